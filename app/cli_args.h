@@ -1,0 +1,85 @@
+// A small strict command-line parser for the CLI tools: --flag, --key VALUE
+// and --key=VALUE; unknown options and missing values are errors.
+#ifndef SWEEPSCAN_APP_CLI_ARGS_H_
+#define SWEEPSCAN_APP_CLI_ARGS_H_
+
+#include <cstdlib>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace sweepscan::app {
+
+class Args {
+ public:
+  // `flags` take no value, `options` take one.
+  Args(const std::set<std::string>& flags, const std::set<std::string>& options)
+      : flags_(flags), options_(options) {}
+
+  bool Parse(int argc, char** argv, int first, std::string* error) {
+    for (int i = first; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a.rfind("--", 0) != 0) {
+        positional_.push_back(a);
+        continue;
+      }
+      std::string key = a.substr(2), value;
+      const size_t eq = key.find('=');
+      const bool has_value = eq != std::string::npos;
+      if (has_value) {
+        value = key.substr(eq + 1);
+        key = key.substr(0, eq);
+      }
+      if (flags_.count(key)) {
+        if (has_value) {
+          *error = "option --" + key + " takes no value";
+          return false;
+        }
+        set_flags_.insert(key);
+      } else if (options_.count(key)) {
+        if (!has_value) {
+          if (i + 1 >= argc) {
+            *error = "option --" + key + " needs a value";
+            return false;
+          }
+          value = argv[++i];
+        }
+        values_[key] = value;
+      } else {
+        *error = "unknown option --" + key;
+        return false;
+      }
+    }
+    return true;
+  }
+
+  bool Flag(const std::string& key) const { return set_flags_.count(key) > 0; }
+  bool Has(const std::string& key) const { return values_.count(key) > 0; }
+  std::string Get(const std::string& key, const std::string& fallback = "") const {
+    const auto it = values_.find(key);
+    return it == values_.end() ? fallback : it->second;
+  }
+  bool GetDouble(const std::string& key, double* out, std::string* error) const {
+    if (!Has(key)) return true;
+    const std::string v = Get(key);
+    char* end = nullptr;
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0' || !(d == d)) {
+      *error = "option --" + key + " expects a number, got '" + v + "'";
+      return false;
+    }
+    *out = d;
+    return true;
+  }
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  std::set<std::string> flags_, options_, set_flags_;
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+};
+
+}  // namespace sweepscan::app
+
+#endif  // SWEEPSCAN_APP_CLI_ARGS_H_

@@ -1,0 +1,71 @@
+#include "core/assembler.h"
+
+#include <cmath>
+
+namespace sweepscan {
+
+bool AssemblyOptions::IsValid(std::string* error) const {
+  if (!(min_range_m >= 0.0) || !(max_range_m > min_range_m) || !std::isfinite(max_range_m)) {
+    *error = "assembly range limits must satisfy 0 <= min_range_m < max_range_m";
+    return false;
+  }
+  return true;
+}
+
+void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChunks* out) {
+  const Eigen::Matrix3f r_bl = body_from_lidar_.rotation().toRotationMatrix().cast<float>();
+  const Eigen::Vector3f t_bl = body_from_lidar_.translation().cast<float>();
+  // p_L = (0, rho sin theta, rho cos theta), so R_bl p_L only needs columns 1 and 2.
+  const Eigen::Vector3f c1 = r_bl.col(1), c2 = r_bl.col(2);
+
+  size_t hint = 0;
+  Rigid3d world_from_body;
+  Eigen::Matrix3f r_wb;
+  Eigen::Vector3f t_wb;
+  bool have_fixed_pose = false;
+  if (!options_.deskew) {
+    if (!scan.samples.empty() && poses.Lookup(scan.start_time(), &world_from_body)) {
+      r_wb = world_from_body.rotation().toRotationMatrix().cast<float>();
+      t_wb = world_from_body.translation().cast<float>();
+      have_fixed_pose = true;
+    }
+  }
+  const float min_r = static_cast<float>(options_.min_range_m);
+  const float max_r = static_cast<float>(options_.max_range_m);
+  const uint8_t flags = options_.deskew ? 0 : 1;
+
+  for (const LidarSample& s : scan.samples) {
+    ++stats_.samples_in;
+    if (!(s.range_m >= min_r && s.range_m <= max_r)) {
+      ++stats_.invalid_range;
+      continue;
+    }
+    if (options_.deskew) {
+      if (!poses.LookupWithHint(s.time, &hint, &world_from_body)) {
+        ++stats_.no_pose;
+        continue;
+      }
+      r_wb = world_from_body.rotation().toRotationMatrix().cast<float>();
+      t_wb = world_from_body.translation().cast<float>();
+    } else if (!have_fixed_pose) {
+      ++stats_.no_pose;
+      continue;
+    }
+    const Eigen::Vector3f p_b = s.range_m * (std::sin(s.theta) * c1 + std::cos(s.theta) * c2) + t_bl;
+    const Eigen::Vector3f p_w = r_wb * p_b + t_wb;
+    CloudPoint p;
+    p.x = p_w.x();
+    p.y = p_w.y();
+    p.z = p_w.z();
+    p.range_m = s.range_m;
+    p.time_ns = ToNanoseconds(s.time);
+    p.scan = scan.index;
+    p.beam = s.beam;
+    p.pose_source = static_cast<uint8_t>(source_);
+    p.flags = flags;
+    out->Append(p);
+    ++stats_.points_out;
+  }
+}
+
+}  // namespace sweepscan

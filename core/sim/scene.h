@@ -1,0 +1,74 @@
+// Scenes of boxes for the simulated world, with exact ray casting.
+//
+// Every primitive is a box that may be rotated about the vertical axis. A
+// box is either solid (seen from outside: furniture, stairs, a target board)
+// or a room (seen from inside: its six faces are floor, ceiling and walls).
+// Boxes may overlap; a ray returns the nearest surface it meets. Each hit
+// reports which primitive and which face it struck, so ground truth can say
+// what every simulated point belongs to.
+#ifndef SWEEPSCAN_CORE_SIM_SCENE_H_
+#define SWEEPSCAN_CORE_SIM_SCENE_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace sweepscan::sim {
+
+// Faces of a box in its own frame: 0 -x, 1 +x, 2 -y, 3 +y, 4 -z (floor or
+// bottom), 5 +z (ceiling or top).
+const char* FaceName(int face);
+
+struct Box {
+  std::string label;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size = Eigen::Vector3d::Ones();  // full extents along the box axes (m)
+  double yaw = 0.0;        // rotation about the world z axis (rad)
+  bool inside = false;     // true for a room seen from inside
+  double dropout = 0.0;    // extra probability that a return from it is lost (dark, glossy)
+};
+
+struct RayHit {
+  double range = 0.0;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit, facing the ray origin
+  int primitive = -1;
+  int face = -1;
+};
+
+class Scene {
+ public:
+  Scene() = default;
+  explicit Scene(std::vector<Box> boxes) : boxes_(std::move(boxes)) {}
+
+  void Add(const Box& box) { boxes_.push_back(box); }
+  const std::vector<Box>& boxes() const { return boxes_; }
+  // Index of the first box with this label, or -1.
+  int Find(const std::string& label) const;
+
+  // Nearest hit along origin + t * direction (direction unit) with
+  // t in (min_range, max_range]; false if nothing is hit.
+  bool Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double min_range,
+            double max_range, RayHit* hit) const;
+
+  // Unsigned distance from p to the nearest surface of any box.
+  double DistanceToSurface(const Eigen::Vector3d& p) const;
+
+  // Checks sizes are positive and finite; `error` names the box.
+  bool IsValid(std::string* error) const;
+
+ private:
+  std::vector<Box> boxes_;
+};
+
+// The seed paper's lab (Miao et al. 2022, section 5): a 10 x 5 x 2.5 m room
+// with its corner at the origin, desks and cabinets, and a 0.6 x 0.6 m
+// calibration target board standing on the window sill of the y = 0 wall,
+// its front face 0.16 m from the wall, centred at x = 5 m, 1.2 m high.
+Scene LabScene();
+// A stairwell: a 9 x 3 x 6 m shaft with a flat run-up, a straight flight of
+// 14 steps (0.28 m deep, 0.17 m high) along +x and a landing.
+Scene StairwellScene();
+
+}  // namespace sweepscan::sim
+
+#endif  // SWEEPSCAN_CORE_SIM_SCENE_H_

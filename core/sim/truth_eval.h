@@ -1,0 +1,64 @@
+// Measurements of a reconstructed cloud against the simulated world's
+// ground truth. Used by the tests and by `sweepscan-cli simulate --json`.
+#ifndef SWEEPSCAN_CORE_SIM_TRUTH_EVAL_H_
+#define SWEEPSCAN_CORE_SIM_TRUTH_EVAL_H_
+
+#include <string>
+#include <vector>
+
+#include "core/cloud.h"
+#include "core/plane.h"
+#include "core/sim/scene.h"
+
+namespace sweepscan::sim {
+
+struct SurfaceErrorStats {
+  size_t count = 0;
+  double mean = 0.0;
+  double rms = 0.0;
+  double p95 = 0.0;
+  double max = 0.0;
+};
+
+// Distance of every point to the nearest true surface.
+SurfaceErrorStats SurfaceErrors(const Scene& scene, const std::vector<CloudPoint>& points);
+
+// The room's size measured from the cloud: for each face of the room box,
+// the points within `band_m` of the true face plane (and at least
+// `margin_m` inside its edges, away from corners and from furniture that
+// touches it) get a least-squares plane; opposite planes give a dimension.
+struct RoomMeasurement {
+  bool ok = false;
+  std::string error;
+  Eigen::Vector3d true_size = Eigen::Vector3d::Zero();
+  Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // along the room's x, y, z
+  Eigen::Vector3d relative_error = Eigen::Vector3d::Zero();  // (measured - true) / true
+  Plane faces[6];
+};
+RoomMeasurement MeasureRoom(const Scene& scene, const std::string& room_label,
+                            const std::vector<CloudPoint>& points, double band_m = 0.10,
+                            double margin_m = 0.3);
+
+// Points within `band_m` of the front face of a box (the face nearest the
+// room's interior, i.e. facing -y for the lab's target), split into passes
+// by gaps in time longer than `gap_s`; each pass gets a plane and the
+// disagreement between the first two passes is reported.
+struct PassDisagreement {
+  bool ok = false;
+  std::string error;
+  size_t passes = 0;
+  size_t points[2] = {0, 0};
+  Eigen::Vector3d centroid[2];
+  Plane planes[2];
+  double plane_angle_rad = 0.0;        // between the two passes' board planes
+  double plane_offset_m = 0.0;         // distance between them along the normal
+  double centroid_distance_m = 0.0;    // between the two passes' board centroids
+  double edge_shift_m = 0.0;           // shift of the board's top edge height between passes
+};
+PassDisagreement MeasureTargetPasses(const Scene& scene, const std::string& label,
+                                     const std::vector<CloudPoint>& points, double band_m = 0.05,
+                                     double gap_s = 1.0);
+
+}  // namespace sweepscan::sim
+
+#endif  // SWEEPSCAN_CORE_SIM_TRUTH_EVAL_H_

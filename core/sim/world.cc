@@ -1,0 +1,300 @@
+#include "core/sim/world.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sweepscan::sim {
+namespace {
+
+bool Finite(std::initializer_list<double> values) {
+  for (double v : values) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+double TimeS(Time t) { return ToSeconds(t) - SimWorld::kStartTimeS; }
+Time RobotTime(double path_s) { return TimeFromSeconds(path_s + SimWorld::kStartTimeS); }
+
+}  // namespace
+
+bool SimConfig::IsValid(std::string* error) const {
+  if (!scene.IsValid(error)) return false;
+  if (scene.boxes().empty()) {
+    *error = "scene has no boxes";
+    return false;
+  }
+  if (!geometry.IsValid(error)) return false;
+  if (!Finite({mounting_error.alpha, mounting_error.beta, mounting_error.gamma})) {
+    *error = "mounting error angles must be finite";
+    return false;
+  }
+  const LidarSpec& l = lidar;
+  if (!Finite({l.scan_rate_hz, l.sample_rate_hz, l.min_range_m, l.max_range_m, l.range_noise_m,
+               l.range_noise_fraction, l.range_quantum_m, l.dropout_probability,
+               l.grazing_dropout_start_deg, l.grazing_dropout_end_deg}) ||
+      l.scan_rate_hz <= 0 || l.sample_rate_hz <= 0 || l.sample_rate_hz < 10 * l.scan_rate_hz ||
+      l.min_range_m < 0 || l.max_range_m <= l.min_range_m || l.range_noise_m < 0 ||
+      l.range_noise_fraction < 0 || l.range_quantum_m < 0 || l.dropout_probability < 0 ||
+      l.dropout_probability > 1 || l.grazing_dropout_end_deg <= l.grazing_dropout_start_deg) {
+    *error =
+        "lidar: rates must be positive (at least 10 samples per scan), 0 <= min_range < "
+        "max_range, noise >= 0, dropout within [0, 1], grazing start < end";
+    return false;
+  }
+  if (!Finite({imu.rate_hz, imu.gyro_noise_rad_s, imu.gyro_bias_rad_s, imu.tilt_noise_rad,
+               imu.yaw_noise_rad, imu.yaw_reference_offset_rad}) ||
+      imu.rate_hz <= 0 || imu.gyro_noise_rad_s < 0 || imu.tilt_noise_rad < 0 ||
+      imu.yaw_noise_rad < 0) {
+    *error = "imu: rate must be positive and noise non-negative";
+    return false;
+  }
+  if (!Finite({odometry.rate_hz, odometry.scale_error_left, odometry.scale_error_right,
+               odometry.speed_noise_mps}) ||
+      odometry.rate_hz <= 0 || odometry.speed_noise_mps < 0 || odometry.scale_error_left <= -1 ||
+      odometry.scale_error_right <= -1) {
+    *error = "odometry: rate must be positive, noise non-negative, scale errors > -1";
+    return false;
+  }
+  for (size_t i = 0; i < slips.size(); ++i) {
+    const SlipEvent& s = slips[i];
+    if (!Finite({s.start_s, s.duration_s, s.extra}) || s.start_s < 0 || s.duration_s < 0 ||
+        s.extra <= -1) {
+      *error = "slip " + std::to_string(i) + ": start and duration must be >= 0, extra > -1";
+      return false;
+    }
+  }
+  if (!Finite({start.x, start.y, start.yaw})) {
+    *error = "start pose must be finite";
+    return false;
+  }
+  if (path.empty()) {
+    *error = "path has no segments";
+    return false;
+  }
+  for (size_t i = 0; i < path.size(); ++i) {
+    const DriveSegment& s = path[i];
+    if (!Finite({s.v, s.w, s.duration_s}) || s.duration_s <= 0) {
+      *error = "path segment " + std::to_string(i) + ": v and w must be finite, duration > 0";
+      return false;
+    }
+  }
+  return true;
+}
+
+double SimConfig::DurationSeconds() const {
+  double d = 0.0;
+  for (const auto& s : path) d += s.duration_s;
+  return d;
+}
+
+Trajectory::Trajectory(const Pose2d& start, const std::vector<DriveSegment>& segments)
+    : segments_(segments) {
+  Pose2d p = start;
+  double t = 0.0;
+  for (const DriveSegment& s : segments_) {
+    starts_s_.push_back(t);
+    start_poses_.push_back(p);
+    p = IntegrateExact(p, {s.v, s.w}, s.duration_s);
+    t += s.duration_s;
+  }
+  end_pose_ = p;
+  end_s_ = t;
+  if (segments_.empty()) end_pose_ = start;
+}
+
+size_t Trajectory::SegmentAt(double t_s) const {
+  const auto it = std::upper_bound(starts_s_.begin(), starts_s_.end(), t_s);
+  return it == starts_s_.begin() ? 0 : static_cast<size_t>(it - starts_s_.begin()) - 1;
+}
+
+Pose2d Trajectory::PoseAt(double t_s) const {
+  if (segments_.empty()) return end_pose_;
+  if (t_s >= end_s_) return end_pose_;
+  if (t_s <= 0.0) return start_poses_.front();
+  const size_t i = SegmentAt(t_s);
+  return IntegrateExact(start_poses_[i], {segments_[i].v, segments_[i].w}, t_s - starts_s_[i]);
+}
+
+Twist2d Trajectory::TwistAt(double t_s) const {
+  if (segments_.empty() || t_s < 0.0 || t_s >= end_s_) return {};
+  const DriveSegment& s = segments_[SegmentAt(t_s)];
+  return {s.v, s.w};
+}
+
+SimWorld::SimWorld(const SimConfig& config)
+    : config_(config),
+      trajectory_(config.start, config.path),
+      body_from_lidar_true_(BodyFromLidar(config.geometry, config.mounting_error)),
+      lidar_rng_(config.seed * 3 + 1),
+      imu_rng_(config.seed * 3 + 2),
+      wheel_rng_(config.seed * 3 + 3) {}
+
+Time SimWorld::end_time() const { return RobotTime(duration_s()); }
+
+Rigid3d SimWorld::TrueWorldFromBody(Time t) const {
+  const Pose2d p = trajectory_.PoseAt(TimeS(t));
+  return Rigid3d::FromPose(p.x, p.y, 0.0, 0.0, 0.0, p.yaw);
+}
+
+Rigid3d SimWorld::TrueWorldFromLidar(Time t) const {
+  return TrueWorldFromBody(t) * body_from_lidar_true_;
+}
+
+void SimWorld::RunUntil(Time t, SensorSink* sink) {
+  const Time until = std::min(t, end_time());
+  EmitWheels(until, sink);
+  EmitImu(until, sink);
+  EmitLidar(until, sink);
+  if (t >= end_time()) finished_ = true;
+}
+
+SensorLog SimWorld::RunAll() {
+  SensorLogCollector collector;
+  RunUntil(end_time(), &collector);
+  return std::move(*collector.log());
+}
+
+void SimWorld::EmitLidar(Time until, SensorSink* sink) {
+  const LidarSpec& spec = config_.lidar;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double until_s = TimeS(until);
+  const double cos_start = std::cos(spec.grazing_dropout_start_deg * M_PI / 180.0);
+  const double start_rad = spec.grazing_dropout_start_deg * M_PI / 180.0;
+  const double span_rad = (spec.grazing_dropout_end_deg - spec.grazing_dropout_start_deg) * M_PI / 180.0;
+  for (;;) {
+    const double t_s = static_cast<double>(next_lidar_sample_) / spec.sample_rate_hz;
+    if (t_s > until_s) break;
+    // The head turns at scan_rate_hz; phase in [0, 1) of a revolution.
+    const double phase = std::fmod(spec.scan_rate_hz * t_s, 1.0);
+    const bool ring_start = next_lidar_sample_ == 0 || phase < last_phase_;
+    if (ring_start && next_lidar_sample_ > 0) ++scan_index_;
+    if (ring_start) beam_ = 0;
+    last_phase_ = phase;
+    ++next_lidar_sample_;
+
+    const Time time = RobotTime(t_s);
+    const double theta = spec.angle_convention.ThetaFromX4Degrees(phase * 360.0);
+    const Rigid3d world_from_lidar = TrueWorldFromLidar(time);
+    const Eigen::Vector3d dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
+    RayHit hit;
+    SampleTruth truth;
+    double range = 0.0;
+    if (config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit)) {
+      truth = {hit.primitive, hit.face, hit.range};
+      const double cos_inc = std::abs(hit.normal.dot(dir));
+      double p_keep = (1.0 - spec.dropout_probability) *
+                      (1.0 - config_.scene.boxes()[hit.primitive].dropout);
+      if (cos_inc < cos_start) {
+        const double inc = std::acos(std::clamp(cos_inc, 0.0, 1.0));
+        p_keep *= std::clamp(1.0 - (inc - start_rad) / span_rad, 0.0, 1.0);
+      }
+      const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * hit.range);
+      const double noisy = hit.range + sigma * gauss(lidar_rng_);
+      const bool kept = uniform(lidar_rng_) < p_keep;
+      if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
+        range = spec.range_quantum_m > 0.0
+                    ? std::round(noisy / spec.range_quantum_m) * spec.range_quantum_m
+                    : noisy;
+      }
+    }
+    if (keep_truth_) sample_truth_.push_back(truth);
+    LidarSample s;
+    s.time = time;
+    s.range_m = static_cast<float>(range);
+    s.theta = static_cast<float>(theta);
+    s.beam = beam_++;
+    sink->OnLidarSample(scan_index_, ring_start, s);
+  }
+}
+
+void SimWorld::TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const {
+  const double d = config_.geometry.wheel_distance_m;
+  if (t1_s <= t0_s) {
+    const Twist2d tw = trajectory_.TwistAt(t0_s);
+    WheelsFromTwist(tw, d, left, right);
+    return;
+  }
+  // Exact mean of a piecewise-constant twist: integrate segment by segment.
+  double dl = 0.0, dr = 0.0, t = 0.0;
+  for (const DriveSegment& s : config_.path) {
+    const double a = std::max(t0_s, t), b = std::min(t1_s, t + s.duration_s);
+    if (b > a) {
+      dl += (s.v - s.w * d) * (b - a);
+      dr += (s.v + s.w * d) * (b - a);
+    }
+    t += s.duration_s;
+    if (t >= t1_s) break;
+  }
+  *left = dl / (t1_s - t0_s);
+  *right = dr / (t1_s - t0_s);
+}
+
+void SimWorld::EmitWheels(Time until, SensorSink* sink) {
+  const OdometrySpec& spec = config_.odometry;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double until_s = TimeS(until);
+  if (next_wheel_tick_ == 1 && 0.0 <= until_s && !finished_) {
+    next_wheel_tick_ = 0;  // the first record (time 0) only starts the odometry
+  }
+  for (;;) {
+    const double t1 = static_cast<double>(next_wheel_tick_) / spec.rate_hz;
+    if (t1 > until_s) break;
+    const double t0 = next_wheel_tick_ == 0 ? t1 : t1 - 1.0 / spec.rate_hz;
+    ++next_wheel_tick_;
+    double left, right;
+    TrueWheelSpeeds(t0, t1, &left, &right);
+    double slip_left = 0.0, slip_right = 0.0;
+    const double mid = 0.5 * (t0 + t1);
+    for (const SlipEvent& s : config_.slips) {
+      if (mid >= s.start_s && mid < s.start_s + s.duration_s) (s.left ? slip_left : slip_right) += s.extra;
+    }
+    WheelSpeedMeasurement m;
+    m.time = RobotTime(t1);
+    m.left_mps = left * (1.0 + spec.scale_error_left) * (1.0 + slip_left) +
+                 spec.speed_noise_mps * gauss(wheel_rng_);
+    m.right_mps = right * (1.0 + spec.scale_error_right) * (1.0 + slip_right) +
+                  spec.speed_noise_mps * gauss(wheel_rng_);
+    sink->OnWheels(m);
+  }
+}
+
+void SimWorld::EmitImu(Time until, SensorSink* sink) {
+  const ImuSpec& spec = config_.imu;
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double until_s = TimeS(until);
+  for (;;) {
+    const double t = static_cast<double>(next_imu_tick_) / spec.rate_hz;
+    if (t > until_s) break;
+    ++next_imu_tick_;
+    const Pose2d p = trajectory_.PoseAt(t);
+    ImuMeasurement m;
+    m.time = RobotTime(t);
+    m.gyro_z = trajectory_.TwistAt(t).w + spec.gyro_bias_rad_s + spec.gyro_noise_rad_s * gauss(imu_rng_);
+    m.roll = spec.tilt_noise_rad * gauss(imu_rng_);
+    m.pitch = spec.tilt_noise_rad * gauss(imu_rng_);
+    m.yaw = WrapAngle(p.yaw + spec.yaw_reference_offset_rad + spec.yaw_noise_rad * gauss(imu_rng_));
+    sink->OnImu(m);
+  }
+}
+
+PoseBuffer SimWorld::TruthPoses(double rate_hz) const {
+  PoseBuffer buffer;
+  const int64_t n = static_cast<int64_t>(std::ceil(duration_s() * rate_hz));
+  for (int64_t i = 0; i <= n; ++i) {
+    const double t = std::min(static_cast<double>(i) / rate_hz, duration_s());
+    buffer.Add(RobotTime(t), TrueWorldFromBody(RobotTime(t)));
+  }
+  return buffer;
+}
+
+void SensorLogCollector::OnLidarSample(uint32_t scan_index, bool ring_start, const LidarSample& s) {
+  if (ring_start || log_.scans.empty()) {
+    log_.scans.emplace_back();
+    log_.scans.back().index = scan_index;
+  }
+  log_.scans.back().samples.push_back(s);
+}
+
+}  // namespace sweepscan::sim

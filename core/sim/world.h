@@ -1,0 +1,195 @@
+// The simulated world: a differential-drive robot following a path of
+// (v, w, duration) segments through a Scene, with an X4-like lidar, a
+// HI219-like IMU and wheel encoders, all seeded and with ground truth kept.
+//
+// Ground truth is exact: the path is piecewise constant (v, w), so the true
+// pose at any time is the closed-form arc (IntegrateExact), and each lidar
+// sample is cast from the true lidar pose at that sample's own time.
+//
+// Error models (defaults follow the seed paper's Table 2 and the X4 data sheet):
+//  * wheel encoders: per-wheel scale error (the paper: 1 % per metre),
+//    white speed noise, and slip events in which one wheel's encoder reads
+//    (1 + extra) times what the wheel actually rolled;
+//  * IMU: white gyro noise plus a constant bias; roll and pitch white noise
+//    (0.3 deg); yaw white noise (0.5 deg) in a heading reference rotated by
+//    a fixed offset from the world's;
+//  * lidar: Gaussian range noise sigma = sqrt(a^2 + (b rho)^2), quantised to
+//    the X4's 0.25 mm, returns lost at random, more at grazing incidence
+//    and on dark surfaces, and none outside 0.12-10 m.
+//
+// Not thread-safe; one world per thread.
+#ifndef SWEEPSCAN_CORE_SIM_WORLD_H_
+#define SWEEPSCAN_CORE_SIM_WORLD_H_
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/odometry.h"
+#include "core/pose_buffer.h"
+#include "core/robot_model.h"
+#include "core/sensor_data.h"
+#include "core/sim/scene.h"
+
+namespace sweepscan::sim {
+
+struct LidarSpec {
+  double scan_rate_hz = 7.0;
+  double sample_rate_hz = 5000.0;
+  double min_range_m = 0.12;
+  double max_range_m = 10.0;
+  double range_noise_m = 0.002;        // a
+  double range_noise_fraction = 0.002;  // b
+  double range_quantum_m = 0.00025;    // X4 distance unit (Si / 4 mm)
+  double dropout_probability = 0.01;
+  double grazing_dropout_start_deg = 70.0;  // incidence beyond which returns fade out
+  double grazing_dropout_end_deg = 88.0;    // all lost beyond this
+  LidarAngleConvention angle_convention;
+};
+
+struct ImuSpec {
+  double rate_hz = 100.0;
+  double gyro_noise_rad_s = 0.003;
+  double gyro_bias_rad_s = 0.0005;
+  double tilt_noise_rad = 0.0052;   // 0.3 deg
+  double yaw_noise_rad = 0.0087;    // 0.5 deg
+  double yaw_reference_offset_rad = 0.7;  // IMU heading of the world's +x axis
+};
+
+struct OdometrySpec {
+  double rate_hz = 50.0;
+  double scale_error_left = 0.005;
+  double scale_error_right = -0.005;
+  double speed_noise_mps = 0.002;
+};
+
+struct SlipEvent {
+  double start_s = 0.0;
+  double duration_s = 0.0;
+  bool left = true;       // which wheel's encoder over-reads
+  double extra = 0.0;     // encoder reads (1 + extra) x the true wheel speed
+};
+
+struct DriveSegment {
+  double v = 0.0;         // m/s
+  double w = 0.0;         // rad/s
+  double duration_s = 0.0;
+};
+
+struct SimConfig {
+  std::string name;
+  uint64_t seed = 1;
+  Scene scene;
+  RobotGeometry geometry;
+  MountingError mounting_error;  // the true one, which the calibration should recover
+  LidarSpec lidar;
+  ImuSpec imu;
+  OdometrySpec odometry;
+  std::vector<SlipEvent> slips;
+  Pose2d start;
+  std::vector<DriveSegment> path;
+
+  bool IsValid(std::string* error) const;
+  double DurationSeconds() const;
+};
+
+// Piecewise-constant (v, w) path with its exact pose.
+class Trajectory {
+ public:
+  Trajectory(const Pose2d& start, const std::vector<DriveSegment>& segments);
+  double duration_s() const { return starts_s_.empty() ? 0.0 : end_s_; }
+  Pose2d PoseAt(double t_s) const;
+  Twist2d TwistAt(double t_s) const;
+
+ private:
+  size_t SegmentAt(double t_s) const;
+  std::vector<DriveSegment> segments_;
+  std::vector<double> starts_s_;
+  std::vector<Pose2d> start_poses_;
+  Pose2d end_pose_;
+  double end_s_ = 0.0;
+};
+
+// Receives simulated records as the world produces them. Within each stream
+// records arrive in time order.
+class SensorSink {
+ public:
+  virtual ~SensorSink() = default;
+  virtual void OnWheels(const WheelSpeedMeasurement& m) = 0;
+  virtual void OnImu(const ImuMeasurement& m) = 0;
+  // `ring_start` is true for the first sample of a new revolution.
+  virtual void OnLidarSample(uint32_t scan_index, bool ring_start, const LidarSample& s) = 0;
+};
+
+// Ground truth of one lidar sample (for tests): what it hit.
+struct SampleTruth {
+  int primitive = -1;
+  int face = -1;
+  double true_range = 0.0;
+};
+
+class SimWorld {
+ public:
+  explicit SimWorld(const SimConfig& config);
+
+  const SimConfig& config() const { return config_; }
+  const Trajectory& trajectory() const { return trajectory_; }
+  double duration_s() const { return trajectory_.duration_s(); }
+  // Robot time of the path's start; the simulated robot clock starts at 1 s
+  // so that no record carries time zero.
+  static constexpr double kStartTimeS = 1.0;
+
+  Rigid3d TrueWorldFromBody(Time t) const;
+  Rigid3d TrueWorldFromLidar(Time t) const;
+
+  // Produces every record with time <= t, in time order per stream.
+  void RunUntil(Time t, SensorSink* sink);
+  bool finished() const { return finished_; }
+  Time end_time() const;
+
+  // Runs the whole path and collects the records (offline).
+  SensorLog RunAll();
+  // Ground truth of each produced lidar sample when enabled (before running).
+  void KeepSampleTruth(bool keep) { keep_truth_ = keep; }
+  const std::vector<SampleTruth>& sample_truth() const { return sample_truth_; }
+
+  // The true body poses sampled at `rate_hz`, for reconstruction from truth.
+  PoseBuffer TruthPoses(double rate_hz) const;
+
+ private:
+  void EmitLidar(Time until, SensorSink* sink);
+  void EmitWheels(Time until, SensorSink* sink);
+  void EmitImu(Time until, SensorSink* sink);
+  // Mean left/right wheel speeds over [t0, t1] (true, before encoder errors).
+  void TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const;
+
+  SimConfig config_;
+  Trajectory trajectory_;
+  Rigid3d body_from_lidar_true_;
+  std::mt19937_64 lidar_rng_, imu_rng_, wheel_rng_;
+  int64_t next_lidar_sample_ = 0;
+  int64_t next_wheel_tick_ = 1;
+  int64_t next_imu_tick_ = 0;
+  uint32_t scan_index_ = 0;
+  double last_phase_ = -1.0;
+  uint16_t beam_ = 0;
+  bool finished_ = false;
+  bool keep_truth_ = false;
+  std::vector<SampleTruth> sample_truth_;
+};
+
+// Collects a SensorLog from sink calls, grouping lidar samples into scans.
+class SensorLogCollector : public SensorSink {
+ public:
+  void OnWheels(const WheelSpeedMeasurement& m) override { log_.wheels.push_back(m); }
+  void OnImu(const ImuMeasurement& m) override { log_.imu.push_back(m); }
+  void OnLidarSample(uint32_t scan_index, bool ring_start, const LidarSample& s) override;
+  SensorLog* log() { return &log_; }
+
+ private:
+  SensorLog log_;
+};
+
+}  // namespace sweepscan::sim
+
+#endif  // SWEEPSCAN_CORE_SIM_WORLD_H_

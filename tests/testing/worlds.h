@@ -1,0 +1,26 @@
+// Synthetic worlds with known truth, shared by the tests (Cartographer's
+// GenerateFake... helpers in spirit).
+#ifndef SWEEPSCAN_TESTS_TESTING_WORLDS_H_
+#define SWEEPSCAN_TESTS_TESTING_WORLDS_H_
+
+#include "core/reconstruct.h"
+#include "core/sim/world.h"
+
+namespace sweepscan::testing {
+
+// The paper's lab with a drive that sees every wall: along the room, a
+// half turn in place at the far end, and back.
+sim::SimConfig LabConfig(uint64_t seed = 1);
+// The paper's calibration drive: a circle of radius 0.83 m at 0.2 m/s around
+// a centre 1.7 m in front of the target board, slightly more than one turn.
+sim::SimConfig CircleConfig(uint64_t seed = 1);
+// Every sensor perfect (no noise, no dropouts, no scale error, no bias).
+void MakeNoiseFree(sim::SimConfig* config);
+
+// Simulates and reconstructs; truth poses are used when source == kTruth.
+ReconstructionResult SimulateAndReconstruct(const sim::SimConfig& config, PoseSource source,
+                                            bool deskew, const MountingError& calibration = {});
+
+}  // namespace sweepscan::testing
+
+#endif  // SWEEPSCAN_TESTS_TESTING_WORLDS_H_
