@@ -1,0 +1,1154 @@
+// All Ceres templates of the project's calibration live in this translation
+// unit (compile time on small machines).
+#include "core/calibration.h"
+
+#include <ceres/ceres.h>
+#include <ceres/sphere_manifold.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "core/json_reader.h"
+
+namespace sweepscan {
+namespace {
+
+constexpr double kNsPerS = 1e9;
+
+uint64_t Key(const SampleRef& r) { return (static_cast<uint64_t>(r.scan) << 16) | r.beam; }
+
+std::string Num(double v, int precision = 6) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << v;
+  return s.str();
+}
+
+std::string RefName(const SampleRef& r) {
+  return "(scan " + std::to_string(r.scan) + ", beam " + std::to_string(r.beam) + ")";
+}
+
+// What the cost functors need of an observation, in doubles: the lidar-frame
+// point p_L, the mount translation t_BL = (l1, 0, h) and the body pose.
+struct Prepared {
+  Eigen::Matrix3d r_wb;
+  Eigen::Vector3d t_wb, t_bl, p_l;
+};
+
+Prepared Prepare(const LidarObservation& o, const RobotGeometry& g) {
+  Prepared p;
+  p.r_wb = o.world_from_body.rotation().toRotationMatrix();
+  p.t_wb = o.world_from_body.translation();
+  p.t_bl = Eigen::Vector3d(g.lidar_offset_x_m, 0.0, g.lidar_height_m);
+  p.p_l = o.p_lidar;
+  return p;
+}
+
+// p_W(c) = R_WB (Rz(alpha) Ry(beta) Rx(gamma) p_L + t_BL) + t_WB   (Eq. 1, 13, 14)
+template <typename T>
+void ProjectT(const Prepared& o, const T* abg, T* p_w) {
+  using std::cos;
+  using std::sin;
+  const T ca = cos(abg[0]), sa = sin(abg[0]);
+  const T cb = cos(abg[1]), sb = sin(abg[1]);
+  const T cg = cos(abg[2]), sg = sin(abg[2]);
+  const T px(o.p_l.x()), py(o.p_l.y()), pz(o.p_l.z());
+  // Rx(gamma), then Ry(beta), then Rz(alpha).
+  const T x1 = px, y1 = cg * py - sg * pz, z1 = sg * py + cg * pz;
+  const T x2 = cb * x1 + sb * z1, y2 = y1, z2 = -sb * x1 + cb * z1;
+  const T b[3] = {ca * x2 - sa * y2 + o.t_bl.x(), sa * x2 + ca * y2 + o.t_bl.y(),
+                  z2 + o.t_bl.z()};
+  for (int r = 0; r < 3; ++r) {
+    p_w[r] = o.r_wb(r, 0) * b[0] + o.r_wb(r, 1) * b[1] + o.r_wb(r, 2) * b[2] + o.t_wb[r];
+  }
+}
+
+// Eq. 15-16: r_k(c) = p_W^{a_k}(c) - p_W^{b_k}(c)  (metres, 3 residuals).
+struct PairCost {
+  PairCost(const Prepared& a, const Prepared& b) : a_(a), b_(b) {}
+  template <typename T>
+  bool operator()(const T* abg_radians, T* residual) const {
+    T pa[3], pb[3];
+    ProjectT(a_, abg_radians, pa);
+    ProjectT(b_, abg_radians, pb);
+    for (int i = 0; i < 3; ++i) residual[i] = pa[i] - pb[i];
+    return true;
+  }
+  static ceres::CostFunction* Create(const Prepared& a, const Prepared& b) {
+    return new ceres::AutoDiffCostFunction<PairCost, 3, 3>(new PairCost(a, b));
+  }
+  Prepared a_, b_;
+};
+
+// Automatic mode: r_i(c, n_s, d_s) = n_s . p_W^i(c) + d_s  (metres), |n_s| = 1
+// kept by the sphere manifold.
+struct PointToPlaneCost {
+  explicit PointToPlaneCost(const Prepared& o) : o_(o) {}
+  template <typename T>
+  bool operator()(const T* abg_radians, const T* normal, const T* d, T* residual) const {
+    T p[3];
+    ProjectT(o_, abg_radians, p);
+    residual[0] = normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] + d[0];
+    return true;
+  }
+  static ceres::CostFunction* Create(const Prepared& o) {
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 3, 1>(new PointToPlaneCost(o));
+  }
+  Prepared o_;
+};
+
+// Records the per-iteration trace (the paper's Fig. 8) and lets the caller
+// cancel. Needs Solver::Options::update_state_every_iteration.
+class TraceCallback : public ceres::IterationCallback {
+ public:
+  TraceCallback(const double* abg, std::vector<CalibrationIteration>* trace,
+                CalibrationProgress* progress)
+      : abg_(abg), trace_(trace), progress_(progress) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    CalibrationIteration it;
+    it.iteration = static_cast<int>(trace_->size());
+    it.angles = {abg_[0], abg_[1], abg_[2]};
+    it.cost = s.cost;
+    trace_->push_back(it);
+    if (progress_ != nullptr && !progress_->OnIteration(it.iteration, it.angles, it.cost)) {
+      return ceres::SOLVER_ABORT;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const double* abg_;
+  std::vector<CalibrationIteration>* trace_;
+  CalibrationProgress* progress_;
+};
+
+ceres::LossFunction* MakeLoss(RobustLoss loss, double scale) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return new ceres::HuberLoss(scale);
+    case RobustLoss::kCauchy:
+      return new ceres::CauchyLoss(scale);
+    case RobustLoss::kNone:
+      break;
+  }
+  return nullptr;
+}
+
+ceres::Solver::Options SolverOptions(const CalibrationOptions& o) {
+  ceres::Solver::Options s;
+  s.minimizer_type = ceres::TRUST_REGION;
+  s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  s.linear_solver_type = ceres::DENSE_QR;
+  s.max_num_iterations = o.max_iterations;
+  s.function_tolerance = o.function_tolerance;
+  s.gradient_tolerance = o.gradient_tolerance;
+  s.parameter_tolerance = o.parameter_tolerance;
+  s.num_threads = 1;
+  s.logging_type = ceres::SILENT;
+  s.minimizer_progress_to_stdout = false;
+  s.update_state_every_iteration = true;
+  return s;
+}
+
+const char* kAngleNames[3] = {"alpha", "beta", "gamma"};
+
+// Observability of the angles: the singular values of the Jacobian's angle
+// columns after the other parameters (planes) are projected out, i.e. of the
+// Schur complement S = Jc'Jc - Jc'Jp (Jp'Jp)^+ Jp'Jc. Condition =
+// sqrt(lambda_max / lambda_min) of S.
+void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationOptions& options,
+                        CalibrationSummary* summary) {
+  ceres::CRSMatrix crs;
+  ceres::Problem::EvaluateOptions eval;
+  double cost = 0.0;
+  if (!problem->Evaluate(eval, &cost, nullptr, nullptr, &crs)) return;
+  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) j(r, crs.cols[k]) = crs.values[k];
+  }
+  // The angle block is the first parameter block added (columns 0..2).
+  const Eigen::MatrixXd jc = j.leftCols(3);
+  Eigen::Matrix3d s = jc.transpose() * jc;
+  if (j.cols() > 3) {
+    const Eigen::MatrixXd jp = j.rightCols(j.cols() - 3);
+    const Eigen::MatrixXd h = jp.transpose() * jp;
+    const Eigen::MatrixXd hinv =
+        h.completeOrthogonalDecomposition().pseudoInverse();
+    s -= jc.transpose() * jp * hinv * jp.transpose() * jc;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
+  const double lmin = std::max(0.0, eig.eigenvalues()[0]);
+  const double lmax = std::max(0.0, eig.eigenvalues()[2]);
+  summary->condition_number =
+      lmin > 0.0 ? std::sqrt(lmax / lmin) : std::numeric_limits<double>::infinity();
+  if (!(summary->condition_number <= options.max_condition_number)) {
+    Eigen::Vector3d v = eig.eigenvectors().col(0).cwiseAbs();
+    int worst = 0;
+    v.maxCoeff(&worst);
+    summary->warnings.push_back(
+        "the picks leave " + std::string(kAngleNames[worst]) +
+        " (nearly) unobservable: Jacobian condition number " + Num(summary->condition_number, 3) +
+        " > " + Num(options.max_condition_number, 3) + "; spread the picks over the target");
+  }
+}
+
+void ComputeCovariance(ceres::Problem* problem, double* abg, int num_residuals,
+                       CalibrationSummary* summary) {
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = -1;
+  co.min_reciprocal_condition_number = 1e-14;
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {{abg, abg}};
+  if (!covariance.Compute(blocks, problem)) {
+    summary->warnings.push_back("covariance could not be computed (rank-deficient Jacobian)");
+    return;
+  }
+  double c[9];
+  covariance.GetCovarianceBlock(abg, abg, c);
+  // Ceres returns (J'J)^-1, i.e. for unit residual variance; scale by the
+  // residual variance estimate s^2 = 2 cost / (m - n), n = 3 angles (plus the
+  // planes' parameters in the automatic mode, few against thousands of rows).
+  const int dof = std::max(1, num_residuals - 3);
+  const double s2 = 2.0 * summary->final_cost / dof;
+  for (int i = 0; i < 3; ++i) summary->sigma_rad[i] = std::sqrt(std::max(0.0, c[4 * i] * s2));
+}
+
+MountingError FromArray(const double* abg) { return {abg[0], abg[1], abg[2]}; }
+
+double AngleChange(const MountingError& a, const MountingError& b) {
+  return std::max({std::abs(a.alpha - b.alpha), std::abs(a.beta - b.beta),
+                   std::abs(a.gamma - b.gamma)});
+}
+
+bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+}  // namespace
+
+Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometry& geometry,
+                                   const MountingError& calibration) {
+  return o.world_from_body * (BodyFromLidar(geometry, calibration) * o.p_lidar);
+}
+
+// ----------------------------------------------------------------------------
+// SampleStore
+
+SampleStore::SampleStore(const SensorLog& log, const PoseBuffer& poses, double min_range_m,
+                         double max_range_m) {
+  for (const LidarScan& scan : log.scans) {
+    size_t hint = 0;
+    for (const LidarSample& s : scan.samples) {
+      if (!(s.range_m >= min_range_m && s.range_m <= max_range_m)) continue;
+      LidarObservation o;
+      if (!poses.LookupWithHint(s.time, &hint, &o.world_from_body)) continue;
+      o.ref = {scan.index, s.beam};
+      o.time_ns = ToNanoseconds(s.time);
+      o.p_lidar = LidarPoint(s.range_m, s.theta);
+      by_ref_[Key(o.ref)] = observations_.size();
+      observations_.push_back(o);
+    }
+  }
+}
+
+Status SampleStore::Find(const SampleRef& ref, LidarObservation* out) const {
+  const auto it = by_ref_.find(Key(ref));
+  if (it == by_ref_.end()) {
+    return Status::Error("sample " + RefName(ref) +
+                         " is not a valid sample of the recording (unknown scan or beam, no "
+                         "return, or no pose)");
+  }
+  *out = observations_[it->second];
+  return Status::Ok();
+}
+
+std::vector<size_t> SampleStore::InWindow(const PassWindow& window) const {
+  std::vector<size_t> out;
+  const auto lo = std::lower_bound(
+      observations_.begin(), observations_.end(), window.begin_ns,
+      [](const LidarObservation& o, int64_t t) { return o.time_ns < t; });
+  for (auto it = lo; it != observations_.end() && it->time_ns <= window.end_ns; ++it) {
+    out.push_back(static_cast<size_t>(it - observations_.begin()));
+  }
+  return out;
+}
+
+Status SampleStore::Nearest(const PassWindow& window, const Eigen::Vector3d& world,
+                            const RobotGeometry& geometry, const MountingError& calibration,
+                            LidarObservation* out) const {
+  if (!Finite(world)) return Status::Error("pick position is not finite");
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i : InWindow(window)) {
+    const double d = (ProjectObservation(observations_[i], geometry, calibration) - world).squaredNorm();
+    if (d < best) {
+      best = d;
+      *out = observations_[i];
+    }
+  }
+  if (!std::isfinite(best)) return Status::Error("the pass has no samples to snap to");
+  return Status::Ok();
+}
+
+Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store,
+                    const std::vector<PassWindow>& windows, const RobotGeometry& geometry,
+                    const MountingError& calibration, std::vector<ObservationPair>* pairs) {
+  if (windows.size() < 2) {
+    return Status::Error("need two passes to resolve picks, found " +
+                         std::to_string(windows.size()));
+  }
+  pairs->clear();
+  for (size_t k = 0; k < picks.size(); ++k) {
+    ObservationPair pair;
+    const Pick* p[2] = {&picks[k].pass1, &picks[k].pass2};
+    LidarObservation* o[2] = {&pair.pass1, &pair.pass2};
+    for (int side = 0; side < 2; ++side) {
+      const std::string where =
+          "pair " + std::to_string(k + 1) + " pass" + std::to_string(side + 1) + ": ";
+      Status s = p[side]->has_sample
+                     ? store.Find(p[side]->sample, o[side])
+                     : store.Nearest(windows[side], p[side]->world, geometry, calibration, o[side]);
+      if (!s.ok()) return Status::Error(where + s.message());
+      const int pass = PassOfTime(windows, o[side]->time_ns);
+      if (pass != side) {
+        return Status::Error(where + "sample " + RefName(o[side]->ref) + " is " +
+                             (pass < 0 ? std::string("in neither pass")
+                                       : "in pass " + std::to_string(pass + 1)) +
+                             ", expected pass " + std::to_string(side + 1));
+      }
+    }
+    pairs->push_back(pair);
+  }
+  return Status::Ok();
+}
+
+const char* RobustLossName(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return "huber";
+    case RobustLoss::kCauchy:
+      return "cauchy";
+    case RobustLoss::kNone:
+      break;
+  }
+  return "none";
+}
+
+bool ParseRobustLoss(const std::string& name, RobustLoss* loss) {
+  for (RobustLoss l : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy}) {
+    if (name == RobustLossName(l)) {
+      *loss = l;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool CalibrationOptions::IsValid(std::string* error) const {
+  if (max_iterations < 1) {
+    *error = "calibration: max_iterations must be >= 1";
+    return false;
+  }
+  if (!(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
+      !(parameter_tolerance >= 0.0)) {
+    *error = "calibration: tolerances must be >= 0";
+    return false;
+  }
+  if (loss != RobustLoss::kNone && !(loss_scale_m > 0.0 && std::isfinite(loss_scale_m))) {
+    *error = "calibration: loss_scale_m must be > 0";
+    return false;
+  }
+  if (min_pairs < 2) {
+    *error = "calibration: min_pairs must be >= 2 (three angles need at least two pairs)";
+    return false;
+  }
+  if (!(max_condition_number > 1.0) || !(min_pick_spread_m >= 0.0)) {
+    *error = "calibration: max_condition_number must be > 1 and min_pick_spread_m >= 0";
+    return false;
+  }
+  if (max_outer_iterations < 1 || !(outer_tolerance_rad > 0.0)) {
+    *error = "calibration: max_outer_iterations must be >= 1 and outer_tolerance_rad > 0";
+    return false;
+  }
+  return true;
+}
+
+bool AutoCalibrationOptions::IsValid(std::string* error) const {
+  if (!solver.IsValid(error)) return false;
+  if (max_segmentation_points < 100 || max_points_per_plane < 10 || max_planes < 1 ||
+      ransac_iterations < 1) {
+    *error = "automatic calibration: point and plane counts too small";
+    return false;
+  }
+  if (!(min_plane_fraction > 0.0 && min_plane_fraction < 1.0)) {
+    *error = "automatic calibration: min_plane_fraction must be in (0, 1)";
+    return false;
+  }
+  if (!(final_band_m > 0.0) || !(initial_band_m >= final_band_m) || !std::isfinite(initial_band_m)) {
+    *error = "automatic calibration: need 0 < final_band_m <= initial_band_m";
+    return false;
+  }
+  if (!(min_range_m >= 0.0)) {
+    *error = "automatic calibration: min_range_m must be >= 0";
+    return false;
+  }
+  return true;
+}
+
+// ----------------------------------------------------------------------------
+// Reports
+
+std::string CalibrationSummary::BriefReport() const {
+  std::ostringstream s;
+  s << method << ": " << (converged ? "converged" : "FAILED") << ", alpha " << angles.alpha
+    << " beta " << angles.beta << " gamma " << angles.gamma << " rad, RMS " << initial_rms_m
+    << " -> " << final_rms_m << " m";
+  return s.str();
+}
+
+std::string CalibrationSummary::FullReport() const {
+  std::ostringstream s;
+  s << std::setprecision(6);
+  s << "Calibration (" << method << ")\n";
+  s << "  converged:        " << (converged ? "yes" : "no") << " (" << message << ")\n";
+  s << "  residual blocks:  " << residual_blocks;
+  if (planes > 0) s << " points on " << planes << " planes";
+  s << "\n  outer iterations: " << outer_iterations << ", LM iterations: " << trace.size() << "\n";
+  s << "  initial angles:   " << initial.alpha << " " << initial.beta << " " << initial.gamma
+    << " rad\n";
+  s << "  final angles:     " << angles.alpha << " " << angles.beta << " " << angles.gamma
+    << " rad\n";
+  s << "  1-sigma:          " << sigma_rad[0] << " " << sigma_rad[1] << " " << sigma_rad[2]
+    << " rad\n";
+  s << "  RMS distance:     " << initial_rms_m << " -> " << final_rms_m << " m\n";
+  s << "  cost:             " << initial_cost << " -> " << final_cost << "\n";
+  s << "  condition number: " << condition_number << "\n";
+  for (const auto& w : warnings) s << "  warning: " << w << "\n";
+  return s.str();
+}
+
+// ----------------------------------------------------------------------------
+// Pairs (Eq. 15-17)
+
+Status SolvePairs(const std::vector<ObservationPair>& pairs, const RobotGeometry& geometry,
+                  const MountingError& initial, const CalibrationOptions& options,
+                  CalibrationSummary* summary) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(error);
+  if (!geometry.IsValid(&error)) return Status::Error(error);
+  const Eigen::Vector3d init(initial.alpha, initial.beta, initial.gamma);
+  if (!init.allFinite()) return Status::Error("initial angles are not finite");
+  if (static_cast<int>(pairs.size()) < options.min_pairs) {
+    return Status::Error("need at least " + std::to_string(options.min_pairs) +
+                         " pairs, got " + std::to_string(pairs.size()));
+  }
+  std::vector<Eigen::Vector3d> first;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const std::string where = "pair " + std::to_string(k + 1) + ": ";
+    const ObservationPair& p = pairs[k];
+    for (const LidarObservation* o : {&p.pass1, &p.pass2}) {
+      if (!Finite(o->p_lidar) || !Finite(o->world_from_body.translation()) ||
+          !o->world_from_body.rotation().coeffs().allFinite()) {
+        return Status::Error(where + "a sample or its pose is not finite");
+      }
+    }
+    // Both picks of a pair from the same sighting: a corner seen once cannot
+    // be compared with itself (the two passes are seconds apart).
+    const double dt = std::abs(static_cast<double>(p.pass1.time_ns - p.pass2.time_ns)) / kNsPerS;
+    if (dt < 1.0) {
+      return Status::Error(where + "both picks are from one pass (" + Num(dt, 3) +
+                           " s apart); pick the feature once in each pass");
+    }
+    for (size_t j = 0; j < k; ++j) {
+      if (pairs[j].pass1.ref == p.pass1.ref && pairs[j].pass2.ref == p.pass2.ref &&
+          pairs[j].pass1.p_lidar == p.pass1.p_lidar && pairs[j].pass2.p_lidar == p.pass2.p_lidar) {
+        return Status::Error(where + "same samples as pair " + std::to_string(j + 1));
+      }
+    }
+    first.push_back(ProjectObservation(p.pass1, geometry, initial));
+  }
+
+  summary->initial = initial;
+  summary->angles = initial;
+  summary->residual_blocks = static_cast<int>(pairs.size());
+  summary->converged = false;
+
+  // Pick geometry: three angles need picks spread in two directions.
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : first) c += p;
+  c /= static_cast<double>(first.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& p : first) scatter += (p - c) * (p - c).transpose();
+  const Eigen::Vector3d ev =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter / first.size()).eigenvalues();
+  if (std::sqrt(std::max(0.0, ev[2])) < options.min_pick_spread_m) {
+    summary->warnings.push_back("the picks are within " + Num(std::sqrt(std::max(0.0, ev[2])), 3) +
+                                " m of each other; spread them over the target's corners");
+  } else if (std::sqrt(std::max(0.0, ev[1])) < options.min_pick_spread_m) {
+    summary->warnings.push_back("the picks are (nearly) collinear (spread " +
+                                Num(std::sqrt(std::max(0.0, ev[1])), 3) +
+                                " m across their line); pick corners on both edges");
+  }
+
+  std::vector<Prepared> a, b;
+  for (const auto& p : pairs) {
+    a.push_back(Prepare(p.pass1, geometry));
+    b.push_back(Prepare(p.pass2, geometry));
+  }
+  double abg[3] = {initial.alpha, initial.beta, initial.gamma};
+  ceres::Problem problem;
+  problem.AddParameterBlock(abg, 3);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    problem.AddResidualBlock(PairCost::Create(a[k], b[k]),
+                             MakeLoss(options.loss, options.loss_scale_m), abg);
+  }
+  auto rms = [&]() {
+    double s = 0.0;
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      double pa[3], pb[3];
+      ProjectT(a[k], abg, pa);
+      ProjectT(b[k], abg, pb);
+      s += (Eigen::Vector3d(pa[0], pa[1], pa[2]) - Eigen::Vector3d(pb[0], pb[1], pb[2])).squaredNorm();
+    }
+    return std::sqrt(s / pairs.size());
+  };
+  summary->initial_rms_m = rms();
+
+  ceres::Solver::Options so = SolverOptions(options);
+  TraceCallback callback(abg, &summary->trace, options.progress);
+  so.callbacks.push_back(&callback);
+  ceres::Solver::Summary cs;
+  ceres::Solve(so, &problem, &cs);
+
+  summary->initial_cost = cs.initial_cost;
+  summary->final_cost = cs.final_cost;
+  summary->angles = FromArray(abg);
+  summary->final_rms_m = rms();
+  summary->message = cs.message;
+  summary->outer_iterations = 1;
+  CheckObservability(&problem, abg, options, summary);
+  if (cs.termination_type == ceres::USER_FAILURE) {
+    return Status::Error("calibration cancelled");
+  }
+  if (cs.termination_type != ceres::CONVERGENCE || !Eigen::Vector3d(abg[0], abg[1], abg[2]).allFinite()) {
+    return Status::Error("calibration did not converge: " + cs.message);
+  }
+  summary->converged = true;
+  if (options.compute_covariance) {
+    ComputeCovariance(&problem, abg, 3 * static_cast<int>(pairs.size()), summary);
+  }
+  return Status::Ok();
+}
+
+// ----------------------------------------------------------------------------
+// Refined corners
+
+namespace {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Least-squares line y = a + b x.
+bool FitLine(const std::vector<Eigen::Vector2d>& xy, double* a, double* b) {
+  if (xy.size() < 2) return false;
+  double mx = 0, my = 0;
+  for (const auto& p : xy) mx += p.x(), my += p.y();
+  mx /= xy.size();
+  my /= xy.size();
+  double sxx = 0, sxy = 0;
+  for (const auto& p : xy) sxx += (p.x() - mx) * (p.x() - mx), sxy += (p.x() - mx) * (p.y() - my);
+  if (!(sxx > 1e-12)) {
+    *b = 0.0;
+  } else {
+    *b = sxy / sxx;
+  }
+  *a = my - *b * mx;
+  return true;
+}
+
+}  // namespace
+
+Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
+                       const MountingError& calibration, BoardCorners* out) {
+  if (samples.size() < 20) {
+    return Status::Error("board fit: " + std::to_string(samples.size()) +
+                         " samples, need at least 20");
+  }
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(samples.size());
+  for (const auto& s : samples) pts.push_back(ProjectObservation(s, geometry, calibration));
+  // Plane with outlier rejection (samples of the wall or the board's edges).
+  std::vector<size_t> keep(samples.size());
+  for (size_t i = 0; i < keep.size(); ++i) keep[i] = i;
+  Plane plane;
+  for (int round = 0; round < 3; ++round) {
+    std::vector<Eigen::Vector3d> in;
+    for (size_t i : keep) in.push_back(pts[i]);
+    if (!FitPlane(in, &plane)) return Status::Error("board fit: degenerate samples");
+    const double band = round == 0 ? 0.05 : 0.03;
+    std::vector<size_t> next;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (std::abs(plane.SignedDistance(pts[i])) < band) next.push_back(i);
+    }
+    keep = next;
+    if (keep.size() < 20) return Status::Error("board fit: too few samples on the board plane");
+  }
+  // Board frame: u along the board (horizontal), v up in the plane.
+  Eigen::Vector3d n = plane.normal;
+  Eigen::Vector3d u = Eigen::Vector3d::UnitZ().cross(n);
+  if (u.norm() < 0.5) return Status::Error("board fit: the board is not vertical");
+  u.normalize();
+  const bool along_x = std::abs(u.x()) >= std::abs(u.y());
+  if ((along_x && u.x() < 0) || (!along_x && u.y() < 0)) {
+    n = -n;
+    u = -u;
+  }
+  const Eigen::Vector3d v = n.cross(u);
+  const Eigen::Vector3d c = plane.centroid;
+
+  // Group by scan line.
+  struct Line {
+    uint32_t scan;
+    std::vector<std::pair<Eigen::Vector2d, size_t>> uv;  // (u, v), sample index
+    double mean_u = 0.0;
+  };
+  std::vector<Line> lines;
+  {
+    std::unordered_map<uint32_t, size_t> by_scan;
+    for (size_t i : keep) {
+      const Eigen::Vector3d q = pts[i] - c;
+      auto it = by_scan.find(samples[i].ref.scan);
+      if (it == by_scan.end()) {
+        it = by_scan.emplace(samples[i].ref.scan, lines.size()).first;
+        lines.push_back({samples[i].ref.scan, {}, 0.0});
+      }
+      lines[it->second].uv.push_back({Eigen::Vector2d(q.dot(u), q.dot(v)), i});
+    }
+  }
+  lines.erase(std::remove_if(lines.begin(), lines.end(), [](const Line& l) { return l.uv.size() < 3; }),
+              lines.end());
+  if (lines.size() < 3) {
+    return Status::Error("board fit: the board was crossed by " + std::to_string(lines.size()) +
+                         " scan lines, need at least 3");
+  }
+  for (auto& l : lines) {
+    for (const auto& p : l.uv) l.mean_u += p.first.x();
+    l.mean_u /= l.uv.size();
+  }
+  std::sort(lines.begin(), lines.end(), [](const Line& a, const Line& b) { return a.mean_u < b.mean_u; });
+
+  // Spacings: samples along a scan line (dv) and scan lines along the board (du).
+  std::vector<double> dvs, dus;
+  std::vector<Eigen::Vector2d> top, bottom;
+  for (const auto& l : lines) {
+    double vmin = 1e9, vmax = -1e9;
+    Eigen::Vector2d pmin, pmax;
+    for (const auto& p : l.uv) {
+      if (p.first.y() < vmin) vmin = p.first.y(), pmin = p.first;
+      if (p.first.y() > vmax) vmax = p.first.y(), pmax = p.first;
+    }
+    dvs.push_back((vmax - vmin) / (l.uv.size() - 1));
+    top.push_back(pmax);
+    bottom.push_back(pmin);
+  }
+  for (size_t i = 1; i < lines.size(); ++i) dus.push_back(lines[i].mean_u - lines[i - 1].mean_u);
+  const double dv = Median(dvs), du = Median(dus);
+  // The outermost sample of a line is inside the true edge by U(0, spacing):
+  // shift the edges out by half a spacing (unbiased in expectation).
+  double at, bt, ab, bb;
+  for (auto& p : top) p.y() += 0.5 * dv;
+  for (auto& p : bottom) p.y() -= 0.5 * dv;
+  FitLine(top, &at, &bt);
+  FitLine(bottom, &ab, &bb);
+  // Side edges u = c + d v through the first and last scan lines (their tilt
+  // is the scan plane's, which carries beta).
+  double cl, dl, cr, dr;
+  {
+    std::vector<Eigen::Vector2d> vu;
+    for (const auto& p : lines.front().uv) vu.emplace_back(p.first.y(), p.first.x());
+    FitLine(vu, &cl, &dl);
+    vu.clear();
+    for (const auto& p : lines.back().uv) vu.emplace_back(p.first.y(), p.first.x());
+    FitLine(vu, &cr, &dr);
+  }
+  cl -= 0.5 * du;
+  cr += 0.5 * du;
+  // Intersection of v = a + b u with u = c + d v.
+  auto corner = [&](double a, double b, double cc, double d) {
+    const double uu = (cc + d * a) / (1.0 - d * b);
+    const double vv = a + b * uu;
+    return Eigen::Vector3d(c + uu * u + vv * v);
+  };
+  out->corners = {corner(at, bt, cl, dl), corner(at, bt, cr, dr), corner(ab, bb, cr, dr),
+                  corner(ab, bb, cl, dl)};
+  for (int k = 0; k < 4; ++k) {
+    if (!Finite(out->corners[k])) return Status::Error("board fit: edge lines do not intersect");
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i : keep) {
+      const double d = (pts[i] - out->corners[k]).squaredNorm();
+      if (d < best) best = d, out->nearest[k] = i;
+    }
+  }
+  plane.normal = n;
+  plane.d = -n.dot(c);
+  out->plane = plane;
+  out->points = keep.size();
+  out->scans = lines.size();
+  return Status::Ok();
+}
+
+double CornerRms(const BoardCorners& a, const BoardCorners& b) {
+  double s = 0.0;
+  for (int k = 0; k < 4; ++k) s += (a.corners[k] - b.corners[k]).squaredNorm();
+  return std::sqrt(s / 4.0);
+}
+
+Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
+                           const std::vector<LidarObservation>& pass2,
+                           const RobotGeometry& geometry, const MountingError& initial,
+                           const CalibrationOptions& options, CalibrationSummary* summary) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(error);
+  *summary = CalibrationSummary();
+  summary->method = "refined-corners";
+  summary->initial = initial;
+  summary->angles = initial;
+  MountingError c = initial;
+  BoardCorners k1, k2;
+  std::vector<CalibrationIteration> trace;
+  std::vector<std::string> warnings;
+  CalibrationSummary inner;
+  for (int outer = 0; outer < options.max_outer_iterations; ++outer) {
+    Status s = FitBoardCorners(pass1, geometry, c, &k1);
+    if (!s.ok()) return Status::Error("pass 1: " + s.message());
+    s = FitBoardCorners(pass2, geometry, c, &k2);
+    if (!s.ok()) return Status::Error("pass 2: " + s.message());
+    if (outer == 0) summary->initial_rms_m = CornerRms(k1, k2);
+    // Each fitted corner becomes a virtual sample: the point in the lidar
+    // frame that lands on the corner under c, attached to the pose of the
+    // nearest real sample: p_L = (T_WB(t_j) * T_BL(c))^-1 corner.
+    std::vector<ObservationPair> pairs(4);
+    const Rigid3d bl = BodyFromLidar(geometry, c);
+    for (int j = 0; j < 4; ++j) {
+      LidarObservation* o[2] = {&pairs[j].pass1, &pairs[j].pass2};
+      const BoardCorners* k[2] = {&k1, &k2};
+      const std::vector<LidarObservation>* src[2] = {&pass1, &pass2};
+      for (int side = 0; side < 2; ++side) {
+        *o[side] = (*src[side])[k[side]->nearest[j]];
+        o[side]->p_lidar = (o[side]->world_from_body * bl).inverse() * k[side]->corners[j];
+      }
+    }
+    CalibrationOptions inner_options = options;
+    inner_options.compute_covariance = true;
+    inner = CalibrationSummary();
+    s = SolvePairs(pairs, geometry, c, inner_options, &inner);
+    for (auto it : inner.trace) {
+      it.iteration = static_cast<int>(trace.size());
+      trace.push_back(it);
+    }
+    summary->outer_iterations = outer + 1;
+    if (!s.ok()) {
+      summary->trace = trace;
+      summary->message = inner.message;
+      return Status::Error("refined corners, outer iteration " + std::to_string(outer + 1) +
+                           ": " + s.message());
+    }
+    const double change = AngleChange(c, inner.angles);
+    c = inner.angles;
+    if (change < options.outer_tolerance_rad) {
+      summary->converged = true;
+      break;
+    }
+  }
+  Status s = FitBoardCorners(pass1, geometry, c, &k1);
+  if (s.ok()) s = FitBoardCorners(pass2, geometry, c, &k2);
+  if (!s.ok()) return Status::Error("final board fit: " + s.message());
+  summary->angles = c;
+  summary->final_rms_m = CornerRms(k1, k2);
+  summary->trace = trace;
+  summary->sigma_rad = inner.sigma_rad;
+  summary->condition_number = inner.condition_number;
+  summary->warnings = inner.warnings;
+  summary->initial_cost = trace.empty() ? 0.0 : trace.front().cost;
+  summary->final_cost = inner.final_cost;
+  summary->residual_blocks = 4;
+  summary->message = summary->converged ? "corners and angles stopped changing"
+                                        : "outer loop hit max_outer_iterations";
+  if (!summary->converged) {
+    return Status::Error("refined corners did not converge in " +
+                         std::to_string(options.max_outer_iterations) + " outer iterations");
+  }
+  return Status::Ok();
+}
+
+// ----------------------------------------------------------------------------
+// Automatic mode
+
+namespace {
+
+struct FoundPlane {
+  Plane plane;
+  std::vector<size_t> members;  // indices into the segmentation sample
+};
+
+// Sequential RANSAC (seeded): the largest plane first, its inliers removed,
+// until the best plane holds fewer than min_count points.
+std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts, double band,
+                                      size_t min_count, int max_planes, int iterations,
+                                      std::mt19937_64* rng) {
+  std::vector<FoundPlane> out;
+  std::vector<size_t> remaining(pts.size());
+  for (size_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
+  while (static_cast<int>(out.size()) < max_planes && remaining.size() >= min_count) {
+    std::uniform_int_distribution<size_t> pick(0, remaining.size() - 1);
+    size_t best_count = 0;
+    Eigen::Vector3d best_n;
+    double best_d = 0.0;
+    for (int it = 0; it < iterations; ++it) {
+      const Eigen::Vector3d& a = pts[remaining[pick(*rng)]];
+      const Eigen::Vector3d& b = pts[remaining[pick(*rng)]];
+      const Eigen::Vector3d& c = pts[remaining[pick(*rng)]];
+      Eigen::Vector3d n = (b - a).cross(c - a);
+      if (n.norm() < 1e-6) continue;
+      n.normalize();
+      const double d = -n.dot(a);
+      size_t count = 0;
+      for (size_t i : remaining) count += std::abs(n.dot(pts[i]) + d) < band;
+      if (count > best_count) best_count = count, best_n = n, best_d = d;
+    }
+    if (best_count < min_count) break;
+    // Refine by least squares on the inliers, then take the final inliers.
+    std::vector<Eigen::Vector3d> in;
+    for (size_t i : remaining) {
+      if (std::abs(best_n.dot(pts[i]) + best_d) < band) in.push_back(pts[i]);
+    }
+    FoundPlane fp;
+    if (!FitPlane(in, &fp.plane)) break;
+    std::vector<size_t> rest;
+    for (size_t i : remaining) {
+      (std::abs(fp.plane.SignedDistance(pts[i])) < band ? fp.members : rest).push_back(i);
+    }
+    if (fp.members.size() < min_count) break;
+    remaining.swap(rest);
+    out.push_back(std::move(fp));
+  }
+  return out;
+}
+
+}  // namespace
+
+Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
+                      const MountingError& initial, const AutoCalibrationOptions& options,
+                      CalibrationSummary* summary) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(error);
+  if (!geometry.IsValid(&error)) return Status::Error(error);
+  *summary = CalibrationSummary();
+  summary->method = "auto-planes";
+  summary->initial = initial;
+  summary->angles = initial;
+  std::vector<size_t> sample;
+  {
+    std::vector<size_t> valid;
+    for (size_t i = 0; i < store.observations().size(); ++i) {
+      if (store.observations()[i].p_lidar.norm() >= options.min_range_m) valid.push_back(i);
+    }
+    const size_t stride =
+        std::max<size_t>(1, (valid.size() + options.max_segmentation_points - 1) /
+                                options.max_segmentation_points);
+    for (size_t i = 0; i < valid.size(); i += stride) sample.push_back(valid[i]);
+  }
+  if (sample.size() < 100) {
+    return Status::Error("automatic calibration: only " + std::to_string(sample.size()) +
+                         " samples in the recording");
+  }
+  std::vector<Prepared> prepared;
+  prepared.reserve(sample.size());
+  for (size_t i : sample) prepared.push_back(Prepare(store.observations()[i], geometry));
+
+  std::mt19937_64 rng(options.seed);
+  MountingError c = initial;
+  double band = options.initial_band_m;
+  std::vector<CalibrationIteration> trace;
+  const CalibrationOptions& so_opts = options.solver;
+  for (int outer = 0; outer < so_opts.max_outer_iterations; ++outer) {
+    double abg[3] = {c.alpha, c.beta, c.gamma};
+    std::vector<Eigen::Vector3d> pts(sample.size());
+    for (size_t i = 0; i < sample.size(); ++i) {
+      double p[3];
+      ProjectT(prepared[i], abg, p);
+      pts[i] = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    const size_t min_count = static_cast<size_t>(options.min_plane_fraction * sample.size());
+    std::vector<FoundPlane> planes = SegmentPlanes(pts, band, std::max<size_t>(min_count, 50),
+                                                   options.max_planes, options.ransac_iterations,
+                                                   &rng);
+    // Keep surfaces seen from more than one place: at least two sightings
+    // (time gaps > 1 s) or one long sighting (floor, ceiling: seen from
+    // every heading of the circle).
+    std::vector<FoundPlane> used;
+    for (auto& fp : planes) {
+      std::vector<int64_t> times;
+      for (size_t m : fp.members) times.push_back(store.observations()[sample[m]].time_ns);
+      const auto windows = SplitByTimeGaps(times, 1.0, 20);
+      double span = 0.0;
+      for (const auto& w : windows) span += w.duration_s();
+      if (windows.size() >= 2 || span >= 5.0) used.push_back(std::move(fp));
+    }
+    if (used.size() < 2) {
+      summary->trace = trace;
+      return Status::Error("automatic calibration: found " + std::to_string(used.size()) +
+                           " plane(s) seen in both passes, need at least 2");
+    }
+    ceres::Problem::Options po;
+    ceres::Problem problem(po);
+    problem.AddParameterBlock(abg, 3);
+    std::vector<std::array<double, 4>> params(used.size());
+    int residuals = 0;
+    double sq_before = 0.0;
+    const double scale = so_opts.loss == RobustLoss::kNone ? 0.25 * band : so_opts.loss_scale_m;
+    const RobustLoss loss = so_opts.loss == RobustLoss::kNone ? RobustLoss::kHuber : so_opts.loss;
+    for (size_t s = 0; s < used.size(); ++s) {
+      const Plane& pl = used[s].plane;
+      params[s] = {pl.normal.x(), pl.normal.y(), pl.normal.z(), pl.d};
+      problem.AddParameterBlock(params[s].data(), 3, new ceres::SphereManifold<3>());
+      problem.AddParameterBlock(params[s].data() + 3, 1);
+      const size_t stride = std::max<size_t>(
+          1, (used[s].members.size() + options.max_points_per_plane - 1) / options.max_points_per_plane);
+      for (size_t k = 0; k < used[s].members.size(); k += stride) {
+        const size_t m = used[s].members[k];
+        problem.AddResidualBlock(PointToPlaneCost::Create(prepared[m]), MakeLoss(loss, scale), abg,
+                                 params[s].data(), params[s].data() + 3);
+        const double r = pl.SignedDistance(pts[m]);
+        sq_before += r * r;
+        ++residuals;
+      }
+    }
+    if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
+    ceres::Solver::Options so = SolverOptions(so_opts);
+    std::vector<CalibrationIteration> inner_trace;
+    TraceCallback callback(abg, &inner_trace, so_opts.progress);
+    so.callbacks.push_back(&callback);
+    ceres::Solver::Summary cs;
+    ceres::Solve(so, &problem, &cs);
+    for (auto it : inner_trace) {
+      it.iteration = static_cast<int>(trace.size());
+      trace.push_back(it);
+    }
+    summary->outer_iterations = outer + 1;
+    summary->message = cs.message;
+    if (outer == 0) summary->initial_cost = cs.initial_cost;
+    if (cs.termination_type == ceres::USER_FAILURE) {
+      summary->trace = trace;
+      return Status::Error("calibration cancelled");
+    }
+    if (cs.termination_type != ceres::CONVERGENCE || !Eigen::Vector3d(abg[0], abg[1], abg[2]).allFinite()) {
+      summary->trace = trace;
+      return Status::Error("automatic calibration did not converge: " + cs.message);
+    }
+    const MountingError next = FromArray(abg);
+    const double change = AngleChange(c, next);
+    c = next;
+    const bool last_band = band <= options.final_band_m;
+    if (last_band && (change < so_opts.outer_tolerance_rad ||
+                      outer + 1 == so_opts.max_outer_iterations)) {
+      // Final statistics on the last problem.
+      summary->converged = change < so_opts.outer_tolerance_rad;
+      summary->final_cost = cs.final_cost;
+      summary->planes = static_cast<int>(used.size());
+      summary->residual_blocks = residuals;
+      double sq = 0.0;
+      for (size_t s = 0; s < used.size(); ++s) {
+        const Eigen::Vector3d n(params[s][0], params[s][1], params[s][2]);
+        const size_t stride = std::max<size_t>(
+            1, (used[s].members.size() + options.max_points_per_plane - 1) / options.max_points_per_plane);
+        for (size_t k = 0; k < used[s].members.size(); k += stride) {
+          double p[3];
+          ProjectT(prepared[used[s].members[k]], abg, p);
+          const double r = n.dot(Eigen::Vector3d(p[0], p[1], p[2])) + params[s][3];
+          sq += r * r;
+        }
+      }
+      summary->final_rms_m = std::sqrt(sq / residuals);
+      CheckObservability(&problem, abg, so_opts, summary);
+      if (so_opts.compute_covariance) ComputeCovariance(&problem, abg, residuals, summary);
+      break;
+    }
+    band = std::max(options.final_band_m, 0.5 * band);
+  }
+  summary->angles = c;
+  summary->trace = trace;
+  if (!summary->converged) {
+    return Status::Error("automatic calibration did not settle in " +
+                         std::to_string(so_opts.max_outer_iterations) + " outer iterations");
+  }
+  summary->message = "angles stopped changing at the final inlier band";
+  return Status::Ok();
+}
+
+// ----------------------------------------------------------------------------
+// Files
+
+namespace {
+
+Pick ParsePick(const JsonObject& o) {
+  Pick p;
+  o.AllowOnly({"scan", "beam", "world"});
+  const bool has_sample = o.Has("scan") || o.Has("beam");
+  if (has_sample == o.Has("world")) {
+    o.Fail("", "give either scan and beam, or world, not " +
+                   std::string(has_sample ? "both" : "neither"));
+  }
+  if (has_sample) {
+    const int64_t scan = o.Integer("scan");
+    const int64_t beam = o.Integer("beam");
+    if (scan < 0 || scan > 0xffffffffLL) o.Fail("scan", "out of range: " + std::to_string(scan));
+    if (beam < 0 || beam > 0xffff) o.Fail("beam", "out of range: " + std::to_string(beam));
+    p.has_sample = true;
+    p.sample = {static_cast<uint32_t>(scan), static_cast<uint16_t>(beam)};
+  } else {
+    const nlohmann::json& w = o.Array("world");
+    if (w.size() != 3) o.Fail("world", "expected [x, y, z], got " + std::to_string(w.size()) + " values");
+    for (int i = 0; i < 3; ++i) {
+      if (!w[i].is_number()) o.Fail("world", "element " + std::to_string(i) + " is " + JsonTypeName(w[i]));
+      p.world[i] = w[i].get<double>();
+      if (!std::isfinite(p.world[i])) o.Fail("world", "element " + std::to_string(i) + " is not finite");
+    }
+  }
+  return p;
+}
+
+void CheckHeader(const JsonObject& root, const std::string& format) {
+  if (root.String("format") != format) {
+    root.Fail("format", "expected \"" + format + "\", got \"" + root.String("format") + "\"");
+  }
+  if (root.Integer("version") != 1) {
+    root.Fail("version", "unsupported version " + std::to_string(root.Integer("version")));
+  }
+}
+
+}  // namespace
+
+Status ParsePairs(const std::string& text, const std::string& source, std::vector<PickPair>* pairs) {
+  nlohmann::json j;
+  Status s = ParseJson(text, source, &j);
+  if (!s.ok()) return s;
+  try {
+    const JsonObject root(j, "");
+    root.AllowOnly({"format", "version", "pairs", "comment"});
+    CheckHeader(root, "sweepscan-pairs");
+    const nlohmann::json& list = root.Array("pairs");
+    std::vector<PickPair> out;
+    for (size_t k = 0; k < list.size(); ++k) {
+      const JsonObject pair(list[k], "pairs[" + std::to_string(k) + "]");
+      pair.AllowOnly({"pass1", "pass2", "label"});
+      if (pair.Has("label")) pair.String("label");
+      PickPair pp;
+      pp.pass1 = ParsePick(pair.Object("pass1"));
+      pp.pass2 = ParsePick(pair.Object("pass2"));
+      out.push_back(pp);
+    }
+    *pairs = std::move(out);
+  } catch (const JsonError& e) {
+    return Status::Error(source + ": " + e.what());
+  }
+  return Status::Ok();
+}
+
+Status LoadPairsFile(const std::string& path, std::vector<PickPair>* pairs) {
+  nlohmann::json j;
+  Status s = ReadJsonFile(path, &j);
+  if (!s.ok()) return s;
+  return ParsePairs(j.dump(), path, pairs);
+}
+
+std::string PairsToJson(const std::vector<PickPair>& pairs) {
+  nlohmann::json list = nlohmann::json::array();
+  auto pick = [](const Pick& p) {
+    nlohmann::json o;
+    if (p.has_sample) {
+      o["scan"] = p.sample.scan;
+      o["beam"] = p.sample.beam;
+    } else {
+      o["world"] = {p.world.x(), p.world.y(), p.world.z()};
+    }
+    return o;
+  };
+  for (const auto& p : pairs) list.push_back({{"pass1", pick(p.pass1)}, {"pass2", pick(p.pass2)}});
+  nlohmann::json root = {{"format", "sweepscan-pairs"}, {"version", 1}, {"pairs", list}};
+  return root.dump(2) + "\n";
+}
+
+Status SaveCalibrationFile(const std::string& path, const MountingError& c,
+                           const CalibrationSummary* summary) {
+  if (!std::isfinite(c.alpha) || !std::isfinite(c.beta) || !std::isfinite(c.gamma)) {
+    return Status::Error(path + ": refusing to save non-finite angles");
+  }
+  nlohmann::json root = {{"format", "sweepscan-calibration"},
+                         {"version", 1},
+                         {"mounting_error_rad", {{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}}}};
+  if (summary != nullptr) {
+    root["method"] = summary->method;
+    root["converged"] = summary->converged;
+    if (summary->sigma_rad.minCoeff() >= 0.0 && summary->sigma_rad.allFinite()) {
+      root["sigma_rad"] = {{"alpha", summary->sigma_rad[0]},
+                           {"beta", summary->sigma_rad[1]},
+                           {"gamma", summary->sigma_rad[2]}};
+    }
+    root["rms_before_m"] = summary->initial_rms_m;
+    root["rms_after_m"] = summary->final_rms_m;
+  }
+  return WriteFileAtomically(path, root.dump(2) + "\n");
+}
+
+Status ParseCalibration(const std::string& text, const std::string& source, MountingError* c) {
+  nlohmann::json j;
+  Status s = ParseJson(text, source, &j);
+  if (!s.ok()) return s;
+  try {
+    const JsonObject root(j, "");
+    root.AllowOnly({"format", "version", "mounting_error_rad", "method", "converged", "sigma_rad",
+                    "rms_before_m", "rms_after_m", "comment"});
+    CheckHeader(root, "sweepscan-calibration");
+    const JsonObject m = root.Object("mounting_error_rad");
+    m.AllowOnly({"alpha", "beta", "gamma"});
+    // A mounting error is a small angle; beyond 0.5 rad the file is wrong
+    // (degrees written as radians, most likely).
+    MountingError out;
+    out.alpha = m.InRange("alpha", -0.5, 0.5, 0.0);
+    out.beta = m.InRange("beta", -0.5, 0.5, 0.0);
+    out.gamma = m.InRange("gamma", -0.5, 0.5, 0.0);
+    for (const char* k : {"alpha", "beta", "gamma"}) {
+      if (!m.Has(k)) m.Fail(k, "missing");
+    }
+    if (root.Has("method")) root.String("method");
+    root.Bool("converged", true);
+    if (root.Has("sigma_rad")) {
+      const JsonObject sg = root.Object("sigma_rad");
+      sg.AllowOnly({"alpha", "beta", "gamma"});
+      for (const char* k : {"alpha", "beta", "gamma"}) sg.NonNegative(k, 0.0);
+    }
+    root.NonNegative("rms_before_m", 0.0);
+    root.NonNegative("rms_after_m", 0.0);
+    *c = out;
+  } catch (const JsonError& e) {
+    return Status::Error(source + ": " + e.what());
+  }
+  return Status::Ok();
+}
+
+Status LoadCalibrationFile(const std::string& path, MountingError* c) {
+  nlohmann::json j;
+  Status s = ReadJsonFile(path, &j);
+  if (!s.ok()) return s;
+  return ParseCalibration(j.dump(), path, c);
+}
+
+}  // namespace sweepscan

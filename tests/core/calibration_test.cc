@@ -1,0 +1,5 @@
+#include "core/calibration.h"
+
+#include <gtest/gtest.h>
+
+TEST(CalibrationPlaceholder, Builds) {}
