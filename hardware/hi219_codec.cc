@@ -53,13 +53,22 @@ void ImuSample::UpdateDerived() {
   yaw_rad = yaw_deg * kDegToRad;
 }
 
+// Table-driven (one lookup per byte instead of 8 shift/xor steps; ~8x faster
+// than the bitwise form, which the tests keep as the reference).
 uint16_t Crc16Xmodem(const uint8_t* data, size_t n, uint16_t crc) {
-  for (size_t i = 0; i < n; ++i) {
-    crc ^= static_cast<uint16_t>(data[i]) << 8;
-    for (int b = 0; b < 8; ++b) {
-      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021)
-                           : static_cast<uint16_t>(crc << 1);
+  static const std::array<uint16_t, 256> kTable = [] {
+    std::array<uint16_t, 256> t{};
+    for (int i = 0; i < 256; ++i) {
+      uint16_t c = static_cast<uint16_t>(i << 8);
+      for (int b = 0; b < 8; ++b) {
+        c = (c & 0x8000) ? static_cast<uint16_t>((c << 1) ^ 0x1021) : static_cast<uint16_t>(c << 1);
+      }
+      t[i] = c;
     }
+    return t;
+  }();
+  for (size_t i = 0; i < n; ++i) {
+    crc = static_cast<uint16_t>((crc << 8) ^ kTable[((crc >> 8) ^ data[i]) & 0xFF]);
   }
   return crc;
 }

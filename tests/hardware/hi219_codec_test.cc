@@ -52,6 +52,29 @@ TEST(Hi219CrcTest, XmodemCheckValue) {
             0x31C3);
 }
 
+// Bitwise reference: poly 0x1021, init 0, MSB first.
+uint16_t BitwiseCrc(const Bytes& data) {
+  uint16_t crc = 0;
+  for (uint8_t byte : data) {
+    crc ^= static_cast<uint16_t>(byte) << 8;
+    for (int b = 0; b < 8; ++b) {
+      crc = (crc & 0x8000) ? static_cast<uint16_t>((crc << 1) ^ 0x1021)
+                           : static_cast<uint16_t>(crc << 1);
+    }
+  }
+  return crc;
+}
+
+TEST(Hi219CrcTest, TableMatchesBitwiseReference) {
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (size_t n = 0; n < 300; ++n) {
+    Bytes data(n);
+    for (auto& b : data) b = static_cast<uint8_t>(byte(rng));
+    EXPECT_EQ(Crc16Xmodem(data.data(), data.size()), BitwiseCrc(data)) << n;
+  }
+}
+
 TEST(Hi219DecoderTest, VendorExampleFrame) {
   const Bytes vec = ReadTestdata("hipnuc_hi91_example_frame.bin");
   ASSERT_EQ(vec.size(), 82u);
