@@ -15,8 +15,9 @@ std::string DecoderStats::ToString() const {
   return s.str();
 }
 
-// memcpy, not a pointer cast: the fields are unaligned and the host is assumed
-// little-endian IEEE 754 (static_assert below guards the size).
+// The bytes are assembled as a little-endian u32 (host byte order does not
+// matter), then reinterpreted with memcpy, which is defined behaviour where a
+// pointer cast would not be. Assumes IEEE 754 binary32 floats.
 float ReadF32Le(const uint8_t* p) {
   static_assert(sizeof(float) == 4, "float must be 32-bit IEEE 754");
   const uint32_t bits = ReadU32Le(p);

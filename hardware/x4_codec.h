@@ -97,7 +97,9 @@ struct X4DeviceInfo {
   std::array<uint8_t, 16> serial{};
   Time receive_time;
 
-  std::string SerialString() const;  // The 16 serial digits as ASCII '0'..'9' where they are 0..9.
+  // Each serial byte as hex without padding (the SDK prints the 16 bytes as
+  // digits 0..9 this way).
+  std::string SerialString() const;
 };
 
 struct X4Health {
