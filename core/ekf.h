@@ -44,9 +44,11 @@ namespace sweepscan {
 struct EkfOptions {
   // Process noise (continuous-time standard deviations).
   double accel_sigma = 0.5;          // m/s^2 on v
-  double angular_accel_sigma = 1.0;  // rad/s^2 on w
+  double angular_accel_sigma = 0.5;  // rad/s^2 on w
   double position_sigma = 0.002;     // m/sqrt(s), unmodelled motion
-  double yaw_sigma = 0.002;          // rad/sqrt(s)
+  // psi changes only through w, which the gyro measures; a large random walk
+  // here would let psi and the IMU heading offset b trade places.
+  double yaw_sigma = 0.0002;         // rad/sqrt(s)
   double tilt_sigma = 0.001;         // rad/sqrt(s)
   double yaw_offset_sigma = 0.0001;  // rad/sqrt(s), wander of the IMU heading reference
   // Measurement noise (standard deviations).

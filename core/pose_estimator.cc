@@ -83,8 +83,11 @@ PoseEstimator EstimatePoses(const SensorLog& log, const PoseEstimatorOptions& op
   PoseEstimator estimator(options, geometry);
   size_t i = 0, j = 0;
   while (i < log.wheels.size() || j < log.imu.size()) {
+    // On equal times the IMU goes first: the gyro is the better yaw-rate
+    // sensor, so a slipping wheel is then judged (and gated) against it
+    // rather than the other way round.
     const bool take_wheel =
-        j >= log.imu.size() || (i < log.wheels.size() && log.wheels[i].time <= log.imu[j].time);
+        j >= log.imu.size() || (i < log.wheels.size() && log.wheels[i].time < log.imu[j].time);
     if (take_wheel) {
       estimator.AddWheels(log.wheels[i++]);
     } else {

@@ -60,7 +60,7 @@ class PoseEstimator {
 };
 
 // Runs the estimator over a whole log, merging wheel and IMU records by
-// time (a wheel record goes first on a tie). Returns the estimator, whose
+// time (an IMU record goes first on a tie). Returns the estimator, whose
 // poses() and ekf() hold the result.
 PoseEstimator EstimatePoses(const SensorLog& log, const PoseEstimatorOptions& options,
                             const RobotGeometry& geometry);

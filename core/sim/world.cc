@@ -157,8 +157,6 @@ SensorLog SimWorld::RunAll() {
 
 void SimWorld::EmitLidar(Time until, SensorSink* sink) {
   const LidarSpec& spec = config_.lidar;
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const double until_s = TimeS(until);
   const double cos_start = std::cos(spec.grazing_dropout_start_deg * M_PI / 180.0);
   const double start_rad = spec.grazing_dropout_start_deg * M_PI / 180.0;
@@ -191,8 +189,8 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
         p_keep *= std::clamp(1.0 - (inc - start_rad) / span_rad, 0.0, 1.0);
       }
       const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * hit.range);
-      const double noisy = hit.range + sigma * gauss(lidar_rng_);
-      const bool kept = uniform(lidar_rng_) < p_keep;
+      const double noisy = hit.range + sigma * lidar_gauss_(lidar_rng_);
+      const bool kept = lidar_uniform_(lidar_rng_) < p_keep;
       if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
         range = spec.range_quantum_m > 0.0
                     ? std::round(noisy / spec.range_quantum_m) * spec.range_quantum_m
@@ -233,14 +231,11 @@ void SimWorld::TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* r
 
 void SimWorld::EmitWheels(Time until, SensorSink* sink) {
   const OdometrySpec& spec = config_.odometry;
-  std::normal_distribution<double> gauss(0.0, 1.0);
   const double until_s = TimeS(until);
-  if (next_wheel_tick_ == 1 && 0.0 <= until_s && !finished_) {
-    next_wheel_tick_ = 0;  // the first record (time 0) only starts the odometry
-  }
   for (;;) {
     const double t1 = static_cast<double>(next_wheel_tick_) / spec.rate_hz;
     if (t1 > until_s) break;
+    // Tick 0 (time 0) reports the instantaneous speeds; it only starts the odometry.
     const double t0 = next_wheel_tick_ == 0 ? t1 : t1 - 1.0 / spec.rate_hz;
     ++next_wheel_tick_;
     double left, right;
@@ -253,16 +248,15 @@ void SimWorld::EmitWheels(Time until, SensorSink* sink) {
     WheelSpeedMeasurement m;
     m.time = RobotTime(t1);
     m.left_mps = left * (1.0 + spec.scale_error_left) * (1.0 + slip_left) +
-                 spec.speed_noise_mps * gauss(wheel_rng_);
+                 spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
     m.right_mps = right * (1.0 + spec.scale_error_right) * (1.0 + slip_right) +
-                  spec.speed_noise_mps * gauss(wheel_rng_);
+                  spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
     sink->OnWheels(m);
   }
 }
 
 void SimWorld::EmitImu(Time until, SensorSink* sink) {
   const ImuSpec& spec = config_.imu;
-  std::normal_distribution<double> gauss(0.0, 1.0);
   const double until_s = TimeS(until);
   for (;;) {
     const double t = static_cast<double>(next_imu_tick_) / spec.rate_hz;
@@ -271,10 +265,10 @@ void SimWorld::EmitImu(Time until, SensorSink* sink) {
     const Pose2d p = trajectory_.PoseAt(t);
     ImuMeasurement m;
     m.time = RobotTime(t);
-    m.gyro_z = trajectory_.TwistAt(t).w + spec.gyro_bias_rad_s + spec.gyro_noise_rad_s * gauss(imu_rng_);
-    m.roll = spec.tilt_noise_rad * gauss(imu_rng_);
-    m.pitch = spec.tilt_noise_rad * gauss(imu_rng_);
-    m.yaw = WrapAngle(p.yaw + spec.yaw_reference_offset_rad + spec.yaw_noise_rad * gauss(imu_rng_));
+    m.gyro_z = trajectory_.TwistAt(t).w + spec.gyro_bias_rad_s + spec.gyro_noise_rad_s * imu_gauss_(imu_rng_);
+    m.roll = spec.tilt_noise_rad * imu_gauss_(imu_rng_);
+    m.pitch = spec.tilt_noise_rad * imu_gauss_(imu_rng_);
+    m.yaw = WrapAngle(p.yaw + spec.yaw_reference_offset_rad + spec.yaw_noise_rad * imu_gauss_(imu_rng_));
     sink->OnImu(m);
   }
 }

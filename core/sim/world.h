@@ -167,8 +167,13 @@ class SimWorld {
   Trajectory trajectory_;
   Rigid3d body_from_lidar_true_;
   std::mt19937_64 lidar_rng_, imu_rng_, wheel_rng_;
+  // Members, not locals: normal_distribution keeps half of each generated
+  // pair, so recreating it per call would make RunUntil's chunking change
+  // the noise.
+  std::normal_distribution<double> lidar_gauss_, imu_gauss_, wheel_gauss_;
+  std::uniform_real_distribution<double> lidar_uniform_;
   int64_t next_lidar_sample_ = 0;
-  int64_t next_wheel_tick_ = 1;
+  int64_t next_wheel_tick_ = 0;
   int64_t next_imu_tick_ = 0;
   uint32_t scan_index_ = 0;
   double last_phase_ = -1.0;

@@ -1,0 +1,91 @@
+// Runs the real sweepscan-cli binary as an operator or a script would.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/cloud_io.h"
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out;  // stdout and stderr
+};
+
+CliRun Cli(const std::string& args) {
+  const std::string cmd = std::string(SWEEPSCAN_CLI) + " " + args + " 2>&1";
+  CliRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string Tmp(const std::string& name) { return ::testing::TempDir() + "/sweepscan_cli_" + name; }
+std::string Scenario(const std::string& name) {
+  return std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name + ".json";
+}
+
+TEST(CliTest, SimulateWritesCloudTruthAndJsonReport) {
+  const CliRun r = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("lab.ply") +
+                    " --truth " + Tmp("truth.json") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_GT(report["points"].get<int>(), 200000);
+  EXPECT_LT(std::abs(report["room"]["relative_error"][1].get<double>()), 0.002);
+  std::vector<Eigen::Vector3f> pts;
+  ASSERT_TRUE(sweepscan::LoadCloudPositions(Tmp("lab.ply"), &pts).ok());
+  EXPECT_EQ(static_cast<int>(pts.size()), report["points"].get<int>());
+  std::ifstream truth(Tmp("truth.json"));
+  const nlohmann::json t = nlohmann::json::parse(truth);
+  EXPECT_EQ(t["format"], "sweepscan-truth");
+  EXPECT_GT(t["trajectory"].size(), 2000u);
+}
+
+TEST(CliTest, SwitchesForComparison) {
+  const CliRun odo = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("o.pcd") + " --no-ekf --json");
+  ASSERT_EQ(odo.code, 0) << odo.out;
+  EXPECT_EQ(nlohmann::json::parse(odo.out)["pose_source"], "odometry");
+  const CliRun nd = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("n.ply") + " --no-deskew --json");
+  ASSERT_EQ(nd.code, 0) << nd.out;
+  EXPECT_FALSE(nlohmann::json::parse(nd.out)["deskew"].get<bool>());
+}
+
+TEST(CliTest, BadInputExitsTwoWithOneClearLine) {
+  const std::string bad = Tmp("bad.json");
+  std::ofstream(bad) << R"({"format": "sweepscan-scenario", "version": 1, "scene": {"preset": "lab"},
+      "robot": {"wheel_distance_m": -0.2},
+      "path": {"start": {"x_m": 1, "y_m": 1, "yaw_rad": 0}, "segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 1}]}})";
+  CliRun r = Cli("simulate --scenario " + bad + " --out " + Tmp("x.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.out, "sweepscan-cli: error: " + bad + ": robot.wheel_distance_m: must be > 0, got -0.2\n");
+
+  std::ofstream(bad) << R"({"format": "sweepscan-scenario", "version": 1, "seed": NaN})";
+  r = Cli("simulate --scenario " + bad + " --out " + Tmp("x.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("not valid JSON"), std::string::npos) << r.out;
+
+  EXPECT_EQ(Cli("simulate --out " + Tmp("x.ply")).code, 2);
+  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out x.txt").code, 2);
+  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out x.ply --bogus").code, 2);
+  EXPECT_EQ(Cli("teleport").code, 2);
+  EXPECT_EQ(Cli("").code, 2);
+  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /nonexistent-dir/x.ply").code, 1);
+}
+
+TEST(CliTest, HelpExitsZero) {
+  const CliRun r = Cli("help simulate");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("--no-deskew"), std::string::npos);
+  EXPECT_EQ(Cli("--help").code, 0);
+}
+
+}  // namespace
