@@ -134,12 +134,12 @@ class CalibrationProgress {
 };
 
 struct CalibrationOptions {
-  int max_iterations = 100;        // LM iterations per solve
+  int max_iterations = 100;  // LM iterations per solve
   double function_tolerance = 1e-12;
   double gradient_tolerance = 1e-14;
   double parameter_tolerance = 1e-12;
   RobustLoss loss = RobustLoss::kNone;
-  double loss_scale_m = 0.02;      // Huber/Cauchy scale (residuals in metres)
+  double loss_scale_m = 0.02;  // Huber/Cauchy scale (residuals in metres)
   int min_pairs = 4;
   bool compute_covariance = true;
   // Observability: the Jacobian's condition number (largest / smallest
@@ -171,14 +171,15 @@ struct CalibrationSummary {
   std::string message;  // Ceres' or ours: why it stopped
   MountingError initial;
   MountingError angles;
-  Eigen::Vector3d sigma_rad = Eigen::Vector3d::Constant(-1.0);  // 1-sigma (alpha, beta, gamma); -1: unknown
+  Eigen::Vector3d sigma_rad =
+      Eigen::Vector3d::Constant(-1.0);  // 1-sigma (alpha, beta, gamma); -1: unknown
   double initial_rms_m = 0.0;  // RMS pair distance (pairs) or point-to-plane distance (auto)
   double final_rms_m = 0.0;
   double initial_cost = 0.0, final_cost = 0.0;
   double condition_number = 0.0;
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
-  int planes = 0;  // automatic mode
+  int planes = 0;                           // automatic mode
   std::vector<CalibrationIteration> trace;  // the paper's Fig. 8
   std::vector<std::string> warnings;
 
@@ -229,14 +230,14 @@ Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
 
 struct AutoCalibrationOptions {
   CalibrationOptions solver;
-  size_t max_segmentation_points = 40000;  // subsample of the cloud for RANSAC
-  size_t max_points_per_plane = 1500;      // residuals per surface
+  size_t max_segmentation_points = 60000;  // subsample of the cloud for RANSAC
+  size_t max_points_per_plane = 6000;      // residuals per surface
   int max_planes = 8;
-  double min_plane_fraction = 0.02;        // of the segmentation sample
+  double min_plane_fraction = 0.02;  // of the segmentation sample
   int ransac_iterations = 400;
-  double initial_band_m = 0.20;            // RANSAC inlier band at the first round
+  double initial_band_m = 0.20;  // RANSAC inlier band at the first round
   double final_band_m = 0.03;
-  double min_range_m = 0.3;                // ignore samples nearer than this
+  double min_range_m = 0.3;  // ignore samples nearer than this
   uint64_t seed = 1;
 
   bool IsValid(std::string* error) const;

@@ -46,8 +46,7 @@ std::vector<PassWindow> SplitByTimeGaps(std::vector<int64_t> times_ns, double ga
 // result[k] holds the indices into `points` of sighting k, in time order.
 std::vector<std::vector<size_t>> SplitRegionIntoPasses(const std::vector<CloudPoint>& points,
                                                        const Eigen::AlignedBox3d& region,
-                                                       double gap_s = 1.0,
-                                                       size_t min_count = 20);
+                                                       double gap_s = 1.0, size_t min_count = 20);
 
 // The windows of the same split (for picking samples by time).
 std::vector<PassWindow> FindPassWindows(const std::vector<CloudPoint>& points,
