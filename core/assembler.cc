@@ -22,6 +22,15 @@ void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChu
   Rigid3d world_from_body;
   Eigen::Matrix3f r_wb;
   Eigen::Vector3f t_wb;
+  // Deskew works interval by interval of the pose buffer: the poses at both
+  // ends of the current interval are turned into matrices once, and each
+  // sample blends them, R(s) = (1 - s) R_a + s R_b, t(s) likewise. Between
+  // filter steps (10 ms, < 0.01 rad) the blend departs from the slerp
+  // rotation by under 1e-5 rad (about delta^2 / 8), 0.1 mm at 10 m, at a
+  // fraction of the cost of a quaternion per sample.
+  size_t interval = static_cast<size_t>(-1);
+  Eigen::Matrix3f r_a, r_d;  // R_a and R_b - R_a
+  Eigen::Vector3f t_a, t_d;
   bool have_fixed_pose = false;
   if (!options_.deskew) {
     if (!scan.samples.empty() && poses.Lookup(scan.start_time(), &world_from_body)) {
@@ -41,12 +50,24 @@ void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChu
       continue;
     }
     if (options_.deskew) {
-      if (!poses.LookupWithHint(s.time, &hint, &world_from_body)) {
+      size_t i;
+      double frac;
+      if (!poses.FindInterval(s.time, &hint, &i, &frac)) {
         ++stats_.no_pose;
         continue;
       }
-      r_wb = world_from_body.rotation().toRotationMatrix().cast<float>();
-      t_wb = world_from_body.translation().cast<float>();
+      if (i != interval) {
+        interval = i;
+        const Rigid3d& a = poses.pose(i);
+        const Rigid3d& b = i + 1 < poses.size() ? poses.pose(i + 1) : a;
+        r_a = a.rotation().toRotationMatrix().cast<float>();
+        r_d = b.rotation().toRotationMatrix().cast<float>() - r_a;
+        t_a = a.translation().cast<float>();
+        t_d = b.translation().cast<float>() - t_a;
+      }
+      const float f = static_cast<float>(frac);
+      r_wb = r_a + f * r_d;
+      t_wb = t_a + f * t_d;
     } else if (!have_fixed_pose) {
       ++stats_.no_pose;
       continue;

@@ -1,6 +1,7 @@
 // All PCL templates of core's cloud I/O live in this one translation unit.
 #include "core/cloud_io.h"
 
+#include <pcl/console/print.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
@@ -38,6 +39,10 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
          std::equal(suffix.rbegin(), suffix.rend(), s.rbegin(),
                     [](char a, char b) { return std::tolower(a) == b; });
 }
+
+// PCL's PLY reader warns on stderr about the "camera" element its own writer
+// adds; errors are reported through our Status instead.
+void QuietPcl() { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
 
 bool FileReadable(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -91,6 +96,7 @@ Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points)
 
 Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
   if (!FileReadable(path)) return Status::Error(path + ": cannot open for reading");
+  QuietPcl();
   pcl::PointCloud<pcl::PointXYZ> cloud;
   int rc = -1;
   if (EndsWith(path, ".ply")) {
@@ -111,6 +117,7 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
 
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points) {
   if (!FileReadable(path)) return Status::Error(path + ": cannot open for reading");
+  QuietPcl();
   pcl::PointCloud<PclSweepPoint> cloud;
   int rc = -1;
   if (EndsWith(path, ".ply")) {

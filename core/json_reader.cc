@@ -122,6 +122,9 @@ Status ParseJson(const std::string& text, const std::string& source, nlohmann::j
     return Status::Error(source + ":" + std::to_string(line) + ":" + std::to_string(col) +
                          ": not valid JSON (" + (pos == std::string::npos ? what : what.substr(pos)) +
                          ")");
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. a number too large for a double (1e999).
+    return Status::Error(source + ": not valid JSON (" + e.what() + ")");
   }
   return Status::Ok();
 }

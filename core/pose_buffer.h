@@ -54,6 +54,16 @@ class PoseBuffer {
   // As Lookup, for time-ordered queries: `hint` keeps the last interval and
   // the search walks forward from it, so a scan costs O(1) per sample.
   bool LookupWithHint(Time time, size_t* hint, Rigid3d* world_from_body) const {
+    size_t i;
+    double s;
+    if (!FindInterval(time, hint, &i, &s)) return false;
+    *world_from_body = s == 0.0 ? poses_[i] : InterpolateNlerp(poses_[i], poses_[i + 1], s);
+    return true;
+  }
+
+  // The stored interval [i, i + 1] around `time` and the fraction s in [0, 1)
+  // of the way through it (s = 0 and i = size() - 1 at the very end).
+  bool FindInterval(Time time, size_t* hint, size_t* index, double* fraction) const {
     const int64_t t = ToNanoseconds(time);
     if (times_.empty() || t < times_.front() || t > times_.back()) return false;
     size_t i = std::min(*hint, times_.size() - 1);
@@ -69,12 +79,10 @@ class PoseBuffer {
       }
     }
     *hint = i;
-    if (i + 1 == times_.size() || times_[i] == t) {
-      *world_from_body = poses_[i];
-      return true;
-    }
-    const double s = static_cast<double>(t - times_[i]) / static_cast<double>(times_[i + 1] - times_[i]);
-    *world_from_body = InterpolateNlerp(poses_[i], poses_[i + 1], s);
+    *index = i;
+    *fraction = (i + 1 == times_.size() || times_[i] == t)
+                    ? 0.0
+                    : static_cast<double>(t - times_[i]) / static_cast<double>(times_[i + 1] - times_[i]);
     return true;
   }
 

@@ -53,6 +53,13 @@ RoomMeasurement MeasureRoom(const Scene& scene, const std::string& room_label,
   }
   const Box& room = scene.boxes()[idx];
   const Eigen::Vector3d h = 0.5 * room.size;
+  // Everything but the room: points near these (the feet of a desk within
+  // the floor's band, a handrail beside a wall) belong to them, not to a face.
+  std::vector<Box> others;
+  for (size_t i = 0; i < scene.boxes().size(); ++i) {
+    if (static_cast<int>(i) != idx) others.push_back(scene.boxes()[i]);
+  }
+  const Scene furniture(others);
   std::vector<Eigen::Vector3d> face_points[6];
   for (const CloudPoint& cp : points) {
     const Eigen::Vector3d q = ToBoxFrame(room, P(cp));
@@ -64,7 +71,9 @@ RoomMeasurement MeasureRoom(const Scene& scene, const std::string& room_label,
       for (int a = 0; a < 3; ++a) {
         if (a != axis && std::abs(q[a]) > h[a] - margin_m) inside_edges = false;
       }
-      if (inside_edges) face_points[face].push_back(q);
+      if (inside_edges && (others.empty() || furniture.DistanceToSurface(P(cp)) > band_m)) {
+        face_points[face].push_back(q);
+      }
     }
   }
   for (int face = 0; face < 6; ++face) {

@@ -25,8 +25,9 @@ SurfaceErrorStats SurfaceErrors(const Scene& scene, const std::vector<CloudPoint
 
 // The room's size measured from the cloud: for each face of the room box,
 // the points within `band_m` of the true face plane (and at least
-// `margin_m` inside its edges, away from corners and from furniture that
-// touches it) get a least-squares plane; opposite planes give a dimension.
+// `margin_m` inside its edges, and farther than `band_m` from every other
+// box, so that the feet of furniture standing on the floor do not count) get
+// a least-squares plane; opposite planes give a dimension.
 struct RoomMeasurement {
   bool ok = false;
   std::string error;

@@ -13,6 +13,13 @@ bool Finite(std::initializer_list<double> values) {
   return true;
 }
 
+// YDLIDAR's second-level (triangulation) correction, degrees, for d in mm
+// (device-protocols.md): atan(21.8 (155.3 - d) / (155.3 d)).
+double X4AngleCorrectionDeg(double d_mm) {
+  if (d_mm <= 0.0) return 0.0;
+  return std::atan(21.8 * (155.3 - d_mm) / (155.3 * d_mm)) * 180.0 / M_PI;
+}
+
 double TimeS(Time t) { return ToSeconds(t) - SimWorld::kStartTimeS; }
 Time RobotTime(double path_s) { return TimeFromSeconds(path_s + SimWorld::kStartTimeS); }
 
@@ -173,13 +180,34 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     ++next_lidar_sample_;
 
     const Time time = RobotTime(t_s);
-    const double theta = spec.angle_convention.ThetaFromX4Degrees(phase * 360.0);
+    const double encoder_deg = phase * 360.0;
+    const LidarAngleConvention& convention = spec.angle_convention;
     const Rigid3d world_from_lidar = TrueWorldFromLidar(time);
-    const Eigen::Vector3d dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
     RayHit hit;
     SampleTruth truth;
     double range = 0.0;
-    if (config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit)) {
+    double theta = convention.ThetaFromX4Degrees(encoder_deg);
+    Eigen::Vector3d dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
+    bool found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
+    if (found && spec.model_angle_correction) {
+      // Fixed point: the direction depends on the range it returns. Converges
+      // in 2-3 steps on a surface (the correction changes slowly with d);
+      // a sample that keeps jumping across a depth edge is lost, like the
+      // X4's mixed returns at edges.
+      bool converged = false;
+      for (int k = 0; k < 5 && found; ++k) {
+        const double previous = hit.range;
+        theta = convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(hit.range * 1e3));
+        dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
+        found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
+        if (found && std::abs(hit.range - previous) < 1e-4) {
+          converged = true;
+          break;
+        }
+      }
+      if (!converged) found = false;
+    }
+    if (found) {
       truth = {hit.primitive, hit.face, hit.range};
       const double cos_inc = std::abs(hit.normal.dot(dir));
       double p_keep = (1.0 - spec.dropout_probability) *
@@ -198,6 +226,12 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
       }
     }
     if (keep_truth_) sample_truth_.push_back(truth);
+    // The device reports the encoder angle and the measured distance; the
+    // direction a decoder computes from them uses the measured (noisy,
+    // quantised) distance, so report exactly that.
+    if (spec.model_angle_correction) {
+      theta = convention.ThetaFromX4Degrees(encoder_deg + (range > 0.0 ? X4AngleCorrectionDeg(range * 1e3) : 0.0));
+    }
     LidarSample s;
     s.time = time;
     s.range_m = static_cast<float>(range);

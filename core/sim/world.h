@@ -14,7 +14,7 @@
 //    (0.3 deg); yaw white noise (0.5 deg) in a heading reference rotated by
 //    a fixed offset from the world's;
 //  * lidar: Gaussian range noise sigma = sqrt(a^2 + (b rho)^2), quantised to
-//    the X4's 0.25 mm, returns lost at random, more at grazing incidence
+//    the X4's 1 mm, returns lost at random, more at grazing incidence
 //    and on dark surfaces, and none outside 0.12-10 m.
 //
 // Not thread-safe; one world per thread.
@@ -40,11 +40,17 @@ struct LidarSpec {
   double max_range_m = 10.0;
   double range_noise_m = 0.002;        // a
   double range_noise_fraction = 0.002;  // b
-  double range_quantum_m = 0.00025;    // X4 distance unit (Si / 4 mm)
+  double range_quantum_m = 0.001;      // X4 distance unit: Si >> 2 is whole millimetres
   double dropout_probability = 0.01;
   double grazing_dropout_start_deg = 70.0;  // incidence beyond which returns fade out
   double grazing_dropout_end_deg = 88.0;    // all lost beyond this
   LidarAngleConvention angle_convention;
+  // Model the X4's triangulation geometry (device-protocols.md, "second-level
+  // correction"): the head's encoder angle advances linearly in time, and a
+  // return at distance d really comes from encoder angle + atan(21.8 (155.3 -
+  // d) / (155.3 d)). The simulator casts along that corrected direction, so
+  // the bytes it emits decode to the same angles a real X4's would.
+  bool model_angle_correction = true;
 };
 
 struct ImuSpec {

@@ -39,6 +39,8 @@ TEST(JsonReaderTest, SyntaxErrorsGiveLineAndColumn) {
   const Status s = ParseJson("{\n  \"a\": 1,\n  \"b\": NaN\n}", "f.json", &j);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.message().rfind("f.json:3:", 0), 0u) << s.message();
+  // A number outside double range is refused, not thrown.
+  EXPECT_FALSE(ParseJson("{\"a\": 1e999}", "g.json", &j).ok());
 }
 
 TEST(JsonReaderTest, AtomicWriteReplacesWholeFile) {

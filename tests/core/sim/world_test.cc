@@ -30,8 +30,8 @@ TEST(WorldTest, LidarTimingMatchesTheX4) {
       } else {
         EXPECT_GE(smp.range_m, 0.12f);
         EXPECT_LE(smp.range_m, 10.0f);
-        // Quantised to the X4's 0.25 mm.
-        EXPECT_NEAR(smp.range_m * 4000.0, std::round(smp.range_m * 4000.0), 1e-2);
+        // Quantised to the X4's 1 mm.
+        EXPECT_NEAR(smp.range_m * 1000.0, std::round(smp.range_m * 1000.0), 1e-3);
       }
     }
   }
