@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds everything and runs every test:
+#   1. the GoogleTest suites through CTest (gcc build in ./build);
+#   2. a short libFuzzer run of every fuzz target on its seed corpus
+#      (clang build in ./build-fuzz; skipped with SWEEPSCAN_SKIP_FUZZ=1).
+# GUI tests, when present, run under xvfb-run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+jobs=$(nproc 2>/dev/null || echo 2)
+export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/ccache}"
+
+scripts/build.sh -DSWEEPSCAN_BUILD_BENCHMARKS=ON
+(cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
+
+if [ "${SWEEPSCAN_SKIP_FUZZ:-0}" != "1" ]; then
+  CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DSWEEPSCAN_BUILD_FUZZERS=ON -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=OFF \
+    -DSWEEPSCAN_BUILD_GUI=OFF > build-fuzz.log 2>&1 || { cat build-fuzz.log; exit 1; }
+  fuzz_targets=$(cmake --build build-fuzz --target help | sed -n 's/^\([a-z0-9_]*_fuzz\):.*/\1/p')
+  # shellcheck disable=SC2086
+  cmake --build build-fuzz -j"$jobs" --target $fuzz_targets
+  (cd build-fuzz && ctest --output-on-failure -R '_fuzz_smoke$')
+fi
