@@ -94,19 +94,27 @@ Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points)
   return Status::Ok();
 }
 
-Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
+// Reads a PLY or PCD file (by extension) into a PCL cloud of PointT.
+template <typename PointT>
+Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
   if (!FileReadable(path)) return Status::Error(path + ": cannot open for reading");
   QuietPcl();
-  pcl::PointCloud<pcl::PointXYZ> cloud;
   int rc = -1;
   if (EndsWith(path, ".ply")) {
-    rc = pcl::io::loadPLYFile(path, cloud);
+    rc = pcl::io::loadPLYFile(path, *cloud);
   } else if (EndsWith(path, ".pcd")) {
-    rc = pcl::io::loadPCDFile(path, cloud);
+    rc = pcl::io::loadPCDFile(path, *cloud);
   } else {
     return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
   }
   if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+  return Status::Ok();
+}
+
+Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  const Status s = ReadPcl(path, &cloud);
+  if (!s.ok()) return s;
   points->clear();
   points->reserve(cloud.size());
   for (const auto& p : cloud) {
@@ -116,18 +124,9 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
 }
 
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points) {
-  if (!FileReadable(path)) return Status::Error(path + ": cannot open for reading");
-  QuietPcl();
   pcl::PointCloud<PclSweepPoint> cloud;
-  int rc = -1;
-  if (EndsWith(path, ".ply")) {
-    rc = pcl::io::loadPLYFile(path, cloud);
-  } else if (EndsWith(path, ".pcd")) {
-    rc = pcl::io::loadPCDFile(path, cloud);
-  } else {
-    return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
-  }
-  if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+  const Status s = ReadPcl(path, &cloud);
+  if (!s.ok()) return s;
   points->resize(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const PclSweepPoint& q = cloud[i];
