@@ -1,0 +1,194 @@
+// sweepscan-robotd: the robot agent for the robot's own computer. Opens the
+// lidar, IMU and motor-board serial ports, serves the robot link
+// (docs/protocol.md) on TCP (loopback unless told otherwise, pre-shared key
+// required) or on a serial port, and stops the robot by itself when the link
+// goes quiet. Behaviour: docs/robot-agent.md. Thin: parsing and wiring.
+#include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <QCommandLineParser>
+#include <QCoreApplication>
+#include <QSocketNotifier>
+#include <cstdio>
+
+#include "hardware/qt_transport.h"
+#include "hardware/robot_agent.h"
+
+namespace {
+
+using sweepscan::hardware::LinkAddress;
+using sweepscan::hardware::RobotAgent;
+using sweepscan::hardware::RobotAgentConfig;
+
+int signal_fds[2] = {-1, -1};
+void OnSignal(int) {
+  const char byte = 1;
+  (void)!::write(signal_fds[1], &byte, 1);  // Async-signal-safe; the event loop does the rest.
+}
+
+int Fail(const QString& message) {
+  std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(message));
+  return 2;
+}
+
+bool ParseDouble(const QString& text, const char* what, double* out, QString* error) {
+  bool ok = false;
+  *out = text.toDouble(&ok);
+  if (!ok) *error = QStringLiteral("--%1: '%2' is not a number").arg(what, text);
+  return ok;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  QCoreApplication app(argc, argv);
+  QCoreApplication::setApplicationName(QStringLiteral("sweepscan-robotd"));
+  QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
+  QCommandLineParser parser;
+  parser.setApplicationDescription(QStringLiteral(
+      "Robot agent: streams the lidar, IMU and motor-board bytes to the workstation over the "
+      "robot link and applies its drive commands with speed and acceleration limits and a "
+      "watchdog. See docs/robot-agent.md."));
+  parser.addHelpOption();
+  parser.addVersionOption();
+  const QCommandLineOption lidar(QStringLiteral("lidar"), "YDLIDAR X4 serial port (128000 baud).",
+                                 "PORT");
+  const QCommandLineOption imu(QStringLiteral("imu"), "HI219 serial port (115200 baud).", "PORT");
+  const QCommandLineOption motor(QStringLiteral("motor"), "Motor board serial port (115200 baud).",
+                                 "PORT");
+  const QCommandLineOption listen(QStringLiteral("listen"),
+                                  "Serve the link on TCP ADDR:PORT (default 127.0.0.1:5600).",
+                                  "ADDR:PORT");
+  const QCommandLineOption serial(
+      QStringLiteral("serial"),
+      "Serve the link on a serial port instead of TCP (PORT[@BAUD], default "
+      "921600 baud; no authentication: physical access).",
+      "PORT");
+  const QCommandLineOption key_file(QStringLiteral("key-file"),
+                                    "Pre-shared key file (required for TCP).", "FILE");
+  const QCommandLineOption watchdog(QStringLiteral("watchdog-ms"),
+                                    "Watchdog period in ms (default 500).", "MS");
+  const QCommandLineOption v_max(QStringLiteral("v-max"), "Speed limit in m/s (default 0.5).",
+                                 "MPS");
+  const QCommandLineOption w_max(QStringLiteral("w-max"), "Turn rate limit in rad/s (default 1.5).",
+                                 "RADPS");
+  const QCommandLineOption accel(QStringLiteral("accel-max"),
+                                 "Acceleration limit in m/s^2 (default 1.0).", "MPS2");
+  const QCommandLineOption alpha(QStringLiteral("alpha-max"),
+                                 "Angular acceleration limit in rad/s^2 (default 3.0).", "RADPS2");
+  const QCommandLineOption name(QStringLiteral("name"),
+                                "Robot name in the Hello (default robot-1).", "NAME");
+  parser.addOptions(
+      {lidar, imu, motor, listen, serial, key_file, watchdog, v_max, w_max, accel, alpha, name});
+  if (!parser.parse(QCoreApplication::arguments())) return Fail(parser.errorText());
+  if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
+  if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
+  if (!parser.positionalArguments().isEmpty()) {
+    return Fail(QStringLiteral("unexpected argument '%1' (see --help)")
+                    .arg(parser.positionalArguments()[0]));
+  }
+
+  RobotAgentConfig config;
+  QString error;
+  config.agent.name =
+      "sweepscan-robotd 0.1.0 (" +
+      (parser.isSet(name) ? parser.value(name) : QStringLiteral("robot-1")).toStdString() + ")";
+  config.lidar_port = parser.value(lidar);
+  config.imu_port = parser.value(imu);
+  config.motor_port = parser.value(motor);
+  if (config.lidar_port.isEmpty() && config.imu_port.isEmpty() && config.motor_port.isEmpty()) {
+    return Fail(QStringLiteral("no device port given (--lidar, --imu, --motor)"));
+  }
+  auto describe = [&](uint8_t device, const QString& port, int baud, const char* what) {
+    if (!port.isEmpty()) {
+      config.agent.devices.push_back(
+          {device, QStringLiteral("%1 %2 @%3").arg(what, port).arg(baud).toStdString()});
+    }
+  };
+  describe(1, config.lidar_port, config.lidar_baud, "YDLIDAR X4");
+  describe(2, config.imu_port, config.imu_baud, "HiPNUC HI219");
+  describe(3, config.motor_port, config.motor_baud, "motor board");
+
+  if (parser.isSet(serial) && parser.isSet(listen)) {
+    return Fail(QStringLiteral("--listen and --serial exclude each other"));
+  }
+  if (parser.isSet(serial)) {
+    LinkAddress address;
+    if (!sweepscan::hardware::ParseLinkAddress("serial:" + parser.value(serial), &address,
+                                               &error)) {
+      return Fail(error);
+    }
+    config.link = RobotAgentConfig::LinkKind::kSerial;
+    config.link_serial_port = address.serial_port;
+    config.link_baud = address.baud;
+    config.agent.require_auth = false;
+  } else {
+    LinkAddress address;
+    const QString text =
+        parser.isSet(listen) ? parser.value(listen) : QStringLiteral("127.0.0.1:5600");
+    if (!sweepscan::hardware::ParseLinkAddress(text, &address, &error) ||
+        address.kind != LinkAddress::Kind::kTcp) {
+      return Fail(error.isEmpty() ? QStringLiteral("--listen expects ADDR:PORT") : error);
+    }
+    config.listen_address = address.host;
+    config.listen_port = address.port;
+    if (!parser.isSet(key_file)) {
+      return Fail(QStringLiteral("--key-file is required on TCP (clients authenticate with it)"));
+    }
+  }
+  if (parser.isSet(key_file) &&
+      !sweepscan::hardware::ReadKeyFile(parser.value(key_file), &config.agent.key, &error)) {
+    return Fail(error);
+  }
+  double value = 0;
+  if (parser.isSet(watchdog)) {
+    if (!ParseDouble(parser.value(watchdog), "watchdog-ms", &value, &error)) return Fail(error);
+    config.agent.watchdog = sweepscan::FromSeconds(value * 1e-3);
+  }
+  if (parser.isSet(v_max) &&
+      !ParseDouble(parser.value(v_max), "v-max", &config.agent.v_max_mps, &error)) {
+    return Fail(error);
+  }
+  if (parser.isSet(w_max) &&
+      !ParseDouble(parser.value(w_max), "w-max", &config.agent.w_max_radps, &error)) {
+    return Fail(error);
+  }
+  if (parser.isSet(accel) &&
+      !ParseDouble(parser.value(accel), "accel-max", &config.agent.accel_max_mps2, &error)) {
+    return Fail(error);
+  }
+  if (parser.isSet(alpha) &&
+      !ParseDouble(parser.value(alpha), "alpha-max", &config.agent.alpha_max_radps2, &error)) {
+    return Fail(error);
+  }
+  if (!config.IsValid(&error)) return Fail(error);
+
+  RobotAgent agent(config);
+  QObject::connect(&agent, &RobotAgent::logMessage,
+                   [](const QString& m) { std::fprintf(stderr, "%s\n", qPrintable(m)); });
+  QObject::connect(&agent, &RobotAgent::clientConnected, [](const QString& p) {
+    std::fprintf(stderr, "client connected: %s\n", qPrintable(p));
+  });
+  QObject::connect(&agent, &RobotAgent::clientDisconnected, [](const QString& p, const QString& r) {
+    std::fprintf(stderr, "client %s gone: %s\n", qPrintable(p), qPrintable(r));
+  });
+  if (!agent.Start(&error)) return Fail(error);
+  if (config.link == RobotAgentConfig::LinkKind::kTcp) {
+    std::printf("listening on %s:%u\n", qPrintable(config.listen_address), agent.tcp_port());
+  } else {
+    std::printf("serving the link on %s\n", qPrintable(config.link_serial_port));
+  }
+  std::fflush(stdout);
+
+  // SIGINT / SIGTERM: leave through the event loop so the motors get a zero.
+  if (::socketpair(AF_UNIX, SOCK_STREAM, 0, signal_fds) == 0) {
+    auto* notifier = new QSocketNotifier(signal_fds[0], QSocketNotifier::Read, &app);
+    QObject::connect(notifier, &QSocketNotifier::activated, &app, &QCoreApplication::quit);
+    ::signal(SIGINT, OnSignal);
+    ::signal(SIGTERM, OnSignal);
+  }
+  const int rc = app.exec();
+  agent.Shutdown();
+  return rc;
+}
