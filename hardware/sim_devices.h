@@ -24,7 +24,6 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,7 +33,6 @@
 #include "hardware/codec_common.h"
 #include "hardware/link_protocol.h"
 #include "hardware/motor_board_codec.h"
-#include "hardware/x4_codec.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -148,7 +146,7 @@ class SimDevices {
   // kScripted: the path is done and every byte it produced was returned.
   // kCommanded: never.
   bool finished() const;
-  // The last time given to AdvanceTo (robot time).
+  // The latest time given to AdvanceTo (robot time); Time::min() before.
   Time now() const { return now_; }
   const SimDevicesStats& stats() const;
 

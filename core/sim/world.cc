@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace sweepscan::sim {
 namespace {
@@ -117,27 +118,87 @@ size_t Trajectory::SegmentAt(double t_s) const {
 
 Pose2d Trajectory::PoseAt(double t_s) const {
   if (segments_.empty()) return end_pose_;
-  if (t_s >= end_s_) return end_pose_;
+  if (!open_ && t_s >= end_s_) return end_pose_;
   if (t_s <= 0.0) return start_poses_.front();
   const size_t i = SegmentAt(t_s);
   return IntegrateExact(start_poses_[i], {segments_[i].v, segments_[i].w}, t_s - starts_s_[i]);
 }
 
 Twist2d Trajectory::TwistAt(double t_s) const {
-  if (segments_.empty() || t_s < 0.0 || t_s >= end_s_) return {};
+  if (segments_.empty() || t_s < 0.0 || (!open_ && t_s >= end_s_)) return {};
   const DriveSegment& s = segments_[SegmentAt(t_s)];
   return {s.v, s.w};
 }
 
-SimWorld::SimWorld(const SimConfig& config)
+void Trajectory::CommandTwist(double t_s, const Twist2d& twist) {
+  constexpr double kOpen = std::numeric_limits<double>::infinity();
+  t_s = std::max(t_s, 0.0);
+  if (!open_ && t_s >= end_s_) {
+    // Past (or without) a fixed path: stand at its end until t_s.
+    if (t_s > end_s_ || segments_.empty()) {
+      starts_s_.push_back(end_s_);
+      start_poses_.push_back(end_pose_);
+      segments_.push_back({0.0, 0.0, t_s - end_s_});
+    }
+  } else {
+    const size_t i = SegmentAt(t_s);
+    segments_.resize(i + 1);
+    starts_s_.resize(i + 1);
+    start_poses_.resize(i + 1);
+    segments_[i].duration_s = t_s - starts_s_[i];
+  }
+  // A zero-length segment at t_s is replaced rather than kept, so
+  // SegmentAt() never lands on one.
+  if (!segments_.empty() && segments_.back().duration_s <= 0.0) {
+    segments_.pop_back();
+    starts_s_.pop_back();
+    start_poses_.pop_back();
+  }
+  const Pose2d p = segments_.empty() ? end_pose_ : PoseAtClosed(segments_.size() - 1, t_s);
+  starts_s_.push_back(t_s);
+  start_poses_.push_back(p);
+  segments_.push_back({twist.v, twist.w, kOpen});
+  end_pose_ = p;  // Unused while open; keeps a sane value.
+  end_s_ = kOpen;
+  open_ = true;
+}
+
+Pose2d Trajectory::PoseAtClosed(size_t i, double t_s) const {
+  return IntegrateExact(start_poses_[i], {segments_[i].v, segments_[i].w}, t_s - starts_s_[i]);
+}
+
+SimWorld::SimWorld(const SimConfig& config, DriveMode mode)
     : config_(config),
-      trajectory_(config.start, config.path),
+      drive_mode_(mode),
+      trajectory_(config.start, mode == DriveMode::kPath ? config.path : std::vector<DriveSegment>()),
+      produced_until_(RobotTime(0.0) - Duration(1)),
       body_from_lidar_true_(BodyFromLidar(config.geometry, config.mounting_error)),
       lidar_rng_(config.seed * 3 + 1),
       imu_rng_(config.seed * 3 + 2),
-      wheel_rng_(config.seed * 3 + 3) {}
+      wheel_rng_(config.seed * 3 + 3) {
+  if (mode == DriveMode::kCommanded) trajectory_.CommandTwist(0.0, Twist2d());
+}
 
-Time SimWorld::end_time() const { return RobotTime(duration_s()); }
+Time SimWorld::end_time() const {
+  return drive_mode_ == DriveMode::kCommanded ? Time::max() : RobotTime(duration_s());
+}
+
+bool SimWorld::CommandTwist(Time t, const Twist2d& twist) {
+  if (drive_mode_ != DriveMode::kCommanded) return false;
+  t = std::max(t, produced_until_ + Duration(1));
+  trajectory_.CommandTwist(TimeS(t), twist);
+  return true;
+}
+
+double SimWorld::LidarPhase(const LidarSpec& spec, int64_t sample_index) {
+  const double t_s = static_cast<double>(sample_index) / spec.sample_rate_hz;
+  return std::fmod(spec.scan_rate_hz * t_s, 1.0);
+}
+
+bool SimWorld::IsLidarRingStart(const LidarSpec& spec, int64_t sample_index) {
+  return sample_index == 0 ||
+         LidarPhase(spec, sample_index) < LidarPhase(spec, sample_index - 1);
+}
 
 Rigid3d SimWorld::TrueWorldFromBody(Time t) const {
   const Pose2d p = trajectory_.PoseAt(TimeS(t));
@@ -153,12 +214,13 @@ void SimWorld::RunUntil(Time t, SensorSink* sink) {
   EmitWheels(until, sink);
   EmitImu(until, sink);
   EmitLidar(until, sink);
+  produced_until_ = std::max(produced_until_, until);
   if (t >= end_time()) finished_ = true;
 }
 
 SensorLog SimWorld::RunAll() {
   SensorLogCollector collector;
-  RunUntil(end_time(), &collector);
+  RunUntil(drive_mode_ == DriveMode::kCommanded ? produced_until_ : end_time(), &collector);
   return std::move(*collector.log());
 }
 
@@ -172,7 +234,7 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     const double t_s = static_cast<double>(next_lidar_sample_) / spec.sample_rate_hz;
     if (t_s > until_s) break;
     // The head turns at scan_rate_hz; phase in [0, 1) of a revolution.
-    const double phase = std::fmod(spec.scan_rate_hz * t_s, 1.0);
+    const double phase = LidarPhase(spec, next_lidar_sample_);
     const bool ring_start = next_lidar_sample_ == 0 || phase < last_phase_;
     if (ring_start && next_lidar_sample_ > 0) ++scan_index_;
     if (ring_start) beam_ = 0;
@@ -250,7 +312,7 @@ void SimWorld::TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* r
   }
   // Exact mean of a piecewise-constant twist: integrate segment by segment.
   double dl = 0.0, dr = 0.0, t = 0.0;
-  for (const DriveSegment& s : config_.path) {
+  for (const DriveSegment& s : trajectory_.segments()) {
     const double a = std::max(t0_s, t), b = std::min(t1_s, t + s.duration_s);
     if (b > a) {
       dl += (s.v - s.w * d) * (b - a);
@@ -309,9 +371,12 @@ void SimWorld::EmitImu(Time until, SensorSink* sink) {
 
 PoseBuffer SimWorld::TruthPoses(double rate_hz) const {
   PoseBuffer buffer;
-  const int64_t n = static_cast<int64_t>(std::ceil(duration_s() * rate_hz));
+  const double duration = drive_mode_ == DriveMode::kCommanded
+                              ? std::max(0.0, TimeS(produced_until_))
+                              : duration_s();
+  const int64_t n = static_cast<int64_t>(std::ceil(duration * rate_hz));
   for (int64_t i = 0; i <= n; ++i) {
-    const double t = std::min(static_cast<double>(i) / rate_hz, duration_s());
+    const double t = std::min(static_cast<double>(i) / rate_hz, duration);
     buffer.Add(RobotTime(t), TrueWorldFromBody(RobotTime(t)));
   }
   return buffer;

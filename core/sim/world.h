@@ -99,21 +99,38 @@ struct SimConfig {
   double DurationSeconds() const;
 };
 
-// Piecewise-constant (v, w) path with its exact pose.
+// Piecewise-constant (v, w) path with its exact pose. Either a fixed path
+// (the scenario's segments; the robot stands at the end pose afterwards) or,
+// after CommandTwist, open-ended: the last segment lasts until the next
+// command, so live commands keep the pose exact (closed-form arcs).
 class Trajectory {
  public:
   Trajectory(const Pose2d& start, const std::vector<DriveSegment>& segments);
+  // Infinite once open-ended.
   double duration_s() const { return starts_s_.empty() ? 0.0 : end_s_; }
   Pose2d PoseAt(double t_s) const;
   Twist2d TwistAt(double t_s) const;
 
+  // From t_s on (path time, clamped to >= 0) the robot drives `twist` until
+  // the next call: the segment holding t_s ends there, later ones are
+  // dropped, and the trajectory becomes open-ended. Past the end of a fixed
+  // path the robot stands still until t_s.
+  void CommandTwist(double t_s, const Twist2d& twist);
+  bool open_ended() const { return open_; }
+  // The segments and their start times (an open-ended last segment has an
+  // infinite duration).
+  const std::vector<DriveSegment>& segments() const { return segments_; }
+  const std::vector<double>& segment_starts_s() const { return starts_s_; }
+
  private:
   size_t SegmentAt(double t_s) const;
+  Pose2d PoseAtClosed(size_t i, double t_s) const;  // Within segment i, whatever its length.
   std::vector<DriveSegment> segments_;
   std::vector<double> starts_s_;
   std::vector<Pose2d> start_poses_;
   Pose2d end_pose_;
   double end_s_ = 0.0;
+  bool open_ = false;
 };
 
 // Receives simulated records as the world produces them. Within each stream
@@ -136,7 +153,13 @@ struct SampleTruth {
 
 class SimWorld {
  public:
-  explicit SimWorld(const SimConfig& config);
+  // kPath: the robot follows config.path and the world finishes at its end.
+  // kCommanded: config.path is ignored; the robot stands at config.start
+  // until CommandTwist moves it, and the world never finishes (the device
+  // simulator's motor board drives it).
+  enum class DriveMode { kPath, kCommanded };
+  explicit SimWorld(const SimConfig& config, DriveMode mode = DriveMode::kPath);
+  DriveMode drive_mode() const { return drive_mode_; }
 
   const SimConfig& config() const { return config_; }
   const Trajectory& trajectory() const { return trajectory_; }
@@ -151,15 +174,32 @@ class SimWorld {
   // Produces every record with time <= t, in time order per stream.
   void RunUntil(Time t, SensorSink* sink);
   bool finished() const { return finished_; }
+  // The path's end; Time::max() in kCommanded mode.
   Time end_time() const;
+  // The latest time given to RunUntil (records up to it exist); start time
+  // minus 1 ns before the first call.
+  Time produced_until() const { return produced_until_; }
 
-  // Runs the whole path and collects the records (offline).
+  // kCommanded only (returns false otherwise): from robot time t on the
+  // robot drives `twist`. Records already produced are never rewritten: a t
+  // at or before produced_until() takes effect 1 ns after it.
+  bool CommandTwist(Time t, const Twist2d& twist);
+
+  // Sample n's head phase in [0, 1) of a revolution, and whether sample n
+  // starts a revolution: the exact rule EmitLidar uses, so a device
+  // emulation can know in advance where the next revolution starts.
+  static double LidarPhase(const LidarSpec& spec, int64_t sample_index);
+  static bool IsLidarRingStart(const LidarSpec& spec, int64_t sample_index);
+
+  // Runs the whole path and collects the records (offline; kPath only, in
+  // kCommanded mode it runs to produced_until()).
   SensorLog RunAll();
   // Ground truth of each produced lidar sample when enabled (before running).
   void KeepSampleTruth(bool keep) { keep_truth_ = keep; }
   const std::vector<SampleTruth>& sample_truth() const { return sample_truth_; }
 
-  // The true body poses sampled at `rate_hz`, for reconstruction from truth.
+  // The true body poses sampled at `rate_hz`, for reconstruction from truth
+  // (kCommanded: up to produced_until()).
   PoseBuffer TruthPoses(double rate_hz) const;
 
  private:
@@ -170,7 +210,9 @@ class SimWorld {
   void TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const;
 
   SimConfig config_;
+  DriveMode drive_mode_;
   Trajectory trajectory_;
+  Time produced_until_;
   Rigid3d body_from_lidar_true_;
   std::mt19937_64 lidar_rng_, imu_rng_, wheel_rng_;
   // Members, not locals: normal_distribution keeps half of each generated
