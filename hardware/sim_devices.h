@@ -33,6 +33,7 @@
 #include "hardware/codec_common.h"
 #include "hardware/link_protocol.h"
 #include "hardware/motor_board_codec.h"
+#include "hardware/x4_codec.h"  // Callers build X4 commands with it.
 
 namespace sweepscan {
 namespace hardware {
