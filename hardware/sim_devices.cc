@@ -65,11 +65,11 @@ bool SimDevicesOptions::IsValid(std::string* error) const {
 std::string SimDevicesStats::ToString() const {
   std::ostringstream s;
   s << "lidar: " << lidar_packets << " packets, " << lidar_samples_sent << " samples sent, "
-    << lidar_samples_dropped << " dropped, " << lidar_responses << " responses, "
-    << lidar_commands << " commands, " << lidar_unknown_commands << " unknown, "
-    << lidar_garbage_bytes << " garbage bytes; imu: " << imu_frames << " frames, "
-    << imu_bytes_ignored << " input bytes ignored; motor: " << motor_frames << " frames, "
-    << motor_commands << " commands (" << motor_commands_ignored << " ignored), input "
+    << lidar_samples_dropped << " dropped, " << lidar_responses << " responses, " << lidar_commands
+    << " commands, " << lidar_unknown_commands << " unknown, " << lidar_garbage_bytes
+    << " garbage bytes; imu: " << imu_frames << " frames, " << imu_bytes_ignored
+    << " input bytes ignored; motor: " << motor_frames << " frames, " << motor_commands
+    << " commands (" << motor_commands_ignored << " ignored), input "
     << motor_command_decoder.ToString() << "; bytes out " << bytes_out[0] << "/" << bytes_out[1]
     << "/" << bytes_out[2] << ", in " << bytes_in[0] << "/" << bytes_in[1] << "/" << bytes_in[2]
     << "; late writes " << late_writes;
@@ -160,7 +160,8 @@ class SimDevices::Impl : public sim::SensorSink {
     const Twist2d truth = world_.trajectory().TwistAt(PathSeconds(m.time));
     const double cr = std::cos(m.roll), sr = std::sin(m.roll);
     const double cp = std::cos(m.pitch), sp = std::sin(m.pitch);
-    s.acc_g = {static_cast<float>(-sp), static_cast<float>(cp * sr + truth.v * truth.w / kStandardGravity),
+    s.acc_g = {static_cast<float>(-sp),
+               static_cast<float>(cp * sr + truth.v * truth.w / kStandardGravity),
                static_cast<float>(cp * cr)};
     s.gyro_dps = {0.0f, 0.0f, static_cast<float>(m.gyro_z * kRadToDeg)};
     s.roll_deg = static_cast<float>(m.roll * kRadToDeg);
@@ -365,8 +366,8 @@ class SimDevices::Impl : public sim::SensorSink {
   }
 
   static bool IsPlainX4Command(uint8_t cmd) {
-    return cmd == kX4CmdScan || cmd == kX4CmdForceScan || cmd == kX4CmdStop ||
-           cmd == kX4CmdReset || cmd == kX4CmdDeviceInfo || cmd == kX4CmdHealth;
+    return cmd == kX4CmdScan || cmd == kX4CmdForceScan || cmd == kX4CmdStop || cmd == kX4CmdReset ||
+           cmd == kX4CmdDeviceInfo || cmd == kX4CmdHealth;
   }
 
   void HandleX4Command(uint8_t cmd, Time now) {

@@ -170,7 +170,8 @@ Pose2d Trajectory::PoseAtClosed(size_t i, double t_s) const {
 SimWorld::SimWorld(const SimConfig& config, DriveMode mode)
     : config_(config),
       drive_mode_(mode),
-      trajectory_(config.start, mode == DriveMode::kPath ? config.path : std::vector<DriveSegment>()),
+      trajectory_(config.start,
+                  mode == DriveMode::kPath ? config.path : std::vector<DriveSegment>()),
       produced_until_(RobotTime(0.0) - Duration(1)),
       body_from_lidar_true_(BodyFromLidar(config.geometry, config.mounting_error)),
       lidar_rng_(config.seed * 3 + 1),
@@ -196,8 +197,7 @@ double SimWorld::LidarPhase(const LidarSpec& spec, int64_t sample_index) {
 }
 
 bool SimWorld::IsLidarRingStart(const LidarSpec& spec, int64_t sample_index) {
-  return sample_index == 0 ||
-         LidarPhase(spec, sample_index) < LidarPhase(spec, sample_index - 1);
+  return sample_index == 0 || LidarPhase(spec, sample_index) < LidarPhase(spec, sample_index - 1);
 }
 
 Rigid3d SimWorld::TrueWorldFromBody(Time t) const {
@@ -371,9 +371,8 @@ void SimWorld::EmitImu(Time until, SensorSink* sink) {
 
 PoseBuffer SimWorld::TruthPoses(double rate_hz) const {
   PoseBuffer buffer;
-  const double duration = drive_mode_ == DriveMode::kCommanded
-                              ? std::max(0.0, TimeS(produced_until_))
-                              : duration_s();
+  const double duration =
+      drive_mode_ == DriveMode::kCommanded ? std::max(0.0, TimeS(produced_until_)) : duration_s();
   const int64_t n = static_cast<int64_t>(std::ceil(duration * rate_hz));
   for (int64_t i = 0; i <= n; ++i) {
     const double t = std::min(static_cast<double>(i) / rate_hz, duration);

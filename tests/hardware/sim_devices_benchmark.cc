@@ -30,8 +30,8 @@ void BM_SimDevicesLab(benchmark::State& state) {
     simulated_s += config.DurationSeconds();
   }
   state.counters["sim_s_per_wall_s"] = benchmark::Counter(simulated_s, benchmark::Counter::kIsRate);
-  state.counters["bytes_per_s"] = benchmark::Counter(static_cast<double>(bytes),
-                                                     benchmark::Counter::kIsRate);
+  state.counters["bytes_per_s"] =
+      benchmark::Counter(static_cast<double>(bytes), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimDevicesLab)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 

@@ -112,8 +112,9 @@ TEST(SimDevicesTest, LidarPacketsDecodeToTheSimulatedSamples) {
   // angle about 1/128 deg worst (FSA/LSA rounding).
   RecordProperty("worst_time_us", std::to_string(worst_time_us));
   RecordProperty("worst_angle_deg", std::to_string(worst_angle_deg));
-  std::printf("lidar: %zu samples in %zu scans, worst time error %.4f us, worst angle error %.5f deg\n",
-              total, scans.size(), worst_time_us, worst_angle_deg);
+  std::printf(
+      "lidar: %zu samples in %zu scans, worst time error %.4f us, worst angle error %.5f deg\n",
+      total, scans.size(), worst_time_us, worst_angle_deg);
 }
 
 TEST(SimDevicesTest, ImuFramesDecodeToTheSimulatedValues) {
@@ -459,8 +460,9 @@ TEST(SimDevicesTest, TelemetryPathReconstructsTheDirectCloud) {
     ASSERT_GT(matched, b.points.size() * 99 / 100);
     ASSERT_GT(matched, 0u);
     const double rms = std::sqrt(sum2 / static_cast<double>(matched));
-    std::printf("%s poses: %zu points matched, rms %.3f mm, worst within 5 m %.3f mm (%zu points)\n",
-                PoseSourceName(source), matched, rms * 1e3, worst_5m * 1e3, near5);
+    std::printf(
+        "%s poses: %zu points matched, rms %.3f mm, worst within 5 m %.3f mm (%zu points)\n",
+        PoseSourceName(source), matched, rms * 1e3, worst_5m * 1e3, near5);
     // Truth poses isolate the lidar bytes: 1/128 deg at 5 m is 0.68 mm.
     // The EKF also sees the quantised wheel twist (1 mm/s, 1 mrad/s) and the
     // float IMU fields. Measured: truth rms 0.16 mm, worst 0.63 mm; EKF rms
