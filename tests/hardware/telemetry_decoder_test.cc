@@ -94,7 +94,7 @@ void ExpectExpectedLog(const SensorLog& log, const TelemetryDecoderOptions& o) {
     const double v = std::round((0.2 + 0.01 * i) * 1000) / 1000;  // mm/s on the wire.
     EXPECT_NEAR(log.wheels[i].left_mps, v - 0.5 * kWheelDistance, 1e-12);
     EXPECT_NEAR(log.wheels[i].right_mps, v + 0.5 * kWheelDistance, 1e-12);
-    EXPECT_EQ(log.wheels[i].time, kT0 + std::chrono::milliseconds(10 * i + 2));
+    EXPECT_EQ(log.wheels[i].time, kT0 + std::chrono::milliseconds(10 * i + 2) - o.motor_latency);
   }
   // IMU: SI units.
   ASSERT_EQ(log.imu.size(), 3u);
@@ -104,7 +104,7 @@ void ExpectExpectedLog(const SensorLog& log, const TelemetryDecoderOptions& o) {
     EXPECT_NEAR(log.imu[i].pitch, -2.5 * M_PI / 180.0, 1e-6);
     EXPECT_NEAR(log.imu[i].yaw, (90.0 - i) * M_PI / 180.0, 1e-6);
     EXPECT_TRUE(log.imu[i].has_gyro && log.imu[i].has_attitude);
-    EXPECT_EQ(log.imu[i].time, kT0 + std::chrono::milliseconds(10 * i + 1));
+    EXPECT_EQ(log.imu[i].time, kT0 + std::chrono::milliseconds(10 * i + 1) - o.imu_latency);
   }
   // Lidar: two revolutions of 1 + 40 samples.
   ASSERT_EQ(log.scans.size(), 2u);
