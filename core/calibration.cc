@@ -88,19 +88,24 @@ struct PairCost {
 
 // Automatic mode: r_i(c, n_s, d_s) = n_s . p_W^i(c) + d_s  (metres), |n_s| = 1
 // kept by the sphere manifold.
+// Weighted by the point's noise: r_i = (n_s . p_W^i(c) + d_s) / sigma_i
+// (dimensionless), so that the least-squares estimate is the maximum
+// likelihood one under the range noise model and s^2 is ~1 when it holds.
 struct PointToPlaneCost {
-  explicit PointToPlaneCost(const Prepared& o) : o_(o) {}
+  PointToPlaneCost(const Prepared& o, double inv_sigma) : o_(o), inv_sigma_(inv_sigma) {}
   template <typename T>
   bool operator()(const T* abg_radians, const T* normal, const T* d, T* residual) const {
     T p[3];
     ProjectT(o_, abg_radians, p);
-    residual[0] = normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] + d[0];
+    residual[0] = (normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] + d[0]) * inv_sigma_;
     return true;
   }
-  static ceres::CostFunction* Create(const Prepared& o) {
-    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 3, 1>(new PointToPlaneCost(o));
+  static ceres::CostFunction* Create(const Prepared& o, double inv_sigma) {
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 3, 1>(
+        new PointToPlaneCost(o, inv_sigma));
   }
   Prepared o_;
+  double inv_sigma_;
 };
 
 // Records the per-iteration trace (the paper's Fig. 8) and lets the caller
@@ -395,6 +400,17 @@ bool AutoCalibrationOptions::IsValid(std::string* error) const {
   }
   if (!(min_range_m >= 0.0)) {
     *error = "automatic calibration: min_range_m must be >= 0";
+    return false;
+  }
+  if (!(range_noise_m >= 0.0) || !(range_noise_fraction >= 0.0) || !(model_noise_m >= 0.0) ||
+      !(range_noise_m + model_noise_m > 0.0) || !(membership_sigmas > 0.0) ||
+      !(edge_margin_m >= 0.0) || !(surface_step_m > 0.0) || !(robust_scale_sigmas > 0.0) ||
+      !(covariance_block_s > 0.0) ||
+      !std::isfinite(range_noise_m + range_noise_fraction + model_noise_m + membership_sigmas +
+                     edge_margin_m + robust_scale_sigmas + covariance_block_s)) {
+    *error =
+        "automatic calibration: noise model, membership, edge margin, robust scale and "
+        "covariance block must be finite and positive";
     return false;
   }
   return true;
@@ -815,8 +831,18 @@ Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
       return Status::Error("refined corners, outer iteration " + std::to_string(outer + 1) + ": " +
                            s.message());
     }
-    const double change = AngleChange(c, inner.angles);
-    c = inner.angles;
+    // The board fit is discrete (which samples are end points), so the
+    // plain fixed-point iteration c_{k+1} = solve(fit(c_k)) can cycle
+    // between two inlier sets. After four rounds the step shrinks fourfold each
+    // round (c_{k+1} = c_k + w (solve - c_k), w = 4^-(k-3)), which settles
+    // on the boundary between them.
+    const double w = outer < 4 ? 1.0 : std::pow(0.25, outer - 3);
+    const MountingError target = inner.angles;
+    const MountingError next{c.alpha + w * (target.alpha - c.alpha),
+                             c.beta + w * (target.beta - c.beta),
+                             c.gamma + w * (target.gamma - c.gamma)};
+    const double change = AngleChange(c, next);
+    c = next;
     if (change < options.outer_tolerance_rad) {
       summary->converged = true;
       break;
@@ -854,17 +880,18 @@ struct FoundPlane {
 };
 
 // Sequential RANSAC (seeded): the largest plane first, its inliers removed,
-// until the best plane holds fewer than min_count points.
-std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts, double band,
-                                      size_t min_count, int max_planes, int iterations,
-                                      std::mt19937_64* rng) {
+// until the best plane holds fewer than min_count points. Point i is an
+// inlier when |n . p_i + d| < threshold[i].
+std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts,
+                                      const std::vector<double>& threshold, size_t min_count,
+                                      int max_planes, int iterations, std::mt19937_64* rng) {
   std::vector<FoundPlane> out;
   std::vector<size_t> remaining(pts.size());
   for (size_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
   while (static_cast<int>(out.size()) < max_planes && remaining.size() >= min_count) {
     std::uniform_int_distribution<size_t> pick(0, remaining.size() - 1);
     size_t best_count = 0;
-    Eigen::Vector3d best_n;
+    Eigen::Vector3d best_n = Eigen::Vector3d::UnitZ();
     double best_d = 0.0;
     for (int it = 0; it < iterations; ++it) {
       const Eigen::Vector3d& a = pts[remaining[pick(*rng)]];
@@ -875,26 +902,65 @@ std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts, d
       n.normalize();
       const double d = -n.dot(a);
       size_t count = 0;
-      for (size_t i : remaining) count += std::abs(n.dot(pts[i]) + d) < band;
+      for (size_t i : remaining) count += std::abs(n.dot(pts[i]) + d) < threshold[i];
       if (count > best_count) best_count = count, best_n = n, best_d = d;
     }
     if (best_count < min_count) break;
     // Refine by least squares on the inliers, then take the final inliers.
     std::vector<Eigen::Vector3d> in;
     for (size_t i : remaining) {
-      if (std::abs(best_n.dot(pts[i]) + best_d) < band) in.push_back(pts[i]);
+      if (std::abs(best_n.dot(pts[i]) + best_d) < threshold[i]) in.push_back(pts[i]);
     }
     FoundPlane fp;
     if (!FitPlane(in, &fp.plane)) break;
     std::vector<size_t> rest;
     for (size_t i : remaining) {
-      (std::abs(fp.plane.SignedDistance(pts[i])) < band ? fp.members : rest).push_back(i);
+      (std::abs(fp.plane.SignedDistance(pts[i])) < threshold[i] ? fp.members : rest).push_back(i);
     }
     if (fp.members.size() < min_count) break;
     remaining.swap(rest);
     out.push_back(std::move(fp));
   }
   return out;
+}
+
+// Cluster-robust covariance of the angles (the "sandwich"):
+//   Cov = H^-1 (sum_g J_g' r_g r_g' J_g) H^-1,  H = J'J,
+// J and r over all parameters (angles and planes, tangent space), rows
+// grouped by g. With independent rows it reduces to the familiar
+// (J'J)^-1 s^2; with errors shared inside a group (a pose error lasting a
+// second) it grows accordingly, where the iid formula would not.
+bool ClusteredAngleSigma(ceres::Problem* problem, const std::vector<int>& group_of_row,
+                         Eigen::Vector3d* sigma) {
+  ceres::CRSMatrix crs;
+  std::vector<double> residuals;
+  double cost = 0.0;
+  if (!problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residuals, nullptr, &crs)) {
+    return false;
+  }
+  if (static_cast<size_t>(crs.num_rows) != group_of_row.size()) return false;
+  const int n = crs.num_cols;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  std::unordered_map<int, Eigen::VectorXd> score;  // sum_rows_in_g J_row' r_row
+  Eigen::VectorXd row(n);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    row.setZero();
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) row[crs.cols[k]] = crs.values[k];
+    h.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    auto it = score.find(group_of_row[r]);
+    if (it == score.end()) it = score.emplace(group_of_row[r], Eigen::VectorXd::Zero(n)).first;
+    it->second += row * residuals[r];
+  }
+  h = h.selfadjointView<Eigen::Lower>();
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+  for (const auto& [g, s] : score) meat += s * s.transpose();
+  // Small-sample correction G / (G - 1) for G groups.
+  const double groups = static_cast<double>(score.size());
+  if (groups > 1) meat *= groups / (groups - 1.0);
+  const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd cov = hinv * meat * hinv;
+  for (int i = 0; i < 3; ++i) (*sigma)[i] = std::sqrt(std::max(0.0, cov(i, i)));
+  return sigma->allFinite();
 }
 
 }  // namespace
@@ -915,23 +981,42 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     for (size_t i = 0; i < store.observations().size(); ++i) {
       if (store.observations()[i].p_lidar.norm() >= options.min_range_m) valid.push_back(i);
     }
+    sample = std::move(valid);
+  }
+  // RANSAC runs on an even subsample (seg_index into `sample`); the planes'
+  // members, and so the residuals, come from every sample: the walls seen
+  // sideways (x = 0, x = 10), which carry alpha and beta, hold only ~1 % of
+  // the recording each.
+  std::vector<size_t> seg_index;
+  {
     const size_t stride = std::max<size_t>(
-        1, (valid.size() + options.max_segmentation_points - 1) / options.max_segmentation_points);
-    for (size_t i = 0; i < valid.size(); i += stride) sample.push_back(valid[i]);
+        1, (sample.size() + options.max_segmentation_points - 1) / options.max_segmentation_points);
+    for (size_t i = 0; i < sample.size(); i += stride) seg_index.push_back(i);
   }
   if (sample.size() < 100) {
     return Status::Error("automatic calibration: only " + std::to_string(sample.size()) +
                          " samples in the recording");
   }
   std::vector<Prepared> prepared;
+  std::vector<double> sigma;  // per point, metres (the noise model in the header)
   prepared.reserve(sample.size());
-  for (size_t i : sample) prepared.push_back(Prepare(store.observations()[i], geometry));
+  sigma.reserve(sample.size());
+  for (size_t i : sample) {
+    const LidarObservation& o = store.observations()[i];
+    prepared.push_back(Prepare(o, geometry));
+    const double rho = o.p_lidar.norm();
+    sigma.push_back(std::sqrt(options.range_noise_m * options.range_noise_m +
+                              std::pow(options.range_noise_fraction * rho, 2) +
+                              options.model_noise_m * options.model_noise_m));
+  }
+  const int64_t t0 = store.observations()[sample.front()].time_ns;
 
   MountingError c = initial;
   int final_rounds = 0;
   double band = options.initial_band_m;
   std::vector<CalibrationIteration> trace;
   const CalibrationOptions& so_opts = options.solver;
+  std::vector<double> threshold(sample.size());
   for (int outer = 0; outer < so_opts.max_outer_iterations; ++outer) {
     double abg[3] = {c.alpha, c.beta, c.gamma};
     std::vector<Eigen::Vector3d> pts(sample.size());
@@ -940,54 +1025,142 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
       ProjectT(prepared[i], abg, p);
       pts[i] = Eigen::Vector3d(p[0], p[1], p[2]);
     }
-    const size_t min_count = static_cast<size_t>(options.min_plane_fraction * sample.size());
+    const bool last_band = band <= options.final_band_m;
+    // While the ghosts are being pulled together a wide band keeps both
+    // copies of a wall in one plane; at the final band, membership follows
+    // each point's own noise, so surfaces a few cm apart separate.
+    for (size_t i = 0; i < sample.size(); ++i) {
+      threshold[i] = last_band ? std::min(band, options.membership_sigmas * sigma[i]) : band;
+    }
+    const size_t min_count = static_cast<size_t>(options.min_plane_fraction * seg_index.size());
     // Same seed every round: the segmentation depends on the points only.
     std::mt19937_64 rng(options.seed);
+    std::vector<Eigen::Vector3d> seg_pts;
+    std::vector<double> seg_threshold;
+    for (size_t i : seg_index) seg_pts.push_back(pts[i]), seg_threshold.push_back(threshold[i]);
     std::vector<FoundPlane> planes =
-        SegmentPlanes(pts, band, std::max<size_t>(min_count, 50), options.max_planes,
+        SegmentPlanes(seg_pts, seg_threshold, std::max<size_t>(min_count, 50), options.max_planes,
                       options.ransac_iterations, &rng);
+    // Members over all samples, each to the first plane (largest first)
+    // whose band holds it, as SegmentPlanes assigns them.
+    {
+      std::vector<char> taken(sample.size(), 0);
+      for (auto& fp : planes) {
+        fp.members.clear();
+        for (size_t i = 0; i < sample.size(); ++i) {
+          if (!taken[i] && std::abs(fp.plane.SignedDistance(pts[i])) < threshold[i]) {
+            fp.members.push_back(i);
+            taken[i] = 1;
+          }
+        }
+      }
+    }
     // Keep surfaces seen from more than one place: at least two sightings
     // (time gaps > 1 s) or one long sighting (floor, ceiling: seen from
     // every heading of the circle).
     std::vector<FoundPlane> used;
+    std::vector<int> sightings;
     for (auto& fp : planes) {
       std::vector<int64_t> times;
       for (size_t m : fp.members) times.push_back(store.observations()[sample[m]].time_ns);
       const auto windows = SplitByTimeGaps(times, 1.0, 20);
       double span = 0.0;
       for (const auto& w : windows) span += w.duration_s();
-      if (windows.size() >= 2 || span >= 5.0) used.push_back(std::move(fp));
+      if (windows.size() >= 2 || span >= 5.0) {
+        used.push_back(std::move(fp));
+        sightings.push_back(static_cast<int>(windows.size()));
+      }
     }
     if (used.size() < 2) {
       summary->trace = trace;
       return Status::Error("automatic calibration: found " + std::to_string(used.size()) +
                            " plane(s) seen in both passes, need at least 2");
     }
+    // At the final band, drop whole scan-line runs that sit off the plane:
+    // a run (consecutive members of one scan line) is a piece of one
+    // surface, and a run whose mean offset exceeds surface_step_m belongs to
+    // a parallel surface a little in front or behind (the board 2 cm in
+    // front of the sill), which the per-point band cannot separate at 3
+    // sigma. Two rounds of reject-and-refit.
+    if (last_band) {
+      for (auto& fp : used) {
+        for (int round = 0; round < 2; ++round) {
+          std::vector<size_t> keep;
+          size_t begin = 0;
+          const auto& mem = fp.members;  // ascending sample index = time order
+          for (size_t i = 1; i <= mem.size(); ++i) {
+            const bool split = i == mem.size() ||
+                               store.observations()[sample[mem[i]]].ref.scan !=
+                                   store.observations()[sample[mem[i - 1]]].ref.scan ||
+                               mem[i] - mem[i - 1] > 1;  // a sample between them is off this plane
+            if (!split) continue;
+            double sum = 0.0, var = 0.0;
+            for (size_t k = begin; k < i; ++k) {
+              sum += fp.plane.SignedDistance(pts[mem[k]]);
+              var += sigma[mem[k]] * sigma[mem[k]];
+            }
+            const double n_run = static_cast<double>(i - begin);
+            const double mean = sum / n_run;
+            // Off by more than the step and more than 3 standard errors.
+            if (std::abs(mean) <= std::max(options.surface_step_m, 3.0 * std::sqrt(var) / n_run)) {
+              keep.insert(keep.end(), mem.begin() + begin, mem.begin() + i);
+            }
+            begin = i;
+          }
+          if (keep.size() == mem.size() || keep.size() < 50) break;
+          std::vector<Eigen::Vector3d> in;
+          for (size_t m : keep) in.push_back(pts[m]);
+          Plane refit;
+          if (!FitPlane(in, &refit)) break;
+          fp.plane = refit;
+          fp.members.swap(keep);
+        }
+      }
+    }
+    // Residual points: members not within edge_margin_m of another kept
+    // plane (edges where two surfaces meet, where membership is a guess),
+    // then evenly subsampled to max_points_per_plane.
+    std::vector<std::vector<size_t>> chosen(used.size());
+    for (size_t s = 0; s < used.size(); ++s) {
+      std::vector<size_t> clean;
+      for (size_t m : used[s].members) {
+        bool ambiguous = false;
+        for (size_t t = 0; t < used.size() && !ambiguous; ++t) {
+          ambiguous =
+              t != s && std::abs(used[t].plane.SignedDistance(pts[m])) < options.edge_margin_m;
+        }
+        if (!ambiguous) clean.push_back(m);
+      }
+      const size_t stride = std::max<size_t>(
+          1, (clean.size() + options.max_points_per_plane - 1) / options.max_points_per_plane);
+      for (size_t k = 0; k < clean.size(); k += stride) chosen[s].push_back(clean[k]);
+    }
     ceres::Problem::Options po;
     ceres::Problem problem(po);
     problem.AddParameterBlock(abg, 3);
     std::vector<std::array<double, 4>> params(used.size());
+    std::vector<int> group_of_row;
     int residuals = 0;
     double sq_before = 0.0;
-    const double scale = so_opts.loss == RobustLoss::kNone ? 0.25 * band : so_opts.loss_scale_m;
     const RobustLoss loss = so_opts.loss == RobustLoss::kNone ? RobustLoss::kHuber : so_opts.loss;
     for (size_t s = 0; s < used.size(); ++s) {
       const Plane& pl = used[s].plane;
       params[s] = {pl.normal.x(), pl.normal.y(), pl.normal.z(), pl.d};
       problem.AddParameterBlock(params[s].data(), 3, new ceres::SphereManifold<3>());
       problem.AddParameterBlock(params[s].data() + 3, 1);
-      const size_t stride =
-          std::max<size_t>(1, (used[s].members.size() + options.max_points_per_plane - 1) /
-                                  options.max_points_per_plane);
-      for (size_t k = 0; k < used[s].members.size(); k += stride) {
-        const size_t m = used[s].members[k];
-        problem.AddResidualBlock(PointToPlaneCost::Create(prepared[m]), MakeLoss(loss, scale), abg,
-                                 params[s].data(), params[s].data() + 3);
+      for (size_t m : chosen[s]) {
+        problem.AddResidualBlock(PointToPlaneCost::Create(prepared[m], 1.0 / sigma[m]),
+                                 MakeLoss(loss, options.robust_scale_sigmas), abg, params[s].data(),
+                                 params[s].data() + 3);
+        group_of_row.push_back(
+            static_cast<int>((store.observations()[sample[m]].time_ns - t0) /
+                             static_cast<int64_t>(options.covariance_block_s * kNsPerS)));
         const double r = pl.SignedDistance(pts[m]);
         sq_before += r * r;
         ++residuals;
       }
     }
+    if (residuals == 0) return Status::Error("automatic calibration: no residual points left");
     if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
     ceres::Solver::Options so = SolverOptions(so_opts);
     std::vector<CalibrationIteration> inner_trace;
@@ -1014,7 +1187,6 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     const MountingError next = FromArray(abg);
     const double change = AngleChange(c, next);
     c = next;
-    const bool last_band = band <= options.final_band_m;
     if (last_band) ++final_rounds;
     // Re-segmenting can flip a few boundary points in or out of a plane, so
     // the angles settle to within ~1e-5 rad, not to the LM tolerance: stop
@@ -1027,22 +1199,43 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
       summary->final_cost = cs.final_cost;
       summary->planes = static_cast<int>(used.size());
       summary->residual_blocks = residuals;
-      double sq = 0.0;
+      double sq = 0.0, sq_norm = 0.0;
       for (size_t s = 0; s < used.size(); ++s) {
-        const Eigen::Vector3d n(params[s][0], params[s][1], params[s][2]);
-        const size_t stride =
-            std::max<size_t>(1, (used[s].members.size() + options.max_points_per_plane - 1) /
-                                    options.max_points_per_plane);
-        for (size_t k = 0; k < used[s].members.size(); k += stride) {
+        CalibrationSummary::PlaneReport rep;
+        rep.normal = Eigen::Vector3d(params[s][0], params[s][1], params[s][2]);
+        rep.d = params[s][3];
+        rep.points = static_cast<int>(chosen[s].size());
+        rep.sightings = sightings[s];
+        double ps = 0.0, pn = 0.0;
+        for (size_t m : chosen[s]) {
           double p[3];
-          ProjectT(prepared[used[s].members[k]], abg, p);
-          const double r = n.dot(Eigen::Vector3d(p[0], p[1], p[2])) + params[s][3];
-          sq += r * r;
+          ProjectT(prepared[m], abg, p);
+          const double r = rep.normal.dot(Eigen::Vector3d(p[0], p[1], p[2])) + rep.d;
+          ps += r * r;
+          pn += (r / sigma[m]) * (r / sigma[m]);
         }
+        sq += ps;
+        sq_norm += pn;
+        rep.rms_m = std::sqrt(ps / std::max<size_t>(1, chosen[s].size()));
+        rep.rms_sigmas = std::sqrt(pn / std::max<size_t>(1, chosen[s].size()));
+        summary->plane_reports.push_back(rep);
       }
       summary->final_rms_m = std::sqrt(sq / residuals);
       CheckObservability(&problem, abg, so_opts, summary);
-      if (so_opts.compute_covariance) ComputeCovariance(&problem, abg, residuals, summary);
+      if (so_opts.compute_covariance) {
+        // The iid estimate, with s^2 from the normalised residuals
+        // themselves (not the robust cost), ...
+        const double saved_cost = cs.final_cost;
+        summary->final_cost = 0.5 * sq_norm;
+        ComputeCovariance(&problem, abg, residuals, summary);
+        summary->final_cost = saved_cost;
+        summary->sigma_iid_rad = summary->sigma_rad;
+        // ... and the cluster-robust one; report the larger per angle.
+        Eigen::Vector3d clustered;
+        if (ClusteredAngleSigma(&problem, group_of_row, &clustered)) {
+          summary->sigma_rad = summary->sigma_rad.cwiseMax(clustered);
+        }
+      }
       break;
     }
     band = std::max(options.final_band_m, 0.5 * band);

@@ -179,7 +179,20 @@ struct CalibrationSummary {
   double condition_number = 0.0;
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
-  int planes = 0;                           // automatic mode
+  int planes = 0;  // automatic mode
+  // Automatic mode: the kept surfaces at the end.
+  struct PlaneReport {
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    double d = 0.0;
+    int points = 0;     // residuals
+    int sightings = 0;  // time-gap windows (> 1 s) of its points
+    double rms_m = 0.0;
+    double rms_sigmas = 0.0;  // RMS of r_i / sigma_i (1 if the noise model holds)
+  };
+  std::vector<PlaneReport> plane_reports;
+  // Automatic mode: the 1-sigma of the plain (J'J)^-1 s^2 estimate, kept for
+  // comparison; sigma_rad holds the larger of it and the cluster-robust one.
+  Eigen::Vector3d sigma_iid_rad = Eigen::Vector3d::Constant(-1.0);
   std::vector<CalibrationIteration> trace;  // the paper's Fig. 8
   std::vector<std::string> warnings;
 
@@ -231,7 +244,7 @@ Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
 struct AutoCalibrationOptions {
   CalibrationOptions solver;
   size_t max_segmentation_points = 60000;  // subsample of the cloud for RANSAC
-  size_t max_points_per_plane = 6000;      // residuals per surface
+  size_t max_points_per_plane = 20000;     // residuals per surface (evenly subsampled)
   int max_planes = 8;
   double min_plane_fraction = 0.02;  // of the segmentation sample
   int ransac_iterations = 400;
@@ -239,6 +252,32 @@ struct AutoCalibrationOptions {
   double final_band_m = 0.03;
   double min_range_m = 0.3;  // ignore samples nearer than this
   uint64_t seed = 1;
+  // Noise model of one point along a plane's normal (X4 data sheet, as in
+  // core/sim): sigma_i = sqrt(a^2 + (b rho_i)^2 + m^2), with m a floor for
+  // pose and model errors. Residuals are divided by sigma_i (weighted least
+  // squares) and, at the final band, a point is a member only within
+  // membership_sigmas * sigma_i of its plane. Why: a uniform 3 cm band lets
+  // the board (y = 0.16) and the window sill 2 cm behind it (y = 0.14)
+  // merge into one "plane" whose fit differs between the passes.
+  double range_noise_m = 0.002;
+  double range_noise_fraction = 0.002;
+  double model_noise_m = 0.001;
+  double membership_sigmas = 3.0;
+  // A scan line's run of consecutive members whose mean distance from its
+  // plane exceeds this is a parallel surface nearby, not the plane.
+  double surface_step_m = 0.008;
+  // A point within this distance of another kept plane is ambiguous (edges,
+  // where two surfaces meet, and parallel surfaces a few cm apart) and gives
+  // no residual.
+  double edge_margin_m = 0.05;
+  // Huber scale on the normalised residuals r_i / sigma_i (used when
+  // solver.loss is kNone; another loss uses this scale too).
+  double robust_scale_sigmas = 2.0;
+  // Cluster-robust ("sandwich") covariance: residuals are grouped into
+  // blocks of this many seconds; errors correlated within a block (pose
+  // errors of the EKF, a scan line's systematic offset) then widen sigma
+  // instead of being counted as independent.
+  double covariance_block_s = 2.0;
 
   bool IsValid(std::string* error) const;
 };

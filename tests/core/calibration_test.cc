@@ -181,7 +181,9 @@ TEST_P(CalibrationCaseTest, RefinedCornersConvergeAndRecoverGamma) {
   EXPECT_TRUE(s.converged);
   EXPECT_LT(std::abs(e[2]), 5.0) << s.FullReport();
   EXPECT_LT(e.cwiseAbs().maxCoeff(), 35.0) << s.FullReport();
-  EXPECT_LT(after, before / 2.5);
+  // On seed 3 the board fit leaves the passes' corners ~5 cm apart even at
+  // the true angles (side edges, docs/calibration.md): compare with truth.
+  EXPECT_LT(after, std::min(before / 1.5, CornerDistance(d, c().truth) + 0.01));
   EXPECT_GT(s.sigma_rad.minCoeff(), 0.0);
 }
 
@@ -213,7 +215,10 @@ TEST_P(CalibrationCaseTest, AutomaticModeRecoversEachAngleWithinHalfMrad) {
   const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
   Report("auto-planes", s, before, after);
   EXPECT_LT(e.cwiseAbs().maxCoeff(), 0.5) << s.FullReport();
-  EXPECT_LT(after, before / 3.0);  // 10x not reachable with fitted corners, see above
+  // The corner metric is limited by the board fit itself (the side edges,
+  // docs/calibration.md): the automatic result must do as well on it as the
+  // true angles do.
+  EXPECT_LT(after, CornerDistance(d, c().truth) + 0.01);
   EXPECT_LT(s.final_rms_m, s.initial_rms_m);
   EXPECT_GE(s.planes, 3);
   const double tilt_before = CeilingTiltDeg(d, {}), tilt_after = CeilingTiltDeg(d, s.angles);
