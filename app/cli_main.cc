@@ -8,12 +8,15 @@
 #include <string>
 
 #include "app/cli_args.h"
+#include "core/calibration.h"
 #include "core/cloud_io.h"
+#include "core/evaluation.h"
 #include "core/json_reader.h"
 #include "core/reconstruct.h"
 #include "core/scenario.h"
 #include "core/sim/truth_eval.h"
 #include "core/sim/world.h"
+#include "hardware/telemetry_decoder.h"
 
 namespace sweepscan::app {
 namespace {
@@ -27,6 +30,8 @@ const char* kUsage =
     "\n"
     "Commands:\n"
     "  simulate   run a simulated scan (scenario file) and reconstruct its cloud\n"
+    "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
+    "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  help       show this text, or `help <command>` for one command\n"
     "\n"
     "Every command accepts --json (machine-readable output on stdout) and --help.\n"
@@ -227,6 +232,401 @@ int Simulate(int argc, char** argv) {
   return kExitOk;
 }
 
+// ---------------------------------------------------------------------------
+// Input shared by calibrate and evaluate: a recorded session folder, or a
+// scenario simulated in-process (until `simulate` writes sessions). Both end
+// as a SensorLog plus geometry; everything after that is one code path.
+
+struct RecordingInput {
+  std::string name;
+  SensorLog log;
+  RobotGeometry geometry;
+  Pose2d start;
+  bool has_truth = false;
+  sim::SimConfig scenario;  // when simulated: the world and its true mounting error
+  PoseBuffer truth_poses;
+};
+
+// Returns an exit code (kExitOk on success); prints one error line otherwise.
+int LoadRecording(const Args& args, RecordingInput* in) {
+  const bool has_scenario = args.Has("scenario");
+  if (has_scenario == !args.positional().empty()) {
+    PrintError(has_scenario ? "give either SESSION or --scenario FILE, not both"
+                            : "missing input: give SESSION or --scenario FILE");
+    return kExitBadInput;
+  }
+  if (args.positional().size() > 1) {
+    PrintError("unexpected argument '" + args.positional()[1] + "'");
+    return kExitBadInput;
+  }
+  if (has_scenario) {
+    Status s = LoadScenario(args.Get("scenario"), &in->scenario);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+    if (args.Has("seed")) {
+      const std::string v = args.Get("seed");
+      char* end = nullptr;
+      const unsigned long long seed = std::strtoull(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || v[0] == '-') {
+        PrintError("--seed expects a non-negative integer, got '" + v + "'");
+        return kExitBadInput;
+      }
+      in->scenario.seed = seed;
+    }
+    sim::SimWorld world(in->scenario);
+    in->log = world.RunAll();
+    in->truth_poses = world.TruthPoses(1000.0);
+    in->has_truth = true;
+    in->geometry = in->scenario.geometry;
+    in->start = in->scenario.start;
+    in->name = "scenario " + in->scenario.name;
+    return kExitOk;
+  }
+  const std::string dir = args.positional().front();
+  hardware::SessionDecodeInfo info;
+  const Status s = hardware::DecodeSession(dir, &in->log, &info);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitBadInput;
+  }
+  in->geometry = info.meta.geometry;
+  in->name = "session " + dir;
+  return kExitOk;
+}
+
+// Poses for the recording: EKF (default), odometry, or the simulation's truth.
+int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
+                   ReconstructionResult* result) {
+  ReconstructionOptions options;
+  if (args.Has("pose-source") && !ParsePoseSource(args.Get("pose-source"), &options.pose.source)) {
+    PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
+    return kExitBadInput;
+  }
+  if (options.pose.source == PoseSource::kTruth && !in.has_truth) {
+    PrintError("--pose-source truth needs a simulated input (--scenario)");
+    return kExitBadInput;
+  }
+  options.pose.initial_pose = in.start;
+  options.calibration = calibration;
+  const Status s = Reconstruct(in.log, in.geometry, options, &in.truth_poses, result);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+nlohmann::json AnglesJson(const MountingError& c) {
+  return {{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}};
+}
+
+const char* kCalibrateUsage =
+    "usage: sweepscan-cli calibrate SESSION|--scenario FILE (--pairs PAIRS.json [--refine] | --auto)\n"
+    "                               [--out CALIB.json] [--pose-source ekf|odometry|truth] [--json]\n"
+    "\n"
+    "Solves the lidar's mounting error (alpha, beta, gamma) from a circle drive with\n"
+    "Levenberg-Marquardt (docs/calibration.md).\n"
+    "\n"
+    "Options:\n"
+    "  --scenario FILE   simulate this scenario in-process instead of reading a SESSION\n"
+    "  --seed N          override the scenario's seed\n"
+    "  --pairs FILE      picked corner pairs (docs/calibration.md, \"Pairs file\"), at least 4\n"
+    "  --refine          with --pairs: replace each pick by the board corner fitted in its pass\n"
+    "  --auto            no picks: planes seen in both passes (floor, ceiling, walls, board)\n"
+    "  --out FILE        write the calibration file (JSON)\n"
+    "  --pose-source S   ekf (default), odometry, or truth (simulated input only)\n"
+    "  --json            print the result as JSON\n";
+
+int Calibrate(int argc, char** argv) {
+  Args args({"json", "auto", "refine", "help"}, {"scenario", "pairs", "out", "pose-source", "seed"});
+  std::string error;
+  if (!args.Parse(argc, argv, 2, &error)) {
+    PrintError(error + " (see sweepscan-cli help calibrate)");
+    return kExitBadInput;
+  }
+  if (args.Flag("help")) {
+    std::cout << kCalibrateUsage;
+    return kExitOk;
+  }
+  if (args.Has("pairs") == args.Flag("auto")) {
+    PrintError("give exactly one of --pairs FILE and --auto (see sweepscan-cli help calibrate)");
+    return kExitBadInput;
+  }
+  if (args.Flag("refine") && !args.Has("pairs")) {
+    PrintError("--refine needs --pairs FILE");
+    return kExitBadInput;
+  }
+  // Check the cheap inputs before the expensive ones.
+  std::vector<PickPair> picks;
+  if (args.Has("pairs")) {
+    const Status s = LoadPairsFile(args.Get("pairs"), &picks);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+    if (picks.size() < 4) {
+      PrintError(args.Get("pairs") + ": need at least 4 pairs, got " + std::to_string(picks.size()));
+      return kExitBadInput;
+    }
+  }
+  RecordingInput in;
+  int code = LoadRecording(args, &in);
+  if (code != kExitOk) return code;
+  ReconstructionResult recon;
+  code = RecordingPoses(args, in, MountingError{}, &recon);
+  if (code != kExitOk) return code;
+  const SampleStore store(in.log, recon.poses);
+
+  CalibrationSummary summary;
+  Status s;
+  if (args.Flag("auto")) {
+    s = SolveAutomatic(store, in.geometry, {}, AutoCalibrationOptions(), &summary);
+  } else {
+    // The target's region: the picks' bounding box (uncalibrated world
+    // positions) grown by 0.25 m; its points split by time gaps give the
+    // two passes.
+    Eigen::AlignedBox3d region;
+    for (const PickPair& p : picks) {
+      for (const Pick* k : {&p.pass1, &p.pass2}) {
+        LidarObservation o;
+        if (!k->has_sample) {
+          region.extend(k->world);
+        } else if (store.Find(k->sample, &o).ok()) {
+          region.extend(ProjectObservation(o, in.geometry, {}));
+        }
+      }
+    }
+    if (region.isEmpty()) {
+      PrintError(args.Get("pairs") + ": no pick refers to a valid sample of the recording");
+      return kExitBadInput;
+    }
+    region.min() -= Eigen::Vector3d::Constant(0.25);
+    region.max() += Eigen::Vector3d::Constant(0.25);
+    std::vector<CloudPoint> cloud;
+    cloud.reserve(store.observations().size());
+    for (const auto& o : store.observations()) {
+      const Eigen::Vector3d p = ProjectObservation(o, in.geometry, {});
+      CloudPoint q;
+      q.x = p.x(), q.y = p.y(), q.z = p.z();
+      q.time_ns = o.time_ns;
+      cloud.push_back(q);
+    }
+    const std::vector<PassWindow> windows = FindPassWindows(cloud, region, 1.0, 20);
+    if (args.Flag("refine")) {
+      if (windows.size() < 2) {
+        PrintError("the target region around the picks was seen in " +
+                   std::to_string(windows.size()) + " pass(es), need 2");
+        return kExitBadInput;
+      }
+      std::vector<LidarObservation> board[2];
+      for (size_t i = 0; i < cloud.size(); ++i) {
+        const CloudPoint& p = cloud[i];
+        if (!region.contains(Eigen::Vector3d(p.x, p.y, p.z))) continue;
+        const int k = PassOfTime(windows, p.time_ns);
+        if (k == 0 || k == 1) board[k].push_back(store.observations()[i]);
+      }
+      s = SolveRefinedCorners(board[0], board[1], in.geometry, {}, CalibrationOptions(), &summary);
+    } else {
+      std::vector<ObservationPair> pairs;
+      s = ResolvePairs(picks, store, windows, in.geometry, {}, &pairs);
+      if (!s.ok()) {
+        PrintError(args.Get("pairs") + ": " + s.message());
+        return kExitBadInput;
+      }
+      summary.method = "pairs";
+      s = SolvePairs(pairs, in.geometry, {}, CalibrationOptions(), &summary);
+    }
+  }
+  if (!s.ok()) {
+    PrintError("calibration failed: " + s.message());
+    return kExitFailure;
+  }
+  if (args.Has("out")) {
+    const Status w = SaveCalibrationFile(args.Get("out"), summary.angles, &summary);
+    if (!w.ok()) {
+      PrintError(w.message());
+      return kExitFailure;
+    }
+  }
+  nlohmann::json report;
+  report["input"] = in.name;
+  report["pose_source"] = args.Get("pose-source", "ekf");
+  report["method"] = summary.method;
+  report["converged"] = summary.converged;
+  report["mounting_error_rad"] = AnglesJson(summary.angles);
+  report["sigma_rad"] = {{"alpha", summary.sigma_rad[0]},
+                         {"beta", summary.sigma_rad[1]},
+                         {"gamma", summary.sigma_rad[2]}};
+  report["rms_before_m"] = summary.initial_rms_m;
+  report["rms_after_m"] = summary.final_rms_m;
+  report["residual_blocks"] = summary.residual_blocks;
+  report["planes"] = summary.planes;
+  report["outer_iterations"] = summary.outer_iterations;
+  report["lm_iterations"] = summary.trace.size();
+  report["condition_number"] = summary.condition_number;
+  report["warnings"] = summary.warnings;
+  nlohmann::json trace = nlohmann::json::array();
+  for (const auto& it : summary.trace) {
+    trace.push_back({it.iteration, it.angles.alpha, it.angles.beta, it.angles.gamma, it.cost});
+  }
+  report["trace_columns"] = {"iteration", "alpha", "beta", "gamma", "cost"};
+  report["trace"] = trace;
+  if (in.has_truth) {
+    const MountingError& t = in.scenario.mounting_error;
+    report["truth_rad"] = AnglesJson(t);
+    report["error_rad"] = AnglesJson({summary.angles.alpha - t.alpha, summary.angles.beta - t.beta,
+                                      summary.angles.gamma - t.gamma});
+  }
+  if (args.Has("out")) report["out"] = args.Get("out");
+  if (args.Flag("json")) {
+    std::cout << report.dump(2) << "\n";
+    return kExitOk;
+  }
+  std::cout << summary.FullReport();
+  if (in.has_truth) {
+    std::printf("  error vs truth:   %+.3f %+.3f %+.3f mrad\n",
+                1e3 * report["error_rad"]["alpha"].get<double>(),
+                1e3 * report["error_rad"]["beta"].get<double>(),
+                1e3 * report["error_rad"]["gamma"].get<double>());
+  }
+  if (args.Has("out")) std::printf("  written:          %s\n", args.Get("out").c_str());
+  return kExitOk;
+}
+
+const char* kEvaluateUsage =
+    "usage: sweepscan-cli evaluate CLOUD.ply|CLOUD.pcd|SESSION|--scenario FILE\n"
+    "                              [--calibration CALIB.json] [--pose-source S] [--json]\n"
+    "\n"
+    "Evaluates a cloud (Miao et al. 2022, section 5): statistical outlier removal,\n"
+    "RANSAC planes (floor, ceiling, walls) with normal and RMS, signed deviation\n"
+    "histograms (Fig. 9), room dimensions from parallel planes (Table 3) and the\n"
+    "mean nearest-neighbour distance (Eq. 18-19). With a SESSION or --scenario\n"
+    "and --calibration, the cloud is rebuilt from the raw samples twice, without\n"
+    "and with the calibration, and both are reported (before / after).\n";
+
+nlohmann::json EvaluationJson(const CloudEvaluation& e) {
+  nlohmann::json planes = nlohmann::json::array();
+  for (const auto& p : e.planes) {
+    planes.push_back({{"kind", p.kind},
+                      {"normal", {p.plane.normal.x(), p.plane.normal.y(), p.plane.normal.z()}},
+                      {"d_m", p.plane.d},
+                      {"rms_m", p.plane.rms},
+                      {"points", p.plane.count},
+                      {"tilt_deg", p.tilt_deg},
+                      {"histogram",
+                       {{"bin_m", p.deviations.bin_m},
+                        {"min_m", p.deviations.min_m},
+                        {"mean_m", p.deviations.mean_m},
+                        {"stddev_m", p.deviations.stddev_m},
+                        {"counts", p.deviations.counts}}}});
+  }
+  nlohmann::json dims = nlohmann::json::array();
+  for (const auto& d : e.dimensions) {
+    dims.push_back({{"planes", {d.plane_a, d.plane_b}},
+                    {"axis", d.axis},
+                    {"distance_m", d.distance_m},
+                    {"angle_deg", d.angle_deg}});
+  }
+  return {{"points", e.points_in},
+          {"points_after_outlier_removal", e.points_after_outliers},
+          {"planes", planes},
+          {"dimensions", dims},
+          {"mean_nn_distance_m", e.mean_nn_distance_m},
+          {"density_queries", e.density_queries}};
+}
+
+void PrintEvaluation(const std::string& title, const CloudEvaluation& e) {
+  std::printf("%s: %zu points, %zu after outlier removal, mean nearest-neighbour distance %.2f mm\n",
+              title.c_str(), e.points_in, e.points_after_outliers, 1e3 * e.mean_nn_distance_m);
+  for (size_t i = 0; i < e.planes.size(); ++i) {
+    const auto& p = e.planes[i];
+    std::printf("  plane %zu %-7s n (%+.4f %+.4f %+.4f) d %+.3f m, %zu points, RMS %.1f mm, tilt %.3f deg\n",
+                i, p.kind.c_str(), p.plane.normal.x(), p.plane.normal.y(), p.plane.normal.z(), p.plane.d,
+                p.plane.count, 1e3 * p.plane.rms, p.tilt_deg);
+  }
+  for (const auto& d : e.dimensions) {
+    std::printf("  %s dimension %.3f m (planes %d and %d, %.2f deg apart)\n", d.axis.c_str(), d.distance_m,
+                d.plane_a, d.plane_b, d.angle_deg);
+  }
+}
+
+int Evaluate(int argc, char** argv) {
+  Args args({"json", "help"}, {"scenario", "calibration", "pose-source", "seed"});
+  std::string error;
+  if (!args.Parse(argc, argv, 2, &error)) {
+    PrintError(error + " (see sweepscan-cli help evaluate)");
+    return kExitBadInput;
+  }
+  if (args.Flag("help")) {
+    std::cout << kEvaluateUsage;
+    return kExitOk;
+  }
+  MountingError calibration;
+  if (args.Has("calibration")) {
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &calibration);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  const auto is_cloud = [](const std::string& p) {
+    return p.size() > 4 && (p.substr(p.size() - 4) == ".ply" || p.substr(p.size() - 4) == ".pcd");
+  };
+  const EvaluationOptions options;
+  std::vector<std::pair<std::string, CloudEvaluation>> results;
+  if (!args.Has("scenario") && args.positional().size() == 1 && is_cloud(args.positional()[0])) {
+    if (args.Has("calibration")) {
+      PrintError("--calibration needs a SESSION or --scenario input: a cloud file holds placed points, "
+                 "not the raw samples a calibration re-projects");
+      return kExitBadInput;
+    }
+    std::vector<Eigen::Vector3f> pts;
+    const Status s = LoadCloudPositions(args.positional()[0], &pts);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+    CloudEvaluation e;
+    const Status es = EvaluateCloud(pts, options, &e);
+    if (!es.ok()) {
+      PrintError(es.message());
+      return kExitFailure;
+    }
+    results.emplace_back("cloud", e);
+  } else {
+    RecordingInput in;
+    int code = LoadRecording(args, &in);
+    if (code != kExitOk) return code;
+    std::vector<std::pair<std::string, MountingError>> runs = {{"uncalibrated", MountingError{}}};
+    if (args.Has("calibration")) runs.emplace_back("calibrated", calibration);
+    for (const auto& [title, c] : runs) {
+      ReconstructionResult r;
+      code = RecordingPoses(args, in, c, &r);
+      if (code != kExitOk) return code;
+      std::vector<Eigen::Vector3f> pts;
+      pts.reserve(r.points.size());
+      for (const auto& p : r.points) pts.emplace_back(p.x, p.y, p.z);
+      CloudEvaluation e;
+      const Status es = EvaluateCloud(pts, options, &e);
+      if (!es.ok()) {
+        PrintError(es.message());
+        return kExitFailure;
+      }
+      results.emplace_back(title, e);
+    }
+  }
+  if (args.Flag("json")) {
+    nlohmann::json report;
+    for (const auto& [title, e] : results) report[title] = EvaluationJson(e);
+    std::cout << report.dump(2) << "\n";
+    return kExitOk;
+  }
+  for (const auto& [title, e] : results) PrintEvaluation(title, e);
+  return kExitOk;
+}
+
 }  // namespace
 
 int Main(int argc, char** argv) {
@@ -236,14 +636,21 @@ int Main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   if (command == "help" || command == "--help" || command == "-h") {
-    if (argc > 2 && std::string(argv[2]) == "simulate") {
+    const std::string topic = argc > 2 ? argv[2] : "";
+    if (topic == "simulate") {
       std::cout << kSimulateUsage;
+    } else if (topic == "calibrate") {
+      std::cout << kCalibrateUsage;
+    } else if (topic == "evaluate") {
+      std::cout << kEvaluateUsage;
     } else {
       std::cout << kUsage;
     }
     return kExitOk;
   }
   if (command == "simulate") return Simulate(argc, argv);
+  if (command == "calibrate") return Calibrate(argc, argv);
+  if (command == "evaluate") return Evaluate(argc, argv);
   PrintError("unknown command '" + command + "'\n" + kUsage);
   return kExitBadInput;
 }

@@ -171,25 +171,22 @@ Status ExtractPlanes(const std::vector<Eigen::Vector3f>& points, const Evaluatio
     members->push_back(std::move(mine));
     remaining.swap(rest);
   }
-  // The lowest level plane is the floor, the highest the ceiling (a single
-  // level plane is the floor if it is below the cloud's mean height).
-  int lowest = -1, highest = -1;
-  for (size_t i = 0; i < planes->size(); ++i) {
-    if ((*planes)[i].kind != "level") continue;
-    const double z = (*planes)[i].plane.centroid.z();
-    if (lowest < 0 || z < (*planes)[lowest].plane.centroid.z()) lowest = static_cast<int>(i);
-    if (highest < 0 || z > (*planes)[highest].plane.centroid.z()) highest = static_cast<int>(i);
-  }
+  // Level planes come in size order: the largest below the cloud's mean
+  // height is the floor, the largest above it the ceiling (by size, not by
+  // extreme height: an uncalibrated cloud holds tilted ghost copies of both).
   double mean_z = 0.0;
   for (const auto& p : points) mean_z += p.z();
   mean_z /= static_cast<double>(points.size());
-  for (size_t i = 0; i < planes->size(); ++i) {
-    EvaluatedPlane& ep = (*planes)[i];
+  bool have_floor = false, have_ceiling = false;
+  for (EvaluatedPlane& ep : *planes) {
     if (ep.kind != "level") continue;
-    if (static_cast<int>(i) == lowest && (lowest != highest || ep.plane.centroid.z() < mean_z)) {
+    const bool below = ep.plane.centroid.z() < mean_z;
+    if (below && !have_floor) {
       ep.kind = "floor";
-    } else if (static_cast<int>(i) == highest) {
+      have_floor = true;
+    } else if (!below && !have_ceiling) {
       ep.kind = "ceiling";
+      have_ceiling = true;
     } else {
       ep.kind = "other";
     }

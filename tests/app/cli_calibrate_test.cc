@@ -1,0 +1,135 @@
+// `sweepscan-cli calibrate` and `evaluate`, run as an operator would: the
+// real binary, its exit code and its output.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/calibration.h"
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out;  // stdout and stderr
+};
+
+CliRun Cli(const std::string& args) {
+  const std::string cmd = std::string(SWEEPSCAN_CLI) + " " + args + " 2>&1";
+  CliRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string Tmp(const std::string& name) {
+  return ::testing::TempDir() + "/sweepscan_cli_calib_" + name;
+}
+std::string Scenario(const std::string& name) {
+  return std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name + ".json";
+}
+void Write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+int Lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+// Bad input: exit code 2 and one line that names the problem.
+void ExpectBadInput(const std::string& args, const std::string& expect) {
+  const CliRun r = Cli(args);
+  EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+  EXPECT_EQ(Lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find(expect), std::string::npos) << r.out;
+}
+
+const char kHead[] = R"({"format":"sweepscan-pairs","version":1,"pairs":[)";
+const char kPair[] = R"({"pass1":{"world":[4.7,0.16,1.5]},"pass2":{"world":[4.7,0.16,1.5]}})";
+
+TEST(CliCalibrateTest, BadInput) {
+  const std::string sc = " --scenario " + Scenario("lab_circle");
+  ExpectBadInput("calibrate" + sc, "exactly one of --pairs FILE and --auto");
+  ExpectBadInput("calibrate --auto", "missing input");
+  ExpectBadInput("calibrate --auto --scenario /nonexistent.json", "/nonexistent.json");
+  ExpectBadInput("calibrate /nonexistent_session --auto", "/nonexistent_session");
+  ExpectBadInput("calibrate" + sc + " --pairs /nonexistent_pairs.json", "/nonexistent_pairs.json");
+  Write(Tmp("nan.json"),
+        std::string(kHead) + R"({"pass1":{"world":[1,2,NaN]},"pass2":{"scan":1,"beam":2}}]})");
+  ExpectBadInput("calibrate" + sc + " --pairs " + Tmp("nan.json"), "not valid JSON");
+  Write(Tmp("three.json"), std::string(kHead) + kPair + "," + kPair + "," + kPair + "]}");
+  ExpectBadInput("calibrate" + sc + " --pairs " + Tmp("three.json"),
+                 "need at least 4 pairs, got 3");
+  ExpectBadInput("calibrate" + sc + " --auto --refine", "--refine needs --pairs");
+  ExpectBadInput("calibrate" + sc + " --auto --bogus", "unknown option --bogus");
+  ExpectBadInput("evaluate /nonexistent.ply", "/nonexistent.ply");
+  ExpectBadInput("evaluate x.ply --calibration /nonexistent_calib.json", "/nonexistent_calib.json");
+}
+
+// The paper's circle drive simulated in-process, automatic mode with truth
+// poses: the angles come back within the issue's bound, and the file it
+// writes loads as a calibration.
+TEST(CliCalibrateTest, AutomaticOnScenarioWritesCalibration) {
+  const CliRun r = Cli("calibrate --scenario " + Scenario("lab_circle") +
+                       " --auto --pose-source truth --json --out " + Tmp("calib.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "auto-planes");
+  EXPECT_TRUE(j["converged"].get<bool>());
+  for (const char* k : {"alpha", "beta", "gamma"}) {
+    EXPECT_LT(std::abs(j["error_rad"][k].get<double>()), 0.5e-3) << k;
+  }
+  EXPECT_GT(j["trace"].size(), 2u);
+  sweepscan::MountingError c;
+  ASSERT_TRUE(sweepscan::LoadCalibrationFile(Tmp("calib.json"), &c).ok());
+  EXPECT_NEAR(c.gamma, 0.0355, 0.5e-3);
+
+  // evaluate: before / after on the same recording.
+  const CliRun e = Cli("evaluate --scenario " + Scenario("lab_circle") +
+                       " --pose-source truth --json --calibration " + Tmp("calib.json"));
+  ASSERT_EQ(e.code, 0) << e.out;
+  const nlohmann::json ej = nlohmann::json::parse(e.out);
+  ASSERT_TRUE(ej.contains("uncalibrated"));
+  ASSERT_TRUE(ej.contains("calibrated"));
+  double tilt_before = -1, tilt_after = -1;
+  for (const auto& p : ej["uncalibrated"]["planes"]) {
+    if (p["kind"] == "ceiling") tilt_before = p["tilt_deg"].get<double>();
+  }
+  for (const auto& p : ej["calibrated"]["planes"]) {
+    if (p["kind"] == "ceiling") tilt_after = p["tilt_deg"].get<double>();
+  }
+  EXPECT_GT(tilt_before, 0.1);
+  EXPECT_GE(tilt_after, 0.0);
+  EXPECT_LT(tilt_after, 0.1);
+}
+
+TEST(CliCalibrateTest, PairsOnScenario) {
+  // The corners of the target board as world picks in both passes.
+  std::string text = kHead;
+  const char* corners[4] = {"[4.7,0.16,1.5]", "[5.3,0.16,1.5]", "[5.3,0.16,0.9]", "[4.7,0.16,0.9]"};
+  for (int k = 0; k < 4; ++k) {
+    if (k > 0) text += ",";
+    text += std::string(R"({"pass1":{"world":)") + corners[k] + R"(},"pass2":{"world":)" +
+            corners[k] + "}}";
+  }
+  text += "]}";
+  Write(Tmp("corners.json"), text);
+  const CliRun r = Cli("calibrate --scenario " + Scenario("lab_circle") + " --pairs " +
+                       Tmp("corners.json") + " --pose-source truth --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"], "pairs");
+  EXPECT_LT(j["rms_after_m"].get<double>(), j["rms_before_m"].get<double>());
+  const CliRun h = Cli("help calibrate");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.out.find("--pairs"), std::string::npos);
+}
+
+}  // namespace
