@@ -27,10 +27,13 @@
 // Automatic mode. No picks: planes (walls, floor, ceiling, the board) are
 // found by RANSAC in the cloud under the current c; each surface s gets a
 // plane (n_s, d_s) as extra Ceres parameters (n_s on the unit sphere) and
-// every sampled point i of s a residual n_s . p_W^i(c) + d_s; points of the
-// two passes must then lie on one plane. Segmentation and solve alternate
-// with a shrinking inlier band, since a miscalibrated cloud shows each wall
-// twice, up to 20 cm apart.
+// every point i of s a residual (n_s . p_W^i(c) + d_s) / sigma_i weighted by
+// the range noise model; points of the two passes must then lie on one
+// plane. Segmentation and solve alternate with a shrinking inlier band,
+// since a miscalibrated cloud shows each wall twice, up to 20 cm apart; at
+// the final band membership is per point (3 sigma_i) and scan-line runs
+// offset from their plane (a parallel surface 2 cm away) are dropped.
+// sigma is the larger of the iid and the cluster-robust estimate.
 //
 // All functions are pure (no globals) and may run on any thread; a long
 // solve can be cancelled through CalibrationProgress.
