@@ -8,6 +8,7 @@
 #include <string>
 
 #include "app/cli_args.h"
+#include "app/cli_common.h"
 #include "core/calibration.h"
 #include "core/cloud_io.h"
 #include "core/evaluation.h"
@@ -16,20 +17,20 @@
 #include "core/scenario.h"
 #include "core/sim/truth_eval.h"
 #include "core/sim/world.h"
+#include "hardware/simulate_session.h"
 #include "hardware/telemetry_decoder.h"
 
 namespace sweepscan::app {
 namespace {
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitBadInput = 2;
-
 const char* kUsage =
     "usage: sweepscan-cli <command> [options]\n"
     "\n"
     "Commands:\n"
-    "  simulate   run a simulated scan (scenario file) and reconstruct its cloud\n"
+    "  simulate   record a simulated scan (scenario file) as a session and reconstruct it\n"
+    "  info       describe a recorded session\n"
+    "  reconstruct  build the cloud of a recorded session\n"
+    "  export     write a session's decoded sensor records as CSV\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  help       show this text, or `help <command>` for one command\n"
@@ -40,13 +41,18 @@ const char* kUsage =
 const char* kSimulateUsage =
     "usage: sweepscan-cli simulate --scenario FILE --out CLOUD.ply|CLOUD.pcd [options]\n"
     "\n"
-    "Runs the scenario's simulated world faster than real time, reconstructs the\n"
-    "cloud from the simulated wheel, IMU and lidar records, writes it, and reports\n"
-    "its accuracy against the world's ground truth.\n"
+    "Runs the scenario's simulated world faster than real time behind byte-exact\n"
+    "emulations of the X4, HI219 and motor board and the robot agent's logic,\n"
+    "records the link frames as a session (as a workstation would), reconstructs\n"
+    "the cloud from the session's bytes, writes it, and reports its accuracy\n"
+    "against the world's ground truth.\n"
     "\n"
     "Options:\n"
     "  --scenario FILE        scenario JSON (docs/scenario-format.md)\n"
     "  --out FILE             cloud to write (.ply binary or .pcd binary, all attributes)\n"
+    "  --session DIR          session folder to record (default: next to --out, NAME.sweepscan)\n"
+    "  --overwrite            replace an existing session folder\n"
+    "  --direct               skip the bytes: reconstruct from the simulator's records directly\n"
     "  --truth FILE           also write ground truth JSON (scenario, trajectory, metrics)\n"
     "  --pose-source S        ekf (default), odometry (wheels only) or truth\n"
     "  --no-ekf               same as --pose-source odometry\n"
@@ -54,14 +60,13 @@ const char* kSimulateUsage =
     "  --seed N               override the scenario's seed\n"
     "  --json                 print the report as JSON\n";
 
-void PrintError(const std::string& message) { std::cerr << "sweepscan-cli: error: " << message << "\n"; }
-
 nlohmann::json StatsJson(const sim::SurfaceErrorStats& s) {
   return {{"count", s.count}, {"mean_m", s.mean}, {"rms_m", s.rms}, {"p95_m", s.p95}, {"max_m", s.max}};
 }
 
 int Simulate(int argc, char** argv) {
-  Args args({"json", "no-ekf", "no-deskew", "help"}, {"scenario", "out", "truth", "pose-source", "seed"});
+  Args args({"json", "no-ekf", "no-deskew", "help", "direct", "overwrite"},
+            {"scenario", "out", "truth", "pose-source", "seed", "session"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help simulate)");
@@ -112,8 +117,29 @@ int Simulate(int argc, char** argv) {
   options.assembly.max_range_m = config.lidar.max_range_m;
 
   sim::SimWorld world(config);
-  const SensorLog log = world.RunAll();
   const PoseBuffer truth = world.TruthPoses(1000.0);
+  SensorLog log;
+  std::string session_dir;
+  if (args.Flag("direct")) {
+    log = world.RunAll();
+  } else {
+    session_dir = args.Get("session", out.substr(0, out.size() - 4) + ".sweepscan");
+    hardware::SimulateSessionOptions sim_options;
+    sim_options.overwrite = args.Flag("overwrite");
+    sim_options.notes = "sweepscan-cli simulate --scenario " + args.Get("scenario");
+    hardware::SimulateSessionReport sim_report;
+    status = hardware::SimulateSession(config, session_dir, sim_options, &sim_report);
+    if (!status.ok()) {
+      PrintError(status.message() + (args.Flag("overwrite") ? "" : " (use --overwrite to replace it)"));
+      return kExitFailure;
+    }
+    hardware::SessionDecodeInfo info;
+    status = hardware::DecodeSession(session_dir, &log, &info);
+    if (!status.ok()) {
+      PrintError(status.message());
+      return kExitFailure;
+    }
+  }
   ReconstructionResult result;
   status = Reconstruct(log, config.geometry, options, &truth, &result);
   if (!status.ok()) {
@@ -128,6 +154,8 @@ int Simulate(int argc, char** argv) {
 
   nlohmann::json report;
   report["scenario"] = config.name;
+  report["session"] = session_dir;
+  report["through_bytes"] = !args.Flag("direct");
   report["seed"] = config.seed;
   report["duration_s"] = world.duration_s();
   report["pose_source"] = PoseSourceName(options.pose.source);
@@ -201,6 +229,7 @@ int Simulate(int argc, char** argv) {
     std::cout << report.dump(2) << "\n";
     return kExitOk;
   }
+  if (!session_dir.empty()) std::printf("recorded session %s (through the device and link bytes)\n", session_dir.c_str());
   std::printf("simulated %.1f s of '%s' (seed %llu): %zu scans, %zu samples -> %zu points in %s\n",
               world.duration_s(), config.name.c_str(), static_cast<unsigned long long>(config.seed),
               log.scans.size(), result.stats.samples_in, result.stats.points_out, out.c_str());
@@ -643,12 +672,21 @@ int Main(int argc, char** argv) {
       std::cout << kCalibrateUsage;
     } else if (topic == "evaluate") {
       std::cout << kEvaluateUsage;
+    } else if (topic == "info") {
+      std::cout << kInfoUsage;
+    } else if (topic == "reconstruct") {
+      std::cout << kReconstructUsage;
+    } else if (topic == "export") {
+      std::cout << kExportUsage;
     } else {
       std::cout << kUsage;
     }
     return kExitOk;
   }
   if (command == "simulate") return Simulate(argc, argv);
+  if (command == "info") return RunInfo(argc, argv);
+  if (command == "reconstruct") return RunReconstruct(argc, argv);
+  if (command == "export") return RunExport(argc, argv);
   if (command == "calibrate") return Calibrate(argc, argv);
   if (command == "evaluate") return Evaluate(argc, argv);
   PrintError("unknown command '" + command + "'\n" + kUsage);

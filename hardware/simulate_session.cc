@@ -21,6 +21,7 @@ Status SimulateSession(const sim::SimConfig& config, const std::string& session_
   meta.lidar_angle_convention = config.lidar.angle_convention;
   meta.link = "simulated (in-process, scenario '" + config.name + "')";
   meta.notes = options.notes;
+  meta.agent = "sweepscan-sim (in-process)";
   meta.settings["scenario"] = ScenarioToJson(config);
   SessionWriterOptions writer_options;
   writer_options.overwrite = options.overwrite;
@@ -31,10 +32,9 @@ Status SimulateSession(const sim::SimConfig& config, const std::string& session_
   SimDevices devices(config, SimDevices::Mode::kScripted);
   // A serial link (no authentication, as on a cable to the robot).
   AgentOptions agent_options;
-  agent_options.name = "sweepscan-sim (in-process)";
+  agent_options.name = meta.agent;
   agent_options.require_auth = false;
   AgentCore agent(agent_options);
-  meta.agent = agent_options.name;
   LinkEncoder client(LinkSender::kClient);
   LinkDecoderOptions decoder_options;
   decoder_options.keep_raw_frames = true;
@@ -99,7 +99,6 @@ Status SimulateSession(const sim::SimConfig& config, const std::string& session_
   }
   report->link = workstation.stats();
   report->simulated_s = ToSeconds(now);
-  writer->UpdateMeta(meta);
   return writer->Close();
 }
 

@@ -36,7 +36,7 @@ std::string Scenario(const std::string& name) {
 
 TEST(CliTest, SimulateWritesCloudTruthAndJsonReport) {
   const CliRun r = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("lab.ply") +
-                    " --truth " + Tmp("truth.json") + " --json");
+                    " --truth " + Tmp("truth.json") + " --overwrite --json");
   ASSERT_EQ(r.code, 0) << r.out;
   const nlohmann::json report = nlohmann::json::parse(r.out);
   EXPECT_GT(report["points"].get<int>(), 200000);
@@ -51,10 +51,10 @@ TEST(CliTest, SimulateWritesCloudTruthAndJsonReport) {
 }
 
 TEST(CliTest, SwitchesForComparison) {
-  const CliRun odo = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("o.pcd") + " --no-ekf --json");
+  const CliRun odo = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("o.pcd") + " --no-ekf --direct --json");
   ASSERT_EQ(odo.code, 0) << odo.out;
   EXPECT_EQ(nlohmann::json::parse(odo.out)["pose_source"], "odometry");
-  const CliRun nd = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("n.ply") + " --no-deskew --json");
+  const CliRun nd = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("n.ply") + " --no-deskew --direct --json");
   ASSERT_EQ(nd.code, 0) << nd.out;
   EXPECT_FALSE(nlohmann::json::parse(nd.out)["deskew"].get<bool>());
 }
@@ -78,7 +78,60 @@ TEST(CliTest, BadInputExitsTwoWithOneClearLine) {
   EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out x.ply --bogus").code, 2);
   EXPECT_EQ(Cli("teleport").code, 2);
   EXPECT_EQ(Cli("").code, 2);
-  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /nonexistent-dir/x.ply").code, 1);
+  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /dev/null/x.ply").code, 1);
+  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /dev/null/x.ply --direct").code, 1);
+}
+
+// The session written by simulate is a first-class recording: info,
+// reconstruct and export work on it like on one from a robot.
+TEST(CliTest, SessionCommands) {
+  const std::string session = Tmp("circle.sweepscan");
+  CliRun r = Cli("simulate --scenario " + Scenario("lab_circle") + " --out " + Tmp("circle.ply") +
+                 " --session " + session + " --overwrite --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json sim = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(sim["through_bytes"].get<bool>());
+
+  r = Cli("info " + session + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_EQ(info["scans"], sim["scans"]);
+  EXPECT_EQ(info["frames"]["refused"], 0);
+  EXPECT_EQ(info["decoder_errors"]["lidar_checksum"], 0);
+  EXPECT_GT(info["imu_records"].get<int>(), 2000);
+
+  // The session's own reconstruction: the same points as simulate's (which
+  // placed them in the scenario's world frame; the session starts at the
+  // robot's start pose, so compare counts, not coordinates).
+  r = Cli("reconstruct " + session + " --out " + Tmp("circle2.ply") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["points"], sim["points"]);
+
+  const std::string csv = Tmp("circle_csv");
+  r = Cli("export " + session + " --out " + csv + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream lidar(csv + "/lidar.csv");
+  size_t lines = 0;
+  for (std::string line; std::getline(lidar, line);) ++lines;
+  EXPECT_EQ(lines, nlohmann::json::parse(r.out)["lidar_samples"].get<size_t>() + 1);
+
+  // A second simulate into the same folder is refused, never clobbered.
+  r = Cli("simulate --scenario " + Scenario("lab_circle") + " --out " + Tmp("circle.ply") + " --session " + session);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("--overwrite"), std::string::npos) << r.out;
+
+  // A corrupted frames.bin: one clear line, exit 2.
+  {
+    std::fstream f(session + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(5000);
+    f.put('\x55');
+  }
+  r = Cli("info " + session);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("frames.bin"), std::string::npos) << r.out;
+  EXPECT_EQ(Cli("info " + Tmp("no-such.sweepscan")).code, 2);
+  EXPECT_EQ(Cli("reconstruct " + session).code, 2);  // no --out
+  EXPECT_EQ(Cli("info").code, 2);
 }
 
 TEST(CliTest, HelpExitsZero) {

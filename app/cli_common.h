@@ -1,0 +1,28 @@
+// Pieces shared by the sweepscan-cli commands.
+#ifndef SWEEPSCAN_APP_CLI_COMMON_H_
+#define SWEEPSCAN_APP_CLI_COMMON_H_
+
+#include <iostream>
+#include <string>
+
+namespace sweepscan::app {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;   // failed while working (cannot write, solver failed)
+constexpr int kExitBadInput = 2;  // usage errors, invalid or corrupt input files
+
+inline void PrintError(const std::string& message) {
+  std::cerr << "sweepscan-cli: error: " << message << "\n";
+}
+
+// Session commands (app/cli_session.cc): `info`, `reconstruct`, `export`.
+int RunInfo(int argc, char** argv);
+int RunReconstruct(int argc, char** argv);
+int RunExport(int argc, char** argv);
+extern const char* const kInfoUsage;
+extern const char* const kReconstructUsage;
+extern const char* const kExportUsage;
+
+}  // namespace sweepscan::app
+
+#endif  // SWEEPSCAN_APP_CLI_COMMON_H_
