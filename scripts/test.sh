@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds everything and runs every test:
-#   1. the GoogleTest suites through CTest (gcc build in ./build);
-#   2. a short libFuzzer run of every fuzz target on its seed corpus
-#      (clang build in ./build-fuzz; skipped with SWEEPSCAN_SKIP_FUZZ=1).
+#   1. a short libFuzzer run of every fuzz target on its seed corpus
+#      (clang build in ./build-fuzz; skipped with SWEEPSCAN_SKIP_FUZZ=1);
+#   2. the GoogleTest suites through CTest (gcc build in ./build).
 # GUI tests, when present, run under xvfb-run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/ccache}"
+# Let clones at other paths (CI checks out afresh) share the cache.
+export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
 
-scripts/build.sh -DSWEEPSCAN_BUILD_BENCHMARKS=ON
-(cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
 
 if [ "${SWEEPSCAN_SKIP_FUZZ:-0}" != "1" ]; then
   CC=clang-14 CXX=clang++-14 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
@@ -22,3 +22,7 @@ if [ "${SWEEPSCAN_SKIP_FUZZ:-0}" != "1" ]; then
   cmake --build build-fuzz -j"$jobs" --target $fuzz_targets
   (cd build-fuzz && ctest --output-on-failure -R '_fuzz_smoke$')
 fi
+
+# The main suite last, so its summary closes the output.
+scripts/build.sh -DSWEEPSCAN_BUILD_BENCHMARKS=ON
+(cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
