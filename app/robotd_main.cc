@@ -13,6 +13,7 @@
 #include <cstdio>
 
 #include "hardware/qt_transport.h"
+#include "app/agent_main_common.h"
 #include "hardware/robot_agent.h"
 
 namespace {
@@ -20,12 +21,6 @@ namespace {
 using sweepscan::hardware::LinkAddress;
 using sweepscan::hardware::RobotAgent;
 using sweepscan::hardware::RobotAgentConfig;
-
-int signal_fds[2] = {-1, -1};
-void OnSignal(int) {
-  const char byte = 1;
-  (void)!::write(signal_fds[1], &byte, 1);  // Async-signal-safe; the event loop does the rest.
-}
 
 int Fail(const QString& message) {
   std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(message));
@@ -181,14 +176,5 @@ int main(int argc, char** argv) {
   }
   std::fflush(stdout);
 
-  // SIGINT / SIGTERM: leave through the event loop so the motors get a zero.
-  if (::socketpair(AF_UNIX, SOCK_STREAM, 0, signal_fds) == 0) {
-    auto* notifier = new QSocketNotifier(signal_fds[0], QSocketNotifier::Read, &app);
-    QObject::connect(notifier, &QSocketNotifier::activated, &app, &QCoreApplication::quit);
-    ::signal(SIGINT, OnSignal);
-    ::signal(SIGTERM, OnSignal);
-  }
-  const int rc = app.exec();
-  agent.Shutdown();
-  return rc;
+  return sweepscan::app::RunAgentUntilSignal(&app, &agent);
 }

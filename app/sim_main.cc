@@ -17,6 +17,7 @@
 #include "core/scenario.h"
 #include "core/sim/world.h"
 #include "hardware/qt_transport.h"
+#include "app/agent_main_common.h"
 #include "hardware/robot_agent.h"
 #include "hardware/sim_devices.h"
 
@@ -28,12 +29,6 @@ using sweepscan::hardware::RobotAgentConfig;
 using sweepscan::hardware::SimDevices;
 using sweepscan::hardware::SimDevicesAdapter;
 using sweepscan::hardware::TimedBytes;
-
-int signal_fds[2] = {-1, -1};
-void OnSignal(int) {
-  const char byte = 1;
-  (void)!::write(signal_fds[1], &byte, 1);
-}
 
 int Fail(const QString& message) {
   std::fprintf(stderr, "sweepscan-sim: %s\n", qPrintable(message));
@@ -152,13 +147,5 @@ int main(int argc, char** argv) {
   }
   std::fflush(stdout);
 
-  if (::socketpair(AF_UNIX, SOCK_STREAM, 0, signal_fds) == 0) {
-    auto* notifier = new QSocketNotifier(signal_fds[0], QSocketNotifier::Read, &app);
-    QObject::connect(notifier, &QSocketNotifier::activated, &app, &QCoreApplication::quit);
-    ::signal(SIGINT, OnSignal);
-    ::signal(SIGTERM, OnSignal);
-  }
-  const int rc = app.exec();
-  agent.Shutdown();
-  return rc;
+  return sweepscan::app::RunAgentUntilSignal(&app, &agent);
 }

@@ -9,24 +9,14 @@
 #include <string>
 
 #include "core/cloud_io.h"
+#include "tests/testing/run_command.h"
 
 namespace {
 
-struct CliRun {
-  int code = -1;
-  std::string out;  // stdout and stderr
-};
+using CliRun = sweepscan::testing::CommandRun;
 
 CliRun Cli(const std::string& args) {
-  const std::string cmd = std::string(SWEEPSCAN_CLI) + " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return sweepscan::testing::RunCommand(std::string(SWEEPSCAN_CLI) + " " + args);
 }
 
 std::string Tmp(const std::string& name) { return ::testing::TempDir() + "/sweepscan_cli_" + name; }
