@@ -5,10 +5,14 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <QCommandLineOption>
+#include <QCommandLineParser>
 #include <QCoreApplication>
 #include <QSocketNotifier>
 #include <csignal>
+#include <cstdio>
 
+#include "hardware/qt_transport.h"
 #include "hardware/robot_agent.h"
 
 namespace sweepscan::app {
@@ -20,6 +24,95 @@ inline void OnSignal(int) {
   (void)!::write(signal_fds[1], &byte, 1);  // Async-signal-safe; the event loop does the rest.
 }
 }  // namespace internal
+
+// The options both agents take: the TCP listen address, the key file, the
+// watchdog and the motion limits. Add() registers them; Apply() reads them
+// into the configuration (TCP unless `tcp` is false, e.g. for a serial or
+// pty link, which has no authentication).
+struct AgentCommandLine {
+  QCommandLineOption listen{QStringLiteral("listen"),
+                            "Serve the link on TCP ADDR:PORT (default 127.0.0.1:5600; port 0 = "
+                            "any free port).",
+                            "ADDR:PORT"};
+  QCommandLineOption key_file{QStringLiteral("key-file"), "Pre-shared key file (required for TCP).",
+                              "FILE"};
+  QCommandLineOption watchdog{QStringLiteral("watchdog-ms"), "Watchdog period in ms (default 500).",
+                              "MS"};
+  QCommandLineOption v_max{QStringLiteral("v-max"), "Speed limit in m/s (default 0.5).", "MPS"};
+  QCommandLineOption w_max{QStringLiteral("w-max"), "Turn rate limit in rad/s (default 1.5).",
+                           "RADPS"};
+  QCommandLineOption accel{QStringLiteral("accel-max"),
+                           "Acceleration limit in m/s^2 (default 1.0).", "MPS2"};
+  QCommandLineOption alpha{QStringLiteral("alpha-max"),
+                           "Angular acceleration limit in rad/s^2 (default 3.0).", "RADPS2"};
+
+  void Add(QCommandLineParser* parser) const {
+    parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha});
+  }
+
+  bool Apply(const QCommandLineParser& parser, bool tcp, hardware::RobotAgentConfig* config,
+             QString* error) const {
+    if (tcp) {
+      hardware::LinkAddress address;
+      const QString text =
+          parser.isSet(listen) ? parser.value(listen) : QStringLiteral("127.0.0.1:5600");
+      if (!hardware::ParseLinkAddress(text, &address, error) ||
+          address.kind != hardware::LinkAddress::Kind::kTcp) {
+        if (error->isEmpty()) *error = QStringLiteral("--listen expects ADDR:PORT");
+        return false;
+      }
+      config->listen_address = address.host;
+      config->listen_port = address.port;
+      if (!parser.isSet(key_file)) {
+        *error = QStringLiteral("--key-file is required on TCP (clients authenticate with it)");
+        return false;
+      }
+    }
+    if (parser.isSet(key_file) &&
+        !hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error)) {
+      return false;
+    }
+    double watchdog_ms = 0.0;
+    if (!Number(parser, watchdog, &watchdog_ms, error) ||
+        !Number(parser, v_max, &config->agent.v_max_mps, error) ||
+        !Number(parser, w_max, &config->agent.w_max_radps, error) ||
+        !Number(parser, accel, &config->agent.accel_max_mps2, error) ||
+        !Number(parser, alpha, &config->agent.alpha_max_radps2, error)) {
+      return false;
+    }
+    if (parser.isSet(watchdog)) config->agent.watchdog = FromSeconds(watchdog_ms * 1e-3);
+    return config->IsValid(error);
+  }
+
+ private:
+  // Leaves *out alone when the option is not given.
+  static bool Number(const QCommandLineParser& parser, const QCommandLineOption& option,
+                     double* out, QString* error) {
+    if (!parser.isSet(option)) return true;
+    bool ok = false;
+    const QString text = parser.value(option);
+    const double value = text.toDouble(&ok);
+    if (!ok) {
+      *error = QStringLiteral("--%1: '%2' is not a number").arg(option.names().first(), text);
+      return false;
+    }
+    *out = value;
+    return true;
+  }
+};
+
+// Logs the agent's messages and client comings and goings on stderr.
+inline void LogAgentEvents(hardware::RobotAgent* agent) {
+  QObject::connect(agent, &hardware::RobotAgent::logMessage,
+                   [](const QString& m) { std::fprintf(stderr, "%s\n", qPrintable(m)); });
+  QObject::connect(agent, &hardware::RobotAgent::clientConnected, [](const QString& p) {
+    std::fprintf(stderr, "client connected: %s\n", qPrintable(p));
+  });
+  QObject::connect(agent, &hardware::RobotAgent::clientDisconnected,
+                   [](const QString& p, const QString& r) {
+                     std::fprintf(stderr, "client %s gone: %s\n", qPrintable(p), qPrintable(r));
+                   });
+}
 
 // Runs the event loop until SIGINT or SIGTERM, then shuts the agent down
 // through the loop (a self-pipe wakes it), so the motors get their zero

@@ -12,8 +12,8 @@
 #include <QSocketNotifier>
 #include <cstdio>
 
-#include "hardware/qt_transport.h"
 #include "app/agent_main_common.h"
+#include "hardware/qt_transport.h"
 #include "hardware/robot_agent.h"
 
 namespace {
@@ -25,13 +25,6 @@ using sweepscan::hardware::RobotAgentConfig;
 int Fail(const QString& message) {
   std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(message));
   return 2;
-}
-
-bool ParseDouble(const QString& text, const char* what, double* out, QString* error) {
-  bool ok = false;
-  *out = text.toDouble(&ok);
-  if (!ok) *error = QStringLiteral("--%1: '%2' is not a number").arg(what, text);
-  return ok;
 }
 
 }  // namespace
@@ -52,30 +45,16 @@ int main(int argc, char** argv) {
   const QCommandLineOption imu(QStringLiteral("imu"), "HI219 serial port (115200 baud).", "PORT");
   const QCommandLineOption motor(QStringLiteral("motor"), "Motor board serial port (115200 baud).",
                                  "PORT");
-  const QCommandLineOption listen(QStringLiteral("listen"),
-                                  "Serve the link on TCP ADDR:PORT (default 127.0.0.1:5600).",
-                                  "ADDR:PORT");
   const QCommandLineOption serial(
       QStringLiteral("serial"),
       "Serve the link on a serial port instead of TCP (PORT[@BAUD], default "
       "921600 baud; no authentication: physical access).",
       "PORT");
-  const QCommandLineOption key_file(QStringLiteral("key-file"),
-                                    "Pre-shared key file (required for TCP).", "FILE");
-  const QCommandLineOption watchdog(QStringLiteral("watchdog-ms"),
-                                    "Watchdog period in ms (default 500).", "MS");
-  const QCommandLineOption v_max(QStringLiteral("v-max"), "Speed limit in m/s (default 0.5).",
-                                 "MPS");
-  const QCommandLineOption w_max(QStringLiteral("w-max"), "Turn rate limit in rad/s (default 1.5).",
-                                 "RADPS");
-  const QCommandLineOption accel(QStringLiteral("accel-max"),
-                                 "Acceleration limit in m/s^2 (default 1.0).", "MPS2");
-  const QCommandLineOption alpha(QStringLiteral("alpha-max"),
-                                 "Angular acceleration limit in rad/s^2 (default 3.0).", "RADPS2");
   const QCommandLineOption name(QStringLiteral("name"),
                                 "Robot name in the Hello (default robot-1).", "NAME");
-  parser.addOptions(
-      {lidar, imu, motor, listen, serial, key_file, watchdog, v_max, w_max, accel, alpha, name});
+  const sweepscan::app::AgentCommandLine common;
+  common.Add(&parser);
+  parser.addOptions({lidar, imu, motor, serial, name});
   if (!parser.parse(QCoreApplication::arguments())) return Fail(parser.errorText());
   if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
   if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
@@ -105,7 +84,7 @@ int main(int argc, char** argv) {
   describe(2, config.imu_port, config.imu_baud, "HiPNUC HI219");
   describe(3, config.motor_port, config.motor_baud, "motor board");
 
-  if (parser.isSet(serial) && parser.isSet(listen)) {
+  if (parser.isSet(serial) && parser.isSet(common.listen)) {
     return Fail(QStringLiteral("--listen and --serial exclude each other"));
   }
   if (parser.isSet(serial)) {
@@ -118,56 +97,11 @@ int main(int argc, char** argv) {
     config.link_serial_port = address.serial_port;
     config.link_baud = address.baud;
     config.agent.require_auth = false;
-  } else {
-    LinkAddress address;
-    const QString text =
-        parser.isSet(listen) ? parser.value(listen) : QStringLiteral("127.0.0.1:5600");
-    if (!sweepscan::hardware::ParseLinkAddress(text, &address, &error) ||
-        address.kind != LinkAddress::Kind::kTcp) {
-      return Fail(error.isEmpty() ? QStringLiteral("--listen expects ADDR:PORT") : error);
-    }
-    config.listen_address = address.host;
-    config.listen_port = address.port;
-    if (!parser.isSet(key_file)) {
-      return Fail(QStringLiteral("--key-file is required on TCP (clients authenticate with it)"));
-    }
   }
-  if (parser.isSet(key_file) &&
-      !sweepscan::hardware::ReadKeyFile(parser.value(key_file), &config.agent.key, &error)) {
-    return Fail(error);
-  }
-  double value = 0;
-  if (parser.isSet(watchdog)) {
-    if (!ParseDouble(parser.value(watchdog), "watchdog-ms", &value, &error)) return Fail(error);
-    config.agent.watchdog = sweepscan::FromSeconds(value * 1e-3);
-  }
-  if (parser.isSet(v_max) &&
-      !ParseDouble(parser.value(v_max), "v-max", &config.agent.v_max_mps, &error)) {
-    return Fail(error);
-  }
-  if (parser.isSet(w_max) &&
-      !ParseDouble(parser.value(w_max), "w-max", &config.agent.w_max_radps, &error)) {
-    return Fail(error);
-  }
-  if (parser.isSet(accel) &&
-      !ParseDouble(parser.value(accel), "accel-max", &config.agent.accel_max_mps2, &error)) {
-    return Fail(error);
-  }
-  if (parser.isSet(alpha) &&
-      !ParseDouble(parser.value(alpha), "alpha-max", &config.agent.alpha_max_radps2, &error)) {
-    return Fail(error);
-  }
-  if (!config.IsValid(&error)) return Fail(error);
+  if (!common.Apply(parser, !parser.isSet(serial), &config, &error)) return Fail(error);
 
   RobotAgent agent(config);
-  QObject::connect(&agent, &RobotAgent::logMessage,
-                   [](const QString& m) { std::fprintf(stderr, "%s\n", qPrintable(m)); });
-  QObject::connect(&agent, &RobotAgent::clientConnected, [](const QString& p) {
-    std::fprintf(stderr, "client connected: %s\n", qPrintable(p));
-  });
-  QObject::connect(&agent, &RobotAgent::clientDisconnected, [](const QString& p, const QString& r) {
-    std::fprintf(stderr, "client %s gone: %s\n", qPrintable(p), qPrintable(r));
-  });
+  sweepscan::app::LogAgentEvents(&agent);
   if (!agent.Start(&error)) return Fail(error);
   if (config.link == RobotAgentConfig::LinkKind::kTcp) {
     std::printf("listening on %s:%u\n", qPrintable(config.listen_address), agent.tcp_port());

@@ -14,10 +14,10 @@
 #include <cstdio>
 #include <memory>
 
+#include "app/agent_main_common.h"
 #include "core/scenario.h"
 #include "core/sim/world.h"
 #include "hardware/qt_transport.h"
-#include "app/agent_main_common.h"
 #include "hardware/robot_agent.h"
 #include "hardware/sim_devices.h"
 
@@ -53,21 +53,11 @@ int main(int argc, char** argv) {
                                     "FILE");
   const QCommandLineOption scripted(QStringLiteral("scripted"),
                                     "Follow the scenario's path instead of drive commands.");
-  const QCommandLineOption listen(QStringLiteral("listen"),
-                                  "Serve the link on TCP ADDR:PORT (default "
-                                  "127.0.0.1:5600; port 0 = any free port).",
-                                  "ADDR:PORT");
   const QCommandLineOption pty(QStringLiteral("pty"),
                                "Serve the link on a new pseudo-terminal; prints its path.");
-  const QCommandLineOption key_file(QStringLiteral("key-file"),
-                                    "Pre-shared key file (required for TCP).", "FILE");
-  const QCommandLineOption watchdog(QStringLiteral("watchdog-ms"),
-                                    "Watchdog period in ms (default 500).", "MS");
-  const QCommandLineOption v_max(QStringLiteral("v-max"), "Speed limit in m/s (default 0.5).",
-                                 "MPS");
-  const QCommandLineOption w_max(QStringLiteral("w-max"), "Turn rate limit in rad/s (default 1.5).",
-                                 "RADPS");
-  parser.addOptions({scenario, scripted, listen, pty, key_file, watchdog, v_max, w_max});
+  const sweepscan::app::AgentCommandLine common;
+  common.Add(&parser);
+  parser.addOptions({scenario, scripted, pty});
   if (!parser.parse(QCoreApplication::arguments())) return Fail(parser.errorText());
   if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
   if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
@@ -88,56 +78,21 @@ int main(int argc, char** argv) {
   config.agent.devices = {{1, "YDLIDAR X4 (simulated) @128000"},
                           {2, "HiPNUC HI219 (simulated) @115200"},
                           {3, "motor board (simulated) @115200"}};
-  if (parser.isSet(pty) && parser.isSet(listen)) {
+  if (parser.isSet(pty) && parser.isSet(common.listen)) {
     return Fail(QStringLiteral("--listen and --pty exclude each other"));
   }
   if (parser.isSet(pty)) {
     config.link = RobotAgentConfig::LinkKind::kPty;
     config.agent.require_auth = false;
-  } else {
-    LinkAddress address;
-    const QString text =
-        parser.isSet(listen) ? parser.value(listen) : QStringLiteral("127.0.0.1:5600");
-    if (!sweepscan::hardware::ParseLinkAddress(text, &address, &error) ||
-        address.kind != LinkAddress::Kind::kTcp) {
-      return Fail(error.isEmpty() ? QStringLiteral("--listen expects ADDR:PORT") : error);
-    }
-    config.listen_address = address.host;
-    config.listen_port = address.port;
-    if (!parser.isSet(key_file)) return Fail(QStringLiteral("--key-file is required on TCP"));
   }
-  if (parser.isSet(key_file) &&
-      !sweepscan::hardware::ReadKeyFile(parser.value(key_file), &config.agent.key, &error)) {
-    return Fail(error);
-  }
-  bool ok = true;
-  if (parser.isSet(watchdog)) {
-    config.agent.watchdog = sweepscan::FromSeconds(parser.value(watchdog).toDouble(&ok) * 1e-3);
-    if (!ok) return Fail(QStringLiteral("--watchdog-ms: not a number"));
-  }
-  if (parser.isSet(v_max)) {
-    config.agent.v_max_mps = parser.value(v_max).toDouble(&ok);
-    if (!ok) return Fail(QStringLiteral("--v-max: not a number"));
-  }
-  if (parser.isSet(w_max)) {
-    config.agent.w_max_radps = parser.value(w_max).toDouble(&ok);
-    if (!ok) return Fail(QStringLiteral("--w-max: not a number"));
-  }
-  if (!config.IsValid(&error)) return Fail(error);
+  if (!common.Apply(parser, !parser.isSet(pty), &config, &error)) return Fail(error);
 
   const SimDevices::Mode mode =
       parser.isSet(scripted) ? SimDevices::Mode::kScripted : SimDevices::Mode::kCommanded;
   auto devices = std::make_unique<SimDevices>(world, mode);
   RobotAgent agent(config,
                    std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(std::move(devices)));
-  QObject::connect(&agent, &RobotAgent::logMessage,
-                   [](const QString& m) { std::fprintf(stderr, "%s\n", qPrintable(m)); });
-  QObject::connect(&agent, &RobotAgent::clientConnected, [](const QString& p) {
-    std::fprintf(stderr, "client connected: %s\n", qPrintable(p));
-  });
-  QObject::connect(&agent, &RobotAgent::clientDisconnected, [](const QString& p, const QString& r) {
-    std::fprintf(stderr, "client %s gone: %s\n", qPrintable(p), qPrintable(r));
-  });
+  sweepscan::app::LogAgentEvents(&agent);
   if (!agent.Start(&error)) return Fail(error);
   // First line of stdout: where to connect (scripts and tests read it).
   if (config.link == RobotAgentConfig::LinkKind::kPty) {
