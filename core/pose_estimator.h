@@ -9,7 +9,6 @@
 #ifndef SWEEPSCAN_CORE_POSE_ESTIMATOR_H_
 #define SWEEPSCAN_CORE_POSE_ESTIMATOR_H_
 
-#include <optional>
 #include <string>
 
 #include "core/ekf.h"

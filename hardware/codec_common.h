@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -43,6 +44,18 @@ class StreamBuffer {
   const uint8_t* data() const { return bytes_.data() + pos_; }
   size_t size() const { return bytes_.size() - pos_; }
   void Consume(size_t n) { pos_ += (n < size() ? n : size()); }
+  // Resync: drops the first byte and everything up to the next `sync` byte
+  // (or all that is buffered); returns how many bytes were dropped, which
+  // the decoders count as skipped. memchr makes long garbage cheap.
+  size_t SkipToNext(uint8_t sync) {
+    const uint8_t* p = data();
+    const size_t avail = size();
+    if (avail == 0) return 0;
+    const void* next = std::memchr(p + 1, sync, avail - 1);
+    const size_t skip = next ? static_cast<size_t>(static_cast<const uint8_t*>(next) - p) : avail;
+    Consume(skip);
+    return skip;
+  }
   void Compact() {
     bytes_.erase(bytes_.begin(), bytes_.begin() + static_cast<std::ptrdiff_t>(pos_));
     pos_ = 0;

@@ -147,10 +147,7 @@ void Hi219Decoder::Feed(const uint8_t* data, size_t n, Time receive_time) {
     const uint8_t* p = buffer_.data();
     const size_t avail = buffer_.size();
     if (p[0] != kHi219Sync1) {
-      size_t k = 1;
-      while (k < avail && p[k] != kHi219Sync1) ++k;
-      buffer_.Consume(k);
-      stats_.bytes_skipped += k;
+      stats_.bytes_skipped += buffer_.SkipToNext(kHi219Sync1);
       continue;
     }
     if (avail < 2) break;

@@ -607,11 +607,7 @@ void LinkDecoder::Feed(const uint8_t* data, size_t n, std::vector<LinkMessage>* 
     const uint8_t* p = buffer_.data();
     const size_t avail = buffer_.size();
     if (p[0] != kLinkSync1) {
-      // Skip to the next possible sync byte in one step (memchr is fast on garbage).
-      const void* next = std::memchr(p + 1, kLinkSync1, avail - 1);
-      const size_t skip = next ? static_cast<size_t>(static_cast<const uint8_t*>(next) - p) : avail;
-      stats_.codec.bytes_skipped += skip;
-      buffer_.Consume(skip);
+      stats_.codec.bytes_skipped += buffer_.SkipToNext(kLinkSync1);
       continue;
     }
     if (avail < 2) break;

@@ -94,10 +94,7 @@ void MotorFrameDecoder<Record, kSize>::Feed(const uint8_t* data, size_t n, Time 
     const uint8_t* p = buffer_.data();
     const size_t avail = buffer_.size();
     if (p[0] != kMotorFrameHead) {
-      size_t k = 1;
-      while (k < avail && p[k] != kMotorFrameHead) ++k;
-      buffer_.Consume(k);
-      stats_.bytes_skipped += k;
+      stats_.bytes_skipped += buffer_.SkipToNext(kMotorFrameHead);
       continue;
     }
     if (avail < kSize) break;
