@@ -23,7 +23,7 @@ Eigen::Vector3d Vec3(const JsonObject& o, const std::string& key) {
 }
 
 sim::Box ReadBox(const JsonObject& o) {
-  o.AllowOnly({"label", "center", "size", "yaw_rad", "inside", "dropout"});
+  o.AllowOnly({"label", "center", "size", "yaw_rad", "pitch_rad", "inside", "dropout"});
   sim::Box b;
   b.label = o.String("label", "");
   b.center = Vec3(o, "center");
@@ -34,6 +34,7 @@ sim::Box ReadBox(const JsonObject& o) {
     }
   }
   b.yaw = o.Number("yaw_rad", 0.0);
+  b.pitch = o.Number("pitch_rad", 0.0);
   b.inside = o.Bool("inside", false);
   b.dropout = o.InRange("dropout", 0.0, 1.0, 0.0);
   return b;
@@ -46,12 +47,14 @@ void ReadScene(const JsonObject& o, SimConfig* c) {
     const std::string preset = o.String("preset");
     if (preset == "lab") {
       c->scene = sim::LabScene();
+    } else if (preset == "lab-diamond") {
+      c->scene = sim::LabScene(sim::LabTarget::kDiamond);
     } else if (preset == "stairwell") {
       c->scene = sim::StairwellScene();
     } else if (preset == "empty") {
       c->scene = sim::Scene();
     } else {
-      o.Fail("preset", "unknown preset '" + preset + "' (lab, stairwell, empty)");
+      o.Fail("preset", "unknown preset '" + preset + "' (lab, lab-diamond, stairwell, empty)");
     }
   }
   if (o.Has("boxes")) {
@@ -222,6 +225,7 @@ json ScenarioToJson(const SimConfig& c) {
                      {"center", {b.center.x(), b.center.y(), b.center.z()}},
                      {"size", {b.size.x(), b.size.y(), b.size.z()}},
                      {"yaw_rad", b.yaw},
+                     {"pitch_rad", b.pitch},
                      {"inside", b.inside},
                      {"dropout", b.dropout}});
   }

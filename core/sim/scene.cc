@@ -7,19 +7,24 @@
 namespace sweepscan::sim {
 namespace {
 
-// World -> box frame.
-Eigen::Vector3d ToBox(const Box& b, const Eigen::Vector3d& p) {
-  const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  const Eigen::Vector3d d = p - b.center;
-  return {c * d.x() + s * d.y(), -s * d.x() + c * d.y(), d.z()};
-}
+// World -> box frame: Ry(pitch)^T Rz(yaw)^T (p - center).
 Eigen::Vector3d DirToBox(const Box& b, const Eigen::Vector3d& v) {
   const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  return {c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z()};
+  const Eigen::Vector3d r(c * v.x() + s * v.y(), -s * v.x() + c * v.y(), v.z());
+  if (b.pitch == 0.0) return r;
+  const double cp = std::cos(b.pitch), sp = std::sin(b.pitch);
+  return {cp * r.x() - sp * r.z(), r.y(), sp * r.x() + cp * r.z()};
 }
+Eigen::Vector3d ToBox(const Box& b, const Eigen::Vector3d& p) { return DirToBox(b, p - b.center); }
+// Box -> world direction: Rz(yaw) Ry(pitch) v.
 Eigen::Vector3d DirToWorld(const Box& b, const Eigen::Vector3d& v) {
+  Eigen::Vector3d r = v;
+  if (b.pitch != 0.0) {
+    const double cp = std::cos(b.pitch), sp = std::sin(b.pitch);
+    r = {cp * v.x() + sp * v.z(), v.y(), -sp * v.x() + cp * v.z()};
+  }
   const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
+  return {c * r.x() - s * r.y(), s * r.x() + c * r.y(), r.z()};
 }
 
 // Slab intersection in the box frame: entry and exit parameters and the axes
@@ -133,8 +138,8 @@ bool Scene::IsValid(std::string* error) const {
   for (size_t i = 0; i < boxes_.size(); ++i) {
     const Box& b = boxes_[i];
     const std::string name = "box " + std::to_string(i) + " ('" + b.label + "')";
-    if (!b.center.allFinite() || !std::isfinite(b.yaw)) {
-      *error = name + ": centre and yaw must be finite";
+    if (!b.center.allFinite() || !std::isfinite(b.yaw) || !std::isfinite(b.pitch)) {
+      *error = name + ": centre, yaw and pitch must be finite";
       return false;
     }
     if (!b.size.allFinite() || (b.size.array() <= 0.0).any()) {
@@ -162,7 +167,7 @@ Box MakeBox(const std::string& label, double x0, double x1, double y0, double y1
 }
 }  // namespace
 
-Scene LabScene() {
+Scene LabScene(LabTarget target) {
   Scene s;
   s.Add(MakeBox("room", 0, 10, 0, 5, 0, 2.5, /*inside=*/true));
   // Desks and cabinets against the long walls, clear of the drive paths.
@@ -173,7 +178,13 @@ Scene LabScene() {
   s.Add(MakeBox("cabinet_south", 1.0, 2.0, 0.0, 0.45, 0.0, 1.2));
   // The window sill and the target board standing on it.
   s.Add(MakeBox("window_sill", 4.0, 6.0, 0.0, 0.14, 0.0, 0.85));
-  s.Add(MakeBox("target", 4.7, 5.3, 0.14, 0.16, 0.9, 1.5));
+  if (target == LabTarget::kSquare) {
+    s.Add(MakeBox("target", 4.7, 5.3, 0.14, 0.16, 0.9, 1.5));
+  } else {
+    Box b = MakeBox("target", 4.7, 5.3, 0.155, 0.16, 1.05, 1.65);
+    b.pitch = M_PI / 4;
+    s.Add(b);
+  }
   return s;
 }
 

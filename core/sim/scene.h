@@ -1,6 +1,7 @@
 // Scenes of boxes for the simulated world, with exact ray casting.
 //
-// Every primitive is a box that may be rotated about the vertical axis. A
+// Every primitive is a box that may be turned about the vertical axis (yaw)
+// and about its own y axis (pitch: a board facing y becomes a diamond). A
 // box is either solid (seen from outside: furniture, stairs, a target board)
 // or a room (seen from inside: its six faces are floor, ceiling and walls).
 // Boxes may overlap; a ray returns the nearest surface it meets. Each hit
@@ -26,6 +27,10 @@ struct Box {
   double yaw = 0.0;        // rotation about the world z axis (rad)
   bool inside = false;     // true for a room seen from inside
   double dropout = 0.0;    // extra probability that a return from it is lost (dark, glossy)
+  // Rotation about the box's own y axis, applied before yaw:
+  // world_from_box = Rz(yaw) Ry(pitch). A board thin along y with
+  // pitch = pi/4 is a square standing on a corner (a diamond).
+  double pitch = 0.0;
 };
 
 struct RayHit {
@@ -64,7 +69,18 @@ class Scene {
 // with its corner at the origin, desks and cabinets, and a 0.6 x 0.6 m
 // calibration target board standing on the window sill of the y = 0 wall,
 // its front face 0.16 m from the wall, centred at x = 5 m, 1.2 m high.
-Scene LabScene();
+//
+// kDiamond mounts a thin (5 mm) 0.6 m board turned 45 deg in its plane,
+// front face still 0.16 m from the wall, centred 1.35 m high (corners at
+// 0.93 and 1.77 m, clear of the 0.85 m sill). Why:
+// the vertical scan plane crosses a vertical board in vertical lines, so an
+// upright board's side edges run parallel to the scan lines and are located
+// only to the scan spacing (~5 cm); every edge of a diamond crosses the scan
+// lines at 45 deg, so all four corners can be fitted to millimetres. Thin,
+// because a beam passing just below a thick board's bottom edge hits its
+// edge face, which biases the fitted edge outwards (docs/calibration.md).
+enum class LabTarget { kSquare, kDiamond };
+Scene LabScene(LabTarget target = LabTarget::kSquare);
 // A stairwell: a 9 x 3 x 6 m shaft with a flat run-up, a straight flight of
 // 14 steps (0.28 m deep, 0.17 m high) along +x and a landing.
 Scene StairwellScene();

@@ -29,7 +29,7 @@ TEST(ScenarioTest, MinimalFileGetsDefaults) {
 }
 
 TEST(ScenarioTest, ShippedScenariosLoad) {
-  for (const char* name : {"lab", "lab_circle", "lab_slip", "stairwell"}) {
+  for (const char* name : {"lab", "lab_circle", "lab_circle_diamond", "lab_slip", "stairwell"}) {
     sim::SimConfig c;
     const Status s = LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name + ".json", &c);
     EXPECT_TRUE(s.ok()) << s.message();
@@ -47,6 +47,25 @@ TEST(ScenarioTest, ExplicitFormRoundTrips) {
   EXPECT_EQ(ScenarioToJson(a), ScenarioToJson(b));
   EXPECT_DOUBLE_EQ(b.mounting_error.gamma, 0.0355);
   ASSERT_EQ(b.slips.size(), 1u);
+}
+
+TEST(ScenarioTest, DiamondPresetAndPitchedBoxesRoundTrip) {
+  nlohmann::json j = Minimal();
+  j["scene"] = {{"preset", "lab-diamond"},
+                {"boxes", nlohmann::json::array({{{"label", "tilted"},
+                                                  {"center", {1, 1, 1}},
+                                                  {"size", {0.5, 0.01, 0.5}},
+                                                  {"pitch_rad", 0.3}}})}};
+  sim::SimConfig a, b;
+  ASSERT_TRUE(ScenarioFromJson(j, "s.json", &a).ok());
+  const int target = a.scene.Find("target");
+  ASSERT_GE(target, 0);
+  EXPECT_NEAR(a.scene.boxes()[target].pitch, M_PI / 4, 1e-12);
+  EXPECT_DOUBLE_EQ(a.scene.boxes().back().pitch, 0.3);
+  const Status s = ScenarioFromJson(ScenarioToJson(a), "again.json", &b);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_DOUBLE_EQ(b.scene.boxes().back().pitch, 0.3);
+  EXPECT_NEAR(b.scene.boxes()[target].pitch, M_PI / 4, 1e-12);
 }
 
 TEST(ScenarioTest, CircleSegment) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace sweepscan::sim {
 namespace {
 
@@ -56,6 +58,36 @@ TEST(SceneTest, PresetsAreValidAndLabHasTarget) {
   Scene bad({Box{"flat", {0, 0, 0}, {1, 0, 1}, 0.0, false, 0.0}});
   EXPECT_FALSE(bad.IsValid(&error));
   EXPECT_NE(error.find("flat"), std::string::npos);
+}
+
+// The diamond target: a board turned 45 deg about its own y axis. Its
+// half-width at height dz above its centre is 0.3 sqrt(2) - |dz|.
+TEST(SceneTest, PitchTurnsABoardIntoADiamond) {
+  const Scene s = LabScene(LabTarget::kDiamond);
+  const int target = s.Find("target");
+  ASSERT_GE(target, 0);
+  const double half = 0.3 * std::sqrt(2.0);
+  RayHit hit;
+  const Eigen::Vector3d toward_wall(0, -1, 0);
+  // At the centre height the board spans x = 5 +- half.
+  ASSERT_TRUE(s.Cast({5.0 + half - 0.005, 2.0, 1.35}, toward_wall, 0.0, 10.0, &hit));
+  EXPECT_EQ(hit.primitive, target);
+  EXPECT_NEAR(hit.range, 2.0 - 0.16, 1e-9);
+  EXPECT_NEAR(hit.normal.y(), 1.0, 1e-12);
+  ASSERT_TRUE(s.Cast({5.0 + half + 0.005, 2.0, 1.35}, toward_wall, 0.0, 10.0, &hit));
+  EXPECT_NE(hit.primitive, target);
+  // 0.3 m higher only +-(half - 0.3) remains.
+  ASSERT_TRUE(s.Cast({5.0 - (half - 0.3) + 0.005, 2.0, 1.65}, toward_wall, 0.0, 10.0, &hit));
+  EXPECT_EQ(hit.primitive, target);
+  ASSERT_TRUE(s.Cast({5.0 - (half - 0.3) - 0.005, 2.0, 1.65}, toward_wall, 0.0, 10.0, &hit));
+  EXPECT_NE(hit.primitive, target);
+  // The top corner is on the surface; 5 mm thick board.
+  EXPECT_NEAR(s.DistanceToSurface({5.0, 0.16, 1.35 + half}), 0.0, 1e-9);
+  EXPECT_NEAR(s.boxes()[target].size.y(), 0.005, 1e-12);
+  std::string error;
+  EXPECT_TRUE(s.IsValid(&error)) << error;
+  Scene bad({Box{"nan", {0, 0, 0}, {1, 1, 1}, 0.0, false, 0.0, std::nan("")}});
+  EXPECT_FALSE(bad.IsValid(&error));
 }
 
 TEST(SceneTest, StairsRise) {
