@@ -16,13 +16,16 @@
 // Refined corners. A raw pick is the sample nearest a corner, which in the
 // two passes are different physical points (scans ~5 cm apart on the board
 // at 0.2 m/s, samples 0.5 deg apart), so a pick pair is only a corner pair to
-// within centimetres. FitBoardCorners replaces each pass's picks by the board
-// corners fitted from that pass's samples (plane, then edge lines, then their
-// intersections). The corners move with c, so the solve is an outer loop:
-// fit corners under c_k, freeze each corner as a virtual lidar-frame point
-// attached to the pose of its nearest sample, solve for c_{k+1}, re-fit,
-// until c stops changing (see docs/calibration.md for why that fixed point
-// is the answer).
+// within centimetres. FitBoardCorners (board_fit.cc) replaces each pass's
+// picks by the board corners fitted from that pass's samples (plane, then a
+// rectangle through the scan lines' end points). The corners move with c,
+// so the solve is an outer loop: fit corners under c_k, freeze each corner
+// as a virtual lidar point attached to the pose of its nearest sample,
+// solve for c_{k+1}, re-fit, until c stops changing (see
+// docs/calibration.md for why that fixed point is the answer). An upright
+// board's side edges run along the vertical scan lines and are located only
+// to the line spacing; a thin board turned 45 deg (a diamond) on two slow
+// turns gives millimetre corners and mrad angles (measured there).
 //
 // Automatic mode. No picks: planes (walls, floor, ceiling, the board) are
 // found by RANSAC in the cloud under the current c; each surface s gets a
@@ -214,23 +217,41 @@ Status SolvePairs(const std::vector<ObservationPair>& pairs, const RobotGeometry
 // Board corners of one pass, from its samples under a calibration.
 struct BoardCorners {
   Plane plane;
-  // Corners in the board plane, ordered top-left, top-right, bottom-right,
-  // bottom-left; "left" is towards -u with u = normalize(z x n), n oriented
-  // so that u points along +x (or +y if the board faces x).
+  // Corners in the board plane, clockwise seen from the front (the side the
+  // samples came from), starting with the corner whose direction from the
+  // centre is nearest 112.5 deg (u = 0 deg, v = 90 deg): top-left, top-right,
+  // bottom-right, bottom-left for an upright board; top, right, bottom, left
+  // for a diamond. u = normalize(z x n), n oriented so that u points along +x
+  // (or +y if the board faces x); v = n x u points up.
   std::array<Eigen::Vector3d, 4> corners;
   // Index (into the input) of the sample nearest each corner: the corner is
   // attached to that sample's pose when the solver re-projects it.
   std::array<size_t, 4> nearest;
-  size_t points = 0;  // inliers used
+  Eigen::Vector2d size_m = Eigen::Vector2d::Zero();  // fitted rectangle: width, height
+  double rotation_rad = 0.0;  // of the rectangle's first axis from u, in [-pi/4, pi/4)
+  double edge_rms_m = 0.0;    // RMS of the edge-point residuals
+  size_t points = 0;          // inliers used
   size_t scans = 0;
+  size_t edge_points = 0;  // scan-line end points (and side points) in the rectangle fit
 };
 
 // Fits the board from the samples of one pass (points near the target, all
-// from one sighting), re-projected under `calibration`: a plane with a 3 cm
-// outlier cut, then in board coordinates (u along, v up) per scan line the
-// top and bottom end points, lines v = a + b u through them (shifted out by
-// half the sample spacing), the first and last scan lines (shifted out by
-// half the scan spacing) as side edges u = c + d v, and their intersections.
+// from one sighting), re-projected under `calibration`:
+//  1. a plane (RANSAC, 1 cm band, then least squares on the board's runs);
+//  2. per scan line the longest gap-free run of in-plane samples, kept if it
+//     reaches the height of the longest line's middle (a convex board
+//     always does; a run on the sill below does not);
+//  3. edge points: each line's top and bottom sample and, beyond each, where
+//     the next beam of that scan would have met the plane; the edge lies
+//     between the two, so the midpoint is unbiased with error
+//     U(-s/2, s/2), s the local spacing (variance s^2/12);
+//  4. a rectangle (centre, rotation, width, height) by weighted least
+//     squares of the edge points' offsets along their scan line from the
+//     rectangle's boundary. For a fixed rotation this is linear; the
+//     rotation is found by golden-section search. An edge within 20 deg of
+//     the scan lines is crossed by none: it is then placed half a line
+//     spacing beyond the outermost line (the upright board's side edges,
+//     located only to the scan spacing; mount the target as a diamond).
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
                        const MountingError& calibration, BoardCorners* corners);
 
