@@ -130,14 +130,31 @@ Status ExtractPlanes(const std::vector<Eigen::Vector3f>& points, const Evaluatio
   while (static_cast<int>(planes->size()) < options.max_planes && remaining.size() >= min_count) {
     // Seeded per plane so that the result is reproducible.
     srand(static_cast<unsigned>(options.seed + planes->size()));
-    seg.setInputCloud(ToPcl(points, &remaining));
+    std::vector<size_t> sample;
+    const std::vector<size_t>* ransac_input = &remaining;
+    if (options.ransac_max_points > 0 && remaining.size() > options.ransac_max_points) {
+      const double step =
+          static_cast<double>(remaining.size()) / static_cast<double>(options.ransac_max_points);
+      sample.reserve(options.ransac_max_points);
+      for (size_t k = 0; k < options.ransac_max_points; ++k) {
+        sample.push_back(remaining[static_cast<size_t>(k * step)]);
+      }
+      ransac_input = &sample;
+    }
+    seg.setInputCloud(ToPcl(points, ransac_input));
     pcl::PointIndices inliers;
     pcl::ModelCoefficients coefficients;
     seg.segment(inliers, coefficients);
-    if (inliers.indices.size() < min_count || coefficients.values.size() != 4) break;
+    // The subsample holds the plane in proportion.
+    const double scale =
+        static_cast<double>(ransac_input->size()) / static_cast<double>(remaining.size());
+    if (static_cast<double>(inliers.indices.size()) < scale * static_cast<double>(min_count) ||
+        coefficients.values.size() != 4) {
+      break;
+    }
     std::vector<Eigen::Vector3d> in;
     in.reserve(inliers.indices.size());
-    for (int i : inliers.indices) in.push_back(points[remaining[i]].cast<double>());
+    for (int i : inliers.indices) in.push_back(points[(*ransac_input)[i]].cast<double>());
     EvaluatedPlane ep;
     if (!FitPlane(in, &ep.plane)) break;
     // Final inliers: within the band of the least-squares plane.

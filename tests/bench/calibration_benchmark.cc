@@ -8,6 +8,8 @@
 
 #include "core/calibration.h"
 #include "core/evaluation.h"
+#include "core/passes.h"
+#include "core/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
 
@@ -69,6 +71,62 @@ void BM_SolveAutomatic(benchmark::State& state) {
   state.counters["samples"] = static_cast<double>(d.store.observations().size());
 }
 BENCHMARK(BM_SolveAutomatic)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// The recommended calibration drive: the diamond target, two turns at
+// 0.05 m/s, the paper's angles, truth poses; the board's samples of all
+// sightings, alternately near and far.
+struct DiamondData {
+  sim::SimConfig config = testing::CircleConfig(1);
+  std::vector<LidarObservation> board[2];
+  DiamondData() {
+    config.scene = sim::LabScene(sim::LabTarget::kDiamond);
+    config.path = {CircleSegment(0.83, 0.05, 2.0, /*left=*/true)};
+    config.mounting_error = {-0.0058, 0.0126, 0.0355};
+    sim::SimWorld world(config);
+    const SensorLog log = world.RunAll();
+    const SampleStore store(log, world.TruthPoses(1000.0));
+    const Eigen::AlignedBox3d region(Eigen::Vector3d(4.45, 0.06, 0.80),
+                                     Eigen::Vector3d(5.55, 0.30, 1.90));
+    std::vector<CloudPoint> cloud;
+    for (const auto& o : store.observations()) {
+      const Eigen::Vector3d p = ProjectObservation(o, config.geometry, {});
+      CloudPoint q;
+      q.x = p.x(), q.y = p.y(), q.z = p.z();
+      q.time_ns = o.time_ns;
+      cloud.push_back(q);
+    }
+    const std::vector<PassWindow> windows = FindPassWindows(cloud, region, 1.0, 50);
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      if (!region.contains(Eigen::Vector3d(cloud[i].x, cloud[i].y, cloud[i].z))) continue;
+      const int k = PassOfTime(windows, cloud[i].time_ns);
+      if (k >= 0) board[k % 2].push_back(store.observations()[i]);
+    }
+  }
+};
+
+void BM_SolveRefinedCorners(benchmark::State& state) {
+  static const DiamondData* d = new DiamondData();
+  for (auto _ : state) {
+    CalibrationSummary s;
+    const Status st = SolveRefinedCorners(d->board[0], d->board[1], d->config.geometry, {},
+                                          CalibrationOptions(), &s);
+    if (!st.ok()) state.SkipWithError(st.message().c_str());
+    state.counters["outer"] = s.outer_iterations;
+  }
+  state.counters["board_samples"] = static_cast<double>(d->board[0].size() + d->board[1].size());
+}
+BENCHMARK(BM_SolveRefinedCorners)->Unit(benchmark::kMillisecond);
+
+void BM_FitBoardCorners(benchmark::State& state) {
+  static const DiamondData* d = new DiamondData();
+  for (auto _ : state) {
+    BoardCorners b;
+    const Status st = FitBoardCorners(d->board[1], d->config.geometry, d->config.mounting_error, &b);
+    if (!st.ok()) state.SkipWithError(st.message().c_str());
+    benchmark::DoNotOptimize(b.corners);
+  }
+}
+BENCHMARK(BM_FitBoardCorners)->Unit(benchmark::kMillisecond);
 
 // A one-million-point room-like cloud: six faces of a 10 x 5 x 2.5 m box,
 // 3 mm noise.
