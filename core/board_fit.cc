@@ -405,8 +405,14 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   double cost = 0.0;
   // Assign points to edges, solve, repeat until the assignment holds; then
   // drop implausible points once and do it again.
+  // The fit before outliers were dropped, kept in case dropping them leaves
+  // an edge without points (a sparse pass: the rectangle is then that fit).
+  Rect kept_rect;
+  std::vector<int> kept_edge;
+  double kept_cost = 0.0;
   for (int pass = 0; pass < 2; ++pass) {
-    for (int round = 0; round < 8; ++round) {
+    bool failed = false;
+    for (int round = 0; round < 8 && !failed; ++round) {
       bool changed = round == 0;
       for (size_t j = 0; j < edge_points.size(); ++j) {
         const int e = outlier[j] ? -1 : AssignEdge(rect, edge_points[j]);
@@ -432,12 +438,18 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
           lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
         }
       }
-      if (!SolveForPhi(0.5 * (lo + hi), edge_points, edge, &rect, &cost)) {
+      if (!SolveForPhi(0.5 * (lo + hi), edge_points, edge, &rect, &cost)) failed = true;
+    }
+    if (failed) {
+      if (pass == 0) {
         return Status::Error(
             "board fit: the edge points do not determine a rectangle (an edge without points)");
       }
+      rect = kept_rect, edge = kept_edge, cost = kept_cost;
+      break;
     }
     if (pass == 1) break;
+    kept_rect = rect, kept_edge = edge, kept_cost = cost;
     bool any = false;
     for (size_t j = 0; j < edge_points.size(); ++j) {
       if (edge[j] >= 0 && std::abs(Residual(rect, edge_points[j], edge[j])) > edge_points[j].limit) {
