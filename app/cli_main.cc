@@ -445,32 +445,16 @@ int Calibrate(int argc, char** argv) {
     if (extent.minCoeff(&thin) < 0.1) grow[thin] = 0.08;
     region.min() -= grow;
     region.max() += grow;
-    std::vector<CloudPoint> cloud;
-    cloud.reserve(store.observations().size());
-    for (const auto& o : store.observations()) {
-      const Eigen::Vector3d p = ProjectObservation(o, in.geometry, {});
-      CloudPoint q;
-      q.x = p.x(), q.y = p.y(), q.z = p.z();
-      q.time_ns = o.time_ns;
-      cloud.push_back(q);
-    }
-    const std::vector<PassWindow> windows = FindPassWindows(cloud, region, 1.0, 20);
+    const TargetSightings sightings = CollectTargetSightings(store, in.geometry, {}, region);
+    const std::vector<PassWindow>& windows = sightings.windows;
     if (args.Flag("refine")) {
       if (windows.size() < 2) {
         PrintError("the target region around the picks was seen in " +
                    std::to_string(windows.size()) + " pass(es), need 2");
         return kExitBadInput;
       }
-      std::vector<LidarObservation> board[2];
-      for (size_t i = 0; i < cloud.size(); ++i) {
-        const CloudPoint& p = cloud[i];
-        if (!region.contains(Eigen::Vector3d(p.x, p.y, p.z))) continue;
-        // Sightings alternate near / far: with several turns the even ones
-        // form pass 1 and the odd ones pass 2 (more scan lines per pass).
-        const int k = PassOfTime(windows, p.time_ns);
-        if (k >= 0) board[k % 2].push_back(store.observations()[i]);
-      }
-      s = SolveRefinedCorners(board[0], board[1], in.geometry, {}, CalibrationOptions(), &summary);
+      s = SolveRefinedCorners(sightings.passes[0], sightings.passes[1], in.geometry, {},
+                              CalibrationOptions(), &summary);
       // The paper's baseline on the same picks, reported beside the result.
       std::vector<ObservationPair> pairs;
       CalibrationSummary raw;

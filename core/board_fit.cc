@@ -504,6 +504,31 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   return Status::Ok();
 }
 
+TargetSightings CollectTargetSightings(const SampleStore& store, const RobotGeometry& geometry,
+                                       const MountingError& calibration,
+                                       const Eigen::AlignedBox3d& region, double gap_s,
+                                       size_t min_count) {
+  TargetSightings out;
+  std::vector<CloudPoint> cloud;
+  cloud.reserve(store.observations().size());
+  for (const auto& o : store.observations()) {
+    const Eigen::Vector3d p = ProjectObservation(o, geometry, calibration);
+    CloudPoint q;
+    q.x = static_cast<float>(p.x());
+    q.y = static_cast<float>(p.y());
+    q.z = static_cast<float>(p.z());
+    q.time_ns = o.time_ns;
+    cloud.push_back(q);
+  }
+  out.windows = FindPassWindows(cloud, region, gap_s, min_count);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    if (!region.contains(Eigen::Vector3d(cloud[i].x, cloud[i].y, cloud[i].z))) continue;
+    const int k = PassOfTime(out.windows, cloud[i].time_ns);
+    if (k >= 0) out.passes[k % 2].push_back(store.observations()[i]);
+  }
+  return out;
+}
+
 double CornerRms(const BoardCorners& a, const BoardCorners& b) {
   double s = 0.0;
   for (int k = 0; k < 4; ++k) s += (a.corners[k] - b.corners[k]).squaredNorm();

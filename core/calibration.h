@@ -255,6 +255,21 @@ struct BoardCorners {
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
                        const MountingError& calibration, BoardCorners* corners);
 
+// The target's samples on a circle drive: every valid sample whose world
+// position under `calibration` lies in `region` (a box around the target,
+// generous enough for uncalibrated ghosts), split into sightings by time
+// gaps (FindPassWindows, gap_s, min_count). Sightings alternate near / far,
+// so the even ones (k = 0, 2, ...) form pass 1 and the odd ones pass 2; with
+// several turns each pass gathers the lines of all its sightings.
+struct TargetSightings {
+  std::vector<PassWindow> windows;           // all sightings, in time order
+  std::vector<LidarObservation> passes[2];   // their samples, pass 1 and pass 2
+};
+TargetSightings CollectTargetSightings(const SampleStore& store, const RobotGeometry& geometry,
+                                       const MountingError& calibration,
+                                       const Eigen::AlignedBox3d& region, double gap_s = 1.0,
+                                       size_t min_count = 20);
+
 // RMS distance between the corners of two passes.
 double CornerRms(const BoardCorners& a, const BoardCorners& b);
 

@@ -45,6 +45,19 @@ void ExpectBadInput(const std::string& args, const std::string& expect) {
 const char kHead[] = R"({"format":"sweepscan-pairs","version":1,"pairs":[)";
 const char kPair[] = R"({"pass1":{"world":[4.7,0.16,1.5]},"pass2":{"world":[4.7,0.16,1.5]}})";
 
+// A pairs file picking the same world positions in both passes.
+std::string WorldPairs(const std::array<std::array<double, 3>, 4>& corners) {
+  std::string text = kHead;
+  for (int k = 0; k < 4; ++k) {
+    char world[96];
+    std::snprintf(world, sizeof(world), "[%.4f,%.4f,%.4f]", corners[k][0], corners[k][1],
+                  corners[k][2]);
+    text += std::string(k > 0 ? "," : "") + R"({"pass1":{"world":)" + world +
+            R"(},"pass2":{"world":)" + world + "}}";
+  }
+  return text + "]}";
+}
+
 TEST(CliCalibrateTest, BadInput) {
   const std::string sc = " --scenario " + Scenario("lab_circle");
   ExpectBadInput("calibrate" + sc, "exactly one of --pairs FILE and --auto");
@@ -103,14 +116,8 @@ TEST(CliCalibrateTest, AutomaticOnScenarioWritesCalibration) {
 
 TEST(CliCalibrateTest, PairsOnScenario) {
   // The corners of the target board as world picks in both passes.
-  std::string text = kHead;
-  const char* corners[4] = {"[4.7,0.16,1.5]", "[5.3,0.16,1.5]", "[5.3,0.16,0.9]", "[4.7,0.16,0.9]"};
-  for (int k = 0; k < 4; ++k) {
-    if (k > 0) text += ",";
-    text += std::string(R"({"pass1":{"world":)") + corners[k] + R"(},"pass2":{"world":)" +
-            corners[k] + "}}";
-  }
-  text += "]}";
+  const std::string text = WorldPairs({{{4.7, 0.16, 1.5}, {5.3, 0.16, 1.5}, {5.3, 0.16, 0.9},
+                                        {4.7, 0.16, 0.9}}});
   Write(Tmp("corners.json"), text);
   const CliRun r = Cli("calibrate --scenario " + Scenario("lab_circle") + " --pairs " +
                        Tmp("corners.json") + " --pose-source truth --json");
@@ -129,17 +136,8 @@ TEST(CliCalibrateTest, PairsOnScenario) {
 // picks reported beside it as the paper's baseline.
 TEST(CliCalibrateTest, RefinedCornersOnDiamondCalibrationDrive) {
   const double h = 0.3 * std::sqrt(2.0);
-  const double corners[4][3] = {
-      {5.0, 0.16, 1.35 + h}, {5.0 + h, 0.16, 1.35}, {5.0, 0.16, 1.35 - h}, {5.0 - h, 0.16, 1.35}};
-  std::string text = kHead;
-  for (int k = 0; k < 4; ++k) {
-    char pick[160];
-    std::snprintf(pick, sizeof(pick), R"({"pass1":{"world":[%.4f,%.4f,%.4f]},"pass2":{"world":[%.4f,%.4f,%.4f]}})",
-                  corners[k][0], corners[k][1], corners[k][2], corners[k][0], corners[k][1],
-                  corners[k][2]);
-    text += (k > 0 ? "," : "") + std::string(pick);
-  }
-  text += "]}";
+  const std::string text = WorldPairs(
+      {{{5.0, 0.16, 1.35 + h}, {5.0 + h, 0.16, 1.35}, {5.0, 0.16, 1.35 - h}, {5.0 - h, 0.16, 1.35}}});
   Write(Tmp("diamond.json"), text);
   const CliRun r = Cli("calibrate --scenario " + Scenario("lab_circle_diamond") + " --pairs " +
                        Tmp("diamond.json") + " --refine --pose-source truth --json");

@@ -8,7 +8,6 @@
 
 #include "core/calibration.h"
 #include "core/evaluation.h"
-#include "core/passes.h"
 #include "core/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
@@ -87,20 +86,9 @@ struct DiamondData {
     const SampleStore store(log, world.TruthPoses(1000.0));
     const Eigen::AlignedBox3d region(Eigen::Vector3d(4.45, 0.06, 0.80),
                                      Eigen::Vector3d(5.55, 0.30, 1.90));
-    std::vector<CloudPoint> cloud;
-    for (const auto& o : store.observations()) {
-      const Eigen::Vector3d p = ProjectObservation(o, config.geometry, {});
-      CloudPoint q;
-      q.x = p.x(), q.y = p.y(), q.z = p.z();
-      q.time_ns = o.time_ns;
-      cloud.push_back(q);
-    }
-    const std::vector<PassWindow> windows = FindPassWindows(cloud, region, 1.0, 50);
-    for (size_t i = 0; i < cloud.size(); ++i) {
-      if (!region.contains(Eigen::Vector3d(cloud[i].x, cloud[i].y, cloud[i].z))) continue;
-      const int k = PassOfTime(windows, cloud[i].time_ns);
-      if (k >= 0) board[k % 2].push_back(store.observations()[i]);
-    }
+    const TargetSightings t = CollectTargetSightings(store, config.geometry, {}, region, 1.0, 50);
+    board[0] = t.passes[0];
+    board[1] = t.passes[1];
   }
 };
 

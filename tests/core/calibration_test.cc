@@ -80,24 +80,6 @@ struct Drive {
   std::vector<PickPair> corner_picks;  // raw samples nearest the true corners
 };
 
-std::vector<CloudPoint> ProjectAll(const SampleStore& store, const RobotGeometry& g,
-                                   const MountingError& c) {
-  std::vector<CloudPoint> out;
-  out.reserve(store.observations().size());
-  for (const auto& o : store.observations()) {
-    const Eigen::Vector3d p = ProjectObservation(o, g, c);
-    CloudPoint q;
-    q.x = p.x();
-    q.y = p.y();
-    q.z = p.z();
-    q.time_ns = o.time_ns;
-    q.scan = o.ref.scan;
-    q.beam = o.ref.beam;
-    out.push_back(q);
-  }
-  return out;
-}
-
 const Drive& GetDrive(int case_index) {
   static std::map<int, std::unique_ptr<Drive>> cache;
   auto& slot = cache[case_index];
@@ -123,17 +105,13 @@ const Drive& GetDrive(int case_index) {
   // EKF's business (docs/calibration.md reports an EKF run separately).
   const PoseBuffer poses = world.TruthPoses(1000.0);
   d.store = SampleStore(log, poses);
-  const std::vector<CloudPoint> cloud = ProjectAll(d.store, d.config.geometry, MountingError{});
   // Sightings alternate near / far; with several turns, even ones form pass
   // 1 and odd ones pass 2 (as `sweepscan-cli calibrate --refine` does).
-  d.windows = FindPassWindows(cloud, c.region(), 1.0, 50);
+  TargetSightings t = CollectTargetSightings(d.store, d.config.geometry, {}, c.region(), 1.0, 50);
+  d.windows = t.windows;
   EXPECT_GE(d.windows.size(), 2u);
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    const CloudPoint& p = cloud[i];
-    if (!c.region().contains(Eigen::Vector3d(p.x, p.y, p.z))) continue;
-    const int k = PassOfTime(d.windows, p.time_ns);
-    if (k >= 0) d.board[k % 2].push_back(d.store.observations()[i]);
-  }
+  d.board[0] = std::move(t.passes[0]);
+  d.board[1] = std::move(t.passes[1]);
   // An operator's clicks: in the first near and the first far sighting,
   // the sample whose true position is nearest each true corner.
   for (int j = 0; j < 4; ++j) {
@@ -186,6 +164,15 @@ class CalibrationCaseTest : public ::testing::TestWithParam<int> {
  protected:
   const Case& c() const { return kCases[GetParam()]; }
   const Drive& drive() const { return GetDrive(GetParam()); }
+  // Refined corners on the drive's board samples, from zero.
+  CalibrationSummary SolveRefined() const {
+    CalibrationSummary s;
+    const Drive& d = drive();
+    const Status st =
+        SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, CalibrationOptions(), &s);
+    EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+    return s;
+  }
   void Report(const char* mode, const CalibrationSummary& s, double corner_before,
               double corner_after) const {
     const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
@@ -221,10 +208,8 @@ class UprightBoardTest : public CalibrationCaseTest {};
 
 TEST_P(UprightBoardTest, RefinedCornersConvergeAndRecoverGamma) {
   const Drive& d = drive();
-  CalibrationSummary s;
-  const Status st =
-      SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, CalibrationOptions(), &s);
-  ASSERT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  const CalibrationSummary s = SolveRefined();
+  ASSERT_TRUE(s.converged) << s.FullReport();
   const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
   const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
   Report("refined-corners", s, before, after);
@@ -244,10 +229,8 @@ class DiamondBoardTest : public CalibrationCaseTest {};
 
 TEST_P(DiamondBoardTest, RefinedCornersRecoverEachAngleWithin3Mrad) {
   const Drive& d = drive();
-  CalibrationSummary s;
-  const Status st =
-      SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, CalibrationOptions(), &s);
-  ASSERT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  const CalibrationSummary s = SolveRefined();
+  ASSERT_TRUE(s.converged) << s.FullReport();
   const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
   const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
   Report("refined-corners", s, before, after);
@@ -255,6 +238,25 @@ TEST_P(DiamondBoardTest, RefinedCornersRecoverEachAngleWithin3Mrad) {
   EXPECT_LT(e.cwiseAbs().maxCoeff(), 3.0) << s.FullReport();
   EXPECT_GT(before, 10.0 * after);
   EXPECT_GT(s.sigma_rad.minCoeff(), 0.0);
+}
+
+// Two turns: four sightings, alternately near (about 0.8 m from the lidar)
+// and far (about 2.4 m, seen through the centre); pass 1 gathers the near
+// ones and pass 2 the far ones.
+TEST_P(DiamondBoardTest, SightingsAlternateNearAndFar) {
+  const Drive& d = drive();
+  ASSERT_EQ(d.windows.size(), 4u);
+  for (int k = 0; k < 2; ++k) {
+    double range = 0.0;
+    for (const auto& o : d.board[k]) {
+      range += o.p_lidar.norm();
+      const int w = PassOfTime(d.windows, o.time_ns);
+      EXPECT_TRUE(w == k || w == k + 2) << w;
+    }
+    range /= static_cast<double>(d.board[k].size());
+    if (k == 0) EXPECT_LT(range, 1.2);
+    if (k == 1) EXPECT_GT(range, 2.0);
+  }
 }
 
 // The fitted board itself: each pass's rectangle at the true angles is the
