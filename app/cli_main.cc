@@ -322,6 +322,7 @@ int LoadRecording(const Args& args, RecordingInput* in) {
     return kExitBadInput;
   }
   in->geometry = info.meta.geometry;
+  in->start = SessionStartPose(info.meta);
   in->name = "session " + dir;
   return kExitOk;
 }

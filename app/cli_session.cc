@@ -168,6 +168,7 @@ int RunReconstruct(int argc, char** argv) {
   Decoded d;
   if ((code = DecodeOrFail(args.positional()[0], &d)) != kExitOk) return code;
   options.calibration = d.info.meta.calibration;
+  options.pose.initial_pose = SessionStartPose(d.info.meta);
   if (args.Has("calibration")) {
     const Status s = LoadCalibrationFile(args.Get("calibration"), &options.calibration);
     if (!s.ok()) {

@@ -106,6 +106,27 @@ std::string UtcNowIso8601() {
 // ---------------------------------------------------------------------------
 // meta.json
 
+Pose2d SessionStartPose(const SessionMeta& meta) {
+  Pose2d start;
+  const json& s = meta.settings;
+  if (!s.is_object() || !s.contains("scenario")) return start;
+  const json& sc = s["scenario"];
+  if (!sc.is_object() || !sc.contains("path") || !sc["path"].is_object() ||
+      !sc["path"].contains("start") || !sc["path"]["start"].is_object()) {
+    return start;
+  }
+  const json& st = sc["path"]["start"];
+  const auto number = [&](const char* key, double* out) {
+    if (st.contains(key) && st[key].is_number() && std::isfinite(st[key].get<double>())) {
+      *out = st[key].get<double>();
+    }
+  };
+  number("x_m", &start.x);
+  number("y_m", &start.y);
+  number("yaw_rad", &start.yaw);
+  return start;
+}
+
 json SessionMetaToJson(const SessionMeta& m) {
   return json{
       {"format", "sweepscan-session"},

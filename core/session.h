@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "core/odometry.h"
 #include "core/robot_model.h"
 #include "core/status.h"
 #include "core/time.h"
@@ -61,6 +62,13 @@ struct SessionMeta {
   nlohmann::json settings = nlohmann::json::object();  // Owned by the components that wrote them.
   std::string notes;
 };
+
+// The world pose the recording starts at, which fixes the frame its clouds
+// and picks are in: a simulated session's scenario start
+// (settings.scenario.path.start, written by `sweepscan-cli simulate`), so
+// that it lines up with the scenario's world; otherwise the origin (a real
+// robot's world is its start pose).
+Pose2d SessionStartPose(const SessionMeta& meta);
 
 nlohmann::json SessionMetaToJson(const SessionMeta& meta);
 // Strict: missing keys, wrong types, unknown keys, out-of-range values and an

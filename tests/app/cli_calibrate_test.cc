@@ -150,6 +150,23 @@ TEST(CliCalibrateTest, RefinedCornersOnDiamondCalibrationDrive) {
   EXPECT_GT(j["rms_before_m"].get<double>(), 10.0 * j["rms_after_m"].get<double>());
   ASSERT_TRUE(j.contains("baseline")) << r.out;
   EXPECT_TRUE(j["baseline"]["error_rad"].contains("alpha"));
+
+  // The same from a recorded session (through the bytes, EKF poses): its
+  // world is the scenario's, so the same world picks apply.
+  const std::string base = Tmp("diamond_session");
+  const CliRun sim = Cli("simulate --scenario " + Scenario("lab_circle_diamond") + " --out " +
+                         base + ".ply --overwrite");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const CliRun e = Cli("calibrate " + base + ".sweepscan --pairs " + Tmp("diamond.json") +
+                       " --refine --json");
+  ASSERT_EQ(e.code, 0) << e.out;
+  const nlohmann::json ej = nlohmann::json::parse(e.out);
+  EXPECT_EQ(ej["method"], "refined-corners");
+  const double truth[3] = {-0.0058, 0.0126, 0.0355};
+  const char* names[3] = {"alpha", "beta", "gamma"};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(ej["mounting_error_rad"][names[k]].get<double>(), truth[k], 3e-3) << e.out;
+  }
 }
 
 }  // namespace

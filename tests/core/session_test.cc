@@ -93,6 +93,25 @@ std::vector<size_t> WriteSession(const std::string& dir, int n) {
   return offsets;
 }
 
+// A simulated session's world is its scenario's; a real one starts at the
+// origin; malformed settings fall back to the origin, never throw.
+TEST(SessionTest, StartPoseFromTheScenarioSettings) {
+  SessionMeta meta;
+  Pose2d p = SessionStartPose(meta);
+  EXPECT_EQ(p.x, 0.0);
+  EXPECT_EQ(p.yaw, 0.0);
+  meta.settings["scenario"]["path"]["start"] = {{"x_m", 4.17}, {"y_m", 1.7}, {"yaw_rad", -1.5}};
+  p = SessionStartPose(meta);
+  EXPECT_DOUBLE_EQ(p.x, 4.17);
+  EXPECT_DOUBLE_EQ(p.y, 1.7);
+  EXPECT_DOUBLE_EQ(p.yaw, -1.5);
+  meta.settings["scenario"]["path"]["start"] = "nowhere";
+  p = SessionStartPose(meta);
+  EXPECT_EQ(p.x, 0.0);
+  meta.settings["scenario"] = 3;
+  EXPECT_EQ(SessionStartPose(meta).y, 0.0);
+}
+
 TEST(SessionTest, WriteAndReloadEqual) {
   TempDir tmp;
   const std::string dir = tmp.Sub("lab.sweepscan");
