@@ -4,6 +4,7 @@
 //
 //   sweepscan-render CLOUD.ply OUT.png [--view iso|top|front|side] [--size WxH]
 //                    [--color height|time|source] [--title TEXT] [--max-z Z]
+//                    [--crop XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX]
 #include <vtkActor.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
@@ -42,12 +43,13 @@ int Fail(const std::string& message, int code) {
 
 int main(int argc, char** argv) {
   using sweepscan::app::Args;
-  Args args({"help"}, {"view", "size", "color", "title", "max-z"});
+  Args args({"help"}, {"view", "size", "color", "title", "max-z", "crop"});
   std::string error;
   if (!args.Parse(argc, argv, 1, &error)) return Fail(error, 2);
   if (args.Flag("help") || args.positional().size() != 2) {
-    std::cout << "usage: sweepscan-render CLOUD.ply|.pcd OUT.png [--view iso|top|front|side] "
-                 "[--size WxH] [--color height|time|source] [--title TEXT] [--max-z Z]\n";
+    std::cout << "usage: sweepscan-render CLOUD.ply|.pcd OUT.png [--view iso|top|front|back|side] "
+                 "[--size WxH] [--color height|time|source] [--title TEXT] [--max-z Z]\n"
+                 "                        [--crop XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX]\n";
     return args.Flag("help") ? 0 : 2;
   }
   std::vector<sweepscan::CloudPoint> points;
@@ -61,6 +63,21 @@ int main(int argc, char** argv) {
                                 [max_z](const sweepscan::CloudPoint& p) { return p.z > max_z; }),
                  points.end());
   }
+  if (args.Has("crop")) {
+    // Keep one box of the world (e.g. the calibration target and its ghosts).
+    double b[6];
+    if (std::sscanf(args.Get("crop").c_str(), "%lf,%lf,%lf,%lf,%lf,%lf", &b[0], &b[1], &b[2], &b[3],
+                    &b[4], &b[5]) != 6 ||
+        !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5])) {
+      return Fail("--crop expects XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX with each min < max", 2);
+    }
+    points.erase(std::remove_if(points.begin(), points.end(),
+                                [&b](const sweepscan::CloudPoint& p) {
+                                  return p.x < b[0] || p.y < b[1] || p.z < b[2] || p.x > b[3] ||
+                                         p.y > b[4] || p.z > b[5];
+                                }),
+                 points.end());
+  }
   if (points.empty()) return Fail(args.positional()[0] + ": the cloud is empty", 2);
   int width = 1280, height = 720;
   if (args.Has("size") && std::sscanf(args.Get("size").c_str(), "%dx%d", &width, &height) != 2) {
@@ -69,8 +86,8 @@ int main(int argc, char** argv) {
   const std::string color = args.Get("color", "height");
   const std::string view = args.Get("view", "iso");
   if (color != "height" && color != "time" && color != "source") return Fail("--color: height, time or source", 2);
-  if (view != "iso" && view != "top" && view != "front" && view != "side") {
-    return Fail("--view: iso, top, front or side", 2);
+  if (view != "iso" && view != "top" && view != "front" && view != "back" && view != "side") {
+    return Fail("--view: iso, top, front, back or side", 2);
   }
 
   vtkNew<vtkPoints> pts;
@@ -137,6 +154,9 @@ int main(int argc, char** argv) {
     cam->SetViewUp(0, 1, 0);
   } else if (view == "front") {
     cam->SetPosition(cx, cy - 10, cz);
+    cam->SetViewUp(0, 0, 1);
+  } else if (view == "back") {  // from +y: faces the y = 0 wall (the lab's target)
+    cam->SetPosition(cx, cy + 10, cz);
     cam->SetViewUp(0, 0, 1);
   } else if (view == "side") {
     cam->SetPosition(cx - 10, cy, cz);

@@ -41,12 +41,23 @@ TEST(RenderTest, WritesPngOfRequestedSize) {
   // IHDR: width and height, big-endian, at bytes 16..23.
   EXPECT_EQ((header[18] << 8) | header[19], 320);
   EXPECT_EQ((header[22] << 8) | header[23], 200);
+  // A crop that keeps part of the cloud, from the +y side.
+  EXPECT_EQ(RunRender(cloud + " " + png + " --view back --crop 0,0,-1,2.5,5,1"), 0);
 }
 
 TEST(RenderTest, BadInputExitsTwo) {
   EXPECT_EQ(RunRender("/nonexistent.ply out.png"), 2);
   EXPECT_EQ(RunRender("only-one-argument.ply"), 2);
   EXPECT_EQ(RunRender("a.ply b.png --view sideways"), 2);
+  // Crops: malformed, inverted, or keeping nothing.
+  std::vector<sweepscan::CloudPoint> pts(10);
+  for (int i = 0; i < 10; ++i) pts[i].x = 0.1f * i;
+  const std::string cloud = ::testing::TempDir() + "/sweepscan_render_crop.ply";
+  ASSERT_TRUE(sweepscan::SaveCloud(cloud, pts).ok());
+  const std::string png = ::testing::TempDir() + "/sweepscan_render_crop.png";
+  EXPECT_EQ(RunRender(cloud + " " + png + " --crop 1,2,3"), 2);
+  EXPECT_EQ(RunRender(cloud + " " + png + " --crop 1,0,0,0,1,1"), 2);
+  EXPECT_EQ(RunRender(cloud + " " + png + " --crop 5,5,5,6,6,6"), 2);
 }
 
 }  // namespace
