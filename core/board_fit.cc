@@ -196,7 +196,7 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
     // beam passing just below a bottom edge can hit the board's edge face,
     // up to its thickness behind the front; such a sample is no front-face
     // hit and should count as a miss (measured: a 20 mm board came out
-    // 3-8 mm too large in the near pass; a 5 mm one does not).
+    // 2-9 mm too large in the near pass; a 5 mm one does not).
     const double rho = s.p_lidar.norm();
     band.push_back(std::max(0.005, 2.5 * std::hypot(0.002, 0.002 * rho)));
   }
