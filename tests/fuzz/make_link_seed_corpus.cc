@@ -3,35 +3,23 @@
 // session writer, so the fuzzers start from well-formed input.
 // Usage: make_link_seed_corpus <corpus dir>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/session.h"
 #include "hardware/link_protocol.h"
+#include "tests/fuzz/seed_files.h"
 
 namespace {
 
-using Bytes = std::vector<uint8_t>;
+using sweepscan::fuzz::Bytes;
 using namespace sweepscan;
 using namespace sweepscan::hardware;
 
-void Write(const std::string& path, uint8_t selector, const Bytes& content) {
-  std::ofstream out(path, std::ios::binary);
-  out.put(static_cast<char>(selector));
-  out.write(reinterpret_cast<const char*>(content.data()),
-            static_cast<std::streamsize>(content.size()));
-  if (!out) std::fprintf(stderr, "cannot write %s\n", path.c_str());
-}
-
-Bytes ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void Append(const Bytes& b, Bytes* out) { out->insert(out->end(), b.begin(), b.end()); }
+using sweepscan::fuzz::Append;
+using sweepscan::fuzz::ReadFile;
+using sweepscan::fuzz::WriteSeed;
 
 }  // namespace
 
@@ -49,13 +37,13 @@ int main(int argc, char** argv) {
   Append(client.Encode(t, Hello{1, false, "sweepscan", {}}), &handshake);
   Append(client.Encode(t, AuthResponse{}), &handshake);
   Append(agent.Encode(t, AuthResult{AuthOutcome::kOk, ""}), &handshake);
-  Write(dir + "/link/handshake", 0, handshake);
+  WriteSeed(dir + "/link/handshake", 0, handshake);
   Bytes commands = client.EncodeDrive(t, 0.2, 0.1);
   for (const LinkPayload& p : std::vector<LinkPayload>{
            Stop{}, EmergencyStop{}, ClearEmergencyStop{}, Heartbeat{}, LidarMotor{true}}) {
     Append(client.Encode(t, p), &commands);
   }
-  Write(dir + "/link/commands", 7, commands);
+  WriteSeed(dir + "/link/commands", 7, commands);
   Bytes agent_out = agent.Encode(t, CommandAck{3, 0x10, AckResult::kAccepted, t});
   LinkStatus st;
   st.battery_voltage_v = 12.1f;
@@ -63,7 +51,7 @@ int main(int argc, char** argv) {
   Append(agent.Encode(t, st), &agent_out);
   const Bytes raw = {0xAA, 0x55, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00};
   Append(agent.EncodeTelemetry(t, LinkDevice::kLidar, t, raw.data(), raw.size()), &agent_out);
-  Write(dir + "/link/agent", 64, agent_out);
+  WriteSeed(dir + "/link/agent", 64, agent_out);
 
   // Session: a small real session's frames.bin and meta.json.
   const std::string tmp = "/tmp/make_link_seed_corpus.sweepscan";
@@ -79,10 +67,10 @@ int main(int argc, char** argv) {
   w->Append(commands, 2);
   w->Append(agent_out, 3);
   w->Close();
-  Write(dir + "/session/frames", 0, ReadFile(tmp + "/frames.bin"));
-  Write(dir + "/session/meta", 1, ReadFile(tmp + "/meta.json"));
+  WriteSeed(dir + "/session/frames", 0, ReadFile(tmp + "/frames.bin"));
+  WriteSeed(dir + "/session/meta", 1, ReadFile(tmp + "/meta.json"));
   Bytes torn = ReadFile(tmp + "/frames.bin");
   torn.resize(torn.size() - 7);
-  Write(dir + "/session/frames_torn", 2, torn);
+  WriteSeed(dir + "/session/frames_torn", 2, torn);
   return 0;
 }

@@ -3,8 +3,6 @@
 // <chunk-selector byte> + stream, as the fuzz targets expect.
 // Usage: make_seed_corpus <corpus dir> <shared testdata dir>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -12,26 +10,16 @@
 #include "hardware/hi219_codec.h"
 #include "hardware/motor_board_codec.h"
 #include "hardware/x4_codec.h"
+#include "tests/fuzz/seed_files.h"
 
 namespace {
 
-using Bytes = std::vector<uint8_t>;
+using sweepscan::fuzz::Bytes;
 using namespace sweepscan::hardware;
 
-void Write(const std::string& path, uint8_t selector, const Bytes& stream) {
-  std::ofstream out(path, std::ios::binary);
-  out.put(static_cast<char>(selector));
-  out.write(reinterpret_cast<const char*>(stream.data()),
-            static_cast<std::streamsize>(stream.size()));
-  if (!out) std::fprintf(stderr, "cannot write %s\n", path.c_str());
-}
-
-Bytes ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-void Append(const Bytes& b, Bytes* out) { out->insert(out->end(), b.begin(), b.end()); }
+using sweepscan::fuzz::Append;
+using sweepscan::fuzz::ReadFile;
+using sweepscan::fuzz::WriteSeed;
 
 }  // namespace
 
@@ -50,7 +38,7 @@ int main(int argc, char** argv) {
     Bytes responses = EncodeX4DeviceInfo(X4DeviceInfo{kX4ModelCode, 0x0106, 1, {}, {}});
     Append(EncodeX4Health(X4Health{0, 0, {}}), &responses);
     Append(EncodeX4ScanStartHeader(), &responses);
-    Write(dir + "/x4/responses", 0, responses);
+    WriteSeed(dir + "/x4/responses", 0, responses);
     Bytes scan = EncodeX4ScanStartHeader();
     for (int r = 0; r < 2; ++r) {
       X4PacketToEncode ring;
@@ -66,13 +54,13 @@ int main(int argc, char** argv) {
         EncodeX4ScanPacket(p, &scan);
       }
     }
-    Write(dir + "/x4/revolutions", 7, scan);
-    Write(dir + "/x4/doc_zero_packet", 0, ReadFile(testdata + "/ydlidar_doc_zero_packet.bin"));
+    WriteSeed(dir + "/x4/revolutions", 7, scan);
+    WriteSeed(dir + "/x4/doc_zero_packet", 0, ReadFile(testdata + "/ydlidar_doc_zero_packet.bin"));
   }
   // HI219: the vendor 0x91 frame, a legacy frame, both back to back.
   {
     const Bytes vendor = ReadFile(testdata + "/hipnuc_hi91_example_frame.bin");
-    Write(dir + "/hi219/vendor_91", 0, vendor);
+    WriteSeed(dir + "/hi219/vendor_91", 0, vendor);
     ImuSample s;
     s.fields = kImuUserId | kImuAcc | kImuGyro | kImuMag | kImuEuler | kImuQuat | kImuPressure;
     s.acc_g = {0.01f, -0.02f, 0.99f};
@@ -84,10 +72,10 @@ int main(int argc, char** argv) {
     s.quat_wxyz = {1.0f, 0.0f, 0.0f, 0.0f};
     s.pressure_pa = 101325.0f;
     const Bytes legacy = EncodeHi219LegacyFrame(s);
-    Write(dir + "/hi219/legacy", 0, legacy);
+    WriteSeed(dir + "/hi219/legacy", 0, legacy);
     Bytes both = vendor;
     Append(legacy, &both);
-    Write(dir + "/hi219/mixed", 13, both);
+    WriteSeed(dir + "/hi219/mixed", 13, both);
   }
   // Motor board: commands and feedback.
   {
@@ -105,8 +93,8 @@ int main(int argc, char** argv) {
       f.voltage_v = 12.1;
       Append(EncodeMotorFeedback(f), &fbs);
     }
-    Write(dir + "/motor_board/commands", 0, cmds);
-    Write(dir + "/motor_board/feedback", 5, fbs);
+    WriteSeed(dir + "/motor_board/commands", 0, cmds);
+    WriteSeed(dir + "/motor_board/feedback", 5, fbs);
   }
   return 0;
 }
