@@ -12,8 +12,8 @@
 #include <csignal>
 #include <cstdio>
 
-#include "hardware/qt_transport.h"
-#include "hardware/robot_agent.h"
+#include "hardware/agent/robot_agent.h"
+#include "hardware/link/qt_transport.h"
 
 namespace sweepscan::app {
 

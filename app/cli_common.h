@@ -23,6 +23,15 @@ extern const char* const kInfoUsage;
 extern const char* const kReconstructUsage;
 extern const char* const kExportUsage;
 
+// The other commands, one file each: cli_simulate.cc, cli_calibrate.cc,
+// cli_evaluate.cc.
+int RunSimulate(int argc, char** argv);
+int RunCalibrate(int argc, char** argv);
+int RunEvaluate(int argc, char** argv);
+extern const char* const kSimulateUsage;
+extern const char* const kCalibrateUsage;
+extern const char* const kEvaluateUsage;
+
 }  // namespace sweepscan::app
 
 #endif  // SWEEPSCAN_APP_CLI_COMMON_H_

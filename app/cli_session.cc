@@ -9,10 +9,10 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
-#include "core/calibration.h"
-#include "core/cloud_io.h"
-#include "core/reconstruct.h"
-#include "hardware/telemetry_decoder.h"
+#include "core/calibration/calibration.h"
+#include "core/cloud/cloud_io.h"
+#include "core/cloud/reconstruct.h"
+#include "hardware/link/telemetry_decoder.h"
 
 namespace sweepscan::app {
 

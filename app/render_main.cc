@@ -20,6 +20,7 @@
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
+#include <vtkSmartPointer.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkWindowToImageFilter.h>
@@ -28,31 +29,26 @@
 #include <cstdio>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "app/cli_args.h"
-#include "core/cloud_io.h"
+#include "core/cloud/cloud_io.h"
 
 namespace {
+
+using sweepscan::CloudPoint;
+using sweepscan::app::Args;
 
 int Fail(const std::string& message, int code) {
   std::cerr << "sweepscan-render: error: " << message << "\n";
   return code;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using sweepscan::app::Args;
-  Args args({"help"}, {"view", "size", "color", "title", "max-z", "crop"});
+// The cloud, without what --max-z and --crop leave out. Returns an exit
+// code (0: go on).
+int LoadPoints(const Args& args, std::vector<CloudPoint>* points_out) {
+  std::vector<CloudPoint>& points = *points_out;
   std::string error;
-  if (!args.Parse(argc, argv, 1, &error)) return Fail(error, 2);
-  if (args.Flag("help") || args.positional().size() != 2) {
-    std::cout << "usage: sweepscan-render CLOUD.ply|.pcd OUT.png [--view iso|top|front|back|side] "
-                 "[--size WxH] [--color height|time|source] [--title TEXT] [--max-z Z]\n"
-                 "                        [--crop XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX]\n";
-    return args.Flag("help") ? 0 : 2;
-  }
-  std::vector<sweepscan::CloudPoint> points;
   const sweepscan::Status s = sweepscan::LoadCloud(args.positional()[0], &points);
   if (!s.ok()) return Fail(s.message(), 2);
   double max_z = 0.0;
@@ -79,17 +75,37 @@ int main(int argc, char** argv) {
                  points.end());
   }
   if (points.empty()) return Fail(args.positional()[0] + ": the cloud is empty", 2);
+  return 0;
+}
+
+struct RenderOptions {
   int width = 1280, height = 720;
+  std::string color, view;
+};
+
+// --size, --color, --view. Returns an exit code (0: go on).
+int ParseRenderOptions(const Args& args, RenderOptions* o) {
+  int& width = o->width;
+  int& height = o->height;
   if (args.Has("size") && std::sscanf(args.Get("size").c_str(), "%dx%d", &width, &height) != 2) {
     return Fail("--size expects WxH, e.g. 1280x720", 2);
   }
-  const std::string color = args.Get("color", "height");
-  const std::string view = args.Get("view", "iso");
+  o->color = args.Get("color", "height");
+  o->view = args.Get("view", "iso");
+  const std::string& color = o->color;
+  const std::string& view = o->view;
   if (color != "height" && color != "time" && color != "source") return Fail("--color: height, time or source", 2);
   if (view != "iso" && view != "top" && view != "front" && view != "back" && view != "side") {
     return Fail("--view: iso, top, front, back or side", 2);
   }
+  return 0;
+}
 
+// The points as VTK vertices with one scalar each (height, time or pose
+// source), and the scalars' range [lo, hi].
+vtkSmartPointer<vtkPolyData> ColoredPoints(const std::vector<CloudPoint>& points,
+                                           const std::string& color, double* lo_out,
+                                           double* hi_out) {
   vtkNew<vtkPoints> pts;
   pts->SetDataTypeToFloat();
   pts->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
@@ -109,11 +125,21 @@ int main(int argc, char** argv) {
   }
   verts->AllocateEstimate(static_cast<vtkIdType>(points.size()), 1);
   for (vtkIdType i = 0; i < static_cast<vtkIdType>(points.size()); ++i) verts->InsertNextCell(1, &i);
-  vtkNew<vtkPolyData> poly;
+  vtkSmartPointer<vtkPolyData> poly = vtkSmartPointer<vtkPolyData>::New();
   poly->SetPoints(pts);
   poly->SetVerts(verts);
   poly->GetPointData()->SetScalars(scalars);
+  *lo_out = lo;
+  *hi_out = hi;
+  return poly;
+}
 
+// The points coloured blue (low) to red (high) with a scalar bar, and the
+// title if given.
+vtkSmartPointer<vtkRenderer> Scene(const Args& args, vtkPolyData* poly, double lo, double hi,
+                                   const RenderOptions& options) {
+  const std::string& color = options.color;
+  const int height = options.height;
   vtkNew<vtkLookupTable> lut;
   lut->SetHueRange(0.667, 0.0);  // blue (low) to red (high)
   lut->SetTableRange(lo, hi > lo ? hi : lo + 1);
@@ -126,7 +152,7 @@ int main(int argc, char** argv) {
   actor->SetMapper(mapper);
   actor->GetProperty()->SetPointSize(1.5);
 
-  vtkNew<vtkRenderer> renderer;
+  vtkSmartPointer<vtkRenderer> renderer = vtkSmartPointer<vtkRenderer>::New();
   renderer->AddActor(actor);
   renderer->SetBackground(0.08, 0.09, 0.11);
   vtkNew<vtkScalarBarActor> bar;
@@ -143,7 +169,11 @@ int main(int argc, char** argv) {
     title->SetDisplayPosition(12, height - 34);
     renderer->AddActor2D(title);
   }
+  return renderer;
+}
 
+// The camera on the cloud's centre from the view's side.
+void PlaceCamera(vtkPolyData* poly, const std::string& view, vtkRenderer* renderer) {
   double b[6];
   poly->GetBounds(b);
   const double cx = 0.5 * (b[0] + b[1]), cy = 0.5 * (b[2] + b[3]), cz = 0.5 * (b[4] + b[5]);
@@ -167,7 +197,11 @@ int main(int argc, char** argv) {
   }
   renderer->ResetCamera();
   cam->Zoom(view == "iso" ? 1.3 : 1.1);
+}
 
+// Renders off screen and writes the PNG. Returns an exit code.
+int WritePng(vtkRenderer* renderer, const RenderOptions& options, const std::string& path) {
+  const int width = options.width, height = options.height;
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
   window->AddRenderer(renderer);
@@ -177,10 +211,37 @@ int main(int argc, char** argv) {
   grab->SetInput(window);
   grab->Update();
   vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(args.positional()[1].c_str());
+  writer->SetFileName(path.c_str());
   writer->SetInputConnection(grab->GetOutputPort());
   writer->Write();
-  if (writer->GetErrorCode() != 0) return Fail("cannot write " + args.positional()[1], 1);
+  if (writer->GetErrorCode() != 0) return Fail("cannot write " + path, 1);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args({"help"}, {"view", "size", "color", "title", "max-z", "crop"});
+  std::string error;
+  if (!args.Parse(argc, argv, 1, &error)) return Fail(error, 2);
+  if (args.Flag("help") || args.positional().size() != 2) {
+    std::cout << "usage: sweepscan-render CLOUD.ply|.pcd OUT.png [--view iso|top|front|back|side] "
+                 "[--size WxH] [--color height|time|source] [--title TEXT] [--max-z Z]\n"
+                 "                        [--crop XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX]\n";
+    return args.Flag("help") ? 0 : 2;
+  }
+  std::vector<sweepscan::CloudPoint> points;
+  int code = LoadPoints(args, &points);
+  if (code != 0) return code;
+  RenderOptions options;
+  code = ParseRenderOptions(args, &options);
+  if (code != 0) return code;
+  double lo = 0.0, hi = 0.0;
+  const vtkSmartPointer<vtkPolyData> poly = ColoredPoints(points, options.color, &lo, &hi);
+  const vtkSmartPointer<vtkRenderer> renderer = Scene(args, poly, lo, hi, options);
+  PlaceCamera(poly, options.view, renderer);
+  code = WritePng(renderer, options, args.positional()[1]);
+  if (code != 0) return code;
   std::printf("rendered %zu points to %s\n", points.size(), args.positional()[1].c_str());
   return 0;
 }

@@ -13,8 +13,8 @@
 #include <cstdio>
 
 #include "app/agent_main_common.h"
-#include "hardware/qt_transport.h"
-#include "hardware/robot_agent.h"
+#include "hardware/agent/robot_agent.h"
+#include "hardware/link/qt_transport.h"
 
 namespace {
 

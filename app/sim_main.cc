@@ -15,11 +15,11 @@
 #include <memory>
 
 #include "app/agent_main_common.h"
-#include "core/scenario.h"
+#include "core/scenario/scenario.h"
 #include "core/sim/world.h"
-#include "hardware/qt_transport.h"
-#include "hardware/robot_agent.h"
-#include "hardware/sim_devices.h"
+#include "hardware/agent/robot_agent.h"
+#include "hardware/emulation/sim_devices.h"
+#include "hardware/link/qt_transport.h"
 
 namespace {
 

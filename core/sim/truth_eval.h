@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/cloud.h"
-#include "core/plane.h"
+#include "core/cloud/cloud.h"
+#include "core/geometry/plane.h"
 #include "core/sim/scene.h"
 
 namespace sweepscan::sim {

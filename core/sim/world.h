@@ -25,10 +25,10 @@
 #include <string>
 #include <vector>
 
-#include "core/odometry.h"
-#include "core/pose_buffer.h"
-#include "core/robot_model.h"
-#include "core/sensor_data.h"
+#include "core/pose/odometry.h"
+#include "core/pose/pose_buffer.h"
+#include "core/robot/robot_model.h"
+#include "core/robot/sensor_data.h"
 #include "core/sim/scene.h"
 
 namespace sweepscan::sim {

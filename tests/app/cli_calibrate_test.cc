@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/calibration.h"
+#include "core/calibration/calibration.h"
 #include "tests/testing/run_command.h"
 
 namespace {

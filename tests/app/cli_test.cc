@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/cloud_io.h"
+#include "core/cloud/cloud_io.h"
 #include "tests/testing/run_command.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "core/cloud_io.h"
+#include "core/cloud/cloud_io.h"
 
 namespace {
 

@@ -6,9 +6,9 @@
 
 #include <random>
 
-#include "core/calibration.h"
-#include "core/evaluation.h"
-#include "core/scenario.h"
+#include "core/calibration/calibration.h"
+#include "core/evaluation/evaluation.h"
+#include "core/scenario/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
 

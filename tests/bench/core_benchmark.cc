@@ -4,8 +4,8 @@
 // Figures are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
 
-#include "core/assembler.h"
-#include "core/pose_estimator.h"
+#include "core/cloud/assembler.h"
+#include "core/pose/pose_estimator.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
 

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <vector>
 
-#include "hardware/hi219_codec.h"
+#include "hardware/codecs/hi219_codec.h"
 
 namespace {
 

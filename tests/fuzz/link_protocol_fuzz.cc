@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "hardware/link_protocol.h"
+#include "hardware/link/link_protocol.h"
 
 namespace {
 

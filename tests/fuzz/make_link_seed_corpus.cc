@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "core/session.h"
-#include "hardware/link_protocol.h"
+#include "core/session/session.h"
+#include "hardware/link/link_protocol.h"
 #include "tests/fuzz/seed_files.h"
 
 namespace {

@@ -1,15 +1,15 @@
 // Writes the seed corpora in tests/fuzz/corpus/<codec>/ from the encoders, so
 // the fuzzers start from well-formed streams. Each file is
 // <chunk-selector byte> + stream, as the fuzz targets expect.
-// Usage: make_seed_corpus <corpus dir> <shared testdata dir>
+// Usage: make_seed_corpus <corpus dir> <vendor test vector dir, tests/data/vendor>
 #include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "hardware/hi219_codec.h"
-#include "hardware/motor_board_codec.h"
-#include "hardware/x4_codec.h"
+#include "hardware/codecs/hi219_codec.h"
+#include "hardware/codecs/motor_board_codec.h"
+#include "hardware/codecs/x4_codec.h"
 #include "tests/fuzz/seed_files.h"
 
 namespace {
@@ -25,7 +25,7 @@ using sweepscan::fuzz::WriteSeed;
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::fprintf(stderr, "usage: %s <corpus dir> <shared testdata dir>\n", argv[0]);
+    std::fprintf(stderr, "usage: %s <corpus dir> <vendor test vector dir, tests/data/vendor>\n", argv[0]);
     return 2;
   }
   const std::string dir = argv[1];

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <vector>
 
-#include "hardware/motor_board_codec.h"
+#include "hardware/codecs/motor_board_codec.h"
 
 namespace {
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/crc32c.h"
-#include "core/json_reader.h"
-#include "core/session.h"
+#include "core/common/crc32c.h"
+#include "core/common/json_reader.h"
+#include "core/session/session.h"
 
 namespace {
 

@@ -9,7 +9,7 @@
 #include <cstring>
 #include <vector>
 
-#include "hardware/x4_codec.h"
+#include "hardware/codecs/x4_codec.h"
 
 namespace {
 

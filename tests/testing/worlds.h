@@ -3,7 +3,7 @@
 #ifndef SWEEPSCAN_TESTS_TESTING_WORLDS_H_
 #define SWEEPSCAN_TESTS_TESTING_WORLDS_H_
 
-#include "core/reconstruct.h"
+#include "core/cloud/reconstruct.h"
 #include "core/sim/world.h"
 
 namespace sweepscan::testing {

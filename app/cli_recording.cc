@@ -1,0 +1,73 @@
+// The input `calibrate` and `evaluate` share (cli_recording.h).
+#include "app/cli_recording.h"
+
+#include <cstdlib>
+#include <string>
+
+#include "app/cli_common.h"
+#include "core/scenario/scenario.h"
+
+namespace sweepscan::app {
+
+// Returns an exit code (kExitOk on success); prints one error line otherwise.
+int LoadRecording(const Args& args, RecordingInput* in) {
+  const bool has_scenario = args.Has("scenario");
+  if (has_scenario == !args.positional().empty()) {
+    PrintError(has_scenario ? "give either SESSION or --scenario FILE, not both"
+                            : "missing input: give SESSION or --scenario FILE");
+    return kExitBadInput;
+  }
+  if (args.positional().size() > 1) {
+    PrintError("unexpected argument '" + args.positional()[1] + "'");
+    return kExitBadInput;
+  }
+  if (has_scenario) {
+    sim::SimConfig scenario;
+    Status s = LoadScenario(args.Get("scenario"), &scenario);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+    if (args.Has("seed")) {
+      const std::string v = args.Get("seed");
+      char* end = nullptr;
+      const unsigned long long seed = std::strtoull(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || v[0] == '-') {
+        PrintError("--seed expects a non-negative integer, got '" + v + "'");
+        return kExitBadInput;
+      }
+      scenario.seed = seed;
+    }
+    hardware::SimulateRecording(scenario, in);
+    return kExitOk;
+  }
+  const Status s = hardware::OpenRecording(args.positional().front(), in);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
+
+// Poses for the recording: EKF (default), odometry, or the simulation's truth.
+int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
+                   ReconstructionResult* result) {
+  ReconstructionOptions options;
+  if (args.Has("pose-source") && !ParsePoseSource(args.Get("pose-source"), &options.pose.source)) {
+    PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
+    return kExitBadInput;
+  }
+  if (options.pose.source == PoseSource::kTruth && !in.has_truth) {
+    PrintError("--pose-source truth needs a simulated input (--scenario)");
+    return kExitBadInput;
+  }
+  options.calibration = calibration;
+  const Status s = hardware::ReconstructRecording(in, options, result);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace sweepscan::app

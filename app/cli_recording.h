@@ -1,0 +1,27 @@
+// Input shared by `calibrate` and `evaluate`: a recorded session folder, or
+// a scenario simulated in-process. Both end as a hardware::Recording;
+// everything after that is one code path.
+#ifndef SWEEPSCAN_APP_CLI_RECORDING_H_
+#define SWEEPSCAN_APP_CLI_RECORDING_H_
+
+#include "app/cli_args.h"
+#include "core/cloud/reconstruct.h"
+#include "core/robot/robot_model.h"
+#include "hardware/station/recording.h"
+
+namespace sweepscan::app {
+
+using RecordingInput = hardware::Recording;
+
+// SESSION or --scenario FILE [--seed N]. Returns an exit code (kExitOk on
+// success); prints one error line otherwise.
+int LoadRecording(const Args& args, RecordingInput* in);
+
+// Poses for the recording (--pose-source: EKF by default, odometry, or the
+// simulation's truth) and its cloud under `calibration`. Returns an exit code.
+int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
+                   ReconstructionResult* result);
+
+}  // namespace sweepscan::app
+
+#endif  // SWEEPSCAN_APP_CLI_RECORDING_H_

@@ -1,0 +1,311 @@
+// sweepscan-cli simulate: a scenario's world behind the byte-exact device
+// emulations, recorded as a session, reconstructed from its bytes and
+// measured against the ground truth.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "app/cli_args.h"
+#include "app/cli_common.h"
+#include "core/cloud/cloud_io.h"
+#include "core/cloud/reconstruct.h"
+#include "core/common/json_reader.h"
+#include "core/scenario/scenario.h"
+#include "core/sim/truth_eval.h"
+#include "core/sim/world.h"
+#include "hardware/emulation/simulate_session.h"
+#include "hardware/link/telemetry_decoder.h"
+
+namespace sweepscan::app {
+
+const char* const kSimulateUsage =
+    "usage: sweepscan-cli simulate --scenario FILE --out CLOUD.ply|CLOUD.pcd [options]\n"
+    "\n"
+    "Runs the scenario's simulated world faster than real time behind byte-exact\n"
+    "emulations of the X4, HI219 and motor board and the robot agent's logic,\n"
+    "records the link frames as a session (as a workstation would), reconstructs\n"
+    "the cloud from the session's bytes, writes it, and reports its accuracy\n"
+    "against the world's ground truth.\n"
+    "\n"
+    "Options:\n"
+    "  --scenario FILE        scenario JSON (docs/scenario-format.md)\n"
+    "  --out FILE             cloud to write (.ply binary or .pcd binary, all attributes)\n"
+    "  --session DIR          session folder to record (default: next to --out, NAME.sweepscan)\n"
+    "  --overwrite            replace an existing session folder\n"
+    "  --direct               skip the bytes: reconstruct from the simulator's records directly\n"
+    "  --truth FILE           also write ground truth JSON (scenario, trajectory, metrics)\n"
+    "  --pose-source S        ekf (default), odometry (wheels only) or truth\n"
+    "  --no-ekf               same as --pose-source odometry\n"
+    "  --no-deskew            place each whole scan at its first sample's pose\n"
+    "  --seed N               override the scenario's seed\n"
+    "  --json                 print the report as JSON\n";
+
+namespace {
+
+nlohmann::json StatsJson(const sim::SurfaceErrorStats& s) {
+  return {{"count", s.count}, {"mean_m", s.mean}, {"rms_m", s.rms}, {"p95_m", s.p95}, {"max_m", s.max}};
+}
+
+// What the command line asks for.
+struct SimulateRequest {
+  std::string out;
+  sim::SimConfig config;
+  ReconstructionOptions options;
+};
+
+// Returns an exit code; kExitOk with `request` filled to go on, kExitOk
+// with request->out empty after --help.
+int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
+  if (args.Flag("help")) {
+    std::cout << kSimulateUsage;
+    return kExitOk;
+  }
+  if (!args.positional().empty()) {
+    PrintError("unexpected argument '" + args.positional().front() + "'");
+    return kExitBadInput;
+  }
+  if (!args.Has("scenario") || !args.Has("out")) {
+    PrintError("simulate needs --scenario FILE and --out CLOUD.ply (see sweepscan-cli help simulate)");
+    return kExitBadInput;
+  }
+  const std::string out = args.Get("out");
+  if (out.size() < 4 || (out.substr(out.size() - 4) != ".ply" && out.substr(out.size() - 4) != ".pcd")) {
+    PrintError("--out must end in .ply or .pcd, got '" + out + "'");
+    return kExitBadInput;
+  }
+  sim::SimConfig& config = request->config;
+  Status status = LoadScenario(args.Get("scenario"), &config);
+  if (!status.ok()) {
+    PrintError(status.message());
+    return kExitBadInput;
+  }
+  if (args.Has("seed")) {
+    const std::string s = args.Get("seed");
+    char* end = nullptr;
+    const unsigned long long seed = std::strtoull(s.c_str(), &end, 10);
+    if (s.empty() || *end != '\0' || s[0] == '-') {
+      PrintError("--seed expects a non-negative integer, got '" + s + "'");
+      return kExitBadInput;
+    }
+    config.seed = seed;
+  }
+  ReconstructionOptions& options = request->options;
+  if (args.Has("pose-source") && !ParsePoseSource(args.Get("pose-source"), &options.pose.source)) {
+    PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
+    return kExitBadInput;
+  }
+  if (args.Flag("no-ekf")) options.pose.source = PoseSource::kOdometry;
+  options.assembly.deskew = !args.Flag("no-deskew");
+  options.pose.initial_pose = config.start;  // the cloud is expressed in the scenario's world frame
+  options.assembly.min_range_m = config.lidar.min_range_m;
+  options.assembly.max_range_m = config.lidar.max_range_m;
+  request->out = out;
+  return kExitOk;
+}
+
+// The sensor records: run through the device and link bytes into a session
+// folder and decoded from it, or (--direct) the simulator's records.
+int RecordAndDecode(const Args& args, const SimulateRequest& request, sim::SimWorld* world,
+                    SensorLog* log, std::string* session_dir) {
+  const std::string& out = request.out;
+  if (args.Flag("direct")) {
+    *log = world->RunAll();
+    return kExitOk;
+  }
+  *session_dir = args.Get("session", out.substr(0, out.size() - 4) + ".sweepscan");
+  hardware::SimulateSessionOptions sim_options;
+  sim_options.overwrite = args.Flag("overwrite");
+  sim_options.notes = "sweepscan-cli simulate --scenario " + args.Get("scenario");
+  hardware::SimulateSessionReport sim_report;
+  Status status = hardware::SimulateSession(request.config, *session_dir, sim_options, &sim_report);
+  if (!status.ok()) {
+    PrintError(status.message() + (args.Flag("overwrite") ? "" : " (use --overwrite to replace it)"));
+    return kExitFailure;
+  }
+  hardware::SessionDecodeInfo info;
+  status = hardware::DecodeSession(*session_dir, log, &info);
+  if (!status.ok()) {
+    PrintError(status.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+// The accuracy report: counts, distance to the true surfaces, final pose
+// error, the room's size and the target's pass-to-pass disagreement.
+nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
+                              const sim::SimWorld& world, const SensorLog& log,
+                              const std::string& session_dir, const ReconstructionResult& result,
+                              sim::SurfaceErrorStats* surface_out) {
+  const sim::SimConfig& config = request.config;
+  const ReconstructionOptions& options = request.options;
+  const std::string& out = request.out;
+  nlohmann::json report;
+  report["scenario"] = config.name;
+  report["session"] = session_dir;
+  report["through_bytes"] = !args.Flag("direct");
+  report["seed"] = config.seed;
+  report["duration_s"] = world.duration_s();
+  report["pose_source"] = PoseSourceName(options.pose.source);
+  report["deskew"] = options.assembly.deskew;
+  report["scans"] = log.scans.size();
+  report["samples"] = result.stats.samples_in;
+  report["points"] = result.stats.points_out;
+  report["invalid_samples"] = result.stats.invalid_range;
+  report["samples_without_pose"] = result.stats.no_pose;
+  report["ekf_updates"] = result.ekf_counters.updates;
+  report["ekf_rejected"] = result.ekf_counters.rejected;
+  report["out"] = out;
+  const sim::SurfaceErrorStats surface = sim::SurfaceErrors(config.scene, result.points);
+  *surface_out = surface;
+  report["surface_error"] = StatsJson(surface);
+  // Final pose error (position and heading) of the estimate against truth.
+  if (!result.poses.empty()) {
+    const Rigid3d est = result.poses.pose(result.poses.size() - 1);
+    const Rigid3d tru = world.TrueWorldFromBody(result.poses.latest());
+    report["final_position_error_m"] = (est.translation() - tru.translation()).head<2>().norm();
+    report["final_heading_error_rad"] =
+        std::abs(WrapAngle(YawFromQuaternion(est.rotation()) - YawFromQuaternion(tru.rotation())));
+  }
+  for (const char* room : {"room", "stairwell"}) {
+    if (config.scene.Find(room) < 0) continue;
+    const sim::RoomMeasurement m = sim::MeasureRoom(config.scene, room, result.points);
+    if (m.ok) {
+      report["room"] = {{"label", room},
+                        {"true_m", {m.true_size.x(), m.true_size.y(), m.true_size.z()}},
+                        {"measured_m", {m.measured.x(), m.measured.y(), m.measured.z()}},
+                        {"relative_error", {m.relative_error.x(), m.relative_error.y(), m.relative_error.z()}}};
+    } else {
+      report["room"] = {{"label", room}, {"error", m.error}};
+    }
+  }
+  if (config.scene.Find("target") >= 0) {
+    const sim::PassDisagreement d = sim::MeasureTargetPasses(config.scene, "target", result.points);
+    if (d.ok) {
+      report["target_passes"] = {{"passes", d.passes},
+                                 {"points", {d.points[0], d.points[1]}},
+                                 {"plane_angle_rad", d.plane_angle_rad},
+                                 {"plane_offset_m", d.plane_offset_m},
+                                 {"centroid_distance_m", d.centroid_distance_m},
+                                 {"top_edge_shift_m", d.edge_shift_m}};
+    } else {
+      report["target_passes"] = {{"passes", d.passes}, {"error", d.error}};
+    }
+  }
+  return report;
+}
+
+// --truth FILE: the scenario, the true trajectory (50 Hz) and the report.
+int WriteTruth(const std::string& path, const sim::SimConfig& config, const sim::SimWorld& world,
+               const nlohmann::json& report) {
+  nlohmann::json truth_json;
+  truth_json["format"] = "sweepscan-truth";
+  truth_json["version"] = 1;
+  truth_json["scenario"] = ScenarioToJson(config);
+  truth_json["robot_time_offset_s"] = sim::SimWorld::kStartTimeS;
+  nlohmann::json traj = nlohmann::json::array();
+  for (double t = 0.0; t <= world.duration_s() + 1e-9; t += 0.02) {
+    const Pose2d p = world.trajectory().PoseAt(t);
+    traj.push_back({t + sim::SimWorld::kStartTimeS, p.x, p.y, p.yaw});
+  }
+  truth_json["trajectory_columns"] = {"robot_time_s", "x_m", "y_m", "yaw_rad"};
+  truth_json["trajectory"] = traj;
+  truth_json["report"] = report;
+  const Status status = WriteFileAtomically(path, truth_json.dump(1) + "\n");
+  if (!status.ok()) {
+    PrintError(status.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+void PrintSimulateReport(const SimulateRequest& request, const sim::SimWorld& world,
+                         const SensorLog& log, const std::string& session_dir,
+                         const ReconstructionResult& result, const sim::SurfaceErrorStats& surface,
+                         const nlohmann::json& report) {
+  const sim::SimConfig& config = request.config;
+  const ReconstructionOptions& options = request.options;
+  const std::string& out = request.out;
+  if (!session_dir.empty()) std::printf("recorded session %s (through the device and link bytes)\n", session_dir.c_str());
+  std::printf("simulated %.1f s of '%s' (seed %llu): %zu scans, %zu samples -> %zu points in %s\n",
+              world.duration_s(), config.name.c_str(), static_cast<unsigned long long>(config.seed),
+              log.scans.size(), result.stats.samples_in, result.stats.points_out, out.c_str());
+  std::printf("poses: %s, deskew %s; EKF updates %d, gated out %d\n", PoseSourceName(options.pose.source),
+              options.assembly.deskew ? "on" : "off", result.ekf_counters.updates,
+              result.ekf_counters.rejected);
+  std::printf("distance to true surfaces: mean %.1f mm, rms %.1f mm, p95 %.1f mm, max %.1f mm\n",
+              surface.mean * 1e3, surface.rms * 1e3, surface.p95 * 1e3, surface.max * 1e3);
+  if (report.contains("final_heading_error_rad")) {
+    std::printf("final pose error: %.3f m, %.3f deg\n", report["final_position_error_m"].get<double>(),
+                report["final_heading_error_rad"].get<double>() * 180.0 / M_PI);
+  }
+  if (report.contains("room") && report["room"].contains("measured_m")) {
+    const auto& r = report["room"];
+    std::printf("room %s: measured %.3f x %.3f x %.3f m (true %.2f x %.2f x %.2f), error %+.3f %% %+.3f %% %+.3f %%\n",
+                r["label"].get<std::string>().c_str(), r["measured_m"][0].get<double>(),
+                r["measured_m"][1].get<double>(), r["measured_m"][2].get<double>(), r["true_m"][0].get<double>(),
+                r["true_m"][1].get<double>(), r["true_m"][2].get<double>(),
+                100 * r["relative_error"][0].get<double>(), 100 * r["relative_error"][1].get<double>(),
+                100 * r["relative_error"][2].get<double>());
+  }
+  if (report.contains("target_passes") && report["target_passes"].contains("plane_offset_m")) {
+    const auto& t = report["target_passes"];
+    std::printf("target seen in %zu passes: pass-to-pass plane offset %.1f mm, angle %.2f deg, centroid shift %.1f mm, top edge shift %.1f mm\n",
+                t["passes"].get<size_t>(), 1e3 * t["plane_offset_m"].get<double>(),
+                t["plane_angle_rad"].get<double>() * 180.0 / M_PI, 1e3 * t["centroid_distance_m"].get<double>(),
+                1e3 * t["top_edge_shift_m"].get<double>());
+  }
+}
+
+}  // namespace
+
+int RunSimulate(int argc, char** argv) {
+  Args args({"json", "no-ekf", "no-deskew", "help", "direct", "overwrite"},
+            {"scenario", "out", "truth", "pose-source", "seed", "session"});
+  std::string error;
+  if (!args.Parse(argc, argv, 2, &error)) {
+    PrintError(error + " (see sweepscan-cli help simulate)");
+    return kExitBadInput;
+  }
+  SimulateRequest request;
+  int code = ParseSimulateArgs(args, &request);
+  if (code != kExitOk || request.out.empty()) return code;
+  const sim::SimConfig& config = request.config;
+
+  sim::SimWorld world(config);
+  const PoseBuffer truth = world.TruthPoses(1000.0);
+  SensorLog log;
+  std::string session_dir;
+  code = RecordAndDecode(args, request, &world, &log, &session_dir);
+  if (code != kExitOk) return code;
+  ReconstructionResult result;
+  Status status = Reconstruct(log, config.geometry, request.options, &truth, &result);
+  if (!status.ok()) {
+    PrintError(status.message());
+    return kExitFailure;
+  }
+  status = SaveCloud(request.out, result.points);
+  if (!status.ok()) {
+    PrintError(status.message());
+    return kExitFailure;
+  }
+
+  sim::SurfaceErrorStats surface;
+  const nlohmann::json report =
+      AccuracyReport(args, request, world, log, session_dir, result, &surface);
+  if (args.Has("truth")) {
+    code = WriteTruth(args.Get("truth"), config, world, report);
+    if (code != kExitOk) return code;
+  }
+  if (args.Flag("json")) {
+    std::cout << report.dump(2) << "\n";
+    return kExitOk;
+  }
+  PrintSimulateReport(request, world, log, session_dir, result, surface, report);
+  return kExitOk;
+}
+
+}  // namespace sweepscan::app

@@ -1,0 +1,78 @@
+// Automatic mode (no picks), solved with Ceres' Levenberg-Marquardt.
+//
+// Planes (walls, floor, ceiling, the board) are found by RANSAC in the cloud
+// under the current c; each surface s gets a plane (n_s, d_s) as extra Ceres
+// parameters (n_s on the unit sphere) and every point i of s a residual
+// (n_s . p_W^i(c) + d_s) / sigma_i weighted by the range noise model; points
+// of the two passes must then lie on one plane. Segmentation and solve
+// alternate with a shrinking inlier band, since a miscalibrated cloud shows
+// each wall twice, up to 20 cm apart; at the final band membership is per
+// point (3 sigma_i) and scan-line runs offset from their plane (a parallel
+// surface 2 cm away) are dropped. sigma is the larger of the iid and the
+// cluster-robust estimate.
+//
+// Pure functions, no globals; may run on any thread; cancel through
+// CalibrationOptions::progress.
+#ifndef SWEEPSCAN_CORE_CALIBRATION_AUTOMATIC_H_
+#define SWEEPSCAN_CORE_CALIBRATION_AUTOMATIC_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "core/calibration/pairs_solver.h"
+#include "core/calibration/samples.h"
+#include "core/common/status.h"
+#include "core/robot/robot_model.h"
+
+namespace sweepscan {
+
+struct AutoCalibrationOptions {
+  CalibrationOptions solver;
+  size_t max_segmentation_points = 60000;  // subsample of the cloud for RANSAC
+  size_t max_points_per_plane = 20000;     // residuals per surface (evenly subsampled)
+  int max_planes = 8;
+  double min_plane_fraction = 0.02;  // of the segmentation sample
+  int ransac_iterations = 400;
+  double initial_band_m = 0.20;  // RANSAC inlier band at the first round
+  double final_band_m = 0.03;
+  double min_range_m = 0.3;  // ignore samples nearer than this
+  uint64_t seed = 1;
+  // Noise model of one point along a plane's normal (X4 data sheet, as in
+  // core/sim): sigma_i = sqrt(a^2 + (b rho_i)^2 + m^2), with m a floor for
+  // pose and model errors. Residuals are divided by sigma_i (weighted least
+  // squares) and, at the final band, a point is a member only within
+  // membership_sigmas * sigma_i of its plane. Why: a uniform 3 cm band lets
+  // the board (y = 0.16) and the window sill 2 cm behind it (y = 0.14)
+  // merge into one "plane" whose fit differs between the passes.
+  double range_noise_m = 0.002;
+  double range_noise_fraction = 0.002;
+  double model_noise_m = 0.001;
+  double membership_sigmas = 3.0;
+  // A scan line's run of consecutive members whose mean distance from its
+  // plane exceeds this is a parallel surface nearby, not the plane.
+  double surface_step_m = 0.008;
+  // A point within this distance of another kept plane is ambiguous (edges,
+  // where two surfaces meet, and parallel surfaces a few cm apart) and gives
+  // no residual.
+  double edge_margin_m = 0.05;
+  // Huber scale on the normalised residuals r_i / sigma_i (used when
+  // solver.loss is kNone; another loss uses this scale too).
+  double robust_scale_sigmas = 2.0;
+  // Cluster-robust ("sandwich") covariance: residuals are grouped into
+  // blocks of this many seconds; errors correlated within a block (pose
+  // errors of the EKF, a scan line's systematic offset) then widen sigma
+  // instead of being counted as independent.
+  double covariance_block_s = 2.0;
+
+  bool IsValid(std::string* error) const;
+};
+
+// Automatic mode on all samples of the recording.
+Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
+                      const MountingError& initial, const AutoCalibrationOptions& options,
+                      CalibrationSummary* summary);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CALIBRATION_AUTOMATIC_H_

@@ -1,0 +1,666 @@
+// The target board of one pass, fitted from raw samples re-projected under a
+// candidate calibration (declared in board_fit.h). Plain Eigen: no Ceres
+// here, the rectangle fit is a 1-D search over a linear least squares.
+//
+// Geometry. The scan plane is vertical, so on a vertical board every scan
+// line is (nearly) a vertical line in board coordinates (u along, v up).
+// Along a line the samples are 0.5 deg apart: 6 mm at 0.7 m, 21 mm at 2.4 m
+// on the lab's board. Between lines the spacing is the robot's sweep: on the
+// 0.83 m circle about 5 cm. An edge crossed by the lines is therefore seen
+// at many places, each to within one sample spacing; an edge parallel to the
+// lines is seen only as "between this line and the next".
+//
+// FitBoardCorners in three steps: the board's scan lines (plane, runs),
+// edge extraction (where each line leaves the board), the corner model (a
+// rectangle through the edge points) and its solve.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <unordered_map>
+
+#include "core/calibration/board_fit.h"
+
+namespace sweepscan {
+namespace {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+double Theta(const LidarObservation& o) { return std::atan2(o.p_lidar.y(), o.p_lidar.z()); }
+double AngleStep(const LidarObservation& a, const LidarObservation& b) {
+  return std::abs(std::remainder(Theta(a) - Theta(b), 2.0 * M_PI));
+}
+
+// Where a scan line leaves the board, in board coordinates. kUpper/kLower:
+// the midpoint between a line's outermost sample and where its next beam
+// meets the plane (error along the line, U(-s/2, s/2)). kLeft/kRight: a
+// sample of the outermost line, moved out by half the line spacing (error
+// across the lines, shared by the whole line).
+enum class EdgeSide { kUpper, kLower, kLeft, kRight };
+struct EdgePoint {
+  Eigen::Vector2d uv;
+  EdgeSide side;
+  double weight;  // 1 / sigma^2
+  // Largest plausible offset from the true edge: half the spacing plus
+  // 2 sigma of noise. A line whose outermost sample fell out of the band
+  // (noise, dropout) ends a whole spacing short and is dropped by this test.
+  double limit = std::numeric_limits<double>::infinity();
+};
+
+// A rectangle in the board plane: centre c, first axis at angle phi from u,
+// half sizes a (along the first axis) and b. Edge k has the outward normal
+// N_k at angle phi + pi/2 - k pi/2 (top, right, bottom, left for phi = 0)
+// and offset h_k = b, a, b, a:  N_k . (p - c) = h_k.
+struct Rect {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  double phi = 0.0, a = 0.0, b = 0.0;
+};
+
+Eigen::Vector2d EdgeNormal(double phi, int k) {
+  const double ang = phi + M_PI / 2 - k * M_PI / 2;
+  return {std::cos(ang), std::sin(ang)};
+}
+
+// An edge crossed by the scan lines at less than 20 deg gets no end points
+// (the crossing would be ill-defined); one within 20 deg of them gets the
+// outermost lines' side points.
+constexpr double kMinCrossing = 0.342;  // sin(20 deg)
+
+// The edge a point belongs to under `r`: for an end point, the edge where
+// its (vertical) scan line crosses the rectangle's boundary on that side;
+// for a side point, where its horizontal line does. -1 if none.
+int AssignEdge(const Rect& r, const EdgePoint& p) {
+  const bool vertical = p.side == EdgeSide::kUpper || p.side == EdgeSide::kLower;
+  const double sign = (p.side == EdgeSide::kUpper || p.side == EdgeSide::kRight) ? 1.0 : -1.0;
+  int best = -1;
+  double best_pos = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector2d n = EdgeNormal(r.phi, k);
+    const double h = (k % 2 == 0) ? r.b : r.a;
+    // Along the line: the coordinate where it meets edge k.
+    const double along = vertical ? n.y() : n.x();
+    if (sign * along < kMinCrossing) continue;
+    const double pos = vertical ? r.c.y() + (h - n.x() * (p.uv.x() - r.c.x())) / n.y()
+                                : r.c.x() + (h - n.y() * (p.uv.y() - r.c.y())) / n.x();
+    // Upper (right) boundary: the lowest (leftmost) such crossing.
+    if (best < 0 || sign * pos < sign * best_pos) best = k, best_pos = pos;
+  }
+  return best;
+}
+
+// Offset of p along its line from edge k of r (what SolveForPhi minimises).
+double Residual(const Rect& r, const EdgePoint& p, int k) {
+  const Eigen::Vector2d n = EdgeNormal(r.phi, k);
+  const double h = (k % 2 == 0) ? r.b : r.a;
+  if (p.side == EdgeSide::kUpper || p.side == EdgeSide::kLower) {
+    return p.uv.y() - (r.c.y() + (h - n.x() * (p.uv.x() - r.c.x())) / n.y());
+  }
+  return p.uv.x() - (r.c.x() + (h - n.y() * (p.uv.y() - r.c.y())) / n.x());
+}
+
+// For fixed phi and assignments the offsets of the edge points along their
+// lines are linear in x = (c_u, c_v, a, b). Edge k crossed by a vertical line
+// at u: v = c_v + (h_k - N_u (u - c_u)) / N_v, so the residual is
+//   r = (v + N_u/N_v u) - [N_u/N_v, 1, h-selector / N_v] x,
+// and likewise with u and v exchanged for side points. Returns the weighted
+// cost; false if x is not determined (no points on some pair of edges).
+bool SolveForPhi(double phi, const std::vector<EdgePoint>& pts, const std::vector<int>& edge,
+                 Rect* r, double* cost) {
+  Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d aty = Eigen::Vector4d::Zero();
+  std::vector<std::pair<Eigen::Vector4d, double>> rows(pts.size());
+  for (size_t j = 0; j < pts.size(); ++j) {
+    rows[j].second = std::numeric_limits<double>::quiet_NaN();
+    if (edge[j] < 0) continue;
+    const int k = edge[j];
+    const Eigen::Vector2d n = EdgeNormal(phi, k);
+    const bool vertical = pts[j].side == EdgeSide::kUpper || pts[j].side == EdgeSide::kLower;
+    const double along = vertical ? n.y() : n.x(), across = vertical ? n.x() : n.y();
+    if (std::abs(along) < 0.5 * kMinCrossing) continue;  // phi moved too far for this edge
+    Eigen::Vector4d a;
+    if (vertical) {
+      a << across / along, 1.0, 0.0, 0.0;
+    } else {
+      a << 1.0, across / along, 0.0, 0.0;
+    }
+    a[(k % 2 == 0) ? 3 : 2] = 1.0 / along;
+    const double y = vertical ? pts[j].uv.y() + across / along * pts[j].uv.x()
+                              : pts[j].uv.x() + across / along * pts[j].uv.y();
+    rows[j] = {a, y};
+    ata += pts[j].weight * a * a.transpose();
+    aty += pts[j].weight * y * a;
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(ata);
+  if (eig.eigenvalues().minCoeff() <= 1e-9 * std::max(1.0, eig.eigenvalues().maxCoeff())) {
+    return false;
+  }
+  const Eigen::Vector4d x = ata.ldlt().solve(aty);
+  double c = 0.0;
+  for (size_t j = 0; j < pts.size(); ++j) {
+    if (std::isnan(rows[j].second)) continue;
+    const double res = rows[j].second - rows[j].first.dot(x);
+    c += pts[j].weight * res * res;
+  }
+  r->c = x.head<2>();
+  r->a = x[2];
+  r->b = x[3];
+  r->phi = phi;
+  *cost = c;
+  return r->a > 0.0 && r->b > 0.0;
+}
+
+// Smallest-area bounding rectangle of the points over phi in [-pi/4, pi/4)
+// (0.5 deg steps): the start of the least-squares fit. A square's inertia
+// is isotropic, so principal axes would not give its rotation.
+Rect BoundingRect(const std::vector<EdgePoint>& pts) {
+  Rect best;
+  double best_area = std::numeric_limits<double>::infinity();
+  for (int i = -90; i < 90; ++i) {
+    const double phi = i * M_PI / 360.0;
+    const Eigen::Vector2d e1(std::cos(phi), std::sin(phi)), e2(-std::sin(phi), std::cos(phi));
+    double lo1 = 1e9, hi1 = -1e9, lo2 = 1e9, hi2 = -1e9;
+    for (const auto& p : pts) {
+      lo1 = std::min(lo1, p.uv.dot(e1)), hi1 = std::max(hi1, p.uv.dot(e1));
+      lo2 = std::min(lo2, p.uv.dot(e2)), hi2 = std::max(hi2, p.uv.dot(e2));
+    }
+    const double area = (hi1 - lo1) * (hi2 - lo2);
+    if (area < best_area) {
+      best_area = area;
+      best.phi = phi;
+      best.a = 0.5 * (hi1 - lo1);
+      best.b = 0.5 * (hi2 - lo2);
+      best.c = 0.5 * (lo1 + hi1) * e1 + 0.5 * (lo2 + hi2) * e2;
+    }
+  }
+  return best;
+}
+
+
+// ----------------------------------------------------------------------------
+// The board's scan lines
+
+// The samples in the world under the calibration, with each sample's
+// membership band.
+void ProjectWithBands(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
+                      const MountingError& calibration, std::vector<Eigen::Vector3d>* pts,
+                      std::vector<double>* band) {
+  pts->reserve(samples.size());
+  band->reserve(samples.size());
+  for (const auto& s : samples) {
+    pts->push_back(ProjectObservation(s, geometry, calibration));
+    // 2.5 sigma of the X4's range noise (data sheet: 2 mm + 0.2 % of the
+    // range; the beam meets the board nearly head-on). Tight on purpose: a
+    // beam passing just below a bottom edge can hit the board's edge face,
+    // up to its thickness behind the front; such a sample is no front-face
+    // hit and should count as a miss (measured: a 20 mm board came out
+    // 2-9 mm too large in the near pass; a 5 mm one does not).
+    const double rho = s.p_lidar.norm();
+    band->push_back(std::max(0.005, 2.5 * std::hypot(0.002, 0.002 * rho)));
+  }
+}
+
+// Plane: RANSAC with a 1 cm band (the lab's window sill is 2 cm behind the
+// board, the wall 16 cm); FindBoardLines then refits it by least squares on
+// the board's runs within each sample's own band.
+Plane RansacBoardPlane(const std::vector<Eigen::Vector3d>& pts) {
+  constexpr double kBand = 0.01;
+  Plane plane;
+  {
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<size_t> pick(0, pts.size() - 1);
+    size_t best = 0;
+    Eigen::Vector3d best_n = Eigen::Vector3d::UnitY();
+    double best_d = 0.0;
+    for (int it = 0; it < 300; ++it) {
+      const Eigen::Vector3d a = pts[pick(rng)], b = pts[pick(rng)], cc = pts[pick(rng)];
+      Eigen::Vector3d nn = (b - a).cross(cc - a);
+      if (nn.norm() < 1e-9) continue;
+      nn.normalize();
+      const double dd = -nn.dot(a);
+      size_t count = 0;
+      for (const auto& p : pts) count += std::abs(nn.dot(p) + dd) < kBand;
+      if (count > best) best = count, best_n = nn, best_d = dd;
+    }
+    plane.normal = best_n;
+    plane.d = best_d;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) {
+      if (std::abs(plane.SignedDistance(p)) < kBand) sum += p;
+    }
+    plane.centroid = sum / std::max<size_t>(1, best);
+  }
+  return plane;
+}
+
+// Board coordinates: n the plane's normal, u = normalize(z x n) along the
+// board (n oriented so that u points along +x, or +y if the board faces x),
+// v = n x u up, c the origin (the plane's centroid).
+struct BoardFrame {
+  Eigen::Vector3d n, u, v, c;
+};
+
+Status BoardFrameOf(const Plane& plane, BoardFrame* f) {
+  Eigen::Vector3d& n = f->n;
+  Eigen::Vector3d& u = f->u;
+  n = plane.normal;
+  u = Eigen::Vector3d::UnitZ().cross(n);
+  if (u.norm() < 0.5) return Status::Error("board fit: the board is not vertical");
+  u.normalize();
+  const bool along_x = std::abs(u.x()) >= std::abs(u.y());
+  if ((along_x && u.x() < 0) || (!along_x && u.y() < 0)) {
+    n = -n;
+    u = -u;
+  }
+  f->v = n.cross(u);
+  f->c = plane.centroid;
+  return Status::Ok();
+}
+
+// One scan line's samples on the board.
+struct Line {
+  std::vector<std::pair<Eigen::Vector2d, size_t>> uv;  // (u, v), sample index; sorted by v
+  double mean_u = 0.0;
+};
+
+// The in-plane samples (within their band) grouped by scan line, in board
+// coordinates.
+std::vector<Line> InPlaneScanLines(const std::vector<LidarObservation>& samples,
+                                   const std::vector<Eigen::Vector3d>& pts,
+                                   const std::vector<double>& band, const Plane& plane,
+                                   const BoardFrame& f) {
+  std::vector<Line> lines;
+  std::unordered_map<uint32_t, size_t> by_scan;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (std::abs(plane.SignedDistance(pts[i])) >= band[i]) continue;
+    const Eigen::Vector3d q = pts[i] - f.c;
+    auto it = by_scan.find(samples[i].ref.scan);
+    if (it == by_scan.end()) {
+      it = by_scan.emplace(samples[i].ref.scan, lines.size()).first;
+      lines.emplace_back();
+    }
+    lines[it->second].uv.push_back({Eigen::Vector2d(q.dot(f.u), q.dot(f.v)), i});
+  }
+  return lines;
+}
+
+// Per scan line the longest run of samples without a gap (the sill below
+// the board, or a stray wall sample, must not become an end point); keeps
+// the runs that reach the middle height of the longest run.
+void KeepBoardRuns(const std::vector<LidarObservation>& samples, std::vector<Line>* lines_io) {
+  std::vector<Line>& lines = *lines_io;
+  double longest = -1.0, middle = 0.0;
+  std::vector<double> steps;
+  // The beam step: the median angle between neighbouring in-plane samples
+  // of a line (scan angle theta = atan2(y_L, z_L), Eq. 1). A run ends where
+  // more than one beam in a row is missing (one may be a dropout); a run on
+  // the sill below, 7 cm lower, is then separate even if it has 1 sample.
+  std::vector<double> line_steps;
+  for (auto& l : lines) {
+    std::sort(l.uv.begin(), l.uv.end(),
+              [](const auto& x, const auto& y) { return x.first.y() < y.first.y(); });
+    for (size_t i = 1; i < l.uv.size(); ++i) {
+      line_steps.push_back(AngleStep(samples[l.uv[i].second], samples[l.uv[i - 1].second]));
+    }
+  }
+  const double limit = 2.5 * Median(line_steps);
+  for (auto& l : lines) {
+    size_t best_begin = 0, best_len = 0, begin = 0;
+    for (size_t i = 1; i <= l.uv.size(); ++i) {
+      if (i == l.uv.size() ||
+          AngleStep(samples[l.uv[i].second], samples[l.uv[i - 1].second]) > limit) {
+        if (i - begin > best_len) best_len = i - begin, best_begin = begin;
+        begin = i;
+      }
+    }
+    l.uv = std::vector<std::pair<Eigen::Vector2d, size_t>>(l.uv.begin() + best_begin,
+                                                           l.uv.begin() + best_begin + best_len);
+    for (size_t i = 1; i < l.uv.size(); ++i) {
+      steps.push_back(l.uv[i].first.y() - l.uv[i - 1].first.y());
+    }
+    const double span = l.uv.back().first.y() - l.uv.front().first.y();
+    if (span > longest) {
+      longest = span;
+      middle = 0.5 * (l.uv.back().first.y() + l.uv.front().first.y());
+    }
+  }
+  // A convex board is crossed by every one of its lines at the height of
+  // its widest line's middle, give or take a sample spacing.
+  const double margin = 2.0 * Median(steps) + 1e-3;
+  lines.erase(std::remove_if(lines.begin(), lines.end(),
+                             [&](const Line& l) {
+                               return l.uv.size() < 2 ||
+                                      l.uv.front().first.y() > middle + margin ||
+                                      l.uv.back().first.y() < middle - margin;
+                             }),
+              lines.end());
+}
+
+// The board's plane, frame and scan lines (sorted by u, each with its mean
+// u), and the samples on them (`keep`). Alternates: inliers of the plane ->
+// per scan line the longest gap-free run -> keep the runs that reach the
+// middle height of the longest run -> refit the plane on them. Three rounds.
+Status FindBoardLines(const std::vector<LidarObservation>& samples,
+                      const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& band,
+                      Plane* plane_io, BoardFrame* f, std::vector<Line>* lines_io,
+                      std::vector<size_t>* keep_io) {
+  Plane& plane = *plane_io;
+  std::vector<Line>& lines = *lines_io;
+  std::vector<size_t>& keep = *keep_io;
+  for (int round = 0; round < 3; ++round) {
+    Status s = BoardFrameOf(plane, f);
+    if (!s.ok()) return s;
+    lines = InPlaneScanLines(samples, pts, band, plane, *f);
+    KeepBoardRuns(samples, &lines);
+    if (lines.size() < 3) {
+      return Status::Error("board fit: the board was crossed by " + std::to_string(lines.size()) +
+                           " scan lines, need at least 3");
+    }
+    keep.clear();
+    std::vector<Eigen::Vector3d> in;
+    for (const auto& l : lines) {
+      for (const auto& p : l.uv) keep.push_back(p.second), in.push_back(pts[p.second]);
+    }
+    if (round < 2 && !FitPlane(in, &plane)) return Status::Error("board fit: degenerate samples");
+  }
+  plane.normal = f->n;
+  plane.d = -f->n.dot(f->c);
+  for (auto& l : lines) {
+    for (const auto& p : l.uv) l.mean_u += p.first.x();
+    l.mean_u /= l.uv.size();
+  }
+  std::sort(lines.begin(), lines.end(),
+            [](const Line& x, const Line& y) { return x.mean_u < y.mean_u; });
+  return Status::Ok();
+}
+
+// ----------------------------------------------------------------------------
+// Edge extraction
+
+// Each line's top and bottom end points: the midpoint between the outermost
+// sample and where the next beam of that scan meets the plane.
+Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::vector<Line>& lines,
+                     const Plane& plane, const BoardFrame& f, const Rigid3d& body_from_lidar,
+                     std::vector<EdgePoint>* edge_points_out) {
+  const Eigen::Vector3d& u = f.u;
+  const Eigen::Vector3d& v = f.v;
+  const Eigen::Vector3d& c = f.c;
+  auto theta = [&](size_t i) { return Theta(samples[i]); };
+  std::vector<double> dthetas;
+  for (const auto& l : lines) {
+    for (size_t i = 1; i < l.uv.size(); ++i) {
+      dthetas.push_back(AngleStep(samples[l.uv[i].second], samples[l.uv[i - 1].second]));
+    }
+  }
+  const double dtheta = Median(dthetas);
+  // Range noise in the board plane (X4 data sheet scale) adds to the
+  // quantisation of each end point.
+  constexpr double kInPlaneNoise = 0.003;
+  std::vector<EdgePoint>& edge_points = *edge_points_out;
+  for (const auto& l : lines) {
+    for (int end = 0; end < 2; ++end) {
+      const size_t last = end == 0 ? l.uv.size() - 1 : 0;
+      const size_t prev = end == 0 ? l.uv.size() - 2 : 1;
+      const size_t i = l.uv[last].second;
+      const double step = std::remainder(theta(i) - theta(l.uv[prev].second), 2.0 * M_PI);
+      if (!(std::abs(step) > 0.0) || !(dtheta > 0.0)) continue;
+      // The next beam beyond the outermost sample, one local step further
+      // (the step varies along the line with the triangulation correction;
+      // the median step if a dropout left a gap), intersected with the
+      // plane: o + t d with n . (o + t d) + d0 = 0.
+      const double next =
+          std::abs(step) > 0.5 * dtheta && std::abs(step) < 1.5 * dtheta ? step
+                                                                         : std::copysign(dtheta, step);
+      const double th = theta(i) + next;
+      const Rigid3d world_from_lidar = samples[i].world_from_body * body_from_lidar;
+      const Eigen::Vector3d o = world_from_lidar.translation();
+      const Eigen::Vector3d dir =
+          world_from_lidar.rotation() * Eigen::Vector3d(0.0, std::sin(th), std::cos(th));
+      const double denom = plane.normal.dot(dir);
+      if (std::abs(denom) < 1e-6) continue;
+      const double t = -plane.SignedDistance(o) / denom;
+      if (!(t > 0.0)) continue;
+      const Eigen::Vector3d miss = o + t * dir - c;
+      const Eigen::Vector2d miss_uv(miss.dot(u), miss.dot(v));
+      const Eigen::Vector2d hit_uv = l.uv[last].first;
+      const double s = (miss_uv - hit_uv).norm();
+      if (s > 0.2) continue;  // grazing beam: no useful bound
+      const Eigen::Vector2d mid = 0.5 * (hit_uv + miss_uv);
+      edge_points.push_back({mid, end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
+                             1.0 / (s * s / 12.0 + kInPlaneNoise * kInPlaneNoise),
+                             0.5 * s + 2.0 * kInPlaneNoise});
+    }
+  }
+  if (edge_points.size() < 6) {
+    return Status::Error("board fit: only " + std::to_string(edge_points.size()) +
+                         " edge points, need at least 6");
+  }
+  return Status::Ok();
+}
+
+// Side points, only if an edge runs along the scan lines: the outermost
+// lines' samples moved out by du/2 (the edge lies somewhere between the
+// last line and the next one). The whole line shares one error of
+// variance du^2/12, so its points together weigh as one observation.
+void AddSidePoints(const std::vector<Line>& lines, const Rect& rect,
+                   std::vector<EdgePoint>* edge_points) {
+  std::vector<double> dus;
+  for (size_t i = 1; i < lines.size(); ++i) dus.push_back(lines[i].mean_u - lines[i - 1].mean_u);
+  const double du = Median(dus);
+  const bool upright = std::abs(std::sin(rect.phi)) < kMinCrossing;
+  if (upright) {
+    for (int k = 0; k < 2; ++k) {
+      const Line& l = k == 0 ? lines.front() : lines.back();
+      const double shift = k == 0 ? -0.5 * du : 0.5 * du;
+      const double w = 12.0 / (du * du * l.uv.size());
+      for (const auto& p : l.uv) {
+        edge_points->push_back({p.first + Eigen::Vector2d(shift, 0.0),
+                                k == 0 ? EdgeSide::kLeft : EdgeSide::kRight, w});
+      }
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------
+// The corner model's solve
+
+// Golden-section search of phi within +-3 deg of the current rotation, then
+// the rectangle at the best phi; false if that rectangle is not determined.
+bool SolveRectangle(const std::vector<EdgePoint>& edge_points, const std::vector<int>& edge,
+                    Rect* rect, double* cost) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double lo = rect->phi - 0.05, hi = rect->phi + 0.05;
+  auto f = [&](double phi) {
+    Rect r;
+    double cst;
+    return SolveForPhi(phi, edge_points, edge, &r, &cst) ? cst
+                                                         : std::numeric_limits<double>::max();
+  };
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+  double f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 40; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
+    }
+  }
+  return SolveForPhi(0.5 * (lo + hi), edge_points, edge, rect, cost);
+}
+
+// The rectangle through the edge points: assign points to edges, solve,
+// repeat until the assignment holds; then drop implausible points once and
+// do it again. `edge[j]`: the edge of point j, -1 if none (or an outlier).
+Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
+                    std::vector<int>* edge_io, double* cost_io) {
+  Rect& rect = *rect_io;
+  std::vector<int>& edge = *edge_io;
+  double& cost = *cost_io;
+  edge.assign(edge_points.size(), -1);
+  std::vector<bool> outlier(edge_points.size(), false);
+  cost = 0.0;
+  // The fit before outliers were dropped, kept in case dropping them leaves
+  // an edge without points (a sparse pass: the rectangle is then that fit).
+  Rect kept_rect;
+  std::vector<int> kept_edge;
+  double kept_cost = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    bool failed = false;
+    for (int round = 0; round < 8 && !failed; ++round) {
+      bool changed = round == 0;
+      for (size_t j = 0; j < edge_points.size(); ++j) {
+        const int e = outlier[j] ? -1 : AssignEdge(rect, edge_points[j]);
+        changed |= e != edge[j];
+        edge[j] = e;
+      }
+      if (!changed) break;
+      if (!SolveRectangle(edge_points, edge, &rect, &cost)) failed = true;
+    }
+    if (failed) {
+      if (pass == 0) {
+        return Status::Error(
+            "board fit: the edge points do not determine a rectangle (an edge without points)");
+      }
+      rect = kept_rect, edge = kept_edge, cost = kept_cost;
+      break;
+    }
+    if (pass == 1) break;
+    kept_rect = rect, kept_edge = edge, kept_cost = cost;
+    bool any = false;
+    for (size_t j = 0; j < edge_points.size(); ++j) {
+      if (edge[j] >= 0 && std::abs(Residual(rect, edge_points[j], edge[j])) > edge_points[j].limit) {
+        outlier[j] = any = true;
+      }
+    }
+    if (!any) break;
+  }
+  return Status::Ok();
+}
+
+// ----------------------------------------------------------------------------
+// Corners
+
+// The rectangle's corners in the world, clockwise from the one nearest
+// 112.5 deg, each with its nearest kept sample; and the rectangle's size
+// and rotation.
+Status CornersFromRect(const Rect& rect, const BoardFrame& f, const std::vector<Eigen::Vector3d>& pts,
+                       const std::vector<size_t>& keep, BoardCorners* out) {
+  const Eigen::Vector3d& u = f.u;
+  const Eigen::Vector3d& v = f.v;
+  const Eigen::Vector3d& c = f.c;
+  const Eigen::Vector2d e1(std::cos(rect.phi), std::sin(rect.phi));
+  const Eigen::Vector2d e2(-std::sin(rect.phi), std::cos(rect.phi));
+  std::array<Eigen::Vector2d, 4> uv = {rect.c + rect.a * e1 + rect.b * e2,
+                                       rect.c - rect.a * e1 + rect.b * e2,
+                                       rect.c - rect.a * e1 - rect.b * e2,
+                                       rect.c + rect.a * e1 - rect.b * e2};
+  std::array<double, 4> ang;
+  for (int k = 0; k < 4; ++k) ang[k] = std::atan2(uv[k].y() - rect.c.y(), uv[k].x() - rect.c.x());
+  int first = 0;
+  for (int k = 1; k < 4; ++k) {
+    if (std::abs(std::remainder(ang[k] - 5 * M_PI / 8, 2 * M_PI)) <
+        std::abs(std::remainder(ang[first] - 5 * M_PI / 8, 2 * M_PI))) {
+      first = k;
+    }
+  }
+  // uv[] runs counter-clockwise (first axis, then +90 deg steps); walk it backwards.
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector2d& p = uv[(first - k + 4) % 4];
+    out->corners[k] = c + p.x() * u + p.y() * v;
+    if (!out->corners[k].allFinite()) return Status::Error("board fit: corners are not finite");
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i : keep) {
+      const double d = (pts[i] - out->corners[k]).squaredNorm();
+      if (d < best) best = d, out->nearest[k] = i;
+    }
+  }
+  // Report the rectangle with its rotation in [-pi/4, pi/4).
+  double phi = std::remainder(rect.phi, M_PI / 2);
+  const bool swapped = std::abs(std::remainder(rect.phi - phi, M_PI)) > 1e-9;
+  if (phi >= M_PI / 4) phi -= M_PI / 2;
+  out->rotation_rad = phi;
+  out->size_m = swapped ? Eigen::Vector2d(2 * rect.b, 2 * rect.a)
+                        : Eigen::Vector2d(2 * rect.a, 2 * rect.b);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
+                       const MountingError& calibration, BoardCorners* out) {
+  if (samples.size() < 20) {
+    return Status::Error("board fit: " + std::to_string(samples.size()) +
+                         " samples, need at least 20");
+  }
+  const Rigid3d body_from_lidar = BodyFromLidar(geometry, calibration);
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<double> band;  // membership band of each sample
+  ProjectWithBands(samples, geometry, calibration, &pts, &band);
+  // The board's scan lines.
+  Plane plane = RansacBoardPlane(pts);
+  BoardFrame frame;
+  std::vector<Line> lines;
+  std::vector<size_t> keep;
+  Status s = FindBoardLines(samples, pts, band, &plane, &frame, &lines, &keep);
+  if (!s.ok()) return s;
+  // Edge extraction.
+  std::vector<EdgePoint> edge_points;
+  s = LineEndPoints(samples, lines, plane, frame, body_from_lidar, &edge_points);
+  if (!s.ok()) return s;
+  Rect rect = BoundingRect(edge_points);
+  AddSidePoints(lines, rect, &edge_points);
+  // The corner model and its solve.
+  std::vector<int> edge;
+  double cost = 0.0;
+  s = FitRectangle(edge_points, &rect, &edge, &cost);
+  if (!s.ok()) return s;
+  s = CornersFromRect(rect, frame, pts, keep, out);
+  if (!s.ok()) return s;
+  size_t used = 0;
+  for (int e : edge) used += e >= 0;
+  out->edge_points = used;
+  double wsum = 0.0;
+  for (size_t j = 0; j < edge_points.size(); ++j) wsum += edge[j] >= 0 ? edge_points[j].weight : 0;
+  out->edge_rms_m = wsum > 0.0 ? std::sqrt(cost / wsum) : 0.0;
+  out->plane = plane;
+  out->points = keep.size();
+  out->scans = lines.size();
+  return Status::Ok();
+}
+
+TargetSightings CollectTargetSightings(const SampleStore& store, const RobotGeometry& geometry,
+                                       const MountingError& calibration,
+                                       const Eigen::AlignedBox3d& region, double gap_s,
+                                       size_t min_count) {
+  TargetSightings out;
+  std::vector<CloudPoint> cloud;
+  cloud.reserve(store.observations().size());
+  for (const auto& o : store.observations()) {
+    const Eigen::Vector3d p = ProjectObservation(o, geometry, calibration);
+    CloudPoint q;
+    q.x = static_cast<float>(p.x());
+    q.y = static_cast<float>(p.y());
+    q.z = static_cast<float>(p.z());
+    q.time_ns = o.time_ns;
+    cloud.push_back(q);
+  }
+  out.windows = FindPassWindows(cloud, region, gap_s, min_count);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    if (!region.contains(Eigen::Vector3d(cloud[i].x, cloud[i].y, cloud[i].z))) continue;
+    const int k = PassOfTime(out.windows, cloud[i].time_ns);
+    if (k >= 0) out.passes[k % 2].push_back(store.observations()[i]);
+  }
+  return out;
+}
+
+double CornerRms(const BoardCorners& a, const BoardCorners& b) {
+  double s = 0.0;
+  for (int k = 0; k < 4; ++k) s += (a.corners[k] - b.corners[k]).squaredNorm();
+  return std::sqrt(s / 4.0);
+}
+
+}  // namespace sweepscan

@@ -1,0 +1,120 @@
+// Pieces the calibration's translation units share; not part of the room's
+// interface (include the public headers instead).
+#ifndef SWEEPSCAN_CORE_CALIBRATION_INTERNAL_H_
+#define SWEEPSCAN_CORE_CALIBRATION_INTERNAL_H_
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/calibration/pairs_solver.h"
+#include "core/calibration/samples.h"
+#include "core/geometry/plane.h"
+#include "core/robot/robot_model.h"
+
+namespace sweepscan::calibration_internal {
+
+inline constexpr double kNsPerS = 1e9;
+
+inline std::string Num(double v, int precision = 6) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << v;
+  return s.str();
+}
+
+inline std::string RefName(const SampleRef& r) {
+  return "(scan " + std::to_string(r.scan) + ", beam " + std::to_string(r.beam) + ")";
+}
+
+// What the cost functors need of an observation, in doubles: the lidar-frame
+// point p_L, the mount translation t_BL = (l1, 0, h) and the body pose.
+struct Prepared {
+  Eigen::Matrix3d r_wb;
+  Eigen::Vector3d t_wb, t_bl, p_l;
+};
+
+inline Prepared Prepare(const LidarObservation& o, const RobotGeometry& g) {
+  Prepared p;
+  p.r_wb = o.world_from_body.rotation().toRotationMatrix();
+  p.t_wb = o.world_from_body.translation();
+  p.t_bl = Eigen::Vector3d(g.lidar_offset_x_m, 0.0, g.lidar_height_m);
+  p.p_l = o.p_lidar;
+  return p;
+}
+
+// p_W(c) = R_WB (Rz(alpha) Ry(beta) Rx(gamma) p_L + t_BL) + t_WB   (Eq. 1, 13, 14)
+template <typename T>
+void ProjectT(const Prepared& o, const T* abg, T* p_w) {
+  using std::cos;
+  using std::sin;
+  const T ca = cos(abg[0]), sa = sin(abg[0]);
+  const T cb = cos(abg[1]), sb = sin(abg[1]);
+  const T cg = cos(abg[2]), sg = sin(abg[2]);
+  const T px(o.p_l.x()), py(o.p_l.y()), pz(o.p_l.z());
+  // Rx(gamma), then Ry(beta), then Rz(alpha).
+  const T x1 = px, y1 = cg * py - sg * pz, z1 = sg * py + cg * pz;
+  const T x2 = cb * x1 + sb * z1, y2 = y1, z2 = -sb * x1 + cb * z1;
+  const T b[3] = {ca * x2 - sa * y2 + o.t_bl.x(), sa * x2 + ca * y2 + o.t_bl.y(), z2 + o.t_bl.z()};
+  for (int r = 0; r < 3; ++r) {
+    p_w[r] = o.r_wb(r, 0) * b[0] + o.r_wb(r, 1) * b[1] + o.r_wb(r, 2) * b[2] + o.t_wb[r];
+  }
+}
+
+inline MountingError FromArray(const double* abg) { return {abg[0], abg[1], abg[2]}; }
+
+inline double AngleChange(const MountingError& a, const MountingError& b) {
+  return std::max(
+      {std::abs(a.alpha - b.alpha), std::abs(a.beta - b.beta), std::abs(a.gamma - b.gamma)});
+}
+
+inline bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+// The automatic mode's Levenberg-Marquardt problem (its Ceres part lives in
+// pairs_solver.cc with the rest of the project's Ceres templates): the three
+// angles and one plane (n_s on the unit sphere, d_s) per kept surface, one
+// point-to-plane residual per chosen point, weighted by 1 / sigma_i.
+class PlaneProblem {
+ public:
+  // planes[s] starts the surface's parameters; chosen[s] indexes `prepared`
+  // and `sigma`. Residuals are added surface by surface in chosen order.
+  PlaneProblem(const MountingError& start, const std::vector<Plane>& planes,
+               const std::vector<std::vector<size_t>>& chosen,
+               const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
+               RobustLoss loss, double loss_scale);
+  ~PlaneProblem();
+  PlaneProblem(const PlaneProblem&) = delete;
+  PlaneProblem& operator=(const PlaneProblem&) = delete;
+
+  struct Outcome {
+    bool cancelled = false;     // the progress callback asked to stop
+    bool lm_converged = false;  // Ceres' CONVERGENCE
+    double initial_cost = 0.0, final_cost = 0.0;
+    std::string message;
+  };
+  // One LM solve from the current angles; appends its iterations to `trace`.
+  Outcome Solve(const CalibrationOptions& options, std::vector<CalibrationIteration>* trace);
+
+  const double* angles() const;                     // alpha, beta, gamma
+  const std::array<double, 4>& plane(size_t s) const;  // n_s (3), d_s
+
+  // Final statistics on the solved problem: the angles' observability, the
+  // iid covariance (s^2 from summary->final_cost) and the cluster-robust one
+  // (rows grouped by group_of_row).
+  void CheckObservability(const CalibrationOptions& options, CalibrationSummary* summary);
+  void ComputeCovariance(int num_residuals, CalibrationSummary* summary);
+  bool ClusteredAngleSigma(const std::vector<int>& group_of_row, Eigen::Vector3d* sigma);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sweepscan::calibration_internal
+
+#endif  // SWEEPSCAN_CORE_CALIBRATION_INTERNAL_H_

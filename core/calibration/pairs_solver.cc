@@ -1,0 +1,512 @@
+// The calibration's Levenberg-Marquardt problems. All Ceres templates of the
+// project live in this translation unit (compile time on small machines):
+// the pairs problem (Eq. 15-17, SolvePairs) and the automatic mode's plane
+// problem (PlaneProblem in internal.h, driven by automatic.cc).
+#include "core/calibration/pairs_solver.h"
+
+#include <ceres/ceres.h>
+#include <ceres/sphere_manifold.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <unordered_map>
+
+#include "core/calibration/internal.h"
+
+namespace sweepscan {
+namespace calibration_internal {
+namespace {
+
+// Eq. 15-16: r_k(c) = p_W^{a_k}(c) - p_W^{b_k}(c)  (metres, 3 residuals).
+struct PairCost {
+  PairCost(const Prepared& a, const Prepared& b) : a_(a), b_(b) {}
+  template <typename T>
+  bool operator()(const T* abg_radians, T* residual) const {
+    T pa[3], pb[3];
+    ProjectT(a_, abg_radians, pa);
+    ProjectT(b_, abg_radians, pb);
+    for (int i = 0; i < 3; ++i) residual[i] = pa[i] - pb[i];
+    return true;
+  }
+  static ceres::CostFunction* Create(const Prepared& a, const Prepared& b) {
+    return new ceres::AutoDiffCostFunction<PairCost, 3, 3>(new PairCost(a, b));
+  }
+  Prepared a_, b_;
+};
+
+// Automatic mode: r_i(c, n_s, d_s) = n_s . p_W^i(c) + d_s  (metres), |n_s| = 1
+// kept by the sphere manifold.
+// Weighted by the point's noise: r_i = (n_s . p_W^i(c) + d_s) / sigma_i
+// (dimensionless), so that the least-squares estimate is the maximum
+// likelihood one under the range noise model and s^2 is ~1 when it holds.
+struct PointToPlaneCost {
+  PointToPlaneCost(const Prepared& o, double inv_sigma) : o_(o), inv_sigma_(inv_sigma) {}
+  template <typename T>
+  bool operator()(const T* abg_radians, const T* normal, const T* d, T* residual) const {
+    T p[3];
+    ProjectT(o_, abg_radians, p);
+    residual[0] = (normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] + d[0]) * inv_sigma_;
+    return true;
+  }
+  static ceres::CostFunction* Create(const Prepared& o, double inv_sigma) {
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 3, 1>(
+        new PointToPlaneCost(o, inv_sigma));
+  }
+  Prepared o_;
+  double inv_sigma_;
+};
+
+// Records the per-iteration trace (the paper's Fig. 8) and lets the caller
+// cancel. Needs Solver::Options::update_state_every_iteration.
+class TraceCallback : public ceres::IterationCallback {
+ public:
+  TraceCallback(const double* abg, std::vector<CalibrationIteration>* trace,
+                CalibrationProgress* progress)
+      : abg_(abg), trace_(trace), progress_(progress) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
+    CalibrationIteration it;
+    it.iteration = static_cast<int>(trace_->size());
+    it.angles = {abg_[0], abg_[1], abg_[2]};
+    it.cost = s.cost;
+    trace_->push_back(it);
+    if (progress_ != nullptr && !progress_->OnIteration(it.iteration, it.angles, it.cost)) {
+      return ceres::SOLVER_ABORT;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const double* abg_;
+  std::vector<CalibrationIteration>* trace_;
+  CalibrationProgress* progress_;
+};
+
+ceres::LossFunction* MakeLoss(RobustLoss loss, double scale) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return new ceres::HuberLoss(scale);
+    case RobustLoss::kCauchy:
+      return new ceres::CauchyLoss(scale);
+    case RobustLoss::kNone:
+      break;
+  }
+  return nullptr;
+}
+
+ceres::Solver::Options SolverOptions(const CalibrationOptions& o) {
+  ceres::Solver::Options s;
+  s.minimizer_type = ceres::TRUST_REGION;
+  s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  s.linear_solver_type = ceres::DENSE_QR;
+  s.max_num_iterations = o.max_iterations;
+  s.function_tolerance = o.function_tolerance;
+  s.gradient_tolerance = o.gradient_tolerance;
+  s.parameter_tolerance = o.parameter_tolerance;
+  s.num_threads = 1;
+  s.logging_type = ceres::SILENT;
+  s.minimizer_progress_to_stdout = false;
+  s.update_state_every_iteration = true;
+  return s;
+}
+
+const char* kAngleNames[3] = {"alpha", "beta", "gamma"};
+
+// Observability of the angles: the singular values of the Jacobian's angle
+// columns after the other parameters (planes) are projected out, i.e. of the
+// Schur complement S = Jc'Jc - Jc'Jp (Jp'Jp)^+ Jp'Jc. Condition =
+// sqrt(lambda_max / lambda_min) of S.
+void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationOptions& options,
+                        CalibrationSummary* summary) {
+  ceres::CRSMatrix crs;
+  ceres::Problem::EvaluateOptions eval;
+  double cost = 0.0;
+  if (!problem->Evaluate(eval, &cost, nullptr, nullptr, &crs)) return;
+  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) j(r, crs.cols[k]) = crs.values[k];
+  }
+  // The angle block is the first parameter block added (columns 0..2).
+  const Eigen::MatrixXd jc = j.leftCols(3);
+  Eigen::Matrix3d s = jc.transpose() * jc;
+  if (j.cols() > 3) {
+    const Eigen::MatrixXd jp = j.rightCols(j.cols() - 3);
+    const Eigen::MatrixXd h = jp.transpose() * jp;
+    const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
+    s -= jc.transpose() * jp * hinv * jp.transpose() * jc;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
+  const double lmin = std::max(0.0, eig.eigenvalues()[0]);
+  const double lmax = std::max(0.0, eig.eigenvalues()[2]);
+  summary->condition_number =
+      lmin > 0.0 ? std::sqrt(lmax / lmin) : std::numeric_limits<double>::infinity();
+  if (!(summary->condition_number <= options.max_condition_number)) {
+    Eigen::Vector3d v = eig.eigenvectors().col(0).cwiseAbs();
+    int worst = 0;
+    v.maxCoeff(&worst);
+    summary->warnings.push_back(
+        "the picks leave " + std::string(kAngleNames[worst]) +
+        " (nearly) unobservable: Jacobian condition number " + Num(summary->condition_number, 3) +
+        " > " + Num(options.max_condition_number, 3) + "; spread the picks over the target");
+  }
+}
+
+void ComputeCovariance(ceres::Problem* problem, double* abg, int num_residuals,
+                       CalibrationSummary* summary) {
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = -1;
+  co.min_reciprocal_condition_number = 1e-14;
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {{abg, abg}};
+  if (!covariance.Compute(blocks, problem)) {
+    summary->warnings.push_back("covariance could not be computed (rank-deficient Jacobian)");
+    return;
+  }
+  double c[9];
+  covariance.GetCovarianceBlock(abg, abg, c);
+  // Ceres returns (J'J)^-1, i.e. for unit residual variance; scale by the
+  // residual variance estimate s^2 = 2 cost / (m - n), n = 3 angles (plus the
+  // planes' parameters in the automatic mode, few against thousands of rows).
+  const int dof = std::max(1, num_residuals - 3);
+  const double s2 = 2.0 * summary->final_cost / dof;
+  for (int i = 0; i < 3; ++i) summary->sigma_rad[i] = std::sqrt(std::max(0.0, c[4 * i] * s2));
+}
+
+}  // namespace
+
+// ----------------------------------------------------------------------------
+// The automatic mode's plane problem
+
+struct PlaneProblem::Impl {
+  double abg[3];
+  std::vector<std::array<double, 4>> params;
+  ceres::Problem::Options po;
+  ceres::Problem problem{po};
+};
+
+PlaneProblem::PlaneProblem(const MountingError& start, const std::vector<Plane>& planes,
+                           const std::vector<std::vector<size_t>>& chosen,
+                           const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
+                           RobustLoss loss, double loss_scale)
+    : impl_(std::make_unique<Impl>()) {
+  double* abg = impl_->abg;
+  abg[0] = start.alpha;
+  abg[1] = start.beta;
+  abg[2] = start.gamma;
+  ceres::Problem& problem = impl_->problem;
+  problem.AddParameterBlock(abg, 3);
+  std::vector<std::array<double, 4>>& params = impl_->params;
+  params.resize(planes.size());
+  for (size_t s = 0; s < planes.size(); ++s) {
+    const Plane& pl = planes[s];
+    params[s] = {pl.normal.x(), pl.normal.y(), pl.normal.z(), pl.d};
+    problem.AddParameterBlock(params[s].data(), 3, new ceres::SphereManifold<3>());
+    problem.AddParameterBlock(params[s].data() + 3, 1);
+    for (size_t m : chosen[s]) {
+      problem.AddResidualBlock(PointToPlaneCost::Create(prepared[m], 1.0 / sigma[m]),
+                               MakeLoss(loss, loss_scale), abg, params[s].data(),
+                               params[s].data() + 3);
+    }
+  }
+}
+
+PlaneProblem::~PlaneProblem() = default;
+
+PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
+                                          std::vector<CalibrationIteration>* trace) {
+  ceres::Solver::Options so = SolverOptions(options);
+  TraceCallback callback(impl_->abg, trace, options.progress);
+  so.callbacks.push_back(&callback);
+  ceres::Solver::Summary cs;
+  ceres::Solve(so, &impl_->problem, &cs);
+  Outcome out;
+  out.cancelled = cs.termination_type == ceres::USER_FAILURE;
+  out.lm_converged = cs.termination_type == ceres::CONVERGENCE;
+  out.initial_cost = cs.initial_cost;
+  out.final_cost = cs.final_cost;
+  out.message = cs.message;
+  return out;
+}
+
+const double* PlaneProblem::angles() const { return impl_->abg; }
+
+const std::array<double, 4>& PlaneProblem::plane(size_t s) const { return impl_->params[s]; }
+
+void PlaneProblem::CheckObservability(const CalibrationOptions& options,
+                                      CalibrationSummary* summary) {
+  calibration_internal::CheckObservability(&impl_->problem, impl_->abg, options, summary);
+}
+
+void PlaneProblem::ComputeCovariance(int num_residuals, CalibrationSummary* summary) {
+  calibration_internal::ComputeCovariance(&impl_->problem, impl_->abg, num_residuals, summary);
+}
+
+// Cluster-robust covariance of the angles (the "sandwich"):
+//   Cov = H^-1 (sum_g J_g' r_g r_g' J_g) H^-1,  H = J'J,
+// J and r over all parameters (angles and planes, tangent space), rows
+// grouped by g. With independent rows it reduces to the familiar
+// (J'J)^-1 s^2; with errors shared inside a group (a pose error lasting a
+// second) it grows accordingly, where the iid formula would not.
+bool PlaneProblem::ClusteredAngleSigma(const std::vector<int>& group_of_row,
+                                       Eigen::Vector3d* sigma) {
+  ceres::Problem* problem = &impl_->problem;
+  ceres::CRSMatrix crs;
+  std::vector<double> residuals;
+  double cost = 0.0;
+  if (!problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, &residuals, nullptr, &crs)) {
+    return false;
+  }
+  if (static_cast<size_t>(crs.num_rows) != group_of_row.size()) return false;
+  const int n = crs.num_cols;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  std::unordered_map<int, Eigen::VectorXd> score;  // sum_rows_in_g J_row' r_row
+  Eigen::VectorXd row(n);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    row.setZero();
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) row[crs.cols[k]] = crs.values[k];
+    h.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    auto it = score.find(group_of_row[r]);
+    if (it == score.end()) it = score.emplace(group_of_row[r], Eigen::VectorXd::Zero(n)).first;
+    it->second += row * residuals[r];
+  }
+  h = h.selfadjointView<Eigen::Lower>();
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
+  for (const auto& [g, s] : score) meat += s * s.transpose();
+  // Small-sample correction G / (G - 1) for G groups.
+  const double groups = static_cast<double>(score.size());
+  if (groups > 1) meat *= groups / (groups - 1.0);
+  const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd cov = hinv * meat * hinv;
+  for (int i = 0; i < 3; ++i) (*sigma)[i] = std::sqrt(std::max(0.0, cov(i, i)));
+  return sigma->allFinite();
+}
+
+}  // namespace calibration_internal
+
+using namespace calibration_internal;  // NOLINT(build/namespaces): this file's own helpers
+
+const char* RobustLossName(RobustLoss loss) {
+  switch (loss) {
+    case RobustLoss::kHuber:
+      return "huber";
+    case RobustLoss::kCauchy:
+      return "cauchy";
+    case RobustLoss::kNone:
+      break;
+  }
+  return "none";
+}
+
+bool ParseRobustLoss(const std::string& name, RobustLoss* loss) {
+  for (RobustLoss l : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy}) {
+    if (name == RobustLossName(l)) {
+      *loss = l;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool CalibrationOptions::IsValid(std::string* error) const {
+  if (max_iterations < 1) {
+    *error = "calibration: max_iterations must be >= 1";
+    return false;
+  }
+  if (!(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) ||
+      !(parameter_tolerance >= 0.0)) {
+    *error = "calibration: tolerances must be >= 0";
+    return false;
+  }
+  if (loss != RobustLoss::kNone && !(loss_scale_m > 0.0 && std::isfinite(loss_scale_m))) {
+    *error = "calibration: loss_scale_m must be > 0";
+    return false;
+  }
+  if (min_pairs < 2) {
+    *error = "calibration: min_pairs must be >= 2 (three angles need at least two pairs)";
+    return false;
+  }
+  if (!(max_condition_number > 1.0) || !(min_pick_spread_m >= 0.0)) {
+    *error = "calibration: max_condition_number must be > 1 and min_pick_spread_m >= 0";
+    return false;
+  }
+  if (max_outer_iterations < 1 || !(outer_tolerance_rad > 0.0)) {
+    *error = "calibration: max_outer_iterations must be >= 1 and outer_tolerance_rad > 0";
+    return false;
+  }
+  return true;
+}
+
+// ----------------------------------------------------------------------------
+// Reports
+
+std::string CalibrationSummary::BriefReport() const {
+  std::ostringstream s;
+  s << method << ": " << (converged ? "converged" : "FAILED") << ", alpha " << angles.alpha
+    << " beta " << angles.beta << " gamma " << angles.gamma << " rad, RMS " << initial_rms_m
+    << " -> " << final_rms_m << " m";
+  return s.str();
+}
+
+std::string CalibrationSummary::FullReport() const {
+  std::ostringstream s;
+  s << std::setprecision(6);
+  s << "Calibration (" << method << ")\n";
+  s << "  converged:        " << (converged ? "yes" : "no") << " (" << message << ")\n";
+  s << "  residual blocks:  " << residual_blocks;
+  if (planes > 0) s << " points on " << planes << " planes";
+  s << "\n  outer iterations: " << outer_iterations << ", LM iterations: " << trace.size() << "\n";
+  s << "  initial angles:   " << initial.alpha << " " << initial.beta << " " << initial.gamma
+    << " rad\n";
+  s << "  final angles:     " << angles.alpha << " " << angles.beta << " " << angles.gamma
+    << " rad\n";
+  s << "  1-sigma:          " << sigma_rad[0] << " " << sigma_rad[1] << " " << sigma_rad[2]
+    << " rad\n";
+  s << "  RMS distance:     " << initial_rms_m << " -> " << final_rms_m << " m\n";
+  s << "  cost:             " << initial_cost << " -> " << final_cost << "\n";
+  s << "  condition number: " << condition_number << "\n";
+  for (const auto& w : warnings) s << "  warning: " << w << "\n";
+  return s.str();
+}
+
+// ----------------------------------------------------------------------------
+// Pairs (Eq. 15-17)
+
+namespace {
+
+// The pairs themselves: finite samples and poses, the two picks of a pair
+// from different passes, no pair twice. `first`: the pass-1 picks in the
+// world under `initial`.
+Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry& geometry,
+                  const MountingError& initial, std::vector<Eigen::Vector3d>* first_out) {
+  std::vector<Eigen::Vector3d>& first = *first_out;
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const std::string where = "pair " + std::to_string(k + 1) + ": ";
+    const ObservationPair& p = pairs[k];
+    for (const LidarObservation* o : {&p.pass1, &p.pass2}) {
+      if (!Finite(o->p_lidar) || !Finite(o->world_from_body.translation()) ||
+          !o->world_from_body.rotation().coeffs().allFinite()) {
+        return Status::Error(where + "a sample or its pose is not finite");
+      }
+    }
+    // Both picks of a pair from the same sighting: a corner seen once cannot
+    // be compared with itself (the two passes are seconds apart).
+    const double dt = std::abs(static_cast<double>(p.pass1.time_ns - p.pass2.time_ns)) / kNsPerS;
+    if (dt < 1.0) {
+      return Status::Error(where + "both picks are from one pass (" + Num(dt, 3) +
+                           " s apart); pick the feature once in each pass");
+    }
+    for (size_t j = 0; j < k; ++j) {
+      if (pairs[j].pass1.ref == p.pass1.ref && pairs[j].pass2.ref == p.pass2.ref &&
+          pairs[j].pass1.p_lidar == p.pass1.p_lidar && pairs[j].pass2.p_lidar == p.pass2.p_lidar) {
+        return Status::Error(where + "same samples as pair " + std::to_string(j + 1));
+      }
+    }
+    first.push_back(ProjectObservation(p.pass1, geometry, initial));
+  }
+  return Status::Ok();
+}
+
+// Pick geometry: three angles need picks spread in two directions.
+void WarnOnPickSpread(const std::vector<Eigen::Vector3d>& first, const CalibrationOptions& options,
+                      CalibrationSummary* summary) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : first) c += p;
+  c /= static_cast<double>(first.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& p : first) scatter += (p - c) * (p - c).transpose();
+  const Eigen::Vector3d ev =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter / first.size()).eigenvalues();
+  if (std::sqrt(std::max(0.0, ev[2])) < options.min_pick_spread_m) {
+    summary->warnings.push_back("the picks are within " + Num(std::sqrt(std::max(0.0, ev[2])), 3) +
+                                " m of each other; spread them over the target's corners");
+  } else if (std::sqrt(std::max(0.0, ev[1])) < options.min_pick_spread_m) {
+    summary->warnings.push_back("the picks are (nearly) collinear (spread " +
+                                Num(std::sqrt(std::max(0.0, ev[1])), 3) +
+                                " m across their line); pick corners on both edges");
+  }
+}
+
+}  // namespace
+
+Status SolvePairs(const std::vector<ObservationPair>& pairs, const RobotGeometry& geometry,
+                  const MountingError& initial, const CalibrationOptions& options,
+                  CalibrationSummary* summary) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(error);
+  if (!geometry.IsValid(&error)) return Status::Error(error);
+  const Eigen::Vector3d init(initial.alpha, initial.beta, initial.gamma);
+  if (!init.allFinite()) return Status::Error("initial angles are not finite");
+  if (static_cast<int>(pairs.size()) < options.min_pairs) {
+    return Status::Error("need at least " + std::to_string(options.min_pairs) + " pairs, got " +
+                         std::to_string(pairs.size()));
+  }
+  std::vector<Eigen::Vector3d> first;
+  const Status checked = CheckPairs(pairs, geometry, initial, &first);
+  if (!checked.ok()) return checked;
+
+  summary->initial = initial;
+  summary->angles = initial;
+  summary->residual_blocks = static_cast<int>(pairs.size());
+  summary->converged = false;
+
+  WarnOnPickSpread(first, options, summary);
+
+  std::vector<Prepared> a, b;
+  for (const auto& p : pairs) {
+    a.push_back(Prepare(p.pass1, geometry));
+    b.push_back(Prepare(p.pass2, geometry));
+  }
+  double abg[3] = {initial.alpha, initial.beta, initial.gamma};
+  ceres::Problem problem;
+  problem.AddParameterBlock(abg, 3);
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    problem.AddResidualBlock(PairCost::Create(a[k], b[k]),
+                             MakeLoss(options.loss, options.loss_scale_m), abg);
+  }
+  auto rms = [&]() {
+    double s = 0.0;
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      double pa[3], pb[3];
+      ProjectT(a[k], abg, pa);
+      ProjectT(b[k], abg, pb);
+      s += (Eigen::Vector3d(pa[0], pa[1], pa[2]) - Eigen::Vector3d(pb[0], pb[1], pb[2]))
+               .squaredNorm();
+    }
+    return std::sqrt(s / pairs.size());
+  };
+  summary->initial_rms_m = rms();
+
+  ceres::Solver::Options so = SolverOptions(options);
+  TraceCallback callback(abg, &summary->trace, options.progress);
+  so.callbacks.push_back(&callback);
+  ceres::Solver::Summary cs;
+  ceres::Solve(so, &problem, &cs);
+
+  summary->initial_cost = cs.initial_cost;
+  summary->final_cost = cs.final_cost;
+  summary->angles = FromArray(abg);
+  summary->final_rms_m = rms();
+  summary->message = cs.message;
+  summary->outer_iterations = 1;
+  CheckObservability(&problem, abg, options, summary);
+  if (cs.termination_type == ceres::USER_FAILURE) {
+    return Status::Error("calibration cancelled");
+  }
+  if (cs.termination_type != ceres::CONVERGENCE ||
+      !Eigen::Vector3d(abg[0], abg[1], abg[2]).allFinite()) {
+    return Status::Error("calibration did not converge: " + cs.message);
+  }
+  summary->converged = true;
+  if (options.compute_covariance) {
+    ComputeCovariance(&problem, abg, 3 * static_cast<int>(pairs.size()), summary);
+  }
+  return Status::Ok();
+}
+
+}  // namespace sweepscan

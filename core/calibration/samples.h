@@ -1,0 +1,75 @@
+// The raw samples a calibration re-projects (Miao et al. 2022, Eq. 1, 11-14).
+//
+// Model. Sample i (range rho_i, scan angle theta_i, time t_i) lands at
+//   p_W(c) = world_from_body(t_i) * body_from_lidar(g, c) * p_L(rho_i, theta_i)   (Eq. 1, 11-14)
+// with body_from_lidar = [Rz(alpha) Ry(beta) Rx(gamma) | (l1, 0, h)] (Eq. 13)
+// and c = (alpha, beta, gamma) the mounting error. The calibration re-projects
+// raw samples for every candidate c; it never moves cloud points.
+//
+// Pure functions and values, no globals; may run on any thread.
+#ifndef SWEEPSCAN_CORE_CALIBRATION_SAMPLES_H_
+#define SWEEPSCAN_CORE_CALIBRATION_SAMPLES_H_
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "core/calibration/passes.h"
+#include "core/common/status.h"
+#include "core/pose/pose_buffer.h"
+#include "core/robot/robot_model.h"
+#include "core/robot/sensor_data.h"
+
+namespace sweepscan {
+
+// A raw sample's address in the recording.
+struct SampleRef {
+  uint32_t scan = 0;
+  uint16_t beam = 0;
+  bool operator==(const SampleRef& o) const { return scan == o.scan && beam == o.beam; }
+};
+
+// What the solver re-projects: a point in the lidar frame (Eq. 1 for a real
+// sample, any point for a virtual one such as a fitted corner) and the body
+// pose at the sample's own time.
+struct LidarObservation {
+  SampleRef ref;
+  int64_t time_ns = 0;
+  Eigen::Vector3d p_lidar = Eigen::Vector3d::Zero();
+  Rigid3d world_from_body;
+};
+
+// p_W(c) = world_from_body * body_from_lidar(g, c) * p_lidar.
+Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometry& geometry,
+                                   const MountingError& calibration);
+
+// The valid raw samples of a recording with their interpolated poses,
+// addressable by (scan, beam). Samples without a pose or out of range are
+// left out (as the assembler leaves them out).
+class SampleStore {
+ public:
+  SampleStore() = default;
+  SampleStore(const SensorLog& log, const PoseBuffer& poses, double min_range_m = 0.12,
+              double max_range_m = 10.0);
+
+  const std::vector<LidarObservation>& observations() const { return observations_; }
+  // Error if the recording has no such valid sample.
+  Status Find(const SampleRef& ref, LidarObservation* out) const;
+  // Indices of the observations whose time lies in the window.
+  std::vector<size_t> InWindow(const PassWindow& window) const;
+  // Nearest observation of the window to `world` under `calibration`;
+  // error if the window is empty.
+  Status Nearest(const PassWindow& window, const Eigen::Vector3d& world,
+                 const RobotGeometry& geometry, const MountingError& calibration,
+                 LidarObservation* out) const;
+
+ private:
+  std::vector<LidarObservation> observations_;  // time order
+  std::unordered_map<uint64_t, size_t> by_ref_;
+};
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CALIBRATION_SAMPLES_H_

@@ -1,0 +1,80 @@
+// Picks -> mounting error, as sweepscan-cli's `calibrate --pairs` and the
+// desktop app's calibration panel run it (workflow.h).
+#include "core/calibration/workflow.h"
+
+#include <string>
+
+namespace sweepscan {
+
+Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
+                                          const SampleStore& store, const RobotGeometry& geometry,
+                                          const MountingError& calibration) {
+  Eigen::AlignedBox3d region;
+  for (const PickPair& p : picks) {
+    for (const Pick* k : {&p.pass1, &p.pass2}) {
+      LidarObservation o;
+      if (!k->has_sample) {
+        region.extend(k->world);
+      } else if (store.Find(k->sample, &o).ok()) {
+        region.extend(ProjectObservation(o, geometry, calibration));
+      }
+    }
+  }
+  if (region.isEmpty()) return region;
+  Eigen::Vector3d grow = Eigen::Vector3d::Constant(0.25);
+  int thin;
+  const Eigen::Vector3d extent = region.sizes();
+  if (extent.minCoeff(&thin) < 0.1) grow[thin] = 0.08;
+  region.min() -= grow;
+  region.max() += grow;
+  return region;
+}
+
+Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometry,
+                          const std::vector<PickPair>& picks,
+                          const PickCalibrationOptions& options, PickCalibrationResult* result) {
+  using Failure = PickCalibrationResult::Failure;
+  *result = PickCalibrationResult();
+  const MountingError& initial = options.initial;
+  result->region = TargetRegionFromPicks(picks, store, geometry, initial);
+  if (result->region.isEmpty()) {
+    result->failure = Failure::kNoValidPick;
+    return Status::Error("no pick refers to a valid sample of the recording");
+  }
+  // The region's points split by time gaps give the passes.
+  result->sightings = CollectTargetSightings(store, geometry, initial, result->region);
+  const std::vector<PassWindow>& windows = result->sightings.windows;
+  CalibrationSummary& summary = result->summary;
+  Status s;
+  if (options.refine) {
+    if (windows.size() < 2) {
+      result->failure = Failure::kTargetNotSeenTwice;
+      return Status::Error("the target region around the picks was seen in " +
+                           std::to_string(windows.size()) + " pass(es), need 2");
+    }
+    s = SolveRefinedCorners(result->sightings.passes[0], result->sightings.passes[1], geometry,
+                            initial, options.solver, &summary);
+    // The paper's baseline on the same picks, reported beside the result.
+    std::vector<ObservationPair> pairs;
+    CalibrationSummary raw;
+    raw.method = "pairs";
+    if (ResolvePairs(picks, store, windows, geometry, initial, &pairs).ok() &&
+        SolvePairs(pairs, geometry, initial, options.solver, &raw).ok()) {
+      result->has_baseline = true;
+      result->baseline = raw;
+    }
+  } else {
+    std::vector<ObservationPair> pairs;
+    s = ResolvePairs(picks, store, windows, geometry, initial, &pairs);
+    if (!s.ok()) {
+      result->failure = Failure::kUnresolvedPicks;
+      return s;
+    }
+    summary.method = "pairs";
+    s = SolvePairs(pairs, geometry, initial, options.solver, &summary);
+  }
+  if (!s.ok()) result->failure = Failure::kSolveFailed;
+  return s;
+}
+
+}  // namespace sweepscan

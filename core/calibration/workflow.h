@@ -1,0 +1,72 @@
+// Workflows: what a front end (sweepscan-cli, the desktop app's calibration
+// panel) runs between reading its inputs and showing the result, so that
+// both calibrate the same way.
+//
+// Pure functions, no globals; may run on any thread (the app runs them on a
+// worker thread; cancel through options.solver.progress).
+#ifndef SWEEPSCAN_CORE_CALIBRATION_WORKFLOW_H_
+#define SWEEPSCAN_CORE_CALIBRATION_WORKFLOW_H_
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "core/calibration/board_fit.h"
+#include "core/calibration/pairs_solver.h"
+#include "core/calibration/picks.h"
+#include "core/calibration/samples.h"
+#include "core/common/status.h"
+#include "core/robot/robot_model.h"
+
+namespace sweepscan {
+
+// The target's region on a circle drive: the picks' bounding box (world
+// positions under `calibration`; sample picks that are not valid samples
+// are skipped) grown by 0.25 m along the board (its two large extents) and
+// by 0.08 m across a flat set of picks (the board's normal, when the box is
+// thinner than 0.1 m there), which still holds the uncalibrated ghosts (a
+// few cm) but not a wall 0.16 m behind. Empty if no pick is usable.
+Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
+                                          const SampleStore& store, const RobotGeometry& geometry,
+                                          const MountingError& calibration);
+
+struct PickCalibrationOptions {
+  // Replace the picks by the board corners fitted in every sighting of the
+  // target (SolveRefinedCorners), and solve the raw picks too as the paper's
+  // baseline. Best with a thin board turned 45 deg (docs/calibration.md).
+  bool refine = false;
+  CalibrationOptions solver;
+  MountingError initial;  // the angles the target region and the solve start from
+};
+
+struct PickCalibrationResult {
+  // Why a calibration failed: the picks or the recording do not allow one
+  // (bad input), or the solve failed.
+  enum class Failure {
+    kNone,
+    kNoValidPick,        // no pick refers to a valid sample of the recording
+    kTargetNotSeenTwice,  // refine: the region was seen in fewer than 2 sightings
+    kUnresolvedPicks,    // a pick could not be resolved in the pass it claims
+    kSolveFailed,        // the solver failed (summary says how far it got)
+  };
+  Failure failure = Failure::kNone;
+  CalibrationSummary summary;  // method "pairs" or "refined-corners"
+  // refine: the raw picks' solve (method "pairs"), when it succeeded.
+  bool has_baseline = false;
+  CalibrationSummary baseline;
+  Eigen::AlignedBox3d region;  // the target region used
+  TargetSightings sightings;   // the target's sightings in that region
+};
+
+// Picks -> mounting error: the target region from the picks, the target's
+// sightings (pass windows) in it, then the pairs solve on the resolved picks
+// or, with refine, the refined-corners solve plus the raw-pick baseline.
+// The Status message says why it failed (result->failure: which kind);
+// pairs-count and file checks are the caller's.
+Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometry,
+                          const std::vector<PickPair>& picks,
+                          const PickCalibrationOptions& options, PickCalibrationResult* result);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CALIBRATION_WORKFLOW_H_

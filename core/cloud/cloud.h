@@ -1,0 +1,88 @@
+// The assembled 3D cloud: world points with their provenance, stored in
+// fixed-size chunks. The processing thread appends to the open chunk; when
+// it is full it is sealed (made immutable) and published. Readers (the
+// viewer on the GUI thread, exporters) take a snapshot of the sealed chunks
+// under a mutex and then read them without locks: a sealed chunk never
+// changes, so a viewer uploads each one to the GPU exactly once.
+#ifndef SWEEPSCAN_CORE_CLOUD_CLOUD_H_
+#define SWEEPSCAN_CORE_CLOUD_CLOUD_H_
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "core/common/time.h"
+
+namespace sweepscan {
+
+// 32 bytes. Position in float (metres): sub-millimetre over +-1 km.
+struct CloudPoint {
+  float x = 0.0f, y = 0.0f, z = 0.0f;
+  float range_m = 0.0f;
+  int64_t time_ns = 0;   // robot time of the sample
+  uint32_t scan = 0;     // scan (revolution) index
+  uint16_t beam = 0;     // sample index within the scan
+  uint8_t pose_source = 0;  // PoseSource of the pose that placed it
+  uint8_t flags = 0;     // bit 0: placed without deskew
+};
+static_assert(sizeof(CloudPoint) == 32, "CloudPoint layout");
+
+using CloudChunk = std::vector<CloudPoint>;
+
+class PointChunks {
+ public:
+  explicit PointChunks(size_t chunk_capacity = 65536) : chunk_capacity_(chunk_capacity) {
+    open_.reserve(chunk_capacity_);
+  }
+
+  // Processing thread only.
+  void Append(const CloudPoint& p) {
+    open_.push_back(p);
+    if (open_.size() >= chunk_capacity_) Seal();
+  }
+  // Publishes the open chunk even if not full (end of a recording, or a
+  // viewer tick that wants the newest points).
+  void Seal() {
+    if (open_.empty()) return;
+    auto chunk = std::make_shared<const CloudChunk>(std::move(open_));
+    open_ = CloudChunk();
+    open_.reserve(chunk_capacity_);
+    std::lock_guard<std::mutex> lock(mutex_);
+    sealed_.push_back(std::move(chunk));
+    sealed_points_ += sealed_.back()->size();
+  }
+
+  // Any thread: the sealed chunks so far (cheap: copies shared pointers).
+  std::vector<std::shared_ptr<const CloudChunk>> SealedChunks() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return sealed_;
+  }
+  size_t sealed_point_count() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return sealed_points_;
+  }
+  // Processing thread only: the open (growing) chunk. A reader that follows
+  // the cloud incrementally copies the sealed chunks it has not seen and then
+  // the open chunk's new tail; when the open chunk is sealed it becomes the
+  // next sealed chunk with the same points in the same order.
+  const CloudChunk& open_chunk() const { return open_; }
+  // Processing thread only: everything, sealed and open, copied out.
+  std::vector<CloudPoint> Flatten() const {
+    std::vector<CloudPoint> all;
+    for (const auto& c : SealedChunks()) all.insert(all.end(), c->begin(), c->end());
+    all.insert(all.end(), open_.begin(), open_.end());
+    return all;
+  }
+
+ private:
+  size_t chunk_capacity_;
+  CloudChunk open_;
+  mutable std::mutex mutex_;
+  std::vector<std::shared_ptr<const CloudChunk>> sealed_;
+  size_t sealed_points_ = 0;
+};
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CLOUD_CLOUD_H_

@@ -1,0 +1,34 @@
+// Cloud files through PCL's io module (never its visualization module).
+//
+// PLY (binary little-endian) and PCD (binary) carry every attribute of
+// CloudPoint: x y z (float, m), range (float, m), time (double, s of robot
+// time), scan (uint32), beam (uint16), source (uint8: 0 EKF, 1 odometry,
+// 2 truth), flags (uint8: bit 0 placed without deskew). See docs/cloud-format.md.
+#ifndef SWEEPSCAN_CORE_CLOUD_CLOUD_IO_H_
+#define SWEEPSCAN_CORE_CLOUD_CLOUD_IO_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/cloud/cloud.h"
+#include "core/common/status.h"
+
+namespace sweepscan {
+
+// Chooses the format from the extension (.ply or .pcd). Written atomically
+// (temporary file, then rename).
+Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points);
+// Reads the positions of any PLY or PCD with x, y, z fields.
+Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points);
+// Reads a cloud written by SaveCloud, with all attributes.
+Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points);
+
+// Voxel-grid downsampling (PCL VoxelGrid, centroid per occupied voxel) for
+// display and for fast evaluation.
+std::vector<Eigen::Vector3f> VoxelDownsample(const std::vector<Eigen::Vector3f>& points,
+                                             double leaf_m);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CLOUD_CLOUD_IO_H_

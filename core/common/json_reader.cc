@@ -1,0 +1,165 @@
+#include "core/common/json_reader.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace sweepscan {
+
+std::string JsonTypeName(const nlohmann::json& j) {
+  if (j.is_null()) return "null";
+  if (j.is_boolean()) return "a boolean";
+  if (j.is_number()) return "a number";
+  if (j.is_string()) return "a string";
+  if (j.is_array()) return "an array";
+  return "an object";
+}
+
+JsonObject::JsonObject(const nlohmann::json& j, std::string path) : j_(j), path_(std::move(path)) {
+  if (!j_.is_object()) {
+    throw JsonError((path_.empty() ? std::string("document") : path_) + ": expected an object, got " +
+                    JsonTypeName(j_));
+  }
+}
+
+void JsonObject::Fail(const std::string& key, const std::string& message) const {
+  throw JsonError(Path(key) + ": " + message);
+}
+
+const nlohmann::json& JsonObject::Get(const std::string& key) const {
+  const auto it = j_.find(key);
+  if (it == j_.end()) Fail(key, "missing");
+  return *it;
+}
+
+JsonObject JsonObject::Object(const std::string& key) const { return JsonObject(Get(key), Path(key)); }
+
+const nlohmann::json& JsonObject::Array(const std::string& key) const {
+  const nlohmann::json& v = Get(key);
+  if (!v.is_array()) Fail(key, "expected an array, got " + JsonTypeName(v));
+  return v;
+}
+
+double JsonObject::Number(const std::string& key) const {
+  const nlohmann::json& v = Get(key);
+  if (!v.is_number()) Fail(key, "expected a number, got " + JsonTypeName(v));
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) Fail(key, "must be finite");
+  return d;
+}
+
+static std::string Str(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+double JsonObject::Positive(const std::string& key) const {
+  const double d = Number(key);
+  if (!(d > 0.0)) Fail(key, "must be > 0, got " + Str(d));
+  return d;
+}
+
+double JsonObject::NonNegative(const std::string& key, double fallback) const {
+  if (!Has(key)) return fallback;
+  const double d = Number(key);
+  if (!(d >= 0.0)) Fail(key, "must be >= 0, got " + Str(d));
+  return d;
+}
+
+double JsonObject::InRange(const std::string& key, double lo, double hi, double fallback) const {
+  if (!Has(key)) return fallback;
+  const double d = Number(key);
+  if (!(d >= lo && d <= hi)) Fail(key, "must be within [" + Str(lo) + ", " + Str(hi) + "], got " + Str(d));
+  return d;
+}
+
+int64_t JsonObject::Integer(const std::string& key) const {
+  const nlohmann::json& v = Get(key);
+  if (!v.is_number_integer()) Fail(key, "expected an integer, got " + JsonTypeName(v));
+  return v.get<int64_t>();
+}
+
+bool JsonObject::Bool(const std::string& key, bool fallback) const {
+  if (!Has(key)) return fallback;
+  const nlohmann::json& v = Get(key);
+  if (!v.is_boolean()) Fail(key, "expected a boolean, got " + JsonTypeName(v));
+  return v.get<bool>();
+}
+
+std::string JsonObject::String(const std::string& key) const {
+  const nlohmann::json& v = Get(key);
+  if (!v.is_string()) Fail(key, "expected a string, got " + JsonTypeName(v));
+  return v.get<std::string>();
+}
+
+void JsonObject::AllowOnly(const std::set<std::string>& keys) const {
+  for (auto it = j_.begin(); it != j_.end(); ++it) {
+    if (!keys.count(it.key())) Fail(it.key(), "unknown key");
+  }
+}
+
+Status ParseJson(const std::string& text, const std::string& source, nlohmann::json* out) {
+  try {
+    *out = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    // Translate the byte offset into line:column for the operator.
+    size_t line = 1, col = 1;
+    for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
+    }
+    std::string what = e.what();
+    const size_t pos = what.find("parse error");
+    return Status::Error(source + ":" + std::to_string(line) + ":" + std::to_string(col) +
+                         ": not valid JSON (" + (pos == std::string::npos ? what : what.substr(pos)) +
+                         ")");
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. a number too large for a double (1e999).
+    return Status::Error(source + ": not valid JSON (" + e.what() + ")");
+  }
+  return Status::Ok();
+}
+
+Status ReadJsonFile(const std::string& path, nlohmann::json* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open for reading");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return ParseJson(buffer.str(), path, out);
+}
+
+Status WriteFileAtomically(const std::string& path, const std::string& contents) {
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::Error(path + ": cannot create temporary file " + tmp);
+  size_t done = 0;
+  while (done < contents.size()) {
+    const ssize_t n = ::write(fd, contents.data() + done, contents.size() - done);
+    if (n <= 0) {
+      ::close(fd);
+      ::unlink(tmp.c_str());
+      return Status::Error(path + ": write failed");
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    ::unlink(tmp.c_str());
+    return Status::Error(path + ": flush to disk failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    ::unlink(tmp.c_str());
+    return Status::Error(path + ": cannot replace file");
+  }
+  return Status::Ok();
+}
+
+}  // namespace sweepscan

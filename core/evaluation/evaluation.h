@@ -1,0 +1,128 @@
+// Evaluation of a cloud (Miao et al. 2022, section 5): statistical outlier
+// removal, RANSAC planes of the floor, ceiling and walls with their normals
+// and RMS, the signed point-to-plane deviation histogram (its Fig. 9), the
+// average nearest-neighbour distance as density (its Eq. 18-19) and the
+// distances between parallel planes as room dimensions (its Table 3).
+//
+// PCL does the heavy lifting (StatisticalOutlierRemoval, SACSegmentation
+// with SACMODEL_PLANE, KdTreeFLANN); all PCL templates live in
+// evaluation.cc. Pure functions, callable from any thread.
+#ifndef SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_
+#define SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/common/status.h"
+#include "core/geometry/plane.h"
+
+namespace sweepscan {
+
+struct EvaluationOptions {
+  // Statistical outlier removal (PCL): a point is dropped when its mean
+  // distance to its k nearest neighbours exceeds mean + stddev_mult * sd of
+  // that quantity over the cloud. k = 0 disables it.
+  int outlier_k = 20;
+  double outlier_stddev_mult = 2.0;
+  // Plane extraction: iterative RANSAC (PCL SACSegmentation, plane model),
+  // the largest plane first, its inliers removed, until max_planes or a
+  // plane holds fewer than min_plane_fraction of the points.
+  double plane_distance_m = 0.03;
+  int max_planes = 10;
+  double min_plane_fraction = 0.01;
+  int ransac_iterations = 500;
+  // RANSAC runs on an even subsample of at most this many of the remaining
+  // points (0 = all); the plane's inliers and its least-squares refit then
+  // use every remaining point. 50 000 points locate a plane holding 1 % of
+  // them from 500 points, far more than a plane needs, and cut the
+  // 1 M-point extraction from 22.8 s to about a second (docs/performance.md).
+  size_t ransac_max_points = 50000;
+  // A plane within this angle of horizontal is floor or ceiling, within this
+  // angle of vertical a wall; anything else is "other".
+  double classify_angle_deg = 10.0;
+  // Deviation histogram: bins of bin_m over [-half_range_m, half_range_m]
+  // (values outside go to the first / last bin).
+  double histogram_bin_m = 0.002;
+  double histogram_half_range_m = 0.04;
+  // Room dimensions: planes closer than this to parallel give a dimension.
+  double parallel_angle_deg = 2.0;
+  double min_dimension_m = 0.5;
+  // Density: at most this many query points (evenly spaced), 0 = all.
+  size_t density_max_queries = 0;
+  uint64_t seed = 1;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct DeviationHistogram {
+  double bin_m = 0.0;
+  double min_m = 0.0;  // left edge of bin 0
+  std::vector<uint64_t> counts;
+  double mean_m = 0.0, stddev_m = 0.0;
+  size_t count = 0;
+  double BinCentre(size_t i) const { return min_m + (static_cast<double>(i) + 0.5) * bin_m; }
+};
+
+struct EvaluatedPlane {
+  std::string kind;  // "floor", "ceiling", "wall", "other"
+  Plane plane;       // least-squares on the inliers: normal, d, centroid, rms, count
+  // Angle of the normal from vertical (floor, ceiling) or from horizontal
+  // (walls), degrees: how far the surface is from level / plumb.
+  double tilt_deg = 0.0;
+  DeviationHistogram deviations;  // signed n . p + d of its inliers (Fig. 9)
+};
+
+struct RoomDimension {
+  int plane_a = -1, plane_b = -1;  // indices into CloudEvaluation::planes
+  std::string axis;                // "vertical" or "horizontal"
+  double distance_m = 0.0;         // DistanceBetweenPlanes (core/geometry/plane.h)
+  double angle_deg = 0.0;          // between the two normals
+};
+
+struct CloudEvaluation {
+  size_t points_in = 0;
+  size_t points_after_outliers = 0;
+  std::vector<EvaluatedPlane> planes;
+  std::vector<RoomDimension> dimensions;
+  double mean_nn_distance_m = 0.0;  // Eq. 18-19
+  size_t density_queries = 0;
+};
+
+// PCL StatisticalOutlierRemoval; `kept` gets the indices of the survivors.
+Status RemoveStatisticalOutliers(const std::vector<Eigen::Vector3f>& points, int k,
+                                 double stddev_mult, std::vector<size_t>* kept);
+
+// Iterative RANSAC plane extraction (PCL SACSegmentation) with a
+// least-squares refit on each plane's inliers. `members[i]` gets the
+// indices of plane i's inliers.
+Status ExtractPlanes(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
+                     std::vector<EvaluatedPlane>* planes,
+                     std::vector<std::vector<size_t>>* members);
+
+// Signed deviations n . p + d binned as in EvaluationOptions.
+DeviationHistogram MakeDeviationHistogram(const std::vector<Eigen::Vector3f>& points,
+                                          const std::vector<size_t>& indices, const Plane& plane,
+                                          double bin_m, double half_range_m);
+
+// Eq. 18-19: rho = (1/N) sum_i min_{j != i} |p_i - p_j|, the nearest
+// neighbour found with a KD-tree (PCL KdTreeFLANN). With max_queries > 0
+// the mean runs over that many evenly spaced points (the tree always holds
+// all of them).
+Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, size_t max_queries,
+                                    double* mean_m, size_t* queries);
+
+// Pairs of (nearly) parallel planes, facing each other across at least
+// min_dimension_m: the room's height (floor-ceiling) and widths (walls).
+std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
+                                          double parallel_angle_deg, double min_dimension_m);
+
+// Everything above, in order: outliers, planes, histograms, dimensions,
+// density (on the points after outlier removal).
+Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
+                     CloudEvaluation* result);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_

@@ -1,0 +1,170 @@
+#include "core/pose/ekf.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+namespace sweepscan {
+
+bool EkfOptions::IsValid(std::string* error) const {
+  const double values[] = {accel_sigma, angular_accel_sigma, position_sigma,   yaw_sigma,
+                           tilt_sigma,  yaw_offset_sigma,    wheel_v_sigma,    wheel_w_sigma,
+                           gyro_sigma,  imu_yaw_sigma,       imu_tilt_sigma};
+  for (double v : values) {
+    if (!std::isfinite(v) || v <= 0.0) {
+      *error = "EKF noise standard deviations must be positive and finite";
+      return false;
+    }
+  }
+  if (!(gate_chi2_1dof >= 0.0) || !(gate_chi2_2dof >= 0.0)) {
+    *error = "EKF gate thresholds must be >= 0 (0 disables the gate)";
+    return false;
+  }
+  return true;
+}
+
+void PoseEkf::Initialize(Time time, const State& state, const Covariance& covariance) {
+  time_ = time;
+  state_ = state;
+  state_[kPsi] = WrapAngle(state_[kPsi]);
+  covariance_ = covariance;
+  initialized_ = true;
+  yaw_offset_known_ = false;
+}
+
+void PoseEkf::Predict(Time time) {
+  const double dt = ToSeconds(time - time_);
+  if (dt <= 0.0) return;
+  const double psi = state_[kPsi], v = state_[kV], w = state_[kW];
+  const double h = psi + 0.5 * w * dt;
+  const double c = std::cos(h), s = std::sin(h);
+
+  // (Eq. 6) state prediction.
+  state_[kX] += v * dt * c;
+  state_[kY] += v * dt * s;
+  state_[kPsi] = WrapAngle(psi + w * dt);
+
+  // (Eq. 7) F = df/ds.
+  Covariance f = Covariance::Identity();
+  f(kX, kPsi) = -v * dt * s;
+  f(kX, kV) = dt * c;
+  f(kX, kW) = -v * dt * s * 0.5 * dt;
+  f(kY, kPsi) = v * dt * c;
+  f(kY, kV) = dt * s;
+  f(kY, kW) = v * dt * c * 0.5 * dt;
+  f(kPsi, kW) = dt;
+
+  State q;
+  q << options_.position_sigma * options_.position_sigma,
+      options_.position_sigma * options_.position_sigma, options_.yaw_sigma * options_.yaw_sigma,
+      options_.accel_sigma * options_.accel_sigma,
+      options_.angular_accel_sigma * options_.angular_accel_sigma,
+      options_.tilt_sigma * options_.tilt_sigma, options_.tilt_sigma * options_.tilt_sigma,
+      options_.yaw_offset_sigma * options_.yaw_offset_sigma;
+  covariance_ = f * covariance_ * f.transpose();
+  covariance_.diagonal() += q * dt;
+  time_ = time;
+}
+
+// GCC 12 reports -Warray-bounds inside Eigen's vectorised copies for the
+// 1x1 LDLT solve (M = 1: a 1x8 row block read as SSE packets). A false
+// positive in third-party code (the sizes are fixed and correct); silenced
+// here, for this function only.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Warray-bounds"
+#endif
+template <int M>
+bool PoseEkf::Update(const Eigen::Matrix<double, M, 1>& z,
+                     const Eigen::Matrix<double, M, kStateSize>& h,
+                     const Eigen::Matrix<double, M, M>& r,
+                     const Eigen::Matrix<bool, M, 1>& is_angle) {
+  // (1) Innovation and its covariance.
+  Eigen::Matrix<double, M, 1> y = z - h * state_;
+  for (int i = 0; i < M; ++i) {
+    if (is_angle[i]) y[i] = WrapAngle(y[i]);
+  }
+  const Eigen::Matrix<double, M, M> s = h * covariance_ * h.transpose() + r;
+  const Eigen::LDLT<Eigen::Matrix<double, M, M>> s_ldlt(s);
+
+  // (2) Mahalanobis gate.
+  const double gate = M == 1 ? options_.gate_chi2_1dof : options_.gate_chi2_2dof;
+  const double d2 = y.dot(s_ldlt.solve(y));
+  if (gate > 0.0 && d2 > gate) {
+    ++counters_.rejected;
+    return false;
+  }
+
+  // (3) Gain and state update: K = P H^T S^-1.
+  const Eigen::Matrix<double, kStateSize, M> k =
+      s_ldlt.solve(h * covariance_).transpose();  // (S^-1 H P)^T = P H^T S^-1, S and P symmetric
+  state_ += k * y;
+  state_[kPsi] = WrapAngle(state_[kPsi]);
+  state_[kYawOffset] = WrapAngle(state_[kYawOffset]);
+
+  // (4) Joseph form.
+  const Covariance i_kh = Covariance::Identity() - k * h;
+  covariance_ = i_kh * covariance_ * i_kh.transpose() + k * r * k.transpose();
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose());
+  ++counters_.updates;
+  return true;
+}
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+
+bool PoseEkf::UpdateWheels(Time time, double v, double w) {
+  Predict(time);
+  Eigen::Matrix<double, 2, kStateSize> h = Eigen::Matrix<double, 2, kStateSize>::Zero();
+  h(0, kV) = 1.0;
+  h(1, kW) = 1.0;
+  const Eigen::Vector2d r(options_.wheel_v_sigma * options_.wheel_v_sigma,
+                          options_.wheel_w_sigma * options_.wheel_w_sigma);
+  return Update<2>(Eigen::Vector2d(v, w), h, r.asDiagonal().toDenseMatrix(),
+                   Eigen::Matrix<bool, 2, 1>(false, false));
+}
+
+bool PoseEkf::UpdateGyro(Time time, double w) {
+  Predict(time);
+  Eigen::Matrix<double, 1, kStateSize> h = Eigen::Matrix<double, 1, kStateSize>::Zero();
+  h(0, kW) = 1.0;
+  return Update<1>(Eigen::Matrix<double, 1, 1>(w), h,
+                   Eigen::Matrix<double, 1, 1>(options_.gyro_sigma * options_.gyro_sigma),
+                   Eigen::Matrix<bool, 1, 1>(false));
+}
+
+bool PoseEkf::UpdateYaw(Time time, double imu_yaw) {
+  Predict(time);
+  if (!yaw_offset_known_) {
+    state_[kYawOffset] = WrapAngle(imu_yaw - state_[kPsi]);
+    covariance_.row(kYawOffset).setZero();
+    covariance_.col(kYawOffset).setZero();
+    covariance_(kYawOffset, kYawOffset) = options_.imu_yaw_sigma * options_.imu_yaw_sigma;
+    yaw_offset_known_ = true;
+    return true;
+  }
+  Eigen::Matrix<double, 1, kStateSize> h = Eigen::Matrix<double, 1, kStateSize>::Zero();
+  h(0, kPsi) = 1.0;
+  h(0, kYawOffset) = 1.0;
+  // The residual z - (psi + b) is wrapped in Update; b itself is kept wrapped below.
+  return Update<1>(Eigen::Matrix<double, 1, 1>(imu_yaw), h,
+                   Eigen::Matrix<double, 1, 1>(options_.imu_yaw_sigma * options_.imu_yaw_sigma),
+                   Eigen::Matrix<bool, 1, 1>(true));
+}
+
+bool PoseEkf::UpdateTilt(Time time, double roll, double pitch) {
+  Predict(time);
+  Eigen::Matrix<double, 2, kStateSize> h = Eigen::Matrix<double, 2, kStateSize>::Zero();
+  h(0, kRoll) = 1.0;
+  h(1, kPitch) = 1.0;
+  const double var = options_.imu_tilt_sigma * options_.imu_tilt_sigma;
+  return Update<2>(Eigen::Vector2d(roll, pitch), h, Eigen::Vector2d(var, var).asDiagonal().toDenseMatrix(),
+                   Eigen::Matrix<bool, 2, 1>(true, true));
+}
+
+Rigid3d PoseEkf::WorldFromBody() const {
+  return Rigid3d::FromPose(state_[kX], state_[kY], 0.0, state_[kRoll], state_[kPitch],
+                           state_[kPsi]);
+}
+
+}  // namespace sweepscan

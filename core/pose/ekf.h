@@ -1,0 +1,118 @@
+// Extended Kalman filter fusing wheel odometry and the IMU (Miao et al. 2022,
+// section 2.2, Eq. 6-10), in the robot_localization style: the filter core
+// knows nothing about devices; each sensor says which state it measures.
+//
+// State (8):  s = [x, y, psi, v, w, roll, pitch, b]
+//   x, y   position of the body origin in the world (m)
+//   psi    yaw (rad), wrapped to (-pi, pi]
+//   v, w   forward speed (m/s) and yaw rate (rad/s) in the body frame
+//   roll, pitch  platform tilt (rad); constant on a flat floor
+//   b      offset of the IMU's heading reference from the world's (rad). The
+//          start pose defines the world, so psi starts known and b is learnt
+//          from every yaw reading instead of being frozen at the first one
+//          (whose 0.5 deg of noise would otherwise bias the whole map).
+//
+// Process model (Eq. 6), a constant-velocity unicycle integrated with the
+// midpoint rule of the odometry (Eq. 4-5), h = psi + w dt / 2:
+//   x' = x + v dt cos h,  y' = y + v dt sin h,  psi' = psi + w dt,
+//   v' = v,  w' = w,  roll' = roll,  pitch' = pitch,  b' = b.
+// Covariance prediction (Eq. 7): P' = F P F^T + Q dt, F = df/ds, and Q the
+// diagonal of white accelerations on v and w, random walks on the rest.
+//
+// Measurement models (all linear, z = H s + n):
+//   wheels  z = [v, w]       from the encoders via Eq. 2-3
+//   gyro    z = w            IMU z rate
+//   yaw     z = psi + b      IMU heading in its own reference
+//   tilt    z = [roll, pitch]
+// Update (Eq. 8-10), numbered as in the code:
+//   (1) innovation y = z - H s (angles wrapped), S = H P H^T + R
+//   (2) Mahalanobis gate: reject if y^T S^-1 y > chi2(dof, 99.9 %)
+//   (3) gain K = P H^T S^-1, state s += K y
+//   (4) Joseph form P = (I - K H) P (I - K H)^T + K R K^T, which stays
+//       symmetric positive definite under rounding.
+#ifndef SWEEPSCAN_CORE_POSE_EKF_H_
+#define SWEEPSCAN_CORE_POSE_EKF_H_
+
+#include <Eigen/Core>
+#include <string>
+
+#include "core/common/time.h"
+#include "core/geometry/transform.h"
+
+namespace sweepscan {
+
+struct EkfOptions {
+  // Process noise (continuous-time standard deviations).
+  double accel_sigma = 0.5;          // m/s^2 on v
+  double angular_accel_sigma = 0.5;  // rad/s^2 on w
+  double position_sigma = 0.002;     // m/sqrt(s), unmodelled motion
+  // psi changes only through w, which the gyro measures; a large random walk
+  // here would let psi and the IMU heading offset b trade places.
+  double yaw_sigma = 0.0002;         // rad/sqrt(s)
+  double tilt_sigma = 0.001;         // rad/sqrt(s)
+  double yaw_offset_sigma = 0.0001;  // rad/sqrt(s), wander of the IMU heading reference
+  // Measurement noise (standard deviations).
+  double wheel_v_sigma = 0.01;       // m/s
+  double wheel_w_sigma = 0.05;       // rad/s; wheels slip, so trust them little for yaw rate
+  double gyro_sigma = 0.005;         // rad/s
+  double imu_yaw_sigma = 0.0087;     // rad (0.5 deg, HI219 Table 2)
+  double imu_tilt_sigma = 0.0052;    // rad (0.3 deg)
+  // Chi-square gates at 99.9 % for one and two degrees of freedom; 0 disables.
+  double gate_chi2_1dof = 10.83;
+  double gate_chi2_2dof = 13.82;
+
+  bool IsValid(std::string* error) const;
+};
+
+class PoseEkf {
+ public:
+  static constexpr int kStateSize = 8;
+  enum Index { kX = 0, kY, kPsi, kV, kW, kRoll, kPitch, kYawOffset };
+  using State = Eigen::Matrix<double, kStateSize, 1>;
+  using Covariance = Eigen::Matrix<double, kStateSize, kStateSize>;
+
+  struct Counters {
+    int updates = 0;
+    int rejected = 0;  // by the Mahalanobis gate
+  };
+
+  explicit PoseEkf(const EkfOptions& options) : options_(options) {}
+
+  void Initialize(Time time, const State& state, const Covariance& covariance);
+  bool initialized() const { return initialized_; }
+
+  // Advances the state to `time` (Eq. 6-7); no-op for times not after the
+  // current one (out-of-order measurements are applied at the filter time).
+  void Predict(Time time);
+
+  // Each update predicts to `time` first. Returns false if gated out.
+  bool UpdateWheels(Time time, double v, double w);
+  bool UpdateGyro(Time time, double w);
+  // z is the IMU's own heading; the first call, if the offset was never
+  // set, initialises b = z - psi with the measurement's variance.
+  bool UpdateYaw(Time time, double imu_yaw);
+  bool UpdateTilt(Time time, double roll, double pitch);
+
+  Time time() const { return time_; }
+  const State& state() const { return state_; }
+  const Covariance& covariance() const { return covariance_; }
+  const Counters& counters() const { return counters_; }
+  Rigid3d WorldFromBody() const;
+
+ private:
+  template <int M>
+  bool Update(const Eigen::Matrix<double, M, 1>& z, const Eigen::Matrix<double, M, kStateSize>& h,
+              const Eigen::Matrix<double, M, M>& r, const Eigen::Matrix<bool, M, 1>& is_angle);
+
+  EkfOptions options_;
+  bool initialized_ = false;
+  Time time_;
+  State state_ = State::Zero();
+  Covariance covariance_ = Covariance::Identity();
+  Counters counters_;
+  bool yaw_offset_known_ = false;
+};
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_POSE_EKF_H_

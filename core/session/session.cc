@@ -1,0 +1,498 @@
+#include "core/session/session.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+
+#include "core/common/crc32c.h"
+#include "core/common/json_reader.h"
+
+namespace sweepscan {
+namespace {
+
+using json = nlohmann::json;
+
+void PutU32(uint32_t v, std::vector<uint8_t>* out) {
+  for (int i = 0; i < 4; ++i) out->push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+void PutI64(int64_t v, std::vector<uint8_t>* out) {
+  const uint64_t u = static_cast<uint64_t>(v);
+  for (int i = 0; i < 8; ++i) out->push_back(static_cast<uint8_t>(u >> (8 * i)));
+}
+uint32_t GetU32(const uint8_t* p) {
+  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
+         static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
+}
+int64_t GetI64(const uint8_t* p) {
+  return static_cast<int64_t>(static_cast<uint64_t>(GetU32(p)) |
+                              static_cast<uint64_t>(GetU32(p + 4)) << 32);
+}
+
+std::vector<uint8_t> FramesFileHeader() {
+  std::vector<uint8_t> h(kSessionFramesMagic, kSessionFramesMagic + 8);
+  PutU32(kSessionFormatVersion, &h);
+  PutU32(0, &h);  // reserved
+  return h;
+}
+
+std::string Join(const std::string& dir, const char* file) {
+  return dir.empty() || dir.back() == '/' ? dir + file : dir + "/" + file;
+}
+
+std::string Errno(const std::string& what) { return what + ": " + std::strerror(errno); }
+
+// mkdir -p.
+Status MakeDirs(const std::string& dir) {
+  std::string partial;
+  std::stringstream ss(dir);
+  std::string part;
+  if (!dir.empty() && dir[0] == '/') partial = "/";
+  while (std::getline(ss, part, '/')) {
+    if (part.empty()) continue;
+    partial += part;
+    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
+      return Status::Error(Errno(partial + ": cannot create folder"));
+    }
+    partial += "/";
+  }
+  return Status::Ok();
+}
+
+// fsync of the folder makes new directory entries (frames.bin, the renamed
+// meta.json) durable, not only the files' contents.
+void SyncDir(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+bool WriteAll(int fd, const uint8_t* p, size_t n) {
+  while (n > 0) {
+    const ssize_t k = ::write(fd, p, n);
+    if (k < 0 && errno == EINTR) continue;
+    if (k <= 0) return false;
+    p += k;
+    n -= static_cast<size_t>(k);
+  }
+  return true;
+}
+
+std::string RecordAt(uint64_t index, uint64_t offset) {
+  return "record " + std::to_string(index) + " at byte " + std::to_string(offset);
+}
+
+}  // namespace
+
+std::string UtcNowIso8601() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+// ---------------------------------------------------------------------------
+// meta.json
+
+Pose2d SessionStartPose(const SessionMeta& meta) {
+  Pose2d start;
+  const json& s = meta.settings;
+  if (!s.is_object() || !s.contains("scenario")) return start;
+  const json& sc = s["scenario"];
+  if (!sc.is_object() || !sc.contains("path") || !sc["path"].is_object() ||
+      !sc["path"].contains("start") || !sc["path"]["start"].is_object()) {
+    return start;
+  }
+  const json& st = sc["path"]["start"];
+  const auto number = [&](const char* key, double* out) {
+    if (st.contains(key) && st[key].is_number() && std::isfinite(st[key].get<double>())) {
+      *out = st[key].get<double>();
+    }
+  };
+  number("x_m", &start.x);
+  number("y_m", &start.y);
+  number("yaw_rad", &start.yaw);
+  return start;
+}
+
+json SessionMetaToJson(const SessionMeta& m) {
+  return json{
+      {"format", "sweepscan-session"},
+      {"format_version", m.format_version},
+      {"created_utc", m.created_utc},
+      {"robot",
+       {{"lidar_height_m", m.geometry.lidar_height_m},
+        {"lidar_offset_x_m", m.geometry.lidar_offset_x_m},
+        {"imu_offset_x_m", m.geometry.imu_offset_x_m},
+        {"wheel_distance_m", m.geometry.wheel_distance_m}}},
+      {"lidar_angle_convention",
+       {{"sign", m.lidar_angle_convention.sign},
+        {"offset_rad", m.lidar_angle_convention.offset_rad}}},
+      {"calibration",
+       {{"alpha_rad", m.calibration.alpha},
+        {"beta_rad", m.calibration.beta},
+        {"gamma_rad", m.calibration.gamma}}},
+      {"link", m.link},
+      {"agent", m.agent},
+      {"settings", m.settings.is_object() ? m.settings : json::object()},
+      {"notes", m.notes},
+  };
+}
+
+Status SessionMetaFromJson(const json& j, const std::string& source, SessionMeta* meta) {
+  SessionMeta m;
+  try {
+    const JsonObject root(j, "");
+    root.AllowOnly({"format", "format_version", "created_utc", "robot", "lidar_angle_convention",
+                    "calibration", "link", "agent", "settings", "notes"});
+    if (root.String("format") != "sweepscan-session") {
+      root.Fail("format", "expected \"sweepscan-session\", got \"" + root.String("format") + "\"");
+    }
+    const int64_t version = root.Integer("format_version");
+    if (version < 1 || version > kSessionFormatVersion) {
+      root.Fail("format_version", "unsupported version " + std::to_string(version) +
+                                      " (this program reads 1.." +
+                                      std::to_string(kSessionFormatVersion) + ")");
+    }
+    m.format_version = static_cast<uint32_t>(version);
+    m.created_utc = root.String("created_utc");
+    const JsonObject r = root.Object("robot");
+    r.AllowOnly({"lidar_height_m", "lidar_offset_x_m", "imu_offset_x_m", "wheel_distance_m"});
+    m.geometry.lidar_height_m = r.Positive("lidar_height_m");
+    m.geometry.lidar_offset_x_m = r.Number("lidar_offset_x_m");
+    m.geometry.imu_offset_x_m = r.Number("imu_offset_x_m");
+    m.geometry.wheel_distance_m = r.Positive("wheel_distance_m");
+    const JsonObject a = root.Object("lidar_angle_convention");
+    a.AllowOnly({"sign", "offset_rad"});
+    const int64_t sign = a.Integer("sign");
+    if (sign != 1 && sign != -1) a.Fail("sign", "must be 1 or -1, got " + std::to_string(sign));
+    m.lidar_angle_convention.sign = static_cast<int>(sign);
+    m.lidar_angle_convention.offset_rad = a.Number("offset_rad");
+    const JsonObject c = root.Object("calibration");
+    c.AllowOnly({"alpha_rad", "beta_rad", "gamma_rad"});
+    // Mounting errors are small angles; anything beyond pi is a unit mistake (degrees).
+    auto angle = [&c](const char* key) {
+      c.Number(key);  // Required: reports "missing" / wrong type first.
+      return c.InRange(key, -M_PI, M_PI, 0.0);
+    };
+    m.calibration.alpha = angle("alpha_rad");
+    m.calibration.beta = angle("beta_rad");
+    m.calibration.gamma = angle("gamma_rad");
+    m.link = root.String("link", "");
+    m.agent = root.String("agent", "");
+    if (root.Has("settings")) {
+      root.Object("settings");  // Must be an object; its content is not ours to check.
+      m.settings = j.at("settings");
+    }
+    m.notes = root.String("notes", "");
+  } catch (const JsonError& e) {
+    return Status::Error(source + ": " + e.what());
+  }
+  *meta = std::move(m);
+  return Status::Ok();
+}
+
+Status ReadSessionMeta(const std::string& path, SessionMeta* meta) {
+  json j;
+  const Status s = ReadJsonFile(path, &j);
+  if (!s.ok()) return s;
+  return SessionMetaFromJson(j, path, meta);
+}
+
+Status WriteSessionMeta(const std::string& path, const SessionMeta& meta) {
+  return WriteFileAtomically(path, SessionMetaToJson(meta).dump(2) + "\n");
+}
+
+// ---------------------------------------------------------------------------
+// frames.bin reading
+
+std::string FramesLoadReport::ToString() const {
+  std::ostringstream s;
+  s << "format " << format_version << ", " << records << " records, " << record_bytes
+    << " frame bytes, file " << file_bytes << " bytes";
+  if (truncated_tail)
+    s << "; torn tail dropped (" << tail_bytes_dropped << " bytes: " << tail_reason << ")";
+  if (corrupt_records_skipped > 0)
+    s << "; " << corrupt_records_skipped << " corrupt records skipped";
+  return s.str();
+}
+
+Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& source,
+                            const FramesLoadOptions& options, std::vector<SessionRecord>* records,
+                            FramesLoadReport* report) {
+  FramesLoadReport rep;
+  rep.file_bytes = n;
+  records->clear();
+  if (n > 0 && data == nullptr) return Status::Error(source + ": no data");
+  if (n < kSessionFramesHeaderSize) {
+    // A session whose header never reached the disk is indistinguishable
+    // from a foreign file; refuse rather than guess.
+    return Status::Error(source + ": " + std::to_string(n) +
+                         " bytes, too short for the 16-byte sweepscan frames header");
+  }
+  if (std::memcmp(data, kSessionFramesMagic, sizeof(kSessionFramesMagic)) != 0) {
+    return Status::Error(source + ": not a sweepscan frames file (wrong magic bytes)");
+  }
+  rep.format_version = GetU32(data + 8);
+  if (rep.format_version != kSessionFormatVersion) {
+    return Status::Error(source + ": unsupported frames format version " +
+                         std::to_string(rep.format_version) + " (this program reads " +
+                         std::to_string(kSessionFormatVersion) + ")");
+  }
+  size_t pos = kSessionFramesHeaderSize;
+  uint64_t index = 0;
+  while (pos < n) {
+    const size_t left = n - pos;
+    auto torn = [&](const std::string& why) {
+      rep.truncated_tail = true;
+      rep.tail_bytes_dropped = left;
+      rep.tail_reason = RecordAt(index, pos) + ": " + why;
+    };
+    if (left < 4 + 8) {
+      torn("only " + std::to_string(left) + " bytes left, a record header needs 12");
+      break;
+    }
+    const uint32_t length = GetU32(data + pos);
+    if (length > kSessionMaxRecordBytes) {
+      return Status::Error(source + ": " + RecordAt(index, pos) + ": absurd length " +
+                           std::to_string(length) + " (limit " +
+                           std::to_string(kSessionMaxRecordBytes) + ")");
+    }
+    const size_t total = kSessionRecordOverhead + length;
+    if (left < total) {
+      torn("needs " + std::to_string(total) + " bytes, " + std::to_string(left) + " left");
+      break;
+    }
+    const uint32_t crc = Crc32c(data + pos, 12 + length);
+    if (crc != GetU32(data + pos + 12 + length)) {
+      if (left == total) {
+        // The final record of the file: a write torn by a crash (its last
+        // page never reached the disk) looks exactly like this.
+        torn("CRC mismatch in the final record");
+        break;
+      }
+      if (!options.skip_corrupt_records) {
+        return Status::Error(source + ": " + RecordAt(index, pos) + ": CRC mismatch");
+      }
+      ++rep.corrupt_records_skipped;
+      pos += total;
+      ++index;
+      continue;
+    }
+    SessionRecord r;
+    r.receive_time_ns = GetI64(data + pos + 4);
+    r.bytes.assign(data + pos + 12, data + pos + 12 + length);
+    rep.record_bytes += length;
+    records->push_back(std::move(r));
+    pos += total;
+    ++index;
+  }
+  rep.records = records->size();
+  rep.valid_bytes = rep.truncated_tail ? n - rep.tail_bytes_dropped : n;
+  if (report != nullptr) *report = rep;
+  return Status::Ok();
+}
+
+Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
+                      std::vector<SessionRecord>* records, FramesLoadReport* report) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open for reading");
+  std::vector<uint8_t> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return Status::Error(path + ": read error");
+  return LoadFramesFromMemory(data.data(), data.size(), path, options, records, report);
+}
+
+Status LoadSession(const std::string& dir, const FramesLoadOptions& options, Session* session) {
+  struct stat st;
+  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    return Status::Error(dir + ": not a session folder (does not exist or is not a folder)");
+  }
+  Session s;
+  s.dir = dir;
+  Status status = ReadSessionMeta(Join(dir, kSessionMetaFile), &s.meta);
+  if (!status.ok()) return status;
+  status = LoadFramesFile(Join(dir, kSessionFramesFile), options, &s.records, &s.frames);
+  if (!status.ok()) return status;
+  *session = std::move(s);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------
+// Writing
+
+bool SessionWriterOptions::IsValid(std::string* error) const {
+  if (flush_interval <= std::chrono::steady_clock::duration::zero()) {
+    *error = "flush_interval must be > 0";
+    return false;
+  }
+  if (max_buffered_bytes == 0) {
+    *error = "max_buffered_bytes must be > 0";
+    return false;
+  }
+  return true;
+}
+
+SessionWriter::SessionWriter(std::string dir, int fd, uint64_t file_bytes,
+                             const SessionWriterOptions& options)
+    : dir_(std::move(dir)),
+      fd_(fd),
+      options_(options),
+      file_bytes_(file_bytes),
+      last_sync_(std::chrono::steady_clock::now()) {}
+
+SessionWriter::~SessionWriter() { Close(); }
+
+Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
+                             const SessionWriterOptions& options,
+                             std::unique_ptr<SessionWriter>* out) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(dir + ": " + error);
+  if (!meta.geometry.IsValid(&error)) return Status::Error(dir + ": " + error);
+  struct stat st;
+  if (::stat(dir.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) return Status::Error(dir + ": exists and is not a folder");
+    bool empty = true;
+    if (DIR* d = ::opendir(dir.c_str())) {
+      while (const dirent* e = ::readdir(d)) {
+        if (std::strcmp(e->d_name, ".") != 0 && std::strcmp(e->d_name, "..") != 0) empty = false;
+      }
+      ::closedir(d);
+    }
+    if (!empty && !options.overwrite) {
+      return Status::Error(dir +
+                           ": folder exists and is not empty; refusing to overwrite a "
+                           "session (ask for overwrite explicitly)");
+    }
+    if (!empty) {
+      for (const char* f :
+           {kSessionFramesFile, kSessionMetaFile, "picks.json", "calibration.json"}) {
+        const std::string p = Join(dir, f);
+        if (::unlink(p.c_str()) != 0 && errno != ENOENT) {
+          return Status::Error(Errno(p + ": cannot remove old session file"));
+        }
+      }
+    }
+  } else {
+    const Status s = MakeDirs(dir);
+    if (!s.ok()) return s;
+  }
+  SessionMeta m = meta;
+  m.format_version = kSessionFormatVersion;
+  if (m.created_utc.empty()) m.created_utc = UtcNowIso8601();
+  Status s = WriteSessionMeta(Join(dir, kSessionMetaFile), m);
+  if (!s.ok()) return s;
+  const std::string frames = Join(dir, kSessionFramesFile);
+  const int fd = ::open(frames.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::Error(Errno(frames + ": cannot create"));
+  const std::vector<uint8_t> header = FramesFileHeader();
+  if (!WriteAll(fd, header.data(), header.size()) || ::fsync(fd) != 0) {
+    ::close(fd);
+    return Status::Error(Errno(frames + ": cannot write the file header"));
+  }
+  SyncDir(dir);
+  out->reset(new SessionWriter(dir, fd, header.size(), options));
+  return Status::Ok();
+}
+
+Status SessionWriter::Open(const std::string& dir, const SessionWriterOptions& options,
+                           std::unique_ptr<SessionWriter>* out, FramesLoadReport* report) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(dir + ": " + error);
+  Session session;
+  Status s = LoadSession(dir, FramesLoadOptions(), &session);
+  if (!s.ok()) return s;
+  const std::string frames = Join(dir, kSessionFramesFile);
+  const int fd = ::open(frames.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd < 0) return Status::Error(Errno(frames + ": cannot open for appending"));
+  // Cut a torn tail so new records follow the last good one.
+  const off_t end = static_cast<off_t>(session.frames.valid_bytes);
+  if (::ftruncate(fd, end) != 0 || ::lseek(fd, end, SEEK_SET) != end || ::fsync(fd) != 0) {
+    ::close(fd);
+    return Status::Error(Errno(frames + ": cannot cut the torn tail"));
+  }
+  if (report != nullptr) *report = session.frames;
+  out->reset(new SessionWriter(dir, fd, session.frames.valid_bytes, options));
+  return Status::Ok();
+}
+
+Status SessionWriter::Append(const uint8_t* bytes, size_t n, int64_t receive_time_ns) {
+  if (!failed_.empty()) return Status::Error(failed_);
+  if (fd_ < 0) return Status::Error(dir_ + ": session is closed");
+  if (n > kSessionMaxRecordBytes || (n > 0 && bytes == nullptr)) {
+    return Status::Error(dir_ + ": record of " + std::to_string(n) + " bytes refused (limit " +
+                         std::to_string(kSessionMaxRecordBytes) + ")");
+  }
+  const size_t start = buffer_.size();
+  PutU32(static_cast<uint32_t>(n), &buffer_);
+  PutI64(receive_time_ns, &buffer_);
+  if (n > 0) buffer_.insert(buffer_.end(), bytes, bytes + n);
+  PutU32(Crc32c(buffer_.data() + start, 12 + n), &buffer_);
+  ++records_appended_;
+  dirty_ = true;
+  if (buffer_.size() >= options_.max_buffered_bytes) return WriteBuffer();
+  return Status::Ok();
+}
+
+Status SessionWriter::WriteBuffer() {
+  if (buffer_.empty()) return Status::Ok();
+  if (!WriteAll(fd_, buffer_.data(), buffer_.size())) {
+    failed_ = Errno(Join(dir_, kSessionFramesFile) + ": write failed");
+    return Status::Error(failed_);
+  }
+  file_bytes_ += buffer_.size();
+  buffer_.clear();
+  return Status::Ok();
+}
+
+Status SessionWriter::Flush() {
+  if (!failed_.empty()) return Status::Error(failed_);
+  if (fd_ < 0) return Status::Ok();
+  Status s = WriteBuffer();
+  if (!s.ok()) return s;
+  if (::fdatasync(fd_) != 0) {
+    failed_ = Errno(Join(dir_, kSessionFramesFile) + ": fsync failed");
+    return Status::Error(failed_);
+  }
+  dirty_ = false;
+  last_sync_ = std::chrono::steady_clock::now();
+  return Status::Ok();
+}
+
+Status SessionWriter::FlushIfDue(std::chrono::steady_clock::time_point now) {
+  if (!dirty_) {
+    last_sync_ = now;  // Nothing to lose: restart the interval.
+    return failed_.empty() ? Status::Ok() : Status::Error(failed_);
+  }
+  if (now - last_sync_ < options_.flush_interval) return Status::Ok();
+  return Flush();
+}
+
+Status SessionWriter::Close() {
+  if (fd_ < 0) return failed_.empty() ? Status::Ok() : Status::Error(failed_);
+  Status s = Flush();
+  if (::close(fd_) != 0 && s.ok()) s = Status::Error(Errno(dir_ + ": close failed"));
+  fd_ = -1;
+  return s;
+}
+
+Status SessionWriter::UpdateMeta(const SessionMeta& meta) {
+  SessionMeta m = meta;
+  m.format_version = kSessionFormatVersion;
+  const Status s = WriteSessionMeta(Join(dir_, kSessionMetaFile), m);
+  if (s.ok()) SyncDir(dir_);
+  return s;
+}
+
+}  // namespace sweepscan

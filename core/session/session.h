@@ -1,0 +1,197 @@
+// Session folders: a recording of every robot link frame the workstation
+// received, with its receive time, plus metadata (robot geometry, lidar angle
+// convention, calibration, settings, notes). Format: docs/session-format.md.
+//
+//   NAME.sweepscan/
+//     frames.bin   append-only: 16-byte file header, then records
+//                  [u32 length][i64 receive time ns][length bytes][u32 CRC-32C]
+//     meta.json    written atomically (temporary file + fsync + rename)
+//     picks.json, calibration.json, ...  added later by other tools
+//
+// The core stores the link frames as opaque bytes (core must not depend on
+// hardware/); hardware/link/telemetry_decoder.h turns them into sensor records.
+//
+// Durability: SessionWriter buffers appends in memory and hands them to the
+// kernel (write) and the disk (fsync) whenever FlushIfDue() finds the flush
+// interval elapsed, on Flush() and on Close(). A process killed by SIGKILL
+// loses at most what was appended since the last write(); a power loss at
+// most what was appended since the last fsync. A reader drops a torn final
+// record (and says so) and refuses corruption elsewhere with its byte offset.
+//
+// Threading: a SessionWriter is used from one thread (the recorder); the
+// loaders are pure functions.
+#ifndef SWEEPSCAN_CORE_SESSION_SESSION_H_
+#define SWEEPSCAN_CORE_SESSION_SESSION_H_
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/common/status.h"
+#include "core/common/time.h"
+#include "core/pose/odometry.h"
+#include "core/robot/robot_model.h"
+
+namespace sweepscan {
+
+inline constexpr uint32_t kSessionFormatVersion = 1;
+// frames.bin starts with these 8 bytes (PNG-style: a non-ASCII first byte,
+// and CR LF / SUB / LF to detect text-mode mangling), then u32 version, u32 0.
+inline constexpr uint8_t kSessionFramesMagic[8] = {0x89, 'S', 'W', 'F', 0x0D, 0x0A, 0x1A, 0x0A};
+inline constexpr size_t kSessionFramesHeaderSize = 16;
+inline constexpr size_t kSessionRecordOverhead = 16;  // u32 length + i64 time + u32 CRC.
+// Records longer than this are corrupt (a link frame is at most 64 KiB + 32).
+inline constexpr uint32_t kSessionMaxRecordBytes = 1u << 20;
+inline constexpr char kSessionFramesFile[] = "frames.bin";
+inline constexpr char kSessionMetaFile[] = "meta.json";
+
+// Everything meta.json holds (docs/session-format.md, "meta.json").
+struct SessionMeta {
+  uint32_t format_version = kSessionFormatVersion;
+  std::string created_utc;  // ISO 8601, e.g. "2026-11-22T10:15:00Z"; filled by Create() if empty.
+  RobotGeometry geometry;
+  LidarAngleConvention lidar_angle_convention;
+  MountingError calibration;  // alpha, beta, gamma (rad) in use while recording.
+  std::string link;           // Where the frames came from: "tcp:127.0.0.1:5600",
+                              // "serial:/dev/ttyUSB0@921600", "sim".
+  std::string agent;          // The agent's Hello name, if known.
+  nlohmann::json settings = nlohmann::json::object();  // Owned by the components that wrote them.
+  std::string notes;
+};
+
+// The world pose the recording starts at, which fixes the frame its clouds
+// and picks are in: a simulated session's scenario start
+// (settings.scenario.path.start, written by `sweepscan-cli simulate`), so
+// that it lines up with the scenario's world; otherwise the origin (a real
+// robot's world is its start pose).
+Pose2d SessionStartPose(const SessionMeta& meta);
+
+nlohmann::json SessionMetaToJson(const SessionMeta& meta);
+// Strict: missing keys, wrong types, unknown keys, out-of-range values and an
+// unsupported format_version are refused with `source` and the JSON path.
+Status SessionMetaFromJson(const nlohmann::json& j, const std::string& source, SessionMeta* meta);
+Status ReadSessionMeta(const std::string& path, SessionMeta* meta);
+Status WriteSessionMeta(const std::string& path, const SessionMeta& meta);  // Atomic.
+
+// One received link frame.
+struct SessionRecord {
+  int64_t receive_time_ns =
+      0;  // Workstation CLOCK_REALTIME, ns since the Unix epoch (informational).
+  std::vector<uint8_t> bytes;
+};
+
+struct FramesLoadOptions {
+  // false (default): a corrupt record before the end of the file is an error.
+  // true: it is skipped (counted in corrupt_records_skipped) when its length
+  // field is plausible, so the next record can be found; an absurd length is
+  // still an error (nothing after it can be located).
+  bool skip_corrupt_records = false;
+};
+
+struct FramesLoadReport {
+  uint32_t format_version = 0;
+  uint64_t records = 0;       // Records loaded.
+  uint64_t record_bytes = 0;  // Sum of their payload sizes.
+  uint64_t file_bytes = 0;
+  uint64_t valid_bytes = 0;     // Offset just after the last good record (where appending resumes).
+  bool truncated_tail = false;  // A torn final record was dropped.
+  uint64_t tail_bytes_dropped = 0;
+  std::string tail_reason;  // e.g. "record 812 at byte 53211: needs 96 bytes, 40 left".
+  uint64_t corrupt_records_skipped = 0;
+
+  std::string ToString() const;
+};
+
+// Parses frames.bin content. `source` names it in messages
+// ("lab.sweepscan/frames.bin"). Error messages look like
+//   lab.sweepscan/frames.bin: record 1234 at byte 5678901: CRC mismatch
+// A torn tail (an incomplete final record, or a complete final record whose
+// CRC fails) is not an error: it is dropped and reported in *report.
+Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& source,
+                            const FramesLoadOptions& options, std::vector<SessionRecord>* records,
+                            FramesLoadReport* report);
+Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
+                      std::vector<SessionRecord>* records, FramesLoadReport* report);
+
+struct Session {
+  std::string dir;
+  SessionMeta meta;
+  std::vector<SessionRecord> records;
+  FramesLoadReport frames;
+};
+// Reads meta.json (strictly) and every complete record of frames.bin.
+Status LoadSession(const std::string& dir, const FramesLoadOptions& options, Session* session);
+
+struct SessionWriterOptions {
+  // Replace an existing session in the folder (frames.bin, meta.json and the
+  // derived files picks.json, calibration.json are deleted first). Default:
+  // refuse when the folder exists and is not empty.
+  bool overwrite = false;
+  // FlushIfDue() writes and fsyncs when this much time passed since the last
+  // sync. With the caller ticking every <= 0.25 s and fsync taking < 0.25 s,
+  // everything older than 1 s is on disk.
+  std::chrono::steady_clock::duration flush_interval = std::chrono::milliseconds(500);
+  // Appends beyond this many buffered bytes are written to the kernel at once
+  // (no fsync), bounding the memory.
+  size_t max_buffered_bytes = 4u << 20;
+
+  bool IsValid(std::string* error) const;
+};
+
+class SessionWriter {
+ public:
+  // Creates the folder (and parents) with meta.json and an empty frames.bin.
+  static Status Create(const std::string& dir, const SessionMeta& meta,
+                       const SessionWriterOptions& options, std::unique_ptr<SessionWriter>* out);
+  // Reopens an existing session to append: validates frames.bin, cuts a torn
+  // tail (reported in *report), refuses corruption. meta.json is kept.
+  static Status Open(const std::string& dir, const SessionWriterOptions& options,
+                     std::unique_ptr<SessionWriter>* out, FramesLoadReport* report = nullptr);
+  ~SessionWriter();  // Close(), errors ignored: call Close() to see them.
+  SessionWriter(const SessionWriter&) = delete;
+  SessionWriter& operator=(const SessionWriter&) = delete;
+
+  // Buffers one record. Fails for n > kSessionMaxRecordBytes or after an
+  // earlier I/O error (the writer stays failed: the file may be torn).
+  Status Append(const uint8_t* bytes, size_t n, int64_t receive_time_ns);
+  Status Append(const std::vector<uint8_t>& bytes, int64_t receive_time_ns) {
+    return Append(bytes.data(), bytes.size(), receive_time_ns);
+  }
+  // The caller's time-based trigger: flushes (write + fsync) when the flush
+  // interval has elapsed since the last sync and there is anything new.
+  Status FlushIfDue(std::chrono::steady_clock::time_point now);
+  // write + fsync now.
+  Status Flush();
+  Status Close();
+  // Rewrites meta.json atomically (notes, calibration updated while recording).
+  Status UpdateMeta(const SessionMeta& meta);
+
+  const std::string& dir() const { return dir_; }
+  uint64_t records_appended() const { return records_appended_; }
+  uint64_t bytes_on_disk() const { return file_bytes_; }  // Written (not necessarily synced).
+
+ private:
+  SessionWriter(std::string dir, int fd, uint64_t file_bytes, const SessionWriterOptions& options);
+  Status WriteBuffer();
+
+  std::string dir_;
+  int fd_ = -1;
+  SessionWriterOptions options_;
+  std::vector<uint8_t> buffer_;
+  uint64_t file_bytes_ = 0;
+  uint64_t records_appended_ = 0;
+  bool dirty_ = false;  // Appended or written since the last fsync.
+  std::chrono::steady_clock::time_point last_sync_;
+  std::string failed_;  // Sticky I/O error.
+};
+
+// Current UTC time as ISO 8601 ("2026-11-22T10:15:00Z").
+std::string UtcNowIso8601();
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_SESSION_SESSION_H_

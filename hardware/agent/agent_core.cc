@@ -1,0 +1,449 @@
+#include "hardware/agent/agent_core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <type_traits>
+#include <variant>
+
+#include "hardware/codecs/x4_codec.h"
+#include "hardware/link/hmac_sha256.h"
+
+namespace sweepscan {
+namespace hardware {
+namespace {
+
+double Clamp(double x, double limit) { return std::max(-limit, std::min(limit, x)); }
+
+// Moves `value` toward `target` by at most `step` (step >= 0).
+double StepToward(double value, double target, double step) {
+  if (value < target) return std::min(target, value + step);
+  if (value > target) return std::max(target, value - step);
+  return value;
+}
+
+bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
+
+}  // namespace
+
+bool AgentOptions::IsValid(std::string* error) const {
+  auto fail = [error](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (require_auth && key.empty()) return fail("authentication required but the key is empty");
+  if (name.size() > kLinkMaxStringSize) return fail("name longer than 255 bytes");
+  if (watchdog <= Duration::zero()) return fail("watchdog period must be positive");
+  if (!PositiveFinite(v_max_mps)) return fail("v_max must be positive and finite");
+  if (!PositiveFinite(w_max_radps)) return fail("w_max must be positive and finite");
+  if (!PositiveFinite(accel_max_mps2)) return fail("accel_max must be positive and finite");
+  if (!PositiveFinite(alpha_max_radps2)) return fail("alpha_max must be positive and finite");
+  // The motor board's wire format saturates at 32.767 m/s and rad/s.
+  if (v_max_mps > 32.0 || w_max_radps > 32.0)
+    return fail("v_max / w_max beyond the motor board's range");
+  if (motor_period <= Duration::zero()) return fail("motor period must be positive");
+  if (motor_period >= watchdog) {
+    return fail("motor period must be shorter than the watchdog period");
+  }
+  if (status_period <= Duration::zero()) return fail("status period must be positive");
+  if (device_silent_after <= Duration::zero()) return fail("device silence limit must be positive");
+  if (auth_timeout <= Duration::zero()) return fail("auth timeout must be positive");
+  if (!std::isfinite(low_battery_v) || low_battery_v < 0.0) {
+    return fail("low battery threshold must be >= 0");
+  }
+  if (lidar_request_spacing < Duration::zero()) return fail("lidar request spacing must be >= 0");
+  if (max_client_payload < kLinkMacSize || max_client_payload > kLinkMaxPayload) {
+    return fail("max client payload must be within [32, 65536]");
+  }
+  return true;
+}
+
+void AgentOutput::Clear() {
+  to_client.clear();
+  for (auto& bytes : to_device) bytes.clear();
+  close_client = false;
+}
+
+AgentCore::AgentCore(const AgentOptions& options)
+    : options_(options), decoder_([&options] {
+        LinkDecoderOptions decoder_options;
+        decoder_options.max_payload = options.max_client_payload;
+        return decoder_options;
+      }()) {}
+
+void AgentCore::Start(Time now, AgentOutput* out) {
+  if (started_) return;
+  started_ = true;
+  start_time_ = now;
+  // The lidar may still be scanning from a previous run of the agent: stop
+  // it so its replies to the requests below are not buried in scan packets.
+  auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
+  const auto stop = EncodeX4Command(kX4CmdStop);
+  lidar.insert(lidar.end(), stop.begin(), stop.end());
+  lidar_requests_sent_ = 0;
+  // A zero command so a board that kept the last velocity of a crashed agent stops.
+  SendMotorCommand(now, out);
+  Tick(now, out);
+}
+
+void AgentCore::OnClientConnected(Time now, AgentOutput* out) {
+  ++counters_.connections;
+  client_connected_ = true;
+  closing_ = false;
+  authenticated_ = !options_.require_auth;
+  auth_attempted_ = false;
+  client_name_.clear();
+  connected_at_ = now;
+  last_client_frame_ = now;
+  decoder_.Reset();
+  encoder_ = LinkEncoder(LinkSender::kAgent);  // Each connection numbers from 0.
+  have_status_time_ = false;
+  SendGreeting(now, out);
+}
+
+void AgentCore::SendGreeting(Time now, AgentOutput* out) {
+  Hello hello;
+  hello.auth_required = options_.require_auth;
+  hello.name = options_.name;
+  hello.devices = options_.devices;
+  Send(now, hello, out);
+  if (!options_.require_auth) {
+    SendStatus(now, out);
+    return;
+  }
+  if (authenticated_) return;  // Serial re-Hello on an authenticated link: nothing to prove.
+  // A fresh nonce for every challenge; one attempt per nonce.
+  auth_attempted_ = false;
+  const auto& source = options_.random_source;
+  nonce_ok_ =
+      source ? source(nonce_.data(), nonce_.size()) : FillRandomBytes(nonce_.data(), nonce_.size());
+  if (!nonce_ok_) {
+    // Never fall back to a guessable nonce: a replayed response would pass.
+    Deny(now, "agent has no random source", out);
+    return;
+  }
+  AuthChallenge challenge;
+  challenge.nonce = nonce_;
+  Send(now, challenge, out);
+}
+
+void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
+  if (!client_connected_) return;
+  client_connected_ = false;
+  closing_ = false;
+  const bool was_authenticated = authenticated_;
+  authenticated_ = false;
+  decoder_.Reset();
+  // A dropped connection trips the watchdog at once (docs/protocol.md).
+  if (was_authenticated && MotionCommanded()) {
+    ++watchdog_trips_;
+    watchdog_ = WatchdogState::kTripped;
+    HardStop(now, out);
+  }
+}
+
+void AgentCore::OnClientBytes(const uint8_t* data, size_t n, Time now, AgentOutput* out) {
+  if (!client_connected_ || closing_) return;
+  std::vector<LinkMessage> messages;
+  decoder_.Feed(data, n, &messages);
+  for (const LinkMessage& message : messages) {
+    if (closing_) break;
+    HandleMessage(message, now, out);
+  }
+}
+
+void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput* out) {
+  if (message.header.sender != LinkSender::kClient) {
+    // Our own frames echoed back (a serial loop) or a confused peer.
+    ++counters_.client_frames_from_wrong_sender;
+    return;
+  }
+  ++frames_received_;
+  if (authenticated_) last_client_frame_ = now;  // Any valid frame feeds the watchdog.
+
+  const LinkPayload& payload = message.payload;
+  if (const auto* hello = std::get_if<Hello>(&payload)) {
+    client_name_ = hello->name;
+    if (hello->protocol_version < kLinkProtocolVersion) {
+      Deny(now, "protocol version", out);
+      return;
+    }
+    // Serial: the client may have opened the port after our Hello; say it again.
+    if (options_.hello_on_client_hello) SendGreeting(now, out);
+    return;
+  }
+  if (const auto* response = std::get_if<AuthResponse>(&payload)) {
+    HandleAuthResponse(*response, now, out);
+    return;
+  }
+
+  const uint8_t type = message.header.type;
+  const bool is_command =
+      std::holds_alternative<DriveCommand>(payload) || std::holds_alternative<Stop>(payload) ||
+      std::holds_alternative<EmergencyStop>(payload) ||
+      std::holds_alternative<ClearEmergencyStop>(payload) ||
+      std::holds_alternative<Heartbeat>(payload) || std::holds_alternative<LidarMotor>(payload);
+  if (!is_command) return;  // Agent-to-client types and unknown types: ignored.
+
+  // Stopping is always allowed; nothing else before authentication.
+  if (!authenticated_ && type != static_cast<uint8_t>(LinkMessageType::kEmergencyStop)) {
+    Ack(now, message, AckResult::kNotAuthenticated, out);
+    return;
+  }
+
+  if (const auto* drive = std::get_if<DriveCommand>(&payload)) {
+    if (estop_latched_) {
+      Ack(now, message, AckResult::kEmergencyStopLatched, out);
+      return;
+    }
+    if (!MotionCommanded()) {
+      // From rest the ramp starts now, not at the last tick.
+      have_ramp_time_ = true;
+      last_ramp_time_ = now;
+    }
+    commanded_v_ = Clamp(drive->v_mps, options_.v_max_mps);
+    commanded_w_ = Clamp(drive->w_radps, options_.w_max_radps);
+    const WatchdogState before = watchdog_;
+    watchdog_ = WatchdogState::kIdle;  // A Drive re-arms a tripped watchdog.
+    UpdateWatchdogArming();
+    if (motor_zero_sent_) have_motor_send_ = false;  // Starting from rest: send at the next tick.
+    Ack(now, message, AckResult::kAccepted, out);
+    if (watchdog_ != before) SendStatus(now, out);
+  } else if (std::holds_alternative<Stop>(payload)) {
+    commanded_v_ = 0.0;
+    commanded_w_ = 0.0;
+    Ack(now, message, AckResult::kAccepted, out);
+  } else if (std::holds_alternative<EmergencyStop>(payload)) {
+    const bool was_latched = estop_latched_;
+    estop_latched_ = true;
+    HardStop(now, out);
+    if (watchdog_ == WatchdogState::kArmed) watchdog_ = WatchdogState::kIdle;
+    Ack(now, message, AckResult::kAccepted, out);
+    if (!was_latched && authenticated_) SendStatus(now, out);
+  } else if (std::holds_alternative<ClearEmergencyStop>(payload)) {
+    const bool was_latched = estop_latched_;
+    estop_latched_ = false;
+    commanded_v_ = 0.0;  // Still until the next Drive.
+    commanded_w_ = 0.0;
+    Ack(now, message, AckResult::kAccepted, out);
+    if (was_latched) SendStatus(now, out);
+  } else if (std::holds_alternative<Heartbeat>(payload)) {
+    Ack(now, message, AckResult::kAccepted, out);
+  } else if (const auto* lidar = std::get_if<LidarMotor>(&payload)) {
+    auto& bytes = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
+    const auto command = EncodeX4Command(lidar->on ? kX4CmdScan : kX4CmdStop);
+    bytes.insert(bytes.end(), command.begin(), command.end());
+    if (lidar->on && !lidar_motor_on_) lidar_motor_on_since_ = now;
+    lidar_motor_on_ = lidar->on;
+    Ack(now, message, AckResult::kAccepted, out);
+  }
+}
+
+void AgentCore::HandleAuthResponse(const AuthResponse& response, Time now, AgentOutput* out) {
+  if (!options_.require_auth) {
+    // Nothing to check on an open link; tell the client it may proceed.
+    Send(now, AuthResult{AuthOutcome::kOk, "authentication not required"}, out);
+    return;
+  }
+  if (auth_attempted_ || authenticated_) {
+    Deny(now, "one attempt per connection", out);
+    return;
+  }
+  auth_attempted_ = true;
+  const Sha256Digest expected = LinkAuthMac(options_.key, nonce_.data(), nonce_.size());
+  if (!nonce_ok_ || !ConstantTimeEqual(expected.data(), response.mac.data(), kLinkMacSize)) {
+    Deny(now, "authentication failed", out);
+    return;
+  }
+  authenticated_ = true;
+  last_client_frame_ = now;
+  ++counters_.auth_ok;
+  Send(now, AuthResult{AuthOutcome::kOk, ""}, out);
+  SendStatus(now, out);
+}
+
+void AgentCore::Deny(Time now, const std::string& reason, AgentOutput* out) {
+  ++counters_.auth_denied;
+  authenticated_ = false;
+  Send(now, AuthResult{AuthOutcome::kDenied, reason}, out);
+  closing_ = true;
+  out->close_client = true;
+}
+
+void AgentCore::OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, Time now,
+                              AgentOutput* out) {
+  const uint8_t id = static_cast<uint8_t>(device);
+  if (id < 1 || id > 3 || n == 0) return;
+  const size_t index = LinkDeviceIndex(device);
+  device_bytes_[index] += n;
+  have_device_bytes_[index] = true;
+  last_device_bytes_[index] = now;
+  if (device == LinkDevice::kMotorBoard) {
+    // Only the battery voltage and stop flag matter here; the workstation
+    // decodes the full feedback from the Telemetry.
+    motor_feedback_.Feed(data, n, now);
+    for (const MotorFeedback& feedback : motor_feedback_.TakeRecords()) {
+      battery_v_ = static_cast<float>(feedback.voltage_v);
+      motor_stop_flag_ = feedback.stop_flag != 0;
+    }
+  }
+  if (!client_connected_ || !authenticated_ || closing_) return;  // No telemetry before auth.
+  const std::vector<uint8_t> frames = encoder_.EncodeTelemetry(now, device, now, data, n);
+  out->to_client.insert(out->to_client.end(), frames.begin(), frames.end());
+  ++counters_.telemetry_frames_sent;
+}
+
+void AgentCore::SetDevicePortError(LinkDevice device, bool error, Time now, AgentOutput* out) {
+  const uint8_t id = static_cast<uint8_t>(device);
+  if (id < 1 || id > 3) return;
+  const size_t index = LinkDeviceIndex(device);
+  if (port_error_[index] == error) return;
+  port_error_[index] = error;
+  if (client_authenticated()) SendStatus(now, out);
+}
+
+void AgentCore::Tick(Time now, AgentOutput* out) {
+  // Start-up requests to the lidar, one at a time.
+  if (started_ && lidar_requests_sent_ < 2 &&
+      now - start_time_ >= options_.lidar_request_spacing * (lidar_requests_sent_ + 1)) {
+    auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
+    const auto request =
+        EncodeX4Command(lidar_requests_sent_ == 0 ? kX4CmdDeviceInfo : kX4CmdHealth);
+    lidar.insert(lidar.end(), request.begin(), request.end());
+    ++lidar_requests_sent_;
+  }
+
+  if (client_connected_ && !closing_ && !authenticated_ &&
+      now - connected_at_ >= options_.auth_timeout) {
+    Deny(now, "authentication timeout", out);
+  }
+
+  // Watchdog first, so a quiet link never gets one more ramp step.
+  if (watchdog_ == WatchdogState::kArmed && now - last_client_frame_ >= options_.watchdog) {
+    ++watchdog_trips_;
+    watchdog_ = WatchdogState::kTripped;
+    HardStop(now, out);
+    if (client_authenticated()) SendStatus(now, out);
+  }
+
+  UpdateRamp(now);
+  const bool moving = MotionCommanded();
+  if (moving) {
+    if (!have_motor_send_ || now - last_motor_send_ >= options_.motor_period) {
+      SendMotorCommand(now, out);
+    }
+  } else if (!motor_zero_sent_) {
+    SendMotorCommand(now, out);  // The ramp reached zero: say so once.
+  }
+  const WatchdogState before = watchdog_;
+  UpdateWatchdogArming();
+  if (before != watchdog_ && client_authenticated()) SendStatus(now, out);
+
+  if (client_authenticated() && !closing_ &&
+      (!have_status_time_ || now - last_status_ >= options_.status_period)) {
+    SendStatus(now, out);
+  }
+}
+
+bool AgentCore::MotionCommanded() const {
+  return commanded_v_ != 0.0 || commanded_w_ != 0.0 || applied_v_ != 0.0 || applied_w_ != 0.0;
+}
+
+void AgentCore::UpdateWatchdogArming() {
+  if (watchdog_ == WatchdogState::kTripped) return;  // Until the next Drive.
+  watchdog_ = MotionCommanded() ? WatchdogState::kArmed : WatchdogState::kIdle;
+}
+
+void AgentCore::UpdateRamp(Time now) {
+  if (!have_ramp_time_) {
+    have_ramp_time_ = true;
+    last_ramp_time_ = now;
+    return;
+  }
+  const double dt = std::max(0.0, ToSeconds(now - last_ramp_time_));
+  last_ramp_time_ = now;
+  applied_v_ = StepToward(applied_v_, commanded_v_, options_.accel_max_mps2 * dt);
+  applied_w_ = StepToward(applied_w_, commanded_w_, options_.alpha_max_radps2 * dt);
+}
+
+void AgentCore::HardStop(Time now, AgentOutput* out) {
+  commanded_v_ = commanded_w_ = 0.0;
+  applied_v_ = applied_w_ = 0.0;
+  SendMotorCommand(now, out);
+}
+
+void AgentCore::SendMotorCommand(Time now, AgentOutput* out) {
+  MotorCommand command;
+  command.vx_mps = applied_v_;
+  command.wz_radps = applied_w_;
+  const auto bytes = EncodeMotorCommand(command);
+  auto& motor = out->to_device[LinkDeviceIndex(LinkDevice::kMotorBoard)];
+  motor.insert(motor.end(), bytes.begin(), bytes.end());
+  motor_zero_sent_ = applied_v_ == 0.0 && applied_w_ == 0.0;
+  have_motor_send_ = true;
+  last_motor_send_ = now;
+  ++counters_.motor_commands_sent;
+}
+
+void AgentCore::Send(Time now, const LinkPayload& payload, AgentOutput* out) {
+  const std::vector<uint8_t> frame = encoder_.Encode(now, payload);
+  out->to_client.insert(out->to_client.end(), frame.begin(), frame.end());
+}
+
+void AgentCore::Ack(Time now, const LinkMessage& message, AckResult result, AgentOutput* out) {
+  if (result != AckResult::kAccepted) ++commands_refused_;
+  CommandAck ack;
+  ack.acked_sequence = message.header.sequence;
+  ack.acked_type = message.header.type;
+  ack.result = result;
+  ack.echo_time = message.header.time;
+  Send(now, ack, out);
+}
+
+void AgentCore::SendStatus(Time now, AgentOutput* out) {
+  if (!client_connected_ || !authenticated_ || closing_) return;  // Nothing before auth.
+  Send(now, status(now), out);
+  have_status_time_ = true;
+  last_status_ = now;
+  ++counters_.status_frames_sent;
+}
+
+LinkStatus AgentCore::status(Time now) const {
+  LinkStatus s;
+  s.battery_voltage_v = battery_v_;
+  auto silent = [&](LinkDevice device) {
+    const size_t i = LinkDeviceIndex(device);
+    const Time since = have_device_bytes_[i] ? last_device_bytes_[i] : start_time_;
+    return started_ && now - since > options_.device_silent_after;
+  };
+  if (lidar_motor_on_ && now - lidar_motor_on_since_ > options_.device_silent_after &&
+      silent(LinkDevice::kLidar)) {
+    s.fault_bits |= kFaultLidarSilent;
+  }
+  if (silent(LinkDevice::kImu)) s.fault_bits |= kFaultImuSilent;
+  if (silent(LinkDevice::kMotorBoard)) s.fault_bits |= kFaultMotorBoardSilent;
+  if (options_.low_battery_v > 0.0 && have_device_bytes_[2] &&
+      battery_v_ < options_.low_battery_v) {
+    s.fault_bits |= kFaultLowBattery;
+  }
+  if (motor_stop_flag_) s.fault_bits |= kFaultMotorBoardStop;
+  if (port_error_[0] || port_error_[1] || port_error_[2]) s.fault_bits |= kFaultDevicePortError;
+  s.watchdog = watchdog_;
+  s.emergency_stop_latched = estop_latched_;
+  s.client_authenticated = client_connected_ && authenticated_;
+  s.lidar_motor_on = lidar_motor_on_;
+  s.commanded_v_mps = commanded_v_;
+  s.commanded_w_radps = commanded_w_;
+  s.applied_v_mps = applied_v_;
+  s.applied_w_radps = applied_w_;
+  s.frames_received = frames_received_;
+  const DecoderStats& codec = decoder_.stats().codec;
+  s.frames_rejected =
+      static_cast<uint32_t>(codec.checksum_errors + codec.length_errors + codec.framing_errors);
+  s.commands_refused = commands_refused_;
+  s.watchdog_trips = watchdog_trips_;
+  s.device_bytes = device_bytes_;
+  return s;
+}
+
+}  // namespace hardware
+}  // namespace sweepscan

@@ -1,0 +1,222 @@
+// The robot agent's logic (sweepscan-robotd and the simulator), without any
+// I/O: bytes and times in, bytes out. docs/protocol.md is the contract with
+// the workstation; docs/robot-agent.md describes the behaviour in words.
+//
+//   client link  --OnClientBytes-->  +-----------+  --AgentOutput::to_client-->  client link
+//   lidar/IMU/motor board --OnDeviceBytes-->  | AgentCore |  --AgentOutput::to_device-->  device
+//   ports timer        --Tick(now)------>  +-----------+
+//
+// What it does:
+//  - per connection: Hello (+ AuthChallenge with a fresh 32-byte CSPRNG nonce
+//    when authentication is required), checks the client's
+//    AuthResponse = HMAC-SHA256(key, "sweepscan-link-v1" || nonce) in
+//    constant time; a wrong key gets AuthResult denied and the connection is
+//    closed. Until then only Hello, AuthResponse and EmergencyStop are
+//    accepted; everything else is acked "not authenticated" with no effect.
+//  - device bytes -> Telemetry frames stamped with the robot receive time.
+//  - DriveCommand -> clamped to |v| <= v_max, |w| <= w_max (the "commanded"
+//    set-point), then ramped with the acceleration limits (the "applied"
+//    velocity) and sent to the motor board as EncodeMotorCommand frames at a
+//    fixed rate while moving. Stop ramps down; EmergencyStop zeroes at once
+//    and latches until ClearEmergencyStop.
+//  - watchdog: no valid frame from the authenticated client for
+//    options.watchdog while motion is commanded -> zero to the motors at once
+//    (no ramp), state tripped, reported in Status. A lost connection trips it
+//    at once.
+//  - CommandAck for every command (echo time for the client's latency), Status
+//    at options.status_period and on every change of watchdog / e-stop / auth state.
+//  - LidarMotor on/off -> X4 scan start / stop (A5 60 / A5 65); Start() sends
+//    device info and health requests (A5 90, A5 92) to the lidar.
+//
+// Deterministic: every input carries the robot time `now` (monotonic,
+// non-decreasing across calls); the only non-determinism is the nonce source
+// (injectable through AgentOptions::random_source).
+//
+// Threading: an AgentCore lives on one thread (the agent's I/O thread, see
+// RobotAgent); it is not thread-safe.
+#ifndef SWEEPSCAN_HARDWARE_AGENT_AGENT_CORE_H_
+#define SWEEPSCAN_HARDWARE_AGENT_AGENT_CORE_H_
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/common/time.h"
+#include "hardware/codecs/motor_board_codec.h"
+#include "hardware/link/link_protocol.h"
+
+namespace sweepscan {
+namespace hardware {
+
+struct AgentOptions {
+  std::string name = "sweepscan-robotd 0.1.0";  // Sent in Hello.
+  std::vector<HelloDevice> devices;             // Described in Hello.
+
+  // TCP: true (the default). A serial link may run without authentication
+  // (physical access); the client is then authenticated from the start.
+  bool require_auth = true;
+  std::vector<uint8_t> key;  // Pre-shared key, raw bytes; must not be empty when require_auth.
+  // An unauthenticated connection is closed after this long, so a silent
+  // client cannot hold the single client slot.
+  Duration auth_timeout = std::chrono::seconds(5);
+  // Re-send Hello (and a fresh challenge) when the client sends Hello. Needed
+  // on a serial link, where the client may open the port after the agent's
+  // first Hello went out; off for TCP (the agent speaks first on connect).
+  bool hello_on_client_hello = false;
+
+  Duration watchdog = kLinkDefaultWatchdog;  // 500 ms.
+  double v_max_mps = 0.5;                    // |commanded v| <= v_max.
+  double w_max_radps = 1.5;                  // |commanded w| <= w_max.
+  double accel_max_mps2 = 1.0;               // Ramp of applied v (speeding up and slowing down).
+  double alpha_max_radps2 = 3.0;             // Ramp of applied w.
+  Duration motor_period = std::chrono::milliseconds(50);    // 20 Hz motor commands while moving.
+  Duration status_period = std::chrono::milliseconds(100);  // 10 Hz Status.
+  Duration device_silent_after = std::chrono::seconds(1);   // Status fault bits 0..2.
+  double low_battery_v = 0.0;  // Fault bit 3 below this voltage; 0 disables.
+  // Delay between the start-up requests to the lidar (A5 90, then A5 92): the
+  // X4 answers one request at a time.
+  Duration lidar_request_spacing = std::chrono::milliseconds(100);
+  // The agent's limit on client frames (clients send only small messages).
+  size_t max_client_payload = 1024;
+  // Nonce source; null = FillRandomBytes (/dev/urandom). Tests may inject one.
+  std::function<bool(uint8_t*, size_t)> random_source;
+
+  bool IsValid(std::string* error) const;
+};
+
+// What one call produced. Callers send to_client on the link, then close the
+// connection if close_client is set (and call OnClientDisconnected), and
+// write to_device[LinkDeviceIndex(device)] to each device port.
+struct AgentOutput {
+  std::vector<uint8_t> to_client;
+  std::array<std::vector<uint8_t>, 3> to_device;  // lidar, imu, motor board.
+  bool close_client = false;
+
+  bool empty() const {
+    return to_client.empty() && to_device[0].empty() && to_device[1].empty() &&
+           to_device[2].empty() && !close_client;
+  }
+  void Clear();
+};
+
+// 0, 1, 2 for lidar, IMU, motor board; requires a valid device.
+inline size_t LinkDeviceIndex(LinkDevice device) { return static_cast<size_t>(device) - 1; }
+
+// Counters beyond those in Status, for tests and logs.
+struct AgentCounters {
+  uint64_t connections = 0;
+  uint64_t auth_ok = 0;
+  uint64_t auth_denied = 0;
+  uint64_t motor_commands_sent = 0;
+  uint64_t telemetry_frames_sent = 0;
+  uint64_t status_frames_sent = 0;
+  uint64_t client_frames_from_wrong_sender = 0;  // Good frames whose sender byte is "agent".
+};
+
+class AgentCore {
+ public:
+  explicit AgentCore(const AgentOptions& options);
+
+  // Once, before anything else: lidar start-up requests, first motor zero.
+  void Start(Time now, AgentOutput* out);
+
+  // A client connected (TCP accept, or the serial link opened): new encoder
+  // sequence, Hello, and AuthChallenge with a fresh nonce when required.
+  void OnClientConnected(Time now, AgentOutput* out);
+  // The connection is gone: trips the watchdog at once if motion was commanded.
+  void OnClientDisconnected(Time now, AgentOutput* out);
+  // Bytes from the client link, any chunking.
+  void OnClientBytes(const uint8_t* data, size_t n, Time now, AgentOutput* out);
+  // Bytes read from a device port: forwarded as Telemetry (once authenticated).
+  void OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, Time now, AgentOutput* out);
+  // A device port failed (or recovered): Status fault bit 5.
+  void SetDevicePortError(LinkDevice device, bool error, Time now, AgentOutput* out);
+  // Call often (every <= 10-20 ms): watchdog, ramps, motor and Status cadence,
+  // start-up requests, auth timeout. The watchdog reacts within one tick.
+  void Tick(Time now, AgentOutput* out);
+
+  // State, as it would go out in the next Status.
+  LinkStatus status(Time now) const;
+  bool client_connected() const { return client_connected_; }
+  bool client_authenticated() const { return client_connected_ && authenticated_; }
+  WatchdogState watchdog_state() const { return watchdog_; }
+  double applied_v_mps() const { return applied_v_; }
+  double applied_w_radps() const { return applied_w_; }
+  const AgentCounters& counters() const { return counters_; }
+  const AgentOptions& options() const { return options_; }
+  const std::string& client_name() const { return client_name_; }
+
+ private:
+  // Hello, then AuthChallenge with a fresh nonce (or Status when no auth is needed).
+  void SendGreeting(Time now, AgentOutput* out);
+  void Send(Time now, const LinkPayload& payload, AgentOutput* out);
+  void SendStatus(Time now, AgentOutput* out);
+  void Ack(Time now, const LinkMessage& message, AckResult result, AgentOutput* out);
+  void Deny(Time now, const std::string& reason, AgentOutput* out);
+  void HandleMessage(const LinkMessage& message, Time now, AgentOutput* out);
+  void HandleAuthResponse(const AuthResponse& response, Time now, AgentOutput* out);
+  // Zero to the motors at once (e-stop and watchdog).
+  void HardStop(Time now, AgentOutput* out);
+  void SendMotorCommand(Time now, AgentOutput* out);
+  void UpdateRamp(Time now);
+  void UpdateWatchdogArming();
+  bool MotionCommanded() const;
+
+  AgentOptions options_;
+  LinkDecoder decoder_;
+  LinkEncoder encoder_{LinkSender::kAgent};
+  MotorFeedbackDecoder motor_feedback_;
+
+  // Connection.
+  bool client_connected_ = false;
+  bool closing_ = false;  // Denied: ignore the rest of this connection's bytes.
+  bool authenticated_ = false;
+  bool auth_attempted_ = false;
+  bool nonce_ok_ = false;  // The random source worked for this connection's nonce.
+  std::array<uint8_t, kLinkNonceSize> nonce_{};
+  Time connected_at_;
+  Time last_client_frame_;  // Last valid frame from the authenticated client.
+  std::string client_name_;
+
+  // Motion. commanded_* is the clamped set-point, applied_* the ramped value.
+  double commanded_v_ = 0.0;
+  double commanded_w_ = 0.0;
+  double applied_v_ = 0.0;
+  double applied_w_ = 0.0;
+  bool estop_latched_ = false;
+  WatchdogState watchdog_ = WatchdogState::kIdle;
+  bool have_ramp_time_ = false;
+  Time last_ramp_time_;
+  bool motor_zero_sent_ = true;  // The last motor frame sent was zero.
+  bool have_motor_send_ = false;
+  Time last_motor_send_;
+
+  // Devices.
+  bool started_ = false;
+  Time start_time_;
+  int lidar_requests_sent_ = 0;  // Start-up requests: 0, 1 (A5 90 sent), 2 (A5 92 sent).
+  bool lidar_motor_on_ = false;
+  Time lidar_motor_on_since_;
+  std::array<bool, 3> have_device_bytes_{};
+  std::array<Time, 3> last_device_bytes_{};
+  std::array<uint64_t, 3> device_bytes_{};
+  std::array<bool, 3> port_error_{};
+  float battery_v_ = 0.0f;
+  bool motor_stop_flag_ = false;
+
+  // Status bookkeeping.
+  bool have_status_time_ = false;
+  Time last_status_;
+  uint32_t frames_received_ = 0;
+  uint32_t commands_refused_ = 0;
+  uint32_t watchdog_trips_ = 0;
+  AgentCounters counters_;
+};
+
+}  // namespace hardware
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_HARDWARE_AGENT_AGENT_CORE_H_

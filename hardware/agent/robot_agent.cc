@@ -1,0 +1,295 @@
+#include "hardware/agent/robot_agent.h"
+
+#include <QHostAddress>
+#include <QTcpServer>
+#include <QTcpSocket>
+#include <QTimer>
+#include <chrono>
+
+namespace sweepscan {
+namespace hardware {
+namespace {
+
+constexpr LinkDevice kDevices[3] = {LinkDevice::kLidar, LinkDevice::kImu, LinkDevice::kMotorBoard};
+
+// What a second client gets while one is connected (docs/protocol.md,
+// "One client at a time"): our Hello and a denial, on its own sequence.
+std::vector<uint8_t> Refusal(const AgentOptions& options, Time now, const std::string& reason) {
+  LinkEncoder encoder(LinkSender::kAgent);
+  Hello hello;
+  hello.auth_required = options.require_auth;
+  hello.name = options.name;
+  hello.devices = options.devices;
+  std::vector<uint8_t> bytes = encoder.Encode(now, hello);
+  const std::vector<uint8_t> denied = encoder.Encode(now, AuthResult{AuthOutcome::kDenied, reason});
+  bytes.insert(bytes.end(), denied.begin(), denied.end());
+  return bytes;
+}
+
+AgentOptions AdjustedOptions(const RobotAgentConfig& config) {
+  AgentOptions options = config.agent;
+  if (config.link != RobotAgentConfig::LinkKind::kTcp) {
+    // A serial line has no connect event and no way to close: the client may
+    // open it at any time, so the agent repeats its Hello when the client
+    // greets, and physical access stands in for the key (docs/protocol.md).
+    options.require_auth = false;
+    options.hello_on_client_hello = true;
+  }
+  return options;
+}
+
+}  // namespace
+
+bool RobotAgentConfig::IsValid(QString* error) const {
+  std::string agent_error;
+  AgentOptions adjusted = agent;
+  if (link != LinkKind::kTcp) adjusted.require_auth = false;
+  if (!adjusted.IsValid(&agent_error)) {
+    if (error != nullptr) *error = QString::fromStdString(agent_error);
+    return false;
+  }
+  auto fail = [error](const QString& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (link == LinkKind::kSerial && link_serial_port.isEmpty()) {
+    return fail(QStringLiteral("serial link without a port"));
+  }
+  if (link == LinkKind::kTcp && QHostAddress(listen_address).isNull()) {
+    return fail(QStringLiteral("listen address '%1' is not an IP address").arg(listen_address));
+  }
+  if (tick_ms <= 0 || tick_ms > 100) return fail(QStringLiteral("tick period must be 1..100 ms"));
+  if (sim_step_ms <= 0 || sim_step_ms > 100) {
+    return fail(QStringLiteral("simulator step must be 1..100 ms"));
+  }
+  if (lidar_baud <= 0 || imu_baud <= 0 || motor_baud <= 0 || link_baud <= 0) {
+    return fail(QStringLiteral("baud rates must be positive"));
+  }
+  return true;
+}
+
+RobotAgent::RobotAgent(const RobotAgentConfig& config, std::unique_ptr<VirtualDevices> sim,
+                       QObject* parent)
+    : QObject(parent),
+      config_(config),
+      sim_(std::move(sim)),
+      core_(std::make_unique<AgentCore>(AdjustedOptions(config))) {}
+
+RobotAgent::~RobotAgent() { Shutdown(); }
+
+Time RobotAgent::Now() const {
+  if (sim_ != nullptr) {
+    return Time(config_.sim_clock_origin) + Duration(clock_.nsecsElapsed());
+  }
+  return Time(
+      std::chrono::duration_cast<Duration>(std::chrono::steady_clock::now().time_since_epoch()));
+}
+
+bool RobotAgent::Start(QString* error) {
+  if (!config_.IsValid(error)) return false;
+  clock_.start();
+
+  switch (config_.link) {
+    case RobotAgentConfig::LinkKind::kTcp: {
+      server_ = new QTcpServer(this);
+      if (!server_->listen(QHostAddress(config_.listen_address), config_.listen_port)) {
+        if (error != nullptr) {
+          *error = QStringLiteral("cannot listen on %1:%2: %3")
+                       .arg(config_.listen_address)
+                       .arg(config_.listen_port)
+                       .arg(server_->errorString());
+        }
+        return false;
+      }
+      connect(server_, &QTcpServer::newConnection, this, &RobotAgent::OnNewTcpConnection);
+      break;
+    }
+    case RobotAgentConfig::LinkKind::kSerial: {
+      auto* stream = new SerialStream(this);
+      if (!stream->Open(config_.link_serial_port, config_.link_baud, error)) {
+        delete stream;
+        return false;
+      }
+      AttachClient(stream);
+      break;
+    }
+    case RobotAgentConfig::LinkKind::kPty: {
+      pty_ = std::make_unique<PtyMasterStream>();
+      if (!pty_->Open(error)) return false;
+      AttachClient(pty_.get());
+      break;
+    }
+  }
+
+  core_->Start(Now(), &out_);
+  if (sim_ == nullptr) {
+    for (int i = 0; i < 3; ++i) OpenDevice(i);
+    reopen_timer_ = new QTimer(this);
+    connect(reopen_timer_, &QTimer::timeout, this, [this] {
+      for (int i = 0; i < 3; ++i) {
+        if (devices_[i] == nullptr || !devices_[i]->IsOpen()) OpenDevice(i);
+      }
+    });
+    reopen_timer_->start(config_.device_reopen_ms);
+  } else {
+    sim_timer_ = new QTimer(this);
+    sim_timer_->setTimerType(Qt::PreciseTimer);
+    connect(sim_timer_, &QTimer::timeout, this, &RobotAgent::OnSimStep);
+    sim_timer_->start(config_.sim_step_ms);
+  }
+  Dispatch(&out_);
+
+  tick_timer_ = new QTimer(this);
+  tick_timer_->setTimerType(Qt::PreciseTimer);
+  connect(tick_timer_, &QTimer::timeout, this, &RobotAgent::OnTick);
+  tick_timer_->start(config_.tick_ms);
+  return true;
+}
+
+void RobotAgent::Shutdown() {
+  if (tick_timer_ != nullptr) tick_timer_->stop();
+  if (sim_timer_ != nullptr) sim_timer_->stop();
+  if (reopen_timer_ != nullptr) reopen_timer_->stop();
+  if (client_ != nullptr) DropClient(QStringLiteral("agent shutting down"));
+  if (server_ != nullptr) server_->close();
+  for (SerialStream*& device : devices_) {
+    if (device != nullptr) device->Close();
+  }
+}
+
+quint16 RobotAgent::tcp_port() const { return server_ != nullptr ? server_->serverPort() : 0; }
+
+QString RobotAgent::pty_path() const { return pty_ != nullptr ? pty_->SlavePath() : QString(); }
+
+void RobotAgent::OpenDevice(int index) {
+  const QString* port[3] = {&config_.lidar_port, &config_.imu_port, &config_.motor_port};
+  const qint32 baud[3] = {config_.lidar_baud, config_.imu_baud, config_.motor_baud};
+  if (port[index]->isEmpty()) return;  // Not fitted.
+  if (devices_[index] == nullptr) {
+    devices_[index] = new SerialStream(this);
+    const LinkDevice device = kDevices[index];
+    connect(devices_[index], &ByteStream::bytesReceived, this, [this, device](const QByteArray& b) {
+      core_->OnDeviceBytes(device, reinterpret_cast<const uint8_t*>(b.constData()),
+                           static_cast<size_t>(b.size()), Now(), &out_);
+      Dispatch(&out_);
+    });
+    connect(devices_[index], &ByteStream::closed, this, [this, device](const QString& reason) {
+      emit logMessage(QStringLiteral("%1 port lost: %2")
+                          .arg(LinkDeviceName(static_cast<uint8_t>(device)), reason));
+      device_failed_[LinkDeviceIndex(device)] = true;
+      core_->SetDevicePortError(device, true, Now(), &out_);
+      Dispatch(&out_);
+    });
+  }
+  QString error;
+  const bool ok = devices_[index]->Open(*port[index], baud[index], &error);
+  // Log transitions only: a missing adapter is retried every second.
+  if (!ok && !device_failed_[index]) emit logMessage(error);
+  if (ok && device_failed_[index]) emit logMessage(QStringLiteral("%1 reopened").arg(*port[index]));
+  device_failed_[index] = !ok;
+  core_->SetDevicePortError(kDevices[index], !ok, Now(), &out_);
+  Dispatch(&out_);
+}
+
+void RobotAgent::OnNewTcpConnection() {
+  while (QTcpSocket* socket = server_->nextPendingConnection()) {
+    const QString peer = socket->peerAddress().toString();
+    const qint64 now_ms = clock_.elapsed();
+    QString refusal;
+    if (client_ != nullptr) {
+      refusal = QStringLiteral("busy");
+    } else if (last_auth_failure_ms_.contains(peer) &&
+               now_ms - last_auth_failure_ms_.value(peer) < config_.auth_failure_delay_ms) {
+      refusal = QStringLiteral("too many failed attempts, retry later");
+    }
+    if (!refusal.isEmpty()) {
+      const auto bytes = Refusal(core_->options(), Now(), refusal.toStdString());
+      socket->write(reinterpret_cast<const char*>(bytes.data()), static_cast<qint64>(bytes.size()));
+      socket->disconnectFromHost();
+      connect(socket, &QTcpSocket::disconnected, socket, &QObject::deleteLater);
+      emit logMessage(QStringLiteral("refused %1: %2").arg(peer, refusal));
+      continue;
+    }
+    auto* stream = new TcpStream(socket, this);
+    client_peer_ = peer;
+    AttachClient(stream);
+  }
+}
+
+void RobotAgent::AttachClient(ByteStream* stream) {
+  client_ = stream;
+  if (client_peer_.isEmpty()) client_peer_ = stream->Describe();
+  connect(stream, &ByteStream::bytesReceived, this, &RobotAgent::OnClientBytes);
+  connect(stream, &ByteStream::closed, this, [this](const QString& reason) { DropClient(reason); });
+  core_->OnClientConnected(Now(), &out_);
+  emit clientConnected(client_peer_);
+  Dispatch(&out_);
+}
+
+void RobotAgent::DropClient(const QString& reason) {
+  if (client_ == nullptr) return;
+  ByteStream* stream = client_;
+  client_ = nullptr;
+  const QString peer = client_peer_;
+  client_peer_.clear();
+  core_->OnClientDisconnected(Now(), &out_);
+  stream->disconnect(this);
+  stream->Close();
+  if (stream != pty_.get()) stream->deleteLater();
+  emit clientDisconnected(peer, reason);
+  Dispatch(&out_);
+}
+
+void RobotAgent::OnClientBytes(const QByteArray& bytes) {
+  core_->OnClientBytes(reinterpret_cast<const uint8_t*>(bytes.constData()),
+                       static_cast<size_t>(bytes.size()), Now(), &out_);
+  Dispatch(&out_);
+}
+
+void RobotAgent::OnTick() {
+  core_->Tick(Now(), &out_);
+  Dispatch(&out_);
+}
+
+void RobotAgent::OnSimStep() {
+  std::vector<DeviceChunk> chunks;
+  sim_->AdvanceTo(Now(), &chunks);
+  for (const DeviceChunk& chunk : chunks) {
+    // An emulated read returns the moment its last byte arrived, so the
+    // receive time is the chunk's own time (not this timer's lateness).
+    core_->OnDeviceBytes(chunk.device, chunk.bytes.data(), chunk.bytes.size(), chunk.time, &out_);
+  }
+  Dispatch(&out_);
+}
+
+void RobotAgent::Dispatch(AgentOutput* out) {
+  if (out->empty()) return;
+  for (int i = 0; i < 3; ++i) {
+    std::vector<uint8_t>& bytes = out->to_device[i];
+    if (bytes.empty()) continue;
+    if (sim_ != nullptr) {
+      sim_->WriteToDevice(kDevices[i], bytes.data(), bytes.size(), Now());
+    } else if (devices_[i] != nullptr && devices_[i]->IsOpen()) {
+      devices_[i]->Write(bytes.data(), bytes.size());
+    }
+  }
+  const bool close = out->close_client;
+  if (client_ != nullptr && !out->to_client.empty()) {
+    client_->Write(out->to_client.data(), out->to_client.size());
+  }
+  out->Clear();
+  if (close && client_ != nullptr) {
+    if (config_.link == RobotAgentConfig::LinkKind::kTcp) {
+      last_auth_failure_ms_.insert(client_peer_, clock_.elapsed());
+      DropClient(QStringLiteral("denied"));
+    } else {
+      // A serial line cannot be closed: start the session over.
+      core_->OnClientDisconnected(Now(), out);
+      core_->OnClientConnected(Now(), out);
+      Dispatch(out);
+    }
+  }
+}
+
+}  // namespace hardware
+}  // namespace sweepscan

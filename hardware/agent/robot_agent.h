@@ -1,0 +1,170 @@
+// The robot agent as a Qt object: AgentCore (the logic) wired to real byte
+// streams. Used by sweepscan-robotd (serial device ports) and sweepscan-sim
+// (SimDevices, the byte-exact device emulations, advanced in real time).
+//
+//   devices: three SerialStreams (X4 128000, HI219 115200, motor board 115200)
+//            or a SimDevices advanced from a timer;
+//   link:    a QTcpServer (127.0.0.1 unless told otherwise; one client at a
+//            time, others get AuthResult denied "busy"), a serial port, or the
+//            master of a pseudo-terminal (sweepscan-sim --pty);
+//   timer:   Tick() every tick_period (watchdog, ramps, motor and Status cadence).
+//
+// Robot clock: CLOCK_MONOTONIC (std::chrono::steady_clock) for real devices;
+// for the simulator, the time since Start() plus sim_clock_origin (1 s),
+// the simulated world's own clock, so telemetry times equal simulated times.
+//
+// Threading: a RobotAgent, its streams, its SimDevices and its AgentCore all
+// live on the thread that created it (the agent's I/O thread, in the
+// executables the main thread, which does nothing else). Nothing blocks:
+// reads are event driven, writes queued or non-blocking.
+#ifndef SWEEPSCAN_HARDWARE_AGENT_ROBOT_AGENT_H_
+#define SWEEPSCAN_HARDWARE_AGENT_ROBOT_AGENT_H_
+
+#include <QElapsedTimer>
+#include <QHash>
+#include <QObject>
+#include <QString>
+#include <array>
+#include <memory>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "core/common/time.h"
+#include "hardware/agent/agent_core.h"
+#include "hardware/link/qt_transport.h"
+
+class QTcpServer;
+class QTimer;
+
+namespace sweepscan {
+namespace hardware {
+
+// Devices emulated in-process instead of serial ports (the simulator). An
+// interface so sweepscan-robotd does not link the simulated world (PCL,
+// Ceres); SimDevicesAdapter below plugs hardware/emulation/sim_devices.h in.
+struct DeviceChunk {
+  LinkDevice device = LinkDevice::kLidar;
+  Time time;  // Robot time at which the agent can read these bytes.
+  std::vector<uint8_t> bytes;
+};
+class VirtualDevices {
+ public:
+  virtual ~VirtualDevices() = default;
+  virtual void WriteToDevice(LinkDevice device, const uint8_t* data, size_t n, Time now) = 0;
+  // Appends everything the devices sent up to `now`, in time order.
+  virtual void AdvanceTo(Time now, std::vector<DeviceChunk>* out) = 0;
+};
+
+// Adapter for hardware::SimDevices (a template so this header need not
+// include the simulator):
+//   RobotAgent agent(config, std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(
+//                                std::move(sim)));
+template <typename Sim, typename Chunk>
+class SimDevicesAdapter : public VirtualDevices {
+ public:
+  explicit SimDevicesAdapter(std::unique_ptr<Sim> sim) : sim_(std::move(sim)) {}
+  void WriteToDevice(LinkDevice device, const uint8_t* data, size_t n, Time now) override {
+    sim_->WriteToDevice(device, data, n, now);
+  }
+  void AdvanceTo(Time now, std::vector<DeviceChunk>* out) override {
+    chunks_.clear();
+    sim_->AdvanceTo(now, &chunks_);
+    for (auto& chunk : chunks_) out->push_back({chunk.device, chunk.time, std::move(chunk.bytes)});
+  }
+  Sim* sim() const { return sim_.get(); }
+
+ private:
+  std::unique_ptr<Sim> sim_;
+  std::vector<Chunk> chunks_;  // Reused between steps.
+};
+
+struct RobotAgentConfig {
+  AgentOptions agent;  // require_auth is forced off for serial and pty links.
+
+  enum class LinkKind { kTcp, kSerial, kPty };
+  LinkKind link = LinkKind::kTcp;
+  QString listen_address = QStringLiteral("127.0.0.1");  // kTcp.
+  quint16 listen_port = 5600;                            // kTcp; 0 = any free port.
+  QString link_serial_port;                              // kSerial.
+  qint32 link_baud = 921600;                             // kSerial.
+
+  // Device ports (ignored with a SimDevices). An empty path means "not
+  // fitted": no Telemetry for it, and its silence is reported in Status.
+  QString lidar_port;
+  QString imu_port;
+  QString motor_port;
+  qint32 lidar_baud = 128000;
+  qint32 imu_baud = 115200;
+  qint32 motor_baud = 115200;
+  int device_reopen_ms = 1000;  // Retry a failed device port this often.
+
+  int tick_ms = 10;     // AgentCore::Tick cadence (the watchdog's resolution).
+  int sim_step_ms = 5;  // SimDevices::AdvanceTo cadence.
+  // Robot time at Start() with virtual devices: sim::SimWorld::kStartTimeS
+  // (1 s; not included here to keep the simulator out of sweepscan-robotd).
+  Duration sim_clock_origin = std::chrono::seconds(1);
+  // After a denied authentication, further connections from the same
+  // address are refused for this long (slows down key guessing).
+  int auth_failure_delay_ms = 1000;
+
+  bool IsValid(QString* error) const;
+};
+
+class RobotAgent : public QObject {
+  Q_OBJECT
+ public:
+  // `devices` (optional) replaces the device ports.
+  explicit RobotAgent(const RobotAgentConfig& config,
+                      std::unique_ptr<VirtualDevices> devices = nullptr, QObject* parent = nullptr);
+  ~RobotAgent() override;
+
+  // Opens the devices (a device that fails to open is retried and reported
+  // as a port error; the agent still runs) and the link. False with a
+  // message when the link cannot be served (port in use, bad address).
+  bool Start(QString* error);
+  void Shutdown();
+
+  quint16 tcp_port() const;  // The listening port (useful with listen_port 0).
+  QString pty_path() const;  // kPty: the slave path for the workstation.
+  Time Now() const;          // The robot clock.
+  const AgentCore& core() const { return *core_; }
+  VirtualDevices* virtual_devices() const { return sim_.get(); }  // Null for real devices.
+  bool has_client() const { return client_ != nullptr; }
+
+ signals:
+  void clientConnected(const QString& peer);
+  void clientDisconnected(const QString& peer, const QString& reason);
+  void logMessage(const QString& message);
+
+ private:
+  void OnNewTcpConnection();
+  void AttachClient(ByteStream* stream);
+  void DropClient(const QString& reason);
+  void OnClientBytes(const QByteArray& bytes);
+  void OnTick();
+  void OnSimStep();
+  void OpenDevice(int index);
+  void Dispatch(AgentOutput* out);
+
+  RobotAgentConfig config_;
+  std::unique_ptr<VirtualDevices> sim_;
+  std::unique_ptr<AgentCore> core_;
+  QElapsedTimer clock_;  // Sim clock origin.
+  QTcpServer* server_ = nullptr;
+  ByteStream* client_ = nullptr;  // The one connected client (owned, child of this).
+  QString client_peer_;
+  std::unique_ptr<PtyMasterStream> pty_;
+  std::array<SerialStream*, 3> devices_{};
+  std::array<bool, 3> device_failed_{};  // Open failed or port lost (logged once).
+  QTimer* tick_timer_ = nullptr;
+  QTimer* sim_timer_ = nullptr;
+  QTimer* reopen_timer_ = nullptr;
+  QHash<QString, qint64> last_auth_failure_ms_;  // Peer address -> clock_ ms.
+  AgentOutput out_;
+};
+
+}  // namespace hardware
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_HARDWARE_AGENT_ROBOT_AGENT_H_

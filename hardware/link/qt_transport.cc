@@ -1,0 +1,303 @@
+#include "hardware/link/qt_transport.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <QFile>
+#include <QHostAddress>
+#include <QSerialPort>
+#include <QSocketNotifier>
+#include <QTcpSocket>
+#include <cstring>
+#include <vector>
+
+namespace sweepscan {
+namespace hardware {
+
+// ---------------------------------------------------------------------------
+// SerialStream
+
+SerialStream::SerialStream(QObject* parent) : ByteStream(parent), port_(new QSerialPort(this)) {
+  connect(port_, &QSerialPort::readyRead, this, [this] { emit bytesReceived(port_->readAll()); });
+  connect(port_, &QSerialPort::errorOccurred, this, [this](QSerialPort::SerialPortError error) {
+    // Timeouts are not errors for a non-blocking reader; anything that makes
+    // the port unusable (unplugged adapter) closes the stream.
+    if (error == QSerialPort::NoError || error == QSerialPort::TimeoutError) return;
+    if (error == QSerialPort::ResourceError || error == QSerialPort::PermissionError ||
+        error == QSerialPort::DeviceNotFoundError) {
+      if (!port_->isOpen()) return;  // A failed Open() reports through its return value.
+      const QString reason = port_->errorString();
+      port_->close();
+      emit closed(reason);
+    }
+  });
+}
+
+SerialStream::~SerialStream() { Close(); }
+
+bool SerialStream::Open(const QString& port, qint32 baud, QString* error) {
+  name_ = port;
+  baud_ = baud;
+  port_->setPortName(port);
+  if (!port_->open(QIODevice::ReadWrite)) {
+    if (error != nullptr) *error = QStringLiteral("%1: %2").arg(port, port_->errorString());
+    return false;
+  }
+  // A pseudo-terminal accepts any rate; a real adapter refuses odd ones.
+  if (!port_->setBaudRate(baud) || !port_->setDataBits(QSerialPort::Data8) ||
+      !port_->setParity(QSerialPort::NoParity) || !port_->setStopBits(QSerialPort::OneStop) ||
+      !port_->setFlowControl(QSerialPort::NoFlowControl)) {
+    if (error != nullptr) {
+      *error =
+          QStringLiteral("%1: cannot set %2 8N1: %3").arg(port).arg(baud).arg(port_->errorString());
+    }
+    port_->close();
+    return false;
+  }
+  port_->clear();  // Stale bytes from before we opened are not ours to decode.
+  return true;
+}
+
+bool SerialStream::IsOpen() const { return port_->isOpen(); }
+
+bool SerialStream::Write(const uint8_t* data, size_t n) {
+  if (!port_->isOpen()) {
+    bytes_dropped_ += n;
+    return false;
+  }
+  const qint64 written = port_->write(reinterpret_cast<const char*>(data), static_cast<qint64>(n));
+  if (written != static_cast<qint64>(n)) {
+    bytes_dropped_ += n - static_cast<size_t>(written < 0 ? 0 : written);
+    return false;
+  }
+  return true;
+}
+
+void SerialStream::Close() {
+  if (port_->isOpen()) port_->close();
+}
+
+QString SerialStream::Describe() const {
+  return QStringLiteral("serial:%1@%2").arg(name_).arg(baud_);
+}
+
+void SerialStream::SetDataTerminalReady(bool on) {
+  if (port_->isOpen()) port_->setDataTerminalReady(on);
+}
+
+// ---------------------------------------------------------------------------
+// TcpStream
+
+TcpStream::TcpStream(QTcpSocket* socket, QObject* parent) : ByteStream(parent), socket_(socket) {
+  socket_->setParent(this);
+  // Small frames (commands, acks) must not wait for Nagle's timer: the
+  // round trip is what the operator sees as latency.
+  socket_->setSocketOption(QAbstractSocket::LowDelayOption, 1);
+  connect(socket_, &QTcpSocket::readyRead, this,
+          [this] { emit bytesReceived(socket_->readAll()); });
+  connect(socket_, &QTcpSocket::connected, this, [this] {
+    socket_->setSocketOption(QAbstractSocket::LowDelayOption, 1);
+    emit connected();
+  });
+  connect(socket_, &QTcpSocket::disconnected, this, [this] {
+    if (!closing_) emit closed(QStringLiteral("connection closed by peer"));
+  });
+  connect(socket_, &QTcpSocket::errorOccurred, this, [this](QAbstractSocket::SocketError error) {
+    if (closing_) return;
+    // RemoteHostClosedError is followed by disconnected(); report the rest
+    // (refused, timeout, network) when no connection was established.
+    if (error != QAbstractSocket::RemoteHostClosedError &&
+        socket_->state() != QAbstractSocket::ConnectedState) {
+      closing_ = true;
+      emit closed(socket_->errorString());
+    }
+  });
+}
+
+TcpStream::~TcpStream() {
+  closing_ = true;
+  socket_->abort();
+}
+
+void TcpStream::ConnectTo(const QString& host, quint16 port) {
+  closing_ = false;
+  socket_->connectToHost(host, port);
+}
+
+bool TcpStream::IsOpen() const { return socket_->state() == QAbstractSocket::ConnectedState; }
+
+bool TcpStream::Write(const uint8_t* data, size_t n) {
+  if (!IsOpen()) {
+    bytes_dropped_ += n;
+    return false;
+  }
+  return socket_->write(reinterpret_cast<const char*>(data), static_cast<qint64>(n)) ==
+         static_cast<qint64>(n);
+}
+
+void TcpStream::Close() {
+  closing_ = true;
+  // Send what is queued (an AuthResult denied), then close.
+  if (socket_->state() == QAbstractSocket::ConnectedState) socket_->flush();
+  socket_->disconnectFromHost();
+}
+
+void TcpStream::Abort() {
+  closing_ = true;
+  socket_->abort();
+}
+
+QString TcpStream::Describe() const {
+  return QStringLiteral("tcp:%1:%2")
+      .arg(socket_->peerAddress().toString())
+      .arg(socket_->peerPort());
+}
+
+QString TcpStream::PeerAddress() const { return socket_->peerAddress().toString(); }
+
+// ---------------------------------------------------------------------------
+// PtyMasterStream
+
+PtyMasterStream::PtyMasterStream(QObject* parent) : ByteStream(parent) {}
+
+PtyMasterStream::~PtyMasterStream() { Close(); }
+
+bool PtyMasterStream::Open(QString* error) {
+  int master = -1;
+  int slave = -1;
+  char name[256] = {0};
+  termios raw{};
+  cfmakeraw(&raw);
+  if (openpty(&master, &slave, name, &raw, nullptr) != 0) {
+    if (error != nullptr) *error = QStringLiteral("openpty: %1").arg(strerror(errno));
+    return false;
+  }
+  // Raw on both ends: no echo, no line editing, no CR/LF translation, all
+  // 256 byte values pass (the link is binary).
+  tcsetattr(slave, TCSANOW, &raw);
+  tcsetattr(master, TCSANOW, &raw);
+  fcntl(master, F_SETFL, fcntl(master, F_GETFL) | O_NONBLOCK);
+  fcntl(master, F_SETFD, FD_CLOEXEC);
+  fcntl(slave, F_SETFD, FD_CLOEXEC);
+  master_fd_ = master;
+  slave_fd_ = slave;
+  slave_path_ = QString::fromLocal8Bit(name);
+  notifier_ = new QSocketNotifier(master_fd_, QSocketNotifier::Read, this);
+  connect(notifier_, &QSocketNotifier::activated, this, [this] { OnReadable(); });
+  return true;
+}
+
+void PtyMasterStream::OnReadable() {
+  QByteArray bytes;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t got = ::read(master_fd_, buffer, sizeof(buffer));
+    if (got > 0) {
+      bytes.append(buffer, static_cast<int>(got));
+      continue;
+    }
+    if (got < 0 && errno == EINTR) continue;
+    break;  // EAGAIN: drained. EIO cannot happen while slave_fd_ is open.
+  }
+  if (!bytes.isEmpty()) emit bytesReceived(bytes);
+}
+
+bool PtyMasterStream::Write(const uint8_t* data, size_t n) {
+  if (master_fd_ < 0) {
+    bytes_dropped_ += n;
+    return false;
+  }
+  size_t done = 0;
+  while (done < n) {
+    const ssize_t put = ::write(master_fd_, data + done, n - done);
+    if (put > 0) {
+      done += static_cast<size_t>(put);
+    } else if (put < 0 && errno == EINTR) {
+      continue;
+    } else {
+      break;  // EAGAIN: the slave side is not reading; never block the agent.
+    }
+  }
+  bytes_dropped_ += n - done;
+  return done == n;
+}
+
+void PtyMasterStream::Close() {
+  if (notifier_ != nullptr) {
+    notifier_->setEnabled(false);
+    delete notifier_;
+    notifier_ = nullptr;
+  }
+  if (master_fd_ >= 0) ::close(master_fd_);
+  if (slave_fd_ >= 0) ::close(slave_fd_);
+  master_fd_ = slave_fd_ = -1;
+}
+
+// ---------------------------------------------------------------------------
+// Addresses and keys.
+
+QString LinkAddress::ToString() const {
+  if (kind == Kind::kTcp) return QStringLiteral("tcp:%1:%2").arg(host).arg(port);
+  return QStringLiteral("serial:%1@%2").arg(serial_port).arg(baud);
+}
+
+bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error) {
+  auto fail = [&](const QString& why) {
+    if (error != nullptr) *error = QStringLiteral("link address '%1': %2").arg(text, why);
+    return false;
+  };
+  LinkAddress result;
+  QString rest = text;
+  if (rest.startsWith(QStringLiteral("serial:"))) {
+    result.kind = LinkAddress::Kind::kSerial;
+    rest = rest.mid(7);
+    const int at = rest.lastIndexOf('@');
+    if (at >= 0) {
+      bool ok = false;
+      result.baud = rest.mid(at + 1).toInt(&ok);
+      if (!ok || result.baud <= 0) return fail(QStringLiteral("bad baud rate"));
+      rest = rest.left(at);
+    }
+    if (rest.isEmpty()) return fail(QStringLiteral("no serial port"));
+    result.serial_port = rest;
+    *address = result;
+    return true;
+  }
+  if (rest.startsWith(QStringLiteral("tcp:"))) rest = rest.mid(4);
+  const int colon = rest.lastIndexOf(':');
+  if (colon <= 0) return fail(QStringLiteral("expected HOST:PORT"));
+  bool ok = false;
+  const int port = rest.mid(colon + 1).toInt(&ok);
+  if (!ok || port < 0 || port > 65535) return fail(QStringLiteral("bad port"));
+  result.kind = LinkAddress::Kind::kTcp;
+  result.host = rest.left(colon);
+  if (result.host.startsWith('[') && result.host.endsWith(']')) {
+    result.host = result.host.mid(1, result.host.size() - 2);  // [::1]:5600
+  }
+  result.port = static_cast<quint16>(port);
+  *address = result;
+  return true;
+}
+
+bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error) {
+  QFile file(path);
+  if (!file.open(QIODevice::ReadOnly)) {
+    if (error != nullptr) *error = QStringLiteral("key file %1: %2").arg(path, file.errorString());
+    return false;
+  }
+  QByteArray bytes = file.read(1 << 16);
+  if (bytes.endsWith('\n')) bytes.chop(1);
+  if (bytes.endsWith('\r')) bytes.chop(1);
+  if (bytes.isEmpty()) {
+    if (error != nullptr) *error = QStringLiteral("key file %1 is empty").arg(path);
+    return false;
+  }
+  key->assign(bytes.begin(), bytes.end());
+  return true;
+}
+
+}  // namespace hardware
+}  // namespace sweepscan

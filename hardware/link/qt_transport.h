@@ -1,0 +1,157 @@
+// Byte streams for the robot link and the device ports, behind one small
+// interface so the agent and the workstation do not care whether bytes go
+// over a QSerialPort, a QTcpSocket or a pseudo-terminal master:
+//
+//   ByteStream       bytesReceived(QByteArray) / closed(reason); Write(); Close().
+//   SerialStream     QSerialPort (8N1, raw).
+//   TcpStream        QTcpSocket (connected, or connecting with ConnectTo()).
+//   PtyMasterStream  the master side of an openpty() pair, for sweepscan-sim
+//                    --pty: the slave path is a real serial device that the
+//                    workstation opens with QSerialPort.
+//
+// Writes never block: they are queued by Qt (serial, TCP) or written with a
+// non-blocking write(2) (pty; bytes the kernel cannot take are dropped and
+// counted, as a serial line with nobody listening would lose them).
+//
+// Threading: every stream lives on the thread that created it (the I/O
+// thread) and is used only there; signals are emitted on that thread.
+#ifndef SWEEPSCAN_HARDWARE_LINK_QT_TRANSPORT_H_
+#define SWEEPSCAN_HARDWARE_LINK_QT_TRANSPORT_H_
+
+#include <QByteArray>
+#include <QObject>
+#include <QString>
+#include <QtGlobal>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+class QSerialPort;
+class QSocketNotifier;
+class QTcpSocket;
+
+namespace sweepscan {
+namespace hardware {
+
+class ByteStream : public QObject {
+  Q_OBJECT
+ public:
+  explicit ByteStream(QObject* parent = nullptr) : QObject(parent) {}
+  ~ByteStream() override = default;
+
+  virtual bool IsOpen() const = 0;
+  // Queues bytes for sending; returns false when the stream is not open or
+  // refused them (the bytes are then lost).
+  virtual bool Write(const uint8_t* data, size_t n) = 0;
+  bool WriteBytes(const QByteArray& bytes) {
+    return Write(reinterpret_cast<const uint8_t*>(bytes.constData()),
+                 static_cast<size_t>(bytes.size()));
+  }
+  // Closes without emitting closed().
+  virtual void Close() = 0;
+  // "tcp:127.0.0.1:5600", "serial:/dev/ttyUSB0@115200", "pty:/dev/pts/4".
+  virtual QString Describe() const = 0;
+  uint64_t bytes_dropped() const { return bytes_dropped_; }
+
+ signals:
+  void bytesReceived(const QByteArray& bytes);
+  // The peer went away or the device failed (not emitted by Close()).
+  void closed(const QString& reason);
+
+ protected:
+  uint64_t bytes_dropped_ = 0;
+};
+
+class SerialStream : public ByteStream {
+  Q_OBJECT
+ public:
+  explicit SerialStream(QObject* parent = nullptr);
+  ~SerialStream() override;
+  // Opens `port` (e.g. /dev/ttyUSB0) at `baud`, 8N1, no flow control.
+  bool Open(const QString& port, qint32 baud, QString* error);
+  bool IsOpen() const override;
+  bool Write(const uint8_t* data, size_t n) override;
+  void Close() override;
+  QString Describe() const override;
+  // DTR drives the X4's motor enable on its USB adapter.
+  void SetDataTerminalReady(bool on);
+
+ private:
+  QSerialPort* port_;
+  QString name_;
+  qint32 baud_ = 0;
+};
+
+class TcpStream : public ByteStream {
+  Q_OBJECT
+ public:
+  // Takes ownership of a socket (connected, or to be connected with ConnectTo()).
+  explicit TcpStream(QTcpSocket* socket, QObject* parent = nullptr);
+  ~TcpStream() override;
+  // Starts connecting; connected() or closed() follows.
+  void ConnectTo(const QString& host, quint16 port);
+  bool IsOpen() const override;
+  bool Write(const uint8_t* data, size_t n) override;
+  void Close() override;
+  // Drops the connection at once, like a pulled cable, without closed().
+  void Abort();
+  QString Describe() const override;
+  QString PeerAddress() const;
+  QTcpSocket* socket() const { return socket_; }
+
+ signals:
+  void connected();
+
+ private:
+  QTcpSocket* socket_;
+  bool closing_ = false;
+};
+
+class PtyMasterStream : public ByteStream {
+  Q_OBJECT
+ public:
+  explicit PtyMasterStream(QObject* parent = nullptr);
+  ~PtyMasterStream() override;
+  // openpty() with the line in raw mode; SlavePath() is then e.g. /dev/pts/7.
+  bool Open(QString* error);
+  QString SlavePath() const { return slave_path_; }
+  bool IsOpen() const override { return master_fd_ >= 0; }
+  bool Write(const uint8_t* data, size_t n) override;
+  void Close() override;
+  QString Describe() const override { return QStringLiteral("pty:") + slave_path_; }
+
+ private:
+  void OnReadable();
+
+  int master_fd_ = -1;
+  // Kept open on purpose: while the workstation has not opened (or has
+  // closed) the slave, the master would otherwise report EIO/hang-up in a
+  // busy loop. The workstation going away is then detected by the watchdog.
+  int slave_fd_ = -1;
+  QString slave_path_;
+  QSocketNotifier* notifier_ = nullptr;
+};
+
+// Parsed link address: "tcp:HOST:PORT", "HOST:PORT" (TCP), or
+// "serial:PATH[@BAUD]" (default 921600 baud; ignored by pseudo-terminals).
+struct LinkAddress {
+  enum class Kind { kTcp, kSerial };
+  Kind kind = Kind::kTcp;
+  QString host = QStringLiteral("127.0.0.1");
+  quint16 port = 5600;
+  QString serial_port;
+  qint32 baud = 921600;
+
+  QString ToString() const;
+};
+bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error);
+
+// Reads a pre-shared key file: its bytes, with one trailing newline (LF or
+// CR LF) removed so `echo secret > key` works. Empty files are refused.
+bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error);
+
+}  // namespace hardware
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_HARDWARE_LINK_QT_TRANSPORT_H_

@@ -1,0 +1,207 @@
+#include "hardware/link/telemetry_decoder.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace sweepscan {
+namespace hardware {
+
+bool TelemetryDecoderOptions::IsValid(std::string* error) const {
+  if (!(wheel_distance_m > 0.0) || !std::isfinite(wheel_distance_m)) {
+    *error = "wheel_distance_m must be > 0";
+    return false;
+  }
+  if (lidar_angle_convention.sign != 1 && lidar_angle_convention.sign != -1) {
+    *error = "lidar_angle_convention.sign must be 1 or -1";
+    return false;
+  }
+  return x4.IsValid(error);
+}
+
+std::string TelemetryDecoderStats::ToString() const {
+  std::ostringstream s;
+  s << "telemetry=" << telemetry_messages << " other=" << other_messages
+    << " unknown_device=" << unknown_device_messages
+    << " bytes(lidar/imu/motor)=" << device_bytes[0] << "/" << device_bytes[1] << "/"
+    << device_bytes[2] << "\n  x4: " << x4.ToString() << "\n  hi219: " << hi219.ToString()
+    << "\n  motor: " << motor.ToString();
+  return s.str();
+}
+
+namespace {
+X4DecoderOptions ScansOnly(X4DecoderOptions o) {
+  o.keep_packets = false;
+  return o;
+}
+}  // namespace
+
+TelemetryDecoder::TelemetryDecoder(const TelemetryDecoderOptions& options)
+    : options_(options), x4_(ScansOnly(options.x4)) {}
+
+void TelemetryDecoder::Add(const LinkMessage& message) {
+  if (const auto* t = std::get_if<Telemetry>(&message.payload)) {
+    AddTelemetry(*t);
+  } else {
+    ++stats_.other_messages;
+  }
+}
+
+void TelemetryDecoder::AddTelemetry(const Telemetry& t) {
+  ++stats_.telemetry_messages;
+  switch (static_cast<LinkDevice>(t.device)) {
+    case LinkDevice::kLidar: {
+      stats_.device_bytes[0] += t.bytes.size();
+      x4_.Feed(t.bytes, t.receive_time);
+      for (X4Scan& scan : x4_.TakeScans()) {
+        LidarScan out;
+        out.index = static_cast<uint32_t>(scan.index);
+        out.samples.reserve(scan.samples.size());
+        for (size_t i = 0; i < scan.samples.size(); ++i) {
+          const X4Sample& s = scan.samples[i];
+          LidarSample ls;
+          ls.time = s.time;
+          ls.range_m = s.valid ? static_cast<float>(s.distance_mm * 1e-3) : 0.0f;
+          ls.theta =
+              static_cast<float>(options_.lidar_angle_convention.ThetaFromX4Degrees(s.angle_deg));
+          ls.beam = static_cast<uint16_t>(i);
+          out.samples.push_back(ls);
+        }
+        pending_.scans.push_back(std::move(out));
+      }
+      break;
+    }
+    case LinkDevice::kImu: {
+      stats_.device_bytes[1] += t.bytes.size();
+      hi219_.Feed(t.bytes, t.receive_time);
+      for (const ImuSample& s : hi219_.TakeSamples()) {
+        ImuMeasurement m;
+        m.time = s.receive_time - options_.imu_latency;
+        m.has_gyro = s.Has(kImuGyro);
+        m.has_attitude = s.Has(kImuEuler);
+        if (!m.has_gyro && !m.has_attitude) {
+          ++stats_.imu_samples_without_data;
+          continue;
+        }
+        m.gyro_z = s.gyro_radps[2];
+        m.roll = s.roll_rad;
+        m.pitch = s.pitch_rad;
+        m.yaw = s.yaw_rad;
+        pending_.imu.push_back(m);
+      }
+      break;
+    }
+    case LinkDevice::kMotorBoard: {
+      stats_.device_bytes[2] += t.bytes.size();
+      motor_.Feed(t.bytes, t.receive_time);
+      for (const MotorFeedback& f : motor_.TakeRecords()) {
+        WheelSpeedMeasurement w;
+        w.time = f.receive_time - options_.motor_latency;
+        WheelsFromTwist(Twist2d{f.vx_mps, f.wz_radps}, options_.wheel_distance_m, &w.left_mps,
+                        &w.right_mps);
+        pending_.wheels.push_back(w);
+      }
+      break;
+    }
+    default:
+      ++stats_.unknown_device_messages;
+      break;
+  }
+}
+
+void TelemetryDecoder::TakeInto(SensorLog* log) {
+  auto move_append = [](auto* from, auto* to) {
+    to->insert(to->end(), std::make_move_iterator(from->begin()),
+               std::make_move_iterator(from->end()));
+    from->clear();
+  };
+  move_append(&pending_.wheels, &log->wheels);
+  move_append(&pending_.imu, &log->imu);
+  move_append(&pending_.scans, &log->scans);
+}
+
+TelemetryDecoderStats TelemetryDecoder::stats() const {
+  TelemetryDecoderStats s = stats_;
+  s.x4 = x4_.stats();
+  s.hi219 = hi219_.stats();
+  s.motor = motor_.stats();
+  return s;
+}
+
+std::string SessionDecodeInfo::ToString() const {
+  std::ostringstream s;
+  s << "frames.bin: " << frames.ToString() << "\n";
+  s << "link: " << link.ToString() << "\n";
+  if (frames_refused > 0)
+    s << "records refused: " << frames_refused << " (first: " << first_refusal << ")\n";
+  s << "robot time: " << ToSeconds(first_robot_time) << " .. " << ToSeconds(last_robot_time)
+    << " s\n";
+  s << "telemetry: " << telemetry.ToString();
+  return s.str();
+}
+
+void DecodeSessionRecords(const std::vector<SessionRecord>& records,
+                          const TelemetryDecoderOptions& options, SensorLog* log,
+                          SessionDecodeInfo* info) {
+  TelemetryDecoder decoder(options);
+  // The link decoder only keeps the sequence accounting; each record is
+  // parsed strictly on its own so a bad record cannot swallow the next one.
+  std::array<SequenceTracker, 2> trackers;
+  bool have_time = false;
+  for (size_t i = 0; i < records.size(); ++i) {
+    const SessionRecord& r = records[i];
+    LinkMessage m;
+    const Status s = ParseLinkFrame(r.bytes.data(), r.bytes.size(), &m);
+    if (!s.ok()) {
+      if (info->frames_refused++ == 0)
+        info->first_refusal = "record " + std::to_string(i) + ": " + s.message();
+      continue;
+    }
+    const int k = m.header.sender == LinkSender::kAgent ? 0 : 1;
+    trackers[k].Observe(m.header.sequence);
+    if (k == 0) {
+      if (!have_time) info->first_robot_time = m.header.time;
+      info->last_robot_time = m.header.time;
+      have_time = true;
+    }
+    decoder.Add(m);
+    if ((i & 255) == 0) decoder.TakeInto(log);
+  }
+  decoder.TakeInto(log);
+  for (int k = 0; k < 2; ++k) info->link.sequence[k] = trackers[k].stats();
+  info->link.codec.frames_ok = records.size() - info->frames_refused;
+  info->link.codec.payload_errors = info->frames_refused;
+  info->telemetry = decoder.stats();
+}
+
+Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
+                     SensorLog* log, SessionDecodeInfo* info) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(session_dir + ": decoder options: " + error);
+  Session session;
+  const Status s = LoadSession(session_dir, FramesLoadOptions(), &session);
+  if (!s.ok()) return s;
+  SessionDecodeInfo result;
+  result.meta = session.meta;
+  result.frames = session.frames;
+  SensorLog decoded;
+  DecodeSessionRecords(session.records, options, &decoded, &result);
+  *log = std::move(decoded);
+  if (info != nullptr) *info = std::move(result);
+  return Status::Ok();
+}
+
+Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info) {
+  SessionMeta meta;
+  const std::string meta_path = session_dir +
+                                (session_dir.empty() || session_dir.back() == '/' ? "" : "/") +
+                                kSessionMetaFile;
+  const Status s = ReadSessionMeta(meta_path, &meta);
+  if (!s.ok()) return s;
+  TelemetryDecoderOptions options;
+  options.wheel_distance_m = meta.geometry.wheel_distance_m;
+  options.lidar_angle_convention = meta.lidar_angle_convention;
+  return DecodeSession(session_dir, options, log, info);
+}
+
+}  // namespace hardware
+}  // namespace sweepscan

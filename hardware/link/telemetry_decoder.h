@@ -1,0 +1,114 @@
+// From recorded link frames to sensor records: Telemetry messages carry each
+// device's raw bytes with the robot's receive time; this feeds them to the
+// X4, HI219 and motor-board decoders and converts their output into the
+// core's SensorLog:
+//   lidar:  one LidarScan per X4 revolution; theta = convention(corrected X4
+//           angle), range_m = distance_mm / 1000 (0 for invalid samples),
+//           sample times from the X4 decoder's time-stamp rule.
+//   imu:    gyro z (rad/s), roll/pitch/yaw (rad), time = frame receive time.
+//   wheels: (left, right) = WheelsFromTwist(vx, wz, wheel_distance) of each
+//           motor-board feedback frame (Eq. 2-3 inverted), time = receive time.
+// Device latencies are subtracted from the receive times (options).
+//
+// Threading: TelemetryDecoder is used from one thread at a time (the
+// processing thread); DecodeSession is a pure function of the folder.
+#ifndef SWEEPSCAN_HARDWARE_LINK_TELEMETRY_DECODER_H_
+#define SWEEPSCAN_HARDWARE_LINK_TELEMETRY_DECODER_H_
+
+#include <string>
+
+#include "core/common/status.h"
+#include "core/robot/robot_model.h"
+#include "core/robot/sensor_data.h"
+#include "core/session/session.h"
+#include "hardware/codecs/hi219_codec.h"
+#include "hardware/codecs/motor_board_codec.h"
+#include "hardware/codecs/x4_codec.h"
+#include "hardware/link/link_protocol.h"
+
+namespace sweepscan {
+namespace hardware {
+
+struct TelemetryDecoderOptions {
+  double wheel_distance_m = RobotGeometry().wheel_distance_m;
+  LidarAngleConvention lidar_angle_convention;
+  X4DecoderOptions x4;        // keep_packets is forced off (only revolutions are used).
+  // Subtracted from the frame receive times. Defaults: the serial
+  // transmission time of one frame (the sample was taken before its bytes
+  // were sent), 82 bytes of HI219 0x91 frame and 24 bytes of motor feedback
+  // at 115200 baud 8N1, 10 bits a byte: 7.118 ms and 2.083 ms.
+  Duration imu_latency{7'118'056};
+  Duration motor_latency{2'083'333};
+
+  bool IsValid(std::string* error) const;
+};
+
+struct TelemetryDecoderStats {
+  uint64_t telemetry_messages = 0;
+  uint64_t other_messages = 0;            // Non-telemetry link messages (ignored).
+  uint64_t unknown_device_messages = 0;   // Telemetry from a device id we do not decode.
+  uint64_t device_bytes[3] = {0, 0, 0};   // lidar, imu, motor board.
+  uint64_t imu_samples_without_data = 0;  // HI219 frames with neither gyro nor Euler angles.
+  DecoderStats x4;
+  DecoderStats hi219;
+  DecoderStats motor;
+
+  std::string ToString() const;
+};
+
+class TelemetryDecoder {
+ public:
+  explicit TelemetryDecoder(const TelemetryDecoderOptions& options = TelemetryDecoderOptions());
+
+  // Any link message; only Telemetry is used.
+  void Add(const LinkMessage& message);
+  void AddTelemetry(const Telemetry& telemetry);
+
+  // Moves everything decoded since the last call to the end of *log (each
+  // stream stays in time order as long as the telemetry was in order).
+  void TakeInto(SensorLog* log);
+
+  TelemetryDecoderStats stats() const;
+
+ private:
+  TelemetryDecoderOptions options_;
+  X4Decoder x4_;
+  Hi219Decoder hi219_;
+  MotorFeedbackDecoder motor_;
+  TelemetryDecoderStats stats_;
+  SensorLog pending_;
+};
+
+// What DecodeSession found, for `sweepscan-cli info` and the logs.
+struct SessionDecodeInfo {
+  SessionMeta meta;
+  FramesLoadReport frames;
+  uint64_t frames_refused = 0;  // Records that are not one valid link frame (skipped).
+  std::string first_refusal;    // e.g. "record 12: link frame: frame CRC mismatch".
+  LinkDecoderStats link;        // Sequence gaps per sender (frames lost before recording).
+  TelemetryDecoderStats telemetry;
+  Time first_robot_time;  // Header time of the first / last agent frame.
+  Time last_robot_time;
+
+  std::string ToString() const;
+};
+
+// Loads a session folder and decodes it with the geometry and lidar angle
+// convention of its meta.json (and otherwise default decoder options).
+// Records that do not hold exactly one valid link frame are skipped and
+// counted; a corrupt frames.bin or meta.json is an error (LoadSession).
+Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info);
+// The same with explicit decoder options (wheel distance and convention are
+// still taken from the options, not from meta.json).
+Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
+                     SensorLog* log, SessionDecodeInfo* info);
+// The decoding part alone, on records already loaded; *info must not be null
+// (its frames_refused, link, telemetry and robot times are filled).
+void DecodeSessionRecords(const std::vector<SessionRecord>& records,
+                          const TelemetryDecoderOptions& options, SensorLog* log,
+                          SessionDecodeInfo* info);
+
+}  // namespace hardware
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_HARDWARE_LINK_TELEMETRY_DECODER_H_

@@ -1,0 +1,420 @@
+#include "hardware/station/robot_connection.h"
+
+#include <time.h>
+
+#include <QTcpSocket>
+#include <QTimer>
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+
+#include "hardware/link/hmac_sha256.h"
+
+namespace sweepscan {
+namespace hardware {
+namespace {
+
+int64_t RealtimeNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+LinkDecoderOptions RecordingDecoderOptions() {
+  LinkDecoderOptions options;
+  options.keep_raw_frames = true;  // The session stores each frame's exact bytes.
+  return options;
+}
+
+}  // namespace
+
+bool RobotConnectionOptions::IsValid(QString* error) const {
+  auto fail = [error](const QString& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  LinkAddress parsed;
+  if (!ParseLinkAddress(address, &parsed, error)) return false;
+  if (heartbeat_ms <= 0 || heartbeat_ms > 200) {
+    return fail(QStringLiteral("heartbeat period must be 1..200 ms (the agent needs >= 5 Hz)"));
+  }
+  if (reconnect_initial_ms <= 0 || reconnect_max_ms < reconnect_initial_ms) {
+    return fail(QStringLiteral("reconnect backoff must satisfy 0 < initial <= max"));
+  }
+  if (connect_timeout_ms <= 0) return fail(QStringLiteral("connect timeout must be positive"));
+  if (flush_check_ms <= 0 || flush_check_ms > 250) {
+    return fail(QStringLiteral("flush check period must be 1..250 ms (durability within 1 s)"));
+  }
+  std::string message;
+  if (!session_writer.IsValid(&message)) return fail(QString::fromStdString(message));
+  if (!decoder.IsValid(&message)) return fail(QString::fromStdString(message));
+  return true;
+}
+
+const char* LinkHealth::StateName(State state) {
+  switch (state) {
+    case State::kIdle:
+      return "idle";
+    case State::kConnecting:
+      return "connecting";
+    case State::kAuthenticating:
+      return "authenticating";
+    case State::kConnected:
+      return "connected";
+    case State::kWaitingToReconnect:
+      return "waiting to reconnect";
+    case State::kFailed:
+      return "failed";
+  }
+  return "?";
+}
+
+std::string LinkHealth::ToString() const {
+  std::ostringstream s;
+  s << StateName(state) << (last_error.isEmpty() ? "" : " (" + last_error.toStdString() + ")")
+    << "; frames " << frames_received << " (" << frames_per_s << "/s), bytes " << bytes_received
+    << " (" << bytes_per_s << "/s)";
+  static const char* kNames[3] = {"lidar", "imu", "motor"};
+  for (int i = 0; i < 3; ++i) {
+    s << "; " << kNames[i] << " " << devices[i].frames_per_s << " frames/s "
+      << devices[i].bytes_per_s << " B/s";
+  }
+  s << "; gaps " << sequence_gaps << " (" << frames_missing << " frames), crc " << crc_errors
+    << ", length " << length_errors << ", framing " << framing_errors << ", payload "
+    << payload_errors << "; latency last " << latency_last_ms << " ms mean " << latency_mean_ms
+    << " ms max " << latency_max_ms << " ms (" << latency_samples << ")";
+  if (have_status) {
+    s << "; agent watchdog " << static_cast<int>(agent_status.watchdog) << " faults 0x" << std::hex
+      << agent_status.fault_bits << std::dec << " battery " << agent_status.battery_voltage_v
+      << " V";
+  }
+  s << "; reconnects " << reconnects;
+  return s.str();
+}
+
+RobotConnection::RobotConnection(const RobotConnectionOptions& options, QObject* parent)
+    : QObject(parent),
+      options_(options),
+      decoder_link_(RecordingDecoderOptions()),
+      decoder_(options.decoder) {}
+
+RobotConnection::~RobotConnection() { Shutdown(); }
+
+Time RobotConnection::WorkstationNow() const {
+  // The client's header time: its own monotonic clock, only ever echoed back.
+  return Time(
+      std::chrono::duration_cast<Duration>(std::chrono::steady_clock::now().time_since_epoch()));
+}
+
+bool RobotConnection::Start(QString* error) {
+  if (!options_.IsValid(error)) return false;
+  ParseLinkAddress(options_.address, &address_, nullptr);
+  if (!options_.session_dir.isEmpty() &&
+      !StartRecording(options_.session_dir, options_.session_meta, error)) {
+    return false;
+  }
+  heartbeat_timer_ = new QTimer(this);
+  heartbeat_timer_->setTimerType(Qt::PreciseTimer);
+  connect(heartbeat_timer_, &QTimer::timeout, this, &RobotConnection::OnHeartbeat);
+  heartbeat_timer_->start(options_.heartbeat_ms);
+  reconnect_timer_ = new QTimer(this);
+  reconnect_timer_->setSingleShot(true);
+  connect(reconnect_timer_, &QTimer::timeout, this, &RobotConnection::Connect);
+  connect_timeout_ = new QTimer(this);
+  connect_timeout_->setSingleShot(true);
+  connect(connect_timeout_, &QTimer::timeout, this,
+          [this] { OnClosed(QStringLiteral("connect timeout")); });
+  rate_timer_ = new QTimer(this);
+  connect(rate_timer_, &QTimer::timeout, this, &RobotConnection::OnRateTimer);
+  rate_timer_->start(1000);
+  rate_clock_.start();
+  backoff_ms_ = options_.reconnect_initial_ms;
+  Connect();
+  return true;
+}
+
+void RobotConnection::Shutdown() {
+  if (stopping_) return;
+  stopping_ = true;
+  if (authenticated_) SendMessage(Stop{}, true);
+  if (heartbeat_timer_ != nullptr) heartbeat_timer_->stop();
+  if (reconnect_timer_ != nullptr) reconnect_timer_->stop();
+  if (connect_timeout_ != nullptr) connect_timeout_->stop();
+  if (rate_timer_ != nullptr) rate_timer_->stop();
+  if (stream_ != nullptr) {
+    stream_->disconnect(this);
+    stream_->Close();
+    stream_.reset();
+  }
+  authenticated_ = false;
+  StopRecording();
+  SetState(LinkHealth::State::kIdle);
+}
+
+bool RobotConnection::StartRecording(const QString& session_dir, const SessionMeta& meta_in,
+                                     QString* error) {
+  if (session_ != nullptr) StopRecording();
+  SessionMeta meta = meta_in;
+  ParseLinkAddress(options_.address, &address_, nullptr);
+  meta.link = address_.ToString().toStdString();
+  if (!health_.agent_name.empty()) meta.agent = health_.agent_name;
+  options_.session_meta = meta;
+  session_status_ = SessionWriter::Create(session_dir.toStdString(), meta, options_.session_writer,
+                                          &session_);
+  if (!session_status_.ok()) {
+    if (error != nullptr) *error = QString::fromStdString(session_status_.message());
+    session_.reset();
+    return false;
+  }
+  // The live decoder restarts at the session's first frame, so that the live
+  // log is exactly what DecodeSession will make of the folder (the offline
+  // decoder also starts with empty buffers at that frame).
+  decoder_ = TelemetryDecoder(options_.decoder);
+  log_ = SensorLog();
+  if (flush_timer_ == nullptr) {
+    flush_timer_ = new QTimer(this);
+    connect(flush_timer_, &QTimer::timeout, this, &RobotConnection::OnFlushTimer);
+  }
+  flush_timer_->start(options_.flush_check_ms);
+  return true;
+}
+
+Status RobotConnection::StopRecording() {
+  if (flush_timer_ != nullptr) flush_timer_->stop();
+  if (session_ == nullptr) return session_status_;
+  const Status closed = session_->Close();
+  if (session_status_.ok()) session_status_ = closed;
+  health_.session_records = session_->records_appended();
+  session_.reset();
+  return session_status_;
+}
+
+void RobotConnection::SetState(LinkHealth::State state) {
+  if (health_.state == state) return;
+  health_.state = state;
+  emit stateChanged(static_cast<int>(state));
+}
+
+void RobotConnection::Connect() {
+  if (stopping_) return;
+  authenticated_ = false;
+  answered_challenge_ = false;
+  auth_required_ = false;
+  encoder_ = LinkEncoder(LinkSender::kClient);  // Each connection numbers from 0.
+  decoder_link_.Reset();
+  SetState(LinkHealth::State::kConnecting);
+  if (address_.kind == LinkAddress::Kind::kTcp) {
+    auto* socket = new QTcpSocket();
+    auto stream = std::make_unique<TcpStream>(socket);
+    TcpStream* tcp = stream.get();
+    stream_ = std::move(stream);
+    connect(tcp, &TcpStream::connected, this, &RobotConnection::OnConnected);
+    connect(tcp, &ByteStream::bytesReceived, this, &RobotConnection::OnBytes);
+    connect(tcp, &ByteStream::closed, this, &RobotConnection::OnClosed);
+    connect_timeout_->start(options_.connect_timeout_ms);
+    tcp->ConnectTo(address_.host, address_.port);
+  } else {
+    auto stream = std::make_unique<SerialStream>();
+    QString error;
+    if (!stream->Open(address_.serial_port, address_.baud, &error)) {
+      ScheduleReconnect(error);
+      return;
+    }
+    stream_ = std::move(stream);
+    connect(stream_.get(), &ByteStream::bytesReceived, this, &RobotConnection::OnBytes);
+    connect(stream_.get(), &ByteStream::closed, this, &RobotConnection::OnClosed);
+    OnConnected();
+  }
+}
+
+void RobotConnection::OnConnected() {
+  connect_timeout_->stop();
+  ++health_.connects;
+  if (health_.connects > 1) ++health_.reconnects;
+  SetState(LinkHealth::State::kAuthenticating);
+  Hello hello;
+  hello.name = options_.client_name;
+  SendMessage(hello, false);
+}
+
+void RobotConnection::OnBytes(const QByteArray& bytes) {
+  const int64_t receive_ns = RealtimeNs();
+  health_.bytes_received += static_cast<uint64_t>(bytes.size());
+  std::vector<LinkMessage> messages;
+  decoder_link_.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()),
+                     static_cast<size_t>(bytes.size()), &messages);
+  bool decoded_telemetry = false;
+  for (const LinkMessage& message : messages) {
+    ++health_.frames_received;
+    if (session_ != nullptr && session_status_.ok()) {
+      session_status_ = session_->Append(message.raw, receive_ns);
+    }
+    if (std::holds_alternative<Telemetry>(message.payload)) {
+      const auto& telemetry = std::get<Telemetry>(message.payload);
+      if (telemetry.device >= 1 && telemetry.device <= 3) {
+        ++health_.devices[telemetry.device - 1].frames;
+        health_.devices[telemetry.device - 1].bytes += telemetry.bytes.size();
+      }
+      if (options_.decode_telemetry) {
+        decoder_.AddTelemetry(telemetry);
+        decoded_telemetry = true;
+      }
+      continue;
+    }
+    HandleMessage(message);
+    if (stream_ == nullptr) break;  // Denied: the rest of this connection does not matter.
+  }
+  if (decoded_telemetry) {
+    decoder_.TakeInto(&log_);
+    emit telemetryDecoded();
+  }
+}
+
+void RobotConnection::HandleMessage(const LinkMessage& message) {
+  if (message.header.sender != LinkSender::kAgent) return;
+  const LinkPayload& payload = message.payload;
+  if (const auto* hello = std::get_if<Hello>(&payload)) {
+    health_.agent_name = hello->name;
+    auth_required_ = hello->auth_required;
+    if (!auth_required_) {
+      authenticated_ = true;
+      backoff_ms_ = options_.reconnect_initial_ms;
+      SetState(LinkHealth::State::kConnected);
+      emit authenticatedChanged(true);
+    }
+    if (session_ != nullptr && session_status_.ok() && hello->name != "") {
+      // Record which agent produced the frames; meta.json is rewritten atomically.
+      SessionMeta meta = options_.session_meta;
+      meta.link = address_.ToString().toStdString();
+      meta.agent = hello->name;
+      session_->UpdateMeta(meta);
+    }
+  } else if (const auto* challenge = std::get_if<AuthChallenge>(&payload)) {
+    if (answered_challenge_ || authenticated_) return;  // One attempt per connection.
+    answered_challenge_ = true;
+    AuthResponse response;
+    const Sha256Digest mac =
+        LinkAuthMac(options_.key, challenge->nonce.data(), challenge->nonce.size());
+    std::copy(mac.begin(), mac.end(), response.mac.begin());
+    SendMessage(response, false);
+  } else if (const auto* result = std::get_if<AuthResult>(&payload)) {
+    if (result->outcome == AuthOutcome::kOk) {
+      authenticated_ = true;
+      backoff_ms_ = options_.reconnect_initial_ms;
+      SetState(LinkHealth::State::kConnected);
+      emit authenticatedChanged(true);
+      return;
+    }
+    const QString reason = QString::fromStdString(result->reason);
+    health_.last_error = QStringLiteral("denied: %1").arg(reason);
+    emit authenticationFailed(reason);
+    if (reason == QLatin1String("authentication failed")) {
+      // A wrong key stays wrong: hammering the agent would only lock us out.
+      if (stream_ != nullptr) {
+        stream_->disconnect(this);
+        stream_->Close();
+        stream_.release()->deleteLater();  // We are inside its bytesReceived signal.
+      }
+      authenticated_ = false;
+      SetState(LinkHealth::State::kFailed);
+      return;
+    }
+    // "busy", "retry later", timeouts: try again after the backoff.
+  } else if (const auto* ack = std::get_if<CommandAck>(&payload)) {
+    const double latency_ms = ToSeconds(WorkstationNow() - ack->echo_time) * 1e3;
+    ++health_.latency_samples;
+    health_.latency_last_ms = latency_ms;
+    latency_sum_ms_ += latency_ms;
+    health_.latency_mean_ms = latency_sum_ms_ / static_cast<double>(health_.latency_samples);
+    health_.latency_max_ms = std::max(health_.latency_max_ms, latency_ms);
+    if (ack->result != AckResult::kAccepted) ++health_.acks_refused;
+  } else if (const auto* status = std::get_if<LinkStatus>(&payload)) {
+    health_.have_status = true;
+    health_.agent_status = *status;
+    emit statusReceived();
+  }
+}
+
+void RobotConnection::OnClosed(const QString& reason) { ScheduleReconnect(reason); }
+
+void RobotConnection::ScheduleReconnect(const QString& reason) {
+  if (stopping_) return;
+  connect_timeout_->stop();
+  if (stream_ != nullptr) {
+    stream_->disconnect(this);
+    stream_->Close();
+    stream_.release()->deleteLater();  // We may be inside one of its signals.
+  }
+  const bool was_authenticated = authenticated_;
+  authenticated_ = false;
+  if (was_authenticated) emit authenticatedChanged(false);
+  if (health_.state == LinkHealth::State::kFailed) return;
+  health_.last_error = reason;
+  SetState(LinkHealth::State::kWaitingToReconnect);
+  reconnect_timer_->start(backoff_ms_);
+  backoff_ms_ = std::min(options_.reconnect_max_ms, backoff_ms_ * 2);
+}
+
+void RobotConnection::DropLink() {
+  if (stream_ == nullptr) return;
+  if (auto* tcp = dynamic_cast<TcpStream*>(stream_.get())) tcp->Abort();
+  ScheduleReconnect(QStringLiteral("dropped by request"));
+}
+
+bool RobotConnection::SendMessage(const LinkPayload& payload, bool require_auth) {
+  if (stream_ == nullptr || !stream_->IsOpen()) return false;
+  if (require_auth && !authenticated_) return false;
+  const std::vector<uint8_t> frame = encoder_.Encode(WorkstationNow(), payload);
+  return stream_->Write(frame.data(), frame.size());
+}
+
+bool RobotConnection::Drive(double v_mps, double w_radps) {
+  return SendMessage(DriveCommand{v_mps, w_radps}, true);
+}
+bool RobotConnection::StopMotion() { return SendMessage(Stop{}, true); }
+bool RobotConnection::EmergencyStop() { return SendMessage(hardware::EmergencyStop{}, false); }
+bool RobotConnection::ClearEmergencyStop() {
+  return SendMessage(hardware::ClearEmergencyStop{}, true);
+}
+bool RobotConnection::SetLidarMotor(bool on) { return SendMessage(LidarMotor{on}, true); }
+
+void RobotConnection::OnHeartbeat() {
+  if (heartbeat_enabled_ && authenticated_) SendMessage(Heartbeat{}, true);
+}
+
+void RobotConnection::OnFlushTimer() {
+  if (session_ == nullptr || !session_status_.ok()) return;
+  session_status_ = session_->FlushIfDue(std::chrono::steady_clock::now());
+  health_.session_records = session_->records_appended();
+}
+
+void RobotConnection::OnRateTimer() {
+  const double dt = std::max(1e-3, rate_clock_.restart() * 1e-3);
+  for (int i = 0; i < 3; ++i) {
+    DeviceRate& d = health_.devices[i];
+    d.frames_per_s = static_cast<double>(d.frames - rate_base_[i].frames) / dt;
+    d.bytes_per_s = static_cast<double>(d.bytes - rate_base_[i].bytes) / dt;
+    rate_base_[i] = d;
+  }
+  health_.frames_per_s = static_cast<double>(health_.frames_received - frames_base_) / dt;
+  health_.bytes_per_s = static_cast<double>(health_.bytes_received - bytes_base_) / dt;
+  frames_base_ = health_.frames_received;
+  bytes_base_ = health_.bytes_received;
+}
+
+LinkHealth RobotConnection::health() const {
+  LinkHealth h = health_;
+  const LinkDecoderStats& stats = decoder_link_.stats();
+  h.sequence_gaps = stats.sequence[0].gaps;
+  h.frames_missing = stats.sequence[0].frames_missing;
+  h.crc_errors = stats.codec.checksum_errors;
+  h.length_errors = stats.codec.length_errors;
+  h.framing_errors = stats.codec.framing_errors;
+  h.payload_errors = stats.codec.payload_errors;
+  h.bytes_skipped = stats.codec.bytes_skipped;
+  if (session_ != nullptr) h.session_records = session_->records_appended();
+  return h;
+}
+
+}  // namespace hardware
+}  // namespace sweepscan

@@ -1,0 +1,203 @@
+// The workstation's end of the robot link: connects over TCP or a serial
+// port, answers the agent's challenge with the pre-shared key, keeps the
+// agent's watchdog fed (Heartbeat at 10 Hz), sends Drive / Stop /
+// EmergencyStop / LidarMotor on request, reconnects with exponential backoff
+// after the link drops, records every received frame to a session
+// (SessionWriter, workstation receive times, durable at least once a second)
+// and decodes Telemetry into a live SensorLog (TelemetryDecoder).
+//
+// Link health (health()): per-device frames/s and bytes/s over the last
+// second, sequence gaps (frames lost in transit), CRC / length / framing
+// errors, round-trip latency from CommandAck echo times, the agent's last
+// Status, reconnect count.
+//
+// Threading: a RobotConnection lives on the thread that created it (the
+// workstation's I/O thread) and is used only there. It decodes telemetry on
+// that thread too; a GUI would move log() batches to the processing thread.
+#ifndef SWEEPSCAN_HARDWARE_STATION_ROBOT_CONNECTION_H_
+#define SWEEPSCAN_HARDWARE_STATION_ROBOT_CONNECTION_H_
+
+#include <QElapsedTimer>
+#include <QObject>
+#include <QString>
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/robot/sensor_data.h"
+#include "core/session/session.h"
+#include "hardware/link/link_protocol.h"
+#include "hardware/link/qt_transport.h"
+#include "hardware/link/telemetry_decoder.h"
+
+class QTimer;
+
+namespace sweepscan {
+namespace hardware {
+
+struct RobotConnectionOptions {
+  QString address = QStringLiteral("tcp:127.0.0.1:5600");  // See ParseLinkAddress.
+  std::vector<uint8_t> key;  // Pre-shared key; needed when the agent asks for authentication.
+  std::string client_name = "sweepscan 0.1.0";
+  int heartbeat_ms = 100;  // 10 Hz; the protocol asks for >= 5 Hz.
+  int reconnect_initial_ms = 200;
+  int reconnect_max_ms = 5000;
+  int connect_timeout_ms = 3000;
+  // Session recording: empty = do not record.
+  QString session_dir;
+  SessionMeta session_meta;  // link and agent are filled in.
+  SessionWriterOptions session_writer;
+  int flush_check_ms = 200;  // How often FlushIfDue runs (with the writer's 500 ms interval:
+                             // everything older than 1 s is on disk).
+  TelemetryDecoderOptions decoder;
+  bool decode_telemetry = true;
+
+  bool IsValid(QString* error) const;
+};
+
+struct DeviceRate {
+  uint64_t frames = 0;        // Telemetry frames since Start().
+  uint64_t bytes = 0;         // Device bytes carried.
+  double frames_per_s = 0.0;  // Over the last second.
+  double bytes_per_s = 0.0;
+};
+
+struct LinkHealth {
+  enum class State {
+    kIdle,
+    kConnecting,
+    kAuthenticating,
+    kConnected,
+    kWaitingToReconnect,
+    kFailed
+  };
+  State state = State::kIdle;
+  QString last_error;
+  uint64_t connects = 0;              // Successful transport connections.
+  uint64_t reconnects = 0;            // Connections after the first.
+  std::array<DeviceRate, 3> devices;  // lidar, imu, motor board.
+  uint64_t frames_received = 0;
+  uint64_t bytes_received = 0;
+  double frames_per_s = 0.0;
+  double bytes_per_s = 0.0;
+  uint64_t sequence_gaps = 0;   // Agent frames: times a sequence number was skipped.
+  uint64_t frames_missing = 0;  // Sum of skipped counts = frames dropped in transit.
+  uint64_t crc_errors = 0;
+  uint64_t length_errors = 0;
+  uint64_t framing_errors = 0;
+  uint64_t payload_errors = 0;
+  uint64_t bytes_skipped = 0;
+  // Round trip (CommandAck echo time -> now), milliseconds.
+  uint64_t latency_samples = 0;
+  double latency_last_ms = 0.0;
+  double latency_mean_ms = 0.0;
+  double latency_max_ms = 0.0;
+  uint64_t acks_refused = 0;  // CommandAcks with a result other than accepted.
+  bool have_status = false;
+  LinkStatus agent_status;  // Last Status from the agent.
+  std::string agent_name;   // From its Hello.
+  uint64_t session_records = 0;
+
+  static const char* StateName(State state);
+  std::string ToString() const;
+};
+
+class RobotConnection : public QObject {
+  Q_OBJECT
+ public:
+  explicit RobotConnection(const RobotConnectionOptions& options, QObject* parent = nullptr);
+  ~RobotConnection() override;
+
+  // Creates the session (if any) and starts connecting. False with a message
+  // for bad options or a session that cannot be created.
+  bool Start(QString* error);
+  // Sends Stop if connected, closes the link and the session (flushed).
+  void Shutdown();
+
+  // Commands (sent only when authenticated; false otherwise).
+  bool Drive(double v_mps, double w_radps);
+  bool StopMotion();
+  bool EmergencyStop();  // Also sent before authentication: stopping is always allowed.
+  bool ClearEmergencyStop();
+  bool SetLidarMotor(bool on);
+  // Stops sending Heartbeats (tests: a client that goes quiet).
+  void SetHeartbeatEnabled(bool enabled) { heartbeat_enabled_ = enabled; }
+  // Drops the transport like a pulled cable; reconnects after the backoff.
+  void DropLink();
+
+  // Records every frame received from now on to a new session folder
+  // (`session_dir` must not exist), closing any session being recorded. The
+  // live decoder and log() restart empty at the same frame, so log() equals
+  // what DecodeSession makes of the folder. False with a message if the
+  // folder cannot be created.
+  bool StartRecording(const QString& session_dir, const SessionMeta& meta, QString* error);
+  // Closes the session (flushed, meta.json final); returns the session's status.
+  Status StopRecording();
+  bool recording() const { return session_ != nullptr; }
+
+  bool authenticated() const { return authenticated_; }
+  LinkHealth health() const;
+  // Everything decoded so far (grows while connected).
+  const SensorLog& log() const { return log_; }
+  SensorLog* mutable_log() { return &log_; }
+  const TelemetryDecoder& decoder() const { return decoder_; }
+  Status session_status() const { return session_status_; }
+
+ signals:
+  void stateChanged(int state);  // A LinkHealth::State.
+  void authenticatedChanged(bool authenticated);
+  void authenticationFailed(const QString& reason);
+  void statusReceived();  // health().agent_status updated.
+  void telemetryDecoded();
+
+ private:
+  void Connect();
+  void OnConnected();
+  void OnBytes(const QByteArray& bytes);
+  void OnClosed(const QString& reason);
+  void HandleMessage(const LinkMessage& message);
+  void ScheduleReconnect(const QString& reason);
+  void SetState(LinkHealth::State state);
+  bool SendMessage(const LinkPayload& payload, bool require_auth);
+  void OnHeartbeat();
+  void OnFlushTimer();
+  void OnRateTimer();
+  Time WorkstationNow() const;
+
+  RobotConnectionOptions options_;
+  LinkAddress address_;
+  std::unique_ptr<ByteStream> stream_;
+  LinkEncoder encoder_{LinkSender::kClient};
+  LinkDecoder decoder_link_;
+  TelemetryDecoder decoder_;
+  SensorLog log_;
+  std::unique_ptr<SessionWriter> session_;
+  Status session_status_;
+
+  LinkHealth health_;
+  bool authenticated_ = false;
+  bool auth_required_ = false;
+  bool answered_challenge_ = false;
+  bool heartbeat_enabled_ = true;
+  bool stopping_ = false;
+  int backoff_ms_ = 0;
+  double latency_sum_ms_ = 0.0;
+  QTimer* heartbeat_timer_ = nullptr;
+  QTimer* reconnect_timer_ = nullptr;
+  QTimer* connect_timeout_ = nullptr;
+  QTimer* flush_timer_ = nullptr;
+  QTimer* rate_timer_ = nullptr;
+  // Counters at the last rate sample, for per-second rates.
+  std::array<DeviceRate, 3> rate_base_{};
+  uint64_t frames_base_ = 0;
+  uint64_t bytes_base_ = 0;
+  QElapsedTimer rate_clock_;
+};
+
+}  // namespace hardware
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_HARDWARE_STATION_ROBOT_CONNECTION_H_

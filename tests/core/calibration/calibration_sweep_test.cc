@@ -1,0 +1,205 @@
+// Automatic calibration over many seeds, angle sets and both pose sources:
+// each angle within the bound, and the reported 1-sigma honest
+// (|error| / sigma stays small over the sweep). The cheaper companion of
+// calibration_test: no refined corners, one solve per case.
+//
+// SWEEPSCAN_SWEEP_SEEDS=N widens the sweep (default 1 seed per angle set and
+// pose source, 6 cases; docs/calibration.md reports a 6-seed run, 36 cases).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "core/calibration/calibration.h"
+#include "core/cloud/reconstruct.h"
+#include "core/sim/world.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan {
+namespace {
+
+struct AngleSet {
+  const char* name;
+  MountingError truth;
+};
+const AngleSet kAngleSets[] = {
+    {"paper", {-0.0058, 0.0126, 0.0355}},
+    {"B", {0.0150, -0.0100, -0.0200}},
+    {"C", {-0.0200, 0.0200, 0.0100}},
+};
+
+int SeedCount() {
+  const char* e = std::getenv("SWEEPSCAN_SWEEP_SEEDS");
+  return e != nullptr ? std::max(1, std::atoi(e)) : 1;
+}
+
+struct Outcome {
+  Eigen::Vector3d error_mrad, sigma_mrad;
+  bool ok = false;
+};
+
+Outcome RunCase(uint64_t seed, const MountingError& truth, PoseSource source) {
+  sim::SimConfig config = testing::CircleConfig(seed);
+  config.mounting_error = truth;
+  sim::SimWorld world(config);
+  const SensorLog log = world.RunAll();
+  const PoseBuffer truth_poses = world.TruthPoses(1000.0);
+  PoseBuffer poses = truth_poses;
+  if (source != PoseSource::kTruth) {
+    ReconstructionOptions options;
+    options.pose.source = source;
+    options.pose.initial_pose = config.start;
+    ReconstructionResult r;
+    EXPECT_TRUE(Reconstruct(log, config.geometry, options, &truth_poses, &r).ok());
+    poses = r.poses;
+    // The EKF's own attitude error over the drive: a constant roll or pitch
+    // error of the body is indistinguishable from gamma or beta.
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (size_t i = 0; i < poses.size(); i += 10) {
+      Rigid3d t;
+      if (!truth_poses.Lookup(poses.time(i), &t)) continue;
+      const Eigen::Quaterniond q = t.rotation().conjugate() * poses.pose(i).rotation();
+      const Eigen::Vector3d aa = Eigen::AngleAxisd(q).angle() * Eigen::AngleAxisd(q).axis();
+      sum += aa;
+      ++n;
+    }
+    if (n > 0) {
+      const Eigen::Vector3d m = 1e3 * sum / n;
+      std::printf(
+          "[sweep] ekf   seed %3llu mean attitude error (body x, y, z) %+.3f %+.3f %+.3f mrad\n",
+          static_cast<unsigned long long>(seed), m.x(), m.y(), m.z());
+    }
+  }
+  const SampleStore store(log, poses);
+  CalibrationSummary s;
+  const Status st = SolveAutomatic(store, config.geometry, {}, AutoCalibrationOptions(), &s);
+  Outcome out;
+  out.ok = st.ok();
+  EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  out.error_mrad = 1e3 * Eigen::Vector3d(s.angles.alpha - truth.alpha, s.angles.beta - truth.beta,
+                                         s.angles.gamma - truth.gamma);
+  out.sigma_mrad = 1e3 * s.sigma_rad;
+  return out;
+}
+
+class AutomaticSweepTest : public ::testing::TestWithParam<PoseSource> {};
+
+TEST_P(AutomaticSweepTest, EachAngleWithinHalfMradAndSigmaHonest) {
+  const PoseSource source = GetParam();
+  const int seeds = SeedCount();
+  double worst = 0.0, worst_z = 0.0, sum_z2 = 0.0;
+  int n = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int k = 0; k < seeds; ++k) {
+      // Different seeds per angle set: 3 x seeds independent drives.
+      const uint64_t seed = 10 + 100 * a + k;
+      const Outcome o = RunCase(seed, kAngleSets[a].truth, source);
+      if (!o.ok) continue;
+      const Eigen::Vector3d z = o.error_mrad.cwiseQuotient(o.sigma_mrad);
+      std::printf(
+          "[sweep] %-5s seed %3llu angles %-5s err(mrad) %+7.3f %+7.3f %+7.3f  sigma %.3f %.3f "
+          "%.3f  z %+5.2f %+5.2f %+5.2f\n",
+          PoseSourceName(source), static_cast<unsigned long long>(seed), kAngleSets[a].name,
+          o.error_mrad[0], o.error_mrad[1], o.error_mrad[2], o.sigma_mrad[0], o.sigma_mrad[1],
+          o.sigma_mrad[2], z[0], z[1], z[2]);
+      worst = std::max(worst, o.error_mrad.cwiseAbs().maxCoeff());
+      worst_z = std::max(worst_z, z.cwiseAbs().maxCoeff());
+      sum_z2 += z.squaredNorm();
+      n += 3;
+      // Truth poses: the 0.5 mrad. EKF poses: the filter's own
+      // attitude error (roll, and heading drift between the passes) adds to
+      // the mount's; 1 mrad is what holds (docs/calibration.md, "Results").
+      EXPECT_LT(o.error_mrad.cwiseAbs().maxCoeff(), source == PoseSource::kTruth ? 0.5 : 1.0)
+          << "seed " << seed;
+    }
+  }
+  const double rms_z = std::sqrt(sum_z2 / std::max(1, n));
+  std::printf("[sweep] %s: worst error %.3f mrad, worst |error|/sigma %.2f, RMS error/sigma %.2f\n",
+              PoseSourceName(source), worst, worst_z, rms_z);
+  // Honest sigma: errors / sigma behave like N(0, 1) draws; with 6-18 of
+  // them none should pass 4.
+  EXPECT_LT(worst_z, 4.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(PoseSources, AutomaticSweepTest,
+                         ::testing::Values(PoseSource::kTruth, PoseSource::kEkf),
+                         [](const auto& info) { return std::string(PoseSourceName(info.param)); });
+
+}  // namespace
+}  // namespace sweepscan
+
+namespace sweepscan {
+namespace {
+
+// Measurement aid (docs/calibration.md, "What biased the automatic mode"):
+// SWEEPSCAN_DIAG=1 prints the kept planes and the errors under option
+// variants for a few drives. Skipped otherwise.
+TEST(AutomaticDiagnostics, PlanesAndVariants) {
+  if (std::getenv("SWEEPSCAN_DIAG") == nullptr) GTEST_SKIP() << "set SWEEPSCAN_DIAG=1";
+  const int seeds = SeedCount();
+  for (int a = 0; a < 3; ++a) {
+    for (int k = 0; k < seeds; ++k) {
+      const uint64_t seed = 10 + 100 * a + k;
+      sim::SimConfig config = testing::CircleConfig(seed);
+      config.mounting_error = kAngleSets[a].truth;
+      sim::SimWorld world(config);
+      const SensorLog log = world.RunAll();
+      const SampleStore store(log, world.TruthPoses(1000.0));
+      struct Variant {
+        const char* name;
+        AutoCalibrationOptions o;
+      };
+      std::vector<Variant> variants;
+      AutoCalibrationOptions base;
+      variants.push_back({"base", base});
+      if (const char* v = std::getenv("SWEEPSCAN_DIAG_VARIANTS"); v != nullptr && std::atoi(v)) {
+        AutoCalibrationOptions o = base;
+        o.edge_margin_m = 0.0;
+        variants.push_back({"edge0", o});
+        o = base;
+        o.edge_margin_m = 0.15;
+        variants.push_back({"edge15", o});
+        o = base;
+        o.membership_sigmas = 2.0;
+        variants.push_back({"memb2", o});
+        o = base;
+        o.max_points_per_plane = 30000;
+        o.max_segmentation_points = 400000;
+        variants.push_back({"allpts", o});
+        o = base;
+        o.min_range_m = 1.0;
+        variants.push_back({"minr1", o});
+        o = base;
+        o.max_planes = 5;
+        variants.push_back({"planes5", o});
+      }
+      for (const auto& v : variants) {
+        CalibrationSummary s;
+        const Status st = SolveAutomatic(store, config.geometry, {}, v.o, &s);
+        const MountingError& t = kAngleSets[a].truth;
+        std::printf(
+            "[diag] seed %3llu %-5s %-8s %s err %+7.3f %+7.3f %+7.3f sigma %.3f %.3f %.3f "
+            "iid %.3f %.3f %.3f pts %d\n",
+            static_cast<unsigned long long>(seed), kAngleSets[a].name, v.name,
+            st.ok() ? "ok  " : "FAIL", 1e3 * (s.angles.alpha - t.alpha),
+            1e3 * (s.angles.beta - t.beta), 1e3 * (s.angles.gamma - t.gamma), 1e3 * s.sigma_rad[0],
+            1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2], 1e3 * s.sigma_iid_rad[0],
+            1e3 * s.sigma_iid_rad[1], 1e3 * s.sigma_iid_rad[2], s.residual_blocks);
+        if (std::string(v.name) == "base") {
+          for (const auto& p : s.plane_reports) {
+            std::printf(
+                "[diag]    plane n (%+.4f %+.4f %+.4f) d %+.3f pts %5d sight %d rms %.4f "
+                "rms/sigma %.2f\n",
+                p.normal.x(), p.normal.y(), p.normal.z(), p.d, p.points, p.sightings, p.rms_m,
+                p.rms_sigmas);
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace sweepscan

@@ -1,0 +1,520 @@
+#include "core/calibration/calibration.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <memory>
+
+#include "core/scenario/scenario.h"
+#include "core/sim/world.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan {
+namespace {
+
+// The lab's target board (core/sim/scene.cc), front face y = 0.16 facing the
+// circle. Upright: x 4.7..5.3, z 0.9..1.5; corners in FitBoardCorners' order
+// top-left, top-right, bottom-right, bottom-left. Diamond: the same 0.6 m
+// board turned 45 deg about its centre (5, 1.35); corners top, right,
+// bottom, left.
+constexpr double kHalfDiagonal = 0.3 * M_SQRT2;
+const Eigen::Vector3d kSquareCorners[4] = {
+    {4.7, 0.16, 1.5}, {5.3, 0.16, 1.5}, {5.3, 0.16, 0.9}, {4.7, 0.16, 0.9}};
+const Eigen::Vector3d kDiamondCorners[4] = {{5.0, 0.16, 1.35 + kHalfDiagonal},
+                                            {5.0 + kHalfDiagonal, 0.16, 1.35},
+                                            {5.0, 0.16, 1.35 - kHalfDiagonal},
+                                            {5.0 - kHalfDiagonal, 0.16, 1.35}};
+// Around the board, generous enough for the uncalibrated ghosts (a few cm),
+// clear of the wall (y = 0) behind it; the sill's top (0.85 m) may be inside.
+const Eigen::AlignedBox3d kSquareRegion(Eigen::Vector3d(4.55, 0.06, 0.75),
+                                        Eigen::Vector3d(5.45, 0.30, 1.65));
+const Eigen::AlignedBox3d kDiamondRegion(Eigen::Vector3d(4.45, 0.06, 0.80),
+                                         Eigen::Vector3d(5.55, 0.30, 1.90));
+
+struct Case {
+  uint64_t seed;
+  MountingError truth;
+  const char* name;
+  sim::LabTarget target = sim::LabTarget::kSquare;
+  const Eigen::Vector3d* corners() const {
+    return target == sim::LabTarget::kSquare ? kSquareCorners : kDiamondCorners;
+  }
+  const Eigen::AlignedBox3d& region() const {
+    return target == sim::LabTarget::kSquare ? kSquareRegion : kDiamondRegion;
+  }
+};
+
+const MountingError kPaper{-0.0058, 0.0126, 0.0355};
+const MountingError kSetB{0.0150, -0.0100, -0.0200};
+const MountingError kSetC{-0.0200, 0.0200, 0.0100};
+// 0-3: the paper's upright board, one turn at 0.2 m/s; 4-12: the diamond on
+// the calibration drive (two turns at 0.05 m/s), 3 seeds per angle set.
+const Case kCases[] = {
+    {1, kPaper, "paper"},
+    {2, kPaper, "paper"},
+    {3, kSetB, "B"},
+    {4, kSetC, "C"},
+    {11, kPaper, "paper", sim::LabTarget::kDiamond},
+    {12, kPaper, "paper", sim::LabTarget::kDiamond},
+    {13, kPaper, "paper", sim::LabTarget::kDiamond},
+    {14, kSetB, "B", sim::LabTarget::kDiamond},
+    {15, kSetB, "B", sim::LabTarget::kDiamond},
+    {16, kSetB, "B", sim::LabTarget::kDiamond},
+    {17, kSetC, "C", sim::LabTarget::kDiamond},
+    {18, kSetC, "C", sim::LabTarget::kDiamond},
+    {19, kSetC, "C", sim::LabTarget::kDiamond},
+};
+constexpr int kSquareCases = 4;
+constexpr int kAllCases = sizeof(kCases) / sizeof(kCases[0]);
+
+// One simulated circle drive, shared by every test of a case.
+struct Drive {
+  sim::SimConfig config;
+  SampleStore store;
+  std::vector<PassWindow> windows;
+  std::vector<LidarObservation> board[2];
+  std::vector<PickPair> corner_picks;  // raw samples nearest the true corners
+};
+
+const Drive& GetDrive(int case_index) {
+  static std::map<int, std::unique_ptr<Drive>> cache;
+  auto& slot = cache[case_index];
+  if (slot) return *slot;
+  slot = std::make_unique<Drive>();
+  Drive& d = *slot;
+  const Case& c = kCases[case_index];
+  d.config = testing::CircleConfig(c.seed);
+  d.config.scene = sim::LabScene(c.target);
+  // The diamond cases drive the calibration drive (two slow turns: finer
+  // scan spacing on the board, docs/calibration.md); SWEEPSCAN_CALIB_SPEED
+  // and SWEEPSCAN_CALIB_TURNS override it to measure other drives.
+  if (c.target == sim::LabTarget::kDiamond) {
+    double speed = 0.05, turns = 2.0;
+    if (const char* v = std::getenv("SWEEPSCAN_CALIB_SPEED")) speed = std::atof(v);
+    if (const char* v = std::getenv("SWEEPSCAN_CALIB_TURNS")) turns = std::atof(v);
+    d.config.path = {CircleSegment(0.83, speed, turns, /*left=*/true)};
+  }
+  d.config.mounting_error = c.truth;
+  sim::SimWorld world(d.config);
+  const SensorLog log = world.RunAll();
+  // Truth poses: the calibration is about the mount; pose errors are the
+  // EKF's business (docs/calibration.md reports an EKF run separately).
+  const PoseBuffer poses = world.TruthPoses(1000.0);
+  d.store = SampleStore(log, poses);
+  // Sightings alternate near / far; with several turns, even ones form pass
+  // 1 and odd ones pass 2 (as `sweepscan-cli calibrate --refine` does).
+  TargetSightings t = CollectTargetSightings(d.store, d.config.geometry, {}, c.region(), 1.0, 50);
+  d.windows = t.windows;
+  EXPECT_GE(d.windows.size(), 2u);
+  d.board[0] = std::move(t.passes[0]);
+  d.board[1] = std::move(t.passes[1]);
+  // An operator's clicks: in the first near and the first far sighting,
+  // the sample whose true position is nearest each true corner.
+  for (int j = 0; j < 4; ++j) {
+    PickPair pp;
+    Pick* picks[2] = {&pp.pass1, &pp.pass2};
+    for (int k = 0; k < 2; ++k) {
+      double best = 1e9;
+      for (const auto& o : d.board[k]) {
+        if (!d.windows[k].Contains(o.time_ns)) continue;
+        const double dist =
+            (ProjectObservation(o, d.config.geometry, c.truth) - c.corners()[j]).norm();
+        if (dist < best) {
+          best = dist;
+          picks[k]->has_sample = true;
+          picks[k]->sample = o.ref;
+        }
+      }
+    }
+    d.corner_picks.push_back(pp);
+  }
+  return d;
+}
+
+double CornerDistance(const Drive& d, const MountingError& c) {
+  BoardCorners a, b;
+  EXPECT_TRUE(FitBoardCorners(d.board[0], d.config.geometry, c, &a).ok());
+  EXPECT_TRUE(FitBoardCorners(d.board[1], d.config.geometry, c, &b).ok());
+  return CornerRms(a, b);
+}
+
+Eigen::Vector3d ErrorMrad(const MountingError& got, const MountingError& truth) {
+  return 1e3 *
+         Eigen::Vector3d(got.alpha - truth.alpha, got.beta - truth.beta, got.gamma - truth.gamma);
+}
+
+// The ceiling's fitted normal under a calibration (points above 2.3 m, away
+// from the walls).
+double CeilingTiltDeg(const Drive& d, const MountingError& c) {
+  std::vector<Eigen::Vector3d> pts;
+  for (const auto& o : d.store.observations()) {
+    const Eigen::Vector3d p = ProjectObservation(o, d.config.geometry, c);
+    if (p.z() > 2.3 && p.x() > 0.5 && p.x() < 9.5 && p.y() > 0.5 && p.y() < 4.5) pts.push_back(p);
+  }
+  Plane plane;
+  EXPECT_TRUE(FitPlane(pts, &plane));
+  return std::acos(std::min(1.0, std::abs(plane.normal.z()))) * 180.0 / M_PI;
+}
+
+class CalibrationCaseTest : public ::testing::TestWithParam<int> {
+ protected:
+  const Case& c() const { return kCases[GetParam()]; }
+  const Drive& drive() const { return GetDrive(GetParam()); }
+  // Refined corners on the drive's board samples, from zero.
+  CalibrationSummary SolveRefined() const {
+    CalibrationSummary s;
+    const Drive& d = drive();
+    const Status st =
+        SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, CalibrationOptions(), &s);
+    EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+    return s;
+  }
+  void Report(const char* mode, const CalibrationSummary& s, double corner_before,
+              double corner_after) const {
+    const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
+    std::printf(
+        "[calib] seed %llu angles %-5s %-16s err(mrad) alpha %+7.3f beta %+7.3f gamma %+7.3f  "
+        "sigma(mrad) %.3f %.3f %.3f  corner RMS %.4f -> %.4f m  outer %d LM %zu\n",
+        static_cast<unsigned long long>(c().seed), c().name, mode, e[0], e[1], e[2],
+        1e3 * s.sigma_rad[0], 1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2], corner_before,
+        corner_after, s.outer_iterations, s.trace.size());
+  }
+};
+
+TEST_P(CalibrationCaseTest, RawSamplePicksAreTheBaseline) {
+  const Drive& d = drive();
+  std::vector<ObservationPair> pairs;
+  ASSERT_TRUE(ResolvePairs(d.corner_picks, d.store, d.windows, d.config.geometry, {}, &pairs).ok());
+  CalibrationSummary s;
+  s.method = "pairs";
+  const Status st = SolvePairs(pairs, d.config.geometry, {}, CalibrationOptions(), &s);
+  ASSERT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  // Measured and reported, not bounded (the issue): only sanity here.
+  EXPECT_LT(s.final_rms_m, s.initial_rms_m);
+  EXPECT_GT(s.trace.size(), 1u);
+  Report("raw-picks", s, CornerDistance(d, {}), CornerDistance(d, s.angles));
+}
+
+// The upright board (the paper's set-up): its side edges run parallel to
+// the scan lines and are located only to the line spacing on the board
+// (~5 cm), so refined corners recover gamma (from the top and bottom edges)
+// but alpha and beta only to tens of mrad (measured, docs/calibration.md);
+// the bounds here are sanity bounds, not the issue's.
+class UprightBoardTest : public CalibrationCaseTest {};
+
+TEST_P(UprightBoardTest, RefinedCornersConvergeAndRecoverGamma) {
+  const Drive& d = drive();
+  const CalibrationSummary s = SolveRefined();
+  ASSERT_TRUE(s.converged) << s.FullReport();
+  const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
+  const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
+  Report("refined-corners", s, before, after);
+  EXPECT_TRUE(s.converged);
+  EXPECT_LT(std::abs(e[2]), 5.0) << s.FullReport();
+  EXPECT_LT(e.cwiseAbs().maxCoeff(), 50.0) << s.FullReport();
+  EXPECT_LT(after, before / 1.5);
+  EXPECT_GT(s.sigma_rad.minCoeff(), 0.0);
+}
+
+// The diamond (a 5 mm board turned 45 deg) on the calibration drive (two
+// turns at 0.05 m/s): every edge crosses the scan lines at 45 deg, so each pass's
+// corners are fitted to millimetres. The issue's bounds: refined corners
+// within 3 mrad, and the fitted corners of the two passes at least ten
+// times closer than uncalibrated.
+class DiamondBoardTest : public CalibrationCaseTest {};
+
+TEST_P(DiamondBoardTest, RefinedCornersRecoverEachAngleWithin3Mrad) {
+  const Drive& d = drive();
+  const CalibrationSummary s = SolveRefined();
+  ASSERT_TRUE(s.converged) << s.FullReport();
+  const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
+  const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
+  Report("refined-corners", s, before, after);
+  EXPECT_TRUE(s.converged);
+  EXPECT_LT(e.cwiseAbs().maxCoeff(), 3.0) << s.FullReport();
+  EXPECT_GT(before, 10.0 * after);
+  EXPECT_GT(s.sigma_rad.minCoeff(), 0.0);
+}
+
+// Two turns: four sightings, alternately near (about 0.8 m from the lidar)
+// and far (about 2.4 m, seen through the centre); pass 1 gathers the near
+// ones and pass 2 the far ones.
+TEST_P(DiamondBoardTest, SightingsAlternateNearAndFar) {
+  const Drive& d = drive();
+  ASSERT_EQ(d.windows.size(), 4u);
+  for (int k = 0; k < 2; ++k) {
+    double range = 0.0;
+    for (const auto& o : d.board[k]) {
+      range += o.p_lidar.norm();
+      const int w = PassOfTime(d.windows, o.time_ns);
+      EXPECT_TRUE(w == k || w == k + 2) << w;
+    }
+    range /= static_cast<double>(d.board[k].size());
+    if (k == 0) {
+      EXPECT_LT(range, 1.2);
+    }
+    if (k == 1) {
+      EXPECT_GT(range, 2.0);
+    }
+  }
+}
+
+// The fitted board itself: each pass's rectangle at the true angles is the
+// true board (0.6 m square, 45 deg) to a few millimetres.
+TEST_P(DiamondBoardTest, BoardFitAtTruthFindsTheTrueCorners) {
+  const Drive& d = drive();
+  for (int k = 0; k < 2; ++k) {
+    BoardCorners b;
+    ASSERT_TRUE(FitBoardCorners(d.board[k], d.config.geometry, c().truth, &b).ok());
+    double worst = 0.0;
+    for (int j = 0; j < 4; ++j) worst = std::max(worst, (b.corners[j] - c().corners()[j]).norm());
+    std::printf("[calib] seed %llu pass %d board %.4f x %.4f m rotation %+.3f deg, %zu lines, "
+                "%zu edge points, edge RMS %.1f mm, worst corner %.1f mm\n",
+                static_cast<unsigned long long>(c().seed), k + 1, b.size_m.x(), b.size_m.y(),
+                b.rotation_rad * 180.0 / M_PI, b.scans, b.edge_points, 1e3 * b.edge_rms_m,
+                1e3 * worst);
+    EXPECT_LT(worst, 0.012);
+    EXPECT_NEAR(b.size_m.x(), 0.6, 0.01);
+    EXPECT_NEAR(b.size_m.y(), 0.6, 0.01);
+    EXPECT_NEAR(std::abs(b.rotation_rad), M_PI / 4, 0.02);
+  }
+}
+
+TEST_P(CalibrationCaseTest, AutomaticModeRecoversEachAngleWithinHalfMrad) {
+  const Drive& d = drive();
+  CalibrationSummary s;
+  const Status st = SolveAutomatic(d.store, d.config.geometry, {}, AutoCalibrationOptions(), &s);
+  ASSERT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  const Eigen::Vector3d e = ErrorMrad(s.angles, c().truth);
+  const double before = CornerDistance(d, {}), after = CornerDistance(d, s.angles);
+  Report("auto-planes", s, before, after);
+  EXPECT_LT(e.cwiseAbs().maxCoeff(), 0.5) << s.FullReport();
+  if (c().target == sim::LabTarget::kDiamond) {
+    EXPECT_GT(before, 10.0 * after);  // the issue's bound
+  } else {
+    // On the upright board the corner metric is limited by the side edges:
+    // the automatic result must do as well on it as the true angles do.
+    EXPECT_LT(after, CornerDistance(d, c().truth) + 0.01);
+  }
+  EXPECT_LT(s.final_rms_m, s.initial_rms_m);
+  EXPECT_GE(s.planes, 3);
+  const double tilt_before = CeilingTiltDeg(d, {}), tilt_after = CeilingTiltDeg(d, s.angles);
+  std::printf("[calib] seed %llu angles %-5s ceiling tilt %.4f deg -> %.4f deg\n",
+              static_cast<unsigned long long>(c().seed), c().name, tilt_before, tilt_after);
+  EXPECT_LT(tilt_after, 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(SeedsAndAngles, CalibrationCaseTest, ::testing::Range(0, kAllCases));
+INSTANTIATE_TEST_SUITE_P(SeedsAndAngles, UprightBoardTest, ::testing::Range(0, kSquareCases));
+INSTANTIATE_TEST_SUITE_P(SeedsAndAngles, DiamondBoardTest,
+                         ::testing::Range(kSquareCases, kAllCases));
+
+// --- Bad input: clear errors, never a crash ---------------------------------
+
+LidarObservation Obs(double x, double y, double z, int64_t t_ns, uint32_t scan) {
+  LidarObservation o;
+  o.ref = {scan, 0};
+  o.time_ns = t_ns;
+  o.p_lidar = Eigen::Vector3d(0.0, y, z);
+  o.world_from_body = Rigid3d::FromPose(x, 0, 0, 0, 0, 0);
+  return o;
+}
+
+std::vector<ObservationPair> SyntheticPairs(int n) {
+  std::vector<ObservationPair> pairs;
+  for (int k = 0; k < n; ++k) {
+    pairs.push_back({Obs(0, -0.7, 0.5 + 0.2 * k, 1'000'000'000 + k, k),
+                     Obs(0, 2.3, 0.5 + 0.2 * k, 20'000'000'000 + k, 100 + k)});
+  }
+  return pairs;
+}
+
+TEST(SolvePairsTest, TooFewPairs) {
+  CalibrationSummary s;
+  const Status st = SolvePairs(SyntheticPairs(3), RobotGeometry(), {}, CalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("at least 4 pairs"), std::string::npos) << st.message();
+}
+
+TEST(SolvePairsTest, PairFromOnePassOnly) {
+  auto pairs = SyntheticPairs(4);
+  pairs[2].pass2.time_ns = pairs[2].pass1.time_ns + 100'000'000;
+  CalibrationSummary s;
+  const Status st = SolvePairs(pairs, RobotGeometry(), {}, CalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("pair 3: both picks are from one pass"), std::string::npos)
+      << st.message();
+}
+
+TEST(SolvePairsTest, NaNIsRefused) {
+  auto pairs = SyntheticPairs(4);
+  pairs[1].pass1.p_lidar.y() = std::nan("");
+  CalibrationSummary s;
+  Status st = SolvePairs(pairs, RobotGeometry(), {}, CalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("pair 2"), std::string::npos) << st.message();
+  st = SolvePairs(SyntheticPairs(4), RobotGeometry(), {std::nan(""), 0, 0}, CalibrationOptions(),
+                  &s);
+  EXPECT_FALSE(st.ok());
+}
+
+TEST(SolvePairsTest, DuplicatePairsAreRefused) {
+  auto pairs = SyntheticPairs(4);
+  pairs[3] = pairs[0];
+  CalibrationSummary s;
+  const Status st = SolvePairs(pairs, RobotGeometry(), {}, CalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("same samples as pair 1"), std::string::npos) << st.message();
+}
+
+TEST(SolvePairsTest, InvalidOptions) {
+  CalibrationOptions o;
+  std::string error;
+  EXPECT_TRUE(o.IsValid(&error));
+  o.loss = RobustLoss::kHuber;
+  o.loss_scale_m = 0.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  CalibrationSummary s;
+  EXPECT_FALSE(SolvePairs(SyntheticPairs(4), RobotGeometry(), {}, o, &s).ok());
+}
+
+TEST(SolvePairsTest, DegenerateRealPicksWarn) {
+  const Drive& d = GetDrive(0);
+  // Four "pairs" all at one corner of the board: the three angles are not
+  // separable from one point seen twice plus noise.
+  std::vector<PickPair> picks(4, d.corner_picks[0]);
+  std::vector<ObservationPair> pairs;
+  ASSERT_TRUE(ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs).ok());
+  // Make them distinct neighbouring samples, not duplicates.
+  for (int k = 1; k < 4; ++k) {
+    LidarObservation o;
+    SampleRef r = pairs[k].pass1.ref;
+    r.beam = static_cast<uint16_t>(r.beam - k);
+    if (d.store.Find(r, &o).ok()) pairs[k].pass1 = o;
+  }
+  CalibrationSummary s;
+  const Status st = SolvePairs(pairs, d.config.geometry, {}, CalibrationOptions(), &s);
+  EXPECT_FALSE(s.warnings.empty()) << s.FullReport();
+  std::printf("[calib] degenerate picks: %s; warnings: %s\n",
+              st.ok() ? "solved" : st.message().c_str(),
+              s.warnings.empty() ? "none" : s.warnings.front().c_str());
+}
+
+TEST(ResolvePairsTest, UnknownSampleAndWrongPassAndWorldSnap) {
+  const Drive& d = GetDrive(0);
+  std::vector<ObservationPair> pairs;
+  // Unknown scan.
+  std::vector<PickPair> picks = d.corner_picks;
+  picks[1].pass1.sample.scan = 999999;
+  Status st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("pair 2 pass1"), std::string::npos) << st.message();
+  // Both picks in pass 1.
+  picks = d.corner_picks;
+  picks[0].pass2 = picks[0].pass1;
+  st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("expected pass 2"), std::string::npos) << st.message();
+  // A world position snaps to the nearest sample of its pass.
+  picks = d.corner_picks;
+  LidarObservation o;
+  ASSERT_TRUE(d.store.Find(picks[2].pass2.sample, &o).ok());
+  picks[2].pass2.has_sample = false;
+  picks[2].pass2.world =
+      ProjectObservation(o, d.config.geometry, {}) + Eigen::Vector3d(0.001, 0.0, 0.001);
+  ASSERT_TRUE(ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs).ok());
+  EXPECT_EQ(pairs[2].pass2.ref, o.ref);
+  picks[2].pass2.world.x() = std::nan("");
+  EXPECT_FALSE(ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs).ok());
+}
+
+TEST(AutomaticTest, EmptyRecordingFails) {
+  CalibrationSummary s;
+  const Status st =
+      SolveAutomatic(SampleStore(), RobotGeometry(), {}, AutoCalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("samples"), std::string::npos) << st.message();
+}
+
+TEST(RefinedCornersTest, TooFewSamplesFails) {
+  CalibrationSummary s;
+  const Status st = SolveRefinedCorners({}, {}, RobotGeometry(), {}, CalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("pass 1"), std::string::npos) << st.message();
+}
+
+// --- Files ------------------------------------------------------------------
+
+TEST(PairsFileTest, RoundTripAndStrictness) {
+  std::vector<PickPair> pairs(4);
+  for (int k = 0; k < 4; ++k) {
+    pairs[k].pass1.has_sample = true;
+    pairs[k].pass1.sample = {static_cast<uint32_t>(10 + k), static_cast<uint16_t>(200 + k)};
+    pairs[k].pass2.world = Eigen::Vector3d(5.0, 0.16, 1.0 + 0.1 * k);
+  }
+  std::vector<PickPair> back;
+  ASSERT_TRUE(ParsePairs(PairsToJson(pairs), "mem", &back).ok());
+  ASSERT_EQ(back.size(), 4u);
+  EXPECT_EQ(back[3].pass1.sample, pairs[3].pass1.sample);
+  EXPECT_FALSE(back[3].pass2.has_sample);
+  EXPECT_DOUBLE_EQ(back[3].pass2.world.z(), 1.3);
+
+  const auto fails = [](const std::string& text, const std::string& expect) {
+    std::vector<PickPair> p;
+    const Status st = ParsePairs(text, "p.json", &p);
+    EXPECT_FALSE(st.ok()) << text;
+    EXPECT_NE(st.message().find(expect), std::string::npos) << st.message();
+  };
+  const std::string head = R"({"format":"sweepscan-pairs","version":1,"pairs":[)";
+  fails(R"({"format":"x","version":1,"pairs":[]})", "format");
+  fails(R"({"format":"sweepscan-pairs","version":2,"pairs":[]})", "version");
+  fails(head + R"({"pass1":{"scan":1,"beam":2}}]})", "pass2: missing");
+  fails(head + R"({"pass1":{"scan":1},"pass2":{"scan":1,"beam":2}}]})", "beam: missing");
+  fails(head + R"({"pass1":{"scan":1,"beam":70000},"pass2":{"scan":1,"beam":2}}]})",
+        "out of range");
+  fails(head + R"({"pass1":{"scan":-1,"beam":7},"pass2":{"scan":1,"beam":2}}]})", "out of range");
+  fails(head + R"({"pass1":{"scan":1.5,"beam":7},"pass2":{"scan":1,"beam":2}}]})", "integer");
+  fails(head + R"({"pass1":{"world":[1,2]},"pass2":{"scan":1,"beam":2}}]})", "[x, y, z]");
+  fails(head + R"({"pass1":{"world":[1,2,NaN]},"pass2":{"scan":1,"beam":2}}]})", "not valid JSON");
+  fails(head + R"({"pass1":{"world":[1,2,"a"]},"pass2":{"scan":1,"beam":2}}]})", "element 2");
+  fails(head + R"({"pass1":{"world":[1,2,3],"scan":1,"beam":1},"pass2":{"scan":1,"beam":2}}]})",
+        "not both");
+  fails(head + R"({"pass1":{"scan":1,"beam":7,"x":1},"pass2":{"scan":1,"beam":2}}]})",
+        "unknown key");
+  fails(head + R"({"pass1":{"world":[1,2,1e999]},"pass2":{"scan":1,"beam":2}}]})", "");
+}
+
+TEST(CalibrationFileTest, SaveLoadAndStrictness) {
+  const std::string path = std::string(SWEEPSCAN_BINARY_DIR) + "/calibration_test_calib.json";
+  CalibrationSummary s;
+  s.method = "auto-planes";
+  s.converged = true;
+  s.sigma_rad = Eigen::Vector3d(1e-4, 2e-4, 3e-4);
+  const MountingError c{-0.0058, 0.0126, 0.0355};
+  ASSERT_TRUE(SaveCalibrationFile(path, c, &s).ok());
+  MountingError back;
+  ASSERT_TRUE(LoadCalibrationFile(path, &back).ok());
+  EXPECT_DOUBLE_EQ(back.alpha, c.alpha);
+  EXPECT_DOUBLE_EQ(back.beta, c.beta);
+  EXPECT_DOUBLE_EQ(back.gamma, c.gamma);
+  std::remove(path.c_str());
+  EXPECT_FALSE(SaveCalibrationFile(path, {std::nan(""), 0, 0}, nullptr).ok());
+  EXPECT_FALSE(LoadCalibrationFile(path, &back).ok());  // removed
+  const std::string head = R"({"format":"sweepscan-calibration","version":1,)";
+  EXPECT_FALSE(
+      ParseCalibration(head + R"("mounting_error_rad":{"alpha":0,"beta":0}})", "c", &back).ok());
+  EXPECT_FALSE(
+      ParseCalibration(head + R"("mounting_error_rad":{"alpha":0,"beta":0,"gamma":2}})", "c", &back)
+          .ok());
+  const Status st = ParseCalibration(
+      head + R"("mounting_error_rad":{"alpha":0,"beta":0,"gamma":0},"x":1})", "c", &back);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("x: unknown key"), std::string::npos) << st.message();
+}
+
+}  // namespace
+}  // namespace sweepscan

@@ -1,0 +1,501 @@
+// AgentCore, driven by explicit times: authentication, refusal of
+// unauthenticated commands, limits and ramps, e-stop latch, watchdog,
+// telemetry wrapping, Status cadence, lidar commands.
+#include "hardware/agent/agent_core.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "hardware/codecs/motor_board_codec.h"
+#include "hardware/codecs/x4_codec.h"
+#include "hardware/link/hmac_sha256.h"
+
+namespace sweepscan {
+namespace hardware {
+namespace {
+
+using std::chrono::milliseconds;
+
+std::vector<uint8_t> Key(const std::string& s) { return std::vector<uint8_t>(s.begin(), s.end()); }
+
+AgentOptions TestOptions() {
+  AgentOptions options;
+  options.key = Key("correct horse battery staple");
+  options.devices = {{1, "X4 sim"}, {2, "HI219 sim"}, {3, "motor board sim"}};
+  options.v_max_mps = 0.5;
+  options.w_max_radps = 1.0;
+  options.accel_max_mps2 = 1.0;
+  options.alpha_max_radps2 = 2.0;
+  return options;
+}
+
+Time Ms(int64_t ms) { return Time(milliseconds(ms)); }
+
+// The workstation side of the test plus everything the agent wrote.
+class AgentHarness {
+ public:
+  explicit AgentHarness(const AgentOptions& options) : agent(options) {
+    std::string error;
+    EXPECT_TRUE(options.IsValid(&error)) << error;
+  }
+
+  void Collect() {
+    std::vector<LinkMessage> messages;
+    client_decoder.Feed(out.to_client.data(), out.to_client.size(), &messages);
+    for (auto& m : messages) received.push_back(std::move(m));
+    motor_decoder.Feed(out.to_device[2], Time());
+    for (const MotorCommand& c : motor_decoder.TakeRecords()) motor_commands.push_back(c);
+    auto& lidar = out.to_device[0];
+    lidar_bytes.insert(lidar_bytes.end(), lidar.begin(), lidar.end());
+    if (out.close_client) closed = true;
+    out.Clear();
+  }
+  void Start(Time t) {
+    agent.Start(t, &out);
+    Collect();
+  }
+  void Connect(Time t) {
+    client_decoder.Reset();
+    agent.OnClientConnected(t, &out);
+    Collect();
+  }
+  void Send(Time t, const LinkPayload& payload) {
+    const std::vector<uint8_t> frame = client.Encode(t, payload);
+    agent.OnClientBytes(frame.data(), frame.size(), t, &out);
+    Collect();
+  }
+  void Tick(Time t) {
+    agent.Tick(t, &out);
+    Collect();
+  }
+  // Ticks every `step` from `from` to `to` inclusive.
+  void TickRange(Time from, Time to, Duration step = milliseconds(10)) {
+    for (Time t = from; t <= to; t += step) Tick(t);
+  }
+  const AuthChallenge* LastChallenge() const {
+    for (auto it = received.rbegin(); it != received.rend(); ++it) {
+      if (const auto* c = std::get_if<AuthChallenge>(&it->payload)) return c;
+    }
+    return nullptr;
+  }
+  void Authenticate(Time t, const std::vector<uint8_t>& key) {
+    const AuthChallenge* challenge = LastChallenge();
+    ASSERT_NE(challenge, nullptr);
+    AuthResponse response;
+    const Sha256Digest mac = LinkAuthMac(key, challenge->nonce.data(), challenge->nonce.size());
+    std::copy(mac.begin(), mac.end(), response.mac.begin());
+    Send(t, Hello{});
+    Send(t, response);
+  }
+  template <typename T>
+  std::vector<T> All() const {
+    std::vector<T> result;
+    for (const auto& m : received) {
+      if (const auto* p = std::get_if<T>(&m.payload)) result.push_back(*p);
+    }
+    return result;
+  }
+  bool AnyNonZeroMotorCommand() const {
+    for (const auto& c : motor_commands) {
+      if (c.vx_mps != 0.0 || c.wz_radps != 0.0) return true;
+    }
+    return false;
+  }
+
+  AgentCore agent;
+  AgentOutput out;
+  LinkEncoder client{LinkSender::kClient};
+  LinkDecoder client_decoder;
+  MotorCommandDecoder motor_decoder;
+  std::vector<LinkMessage> received;
+  std::vector<MotorCommand> motor_commands;
+  std::vector<uint8_t> lidar_bytes;
+  bool closed = false;
+};
+
+TEST(AgentOptionsTest, Validation) {
+  std::string error;
+  EXPECT_TRUE(TestOptions().IsValid(&error)) << error;
+  AgentOptions no_key = TestOptions();
+  no_key.key.clear();
+  EXPECT_FALSE(no_key.IsValid(&error));
+  no_key.require_auth = false;
+  EXPECT_TRUE(no_key.IsValid(&error)) << error;
+  AgentOptions bad = TestOptions();
+  bad.v_max_mps = -1;
+  EXPECT_FALSE(bad.IsValid(&error));
+  bad = TestOptions();
+  bad.watchdog = Duration::zero();
+  EXPECT_FALSE(bad.IsValid(&error));
+  bad = TestOptions();
+  bad.accel_max_mps2 = std::nan("");
+  EXPECT_FALSE(bad.IsValid(&error));
+  bad = TestOptions();
+  bad.motor_period = milliseconds(600);
+  EXPECT_FALSE(bad.IsValid(&error));
+}
+
+TEST(AgentCoreTest, GreetsWithHelloAndAFreshChallengePerConnection) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(10));
+  ASSERT_GE(h.received.size(), 2u);
+  const auto* hello = std::get_if<Hello>(&h.received[0].payload);
+  ASSERT_NE(hello, nullptr);
+  EXPECT_TRUE(hello->auth_required);
+  EXPECT_EQ(hello->devices.size(), 3u);
+  EXPECT_EQ(h.received[0].header.sequence, 0u);
+  const AuthChallenge first = *h.LastChallenge();
+  h.agent.OnClientDisconnected(Ms(20), &h.out);
+  h.Collect();
+  h.Connect(Ms(30));
+  const AuthChallenge second = *h.LastChallenge();
+  EXPECT_NE(first.nonce, second.nonce);
+  // No telemetry or status before authentication.
+  const uint8_t bytes[] = {1, 2, 3};
+  h.agent.OnDeviceBytes(LinkDevice::kImu, bytes, 3, Ms(40), &h.out);
+  h.Tick(Ms(200));
+  EXPECT_TRUE(h.All<Telemetry>().empty());
+  EXPECT_TRUE(h.All<LinkStatus>().empty());
+}
+
+TEST(AgentCoreTest, RightKeyAuthenticatesAndDrives) {
+  const AgentOptions options = TestOptions();
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  h.Authenticate(Ms(5), options.key);
+  const auto results = h.All<AuthResult>();
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_EQ(results[0].outcome, AuthOutcome::kOk);
+  EXPECT_FALSE(h.closed);
+  EXPECT_TRUE(h.agent.client_authenticated());
+  h.Send(Ms(10), DriveCommand{0.2, 0.0});
+  const auto acks = h.All<CommandAck>();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].result, AckResult::kAccepted);
+  EXPECT_EQ(acks[0].acked_type, static_cast<uint8_t>(LinkMessageType::kDriveCommand));
+  EXPECT_EQ(acks[0].echo_time, Ms(10));
+  h.TickRange(Ms(10), Ms(400));
+  EXPECT_TRUE(h.AnyNonZeroMotorCommand());
+  EXPECT_NEAR(h.agent.applied_v_mps(), 0.2, 1e-12);
+  EXPECT_EQ(h.agent.watchdog_state(), WatchdogState::kArmed);
+}
+
+TEST(AgentCoreTest, WrongKeyIsDeniedClosedAndNeverMoves) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  // Commands before authentication: refused, no effect.
+  h.Send(Ms(1), DriveCommand{0.3, 0.5});
+  h.Send(Ms(2), LidarMotor{true});
+  h.Send(Ms(3), Heartbeat{});
+  for (const auto& ack : h.All<CommandAck>()) {
+    EXPECT_EQ(ack.result, AckResult::kNotAuthenticated);
+  }
+  EXPECT_EQ(h.All<CommandAck>().size(), 3u);
+  EXPECT_TRUE(h.lidar_bytes.size() <= 2u);  // Only the start-up stop (A5 65).
+  h.Authenticate(Ms(5), Key("wrong key"));
+  const auto results = h.All<AuthResult>();
+  ASSERT_EQ(results.size(), 1u);
+  EXPECT_EQ(results[0].outcome, AuthOutcome::kDenied);
+  EXPECT_TRUE(h.closed);
+  EXPECT_FALSE(h.agent.client_authenticated());
+  // Anything after the denial on this connection is ignored.
+  const size_t before = h.received.size();
+  h.Send(Ms(6), DriveCommand{0.3, 0.0});
+  EXPECT_EQ(h.received.size(), before);
+  h.TickRange(Ms(6), Ms(1000));
+  EXPECT_FALSE(h.AnyNonZeroMotorCommand());
+  EXPECT_EQ(h.agent.applied_v_mps(), 0.0);
+  EXPECT_TRUE(h.All<Telemetry>().empty());
+}
+
+TEST(AgentCoreTest, SecondAuthResponseOnTheSameConnectionIsDenied) {
+  const AgentOptions options = TestOptions();
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  h.Authenticate(Ms(1), options.key);
+  h.Send(Ms(2), AuthResponse{});
+  const auto results = h.All<AuthResult>();
+  ASSERT_EQ(results.size(), 2u);
+  EXPECT_EQ(results[1].outcome, AuthOutcome::kDenied);
+  EXPECT_TRUE(h.closed);
+}
+
+TEST(AgentCoreTest, ReplayedResponseFailsOnANewNonce) {
+  const AgentOptions options = TestOptions();
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  const AuthChallenge old = *h.LastChallenge();
+  AuthResponse recorded;
+  const Sha256Digest mac = LinkAuthMac(options.key, old.nonce.data(), old.nonce.size());
+  std::copy(mac.begin(), mac.end(), recorded.mac.begin());
+  h.agent.OnClientDisconnected(Ms(1), &h.out);
+  h.Connect(Ms(2));
+  h.Send(Ms(3), recorded);
+  EXPECT_EQ(h.All<AuthResult>().back().outcome, AuthOutcome::kDenied);
+}
+
+TEST(AgentCoreTest, UnauthenticatedClientIsDroppedAfterTheAuthTimeout) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  h.TickRange(Ms(0), Ms(4900), milliseconds(100));
+  EXPECT_FALSE(h.closed);
+  h.Tick(Ms(5000));
+  EXPECT_TRUE(h.closed);
+}
+
+TEST(AgentCoreTest, EmergencyStopIsAcceptedEvenUnauthenticated) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  h.Send(Ms(1), EmergencyStop{});
+  ASSERT_EQ(h.All<CommandAck>().size(), 1u);
+  EXPECT_EQ(h.All<CommandAck>()[0].result, AckResult::kAccepted);
+  EXPECT_TRUE(h.agent.status(Ms(1)).emergency_stop_latched);
+}
+
+class AuthenticatedAgentTest : public ::testing::Test {
+ protected:
+  AuthenticatedAgentTest() : h_(TestOptions()) {
+    h_.Start(Ms(0));
+    h_.Connect(Ms(0));
+    h_.Authenticate(Ms(0), TestOptions().key);
+  }
+  // Ticks every 10 ms and sends a Heartbeat every 100 ms (a healthy client).
+  void RunWithHeartbeats(Time from, Time to) {
+    for (Time t = from; t <= to; t += milliseconds(10)) {
+      if ((t - from) % milliseconds(100) == Duration::zero()) h_.Send(t, Heartbeat{});
+      h_.Tick(t);
+    }
+  }
+  AgentHarness h_;
+};
+
+TEST_F(AuthenticatedAgentTest, VelocityLimitsClampTheSetPoint) {
+  h_.Send(Ms(10), DriveCommand{3.0, -7.0});
+  const LinkStatus s = h_.agent.status(Ms(10));
+  EXPECT_EQ(s.commanded_v_mps, 0.5);
+  EXPECT_EQ(s.commanded_w_radps, -1.0);
+  RunWithHeartbeats(Ms(10), Ms(2000));
+  EXPECT_NEAR(h_.agent.applied_v_mps(), 0.5, 1e-12);
+  EXPECT_NEAR(h_.agent.applied_w_radps(), -1.0, 1e-12);
+  for (const auto& c : h_.motor_commands) {
+    EXPECT_LE(std::abs(c.vx_mps), 0.5 + 1e-3);
+    EXPECT_LE(std::abs(c.wz_radps), 1.0 + 1e-3);
+  }
+}
+
+TEST_F(AuthenticatedAgentTest, AccelerationIsRampedAndCommandsGoOutAt20Hz) {
+  h_.Send(Ms(100), DriveCommand{0.5, 0.0});
+  h_.motor_commands.clear();
+  RunWithHeartbeats(Ms(100), Ms(1100));
+  // 1 m/s^2 from 0 to 0.5 m/s takes 0.5 s; wire resolution is 1 mm/s.
+  ASSERT_GE(h_.motor_commands.size(), 19u);
+  EXPECT_LE(h_.motor_commands.size(), 22u);
+  double previous = 0.0;
+  for (const auto& c : h_.motor_commands) {
+    EXPECT_LE(c.vx_mps - previous, 1.0 * 0.05 + 1e-3);  // <= a_max * motor period.
+    EXPECT_GE(c.vx_mps, previous - 1e-9);
+    previous = c.vx_mps;
+  }
+  EXPECT_NEAR(h_.motor_commands.back().vx_mps, 0.5, 1e-3);
+}
+
+TEST_F(AuthenticatedAgentTest, StopRampsDownAndEndsWithAZeroCommand) {
+  h_.Send(Ms(0), DriveCommand{0.4, 0.0});
+  RunWithHeartbeats(Ms(0), Ms(1000));
+  h_.Send(Ms(1000), Stop{});
+  h_.motor_commands.clear();
+  RunWithHeartbeats(Ms(1000), Ms(1200));
+  // After 0.2 s of 1 m/s^2: 0.2 m/s.
+  EXPECT_NEAR(h_.agent.applied_v_mps(), 0.2, 0.011);
+  RunWithHeartbeats(Ms(1200), Ms(2000));
+  EXPECT_EQ(h_.agent.applied_v_mps(), 0.0);
+  ASSERT_FALSE(h_.motor_commands.empty());
+  EXPECT_EQ(h_.motor_commands.back().vx_mps, 0.0);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kIdle);
+}
+
+TEST_F(AuthenticatedAgentTest, EmergencyStopZeroesAtOnceAndLatchesUntilCleared) {
+  h_.Send(Ms(0), DriveCommand{0.4, 0.5});
+  RunWithHeartbeats(Ms(0), Ms(1000));
+  h_.motor_commands.clear();
+  h_.Send(Ms(1000), EmergencyStop{});
+  // Zero is sent in the same call, without waiting for a tick.
+  ASSERT_EQ(h_.motor_commands.size(), 1u);
+  EXPECT_EQ(h_.motor_commands[0].vx_mps, 0.0);
+  EXPECT_EQ(h_.motor_commands[0].wz_radps, 0.0);
+  EXPECT_TRUE(h_.All<LinkStatus>().back().emergency_stop_latched);
+  h_.Send(Ms(1010), DriveCommand{0.2, 0.0});
+  EXPECT_EQ(h_.All<CommandAck>().back().result, AckResult::kEmergencyStopLatched);
+  RunWithHeartbeats(Ms(1010), Ms(1500));
+  EXPECT_FALSE(h_.AnyNonZeroMotorCommand());
+  h_.Send(Ms(1500), ClearEmergencyStop{});
+  EXPECT_EQ(h_.All<CommandAck>().back().result, AckResult::kAccepted);
+  RunWithHeartbeats(Ms(1500), Ms(1800));
+  EXPECT_FALSE(h_.AnyNonZeroMotorCommand());  // Still until the next Drive.
+  h_.Send(Ms(1800), DriveCommand{0.2, 0.0});
+  EXPECT_EQ(h_.All<CommandAck>().back().result, AckResult::kAccepted);
+  RunWithHeartbeats(Ms(1800), Ms(2000));
+  EXPECT_TRUE(h_.AnyNonZeroMotorCommand());
+  EXPECT_GE(h_.agent.status(Ms(2000)).commands_refused, 1u);
+}
+
+TEST_F(AuthenticatedAgentTest, WatchdogStopsWithinThePeriodOfTheLastFrame) {
+  h_.Send(Ms(0), DriveCommand{0.4, 0.3});
+  RunWithHeartbeats(Ms(0), Ms(1000));  // Last heartbeat at 1000 ms.
+  ASSERT_GT(h_.agent.applied_v_mps(), 0.3);
+  const Time last_frame = Ms(1000);
+  Time stopped_at;
+  bool stopped = false;
+  for (Time t = Ms(1010); t <= Ms(2000); t += milliseconds(10)) {
+    h_.motor_commands.clear();
+    h_.Tick(t);
+    if (!stopped && !h_.motor_commands.empty() && h_.motor_commands.back().vx_mps == 0.0 &&
+        h_.motor_commands.back().wz_radps == 0.0) {
+      stopped = true;
+      stopped_at = t;
+    }
+  }
+  ASSERT_TRUE(stopped);
+  EXPECT_LE(stopped_at - last_frame, milliseconds(500) + milliseconds(10));
+  EXPECT_GE(stopped_at - last_frame, milliseconds(500));  // Not before the period.
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  const LinkStatus s = h_.All<LinkStatus>().back();
+  EXPECT_EQ(s.watchdog, WatchdogState::kTripped);
+  EXPECT_EQ(s.watchdog_trips, 1u);
+  EXPECT_EQ(s.applied_v_mps, 0.0);
+  // A new Drive re-arms it.
+  h_.Send(Ms(2000), DriveCommand{0.1, 0.0});
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
+}
+
+TEST_F(AuthenticatedAgentTest, HeartbeatsKeepTheWatchdogFedAndAreAcked) {
+  h_.Send(Ms(0), DriveCommand{0.2, 0.0});
+  RunWithHeartbeats(Ms(0), Ms(3000));
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
+  EXPECT_NEAR(h_.agent.applied_v_mps(), 0.2, 1e-12);
+  size_t heartbeat_acks = 0;
+  for (const auto& ack : h_.All<CommandAck>()) {
+    if (ack.acked_type == static_cast<uint8_t>(LinkMessageType::kHeartbeat)) ++heartbeat_acks;
+  }
+  EXPECT_EQ(heartbeat_acks, 31u);
+}
+
+TEST_F(AuthenticatedAgentTest, CorruptFramesDoNotFeedTheWatchdog) {
+  h_.Send(Ms(0), DriveCommand{0.2, 0.0});
+  RunWithHeartbeats(Ms(0), Ms(500));
+  std::vector<uint8_t> frame = h_.client.EncodeHeartbeat(Ms(600));
+  frame.back() ^= 0xFF;  // Frame CRC broken.
+  for (Time t = Ms(510); t <= Ms(1010); t += milliseconds(10)) {
+    h_.agent.OnClientBytes(frame.data(), frame.size(), t, &h_.out);
+    h_.Tick(t);
+  }
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  EXPECT_GT(h_.agent.status(Ms(1010)).frames_rejected, 0u);
+}
+
+TEST_F(AuthenticatedAgentTest, DisconnectTripsTheWatchdogAtOnce) {
+  h_.Send(Ms(0), DriveCommand{0.3, 0.0});
+  RunWithHeartbeats(Ms(0), Ms(500));
+  h_.motor_commands.clear();
+  h_.agent.OnClientDisconnected(Ms(505), &h_.out);
+  h_.Collect();
+  ASSERT_EQ(h_.motor_commands.size(), 1u);
+  EXPECT_EQ(h_.motor_commands[0].vx_mps, 0.0);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+}
+
+TEST_F(AuthenticatedAgentTest, DeviceBytesBecomeTelemetryWithTheReceiveTime) {
+  const uint8_t bytes[] = {0xAA, 0x55, 0x01, 0x02};
+  h_.agent.OnDeviceBytes(LinkDevice::kLidar, bytes, sizeof(bytes), Ms(42), &h_.out);
+  h_.Collect();
+  const auto telemetry = h_.All<Telemetry>();
+  ASSERT_EQ(telemetry.size(), 1u);
+  EXPECT_EQ(telemetry[0].device, 1);
+  EXPECT_EQ(telemetry[0].receive_time, Ms(42));
+  EXPECT_EQ(telemetry[0].bytes, std::vector<uint8_t>(bytes, bytes + 4));
+  EXPECT_EQ(h_.agent.status(Ms(42)).device_bytes[0], 4u);
+  // Reads beyond one frame's capacity are split, all with the same time.
+  std::vector<uint8_t> big(kLinkMaxTelemetryBytes + 100, 0x11);
+  h_.agent.OnDeviceBytes(LinkDevice::kImu, big.data(), big.size(), Ms(50), &h_.out);
+  h_.Collect();
+  const auto all = h_.All<Telemetry>();
+  ASSERT_EQ(all.size(), 3u);
+  EXPECT_EQ(all[1].bytes.size() + all[2].bytes.size(), big.size());
+  EXPECT_EQ(all[2].receive_time, Ms(50));
+}
+
+TEST_F(AuthenticatedAgentTest, MotorFeedbackGivesBatteryAndStatusAt10Hz) {
+  MotorFeedback feedback;
+  feedback.voltage_v = 11.7;
+  const auto bytes = EncodeMotorFeedback(feedback);
+  h_.agent.OnDeviceBytes(LinkDevice::kMotorBoard, bytes.data(), bytes.size(), Ms(5), &h_.out);
+  h_.Collect();
+  const size_t before = h_.All<LinkStatus>().size();
+  RunWithHeartbeats(Ms(10), Ms(1000));
+  const auto statuses = h_.All<LinkStatus>();
+  EXPECT_GE(statuses.size() - before, 9u);
+  EXPECT_LE(statuses.size() - before, 11u);
+  EXPECT_NEAR(statuses.back().battery_voltage_v, 11.7, 1e-3);
+  EXPECT_TRUE(statuses.back().client_authenticated);
+}
+
+TEST_F(AuthenticatedAgentTest, SilentDevicesAreReportedAsFaults) {
+  RunWithHeartbeats(Ms(10), Ms(1500));
+  const uint32_t faults = h_.All<LinkStatus>().back().fault_bits;
+  EXPECT_TRUE(faults & kFaultImuSilent);
+  EXPECT_TRUE(faults & kFaultMotorBoardSilent);
+  EXPECT_FALSE(faults & kFaultLidarSilent);  // The lidar motor is off.
+}
+
+TEST_F(AuthenticatedAgentTest, LidarStartUpRequestsAndMotorCommands) {
+  RunWithHeartbeats(Ms(0), Ms(300));
+  // Start: A5 65 (stop), then A5 90 (device info), A5 92 (health), spaced.
+  const std::vector<uint8_t> startup = {0xA5, 0x65, 0xA5, 0x90, 0xA5, 0x92};
+  EXPECT_EQ(h_.lidar_bytes, startup);
+  h_.lidar_bytes.clear();
+  h_.Send(Ms(310), LidarMotor{true});
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
+  EXPECT_TRUE(h_.agent.status(Ms(310)).lidar_motor_on);
+  h_.lidar_bytes.clear();
+  h_.Send(Ms(320), LidarMotor{false});
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65}));
+}
+
+TEST(AgentCoreTest, SerialLinkWithoutAuthRepeatsHelloAndAcceptsCommands) {
+  AgentOptions options = TestOptions();
+  options.require_auth = false;
+  options.key.clear();
+  options.hello_on_client_hello = true;
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  EXPECT_TRUE(h.All<AuthChallenge>().empty());
+  h.Send(Ms(10), Hello{});
+  EXPECT_EQ(h.All<Hello>().size(), 2u);
+  h.Send(Ms(20), DriveCommand{0.1, 0.0});
+  EXPECT_EQ(h.All<CommandAck>().back().result, AckResult::kAccepted);
+}
+
+TEST(AgentCoreTest, MissingRandomSourceRefusesToAuthenticate) {
+  AgentOptions options = TestOptions();
+  options.random_source = [](uint8_t*, size_t) { return false; };
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  EXPECT_TRUE(h.closed);
+  EXPECT_EQ(h.All<AuthResult>().back().outcome, AuthOutcome::kDenied);
+}
+
+}  // namespace
+}  // namespace hardware
+}  // namespace sweepscan
