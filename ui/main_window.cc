@@ -1,0 +1,551 @@
+#include "ui/main_window.h"
+
+#include <QAction>
+#include <QActionGroup>
+#include <QApplication>
+#include <QCloseEvent>
+#include <QDockWidget>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QKeyEvent>
+#include <QLabel>
+#include <QLineEdit>
+#include <QMenu>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QProgressBar>
+#include <QSettings>
+#include <QStatusBar>
+#include <QTimer>
+#include <QToolButton>
+#include <QUndoCommand>
+#include <QUndoStack>
+#include <cmath>
+
+#include "ui/panels/connection_panel.h"
+#include "ui/panels/drive_panel.h"
+#include "ui/panels/replay_panel.h"
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+constexpr int kTickMs = 33;  // ~30 Hz: drain the mailbox, render once.
+constexpr int kMaxRecent = 8;
+
+// View appearance changes are edits: undoable (Ctrl+Z / Ctrl+Shift+Z).
+class ColorModeCommand : public QUndoCommand {
+ public:
+  ColorModeCommand(CloudView* view, CloudView::ColorMode to, std::function<void()> sync)
+      : view_(view), from_(view->color_mode()), to_(to), sync_(std::move(sync)) {
+    setText(QObject::tr("colour mode"));
+  }
+  void redo() override {
+    view_->SetColorMode(to_);
+    sync_();
+  }
+  void undo() override {
+    view_->SetColorMode(from_);
+    sync_();
+  }
+
+ private:
+  CloudView* view_;
+  CloudView::ColorMode from_, to_;
+  std::function<void()> sync_;
+};
+
+class PointSizeCommand : public QUndoCommand {
+ public:
+  PointSizeCommand(CloudView* view, double to) : view_(view), from_(view->point_size()), to_(to) {
+    setText(QObject::tr("point size"));
+  }
+  void redo() override { view_->SetPointSize(to_); }
+  void undo() override { view_->SetPointSize(from_); }
+
+ private:
+  CloudView* view_;
+  double from_, to_;
+};
+
+bool IsDriveKey(int key) {
+  switch (key) {
+    case Qt::Key_Up:
+    case Qt::Key_Down:
+    case Qt::Key_Left:
+    case Qt::Key_Right:
+    case Qt::Key_W:
+    case Qt::Key_A:
+    case Qt::Key_S:
+    case Qt::Key_D:
+      return true;
+    default:
+      return false;
+  }
+}
+
+}  // namespace
+
+MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidget* parent)
+    : QMainWindow(parent), workspace_(workspace), resources_dir_(resources_dir) {
+  setWindowTitle(QStringLiteral("sweepscan"));
+  setObjectName(QStringLiteral("MainWindow"));
+  view_ = new CloudView(this);
+  setCentralWidget(view_);
+  undo_ = new QUndoStack(this);
+
+  connection_panel_ = new ConnectionPanel(workspace_, resources_dir + QStringLiteral("/scenarios"));
+  drive_panel_ = new DrivePanel(workspace_);
+  replay_panel_ = new ReplayPanel(workspace_);
+  auto add_dock = [this](QWidget* w, const QString& title, const QString& name,
+                         Qt::DockWidgetArea area) {
+    auto* dock = new QDockWidget(title, this);
+    dock->setObjectName(name);
+    dock->setWidget(w);
+    addDockWidget(area, dock);
+    return dock;
+  };
+  add_dock(connection_panel_, tr("Connection"), QStringLiteral("connectionDock"),
+           Qt::LeftDockWidgetArea);
+  add_dock(drive_panel_, tr("Drive"), QStringLiteral("driveDock"), Qt::LeftDockWidgetArea);
+  add_dock(replay_panel_, tr("Session and replay"), QStringLiteral("replayDock"),
+           Qt::RightDockWidgetArea);
+  connect(connection_panel_, &ConnectionPanel::errorOccurred, this,
+          [this](const QString& m) { ShowError(tr("Cannot connect"), m); });
+
+  BuildMenus();
+  BuildStatusBar();
+  RestoreSettings();
+
+  connect(workspace_, &Workspace::message, this,
+          [this](const QString& m) { statusBar()->showMessage(m, 6000); });
+  connect(workspace_, &Workspace::authenticationFailed, this, [this](const QString& reason) {
+    ShowError(tr("Connection refused"),
+              tr("The robot refused this workstation: %1\n\nCheck the key file.").arg(reason));
+  });
+  connect(workspace_, &Workspace::jobProgress, this, [this](const QString& what, double f) {
+    progress_->setVisible(true);
+    cancel_->setVisible(true);
+    progress_->setFormat(what);
+    progress_->setRange(0, f < 0 ? 0 : 1000);
+    if (f >= 0) progress_->setValue(static_cast<int>(1000 * f));
+  });
+  connect(workspace_, &Workspace::jobFinished, this,
+          [this](const QString& what, bool ok, const QString& message) {
+            progress_->setVisible(false);
+            cancel_->setVisible(false);
+            if (!ok) ShowError(what, message);
+          });
+  connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
+    setWindowTitle(dir.isEmpty() ? QStringLiteral("sweepscan")
+                                 : QStringLiteral("%1 - sweepscan").arg(QFileInfo(dir).fileName()));
+    if (!dir.isEmpty() && !workspace_->unsaved()) AddRecent(dir);
+    UpdateActions();
+  });
+  connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::UpdateActions);
+  connect(workspace_, &Workspace::authenticatedChanged, this, &MainWindow::UpdateActions);
+
+  qApp->installEventFilter(this);
+  auto* tick = new QTimer(this);
+  tick->setTimerType(Qt::PreciseTimer);
+  connect(tick, &QTimer::timeout, this, &MainWindow::OnTick);
+  tick->start(kTickMs);
+  tick_clock_.start();
+  fps_clock_.start();
+  UpdateActions();
+}
+
+MainWindow::~MainWindow() { qApp->removeEventFilter(this); }
+
+void MainWindow::BuildMenus() {
+  // ---- File ----
+  QMenu* file = menuBar()->addMenu(tr("&File"));
+  QAction* new_session = file->addAction(tr("&New Session"), this, [this] {
+    if (ConfirmDiscard()) workspace_->NewSession();
+  });
+  new_session->setShortcut(QKeySequence::New);
+  QAction* open = file->addAction(tr("&Open Session…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(
+        this, tr("Open session folder (NAME.sweepscan)"), workspace_->sessions_root());
+    if (!dir.isEmpty()) OpenSessionPath(dir);
+  });
+  open->setShortcut(QKeySequence::Open);
+  recent_menu_ = file->addMenu(tr("Open &Recent"));
+  QAction* save_as = file->addAction(tr("Save Session &As…"), this, [this] {
+    const QString dir = QFileDialog::getSaveFileName(
+        this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
+    if (dir.isEmpty()) return;
+    SaveSessionTo(dir.endsWith(QStringLiteral(".sweepscan")) ? dir
+                                                               : dir + QStringLiteral(".sweepscan"));
+  });
+  save_as->setShortcut(QKeySequence::SaveAs);
+  file->addSeparator();
+  QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
+    const QString path = QFileDialog::getSaveFileName(this, tr("Export cloud"), QString(),
+                                                      tr("PLY (*.ply);;PCD (*.pcd)"));
+    if (!path.isEmpty()) workspace_->ExportCloud(path);
+  });
+  export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+  QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {
+    const QString path =
+        QFileDialog::getSaveFileName(this, tr("Save screenshot"), QString(), tr("PNG (*.png)"));
+    QString error;
+    if (!path.isEmpty() && !view_->SaveScreenshot(path, &error)) ShowError(tr("Screenshot"), error);
+  });
+  shot->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_P));
+  file->addSeparator();
+  QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
+  quit->setShortcut(QKeySequence::Quit);
+
+  // ---- Edit ----
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
+  undo->setShortcut(QKeySequence::Undo);
+  QAction* redo = undo_->createRedoAction(this, tr("&Redo"));
+  redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence::Redo});
+  edit->addAction(undo);
+  edit->addAction(redo);
+
+  // ---- View ----
+  QMenu* view = menuBar()->addMenu(tr("&View"));
+  view->addAction(tr("&3D"), view_, &CloudView::ViewOblique)->setShortcut(Qt::Key_0);
+  view->addAction(tr("&Top"), view_, &CloudView::ViewTop)->setShortcut(Qt::Key_1);
+  view->addAction(tr("&Front"), view_, &CloudView::ViewFront)->setShortcut(Qt::Key_2);
+  view->addAction(tr("&Side"), view_, &CloudView::ViewSide)->setShortcut(Qt::Key_3);
+  view->addAction(tr("&Fit to Cloud"), view_, &CloudView::FitToCloud)->setShortcut(Qt::Key_F);
+  view->addSeparator();
+  QMenu* color = view->addMenu(tr("&Colour by"));
+  color_group_ = new QActionGroup(this);
+  const QString names[3] = {tr("&Height"), tr("&Time"), tr("&Range (the X4 reports no intensity)")};
+  for (int i = 0; i < 3; ++i) {
+    QAction* a = color->addAction(names[i]);
+    a->setCheckable(true);
+    a->setData(i);
+    color_group_->addAction(a);
+    connect(a, &QAction::triggered, this, [this, i] {
+      if (static_cast<int>(view_->color_mode()) == i) return;
+      undo_->push(new ColorModeCommand(view_, static_cast<CloudView::ColorMode>(i), [this] {
+        color_group_->actions()[static_cast<int>(view_->color_mode())]->setChecked(true);
+      }));
+    });
+  }
+  color_group_->actions()[0]->setChecked(true);
+  view->addAction(tr("Larger Points"), this, [this] {
+    undo_->push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
+  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Plus));
+  view->addAction(tr("Smaller Points"), this, [this] {
+    undo_->push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
+  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Minus));
+  view->addSeparator();
+  auto toggle = [this, view](const QString& text, auto setter) {
+    QAction* a = view->addAction(text);
+    a->setCheckable(true);
+    a->setChecked(true);
+    connect(a, &QAction::toggled, view_, setter);
+    return a;
+  };
+  toggle(tr("Show &Grid"), &CloudView::SetGridVisible);
+  toggle(tr("Show &Axes"), &CloudView::SetAxesVisible);
+  toggle(tr("Show Tra&jectory"), &CloudView::SetTrajectoryVisible);
+  toggle(tr("Show &Robot"), &CloudView::SetRobotVisible);
+  toggle(tr("Show Colour &Bar"), &CloudView::SetColorBarVisible);
+  view->addSeparator();
+  QMenu* panels = view->addMenu(tr("&Panels"));
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) panels->addAction(dock->toggleViewAction());
+
+  // ---- Robot ----
+  QMenu* robot = menuBar()->addMenu(tr("&Robot"));
+  robot->addAction(tr("&Connect"), this, [this] {
+    QString error;
+    if (!connection_panel_->ConnectNow(&error)) ShowError(tr("Cannot connect"), error);
+  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
+  robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect)
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));
+  robot->addSeparator();
+  record_ = robot->addAction(tr("&Record"), this, [this] {
+    QString error;
+    if (!workspace_->StartRecording(&error)) ShowError(tr("Cannot record"), error);
+  });
+  record_->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_R));
+  stop_record_ = robot->addAction(tr("&Stop Recording"), this, [this] {
+    QString error;
+    if (!workspace_->StopRecording(&error)) ShowError(tr("Recording"), error);
+  });
+  stop_record_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_R));
+  robot->addSeparator();
+  // Space is handled in eventFilter so that it works whatever has focus; the
+  // action shows the binding in the menu.
+  estop_ = robot->addAction(tr("&Emergency Stop\tSpace"), workspace_, &Workspace::EmergencyStop);
+  robot->addAction(tr("C&lear Emergency Stop"), workspace_, &Workspace::ClearEmergencyStop);
+  robot->addAction(tr("&Abort Scripted Drive"), workspace_, &Workspace::AbortScriptedDrive);
+
+  // ---- Tools ----
+  QMenu* tools = menuBar()->addMenu(tr("&Tools"));
+  tools->addAction(tr("&Sessions Folder…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Where new recordings go"),
+                                                          workspace_->sessions_root());
+    if (!dir.isEmpty()) workspace_->set_sessions_root(dir);
+  });
+  tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
+
+  // ---- Help ----
+  QMenu* help = menuBar()->addMenu(tr("&Help"));
+  help->addAction(tr("&Keyboard"), this, [this] {
+    QMessageBox::information(
+        this, tr("Keyboard"),
+        tr("Arrows / W A S D: drive while held (release stops)\n"
+           "Space: emergency stop (whatever has focus)\n"
+           "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
+           "Ctrl+R / Ctrl+Shift+R: record / stop\n"
+           "Ctrl+O: open session;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+           "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
+  })->setShortcut(QKeySequence::HelpContents);
+  help->addAction(tr("&About sweepscan"), this, [this] {
+    QMessageBox::about(this, tr("About sweepscan"),
+                       tr("<b>sweepscan 0.1.0</b><p>Operator workstation for mobile 3D lidar "
+                          "scanning with a vertical 2D lidar (Miao et al. 2022; Choi et al. "
+                          "2017).</p>"));
+  });
+}
+
+void MainWindow::BuildStatusBar() {
+  link_label_ = new QLabel;
+  link_label_->setObjectName(QStringLiteral("statusLink"));
+  pose_label_ = new QLabel;
+  speed_label_ = new QLabel;
+  points_label_ = new QLabel;
+  points_label_->setObjectName(QStringLiteral("statusPoints"));
+  fps_label_ = new QLabel;
+  progress_ = new QProgressBar;
+  progress_->setMaximumWidth(260);
+  progress_->setTextVisible(true);
+  progress_->setVisible(false);
+  cancel_ = new QToolButton;
+  cancel_->setText(tr("Cancel"));
+  cancel_->setVisible(false);
+  connect(cancel_, &QToolButton::clicked, workspace_, &Workspace::CancelJob);
+  statusBar()->addPermanentWidget(progress_);
+  statusBar()->addPermanentWidget(cancel_);
+  for (QLabel* l : {link_label_, pose_label_, speed_label_, points_label_, fps_label_}) {
+    statusBar()->addPermanentWidget(l);
+  }
+}
+
+void MainWindow::RestoreSettings() {
+  QSettings s;
+  restoreGeometry(s.value(QStringLiteral("window/geometry")).toByteArray());
+  restoreState(s.value(QStringLiteral("window/state")).toByteArray());
+  ConnectOptions o;
+  o.kind = static_cast<LinkKind>(s.value(QStringLiteral("link/kind"), 0).toInt());
+  o.scenario_path = s.value(QStringLiteral("link/scenario"),
+                            resources_dir_ + QStringLiteral("/scenarios/lab.json"))
+                        .toString();
+  o.host = s.value(QStringLiteral("link/host"), o.host).toString();
+  o.port = s.value(QStringLiteral("link/port"), o.port).toInt();
+  o.key_file = s.value(QStringLiteral("link/key_file")).toString();
+  o.serial_port = s.value(QStringLiteral("link/serial_port")).toString();
+  o.baud = s.value(QStringLiteral("link/baud"), o.baud).toInt();
+  connection_panel_->SetOptions(o);
+  const int color = s.value(QStringLiteral("view/color"), 0).toInt();
+  if (color >= 0 && color < 3) {
+    view_->SetColorMode(static_cast<CloudView::ColorMode>(color));
+    color_group_->actions()[color]->setChecked(true);
+  }
+  view_->SetPointSize(s.value(QStringLiteral("view/point_size"), 2.0).toDouble());
+  const QString root = s.value(QStringLiteral("sessions/root")).toString();
+  if (!root.isEmpty()) workspace_->set_sessions_root(root);
+  RebuildRecentMenu();
+}
+
+void MainWindow::SaveSettings() {
+  QSettings s;
+  s.setValue(QStringLiteral("window/geometry"), saveGeometry());
+  s.setValue(QStringLiteral("window/state"), saveState());
+  const ConnectOptions o = connection_panel_->options();
+  s.setValue(QStringLiteral("link/kind"), static_cast<int>(o.kind));
+  s.setValue(QStringLiteral("link/scenario"), o.scenario_path);
+  s.setValue(QStringLiteral("link/host"), o.host);
+  s.setValue(QStringLiteral("link/port"), o.port);
+  s.setValue(QStringLiteral("link/key_file"), o.key_file);
+  s.setValue(QStringLiteral("link/serial_port"), o.serial_port);
+  s.setValue(QStringLiteral("link/baud"), o.baud);
+  s.setValue(QStringLiteral("view/color"), static_cast<int>(view_->color_mode()));
+  s.setValue(QStringLiteral("view/point_size"), view_->point_size());
+  s.setValue(QStringLiteral("sessions/root"), workspace_->sessions_root());
+}
+
+void MainWindow::OnTick() {
+  // Event-loop latency: how late this tick is against its period.
+  const double elapsed = tick_clock_.nsecsElapsed() * 1e-6;
+  tick_clock_.restart();
+  latencies_ms_.push_back(std::max(0.0, elapsed - kTickMs));
+
+  for (LiveBatch& b : workspace_->mailbox()->TakeAll()) {
+    if (b.reset) view_->Clear();
+    view_->AppendPoints(b.points);
+    view_->AppendTrajectory(b.trajectory);
+    if (b.has_pose) {
+      view_->SetRobotPose(b.pose);
+      pose_label_->setText(tr("x %1  y %2 m  yaw %3°")
+                               .arg(b.pose.x, 0, 'f', 2)
+                               .arg(b.pose.y, 0, 'f', 2)
+                               .arg(b.pose.yaw * 180.0 / M_PI, 0, 'f', 1));
+    }
+    workspace_->NoteBatch(b.total_points, b.scans);
+  }
+  if (!keys_held_.isEmpty()) UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).
+  view_->RenderIfDirty();
+
+  ++fps_frames_;
+  if (fps_clock_.elapsed() >= 1000) {
+    static uint64_t last_frames = 0;
+    const uint64_t frames = view_->frames_rendered();
+    fps_ = (frames - last_frames) * 1000.0 / fps_clock_.elapsed();
+    last_frames = frames;
+    fps_clock_.restart();
+    const hardware::LinkHealth& h = workspace_->health();
+    QString link = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
+    if (workspace_->authenticated()) link = tr("connected");
+    if (workspace_->recording()) link += tr(" · REC");
+    link_label_->setText(tr("Link: %1").arg(link));
+    fps_label_->setText(tr("%1 fps").arg(fps_, 0, 'f', 0));
+  }
+  const Twist2d c = workspace_->commanded();
+  speed_label_->setText(tr("v %1 m/s  w %2 rad/s").arg(c.v, 0, 'f', 2).arg(c.w, 0, 'f', 2));
+  points_label_->setText(tr("%L1 points").arg(view_->point_count()));
+  drive_panel_->ShowCommand(c);
+}
+
+bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
+  const QEvent::Type type = event->type();
+  if (type != QEvent::KeyPress && type != QEvent::KeyRelease && type != QEvent::ShortcutOverride) {
+    return QMainWindow::eventFilter(watched, event);
+  }
+  auto* key = static_cast<QKeyEvent*>(event);
+  // Only keys meant for this window (not for a modal dialog on top of it).
+  QWidget* w = qobject_cast<QWidget*>(watched);
+  if (w == nullptr || w->window() != this) return QMainWindow::eventFilter(watched, event);
+  if (key->key() == Qt::Key_Space && key->modifiers() == Qt::NoModifier) {
+    // The emergency stop wins over whatever widget has focus.
+    if (type == QEvent::KeyPress && !key->isAutoRepeat()) workspace_->EmergencyStop();
+    event->accept();
+    return true;
+  }
+  if (IsDriveKey(key->key()) && key->modifiers() == Qt::NoModifier &&
+      (type == QEvent::KeyPress || type == QEvent::KeyRelease)) {
+    // Text fields keep their letters; the arrows and WASD drive elsewhere.
+    if (qobject_cast<QLineEdit*>(w) != nullptr || w->inherits("QAbstractSpinBox") ||
+        w->inherits("QComboBox")) {
+      return QMainWindow::eventFilter(watched, event);
+    }
+    if (key->isAutoRepeat()) return true;
+    if (type == QEvent::KeyPress) keys_held_.insert(key->key());
+    else keys_held_.remove(key->key());
+    UpdateTeleop();
+    return true;
+  }
+  return QMainWindow::eventFilter(watched, event);
+}
+
+void MainWindow::UpdateTeleop() {
+  double v = 0.0, w = 0.0;
+  const DriveLimits& l = workspace_->limits();
+  if (keys_held_.contains(Qt::Key_Up) || keys_held_.contains(Qt::Key_W)) v += l.v_max_mps;
+  if (keys_held_.contains(Qt::Key_Down) || keys_held_.contains(Qt::Key_S)) v -= l.v_max_mps;
+  if (keys_held_.contains(Qt::Key_Left) || keys_held_.contains(Qt::Key_A)) w += l.w_max_radps;
+  if (keys_held_.contains(Qt::Key_Right) || keys_held_.contains(Qt::Key_D)) w -= l.w_max_radps;
+  if (workspace_->scripted_drive_running() && keys_held_.isEmpty()) return;
+  if (!keys_held_.isEmpty()) workspace_->AbortScriptedDrive();
+  if (v == 0.0 && w == 0.0) {
+    workspace_->StopMotion();
+  } else {
+    workspace_->Drive(v, w);
+  }
+}
+
+bool MainWindow::ConfirmDiscard() {
+  if (!workspace_->unsaved() && !workspace_->recording()) return true;
+  if (!interactive_) return true;  // The recording stays in its folder either way.
+  const auto answer = QMessageBox::question(
+      this, tr("Unsaved session"),
+      tr("The current recording has not been saved elsewhere. It stays in\n%1\n\n"
+         "Save it under a new name first?")
+          .arg(workspace_->session_dir()),
+      QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+  if (answer == QMessageBox::Cancel) return false;
+  if (answer == QMessageBox::Save) {
+    QString error;
+    if (workspace_->recording() && !workspace_->StopRecording(&error)) {
+      ShowError(tr("Recording"), error);
+      return false;
+    }
+    const QString dir = QFileDialog::getSaveFileName(
+        this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
+    if (dir.isEmpty()) return false;
+    return SaveSessionTo(dir);
+  }
+  return true;
+}
+
+void MainWindow::OpenSessionPath(const QString& dir) {
+  if (!ConfirmDiscard()) return;
+  workspace_->OpenSession(dir, replay_panel_->speed());
+}
+
+bool MainWindow::SaveSessionTo(const QString& dir) {
+  QString error;
+  if (workspace_->recording() && !workspace_->StopRecording(&error)) {
+    ShowError(tr("Recording"), error);
+    return false;
+  }
+  if (!workspace_->SaveSessionAs(dir, &error)) {
+    ShowError(tr("Cannot save the session"), error);
+    return false;
+  }
+  AddRecent(dir);
+  statusBar()->showMessage(tr("Saved %1").arg(dir), 6000);
+  return true;
+}
+
+void MainWindow::AddRecent(const QString& dir) {
+  QSettings s;
+  QStringList recent = s.value(QStringLiteral("sessions/recent")).toStringList();
+  recent.removeAll(dir);
+  recent.prepend(dir);
+  while (recent.size() > kMaxRecent) recent.removeLast();
+  s.setValue(QStringLiteral("sessions/recent"), recent);
+  RebuildRecentMenu();
+}
+
+void MainWindow::RebuildRecentMenu() {
+  recent_menu_->clear();
+  const QStringList recent = QSettings().value(QStringLiteral("sessions/recent")).toStringList();
+  for (const QString& dir : recent) {
+    recent_menu_->addAction(QFileInfo(dir).fileName(), this, [this, dir] { OpenSessionPath(dir); })
+        ->setToolTip(dir);
+  }
+  recent_menu_->setEnabled(!recent.isEmpty());
+}
+
+void MainWindow::UpdateActions() {
+  record_->setEnabled(workspace_->link_open() && !workspace_->recording());
+  stop_record_->setEnabled(workspace_->recording());
+}
+
+void MainWindow::ShowError(const QString& title, const QString& message) {
+  last_error_ = message;
+  statusBar()->showMessage(title + QStringLiteral(": ") + message, 10000);
+  if (interactive_) QMessageBox::warning(this, title, message);
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  if (!ConfirmDiscard()) {
+    event->ignore();
+    return;
+  }
+  SaveSettings();
+  workspace_->Disconnect();
+  event->accept();
+}
+
+}  // namespace sweepscan::ui

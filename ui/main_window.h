@@ -1,0 +1,108 @@
+// The operator's main window: the cloud view in the centre, dockable panels
+// (connection, drive, replay), File / Edit / View / Robot / Tools / Help
+// menus with the usual shortcuts, a status bar (link, pose, speeds, points,
+// frame rate, job progress with cancel), keyboard teleop and an emergency
+// stop on Space that works whatever has focus. Window layout and last
+// settings persist in QSettings.
+//
+// A GUI timer (30 Hz) drains the workspace's mailbox into the view and
+// renders at most once per tick. GUI thread only.
+#ifndef SWEEPSCAN_UI_MAIN_WINDOW_H_
+#define SWEEPSCAN_UI_MAIN_WINDOW_H_
+
+#include <QElapsedTimer>
+#include <QMainWindow>
+#include <QSet>
+#include <vector>
+
+#include "ui/workspace/workspace.h"
+
+class QAction;
+class QActionGroup;
+class QLabel;
+class QMenu;
+class QProgressBar;
+class QToolButton;
+class QUndoStack;
+
+namespace sweepscan::ui {
+
+class CloudView;
+class ConnectionPanel;
+class DrivePanel;
+class ReplayPanel;
+
+class MainWindow : public QMainWindow {
+  Q_OBJECT
+ public:
+  MainWindow(Workspace* workspace, const QString& resources_dir, QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  CloudView* view() const { return view_; }
+  ConnectionPanel* connection_panel() const { return connection_panel_; }
+  DrivePanel* drive_panel() const { return drive_panel_; }
+  ReplayPanel* replay_panel() const { return replay_panel_; }
+  QUndoStack* undo_stack() const { return undo_; }
+  // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
+  // then errors go to lastError() and unsaved recordings stay where they are.
+  void SetInteractive(bool interactive) { interactive_ = interactive; }
+  QString last_error() const { return last_error_; }
+  // Event-loop latency samples (ms) measured by the GUI tick, for figures.
+  const std::vector<double>& tick_latencies_ms() const { return latencies_ms_; }
+  double frames_per_second() const { return fps_; }
+
+  // Actions the tests and the command line trigger.
+  void OpenSessionPath(const QString& dir);
+  bool SaveSessionTo(const QString& dir);
+  void ShowError(const QString& title, const QString& message);
+
+ protected:
+  void closeEvent(QCloseEvent* event) override;
+  bool eventFilter(QObject* watched, QEvent* event) override;
+
+ private:
+  void BuildMenus();
+  void BuildStatusBar();
+  void RestoreSettings();
+  void SaveSettings();
+  void OnTick();
+  void UpdateTeleop();
+  bool ConfirmDiscard();
+  void AddRecent(const QString& dir);
+  void RebuildRecentMenu();
+  void UpdateActions();
+
+  Workspace* workspace_;
+  QString resources_dir_;
+  CloudView* view_;
+  ConnectionPanel* connection_panel_;
+  DrivePanel* drive_panel_;
+  ReplayPanel* replay_panel_;
+  QUndoStack* undo_;
+  QMenu* recent_menu_ = nullptr;
+  QAction* record_ = nullptr;
+  QAction* stop_record_ = nullptr;
+  QAction* estop_ = nullptr;
+  QActionGroup* color_group_ = nullptr;
+
+  QLabel* link_label_;
+  QLabel* pose_label_;
+  QLabel* speed_label_;
+  QLabel* points_label_;
+  QLabel* fps_label_;
+  QProgressBar* progress_;
+  QToolButton* cancel_;
+
+  bool interactive_ = true;
+  QString last_error_;
+  QSet<int> keys_held_;
+  QElapsedTimer tick_clock_;
+  QElapsedTimer fps_clock_;
+  uint64_t fps_frames_ = 0;
+  double fps_ = 0.0;
+  std::vector<double> latencies_ms_;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_MAIN_WINDOW_H_

@@ -1,0 +1,172 @@
+#include "ui/panels/connection_panel.h"
+
+#include <QComboBox>
+#include <QDir>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QFontDatabase>
+#include <QFormLayout>
+#include <QHBoxLayout>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QSerialPortInfo>
+#include <QSpinBox>
+#include <QStackedWidget>
+#include <QToolButton>
+#include <QVBoxLayout>
+
+namespace sweepscan::ui {
+
+ConnectionPanel::ConnectionPanel(Workspace* workspace, const QString& scenarios_dir,
+                                 QWidget* parent)
+    : QWidget(parent), workspace_(workspace) {
+  auto* layout = new QVBoxLayout(this);
+  kind_ = new QComboBox;
+  kind_->addItems({tr("Built-in simulator"), tr("Robot over TCP"), tr("Robot over serial")});
+  kind_->setToolTip(tr("Where the robot link goes"));
+  layout->addWidget(kind_);
+
+  pages_ = new QStackedWidget;
+  // Simulator.
+  auto* sim_page = new QWidget;
+  auto* sim_form = new QFormLayout(sim_page);
+  scenario_ = new QComboBox;
+  for (const QFileInfo& f :
+       QDir(scenarios_dir).entryInfoList({QStringLiteral("*.json")}, QDir::Files, QDir::Name)) {
+    scenario_->addItem(f.completeBaseName(), f.absoluteFilePath());
+  }
+  scenario_->setToolTip(tr("The simulated world (resources/scenarios)"));
+  sim_form->addRow(tr("Scenario"), scenario_);
+  pages_->addWidget(sim_page);
+  // TCP.
+  auto* tcp_page = new QWidget;
+  auto* tcp_form = new QFormLayout(tcp_page);
+  host_ = new QLineEdit(QStringLiteral("127.0.0.1"));
+  port_ = new QSpinBox;
+  port_->setRange(1, 65535);
+  port_->setValue(5600);
+  auto* key_row = new QHBoxLayout;
+  key_file_ = new QLineEdit;
+  key_file_->setPlaceholderText(tr("the agent's --key-file"));
+  auto* browse = new QToolButton;
+  browse->setText(QStringLiteral("…"));
+  connect(browse, &QToolButton::clicked, this, [this] {
+    const QString f = QFileDialog::getOpenFileName(this, tr("Robot key file"));
+    if (!f.isEmpty()) key_file_->setText(f);
+  });
+  key_row->addWidget(key_file_);
+  key_row->addWidget(browse);
+  tcp_form->addRow(tr("Host"), host_);
+  tcp_form->addRow(tr("Port"), port_);
+  tcp_form->addRow(tr("Key file"), key_row);
+  pages_->addWidget(tcp_page);
+  // Serial.
+  auto* serial_page = new QWidget;
+  auto* serial_form = new QFormLayout(serial_page);
+  auto* port_row = new QHBoxLayout;
+  serial_port_ = new QComboBox;
+  serial_port_->setEditable(true);
+  auto* refresh = new QToolButton;
+  refresh->setText(tr("Refresh"));
+  connect(refresh, &QToolButton::clicked, this, &ConnectionPanel::RefreshSerialPorts);
+  port_row->addWidget(serial_port_, 1);
+  port_row->addWidget(refresh);
+  baud_ = new QComboBox;
+  baud_->setEditable(true);
+  baud_->addItems({QStringLiteral("921600"), QStringLiteral("460800"), QStringLiteral("230400"),
+                   QStringLiteral("115200")});
+  serial_form->addRow(tr("Port"), port_row);
+  serial_form->addRow(tr("Baud"), baud_);
+  pages_->addWidget(serial_page);
+  layout->addWidget(pages_);
+  connect(kind_, QOverload<int>::of(&QComboBox::currentIndexChanged), pages_,
+          &QStackedWidget::setCurrentIndex);
+  RefreshSerialPorts();
+
+  auto* buttons = new QHBoxLayout;
+  connect_ = new QPushButton(tr("Connect"));
+  disconnect_ = new QPushButton(tr("Disconnect"));
+  buttons->addWidget(connect_);
+  buttons->addWidget(disconnect_);
+  layout->addLayout(buttons);
+  connect(connect_, &QPushButton::clicked, this, [this] {
+    QString error;
+    if (!ConnectNow(&error)) emit errorOccurred(error);
+  });
+  connect(disconnect_, &QPushButton::clicked, workspace_, &Workspace::Disconnect);
+
+  state_ = new QLabel;
+  state_->setObjectName(QStringLiteral("linkState"));
+  layout->addWidget(state_);
+  health_ = new QLabel;
+  health_->setFont(QFontDatabase::systemFont(QFontDatabase::FixedFont));
+  health_->setWordWrap(true);
+  health_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  health_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
+  layout->addWidget(health_, 1);
+
+  connect(workspace_, &Workspace::linkStateChanged, this, &ConnectionPanel::UpdateState);
+  connect(workspace_, &Workspace::authenticatedChanged, this, &ConnectionPanel::UpdateState);
+  connect(workspace_, &Workspace::healthUpdated, this, &ConnectionPanel::UpdateState);
+  connect(workspace_, &Workspace::authenticationFailed, this,
+          [this](const QString& reason) { state_->setText(tr("Refused: %1").arg(reason)); });
+  UpdateState();
+}
+
+void ConnectionPanel::RefreshSerialPorts() {
+  const QString current = serial_port_->currentText();
+  serial_port_->clear();
+  for (const QSerialPortInfo& info : QSerialPortInfo::availablePorts()) {
+    serial_port_->addItem(info.systemLocation());
+  }
+  if (!current.isEmpty()) serial_port_->setEditText(current);
+}
+
+ConnectOptions ConnectionPanel::options() const {
+  ConnectOptions o;
+  o.kind = static_cast<LinkKind>(kind_->currentIndex());
+  o.scenario_path = scenario_->currentData().toString();
+  o.host = host_->text().trimmed();
+  o.port = port_->value();
+  o.key_file = key_file_->text().trimmed();
+  o.serial_port = serial_port_->currentText().trimmed();
+  o.baud = baud_->currentText().toInt();
+  return o;
+}
+
+void ConnectionPanel::SetOptions(const ConnectOptions& o) {
+  kind_->setCurrentIndex(static_cast<int>(o.kind));
+  const int s = scenario_->findData(o.scenario_path);
+  if (s >= 0) scenario_->setCurrentIndex(s);
+  else if (!o.scenario_path.isEmpty()) {
+    scenario_->addItem(QFileInfo(o.scenario_path).completeBaseName(), o.scenario_path);
+    scenario_->setCurrentIndex(scenario_->count() - 1);
+  }
+  host_->setText(o.host);
+  port_->setValue(o.port);
+  key_file_->setText(o.key_file);
+  serial_port_->setEditText(o.serial_port);
+  baud_->setEditText(QString::number(o.baud));
+}
+
+bool ConnectionPanel::ConnectNow(QString* error) {
+  const bool ok = workspace_->Connect(options(), error);
+  UpdateState();
+  return ok;
+}
+
+void ConnectionPanel::UpdateState() {
+  const hardware::LinkHealth& h = workspace_->health();
+  const bool open = workspace_->link_open();
+  connect_->setEnabled(!open);
+  disconnect_->setEnabled(open);
+  kind_->setEnabled(!open);
+  pages_->setEnabled(!open);
+  QString state = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
+  if (workspace_->authenticated()) state = tr("connected, authenticated");
+  state_->setText(tr("Link: %1").arg(state));
+  health_->setText(open ? QString::fromStdString(h.ToString()) : QString());
+}
+
+}  // namespace sweepscan::ui

@@ -1,0 +1,38 @@
+// Replay panel: the opened session, a time slider (seek), speed 1x..20x or
+// as fast as possible, pause. GUI thread. Calls only the Workspace.
+#ifndef SWEEPSCAN_UI_PANELS_REPLAY_PANEL_H_
+#define SWEEPSCAN_UI_PANELS_REPLAY_PANEL_H_
+
+#include <QWidget>
+
+#include "ui/workspace/workspace.h"
+
+class QComboBox;
+class QLabel;
+class QPushButton;
+class QSlider;
+
+namespace sweepscan::ui {
+
+class ReplayPanel : public QWidget {
+  Q_OBJECT
+ public:
+  explicit ReplayPanel(Workspace* workspace, QWidget* parent = nullptr);
+  // 0 = as fast as possible.
+  double speed() const;
+  void SetSpeed(double speed);
+
+ private:
+  Workspace* workspace_;
+  QLabel* session_;
+  QSlider* slider_;
+  QLabel* position_;
+  QComboBox* speed_;
+  QPushButton* pause_;
+  double length_s_ = 0.0;
+  bool dragging_ = false;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_PANELS_REPLAY_PANEL_H_

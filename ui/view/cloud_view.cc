@@ -1,0 +1,495 @@
+#include "ui/view/cloud_view.h"
+
+#include <vtkActor.h>
+#include <vtkArrowSource.h>
+#include <vtkAxesActor.h>
+#include <vtkCallbackCommand.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkFloatArray.h>
+#include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkLookupTable.h>
+#include <vtkOrientationMarkerWidget.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderWindowInteractor.h>
+#include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
+#include <vtkTextProperty.h>
+#include <vtkTransform.h>
+
+#include <QElapsedTimer>
+#include <QFileInfo>
+#include <algorithm>
+#include <cmath>
+
+namespace sweepscan::ui {
+namespace {
+
+const char* const kArrayNames[3] = {"height", "time", "range"};
+const char* const kBarTitles[3] = {"height (m)", "time (s)", "range (m)"};
+
+vtkSmartPointer<vtkFloatArray> NewArray(const char* name, vtkIdType reserve) {
+  auto a = vtkSmartPointer<vtkFloatArray>::New();
+  a->SetName(name);
+  a->Allocate(reserve);
+  return a;
+}
+
+// The next colour range end that covers `value`: doubling from `current`,
+// so that a growing cloud re-maps its colours O(log n) times.
+double Grow(double current, double value) {
+  double hi = std::max(current, 1e-3);
+  while (value > hi) hi *= 2.0;
+  return hi;
+}
+
+}  // namespace
+
+struct CloudView::Chunk {
+  vtkSmartPointer<vtkPoints> points;
+  vtkSmartPointer<vtkCellArray> verts;
+  vtkSmartPointer<vtkFloatArray> arrays[3];
+  vtkSmartPointer<vtkPolyData> poly;
+  vtkSmartPointer<vtkPolyDataMapper> mapper;
+  vtkSmartPointer<vtkActor> actor;
+  vtkSmartPointer<vtkActor> lod_actor;  // Every kLodStride-th point; sealed chunks only.
+  vtkSmartPointer<vtkPolyDataMapper> lod_mapper;
+  size_t size = 0;
+  bool sealed = false;
+};
+
+CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
+  window_ = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
+  setRenderWindow(window_);
+  renderer_ = vtkSmartPointer<vtkRenderer>::New();
+  renderer_->SetBackground(0.11, 0.12, 0.14);
+  renderer_->SetBackground2(0.22, 0.24, 0.28);
+  renderer_->GradientBackgroundOn();
+  window_->AddRenderer(renderer_);
+
+  // Colours: a perceptually ordered blue -> red ramp shared by every chunk.
+  lut_ = vtkSmartPointer<vtkLookupTable>::New();
+  lut_->SetHueRange(0.667, 0.0);
+  lut_->SetNumberOfTableValues(256);
+  lut_->Build();
+  color_bar_ = vtkSmartPointer<vtkScalarBarActor>::New();
+  color_bar_->SetLookupTable(lut_);
+  color_bar_->SetNumberOfLabels(5);
+  color_bar_->SetWidth(0.07);
+  color_bar_->SetHeight(0.45);
+  color_bar_->SetPosition(0.91, 0.05);
+  color_bar_->GetTitleTextProperty()->SetFontSize(12);
+  color_bar_->GetLabelTextProperty()->SetFontSize(10);
+  color_bar_->SetLabelFormat("%.1f");
+  renderer_->AddViewProp(color_bar_);
+  ApplyLookupTable();
+
+  BuildGrid();
+
+  // Robot marker: an arrow along the robot's x axis (its heading).
+  auto arrow = vtkSmartPointer<vtkArrowSource>::New();
+  arrow->SetTipLength(0.35);
+  arrow->SetShaftRadius(0.06);
+  arrow->SetTipRadius(0.15);
+  auto arrow_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  arrow_mapper->SetInputConnection(arrow->GetOutputPort());
+  robot_ = vtkSmartPointer<vtkActor>::New();
+  robot_->SetMapper(arrow_mapper);
+  robot_->SetScale(0.5);
+  robot_->GetProperty()->SetColor(1.0, 0.55, 0.1);
+  robot_->VisibilityOff();
+  renderer_->AddActor(robot_);
+
+  trajectory_points_ = vtkSmartPointer<vtkPoints>::New();
+  trajectory_poly_ = vtkSmartPointer<vtkPolyData>::New();
+  trajectory_poly_->SetPoints(trajectory_points_);
+  trajectory_poly_->SetLines(vtkSmartPointer<vtkCellArray>::New());
+  auto trajectory_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  trajectory_mapper->SetInputData(trajectory_poly_);
+  trajectory_ = vtkSmartPointer<vtkActor>::New();
+  trajectory_->SetMapper(trajectory_mapper);
+  trajectory_->GetProperty()->SetColor(1.0, 0.85, 0.2);
+  trajectory_->GetProperty()->SetLineWidth(2.0);
+  renderer_->AddActor(trajectory_);
+
+  axes_ = vtkSmartPointer<vtkAxesActor>::New();
+  axes_widget_ = vtkSmartPointer<vtkOrientationMarkerWidget>::New();
+  axes_widget_->SetOrientationMarker(axes_);
+  axes_widget_->SetInteractor(interactor());
+  axes_widget_->SetViewport(0.0, 0.0, 0.16, 0.22);
+  axes_widget_->SetEnabled(1);
+  axes_widget_->InteractiveOff();
+
+  // Level of detail while the camera moves (see the header).
+  auto start = vtkSmartPointer<vtkCallbackCommand>::New();
+  start->SetClientData(this);
+  start->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+    auto* view = static_cast<CloudView*>(self);
+    if (view->point_count_ > view->lod_threshold_) view->SetLodActive(true);
+  });
+  auto end = vtkSmartPointer<vtkCallbackCommand>::New();
+  end->SetClientData(this);
+  end->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+    auto* view = static_cast<CloudView*>(self);
+    if (view->lod_active_) {
+      view->SetLodActive(false);
+      view->RequestRender();
+    }
+  });
+  interactor()->AddObserver(vtkCommand::StartInteractionEvent, start);
+  interactor()->AddObserver(vtkCommand::EndInteractionEvent, end);
+
+  // Frame counter and render time, whoever triggers the render (our timer or
+  // the interactor while the operator moves the camera).
+  auto on_start = vtkSmartPointer<vtkCallbackCommand>::New();
+  auto* clock = new QElapsedTimer();
+  on_start->SetClientData(clock);
+  on_start->SetCallback(
+      [](vtkObject*, unsigned long, void* c, void*) { static_cast<QElapsedTimer*>(c)->start(); });
+  window_->AddObserver(vtkCommand::StartEvent, on_start);
+  auto on_end = vtkSmartPointer<vtkCallbackCommand>::New();
+  on_end->SetClientData(this);
+  on_end->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+    auto* view = static_cast<CloudView*>(self);
+    ++view->frames_rendered_;
+  });
+  window_->AddObserver(vtkCommand::EndEvent, on_end);
+  connect(this, &QObject::destroyed, [clock] { delete clock; });
+
+  ViewOblique();
+}
+
+CloudView::~CloudView() = default;
+
+void CloudView::BuildGrid() {
+  // 1 m floor grid, 40 x 40 m around the origin.
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  auto lines = vtkSmartPointer<vtkCellArray>::New();
+  const int half = 20;
+  for (int i = -half; i <= half; ++i) {
+    const vtkIdType a = points->InsertNextPoint(i, -half, 0);
+    const vtkIdType b = points->InsertNextPoint(i, half, 0);
+    const vtkIdType c = points->InsertNextPoint(-half, i, 0);
+    const vtkIdType d = points->InsertNextPoint(half, i, 0);
+    vtkIdType ab[2] = {a, b}, cd[2] = {c, d};
+    lines->InsertNextCell(2, ab);
+    lines->InsertNextCell(2, cd);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetLines(lines);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(poly);
+  grid_ = vtkSmartPointer<vtkActor>::New();
+  grid_->SetMapper(mapper);
+  grid_->GetProperty()->SetColor(0.45, 0.47, 0.5);
+  grid_->GetProperty()->SetOpacity(0.35);
+  grid_->PickableOff();
+  renderer_->AddActor(grid_);
+}
+
+CloudView::Chunk* CloudView::NewChunk() {
+  auto chunk = std::make_unique<Chunk>();
+  chunk->points = vtkSmartPointer<vtkPoints>::New();
+  chunk->points->SetDataTypeToFloat();
+  chunk->points->Allocate(kChunkPoints);
+  chunk->verts = vtkSmartPointer<vtkCellArray>::New();
+  chunk->verts->Use32BitStorage();  // 8 bytes a point instead of 16.
+  chunk->verts->AllocateExact(kChunkPoints, kChunkPoints);
+  chunk->poly = vtkSmartPointer<vtkPolyData>::New();
+  chunk->poly->SetPoints(chunk->points);
+  chunk->poly->SetVerts(chunk->verts);
+  for (int i = 0; i < 3; ++i) {
+    chunk->arrays[i] = NewArray(kArrayNames[i], kChunkPoints);
+    chunk->poly->GetPointData()->AddArray(chunk->arrays[i]);
+  }
+  chunk->mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  chunk->mapper->SetInputData(chunk->poly);
+  chunk->mapper->SetLookupTable(lut_);
+  chunk->mapper->UseLookupTableScalarRangeOn();
+  chunk->mapper->SetScalarModeToUsePointFieldData();
+  chunk->mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
+  chunk->mapper->ScalarVisibilityOn();
+  chunk->actor = vtkSmartPointer<vtkActor>::New();
+  chunk->actor->SetMapper(chunk->mapper);
+  chunk->actor->GetProperty()->SetPointSize(point_size_);
+  chunk->actor->GetProperty()->SetRepresentationToPoints();
+  renderer_->AddActor(chunk->actor);
+  chunks_.push_back(std::move(chunk));
+  return chunks_.back().get();
+}
+
+void CloudView::SealChunk(Chunk* chunk) {
+  chunk->sealed = true;
+  chunk->points->Squeeze();
+  // The thinned copy for camera motion.
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat();
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->Use32BitStorage();
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  vtkSmartPointer<vtkFloatArray> arrays[3];
+  for (int i = 0; i < 3; ++i) {
+    arrays[i] = NewArray(kArrayNames[i], static_cast<vtkIdType>(chunk->size / kLodStride + 1));
+  }
+  for (vtkIdType i = 0; i < static_cast<vtkIdType>(chunk->size); i += kLodStride) {
+    const vtkIdType id = points->InsertNextPoint(chunk->points->GetPoint(i));
+    verts->InsertNextCell(1, &id);
+    for (int k = 0; k < 3; ++k) arrays[k]->InsertNextValue(chunk->arrays[k]->GetValue(i));
+  }
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  for (int k = 0; k < 3; ++k) poly->GetPointData()->AddArray(arrays[k]);
+  chunk->lod_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  chunk->lod_mapper->SetInputData(poly);
+  chunk->lod_mapper->SetLookupTable(lut_);
+  chunk->lod_mapper->UseLookupTableScalarRangeOn();
+  chunk->lod_mapper->SetScalarModeToUsePointFieldData();
+  chunk->lod_mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
+  chunk->lod_mapper->ScalarVisibilityOn();
+  chunk->lod_actor = vtkSmartPointer<vtkActor>::New();
+  chunk->lod_actor->SetMapper(chunk->lod_mapper);
+  chunk->lod_actor->GetProperty()->SetPointSize(point_size_);
+  chunk->lod_actor->SetVisibility(lod_active_);
+  chunk->actor->SetVisibility(!lod_active_);
+  renderer_->AddActor(chunk->lod_actor);
+}
+
+void CloudView::Clear() {
+  for (auto& c : chunks_) {
+    renderer_->RemoveActor(c->actor);
+    if (c->lod_actor) renderer_->RemoveActor(c->lod_actor);
+  }
+  chunks_.clear();
+  point_count_ = 0;
+  have_origin_ = false;
+  have_points_ = false;
+  range_lo_[0] = 0.0;
+  range_hi_[0] = 3.0;
+  range_hi_[1] = 60.0;
+  range_hi_[2] = 8.0;
+  trajectory_points_->Reset();
+  trajectory_points_->Modified();
+  trajectory_poly_->SetLines(vtkSmartPointer<vtkCellArray>::New());
+  robot_->VisibilityOff();
+  ApplyLookupTable();
+  RequestRender();
+}
+
+void CloudView::UpdateRanges(float z, float t, float r) {
+  bool changed = false;
+  if (!have_points_) {
+    z_min_ = z_max_ = z;
+    have_points_ = true;
+    // Height: start with the floor-to-ceiling span of a room.
+    range_lo_[0] = std::floor(z);
+  }
+  z_min_ = std::min(z_min_, z);
+  z_max_ = std::max(z_max_, z);
+  t_max_ = std::max(t_max_, t);
+  r_max_ = std::max(r_max_, r);
+  if (z_min_ < range_lo_[0]) {
+    range_lo_[0] = std::floor(z_min_);
+    changed = true;
+  }
+  const double spans[3] = {z_max_ - range_lo_[0], t_max_, r_max_};
+  for (int i = 0; i < 3; ++i) {
+    const double hi_span = range_hi_[i] - range_lo_[i];
+    if (spans[i] > hi_span) {
+      range_hi_[i] = range_lo_[i] + Grow(hi_span, spans[i]);
+      changed = true;
+    }
+  }
+  if (changed) ApplyLookupTable();
+}
+
+void CloudView::ApplyLookupTable() {
+  const int m = static_cast<int>(color_mode_);
+  lut_->SetTableRange(range_lo_[m], range_hi_[m]);
+  color_bar_->SetTitle(kBarTitles[m]);
+}
+
+void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
+  if (points.empty()) return;
+  if (!have_origin_) {
+    time_origin_ns_ = points.front().time_ns;
+    have_origin_ = true;
+  }
+  Chunk* chunk = chunks_.empty() || chunks_.back()->sealed ? NewChunk() : chunks_.back().get();
+  float z_lo = points.front().z, z_hi = z_lo, t_hi = 0.0f, r_hi = 0.0f;
+  for (const CloudPoint& p : points) {
+    if (chunk->size >= kChunkPoints) {
+      chunk->points->Modified();
+      SealChunk(chunk);
+      chunk = NewChunk();
+    }
+    const vtkIdType id = chunk->points->InsertNextPoint(p.x, p.y, p.z);
+    chunk->verts->InsertNextCell(1, &id);
+    const float t = static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9);
+    chunk->arrays[0]->InsertNextValue(p.z);
+    chunk->arrays[1]->InsertNextValue(t);
+    chunk->arrays[2]->InsertNextValue(p.range_m);
+    ++chunk->size;
+    z_lo = std::min(z_lo, p.z);
+    z_hi = std::max(z_hi, p.z);
+    t_hi = std::max(t_hi, t);
+    r_hi = std::max(r_hi, p.range_m);
+  }
+  // Only the growing chunk is marked modified: it alone is uploaded again.
+  chunk->points->Modified();
+  chunk->verts->Modified();
+  for (auto& a : chunk->arrays) a->Modified();
+  chunk->poly->Modified();
+  point_count_ += points.size();
+  UpdateRanges(z_lo, t_hi, r_hi);
+  UpdateRanges(z_hi, t_hi, r_hi);
+  RequestRender();
+}
+
+void CloudView::SetRobotPose(const Pose2d& pose) {
+  robot_->SetPosition(pose.x, pose.y, 0.05);
+  robot_->SetOrientation(0.0, 0.0, pose.yaw * 180.0 / M_PI);
+  robot_->VisibilityOn();
+  RequestRender();
+}
+
+void CloudView::AppendTrajectory(const std::vector<Pose2d>& poses) {
+  if (poses.empty()) return;
+  for (const Pose2d& p : poses) trajectory_points_->InsertNextPoint(p.x, p.y, 0.02);
+  const vtkIdType n = trajectory_points_->GetNumberOfPoints();
+  auto line = vtkSmartPointer<vtkCellArray>::New();
+  if (n >= 2) {
+    line->InsertNextCell(n);
+    for (vtkIdType i = 0; i < n; ++i) line->InsertCellPoint(i);
+  }
+  trajectory_points_->Modified();
+  trajectory_poly_->SetLines(line);
+  RequestRender();
+}
+
+void CloudView::SetColorMode(ColorMode mode) {
+  color_mode_ = mode;
+  for (auto& c : chunks_) {
+    c->mapper->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
+    if (c->lod_mapper) c->lod_mapper->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
+  }
+  ApplyLookupTable();
+  RequestRender();
+}
+
+void CloudView::SetPointSize(double pixels) {
+  point_size_ = pixels;
+  for (auto& c : chunks_) {
+    c->actor->GetProperty()->SetPointSize(pixels);
+    if (c->lod_actor) c->lod_actor->GetProperty()->SetPointSize(pixels);
+  }
+  RequestRender();
+}
+
+void CloudView::SetGridVisible(bool visible) {
+  grid_->SetVisibility(visible);
+  RequestRender();
+}
+
+void CloudView::SetAxesVisible(bool visible) {
+  axes_widget_->SetEnabled(visible ? 1 : 0);
+  RequestRender();
+}
+
+void CloudView::SetTrajectoryVisible(bool visible) {
+  trajectory_->SetVisibility(visible);
+  RequestRender();
+}
+
+void CloudView::SetRobotVisible(bool visible) {
+  robot_->SetVisibility(visible && trajectory_points_->GetNumberOfPoints() > 0);
+  RequestRender();
+}
+
+void CloudView::SetColorBarVisible(bool visible) {
+  color_bar_->SetVisibility(visible);
+  RequestRender();
+}
+
+void CloudView::SetLodActive(bool active) {
+  lod_active_ = active;
+  for (auto& c : chunks_) {
+    if (!c->sealed) continue;  // The growing chunk is always drawn in full.
+    c->actor->SetVisibility(!active);
+    c->lod_actor->SetVisibility(active);
+  }
+}
+
+void CloudView::SetCamera(const double direction[3], const double up[3]) {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetPosition(-direction[0], -direction[1], -direction[2]);
+  camera->SetViewUp(up[0], up[1], up[2]);
+  FitToCloud();
+}
+
+void CloudView::ViewTop() {
+  const double d[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+  SetCamera(d, up);
+}
+
+void CloudView::ViewOblique() {
+  // From the south-west, 35 degrees above the floor: the room in 3D.
+  const double d[3] = {0.6, 0.55, -0.58}, up[3] = {0, 0, 1};
+  SetCamera(d, up);
+}
+
+void CloudView::ViewFront() {
+  const double d[3] = {0, 1, 0}, up[3] = {0, 0, 1};
+  SetCamera(d, up);
+}
+
+void CloudView::ViewSide() {
+  const double d[3] = {-1, 0, 0}, up[3] = {0, 0, 1};
+  SetCamera(d, up);
+}
+
+void CloudView::FitToCloud() {
+  // Fit to the cloud (and the robot), not to the 40 m grid.
+  const bool grid = grid_->GetVisibility();
+  grid_->SetVisibility(point_count_ == 0);
+  renderer_->ResetCamera();
+  grid_->SetVisibility(grid);
+  renderer_->ResetCameraClippingRange();
+  RequestRender();
+}
+
+bool CloudView::RenderIfDirty() {
+  if (!dirty_) return false;
+  RenderNow();
+  return true;
+}
+
+void CloudView::RenderNow() {
+  dirty_ = false;
+  QElapsedTimer clock;
+  clock.start();
+  renderer_->ResetCameraClippingRange();
+  window_->Render();
+  last_render_ms_ = clock.nsecsElapsed() * 1e-6;
+}
+
+QImage CloudView::GrabImage() {
+  RenderNow();
+  return grabFramebuffer();
+}
+
+bool CloudView::SaveScreenshot(const QString& path, QString* error) {
+  const QImage image = GrabImage();
+  if (image.isNull() || !image.save(path)) {
+    *error = QStringLiteral("%1: cannot write the image").arg(path);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace sweepscan::ui

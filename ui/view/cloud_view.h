@@ -1,0 +1,138 @@
+// The 3D view: the cloud in chunks, the robot and its trajectory, a floor
+// grid, axes and a colour bar, in a QVTKOpenGLNativeWidget.
+//
+// Incremental by construction (core/cloud/cloud.h): points arrive in order,
+// fill the growing chunk, and a full chunk is sealed: its VTK arrays never
+// change again, so the GPU keeps its buffers and a render uploads only the
+// growing chunk. Colour ranges grow geometrically (doubling) so that
+// re-mapping every chunk's colours happens a handful of times per session,
+// not per frame.
+//
+// Level of detail: each sealed chunk also keeps every 8th point. While the
+// camera moves and more than lod_threshold() points are shown, the view draws
+// the thinned chunks; at rest it draws everything.
+//
+// Render requests are coalesced: RequestRender() marks the view dirty and
+// the owner's timer calls RenderIfDirty() (ParaView's pqView::render()).
+//
+// Threading: GUI thread only, like every VTK object.
+#ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
+#define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
+
+#include <QImage>
+#include <QVTKOpenGLNativeWidget.h>
+#include <vtkSmartPointer.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "core/cloud/cloud.h"
+#include "core/pose/odometry.h"
+
+class vtkActor;
+class vtkActor2D;
+class vtkAxesActor;
+class vtkGenericOpenGLRenderWindow;
+class vtkLookupTable;
+class vtkOrientationMarkerWidget;
+class vtkPoints;
+class vtkPolyData;
+class vtkRenderer;
+class vtkScalarBarActor;
+
+namespace sweepscan::ui {
+
+class CloudView : public QVTKOpenGLNativeWidget {
+  Q_OBJECT
+ public:
+  enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2 };
+  static constexpr size_t kChunkPoints = 65536;
+  static constexpr int kLodStride = 8;
+
+  explicit CloudView(QWidget* parent = nullptr);
+  ~CloudView() override;
+
+  // ---- Content ----
+  void Clear();
+  void AppendPoints(const std::vector<CloudPoint>& points);
+  void SetRobotPose(const Pose2d& pose);
+  void AppendTrajectory(const std::vector<Pose2d>& poses);
+  size_t point_count() const { return point_count_; }
+  size_t chunk_count() const { return chunks_.size(); }
+
+  // ---- Appearance ----
+  void SetColorMode(ColorMode mode);
+  ColorMode color_mode() const { return color_mode_; }
+  void SetPointSize(double pixels);
+  double point_size() const { return point_size_; }
+  void SetGridVisible(bool visible);
+  void SetAxesVisible(bool visible);
+  void SetTrajectoryVisible(bool visible);
+  void SetRobotVisible(bool visible);
+  void SetColorBarVisible(bool visible);
+  void SetLodThreshold(size_t points) { lod_threshold_ = points; }
+  size_t lod_threshold() const { return lod_threshold_; }
+  // Forces the thinned chunks on or off (benchmarks; normally automatic).
+  void SetLodActive(bool active);
+  bool lod_active() const { return lod_active_; }
+
+  // ---- Camera ----
+  void ViewTop();
+  void ViewOblique();
+  void ViewFront();
+  void ViewSide();
+  void FitToCloud();
+
+  // ---- Rendering ----
+  void RequestRender() { dirty_ = true; }
+  bool RenderIfDirty();  // True if it rendered.
+  void RenderNow();
+  uint64_t frames_rendered() const { return frames_rendered_; }
+  double last_render_ms() const { return last_render_ms_; }
+  // The rendered image (the framebuffer, as the operator sees it).
+  QImage GrabImage();
+  bool SaveScreenshot(const QString& path, QString* error);
+
+ private:
+  struct Chunk;
+  Chunk* NewChunk();
+  void SealChunk(Chunk* chunk);
+  void UpdateRanges(float z, float t, float r);
+  void ApplyLookupTable();
+  void BuildGrid();
+  void SetCamera(const double direction[3], const double up[3]);
+
+  vtkSmartPointer<vtkGenericOpenGLRenderWindow> window_;
+  vtkSmartPointer<vtkRenderer> renderer_;
+  vtkSmartPointer<vtkLookupTable> lut_;
+  vtkSmartPointer<vtkScalarBarActor> color_bar_;
+  vtkSmartPointer<vtkActor> grid_;
+  vtkSmartPointer<vtkActor> robot_;
+  vtkSmartPointer<vtkActor> trajectory_;
+  vtkSmartPointer<vtkPoints> trajectory_points_;
+  vtkSmartPointer<vtkPolyData> trajectory_poly_;
+  vtkSmartPointer<vtkAxesActor> axes_;
+  vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
+  std::vector<std::unique_ptr<Chunk>> chunks_;
+
+  ColorMode color_mode_ = ColorMode::kHeight;
+  double point_size_ = 2.0;
+  size_t point_count_ = 0;
+  int64_t time_origin_ns_ = 0;
+  bool have_origin_ = false;
+  // Data extents and the colour ranges shown (which grow by doubling).
+  float z_min_ = 0.0f, z_max_ = 0.0f, t_max_ = 0.0f, r_max_ = 0.0f;
+  double range_lo_[3] = {0.0, 0.0, 0.0};
+  double range_hi_[3] = {3.0, 60.0, 8.0};
+  bool have_points_ = false;
+  size_t lod_threshold_ = 2'000'000;
+  bool lod_active_ = false;
+  bool dirty_ = true;
+  uint64_t frames_rendered_ = 0;
+  double last_render_ms_ = 0.0;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_

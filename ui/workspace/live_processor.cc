@@ -1,0 +1,211 @@
+#include "ui/workspace/live_processor.h"
+
+#include <QTimer>
+#include <algorithm>
+
+namespace sweepscan::ui {
+namespace {
+
+// Replay tick: 50 Hz is smooth for the view and cheap for the thread.
+constexpr int kReplayTickMs = 20;
+// "As fast as possible" feeds this much robot time per slice, then returns to
+// the event loop so that pause, seek and stop are handled promptly.
+constexpr double kFastSliceS = 2.0;
+// Trajectory samples for the view.
+constexpr double kTrajectoryStepS = 0.1;
+
+Time FirstTime(const SensorLog& log) {
+  Time t = Time::max();
+  if (!log.wheels.empty()) t = std::min(t, log.wheels.front().time);
+  if (!log.imu.empty()) t = std::min(t, log.imu.front().time);
+  if (!log.scans.empty()) t = std::min(t, log.scans.front().start_time());
+  return t == Time::max() ? Time() : t;
+}
+
+Time LastTime(const SensorLog& log) {
+  Time t = Time::min();
+  if (!log.wheels.empty()) t = std::max(t, log.wheels.back().time);
+  if (!log.imu.empty()) t = std::max(t, log.imu.back().time);
+  if (!log.scans.empty()) t = std::max(t, log.scans.back().end_time());
+  return t == Time::min() ? Time() : t;
+}
+
+}  // namespace
+
+LiveProcessor::LiveProcessor(BatchMailbox* mailbox, QObject* parent)
+    : QObject(parent), mailbox_(mailbox) {}
+
+LiveProcessor::~LiveProcessor() = default;
+
+void LiveProcessor::Reset(const ReconstructionOptions& options, const RobotGeometry& geometry) {
+  options_ = options;
+  geometry_ = geometry;
+  pipeline_ = std::make_unique<LivePipeline>(options, geometry);
+  published_chunk_ = 0;
+  published_offset_ = 0;
+  total_points_ = 0;
+  scans_ = 0;
+  latest_time_ = Time();
+  last_trajectory_time_ = Time::min();
+  Publish(true);
+}
+
+void LiveProcessor::AddRecords(const SensorLog& batch) {
+  if (pipeline_ == nullptr) return;
+  pipeline_->Add(batch);
+  scans_ += batch.scans.size();
+  const Time last = LastTime(batch);
+  if (last > latest_time_) latest_time_ = last;
+  Publish(false);
+}
+
+void LiveProcessor::Finish() {
+  if (pipeline_ == nullptr) return;
+  pipeline_->Finish();
+  Publish(false);
+}
+
+std::vector<CloudPoint> LiveProcessor::Flatten() const {
+  if (pipeline_ == nullptr) return {};
+  return pipeline_->cloud().Flatten();
+}
+
+void LiveProcessor::Publish(bool reset) {
+  LiveBatch batch;
+  batch.reset = reset;
+  if (pipeline_ != nullptr) {
+    // New points: the sealed chunks not published yet, then the open chunk's
+    // new tail (PointChunks keeps the order when it seals the open chunk).
+    PointChunks& chunks = pipeline_->cloud();
+    const auto sealed = chunks.SealedChunks();
+    for (; published_chunk_ < sealed.size(); ++published_chunk_) {
+      const CloudChunk& c = *sealed[published_chunk_];
+      batch.points.insert(batch.points.end(), c.begin() + published_offset_, c.end());
+      published_offset_ = 0;
+    }
+    const CloudChunk& open = chunks.open_chunk();
+    batch.points.insert(batch.points.end(), open.begin() + published_offset_, open.end());
+    published_offset_ = open.size();
+    total_points_ += batch.points.size();
+
+    const PoseBuffer& poses = pipeline_->estimator().poses();
+    if (!poses.empty()) {
+      batch.has_pose = true;
+      batch.pose = pipeline_->estimator().LatestPose2d();
+      if (last_trajectory_time_ == Time::min() ||
+          ToSeconds(poses.latest() - last_trajectory_time_) >= kTrajectoryStepS) {
+        batch.trajectory.push_back(batch.pose);
+        last_trajectory_time_ = poses.latest();
+      }
+    }
+  }
+  batch.robot_time_s = ToSeconds(latest_time_);
+  batch.total_points = total_points_;
+  batch.scans = scans_;
+  if (!reset && batch.points.empty() && !batch.has_pose) return;
+  mailbox_->Push(std::move(batch));
+}
+
+void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recording,
+                                const ReconstructionOptions& options, double speed) {
+  StopReplay();
+  replay_ = std::move(recording);
+  ReconstructionOptions o = options;
+  o.pose.initial_pose = replay_->start;
+  Reset(o, replay_->geometry);
+  replay_start_ = FirstTime(replay_->log);
+  replay_end_ = LastTime(replay_->log);
+  replay_position_ = replay_start_;
+  replay_anchor_ = replay_start_;
+  next_wheel_ = next_imu_ = next_scan_ = 0;
+  replay_speed_ = speed;
+  replay_paused_ = false;
+  if (replay_timer_ == nullptr) {
+    replay_timer_ = new QTimer(this);
+    connect(replay_timer_, &QTimer::timeout, this, &LiveProcessor::OnReplayTick);
+  }
+  replay_clock_.start();
+  replay_timer_->start(speed > 0 ? kReplayTickMs : 0);
+}
+
+void LiveProcessor::SetReplaySpeed(double speed) {
+  replay_speed_ = speed;
+  replay_anchor_ = replay_position_;
+  replay_clock_.restart();
+  if (replay_timer_ != nullptr && replay_timer_->isActive()) {
+    replay_timer_->start(speed > 0 ? kReplayTickMs : 0);
+  }
+}
+
+void LiveProcessor::SetReplayPaused(bool paused) {
+  if (replay_ == nullptr || replay_timer_ == nullptr) return;
+  replay_paused_ = paused;
+  if (paused) {
+    replay_timer_->stop();
+  } else if (replay_position_ <= replay_end_) {
+    replay_anchor_ = replay_position_;
+    replay_clock_.restart();
+    replay_timer_->start(replay_speed_ > 0 ? kReplayTickMs : 0);
+  }
+}
+
+void LiveProcessor::SeekReplay(double robot_time_s) {
+  if (replay_ == nullptr) return;
+  const Time target = replay_start_ + FromSeconds(std::max(0.0, robot_time_s));
+  if (target < replay_position_) {
+    // Backwards: the EKF cannot un-see records; start over from the beginning.
+    ReconstructionOptions o = options_;
+    Reset(o, geometry_);
+    replay_position_ = replay_start_;
+    next_wheel_ = next_imu_ = next_scan_ = 0;
+  }
+  FeedReplayUntil(std::min(target, replay_end_ + FromSeconds(1e-9)));
+  replay_anchor_ = replay_position_;
+  replay_clock_.restart();
+  emit replayProgress(ToSeconds(replay_position_ - replay_start_),
+                      ToSeconds(replay_end_ - replay_start_));
+}
+
+void LiveProcessor::StopReplay() {
+  if (replay_timer_ != nullptr) replay_timer_->stop();
+  replay_.reset();
+}
+
+void LiveProcessor::OnReplayTick() {
+  if (replay_ == nullptr) return;
+  Time until;
+  if (replay_speed_ > 0) {
+    until = replay_anchor_ + FromSeconds(replay_speed_ * replay_clock_.elapsed() * 1e-3);
+  } else {
+    until = replay_position_ + FromSeconds(kFastSliceS);
+  }
+  const bool done = until > replay_end_;
+  FeedReplayUntil(done ? replay_end_ + FromSeconds(1e-9) : until);
+  emit replayProgress(ToSeconds(replay_position_ - replay_start_),
+                      ToSeconds(replay_end_ - replay_start_));
+  if (done) {
+    replay_timer_->stop();
+    Finish();
+    emit replayFinished();
+  }
+}
+
+void LiveProcessor::FeedReplayUntil(Time until) {
+  const SensorLog& log = replay_->log;
+  SensorLog batch;
+  while (next_wheel_ < log.wheels.size() && log.wheels[next_wheel_].time < until) {
+    batch.wheels.push_back(log.wheels[next_wheel_++]);
+  }
+  while (next_imu_ < log.imu.size() && log.imu[next_imu_].time < until) {
+    batch.imu.push_back(log.imu[next_imu_++]);
+  }
+  // A scan is released once its last sample is due (a live link delivers a
+  // revolution when it is complete).
+  while (next_scan_ < log.scans.size() && log.scans[next_scan_].end_time() < until) {
+    batch.scans.push_back(log.scans[next_scan_++]);
+  }
+  replay_position_ = until;
+  if (!batch.wheels.empty() || !batch.imu.empty() || !batch.scans.empty()) AddRecords(batch);
+}
+
+}  // namespace sweepscan::ui

@@ -1,0 +1,93 @@
+// The processing thread's worker: runs the LivePipeline (EKF, deskew,
+// assembly) on decoded records, live from the robot or replayed from a
+// session, and posts the new points as LiveBatches to the mailbox the GUI
+// drains (docs/architecture.md, "Threads").
+//
+// Replay feeds a recording's records in robot-time order at a speed factor
+// (1x..20x, or 0 = as fast as possible, in slices that keep the thread
+// responsive); seeking restarts the pipeline and feeds up to the target time
+// at full speed. For the same records the replayed cloud equals the offline
+// Reconstruct (LivePipeline's guarantee), hence `sweepscan-cli reconstruct`.
+//
+// Threading: lives on the processing thread; every slot is called through
+// queued connections (QMetaObject::invokeMethod) from the workspace.
+#ifndef SWEEPSCAN_UI_WORKSPACE_LIVE_PROCESSOR_H_
+#define SWEEPSCAN_UI_WORKSPACE_LIVE_PROCESSOR_H_
+
+#include <QElapsedTimer>
+#include <QObject>
+#include <memory>
+
+#include "core/cloud/live_pipeline.h"
+#include "core/cloud/reconstruct.h"
+#include "hardware/station/recording.h"
+#include "ui/workspace/live_batch.h"
+
+class QTimer;
+
+namespace sweepscan::ui {
+
+class LiveProcessor : public QObject {
+  Q_OBJECT
+ public:
+  explicit LiveProcessor(BatchMailbox* mailbox, QObject* parent = nullptr);
+  ~LiveProcessor() override;
+
+  // Slots (processing thread).
+  // Starts a new cloud: drops the old pipeline, posts a reset batch.
+  void Reset(const ReconstructionOptions& options, const RobotGeometry& geometry);
+  // Live records from the robot (each stream in time order).
+  void AddRecords(const SensorLog& batch);
+  // End of a recording: places the scans still waiting for poses.
+  void Finish();
+
+  void StartReplay(std::shared_ptr<const hardware::Recording> recording,
+                   const ReconstructionOptions& options, double speed);
+  void SetReplaySpeed(double speed);  // 0 = as fast as possible.
+  void SetReplayPaused(bool paused);
+  void SeekReplay(double robot_time_s);
+  void StopReplay();
+
+  // The whole cloud assembled since the last reset (processing thread; the
+  // workspace reads it through a blocking queued call for save/export).
+  std::vector<CloudPoint> Flatten() const;
+
+ signals:
+  // Replay position (robot seconds from the recording's start) and length.
+  void replayProgress(double position_s, double length_s);
+  void replayFinished();
+
+ private:
+  void Publish(bool reset);
+  void OnReplayTick();
+  // Feeds every record with time < until (robot time) not fed yet.
+  void FeedReplayUntil(Time until);
+
+  BatchMailbox* mailbox_;
+  std::unique_ptr<LivePipeline> pipeline_;
+  ReconstructionOptions options_;
+  RobotGeometry geometry_;
+  size_t published_chunk_ = 0;   // Next chunk index to publish from.
+  size_t published_offset_ = 0;  // Points of that chunk already published.
+  size_t total_points_ = 0;
+  size_t scans_ = 0;
+  Time latest_time_;
+  Time last_trajectory_time_;
+  bool reset_pending_ = false;
+
+  // Replay state.
+  std::shared_ptr<const hardware::Recording> replay_;
+  QTimer* replay_timer_ = nullptr;
+  QElapsedTimer replay_clock_;
+  double replay_speed_ = 1.0;
+  bool replay_paused_ = false;
+  Time replay_start_;     // Robot time of the recording's first record.
+  Time replay_end_;       // ... and of its last.
+  Time replay_position_;  // Everything before this has been fed.
+  Time replay_anchor_;    // replay_position_ when replay_clock_ was restarted.
+  size_t next_wheel_ = 0, next_imu_ = 0, next_scan_ = 0;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_WORKSPACE_LIVE_PROCESSOR_H_

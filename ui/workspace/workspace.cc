@@ -1,0 +1,552 @@
+#include "ui/workspace/workspace.h"
+
+#include <QDateTime>
+#include <QDir>
+#include <QFileInfo>
+#include <QMetaObject>
+#include <QStandardPaths>
+#include <QTimer>
+#include <algorithm>
+#include <cmath>
+
+#include "core/cloud/cloud_io.h"
+#include "core/scenario/scenario.h"
+#include "hardware/link/qt_transport.h"
+#include "ui/workspace/live_processor.h"
+#include "ui/workspace/sim_robot.h"
+
+namespace sweepscan::ui {
+namespace {
+
+constexpr int kScriptTickMs = 100;  // Drive commands at 10 Hz, as the keyboard sends them.
+constexpr int kHealthMs = 250;
+
+// Copies a session folder file by file (frames.bin, meta.json, ...).
+bool CopyFolder(const QString& from, const QString& to, QString* error) {
+  QDir source(from);
+  if (!source.exists()) {
+    *error = QStringLiteral("%1: no such session folder").arg(from);
+    return false;
+  }
+  if (QFileInfo::exists(to)) {
+    *error = QStringLiteral("%1 exists already; choose a new name").arg(to);
+    return false;
+  }
+  if (!QDir().mkpath(to)) {
+    *error = QStringLiteral("%1: cannot create the folder").arg(to);
+    return false;
+  }
+  for (const QFileInfo& f : source.entryInfoList(QDir::Files)) {
+    if (!QFile::copy(f.absoluteFilePath(), to + QLatin1Char('/') + f.fileName())) {
+      *error = QStringLiteral("%1: cannot copy %2").arg(to, f.fileName());
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+Workspace::Workspace(QObject* parent) : QObject(parent) {
+  io_thread_.setObjectName(QStringLiteral("io"));
+  processing_thread_.setObjectName(QStringLiteral("processing"));
+  sessions_root_ = QDir::homePath() + QStringLiteral("/sweepscan-sessions");
+  processor_ = new LiveProcessor(&mailbox_);
+  processor_->moveToThread(&processing_thread_);
+  connect(&processing_thread_, &QThread::finished, processor_, &QObject::deleteLater);
+  connect(processor_, &LiveProcessor::replayProgress, this, &Workspace::replayProgress,
+          Qt::QueuedConnection);
+  connect(
+      processor_, &LiveProcessor::replayFinished, this,
+      [this] {
+        replaying_ = false;
+        emit replayFinished();
+      },
+      Qt::QueuedConnection);
+  io_thread_.start();
+  processing_thread_.start();
+}
+
+Workspace::~Workspace() {
+  CancelJob();
+  if (job_thread_ != nullptr) job_thread_->join();
+  Disconnect();
+  processing_thread_.quit();
+  processing_thread_.wait();
+  io_thread_.quit();
+  io_thread_.wait();
+}
+
+// ---------------------------------------------------------------------------
+// Link
+
+bool Workspace::Connect(const ConnectOptions& options, QString* error) {
+  Disconnect();
+  connect_options_ = options;
+  hardware::RobotConnectionOptions link;
+  live_geometry_ = options.geometry;
+  live_start_ = Pose2d();
+  live_meta_ = SessionMeta();
+  switch (options.kind) {
+    case LinkKind::kSimulator: {
+      sim::SimConfig scenario;
+      const Status s = LoadScenario(options.scenario_path.toStdString(), &scenario);
+      if (!s.ok()) {
+        *error = QString::fromStdString(s.message());
+        return false;
+      }
+      sim_ = std::make_unique<SimRobot>();
+      if (!sim_->Start(scenario, error)) {
+        sim_.reset();
+        return false;
+      }
+      link.address = sim_->address();
+      link.key = sim_->key();
+      live_geometry_ = scenario.geometry;
+      live_start_ = scenario.start;
+      live_meta_.lidar_angle_convention = scenario.lidar.angle_convention;
+      // The scenario travels with the recording: reopening places the cloud
+      // in the same world frame (SessionStartPose).
+      live_meta_.settings["scenario"] = ScenarioToJson(scenario);
+      break;
+    }
+    case LinkKind::kTcp:
+      link.address = QStringLiteral("tcp:%1:%2").arg(options.host).arg(options.port);
+      if (options.key_file.isEmpty()) {
+        *error = QStringLiteral("A TCP link needs the robot's key file (the agent's --key-file).");
+        return false;
+      }
+      if (!hardware::ReadKeyFile(options.key_file, &link.key, error)) return false;
+      break;
+    case LinkKind::kSerial:
+      if (options.serial_port.isEmpty()) {
+        *error = QStringLiteral("Choose a serial port.");
+        return false;
+      }
+      link.address = QStringLiteral("serial:%1:%2").arg(options.serial_port).arg(options.baud);
+      break;
+  }
+  live_meta_.geometry = live_geometry_;
+  link.session_meta = live_meta_;
+  link.decoder.wheel_distance_m = live_geometry_.wheel_distance_m;
+  link.decoder.lidar_angle_convention = live_meta_.lidar_angle_convention;
+  if (!link.IsValid(error)) {
+    if (sim_ != nullptr) sim_.reset();
+    return false;
+  }
+
+  ResetCloud(live_start_, live_geometry_);
+  opened_.reset();
+  replaying_ = false;
+  health_ = hardware::LinkHealth();
+  authenticated_ = false;
+
+  // The connection is created, started and destroyed on the I/O thread.
+  bool started = false;
+  QString start_error;
+  hardware::RobotConnection* connection = nullptr;
+  LiveProcessor* processor = processor_;
+  live_feed_ = std::make_shared<std::atomic<bool>>(true);  // Live preview until a recording stops.
+  std::shared_ptr<std::atomic<bool>> feed = live_feed_;
+  QObject context;
+  context.moveToThread(&io_thread_);
+  QMetaObject::invokeMethod(
+      &context,
+      [&] {
+        connection = new hardware::RobotConnection(link);
+        // Decoded records leave the I/O thread at once, for the processing thread.
+        QObject::connect(connection, &hardware::RobotConnection::telemetryDecoded, connection,
+                         [connection, processor, feed] {
+                           if (!*feed) {
+                             connection->mutable_log()->wheels.clear();
+                             connection->mutable_log()->imu.clear();
+                             connection->mutable_log()->scans.clear();
+                             return;
+                           }
+                           auto batch = std::make_shared<SensorLog>();
+                           std::swap(*batch, *connection->mutable_log());
+                           QMetaObject::invokeMethod(processor,
+                                                     [processor, batch] {
+                                                       processor->AddRecords(*batch);
+                                                     });
+                         });
+        auto* health_timer = new QTimer(connection);
+        QObject::connect(health_timer, &QTimer::timeout, connection, [this, connection] {
+          const hardware::LinkHealth h = connection->health();
+          QMetaObject::invokeMethod(this, [this, h] {
+            health_ = h;
+            emit healthUpdated();
+          });
+        });
+        health_timer->start(kHealthMs);
+        // Signals to the GUI thread are connected before Start(): on
+        // loopback the agent may authenticate us before this call returns.
+        QObject::connect(connection, &hardware::RobotConnection::stateChanged, this,
+                [this](int state) {
+                  health_.state = static_cast<hardware::LinkHealth::State>(state);
+                  emit linkStateChanged(state);
+                },
+                Qt::QueuedConnection);
+        QObject::connect(connection, &hardware::RobotConnection::authenticatedChanged, this,
+                [this](bool a) {
+                  authenticated_ = a;
+                  // The lidar spins (and scans) as the operator last asked: on by default.
+                  if (a) SetLidarMotor(lidar_on_);
+                  emit authenticatedChanged(a);
+                },
+                Qt::QueuedConnection);
+        QObject::connect(connection, &hardware::RobotConnection::authenticationFailed, this,
+                [this](const QString& reason) {
+                  emit authenticationFailed(reason);
+                  emit message(QStringLiteral("The robot refused the connection: %1").arg(reason));
+                },
+                Qt::QueuedConnection);
+        started = connection->Start(&start_error);
+        context.moveToThread(nullptr);
+      },
+      Qt::BlockingQueuedConnection);
+  if (!started) {
+    QMetaObject::invokeMethod(connection, [connection] { delete connection; },
+                              Qt::BlockingQueuedConnection);
+    sim_.reset();
+    *error = start_error;
+    return false;
+  }
+  connection_ = connection;
+  return true;
+}
+
+void Workspace::Disconnect() {
+  AbortScriptedDrive();
+  if (connection_ != nullptr) {
+    if (recording_) {
+      QString ignored;
+      StopRecording(&ignored);
+    }
+    hardware::RobotConnection* connection = connection_;
+    connection_ = nullptr;
+    connection->disconnect(this);
+    QMetaObject::invokeMethod(
+        connection,
+        [connection] {
+          connection->Shutdown();
+          delete connection;
+        },
+        Qt::BlockingQueuedConnection);
+    // Place the scans still waiting for poses.
+    QMetaObject::invokeMethod(processor_, [p = processor_] { p->Finish(); });
+  }
+  sim_.reset();
+  authenticated_ = false;
+  health_.state = hardware::LinkHealth::State::kIdle;
+  commanded_ = Twist2d();
+  emit linkStateChanged(static_cast<int>(health_.state));
+  emit authenticatedChanged(false);
+}
+
+void Workspace::InvokeOnConnection(std::function<void(hardware::RobotConnection*)> call) {
+  if (connection_ == nullptr) return;
+  hardware::RobotConnection* connection = connection_;
+  QMetaObject::invokeMethod(connection, [connection, call] { call(connection); });
+}
+
+// ---------------------------------------------------------------------------
+// Driving
+
+void Workspace::Drive(double v_mps, double w_radps) {
+  commanded_.v = std::clamp(v_mps, -limits_.v_max_mps, limits_.v_max_mps);
+  commanded_.w = std::clamp(w_radps, -limits_.w_max_radps, limits_.w_max_radps);
+  const Twist2d t = commanded_;
+  InvokeOnConnection([t](hardware::RobotConnection* c) { c->Drive(t.v, t.w); });
+}
+
+void Workspace::StopMotion() {
+  commanded_ = Twist2d();
+  InvokeOnConnection([](hardware::RobotConnection* c) { c->StopMotion(); });
+}
+
+void Workspace::EmergencyStop() {
+  AbortScriptedDrive();
+  commanded_ = Twist2d();
+  InvokeOnConnection([](hardware::RobotConnection* c) { c->EmergencyStop(); });
+  emit message(QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it."));
+}
+
+void Workspace::ClearEmergencyStop() {
+  InvokeOnConnection([](hardware::RobotConnection* c) { c->ClearEmergencyStop(); });
+}
+
+void Workspace::SetLidarMotor(bool on) {
+  lidar_on_ = on;
+  InvokeOnConnection([on](hardware::RobotConnection* c) { c->SetLidarMotor(on); });
+}
+
+std::vector<sim::DriveSegment> Workspace::CirclePath(double radius_m, double speed_mps,
+                                                     double turns) {
+  // A circle of radius r at speed v: w = v / r for 2 pi r turns / v seconds,
+  // with a second of standstill before (the filter's start) and after.
+  std::vector<sim::DriveSegment> path;
+  if (radius_m <= 0 || speed_mps <= 0 || turns <= 0) return path;
+  path.push_back({0.0, 0.0, 1.0});
+  path.push_back({speed_mps, speed_mps / radius_m, 2.0 * M_PI * radius_m * turns / speed_mps});
+  path.push_back({0.0, 0.0, 1.0});
+  return path;
+}
+
+void Workspace::StartScriptedDrive(const std::vector<sim::DriveSegment>& path) {
+  AbortScriptedDrive();
+  if (path.empty()) return;
+  script_ = path;
+  script_timer_ = new QTimer(this);
+  script_timer_->setTimerType(Qt::PreciseTimer);
+  connect(script_timer_, &QTimer::timeout, this, &Workspace::OnScriptTick);
+  script_clock_.start();
+  script_timer_->start(kScriptTickMs);
+  OnScriptTick();
+}
+
+void Workspace::AbortScriptedDrive() {
+  if (script_timer_ == nullptr) return;
+  script_timer_->stop();
+  script_timer_->deleteLater();
+  script_timer_ = nullptr;
+  StopMotion();
+}
+
+void Workspace::OnScriptTick() {
+  double t = script_clock_.elapsed() * 1e-3;
+  for (const sim::DriveSegment& s : script_) {
+    if (t < s.duration_s) {
+      Drive(s.v, s.w);
+      return;
+    }
+    t -= s.duration_s;
+  }
+  AbortScriptedDrive();
+  emit message(QStringLiteral("Scripted drive finished."));
+}
+
+// ---------------------------------------------------------------------------
+// Sessions
+
+void Workspace::ResetCloud(const Pose2d& start, const RobotGeometry& geometry) {
+  ReconstructionOptions options;
+  options.pose.initial_pose = start;
+  LiveProcessor* p = processor_;
+  QMetaObject::invokeMethod(p, [p, options, geometry] {
+    p->StopReplay();
+    p->Reset(options, geometry);
+  });
+  point_count_ = 0;
+  scan_count_ = 0;
+}
+
+bool Workspace::StartRecording(QString* error) {
+  if (connection_ == nullptr) {
+    *error = QStringLiteral("Connect to a robot (or the simulator) first.");
+    return false;
+  }
+  if (recording_) return true;
+  if (!QDir().mkpath(sessions_root_)) {
+    *error = QStringLiteral("%1: cannot create the sessions folder").arg(sessions_root_);
+    return false;
+  }
+  const QString name = QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyyMMdd-HHmmss-zzz"));
+  const QString dir = sessions_root_ + QLatin1Char('/') + name + QStringLiteral(".sweepscan");
+  // The recorder, the live decoder and the cloud restart at the same frame:
+  // what is shown is exactly what the session holds. The reset is posted
+  // from the I/O thread, after every batch of earlier frames and before any
+  // batch of the session's.
+  bool ok = false;
+  QString start_error;
+  const SessionMeta meta = live_meta_;
+  hardware::RobotConnection* connection = connection_;
+  LiveProcessor* processor = processor_;
+  ReconstructionOptions options;
+  options.pose.initial_pose = live_start_;
+  const RobotGeometry geometry = live_geometry_;
+  std::shared_ptr<std::atomic<bool>> feed = live_feed_;
+  QMetaObject::invokeMethod(
+      connection,
+      [&] {
+        ok = connection->StartRecording(dir, meta, &start_error);
+        if (!ok) return;
+        *feed = true;
+        QMetaObject::invokeMethod(processor, [processor, options, geometry] {
+          processor->StopReplay();
+          processor->Reset(options, geometry);
+        });
+      },
+      Qt::BlockingQueuedConnection);
+  point_count_ = 0;
+  scan_count_ = 0;
+  if (!ok) {
+    *error = start_error;
+    return false;
+  }
+  recording_ = true;
+  unsaved_ = true;
+  session_dir_ = dir;
+  opened_.reset();
+  emit recordingChanged(true);
+  emit sessionChanged(dir);
+  emit message(QStringLiteral("Recording to %1").arg(dir));
+  return true;
+}
+
+bool Workspace::StopRecording(QString* error) {
+  if (!recording_) return true;
+  Status closed;
+  hardware::RobotConnection* connection = connection_;
+  if (connection != nullptr) {
+    // The cloud stops with the session (same frame on the I/O thread), so
+    // that it stays equal to what the folder holds.
+    std::shared_ptr<std::atomic<bool>> feed = live_feed_;
+    QMetaObject::invokeMethod(
+        connection,
+        [&] {
+          closed = connection->StopRecording();
+          *feed = false;
+        },
+        Qt::BlockingQueuedConnection);
+  }
+  recording_ = false;
+  QMetaObject::invokeMethod(processor_, [p = processor_] { p->Finish(); });
+  emit recordingChanged(false);
+  if (!closed.ok()) {
+    *error = QString::fromStdString(closed.message());
+    return false;
+  }
+  emit message(QStringLiteral("Recording stopped: %1").arg(session_dir_));
+  return true;
+}
+
+bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
+  if (recording_) {
+    *error = QStringLiteral("Stop the recording before saving it.");
+    return false;
+  }
+  if (session_dir_.isEmpty()) {
+    *error = QStringLiteral("There is no session to save: record or open one first.");
+    return false;
+  }
+  if (!CopyFolder(session_dir_, dir, error)) return false;
+  session_dir_ = dir;
+  unsaved_ = false;
+  emit sessionChanged(dir);
+  return true;
+}
+
+void Workspace::NewSession() {
+  if (recording_) {
+    QString ignored;
+    StopRecording(&ignored);
+  }
+  session_dir_.clear();
+  unsaved_ = false;
+  opened_.reset();
+  replaying_ = false;
+  ResetCloud(live_start_, live_geometry_);
+  emit sessionChanged(QString());
+}
+
+void Workspace::OpenSession(const QString& dir, double speed) {
+  auto recording = std::make_shared<hardware::Recording>();
+  const std::string path = dir.toStdString();
+  RunJob(
+      QStringLiteral("Opening %1").arg(dir),
+      [recording, path](std::atomic<bool>*) -> QString {
+        const Status s = hardware::OpenRecording(path, recording.get());
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, recording, dir, speed] {
+        if (recording_) {
+          QString ignored;
+          StopRecording(&ignored);
+        }
+        opened_ = recording;
+        session_dir_ = dir;
+        unsaved_ = false;
+        replaying_ = true;
+        ReconstructionOptions options;
+        options.calibration = recording->decode.meta.calibration;
+        LiveProcessor* p = processor_;
+        std::shared_ptr<const hardware::Recording> r = recording;
+        QMetaObject::invokeMethod(p, [p, r, options, speed] { p->StartReplay(r, options, speed); });
+        emit sessionChanged(dir);
+      });
+}
+
+void Workspace::SetReplaySpeed(double speed) {
+  LiveProcessor* p = processor_;
+  QMetaObject::invokeMethod(p, [p, speed] { p->SetReplaySpeed(speed); });
+}
+
+void Workspace::SetReplayPaused(bool paused) {
+  LiveProcessor* p = processor_;
+  QMetaObject::invokeMethod(p, [p, paused] { p->SetReplayPaused(paused); });
+}
+
+void Workspace::SeekReplay(double position_s) {
+  LiveProcessor* p = processor_;
+  QMetaObject::invokeMethod(p, [p, position_s] { p->SeekReplay(position_s); });
+}
+
+std::vector<CloudPoint> Workspace::CloudSnapshot() const {
+  std::vector<CloudPoint> points;
+  LiveProcessor* p = processor_;
+  QMetaObject::invokeMethod(
+      p, [p, &points] { points = p->Flatten(); }, Qt::BlockingQueuedConnection);
+  return points;
+}
+
+void Workspace::ExportCloud(const QString& path) {
+  auto points = std::make_shared<std::vector<CloudPoint>>(CloudSnapshot());
+  const std::string file = path.toStdString();
+  RunJob(
+      QStringLiteral("Exporting %1").arg(path),
+      [points, file](std::atomic<bool>*) -> QString {
+        if (points->empty()) return QStringLiteral("The cloud is empty: nothing to export.");
+        const Status s = SaveCloud(file, *points);
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, path, points] {
+        emit message(QStringLiteral("Exported %1 points to %2").arg(points->size()).arg(path));
+      });
+}
+
+void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
+                       std::function<void()> on_success) {
+  if (job_thread_ != nullptr) {
+    emit jobFinished(what, false, QStringLiteral("Another task is still running."));
+    return;
+  }
+  job_cancel_ = false;
+  emit jobProgress(what, -1.0);  // Indeterminate: the decoders report no fraction.
+  job_thread_ = std::make_unique<std::thread>([this, what, work, on_success] {
+    const QString error = work(&job_cancel_);
+    QMetaObject::invokeMethod(this, [this, what, error, on_success] {
+      if (job_thread_ != nullptr) {
+        job_thread_->join();
+        job_thread_.reset();
+      }
+      if (job_cancel_) {
+        emit jobFinished(what, false, QStringLiteral("Cancelled."));
+      } else if (!error.isEmpty()) {
+        emit jobFinished(what, false, error);
+      } else {
+        on_success();
+        emit jobFinished(what, true, QString());
+      }
+    });
+  });
+}
+
+void Workspace::CancelJob() {
+  if (job_thread_ == nullptr) return;
+  // The job's result is dropped when it ends; decoding and writing have no
+  // inner cancellation points, so the thread is waited for here only on exit.
+  job_cancel_ = true;
+}
+
+}  // namespace sweepscan::ui

@@ -1,0 +1,206 @@
+// The desktop app without its widgets: the current session, the robot link
+// on an I/O thread, the live pipeline on a processing thread, the built-in
+// simulated robot, replay, and the long jobs (open, export) on worker
+// threads with progress and cancel. Every button of the app calls a method
+// here, and the UI tests drive the same methods (docs/architecture.md, "ui/").
+//
+// Threads (docs/architecture.md):
+//   GUI thread         this object, every widget and VTK object;
+//   I/O thread         RobotConnection (socket or serial port, session recorder,
+//                      telemetry decoding); decoded records go to
+//   processing thread  LiveProcessor (EKF, deskew, assembly), which posts
+//                      immutable LiveBatches to mailbox(); the view drains it
+//                      on a GUI timer;
+//   robot thread       the built-in simulator's agent and devices (SimRobot);
+//   job threads        open a session, export a cloud (one at a time).
+//
+// Lives on the GUI thread; not thread-safe.
+#ifndef SWEEPSCAN_UI_WORKSPACE_WORKSPACE_H_
+#define SWEEPSCAN_UI_WORKSPACE_WORKSPACE_H_
+
+#include <QElapsedTimer>
+#include <QObject>
+#include <QString>
+#include <QThread>
+#include <atomic>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "core/cloud/reconstruct.h"
+#include "core/sim/world.h"
+#include "hardware/station/recording.h"
+#include "hardware/station/robot_connection.h"
+#include "ui/workspace/live_batch.h"
+
+class QTimer;
+
+namespace sweepscan::ui {
+
+class LiveProcessor;
+class SimRobot;
+
+enum class LinkKind { kSimulator = 0, kTcp = 1, kSerial = 2 };
+
+struct ConnectOptions {
+  LinkKind kind = LinkKind::kSimulator;
+  QString scenario_path;  // kSimulator: the world (resources/scenarios/*.json)
+  QString host = QStringLiteral("127.0.0.1");  // kTcp
+  int port = 5600;
+  QString key_file;      // kTcp: the robot's pre-shared key
+  QString serial_port;   // kSerial: e.g. /dev/ttyUSB0
+  int baud = 921600;
+  // A robot's geometry is not sent over the link; a real robot uses the
+  // paper's geometry unless settings say otherwise. The simulator's comes
+  // from its scenario.
+  RobotGeometry geometry;
+};
+
+struct DriveLimits {
+  double v_max_mps = 0.3;
+  double w_max_radps = 0.8;
+};
+
+class Workspace : public QObject {
+  Q_OBJECT
+ public:
+  explicit Workspace(QObject* parent = nullptr);
+  ~Workspace() override;
+
+  // ---- Robot link ---------------------------------------------------------
+  // Starts the built-in simulator if asked, then connects (asynchronously:
+  // watch linkStateChanged / authenticationFailed). False with a message for
+  // options that cannot work (missing key file, bad scenario).
+  bool Connect(const ConnectOptions& options, QString* error);
+  void Disconnect();
+  bool link_open() const { return connection_ != nullptr; }
+  bool authenticated() const { return authenticated_; }
+  hardware::LinkHealth::State link_state() const { return health_.state; }
+  const hardware::LinkHealth& health() const { return health_; }
+  const ConnectOptions& connect_options() const { return connect_options_; }
+  SimRobot* sim_robot() const { return sim_.get(); }  // Null unless on the simulator.
+
+  // ---- Driving ------------------------------------------------------------
+  // Drive commands, clamped to limits(); the agent applies its own limits too.
+  void Drive(double v_mps, double w_radps);
+  void StopMotion();
+  void EmergencyStop();  // Sent at once, also while unauthenticated; latched by the agent.
+  void ClearEmergencyStop();
+  void SetLidarMotor(bool on);  // Remembered: applied again on every (re)connection.
+  bool lidar_motor() const { return lidar_on_; }
+  void SetLimits(const DriveLimits& limits) { limits_ = limits; }
+  const DriveLimits& limits() const { return limits_; }
+  Twist2d commanded() const { return commanded_; }
+  // Scripted drive: the segments' (v, w) sent as drive commands at 10 Hz,
+  // exactly what the keyboard sends. CirclePath is the calibration drive.
+  void StartScriptedDrive(const std::vector<sim::DriveSegment>& path);
+  void AbortScriptedDrive();
+  bool scripted_drive_running() const { return script_timer_ != nullptr; }
+  static std::vector<sim::DriveSegment> CirclePath(double radius_m, double speed_mps,
+                                                   double turns);
+
+  // ---- Sessions -----------------------------------------------------------
+  // Records from now on into a new session folder under sessions_root()
+  // (crash-safe from its first second; the cloud restarts with it).
+  bool StartRecording(QString* error);
+  bool StopRecording(QString* error);
+  bool recording() const { return recording_; }
+  // The session shown: being recorded, recorded and not saved yet, or opened.
+  QString session_dir() const { return session_dir_; }
+  bool unsaved() const { return unsaved_; }  // A new recording not saved elsewhere yet.
+  // Copies the current session folder to `dir` (must not exist) and makes it
+  // the current session. Only when not recording.
+  bool SaveSessionAs(const QString& dir, QString* error);
+  // Forgets the current session and cloud (the recording folder stays on disk).
+  void NewSession();
+  // Opens a session folder on a job thread (progress, cancel), then replays
+  // it at `speed` (0 = as fast as possible). A corrupt session is refused:
+  // jobFinished(false, "where and why").
+  void OpenSession(const QString& dir, double speed = 0.0);
+  const hardware::Recording* recording_opened() const { return opened_.get(); }
+  // Replay of the opened session.
+  void SetReplaySpeed(double speed);
+  void SetReplayPaused(bool paused);
+  void SeekReplay(double position_s);
+  bool replaying() const { return replaying_; }
+  // Writes the cloud shown (PLY or PCD by extension) on a job thread.
+  void ExportCloud(const QString& path);
+  void CancelJob();
+  bool job_running() const { return job_thread_ != nullptr; }
+
+  // Where new recordings go (default: ~/sweepscan-sessions, QSettings).
+  QString sessions_root() const { return sessions_root_; }
+  void set_sessions_root(const QString& root) { sessions_root_ = root; }
+
+  // ---- The cloud ----------------------------------------------------------
+  BatchMailbox* mailbox() { return &mailbox_; }
+  // Every point assembled since the last reset, copied on the processing
+  // thread (blocks until it has finished its current batch).
+  std::vector<CloudPoint> CloudSnapshot() const;
+  // Points and scans assembled, as of the last batch the view took.
+  size_t point_count() const { return point_count_; }
+  size_t scan_count() const { return scan_count_; }
+  void NoteBatch(size_t points, size_t scans) {
+    point_count_ = points;
+    scan_count_ = scans;
+  }
+
+ signals:
+  void linkStateChanged(int state);  // A LinkHealth::State.
+  void authenticatedChanged(bool authenticated);
+  void authenticationFailed(const QString& reason);
+  void healthUpdated();
+  void recordingChanged(bool recording);
+  void sessionChanged(const QString& dir);
+  void replayProgress(double position_s, double length_s);
+  void replayFinished();
+  void jobProgress(const QString& what, double fraction);
+  void jobFinished(const QString& what, bool ok, const QString& message);
+  void message(const QString& text);  // For the status bar.
+
+ private:
+  void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
+  void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
+              std::function<void()> on_success);
+  void OnScriptTick();
+  void InvokeOnConnection(std::function<void(hardware::RobotConnection*)> call);
+
+  BatchMailbox mailbox_;
+  QThread io_thread_;
+  QThread processing_thread_;
+  LiveProcessor* processor_ = nullptr;                // Lives on processing_thread_.
+  hardware::RobotConnection* connection_ = nullptr;   // Lives on io_thread_.
+  std::unique_ptr<SimRobot> sim_;
+  ConnectOptions connect_options_;
+  hardware::LinkHealth health_;
+  bool authenticated_ = false;
+  DriveLimits limits_;
+  bool lidar_on_ = true;
+  // Whether decoded telemetry reaches the cloud: on while connected, off
+  // once a recording stops (the cloud is then the session's). I/O thread reads it.
+  std::shared_ptr<std::atomic<bool>> live_feed_ = std::make_shared<std::atomic<bool>>(true);
+  Twist2d commanded_;
+  RobotGeometry live_geometry_;
+  Pose2d live_start_;
+  SessionMeta live_meta_;
+
+  QTimer* script_timer_ = nullptr;
+  std::vector<sim::DriveSegment> script_;
+  QElapsedTimer script_clock_;
+
+  bool recording_ = false;
+  bool unsaved_ = false;
+  QString session_dir_;
+  QString sessions_root_;
+  std::shared_ptr<hardware::Recording> opened_;
+  bool replaying_ = false;
+  size_t point_count_ = 0;
+  size_t scan_count_ = 0;
+
+  std::unique_ptr<std::thread> job_thread_;
+  std::atomic<bool> job_cancel_{false};
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_WORKSPACE_WORKSPACE_H_
