@@ -314,12 +314,11 @@ void ResidualRows(const SampleStore& store, const AutoSamples& in,
 // Final statistics on the last problem: the kept planes, the RMS distance,
 // observability and the angles' sigma (the larger of the iid and the
 // cluster-robust estimate).
-void ReportFinalStatistics(PlaneProblem* problem, const AutoSamples& in,
+void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoSamples& in,
                            const std::vector<FoundPlane>& used, const std::vector<int>& sightings,
                            const std::vector<std::vector<size_t>>& chosen, int residuals,
                            const std::vector<int>& group_of_row, double final_cost,
                            const CalibrationOptions& so_opts, CalibrationSummary* summary) {
-  const double* abg = problem->angles();
   const std::vector<Prepared>& prepared = in.prepared;
   const std::vector<double>& sigma = in.sigma;
   summary->final_cost = final_cost;
@@ -418,7 +417,8 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     std::vector<Plane> start;
     for (const FoundPlane& fp : used) start.push_back(fp.plane);
     const RobustLoss loss = so_opts.loss == RobustLoss::kNone ? RobustLoss::kHuber : so_opts.loss;
-    PlaneProblem problem(c, start, chosen, in.prepared, in.sigma, loss,
+    double abg[3] = {c.alpha, c.beta, c.gamma};
+    PlaneProblem problem(abg, start, chosen, in.prepared, in.sigma, loss,
                          options.robust_scale_sigmas);
     if (residuals == 0) return Status::Error("automatic calibration: no residual points left");
     if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
@@ -435,7 +435,6 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
       summary->trace = trace;
       return Status::Error("calibration cancelled");
     }
-    const double* abg = problem.angles();
     if (!cs.lm_converged || !Eigen::Vector3d(abg[0], abg[1], abg[2]).allFinite()) {
       summary->trace = trace;
       return Status::Error("automatic calibration did not converge: " + cs.message);
@@ -451,7 +450,7 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     const bool settled = change < std::max(so_opts.outer_tolerance_rad, 1e-5);
     if (last_band && (settled || final_rounds >= 3 || outer + 1 == so_opts.max_outer_iterations)) {
       summary->converged = settled || final_rounds >= 3;
-      ReportFinalStatistics(&problem, in, used, sightings, chosen, residuals, group_of_row,
+      ReportFinalStatistics(&problem, abg, in, used, sightings, chosen, residuals, group_of_row,
                             cs.final_cost, so_opts, summary);
       break;
     }

@@ -81,9 +81,15 @@ inline bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
 // point-to-plane residual per chosen point, weighted by 1 / sigma_i.
 class PlaneProblem {
  public:
-  // planes[s] starts the surface's parameters; chosen[s] indexes `prepared`
-  // and `sigma`. Residuals are added surface by surface in chosen order.
-  PlaneProblem(const MountingError& start, const std::vector<Plane>& planes,
+  // abg: the angles (alpha, beta, gamma), the start on entry and the
+  // solution after Solve; owned by the caller, who keeps them in its own
+  // stack frame: Ceres orders the covariance's columns by parameter block
+  // address, and angles on the stack, planes on the heap is the order the
+  // reported sigma was computed in (a different order changes its last
+  // bits). planes[s] starts the surface's parameters; chosen[s] indexes
+  // `prepared` and `sigma`. Residuals are added surface by surface in chosen
+  // order.
+  PlaneProblem(double* abg, const std::vector<Plane>& planes,
                const std::vector<std::vector<size_t>>& chosen,
                const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
                RobustLoss loss, double loss_scale);
@@ -100,7 +106,6 @@ class PlaneProblem {
   // One LM solve from the current angles; appends its iterations to `trace`.
   Outcome Solve(const CalibrationOptions& options, std::vector<CalibrationIteration>* trace);
 
-  const double* angles() const;                     // alpha, beta, gamma
   const std::array<double, 4>& plane(size_t s) const;  // n_s (3), d_s
 
   // Final statistics on the solved problem: the angles' observability, the

@@ -184,21 +184,18 @@ void ComputeCovariance(ceres::Problem* problem, double* abg, int num_residuals,
 // The automatic mode's plane problem
 
 struct PlaneProblem::Impl {
-  double abg[3];
+  double* abg;  // the caller's
   std::vector<std::array<double, 4>> params;
   ceres::Problem::Options po;
   ceres::Problem problem{po};
 };
 
-PlaneProblem::PlaneProblem(const MountingError& start, const std::vector<Plane>& planes,
+PlaneProblem::PlaneProblem(double* abg, const std::vector<Plane>& planes,
                            const std::vector<std::vector<size_t>>& chosen,
                            const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
                            RobustLoss loss, double loss_scale)
     : impl_(std::make_unique<Impl>()) {
-  double* abg = impl_->abg;
-  abg[0] = start.alpha;
-  abg[1] = start.beta;
-  abg[2] = start.gamma;
+  impl_->abg = abg;
   ceres::Problem& problem = impl_->problem;
   problem.AddParameterBlock(abg, 3);
   std::vector<std::array<double, 4>>& params = impl_->params;
@@ -233,8 +230,6 @@ PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
   out.message = cs.message;
   return out;
 }
-
-const double* PlaneProblem::angles() const { return impl_->abg; }
 
 const std::array<double, 4>& PlaneProblem::plane(size_t s) const { return impl_->params[s]; }
 
