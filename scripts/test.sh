@@ -24,5 +24,5 @@ if [ "${SWEEPSCAN_SKIP_FUZZ:-0}" != "1" ]; then
 fi
 
 # The main suite last, so its summary closes the output.
-scripts/build.sh -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=ON
+scripts/build.sh -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=ON -DSWEEPSCAN_WERROR=ON
 (cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
