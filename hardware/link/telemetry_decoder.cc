@@ -139,15 +139,18 @@ std::string SessionDecodeInfo::ToString() const {
   return s.str();
 }
 
-void DecodeSessionRecords(const std::vector<SessionRecord>& records,
+bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
                           const TelemetryDecoderOptions& options, SensorLog* log,
-                          SessionDecodeInfo* info) {
+                          SessionDecodeInfo* info, const DecodeProgress& progress) {
   TelemetryDecoder decoder(options);
   // The link decoder only keeps the sequence accounting; each record is
   // parsed strictly on its own so a bad record cannot swallow the next one.
   std::array<SequenceTracker, 2> trackers;
   bool have_time = false;
   for (size_t i = 0; i < records.size(); ++i) {
+    if (progress && (i & 4095) == 0 && !progress(static_cast<double>(i) / records.size())) {
+      return false;
+    }
     const SessionRecord& r = records[i];
     LinkMessage m;
     const Status s = ParseLinkFrame(r.bytes.data(), r.bytes.size(), &m);
@@ -171,12 +174,18 @@ void DecodeSessionRecords(const std::vector<SessionRecord>& records,
   info->link.codec.frames_ok = records.size() - info->frames_refused;
   info->link.codec.payload_errors = info->frames_refused;
   info->telemetry = decoder.stats();
+  return true;
 }
 
-Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
-                     SensorLog* log, SessionDecodeInfo* info) {
+namespace {
+
+Status DecodeSessionWithProgress(const std::string& session_dir,
+                                 const TelemetryDecoderOptions& options, SensorLog* log,
+                                 SessionDecodeInfo* info, const DecodeProgress& progress) {
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(session_dir + ": decoder options: " + error);
+  // Reading the file is the first tenth of the work, decoding the rest.
+  if (progress && !progress(0.0)) return Status::Error(session_dir + ": cancelled");
   Session session;
   const Status s = LoadSession(session_dir, FramesLoadOptions(), &session);
   if (!s.ok()) return s;
@@ -184,13 +193,19 @@ Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptio
   result.meta = session.meta;
   result.frames = session.frames;
   SensorLog decoded;
-  DecodeSessionRecords(session.records, options, &decoded, &result);
+  DecodeProgress decode_progress;
+  if (progress) decode_progress = [&](double f) { return progress(0.1 + 0.9 * f); };
+  if (!DecodeSessionRecords(session.records, options, &decoded, &result, decode_progress)) {
+    return Status::Error(session_dir + ": cancelled");
+  }
+  if (progress) progress(1.0);
   *log = std::move(decoded);
   if (info != nullptr) *info = std::move(result);
   return Status::Ok();
 }
 
-Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info) {
+Status DecodeSessionWithMeta(const std::string& session_dir, SensorLog* log,
+                             SessionDecodeInfo* info, const DecodeProgress& progress) {
   SessionMeta meta;
   const std::string meta_path = session_dir +
                                 (session_dir.empty() || session_dir.back() == '/' ? "" : "/") +
@@ -200,7 +215,23 @@ Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDeco
   TelemetryDecoderOptions options;
   options.wheel_distance_m = meta.geometry.wheel_distance_m;
   options.lidar_angle_convention = meta.lidar_angle_convention;
-  return DecodeSession(session_dir, options, log, info);
+  return DecodeSessionWithProgress(session_dir, options, log, info, progress);
+}
+
+}  // namespace
+
+Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
+                     SensorLog* log, SessionDecodeInfo* info) {
+  return DecodeSessionWithProgress(session_dir, options, log, info, nullptr);
+}
+
+Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info) {
+  return DecodeSessionWithMeta(session_dir, log, info, nullptr);
+}
+
+Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info,
+                     const DecodeProgress& progress) {
+  return DecodeSessionWithMeta(session_dir, log, info, progress);
 }
 
 }  // namespace hardware

@@ -15,6 +15,7 @@
 #ifndef SWEEPSCAN_HARDWARE_LINK_TELEMETRY_DECODER_H_
 #define SWEEPSCAN_HARDWARE_LINK_TELEMETRY_DECODER_H_
 
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -32,7 +33,7 @@ namespace hardware {
 struct TelemetryDecoderOptions {
   double wheel_distance_m = RobotGeometry().wheel_distance_m;
   LidarAngleConvention lidar_angle_convention;
-  X4DecoderOptions x4;        // keep_packets is forced off (only revolutions are used).
+  X4DecoderOptions x4;  // keep_packets is forced off (only revolutions are used).
   // Subtracted from the frame receive times. Defaults: the serial
   // transmission time of one frame (the sample was taken before its bytes
   // were sent), 82 bytes of HI219 0x91 frame and 24 bytes of motor feedback
@@ -98,15 +99,24 @@ struct SessionDecodeInfo {
 // Records that do not hold exactly one valid link frame are skipped and
 // counted; a corrupt frames.bin or meta.json is an error (LoadSession).
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info);
+// Progress of a long decode: called with the fraction done (0..1, monotone,
+// ending at 1 on success); returning false cancels (the call then fails with
+// "cancelled"). Called every 4096 records, so a cancel takes effect within
+// milliseconds.
+using DecodeProgress = std::function<bool(double fraction)>;
+// The same with progress and cancel (the desktop app's open job).
+Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info,
+                     const DecodeProgress& progress);
 // The same with explicit decoder options (wheel distance and convention are
 // still taken from the options, not from meta.json).
 Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
                      SensorLog* log, SessionDecodeInfo* info);
 // The decoding part alone, on records already loaded; *info must not be null
 // (its frames_refused, link, telemetry and robot times are filled).
-void DecodeSessionRecords(const std::vector<SessionRecord>& records,
+// With `progress`, returns false if it cancelled (the log is then partial).
+bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
                           const TelemetryDecoderOptions& options, SensorLog* log,
-                          SessionDecodeInfo* info);
+                          SessionDecodeInfo* info, const DecodeProgress& progress = nullptr);
 
 }  // namespace hardware
 }  // namespace sweepscan

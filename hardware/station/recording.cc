@@ -3,8 +3,13 @@
 namespace sweepscan::hardware {
 
 Status OpenRecording(const std::string& session_dir, Recording* recording) {
+  return OpenRecording(session_dir, recording, nullptr);
+}
+
+Status OpenRecording(const std::string& session_dir, Recording* recording,
+                     const DecodeProgress& progress) {
   *recording = Recording();
-  const Status s = DecodeSession(session_dir, &recording->log, &recording->decode);
+  const Status s = DecodeSession(session_dir, &recording->log, &recording->decode, progress);
   if (!s.ok()) return s;
   recording->session_dir = session_dir;
   recording->geometry = recording->decode.meta.geometry;

@@ -23,8 +23,8 @@
 namespace sweepscan::hardware {
 
 struct Recording {
-  std::string name;          // "session DIR" or "scenario NAME", for messages
-  std::string session_dir;   // empty for an in-process simulation
+  std::string name;         // "session DIR" or "scenario NAME", for messages
+  std::string session_dir;  // empty for an in-process simulation
   SensorLog log;
   RobotGeometry geometry;
   Pose2d start;              // the robot's pose at the first record (world frame)
@@ -38,6 +38,10 @@ struct Recording {
 // frame log is refused with the file, the place and the reason; frames that
 // are not valid link frames are counted in decode.frames_refused and skipped.
 Status OpenRecording(const std::string& session_dir, Recording* recording);
+// The same with progress and cancel (DecodeProgress: fraction 0..1; return
+// false to cancel, which fails with "cancelled").
+Status OpenRecording(const std::string& session_dir, Recording* recording,
+                     const DecodeProgress& progress);
 
 // Runs a scenario's world in-process (no bytes: the simulator's records
 // directly) and keeps its ground truth.
