@@ -1,18 +1,24 @@
 // sweepscan: the operator's desktop app. Thin: parses the command line,
 // wires Workspace and MainWindow (ui/), and runs the demo options:
 //   sweepscan [--simulate] [--scenario FILE] [--drive-demo] [--replay SESSION]
-//             [--speed X] [--screenshot PATH] [--export-cloud PATH] [--quit-after S]
-// On quit after a demo option it prints one JSON line (points, scans,
-// link_state, session, frames_rendered, ...).
+//             [--speed X] [--screenshot PATH] [--window-screenshot PATH]
+//             [--export-cloud PATH] [--quit-after S] [--orbit-benchmark N]
+// On quit after --quit-after it prints one JSON line (points, scans,
+// link_state, session, frames_rendered, event-loop latency, memory).
+#include <QVTKOpenGLNativeWidget.h>
+
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QDir>
+#include <QElapsedTimer>
+#include <QFile>
 #include <QFileInfo>
 #include <QSurfaceFormat>
+#include <QThread>
 #include <QTimer>
-#include <QVTKOpenGLNativeWidget.h>
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "core/cloud/cloud_io.h"
@@ -23,13 +29,91 @@
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/workspace.h"
 
+namespace sweepscan::app {
 namespace {
 
-// resources/: next to the executable's install prefix, else the source tree.
+using ui::CloudView;
+using ui::MainWindow;
+using ui::Workspace;
+
+struct Options {
+  bool simulate = false;
+  bool drive_demo = false;
+  QString scenario;  // Resolved to the default when not given.
+  QString replay;
+  double speed = 0.0;
+  QString screenshot, window_screenshot, export_cloud, sessions_dir;
+  double quit_after_s = -1.0;  // < 0: run until the operator quits.
+  int orbit_frames = 0;        // > 0: the orbit benchmark after --replay.
+};
+
+// resources/: beside the executable's install prefix, else the source tree.
 QString ResourcesDir() {
   const QString beside = QCoreApplication::applicationDirPath() + QStringLiteral("/../resources");
   if (QFileInfo::exists(beside + QStringLiteral("/scenarios"))) return QDir(beside).absolutePath();
   return QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
+}
+
+Options ParseOptions(const QApplication& app, const QString& resources) {
+  QCommandLineParser parser;
+  parser.setApplicationDescription(QStringLiteral(
+      "Operator workstation for mobile 3D lidar scanning: connect, drive, watch the cloud grow, "
+      "record, replay, export."));
+  parser.addHelpOption();
+  parser.addVersionOption();
+  const QCommandLineOption simulate("simulate",
+                                    "Connect to the built-in simulated robot at start.");
+  const QCommandLineOption scenario(
+      "scenario", "Scenario of the simulated robot (default: resources/scenarios/lab.json).",
+      "FILE");
+  const QCommandLineOption drive_demo(
+      "drive-demo",
+      "Record and drive the scenario's path with the same drive commands the keyboard sends.");
+  const QCommandLineOption replay("replay", "Open and replay a session folder.", "SESSION");
+  const QCommandLineOption speed(
+      "speed", "Replay speed: 1 to 20, or 0 for as fast as possible (default 0).", "X", "0");
+  const QCommandLineOption screenshot("screenshot", "Save the view as PNG just before quitting.",
+                                      "PATH");
+  const QCommandLineOption window_shot(
+      "window-screenshot", "Save the whole window as PNG just before quitting.", "PATH");
+  const QCommandLineOption export_cloud(
+      "export-cloud", "Write the cloud (PLY or PCD) just before quitting.", "PATH");
+  const QCommandLineOption quit_after("quit-after",
+                                      "Quit after S seconds (prints a JSON summary line).", "S");
+  const QCommandLineOption orbit(
+      "orbit-benchmark",
+      "With --replay: once the session is shown, render N frames orbiting the camera in full and "
+      "N with the level of detail, print timings as JSON and quit.",
+      "N");
+  const QCommandLineOption sessions(
+      "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
+  parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
+                     export_cloud, quit_after, orbit, sessions});
+  parser.process(app);
+
+  Options o;
+  o.simulate = parser.isSet(simulate);
+  o.drive_demo = parser.isSet(drive_demo);
+  o.scenario = parser.isSet(scenario) ? parser.value(scenario)
+                                      : resources + QStringLiteral("/scenarios/lab.json");
+  o.replay = parser.value(replay);
+  o.speed = parser.value(speed).toDouble();
+  o.screenshot = parser.value(screenshot);
+  o.window_screenshot = parser.value(window_shot);
+  o.export_cloud = parser.value(export_cloud);
+  o.sessions_dir = parser.value(sessions);
+  if (parser.isSet(quit_after)) o.quit_after_s = parser.value(quit_after).toDouble();
+  if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
+  return o;
+}
+
+double ResidentMiB() {
+  QFile f(QStringLiteral("/proc/self/status"));
+  if (!f.open(QIODevice::ReadOnly)) return 0.0;
+  for (const QByteArray& line : f.readAll().split('\n')) {
+    if (line.startsWith("VmRSS:")) return line.mid(6).trimmed().split(' ')[0].toDouble() / 1024.0;
+  }
+  return 0.0;
 }
 
 double Percentile(std::vector<double> v, double p) {
@@ -38,158 +122,171 @@ double Percentile(std::vector<double> v, double p) {
   return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
 }
 
-}  // namespace
+// --drive-demo: record and drive the scenario's path once the link is up.
+bool StartDriveDemo(const Options& o, Workspace* workspace, MainWindow* window) {
+  sim::SimConfig config;
+  const Status s = LoadScenario(o.scenario.toStdString(), &config);
+  if (!s.ok()) {
+    std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
+    return false;
+  }
+  auto started = std::make_shared<bool>(false);
+  QObject::connect(workspace, &Workspace::authenticatedChanged, window,
+                   [workspace, window, config, started](bool ok) {
+                     if (!ok || *started) return;
+                     *started = true;
+                     QString error;
+                     if (!workspace->StartRecording(&error)) window->ShowError("Record", error);
+                     workspace->StartScriptedDrive(config.path);
+                   });
+  return true;
+}
 
-int main(int argc, char** argv) {
+// --orbit-benchmark N: time to open and show the session, then frames per
+// second while the camera orbits, in full and with the level of detail.
+void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
+  auto clock = std::make_shared<QElapsedTimer>();
+  clock->start();
+  QObject::connect(workspace, &Workspace::replayFinished, window, [=] {
+    // Let the GUI tick take the last batches before timing the first frame.
+    const size_t expected = workspace->CloudSnapshot().size();
+    QElapsedTimer wait;
+    wait.start();
+    while (window->view()->point_count() < expected && wait.elapsed() < 120000) {
+      QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
+    }
+    window->view()->SetLodActive(false);
+    window->view()->FitToCloud();
+    window->view()->RenderNow();
+    const double open_s = clock->nsecsElapsed() * 1e-9;
+    auto fps = [&](bool lod) {
+      window->view()->SetLodActive(lod);
+      QElapsedTimer t;
+      t.start();
+      for (int i = 0; i < frames; ++i) {
+        window->view()->Orbit(360.0 / frames);
+        window->view()->RenderNow();
+        QCoreApplication::processEvents();
+      }
+      return frames / (t.nsecsElapsed() * 1e-9);
+    };
+    const double full = fps(false);
+    const double lod = fps(true);
+    nlohmann::json j = {{"points", window->view()->point_count()},
+                        {"open_and_show_s", open_s},
+                        {"fps_full", full},
+                        {"fps_lod", lod},
+                        {"lod_level", window->view()->lod_level()},
+                        {"rss_mib", ResidentMiB()}};
+    std::printf("%s\n", j.dump().c_str());
+    std::fflush(stdout);
+    window->SetInteractive(false);
+    window->close();
+  });
+}
+
+// --quit-after: stop recording, let the last scans arrive, write what was
+// asked for, print the summary line and close. Returns 1 if a file failed.
+int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* window) {
+  int exit_code = 0;
+  if (workspace->recording()) {
+    QString error;
+    workspace->StopRecording(&error);
+  }
+  for (int i = 0; i < 3; ++i) {  // The processing thread places the last scans.
+    QThread::msleep(100);
+    QCoreApplication::processEvents();
+  }
+  window->view()->FitToCloud();
+  QString error;
+  if (!o.screenshot.isEmpty() && !window->view()->SaveScreenshot(o.screenshot, &error)) {
+    std::fprintf(stderr, "sweepscan: %s\n", qPrintable(error));
+    exit_code = 1;
+  }
+  if (!o.window_screenshot.isEmpty()) {
+    window->view()->RenderNow();
+    if (!window->grab().save(o.window_screenshot)) {
+      std::fprintf(stderr, "sweepscan: %s: cannot write the image\n",
+                   qPrintable(o.window_screenshot));
+      exit_code = 1;
+    }
+  }
+  const std::vector<CloudPoint> cloud = workspace->CloudSnapshot();
+  if (!o.export_cloud.isEmpty()) {
+    const Status s = SaveCloud(o.export_cloud.toStdString(), cloud);
+    if (!s.ok()) {
+      std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
+      exit_code = 1;
+    }
+  }
+  const auto& latency = window->tick_latencies_ms();
+  const nlohmann::json j = {
+      {"points", cloud.size()},
+      {"points_shown", window->view()->point_count()},
+      {"scans", workspace->scan_count()},
+      {"link_state", hardware::LinkHealth::StateName(workspace->health().state)},
+      {"authenticated", workspace->authenticated()},
+      {"session", workspace->session_dir().toStdString()},
+      {"frames_rendered", window->view()->frames_rendered()},
+      {"event_loop_latency_ms",
+       {{"p50", Percentile(latency, 0.5)}, {"p99", Percentile(latency, 0.99)}}},
+      {"rss_mib", ResidentMiB()},
+      {"last_error", window->last_error().toStdString()}};
+  std::printf("%s\n", j.dump().c_str());
+  std::fflush(stdout);
+  window->close();
+  return exit_code;
+}
+
+int Main(int argc, char** argv) {
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   QCoreApplication::setOrganizationName(QStringLiteral("sweepscan"));
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan"));
   QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
-
-  QCommandLineParser parser;
-  parser.setApplicationDescription(QStringLiteral(
-      "Operator workstation for mobile 3D lidar scanning: connect, drive, watch the cloud grow, "
-      "record, replay, export."));
-  parser.addHelpOption();
-  parser.addVersionOption();
-  const QCommandLineOption simulate(QStringLiteral("simulate"),
-                                    "Connect to the built-in simulated robot at start.");
-  const QCommandLineOption scenario(QStringLiteral("scenario"),
-                                    "Scenario of the simulated robot (default: resources/scenarios/lab.json).",
-                                    QStringLiteral("FILE"));
-  const QCommandLineOption drive_demo(
-      QStringLiteral("drive-demo"),
-      "Record and drive the scenario's path with the same drive commands the keyboard sends.");
-  const QCommandLineOption replay(QStringLiteral("replay"), "Open and replay a session folder.",
-                                  QStringLiteral("SESSION"));
-  const QCommandLineOption speed(QStringLiteral("speed"),
-                                 "Replay speed: 1 to 20, or 0 for as fast as possible (default 0).",
-                                 QStringLiteral("X"), QStringLiteral("0"));
-  const QCommandLineOption screenshot(QStringLiteral("screenshot"),
-                                      "Save the view as PNG just before quitting.",
-                                      QStringLiteral("PATH"));
-  const QCommandLineOption window_shot(QStringLiteral("window-screenshot"),
-                                       "Save the whole window as PNG just before quitting.",
-                                       QStringLiteral("PATH"));
-  const QCommandLineOption export_cloud(QStringLiteral("export-cloud"),
-                                        "Write the cloud (PLY or PCD) just before quitting.",
-                                        QStringLiteral("PATH"));
-  const QCommandLineOption quit_after(QStringLiteral("quit-after"),
-                                      "Quit after S seconds (prints a JSON summary line).",
-                                      QStringLiteral("S"));
-  const QCommandLineOption sessions(QStringLiteral("sessions-dir"),
-                                    "Where new recordings go (default: ~/sweepscan-sessions).",
-                                    QStringLiteral("DIR"));
-  parser.addOptions(
-      {simulate, scenario, drive_demo, replay, speed, screenshot, window_shot, export_cloud, quit_after,
-       sessions});
-  parser.process(app);
-
   const QString resources = ResourcesDir();
-  sweepscan::ui::Workspace workspace;
-  if (parser.isSet(sessions)) workspace.set_sessions_root(parser.value(sessions));
-  sweepscan::ui::MainWindow window(&workspace, resources);
-  const bool scripted = parser.isSet(quit_after);
+  const Options o = ParseOptions(app, resources);
+
+  Workspace workspace;
+  if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
+  MainWindow window(&workspace, resources);
+  const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0;
   window.SetInteractive(!scripted);
   window.resize(1400, 860);
   window.show();
 
-  const QString scenario_path = parser.isSet(scenario)
-                                    ? parser.value(scenario)
-                                    : resources + QStringLiteral("/scenarios/lab.json");
-  if (parser.isSet(simulate) || parser.isSet(drive_demo)) {
-    sweepscan::ui::ConnectOptions o = window.connection_panel()->options();
-    o.kind = sweepscan::ui::LinkKind::kSimulator;
-    o.scenario_path = scenario_path;
-    window.connection_panel()->SetOptions(o);
+  if (o.simulate || o.drive_demo) {
+    ui::ConnectOptions c = window.connection_panel()->options();
+    c.kind = ui::LinkKind::kSimulator;
+    c.scenario_path = o.scenario;
+    window.connection_panel()->SetOptions(c);
     QString error;
     if (!window.connection_panel()->ConnectNow(&error)) {
       std::fprintf(stderr, "sweepscan: %s\n", qPrintable(error));
       return 2;
     }
   }
-  if (parser.isSet(drive_demo)) {
-    sweepscan::sim::SimConfig config;
-    const sweepscan::Status s = sweepscan::LoadScenario(scenario_path.toStdString(), &config);
-    if (!s.ok()) {
-      std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
-      return 2;
-    }
-    // Record and drive once the link is up.
-    auto started = std::make_shared<bool>(false);
-    QObject::connect(&workspace, &sweepscan::ui::Workspace::authenticatedChanged, &window,
-                     [&workspace, &window, config, started](bool ok) {
-                       if (!ok || *started) return;
-                       *started = true;
-                       QString error;
-                       if (!workspace.StartRecording(&error)) window.ShowError("Record", error);
-                       workspace.StartScriptedDrive(config.path);
-                     });
+  if (o.drive_demo && !StartDriveDemo(o, &workspace, &window)) return 2;
+  if (!o.replay.isEmpty()) {
+    window.replay_panel()->SetSpeed(o.speed);
+    if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);
+    workspace.OpenSession(o.replay, o.speed);
   }
-  if (parser.isSet(replay)) {
-    window.replay_panel()->SetSpeed(parser.value(speed).toDouble());
-    workspace.OpenSession(parser.value(replay), parser.value(speed).toDouble());
-  }
-  // Follow the robot in the demo: fit the view every few seconds.
-  if (scripted) {
+  if (scripted) {  // Follow the robot in demos: fit the view every few seconds.
     auto* fit = new QTimer(&window);
-    QObject::connect(fit, &QTimer::timeout, window.view(), &sweepscan::ui::CloudView::FitToCloud);
+    QObject::connect(fit, &QTimer::timeout, window.view(), &CloudView::FitToCloud);
     fit->start(3000);
   }
-
   int exit_code = 0;
-  if (parser.isSet(quit_after)) {
-    const int ms = static_cast<int>(parser.value(quit_after).toDouble() * 1000.0);
-    QTimer::singleShot(ms, &window, [&] {
-      if (workspace.recording()) {
-        QString error;
-        workspace.StopRecording(&error);
-      }
-      // The replay or drive may still hold scans: let the processing thread
-      // finish them and the view take them.
-      QThread::msleep(200);
-      QCoreApplication::processEvents();
-      QThread::msleep(100);
-      QCoreApplication::processEvents();
-      window.view()->FitToCloud();
-      QString error;
-      if (parser.isSet(screenshot) && !window.view()->SaveScreenshot(parser.value(screenshot), &error)) {
-        std::fprintf(stderr, "sweepscan: %s\n", qPrintable(error));
-        exit_code = 1;
-      }
-      if (parser.isSet(window_shot)) {
-        window.view()->RenderNow();
-        if (!window.grab().save(parser.value(window_shot))) {
-          std::fprintf(stderr, "sweepscan: %s: cannot write the image\n",
-                       qPrintable(parser.value(window_shot)));
-          exit_code = 1;
-        }
-      }
-      const std::vector<sweepscan::CloudPoint> cloud = workspace.CloudSnapshot();
-      if (parser.isSet(export_cloud)) {
-        const sweepscan::Status s = sweepscan::SaveCloud(parser.value(export_cloud).toStdString(), cloud);
-        if (!s.ok()) {
-          std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
-          exit_code = 1;
-        }
-      }
-      const auto& lat = window.tick_latencies_ms();
-      nlohmann::json j = {
-          {"points", cloud.size()},
-          {"points_shown", window.view()->point_count()},
-          {"scans", workspace.scan_count()},
-          {"link_state", sweepscan::hardware::LinkHealth::StateName(workspace.health().state)},
-          {"authenticated", workspace.authenticated()},
-          {"session", workspace.session_dir().toStdString()},
-          {"frames_rendered", window.view()->frames_rendered()},
-          {"event_loop_latency_ms", {{"p50", Percentile(lat, 0.5)}, {"p99", Percentile(lat, 0.99)}}},
-          {"last_error", window.last_error().toStdString()}};
-      std::printf("%s\n", j.dump().c_str());
-      std::fflush(stdout);
-      window.close();
-    });
+  if (o.quit_after_s >= 0) {
+    QTimer::singleShot(static_cast<int>(o.quit_after_s * 1000.0), &window,
+                       [&] { exit_code = FinishAndSummarize(o, &workspace, &window); });
   }
   const int rc = app.exec();
   return exit_code != 0 ? exit_code : rc;
 }
+
+}  // namespace
+}  // namespace sweepscan::app
+
+int main(int argc, char** argv) { return sweepscan::app::Main(argc, argv); }

@@ -23,6 +23,7 @@
 #include <cmath>
 
 #include "ui/panels/connection_panel.h"
+#include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
@@ -176,7 +177,7 @@ void MainWindow::BuildMenus() {
         this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
     if (dir.isEmpty()) return;
     SaveSessionTo(dir.endsWith(QStringLiteral(".sweepscan")) ? dir
-                                                               : dir + QStringLiteral(".sweepscan"));
+                                                             : dir + QStringLiteral(".sweepscan"));
   });
   save_as->setShortcut(QKeySequence::SaveAs);
   file->addSeparator();
@@ -230,12 +231,18 @@ void MainWindow::BuildMenus() {
     });
   }
   color_group_->actions()[0]->setChecked(true);
-  view->addAction(tr("Larger Points"), this, [this] {
-    undo_->push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
-  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Plus));
-  view->addAction(tr("Smaller Points"), this, [this] {
-    undo_->push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
-  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Minus));
+  view->addAction(
+          tr("Larger Points"), this,
+          [this] {
+            undo_->push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
+          })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Plus));
+  view->addAction(
+          tr("Smaller Points"), this,
+          [this] {
+            undo_->push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
+          })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Minus));
   view->addSeparator();
   auto toggle = [this, view](const QString& text, auto setter) {
     QAction* a = view->addAction(text);
@@ -251,14 +258,19 @@ void MainWindow::BuildMenus() {
   toggle(tr("Show Colour &Bar"), &CloudView::SetColorBarVisible);
   view->addSeparator();
   QMenu* panels = view->addMenu(tr("&Panels"));
-  for (QDockWidget* dock : findChildren<QDockWidget*>()) panels->addAction(dock->toggleViewAction());
+  for (QDockWidget* dock : findChildren<QDockWidget*>())
+    panels->addAction(dock->toggleViewAction());
 
   // ---- Robot ----
   QMenu* robot = menuBar()->addMenu(tr("&Robot"));
-  robot->addAction(tr("&Connect"), this, [this] {
-    QString error;
-    if (!connection_panel_->ConnectNow(&error)) ShowError(tr("Cannot connect"), error);
-  })->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
+  robot
+      ->addAction(tr("&Connect"), this,
+                  [this] {
+                    QString error;
+                    if (!connection_panel_->ConnectNow(&error))
+                      ShowError(tr("Cannot connect"), error);
+                  })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
   robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect)
       ->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));
   robot->addSeparator();
@@ -286,20 +298,28 @@ void MainWindow::BuildMenus() {
                                                           workspace_->sessions_root());
     if (!dir.isEmpty()) workspace_->set_sessions_root(dir);
   });
+  tools->addAction(tr("&Device Check…"), this, [this] {
+    auto* dialog = new DeviceCheckDialog(workspace_, this);
+    dialog->setAttribute(Qt::WA_DeleteOnClose);
+    dialog->show();
+  });
   tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
 
   // ---- Help ----
   QMenu* help = menuBar()->addMenu(tr("&Help"));
-  help->addAction(tr("&Keyboard"), this, [this] {
-    QMessageBox::information(
-        this, tr("Keyboard"),
-        tr("Arrows / W A S D: drive while held (release stops)\n"
-           "Space: emergency stop (whatever has focus)\n"
-           "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
-           "Ctrl+R / Ctrl+Shift+R: record / stop\n"
-           "Ctrl+O: open session;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
-           "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
-  })->setShortcut(QKeySequence::HelpContents);
+  help->addAction(
+          tr("&Keyboard"), this,
+          [this] {
+            QMessageBox::information(
+                this, tr("Keyboard"),
+                tr("Arrows / W A S D: drive while held (release stops)\n"
+                   "Space: emergency stop (whatever has focus)\n"
+                   "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
+                   "Ctrl+R / Ctrl+Shift+R: record / stop\n"
+                   "Ctrl+O: open session;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+                   "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
+          })
+      ->setShortcut(QKeySequence::HelpContents);
   help->addAction(tr("&About sweepscan"), this, [this] {
     QMessageBox::about(this, tr("About sweepscan"),
                        tr("<b>sweepscan 0.1.0</b><p>Operator workstation for mobile 3D lidar "
@@ -393,7 +413,8 @@ void MainWindow::OnTick() {
     }
     workspace_->NoteBatch(b.total_points, b.scans);
   }
-  if (!keys_held_.isEmpty()) UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).
+  if (!keys_held_.isEmpty())
+    UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).
   view_->RenderIfDirty();
 
   ++fps_frames_;
@@ -439,8 +460,10 @@ bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
       return QMainWindow::eventFilter(watched, event);
     }
     if (key->isAutoRepeat()) return true;
-    if (type == QEvent::KeyPress) keys_held_.insert(key->key());
-    else keys_held_.remove(key->key());
+    if (type == QEvent::KeyPress)
+      keys_held_.insert(key->key());
+    else
+      keys_held_.remove(key->key());
     UpdateTeleop();
     return true;
   }

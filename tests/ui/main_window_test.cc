@@ -3,6 +3,9 @@
 // TCP, the VTK view's rendered image, the emergency stop on Space, a wrong
 // key against a sweepscan-sim process, save / open, corrupt sessions, and
 // replay against `sweepscan-cli reconstruct`.
+#include "ui/main_window.h"
+
+#include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -18,14 +21,16 @@
 #include <QTemporaryDir>
 #include <QTest>
 #include <QThread>
-#include <QVTKOpenGLNativeWidget.h>
+#include <QTimer>
 #include <cmath>
 #include <functional>
 
 #include "core/cloud/cloud_io.h"
+#include "hardware/codecs/hi219_codec.h"
+#include "hardware/link/qt_transport.h"
 #include "tests/testing/run_command.h"
-#include "ui/main_window.h"
 #include "ui/panels/connection_panel.h"
+#include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
@@ -110,8 +115,8 @@ TEST_F(AppTest, DrivesTheSimulatorAndTheViewShowsTheGrowingCloud) {
   EXPECT_GT(std::abs(workspace_->sim_robot()->TrueTwist().v), 0.05);
   QTest::keyRelease(window_->view(), Qt::Key_Up);
   // Releasing the key stops the robot (the agent ramps down).
-  EXPECT_TRUE(WaitFor([&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) < 1e-6; },
-                      2000));
+  EXPECT_TRUE(
+      WaitFor([&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) < 1e-6; }, 2000));
   window_->view()->FitToCloud();
   const QImage image = window_->view()->GrabImage();
   ASSERT_FALSE(image.isNull());
@@ -136,8 +141,8 @@ TEST_F(AppTest, SpaceStopsTheSimulatedRobotWithin200msWhateverHasFocus) {
   // Halted: below 3 cm/s (1.5 mm of travel left). The emulated motor board follows its command with
   // a 50 ms first-order lag (docs/simulator.md), like real wheels: 0.3 m/s
   // falls below 3 cm/s 2.3 time constants (115 ms) after the command lands.
-  ASSERT_TRUE(WaitFor([&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) < 0.03; },
-                      1000));
+  ASSERT_TRUE(
+      WaitFor([&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) < 0.03; }, 1000));
   EXPECT_LT(clock.elapsed(), 200);
   std::printf("emergency stop: below 3 cm/s after %lld ms\n",
               static_cast<long long>(clock.elapsed()));
@@ -299,8 +304,8 @@ TEST_F(AppTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
   const auto sim = testing::RunCommand(cli + " simulate --scenario " + kResources.toStdString() +
                                        "/scenarios/lab_circle.json --out " + dir + "/c.ply");
   ASSERT_EQ(sim.code, 0) << sim.out;
-  const auto rec = testing::RunCommand(cli + " reconstruct " + dir + "/c.sweepscan --out " + dir +
-                                       "/cli.ply");
+  const auto rec =
+      testing::RunCommand(cli + " reconstruct " + dir + "/c.sweepscan --out " + dir + "/cli.ply");
   ASSERT_EQ(rec.code, 0) << rec.out;
   std::vector<CloudPoint> expected;
   ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
@@ -317,6 +322,80 @@ TEST_F(AppTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
     ASSERT_EQ(replayed[i].y, expected[i].y) << i;
     ASSERT_EQ(replayed[i].z, expected[i].z) << i;
   }
+}
+
+TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
+  const std::string dir = tmp_.path().toStdString();
+  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
+                                       kResources.toStdString() + "/scenarios/lab.json --out " +
+                                       dir + "/lab.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const QString session = tmp_.path() + "/lab.sweepscan";
+  std::vector<double> fractions;
+  QString finished_message;
+  bool finished = false, finished_ok = false;
+  QObject::connect(workspace_.get(), &Workspace::jobProgress,
+                   [&](const QString&, double f) { fractions.push_back(f); });
+  QObject::connect(workspace_.get(), &Workspace::jobFinished,
+                   [&](const QString&, bool ok, const QString& m) {
+                     finished = true;
+                     finished_ok = ok;
+                     finished_message = m;
+                   });
+  // Cancelled at once: the job ends without a session and says so.
+  workspace_->OpenSession(session);
+  workspace_->CancelJob();
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
+  EXPECT_FALSE(finished_ok);
+  EXPECT_NE(finished_message.indexOf("ancel"), -1) << finished_message.toStdString();
+  EXPECT_TRUE(workspace_->session_dir().isEmpty());
+  // Opened in full: progress is monotone and ends at 1.
+  fractions.clear();
+  finished = false;
+  workspace_->OpenSession(session);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
+  EXPECT_TRUE(finished_ok) << finished_message.toStdString();
+  ASSERT_GE(fractions.size(), 3u);
+  EXPECT_EQ(fractions.front(), -1.0);  // The job starts indeterminate...
+  for (size_t i = 2; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1]) << i;
+  EXPECT_EQ(fractions.back(), 1.0);  // ...and reports its end.
+  EXPECT_EQ(workspace_->session_dir(), session);
+}
+
+TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {
+  // An HI219 on a pseudo-terminal: the master side streams 0x91 frames at 100 Hz.
+  hardware::PtyMasterStream imu;
+  QString error;
+  ASSERT_TRUE(imu.Open(&error)) << error.toStdString();
+  int sent = 0;
+  QTimer stream;
+  QObject::connect(&stream, &QTimer::timeout, [&] {
+    hardware::ImuSample sample;
+    sample.yaw_deg = static_cast<float>(sent++);
+    sample.gyro_dps = {0.f, 0.f, 5.f};
+    sample.fields = hardware::kImuGyro | hardware::kImuEuler;
+    const auto frame = hardware::EncodeHi219Packet91Frame(sample);
+    imu.Write(frame.data(), frame.size());
+  });
+  stream.start(10);
+  DeviceCheckDialog dialog(workspace_.get(), window_.get());
+  dialog.SetKind(hardware::DirectDevice::Kind::kHi219);
+  dialog.SetPort(imu.SlavePath());
+  dialog.show();
+  bool done = false;
+  QObject::connect(&dialog, &DeviceCheckDialog::finished, [&](bool) { done = true; });
+  QTest::mouseClick(dialog.findChild<QPushButton*>(), Qt::LeftButton);
+  ASSERT_TRUE(WaitFor([&] { return done; }, 10000));
+  EXPECT_TRUE(dialog.passed()) << dialog.report().toStdString();
+  EXPECT_NE(dialog.report().indexOf("HI219 samples"), -1) << dialog.report().toStdString();
+  EXPECT_NE(dialog.report().indexOf(" 0 checksum errors"), -1) << dialog.report().toStdString();
+  // A port that does not exist is a clear failure, and the app keeps going.
+  done = false;
+  dialog.SetPort("/dev/does-not-exist");
+  dialog.StartCheck();
+  ASSERT_TRUE(WaitFor([&] { return done; }, 10000));
+  EXPECT_FALSE(dialog.passed());
+  EXPECT_NE(dialog.report().indexOf("Cannot open"), -1) << dialog.report().toStdString();
 }
 
 }  // namespace

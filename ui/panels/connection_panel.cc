@@ -138,7 +138,8 @@ ConnectOptions ConnectionPanel::options() const {
 void ConnectionPanel::SetOptions(const ConnectOptions& o) {
   kind_->setCurrentIndex(static_cast<int>(o.kind));
   const int s = scenario_->findData(o.scenario_path);
-  if (s >= 0) scenario_->setCurrentIndex(s);
+  if (s >= 0)
+    scenario_->setCurrentIndex(s);
   else if (!o.scenario_path.isEmpty()) {
     scenario_->addItem(QFileInfo(o.scenario_path).completeBaseName(), o.scenario_path);
     scenario_->setCurrentIndex(scenario_->count() - 1);

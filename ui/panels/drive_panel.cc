@@ -46,9 +46,7 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   auto* teleop_form = new QFormLayout(teleop);
   v_max_ = Spin(0.01, 1.0, 0.05, workspace_->limits().v_max_mps, tr(" m/s"));
   w_max_ = Spin(0.05, 3.0, 0.1, workspace_->limits().w_max_radps, tr(" rad/s"));
-  auto apply_limits = [this] {
-    workspace_->SetLimits({v_max_->value(), w_max_->value()});
-  };
+  auto apply_limits = [this] { workspace_->SetLimits({v_max_->value(), w_max_->value()}); };
   connect(v_max_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, apply_limits);
   connect(w_max_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, apply_limits);
   teleop_form->addRow(tr("Speed limit"), v_max_);

@@ -8,9 +8,12 @@
 // re-mapping every chunk's colours happens a handful of times per session,
 // not per frame.
 //
-// Level of detail: each sealed chunk also keeps every 8th point. While the
-// camera moves and more than lod_threshold() points are shown, the view draws
-// the thinned chunks; at rest it draws everything.
+// Level of detail: each sealed chunk also keeps every 8th and every 64th
+// point. While the camera moves or points stream in, and more than
+// lod_budget() points are shown, the view draws the finest thinned level that
+// stays within the budget (a software renderer draws ~10 M points a second);
+// when the camera and the data have been still for kSettleMs it draws
+// everything once.
 //
 // Render requests are coalesced: RequestRender() marks the view dirty and
 // the owner's timer calls RenderIfDirty() (ParaView's pqView::render()).
@@ -19,10 +22,10 @@
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
 
-#include <QImage>
 #include <QVTKOpenGLNativeWidget.h>
 #include <vtkSmartPointer.h>
 
+#include <QImage>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -30,6 +33,7 @@
 #include "core/cloud/cloud.h"
 #include "core/pose/odometry.h"
 
+class QTimer;
 class vtkActor;
 class vtkActor2D;
 class vtkAxesActor;
@@ -47,8 +51,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
  public:
   enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2 };
-  static constexpr size_t kChunkPoints = 65536;
-  static constexpr int kLodStride = 8;
+  static constexpr size_t kChunkPoints = 262144;
+  static constexpr int kLodStrides[2] = {8, 64};
+  static constexpr int kSettleMs = 400;
 
   explicit CloudView(QWidget* parent = nullptr);
   ~CloudView() override;
@@ -71,9 +76,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetTrajectoryVisible(bool visible);
   void SetRobotVisible(bool visible);
   void SetColorBarVisible(bool visible);
-  void SetLodThreshold(size_t points) { lod_threshold_ = points; }
-  size_t lod_threshold() const { return lod_threshold_; }
-  // Forces the thinned chunks on or off (benchmarks; normally automatic).
+  // Points drawn at most while the camera moves or data streams.
+  void SetLodBudget(size_t points) { lod_budget_ = points; }
+  size_t lod_budget() const { return lod_budget_; }
+  int lod_level() const { return lod_level_; }  // -1 full, 0 every 8th, 1 every 64th
+  // Thinned chunks on or off (automatic; benchmarks force it).
   void SetLodActive(bool active);
   bool lod_active() const { return lod_active_; }
 
@@ -83,6 +90,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ViewFront();
   void ViewSide();
   void FitToCloud();
+  // Turns the camera about the view's vertical axis (benchmarks, demos).
+  void Orbit(double degrees);
 
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
@@ -126,8 +135,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   double range_lo_[3] = {0.0, 0.0, 0.0};
   double range_hi_[3] = {3.0, 60.0, 8.0};
   bool have_points_ = false;
-  size_t lod_threshold_ = 2'000'000;
+  size_t lod_budget_ = 400'000;
   bool lod_active_ = false;
+  int lod_level_ = -1;
+  bool interacting_ = false;
+  QTimer* settle_ = nullptr;
   bool dirty_ = true;
   uint64_t frames_rendered_ = 0;
   double last_render_ms_ = 0.0;

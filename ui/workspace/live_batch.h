@@ -19,14 +19,14 @@
 namespace sweepscan::ui {
 
 struct LiveBatch {
-  bool reset = false;               // Forget every point shown before (new recording, seek).
-  std::vector<CloudPoint> points;   // New points, in assembly order.
-  std::vector<Pose2d> trajectory;   // New robot poses (world), ~10 Hz.
+  bool reset = false;              // Forget every point shown before (new recording, seek).
+  std::vector<CloudPoint> points;  // New points, in assembly order.
+  std::vector<Pose2d> trajectory;  // New robot poses (world), ~10 Hz.
   bool has_pose = false;
-  Pose2d pose;                      // The robot's latest estimated pose.
-  double robot_time_s = 0.0;        // Robot time of the latest record processed.
-  size_t total_points = 0;          // Points assembled since the last reset.
-  size_t scans = 0;                 // Scans assembled since the last reset.
+  Pose2d pose;                // The robot's latest estimated pose.
+  double robot_time_s = 0.0;  // Robot time of the latest record processed.
+  size_t total_points = 0;    // Points assembled since the last reset.
+  size_t scans = 0;           // Scans assembled since the last reset.
 };
 
 // Any thread. Push from the processing thread, TakeAll from the GUI thread.
@@ -43,8 +43,7 @@ class BatchMailbox {
     }
     LiveBatch& last = queue_.back();
     last.points.insert(last.points.end(), batch.points.begin(), batch.points.end());
-    last.trajectory.insert(last.trajectory.end(), batch.trajectory.begin(),
-                           batch.trajectory.end());
+    last.trajectory.insert(last.trajectory.end(), batch.trajectory.begin(), batch.trajectory.end());
     if (batch.has_pose) {
       last.has_pose = true;
       last.pose = batch.pose;

@@ -47,9 +47,8 @@ bool SimRobot::Start(const sim::SimConfig& scenario, QString* error) {
       &context,
       [&] {
         auto devices = std::make_unique<SimDevices>(scenario, SimDevices::Mode::kCommanded);
-        agent_ = new RobotAgent(
-            config,
-            std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(std::move(devices)));
+        agent_ = new RobotAgent(config, std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(
+                                            std::move(devices)));
         ok = agent_->Start(error);
         if (!ok) {
           delete agent_;

@@ -165,10 +165,8 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
                            }
                            auto batch = std::make_shared<SensorLog>();
                            std::swap(*batch, *connection->mutable_log());
-                           QMetaObject::invokeMethod(processor,
-                                                     [processor, batch] {
-                                                       processor->AddRecords(*batch);
-                                                     });
+                           QMetaObject::invokeMethod(
+                               processor, [processor, batch] { processor->AddRecords(*batch); });
                          });
         auto* health_timer = new QTimer(connection);
         QObject::connect(health_timer, &QTimer::timeout, connection, [this, connection] {
@@ -181,33 +179,36 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
         health_timer->start(kHealthMs);
         // Signals to the GUI thread are connected before Start(): on
         // loopback the agent may authenticate us before this call returns.
-        QObject::connect(connection, &hardware::RobotConnection::stateChanged, this,
-                [this](int state) {
-                  health_.state = static_cast<hardware::LinkHealth::State>(state);
-                  emit linkStateChanged(state);
-                },
-                Qt::QueuedConnection);
-        QObject::connect(connection, &hardware::RobotConnection::authenticatedChanged, this,
-                [this](bool a) {
-                  authenticated_ = a;
-                  // The lidar spins (and scans) as the operator last asked: on by default.
-                  if (a) SetLidarMotor(lidar_on_);
-                  emit authenticatedChanged(a);
-                },
-                Qt::QueuedConnection);
-        QObject::connect(connection, &hardware::RobotConnection::authenticationFailed, this,
-                [this](const QString& reason) {
-                  emit authenticationFailed(reason);
-                  emit message(QStringLiteral("The robot refused the connection: %1").arg(reason));
-                },
-                Qt::QueuedConnection);
+        QObject::connect(
+            connection, &hardware::RobotConnection::stateChanged, this,
+            [this](int state) {
+              health_.state = static_cast<hardware::LinkHealth::State>(state);
+              emit linkStateChanged(state);
+            },
+            Qt::QueuedConnection);
+        QObject::connect(
+            connection, &hardware::RobotConnection::authenticatedChanged, this,
+            [this](bool a) {
+              authenticated_ = a;
+              // The lidar spins (and scans) as the operator last asked: on by default.
+              if (a) SetLidarMotor(lidar_on_);
+              emit authenticatedChanged(a);
+            },
+            Qt::QueuedConnection);
+        QObject::connect(
+            connection, &hardware::RobotConnection::authenticationFailed, this,
+            [this](const QString& reason) {
+              emit authenticationFailed(reason);
+              emit message(QStringLiteral("The robot refused the connection: %1").arg(reason));
+            },
+            Qt::QueuedConnection);
         started = connection->Start(&start_error);
         context.moveToThread(nullptr);
       },
       Qt::BlockingQueuedConnection);
   if (!started) {
-    QMetaObject::invokeMethod(connection, [connection] { delete connection; },
-                              Qt::BlockingQueuedConnection);
+    QMetaObject::invokeMethod(
+        connection, [connection] { delete connection; }, Qt::BlockingQueuedConnection);
     sim_.reset();
     *error = start_error;
     return false;
@@ -248,6 +249,88 @@ void Workspace::InvokeOnConnection(std::function<void(hardware::RobotConnection*
   if (connection_ == nullptr) return;
   hardware::RobotConnection* connection = connection_;
   QMetaObject::invokeMethod(connection, [connection, call] { call(connection); });
+}
+
+// ---------------------------------------------------------------------------
+// Bench check
+
+namespace {
+
+QString DeviceReport(const hardware::DirectDevice& d, double seconds, bool* ok) {
+  QStringList lines;
+  const hardware::DecoderStats& stats = d.stats();
+  if (d.kind() == hardware::DirectDevice::Kind::kX4) {
+    const hardware::X4DeviceInfo& info = d.device_info();
+    const bool have_info = info.model != 0;
+    lines << (have_info ? QStringLiteral("YDLIDAR model %1 (X4 = 6), firmware %2.%3, hardware %4, "
+                                         "serial %5")
+                              .arg(info.model)
+                              .arg(info.firmware >> 8)
+                              .arg(info.firmware & 0xff)
+                              .arg(info.hardware)
+                              .arg(QString::fromStdString(info.SerialString()))
+                        : QStringLiteral("No device-info reply: is this an X4, at 128000 baud?"));
+    const char* health[] = {"good", "warning", "error"};
+    lines << QStringLiteral("Health: %1 (error code %2)")
+                 .arg(QString::fromLatin1(health[std::min<int>(d.health().status, 2)]))
+                 .arg(d.health().error_code);
+    lines << QStringLiteral("%1 revolutions in %2 s (%3 Hz)")
+                 .arg(d.scans_received())
+                 .arg(seconds, 0, 'f', 1)
+                 .arg(d.scans_received() / seconds, 0, 'f', 1);
+    *ok = have_info && d.scans_received() > 0 && d.health().status == 0;
+  } else {
+    lines << QStringLiteral("%1 HI219 samples in %2 s (%3 Hz)")
+                 .arg(d.imu_samples_received())
+                 .arg(seconds, 0, 'f', 1)
+                 .arg(d.imu_samples_received() / seconds, 0, 'f', 1);
+    *ok = d.imu_samples_received() > 0;
+  }
+  lines << QStringLiteral("Frames: %1 good, %2 checksum errors, %3 bytes skipped")
+               .arg(stats.frames_ok)
+               .arg(stats.checksum_errors)
+               .arg(stats.bytes_skipped);
+  if (stats.checksum_errors > 0) {
+    lines << QStringLiteral("Checksum errors: check the cable and the baud rate.");
+  }
+  return lines.join(QLatin1Char('\n'));
+}
+
+}  // namespace
+
+void Workspace::CheckDevice(hardware::DirectDevice::Kind kind, const QString& port,
+                            double seconds) {
+  QObject context;
+  context.moveToThread(&io_thread_);
+  QMetaObject::invokeMethod(
+      &context,
+      [this, kind, port, seconds, &context] {
+        context.moveToThread(nullptr);
+        auto* device = new hardware::DirectDevice(kind, port);
+        QString error;
+        if (!device->Open(&error)) {
+          delete device;
+          QMetaObject::invokeMethod(this, [this, error] {
+            emit deviceCheckFinished(false, QStringLiteral("Cannot open the port: %1").arg(error));
+          });
+          return;
+        }
+        if (kind == hardware::DirectDevice::Kind::kX4) {
+          device->RequestDeviceInfo();
+          device->RequestHealth();
+          device->StartScan();
+        }
+        QTimer::singleShot(static_cast<int>(seconds * 1000), device, [this, device, seconds] {
+          bool ok = false;
+          const QString report = DeviceReport(*device, seconds, &ok);
+          if (device->kind() == hardware::DirectDevice::Kind::kX4) device->StopScan();
+          device->Close();
+          device->deleteLater();
+          QMetaObject::invokeMethod(this,
+                                    [this, ok, report] { emit deviceCheckFinished(ok, report); });
+        });
+      },
+      Qt::BlockingQueuedConnection);
 }
 
 // ---------------------------------------------------------------------------
@@ -351,7 +434,8 @@ bool Workspace::StartRecording(QString* error) {
     *error = QStringLiteral("%1: cannot create the sessions folder").arg(sessions_root_);
     return false;
   }
-  const QString name = QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyyMMdd-HHmmss-zzz"));
+  const QString name =
+      QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyyMMdd-HHmmss-zzz"));
   const QString dir = sessions_root_ + QLatin1Char('/') + name + QStringLiteral(".sweepscan");
   // The recorder, the live decoder and the cloud restart at the same frame:
   // what is shown is exactly what the session holds. The reset is posted
@@ -455,8 +539,17 @@ void Workspace::OpenSession(const QString& dir, double speed) {
   const std::string path = dir.toStdString();
   RunJob(
       QStringLiteral("Opening %1").arg(dir),
-      [recording, path](std::atomic<bool>*) -> QString {
-        const Status s = hardware::OpenRecording(path, recording.get());
+      [this, recording, path](std::atomic<bool>* cancel) -> QString {
+        // Progress to the status bar at most every 2 %; a cancel stops the decoder.
+        auto last = std::make_shared<double>(-1.0);
+        const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
+        const Status s = hardware::OpenRecording(path, recording.get(), [&, last](double f) {
+          if (f - *last >= 0.02 || f >= 1.0) {
+            *last = f;
+            QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
+          }
+          return !*cancel;
+        });
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
       [this, recording, dir, speed] {
@@ -522,7 +615,7 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
     return;
   }
   job_cancel_ = false;
-  emit jobProgress(what, -1.0);  // Indeterminate: the decoders report no fraction.
+  emit jobProgress(what, -1.0);  // Indeterminate until the job reports a fraction.
   job_thread_ = std::make_unique<std::thread>([this, what, work, on_success] {
     const QString error = work(&job_cancel_);
     QMetaObject::invokeMethod(this, [this, what, error, on_success] {
@@ -544,8 +637,8 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
 
 void Workspace::CancelJob() {
   if (job_thread_ == nullptr) return;
-  // The job's result is dropped when it ends; decoding and writing have no
-  // inner cancellation points, so the thread is waited for here only on exit.
+  // Opening stops within a few milliseconds (the decoder polls the flag);
+  // an export finishes its file and then drops the result.
   job_cancel_ = true;
 }
 

@@ -29,6 +29,7 @@
 
 #include "core/cloud/reconstruct.h"
 #include "core/sim/world.h"
+#include "hardware/station/direct_device.h"
 #include "hardware/station/recording.h"
 #include "hardware/station/robot_connection.h"
 #include "ui/workspace/live_batch.h"
@@ -44,11 +45,11 @@ enum class LinkKind { kSimulator = 0, kTcp = 1, kSerial = 2 };
 
 struct ConnectOptions {
   LinkKind kind = LinkKind::kSimulator;
-  QString scenario_path;  // kSimulator: the world (resources/scenarios/*.json)
+  QString scenario_path;                       // kSimulator: the world (resources/scenarios/*.json)
   QString host = QStringLiteral("127.0.0.1");  // kTcp
   int port = 5600;
-  QString key_file;      // kTcp: the robot's pre-shared key
-  QString serial_port;   // kSerial: e.g. /dev/ttyUSB0
+  QString key_file;     // kTcp: the robot's pre-shared key
+  QString serial_port;  // kSerial: e.g. /dev/ttyUSB0
   int baud = 921600;
   // A robot's geometry is not sent over the link; a real robot uses the
   // paper's geometry unless settings say otherwise. The simulator's comes
@@ -80,6 +81,13 @@ class Workspace : public QObject {
   const ConnectOptions& connect_options() const { return connect_options_; }
   SimRobot* sim_robot() const { return sim_.get(); }  // Null unless on the simulator.
 
+  // ---- Bench check ------------------------------------------------------
+  // A lidar or IMU plugged straight into this computer (DirectDevice, on the
+  // I/O thread): opens `port`, asks an X4 for its info and health and
+  // starts it scanning, listens for `seconds`, and reports what arrived and
+  // the decoders' error counters (deviceCheckFinished).
+  void CheckDevice(hardware::DirectDevice::Kind kind, const QString& port, double seconds = 3.0);
+
   // ---- Driving ------------------------------------------------------------
   // Drive commands, clamped to limits(); the agent applies its own limits too.
   void Drive(double v_mps, double w_radps);
@@ -96,8 +104,7 @@ class Workspace : public QObject {
   void StartScriptedDrive(const std::vector<sim::DriveSegment>& path);
   void AbortScriptedDrive();
   bool scripted_drive_running() const { return script_timer_ != nullptr; }
-  static std::vector<sim::DriveSegment> CirclePath(double radius_m, double speed_mps,
-                                                   double turns);
+  static std::vector<sim::DriveSegment> CirclePath(double radius_m, double speed_mps, double turns);
 
   // ---- Sessions -----------------------------------------------------------
   // Records from now on into a new session folder under sessions_root()
@@ -157,6 +164,7 @@ class Workspace : public QObject {
   void jobProgress(const QString& what, double fraction);
   void jobFinished(const QString& what, bool ok, const QString& message);
   void message(const QString& text);  // For the status bar.
+  void deviceCheckFinished(bool ok, const QString& report);
 
  private:
   void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
@@ -168,8 +176,8 @@ class Workspace : public QObject {
   BatchMailbox mailbox_;
   QThread io_thread_;
   QThread processing_thread_;
-  LiveProcessor* processor_ = nullptr;                // Lives on processing_thread_.
-  hardware::RobotConnection* connection_ = nullptr;   // Lives on io_thread_.
+  LiveProcessor* processor_ = nullptr;               // Lives on processing_thread_.
+  hardware::RobotConnection* connection_ = nullptr;  // Lives on io_thread_.
   std::unique_ptr<SimRobot> sim_;
   ConnectOptions connect_options_;
   hardware::LinkHealth health_;
