@@ -16,7 +16,8 @@ Eigen::Vector3d Vec3(const JsonObject& o, const std::string& key) {
   if (a.size() != 3) o.Fail(key, "expected 3 numbers, got " + std::to_string(a.size()));
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) {
-    if (!a[i].is_number()) o.Fail(key + "[" + std::to_string(i) + "]", "expected a number, got " + JsonTypeName(a[i]));
+    if (!a[i].is_number())
+      o.Fail(key + "[" + std::to_string(i) + "]", "expected a number, got " + JsonTypeName(a[i]));
     v[i] = a[i].get<double>();
   }
   return v;
@@ -42,7 +43,8 @@ sim::Box ReadBox(const JsonObject& o) {
 
 void ReadScene(const JsonObject& o, SimConfig* c) {
   o.AllowOnly({"preset", "boxes"});
-  if (!o.Has("preset") && !o.Has("boxes")) o.Fail("preset", "missing (give a preset, boxes, or both)");
+  if (!o.Has("preset") && !o.Has("boxes"))
+    o.Fail("preset", "missing (give a preset, boxes, or both)");
   if (o.Has("preset")) {
     const std::string preset = o.String("preset");
     if (preset == "lab") {
@@ -92,6 +94,96 @@ void ReadPath(const JsonObject& o, SimConfig* c) {
   }
 }
 
+// One reader per section of the file (docs/scenario-format.md); each throws
+// JsonError with the JSON path of the first problem.
+void ReadRobot(const JsonObject& r, SimConfig* config) {
+  SimConfig& c = *config;
+  r.AllowOnly({"lidar_height_m", "lidar_offset_x_m", "imu_offset_x_m", "wheel_distance_m"});
+  c.geometry.lidar_height_m = r.Positive("lidar_height_m", c.geometry.lidar_height_m);
+  c.geometry.lidar_offset_x_m = r.Number("lidar_offset_x_m", c.geometry.lidar_offset_x_m);
+  c.geometry.imu_offset_x_m = r.Number("imu_offset_x_m", c.geometry.imu_offset_x_m);
+  c.geometry.wheel_distance_m = r.Positive("wheel_distance_m", c.geometry.wheel_distance_m);
+}
+
+void ReadMountingError(const JsonObject& m, SimConfig* config) {
+  SimConfig& c = *config;
+  m.AllowOnly({"alpha", "beta", "gamma"});
+  c.mounting_error = {m.InRange("alpha", -0.5, 0.5, 0.0), m.InRange("beta", -0.5, 0.5, 0.0),
+                      m.InRange("gamma", -0.5, 0.5, 0.0)};
+}
+
+void ReadLidar(const JsonObject& l, SimConfig* config) {
+  SimConfig& c = *config;
+  l.AllowOnly({"scan_rate_hz", "sample_rate_hz", "min_range_m", "max_range_m", "range_noise_m",
+               "range_noise_fraction", "range_quantum_m", "dropout_probability",
+               "grazing_dropout_start_deg", "grazing_dropout_end_deg", "angle_sign",
+               "angle_offset_rad", "model_angle_correction"});
+  sim::LidarSpec& s = c.lidar;
+  s.scan_rate_hz = l.InRange("scan_rate_hz", 1.0, 50.0, s.scan_rate_hz);
+  s.sample_rate_hz = l.InRange("sample_rate_hz", 100.0, 100000.0, s.sample_rate_hz);
+  s.min_range_m = l.NonNegative("min_range_m", s.min_range_m);
+  s.max_range_m = l.Positive("max_range_m", s.max_range_m);
+  s.range_noise_m = l.NonNegative("range_noise_m", s.range_noise_m);
+  s.range_noise_fraction = l.NonNegative("range_noise_fraction", s.range_noise_fraction);
+  s.range_quantum_m = l.NonNegative("range_quantum_m", s.range_quantum_m);
+  s.dropout_probability = l.InRange("dropout_probability", 0.0, 1.0, s.dropout_probability);
+  s.grazing_dropout_start_deg =
+      l.InRange("grazing_dropout_start_deg", 0.0, 90.0, s.grazing_dropout_start_deg);
+  s.grazing_dropout_end_deg =
+      l.InRange("grazing_dropout_end_deg", 0.0, 90.0, s.grazing_dropout_end_deg);
+  if (l.Has("angle_sign")) {
+    const int64_t sign = l.Integer("angle_sign");
+    if (sign != 1 && sign != -1) l.Fail("angle_sign", "must be 1 or -1");
+    s.angle_convention.sign = static_cast<int>(sign);
+  }
+  s.angle_convention.offset_rad = l.Number("angle_offset_rad", s.angle_convention.offset_rad);
+  s.model_angle_correction = l.Bool("model_angle_correction", s.model_angle_correction);
+  if (s.max_range_m <= s.min_range_m) l.Fail("max_range_m", "must exceed min_range_m");
+  if (s.grazing_dropout_end_deg <= s.grazing_dropout_start_deg) {
+    l.Fail("grazing_dropout_end_deg", "must exceed grazing_dropout_start_deg");
+  }
+}
+
+void ReadImu(const JsonObject& m, SimConfig* config) {
+  SimConfig& c = *config;
+  m.AllowOnly({"rate_hz", "gyro_noise_rad_s", "gyro_bias_rad_s", "tilt_noise_rad", "yaw_noise_rad",
+               "yaw_reference_offset_rad"});
+  sim::ImuSpec& s = c.imu;
+  s.rate_hz = m.InRange("rate_hz", 1.0, 2000.0, s.rate_hz);
+  s.gyro_noise_rad_s = m.NonNegative("gyro_noise_rad_s", s.gyro_noise_rad_s);
+  s.gyro_bias_rad_s = m.Number("gyro_bias_rad_s", s.gyro_bias_rad_s);
+  s.tilt_noise_rad = m.NonNegative("tilt_noise_rad", s.tilt_noise_rad);
+  s.yaw_noise_rad = m.NonNegative("yaw_noise_rad", s.yaw_noise_rad);
+  s.yaw_reference_offset_rad = m.Number("yaw_reference_offset_rad", s.yaw_reference_offset_rad);
+}
+
+void ReadOdometry(const JsonObject& m, SimConfig* config) {
+  SimConfig& c = *config;
+  m.AllowOnly({"rate_hz", "scale_error_left", "scale_error_right", "speed_noise_mps"});
+  sim::OdometrySpec& s = c.odometry;
+  s.rate_hz = m.InRange("rate_hz", 1.0, 1000.0, s.rate_hz);
+  s.scale_error_left = m.InRange("scale_error_left", -0.5, 0.5, s.scale_error_left);
+  s.scale_error_right = m.InRange("scale_error_right", -0.5, 0.5, s.scale_error_right);
+  s.speed_noise_mps = m.NonNegative("speed_noise_mps", s.speed_noise_mps);
+}
+
+void ReadSlips(const json& slips, SimConfig* config) {
+  SimConfig& c = *config;
+  for (size_t i = 0; i < slips.size(); ++i) {
+    const JsonObject s(slips[i], "slips[" + std::to_string(i) + "]");
+    s.AllowOnly({"start_s", "duration_s", "wheel", "extra"});
+    sim::SlipEvent e;
+    e.start_s = s.NonNegative("start_s", 0.0);
+    e.duration_s = s.Positive("duration_s");
+    const std::string wheel = s.String("wheel");
+    if (wheel != "left" && wheel != "right") s.Fail("wheel", "must be 'left' or 'right'");
+    e.left = wheel == "left";
+    e.extra = s.InRange("extra", -0.9, 10.0, 0.0);
+    if (!s.Has("extra")) s.Fail("extra", "missing");
+    c.slips.push_back(e);
+  }
+}
+
 }  // namespace
 
 sim::DriveSegment CircleSegment(double radius_m, double speed_mps, double turns, bool left) {
@@ -110,8 +202,9 @@ Status ScenarioFromJson(const json& j, const std::string& source, SimConfig* con
     }
     const int64_t version = root.Integer("version");
     if (version != kScenarioFormatVersion) {
-      root.Fail("version", "unsupported version " + std::to_string(version) + " (this build reads " +
-                               std::to_string(kScenarioFormatVersion) + ")");
+      root.Fail("version", "unsupported version " + std::to_string(version) +
+                               " (this build reads " + std::to_string(kScenarioFormatVersion) +
+                               ")");
     }
     c.name = root.String("name", "");
     if (root.Has("seed")) {
@@ -121,86 +214,12 @@ Status ScenarioFromJson(const json& j, const std::string& source, SimConfig* con
     }
     ReadScene(root.Object("scene"), &c);
 
-    if (root.Has("robot")) {
-      const JsonObject r = root.Object("robot");
-      r.AllowOnly({"lidar_height_m", "lidar_offset_x_m", "imu_offset_x_m", "wheel_distance_m"});
-      c.geometry.lidar_height_m = r.Positive("lidar_height_m", c.geometry.lidar_height_m);
-      c.geometry.lidar_offset_x_m = r.Number("lidar_offset_x_m", c.geometry.lidar_offset_x_m);
-      c.geometry.imu_offset_x_m = r.Number("imu_offset_x_m", c.geometry.imu_offset_x_m);
-      c.geometry.wheel_distance_m = r.Positive("wheel_distance_m", c.geometry.wheel_distance_m);
-    }
-    if (root.Has("mounting_error_rad")) {
-      const JsonObject m = root.Object("mounting_error_rad");
-      m.AllowOnly({"alpha", "beta", "gamma"});
-      c.mounting_error = {m.InRange("alpha", -0.5, 0.5, 0.0), m.InRange("beta", -0.5, 0.5, 0.0),
-                          m.InRange("gamma", -0.5, 0.5, 0.0)};
-    }
-    if (root.Has("lidar")) {
-      const JsonObject l = root.Object("lidar");
-      l.AllowOnly({"scan_rate_hz", "sample_rate_hz", "min_range_m", "max_range_m", "range_noise_m",
-                   "range_noise_fraction", "range_quantum_m", "dropout_probability",
-                   "grazing_dropout_start_deg", "grazing_dropout_end_deg", "angle_sign",
-                   "angle_offset_rad", "model_angle_correction"});
-      sim::LidarSpec& s = c.lidar;
-      s.scan_rate_hz = l.InRange("scan_rate_hz", 1.0, 50.0, s.scan_rate_hz);
-      s.sample_rate_hz = l.InRange("sample_rate_hz", 100.0, 100000.0, s.sample_rate_hz);
-      s.min_range_m = l.NonNegative("min_range_m", s.min_range_m);
-      s.max_range_m = l.Positive("max_range_m", s.max_range_m);
-      s.range_noise_m = l.NonNegative("range_noise_m", s.range_noise_m);
-      s.range_noise_fraction = l.NonNegative("range_noise_fraction", s.range_noise_fraction);
-      s.range_quantum_m = l.NonNegative("range_quantum_m", s.range_quantum_m);
-      s.dropout_probability = l.InRange("dropout_probability", 0.0, 1.0, s.dropout_probability);
-      s.grazing_dropout_start_deg = l.InRange("grazing_dropout_start_deg", 0.0, 90.0, s.grazing_dropout_start_deg);
-      s.grazing_dropout_end_deg = l.InRange("grazing_dropout_end_deg", 0.0, 90.0, s.grazing_dropout_end_deg);
-      if (l.Has("angle_sign")) {
-        const int64_t sign = l.Integer("angle_sign");
-        if (sign != 1 && sign != -1) l.Fail("angle_sign", "must be 1 or -1");
-        s.angle_convention.sign = static_cast<int>(sign);
-      }
-      s.angle_convention.offset_rad = l.Number("angle_offset_rad", s.angle_convention.offset_rad);
-      s.model_angle_correction = l.Bool("model_angle_correction", s.model_angle_correction);
-      if (s.max_range_m <= s.min_range_m) l.Fail("max_range_m", "must exceed min_range_m");
-      if (s.grazing_dropout_end_deg <= s.grazing_dropout_start_deg) {
-        l.Fail("grazing_dropout_end_deg", "must exceed grazing_dropout_start_deg");
-      }
-    }
-    if (root.Has("imu")) {
-      const JsonObject m = root.Object("imu");
-      m.AllowOnly({"rate_hz", "gyro_noise_rad_s", "gyro_bias_rad_s", "tilt_noise_rad", "yaw_noise_rad",
-                   "yaw_reference_offset_rad"});
-      sim::ImuSpec& s = c.imu;
-      s.rate_hz = m.InRange("rate_hz", 1.0, 2000.0, s.rate_hz);
-      s.gyro_noise_rad_s = m.NonNegative("gyro_noise_rad_s", s.gyro_noise_rad_s);
-      s.gyro_bias_rad_s = m.Number("gyro_bias_rad_s", s.gyro_bias_rad_s);
-      s.tilt_noise_rad = m.NonNegative("tilt_noise_rad", s.tilt_noise_rad);
-      s.yaw_noise_rad = m.NonNegative("yaw_noise_rad", s.yaw_noise_rad);
-      s.yaw_reference_offset_rad = m.Number("yaw_reference_offset_rad", s.yaw_reference_offset_rad);
-    }
-    if (root.Has("odometry")) {
-      const JsonObject m = root.Object("odometry");
-      m.AllowOnly({"rate_hz", "scale_error_left", "scale_error_right", "speed_noise_mps"});
-      sim::OdometrySpec& s = c.odometry;
-      s.rate_hz = m.InRange("rate_hz", 1.0, 1000.0, s.rate_hz);
-      s.scale_error_left = m.InRange("scale_error_left", -0.5, 0.5, s.scale_error_left);
-      s.scale_error_right = m.InRange("scale_error_right", -0.5, 0.5, s.scale_error_right);
-      s.speed_noise_mps = m.NonNegative("speed_noise_mps", s.speed_noise_mps);
-    }
-    if (root.Has("slips")) {
-      const json& slips = root.Array("slips");
-      for (size_t i = 0; i < slips.size(); ++i) {
-        const JsonObject s(slips[i], "slips[" + std::to_string(i) + "]");
-        s.AllowOnly({"start_s", "duration_s", "wheel", "extra"});
-        sim::SlipEvent e;
-        e.start_s = s.NonNegative("start_s", 0.0);
-        e.duration_s = s.Positive("duration_s");
-        const std::string wheel = s.String("wheel");
-        if (wheel != "left" && wheel != "right") s.Fail("wheel", "must be 'left' or 'right'");
-        e.left = wheel == "left";
-        e.extra = s.InRange("extra", -0.9, 10.0, 0.0);
-        if (!s.Has("extra")) s.Fail("extra", "missing");
-        c.slips.push_back(e);
-      }
-    }
+    if (root.Has("robot")) ReadRobot(root.Object("robot"), &c);
+    if (root.Has("mounting_error_rad")) ReadMountingError(root.Object("mounting_error_rad"), &c);
+    if (root.Has("lidar")) ReadLidar(root.Object("lidar"), &c);
+    if (root.Has("imu")) ReadImu(root.Object("imu"), &c);
+    if (root.Has("odometry")) ReadOdometry(root.Object("odometry"), &c);
+    if (root.Has("slips")) ReadSlips(root.Array("slips"), &c);
     ReadPath(root.Object("path"), &c);
   } catch (const JsonError& e) {
     return Status::Error(source + ": " + e.what());
@@ -253,7 +272,9 @@ json ScenarioToJson(const SimConfig& c) {
         {"imu_offset_x_m", c.geometry.imu_offset_x_m},
         {"wheel_distance_m", c.geometry.wheel_distance_m}}},
       {"mounting_error_rad",
-       {{"alpha", c.mounting_error.alpha}, {"beta", c.mounting_error.beta}, {"gamma", c.mounting_error.gamma}}},
+       {{"alpha", c.mounting_error.alpha},
+        {"beta", c.mounting_error.beta},
+        {"gamma", c.mounting_error.gamma}}},
       {"lidar",
        {{"scan_rate_hz", l.scan_rate_hz},
         {"sample_rate_hz", l.sample_rate_hz},
@@ -281,7 +302,9 @@ json ScenarioToJson(const SimConfig& c) {
         {"scale_error_right", c.odometry.scale_error_right},
         {"speed_noise_mps", c.odometry.speed_noise_mps}}},
       {"slips", slips},
-      {"path", {{"start", {{"x_m", c.start.x}, {"y_m", c.start.y}, {"yaw_rad", c.start.yaw}}}, {"segments", segments}}},
+      {"path",
+       {{"start", {{"x_m", c.start.x}, {"y_m", c.start.y}, {"yaw_rad", c.start.yaw}}},
+        {"segments", segments}}},
   };
 }
 

@@ -58,8 +58,8 @@ struct CloudView::Chunk {
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   vtkSmartPointer<vtkActor> actor;
   // Thinned copies (every kLodStrides[k]-th point); sealed chunks only.
-  vtkSmartPointer<vtkActor> lod_actor[2];
-  vtkSmartPointer<vtkPolyDataMapper> lod_mapper[2];
+  vtkSmartPointer<vtkActor> lod_actor[kLodLevels];
+  vtkSmartPointer<vtkPolyDataMapper> lod_mapper[kLodLevels];
   size_t size = 0;
   bool sealed = false;
 };
@@ -239,7 +239,7 @@ CloudView::Chunk* CloudView::NewChunk() {
 void CloudView::SealChunk(Chunk* chunk) {
   chunk->sealed = true;
   chunk->points->Squeeze();
-  for (int level = 0; level < 2; ++level) {
+  for (int level = 0; level < kLodLevels; ++level) {
     const vtkIdType stride = kLodStrides[level];
     auto points = vtkSmartPointer<vtkPoints>::New();
     points->SetDataTypeToFloat();
@@ -451,14 +451,15 @@ void CloudView::SetLodActive(bool active) {
   // The coarsest detail that keeps the drawn points within the budget.
   int level = -1;
   if (active && point_count_ > lod_budget_) {
-    level = point_count_ / kLodStrides[0] <= lod_budget_ ? 0 : 1;
+    level = 0;
+    while (level + 1 < kLodLevels && point_count_ / kLodStrides[level] > lod_budget_) ++level;
   }
   if (level == lod_level_) return;
   lod_level_ = level;
   for (auto& c : chunks_) {
     if (!c->sealed) continue;  // The growing chunk is always drawn in full.
     c->actor->SetVisibility(level < 0);
-    for (int k = 0; k < 2; ++k) c->lod_actor[k]->SetVisibility(level == k);
+    for (int k = 0; k < kLodLevels; ++k) c->lod_actor[k]->SetVisibility(level == k);
   }
   RequestRender();
 }
