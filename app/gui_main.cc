@@ -24,6 +24,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/scenario/scenario.h"
 #include "ui/main_window.h"
+#include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
@@ -45,6 +46,7 @@ struct Options {
   QString screenshot, window_screenshot, export_cloud, sessions_dir;
   double quit_after_s = -1.0;  // < 0: run until the operator quits.
   int orbit_frames = 0;        // > 0: the orbit benchmark after --replay.
+  QString pairs;               // With --replay: load into the calibration panel and solve.
 };
 
 // resources/: beside the executable's install prefix, else the source tree.
@@ -85,10 +87,15 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
       "With --replay: once the session is shown, render N frames orbiting the camera in full and "
       "N with the level of detail, print timings as JSON and quit.",
       "N");
+  const QCommandLineOption pairs(
+      "pairs",
+      "With --replay: load a pairs file into the calibration panel once the session is shown, "
+      "solve (refined corners) and show the calibrated cloud.",
+      "FILE");
   const QCommandLineOption sessions(
       "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
-                     export_cloud, quit_after, orbit, sessions});
+                     export_cloud, quit_after, orbit, pairs, sessions});
   parser.process(app);
 
   Options o;
@@ -104,6 +111,7 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
   o.sessions_dir = parser.value(sessions);
   if (parser.isSet(quit_after)) o.quit_after_s = parser.value(quit_after).toDouble();
   if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
+  o.pairs = parser.value(pairs);
   return o;
 }
 
@@ -182,6 +190,30 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
     std::fflush(stdout);
     window->SetInteractive(false);
     window->close();
+  });
+}
+
+// --pairs FILE: load the picks once the session is shown, solve, and show
+// the calibrated cloud (demos and docs screenshots).
+void StartCalibrationDemo(const QString& pairs, Workspace* workspace, MainWindow* window) {
+  auto done = std::make_shared<bool>(false);
+  QObject::connect(workspace, &Workspace::replayFinished, window, [=] {
+    if (*done) return;
+    *done = true;
+    ui::CalibrationPanel* panel = window->calibration_panel();
+    QString error;
+    if (!panel->LoadPairs(pairs, &error)) {
+      window->ShowError("Pairs", error);
+      return;
+    }
+    QObject::connect(panel, &ui::CalibrationPanel::solved, window, [panel, window](bool ok) {
+      if (!ok) return;
+      panel->ShowAfter(true);
+      // The target stands inside the room: look at it from above, under the ceiling.
+      window->view()->SetClipHeight(2.0);
+      window->view()->ViewOblique();
+    });
+    panel->Solve();
   });
 }
 
@@ -270,6 +302,7 @@ int Main(int argc, char** argv) {
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);
     if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);
+    if (!o.pairs.isEmpty()) StartCalibrationDemo(o.pairs, &workspace, &window);
     workspace.OpenSession(o.replay, o.speed);
   }
   if (scripted) {  // Follow the robot in demos: fit the view every few seconds.

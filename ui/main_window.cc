@@ -14,6 +14,7 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QProgressBar>
+#include <QScrollArea>
 #include <QSettings>
 #include <QStatusBar>
 #include <QTimer>
@@ -21,7 +22,9 @@
 #include <QUndoCommand>
 #include <QUndoStack>
 #include <cmath>
+#include <limits>
 
+#include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
@@ -98,6 +101,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   connection_panel_ = new ConnectionPanel(workspace_, resources_dir + QStringLiteral("/scenarios"));
   drive_panel_ = new DrivePanel(workspace_);
   replay_panel_ = new ReplayPanel(workspace_);
+  calibration_panel_ = new CalibrationPanel(workspace_, view_, undo_);
   auto add_dock = [this](QWidget* w, const QString& title, const QString& name,
                          Qt::DockWidgetArea area) {
     auto* dock = new QDockWidget(title, this);
@@ -110,6 +114,13 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
            Qt::LeftDockWidgetArea);
   add_dock(drive_panel_, tr("Drive"), QStringLiteral("driveDock"), Qt::LeftDockWidgetArea);
   add_dock(replay_panel_, tr("Session and replay"), QStringLiteral("replayDock"),
+           Qt::RightDockWidgetArea);
+  // The calibration steps scroll when the window is short.
+  auto* calibration_scroll = new QScrollArea;
+  calibration_scroll->setWidget(calibration_panel_);
+  calibration_scroll->setWidgetResizable(true);
+  calibration_scroll->setMinimumWidth(380);
+  add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
            Qt::RightDockWidgetArea);
   connect(connection_panel_, &ConnectionPanel::errorOccurred, this,
           [this](const QString& m) { ShowError(tr("Cannot connect"), m); });
@@ -256,6 +267,12 @@ void MainWindow::BuildMenus() {
   toggle(tr("Show Tra&jectory"), &CloudView::SetTrajectoryVisible);
   toggle(tr("Show &Robot"), &CloudView::SetRobotVisible);
   toggle(tr("Show Colour &Bar"), &CloudView::SetColorBarVisible);
+  QAction* ceiling = view->addAction(tr("Hide &Ceiling (above 2 m)"));
+  ceiling->setCheckable(true);
+  ceiling->setShortcut(QKeySequence(Qt::Key_C));
+  connect(ceiling, &QAction::toggled, view_, [this](bool on) {
+    view_->SetClipHeight(on ? 2.0 : std::numeric_limits<double>::quiet_NaN());
+  });
   view->addSeparator();
   QMenu* panels = view->addMenu(tr("&Panels"));
   for (QDockWidget* dock : findChildren<QDockWidget*>())

@@ -31,6 +31,7 @@ class CloudView;
 class ConnectionPanel;
 class DrivePanel;
 class ReplayPanel;
+class CalibrationPanel;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -42,6 +43,7 @@ class MainWindow : public QMainWindow {
   ConnectionPanel* connection_panel() const { return connection_panel_; }
   DrivePanel* drive_panel() const { return drive_panel_; }
   ReplayPanel* replay_panel() const { return replay_panel_; }
+  CalibrationPanel* calibration_panel() const { return calibration_panel_; }
   QUndoStack* undo_stack() const { return undo_; }
   // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
   // then errors go to lastError() and unsaved recordings stay where they are.
@@ -78,6 +80,7 @@ class MainWindow : public QMainWindow {
   ConnectionPanel* connection_panel_;
   DrivePanel* drive_panel_;
   ReplayPanel* replay_panel_;
+  CalibrationPanel* calibration_panel_;
   QUndoStack* undo_;
   QMenu* recent_menu_ = nullptr;
   QAction* record_ = nullptr;

@@ -22,13 +22,17 @@
 #include <QTest>
 #include <QThread>
 #include <QTimer>
+#include <QUndoStack>
 #include <cmath>
 #include <functional>
 
+#include "core/calibration/calibration_file.h"
+#include "core/calibration/picks.h"
 #include "core/cloud/cloud_io.h"
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/link/qt_transport.h"
 #include "tests/testing/run_command.h"
+#include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
@@ -360,6 +364,97 @@ TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
   for (size_t i = 2; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1]) << i;
   EXPECT_EQ(fractions.back(), 1.0);  // ...and reports its end.
   EXPECT_EQ(workspace_->session_dir(), session);
+}
+
+// The calibration panel on the recommended set-up (docs/calibration.md): the
+// diamond target on a two-turn 0.05 m/s circle, recorded through the bytes.
+// Picking through the view's picking layer, undo / redo, the pairs file, the
+// solve with refined corners (each angle within 3 mrad of the truth, as the
+// CLI's test), the before / after cloud and the calibration file.
+TEST_F(AppTest, CalibrationPanelPicksSolvesAndShowsTheCalibratedCloud) {
+  const std::string dir = tmp_.path().toStdString();
+  const auto sim = testing::RunCommand(
+      std::string(SWEEPSCAN_CLI) + " simulate --scenario " + kResources.toStdString() +
+      "/scenarios/lab_circle_diamond.json --out " + dir + "/diamond.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  window_->OpenSessionPath(tmp_.path() + "/diamond.sweepscan");
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000)) << window_->last_error().toStdString();
+  const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
+  ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == before.size(); }, 10000));
+  CalibrationPanel* panel = window_->calibration_panel();
+
+  // A Shift + click picks the cloud point under the cursor (pass A).
+  CloudView* view = window_->view();
+  view->ViewTop();
+  view->RenderNow();
+  const QPoint centre(view->width() / 2, view->height() / 2);
+  QTest::mouseClick(view, Qt::LeftButton, Qt::ShiftModifier, centre);
+  ASSERT_EQ(panel->pair_count(), 1);
+  const QPointF back = view->WorldToWidget(panel->pair_points()[0].a);
+  EXPECT_LT(std::hypot(back.x() - centre.x(), back.y() - centre.y()), 7.0);
+  window_->undo_stack()->undo();
+  EXPECT_EQ(panel->pair_count(), 0);
+  window_->undo_stack()->redo();
+  EXPECT_EQ(panel->pair_count(), 1);
+  window_->undo_stack()->undo();
+
+  // The target's four corners, picked in pass A and again in pass B.
+  const double h = 0.3 * std::sqrt(2.0);
+  const Eigen::Vector3d corners[4] = {
+      {5.0, 0.16, 1.35 + h}, {5.0 + h, 0.16, 1.35}, {5.0, 0.16, 1.35 - h}, {5.0 - h, 0.16, 1.35}};
+  for (const auto& c : corners) {
+    panel->AddPick(c);
+    panel->AddPick(c);
+  }
+  ASSERT_EQ(panel->pairs().size(), 4u);
+  panel->DeletePair(1);
+  EXPECT_EQ(panel->pairs().size(), 3u);
+  window_->undo_stack()->undo();
+  ASSERT_EQ(panel->pairs().size(), 4u);
+  QString error;
+  ASSERT_TRUE(panel->SavePairs(tmp_.path() + "/pairs.json", &error)) << error.toStdString();
+  std::vector<PickPair> saved;
+  ASSERT_TRUE(LoadPairsFile(dir + "/pairs.json", &saved).ok());
+  ASSERT_EQ(saved.size(), 4u);
+  EXPECT_NEAR(saved[1].pass2.world.x(), corners[1].x(), 1e-6);
+
+  bool solved = false, solved_ok = false;
+  QObject::connect(panel, &CalibrationPanel::solved, [&](bool ok) {
+    solved = true;
+    solved_ok = ok;
+  });
+  panel->SetRefine(true);
+  panel->Solve();
+  ASSERT_TRUE(WaitFor([&] { return solved; }, 120000));
+  ASSERT_TRUE(solved_ok) << panel->result_text().toStdString();
+  const PickCalibrationResult* r = workspace_->calibration_result();
+  ASSERT_NE(r, nullptr);
+  const double truth[3] = {-0.0058, 0.0126, 0.0355};
+  const double got[3] = {r->summary.angles.alpha, r->summary.angles.beta, r->summary.angles.gamma};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(got[k], truth[k], 3e-3) << k;
+    EXPECT_GT(r->summary.sigma_rad[k], 0.0) << k;
+  }
+  EXPECT_GT(r->summary.initial_rms_m, 10.0 * r->summary.final_rms_m);
+  EXPECT_NE(panel->result_text().indexOf("alpha"), -1);
+
+  // After: the session re-assembled under the solved angles.
+  replayed = false;
+  panel->ShowAfter(true);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  const std::vector<CloudPoint> after = workspace_->CloudSnapshot();
+  ASSERT_EQ(after.size(), before.size());
+  double moved = 0.0;
+  for (size_t i = 0; i < after.size(); i += 97)
+    moved = std::max(moved, double(std::abs(after[i].z - before[i].z)));
+  EXPECT_GT(moved, 0.01);  // 35 mrad of roll moves points centimetres at 1-2 m.
+  ASSERT_TRUE(panel->SaveCalibration(tmp_.path() + "/calibration.json", &error))
+      << error.toStdString();
+  MountingError loaded;
+  ASSERT_TRUE(LoadCalibrationFile(dir + "/calibration.json", &loaded).ok());
+  EXPECT_NEAR(loaded.gamma, r->summary.angles.gamma, 1e-9);
 }
 
 TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {

@@ -35,7 +35,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   row->addWidget(speed_);
   row->addWidget(pause_);
   layout->addLayout(row);
-  layout->addStretch(1);
+  setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Maximum);
 
   connect(speed_, QOverload<int>::of(&QComboBox::currentIndexChanged), this,
           [this] { workspace_->SetReplaySpeed(speed()); });

@@ -10,6 +10,8 @@
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkLookupTable.h>
 #include <vtkOrientationMarkerWidget.h>
+#include <vtkPlane.h>
+#include <vtkPlaneCollection.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -20,12 +22,15 @@
 #include <vtkScalarBarActor.h>
 #include <vtkTextProperty.h>
 #include <vtkTransform.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <QElapsedTimer>
 #include <QFileInfo>
+#include <QMouseEvent>
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace sweepscan::ui {
 namespace {
@@ -121,6 +126,22 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   trajectory_->GetProperty()->SetColor(1.0, 0.85, 0.2);
   trajectory_->GetProperty()->SetLineWidth(2.0);
   renderer_->AddActor(trajectory_);
+
+  // Marker overlay: picked points as large dots drawn over the cloud.
+  for (int k = 0; k < 2; ++k) {
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    mapper->SetScalarModeToUsePointData();
+    // Drawn after the cloud and in front of it: markers stay visible.
+    mapper->SetResolveCoincidentTopologyToPolygonOffset();
+    markers_[k] = vtkSmartPointer<vtkActor>::New();
+    markers_[k]->SetMapper(mapper);
+    markers_[k]->GetProperty()->SetPointSize(k == 0 ? 11.0 : 17.0);
+    markers_[k]->GetProperty()->SetRenderPointsAsSpheres(true);
+    markers_[k]->PickableOff();
+    renderer_->AddActor(markers_[k]);
+  }
 
   axes_ = vtkSmartPointer<vtkAxesActor>::New();
   axes_widget_ = vtkSmartPointer<vtkOrientationMarkerWidget>::New();
@@ -227,6 +248,7 @@ CloudView::Chunk* CloudView::NewChunk() {
   chunk->mapper->SetScalarModeToUsePointFieldData();
   chunk->mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
   chunk->mapper->ScalarVisibilityOn();
+  ApplyClip(chunk->mapper);
   chunk->actor = vtkSmartPointer<vtkActor>::New();
   chunk->actor->SetMapper(chunk->mapper);
   chunk->actor->GetProperty()->SetPointSize(point_size_);
@@ -265,6 +287,7 @@ void CloudView::SealChunk(Chunk* chunk) {
     mapper->SetScalarModeToUsePointFieldData();
     mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
     mapper->ScalarVisibilityOn();
+    ApplyClip(mapper);
     auto actor = vtkSmartPointer<vtkActor>::New();
     actor->SetMapper(mapper);
     actor->GetProperty()->SetPointSize(point_size_);
@@ -446,6 +469,29 @@ void CloudView::SetColorBarVisible(bool visible) {
   RequestRender();
 }
 
+void CloudView::ApplyClip(vtkPolyDataMapper* mapper) const {
+  mapper->SetClippingPlanes(std::isnan(clip_height_) ? nullptr : clip_planes_.Get());
+}
+
+void CloudView::SetClipHeight(double z) {
+  clip_height_ = z;
+  if (!std::isnan(z)) {
+    // Keeps n . x + d >= 0 with n = -z: the points below z.
+    auto plane = vtkSmartPointer<vtkPlane>::New();
+    plane->SetOrigin(0, 0, z);
+    plane->SetNormal(0, 0, -1);
+    clip_planes_ = vtkSmartPointer<vtkPlaneCollection>::New();
+    clip_planes_->AddItem(plane);
+  }
+  for (auto& c : chunks_) {
+    ApplyClip(c->mapper);
+    for (auto& m : c->lod_mapper) {
+      if (m) ApplyClip(m);
+    }
+  }
+  RequestRender();
+}
+
 void CloudView::SetLodActive(bool active) {
   lod_active_ = active;
   // The coarsest detail that keeps the drawn points within the budget.
@@ -500,6 +546,119 @@ void CloudView::FitToCloud() {
   renderer_->ResetCamera();
   grid_->SetVisibility(grid);
   renderer_->ResetCameraClippingRange();
+  RequestRender();
+}
+
+void CloudView::mousePressEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton && (event->modifiers() & Qt::ShiftModifier)) {
+    Eigen::Vector3d world;
+    if (PickPoint(event->pos(), &world)) emit pointPicked(world);
+    event->accept();
+    return;
+  }
+  QVTKOpenGLNativeWidget::mousePressEvent(event);
+}
+
+namespace {
+
+// Ray / axis-aligned box test (slab method), the box grown by `margin`.
+bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double b[6],
+                double margin) {
+  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const double lo = b[2 * k] - margin, hi = b[2 * k + 1] + margin;
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < lo || o[k] > hi) return false;
+      continue;
+    }
+    double a = (lo - o[k]) / d[k], c = (hi - o[k]) / d[k];
+    if (a > c) std::swap(a, c);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, c);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool CloudView::PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px) {
+  if (point_count_ == 0) return false;
+  // Display coordinates: device pixels, origin bottom left.
+  const double ratio = devicePixelRatioF();
+  const double x = pos.x() * ratio;
+  const double y = (height() - pos.y()) * ratio;
+  double near_w[4], far_w[4];
+  renderer_->SetDisplayPoint(x, y, 0.0);
+  renderer_->DisplayToWorld();
+  renderer_->GetWorldPoint(near_w);
+  renderer_->SetDisplayPoint(x, y, 1.0);
+  renderer_->DisplayToWorld();
+  renderer_->GetWorldPoint(far_w);
+  const Eigen::Vector3d o(near_w[0] / near_w[3], near_w[1] / near_w[3], near_w[2] / near_w[3]);
+  const Eigen::Vector3d f(far_w[0] / far_w[3], far_w[1] / far_w[3], far_w[2] / far_w[3]);
+  const Eigen::Vector3d d = (f - o).normalized();
+  // World size of one pixel at distance t along the ray (perspective).
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  const double pixel_per_t =
+      2.0 * std::tan(0.5 * camera->GetViewAngle() * M_PI / 180.0) / std::max(1.0, height() * ratio);
+  const double cam_dist = camera->GetDistance();
+  const double margin = tolerance_px * pixel_per_t * (cam_dist * 2.0 + 10.0);
+  double best_t = std::numeric_limits<double>::infinity();
+  bool found = false;
+  for (const auto& c : chunks_) {
+    double b[6];
+    c->points->GetBounds(b);
+    if (!RayHitsBox(o, d, b, margin)) continue;
+    const float* p = static_cast<const float*>(c->points->GetVoidPointer(0));
+    for (size_t i = 0; i < c->size; ++i, p += 3) {
+      const Eigen::Vector3d v(p[0] - o.x(), p[1] - o.y(), p[2] - o.z());
+      const double t = v.dot(d);
+      if (t <= 0 || t >= best_t) continue;
+      const double off2 = v.squaredNorm() - t * t;
+      const double tol = tolerance_px * pixel_per_t * t;
+      if (off2 <= tol * tol) {
+        best_t = t;
+        *world = Eigen::Vector3d(p[0], p[1], p[2]);
+        found = true;
+      }
+    }
+  }
+  return found;
+}
+
+QPointF CloudView::WorldToWidget(const Eigen::Vector3d& w) {
+  renderer_->SetWorldPoint(w.x(), w.y(), w.z(), 1.0);
+  renderer_->WorldToDisplay();
+  double d[3];
+  renderer_->GetDisplayPoint(d);
+  const double ratio = devicePixelRatioF();
+  return QPointF(d[0] / ratio, height() - d[1] / ratio);
+}
+
+void CloudView::SetMarkers(const std::vector<Marker>& markers) {
+  for (int k = 0; k < 2; ++k) {
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    colors->SetNumberOfComponents(3);
+    colors->SetName("colors");
+    for (const Marker& m : markers) {
+      if (m.highlighted != (k == 1)) continue;
+      const vtkIdType id = points->InsertNextPoint(m.position.data());
+      verts->InsertNextCell(1, &id);
+      const unsigned char rgb[3] = {static_cast<unsigned char>(m.color.red()),
+                                    static_cast<unsigned char>(m.color.green()),
+                                    static_cast<unsigned char>(m.color.blue())};
+      colors->InsertNextTypedTuple(rgb);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetVerts(verts);
+    poly->GetPointData()->SetScalars(colors);
+    static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetInputData(poly);
+    static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetColorModeToDirectScalars();
+  }
   RequestRender();
 }
 

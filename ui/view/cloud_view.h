@@ -25,14 +25,19 @@
 #include <QVTKOpenGLNativeWidget.h>
 #include <vtkSmartPointer.h>
 
+#include <Eigen/Core>
+#include <QColor>
 #include <QImage>
+#include <QPoint>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
 #include "core/cloud/cloud.h"
 #include "core/pose/odometry.h"
 
+class QMouseEvent;
 class QTimer;
 class vtkActor;
 class vtkActor2D;
@@ -40,7 +45,9 @@ class vtkAxesActor;
 class vtkGenericOpenGLRenderWindow;
 class vtkLookupTable;
 class vtkOrientationMarkerWidget;
+class vtkPlaneCollection;
 class vtkPoints;
+class vtkPolyDataMapper;
 class vtkPolyData;
 class vtkRenderer;
 class vtkScalarBarActor;
@@ -59,6 +66,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   explicit CloudView(QWidget* parent = nullptr);
   ~CloudView() override;
 
+ signals:
+  // Shift + left click on the cloud (the picking layer): the picked point.
+  void pointPicked(const Eigen::Vector3d& world);
+
+ public:
   // ---- Content ----
   void Clear();
   void AppendPoints(const std::vector<CloudPoint>& points);
@@ -77,6 +89,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetTrajectoryVisible(bool visible);
   void SetRobotVisible(bool visible);
   void SetColorBarVisible(bool visible);
+  // Hides every point above `z` (metres; NaN shows all): a room's ceiling,
+  // so that the floor, the walls and a calibration target are seen from above.
+  void SetClipHeight(double z);
+  double clip_height() const { return clip_height_; }
   // Points drawn at most while the camera moves or data streams.
   void SetLodBudget(size_t points) { lod_budget_ = points; }
   size_t lod_budget() const { return lod_budget_; }
@@ -94,6 +110,22 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Turns the camera about the view's vertical axis (benchmarks, demos).
   void Orbit(double degrees);
 
+  // ---- Picking layer ----
+  // The cloud point under display position `pos` (widget pixels): among the
+  // points within `tolerance_px` of the viewing ray, the one nearest the
+  // camera. Chunks whose bounding box the widened ray misses are skipped, so
+  // a click tests only the chunks under the cursor. False if none.
+  bool PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px = 6.0);
+  // Where a world point lands in the widget (pixels), for tests and overlays.
+  QPointF WorldToWidget(const Eigen::Vector3d& world);
+  struct Marker {
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();
+    QColor color;
+    bool highlighted = false;  // drawn larger
+  };
+  // Overlay markers (picked points) drawn on top of the cloud.
+  void SetMarkers(const std::vector<Marker>& markers);
+
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
   bool RenderIfDirty();  // True if it rendered.
@@ -103,6 +135,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // The rendered image (the framebuffer, as the operator sees it).
   QImage GrabImage();
   bool SaveScreenshot(const QString& path, QString* error);
+
+ protected:
+  void mousePressEvent(QMouseEvent* event) override;
 
  private:
   struct Chunk;
@@ -120,6 +155,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkActor> grid_;
   vtkSmartPointer<vtkActor> robot_;
   vtkSmartPointer<vtkActor> trajectory_;
+  vtkSmartPointer<vtkActor> markers_[2];  // normal, highlighted
   vtkSmartPointer<vtkPoints> trajectory_points_;
   vtkSmartPointer<vtkPolyData> trajectory_poly_;
   vtkSmartPointer<vtkAxesActor> axes_;
@@ -128,6 +164,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
   ColorMode color_mode_ = ColorMode::kHeight;
   double point_size_ = 2.0;
+  double clip_height_ = std::numeric_limits<double>::quiet_NaN();
+  vtkSmartPointer<vtkPlaneCollection> clip_planes_;
+  void ApplyClip(vtkPolyDataMapper* mapper) const;
   size_t point_count_ = 0;
   int64_t time_origin_ns_ = 0;
   bool have_origin_ = false;

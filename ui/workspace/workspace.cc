@@ -63,6 +63,12 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
         emit replayFinished();
       },
       Qt::QueuedConnection);
+  // A calibration's failures (bad picks, solver) and cancels arrive as a
+  // failed job; the calibration panel listens to calibrationFinished only.
+  connect(this, &Workspace::jobFinished, this,
+          [this](const QString& what, bool ok, const QString& message) {
+            if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
+          });
   io_thread_.start();
   processing_thread_.start();
 }
@@ -563,11 +569,80 @@ void Workspace::OpenSession(const QString& dir, double speed) {
         replaying_ = true;
         ReconstructionOptions options;
         options.calibration = recording->decode.meta.calibration;
+        shown_calibration_ = options.calibration;
+        calibration_.reset();
         LiveProcessor* p = processor_;
         std::shared_ptr<const hardware::Recording> r = recording;
         QMetaObject::invokeMethod(p, [p, r, options, speed] { p->StartReplay(r, options, speed); });
         emit sessionChanged(dir);
       });
+}
+
+namespace {
+
+// LM iterations to the GUI thread; the cancel flag back to the solver.
+class JobCalibrationProgress : public CalibrationProgress {
+ public:
+  JobCalibrationProgress(Workspace* workspace, std::atomic<bool>* cancel)
+      : workspace_(workspace), cancel_(cancel) {}
+  bool OnIteration(int iteration, const MountingError&, double cost) override {
+    Workspace* w = workspace_;
+    QMetaObject::invokeMethod(
+        w, [w, iteration, cost] { emit w->calibrationIteration(iteration, cost); });
+    return !*cancel_;
+  }
+
+ private:
+  Workspace* workspace_;
+  std::atomic<bool>* cancel_;
+};
+
+}  // namespace
+
+void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
+  if (opened_ == nullptr) {
+    emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
+    return;
+  }
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  auto result = std::make_shared<PickCalibrationResult>();
+  auto error = std::make_shared<QString>();
+  RunJob(
+      tr("Calibrating"),
+      [this, recording, picks, refine, result, error](std::atomic<bool>* cancel) -> QString {
+        ReconstructionOptions options;  // EKF poses, uncalibrated: the picks' frame
+        ReconstructionResult poses;
+        Status s = hardware::ReconstructRecording(*recording, options, &poses);
+        if (!s.ok()) return *error = QString::fromStdString(s.message());
+        if (*cancel) return QString();
+        const SampleStore store(recording->log, poses.poses);
+        JobCalibrationProgress progress(this, cancel);
+        PickCalibrationOptions o;
+        o.refine = refine;
+        o.solver.progress = &progress;
+        s = CalibrateFromPicks(store, recording->geometry, picks, o, result.get());
+        if (!s.ok()) return *error = QString::fromStdString(s.message());
+        return QString();
+      },
+      [this, result] {
+        calibration_ = result;
+        const MountingError& a = result->summary.angles;
+        emit calibrationFinished(true, tr("alpha %1, beta %2, gamma %3 mrad")
+                                           .arg(a.alpha * 1e3, 0, 'f', 2)
+                                           .arg(a.beta * 1e3, 0, 'f', 2)
+                                           .arg(a.gamma * 1e3, 0, 'f', 2));
+      });
+}
+
+void Workspace::ShowCalibrated(const MountingError& calibration) {
+  if (opened_ == nullptr) return;
+  shown_calibration_ = calibration;
+  ReconstructionOptions options;
+  options.calibration = calibration;
+  replaying_ = true;
+  LiveProcessor* p = processor_;
+  std::shared_ptr<const hardware::Recording> r = opened_;
+  QMetaObject::invokeMethod(p, [p, r, options] { p->StartReplay(r, options, 0.0); });
 }
 
 void Workspace::SetReplaySpeed(double speed) {

@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/calibration/workflow.h"
 #include "core/cloud/reconstruct.h"
 #include "core/sim/world.h"
 #include "hardware/station/direct_device.h"
@@ -139,6 +140,20 @@ class Workspace : public QObject {
   QString sessions_root() const { return sessions_root_; }
   void set_sessions_root(const QString& root) { sessions_root_ = root; }
 
+  // ---- Calibration of the opened session (docs/calibration.md) ----------
+  // Picks -> mounting error on a job thread (CalibrateFromPicks, the same
+  // workflow as `sweepscan-cli calibrate --pairs`): poses by the EKF, the
+  // target region from the picks, the pairs solve or, with refine, the
+  // refined-corners solve with the raw picks as baseline. Progress per LM
+  // iteration (calibrationIteration), cancel through CancelJob().
+  void Calibrate(const std::vector<PickPair>& picks, bool refine);
+  // The last successful result (null before one).
+  const PickCalibrationResult* calibration_result() const { return calibration_.get(); }
+  // Replays the opened session under `calibration` (as fast as possible):
+  // the before / after view.
+  void ShowCalibrated(const MountingError& calibration);
+  const MountingError& shown_calibration() const { return shown_calibration_; }
+
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
   // Every point assembled since the last reset, copied on the processing
@@ -165,6 +180,8 @@ class Workspace : public QObject {
   void jobFinished(const QString& what, bool ok, const QString& message);
   void message(const QString& text);  // For the status bar.
   void deviceCheckFinished(bool ok, const QString& report);
+  void calibrationIteration(int iteration, double cost);
+  void calibrationFinished(bool ok, const QString& message);
 
  private:
   void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
@@ -202,6 +219,8 @@ class Workspace : public QObject {
   QString sessions_root_;
   std::shared_ptr<hardware::Recording> opened_;
   bool replaying_ = false;
+  std::shared_ptr<PickCalibrationResult> calibration_;
+  MountingError shown_calibration_;
   size_t point_count_ = 0;
   size_t scan_count_ = 0;
 

@@ -1,0 +1,88 @@
+// Calibration panel: the mounting-error calibration of Miao et al. 2022
+// (section 4, Eq. 15-17) step by step, on the session shown:
+//   1. the target and the drive (a thin 0.6 m board turned 45 degrees, two
+//      turns at 0.05 m/s: docs/calibration.md), with the circle drive;
+//   2. picking: Shift + click a target corner in pass A, then the same
+//      corner in pass B, at least four times; the pair list highlights its
+//      pair in the view, deletes, undoes and redoes (Ctrl+Z / Ctrl+Shift+Z),
+//      and saves / loads the pairs file the CLI reads;
+//   3. Solve on a job thread (progress per LM iteration, Cancel), optionally
+//      snapping the picks to the fitted board corners (refine): alpha, beta,
+//      gamma with their 1-sigma from the solver's covariance, the pair
+//      distance (the ghost) before and after, the cost per iteration;
+//   4. before / after: the session re-assembled under the result; save the
+//      calibration file.
+// GUI thread. Calls only the Workspace and the view's picking layer.
+#ifndef SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
+#define SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
+
+#include <QWidget>
+#include <vector>
+
+#include "core/calibration/picks.h"
+#include "ui/workspace/workspace.h"
+
+class QCheckBox;
+class QLabel;
+class QPushButton;
+class QTableWidget;
+class QUndoStack;
+
+namespace sweepscan::ui {
+
+class CloudView;
+class CostPlot;
+
+class CalibrationPanel : public QWidget {
+  Q_OBJECT
+ public:
+  CalibrationPanel(Workspace* workspace, CloudView* view, QUndoStack* undo,
+                   QWidget* parent = nullptr);
+
+  // A picked point (what Shift + click in the view does): completes the open
+  // pair's B or starts a new pair with A. Undoable.
+  void AddPick(const Eigen::Vector3d& world);
+  void DeletePair(int index);           // Undoable.
+  std::vector<PickPair> pairs() const;  // Complete pairs, as the CLI's pairs file.
+  int pair_count() const { return static_cast<int>(pairs_.size()); }
+  bool SavePairs(const QString& path, QString* error) const;
+  bool LoadPairs(const QString& path, QString* error);  // Undoable as one step.
+  void Solve();
+  void SetRefine(bool refine);
+  void ShowAfter(bool after);  // The before / after toggle.
+  bool SaveCalibration(const QString& path, QString* error) const;
+  QString result_text() const;
+
+  // The pairs as the panel holds them (B may be missing on the last one).
+  struct PairPoints {
+    Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+    bool has_b = false;
+  };
+  // For the undo commands.
+  void SetPairs(const std::vector<PairPoints>& pairs);
+  const std::vector<PairPoints>& pair_points() const { return pairs_; }
+
+ signals:
+  void solved(bool ok);
+
+ private:
+  void Refresh();
+  void ShowResult(bool ok, const QString& message);
+
+  Workspace* workspace_;
+  CloudView* view_;
+  QUndoStack* undo_;
+  std::vector<PairPoints> pairs_;
+  QTableWidget* table_;
+  QCheckBox* refine_;
+  QPushButton* solve_;
+  QPushButton* after_;
+  QPushButton* save_calibration_;
+  QLabel* next_pick_;
+  QLabel* result_;
+  CostPlot* plot_;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
