@@ -122,6 +122,18 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   calibration_scroll->setMinimumWidth(380);
   add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
            Qt::RightDockWidgetArea);
+  connect(calibration_panel_, &CalibrationPanel::robotCalibrationChanged, this,
+          [this](const MountingError& c) {
+            QSettings().setValue(QStringLiteral("robot/calibration_rad"),
+                                 QVariantList{c.alpha, c.beta, c.gamma});
+            statusBar()->showMessage(
+                tr("Robot calibration set: alpha %1, beta %2, gamma %3 mrad (live scans and new "
+                   "recordings)")
+                    .arg(c.alpha * 1e3, 0, 'f', 2)
+                    .arg(c.beta * 1e3, 0, 'f', 2)
+                    .arg(c.gamma * 1e3, 0, 'f', 2),
+                8000);
+          });
   connect(connection_panel_, &ConnectionPanel::errorOccurred, this,
           [this](const QString& m) { ShowError(tr("Cannot connect"), m); });
 
@@ -389,6 +401,11 @@ void MainWindow::RestoreSettings() {
     color_group_->actions()[color]->setChecked(true);
   }
   view_->SetPointSize(s.value(QStringLiteral("view/point_size"), 2.0).toDouble());
+  const QVariantList calibration = s.value(QStringLiteral("robot/calibration_rad")).toList();
+  if (calibration.size() == 3) {
+    workspace_->SetRobotCalibration(
+        {calibration[0].toDouble(), calibration[1].toDouble(), calibration[2].toDouble()});
+  }
   const QString root = s.value(QStringLiteral("sessions/root")).toString();
   if (!root.isEmpty()) workspace_->set_sessions_root(root);
   RebuildRecentMenu();

@@ -29,6 +29,7 @@
 #include "core/calibration/calibration_file.h"
 #include "core/calibration/picks.h"
 #include "core/cloud/cloud_io.h"
+#include "core/session/session.h"
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/link/qt_transport.h"
 #include "tests/testing/run_command.h"
@@ -455,6 +456,22 @@ TEST_F(AppTest, CalibrationPanelPicksSolvesAndShowsTheCalibratedCloud) {
   MountingError loaded;
   ASSERT_TRUE(LoadCalibrationFile(dir + "/calibration.json", &loaded).ok());
   EXPECT_NEAR(loaded.gamma, r->summary.angles.gamma, 1e-9);
+
+  // Kept for the robot: a new recording carries it, and a new window loads it.
+  panel->UseForRobot();
+  EXPECT_EQ(workspace_->robot_calibration().gamma, r->summary.angles.gamma);
+  ConnectToSimulator("lab_circle_diamond.json");
+  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+  SessionMeta meta;
+  ASSERT_TRUE(
+      ReadSessionMeta((workspace_->session_dir() + "/meta.json").toStdString(), &meta).ok());
+  EXPECT_NEAR(meta.calibration.gamma, r->summary.angles.gamma, 1e-12);
+  workspace_->Disconnect();
+  window_->close();
+  Workspace second;
+  MainWindow reopened(&second, kResources);
+  EXPECT_NEAR(second.robot_calibration().beta, r->summary.angles.beta, 1e-12);
 }
 
 TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {

@@ -163,6 +163,10 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
   save_calibration_ = new QPushButton(tr("Save calibration…"));
   apply_layout->addWidget(after_);
   apply_layout->addWidget(save_calibration_);
+  use_for_robot_ = new QPushButton(tr("Use for this robot"));
+  use_for_robot_->setToolTip(
+      tr("Live scans and every new recording use these angles (kept in the settings)"));
+  apply_layout->addWidget(use_for_robot_);
   layout->addWidget(applying);
   layout->addStretch(1);
 
@@ -192,6 +196,7 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     QString error;
     if (!path.isEmpty() && !SaveCalibration(path, &error)) result_->setText(error);
   });
+  connect(use_for_robot_, &QPushButton::clicked, this, &CalibrationPanel::UseForRobot);
   connect(workspace_, &Workspace::calibrationIteration, this,
           [this](int i, double cost) { plot_->Add(i, cost); });
   connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
@@ -353,6 +358,13 @@ bool CalibrationPanel::SaveCalibration(const QString& path, QString* error) cons
   return true;
 }
 
+void CalibrationPanel::UseForRobot() {
+  const PickCalibrationResult* r = workspace_->calibration_result();
+  if (r == nullptr) return;
+  workspace_->SetRobotCalibration(r->summary.angles);
+  emit robotCalibrationChanged(r->summary.angles);
+}
+
 QString CalibrationPanel::result_text() const { return result_->text(); }
 
 void CalibrationPanel::Refresh() {
@@ -386,6 +398,7 @@ void CalibrationPanel::Refresh() {
   const bool have = workspace_->calibration_result() != nullptr;
   after_->setEnabled(have);
   save_calibration_->setEnabled(have);
+  use_for_robot_->setEnabled(have);
 }
 
 }  // namespace sweepscan::ui

@@ -51,6 +51,8 @@ class CalibrationPanel : public QWidget {
   void SetRefine(bool refine);
   void ShowAfter(bool after);  // The before / after toggle.
   bool SaveCalibration(const QString& path, QString* error) const;
+  // Makes the result the robot's calibration for live scans and new recordings.
+  void UseForRobot();
   QString result_text() const;
 
   // The pairs as the panel holds them (B may be missing on the last one).
@@ -64,6 +66,7 @@ class CalibrationPanel : public QWidget {
 
  signals:
   void solved(bool ok);
+  void robotCalibrationChanged(const MountingError& calibration);
 
  private:
   void Refresh();
@@ -78,6 +81,7 @@ class CalibrationPanel : public QWidget {
   QPushButton* solve_;
   QPushButton* after_;
   QPushButton* save_calibration_;
+  QPushButton* use_for_robot_;
   QLabel* next_pick_;
   QLabel* result_;
   CostPlot* plot_;

@@ -133,6 +133,8 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
       break;
   }
   live_meta_.geometry = live_geometry_;
+  // The robot's saved calibration applies to everything recorded from now on.
+  live_meta_.calibration = robot_calibration_;
   link.session_meta = live_meta_;
   link.decoder.wheel_distance_m = live_geometry_.wheel_distance_m;
   link.decoder.lidar_angle_convention = live_meta_.lidar_angle_convention;
@@ -421,6 +423,7 @@ void Workspace::OnScriptTick() {
 void Workspace::ResetCloud(const Pose2d& start, const RobotGeometry& geometry) {
   ReconstructionOptions options;
   options.pose.initial_pose = start;
+  options.calibration = robot_calibration_;
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(p, [p, options, geometry] {
     p->StopReplay();
@@ -454,6 +457,7 @@ bool Workspace::StartRecording(QString* error) {
   LiveProcessor* processor = processor_;
   ReconstructionOptions options;
   options.pose.initial_pose = live_start_;
+  options.calibration = robot_calibration_;
   const RobotGeometry geometry = live_geometry_;
   std::shared_ptr<std::atomic<bool>> feed = live_feed_;
   QMetaObject::invokeMethod(

@@ -153,6 +153,11 @@ class Workspace : public QObject {
   // the before / after view.
   void ShowCalibrated(const MountingError& calibration);
   const MountingError& shown_calibration() const { return shown_calibration_; }
+  // The robot's mounting calibration: the live cloud is assembled under it
+  // and every new recording carries it in meta.json (MainWindow keeps it in
+  // QSettings). Takes effect at the next connection or recording.
+  void SetRobotCalibration(const MountingError& calibration) { robot_calibration_ = calibration; }
+  const MountingError& robot_calibration() const { return robot_calibration_; }
 
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
@@ -221,6 +226,7 @@ class Workspace : public QObject {
   bool replaying_ = false;
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;
+  MountingError robot_calibration_;
   size_t point_count_ = 0;
   size_t scan_count_ = 0;
 
