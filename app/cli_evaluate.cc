@@ -1,6 +1,9 @@
 // sweepscan-cli evaluate: planes, deviation histograms, room dimensions and
 // density of a cloud, or of a recording before and after a calibration.
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -12,6 +15,7 @@
 #include "app/cli_recording.h"
 #include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
+#include "core/evaluation/cloud_arrays.h"
 #include "core/evaluation/evaluation.h"
 
 namespace sweepscan::app {
@@ -19,13 +23,20 @@ namespace sweepscan::app {
 const char* const kEvaluateUsage =
     "usage: sweepscan-cli evaluate CLOUD.ply|CLOUD.pcd|SESSION|--scenario FILE\n"
     "                              [--calibration CALIB.json] [--pose-source S] [--json]\n"
+    "                              [--threads N] [--timing]\n"
     "\n"
     "Evaluates a cloud (Miao et al. 2022, section 5): statistical outlier removal,\n"
     "RANSAC planes (floor, ceiling, walls) with normal and RMS, signed deviation\n"
     "histograms (Fig. 9), room dimensions from parallel planes (Table 3) and the\n"
     "mean nearest-neighbour distance (Eq. 18-19). With a SESSION or --scenario\n"
     "and --calibration, the cloud is rebuilt from the raw samples twice, without\n"
-    "and with the calibration, and both are reported (before / after).\n";
+    "and with the calibration, and both are reported (before / after).\n"
+    "\n"
+    "  --threads N   worker threads (default: every core; the result does not depend on it)\n"
+    "  --timing      print the wall time of each stage on stderr\n"
+    "  --neighbours kdtree|grid|flann   the shared neighbour structure (for measurements; the\n"
+    "                same result with each): nanoflann (default), voxel hash grid, PCL KdTreeFLANN\n"
+    "On a terminal (and without --json) the progress is shown on stderr.\n";
 
 namespace {
 
@@ -75,10 +86,62 @@ void PrintEvaluation(const std::string& title, const CloudEvaluation& e) {
   }
 }
 
+// Reads a cloud file's positions straight into the evaluation's array; PCL
+// reads what the direct reader does not (ASCII, compressed) and reports the
+// errors.
+Status LoadPositions(const std::string& path, std::vector<Eigen::Vector3f>* pts) {
+  std::string error;
+  if (ReadCloudPositions(path, pts, &error) == CloudReadResult::kOk) return Status::Ok();
+  return LoadCloudPositions(path, pts);
+}
+
+// Progress on a terminal: "evaluate cloud: neighbours  42 %".
+class TerminalProgress {
+ public:
+  TerminalProgress(bool on, std::string title) : on_(on), title_(std::move(title)) {}
+  ~TerminalProgress() {
+    if (shown_) std::fprintf(stderr, "\r\033[K");
+  }
+  EvaluationControl Control() {
+    EvaluationControl c;
+    if (on_) {
+      c.progress = [this](const EvaluationProgress& p) {
+        const int percent = static_cast<int>(100.0 * p.fraction);
+        if (percent != last_percent_ || p.stage != last_stage_) {
+          std::fprintf(stderr, "\r\033[Kevaluate %s: %-10s %3d %%", title_.c_str(),
+                       EvaluationStageName(p.stage), percent);
+          std::fflush(stderr);
+          last_percent_ = percent;
+          last_stage_ = p.stage;
+          shown_ = true;
+        }
+        return true;
+      };
+    }
+    return c;
+  }
+
+ private:
+  bool on_;
+  std::string title_;
+  bool shown_ = false;
+  int last_percent_ = -1;
+  EvaluationStage last_stage_ = EvaluationStage::kNeighbours;
+};
+
+void PrintTiming(const std::string& title, const CloudEvaluation& e) {
+  const EvaluationTiming& t = e.timing;
+  std::fprintf(stderr,
+               "timing %s: %zu points, %d threads: neighbours %.3f s, outliers %.3f s, density %.3f s, "
+               "planes %.3f s, total %.3f s\n",
+               title.c_str(), e.points_in, t.threads, t.neighbours_s, t.outliers_s, t.density_s,
+               t.planes_s, t.total_s);
+}
+
 }  // namespace
 
 int RunEvaluate(int argc, char** argv) {
-  Args args({"json", "help"}, {"scenario", "calibration", "pose-source", "seed"});
+  Args args({"json", "help", "timing"}, {"scenario", "calibration", "pose-source", "seed", "threads", "neighbours"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help evaluate)");
@@ -99,7 +162,37 @@ int RunEvaluate(int argc, char** argv) {
   const auto is_cloud = [](const std::string& p) {
     return p.size() > 4 && (p.substr(p.size() - 4) == ".ply" || p.substr(p.size() - 4) == ".pcd");
   };
-  const EvaluationOptions options;
+  EvaluationOptions options;
+  if (args.Has("threads")) {
+    char* end = nullptr;
+    const long threads = std::strtol(args.Get("threads").c_str(), &end, 10);
+    if (end == nullptr || *end != '\0' || threads < 0 || threads > 1024) {
+      PrintError("--threads needs a number >= 0 (0: every core)");
+      return kExitBadInput;
+    }
+    options.threads = static_cast<int>(threads);
+  }
+  if (args.Has("neighbours")) {
+    const std::string b = args.Get("neighbours");
+    if (b == "kdtree") {
+      options.neighbours = NeighbourBackend::kKdTree;
+    } else if (b == "grid") {
+      options.neighbours = NeighbourBackend::kVoxelGrid;
+    } else if (b == "flann") {
+      options.neighbours = NeighbourBackend::kPclKdTree;
+    } else {
+      PrintError("--neighbours is kdtree (nanoflann, the default), grid (voxel hash grid) or flann (PCL)");
+      return kExitBadInput;
+    }
+  }
+  const bool show_progress = !args.Flag("json") && ::isatty(STDERR_FILENO) != 0;
+  const auto evaluate = [&](const std::string& title, const std::vector<Eigen::Vector3f>& pts,
+                            CloudEvaluation* e) {
+    TerminalProgress progress(show_progress, title);
+    const Status s = EvaluateCloud(pts, options, e, progress.Control());
+    if (s.ok() && args.Flag("timing")) PrintTiming(title, *e);
+    return s;
+  };
   std::vector<std::pair<std::string, CloudEvaluation>> results;
   if (!args.Has("scenario") && args.positional().size() == 1 && is_cloud(args.positional()[0])) {
     if (args.Has("calibration")) {
@@ -108,13 +201,13 @@ int RunEvaluate(int argc, char** argv) {
       return kExitBadInput;
     }
     std::vector<Eigen::Vector3f> pts;
-    const Status s = LoadCloudPositions(args.positional()[0], &pts);
+    const Status s = LoadPositions(args.positional()[0], &pts);
     if (!s.ok()) {
       PrintError(s.message());
       return kExitBadInput;
     }
     CloudEvaluation e;
-    const Status es = EvaluateCloud(pts, options, &e);
+    const Status es = evaluate("cloud", pts, &e);
     if (!es.ok()) {
       PrintError(es.message());
       return kExitFailure;
@@ -133,8 +226,9 @@ int RunEvaluate(int argc, char** argv) {
       std::vector<Eigen::Vector3f> pts;
       pts.reserve(r.points.size());
       for (const auto& p : r.points) pts.emplace_back(p.x, p.y, p.z);
+      r = ReconstructionResult();  // only the positions are evaluated
       CloudEvaluation e;
-      const Status es = EvaluateCloud(pts, options, &e);
+      const Status es = evaluate(title, pts, &e);
       if (!es.ok()) {
         PrintError(es.message());
         return kExitFailure;

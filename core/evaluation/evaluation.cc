@@ -1,40 +1,512 @@
-// All PCL templates of the evaluation live in this translation unit.
 #include "core/evaluation/evaluation.h"
 
-#include <pcl/ModelCoefficients.h>
-#include <pcl/PointIndices.h>
-#include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/kdtree/kdtree_flann.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
-
+#include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/uniform_int.hpp>
+#include <boost/random/variate_generator.hpp>
+#include <chrono>
 #include <cmath>
+#include <limits>
+
+#include "core/evaluation/parallel.h"
 
 namespace sweepscan {
+
+const char* const kEvaluationCancelled = "evaluation: cancelled";
+
 namespace {
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr ToPcl(const std::vector<Eigen::Vector3f>& points,
-                                          const std::vector<size_t>* indices = nullptr) {
-  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  const size_t n = indices != nullptr ? indices->size() : points.size();
-  cloud->resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3f& p = points[indices != nullptr ? (*indices)[i] : i];
-    (*cloud)[i] = pcl::PointXYZ(p.x(), p.y(), p.z());
-  }
-  cloud->width = static_cast<uint32_t>(n);
-  cloud->height = 1;
-  cloud->is_dense = true;
-  return cloud;
-}
+using evaluation_internal::Runner;
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+// Block sizes: fixed (the result must not depend on the thread count) and
+// small enough that a block takes a few milliseconds.
+constexpr size_t kQueryBlock = 4096;
+constexpr size_t kPassBlock = 1 << 16;
+constexpr int kHypothesisBatch = 32;
+
+Status Cancelled() { return Status::Error(kEvaluationCancelled); }
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+NeighbourIndex::ParallelFor ForOf(Runner* runner) {
+  return [runner](size_t n, size_t block,
+                  const std::function<void(size_t, size_t, size_t)>& body) {
+    return runner->For(n, block, body, 0.0, 0.05);
+  };
+}
+
+// What the shared neighbour pass leaves per point (original indexing).
+struct NeighbourPass {
+  int k = 0;                       // outlier k (0: none)
+  int queried = 0;                 // neighbours asked for (itself included)
+  std::vector<float> mean_dist;    // mean distance to the k neighbours (k > 0)
+  std::vector<uint32_t> nearest;   // nearest other point, kNone if none
+  std::vector<float> nearest_d2;
+};
+
+bool RunNeighbourPass(const NeighbourIndex& index, int k, Runner* runner, NeighbourPass* pass) {
+  const size_t n = index.size();
+  pass->k = k;
+  pass->queried = static_cast<int>(std::min<size_t>(n, static_cast<size_t>(std::max(k, 1) + 1)));
+  if (k > 0) pass->mean_dist.assign(n, 0.0f);
+  pass->nearest.assign(n, kNone);
+  pass->nearest_d2.assign(n, 0.0f);
+  const std::vector<uint32_t>& order = index.order();
+  const size_t kq = static_cast<size_t>(pass->queried);
+  return runner->For(
+      n, kQueryBlock,
+      [&](size_t, size_t begin, size_t end) {
+        std::vector<uint32_t> idx((end - begin) * kq);
+        std::vector<float> d2((end - begin) * kq);
+        index.KnnRange(begin, end, pass->queried, idx.data(), d2.data());
+        for (size_t s = begin; s < end; ++s) {
+          const uint32_t* pi = &idx[(s - begin) * kq];
+          const float* pd = &d2[(s - begin) * kq];
+          const uint32_t i = order[s];
+          if (k > 0) {
+            // PCL: the first result is taken to be the point itself.
+            double sum = 0.0;
+            for (size_t j = 1; j < kq; ++j) sum += std::sqrt(static_cast<double>(pd[j]));
+            pass->mean_dist[i] = static_cast<float>(sum / k);
+          }
+          for (size_t j = 0; j < kq; ++j) {
+            if (pi[j] != s) {
+              pass->nearest[i] = order[pi[j]];
+              pass->nearest_d2[i] = pd[j];
+              break;
+            }
+          }
+        }
+      },
+      0.05, 1.0);
+}
+
+// PCL StatisticalOutlierRemoval::applyFilterIndices' statistics, summed in
+// blocks combined in order.
+bool OutlierFlags(const NeighbourPass& pass, double stddev_mult, Runner* runner,
+                  std::vector<uint8_t>* kept) {
+  const size_t n = pass.mean_dist.size();
+  const size_t blocks = Runner::Blocks(n, kPassBlock);
+  std::vector<double> sums(blocks), sq_sums(blocks);
+  if (!runner->For(n, kPassBlock, [&](size_t b, size_t begin, size_t end) {
+        double sum = 0.0, sq_sum = 0.0;
+        for (size_t i = begin; i < end; ++i) {
+          const float d = pass.mean_dist[i];
+          sum += d;
+          sq_sum += d * d;
+        }
+        sums[b] = sum;
+        sq_sums[b] = sq_sum;
+      }, 0.0, 0.5)) {
+    return false;
+  }
+  double sum = 0.0, sq_sum = 0.0;
+  for (size_t b = 0; b < blocks; ++b) {
+    sum += sums[b];
+    sq_sum += sq_sums[b];
+  }
+  const double count = static_cast<double>(n);
+  const double mean = sum / count;
+  const double variance = (sq_sum - sum * sum / count) / (count - 1.0);
+  const double threshold = mean + stddev_mult * std::sqrt(variance);
+  kept->resize(n);
+  return runner->For(n, kPassBlock, [&](size_t, size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      (*kept)[i] = static_cast<double>(pass.mean_dist[i]) <= threshold ? 1 : 0;
+    }
+  }, 0.5, 1.0);
+}
+
+// Eq. 18-19 over `clean` (original indices of the kept points), every
+// stride-th of them: the nearest kept neighbour from the shared pass, a new
+// query only where that neighbour was removed.
+bool Density(const std::vector<Eigen::Vector3f>& points, const NeighbourIndex& index,
+             const NeighbourPass& pass, const std::vector<uint8_t>* kept,
+             const std::vector<uint32_t>& clean, size_t max_queries, Runner* runner,
+             double* mean_m, size_t* queries) {
+  const size_t m = clean.size();
+  const size_t stride = max_queries > 0 ? std::max<size_t>(1, m / max_queries) : 1;
+  const size_t nq = (m + stride - 1) / stride;
+  const size_t blocks = Runner::Blocks(nq, kQueryBlock);
+  std::vector<double> sums(blocks);
+  std::vector<size_t> counts(blocks);
+  const auto is_kept = [&](uint32_t j) { return kept == nullptr || (*kept)[j] != 0; };
+  if (!runner->For(nq, kQueryBlock, [&](size_t b, size_t begin, size_t end) {
+        double sum = 0.0;
+        size_t count = 0;
+        for (size_t qi = begin; qi < end; ++qi) {
+          const uint32_t i = clean[qi * stride];
+          if (pass.nearest[i] != kNone && is_kept(pass.nearest[i])) {
+            sum += std::sqrt(static_cast<double>(pass.nearest_d2[i]));
+            ++count;
+            continue;
+          }
+          // The nearest neighbour was an outlier: the nearest kept point
+          // other than this one, in one walk of the tree.
+          uint32_t j;
+          float dj;
+          const uint32_t self = i;
+          if (index.NearestWhere(
+                  points[i].data(),
+                  [&](uint32_t s) {
+                    const uint32_t o = index.order()[s];
+                    return o != self && is_kept(o);
+                  },
+                  &j, &dj)) {
+            sum += std::sqrt(static_cast<double>(dj));
+            ++count;
+          }
+        }
+        sums[b] = sum;
+        counts[b] = count;
+      })) {
+    return false;
+  }
+  double sum = 0.0;
+  size_t count = 0;
+  for (size_t b = 0; b < blocks; ++b) {
+    sum += sums[b];
+    count += counts[b];
+  }
+  *mean_m = count > 0 ? sum / static_cast<double>(count) : 0.0;
+  *queries = count;
+  return true;
+}
+
+// FitPlane (core/geometry/plane.h) from moments about a reference point r:
+// s1 = sum (p - r), s2 = sum (p - r)(p - r)^T.
+bool PlaneFromMoments(size_t count, const Eigen::Vector3d& r, const Eigen::Vector3d& s1,
+                      const Eigen::Matrix3d& s2, Plane* plane) {
+  if (count < 3) return false;
+  const double n = static_cast<double>(count);
+  const Eigen::Vector3d mean = s1 / n;
+  const Eigen::Matrix3d scatter = s2 - n * mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  const Eigen::Vector3d ev = eig.eigenvalues();
+  if (ev[1] <= 1e-12 * std::max(1.0, ev[2])) return false;
+  plane->normal = eig.eigenvectors().col(0).normalized();
+  plane->centroid = r + mean;
+  plane->d = -plane->normal.dot(plane->centroid);
+  plane->rms = std::sqrt(std::max(0.0, ev[0]) / n);
+  plane->count = count;
+  return true;
+}
+
+struct Moments {
+  size_t count = 0;
+  Eigen::Vector3d s1 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
+};
+
+// RANSAC's subsample as a structure of arrays.
+struct Soa {
+  std::vector<float> x, y, z;
+};
+
+// |(a, b, c, d) . (x, y, z, 1)| summed as Eigen's SSE dot of two
+// Vector4f does ((ax + cz) + (by + d)), as PCL's plane model computes it.
+inline float Distance(float a, float b, float c, float d, float x, float y, float z) {
+  return std::abs((a * x + c * z) + (b * y + d));
+}
+
+// The largest float t with (double)t < threshold: |dist| <= t in float is
+// PCL's |dist| < threshold in double.
+float FloatBelow(double threshold) {
+  float t = static_cast<float>(threshold);
+  while (static_cast<double>(t) >= threshold) t = std::nextafter(t, 0.0f);
+  return t;
+}
+
+// Number of subsample points within t (FloatBelow) of the plane (a, b, c, d):
+// a loop over the structure of arrays that the compiler vectorises.
+size_t CountWithin(const Soa& s, float a, float b, float c, float d, float t) {
+  const size_t m = s.x.size();
+  const float* x = s.x.data();
+  const float* y = s.y.data();
+  const float* z = s.z.data();
+  uint32_t count = 0;
+  for (size_t i = 0; i < m; ++i) count += Distance(a, b, c, d, x[i], y[i], z[i]) <= t ? 1u : 0u;
+  return count;
+}
+
+DeviationHistogram HistogramParallel(const std::vector<Eigen::Vector3f>& points,
+                                     const std::vector<uint32_t>& indices, const Plane& plane,
+                                     double bin_m, double half_range_m, Runner* runner,
+                                     bool* ok) {
+  DeviationHistogram h;
+  h.bin_m = bin_m;
+  const size_t bins =
+      std::max<size_t>(1, static_cast<size_t>(std::ceil(2.0 * half_range_m / bin_m)));
+  h.min_m = -0.5 * bins * bin_m;
+  h.counts.assign(bins, 0);
+  const size_t blocks = Runner::Blocks(indices.size(), kPassBlock);
+  std::vector<std::vector<uint64_t>> counts(blocks);
+  std::vector<double> sums(blocks), sums2(blocks);
+  *ok = runner->For(indices.size(), kPassBlock, [&](size_t b, size_t begin, size_t end) {
+    std::vector<uint64_t>& c = counts[b];
+    c.assign(bins, 0);
+    double sum = 0.0, sum2 = 0.0;
+    for (size_t k = begin; k < end; ++k) {
+      const double r = plane.SignedDistance(points[indices[k]].cast<double>());
+      sum += r;
+      sum2 += r * r;
+      const double f = std::floor((r - h.min_m) / bin_m);
+      const size_t bin = f < 0 ? 0 : std::min(bins - 1, static_cast<size_t>(f));
+      ++c[bin];
+    }
+    sums[b] = sum;
+    sums2[b] = sum2;
+  });
+  if (!*ok) return h;
+  double sum = 0.0, sum2 = 0.0;
+  for (size_t b = 0; b < blocks; ++b) {
+    for (size_t i = 0; i < bins; ++i) h.counts[i] += counts[b][i];
+    sum += sums[b];
+    sum2 += sums2[b];
+  }
+  h.count = indices.size();
+  if (h.count > 0) {
+    h.mean_m = sum / h.count;
+    h.stddev_m = std::sqrt(std::max(0.0, sum2 / h.count - h.mean_m * h.mean_m));
+  }
+  return h;
+}
+
+// Iterative RANSAC planes (see ExtractPlanes). members may be null.
+Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
+                         const EvaluationOptions& options, Runner* runner,
+                         std::vector<EvaluatedPlane>* planes,
+                         std::vector<std::vector<size_t>>* members) {
+  planes->clear();
+  if (members != nullptr) members->clear();
+  if (points.size() < 3) {
+    return Status::Error("plane extraction: " + std::to_string(points.size()) + " points");
+  }
+  const size_t n = points.size();
+  std::vector<uint32_t> remaining(n), rest;
+  for (size_t i = 0; i < n; ++i) remaining[i] = static_cast<uint32_t>(i);
+  const size_t min_count =
+      std::max<size_t>(3, static_cast<size_t>(options.min_plane_fraction * points.size()));
+  const double cos_level = std::cos(options.classify_angle_deg / kRadToDeg);
+  const double sin_plumb = std::sin(options.classify_angle_deg / kRadToDeg);
+  const float threshold = FloatBelow(options.plane_distance_m);
+  Soa sub;
+  std::vector<uint8_t> in_band;
+  while (static_cast<int>(planes->size()) < options.max_planes && remaining.size() >= min_count) {
+    runner->Report(std::max(static_cast<double>(planes->size()) / options.max_planes,
+                            1.0 - static_cast<double>(remaining.size()) / static_cast<double>(n)));
+    if (runner->Cancelled()) return Cancelled();
+    // The even subsample RANSAC runs on.
+    size_t m = remaining.size();
+    double step = 1.0;
+    if (options.ransac_max_points > 0 && remaining.size() > options.ransac_max_points) {
+      m = options.ransac_max_points;
+      step = static_cast<double>(remaining.size()) / static_cast<double>(m);
+    }
+    sub.x.resize(m);
+    sub.y.resize(m);
+    sub.z.resize(m);
+    for (size_t k = 0; k < m; ++k) {
+      const Eigen::Vector3f& p =
+          points[remaining[step == 1.0 ? k : static_cast<size_t>(static_cast<double>(k) * step)]];
+      sub.x[k] = p.x();
+      sub.y[k] = p.y();
+      sub.z[k] = p.z();
+    }
+    // RANSAC exactly as PCL's SACSegmentation runs it (so that the planes are
+    // those of the PCL version): a fresh boost::mt19937 seeded 12345 per
+    // plane (12345 + seed - 1 here), samples drawn by partial shuffles of
+    // the subsample's indices, rejected when the cross product's norm is
+    // below Eigen's float precision, coefficients and distances in float in
+    // Eigen's order, the best by inlier count, stopping after
+    // log(1 - 0.99) / log(1 - w^3) hypotheses. The hypotheses are drawn in
+    // order and scored in batches on all threads; the stop is decided in
+    // hypothesis order, so the result is PCL's on any thread count.
+    boost::mt19937 rng_alg(static_cast<uint32_t>(12345u + options.seed - 1));
+    boost::uniform_int<> rng_dist(0, std::numeric_limits<int>::max());
+    boost::variate_generator<boost::mt19937&, boost::uniform_int<>> rnd(rng_alg, rng_dist);
+    std::vector<uint32_t> shuffled(m);
+    for (size_t k = 0; k < m; ++k) shuffled[k] = static_cast<uint32_t>(k);
+    const auto draw = [&](Eigen::Vector4f* model) {
+      for (int check = 0; check < 1000; ++check) {
+        for (size_t i = 0; i < 3; ++i) {
+          std::swap(shuffled[i], shuffled[i + static_cast<size_t>(rnd()) % (m - i)]);
+        }
+        const Eigen::Vector3f p0(sub.x[shuffled[0]], sub.y[shuffled[0]], sub.z[shuffled[0]]);
+        const Eigen::Vector3f p1(sub.x[shuffled[1]], sub.y[shuffled[1]], sub.z[shuffled[1]]);
+        const Eigen::Vector3f p2(sub.x[shuffled[2]], sub.y[shuffled[2]], sub.z[shuffled[2]]);
+        const Eigen::Vector3f cross = (p1 - p0).cross(p2 - p0);
+        const float norm = cross.stableNorm();
+        if (norm < Eigen::NumTraits<float>::dummy_precision()) continue;
+        const Eigen::Vector3f normal = cross / norm;
+        *model << normal, -1.0f * normal.dot(p0);
+        return true;
+      }
+      return false;  // PCL: no sample could be selected
+    };
+    const size_t m_size = m;
+    const double one_over_indices = 1.0 / static_cast<double>(m_size);
+    const double log_probability = std::log(1.0 - 0.99);
+    double k_needed = std::numeric_limits<double>::max();
+    int iterations = 0;
+    size_t best_count = 0;
+    Eigen::Vector4f best_model = Eigen::Vector4f::Zero();
+    bool have_best = false, stop = false;
+    std::vector<Eigen::Vector4f> batch;
+    std::vector<size_t> batch_count(kHypothesisBatch);
+    while (!stop) {
+      batch.clear();
+      for (int h = 0; h < kHypothesisBatch; ++h) {
+        Eigen::Vector4f model;
+        if (!draw(&model)) break;
+        batch.push_back(model);
+      }
+      if (batch.size() < static_cast<size_t>(kHypothesisBatch)) stop = true;
+      if (!runner->For(batch.size(), 1, [&](size_t h, size_t, size_t) {
+            const Eigen::Vector4f& q = batch[h];
+            batch_count[h] = CountWithin(sub, q[0], q[1], q[2], q[3], threshold);
+          })) {
+        return Cancelled();
+      }
+      for (size_t h = 0; h < batch.size(); ++h) {
+        if (batch_count[h] > best_count) {
+          have_best = true;
+          best_count = batch_count[h];
+          best_model = batch[h];
+          const double w = static_cast<double>(best_count) * one_over_indices;
+          double p_outliers = 1.0 - std::pow(w, 3.0);
+          p_outliers = std::max(std::numeric_limits<double>::epsilon(), p_outliers);
+          p_outliers = std::min(1.0 - std::numeric_limits<double>::epsilon(), p_outliers);
+          k_needed = log_probability / std::log(p_outliers);
+        }
+        ++iterations;
+        if (iterations > k_needed || iterations > options.ransac_iterations) {
+          stop = true;
+          break;
+        }
+      }
+    }
+    const double scale = static_cast<double>(m) / static_cast<double>(remaining.size());
+    if (!have_best || static_cast<double>(best_count) < scale * static_cast<double>(min_count)) {
+      break;
+    }
+    std::vector<Eigen::Vector3d> in;
+    in.reserve(best_count);
+    for (size_t k = 0; k < m; ++k) {
+      if (Distance(best_model[0], best_model[1], best_model[2], best_model[3], sub.x[k], sub.y[k],
+                   sub.z[k]) <= threshold) {
+        in.emplace_back(sub.x[k], sub.y[k], sub.z[k]);
+      }
+    }
+    EvaluatedPlane ep;
+    if (!FitPlane(in, &ep.plane)) break;
+    // One pass over the remaining points: the band of the least-squares
+    // plane and the moments of its points (about the subsample's centroid).
+    const Plane first = ep.plane;
+    const Eigen::Vector3d ref = first.centroid;
+    const size_t blocks = Runner::Blocks(remaining.size(), kPassBlock);
+    std::vector<Moments> moments(blocks);
+    in_band.resize(remaining.size());
+    if (!runner->For(remaining.size(), kPassBlock, [&](size_t b, size_t begin, size_t end) {
+          Moments& mo = moments[b];
+          for (size_t k = begin; k < end; ++k) {
+            const Eigen::Vector3d p = points[remaining[k]].cast<double>();
+            const bool inside = std::abs(first.SignedDistance(p)) < options.plane_distance_m;
+            in_band[k] = inside ? 1 : 0;
+            if (inside) {
+              const Eigen::Vector3d q = p - ref;
+              ++mo.count;
+              mo.s1 += q;
+              mo.s2.noalias() += q * q.transpose();
+            }
+          }
+        })) {
+      return Cancelled();
+    }
+    Moments all;
+    for (const Moments& mo : moments) {
+      all.count += mo.count;
+      all.s1 += mo.s1;
+      all.s2 += mo.s2;
+    }
+    if (all.count < min_count) break;
+    if (!PlaneFromMoments(all.count, ref, all.s1, all.s2, &ep.plane)) break;
+    std::vector<uint32_t> mine;
+    mine.reserve(all.count);
+    rest.clear();
+    rest.reserve(remaining.size() - all.count);
+    for (size_t k = 0; k < remaining.size(); ++k) {
+      (in_band[k] ? mine : rest).push_back(remaining[k]);
+    }
+    const double nz = std::abs(ep.plane.normal.z());
+    if (nz >= cos_level) {
+      // Orient the normal up; the floor has the room above it.
+      if (ep.plane.normal.z() < 0) ep.plane.normal = -ep.plane.normal, ep.plane.d = -ep.plane.d;
+      ep.tilt_deg = std::acos(std::min(1.0, nz)) * kRadToDeg;
+      ep.kind = "level";  // floor or ceiling, decided below
+    } else if (nz <= sin_plumb) {
+      ep.kind = "wall";
+      ep.tilt_deg = std::asin(std::min(1.0, nz)) * kRadToDeg;
+    } else {
+      ep.kind = "other";
+      ep.tilt_deg = std::asin(std::min(1.0, nz)) * kRadToDeg;
+    }
+    bool ok = true;
+    ep.deviations = HistogramParallel(points, mine, ep.plane, options.histogram_bin_m,
+                                      options.histogram_half_range_m, runner, &ok);
+    if (!ok) return Cancelled();
+    planes->push_back(ep);
+    if (members != nullptr) members->emplace_back(mine.begin(), mine.end());
+    remaining.swap(rest);
+  }
+  // Level planes come in size order: the largest below the cloud's mean
+  // height is the floor, the largest above it the ceiling (by size, not by
+  // extreme height: an uncalibrated cloud holds tilted ghost copies of both).
+  double mean_z = 0.0;
+  for (const auto& p : points) mean_z += p.z();
+  mean_z /= static_cast<double>(points.size());
+  bool have_floor = false, have_ceiling = false;
+  for (EvaluatedPlane& ep : *planes) {
+    if (ep.kind != "level") continue;
+    const bool below = ep.plane.centroid.z() < mean_z;
+    if (below && !have_floor) {
+      ep.kind = "floor";
+      have_floor = true;
+    } else if (!below && !have_ceiling) {
+      ep.kind = "ceiling";
+      have_ceiling = true;
+    } else {
+      ep.kind = "other";
+    }
+  }
+  runner->Report(1.0);
+  return Status::Ok();
+}
+
+Status CheckFinite(const std::vector<Eigen::Vector3f>& points, const char* what) {
+  for (const auto& p : points) {
+    if (!p.allFinite()) return Status::Error(std::string(what) + ": the cloud has non-finite points");
+  }
+  return Status::Ok();
+}
 
 }  // namespace
+
+const char* EvaluationStageName(EvaluationStage stage) {
+  switch (stage) {
+    case EvaluationStage::kNeighbours: return "neighbours";
+    case EvaluationStage::kOutliers: return "outliers";
+    case EvaluationStage::kDensity: return "density";
+    case EvaluationStage::kPlanes: return "planes";
+    case EvaluationStage::kDone: return "done";
+  }
+  return "?";
+}
 
 bool EvaluationOptions::IsValid(std::string* error) const {
   if (outlier_k < 0 || !(outlier_stddev_mult > 0.0)) {
@@ -56,26 +528,32 @@ bool EvaluationOptions::IsValid(std::string* error) const {
     *error = "evaluation: angles must be in (0, 45) deg and min_dimension_m >= 0";
     return false;
   }
+  if (threads < 0) {
+    *error = "evaluation: threads must be >= 0";
+    return false;
+  }
   return true;
 }
 
 Status RemoveStatisticalOutliers(const std::vector<Eigen::Vector3f>& points, int k,
                                  double stddev_mult, std::vector<size_t>* kept) {
   kept->clear();
-  for (const auto& p : points) {
-    if (!p.allFinite()) return Status::Error("outlier removal: the cloud has non-finite points");
-  }
+  Status s = CheckFinite(points, "outlier removal");
+  if (!s.ok()) return s;
   if (k <= 0 || points.size() <= static_cast<size_t>(k)) {
     for (size_t i = 0; i < points.size(); ++i) kept->push_back(i);
     return Status::Ok();
   }
-  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
-  sor.setInputCloud(ToPcl(points));
-  sor.setMeanK(k);
-  sor.setStddevMulThresh(stddev_mult);
-  pcl::Indices indices;
-  sor.filter(indices);
-  kept->assign(indices.begin(), indices.end());
+  Runner runner(0, nullptr);
+  NeighbourIndex index;
+  index.Build(points, NeighbourBackend::kKdTree, ForOf(&runner));
+  NeighbourPass pass;
+  RunNeighbourPass(index, k, &runner, &pass);
+  std::vector<uint8_t> flags;
+  OutlierFlags(pass, stddev_mult, &runner, &flags);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (flags[i]) kept->push_back(i);
+  }
   return Status::Ok();
 }
 
@@ -110,105 +588,8 @@ Status ExtractPlanes(const std::vector<Eigen::Vector3f>& points, const Evaluatio
                      std::vector<std::vector<size_t>>* members) {
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(error);
-  planes->clear();
-  members->clear();
-  if (points.size() < 3) {
-    return Status::Error("plane extraction: " + std::to_string(points.size()) + " points");
-  }
-  std::vector<size_t> remaining(points.size());
-  for (size_t i = 0; i < points.size(); ++i) remaining[i] = i;
-  const size_t min_count =
-      std::max<size_t>(3, static_cast<size_t>(options.min_plane_fraction * points.size()));
-  pcl::SACSegmentation<pcl::PointXYZ> seg;
-  seg.setOptimizeCoefficients(false);  // our least-squares refit below
-  seg.setModelType(pcl::SACMODEL_PLANE);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setDistanceThreshold(options.plane_distance_m);
-  seg.setMaxIterations(options.ransac_iterations);
-  const double cos_level = std::cos(options.classify_angle_deg / kRadToDeg);
-  const double sin_plumb = std::sin(options.classify_angle_deg / kRadToDeg);
-  while (static_cast<int>(planes->size()) < options.max_planes && remaining.size() >= min_count) {
-    // Seeded per plane so that the result is reproducible.
-    srand(static_cast<unsigned>(options.seed + planes->size()));
-    std::vector<size_t> sample;
-    const std::vector<size_t>* ransac_input = &remaining;
-    if (options.ransac_max_points > 0 && remaining.size() > options.ransac_max_points) {
-      const double step =
-          static_cast<double>(remaining.size()) / static_cast<double>(options.ransac_max_points);
-      sample.reserve(options.ransac_max_points);
-      for (size_t k = 0; k < options.ransac_max_points; ++k) {
-        sample.push_back(remaining[static_cast<size_t>(k * step)]);
-      }
-      ransac_input = &sample;
-    }
-    seg.setInputCloud(ToPcl(points, ransac_input));
-    pcl::PointIndices inliers;
-    pcl::ModelCoefficients coefficients;
-    seg.segment(inliers, coefficients);
-    // The subsample holds the plane in proportion.
-    const double scale =
-        static_cast<double>(ransac_input->size()) / static_cast<double>(remaining.size());
-    if (static_cast<double>(inliers.indices.size()) < scale * static_cast<double>(min_count) ||
-        coefficients.values.size() != 4) {
-      break;
-    }
-    std::vector<Eigen::Vector3d> in;
-    in.reserve(inliers.indices.size());
-    for (int i : inliers.indices) in.push_back(points[(*ransac_input)[i]].cast<double>());
-    EvaluatedPlane ep;
-    if (!FitPlane(in, &ep.plane)) break;
-    // Final inliers: within the band of the least-squares plane.
-    std::vector<size_t> mine, rest;
-    for (size_t i : remaining) {
-      (std::abs(ep.plane.SignedDistance(points[i].cast<double>())) < options.plane_distance_m
-           ? mine
-           : rest)
-          .push_back(i);
-    }
-    if (mine.size() < min_count) break;
-    in.clear();
-    for (size_t i : mine) in.push_back(points[i].cast<double>());
-    if (!FitPlane(in, &ep.plane)) break;
-    const double nz = std::abs(ep.plane.normal.z());
-    if (nz >= cos_level) {
-      // Orient the normal up; the floor has the room above it.
-      if (ep.plane.normal.z() < 0) ep.plane.normal = -ep.plane.normal, ep.plane.d = -ep.plane.d;
-      ep.tilt_deg = std::acos(std::min(1.0, nz)) * kRadToDeg;
-      ep.kind = "level";  // floor or ceiling, decided below
-    } else if (nz <= sin_plumb) {
-      ep.kind = "wall";
-      ep.tilt_deg = std::asin(std::min(1.0, nz)) * kRadToDeg;
-    } else {
-      ep.kind = "other";
-      ep.tilt_deg = std::asin(std::min(1.0, nz)) * kRadToDeg;
-    }
-    ep.deviations = MakeDeviationHistogram(points, mine, ep.plane, options.histogram_bin_m,
-                                           options.histogram_half_range_m);
-    planes->push_back(ep);
-    members->push_back(std::move(mine));
-    remaining.swap(rest);
-  }
-  // Level planes come in size order: the largest below the cloud's mean
-  // height is the floor, the largest above it the ceiling (by size, not by
-  // extreme height: an uncalibrated cloud holds tilted ghost copies of both).
-  double mean_z = 0.0;
-  for (const auto& p : points) mean_z += p.z();
-  mean_z /= static_cast<double>(points.size());
-  bool have_floor = false, have_ceiling = false;
-  for (EvaluatedPlane& ep : *planes) {
-    if (ep.kind != "level") continue;
-    const bool below = ep.plane.centroid.z() < mean_z;
-    if (below && !have_floor) {
-      ep.kind = "floor";
-      have_floor = true;
-    } else if (!below && !have_ceiling) {
-      ep.kind = "ceiling";
-      have_ceiling = true;
-    } else {
-      ep.kind = "other";
-    }
-  }
-  return Status::Ok();
+  Runner runner(options.threads, nullptr);
+  return ExtractPlanesWith(points, options, &runner, planes, members);
 }
 
 Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, size_t max_queries,
@@ -216,25 +597,17 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
   if (points.size() < 2) {
     return Status::Error("density: need at least 2 points, got " + std::to_string(points.size()));
   }
-  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
-  const auto cloud = ToPcl(points);
-  tree.setInputCloud(cloud);
-  const size_t n = points.size();
-  const size_t stride = max_queries > 0 ? std::max<size_t>(1, n / max_queries) : 1;
-  pcl::Indices idx(2);
-  std::vector<float> d2(2);
-  double sum = 0.0;
-  size_t count = 0;
-  for (size_t i = 0; i < n; i += stride) {
-    // k = 2: the first neighbour is the point itself (distance 0). Exact
-    // duplicates count as distance 0, as Eq. 18 does.
-    if (tree.nearestKSearch((*cloud)[i], 2, idx, d2) < 2) continue;
-    sum += std::sqrt(static_cast<double>(d2[1]));
-    ++count;
-  }
-  if (count == 0) return Status::Error("density: no neighbours found");
-  *mean_m = sum / static_cast<double>(count);
-  *queries = count;
+  Status s = CheckFinite(points, "density");
+  if (!s.ok()) return s;
+  Runner runner(0, nullptr);
+  NeighbourIndex index;
+  index.Build(points, NeighbourBackend::kKdTree, ForOf(&runner));
+  NeighbourPass pass;
+  RunNeighbourPass(index, 0, &runner, &pass);
+  std::vector<uint32_t> all(points.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<uint32_t>(i);
+  Density(points, index, pass, nullptr, all, max_queries, &runner, mean_m, queries);
+  if (*queries == 0) return Status::Error("density: no neighbours found");
   return Status::Ok();
 }
 
@@ -259,25 +632,94 @@ std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& pla
 
 Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
                      CloudEvaluation* result) {
+  return EvaluateCloud(points, options, result, EvaluationControl());
+}
+
+Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
+                     CloudEvaluation* result, const EvaluationControl& control) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(error);
   *result = CloudEvaluation();
   result->points_in = points.size();
-  std::vector<size_t> kept;
-  Status s =
-      RemoveStatisticalOutliers(points, options.outlier_k, options.outlier_stddev_mult, &kept);
+  Status s = CheckFinite(points, "outlier removal");
   if (!s.ok()) return s;
-  std::vector<Eigen::Vector3f> clean;
-  clean.reserve(kept.size());
-  for (size_t i : kept) clean.push_back(points[i]);
-  result->points_after_outliers = clean.size();
-  std::vector<std::vector<size_t>> members;
-  s = ExtractPlanes(clean, options, &result->planes, &members);
+  if (points.size() >= std::numeric_limits<uint32_t>::max()) {
+    return Status::Error("evaluation: more than 2^32 - 1 points");
+  }
+  Runner runner(options.threads, &control);
+  result->timing.threads = runner.threads();
+  const size_t n = points.size();
+
+  // 1. One neighbour structure; every point's k + 1 nearest (itself included).
+  runner.Stage(EvaluationStage::kNeighbours);
+  auto t = Clock::now();
+  const int k = options.outlier_k > 0 && n > static_cast<size_t>(options.outlier_k)
+                    ? options.outlier_k
+                    : 0;
+  NeighbourIndex index;
+  NeighbourPass pass;
+  if (n >= 2) {
+    if (!index.Build(points, options.neighbours, ForOf(&runner))) return Cancelled();
+    if (!RunNeighbourPass(index, k, &runner, &pass)) return Cancelled();
+  }
+  result->timing.neighbours_s = Seconds(t);
+
+  // 2. Outliers: PCL's statistics on the mean neighbour distances.
+  runner.Stage(EvaluationStage::kOutliers);
+  t = Clock::now();
+  std::vector<uint8_t> kept;
+  if (k > 0) {
+    if (!OutlierFlags(pass, options.outlier_stddev_mult, &runner, &kept)) return Cancelled();
+  }
+  std::vector<uint32_t> clean_index;
+  clean_index.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (kept.empty() || kept[i]) clean_index.push_back(static_cast<uint32_t>(i));
+  }
+  result->points_after_outliers = clean_index.size();
+  result->timing.outliers_s = Seconds(t);
+
+  // 3. Density on the clean cloud, from the same neighbours.
+  runner.Stage(EvaluationStage::kDensity);
+  t = Clock::now();
+  double density = 0.0;
+  size_t density_queries = 0;
+  if (clean_index.size() >= 2) {
+    if (!Density(points, index, pass, kept.empty() ? nullptr : &kept, clean_index,
+                 options.density_max_queries, &runner, &density, &density_queries)) {
+      return Cancelled();
+    }
+  }
+  // The neighbour structure is no longer needed: free it before the planes.
+  index.Build({});
+  pass = NeighbourPass();
+  kept = std::vector<uint8_t>();
+  std::vector<Eigen::Vector3f> clean(clean_index.size());
+  for (size_t c = 0; c < clean_index.size(); ++c) clean[c] = points[clean_index[c]];
+  clean_index = std::vector<uint32_t>();
+  result->timing.density_s = Seconds(t);
+
+  // 4. Planes, histograms, dimensions.
+  runner.Stage(EvaluationStage::kPlanes);
+  t = Clock::now();
+  s = ExtractPlanesWith(clean, options, &runner, &result->planes, nullptr);
   if (!s.ok()) return s;
   result->dimensions =
       RoomDimensions(result->planes, options.parallel_angle_deg, options.min_dimension_m);
-  return MeanNearestNeighbourDistance(clean, options.density_max_queries,
-                                      &result->mean_nn_distance_m, &result->density_queries);
+  result->timing.planes_s = Seconds(t);
+
+  if (clean.size() < 2) {
+    return Status::Error("density: need at least 2 points, got " + std::to_string(clean.size()));
+  }
+  if (density_queries == 0) return Status::Error("density: no neighbours found");
+  result->mean_nn_distance_m = density;
+  result->density_queries = density_queries;
+  result->timing.total_s = Seconds(t_start);
+  if (runner.Cancelled()) return Cancelled();
+  runner.Done();
+  return Status::Ok();
 }
 
 }  // namespace sweepscan

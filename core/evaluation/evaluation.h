@@ -4,18 +4,35 @@
 // average nearest-neighbour distance as density (its Eq. 18-19) and the
 // distances between parallel planes as room dimensions (its Table 3).
 //
-// PCL does the heavy lifting (StatisticalOutlierRemoval, SACSegmentation
-// with SACMODEL_PLANE, KdTreeFLANN); all PCL templates live in
-// evaluation.cc. Pure functions, callable from any thread.
+// One neighbour structure (core/evaluation/neighbours.h) is built per
+// evaluation and shared: the k neighbours that outlier removal asks for also
+// give each point its nearest neighbour, so the density needs new queries
+// only for points whose nearest neighbour was removed as an outlier. The
+// outlier statistics are PCL's StatisticalOutlierRemoval's, to the point.
+// Neighbour queries, RANSAC scoring and the passes over all points run on
+// oneTBB's threads in blocks of a fixed size whose results are combined in
+// block order: the result does not depend on the thread count, bit for bit.
+// RANSAC scores its hypotheses on an even subsample held as a structure of
+// arrays (vectorised loops) and draws the sample sequence of PCL's
+// SACSegmentation (boost::mt19937 seeded 12345 per plane, partial shuffles),
+// so its planes are those of the PCL version this replaced; each plane's
+// band of inliers and its least-squares refit take one pass over the
+// remaining points.
+//
+// Pure functions, callable from any thread; progress and cancel through
+// EvaluationControl. docs/performance.md ("Evaluation") has the figures.
 #ifndef SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_
 #define SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_
 
 #include <Eigen/Core>
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "core/common/status.h"
+#include "core/evaluation/neighbours.h"
 #include "core/geometry/plane.h"
 
 namespace sweepscan {
@@ -51,9 +68,48 @@ struct EvaluationOptions {
   double min_dimension_m = 0.5;
   // Density: at most this many query points (evenly spaced), 0 = all.
   size_t density_max_queries = 0;
+  // RANSAC's generator starts at 12345 + seed - 1 for every plane (seed 1:
+  // PCL's own sequence).
   uint64_t seed = 1;
+  // Worker threads (0 = every hardware thread; never more than those). The
+  // result does not depend on it.
+  int threads = 0;
+  // The shared neighbour structure (docs/performance.md compares them).
+  NeighbourBackend neighbours = NeighbourBackend::kKdTree;
 
   bool IsValid(std::string* error) const;
+};
+
+// Stages in order; kDone is reported once, with fraction 1, at the end of a
+// successful evaluation.
+enum class EvaluationStage { kNeighbours, kOutliers, kDensity, kPlanes, kDone };
+const char* EvaluationStageName(EvaluationStage stage);
+
+struct EvaluationProgress {
+  EvaluationStage stage = EvaluationStage::kNeighbours;
+  double stage_fraction = 0.0;  // 0..1 within the stage
+  double fraction = 0.0;        // 0..1 of the whole; never decreases
+};
+
+// Progress and cancel. `progress` is called one call at a time but from the
+// evaluation's worker threads (not necessarily the caller's), at most about
+// 50 times a second; returning false cancels. `cancel` may be set from any
+// thread. A cancelled evaluation returns within 100 ms with a Status whose
+// message is kEvaluationCancelled.
+struct EvaluationControl {
+  std::function<bool(const EvaluationProgress&)> progress;
+  const std::atomic<bool>* cancel = nullptr;
+};
+extern const char* const kEvaluationCancelled;
+
+// Wall-clock seconds per stage of the last EvaluateCloud.
+struct EvaluationTiming {
+  double neighbours_s = 0.0;  // spatial sort, kd-tree build, k-neighbour queries
+  double outliers_s = 0.0;    // statistics, the clean cloud
+  double density_s = 0.0;     // Eq. 18-19 from the shared neighbours
+  double planes_s = 0.0;      // RANSAC, bands, refits, histograms, dimensions
+  double total_s = 0.0;
+  int threads = 0;
 };
 
 struct DeviationHistogram {
@@ -88,15 +144,18 @@ struct CloudEvaluation {
   std::vector<RoomDimension> dimensions;
   double mean_nn_distance_m = 0.0;  // Eq. 18-19
   size_t density_queries = 0;
+  EvaluationTiming timing;
 };
 
-// PCL StatisticalOutlierRemoval; `kept` gets the indices of the survivors.
+// PCL StatisticalOutlierRemoval's statistics (mean distance to the k
+// nearest neighbours, dropped above mean + stddev_mult * sd); `kept` gets
+// the indices of the survivors, ascending.
 Status RemoveStatisticalOutliers(const std::vector<Eigen::Vector3f>& points, int k,
                                  double stddev_mult, std::vector<size_t>* kept);
 
-// Iterative RANSAC plane extraction (PCL SACSegmentation) with a
-// least-squares refit on each plane's inliers. `members[i]` gets the
-// indices of plane i's inliers.
+// Iterative RANSAC plane extraction (PCL SACSegmentation's RANSAC with its
+// adaptive stop at 99 % confidence) with a least-squares refit on each
+// plane's inliers. `members[i]` gets the indices of plane i's inliers.
 Status ExtractPlanes(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
                      std::vector<EvaluatedPlane>* planes,
                      std::vector<std::vector<size_t>>* members);
@@ -107,7 +166,7 @@ DeviationHistogram MakeDeviationHistogram(const std::vector<Eigen::Vector3f>& po
                                           double bin_m, double half_range_m);
 
 // Eq. 18-19: rho = (1/N) sum_i min_{j != i} |p_i - p_j|, the nearest
-// neighbour found with a KD-tree (PCL KdTreeFLANN). With max_queries > 0
+// neighbour found with the neighbour index. With max_queries > 0
 // the mean runs over that many evenly spaced points (the tree always holds
 // all of them).
 Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, size_t max_queries,
@@ -118,10 +177,13 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
 std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
                                           double parallel_angle_deg, double min_dimension_m);
 
-// Everything above, in order: outliers, planes, histograms, dimensions,
-// density (on the points after outlier removal).
+// Everything above: outliers, density (on the points after outlier
+// removal, from the same neighbour structure), planes, histograms,
+// dimensions.
 Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
                      CloudEvaluation* result);
+Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
+                     CloudEvaluation* result, const EvaluationControl& control);
 
 }  // namespace sweepscan
 
