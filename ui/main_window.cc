@@ -28,6 +28,7 @@
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
+#include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
 
@@ -120,8 +121,18 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   calibration_scroll->setWidget(calibration_panel_);
   calibration_scroll->setWidgetResizable(true);
   calibration_scroll->setMinimumWidth(380);
-  add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
-           Qt::RightDockWidgetArea);
+  QDockWidget* calibration_dock =
+      add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
+               Qt::RightDockWidgetArea);
+  evaluation_panel_ = new EvaluationPanel(workspace_);
+  auto* evaluation_scroll = new QScrollArea;
+  evaluation_scroll->setWidget(evaluation_panel_);
+  evaluation_scroll->setWidgetResizable(true);
+  QDockWidget* evaluation_dock =
+      add_dock(evaluation_scroll, tr("Evaluation"), QStringLiteral("evaluationDock"),
+               Qt::RightDockWidgetArea);
+  tabifyDockWidget(calibration_dock, evaluation_dock);
+  calibration_dock->raise();
   connect(calibration_panel_, &CalibrationPanel::robotCalibrationChanged, this,
           [this](const MountingError& c) {
             QSettings().setValue(QStringLiteral("robot/calibration_rad"),

@@ -32,6 +32,7 @@ class ConnectionPanel;
 class DrivePanel;
 class ReplayPanel;
 class CalibrationPanel;
+class EvaluationPanel;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -44,6 +45,7 @@ class MainWindow : public QMainWindow {
   DrivePanel* drive_panel() const { return drive_panel_; }
   ReplayPanel* replay_panel() const { return replay_panel_; }
   CalibrationPanel* calibration_panel() const { return calibration_panel_; }
+  EvaluationPanel* evaluation_panel() const { return evaluation_panel_; }
   QUndoStack* undo_stack() const { return undo_; }
   // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
   // then errors go to lastError() and unsaved recordings stay where they are.
@@ -81,6 +83,7 @@ class MainWindow : public QMainWindow {
   DrivePanel* drive_panel_;
   ReplayPanel* replay_panel_;
   CalibrationPanel* calibration_panel_;
+  EvaluationPanel* evaluation_panel_;
   QUndoStack* undo_;
   QMenu* recent_menu_ = nullptr;
   QAction* record_ = nullptr;

@@ -25,6 +25,7 @@
 #include <QUndoStack>
 #include <cmath>
 #include <functional>
+#include <nlohmann/json.hpp>
 
 #include "core/calibration/calibration_file.h"
 #include "core/calibration/picks.h"
@@ -37,6 +38,7 @@
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
+#include "ui/panels/evaluation_panel.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/workspace.h"
@@ -472,6 +474,50 @@ TEST_F(AppTest, CalibrationPanelPicksSolvesAndShowsTheCalibratedCloud) {
   Workspace second;
   MainWindow reopened(&second, kResources);
   EXPECT_NEAR(second.robot_calibration().beta, r->summary.angles.beta, 1e-12);
+}
+
+// The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for
+// the same recording (the same cloud, the same EvaluateCloud), and keeps the
+// previous evaluation beside the new one.
+TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
+  const std::string dir = tmp_.path().toStdString();
+  const std::string cli = SWEEPSCAN_CLI;
+  const auto sim = testing::RunCommand(cli + " simulate --scenario " + kResources.toStdString() +
+                                       "/scenarios/lab.json --out " + dir + "/lab.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const auto eval = testing::RunCommand(cli + " evaluate " + dir + "/lab.sweepscan --json");
+  ASSERT_EQ(eval.code, 0) << eval.out;
+  const nlohmann::json expected = nlohmann::json::parse(eval.out)["uncalibrated"];
+
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  window_->OpenSessionPath(tmp_.path() + "/lab.sweepscan");
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  EvaluationPanel* panel = window_->evaluation_panel();
+  bool done = false, ok = false;
+  QObject::connect(panel, &EvaluationPanel::evaluated, [&](bool r) {
+    done = true;
+    ok = r;
+  });
+  QTest::mouseClick(panel->findChild<QPushButton*>(), Qt::LeftButton);
+  ASSERT_TRUE(WaitFor([&] { return done; }, 120000));
+  ASSERT_TRUE(ok) << panel->summary_text().toStdString();
+  const CloudEvaluation* e = workspace_->evaluation();
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->points_in, expected["points"].get<size_t>());
+  EXPECT_EQ(e->planes.size(), expected["planes"].size());
+  EXPECT_EQ(panel->plane_rows(), static_cast<int>(expected["planes"].size()));
+  EXPECT_NEAR(e->mean_nn_distance_m, expected["mean_nn_distance_m"].get<double>(), 1e-9);
+  for (size_t i = 0; i < e->planes.size() && i < expected["planes"].size(); ++i) {
+    EXPECT_EQ(e->planes[i].kind, expected["planes"][i]["kind"].get<std::string>()) << i;
+    EXPECT_NEAR(e->planes[i].plane.rms, expected["planes"][i]["rms_m"].get<double>(), 1e-9) << i;
+  }
+  // A second evaluation keeps the first as "before".
+  done = false;
+  panel->Evaluate();
+  ASSERT_TRUE(WaitFor([&] { return done; }, 120000));
+  ASSERT_NE(workspace_->previous_evaluation(), nullptr);
+  EXPECT_NE(panel->summary_text().indexOf("previous evaluation"), -1);
 }
 
 TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {

@@ -68,6 +68,7 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
   connect(this, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
             if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
+            if (what == tr("Evaluating") && !ok) emit evaluationFinished(false, message);
           });
   io_thread_.start();
   processing_thread_.start();
@@ -635,6 +636,33 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
                                            .arg(a.alpha * 1e3, 0, 'f', 2)
                                            .arg(a.beta * 1e3, 0, 'f', 2)
                                            .arg(a.gamma * 1e3, 0, 'f', 2));
+      });
+}
+
+void Workspace::Evaluate() {
+  auto points = std::make_shared<std::vector<Eigen::Vector3f>>();
+  {
+    const std::vector<CloudPoint> cloud = CloudSnapshot();
+    points->reserve(cloud.size());
+    for (const CloudPoint& p : cloud) points->emplace_back(p.x, p.y, p.z);
+  }
+  if (points->empty()) {
+    emit evaluationFinished(false, tr("The cloud is empty: open or record a session first."));
+    return;
+  }
+  auto result = std::make_shared<CloudEvaluation>();
+  const MountingError shown = shown_calibration_;
+  RunJob(
+      tr("Evaluating"),
+      [points, result](std::atomic<bool>*) -> QString {
+        const Status s = EvaluateCloud(*points, EvaluationOptions(), result.get());
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, result, shown] {
+        previous_evaluation_ = evaluation_;
+        evaluation_ = result;
+        evaluated_calibration_ = shown;
+        emit evaluationFinished(true, QString());
       });
 }
 

@@ -29,6 +29,7 @@
 
 #include "core/calibration/workflow.h"
 #include "core/cloud/reconstruct.h"
+#include "core/evaluation/evaluation.h"
 #include "core/sim/world.h"
 #include "hardware/station/direct_device.h"
 #include "hardware/station/recording.h"
@@ -159,6 +160,16 @@ class Workspace : public QObject {
   void SetRobotCalibration(const MountingError& calibration) { robot_calibration_ = calibration; }
   const MountingError& robot_calibration() const { return robot_calibration_; }
 
+  // ---- Evaluation of the cloud shown (Miao et al. 2022, section 5) -------
+  // Outlier removal, planes with deviation histograms, density (Eq. 18-19)
+  // and room dimensions on a job thread, the same EvaluateCloud as
+  // `sweepscan-cli evaluate`. The previous result is kept for before / after.
+  void Evaluate();
+  const CloudEvaluation* evaluation() const { return evaluation_.get(); }
+  const CloudEvaluation* previous_evaluation() const { return previous_evaluation_.get(); }
+  // What the evaluated cloud was assembled under.
+  const MountingError& evaluated_calibration() const { return evaluated_calibration_; }
+
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
   // Every point assembled since the last reset, copied on the processing
@@ -187,6 +198,7 @@ class Workspace : public QObject {
   void deviceCheckFinished(bool ok, const QString& report);
   void calibrationIteration(int iteration, double cost);
   void calibrationFinished(bool ok, const QString& message);
+  void evaluationFinished(bool ok, const QString& message);
 
  private:
   void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
@@ -227,6 +239,8 @@ class Workspace : public QObject {
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;
   MountingError robot_calibration_;
+  std::shared_ptr<CloudEvaluation> evaluation_, previous_evaluation_;
+  MountingError evaluated_calibration_;
   size_t point_count_ = 0;
   size_t scan_count_ = 0;
 
