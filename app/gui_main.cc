@@ -180,11 +180,26 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
     };
     const double full = fps(false);
     const double lod = fps(true);
+    const int lod_level = window->view()->lod_level();
+    // The picking layer: 25 picks over a 5 x 5 grid of the view.
+    window->view()->SetLodActive(false);
+    QElapsedTimer pick_clock;
+    pick_clock.start();
+    int hits = 0;
+    for (int i = 0; i < 25; ++i) {
+      const QPoint at(window->view()->width() * (1 + i % 5) / 6,
+                      window->view()->height() * (1 + i / 5) / 6);
+      Eigen::Vector3d world;
+      hits += window->view()->PickPoint(at, &world) ? 1 : 0;
+    }
+    const double pick_ms = pick_clock.nsecsElapsed() * 1e-6 / 25;
     nlohmann::json j = {{"points", window->view()->point_count()},
                         {"open_and_show_s", open_s},
                         {"fps_full", full},
                         {"fps_lod", lod},
-                        {"lod_level", window->view()->lod_level()},
+                        {"lod_level", lod_level},
+                        {"pick_ms", pick_ms},
+                        {"pick_hits_of_25", hits},
                         {"rss_mib", ResidentMiB()}};
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);

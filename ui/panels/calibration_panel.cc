@@ -116,6 +116,19 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
          "Calibration circle) while recording. Open the recording."));
   target->setWordWrap(true);
   layout->addWidget(target);
+  auto* drive = new QPushButton(tr("Record a calibration drive (1 m circle, 0.05 m/s, 2 turns)"));
+  drive->setToolTip(
+      tr("Starts recording and the scripted circle of the Drive panel; "
+         "Robot > Stop Recording when it ends, then open the recording"));
+  connect(drive, &QPushButton::clicked, this, [this] {
+    QString error;
+    if (!workspace_->recording() && !workspace_->StartRecording(&error)) {
+      result_->setText(error);
+      return;
+    }
+    workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 2.0));
+  });
+  layout->addWidget(drive);
 
   auto* picking = new QGroupBox(tr("2. Pick pairs"));
   auto* pick_layout = new QVBoxLayout(picking);

@@ -8,8 +8,8 @@
 // re-mapping every chunk's colours happens a handful of times per session,
 // not per frame.
 //
-// Level of detail: each sealed chunk also keeps every 8th, 64th and 256th
-// point. While the camera moves or points stream in, and more than
+// Level of detail: each sealed chunk also keeps every 8th, 32nd, 128th and
+// 256th point. While the camera moves or points stream in, and more than
 // lod_budget() points are shown, the view draws the finest thinned level that
 // stays within the budget (a software renderer draws ~10 M points a second);
 // when the camera and the data have been still for kSettleMs it draws
@@ -58,9 +58,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
  public:
   enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2 };
-  static constexpr size_t kChunkPoints = 262144;
-  static constexpr int kLodLevels = 3;
-  static constexpr int kLodStrides[kLodLevels] = {8, 64, 256};
+  static constexpr size_t kChunkPoints = 65536;
+  static constexpr int kLodLevels = 4;
+  static constexpr int kLodStrides[kLodLevels] = {8, 32, 128, 256};
   static constexpr int kSettleMs = 400;
 
   explicit CloudView(QWidget* parent = nullptr);
@@ -175,9 +175,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   double range_lo_[3] = {0.0, 0.0, 0.0};
   double range_hi_[3] = {3.0, 60.0, 8.0};
   bool have_points_ = false;
-  // Measured under llvmpipe on 2 cores: a frame costs ~26 ms plus ~0.17 us a
-  // point, so 160 000 points keep camera motion near 20 frames/s.
-  size_t lod_budget_ = 160'000;
+  // Measured under llvmpipe on 2 cores: a frame costs ~30 ms plus ~0.17 us a
+  // point, so 120 000 points keep camera motion above 20 frames/s (10 M
+  // points: 22 frames/s drawing every 128th).
+  size_t lod_budget_ = 120'000;
   bool lod_active_ = false;
   int lod_level_ = -1;
   bool interacting_ = false;
