@@ -244,6 +244,7 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
     QThread::msleep(100);
     QCoreApplication::processEvents();
   }
+  window->view()->SetLodActive(false);  // Every point in the images, not the thinned preview.
   window->view()->FitToCloud();
   QString error;
   if (!o.screenshot.isEmpty() && !window->view()->SaveScreenshot(o.screenshot, &error)) {

@@ -120,6 +120,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   auto* calibration_scroll = new QScrollArea;
   calibration_scroll->setWidget(calibration_panel_);
   calibration_scroll->setWidgetResizable(true);
+  calibration_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);  // Labels wrap instead.
   calibration_scroll->setMinimumWidth(380);
   QDockWidget* calibration_dock =
       add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
@@ -128,6 +129,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   auto* evaluation_scroll = new QScrollArea;
   evaluation_scroll->setWidget(evaluation_panel_);
   evaluation_scroll->setWidgetResizable(true);
+  evaluation_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
   QDockWidget* evaluation_dock =
       add_dock(evaluation_scroll, tr("Evaluation"), QStringLiteral("evaluationDock"),
                Qt::RightDockWidgetArea);

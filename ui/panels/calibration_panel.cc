@@ -116,10 +116,11 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
          "Calibration circle) while recording. Open the recording."));
   target->setWordWrap(true);
   layout->addWidget(target);
-  auto* drive = new QPushButton(tr("Record a calibration drive (1 m circle, 0.05 m/s, 2 turns)"));
+  auto* drive = new QPushButton(tr("Record a calibration drive"));
   drive->setToolTip(
-      tr("Starts recording and the scripted circle of the Drive panel; "
-         "Robot > Stop Recording when it ends, then open the recording"));
+      tr("Starts recording and a 1 m circle at 0.05 m/s, two turns (the Drive "
+         "panel's scripted circle); Robot > Stop Recording when it ends, then open "
+         "the recording"));
   connect(drive, &QPushButton::clicked, this, [this] {
     QString error;
     if (!workspace_->recording() && !workspace_->StartRecording(&error)) {
