@@ -195,7 +195,15 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 MainWindow::~MainWindow() { qApp->removeEventFilter(this); }
 
 void MainWindow::BuildMenus() {
-  // ---- File ----
+  BuildFileMenu();
+  BuildEditMenu();
+  BuildViewMenu();
+  BuildRobotMenu();
+  BuildToolsMenu();
+  BuildHelpMenu();
+}
+
+void MainWindow::BuildFileMenu() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   QAction* new_session = file->addAction(tr("&New Session"), this, [this] {
     if (ConfirmDiscard()) workspace_->NewSession();
@@ -233,8 +241,9 @@ void MainWindow::BuildMenus() {
   file->addSeparator();
   QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
   quit->setShortcut(QKeySequence::Quit);
+}
 
-  // ---- Edit ----
+void MainWindow::BuildEditMenu() {
   QMenu* edit = menuBar()->addMenu(tr("&Edit"));
   QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
   undo->setShortcut(QKeySequence::Undo);
@@ -242,8 +251,9 @@ void MainWindow::BuildMenus() {
   redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence::Redo});
   edit->addAction(undo);
   edit->addAction(redo);
+}
 
-  // ---- View ----
+void MainWindow::BuildViewMenu() {
   QMenu* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&3D"), view_, &CloudView::ViewOblique)->setShortcut(Qt::Key_0);
   view->addAction(tr("&Top"), view_, &CloudView::ViewTop)->setShortcut(Qt::Key_1);
@@ -302,8 +312,9 @@ void MainWindow::BuildMenus() {
   QMenu* panels = view->addMenu(tr("&Panels"));
   for (QDockWidget* dock : findChildren<QDockWidget*>())
     panels->addAction(dock->toggleViewAction());
+}
 
-  // ---- Robot ----
+void MainWindow::BuildRobotMenu() {
   QMenu* robot = menuBar()->addMenu(tr("&Robot"));
   robot
       ->addAction(tr("&Connect"), this,
@@ -332,8 +343,9 @@ void MainWindow::BuildMenus() {
   estop_ = robot->addAction(tr("&Emergency Stop\tSpace"), workspace_, &Workspace::EmergencyStop);
   robot->addAction(tr("C&lear Emergency Stop"), workspace_, &Workspace::ClearEmergencyStop);
   robot->addAction(tr("&Abort Scripted Drive"), workspace_, &Workspace::AbortScriptedDrive);
+}
 
-  // ---- Tools ----
+void MainWindow::BuildToolsMenu() {
   QMenu* tools = menuBar()->addMenu(tr("&Tools"));
   tools->addAction(tr("&Sessions Folder…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(this, tr("Where new recordings go"),
@@ -346,8 +358,9 @@ void MainWindow::BuildMenus() {
     dialog->show();
   });
   tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
+}
 
-  // ---- Help ----
+void MainWindow::BuildHelpMenu() {
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(
           tr("&Keyboard"), this,

@@ -66,6 +66,12 @@ class MainWindow : public QMainWindow {
 
  private:
   void BuildMenus();
+  void BuildFileMenu();
+  void BuildEditMenu();
+  void BuildViewMenu();
+  void BuildRobotMenu();
+  void BuildToolsMenu();
+  void BuildHelpMenu();
   void BuildStatusBar();
   void RestoreSettings();
   void SaveSettings();

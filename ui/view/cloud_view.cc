@@ -82,6 +82,24 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   renderer_->GradientBackgroundOn();
   window_->AddRenderer(renderer_);
 
+  BuildColorBar();
+  BuildGrid();
+  BuildRobotAndTrajectory();
+  BuildMarkers();
+  BuildAxes();
+  InstallObservers();
+
+  settle_ = new QTimer(this);
+  settle_->setSingleShot(true);
+  settle_->setInterval(kSettleMs);
+  connect(settle_, &QTimer::timeout, this, [this] {
+    if (!interacting_ && lod_active_) SetLodActive(false);
+  });
+
+  ViewOblique();
+}
+
+void CloudView::BuildColorBar() {
   // Colours: a perceptually ordered blue -> red ramp shared by every chunk.
   lut_ = vtkSmartPointer<vtkLookupTable>::New();
   lut_->SetHueRange(0.667, 0.0);
@@ -98,9 +116,9 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   color_bar_->SetLabelFormat("%.1f");
   renderer_->AddViewProp(color_bar_);
   ApplyLookupTable();
+}
 
-  BuildGrid();
-
+void CloudView::BuildRobotAndTrajectory() {
   // Robot marker: an arrow along the robot's x axis (its heading).
   auto arrow = vtkSmartPointer<vtkArrowSource>::New();
   arrow->SetTipLength(0.35);
@@ -126,7 +144,9 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   trajectory_->GetProperty()->SetColor(1.0, 0.85, 0.2);
   trajectory_->GetProperty()->SetLineWidth(2.0);
   renderer_->AddActor(trajectory_);
+}
 
+void CloudView::BuildMarkers() {
   // Marker overlay: picked points as large dots drawn over the cloud.
   for (int k = 0; k < 2; ++k) {
     auto poly = vtkSmartPointer<vtkPolyData>::New();
@@ -142,7 +162,9 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
     markers_[k]->PickableOff();
     renderer_->AddActor(markers_[k]);
   }
+}
 
+void CloudView::BuildAxes() {
   axes_ = vtkSmartPointer<vtkAxesActor>::New();
   axes_widget_ = vtkSmartPointer<vtkOrientationMarkerWidget>::New();
   axes_widget_->SetOrientationMarker(axes_);
@@ -150,7 +172,9 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   axes_widget_->SetViewport(0.0, 0.0, 0.16, 0.22);
   axes_widget_->SetEnabled(1);
   axes_widget_->InteractiveOff();
+}
 
+void CloudView::InstallObservers() {
   // Level of detail while the camera moves (see the header).
   auto start = vtkSmartPointer<vtkCallbackCommand>::New();
   start->SetClientData(this);
@@ -185,15 +209,6 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   });
   window_->AddObserver(vtkCommand::EndEvent, on_end);
   connect(this, &QObject::destroyed, [clock] { delete clock; });
-
-  settle_ = new QTimer(this);
-  settle_->setSingleShot(true);
-  settle_->setInterval(kSettleMs);
-  connect(settle_, &QTimer::timeout, this, [this] {
-    if (!interacting_ && lod_active_) SetLodActive(false);
-  });
-
-  ViewOblique();
 }
 
 CloudView::~CloudView() = default;

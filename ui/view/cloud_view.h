@@ -146,6 +146,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void UpdateRanges(float z, float t, float r);
   void ApplyLookupTable();
   void BuildGrid();
+  void BuildColorBar();
+  void BuildRobotAndTrajectory();
+  void BuildMarkers();
+  void BuildAxes();
+  void InstallObservers();  // LOD on camera motion, frame counting.
   void SetCamera(const double direction[3], const double up[3]);
 
   vtkSmartPointer<vtkGenericOpenGLRenderWindow> window_;

@@ -87,10 +87,11 @@ Workspace::~Workspace() {
 // ---------------------------------------------------------------------------
 // Link
 
-bool Workspace::Connect(const ConnectOptions& options, QString* error) {
-  Disconnect();
-  connect_options_ = options;
-  hardware::RobotConnectionOptions link;
+// The link's options and the live frame for `options`: the simulator (started
+// here, with its scenario's geometry and start pose), TCP (key file) or serial.
+bool Workspace::PrepareLink(const ConnectOptions& options,
+                            hardware::RobotConnectionOptions* link_out, QString* error) {
+  hardware::RobotConnectionOptions& link = *link_out;
   live_geometry_ = options.geometry;
   live_start_ = Pose2d();
   live_meta_ = SessionMeta();
@@ -139,11 +140,17 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
   link.session_meta = live_meta_;
   link.decoder.wheel_distance_m = live_geometry_.wheel_distance_m;
   link.decoder.lidar_angle_convention = live_meta_.lidar_angle_convention;
-  if (!link.IsValid(error)) {
-    if (sim_ != nullptr) sim_.reset();
+  return link.IsValid(error);
+}
+
+bool Workspace::Connect(const ConnectOptions& options, QString* error) {
+  Disconnect();
+  connect_options_ = options;
+  hardware::RobotConnectionOptions link;
+  if (!PrepareLink(options, &link, error)) {
+    sim_.reset();
     return false;
   }
-
   ResetCloud(live_start_, live_geometry_);
   opened_.reset();
   replaying_ = false;

@@ -201,6 +201,8 @@ class Workspace : public QObject {
   void evaluationFinished(bool ok, const QString& message);
 
  private:
+  bool PrepareLink(const ConnectOptions& options, hardware::RobotConnectionOptions* link,
+                   QString* error);
   void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success);
