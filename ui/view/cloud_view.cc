@@ -241,6 +241,25 @@ void CloudView::BuildGrid() {
   renderer_->AddActor(grid_);
 }
 
+void CloudView::AddPointsActor(vtkPolyData* poly, vtkSmartPointer<vtkPolyDataMapper>* mapper,
+                               vtkSmartPointer<vtkActor>* actor) {
+  // Every cloud actor (full or thinned) shares the lookup table, the colour
+  // array in use, the point size and the clip.
+  *mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  (*mapper)->SetInputData(poly);
+  (*mapper)->SetLookupTable(lut_);
+  (*mapper)->UseLookupTableScalarRangeOn();
+  (*mapper)->SetScalarModeToUsePointFieldData();
+  (*mapper)->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
+  (*mapper)->ScalarVisibilityOn();
+  ApplyClip(*mapper);
+  *actor = vtkSmartPointer<vtkActor>::New();
+  (*actor)->SetMapper(*mapper);
+  (*actor)->GetProperty()->SetPointSize(point_size_);
+  (*actor)->GetProperty()->SetRepresentationToPoints();
+  renderer_->AddActor(*actor);
+}
+
 CloudView::Chunk* CloudView::NewChunk() {
   auto chunk = std::make_unique<Chunk>();
   chunk->points = vtkSmartPointer<vtkPoints>::New();
@@ -256,19 +275,7 @@ CloudView::Chunk* CloudView::NewChunk() {
     chunk->arrays[i] = NewArray(kArrayNames[i], kChunkPoints);
     chunk->poly->GetPointData()->AddArray(chunk->arrays[i]);
   }
-  chunk->mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-  chunk->mapper->SetInputData(chunk->poly);
-  chunk->mapper->SetLookupTable(lut_);
-  chunk->mapper->UseLookupTableScalarRangeOn();
-  chunk->mapper->SetScalarModeToUsePointFieldData();
-  chunk->mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
-  chunk->mapper->ScalarVisibilityOn();
-  ApplyClip(chunk->mapper);
-  chunk->actor = vtkSmartPointer<vtkActor>::New();
-  chunk->actor->SetMapper(chunk->mapper);
-  chunk->actor->GetProperty()->SetPointSize(point_size_);
-  chunk->actor->GetProperty()->SetRepresentationToPoints();
-  renderer_->AddActor(chunk->actor);
+  AddPointsActor(chunk->poly, &chunk->mapper, &chunk->actor);
   chunks_.push_back(std::move(chunk));
   return chunks_.back().get();
 }
@@ -295,21 +302,8 @@ void CloudView::SealChunk(Chunk* chunk) {
     poly->SetPoints(points);
     poly->SetVerts(verts);
     for (int k = 0; k < 3; ++k) poly->GetPointData()->AddArray(arrays[k]);
-    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-    mapper->SetInputData(poly);
-    mapper->SetLookupTable(lut_);
-    mapper->UseLookupTableScalarRangeOn();
-    mapper->SetScalarModeToUsePointFieldData();
-    mapper->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
-    mapper->ScalarVisibilityOn();
-    ApplyClip(mapper);
-    auto actor = vtkSmartPointer<vtkActor>::New();
-    actor->SetMapper(mapper);
-    actor->GetProperty()->SetPointSize(point_size_);
-    actor->SetVisibility(lod_level_ == level);
-    renderer_->AddActor(actor);
-    chunk->lod_mapper[level] = mapper;
-    chunk->lod_actor[level] = actor;
+    AddPointsActor(poly, &chunk->lod_mapper[level], &chunk->lod_actor[level]);
+    chunk->lod_actor[level]->SetVisibility(lod_level_ == level);
   }
   chunk->actor->SetVisibility(lod_level_ < 0);
 }

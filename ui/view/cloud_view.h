@@ -142,6 +142,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
  private:
   struct Chunk;
   Chunk* NewChunk();
+  void AddPointsActor(vtkPolyData* poly, vtkSmartPointer<vtkPolyDataMapper>* mapper,
+                      vtkSmartPointer<vtkActor>* actor);
   void SealChunk(Chunk* chunk);
   void UpdateRanges(float z, float t, float r);
   void ApplyLookupTable();

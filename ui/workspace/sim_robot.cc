@@ -5,6 +5,7 @@
 
 #include "hardware/agent/robot_agent.h"
 #include "hardware/emulation/sim_devices.h"
+#include "ui/workspace/thread_call.h"
 
 namespace sweepscan::ui {
 
@@ -41,24 +42,18 @@ bool SimRobot::Start(const sim::SimConfig& scenario, QString* error) {
   bool ok = false;
   // The agent and its devices are created on the robot thread so that their
   // timers and sockets belong to it.
-  QObject context;
-  context.moveToThread(&thread_);
-  QMetaObject::invokeMethod(
-      &context,
-      [&] {
-        auto devices = std::make_unique<SimDevices>(scenario, SimDevices::Mode::kCommanded);
-        agent_ = new RobotAgent(config, std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(
-                                            std::move(devices)));
-        ok = agent_->Start(error);
-        if (!ok) {
-          delete agent_;
-          agent_ = nullptr;
-        } else {
-          port_ = agent_->tcp_port();
-        }
-        context.moveToThread(nullptr);
-      },
-      Qt::BlockingQueuedConnection);
+  CallOnThread(&thread_, [&] {
+    auto devices = std::make_unique<SimDevices>(scenario, SimDevices::Mode::kCommanded);
+    agent_ = new RobotAgent(
+        config, std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(std::move(devices)));
+    ok = agent_->Start(error);
+    if (!ok) {
+      delete agent_;
+      agent_ = nullptr;
+    } else {
+      port_ = agent_->tcp_port();
+    }
+  });
   if (!ok) {
     thread_.quit();
     thread_.wait();

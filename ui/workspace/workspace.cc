@@ -14,6 +14,7 @@
 #include "hardware/link/qt_transport.h"
 #include "ui/workspace/live_processor.h"
 #include "ui/workspace/sim_robot.h"
+#include "ui/workspace/thread_call.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -164,64 +165,58 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
   LiveProcessor* processor = processor_;
   live_feed_ = std::make_shared<std::atomic<bool>>(true);  // Live preview until a recording stops.
   std::shared_ptr<std::atomic<bool>> feed = live_feed_;
-  QObject context;
-  context.moveToThread(&io_thread_);
-  QMetaObject::invokeMethod(
-      &context,
-      [&] {
-        connection = new hardware::RobotConnection(link);
-        // Decoded records leave the I/O thread at once, for the processing thread.
-        QObject::connect(connection, &hardware::RobotConnection::telemetryDecoded, connection,
-                         [connection, processor, feed] {
-                           if (!*feed) {
-                             connection->mutable_log()->wheels.clear();
-                             connection->mutable_log()->imu.clear();
-                             connection->mutable_log()->scans.clear();
-                             return;
-                           }
-                           auto batch = std::make_shared<SensorLog>();
-                           std::swap(*batch, *connection->mutable_log());
-                           QMetaObject::invokeMethod(
-                               processor, [processor, batch] { processor->AddRecords(*batch); });
-                         });
-        auto* health_timer = new QTimer(connection);
-        QObject::connect(health_timer, &QTimer::timeout, connection, [this, connection] {
-          const hardware::LinkHealth h = connection->health();
-          QMetaObject::invokeMethod(this, [this, h] {
-            health_ = h;
-            emit healthUpdated();
-          });
-        });
-        health_timer->start(kHealthMs);
-        // Signals to the GUI thread are connected before Start(): on
-        // loopback the agent may authenticate us before this call returns.
-        QObject::connect(
-            connection, &hardware::RobotConnection::stateChanged, this,
-            [this](int state) {
-              health_.state = static_cast<hardware::LinkHealth::State>(state);
-              emit linkStateChanged(state);
-            },
-            Qt::QueuedConnection);
-        QObject::connect(
-            connection, &hardware::RobotConnection::authenticatedChanged, this,
-            [this](bool a) {
-              authenticated_ = a;
-              // The lidar spins (and scans) as the operator last asked: on by default.
-              if (a) SetLidarMotor(lidar_on_);
-              emit authenticatedChanged(a);
-            },
-            Qt::QueuedConnection);
-        QObject::connect(
-            connection, &hardware::RobotConnection::authenticationFailed, this,
-            [this](const QString& reason) {
-              emit authenticationFailed(reason);
-              emit message(QStringLiteral("The robot refused the connection: %1").arg(reason));
-            },
-            Qt::QueuedConnection);
-        started = connection->Start(&start_error);
-        context.moveToThread(nullptr);
-      },
-      Qt::BlockingQueuedConnection);
+  CallOnThread(&io_thread_, [&] {
+    connection = new hardware::RobotConnection(link);
+    // Decoded records leave the I/O thread at once, for the processing thread.
+    QObject::connect(connection, &hardware::RobotConnection::telemetryDecoded, connection,
+                     [connection, processor, feed] {
+                       if (!*feed) {
+                         connection->mutable_log()->wheels.clear();
+                         connection->mutable_log()->imu.clear();
+                         connection->mutable_log()->scans.clear();
+                         return;
+                       }
+                       auto batch = std::make_shared<SensorLog>();
+                       std::swap(*batch, *connection->mutable_log());
+                       QMetaObject::invokeMethod(
+                           processor, [processor, batch] { processor->AddRecords(*batch); });
+                     });
+    auto* health_timer = new QTimer(connection);
+    QObject::connect(health_timer, &QTimer::timeout, connection, [this, connection] {
+      const hardware::LinkHealth h = connection->health();
+      QMetaObject::invokeMethod(this, [this, h] {
+        health_ = h;
+        emit healthUpdated();
+      });
+    });
+    health_timer->start(kHealthMs);
+    // Signals to the GUI thread are connected before Start(): on
+    // loopback the agent may authenticate us before this call returns.
+    QObject::connect(
+        connection, &hardware::RobotConnection::stateChanged, this,
+        [this](int state) {
+          health_.state = static_cast<hardware::LinkHealth::State>(state);
+          emit linkStateChanged(state);
+        },
+        Qt::QueuedConnection);
+    QObject::connect(
+        connection, &hardware::RobotConnection::authenticatedChanged, this,
+        [this](bool a) {
+          authenticated_ = a;
+          // The lidar spins (and scans) as the operator last asked: on by default.
+          if (a) SetLidarMotor(lidar_on_);
+          emit authenticatedChanged(a);
+        },
+        Qt::QueuedConnection);
+    QObject::connect(
+        connection, &hardware::RobotConnection::authenticationFailed, this,
+        [this](const QString& reason) {
+          emit authenticationFailed(reason);
+          emit message(QStringLiteral("The robot refused the connection: %1").arg(reason));
+        },
+        Qt::QueuedConnection);
+    started = connection->Start(&start_error);
+  });
   if (!started) {
     QMetaObject::invokeMethod(
         connection, [connection] { delete connection; }, Qt::BlockingQueuedConnection);
@@ -316,37 +311,30 @@ QString DeviceReport(const hardware::DirectDevice& d, double seconds, bool* ok) 
 
 void Workspace::CheckDevice(hardware::DirectDevice::Kind kind, const QString& port,
                             double seconds) {
-  QObject context;
-  context.moveToThread(&io_thread_);
-  QMetaObject::invokeMethod(
-      &context,
-      [this, kind, port, seconds, &context] {
-        context.moveToThread(nullptr);
-        auto* device = new hardware::DirectDevice(kind, port);
-        QString error;
-        if (!device->Open(&error)) {
-          delete device;
-          QMetaObject::invokeMethod(this, [this, error] {
-            emit deviceCheckFinished(false, QStringLiteral("Cannot open the port: %1").arg(error));
-          });
-          return;
-        }
-        if (kind == hardware::DirectDevice::Kind::kX4) {
-          device->RequestDeviceInfo();
-          device->RequestHealth();
-          device->StartScan();
-        }
-        QTimer::singleShot(static_cast<int>(seconds * 1000), device, [this, device, seconds] {
-          bool ok = false;
-          const QString report = DeviceReport(*device, seconds, &ok);
-          if (device->kind() == hardware::DirectDevice::Kind::kX4) device->StopScan();
-          device->Close();
-          device->deleteLater();
-          QMetaObject::invokeMethod(this,
-                                    [this, ok, report] { emit deviceCheckFinished(ok, report); });
-        });
-      },
-      Qt::BlockingQueuedConnection);
+  CallOnThread(&io_thread_, [this, kind, port, seconds] {
+    auto* device = new hardware::DirectDevice(kind, port);
+    QString error;
+    if (!device->Open(&error)) {
+      delete device;
+      QMetaObject::invokeMethod(this, [this, error] {
+        emit deviceCheckFinished(false, QStringLiteral("Cannot open the port: %1").arg(error));
+      });
+      return;
+    }
+    if (kind == hardware::DirectDevice::Kind::kX4) {
+      device->RequestDeviceInfo();
+      device->RequestHealth();
+      device->StartScan();
+    }
+    QTimer::singleShot(static_cast<int>(seconds * 1000), device, [this, device, seconds] {
+      bool ok = false;
+      const QString report = DeviceReport(*device, seconds, &ok);
+      if (device->kind() == hardware::DirectDevice::Kind::kX4) device->StopScan();
+      device->Close();
+      device->deleteLater();
+      QMetaObject::invokeMethod(this, [this, ok, report] { emit deviceCheckFinished(ok, report); });
+    });
+  });
 }
 
 // ---------------------------------------------------------------------------
