@@ -17,6 +17,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/evaluation/cloud_arrays.h"
 #include "core/evaluation/evaluation.h"
+#include "core/evaluation/report.h"
 
 namespace sweepscan::app {
 
@@ -39,37 +40,6 @@ const char* const kEvaluateUsage =
     "On a terminal (and without --json) the progress is shown on stderr.\n";
 
 namespace {
-
-nlohmann::json EvaluationJson(const CloudEvaluation& e) {
-  nlohmann::json planes = nlohmann::json::array();
-  for (const auto& p : e.planes) {
-    planes.push_back({{"kind", p.kind},
-                      {"normal", {p.plane.normal.x(), p.plane.normal.y(), p.plane.normal.z()}},
-                      {"d_m", p.plane.d},
-                      {"rms_m", p.plane.rms},
-                      {"points", p.plane.count},
-                      {"tilt_deg", p.tilt_deg},
-                      {"histogram",
-                       {{"bin_m", p.deviations.bin_m},
-                        {"min_m", p.deviations.min_m},
-                        {"mean_m", p.deviations.mean_m},
-                        {"stddev_m", p.deviations.stddev_m},
-                        {"counts", p.deviations.counts}}}});
-  }
-  nlohmann::json dims = nlohmann::json::array();
-  for (const auto& d : e.dimensions) {
-    dims.push_back({{"planes", {d.plane_a, d.plane_b}},
-                    {"axis", d.axis},
-                    {"distance_m", d.distance_m},
-                    {"angle_deg", d.angle_deg}});
-  }
-  return {{"points", e.points_in},
-          {"points_after_outlier_removal", e.points_after_outliers},
-          {"planes", planes},
-          {"dimensions", dims},
-          {"mean_nn_distance_m", e.mean_nn_distance_m},
-          {"density_queries", e.density_queries}};
-}
 
 void PrintEvaluation(const std::string& title, const CloudEvaluation& e) {
   std::printf("%s: %zu points, %zu after outlier removal, mean nearest-neighbour distance %.2f mm\n",
@@ -238,7 +208,7 @@ int RunEvaluate(int argc, char** argv) {
   }
   if (args.Flag("json")) {
     nlohmann::json report;
-    for (const auto& [title, e] : results) report[title] = EvaluationJson(e);
+    for (const auto& [title, e] : results) report[title] = EvaluationToJson(e);
     std::cout << report.dump(2) << "\n";
     return kExitOk;
   }

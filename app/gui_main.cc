@@ -3,6 +3,7 @@
 //   sweepscan [--simulate] [--scenario FILE] [--drive-demo] [--replay SESSION]
 //             [--speed X] [--screenshot PATH] [--window-screenshot PATH]
 //             [--export-cloud PATH] [--quit-after S] [--orbit-benchmark N]
+//             [--pairs FILE [--calibration-tour DIR]]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
@@ -22,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/cloud/cloud_io.h"
+#include "app/gui_tour.h"
 #include "core/scenario/scenario.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
@@ -47,6 +49,7 @@ struct Options {
   double quit_after_s = -1.0;  // < 0: run until the operator quits.
   int orbit_frames = 0;        // > 0: the orbit benchmark after --replay.
   QString pairs;               // With --replay: load into the calibration panel and solve.
+  QString tour;                // With --replay and --pairs: the calibration tour's folder.
 };
 
 // resources/: beside the executable's install prefix, else the source tree.
@@ -92,10 +95,15 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
       "With --replay: load a pairs file into the calibration panel once the session is shown, "
       "solve (refined corners) and show the calibrated cloud.",
       "FILE");
+  const QCommandLineOption tour(
+      "calibration-tour",
+      "With --replay (a circle drive) and --pairs: go through the calibration steps and the "
+      "evaluation, saving a window screenshot of each into DIR, then quit.",
+      "DIR");
   const QCommandLineOption sessions(
       "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
-                     export_cloud, quit_after, orbit, pairs, sessions});
+                     export_cloud, quit_after, orbit, pairs, tour, sessions});
   parser.process(app);
 
   Options o;
@@ -112,6 +120,7 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
   if (parser.isSet(quit_after)) o.quit_after_s = parser.value(quit_after).toDouble();
   if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
   o.pairs = parser.value(pairs);
+  o.tour = parser.value(tour);
   return o;
 }
 
@@ -298,7 +307,7 @@ int Main(int argc, char** argv) {
   Workspace workspace;
   if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
   MainWindow window(&workspace, resources);
-  const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0;
+  const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty();
   window.SetInteractive(!scripted);
   window.resize(1400, 860);
   window.show();
@@ -318,10 +327,14 @@ int Main(int argc, char** argv) {
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);
     if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);
-    if (!o.pairs.isEmpty()) StartCalibrationDemo(o.pairs, &workspace, &window);
+    if (!o.tour.isEmpty() && !o.pairs.isEmpty()) {
+      StartCalibrationTour(o.pairs, o.tour, &workspace, &window);
+    } else if (!o.pairs.isEmpty()) {
+      StartCalibrationDemo(o.pairs, &workspace, &window);
+    }
     workspace.OpenSession(o.replay, o.speed);
   }
-  if (scripted) {  // Follow the robot in demos: fit the view every few seconds.
+  if (scripted && o.tour.isEmpty()) {  // Follow the robot in demos: fit the view every few seconds.
     auto* fit = new QTimer(&window);
     QObject::connect(fit, &QTimer::timeout, window.view(), &CloudView::FitToCloud);
     fit->start(3000);

@@ -125,7 +125,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   QDockWidget* calibration_dock =
       add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
                Qt::RightDockWidgetArea);
-  evaluation_panel_ = new EvaluationPanel(workspace_);
+  evaluation_panel_ = new EvaluationPanel(workspace_, view_);
   auto* evaluation_scroll = new QScrollArea;
   evaluation_scroll->setWidget(evaluation_panel_);
   evaluation_scroll->setWidgetResizable(true);
@@ -147,6 +147,20 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                     .arg(c.gamma * 1e3, 0, 'f', 2),
                 8000);
           });
+  // Shift + click: a calibration pick, or with Tools > Measure Distance on,
+  // an end of the measured segment.
+  connect(view_, &CloudView::pointPicked, this, [this](const Eigen::Vector3d& p) {
+    if (measure_->isChecked()) {
+      Measure(p);
+    } else {
+      calibration_panel_->AddPick(p);
+    }
+  });
+  connect(view_, &CloudView::colorModeChanged, this, [this](int mode) {
+    if (mode >= 0 && mode < color_group_->actions().size()) {
+      color_group_->actions()[mode]->setChecked(true);
+    }
+  });
   connect(connection_panel_, &ConnectionPanel::errorOccurred, this,
           [this](const QString& m) { ShowError(tr("Cannot connect"), m); });
 
@@ -193,6 +207,30 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 }
 
 MainWindow::~MainWindow() { qApp->removeEventFilter(this); }
+
+void MainWindow::RaiseDock(const QString& name) {
+  if (auto* dock = findChild<QDockWidget*>(name)) {
+    dock->show();
+    dock->raise();
+  }
+}
+
+void MainWindow::Measure(const Eigen::Vector3d& point) {
+  if (measure_points_.size() == 2) measure_points_.clear();
+  measure_points_.push_back(point);
+  if (measure_points_.size() == 1) {
+    view_->ClearMeasurement();
+    statusBar()->showMessage(tr("Measure: Shift + click the second point"), 6000);
+    return;
+  }
+  const Eigen::Vector3d d = measure_points_[1] - measure_points_[0];
+  measured_m_ = d.norm();
+  view_->SetMeasurement(measure_points_[0], measure_points_[1]);
+  statusBar()->showMessage(tr("Distance %1 m (horizontal %2 m, vertical %3 m)")
+                               .arg(measured_m_, 0, 'f', 3)
+                               .arg(d.head<2>().norm(), 0, 'f', 3)
+                               .arg(std::abs(d.z()), 0, 'f', 3));
+}
 
 void MainWindow::BuildMenus() {
   BuildFileMenu();
@@ -263,8 +301,11 @@ void MainWindow::BuildViewMenu() {
   view->addSeparator();
   QMenu* color = view->addMenu(tr("&Colour by"));
   color_group_ = new QActionGroup(this);
-  const QString names[3] = {tr("&Height"), tr("&Time"), tr("&Range (the X4 reports no intensity)")};
-  for (int i = 0; i < 3; ++i) {
+  const QString names[CloudView::kColorModes] = {
+      tr("&Height"), tr("&Time"), tr("&Range (the X4 reports no intensity)"),
+      tr("&Pass (circle drive: A cyan, B magenta)"),
+      tr("&Deviation from Fitted Plane (after an evaluation)")};
+  for (int i = 0; i < CloudView::kColorModes; ++i) {
     QAction* a = color->addAction(names[i]);
     a->setCheckable(true);
     a->setData(i);
@@ -357,6 +398,15 @@ void MainWindow::BuildToolsMenu() {
     dialog->setAttribute(Qt::WA_DeleteOnClose);
     dialog->show();
   });
+  measure_ = tools->addAction(tr("&Measure Distance"));
+  measure_->setCheckable(true);
+  measure_->setShortcut(Qt::Key_M);
+  measure_->setToolTip(tr("Shift + click two points: the distance between them"));
+  connect(measure_, &QAction::toggled, this, [this](bool on) {
+    measure_points_.clear();
+    if (!on) view_->ClearMeasurement();
+    statusBar()->showMessage(on ? tr("Measure: Shift + click the first point") : QString(), 6000);
+  });
   tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
 }
 
@@ -372,6 +422,8 @@ void MainWindow::BuildHelpMenu() {
                    "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
                    "Ctrl+R / Ctrl+Shift+R: record / stop\n"
                    "Ctrl+O: open session;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+                   "Shift + click: pick a point (calibration pairs, or the distance tool)\n"
+                   "M: measure distance;  C: hide the ceiling\n"
                    "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
           })
       ->setShortcut(QKeySequence::HelpContents);

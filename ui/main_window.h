@@ -59,6 +59,12 @@ class MainWindow : public QMainWindow {
   void OpenSessionPath(const QString& dir);
   bool SaveSessionTo(const QString& dir);
   void ShowError(const QString& title, const QString& message);
+  // The distance tool (Tools > Measure Distance, M): two Shift + clicks.
+  QAction* measure_action() const { return measure_; }
+  double measured_distance() const { return measured_m_; }
+  void Measure(const Eigen::Vector3d& point);
+  // Brings a dock (by object name, e.g. "evaluationDock") to the front.
+  void RaiseDock(const QString& name);
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -96,6 +102,9 @@ class MainWindow : public QMainWindow {
   QAction* stop_record_ = nullptr;
   QAction* estop_ = nullptr;
   QActionGroup* color_group_ = nullptr;
+  QAction* measure_ = nullptr;
+  std::vector<Eigen::Vector3d> measure_points_;
+  double measured_m_ = 0.0;
 
   QLabel* link_label_;
   QLabel* pose_label_;

@@ -83,3 +83,72 @@ bool CircleDrive::PassAtTime(const PoseBuffer& poses, Time t, const Eigen::Vecto
 }
 
 }  // namespace sweepscan
+
+namespace sweepscan {
+
+bool FitCircleDrive(const PoseBuffer& poses, CircleDrive* circle, std::string* why,
+                    double min_turns) {
+  if (poses.size() < 10) {
+    *why = "too few poses for a circle drive (" + std::to_string(poses.size()) + ")";
+    return false;
+  }
+  // Kasa fit: minimise sum (x^2 + y^2 + D x + E y + F)^2, linear in (D, E, F).
+  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Vector2d p = poses.pose(i).translation().head<2>();
+    const Eigen::Vector3d row(p.x(), p.y(), 1.0);
+    ata += row * row.transpose();
+    atb -= row * p.squaredNorm();
+  }
+  const Eigen::Vector3d def = ata.ldlt().solve(atb);
+  const Eigen::Vector2d centre(-0.5 * def[0], -0.5 * def[1]);
+  const double r2 = centre.squaredNorm() - def[2];
+  if (!def.allFinite() || !(r2 > 0.01)) {
+    *why = "the drive is not a circle (no finite centre)";
+    return false;
+  }
+  const double radius = std::sqrt(r2);
+  // How far the path strays from the circle, and how far round it goes
+  // (the polar angle about the centre, unwrapped).
+  double worst = 0.0, swept = 0.0;
+  double last = 0.0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Vector2d d = poses.pose(i).translation().head<2>() - centre;
+    worst = std::max(worst, std::abs(d.norm() - radius));
+    const double phi = std::atan2(d.y(), d.x());
+    if (i > 0) swept += std::remainder(phi - last, 2.0 * M_PI);
+    last = phi;
+  }
+  const double turns = std::abs(swept) / (2.0 * M_PI);
+  if (worst > 0.15 * radius) {
+    *why = "the drive strays " + std::to_string(worst) + " m from its best circle (radius " +
+           std::to_string(radius) + " m): not a circle drive";
+    return false;
+  }
+  if (turns < min_turns) {
+    *why = "the drive goes " + std::to_string(turns) + " turns round its circle, need " +
+           std::to_string(min_turns);
+    return false;
+  }
+  circle->centre = centre;
+  circle->radius_m = radius;
+  return true;
+}
+
+std::vector<uint8_t> LabelCirclePasses(const std::vector<CloudPoint>& points,
+                                       const PoseBuffer& poses, const CircleDrive& circle) {
+  std::vector<uint8_t> labels(points.size(), kNoPass);
+  size_t hint = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const CloudPoint& p = points[i];
+    Rigid3d world_from_body;
+    // Points come in time order, so the hint makes each lookup O(1).
+    if (!poses.LookupWithHint(TimeFromNanoseconds(p.time_ns), &hint, &world_from_body)) continue;
+    labels[i] = static_cast<uint8_t>(
+        circle.PassOf(world_from_body.translation().head<2>(), Eigen::Vector2d(p.x, p.y)));
+  }
+  return labels;
+}
+
+}  // namespace sweepscan

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/cloud/cloud.h"
@@ -72,6 +73,24 @@ struct CircleDrive {
   bool PassAtTime(const PoseBuffer& poses, Time t, const Eigen::Vector2d& object_xy,
                   CirclePass* pass) const;
 };
+
+// The circle of a calibration drive from the robot's positions: the
+// algebraic least-squares circle (Kasa: x^2 + y^2 + D x + E y + F = 0,
+// linear in D, E, F; centre (-D/2, -E/2), r^2 = (D^2 + E^2)/4 - F). Refused,
+// with why, unless the positions go at least `min_turns` round the centre
+// and stay within 15 % of the radius of the circle (a straight or wandering
+// drive has no passes).
+bool FitCircleDrive(const PoseBuffer& poses, CircleDrive* circle, std::string* why,
+                    double min_turns = 0.9);
+
+// The pass of every point of a circle drive (CircleDrive::PassOf with the
+// robot's position at the point's own time): 0 near side (pass A), 1 far
+// side (pass B), kNoPass where the poses do not cover the point's time.
+// Points of one object get one label per sighting; the two passes of the
+// target are the two labels.
+constexpr uint8_t kNoPass = 255;
+std::vector<uint8_t> LabelCirclePasses(const std::vector<CloudPoint>& points,
+                                       const PoseBuffer& poses, const CircleDrive& circle);
 
 }  // namespace sweepscan
 

@@ -3,7 +3,9 @@
 #include "core/calibration/picks.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
+#include <utility>
 
 #include "core/calibration/file_internal.h"
 #include "core/calibration/internal.h"
@@ -16,6 +18,34 @@ using calibration_internal::ParseJsonNoThrow;
 using calibration_internal::ReadText;
 using calibration_internal::RefName;
 
+namespace {
+
+// Sum of the two picks' distances to the samples they snap to, with pick a
+// in windows[0] and b in windows[1]; infinity if either window is empty.
+double SnapDistance(const Pick& a, const Pick& b, const SampleStore& store,
+                    const std::vector<PassWindow>& windows, const RobotGeometry& geometry,
+                    const MountingError& calibration) {
+  double sum = 0.0;
+  const Pick* p[2] = {&a, &b};
+  for (int side = 0; side < 2; ++side) {
+    LidarObservation o;
+    if (!store.Nearest(windows[side], p[side]->world, geometry, calibration, &o).ok()) {
+      return std::numeric_limits<double>::infinity();
+    }
+    sum += (ProjectObservation(o, geometry, calibration) - p[side]->world).norm();
+  }
+  return sum;
+}
+
+bool SwappedPassesFitBetter(const Pick& a, const Pick& b, const SampleStore& store,
+                            const std::vector<PassWindow>& windows, const RobotGeometry& geometry,
+                            const MountingError& calibration) {
+  return SnapDistance(b, a, store, windows, geometry, calibration) <
+         SnapDistance(a, b, store, windows, geometry, calibration);
+}
+
+}  // namespace
+
 Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store,
                     const std::vector<PassWindow>& windows, const RobotGeometry& geometry,
                     const MountingError& calibration, std::vector<ObservationPair>* pairs) {
@@ -27,6 +57,15 @@ Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store
   for (size_t k = 0; k < picks.size(); ++k) {
     ObservationPair pair;
     const Pick* p[2] = {&picks[k].pass1, &picks[k].pass2};
+    // World picks may name the passes either way round: an operator clicks
+    // a corner in whichever sighting is on screen. The order that snaps both
+    // picks nearer to their samples wins (the other order puts each pick on
+    // the wrong ghost, centimetres away).
+    if (!p[0]->has_sample && !p[1]->has_sample && SwappedPassesFitBetter(*p[0], *p[1], store,
+                                                                         windows, geometry,
+                                                                         calibration)) {
+      std::swap(p[0], p[1]);
+    }
     LidarObservation* o[2] = {&pair.pass1, &pair.pass2};
     for (int side = 0; side < 2; ++side) {
       const std::string where =

@@ -73,7 +73,31 @@ Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometr
     summary.method = "pairs";
     s = SolvePairs(pairs, geometry, initial, options.solver, &summary);
   }
-  if (!s.ok()) result->failure = Failure::kSolveFailed;
+  if (!s.ok()) {
+    result->failure = Failure::kSolveFailed;
+    return s;
+  }
+  // The pairs and corners under the result, for display.
+  std::vector<ObservationPair> resolved;
+  if (ResolvePairs(picks, store, windows, geometry, initial, &resolved).ok()) {
+    for (const ObservationPair& pair : resolved) {
+      PickCalibrationResult::PairCheck check;
+      check.pass1_world = ProjectObservation(pair.pass1, geometry, summary.angles);
+      check.pass2_world = ProjectObservation(pair.pass2, geometry, summary.angles);
+      check.after_m = (check.pass1_world - check.pass2_world).norm();
+      check.before_m = (ProjectObservation(pair.pass1, geometry, initial) -
+                        ProjectObservation(pair.pass2, geometry, initial))
+                           .norm();
+      result->pair_checks.push_back(check);
+    }
+  }
+  if (options.refine) {
+    result->has_corners =
+        FitBoardCorners(result->sightings.passes[0], geometry, summary.angles, &result->corners[0])
+            .ok() &&
+        FitBoardCorners(result->sightings.passes[1], geometry, summary.angles, &result->corners[1])
+            .ok();
+  }
   return s;
 }
 

@@ -56,6 +56,21 @@ struct PickCalibrationResult {
   CalibrationSummary baseline;
   Eigen::AlignedBox3d region;  // the target region used
   TargetSightings sightings;   // the target's sightings in that region
+
+  // What a front end shows beside the angles. Each pick pair resolved to
+  // its two samples (ResolvePairs): the samples' world positions and their
+  // distance under the initial and the solved angles (the pair's residual,
+  // Eq. 17, before and after).
+  struct PairCheck {
+    Eigen::Vector3d pass1_world = Eigen::Vector3d::Zero();  // solved angles
+    Eigen::Vector3d pass2_world = Eigen::Vector3d::Zero();
+    double before_m = 0.0, after_m = 0.0;
+  };
+  std::vector<PairCheck> pair_checks;  // empty if the picks did not resolve
+  // refine: the board corners fitted in each pass under the solved angles
+  // (FitBoardCorners), which the solve made coincide.
+  bool has_corners = false;
+  BoardCorners corners[2];
 };
 
 // Picks -> mounting error: the target region from the picks, the target's

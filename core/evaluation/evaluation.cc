@@ -277,6 +277,40 @@ DeviationHistogram HistogramParallel(const std::vector<Eigen::Vector3f>& points,
   return h;
 }
 
+// Two in-plane unit axes: horizontal and (nearly) up for a wall; for a
+// level plane x projected into it and n x u.
+void PlaneAxes(const Eigen::Vector3d& n, Eigen::Vector3d* u, Eigen::Vector3d* v) {
+  if (std::abs(n.z()) > 0.9) {
+    *u = (Eigen::Vector3d::UnitX() - n.x() * n).normalized();
+  } else {
+    *u = Eigen::Vector3d::UnitZ().cross(n).normalized();
+  }
+  *v = n.cross(*u);
+}
+
+std::array<Eigen::Vector3d, 4> PlaneOutline(const std::vector<Eigen::Vector3f>& points,
+                                            const std::vector<uint32_t>& inliers,
+                                            const Plane& plane) {
+  Eigen::Vector3d u, v;
+  PlaneAxes(plane.normal, &u, &v);
+  std::vector<float> pu(inliers.size()), pv(inliers.size());
+  for (size_t k = 0; k < inliers.size(); ++k) {
+    const Eigen::Vector3d d = points[inliers[k]].cast<double>() - plane.centroid;
+    pu[k] = static_cast<float>(d.dot(u));
+    pv[k] = static_cast<float>(d.dot(v));
+  }
+  auto quantile = [](std::vector<float>* x, double q) {
+    if (x->empty()) return 0.0;
+    const size_t i = std::min(x->size() - 1, static_cast<size_t>(q * (x->size() - 1) + 0.5));
+    std::nth_element(x->begin(), x->begin() + static_cast<std::ptrdiff_t>(i), x->end());
+    return static_cast<double>((*x)[i]);
+  };
+  const double u0 = quantile(&pu, 0.005), u1 = quantile(&pu, 0.995);
+  const double v0 = quantile(&pv, 0.005), v1 = quantile(&pv, 0.995);
+  const Eigen::Vector3d& c = plane.centroid;
+  return {c + u0 * u + v0 * v, c + u1 * u + v0 * v, c + u1 * u + v1 * v, c + u0 * u + v1 * v};
+}
+
 // Iterative RANSAC planes (see ExtractPlanes). members may be null.
 Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
                          const EvaluationOptions& options, Runner* runner,
@@ -456,6 +490,7 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
       ep.kind = "other";
       ep.tilt_deg = std::asin(std::min(1.0, nz)) * kRadToDeg;
     }
+    ep.outline = PlaneOutline(points, mine, ep.plane);
     bool ok = true;
     ep.deviations = HistogramParallel(points, mine, ep.plane, options.histogram_bin_m,
                                       options.histogram_half_range_m, runner, &ok);
@@ -720,6 +755,53 @@ Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const Evaluatio
   if (runner.Cancelled()) return Cancelled();
   runner.Done();
   return Status::Ok();
+}
+
+std::vector<float> DeviationMapMm(const std::vector<Eigen::Vector3f>& points,
+                                  const std::vector<EvaluatedPlane>& planes, double band_m) {
+  // Each plane as its normal, offset and the outline's rectangle in the
+  // plane's own axes (u0..u1, v0..v1 about the centroid), grown by the band.
+  struct Patch {
+    Eigen::Vector3f n, c, u, v;
+    float d, u0, u1, v0, v1;
+  };
+  std::vector<Patch> patches;
+  const float band = static_cast<float>(band_m);
+  for (const EvaluatedPlane& ep : planes) {
+    Eigen::Vector3d u, v;
+    PlaneAxes(ep.plane.normal, &u, &v);
+    Patch q;
+    q.n = ep.plane.normal.cast<float>();
+    q.d = static_cast<float>(ep.plane.d);
+    q.c = ep.plane.centroid.cast<float>();
+    q.u = u.cast<float>();
+    q.v = v.cast<float>();
+    const Eigen::Vector3d lo = ep.outline[0] - ep.plane.centroid;
+    const Eigen::Vector3d hi = ep.outline[2] - ep.plane.centroid;
+    q.u0 = static_cast<float>(lo.dot(u)) - band;
+    q.u1 = static_cast<float>(hi.dot(u)) + band;
+    q.v0 = static_cast<float>(lo.dot(v)) - band;
+    q.v1 = static_cast<float>(hi.dot(v)) + band;
+    patches.push_back(q);
+  }
+  std::vector<float> out(points.size(), std::numeric_limits<float>::quiet_NaN());
+  Runner runner(0, nullptr);
+  runner.For(points.size(), kPassBlock, [&](size_t, size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3f& p = points[i];
+      float best = band;
+      for (const Patch& q : patches) {
+        const float dist = q.n.dot(p) + q.d;
+        if (std::abs(dist) > std::abs(best) || std::abs(dist) > band) continue;
+        const Eigen::Vector3f r = p - q.c;
+        const float a = r.dot(q.u), b = r.dot(q.v);
+        if (a < q.u0 || a > q.u1 || b < q.v0 || b > q.v1) continue;
+        best = dist;
+        out[i] = 1e3f * dist;
+      }
+    }
+  });
+  return out;
 }
 
 }  // namespace sweepscan

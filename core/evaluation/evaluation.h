@@ -25,6 +25,7 @@
 #define SWEEPSCAN_CORE_EVALUATION_EVALUATION_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -128,6 +129,11 @@ struct EvaluatedPlane {
   // (walls), degrees: how far the surface is from level / plumb.
   double tilt_deg = 0.0;
   DeviationHistogram deviations;  // signed n . p + d of its inliers (Fig. 9)
+  // The inliers' extent in the plane, for drawing it: a rectangle on two
+  // in-plane axes (horizontal and up for walls, x-aligned for level planes)
+  // spanning the 0.5th to 99.5th percentile of the inliers along each axis
+  // (a few stray inliers far away do not stretch it). Corners in order.
+  std::array<Eigen::Vector3d, 4> outline;
 };
 
 struct RoomDimension {
@@ -180,6 +186,14 @@ std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& pla
 // Everything above: outliers, density (on the points after outlier
 // removal, from the same neighbour structure), planes, histograms,
 // dimensions.
+// The deviation map: every point's signed distance n . p + d to the plane
+// it lies on, in millimetres, for colouring a cloud by flatness. A point
+// lies on the nearest of `planes` if within `band_m` of it and inside its
+// outline grown by `band_m`; other points get NaN. Runs over the points in
+// parallel blocks; the result does not depend on the thread count.
+std::vector<float> DeviationMapMm(const std::vector<Eigen::Vector3f>& points,
+                                  const std::vector<EvaluatedPlane>& planes, double band_m);
+
 Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,
                      CloudEvaluation* result);
 Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const EvaluationOptions& options,

@@ -2,6 +2,7 @@
 
 #include <QCheckBox>
 #include <QFileDialog>
+#include <QGridLayout>
 #include <QGroupBox>
 #include <QHBoxLayout>
 #include <QHeaderView>
@@ -10,6 +11,7 @@
 #include <QPainterPath>
 #include <QPushButton>
 #include <QTableWidget>
+#include <QTimer>
 #include <QUndoCommand>
 #include <QUndoStack>
 #include <QVBoxLayout>
@@ -79,6 +81,9 @@ namespace {
 
 const QColor kColorA(0, 200, 255);
 const QColor kColorB(255, 60, 200);
+// Fitted corners: pale versions of the pass colours.
+const QColor kCornerA(200, 255, 120);
+const QColor kCornerB(255, 214, 0);
 
 // Every edit of the pair list is one snapshot swap: simple and exact.
 class PairsCommand : public QUndoCommand {
@@ -109,11 +114,46 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
                                    QWidget* parent)
     : QWidget(parent), workspace_(workspace), view_(view), undo_(undo) {
   auto* layout = new QVBoxLayout(this);
+  layout->addWidget(BuildTargetStep());
+  layout->addWidget(BuildPassesStep());
+  layout->addWidget(BuildPickStep());
+  layout->addWidget(BuildSolveStep());
+  layout->addWidget(BuildKeepStep());
+  layout->addStretch(1);
 
+  connect(workspace_, &Workspace::calibrationIteration, this,
+          [this](int i, double cost) { plot_->Add(i, cost); });
+  connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
+  connect(workspace_, &Workspace::passesSplit, this, &CalibrationPanel::OnPassesSplit);
+  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+    after_->setChecked(false);
+    pass_shown_ = -1;
+    passes_->setText(workspace_->circle_drive()
+                         ? tr("Opened %1; splitting the passes when it has replayed.")
+                               .arg(workspace_->circle_drive_note())
+                         : tr("Not a calibration drive: %1").arg(workspace_->circle_drive_note()));
+    Refresh();
+  });
+  // The passes are split once the opened circle drive has replayed; after a
+  // before / after replay the same labels are given to the new cloud.
+  connect(workspace_, &Workspace::replayFinished, this, [this] {
+    if (!workspace_->circle_drive()) return;
+    if (workspace_->pass_labels().empty()) {
+      if (!workspace_->job_running()) workspace_->SplitPasses();
+    } else {
+      ApplyPassLabels();
+    }
+  });
+  Refresh();
+}
+
+QWidget* CalibrationPanel::BuildTargetStep() {
+  auto* box = new QGroupBox(tr("1. Target and drive"));
+  auto* layout = new QVBoxLayout(box);
   auto* target = new QLabel(
-      tr("<b>1. Target and drive.</b> Mount a thin board (0.6 m, 5 mm) turned 45° like a "
-         "diamond, 1-2 m beside the circle, and drive two turns at 0.05 m/s (Drive panel, "
-         "Calibration circle) while recording. Open the recording."));
+      tr("Mount a thin board (0.6 m, 5 mm) turned 45° like a diamond, 1-2 m beside the "
+         "circle, its face towards the circle's centre. Then record two turns of a 1 m circle "
+         "at 0.05 m/s and open the recording."));
   target->setWordWrap(true);
   layout->addWidget(target);
   auto* drive = new QPushButton(tr("Record a calibration drive"));
@@ -130,61 +170,63 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 2.0));
   });
   layout->addWidget(drive);
+  return box;
+}
 
-  auto* picking = new QGroupBox(tr("2. Pick pairs"));
-  auto* pick_layout = new QVBoxLayout(picking);
+QWidget* CalibrationPanel::BuildPassesStep() {
+  auto* box = new QGroupBox(tr("2. The two passes"));
+  auto* layout = new QVBoxLayout(box);
+  passes_ = new QLabel(tr("Open a calibration drive: its two passes are split automatically."));
+  passes_->setWordWrap(true);
+  layout->addWidget(passes_);
+  auto* row = new QHBoxLayout;
+  const QString names[3] = {tr("Both"), tr("Pass A"), tr("Pass B")};
+  const QString tips[3] = {tr("Both passes: the ghost is the two sightings of the target"),
+                           tr("Only pass A (near side, cyan): pick here first"),
+                           tr("Only pass B (far side, magenta): pick the same corner here")};
+  for (int k = 0; k < 3; ++k) {
+    pass_buttons_[k] = new QPushButton(names[k]);
+    pass_buttons_[k]->setCheckable(true);
+    pass_buttons_[k]->setAutoExclusive(true);
+    pass_buttons_[k]->setToolTip(tips[k]);
+    row->addWidget(pass_buttons_[k]);
+    connect(pass_buttons_[k], &QPushButton::clicked, this, [this, k] { ShowPass(k - 1); });
+  }
+  pass_buttons_[0]->setChecked(true);
+  split_ = new QPushButton(tr("Split"));
+  split_->setToolTip(tr("Split the cloud shown into the circle drive's two passes again"));
+  connect(split_, &QPushButton::clicked, workspace_, &Workspace::SplitPasses);
+  row->addWidget(split_);
+  layout->addLayout(row);
+  return box;
+}
+
+QWidget* CalibrationPanel::BuildPickStep() {
+  auto* box = new QGroupBox(tr("3. Pick pairs"));
+  auto* layout = new QVBoxLayout(box);
   next_pick_ = new QLabel;
   next_pick_->setWordWrap(true);
-  pick_layout->addWidget(next_pick_);
-  table_ = new QTableWidget(0, 2);
-  table_->setHorizontalHeaderLabels({tr("pass A (m)"), tr("pass B (m)")});
+  layout->addWidget(next_pick_);
+  table_ = new QTableWidget(0, 3);
+  table_->setHorizontalHeaderLabels({tr("pass A (m)"), tr("pass B (m)"), tr("gap (mm)")});
+  table_->horizontalHeaderItem(2)->setToolTip(
+      tr("The pair's distance before -> after the solve (each pick snapped to its sample)"));
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::Stretch);
+  table_->horizontalHeader()->setSectionResizeMode(2, QHeaderView::ResizeToContents);
   table_->setSelectionBehavior(QAbstractItemView::SelectRows);
   table_->setSelectionMode(QAbstractItemView::SingleSelection);
   table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   table_->setMinimumHeight(120);
-  pick_layout->addWidget(table_);
+  layout->addWidget(table_);
   auto* row = new QHBoxLayout;
   auto* remove = new QPushButton(tr("Delete"));
+  remove->setShortcut(QKeySequence::Delete);
   auto* load = new QPushButton(tr("Load…"));
   auto* save = new QPushButton(tr("Save…"));
   row->addWidget(remove);
   row->addWidget(load);
   row->addWidget(save);
-  pick_layout->addLayout(row);
-  layout->addWidget(picking);
-
-  auto* solving = new QGroupBox(tr("3. Solve"));
-  auto* solve_layout = new QVBoxLayout(solving);
-  refine_ = new QCheckBox(tr("Snap picks to the fitted board corners (refine)"));
-  refine_->setChecked(true);
-  solve_layout->addWidget(refine_);
-  solve_ = new QPushButton(tr("Solve"));
-  solve_layout->addWidget(solve_);
-  result_ = new QLabel;
-  result_->setObjectName(QStringLiteral("calibrationResult"));
-  result_->setWordWrap(true);
-  result_->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  solve_layout->addWidget(result_);
-  plot_ = new CostPlot;
-  solve_layout->addWidget(plot_);
-  layout->addWidget(solving);
-
-  auto* applying = new QGroupBox(tr("4. Check and keep"));
-  auto* apply_layout = new QHBoxLayout(applying);
-  after_ = new QPushButton(tr("Show calibrated"));
-  after_->setCheckable(true);
-  save_calibration_ = new QPushButton(tr("Save calibration…"));
-  apply_layout->addWidget(after_);
-  apply_layout->addWidget(save_calibration_);
-  use_for_robot_ = new QPushButton(tr("Use for this robot"));
-  use_for_robot_->setToolTip(
-      tr("Live scans and every new recording use these angles (kept in the settings)"));
-  apply_layout->addWidget(use_for_robot_);
-  layout->addWidget(applying);
-  layout->addStretch(1);
-
-  connect(view_, &CloudView::pointPicked, this, &CalibrationPanel::AddPick);
+  layout->addLayout(row);
   connect(table_, &QTableWidget::itemSelectionChanged, this, &CalibrationPanel::Refresh);
   connect(remove, &QPushButton::clicked, this, [this] {
     const int r = table_->currentRow();
@@ -202,7 +244,57 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     QString error;
     if (!path.isEmpty() && !LoadPairs(path, &error)) result_->setText(error);
   });
+  return box;
+}
+
+QWidget* CalibrationPanel::BuildSolveStep() {
+  auto* box = new QGroupBox(tr("4. Solve"));
+  auto* layout = new QVBoxLayout(box);
+  refine_ = new QCheckBox(tr("Snap picks to the fitted board corners (refine)"));
+  refine_->setChecked(true);
+  layout->addWidget(refine_);
+  auto* row = new QHBoxLayout;
+  solve_ = new QPushButton(tr("Solve"));
+  solve_->setToolTip(tr("Levenberg-Marquardt on the picked pairs (Miao et al. Eq. 15-17)"));
+  auto_ = new QPushButton(tr("Automatic"));
+  auto_->setToolTip(
+      tr("No picks: the floor, ceiling, walls and board seen in both passes are made to "
+         "agree (sweepscan-cli calibrate --auto)"));
+  cancel_ = new QPushButton(tr("Cancel"));
+  row->addWidget(solve_);
+  row->addWidget(auto_);
+  row->addWidget(cancel_);
+  layout->addLayout(row);
+  result_ = new QLabel;
+  result_->setObjectName(QStringLiteral("calibrationResult"));
+  result_->setWordWrap(true);
+  result_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  layout->addWidget(result_);
+  plot_ = new CostPlot;
+  layout->addWidget(plot_);
   connect(solve_, &QPushButton::clicked, this, &CalibrationPanel::Solve);
+  connect(auto_, &QPushButton::clicked, this, &CalibrationPanel::SolveAutomatic);
+  connect(cancel_, &QPushButton::clicked, this, &CalibrationPanel::CancelSolve);
+  return box;
+}
+
+QWidget* CalibrationPanel::BuildKeepStep() {
+  auto* box = new QGroupBox(tr("5. Check and keep"));
+  auto* layout = new QGridLayout(box);
+  after_ = new QPushButton(tr("Show calibrated"));
+  after_->setCheckable(true);
+  after_->setToolTip(tr("Re-assemble the session from its records under the solved angles"));
+  save_calibration_ = new QPushButton(tr("Save…"));
+  save_calibration_->setToolTip(tr("Save the calibration file (sweepscan-cli reads it too)"));
+  auto* load_calibration = new QPushButton(tr("Load…"));
+  load_calibration->setToolTip(tr("Load a calibration file as the result"));
+  use_for_robot_ = new QPushButton(tr("Use for this robot"));
+  use_for_robot_->setToolTip(
+      tr("Live scans and every new recording use these angles (kept in the settings)"));
+  layout->addWidget(after_, 0, 0);
+  layout->addWidget(use_for_robot_, 0, 1);
+  layout->addWidget(save_calibration_, 1, 0);
+  layout->addWidget(load_calibration, 1, 1);
   connect(after_, &QPushButton::toggled, this, &CalibrationPanel::ShowAfter);
   connect(save_calibration_, &QPushButton::clicked, this, [this] {
     const QString path = QFileDialog::getSaveFileName(this, tr("Save calibration"), QString(),
@@ -210,14 +302,45 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     QString error;
     if (!path.isEmpty() && !SaveCalibration(path, &error)) result_->setText(error);
   });
-  connect(use_for_robot_, &QPushButton::clicked, this, &CalibrationPanel::UseForRobot);
-  connect(workspace_, &Workspace::calibrationIteration, this,
-          [this](int i, double cost) { plot_->Add(i, cost); });
-  connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
-  connect(workspace_, &Workspace::sessionChanged, this, [this] {
-    after_->setChecked(false);
-    Refresh();
+  connect(load_calibration, &QPushButton::clicked, this, [this] {
+    const QString path = QFileDialog::getOpenFileName(this, tr("Load calibration"), QString(),
+                                                      tr("Calibration (*.json)"));
+    QString error;
+    if (!path.isEmpty() && !LoadCalibration(path, &error)) result_->setText(error);
   });
+  connect(use_for_robot_, &QPushButton::clicked, this, &CalibrationPanel::UseForRobot);
+  return box;
+}
+
+void CalibrationPanel::ShowPass(int pass) {
+  pass_shown_ = pass < 0 || pass > 1 ? -1 : pass;
+  pass_buttons_[pass_shown_ + 1]->setChecked(true);
+  if (view_->has_point_values(CloudView::ColorMode::kPass)) view_->SetPassFilter(pass_shown_);
+  Refresh();
+}
+
+void CalibrationPanel::OnPassesSplit(bool ok, const QString& message) {
+  if (!ok) {
+    passes_->setText(tr("<b style='color:#c62828'>Passes not split:</b> %1")
+                         .arg(message.toHtmlEscaped()));
+    return;
+  }
+  passes_->setText(tr("<span style='color:#00b4e6'>■</span> %1 "
+                      "<span style='color:#ff3cc8'>■</span>. Show one pass at a time to pick.")
+                       .arg(message.toHtmlEscaped()));
+  ApplyPassLabels();
+}
+
+void CalibrationPanel::ApplyPassLabels(int attempts_left) {
+  const std::vector<float>& labels = workspace_->pass_labels();
+  if (labels.empty()) return;
+  if (view_->point_count() < labels.size() && attempts_left > 0) {
+    QTimer::singleShot(50, this, [this, attempts_left] { ApplyPassLabels(attempts_left - 1); });
+    return;
+  }
+  view_->SetPointValues(CloudView::ColorMode::kPass, labels);
+  view_->SetColorMode(CloudView::ColorMode::kPass);
+  view_->SetPassFilter(pass_shown_);
   Refresh();
 }
 
@@ -302,14 +425,28 @@ void CalibrationPanel::Solve() {
     ShowResult(false, tr("Pick at least four pairs (%1 so far).").arg(p.size()));
     return;
   }
-  plot_->Clear();
-  solve_->setEnabled(false);
-  result_->setText(tr("Solving…"));
+  StartSolving();
   workspace_->Calibrate(p, refine_->isChecked());
 }
 
+void CalibrationPanel::SolveAutomatic() {
+  StartSolving();
+  workspace_->CalibrateAutomatic();
+}
+
+void CalibrationPanel::StartSolving() {
+  plot_->Clear();
+  solving_ = true;
+  result_->setText(tr("Solving…"));
+  Refresh();
+}
+
+void CalibrationPanel::CancelSolve() {
+  if (solving_) workspace_->CancelJob();
+}
+
 void CalibrationPanel::ShowResult(bool ok, const QString& message) {
-  solve_->setEnabled(true);
+  solving_ = false;
   const PickCalibrationResult* r = workspace_->calibration_result();
   if (!ok || r == nullptr) {
     result_->setText(
@@ -324,17 +461,25 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
                ? QStringLiteral("%1 ± %2").arg(v * 1e3, 0, 'f', 2).arg(sigma * 1e3, 0, 'f', 2)
                : QStringLiteral("%1").arg(v * 1e3, 0, 'f', 2);
   };
-  QString text = tr("<b>%1</b> (%2)<br>alpha %3 mrad<br>beta %4 mrad<br>gamma %5 mrad<br>"
-                    "pair distance (the ghost): %6 mm -> %7 mm, %8 pairs, %9 sightings")
+  const bool automatic = s.method == "auto-planes";
+  const QString ghost =
+      automatic ? tr("point-to-plane RMS: %1 mm -> %2 mm, %3 points on %4 planes")
+                      .arg(s.initial_rms_m * 1e3, 0, 'f', 1)
+                      .arg(s.final_rms_m * 1e3, 0, 'f', 2)
+                      .arg(s.residual_blocks)
+                      .arg(s.planes)
+                : tr("the ghost (RMS pair distance): %1 mm -> %2 mm, %3 pairs, %4 sightings")
+                      .arg(s.initial_rms_m * 1e3, 0, 'f', 1)
+                      .arg(s.final_rms_m * 1e3, 0, 'f', 2)
+                      .arg(s.residual_blocks)
+                      .arg(static_cast<int>(r->sightings.windows.size()));
+  QString text = tr("<b>%1</b> (%2)<br>alpha %3 mrad<br>beta %4 mrad<br>gamma %5 mrad<br>%6")
                      .arg(s.converged ? tr("Converged") : tr("Not converged"))
                      .arg(QString::fromStdString(s.method))
                      .arg(angle(s.angles.alpha, s.sigma_rad[0]))
                      .arg(angle(s.angles.beta, s.sigma_rad[1]))
                      .arg(angle(s.angles.gamma, s.sigma_rad[2]))
-                     .arg(s.initial_rms_m * 1e3, 0, 'f', 1)
-                     .arg(s.final_rms_m * 1e3, 0, 'f', 2)
-                     .arg(s.residual_blocks)
-                     .arg(static_cast<int>(r->sightings.windows.size()));
+                     .arg(s.method == "file" ? message.toHtmlEscaped() : ghost);
   if (r->has_baseline) {
     text += tr("<br>raw picks alone (the paper's method): %1 mm -> %2 mm")
                 .arg(r->baseline.initial_rms_m * 1e3, 0, 'f', 1)
@@ -372,6 +517,10 @@ bool CalibrationPanel::SaveCalibration(const QString& path, QString* error) cons
   return true;
 }
 
+bool CalibrationPanel::LoadCalibration(const QString& path, QString* error) {
+  return workspace_->LoadCalibration(path, error);
+}
+
 void CalibrationPanel::UseForRobot() {
   const PickCalibrationResult* r = workspace_->calibration_result();
   if (r == nullptr) return;
@@ -382,13 +531,26 @@ void CalibrationPanel::UseForRobot() {
 QString CalibrationPanel::result_text() const { return result_->text(); }
 
 void CalibrationPanel::Refresh() {
+  const PickCalibrationResult* result = workspace_->calibration_result();
+  // Per-pair distances belong to the picks they were solved from.
+  const bool checks = result != nullptr && result->pair_checks.size() == pairs().size();
   table_->blockSignals(true);
   const int selected = table_->currentRow();
   table_->setRowCount(static_cast<int>(pairs_.size()));
   for (size_t i = 0; i < pairs_.size(); ++i) {
-    table_->setItem(static_cast<int>(i), 0, new QTableWidgetItem(Xyz(pairs_[i].a)));
-    table_->setItem(static_cast<int>(i), 1,
+    const int row = static_cast<int>(i);
+    table_->setItem(row, 0, new QTableWidgetItem(Xyz(pairs_[i].a)));
+    table_->setItem(row, 1,
                     new QTableWidgetItem(pairs_[i].has_b ? Xyz(pairs_[i].b) : tr("(pick B)")));
+    QString gap = QStringLiteral("-");
+    if (checks && pairs_[i].has_b) {
+      const auto& c = result->pair_checks[i];
+      gap = QStringLiteral("%1 → %2").arg(c.before_m * 1e3, 0, 'f', 1).arg(c.after_m * 1e3, 0,
+                                                                            'f', 1);
+    }
+    auto* item = new QTableWidgetItem(gap);
+    item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
+    table_->setItem(row, 2, item);
   }
   if (selected >= 0 && selected < table_->rowCount()) table_->selectRow(selected);
   table_->blockSignals(false);
@@ -397,8 +559,17 @@ void CalibrationPanel::Refresh() {
   const int highlight = table_->currentRow();
   for (size_t i = 0; i < pairs_.size(); ++i) {
     const bool h = static_cast<int>(i) == highlight;
-    markers.push_back({pairs_[i].a, kColorA, h});
-    if (pairs_[i].has_b) markers.push_back({pairs_[i].b, kColorB, h});
+    if (pass_shown_ != 1) markers.push_back({pairs_[i].a, kColorA, h});
+    if (pairs_[i].has_b && pass_shown_ != 0) markers.push_back({pairs_[i].b, kColorB, h});
+  }
+  // The fitted board corners the refined solve used (the raw picks stay).
+  if (result != nullptr && result->has_corners) {
+    for (int k = 0; k < 2; ++k) {
+      if (pass_shown_ >= 0 && pass_shown_ != k) continue;
+      for (const Eigen::Vector3d& c : result->corners[k].corners) {
+        markers.push_back({c, k == 0 ? kCornerA : kCornerB, false});
+      }
+    }
   }
   view_->SetMarkers(markers);
 
@@ -408,9 +579,15 @@ void CalibrationPanel::Refresh() {
              : tr("Shift + click a target corner in <b style='color:#00b4e6'>pass A</b> "
                   "(%1 complete pairs; at least 4).")
                    .arg(pairs().size()));
-  solve_->setEnabled(pairs().size() >= 4 && workspace_->recording_opened() != nullptr);
-  const bool have = workspace_->calibration_result() != nullptr;
-  after_->setEnabled(have);
+  const bool opened = workspace_->recording_opened() != nullptr;
+  solve_->setEnabled(!solving_ && pairs().size() >= 4 && opened);
+  auto_->setEnabled(!solving_ && opened);
+  cancel_->setEnabled(solving_);
+  split_->setEnabled(opened && workspace_->circle_drive());
+  const bool labelled = view_->has_point_values(CloudView::ColorMode::kPass);
+  for (QPushButton* b : pass_buttons_) b->setEnabled(labelled);
+  const bool have = result != nullptr;
+  after_->setEnabled(have && opened);
   save_calibration_->setEnabled(have);
   use_for_robot_->setEnabled(have);
 }

@@ -2,16 +2,21 @@
 // (section 4, Eq. 15-17) step by step, on the session shown:
 //   1. the target and the drive (a thin 0.6 m board turned 45 degrees, two
 //      turns at 0.05 m/s: docs/calibration.md), with the circle drive;
-//   2. picking: Shift + click a target corner in pass A, then the same
+//   2. the passes: an opened circle drive is split into pass A (near side)
+//      and pass B (far side), coloured cyan and magenta, shown together or
+//      one at a time;
+//   3. picking: Shift + click a target corner in pass A, then the same
 //      corner in pass B, at least four times; the pair list highlights its
 //      pair in the view, deletes, undoes and redoes (Ctrl+Z / Ctrl+Shift+Z),
 //      and saves / loads the pairs file the CLI reads;
-//   3. Solve on a job thread (progress per LM iteration, Cancel), optionally
-//      snapping the picks to the fitted board corners (refine): alpha, beta,
-//      gamma with their 1-sigma from the solver's covariance, the pair
-//      distance (the ghost) before and after, the cost per iteration;
-//   4. before / after: the session re-assembled under the result; save the
-//      calibration file.
+//   4. Solve on a job thread (progress per LM iteration, Cancel), optionally
+//      snapping the picks to the fitted board corners (refine), or the
+//      automatic mode (no picks): alpha, beta, gamma with their 1-sigma from
+//      the solver's covariance, each pair's distance before and after, the
+//      ghost (RMS pair distance) before and after, the cost per iteration,
+//      the fitted corners in the view;
+//   5. before / after: the session re-assembled under the result; save or
+//      load the calibration file, make it the robot's.
 // GUI thread. Calls only the Workspace and the view's picking layer.
 #ifndef SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
 #define SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
@@ -48,7 +53,13 @@ class CalibrationPanel : public QWidget {
   bool SavePairs(const QString& path, QString* error) const;
   bool LoadPairs(const QString& path, QString* error);  // Undoable as one step.
   void Solve();
+  void SolveAutomatic();
+  void CancelSolve();
+  bool solving() const { return solving_; }
   void SetRefine(bool refine);
+  // Step 2: pass A (0), pass B (1) or both (-1) in the view.
+  void ShowPass(int pass);
+  bool LoadCalibration(const QString& path, QString* error);
   void ShowAfter(bool after);  // The before / after toggle.
   bool SaveCalibration(const QString& path, QString* error) const;
   // Makes the result the robot's calibration for live scans and new recordings.
@@ -69,8 +80,18 @@ class CalibrationPanel : public QWidget {
   void robotCalibrationChanged(const MountingError& calibration);
 
  private:
+  QWidget* BuildTargetStep();
+  QWidget* BuildPassesStep();
+  QWidget* BuildPickStep();
+  QWidget* BuildSolveStep();
+  QWidget* BuildKeepStep();
   void Refresh();
   void ShowResult(bool ok, const QString& message);
+  void OnPassesSplit(bool ok, const QString& message);
+  // Gives the view the pass labels once it holds every point (the view
+  // takes points on the GUI tick, after the workspace has them).
+  void ApplyPassLabels(int attempts_left = 100);
+  void StartSolving();
 
   Workspace* workspace_;
   CloudView* view_;
@@ -79,6 +100,13 @@ class CalibrationPanel : public QWidget {
   QTableWidget* table_;
   QCheckBox* refine_;
   QPushButton* solve_;
+  QPushButton* auto_;
+  QPushButton* cancel_;
+  bool solving_ = false;
+  QLabel* passes_;
+  QPushButton* pass_buttons_[3];  // both, A, B
+  QPushButton* split_;
+  int pass_shown_ = -1;
   QPushButton* after_;
   QPushButton* save_calibration_;
   QPushButton* use_for_robot_;

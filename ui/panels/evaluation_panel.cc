@@ -1,12 +1,22 @@
 #include "ui/panels/evaluation_panel.h"
 
+#include <QCheckBox>
+#include <QDir>
+#include <QDoubleSpinBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QGridLayout>
 #include <QHeaderView>
 #include <QLabel>
 #include <QPainter>
+#include <QPainterPath>
 #include <QPushButton>
 #include <QTableWidget>
 #include <QVBoxLayout>
 #include <algorithm>
+#include <cmath>
+
+#include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
 
@@ -14,8 +24,11 @@ namespace sweepscan::ui {
 class HistogramPlot : public QWidget {
  public:
   HistogramPlot() { setMinimumHeight(110); }
-  void Set(const DeviationHistogram& h, const QString& title) {
+  // `before`: the same plane in the previous evaluation, drawn as an
+  // outline over the bars (empty counts: none).
+  void Set(const DeviationHistogram& h, const DeviationHistogram& before, const QString& title) {
     h_ = h;
+    before_ = before;
     title_ = title;
     update();
   }
@@ -31,13 +44,42 @@ class HistogramPlot : public QWidget {
       p.drawText(rect(), Qt::AlignCenter, tr("deviation histogram of the selected plane"));
       return;
     }
-    const uint64_t peak = *std::max_element(h_.counts.begin(), h_.counts.end());
+    // Shares of each histogram's points, so that clouds of different size
+    // compare; bins on the same axis (the same options give the same bins).
+    auto shares = [](const DeviationHistogram& h) {
+      std::vector<double> s(h.counts.size(), 0.0);
+      uint64_t total = 0;
+      for (uint64_t c : h.counts) total += c;
+      for (size_t i = 0; i < s.size() && total > 0; ++i) s[i] = double(h.counts[i]) / total;
+      return s;
+    };
+    const std::vector<double> now = shares(h_);
+    const bool with_before =
+        before_.counts.size() == h_.counts.size() && before_.bin_m == h_.bin_m;
+    const std::vector<double> then = with_before ? shares(before_) : std::vector<double>();
+    double peak = *std::max_element(now.begin(), now.end());
+    if (with_before) peak = std::max(peak, *std::max_element(then.begin(), then.end()));
     const QRectF r = QRectF(rect()).adjusted(6, 18, -6, -16);
-    const double w = r.width() / h_.counts.size();
-    for (size_t i = 0; i < h_.counts.size(); ++i) {
-      const double bar = peak > 0 ? r.height() * h_.counts[i] / peak : 0.0;
+    const double w = r.width() / now.size();
+    for (size_t i = 0; i < now.size(); ++i) {
+      const double bar = peak > 0 ? r.height() * now[i] / peak : 0.0;
       p.fillRect(QRectF(r.left() + i * w, r.bottom() - bar, std::max(1.0, w - 1), bar),
                  QColor(67, 160, 71));
+    }
+    if (with_before) {
+      QPainterPath path;
+      path.moveTo(r.left(), r.bottom());
+      for (size_t i = 0; i < then.size(); ++i) {
+        const double y = r.bottom() - (peak > 0 ? r.height() * then[i] / peak : 0.0);
+        path.lineTo(r.left() + i * w, y);
+        path.lineTo(r.left() + (i + 1) * w, y);
+      }
+      path.lineTo(r.right(), r.bottom());
+      p.setPen(QPen(QColor(239, 108, 0), 1.5));
+      p.drawPath(path);
+      p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignRight,
+                 tr("orange: previous"));
+      p.setPen(palette().text().color());
     }
     p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignLeft, title_);
     const double lo = h_.min_m * 1e3, hi = (h_.min_m + h_.bin_m * h_.counts.size()) * 1e3;
@@ -50,11 +92,22 @@ class HistogramPlot : public QWidget {
   }
 
  private:
-  DeviationHistogram h_;
+  DeviationHistogram h_, before_;
   QString title_;
 };
 
 namespace {
+
+QColor PlaneColor(const std::string& kind, int wall) {
+  if (kind == "floor") return QColor(141, 110, 99);
+  if (kind == "ceiling") return QColor(144, 202, 249);
+  if (kind == "wall") {
+    static const QColor walls[] = {QColor(255, 183, 77), QColor(129, 199, 132),
+                                   QColor(186, 104, 200), QColor(77, 208, 225)};
+    return walls[wall % 4];
+  }
+  return QColor(224, 224, 224);
+}
 
 QTableWidgetItem* Item(const QString& text) {
   auto* item = new QTableWidgetItem(text);
@@ -72,8 +125,8 @@ QString Angles(const MountingError& c) {
 
 }  // namespace
 
-EvaluationPanel::EvaluationPanel(Workspace* workspace, QWidget* parent)
-    : QWidget(parent), workspace_(workspace) {
+EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget* parent)
+    : QWidget(parent), workspace_(workspace), view_(view) {
   auto* layout = new QVBoxLayout(this);
   evaluate_ = new QPushButton(tr("Evaluate the cloud shown"));
   layout->addWidget(evaluate_);
@@ -101,7 +154,45 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, QWidget* parent)
   dimensions_->setMinimumHeight(100);
   layout->addWidget(dimensions_);
 
+  auto* shown = new QGridLayout;
+  planes_shown_ = new QCheckBox(tr("Show planes"));
+  planes_shown_->setChecked(true);
+  planes_shown_->setToolTip(tr("The fitted planes as coloured rectangles in the view"));
+  deviations_shown_ = new QCheckBox(tr("Colour by deviation, ±"));
+  deviations_shown_->setToolTip(
+      tr("Each point coloured by its distance to its fitted plane: blue behind, white on, red "
+         "in front; grey on no plane"));
+  deviation_range_ = new QDoubleSpinBox;
+  deviation_range_->setRange(1.0, 200.0);
+  deviation_range_->setValue(20.0);
+  deviation_range_->setSuffix(tr(" mm"));
+  deviation_range_->setDecimals(0);
+  shown->addWidget(planes_shown_, 0, 0);
+  shown->addWidget(deviations_shown_, 1, 0);
+  shown->addWidget(deviation_range_, 1, 1);
+  layout->addLayout(shown);
+  export_ = new QPushButton(tr("Export report…"));
+  export_->setToolTip(tr("The evaluation as JSON, with a PNG of the view beside it"));
+  export_->setEnabled(false);
+  layout->addWidget(export_);
+
   connect(evaluate_, &QPushButton::clicked, this, &EvaluationPanel::Evaluate);
+  connect(planes_shown_, &QCheckBox::toggled, this, &EvaluationPanel::ShowPlanes);
+  connect(deviations_shown_, &QCheckBox::toggled, this, &EvaluationPanel::ShowDeviations);
+  connect(deviation_range_, qOverload<double>(&QDoubleSpinBox::valueChanged), view_,
+          &CloudView::SetDeviationRange);
+  connect(export_, &QPushButton::clicked, this, [this] {
+    const QString path = QFileDialog::getSaveFileName(this, tr("Export evaluation report"),
+                                                      QString(), tr("Report (*.json)"));
+    QString error;
+    if (!path.isEmpty() && !ExportReport(path, &error)) summary_->setText(error);
+  });
+  // A new cloud (another session, a before / after replay) has neither the
+  // old planes nor the old deviations.
+  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+    view_->SetPlanes({});
+    deviations_shown_->setChecked(false);
+  });
   connect(planes_, &QTableWidget::itemSelectionChanged, this, &EvaluationPanel::ShowHistogram);
   connect(workspace_, &Workspace::evaluationFinished, this, &EvaluationPanel::Show);
 }
@@ -173,7 +264,54 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
   }
   if (!e->planes.empty()) planes_->selectRow(0);
   ShowHistogram();
+  // The planes in the view, coloured by kind, named with their RMS.
+  std::vector<CloudView::PlanePatch> patches;
+  int walls = 0;
+  for (size_t i = 0; i < e->planes.size(); ++i) {
+    const EvaluatedPlane& p = e->planes[i];
+    CloudView::PlanePatch patch;
+    patch.corners = p.outline;
+    patch.color = PlaneColor(p.kind, p.kind == "wall" ? walls++ : 0);
+    patch.label = QStringLiteral("%1 %2: %3 mm")
+                      .arg(QString::fromStdString(p.kind))
+                      .arg(i)
+                      .arg(p.plane.rms * 1e3, 0, 'f', 1);
+    patches.push_back(patch);
+  }
+  view_->SetPlanes(patches);
+  view_->SetPlanesVisible(planes_shown_->isChecked());
+  view_->SetPointValues(CloudView::ColorMode::kDeviation, workspace_->deviation_map());
+  view_->SetDeviationRange(deviation_range_->value());
+  if (deviations_shown_->isChecked()) view_->SetColorMode(CloudView::ColorMode::kDeviation);
+  export_->setEnabled(true);
   emit evaluated(true);
+}
+
+void EvaluationPanel::ShowPlanes(bool on) {
+  if (planes_shown_->isChecked() != on) planes_shown_->setChecked(on);
+  view_->SetPlanesVisible(on);
+}
+
+void EvaluationPanel::ShowDeviations(bool on) {
+  if (deviations_shown_->isChecked() != on) {
+    deviations_shown_->setChecked(on);  // Re-enters through toggled.
+    return;
+  }
+  if (on) {
+    if (view_->color_mode() != CloudView::ColorMode::kDeviation) {
+      color_before_ = static_cast<int>(view_->color_mode());
+    }
+    view_->SetColorMode(CloudView::ColorMode::kDeviation);
+  } else if (view_->color_mode() == CloudView::ColorMode::kDeviation) {
+    view_->SetColorMode(static_cast<CloudView::ColorMode>(color_before_));
+  }
+}
+
+bool EvaluationPanel::ExportReport(const QString& path, QString* error) {
+  const QFileInfo info(path);
+  const QString image = info.completeBaseName() + QStringLiteral(".png");
+  if (!view_->SaveScreenshot(info.dir().filePath(image), error)) return false;
+  return workspace_->SaveEvaluationReport(path, image, error);
 }
 
 void EvaluationPanel::ShowHistogram() {
@@ -181,7 +319,21 @@ void EvaluationPanel::ShowHistogram() {
   const int r = planes_->currentRow();
   if (e == nullptr || r < 0 || r >= static_cast<int>(e->planes.size())) return;
   const EvaluatedPlane& p = e->planes[r];
-  histogram_->Set(p.deviations, tr("%1 %2: deviations from its plane (RMS %3 mm)")
+  // The same plane in the previous evaluation: the same kind, the nearest
+  // normal (planes come in size order, which a calibration can change).
+  DeviationHistogram before;
+  if (const CloudEvaluation* b = workspace_->previous_evaluation()) {
+    double best = 0.9;  // |cos| of at most ~25 degrees
+    for (const EvaluatedPlane& q : b->planes) {
+      const double c = std::abs(q.plane.normal.dot(p.plane.normal));
+      if (q.kind == p.kind && c > best &&
+          std::abs(std::abs(q.plane.d) - std::abs(p.plane.d)) < 0.3) {
+        best = c;
+        before = q.deviations;
+      }
+    }
+  }
+  histogram_->Set(p.deviations, before, tr("%1 %2: deviations from its plane (RMS %3 mm)")
                                     .arg(QString::fromStdString(p.kind))
                                     .arg(r)
                                     .arg(p.plane.rms * 1e3, 0, 'f', 2));

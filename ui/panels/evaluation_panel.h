@@ -4,7 +4,11 @@
 // nearest-neighbour distance (Eq. 18-19) and room dimensions between
 // parallel planes (Table 3). Each evaluation is shown beside the previous
 // one, so evaluating before and after a calibration (Calibration panel,
-// Show calibrated) compares them. GUI thread; the work runs on a job thread.
+// Show calibrated) compares them: the planes' histograms are drawn over the
+// previous ones. In the view: the planes as coloured rectangles and the
+// cloud coloured by its deviation from them (mm, colour bar). The report
+// (JSON and a PNG of the view) is exported. GUI thread; the work runs on a
+// job thread.
 #ifndef SWEEPSCAN_UI_PANELS_EVALUATION_PANEL_H_
 #define SWEEPSCAN_UI_PANELS_EVALUATION_PANEL_H_
 
@@ -12,19 +16,29 @@
 
 #include "ui/workspace/workspace.h"
 
+class QCheckBox;
+class QDoubleSpinBox;
 class QLabel;
 class QPushButton;
 class QTableWidget;
 
 namespace sweepscan::ui {
 
+class CloudView;
 class HistogramPlot;
 
 class EvaluationPanel : public QWidget {
   Q_OBJECT
  public:
-  explicit EvaluationPanel(Workspace* workspace, QWidget* parent = nullptr);
+  EvaluationPanel(Workspace* workspace, CloudView* view, QWidget* parent = nullptr);
   void Evaluate();
+  // Colours the cloud by the deviation map (true) or gives the view back its
+  // previous colouring (false).
+  void ShowDeviations(bool on);
+  void ShowPlanes(bool on);
+  // Writes `path` (JSON, docs/evaluation-report.md) and beside it the view
+  // as PNG (same name, .png).
+  bool ExportReport(const QString& path, QString* error);
   QString summary_text() const;
   int plane_rows() const;
 
@@ -36,7 +50,13 @@ class EvaluationPanel : public QWidget {
   void ShowHistogram();
 
   Workspace* workspace_;
+  CloudView* view_;
   QPushButton* evaluate_;
+  QPushButton* export_;
+  QCheckBox* planes_shown_;
+  QCheckBox* deviations_shown_;
+  QDoubleSpinBox* deviation_range_;
+  int color_before_ = 0;
   QLabel* summary_;
   QTableWidget* planes_;
   QTableWidget* dimensions_;

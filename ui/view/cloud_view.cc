@@ -23,6 +23,7 @@
 #include <vtkTextProperty.h>
 #include <vtkTransform.h>
 #include <vtkUnsignedCharArray.h>
+#include <vtkVariant.h>
 
 #include <QElapsedTimer>
 #include <QFileInfo>
@@ -35,8 +36,13 @@
 namespace sweepscan::ui {
 namespace {
 
-const char* const kArrayNames[3] = {"height", "time", "range"};
-const char* const kBarTitles[3] = {"height (m)", "time (s)", "range (m)"};
+const char* const kArrayNames[CloudView::kColorModes] = {"height", "time", "range", "pass",
+                                                         "deviation"};
+const char* const kBarTitles[CloudView::kColorModes] = {"height (m)", "time (s)", "range (m)",
+                                                        "pass", "deviation (mm)"};
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// The calibration panel's pick colours: pass A cyan, pass B magenta.
+constexpr double kPassColors[2][3] = {{0.0, 0.78, 1.0}, {1.0, 0.24, 0.78}};
 
 vtkSmartPointer<vtkFloatArray> NewArray(const char* name, vtkIdType reserve) {
   auto a = vtkSmartPointer<vtkFloatArray>::New();
@@ -58,11 +64,12 @@ double Grow(double current, double value) {
 struct CloudView::Chunk {
   vtkSmartPointer<vtkPoints> points;
   vtkSmartPointer<vtkCellArray> verts;
-  vtkSmartPointer<vtkFloatArray> arrays[3];
+  vtkSmartPointer<vtkFloatArray> arrays[kColorModes];
   vtkSmartPointer<vtkPolyData> poly;
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   vtkSmartPointer<vtkActor> actor;
   // Thinned copies (every kLodStrides[k]-th point); sealed chunks only.
+  vtkSmartPointer<vtkPolyData> lod_poly[kLodLevels];
   vtkSmartPointer<vtkActor> lod_actor[kLodLevels];
   vtkSmartPointer<vtkPolyDataMapper> lod_mapper[kLodLevels];
   size_t size = 0;
@@ -87,6 +94,7 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   BuildRobotAndTrajectory();
   BuildMarkers();
   BuildAxes();
+  BuildAnnotations();
   InstallObservers();
 
   settle_ = new QTimer(this);
@@ -271,7 +279,7 @@ CloudView::Chunk* CloudView::NewChunk() {
   chunk->poly = vtkSmartPointer<vtkPolyData>::New();
   chunk->poly->SetPoints(chunk->points);
   chunk->poly->SetVerts(chunk->verts);
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < kColorModes; ++i) {
     chunk->arrays[i] = NewArray(kArrayNames[i], kChunkPoints);
     chunk->poly->GetPointData()->AddArray(chunk->arrays[i]);
   }
@@ -290,18 +298,21 @@ void CloudView::SealChunk(Chunk* chunk) {
     auto verts = vtkSmartPointer<vtkCellArray>::New();
     verts->Use32BitStorage();
     auto poly = vtkSmartPointer<vtkPolyData>::New();
-    vtkSmartPointer<vtkFloatArray> arrays[3];
-    for (int k = 0; k < 3; ++k) {
+    vtkSmartPointer<vtkFloatArray> arrays[kColorModes];
+    for (int k = 0; k < kColorModes; ++k) {
       arrays[k] = NewArray(kArrayNames[k], static_cast<vtkIdType>(chunk->size) / stride + 1);
     }
     for (vtkIdType i = 0; i < static_cast<vtkIdType>(chunk->size); i += stride) {
       const vtkIdType id = points->InsertNextPoint(chunk->points->GetPoint(i));
       verts->InsertNextCell(1, &id);
-      for (int k = 0; k < 3; ++k) arrays[k]->InsertNextValue(chunk->arrays[k]->GetValue(i));
+      for (int k = 0; k < kColorModes; ++k) {
+        arrays[k]->InsertNextValue(chunk->arrays[k]->GetValue(i));
+      }
     }
     poly->SetPoints(points);
     poly->SetVerts(verts);
-    for (int k = 0; k < 3; ++k) poly->GetPointData()->AddArray(arrays[k]);
+    for (int k = 0; k < kColorModes; ++k) poly->GetPointData()->AddArray(arrays[k]);
+    chunk->lod_poly[level] = poly;
     AddPointsActor(poly, &chunk->lod_mapper[level], &chunk->lod_actor[level]);
     chunk->lod_actor[level]->SetVisibility(lod_level_ == level);
   }
@@ -321,6 +332,8 @@ void CloudView::Clear() {
   lod_active_ = false;
   have_origin_ = false;
   have_points_ = false;
+  has_values_[3] = has_values_[4] = false;
+  pass_filter_ = -1;
   range_lo_[0] = 0.0;
   range_hi_[0] = 3.0;
   range_hi_[1] = 60.0;
@@ -362,8 +375,115 @@ void CloudView::UpdateRanges(float z, float t, float r) {
 
 void CloudView::ApplyLookupTable() {
   const int m = static_cast<int>(color_mode_);
-  lut_->SetTableRange(range_lo_[m], range_hi_[m]);
   color_bar_->SetTitle(kBarTitles[m]);
+  lut_->ResetAnnotations();
+  lut_->SetNanColor(0.42, 0.43, 0.45, 1.0);
+  if (color_mode_ == ColorMode::kPass) {
+    // Two categories, as swatches in the colour bar.
+    lut_->IndexedLookupOn();
+    lut_->SetNumberOfTableValues(2);
+    for (int k = 0; k < 2; ++k) {
+      lut_->SetTableValue(k, kPassColors[k][0], kPassColors[k][1], kPassColors[k][2], 1.0);
+    }
+    lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
+    lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
+    lut_->SetTableRange(0.0, 1.0);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
+  lut_->IndexedLookupOff();
+  lut_->SetNumberOfTableValues(256);
+  if (color_mode_ == ColorMode::kDeviation) {
+    // Diverging blue - white - red: the sign of a deviation matters (a
+    // surface in front of or behind its plane), white is on the plane.
+    for (int i = 0; i < 256; ++i) {
+      const double x = i / 255.0 * 2.0 - 1.0;  // -1 .. 1
+      const double a = std::abs(x);
+      if (x < 0) {
+        lut_->SetTableValue(i, 1.0 - 0.85 * a, 1.0 - 0.6 * a, 1.0 - 0.1 * a, 1.0);
+      } else {
+        lut_->SetTableValue(i, 1.0 - 0.1 * a, 1.0 - 0.8 * a, 1.0 - 0.85 * a, 1.0);
+      }
+    }
+    lut_->SetTableRange(-deviation_max_mm_, deviation_max_mm_);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
+  lut_->SetHueRange(0.667, 0.0);
+  lut_->SetSaturationRange(1.0, 1.0);
+  lut_->SetValueRange(1.0, 1.0);
+  lut_->SetAlphaRange(1.0, 1.0);
+  lut_->ForceBuild();
+  lut_->SetTableRange(range_lo_[m], range_hi_[m]);
+  color_bar_->SetLabelFormat("%.1f");
+}
+
+void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values) {
+  const int m = static_cast<int>(mode);
+  if (m < 3) return;  // Height, time and range come with the points.
+  size_t offset = 0;
+  for (auto& c : chunks_) {
+    vtkFloatArray* a = c->arrays[m];
+    for (size_t i = 0; i < c->size; ++i) {
+      a->SetValue(static_cast<vtkIdType>(i), offset + i < values.size() ? values[offset + i] : kNaN);
+    }
+    a->Modified();
+    for (int level = 0; level < kLodLevels; ++level) {
+      if (!c->lod_poly[level]) continue;
+      auto* thin = vtkFloatArray::SafeDownCast(c->lod_poly[level]->GetPointData()->GetArray(m));
+      for (vtkIdType j = 0; j < thin->GetNumberOfTuples(); ++j) {
+        thin->SetValue(j, a->GetValue(j * kLodStrides[level]));
+      }
+      thin->Modified();
+    }
+    offset += c->size;
+  }
+  has_values_[m] = true;
+  if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
+  RequestRender();
+}
+
+void CloudView::SetDeviationRange(double max_mm) {
+  deviation_max_mm_ = std::max(0.1, max_mm);
+  if (color_mode_ == ColorMode::kDeviation) ApplyLookupTable();
+  RequestRender();
+}
+
+void CloudView::SetPassFilter(int pass) {
+  pass = pass < 0 || pass > 1 ? -1 : pass;
+  if (pass == pass_filter_) return;
+  pass_filter_ = pass;
+  ApplyPassFilter();
+  RequestRender();
+}
+
+void CloudView::ApplyPassFilter() {
+  // Rebuilds each chunk's vertex list (full and thinned) with the points of
+  // the pass shown; the point arrays stay as they are.
+  auto rebuild = [this](vtkPolyData* poly, vtkFloatArray* pass) {
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    verts->Use32BitStorage();
+    const vtkIdType n = pass->GetNumberOfTuples();
+    const float want = static_cast<float>(pass_filter_);
+    for (vtkIdType i = 0; i < n; ++i) {
+      if (pass_filter_ < 0 || pass->GetValue(i) == want) verts->InsertNextCell(1, &i);
+    }
+    poly->SetVerts(verts);
+    poly->Modified();
+    return verts;
+  };
+  for (auto& c : chunks_) {
+    c->verts = rebuild(c->poly, c->arrays[3]);
+    for (auto& thin : c->lod_poly) {
+      if (thin) rebuild(thin, vtkFloatArray::SafeDownCast(thin->GetPointData()->GetArray(3)));
+    }
+  }
+}
+
+size_t CloudView::drawn_point_count() const {
+  size_t n = 0;
+  for (const auto& c : chunks_) n += static_cast<size_t>(c->verts->GetNumberOfCells());
+  return n;
 }
 
 void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
@@ -381,11 +501,14 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
       chunk = NewChunk();
     }
     const vtkIdType id = chunk->points->InsertNextPoint(p.x, p.y, p.z);
-    chunk->verts->InsertNextCell(1, &id);
+    // A new point has no pass yet: drawn only while no pass filter is on.
+    if (pass_filter_ < 0) chunk->verts->InsertNextCell(1, &id);
     const float t = static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9);
     chunk->arrays[0]->InsertNextValue(p.z);
     chunk->arrays[1]->InsertNextValue(t);
     chunk->arrays[2]->InsertNextValue(p.range_m);
+    chunk->arrays[3]->InsertNextValue(kNaN);
+    chunk->arrays[4]->InsertNextValue(kNaN);
     ++chunk->size;
     z_lo = std::min(z_lo, p.z);
     z_hi = std::max(z_hi, p.z);
@@ -440,6 +563,7 @@ void CloudView::SetColorMode(ColorMode mode) {
   }
   ApplyLookupTable();
   RequestRender();
+  emit colorModeChanged(static_cast<int>(mode));
 }
 
 void CloudView::SetPointSize(double pixels) {
@@ -615,12 +739,18 @@ bool CloudView::PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tole
   const double margin = tolerance_px * pixel_per_t * (cam_dist * 2.0 + 10.0);
   double best_t = std::numeric_limits<double>::infinity();
   bool found = false;
+  const float clip_z = std::isnan(clip_height_) ? std::numeric_limits<float>::infinity()
+                                                : static_cast<float>(clip_height_);
   for (const auto& c : chunks_) {
     double b[6];
     c->points->GetBounds(b);
     if (!RayHitsBox(o, d, b, margin)) continue;
     const float* p = static_cast<const float*>(c->points->GetVoidPointer(0));
+    const float* pass = c->arrays[3]->GetPointer(0);
+    const float want = static_cast<float>(pass_filter_);
     for (size_t i = 0; i < c->size; ++i, p += 3) {
+      if (pass_filter_ >= 0 && pass[i] != want) continue;  // Not drawn: not pickable.
+      if (p[2] > clip_z) continue;                          // Clipped: not pickable.
       const Eigen::Vector3d v(p[0] - o.x(), p[1] - o.y(), p[2] - o.z());
       const double t = v.dot(d);
       if (t <= 0 || t >= best_t) continue;
@@ -646,6 +776,16 @@ QPointF CloudView::WorldToWidget(const Eigen::Vector3d& w) {
 }
 
 void CloudView::SetMarkers(const std::vector<Marker>& markers) {
+  // Unchanged markers cost no render (a full-detail frame of millions of
+  // points is long under a software renderer).
+  const bool same = markers.size() == shown_markers_.size() &&
+                    std::equal(markers.begin(), markers.end(), shown_markers_.begin(),
+                               [](const Marker& a, const Marker& b) {
+                                 return a.position == b.position && a.color == b.color &&
+                                        a.highlighted == b.highlighted;
+                               });
+  if (same) return;
+  shown_markers_ = markers;
   for (int k = 0; k < 2; ++k) {
     auto points = vtkSmartPointer<vtkPoints>::New();
     auto verts = vtkSmartPointer<vtkCellArray>::New();
@@ -668,6 +808,14 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
     static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetInputData(poly);
     static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetColorModeToDirectScalars();
   }
+  RequestRender();
+}
+
+void CloudView::LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position) {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  camera->SetFocalPoint(focal.data());
+  camera->SetPosition(position.data());
+  camera->SetViewUp(0.0, 0.0, 1.0);
   RequestRender();
 }
 

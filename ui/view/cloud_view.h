@@ -29,6 +29,8 @@
 #include <QColor>
 #include <QImage>
 #include <QPoint>
+#include <QString>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -41,6 +43,7 @@ class QMouseEvent;
 class QTimer;
 class vtkActor;
 class vtkActor2D;
+class vtkBillboardTextActor3D;
 class vtkAxesActor;
 class vtkGenericOpenGLRenderWindow;
 class vtkLookupTable;
@@ -57,7 +60,10 @@ namespace sweepscan::ui {
 class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
  public:
-  enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2 };
+  // Height, time and range come with every point; pass and deviation are
+  // computed after the fact (SetPointValues) and are NaN (grey) until then.
+  enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2, kPass = 3, kDeviation = 4 };
+  static constexpr int kColorModes = 5;
   static constexpr size_t kChunkPoints = 65536;
   static constexpr int kLodLevels = 4;
   static constexpr int kLodStrides[kLodLevels] = {8, 32, 128, 256};
@@ -69,6 +75,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
  signals:
   // Shift + left click on the cloud (the picking layer): the picked point.
   void pointPicked(const Eigen::Vector3d& world);
+  void colorModeChanged(int mode);  // A ColorMode.
 
  public:
   // ---- Content ----
@@ -82,6 +89,23 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // ---- Appearance ----
   void SetColorMode(ColorMode mode);
   ColorMode color_mode() const { return color_mode_; }
+  // Values for kPass (0 = pass A, 1 = pass B of a circle drive, NaN none) or
+  // kDeviation (mm from the fitted plane, NaN off every plane), one per point
+  // in the order the points were appended; points beyond `values` (or
+  // appended later) get NaN. Cleared with the cloud.
+  void SetPointValues(ColorMode mode, const std::vector<float>& values);
+  bool has_point_values(ColorMode mode) const {
+    return has_values_[static_cast<int>(mode)];
+  }
+  // The deviation colours span -max_mm (blue) .. 0 (white) .. +max_mm (red).
+  void SetDeviationRange(double max_mm);
+  // Draws only pass A (0), only pass B (1), or every point (-1). The picking
+  // layer picks only what is drawn, so that an operator clicks a corner in
+  // the pass on screen.
+  void SetPassFilter(int pass);
+  int pass_filter() const { return pass_filter_; }
+  // Points drawn at full detail now (the pass filter applied).
+  size_t drawn_point_count() const;
   void SetPointSize(double pixels);
   double point_size() const { return point_size_; }
   void SetGridVisible(bool visible);
@@ -109,6 +133,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void FitToCloud();
   // Turns the camera about the view's vertical axis (benchmarks, demos).
   void Orbit(double degrees);
+  // Puts the camera at `position` looking at `focal`, z up.
+  void LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position);
 
   // ---- Picking layer ----
   // The cloud point under display position `pos` (widget pixels): among the
@@ -125,6 +151,20 @@ class CloudView : public QVTKOpenGLNativeWidget {
   };
   // Overlay markers (picked points) drawn on top of the cloud.
   void SetMarkers(const std::vector<Marker>& markers);
+
+  // ---- Annotations (cloud_view_overlays.cc) ----
+  // Fitted planes as translucent coloured rectangles with their names.
+  struct PlanePatch {
+    std::array<Eigen::Vector3d, 4> corners;
+    QColor color;
+    QString label;
+  };
+  void SetPlanes(const std::vector<PlanePatch>& planes);
+  void SetPlanesVisible(bool visible);
+  size_t plane_count() const { return plane_count_; }
+  // The distance tool: a line between two points with its length.
+  void SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+  void ClearMeasurement();
 
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
@@ -152,6 +192,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void BuildRobotAndTrajectory();
   void BuildMarkers();
   void BuildAxes();
+  void BuildAnnotations();
+  void ApplyPassFilter();
   void InstallObservers();  // LOD on camera motion, frame counting.
   void SetCamera(const double direction[3], const double up[3]);
 
@@ -163,6 +205,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkActor> robot_;
   vtkSmartPointer<vtkActor> trajectory_;
   vtkSmartPointer<vtkActor> markers_[2];  // normal, highlighted
+  std::vector<Marker> shown_markers_;
+  vtkSmartPointer<vtkActor> planes_;
+  std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> plane_labels_;
+  size_t plane_count_ = 0;
+  bool planes_visible_ = true;
+  vtkSmartPointer<vtkActor> measure_line_;
+  vtkSmartPointer<vtkBillboardTextActor3D> measure_label_;
   vtkSmartPointer<vtkPoints> trajectory_points_;
   vtkSmartPointer<vtkPolyData> trajectory_poly_;
   vtkSmartPointer<vtkAxesActor> axes_;
@@ -181,6 +230,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   float z_min_ = 0.0f, z_max_ = 0.0f, t_max_ = 0.0f, r_max_ = 0.0f;
   double range_lo_[3] = {0.0, 0.0, 0.0};
   double range_hi_[3] = {3.0, 60.0, 8.0};
+  bool has_values_[kColorModes] = {true, true, true, false, false};
+  double deviation_max_mm_ = 30.0;
+  int pass_filter_ = -1;
   bool have_points_ = false;
   // Measured under llvmpipe on 2 cores: a frame costs ~30 ms plus ~0.17 us a
   // point, so 120 000 points keep camera motion above 20 frames/s (10 M

@@ -8,8 +8,14 @@
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
+#include "core/calibration/automatic.h"
+#include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
+#include "core/common/json_reader.h"
+#include "core/evaluation/report.h"
+#include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
 #include "hardware/link/qt_transport.h"
 #include "ui/workspace/live_processor.h"
@@ -21,6 +27,9 @@ namespace {
 
 constexpr int kScriptTickMs = 100;  // Drive commands at 10 Hz, as the keyboard sends them.
 constexpr int kHealthMs = 250;
+// The deviation map's band: a point farther than this from every fitted
+// plane is on none (furniture, the robot's own clutter) and shows grey.
+constexpr double kDeviationBandM = 0.05;
 
 // Copies a session folder file by file (frames.bin, meta.json, ...).
 bool CopyFolder(const QString& from, const QString& to, QString* error) {
@@ -542,10 +551,11 @@ void Workspace::NewSession() {
 
 void Workspace::OpenSession(const QString& dir, double speed) {
   auto recording = std::make_shared<hardware::Recording>();
+  auto circle = std::make_shared<OpenedCircle>();
   const std::string path = dir.toStdString();
   RunJob(
       QStringLiteral("Opening %1").arg(dir),
-      [this, recording, path](std::atomic<bool>* cancel) -> QString {
+      [this, recording, circle, path](std::atomic<bool>* cancel) -> QString {
         // Progress to the status bar at most every 2 %; a cancel stops the decoder.
         auto last = std::make_shared<double>(-1.0);
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
@@ -556,14 +566,30 @@ void Workspace::OpenSession(const QString& dir, double speed) {
           }
           return !*cancel;
         });
-        return s.ok() ? QString() : QString::fromStdString(s.message());
+        if (!s.ok()) return QString::fromStdString(s.message());
+        // Is it a calibration drive? The EKF poses (as Calibrate uses them;
+        // a few ms per minute of drive) and the circle through them.
+        PoseEstimatorOptions pose;
+        pose.initial_pose = recording->start;
+        auto poses = std::make_shared<PoseBuffer>(
+            EstimatePoses(recording->log, pose, recording->geometry).poses());
+        std::string why;
+        circle->ok = FitCircleDrive(*poses, &circle->circle, &why);
+        circle->note = circle->ok ? tr("a circle drive: radius %1 m")
+                                        .arg(circle->circle.radius_m, 0, 'f', 2)
+                                  : QString::fromStdString(why);
+        circle->poses = poses;
+        return QString();
       },
-      [this, recording, dir, speed] {
+      [this, recording, circle, dir, speed] {
         if (recording_) {
           QString ignored;
           StopRecording(&ignored);
         }
         opened_ = recording;
+        opened_circle_ = *circle;
+        pass_labels_.clear();
+        deviation_map_.clear();
         session_dir_ = dir;
         unsaved_ = false;
         replaying_ = true;
@@ -634,6 +660,82 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
       });
 }
 
+void Workspace::CalibrateAutomatic() {
+  if (opened_ == nullptr) {
+    emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
+    return;
+  }
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  auto result = std::make_shared<PickCalibrationResult>();
+  RunJob(
+      tr("Calibrating"),
+      [this, recording, result](std::atomic<bool>* cancel) -> QString {
+        // As `sweepscan-cli calibrate SESSION --auto`: EKF poses of the
+        // uncalibrated recording, SolveAutomatic with its default options.
+        ReconstructionResult poses;
+        Status s = hardware::ReconstructRecording(*recording, ReconstructionOptions(), &poses);
+        if (!s.ok()) return QString::fromStdString(s.message());
+        if (*cancel) return QString();
+        const SampleStore store(recording->log, poses.poses);
+        JobCalibrationProgress progress(this, cancel);
+        AutoCalibrationOptions o;
+        o.solver.progress = &progress;
+        s = SolveAutomatic(store, recording->geometry, {}, o, &result->summary);
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, result] {
+        calibration_ = result;
+        emit calibrationFinished(true, QString());
+      });
+}
+
+bool Workspace::LoadCalibration(const QString& path, QString* error) {
+  auto result = std::make_shared<PickCalibrationResult>();
+  const Status s = LoadCalibrationFile(path.toStdString(), &result->summary.angles);
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
+    return false;
+  }
+  result->summary.method = "file";
+  result->summary.converged = true;
+  result->summary.initial = result->summary.angles;
+  calibration_ = result;
+  emit calibrationFinished(true, tr("loaded %1").arg(path));
+  return true;
+}
+
+void Workspace::SplitPasses() {
+  if (opened_ == nullptr || !opened_circle_.ok) {
+    emit passesSplit(false, opened_ == nullptr ? tr("Open a calibration drive's session first.")
+                                               : tr("Not a circle drive: %1")
+                                                     .arg(opened_circle_.note));
+    return;
+  }
+  auto points = std::make_shared<std::vector<CloudPoint>>(CloudSnapshot());
+  auto labels = std::make_shared<std::vector<float>>();
+  const OpenedCircle circle = opened_circle_;
+  RunJob(
+      tr("Splitting the passes"),
+      [points, labels, circle](std::atomic<bool>*) -> QString {
+        const std::vector<uint8_t> pass = LabelCirclePasses(*points, *circle.poses, circle.circle);
+        labels->resize(pass.size());
+        for (size_t i = 0; i < pass.size(); ++i) {
+          (*labels)[i] = pass[i] == kNoPass ? std::numeric_limits<float>::quiet_NaN()
+                                            : static_cast<float>(pass[i]);
+        }
+        return QString();
+      },
+      [this, labels] {
+        pass_labels_ = std::move(*labels);
+        size_t a = 0, b = 0;
+        for (float v : pass_labels_) (v == 0.0f ? a : b) += (v == 0.0f || v == 1.0f) ? 1 : 0;
+        emit passesSplit(true, tr("pass A (near side) %L1 points, pass B (far side) %L2 points")
+                                   .arg(a)
+                                   .arg(b));
+      });
+  // A refused job (another task running) reports through jobFinished.
+}
+
 void Workspace::Evaluate() {
   auto points = std::make_shared<std::vector<Eigen::Vector3f>>();
   {
@@ -646,10 +748,11 @@ void Workspace::Evaluate() {
     return;
   }
   auto result = std::make_shared<CloudEvaluation>();
+  auto deviations = std::make_shared<std::vector<float>>();
   const MountingError shown = shown_calibration_;
   RunJob(
       tr("Evaluating"),
-      [this, points, result](std::atomic<bool>* cancel) -> QString {
+      [this, points, result, deviations](std::atomic<bool>* cancel) -> QString {
         // Stage and fraction to the status bar (at most ~50 calls a second,
         // from the evaluation's threads); Cancel stops it within 100 ms.
         EvaluationControl control;
@@ -662,14 +765,50 @@ void Workspace::Evaluate() {
           return true;
         };
         const Status s = EvaluateCloud(*points, EvaluationOptions(), result.get(), control);
-        return s.ok() ? QString() : QString::fromStdString(s.message());
+        if (!s.ok()) return QString::fromStdString(s.message());
+        // The deviation map over every point shown (outliers included: the
+        // operator sees them grey or far off white).
+        *deviations = DeviationMapMm(*points, result->planes, kDeviationBandM);
+        return QString();
       },
-      [this, result, shown] {
+      [this, result, shown, deviations] {
         previous_evaluation_ = evaluation_;
+        previous_calibration_ = evaluated_calibration_;
         evaluation_ = result;
+        deviation_map_ = std::move(*deviations);
         evaluated_calibration_ = shown;
         emit evaluationFinished(true, QString());
       });
+}
+
+bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_name,
+                                     QString* error) const {
+  if (evaluation_ == nullptr) {
+    *error = tr("Evaluate first.");
+    return false;
+  }
+  auto angles = [](const MountingError& c) {
+    return nlohmann::json{{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}};
+  };
+  nlohmann::json report = {{"format", "sweepscan-evaluation-report"},
+                           {"version", 1},
+                           {"session", session_dir_.toStdString()},
+                           {"created", QDateTime::currentDateTimeUtc()
+                                           .toString(Qt::ISODateWithMs)
+                                           .toStdString()},
+                           {"image", image_name.toStdString()},
+                           {"calibration_rad", angles(evaluated_calibration_)},
+                           {"evaluation", EvaluationToJson(*evaluation_)}};
+  if (previous_evaluation_ != nullptr) {
+    report["previous"] = {{"calibration_rad", angles(previous_calibration_)},
+                          {"evaluation", EvaluationToJson(*previous_evaluation_)}};
+  }
+  const Status s = WriteFileAtomically(path.toStdString(), report.dump(2) + "\n");
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
+    return false;
+  }
+  return true;
 }
 
 void Workspace::ShowCalibrated(const MountingError& calibration) {

@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/calibration/passes.h"
 #include "core/calibration/workflow.h"
 #include "core/cloud/reconstruct.h"
 #include "core/evaluation/evaluation.h"
@@ -148,8 +149,29 @@ class Workspace : public QObject {
   // refined-corners solve with the raw picks as baseline. Progress per LM
   // iteration (calibrationIteration), cancel through CancelJob().
   void Calibrate(const std::vector<PickPair>& picks, bool refine);
+  // The automatic mode (no picks): planes seen in both passes, the same
+  // SolveAutomatic as `sweepscan-cli calibrate --auto` with EKF poses. The
+  // result arrives like a picks solve (calibrationFinished), with method
+  // "auto-planes" and no pair checks.
+  void CalibrateAutomatic();
   // The last successful result (null before one).
   const PickCalibrationResult* calibration_result() const { return calibration_.get(); }
+  // Loads a calibration file as the current result (as if solved), so that
+  // it can be shown, used for the robot or saved again.
+  bool LoadCalibration(const QString& path, QString* error);
+
+  // ---- The passes of a circle drive (calibration panel, step 2) ---------
+  // Opening a session also fits the circle of its drive (EKF poses,
+  // FitCircleDrive); circle_drive() says whether it is one, and why not.
+  bool circle_drive() const { return opened_circle_.ok; }
+  QString circle_drive_note() const { return opened_circle_.note; }
+  Eigen::Vector2d circle_centre() const { return opened_circle_.circle.centre; }
+  // Labels every point of the cloud shown pass A (near side) or B (far side)
+  // on a job thread (LabelCirclePasses); passesSplit(ok, message) when done.
+  // The labels stay valid when the same session is shown under another
+  // calibration (the same points in the same order).
+  void SplitPasses();
+  const std::vector<float>& pass_labels() const { return pass_labels_; }
   // Replays the opened session under `calibration` (as fast as possible):
   // the before / after view.
   void ShowCalibrated(const MountingError& calibration);
@@ -169,6 +191,13 @@ class Workspace : public QObject {
   const CloudEvaluation* previous_evaluation() const { return previous_evaluation_.get(); }
   // What the evaluated cloud was assembled under.
   const MountingError& evaluated_calibration() const { return evaluated_calibration_; }
+  // The deviation map of the last evaluation: each point of the cloud shown
+  // (in order) in mm from its fitted plane, NaN off every plane
+  // (DeviationMapMm with a 5 cm band), computed with the evaluation.
+  const std::vector<float>& deviation_map() const { return deviation_map_; }
+  // The report of the last evaluation (and the one before) as JSON
+  // (docs/evaluation-report.md), written atomically to `path`.
+  bool SaveEvaluationReport(const QString& path, const QString& image_name, QString* error) const;
 
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
@@ -199,6 +228,7 @@ class Workspace : public QObject {
   void calibrationIteration(int iteration, double cost);
   void calibrationFinished(bool ok, const QString& message);
   void evaluationFinished(bool ok, const QString& message);
+  void passesSplit(bool ok, const QString& message);
 
  private:
   bool PrepareLink(const ConnectOptions& options, hardware::RobotConnectionOptions* link,
@@ -241,8 +271,17 @@ class Workspace : public QObject {
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;
   MountingError robot_calibration_;
+  struct OpenedCircle {
+    bool ok = false;
+    QString note;
+    CircleDrive circle;
+    std::shared_ptr<const PoseBuffer> poses;
+  };
+  OpenedCircle opened_circle_;
+  std::vector<float> pass_labels_;
+  std::vector<float> deviation_map_;
   std::shared_ptr<CloudEvaluation> evaluation_, previous_evaluation_;
-  MountingError evaluated_calibration_;
+  MountingError evaluated_calibration_, previous_calibration_;
   size_t point_count_ = 0;
   size_t scan_count_ = 0;
 

@@ -432,6 +432,33 @@ TEST(ResolvePairsTest, UnknownSampleAndWrongPassAndWorldSnap) {
   EXPECT_FALSE(ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs).ok());
 }
 
+// Two world picks of a pair name their passes either way round: the pair
+// resolves to the same two samples whichever order the operator clicked.
+TEST(ResolvePairsTest, WorldPicksInEitherPassOrderResolveToTheSameSamples) {
+  const Drive& d = GetDrive(0);
+  std::vector<PickPair> world = d.corner_picks;
+  for (PickPair& p : world) {
+    for (Pick* k : {&p.pass1, &p.pass2}) {
+      LidarObservation o;
+      ASSERT_TRUE(d.store.Find(k->sample, &o).ok());
+      k->has_sample = false;  // `sample` still names the truth for the checks below
+      k->world = ProjectObservation(o, d.config.geometry, {}) + Eigen::Vector3d(0.002, 0, -0.001);
+    }
+  }
+  std::vector<ObservationPair> in_order, swapped;
+  ASSERT_TRUE(ResolvePairs(world, d.store, d.windows, d.config.geometry, {}, &in_order).ok());
+  std::vector<PickPair> truth = d.corner_picks;
+  for (PickPair& p : world) std::swap(p.pass1, p.pass2);
+  ASSERT_TRUE(ResolvePairs(world, d.store, d.windows, d.config.geometry, {}, &swapped).ok());
+  ASSERT_EQ(in_order.size(), swapped.size());
+  for (size_t k = 0; k < in_order.size(); ++k) {
+    EXPECT_EQ(in_order[k].pass1.ref, truth[k].pass1.sample) << k;
+    EXPECT_EQ(in_order[k].pass2.ref, truth[k].pass2.sample) << k;
+    EXPECT_EQ(swapped[k].pass1.ref, in_order[k].pass1.ref) << k;
+    EXPECT_EQ(swapped[k].pass2.ref, in_order[k].pass2.ref) << k;
+  }
+}
+
 TEST(AutomaticTest, EmptyRecordingFails) {
   CalibrationSummary s;
   const Status st =

@@ -71,5 +71,69 @@ TEST(CircleDriveTest, NearAndFarSides) {
   EXPECT_FALSE(circle.PassAtTime(poses, TimeFromNanoseconds(2'000'000'000), target, &pass));
 }
 
+// A drive round a known circle: the fit finds it, labels every point by the
+// side of the centre it was seen from, and refuses drives that are not
+// circles (a straight line, a part turn).
+TEST(FitCircleDriveTest, FindsTheCircleAndLabelsPasses) {
+  const Eigen::Vector2d centre(5.0, 1.7);
+  const double radius = 0.83;
+  PoseBuffer poses;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const int n = 2000;  // two turns, 10 Hz over 200 s
+  for (int i = 0; i < n; ++i) {
+    const double phi = 4.0 * M_PI * i / n;
+    poses.Add(TimeFromNanoseconds(int64_t{100'000'000} * i),
+              Rigid3d::FromPose(centre.x() + radius * std::cos(phi) + noise(rng),
+                                centre.y() + radius * std::sin(phi) + noise(rng), 0, 0, 0,
+                                phi + M_PI / 2));
+  }
+  CircleDrive circle;
+  std::string why;
+  ASSERT_TRUE(FitCircleDrive(poses, &circle, &why)) << why;
+  EXPECT_NEAR(circle.centre.x(), centre.x(), 0.002);
+  EXPECT_NEAR(circle.centre.y(), centre.y(), 0.002);
+  EXPECT_NEAR(circle.radius_m, radius, 0.002);
+
+  // A target at (5, 0.16), below the centre: seen from the near side while
+  // the robot is in the lower half of the circle (phi in (pi, 2 pi)).
+  std::vector<CloudPoint> points;
+  for (int i = 0; i < n; i += 10) {
+    CloudPoint p;
+    p.x = 5.0f;
+    p.y = 0.16f;
+    p.time_ns = int64_t{100'000'000} * i + 50'000'000;
+    points.push_back(p);
+  }
+  CloudPoint late;
+  late.time_ns = int64_t{100'000'000} * (n + 5);  // after the last pose
+  points.push_back(late);
+  const std::vector<uint8_t> labels = LabelCirclePasses(points, poses, circle);
+  ASSERT_EQ(labels.size(), points.size());
+  for (size_t k = 0; k + 1 < points.size(); ++k) {
+    const double phi = 4.0 * M_PI * (points[k].time_ns * 1e-8) / n;
+    const double s = std::sin(phi);
+    if (std::abs(s) < 0.05) continue;  // on the boundary, either side
+    EXPECT_EQ(labels[k], s < 0 ? 0 : 1) << k << " phi " << phi;
+  }
+  EXPECT_EQ(labels.back(), kNoPass);
+
+  PoseBuffer straight;
+  for (int i = 0; i < 200; ++i) {
+    straight.Add(TimeFromNanoseconds(int64_t{100'000'000} * i),
+                 Rigid3d::FromPose(0.01 * i, 0.0, 0, 0, 0, 0));
+  }
+  EXPECT_FALSE(FitCircleDrive(straight, &circle, &why));
+  EXPECT_FALSE(why.empty());
+  PoseBuffer quarter;
+  for (int i = 0; i < 200; ++i) {
+    const double phi = 0.5 * M_PI * i / 200;
+    quarter.Add(TimeFromNanoseconds(int64_t{100'000'000} * i),
+                Rigid3d::FromPose(radius * std::cos(phi), radius * std::sin(phi), 0, 0, 0, 0));
+  }
+  EXPECT_FALSE(FitCircleDrive(quarter, &circle, &why));
+  EXPECT_NE(why.find("turns"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace sweepscan

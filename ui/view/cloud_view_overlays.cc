@@ -1,0 +1,142 @@
+// CloudView's annotations: the evaluation's fitted planes as translucent
+// coloured rectangles with their names, and the two-point distance tool.
+// They live apart from the cloud's chunks; the planes are the only
+// translucent actor (one extra pass, drawn only while planes are shown).
+#include <vtkActor.h>
+#include <vtkBillboardTextActor3D.h>
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderer.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+
+namespace {
+
+vtkSmartPointer<vtkBillboardTextActor3D> NewLabel() {
+  auto label = vtkSmartPointer<vtkBillboardTextActor3D>::New();
+  label->GetTextProperty()->SetFontSize(15);
+  label->GetTextProperty()->SetBold(true);
+  label->GetTextProperty()->SetColor(1.0, 1.0, 1.0);
+  label->GetTextProperty()->SetBackgroundColor(0.1, 0.1, 0.12);
+  label->GetTextProperty()->SetBackgroundOpacity(0.75);
+  label->GetTextProperty()->SetJustificationToCentered();
+  label->PickableOff();
+  return label;
+}
+
+}  // namespace
+
+void CloudView::BuildAnnotations() {
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
+  mapper->SetScalarModeToUseCellData();
+  mapper->SetColorModeToDirectScalars();
+  planes_ = vtkSmartPointer<vtkActor>::New();
+  planes_->SetMapper(mapper);
+  planes_->GetProperty()->SetOpacity(0.35);
+  planes_->GetProperty()->SetEdgeVisibility(true);
+  planes_->GetProperty()->SetLineWidth(2.0);
+  planes_->PickableOff();
+  planes_->VisibilityOff();
+  renderer_->AddActor(planes_);
+
+  auto line_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  line_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
+  line_mapper->SetResolveCoincidentTopologyToPolygonOffset();
+  measure_line_ = vtkSmartPointer<vtkActor>::New();
+  measure_line_->SetMapper(line_mapper);
+  measure_line_->GetProperty()->SetColor(1.0, 0.92, 0.23);
+  measure_line_->GetProperty()->SetLineWidth(3.0);
+  measure_line_->GetProperty()->SetPointSize(9.0);
+  measure_line_->GetProperty()->SetRenderPointsAsSpheres(true);
+  measure_line_->GetProperty()->SetRenderLinesAsTubes(true);
+  measure_line_->PickableOff();
+  measure_line_->VisibilityOff();
+  renderer_->AddActor(measure_line_);
+  measure_label_ = NewLabel();
+  measure_label_->GetTextProperty()->SetColor(1.0, 0.92, 0.23);
+  measure_label_->VisibilityOff();
+  renderer_->AddActor(measure_label_);
+}
+
+void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  auto quads = vtkSmartPointer<vtkCellArray>::New();
+  auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colors->SetNumberOfComponents(3);
+  colors->SetName("colors");
+  for (const auto& label : plane_labels_) renderer_->RemoveActor(label);
+  plane_labels_.clear();
+  for (const PlanePatch& p : planes) {
+    vtkIdType ids[4];
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) {
+      ids[k] = points->InsertNextPoint(p.corners[k].data());
+      centre += 0.25 * p.corners[k];
+    }
+    quads->InsertNextCell(4, ids);
+    const unsigned char rgb[3] = {static_cast<unsigned char>(p.color.red()),
+                                  static_cast<unsigned char>(p.color.green()),
+                                  static_cast<unsigned char>(p.color.blue())};
+    colors->InsertNextTypedTuple(rgb);
+    auto label = NewLabel();
+    label->SetInput(p.label.toUtf8().constData());
+    label->SetPosition(centre.data());
+    label->GetTextProperty()->SetColor(p.color.redF(), p.color.greenF(), p.color.blueF());
+    label->SetVisibility(planes_visible_);
+    renderer_->AddActor(label);
+    plane_labels_.push_back(label);
+  }
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetPolys(quads);
+  poly->GetCellData()->SetScalars(colors);
+  static_cast<vtkPolyDataMapper*>(planes_->GetMapper())->SetInputData(poly);
+  plane_count_ = planes.size();
+  planes_->SetVisibility(planes_visible_ && plane_count_ > 0);
+  RequestRender();
+}
+
+void CloudView::SetPlanesVisible(bool visible) {
+  planes_visible_ = visible;
+  planes_->SetVisibility(visible && plane_count_ > 0);
+  for (const auto& label : plane_labels_) label->SetVisibility(visible);
+  RequestRender();
+}
+
+void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  const vtkIdType ids[2] = {points->InsertNextPoint(a.data()), points->InsertNextPoint(b.data())};
+  auto lines = vtkSmartPointer<vtkCellArray>::New();
+  lines->InsertNextCell(2, ids);
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->InsertNextCell(1, &ids[0]);
+  verts->InsertNextCell(1, &ids[1]);
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetLines(lines);
+  poly->SetVerts(verts);
+  static_cast<vtkPolyDataMapper*>(measure_line_->GetMapper())->SetInputData(poly);
+  measure_line_->VisibilityOn();
+  const Eigen::Vector3d mid = 0.5 * (a + b);
+  measure_label_->SetPosition(mid.x(), mid.y(), mid.z());
+  measure_label_->SetInput(QStringLiteral("%1 m").arg((b - a).norm(), 0, 'f', 3).toUtf8().constData());
+  measure_label_->VisibilityOn();
+  RequestRender();
+}
+
+void CloudView::ClearMeasurement() {
+  measure_line_->VisibilityOff();
+  measure_label_->VisibilityOff();
+  RequestRender();
+}
+
+}  // namespace sweepscan::ui
