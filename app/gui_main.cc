@@ -14,6 +14,7 @@
 #include <QElapsedTimer>
 #include <QFile>
 #include <QFileInfo>
+#include <QMouseEvent>
 #include <QSurfaceFormat>
 #include <QThread>
 #include <QTimer>
@@ -202,6 +203,23 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
       hits += window->view()->PickPoint(at, &world) ? 1 : 0;
     }
     const double pick_ms = pick_clock.nsecsElapsed() * 1e-6 / 25;
+    // From a Shift + click (the mouse event) to the frame that shows the
+    // pick's marker: picking, the calibration panel's pair list, the frame.
+    std::vector<double> click_ms;
+    for (int i = 0; i < 10; ++i) {
+      const QPoint at(window->view()->width() * (2 + i % 3) / 6,
+                      window->view()->height() * (2 + i / 3 % 3) / 6);
+      const size_t before = window->calibration_panel()->pair_points().size();
+      QElapsedTimer click;
+      click.start();
+      QMouseEvent press(QEvent::MouseButtonPress, at, Qt::LeftButton, Qt::LeftButton,
+                        Qt::ShiftModifier);
+      QCoreApplication::sendEvent(window->view(), &press);
+      window->view()->RenderIfDirty();
+      if (window->calibration_panel()->pair_points().size() != before) {
+        click_ms.push_back(click.nsecsElapsed() * 1e-6);
+      }
+    }
     nlohmann::json j = {{"points", window->view()->point_count()},
                         {"open_and_show_s", open_s},
                         {"fps_full", full},
@@ -209,6 +227,10 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
                         {"lod_level", lod_level},
                         {"pick_ms", pick_ms},
                         {"pick_hits_of_25", hits},
+                        {"click_to_highlight_ms",
+                         {{"median", Percentile(click_ms, 0.5)},
+                          {"max", Percentile(click_ms, 1.0)},
+                          {"clicks", click_ms.size()}}},
                         {"rss_mib", ResidentMiB()}};
     std::printf("%s\n", j.dump().c_str());
     std::fflush(stdout);

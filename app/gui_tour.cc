@@ -61,8 +61,8 @@ class Tour {
     for (const auto& p : panel->pair_points()) target += 0.5 * (p.a + p.b);
     target /= std::max<size_t>(1, panel->pair_points().size());
     const Eigen::Vector2d centre = workspace_->circle_centre();
-    Eigen::Vector3d from(centre.x(), centre.y(), target.z() + 1.2);
-    from = target + 3.2 * (from - target).normalized();
+    Eigen::Vector3d from(centre.x(), centre.y(), target.z() + 0.5);
+    from = target + 3.0 * (from - target).normalized();
     view->SetClipHeight(2.0);
     view->LookAt(target, from);
     panel->ShowPass(-1);
@@ -80,9 +80,26 @@ class Tour {
       solved = true;
       ok = r;
     });
+    QElapsedTimer solve_clock;
+    solve_clock.start();
     panel->Solve();
     if (!Step("solved", [&] { return solved; }, 300000) || !ok) return Finish();
+    const double pairs_s = solve_clock.nsecsElapsed() * 1e-9;
     Shot("calibration-4-solved.png");
+    // The automatic mode, timed as the operator sees it (button to result).
+    solved = false;
+    solve_clock.restart();
+    panel->SolveAutomatic();
+    if (!Step("automatic solve", [&] { return solved; }, 300000) || !ok) return Finish();
+    const double auto_s = solve_clock.nsecsElapsed() * 1e-9;
+    std::printf("%s\n", nlohmann::json({{"solve_4_pairs_refined_s", pairs_s},
+                                        {"solve_automatic_s", auto_s}})
+                            .dump()
+                            .c_str());
+    // Back to the picks' result for the rest of the tour.
+    solved = false;
+    panel->Solve();
+    if (!Step("solved again", [&] { return solved; }, 300000) || !ok) return Finish();
     // Evaluate before, then show calibrated (the ghost falls together) and
     // evaluate after.
     Evaluate();

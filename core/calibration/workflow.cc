@@ -79,24 +79,41 @@ Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometr
   }
   // The pairs and corners under the result, for display.
   std::vector<ObservationPair> resolved;
-  if (ResolvePairs(picks, store, windows, geometry, initial, &resolved).ok()) {
-    for (const ObservationPair& pair : resolved) {
-      PickCalibrationResult::PairCheck check;
-      check.pass1_world = ProjectObservation(pair.pass1, geometry, summary.angles);
-      check.pass2_world = ProjectObservation(pair.pass2, geometry, summary.angles);
-      check.after_m = (check.pass1_world - check.pass2_world).norm();
-      check.before_m = (ProjectObservation(pair.pass1, geometry, initial) -
-                        ProjectObservation(pair.pass2, geometry, initial))
-                           .norm();
-      result->pair_checks.push_back(check);
+  if (!ResolvePairs(picks, store, windows, geometry, initial, &resolved).ok()) return s;
+  BoardCorners before[2];
+  if (options.refine) {
+    result->has_corners = true;
+    for (int k = 0; k < 2; ++k) {
+      result->has_corners =
+          result->has_corners &&
+          FitBoardCorners(result->sightings.passes[k], geometry, initial, &before[k]).ok() &&
+          FitBoardCorners(result->sightings.passes[k], geometry, summary.angles,
+                          &result->corners[k])
+              .ok();
     }
   }
-  if (options.refine) {
-    result->has_corners =
-        FitBoardCorners(result->sightings.passes[0], geometry, summary.angles, &result->corners[0])
-            .ok() &&
-        FitBoardCorners(result->sightings.passes[1], geometry, summary.angles, &result->corners[1])
-            .ok();
+  for (const ObservationPair& pair : resolved) {
+    PickCalibrationResult::PairCheck check;
+    const Eigen::Vector3d a0 = ProjectObservation(pair.pass1, geometry, initial);
+    if (result->has_corners) {
+      // Refined: the pair stands for the fitted corner nearest its pick;
+      // its gap is that corner's, fitted in each pass (what was solved).
+      int nearest = 0;
+      for (int c = 1; c < 4; ++c) {
+        if ((before[0].corners[c] - a0).norm() < (before[0].corners[nearest] - a0).norm()) {
+          nearest = c;
+        }
+      }
+      check.pass1_world = result->corners[0].corners[nearest];
+      check.pass2_world = result->corners[1].corners[nearest];
+      check.before_m = (before[0].corners[nearest] - before[1].corners[nearest]).norm();
+    } else {
+      check.pass1_world = ProjectObservation(pair.pass1, geometry, summary.angles);
+      check.pass2_world = ProjectObservation(pair.pass2, geometry, summary.angles);
+      check.before_m = (a0 - ProjectObservation(pair.pass2, geometry, initial)).norm();
+    }
+    check.after_m = (check.pass1_world - check.pass2_world).norm();
+    result->pair_checks.push_back(check);
   }
   return s;
 }

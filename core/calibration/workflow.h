@@ -57,10 +57,11 @@ struct PickCalibrationResult {
   Eigen::AlignedBox3d region;  // the target region used
   TargetSightings sightings;   // the target's sightings in that region
 
-  // What a front end shows beside the angles. Each pick pair resolved to
-  // its two samples (ResolvePairs): the samples' world positions and their
-  // distance under the initial and the solved angles (the pair's residual,
-  // Eq. 17, before and after).
+  // What a front end shows beside the angles, one per pick pair: the
+  // pair's two world positions under the solved angles and their distance
+  // under the initial and the solved angles (the pair's residual, Eq. 17,
+  // before and after). Pairs: the two samples the picks resolve to;
+  // refine: the fitted board corner nearest the pick, in each pass.
   struct PairCheck {
     Eigen::Vector3d pass1_world = Eigen::Vector3d::Zero();  // solved angles
     Eigen::Vector3d pass2_world = Eigen::Vector3d::Zero();

@@ -10,6 +10,7 @@
 #include <QPainter>
 #include <QPainterPath>
 #include <QPushButton>
+#include <QScrollArea>
 #include <QTableWidget>
 #include <QTimer>
 #include <QUndoCommand>
@@ -103,9 +104,9 @@ class PairsCommand : public QUndoCommand {
 
 QString Xyz(const Eigen::Vector3d& p) {
   return QStringLiteral("%1, %2, %3")
-      .arg(p.x(), 0, 'f', 3)
-      .arg(p.y(), 0, 'f', 3)
-      .arg(p.z(), 0, 'f', 3);
+      .arg(p.x(), 0, 'f', 2)
+      .arg(p.y(), 0, 'f', 2)
+      .arg(p.z(), 0, 'f', 2);
 }
 
 }  // namespace
@@ -490,6 +491,13 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
   result_->setText(text);
   emit solved(s.converged);
   Refresh();
+  // The result in sight when the panel scrolls.
+  for (QWidget* w = parentWidget(); w != nullptr; w = w->parentWidget()) {
+    if (auto* scroll = qobject_cast<QScrollArea*>(w)) {
+      scroll->ensureWidgetVisible(plot_);
+      break;
+    }
+  }
 }
 
 void CalibrationPanel::ShowAfter(bool after) {

@@ -23,7 +23,7 @@ namespace sweepscan::ui {
 // A plane's signed deviations n . p + d as bars (the paper's Fig. 9).
 class HistogramPlot : public QWidget {
  public:
-  HistogramPlot() { setMinimumHeight(110); }
+  HistogramPlot() { setMinimumHeight(130); }
   // `before`: the same plane in the previous evaluation, drawn as an
   // outline over the bars (empty counts: none).
   void Set(const DeviationHistogram& h, const DeviationHistogram& before, const QString& title) {
@@ -59,7 +59,7 @@ class HistogramPlot : public QWidget {
     const std::vector<double> then = with_before ? shares(before_) : std::vector<double>();
     double peak = *std::max_element(now.begin(), now.end());
     if (with_before) peak = std::max(peak, *std::max_element(then.begin(), then.end()));
-    const QRectF r = QRectF(rect()).adjusted(6, 18, -6, -16);
+    const QRectF r = QRectF(rect()).adjusted(6, 32, -6, -16);
     const double w = r.width() / now.size();
     for (size_t i = 0; i < now.size(); ++i) {
       const double bar = peak > 0 ? r.height() * now[i] / peak : 0.0;
@@ -77,7 +77,7 @@ class HistogramPlot : public QWidget {
       path.lineTo(r.right(), r.bottom());
       p.setPen(QPen(QColor(239, 108, 0), 1.5));
       p.drawPath(path);
-      p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignRight,
+      p.drawText(rect().adjusted(4, 16, -4, 0), Qt::AlignTop | Qt::AlignRight,
                  tr("orange: previous"));
       p.setPen(palette().text().color());
     }

@@ -118,9 +118,12 @@ void CloudView::BuildColorBar() {
   color_bar_->SetNumberOfLabels(5);
   color_bar_->SetWidth(0.07);
   color_bar_->SetHeight(0.45);
-  color_bar_->SetPosition(0.91, 0.05);
-  color_bar_->GetTitleTextProperty()->SetFontSize(12);
-  color_bar_->GetLabelTextProperty()->SetFontSize(10);
+  color_bar_->SetPosition(0.88, 0.05);
+  // Fixed font sizes: a long title ("deviation (mm)") is not shrunk to the
+  // bar's width.
+  color_bar_->UnconstrainedFontSizeOn();
+  color_bar_->GetTitleTextProperty()->SetFontSize(13);
+  color_bar_->GetLabelTextProperty()->SetFontSize(12);
   color_bar_->SetLabelFormat("%.1f");
   renderer_->AddViewProp(color_bar_);
   ApplyLookupTable();
@@ -338,6 +341,9 @@ void CloudView::Clear() {
   range_hi_[0] = 3.0;
   range_hi_[1] = 60.0;
   range_hi_[2] = 8.0;
+  // Annotations belong to the cloud they were made on.
+  SetPlanes({});
+  ClearMeasurement();
   trajectory_points_->Reset();
   trajectory_points_->Modified();
   trajectory_poly_->SetLines(vtkSmartPointer<vtkCellArray>::New());
@@ -622,6 +628,9 @@ void CloudView::SetClipHeight(double z) {
       if (m) ApplyClip(m);
     }
   }
+  // The planes too: a hidden ceiling must not tint the view from above.
+  ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
+  SetPlanesVisible(planes_visible_);  // Labels of hidden planes go with them.
   RequestRender();
 }
 
@@ -786,6 +795,13 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
                                });
   if (same) return;
   shown_markers_ = markers;
+  // The new marker is drawn over the thinned cloud at once (a full-detail
+  // frame of 10 M points takes seconds in software); full detail follows
+  // when the view has been still for kSettleMs, as after a camera move.
+  if (point_count_ > lod_budget_) {
+    SetLodActive(true);
+    settle_->start();
+  }
   for (int k = 0; k < 2; ++k) {
     auto points = vtkSmartPointer<vtkPoints>::New();
     auto verts = vtkSmartPointer<vtkCellArray>::New();

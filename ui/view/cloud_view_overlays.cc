@@ -14,6 +14,8 @@
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
+#include <cmath>
+
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -91,7 +93,6 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
     label->SetInput(p.label.toUtf8().constData());
     label->SetPosition(centre.data());
     label->GetTextProperty()->SetColor(p.color.redF(), p.color.greenF(), p.color.blueF());
-    label->SetVisibility(planes_visible_);
     renderer_->AddActor(label);
     plane_labels_.push_back(label);
   }
@@ -101,14 +102,17 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
   poly->GetCellData()->SetScalars(colors);
   static_cast<vtkPolyDataMapper*>(planes_->GetMapper())->SetInputData(poly);
   plane_count_ = planes.size();
-  planes_->SetVisibility(planes_visible_ && plane_count_ > 0);
-  RequestRender();
+  SetPlanesVisible(planes_visible_);
 }
 
 void CloudView::SetPlanesVisible(bool visible) {
   planes_visible_ = visible;
   planes_->SetVisibility(visible && plane_count_ > 0);
-  for (const auto& label : plane_labels_) label->SetVisibility(visible);
+  for (const auto& label : plane_labels_) {
+    // A label above the clip height belongs to a hidden plane (the ceiling).
+    const bool clipped = !std::isnan(clip_height_) && label->GetPosition()[2] > clip_height_;
+    label->SetVisibility(visible && !clipped);
+  }
   RequestRender();
 }
 
