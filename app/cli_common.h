@@ -32,6 +32,12 @@ extern const char* const kSimulateUsage;
 extern const char* const kCalibrateUsage;
 extern const char* const kEvaluateUsage;
 
+// Lidar-only structure from motion (app/cli_sfm.cc): `p3l`, `sfm`.
+int RunP3l(int argc, char** argv);
+extern const char* const kP3lUsage;
+int RunSfm(int argc, char** argv);
+extern const char* const kSfmUsage;
+
 }  // namespace sweepscan::app
 
 #endif  // SWEEPSCAN_APP_CLI_COMMON_H_

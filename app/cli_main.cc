@@ -21,6 +21,8 @@ const char* kUsage =
     "  export     write a session's decoded sensor records as CSV\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
+    "  p3l        6-DoF pose from three scan lines on three known planes (lidar-only SfM)\n"
+    "  sfm        lidar-only structure from motion of a simulated 2D-lidar rig (poses, planes, cloud)\n"
     "  help       show this text, or `help <command>` for one command\n"
     "\n"
     "Every command accepts --json (machine-readable output on stdout) and --help.\n"
@@ -48,6 +50,10 @@ int Main(int argc, char** argv) {
       std::cout << kReconstructUsage;
     } else if (topic == "export") {
       std::cout << kExportUsage;
+    } else if (topic == "p3l") {
+      std::cout << kP3lUsage;
+    } else if (topic == "sfm") {
+      std::cout << kSfmUsage;
     } else {
       std::cout << kUsage;
     }
@@ -59,6 +65,8 @@ int Main(int argc, char** argv) {
   if (command == "export") return RunExport(argc, argv);
   if (command == "calibrate") return RunCalibrate(argc, argv);
   if (command == "evaluate") return RunEvaluate(argc, argv);
+  if (command == "p3l") return RunP3l(argc, argv);
+  if (command == "sfm") return RunSfm(argc, argv);
   PrintError("unknown command '" + command + "'\n" + kUsage);
   return kExitBadInput;
 }
