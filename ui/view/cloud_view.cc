@@ -634,13 +634,14 @@ void CloudView::SetClipHeight(double z) {
   RequestRender();
 }
 
-void CloudView::SetLodActive(bool active) {
+void CloudView::SetLodActive(bool active, size_t budget) {
   lod_active_ = active;
-  // The coarsest detail that keeps the drawn points within the budget.
+  if (budget == 0) budget = lod_budget_;
+  // The finest detail that keeps the drawn points within the budget.
   int level = -1;
-  if (active && point_count_ > lod_budget_) {
+  if (active && point_count_ > budget) {
     level = 0;
-    while (level + 1 < kLodLevels && point_count_ / kLodStrides[level] > lod_budget_) ++level;
+    while (level + 1 < kLodLevels && point_count_ / kLodStrides[level] > budget) ++level;
   }
   if (level == lod_level_) return;
   lod_level_ = level;
@@ -799,7 +800,9 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
   // frame of 10 M points takes seconds in software); full detail follows
   // when the view has been still for kSettleMs, as after a camera move.
   if (point_count_ > lod_budget_) {
-    SetLodActive(true);
+    // Half the budget: the frame that shows a pick should come within
+    // ~50 ms (measured: docs/performance.md, "Desktop app").
+    SetLodActive(true, lod_budget_ / 2);
     settle_->start();
   }
   for (int k = 0; k < 2; ++k) {

@@ -122,7 +122,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t lod_budget() const { return lod_budget_; }
   int lod_level() const { return lod_level_; }  // -1 full, else the kLodStrides index
   // Thinned chunks on or off (automatic; benchmarks force it).
-  void SetLodActive(bool active);
+  // `budget`: points drawn at most while active (default lod_budget()).
+  void SetLodActive(bool active, size_t budget = 0);
   bool lod_active() const { return lod_active_; }
 
   // ---- Camera ----
