@@ -33,7 +33,9 @@ const char* const kCalibrateUsage =
     "                    (all sightings of the target, alternately near and far; reports the\n"
     "                    raw picks as the paper's baseline too). Best with a thin board turned\n"
     "                    45 deg and two turns at 0.05 m/s: see docs/calibration.md\n"
-    "  --auto            no picks: planes seen in both passes (floor, ceiling, walls, board)\n"
+    "  --auto            no picks: planes seen in both passes (floor, ceiling, walls, board);\n"
+    "                    refuses a drive that is not a circle, and a result at the angle\n"
+    "                    bounds or with collapsed residuals (exit 1, no file written)\n"
     "  --out FILE        write the calibration file (JSON)\n"
     "  --pose-source S   ekf (default), odometry, or truth (simulated input only)\n"
     "  --json            print the result as JSON\n";
@@ -81,9 +83,12 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
                      const std::vector<PickPair>& picks, CalibrationSummary* summary,
                      std::unique_ptr<CalibrationSummary>* baseline) {
   if (args.Flag("auto")) {
+    // A drive that is not a circle is refused before solving, a degenerate
+    // result after (docs/calibration.md): one line, exit 1, no file.
     const Status s = SolveAutomatic(store, in.geometry, {}, AutoCalibrationOptions(), summary);
     if (!s.ok()) {
-      PrintError("calibration failed: " + s.message());
+      const bool refused = s.message().rfind("refused: ", 0) == 0;
+      PrintError((refused ? "calibration " : "calibration failed: ") + s.message());
       return kExitFailure;
     }
     return kExitOk;

@@ -50,12 +50,14 @@ bool AutoCalibrationOptions::IsValid(std::string* error) const {
   if (!(range_noise_m >= 0.0) || !(range_noise_fraction >= 0.0) || !(model_noise_m >= 0.0) ||
       !(range_noise_m + model_noise_m > 0.0) || !(membership_sigmas > 0.0) ||
       !(edge_margin_m >= 0.0) || !(surface_step_m > 0.0) || !(robust_scale_sigmas > 0.0) ||
-      !(covariance_block_s > 0.0) ||
+      !(covariance_block_s > 0.0) || !(max_abs_angle_rad > 0.0) || !(min_rms_sigmas >= 0.0) ||
+      !(min_sigma_rad >= 0.0) ||
       !std::isfinite(range_noise_m + range_noise_fraction + model_noise_m + membership_sigmas +
-                     edge_margin_m + robust_scale_sigmas + covariance_block_s)) {
+                     edge_margin_m + robust_scale_sigmas + covariance_block_s +
+                     max_abs_angle_rad + min_rms_sigmas + min_sigma_rad)) {
     *error =
-        "automatic calibration: noise model, membership, edge margin, robust scale and "
-        "covariance block must be finite and positive";
+        "automatic calibration: noise model, membership, edge margin, robust scale, "
+        "covariance block and refusal thresholds must be finite and positive";
     return false;
   }
   return true;
@@ -364,6 +366,54 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
   }
 }
 
+// The robot's path as the samples saw it: one pose per scan (the first
+// sample's), for the circle check.
+PoseBuffer PathOfSamples(const SampleStore& store) {
+  PoseBuffer path;
+  bool first = true;
+  uint32_t scan = 0;
+  for (const LidarObservation& o : store.observations()) {
+    if (!first && o.ref.scan == scan) continue;
+    first = false;
+    scan = o.ref.scan;
+    path.Add(TimeFromNanoseconds(o.time_ns), o.world_from_body);
+  }
+  return path;
+}
+
+// After the solve: a result at or beyond the angle bound, or with collapsed
+// residuals or sigma, cannot be trusted. Empty when the result stands.
+std::string RefuseResult(const CalibrationSummary& s, const AutoCalibrationOptions& options) {
+  const double angles[3] = {s.angles.alpha, s.angles.beta, s.angles.gamma};
+  const char* names[3] = {"alpha", "beta", "gamma"};
+  for (int k = 0; k < 3; ++k) {
+    if (!(std::abs(angles[k]) < options.max_abs_angle_rad)) {
+      return "refused: " + std::string(names[k]) + " = " + std::to_string(angles[k]) +
+             " rad is at or beyond the bound +-" + std::to_string(options.max_abs_angle_rad) +
+             " rad (a mounting error is a few degrees): check the lidar's angle convention and "
+             "the poses, and drive a slow circle";
+    }
+  }
+  // The normalised RMS over all residual points, from the plane reports.
+  double sq = 0.0;
+  int n = 0;
+  for (const auto& p : s.plane_reports) {
+    sq += p.rms_sigmas * p.rms_sigmas * p.points;
+    n += p.points;
+  }
+  const double rms_sigmas = n > 0 ? std::sqrt(sq / n) : 0.0;
+  if (rms_sigmas < options.min_rms_sigmas) {
+    return "refused: the residuals collapsed (RMS " + std::to_string(s.final_rms_m) + " m, " +
+           std::to_string(rms_sigmas) +
+           " of the range noise): the cloud folded onto a plane, not a calibration";
+  }
+  if (s.sigma_rad.minCoeff() >= 0.0 && s.sigma_rad.minCoeff() < options.min_sigma_rad) {
+    return "refused: the 1-sigma collapsed (" + std::to_string(s.sigma_rad.minCoeff()) +
+           " rad): a degenerate solution, not a calibration";
+  }
+  return std::string();
+}
+
 }  // namespace
 
 Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
@@ -379,6 +429,14 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
   AutoSamples in;
   const Status selected = SelectAutoSamples(store, geometry, options, &in);
   if (!selected.ok()) return selected;
+  if (options.require_circle_drive) {
+    CircleDrive circle;
+    std::string why;
+    if (!FitCircleDrive(PathOfSamples(store), &circle, &why)) {
+      return Status::Error("refused: not a calibration drive: " + why +
+                           "; drive one or two slow turns of a circle (docs/calibration.md)");
+    }
+  }
   const std::vector<size_t>& sample = in.sample;
 
   MountingError c = initial;
@@ -463,6 +521,12 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
                          std::to_string(so_opts.max_outer_iterations) + " outer iterations");
   }
   summary->message = "angles stopped changing at the final inlier band";
+  const std::string refused = RefuseResult(*summary, options);
+  if (!refused.empty()) {
+    summary->converged = false;
+    summary->message = refused;
+    return Status::Error(refused);
+  }
   return Status::Ok();
 }
 

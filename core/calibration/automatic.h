@@ -64,11 +64,25 @@ struct AutoCalibrationOptions {
   // errors of the EKF, a scan line's systematic offset) then widen sigma
   // instead of being counted as independent.
   double covariance_block_s = 2.0;
+  // Refusals (docs/calibration.md, "What the automatic mode refuses").
+  // Before solving: the drive must be a circle (FitCircleDrive on the
+  // robot's positions at the samples' times): a straight or wandering drive
+  // has no two passes of each wall, and the angles it gives are not
+  // trustworthy. After solving: a result with any |angle| >= max_abs_angle_rad
+  // (the calibration file accepts 0.5 rad; 0.45 is "at or near" that bound),
+  // or whose residuals collapsed (RMS of r_i / sigma_i below min_rms_sigmas:
+  // the X4's noise cannot vanish, so the cloud folded onto one plane) or
+  // whose sigma collapsed (below min_sigma_rad), is refused.
+  bool require_circle_drive = true;
+  double max_abs_angle_rad = 0.45;
+  double min_rms_sigmas = 0.05;
+  double min_sigma_rad = 1e-7;
 
   bool IsValid(std::string* error) const;
 };
 
-// Automatic mode on all samples of the recording.
+// Automatic mode on all samples of the recording. Refusals (see the
+// options) return an error whose message starts with "refused: ", one line.
 Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
                       const MountingError& initial, const AutoCalibrationOptions& options,
                       CalibrationSummary* summary);

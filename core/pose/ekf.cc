@@ -8,7 +8,8 @@ namespace sweepscan {
 bool EkfOptions::IsValid(std::string* error) const {
   const double values[] = {accel_sigma, angular_accel_sigma, position_sigma,   yaw_sigma,
                            tilt_sigma,  yaw_offset_sigma,    wheel_v_sigma,    wheel_w_sigma,
-                           gyro_sigma,  imu_yaw_sigma,       imu_tilt_sigma};
+                           gyro_sigma,  imu_yaw_sigma,       imu_tilt_sigma,   gyro_bias_sigma,
+                           gyro_bias_prior_sigma};
   for (double v : values) {
     if (!std::isfinite(v) || v <= 0.0) {
       *error = "EKF noise standard deviations must be positive and finite";
@@ -27,6 +28,11 @@ void PoseEkf::Initialize(Time time, const State& state, const Covariance& covari
   state_ = state;
   state_[kPsi] = WrapAngle(state_[kPsi]);
   covariance_ = covariance;
+  if (!options_.estimate_gyro_bias) {  // g frozen at 0: the filter without the bias state
+    state_[kGyroBias] = 0.0;
+    covariance_.row(kGyroBias).setZero();
+    covariance_.col(kGyroBias).setZero();
+  }
   initialized_ = true;
   yaw_offset_known_ = false;
 }
@@ -59,7 +65,8 @@ void PoseEkf::Predict(Time time) {
       options_.accel_sigma * options_.accel_sigma,
       options_.angular_accel_sigma * options_.angular_accel_sigma,
       options_.tilt_sigma * options_.tilt_sigma, options_.tilt_sigma * options_.tilt_sigma,
-      options_.yaw_offset_sigma * options_.yaw_offset_sigma;
+      options_.yaw_offset_sigma * options_.yaw_offset_sigma,
+      options_.estimate_gyro_bias ? options_.gyro_bias_sigma * options_.gyro_bias_sigma : 0.0;
   covariance_ = f * covariance_ * f.transpose();
   covariance_.diagonal() += q * dt;
   time_ = time;
@@ -126,8 +133,11 @@ bool PoseEkf::UpdateWheels(Time time, double v, double w) {
 
 bool PoseEkf::UpdateGyro(Time time, double w) {
   Predict(time);
+  // z = w + g. With estimate_gyro_bias false, g stays 0 with variance 0
+  // (no process noise, and a zero row of P gives a zero gain row).
   Eigen::Matrix<double, 1, kStateSize> h = Eigen::Matrix<double, 1, kStateSize>::Zero();
   h(0, kW) = 1.0;
+  h(0, kGyroBias) = 1.0;
   return Update<1>(Eigen::Matrix<double, 1, 1>(w), h,
                    Eigen::Matrix<double, 1, 1>(options_.gyro_sigma * options_.gyro_sigma),
                    Eigen::Matrix<bool, 1, 1>(false));
@@ -160,6 +170,14 @@ bool PoseEkf::UpdateTilt(Time time, double roll, double pitch) {
   const double var = options_.imu_tilt_sigma * options_.imu_tilt_sigma;
   return Update<2>(Eigen::Vector2d(roll, pitch), h, Eigen::Vector2d(var, var).asDiagonal().toDenseMatrix(),
                    Eigen::Matrix<bool, 2, 1>(true, true));
+}
+
+void PoseEkf::SetGyroBias(double bias, double variance) {
+  if (!options_.estimate_gyro_bias || !std::isfinite(bias) || !(variance > 0.0)) return;
+  state_[kGyroBias] = bias;
+  covariance_.row(kGyroBias).setZero();
+  covariance_.col(kGyroBias).setZero();
+  covariance_(kGyroBias, kGyroBias) = variance;
 }
 
 Rigid3d PoseEkf::WorldFromBody() const {

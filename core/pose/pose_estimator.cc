@@ -1,5 +1,8 @@
 #include "core/pose/pose_estimator.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace sweepscan {
 
 const char* PoseSourceName(PoseSource source) {
@@ -36,8 +39,11 @@ void PoseEstimator::EnsureInitialized(Time time) {
   s[PoseEkf::kPsi] = options_.initial_pose.yaw;
   // The start pose defines the world frame: tiny position/yaw uncertainty,
   // velocity unknown within a walking pace, tilt within a few degrees.
+  // The gyro bias within the HI219's turn-on range (gyro_bias_prior_sigma)
+  // until a standstill measures it.
   PoseEkf::State var;
-  var << 1e-8, 1e-8, 1e-8, 0.25, 0.25, 0.003, 0.003, 1.0;
+  const double g = options_.ekf.gyro_bias_prior_sigma;
+  var << 1e-8, 1e-8, 1e-8, 0.25, 0.25, 0.003, 0.003, 1.0, g * g;
   ekf_.Initialize(time, s, var.asDiagonal());
 }
 
@@ -50,9 +56,49 @@ void PoseEstimator::RecordPose(Time time) {
   }
 }
 
+bool PoseEstimator::HoldingGyro() const {
+  return phase_ == StartPhase::kStill && options_.gyro_bias_from_standstill &&
+         options_.ekf.estimate_gyro_bias && options_.source != PoseSource::kOdometry;
+}
+
+void PoseEstimator::TrackStandstill(const WheelSpeedMeasurement& m) {
+  if (phase_ == StartPhase::kMoved) return;
+  const bool still = std::abs(m.left_mps) <= options_.standstill_max_wheel_mps &&
+                     std::abs(m.right_mps) <= options_.standstill_max_wheel_mps;
+  if (still) {
+    if (phase_ == StartPhase::kNoWheels) still_begin_ = m.time;
+    phase_ = StartPhase::kStill;
+    still_end_ = m.time;
+    standstill_s_ = ToSeconds(still_end_ - still_begin_);
+    // The record is the mean speed over the period that ends at m.time, so
+    // held readings before m.time were taken at rest; one at m.time itself
+    // may be the first instant of the motion (an instantaneous rate) and
+    // waits for the next record.
+    for (const auto& [t, z] : pending_gyro_) {
+      if (t < m.time) gyro_sum_ += z, ++gyro_count_;
+    }
+    pending_gyro_.erase(std::remove_if(pending_gyro_.begin(), pending_gyro_.end(),
+                                       [&](const auto& r) { return r.first < m.time; }),
+                        pending_gyro_.end());
+    return;
+  }
+  // The wheels move: seed g from the standstill if it was long enough, then
+  // give the filter the readings held since the last record at rest.
+  const bool holding = HoldingGyro();
+  phase_ = StartPhase::kMoved;
+  if (holding && standstill_s_ >= options_.standstill_min_s && gyro_count_ > 0) {
+    const double sigma = options_.ekf.gyro_sigma;
+    ekf_.SetGyroBias(gyro_sum_ / gyro_count_, sigma * sigma / gyro_count_);
+    gyro_bias_seeded_ = true;
+  }
+  for (const auto& [t, z] : pending_gyro_) ekf_.UpdateGyro(t, z);
+  pending_gyro_.clear();
+}
+
 void PoseEstimator::AddWheels(const WheelSpeedMeasurement& m) {
   const bool first = !odometry_.initialized();
   EnsureInitialized(m.time);
+  TrackStandstill(m);
   if (!first) odometry_.Add(m);
   if (options_.source == PoseSource::kEkf) {
     const Twist2d t = TwistFromWheels(m.left_mps, m.right_mps, geometry_.wheel_distance_m);
@@ -64,7 +110,13 @@ void PoseEstimator::AddWheels(const WheelSpeedMeasurement& m) {
 void PoseEstimator::AddImu(const ImuMeasurement& m) {
   EnsureInitialized(m.time);
   if (options_.source == PoseSource::kOdometry) return;  // odometry alone ignores the IMU
-  if (m.has_gyro && options_.use_imu_gyro) ekf_.UpdateGyro(m.time, m.gyro_z);
+  if (m.has_gyro && options_.use_imu_gyro) {
+    if (HoldingGyro()) {
+      pending_gyro_.emplace_back(m.time, m.gyro_z);  // at rest: w = 0, z = g + noise
+    } else {
+      ekf_.UpdateGyro(m.time, m.gyro_z);
+    }
+  }
   if (m.has_attitude) {
     if (options_.use_imu_yaw) ekf_.UpdateYaw(m.time, m.yaw);
     if (options_.use_imu_tilt) ekf_.UpdateTilt(m.time, m.roll, m.pitch);

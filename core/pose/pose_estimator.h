@@ -5,11 +5,23 @@
 // merges them; EstimatePoses does it for a whole SensorLog). The IMU yaw has
 // its own heading reference; the EKF estimates its offset (state b).
 //
+// Gyro bias from a standstill: while the wheels report zero speed (both
+// |v_l|, |v_r| <= standstill_max_wheel_mps) from the first wheel record on,
+// the robot cannot turn, so the gyro reads only its bias and noise:
+//   g0 = mean(z_gyro),  var(g0) = gyro_sigma^2 / n        (n readings)
+// Those readings are held back from the filter (whose w the wheels keep at
+// 0) and, if the standstill lasted at least standstill_min_s, seed the
+// EKF's bias state g (PoseEkf::SetGyroBias) when the wheels first move.
+// A drive that starts moving at once keeps the prior g = 0 +- prior sigma
+// and learns g from the IMU yaw.
+//
 // Lives on the processing thread.
 #ifndef SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
 #define SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/pose/ekf.h"
 #include "core/pose/odometry.h"
@@ -30,6 +42,10 @@ struct PoseEstimatorOptions {
   bool use_imu_gyro = true;
   bool use_imu_yaw = true;
   bool use_imu_tilt = true;
+  // Gyro bias from a standstill at the start of the drive (see above).
+  bool gyro_bias_from_standstill = true;
+  double standstill_min_s = 0.5;
+  double standstill_max_wheel_mps = 0.0005;
   // Where the robot starts in the world; the cloud is expressed in this frame.
   Pose2d initial_pose;
 };
@@ -46,10 +62,28 @@ class PoseEstimator {
   const PoseEkf& ekf() const { return ekf_; }
   // Heading of the latest estimate (for tests and status displays).
   Pose2d LatestPose2d() const;
+  // The initial standstill: its length (s) and whether it seeded the gyro
+  // bias (false until the wheels first move).
+  double standstill_s() const { return standstill_s_; }
+  bool gyro_bias_seeded() const { return gyro_bias_seeded_; }
 
  private:
   void EnsureInitialized(Time time);
   void RecordPose(Time time);
+  void TrackStandstill(const WheelSpeedMeasurement& m);
+  bool HoldingGyro() const;
+
+  // The initial standstill: no wheel record yet, wheels at rest so far, moved.
+  enum class StartPhase { kNoWheels, kStill, kMoved };
+  StartPhase phase_ = StartPhase::kNoWheels;
+  Time still_begin_, still_end_;
+  double gyro_sum_ = 0.0;
+  int gyro_count_ = 0;
+  // Gyro readings held during the standstill not yet covered by a
+  // zero-speed wheel record (the robot may have started moving meanwhile).
+  std::vector<std::pair<Time, double>> pending_gyro_;
+  double standstill_s_ = 0.0;
+  bool gyro_bias_seeded_ = false;
 
   PoseEstimatorOptions options_;
   RobotGeometry geometry_;

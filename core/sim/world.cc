@@ -343,10 +343,16 @@ void SimWorld::EmitWheels(Time until, SensorSink* sink) {
     }
     WheelSpeedMeasurement m;
     m.time = RobotTime(t1);
-    m.left_mps = left * (1.0 + spec.scale_error_left) * (1.0 + slip_left) +
-                 spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
-    m.right_mps = right * (1.0 + spec.scale_error_right) * (1.0 + slip_right) +
-                  spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
+    // A wheel at rest turns its encoder by no tick: it reads exactly 0. The
+    // noise is drawn either way, so a standstill leaves the random stream
+    // (and every later record) as it was.
+    const double noise_left = spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
+    const double noise_right = spec.speed_noise_mps * wheel_gauss_(wheel_rng_);
+    m.left_mps = left == 0.0 ? 0.0
+                             : left * (1.0 + spec.scale_error_left) * (1.0 + slip_left) + noise_left;
+    m.right_mps = right == 0.0
+                      ? 0.0
+                      : right * (1.0 + spec.scale_error_right) * (1.0 + slip_right) + noise_right;
     sink->OnWheels(m);
   }
 }

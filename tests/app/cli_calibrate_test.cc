@@ -114,6 +114,24 @@ TEST(CliCalibrateTest, AutomaticOnScenarioWritesCalibration) {
   EXPECT_LT(tilt_after, 0.1);
 }
 
+// A straight drive (no circle) is refused by --auto before solving: exit 1,
+// one line that says what to drive instead, no calibration file.
+TEST(CliCalibrateTest, AutomaticRefusesAStraightDrive) {
+  Write(Tmp("straight.json"), R"({"format":"sweepscan-scenario","version":1,"name":"straight",
+    "seed":1,"scene":{"preset":"lab"},
+    "mounting_error_rad":{"alpha":-0.0058,"beta":0.0126,"gamma":0.0355},
+    "path":{"start":{"x_m":2.0,"y_m":2.5,"yaw_rad":0.0},
+            "segments":[{"v_mps":0.2,"w_radps":0.0,"duration_s":20.0}]}})");
+  std::remove(Tmp("straight_calib.json").c_str());
+  const CliRun r = Cli("calibrate --scenario " + Tmp("straight.json") + " --auto --out " +
+                       Tmp("straight_calib.json"));
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(Lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("calibration refused: not a calibration drive"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("circle"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::ifstream(Tmp("straight_calib.json")).good());
+}
+
 TEST(CliCalibrateTest, PairsOnScenario) {
   // The corners of the target board as world picks in both passes.
   const std::string text = WorldPairs({{{4.7, 0.16, 1.5}, {5.3, 0.16, 1.5}, {5.3, 0.16, 0.9},

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 
+#include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
@@ -465,6 +466,94 @@ TEST(AutomaticTest, EmptyRecordingFails) {
       SolveAutomatic(SampleStore(), RobotGeometry(), {}, AutoCalibrationOptions(), &s);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.message().find("samples"), std::string::npos) << st.message();
+}
+
+// --- Gyro bias (issue 14) -----------------------------------------------------
+
+// Automatic mode on EKF poses of the lab circle (seed 1, the paper's angles)
+// with a gyro z bias; the filter with or without its bias state.
+Eigen::Vector3d EkfAutoErrorMrad(double gyro_bias_rad_s, bool estimate_gyro_bias) {
+  sim::SimConfig c = testing::CircleConfig(1);
+  c.mounting_error = kPaper;
+  c.imu.gyro_bias_rad_s = gyro_bias_rad_s;
+  sim::SimWorld world(c);
+  const SensorLog log = world.RunAll();
+  PoseEstimatorOptions o;
+  o.initial_pose = c.start;
+  o.ekf.estimate_gyro_bias = estimate_gyro_bias;
+  const PoseEstimator est = EstimatePoses(log, o, c.geometry);
+  CalibrationSummary s;
+  const Status st =
+      SolveAutomatic(SampleStore(log, est.poses()), c.geometry, {}, AutoCalibrationOptions(), &s);
+  EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
+  const Eigen::Vector3d e = ErrorMrad(s.angles, c.mounting_error);
+  std::printf("[calib] gyro bias %.1f mrad/s, EKF %s the bias state: err(mrad) alpha %+7.3f beta "
+              "%+7.3f gamma %+7.3f  sigma(mrad) %.3f %.3f %.3f\n",
+              1e3 * gyro_bias_rad_s, estimate_gyro_bias ? "with" : "without", e[0], e[1], e[2],
+              1e3 * s.sigma_rad[0], 1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2]);
+  return e;
+}
+
+// A 2 mrad/s gyro bias (the top of the HI219's range) must not reach the
+// calibration: with the bias state, alpha on the biased drive is alpha on
+// the same drive without bias, within 0.15 mrad. Without the state the bias
+// bends the estimated circle and alpha moves by about -3 mrad (measured:
+// SWEEPSCAN_GYRO_BIAS_COMPARE=1 prints it). The absolute bound is the EKF
+// bound of calibration_sweep_test (1 mrad): on this seed alpha keeps a
+// +0.9 mrad error that does not depend on the bias (docs/results.md), so
+// the issue's 0.5 mrad is not met here.
+TEST(GyroBiasCalibrationTest, BiasOfTwoMradPerSecondDoesNotReachAlpha) {
+  const Eigen::Vector3d biased = EkfAutoErrorMrad(0.002, true);
+  const Eigen::Vector3d unbiased = EkfAutoErrorMrad(0.0, true);
+  EXPECT_LT(std::abs(biased[0] - unbiased[0]), 0.15);
+  EXPECT_LT(biased.cwiseAbs().maxCoeff(), 1.0);
+  if (std::getenv("SWEEPSCAN_GYRO_BIAS_COMPARE") != nullptr) {
+    const Eigen::Vector3d frozen = EkfAutoErrorMrad(0.002, false);
+    EXPECT_GT(std::abs(frozen[0]), std::abs(biased[0]));
+  }
+}
+
+// --- Refusals (issue 14) --------------------------------------------------------
+
+// A straight drive along the lab: no circle, so no two passes of each
+// wall; refused before solving, with what to drive instead.
+TEST(AutomaticTest, StraightDriveIsRefused) {
+  sim::SimConfig c = testing::CircleConfig(1);
+  c.start = {2.0, 2.5, 0.0};
+  c.path = {{0.2, 0.0, 20.0}};
+  sim::SimWorld world(c);
+  const SensorLog log = world.RunAll();
+  CalibrationSummary s;
+  const Status st = SolveAutomatic(SampleStore(log, world.TruthPoses(1000.0)), c.geometry, {},
+                                   AutoCalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.message().rfind("refused: not a calibration drive", 0), 0u) << st.message();
+  EXPECT_NE(st.message().find("circle"), std::string::npos) << st.message();
+  EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  EXPECT_TRUE(s.trace.empty());  // refused before solving
+}
+
+// After the solve: a result at the angle bound, or with residuals or sigma
+// collapsed, is refused. The thresholds are moved onto a good solve of the
+// paper's drive (gamma = 35.5 mrad, RMS/sigma ~0.8, sigma >= 0.01 mrad) to
+// exercise each check; the defaults (0.45 rad, 0.05, 1e-7 rad) are far from
+// it, so a genuine result passes (CalibrationCaseTest).
+TEST(AutomaticTest, ResultsAtTheBoundOrCollapsedAreRefused) {
+  const Drive& d = GetDrive(0);
+  AutoCalibrationOptions o;
+  o.max_abs_angle_rad = 0.03;
+  CalibrationSummary s;
+  Status st = SolveAutomatic(d.store, d.config.geometry, {}, o, &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.message().rfind("refused: gamma = ", 0), 0u) << st.message();
+  EXPECT_NE(st.message().find("bound"), std::string::npos) << st.message();
+  EXPECT_FALSE(s.converged);
+  o = AutoCalibrationOptions();
+  o.min_rms_sigmas = 5.0;  // as if the X4's noise had vanished from the residuals
+  st = SolveAutomatic(d.store, d.config.geometry, {}, o, &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.message().rfind("refused: the residuals collapsed", 0), 0u) << st.message();
+  EXPECT_EQ(st.message().find('\n'), std::string::npos);
 }
 
 TEST(RefinedCornersTest, TooFewSamplesFails) {

@@ -11,7 +11,7 @@ namespace {
 PoseEkf MakeFilter(const EkfOptions& o = EkfOptions()) {
   PoseEkf ekf(o);
   PoseEkf::State var;
-  var << 1e-8, 1e-8, 1e-8, 0.25, 0.25, 0.003, 0.003, 1.0;
+  var << 1e-8, 1e-8, 1e-8, 0.25, 0.25, 0.003, 0.003, 1.0, 0.003 * 0.003;
   ekf.Initialize(TimeFromSeconds(0), PoseEkf::State::Zero(), var.asDiagonal());
   return ekf;
 }
@@ -72,7 +72,10 @@ TEST(EkfTest, MahalanobisGateRejectsOutliers) {
 }
 
 TEST(EkfTest, CovarianceStaysSymmetricPositiveDefinite) {
-  PoseEkf ekf = MakeFilter();
+  // With the gyro-bias state on (off, g's row and column stay exactly 0).
+  EkfOptions with_bias;
+  with_bias.estimate_gyro_bias = true;
+  PoseEkf ekf = MakeFilter(with_bias);
   std::mt19937 rng(2);
   std::normal_distribution<double> n(0, 1);
   for (int i = 1; i <= 2000; ++i) {
