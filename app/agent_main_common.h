@@ -36,8 +36,8 @@ struct AgentCommandLine {
                             "ADDR:PORT"};
   QCommandLineOption key_file{QStringLiteral("key-file"), "Pre-shared key file (required for TCP).",
                               "FILE"};
-  QCommandLineOption watchdog{QStringLiteral("watchdog-ms"), "Watchdog period in ms (default 500).",
-                              "MS"};
+  QCommandLineOption watchdog{QStringLiteral("watchdog-ms"),
+                              "Watchdog period in ms, 100..5000 (default 500).", "MS"};
   QCommandLineOption v_max{QStringLiteral("v-max"), "Speed limit in m/s (default 0.5).", "MPS"};
   QCommandLineOption w_max{QStringLiteral("w-max"), "Turn rate limit in rad/s (default 1.5).",
                            "RADPS"};
@@ -50,8 +50,12 @@ struct AgentCommandLine {
     parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha});
   }
 
+  // `key_permissions`: what to do with a key file others may read
+  // (sweepscan-robotd refuses it, sweepscan-sim warns).
   bool Apply(const QCommandLineParser& parser, bool tcp, hardware::RobotAgentConfig* config,
-             QString* error) const {
+             QString* error,
+             hardware::KeyFilePermissions key_permissions =
+                 hardware::KeyFilePermissions::kOwnerOnly) const {
     if (tcp) {
       hardware::LinkAddress address;
       const QString text =
@@ -68,9 +72,13 @@ struct AgentCommandLine {
         return false;
       }
     }
-    if (parser.isSet(key_file) &&
-        !hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error)) {
-      return false;
+    if (parser.isSet(key_file)) {
+      QString warning;
+      if (!hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error,
+                                 key_permissions, &warning)) {
+        return false;
+      }
+      if (!warning.isEmpty()) std::fprintf(stderr, "warning: %s\n", qPrintable(warning));
     }
     double watchdog_ms = 0.0;
     if (!Number(parser, watchdog, &watchdog_ms, error) ||
@@ -80,7 +88,15 @@ struct AgentCommandLine {
         !Number(parser, alpha, &config->agent.alpha_max_radps2, error)) {
       return false;
     }
-    if (parser.isSet(watchdog)) config->agent.watchdog = FromSeconds(watchdog_ms * 1e-3);
+    if (parser.isSet(watchdog)) {
+      // Bounded: 1e9 used to be accepted, which switched the watchdog off.
+      if (!(watchdog_ms >= 100.0 && watchdog_ms <= 5000.0)) {
+        *error = QStringLiteral("--watchdog-ms must be within 100..5000, got %1")
+                     .arg(parser.value(watchdog));
+        return false;
+      }
+      config->agent.watchdog = FromSeconds(watchdog_ms * 1e-3);
+    }
     return config->IsValid(error);
   }
 

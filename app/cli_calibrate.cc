@@ -38,6 +38,7 @@ const char* const kCalibrateUsage =
     "                    bounds or with collapsed residuals (exit 1, no file written)\n"
     "  --out FILE        write the calibration file (JSON)\n"
     "  --pose-source S   ekf (default), odometry, or truth (simulated input only)\n"
+    "  --strict          refuse a session with damaged records (default: skip them, with a warning)\n"
     "  --json            print the result as JSON\n";
 
 namespace {
@@ -194,7 +195,7 @@ void PrintCalibration(const Args& args, const RecordingInput& in,
 }  // namespace
 
 int RunCalibrate(int argc, char** argv) {
-  Args args({"json", "auto", "refine", "help"}, {"scenario", "pairs", "out", "pose-source", "seed"});
+  Args args({"json", "auto", "refine", "help", "strict"}, {"scenario", "pairs", "out", "pose-source", "seed"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help calibrate)");

@@ -2,7 +2,9 @@
 #ifndef SWEEPSCAN_APP_CLI_COMMON_H_
 #define SWEEPSCAN_APP_CLI_COMMON_H_
 
+#include <exception>
 #include <iostream>
+#include <new>
 #include <string>
 
 namespace sweepscan::app {
@@ -15,10 +17,30 @@ inline void PrintError(const std::string& message) {
   std::cerr << "sweepscan-cli: error: " << message << "\n";
 }
 
+// Runs a command so that nothing escapes it: an exception (out of memory,
+// an I/O error deep in a library) becomes one error line and exit 1
+// ("failed while working"); bad input is found and refused with exit 2
+// before that. Used by main() of every command-line tool.
+template <typename Fn>
+int RunGuarded(Fn&& fn) {
+  try {
+    return fn();
+  } catch (const std::bad_alloc&) {
+    PrintError("out of memory");
+  } catch (const std::exception& e) {
+    PrintError(std::string("unexpected failure: ") + e.what());
+  } catch (...) {
+    PrintError("unexpected failure (unknown exception)");
+  }
+  return kExitFailure;
+}
+
 // Session commands (app/cli_session.cc): `info`, `reconstruct`, `export`.
 int RunInfo(int argc, char** argv);
 int RunReconstruct(int argc, char** argv);
 int RunExport(int argc, char** argv);
+int RunRepair(int argc, char** argv);
+extern const char* const kRepairUsage;
 extern const char* const kInfoUsage;
 extern const char* const kReconstructUsage;
 extern const char* const kExportUsage;

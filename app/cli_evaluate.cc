@@ -35,6 +35,7 @@ const char* const kEvaluateUsage =
     "\n"
     "  --threads N   worker threads (default: every core; the result does not depend on it)\n"
     "  --timing      print the wall time of each stage on stderr\n"
+    "  --strict      refuse a SESSION with damaged records (default: skip them, with a warning)\n"
     "  --neighbours kdtree|grid|flann   the shared neighbour structure (for measurements; the\n"
     "                same result with each): nanoflann (default), voxel hash grid, PCL KdTreeFLANN\n"
     "On a terminal (and without --json) the progress is shown on stderr.\n";
@@ -60,6 +61,10 @@ void PrintEvaluation(const std::string& title, const CloudEvaluation& e) {
 // reads what the direct reader does not (ASCII, compressed) and reports the
 // errors.
 Status LoadPositions(const std::string& path, std::vector<Eigen::Vector3f>* pts) {
+  // The header must fit the file before anything is allocated (a forged
+  // vertex count must not exhaust memory; trailing junk is refused).
+  const Status valid = ValidateCloudFile(path);
+  if (!valid.ok()) return valid;
   std::string error;
   if (ReadCloudPositions(path, pts, &error) == CloudReadResult::kOk) return Status::Ok();
   return LoadCloudPositions(path, pts);
@@ -111,7 +116,7 @@ void PrintTiming(const std::string& title, const CloudEvaluation& e) {
 }  // namespace
 
 int RunEvaluate(int argc, char** argv) {
-  Args args({"json", "help", "timing"}, {"scenario", "calibration", "pose-source", "seed", "threads", "neighbours"});
+  Args args({"json", "help", "timing", "strict"}, {"scenario", "calibration", "pose-source", "seed", "threads", "neighbours"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help evaluate)");

@@ -19,6 +19,7 @@ const char* kUsage =
     "  info       describe a recorded session\n"
     "  reconstruct  build the cloud of a recorded session\n"
     "  export     write a session's decoded sensor records as CSV\n"
+    "  repair     write a clean copy of a damaged session (intact records only)\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  p3l        6-DoF pose from three scan lines on three known planes (lidar-only SfM)\n"
@@ -26,7 +27,8 @@ const char* kUsage =
     "  help       show this text, or `help <command>` for one command\n"
     "\n"
     "Every command accepts --json (machine-readable output on stdout) and --help.\n"
-    "Exit codes: 0 ok, 1 failed while working, 2 bad input.\n";
+    "Exit codes: 0 ok, 1 failed while working (cannot write an output, out of memory),\n"
+    "2 bad input (usage, missing/invalid/corrupt input files); always one error line.\n";
 
 }  // namespace
 
@@ -54,6 +56,8 @@ int Main(int argc, char** argv) {
       std::cout << kP3lUsage;
     } else if (topic == "sfm") {
       std::cout << kSfmUsage;
+    } else if (topic == "repair") {
+      std::cout << kRepairUsage;
     } else {
       std::cout << kUsage;
     }
@@ -63,6 +67,7 @@ int Main(int argc, char** argv) {
   if (command == "info") return RunInfo(argc, argv);
   if (command == "reconstruct") return RunReconstruct(argc, argv);
   if (command == "export") return RunExport(argc, argv);
+  if (command == "repair") return RunRepair(argc, argv);
   if (command == "calibrate") return RunCalibrate(argc, argv);
   if (command == "evaluate") return RunEvaluate(argc, argv);
   if (command == "p3l") return RunP3l(argc, argv);
@@ -73,4 +78,6 @@ int Main(int argc, char** argv) {
 
 }  // namespace sweepscan::app
 
-int main(int argc, char** argv) { return sweepscan::app::Main(argc, argv); }
+int main(int argc, char** argv) {
+  return sweepscan::app::RunGuarded([&] { return sweepscan::app::Main(argc, argv); });
+}

@@ -2,12 +2,35 @@
 #include "app/cli_recording.h"
 
 #include <cstdlib>
+#include <iostream>
 #include <string>
 
 #include "app/cli_common.h"
 #include "core/scenario/scenario.h"
 
 namespace sweepscan::app {
+
+FramesLoadOptions SessionFramesOptions(const Args& args) {
+  FramesLoadOptions options = hardware::DefaultSessionFramesOptions();
+  if (args.Flag("strict")) options.skip_corrupt_records = false;
+  return options;
+}
+
+void WarnAboutDamage(const std::string& session_dir, const FramesLoadReport& frames) {
+  if (!frames.damaged()) return;
+  std::cerr << "sweepscan-cli: warning: " << session_dir << "/" << kSessionFramesFile << ": "
+            << frames.DamageSummary() << "; the rest was used (--strict refuses a damaged "
+            << "session; `sweepscan-cli repair " << session_dir << " --out NEW` writes a clean copy)\n";
+}
+
+void PrintSessionError(const Args& args, const std::string& session_dir, const Status& status) {
+  std::string message = status.message();
+  if (args.Flag("strict") && message.find(": record ") != std::string::npos) {
+    message += " (run without --strict to skip the damaged records, or `sweepscan-cli repair " +
+               session_dir + " --out NEW` to write a clean copy)";
+  }
+  PrintError(message);
+}
 
 // Returns an exit code (kExitOk on success); prints one error line otherwise.
 int LoadRecording(const Args& args, RecordingInput* in) {
@@ -41,11 +64,13 @@ int LoadRecording(const Args& args, RecordingInput* in) {
     hardware::SimulateRecording(scenario, in);
     return kExitOk;
   }
-  const Status s = hardware::OpenRecording(args.positional().front(), in);
+  const std::string& dir = args.positional().front();
+  const Status s = hardware::OpenRecording(dir, SessionFramesOptions(args), in);
   if (!s.ok()) {
-    PrintError(s.message());
+    PrintSessionError(args, dir, s);
     return kExitBadInput;
   }
+  WarnAboutDamage(dir, in->decode.frames);
   return kExitOk;
 }
 

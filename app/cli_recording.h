@@ -13,6 +13,16 @@ namespace sweepscan::app {
 
 using RecordingInput = hardware::Recording;
 
+// --strict: refuse a session with damaged records (the default skips them
+// with a warning). Accepted by every command that reads sessions.
+FramesLoadOptions SessionFramesOptions(const Args& args);
+// One warning line on stderr when frames.bin had damaged stretches that were
+// skipped (how many records, how many seconds, where); nothing otherwise.
+void WarnAboutDamage(const std::string& session_dir, const FramesLoadReport& frames);
+// The error line for a session that could not be opened (with --strict, a
+// damaged record's error says how to go on).
+void PrintSessionError(const Args& args, const std::string& session_dir, const Status& status);
+
 // SESSION or --scenario FILE [--seed N]. Returns an exit code (kExitOk on
 // success); prints one error line otherwise.
 int LoadRecording(const Args& args, RecordingInput* in);

@@ -2,13 +2,22 @@
 // the folder the workstation (or `simulate`) records: raw link frames plus
 // meta.json (docs/session-format.md). Everything here re-decodes the raw
 // bytes, so a better decoder or calibration always applies to old sessions.
+#include <dirent.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sys/stat.h>
+#include <sstream>
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_recording.h"
+#include "core/common/checked_file.h"
+#include "core/common/crc32c.h"
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
@@ -17,12 +26,21 @@
 namespace sweepscan::app {
 
 const char* const kInfoUsage =
-    "usage: sweepscan-cli info SESSION [--json]\n"
+    "usage: sweepscan-cli info SESSION [--strict] [--json]\n"
     "\n"
     "Describes a recorded session: robot geometry and calibration from meta.json,\n"
     "how many link frames were recorded (and whether a torn tail was dropped),\n"
-    "what the devices sent (scans, IMU and wheel records, decoder errors), and\n"
-    "the robot-time span.\n";
+    "damage (records skipped because frames.bin is corrupt there: how many, how\n"
+    "many seconds, where), what the devices sent (scans, IMU and wheel records,\n"
+    "decoder errors), and the robot-time span. --strict: exit 2 if damaged.\n";
+
+const char* const kRepairUsage =
+    "usage: sweepscan-cli repair SESSION --out NEW [--json]\n"
+    "\n"
+    "Writes a clean copy of a damaged session: every intact record of frames.bin\n"
+    "(damaged stretches and a torn tail are left out), meta.json and the other\n"
+    "files of the folder. The damaged session is not touched. NEW must not exist\n"
+    "or be an empty folder.\n";
 
 const char* const kReconstructUsage =
     "usage: sweepscan-cli reconstruct SESSION --out CLOUD.ply|CLOUD.pcd [options]\n"
@@ -34,10 +52,11 @@ const char* const kReconstructUsage =
     "  --pose-source S        ekf (default) or odometry\n"
     "  --no-ekf               same as --pose-source odometry\n"
     "  --no-deskew            place each whole scan at its first sample's pose\n"
+    "  --strict               refuse a session with damaged records (default: skip them, with a warning)\n"
     "  --json                 print the report as JSON\n";
 
 const char* const kExportUsage =
-    "usage: sweepscan-cli export SESSION --out DIR [--json]\n"
+    "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
     "\n"
     "Writes the session's decoded sensor records as CSV for other tools:\n"
     "  DIR/lidar.csv   robot_time_s,scan,beam,range_m,theta_rad   (range 0: no return)\n"
@@ -51,13 +70,35 @@ struct Decoded {
   hardware::SessionDecodeInfo info;
 };
 
-int DecodeOrFail(const std::string& dir, Decoded* d) {
-  const Status s = hardware::DecodeSession(dir, &d->log, &d->info);
+// Decodes SESSION (damaged records skipped unless --strict); warns about
+// damage unless `quiet` (info reports it in its own output).
+int DecodeOrFail(const Args& args, const std::string& dir, Decoded* d, bool quiet = false) {
+  const Status s = hardware::DecodeSession(dir, SessionFramesOptions(args), &d->log, &d->info);
   if (!s.ok()) {
-    PrintError(s.message());
+    PrintSessionError(args, dir, s);
     return kExitBadInput;
   }
+  if (!quiet) WarnAboutDamage(dir, d->info.frames);
   return kExitOk;
+}
+
+nlohmann::json DamageJson(const FramesLoadReport& f) {
+  nlohmann::json places = nlohmann::json::array();
+  for (const FramesDamage& d : f.damage) {
+    places.push_back({{"first_record", d.first_record},
+                      {"records", d.records},
+                      {"byte_offset", d.offset},
+                      {"bytes", d.bytes},
+                      {"reason", d.reason},
+                      {"seconds_lost", d.SecondsLost()},
+                      {"at_s", d.has_before ? static_cast<double>(d.time_before_ns - f.first_time_ns) * 1e-9
+                                            : 0.0}});
+  }
+  return {{"damaged", f.damaged()},
+          {"records_skipped", f.corrupt_records_skipped},
+          {"bytes_skipped", f.damaged_bytes()},
+          {"seconds_lost", f.seconds_lost()},
+          {"places", places}};
 }
 
 bool ParseCommon(Args* args, int argc, char** argv, const char* usage, int* code) {
@@ -106,6 +147,7 @@ nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
         {"truncated_tail", d.info.frames.truncated_tail},
         {"tail_reason", d.info.frames.tail_reason},
         {"refused", d.info.frames_refused}}},
+      {"damage", DamageJson(d.info.frames)},
       {"robot_time_s", {ToSeconds(d.info.first_robot_time), ToSeconds(d.info.last_robot_time)}},
       {"duration_s", ToSeconds(d.info.last_robot_time - d.info.first_robot_time)},
       {"scans", d.log.scans.size()},
@@ -125,11 +167,11 @@ nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
 }  // namespace
 
 int RunInfo(int argc, char** argv) {
-  Args args({"json", "help"}, {});
+  Args args({"json", "help", "strict"}, {});
   int code;
   if (!ParseCommon(&args, argc, argv, kInfoUsage, &code)) return code;
   Decoded d;
-  if ((code = DecodeOrFail(args.positional()[0], &d)) != kExitOk) return code;
+  if ((code = DecodeOrFail(args, args.positional()[0], &d, true)) != kExitOk) return code;
   const nlohmann::json j = InfoJson(args.positional()[0], d);
   if (args.Flag("json")) {
     std::cout << j.dump(2) << "\n";
@@ -139,6 +181,12 @@ int RunInfo(int argc, char** argv) {
               d.info.meta.format_version, d.info.meta.created_utc.c_str());
   std::printf("link %s, agent %s\n", d.info.meta.link.c_str(), d.info.meta.agent.c_str());
   std::printf("%s\n", d.info.ToString().c_str());
+  if (d.info.frames.damaged()) {
+    std::printf("DAMAGED: %s\n", d.info.frames.DamageSummary().c_str());
+    std::printf("  (`sweepscan-cli repair %s --out NEW` writes a clean copy)\n", args.positional()[0].c_str());
+  } else {
+    std::printf("no damage\n");
+  }
   std::printf("%.1f s of robot time: %zu scans (%zu samples), %zu IMU records, %zu wheel records\n",
               j["duration_s"].get<double>(), d.log.scans.size(), j["lidar_samples"].get<size_t>(),
               d.log.imu.size(), d.log.wheels.size());
@@ -148,7 +196,7 @@ int RunInfo(int argc, char** argv) {
 }
 
 int RunReconstruct(int argc, char** argv) {
-  Args args({"json", "help", "no-ekf", "no-deskew"}, {"out", "calibration", "pose-source"});
+  Args args({"json", "help", "no-ekf", "no-deskew", "strict"}, {"out", "calibration", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
   if (!args.Has("out")) {
@@ -166,7 +214,7 @@ int RunReconstruct(int argc, char** argv) {
   if (args.Flag("no-ekf")) options.pose.source = PoseSource::kOdometry;
   options.assembly.deskew = !args.Flag("no-deskew");
   Decoded d;
-  if ((code = DecodeOrFail(args.positional()[0], &d)) != kExitOk) return code;
+  if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
   options.calibration = d.info.meta.calibration;
   options.pose.initial_pose = SessionStartPose(d.info.meta);
   if (args.Has("calibration")) {
@@ -212,7 +260,7 @@ int RunReconstruct(int argc, char** argv) {
 }
 
 int RunExport(int argc, char** argv) {
-  Args args({"json", "help"}, {"out"});
+  Args args({"json", "help", "strict"}, {"out"});
   int code;
   if (!ParseCommon(&args, argc, argv, kExportUsage, &code)) return code;
   if (!args.Has("out")) {
@@ -220,50 +268,66 @@ int RunExport(int argc, char** argv) {
     return kExitBadInput;
   }
   Decoded d;
-  if ((code = DecodeOrFail(args.positional()[0], &d)) != kExitOk) return code;
+  if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
   const std::string dir = args.Get("out");
-  ::mkdir(dir.c_str(), 0755);
-  struct stat st;
-  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    PrintError(dir + ": cannot create folder");
+  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+    PrintError(dir + ": cannot create folder: " + std::strerror(errno));
     return kExitFailure;
   }
-  // Written to temporary names, renamed when complete.
-  auto write = [&](const std::string& name, const std::string& header, auto&& rows) -> bool {
-    const std::string path = dir + "/" + name, tmp = path + ".tmp";
-    FILE* f = std::fopen(tmp.c_str(), "w");
-    if (f == nullptr) return false;
-    std::fprintf(f, "%s\n", header.c_str());
-    rows(f);
-    const bool ok = std::fclose(f) == 0 && std::rename(tmp.c_str(), path.c_str()) == 0;
-    if (!ok) std::remove(tmp.c_str());
-    return ok;
+  struct stat st;
+  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    PrintError(dir + ": exists and is not a folder");
+    return kExitFailure;
+  }
+  // Each file through the checked writer: complete under its name, or absent.
+  auto write = [&](const std::string& name, const std::string& header, auto&& rows) -> Status {
+    CheckedFileWriter out;
+    Status s = out.Open(dir + "/" + name);
+    if (!s.ok()) return s;
+    std::string text = header + "\n";
+    auto flush = [&]() {
+      if (s.ok()) s = out.Write(text);
+      text.clear();
+    };
+    rows(&text, flush);
+    flush();
+    if (!s.ok()) return s;
+    return out.Commit();
   };
+  auto line = [](std::string* text, const char* format, auto... values) {
+    char buf[256];
+    const int n = std::snprintf(buf, sizeof(buf), format, values...);
+    text->append(buf, static_cast<size_t>(std::max(0, std::min(n, static_cast<int>(sizeof(buf)) - 1))));
+  };
+  constexpr size_t kChunk = 1 << 20;
   size_t samples = 0;
-  const bool ok =
-      write("lidar.csv", "robot_time_s,scan,beam,range_m,theta_rad",
-            [&](FILE* f) {
-              for (const auto& scan : d.log.scans) {
-                for (const auto& s : scan.samples) {
-                  std::fprintf(f, "%.9f,%u,%u,%.4f,%.6f\n", ToSeconds(s.time), scan.index, s.beam,
-                               s.range_m, s.theta);
-                  ++samples;
-                }
-              }
-            }) &&
-      write("imu.csv", "robot_time_s,gyro_z_rad_s,roll_rad,pitch_rad,yaw_rad",
-            [&](FILE* f) {
-              for (const auto& m : d.log.imu) {
-                std::fprintf(f, "%.9f,%.7f,%.7f,%.7f,%.7f\n", ToSeconds(m.time), m.gyro_z, m.roll, m.pitch, m.yaw);
-              }
-            }) &&
-      write("wheels.csv", "robot_time_s,left_mps,right_mps", [&](FILE* f) {
-        for (const auto& m : d.log.wheels) {
-          std::fprintf(f, "%.9f,%.6f,%.6f\n", ToSeconds(m.time), m.left_mps, m.right_mps);
-        }
-      });
-  if (!ok) {
-    PrintError(dir + ": cannot write the CSV files");
+  Status s = write("lidar.csv", "robot_time_s,scan,beam,range_m,theta_rad", [&](std::string* t, auto&& flush) {
+    for (const auto& scan : d.log.scans) {
+      for (const auto& m : scan.samples) {
+        line(t, "%.9f,%u,%u,%.4f,%.6f\n", ToSeconds(m.time), scan.index, m.beam, m.range_m, m.theta);
+        ++samples;
+        if (t->size() > kChunk) flush();
+      }
+    }
+  });
+  if (s.ok()) {
+    s = write("imu.csv", "robot_time_s,gyro_z_rad_s,roll_rad,pitch_rad,yaw_rad", [&](std::string* t, auto&& flush) {
+      for (const auto& m : d.log.imu) {
+        line(t, "%.9f,%.7f,%.7f,%.7f,%.7f\n", ToSeconds(m.time), m.gyro_z, m.roll, m.pitch, m.yaw);
+        if (t->size() > kChunk) flush();
+      }
+    });
+  }
+  if (s.ok()) {
+    s = write("wheels.csv", "robot_time_s,left_mps,right_mps", [&](std::string* t, auto&& flush) {
+      for (const auto& m : d.log.wheels) {
+        line(t, "%.9f,%.6f,%.6f\n", ToSeconds(m.time), m.left_mps, m.right_mps);
+        if (t->size() > kChunk) flush();
+      }
+    });
+  }
+  if (!s.ok()) {
+    PrintError(s.message());
     return kExitFailure;
   }
   const nlohmann::json report = {{"out", dir},
@@ -275,6 +339,115 @@ int RunExport(int argc, char** argv) {
   } else {
     std::printf("wrote %zu lidar samples, %zu IMU and %zu wheel records to %s/\n", samples, d.log.imu.size(),
                 d.log.wheels.size(), dir.c_str());
+  }
+  return kExitOk;
+}
+
+int RunRepair(int argc, char** argv) {
+  Args args({"json", "help"}, {"out"});
+  int code;
+  if (!ParseCommon(&args, argc, argv, kRepairUsage, &code)) return code;
+  if (!args.Has("out")) {
+    PrintError("repair needs --out NEW (a new session folder)");
+    return kExitBadInput;
+  }
+  const std::string in = args.positional()[0];
+  const std::string out = args.Get("out");
+  Session session;
+  Status s = LoadSession(in, hardware::DefaultSessionFramesOptions(), &session);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitBadInput;
+  }
+  std::vector<std::string> extra_files;  // Other regular files of the folder, copied as they are.
+  if (DIR* dp = ::opendir(in.c_str())) {
+    while (const dirent* e = ::readdir(dp)) {
+      const std::string name = e->d_name;
+      if (name == "." || name == ".." || name == kSessionFramesFile || IsTemporaryFileName(name)) continue;
+      struct stat fst;
+      if (::stat((in + "/" + name).c_str(), &fst) == 0 && S_ISREG(fst.st_mode)) extra_files.push_back(name);
+    }
+    ::closedir(dp);
+  }
+  struct stat st;
+  if (::stat(out.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) {
+      PrintError(out + ": exists and is not a folder");
+      return kExitBadInput;
+    }
+    DIR* dp = ::opendir(out.c_str());
+    bool empty = true;
+    if (dp != nullptr) {
+      while (const dirent* e = ::readdir(dp)) {
+        if (std::strcmp(e->d_name, ".") != 0 && std::strcmp(e->d_name, "..") != 0) empty = false;
+      }
+      ::closedir(dp);
+    }
+    if (!empty) {
+      PrintError(out + ": exists and is not empty; repair writes a new session folder");
+      return kExitBadInput;
+    }
+  } else if (::mkdir(out.c_str(), 0755) != 0) {
+    PrintError(out + ": cannot create folder: " + std::strerror(errno));
+    return kExitFailure;
+  }
+  // frames.bin: the header, then every intact record, through the checked writer.
+  CheckedFileWriter frames;
+  s = frames.Open(out + "/" + kSessionFramesFile);
+  std::string bytes(reinterpret_cast<const char*>(kSessionFramesMagic), sizeof(kSessionFramesMagic));
+  auto put32 = [&bytes](uint32_t v) {
+    for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+  };
+  put32(kSessionFormatVersion);
+  put32(0);
+  for (const SessionRecord& r : session.records) {
+    if (!s.ok()) break;
+    std::string rec;
+    const uint32_t n = static_cast<uint32_t>(r.bytes.size());
+    for (int i = 0; i < 4; ++i) rec.push_back(static_cast<char>((n >> (8 * i)) & 0xFF));
+    const uint64_t t = static_cast<uint64_t>(r.receive_time_ns);
+    for (int i = 0; i < 8; ++i) rec.push_back(static_cast<char>((t >> (8 * i)) & 0xFF));
+    rec.append(reinterpret_cast<const char*>(r.bytes.data()), r.bytes.size());
+    const uint32_t crc = Crc32c(reinterpret_cast<const uint8_t*>(rec.data()), rec.size());
+    for (int i = 0; i < 4; ++i) rec.push_back(static_cast<char>((crc >> (8 * i)) & 0xFF));
+    bytes += rec;
+    if (bytes.size() > (1u << 20)) {
+      s = frames.Write(bytes);
+      bytes.clear();
+    }
+  }
+  if (s.ok()) s = frames.Write(bytes);
+  if (s.ok()) s = frames.Commit();
+  for (const std::string& name : extra_files) {
+    if (!s.ok()) break;
+    std::ifstream f(in + "/" + name, std::ios::binary);
+    std::stringstream buffer;
+    buffer << f.rdbuf();
+    if (!f.good() && !f.eof()) {
+      s = Status::Error(in + "/" + name + ": read error");
+      break;
+    }
+    s = WriteFileChecked(out + "/" + name, buffer.str());
+  }
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitFailure;
+  }
+  const FramesLoadReport& f = session.frames;
+  const nlohmann::json report = {{"session", in},
+                                 {"out", out},
+                                 {"records_kept", f.records},
+                                 {"damage", DamageJson(f)},
+                                 {"torn_tail_bytes_dropped", f.truncated_tail ? f.tail_bytes_dropped : 0},
+                                 {"files_copied", extra_files}};
+  if (args.Flag("json")) {
+    std::cout << report.dump(2) << "\n";
+  } else {
+    std::printf("repaired %s -> %s: %llu records kept", in.c_str(), out.c_str(),
+                static_cast<unsigned long long>(f.records));
+    if (f.damaged()) std::printf("; left out %s", f.DamageSummary().c_str());
+    if (f.truncated_tail) std::printf("; torn tail of %llu bytes dropped", static_cast<unsigned long long>(f.tail_bytes_dropped));
+    std::printf("\n");
   }
   return kExitOk;
 }

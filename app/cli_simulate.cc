@@ -122,7 +122,9 @@ int RecordAndDecode(const Args& args, const SimulateRequest& request, sim::SimWo
   hardware::SimulateSessionReport sim_report;
   Status status = hardware::SimulateSession(request.config, *session_dir, sim_options, &sim_report);
   if (!status.ok()) {
-    PrintError(status.message() + (args.Flag("overwrite") ? "" : " (use --overwrite to replace it)"));
+    // --overwrite only helps when the session folder already holds a session.
+    const bool exists = status.message().find("not empty") != std::string::npos;
+    PrintError(status.message() + (exists && !args.Flag("overwrite") ? " (use --overwrite to replace it)" : ""));
     return kExitFailure;
   }
   hardware::SessionDecodeInfo info;

@@ -11,6 +11,7 @@
 #include <QCoreApplication>
 #include <QSocketNotifier>
 #include <cstdio>
+#include <exception>
 
 #include "app/agent_main_common.h"
 #include "hardware/agent/robot_agent.h"
@@ -29,7 +30,8 @@ int Fail(const QString& message) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int AgentMain(int argc, char** argv) {
   QCoreApplication app(argc, argv);
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan-robotd"));
   QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
@@ -111,4 +113,18 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   return sweepscan::app::RunAgentUntilSignal(&app, &agent);
+}
+}  // namespace
+
+// Nothing escapes: an exception becomes one line and exit 1 (options errors
+// are exit 2 with their own line, before the agent starts).
+int main(int argc, char** argv) {
+  try {
+    return AgentMain(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: unexpected failure: %s\n", "sweepscan-robotd", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "%s: error: unexpected failure\n", "sweepscan-robotd");
+  }
+  return 1;
 }

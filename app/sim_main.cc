@@ -12,6 +12,7 @@
 #include <QCoreApplication>
 #include <QSocketNotifier>
 #include <cstdio>
+#include <exception>
 #include <memory>
 
 #include "app/agent_main_common.h"
@@ -37,7 +38,8 @@ int Fail(const QString& message) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int AgentMain(int argc, char** argv) {
   QCoreApplication app(argc, argv);
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan-sim"));
   QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
@@ -85,7 +87,12 @@ int main(int argc, char** argv) {
     config.link = RobotAgentConfig::LinkKind::kPty;
     config.agent.require_auth = false;
   }
-  if (!common.Apply(parser, !parser.isSet(pty), &config, &error)) return Fail(error);
+  // The simulator only warns about a key file others may read (it is a test
+  // and demo tool); sweepscan-robotd refuses one.
+  if (!common.Apply(parser, !parser.isSet(pty), &config, &error,
+                    sweepscan::hardware::KeyFilePermissions::kWarn)) {
+    return Fail(error);
+  }
 
   const SimDevices::Mode mode =
       parser.isSet(scripted) ? SimDevices::Mode::kScripted : SimDevices::Mode::kCommanded;
@@ -103,4 +110,18 @@ int main(int argc, char** argv) {
   std::fflush(stdout);
 
   return sweepscan::app::RunAgentUntilSignal(&app, &agent);
+}
+}  // namespace
+
+// Nothing escapes: an exception becomes one line and exit 1 (options errors
+// are exit 2 with their own line, before the agent starts).
+int main(int argc, char** argv) {
+  try {
+    return AgentMain(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: unexpected failure: %s\n", "sweepscan-sim", e.what());
+  } catch (...) {
+    std::fprintf(stderr, "%s: error: unexpected failure\n", "sweepscan-sim");
+  }
+  return 1;
 }

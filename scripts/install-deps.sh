@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libceres-dev libpcl-dev libvtk9-qt-dev nlohmann-json3-dev
-  libnanoflann-dev libtbb-dev
+  libnanoflann-dev libtbb-dev libssl-dev
   qtbase5-dev libqt5serialport5-dev
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-14 libclang-rt-14-dev

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/common/checked_file.h"
 #include "core/common/json_reader.h"
 #include "core/common/status.h"
 
@@ -33,6 +34,8 @@ inline Status ParseJsonNoThrow(const std::string& text, const std::string& sourc
 }
 
 inline Status ReadText(const std::string& path, std::string* text) {
+  const Status regular = CheckRegularFile(path);  // A folder is a clear error, not an empty text.
+  if (!regular.ok()) return regular;
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::Error(path + ": cannot open for reading");
   std::stringstream buffer;

@@ -10,7 +10,12 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/common/checked_file.h"
 
 namespace sweepscan {
 struct EIGEN_ALIGN16 PclSweepPoint {
@@ -44,9 +49,272 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 // adds; errors are reported through our Status instead.
 void QuietPcl() { pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS); }
 
-bool FileReadable(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return static_cast<bool>(f);
+// Little-endian appends for the hand-written binary bodies (x86 and ARM
+// Linux are little-endian; PLY says so in its header, PCD assumes the host).
+template <typename T>
+void Put(std::string* out, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  out->append(b, sizeof(T));
+}
+
+// One vertex in file order: x y z range (float), time (double), scan (u32),
+// beam (u16), source, flags (u8): 32 bytes, packed.
+constexpr size_t kRecordSize = 4 * 4 + 8 + 4 + 2 + 1 + 1;
+
+void AppendRecord(const CloudPoint& p, std::string* out) {
+  Put<float>(out, p.x);
+  Put<float>(out, p.y);
+  Put<float>(out, p.z);
+  Put<float>(out, p.range_m);
+  Put<double>(out, static_cast<double>(p.time_ns) * 1e-9);
+  Put<std::uint32_t>(out, p.scan);
+  Put<std::uint16_t>(out, p.beam);
+  Put<std::uint8_t>(out, p.pose_source);
+  Put<std::uint8_t>(out, p.flags);
+}
+
+std::string PlyHeader(size_t n) {
+  return "ply\nformat binary_little_endian 1.0\ncomment sweepscan cloud (docs/cloud-format.md)\n"
+         "element vertex " +
+         std::to_string(n) +
+         "\nproperty float x\nproperty float y\nproperty float z\nproperty float range\n"
+         "property double time\nproperty uint scan\nproperty ushort beam\nproperty uchar source\n"
+         "property uchar flags\nend_header\n";
+}
+
+std::string PcdHeader(size_t n) {
+  return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+         "FIELDS x y z range time scan beam source flags\nSIZE 4 4 4 4 8 4 2 1 1\n"
+         "TYPE F F F F F U U U U\nCOUNT 1 1 1 1 1 1 1 1 1\nWIDTH " +
+         std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) +
+         "\nDATA binary\n";
+}
+
+// ---------------------------------------------------------------------------
+// Header validation before PCL allocates anything: the counts a header
+// declares must fit the bytes that follow it.
+
+std::vector<std::string> SplitWords(const std::string& line) {
+  std::vector<std::string> words;
+  std::istringstream in(line);
+  std::string w;
+  while (in >> w) words.push_back(w);
+  return words;
+}
+
+// A plain non-negative decimal (no sign, no exponent) of at most 15 digits.
+bool ParseCount(const std::string& s, uint64_t* out) {
+  if (s.empty() || s.size() > 15 || s.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
+  }
+  *out = std::stoull(s);
+  return true;
+}
+
+int PlyTypeSize(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
+      t == "float32") {
+    return 4;
+  }
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+// Reads the header (at most 64 KiB); *data_offset is the first data byte.
+Status ReadHeaderLines(const std::string& path, const char* end_marker,
+                       std::vector<std::string>* lines, uint64_t* data_offset) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open for reading");
+  std::string head(64 * 1024, '\0');
+  in.read(&head[0], static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  size_t pos = 0;
+  while (pos < head.size()) {
+    const size_t nl = head.find('\n', pos);
+    if (nl == std::string::npos) break;
+    std::string line = head.substr(pos, nl - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = nl + 1;
+    lines->push_back(line);
+    const std::vector<std::string> w = SplitWords(line);
+    if (!w.empty() && w[0] == end_marker) {
+      *data_offset = pos;
+      return Status::Ok();
+    }
+  }
+  return Status::Error(path + ": not a readable point cloud (no " + end_marker +
+                       " line within the first 64 KiB)");
+}
+
+Status ValidatePly(const std::string& path, uint64_t file_size) {
+  std::vector<std::string> lines;
+  uint64_t data_offset = 0;
+  Status s = ReadHeaderLines(path, "end_header", &lines, &data_offset);
+  if (!s.ok()) return s;
+  auto bad = [&](const std::string& why) {
+    return Status::Error(path + ": not a readable point cloud (PLY header: " + why + ")");
+  };
+  if (lines.empty() || lines[0] != "ply") return bad("does not start with 'ply'");
+  std::string format;
+  struct Element {
+    std::string name;
+    uint64_t count = 0;
+    uint64_t fixed_bytes = 0;     // Per row, fixed-size properties.
+    uint64_t min_list_bytes = 0;  // Per row, the count fields of list properties.
+    int properties = 0;
+  };
+  std::vector<Element> elements;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> w = SplitWords(lines[i]);
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info" || w[0] == "end_header") continue;
+    if (w[0] == "format") {
+      if (w.size() < 2) return bad("format line without a format");
+      format = w[1];
+    } else if (w[0] == "element") {
+      Element e;
+      if (w.size() != 3 || !ParseCount(w[2], &e.count)) {
+        return bad("'" + lines[i] + "' has no valid non-negative count");
+      }
+      e.name = w[1];
+      elements.push_back(e);
+    } else if (w[0] == "property") {
+      if (elements.empty()) return bad("property before any element");
+      Element& e = elements.back();
+      ++e.properties;
+      if (w.size() >= 2 && w[1] == "list") {
+        const int count_size = w.size() == 5 ? PlyTypeSize(w[2]) : 0;
+        if (count_size == 0 || PlyTypeSize(w[3]) == 0) return bad("bad list property");
+        e.min_list_bytes += static_cast<uint64_t>(count_size);
+      } else {
+        const int size = w.size() == 3 ? PlyTypeSize(w[1]) : 0;
+        if (size == 0) return bad("bad property '" + lines[i] + "'");
+        e.fixed_bytes += static_cast<uint64_t>(size);
+      }
+    } else {
+      return bad("unknown header line '" + lines[i] + "'");
+    }
+  }
+  if (format.empty()) return bad("no format line");
+  const uint64_t data_size = file_size - data_offset;
+  const std::string declared = std::to_string(data_size) + " bytes follow the header";
+  if (format == "ascii") {
+    // Every value needs at least one character and a separator.
+    for (const Element& e : elements) {
+      const uint64_t per_row = 2 * static_cast<uint64_t>(std::max(1, e.properties));
+      if (e.count > data_size / per_row) {
+        return bad("element " + e.name + " declares " + std::to_string(e.count) +
+                   " rows but only " + declared);
+      }
+    }
+    return Status::Ok();
+  }
+  if (format != "binary_little_endian" && format != "binary_big_endian") {
+    return bad("unknown format '" + format + "'");
+  }
+  uint64_t expected = 0;
+  bool exact = true;
+  for (const Element& e : elements) {
+    const uint64_t row = e.fixed_bytes + e.min_list_bytes;
+    if (e.min_list_bytes > 0) exact = false;
+    if (row > 0 && e.count > data_size / row) {
+      return bad("element " + e.name + " declares " + std::to_string(e.count) + " rows of " +
+                 std::to_string(row) + " bytes but only " + declared);
+    }
+    expected += e.count * row;
+    if (expected > data_size) {
+      return bad("the elements need " + std::to_string(expected) + " bytes but only " + declared);
+    }
+  }
+  if (exact && expected != data_size) {
+    return bad("the elements need " + std::to_string(expected) + " bytes but " + declared +
+               " (trailing junk or a cut file)");
+  }
+  return Status::Ok();
+}
+
+Status ValidatePcd(const std::string& path, uint64_t file_size) {
+  std::vector<std::string> lines;
+  uint64_t data_offset = 0;
+  Status s = ReadHeaderLines(path, "DATA", &lines, &data_offset);
+  if (!s.ok()) return s;
+  auto bad = [&](const std::string& why) {
+    return Status::Error(path + ": not a readable point cloud (PCD header: " + why + ")");
+  };
+  std::vector<uint64_t> sizes, counts;
+  uint64_t width = 0, height = 1, points = 0;
+  bool have_points = false, have_width = false;
+  std::string data;
+  for (const std::string& line : lines) {
+    const std::vector<std::string> w = SplitWords(line);
+    if (w.empty() || w[0][0] == '#') continue;
+    auto numbers = [&](std::vector<uint64_t>* out) {
+      for (size_t i = 1; i < w.size(); ++i) {
+        uint64_t v;
+        if (!ParseCount(w[i], &v)) return false;
+        out->push_back(v);
+      }
+      return true;
+    };
+    if (w[0] == "SIZE") {
+      if (!numbers(&sizes)) return bad("bad SIZE");
+    } else if (w[0] == "COUNT") {
+      if (!numbers(&counts)) return bad("bad COUNT");
+    } else if (w[0] == "WIDTH") {
+      if (w.size() != 2 || !ParseCount(w[1], &width)) return bad("bad WIDTH");
+      have_width = true;
+    } else if (w[0] == "HEIGHT") {
+      if (w.size() != 2 || !ParseCount(w[1], &height)) return bad("bad HEIGHT");
+    } else if (w[0] == "POINTS") {
+      if (w.size() != 2 || !ParseCount(w[1], &points)) return bad("bad POINTS");
+      have_points = true;
+    } else if (w[0] == "DATA") {
+      if (w.size() != 2) return bad("bad DATA");
+      data = w[1];
+    }
+  }
+  if (sizes.empty()) return bad("no SIZE line");
+  if (counts.empty()) counts.assign(sizes.size(), 1);
+  if (counts.size() != sizes.size()) return bad("SIZE and COUNT differ in length");
+  if (!have_points) {
+    if (!have_width) return bad("neither POINTS nor WIDTH");
+    points = width * height;
+  }
+  if (have_width && width * height != points) return bad("WIDTH x HEIGHT differs from POINTS");
+  uint64_t point_size = 0;
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    if (sizes[i] != 1 && sizes[i] != 2 && sizes[i] != 4 && sizes[i] != 8) return bad("bad SIZE");
+    if (counts[i] > (1u << 20)) return bad("COUNT too large");
+    point_size += sizes[i] * counts[i];
+  }
+  const uint64_t data_size = file_size - data_offset;
+  const std::string declared = std::to_string(data_size) + " bytes follow the header";
+  if (data == "ascii") {
+    if (points > data_size / 2) {
+      return bad("POINTS " + std::to_string(points) + " but only " + declared);
+    }
+    return Status::Ok();
+  }
+  if (data == "binary") {
+    if (point_size == 0 || points > data_size / point_size || points * point_size != data_size) {
+      return bad("POINTS " + std::to_string(points) + " of " + std::to_string(point_size) +
+                 " bytes but " + declared);
+    }
+    return Status::Ok();
+  }
+  if (data == "binary_compressed") {
+    if (data_size < 8) return bad("compressed data shorter than its 8-byte sizes");
+    // PCL decompresses into points x point_size bytes: bound it by LZF's
+    // best ratio (about 1:100) so a forged count cannot exhaust memory.
+    if (point_size == 0 || points / 128 > data_size / point_size) {
+      return bad("POINTS " + std::to_string(points) + " for only " + declared +
+                 " of compressed data");
+    }
+    return Status::Ok();
+  }
+  return bad("unknown DATA '" + data + "'");
 }
 
 }  // namespace
@@ -56,56 +324,52 @@ Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points)
   if (!ply && !EndsWith(path, ".pcd")) {
     return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
   }
-  pcl::PointCloud<PclSweepPoint> cloud;
-  cloud.resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const CloudPoint& p = points[i];
-    PclSweepPoint& q = cloud[i];
-    q.x = p.x;
-    q.y = p.y;
-    q.z = p.z;
-    q.range = p.range_m;
-    q.time = static_cast<double>(p.time_ns) * 1e-9;
-    q.scan = p.scan;
-    q.beam = p.beam;
-    q.source = p.pose_source;
-    q.flags = p.flags;
+  // Written by hand through the checked writer: PCL's PLY writer reports
+  // success after a failed write (on a full disk it left a short file whose
+  // header promised every point) and its PCD writer throws.
+  CheckedFileWriter out;
+  Status s = out.Open(path);
+  if (!s.ok()) return s;
+  s = out.Write(ply ? PlyHeader(points.size()) : PcdHeader(points.size()));
+  std::string chunk;
+  chunk.reserve(4096 * kRecordSize);
+  for (size_t i = 0; i < points.size() && s.ok(); ++i) {
+    AppendRecord(points[i], &chunk);
+    if (chunk.size() >= 4096 * kRecordSize || i + 1 == points.size()) {
+      s = out.Write(chunk);
+      chunk.clear();
+    }
   }
-  cloud.width = static_cast<std::uint32_t>(points.size());
-  cloud.height = 1;
-  cloud.is_dense = true;
-  // PCL's writers pick the format from our call, not the file name, so the
-  // temporary file keeps the real extension's writer.
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  int rc;
-  if (ply) {
-    rc = pcl::io::savePLYFileBinary(tmp, cloud);
-  } else {
-    rc = pcl::io::savePCDFileBinary(tmp, cloud);
-  }
-  if (rc != 0) {
-    std::remove(tmp.c_str());
-    return Status::Error(path + ": cannot write cloud");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    return Status::Error(path + ": cannot replace file");
-  }
-  return Status::Ok();
+  if (!s.ok()) return s;  // The writer removes its temporary.
+  return out.Commit();
+}
+
+Status ValidateCloudFile(const std::string& path) {
+  uint64_t size = 0;
+  const Status regular = CheckRegularFile(path, &size);
+  if (!regular.ok()) return regular;
+  if (EndsWith(path, ".ply")) return ValidatePly(path, size);
+  if (EndsWith(path, ".pcd")) return ValidatePcd(path, size);
+  return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
 }
 
 // Reads a PLY or PCD file (by extension) into a PCL cloud of PointT.
 template <typename PointT>
 Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
-  if (!FileReadable(path)) return Status::Error(path + ": cannot open for reading");
+  const Status valid = ValidateCloudFile(path);
+  if (!valid.ok()) return valid;
   QuietPcl();
   int rc = -1;
-  if (EndsWith(path, ".ply")) {
-    rc = pcl::io::loadPLYFile(path, *cloud);
-  } else if (EndsWith(path, ".pcd")) {
-    rc = pcl::io::loadPCDFile(path, *cloud);
-  } else {
-    return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
+  try {
+    if (EndsWith(path, ".ply")) {
+      rc = pcl::io::loadPLYFile(path, *cloud);
+    } else {
+      rc = pcl::io::loadPCDFile(path, *cloud);
+    }
+  } catch (const std::bad_alloc&) {
+    return Status::Error(path + ": not a readable point cloud (too large for memory)");
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": not a readable point cloud (" + e.what() + ")");
   }
   if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
   return Status::Ok();

@@ -16,10 +16,15 @@
 
 namespace sweepscan {
 
-// Chooses the format from the extension (.ply or .pcd). Written atomically
-// (temporary file, then rename).
+// Chooses the format from the extension (.ply or .pcd). Written through the
+// checked writer (core/common/checked_file.h): every write checked, fsync,
+// rename only when complete; a failure names the file and the OS error.
 Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points);
-// Reads the positions of any PLY or PCD with x, y, z fields.
+// Checks that PATH is a regular file whose PLY / PCD header is sane and
+// declares exactly as many bytes as follow it (binary) or no more rows than
+// the bytes could hold (ASCII), before anything is allocated.
+Status ValidateCloudFile(const std::string& path);
+// Reads the positions of any PLY or PCD with x, y, z fields (validated first).
 Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points);
 // Reads a cloud written by SaveCloud, with all attributes.
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points);

@@ -1,5 +1,7 @@
 #include "core/common/json_reader.h"
 
+#include "core/common/checked_file.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -130,6 +132,8 @@ Status ParseJson(const std::string& text, const std::string& source, nlohmann::j
 }
 
 Status ReadJsonFile(const std::string& path, nlohmann::json* out) {
+  const Status regular = CheckRegularFile(path);
+  if (!regular.ok()) return regular;
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::Error(path + ": cannot open for reading");
   std::stringstream buffer;
@@ -138,28 +142,7 @@ Status ReadJsonFile(const std::string& path, nlohmann::json* out) {
 }
 
 Status WriteFileAtomically(const std::string& path, const std::string& contents) {
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return Status::Error(path + ": cannot create temporary file " + tmp);
-  size_t done = 0;
-  while (done < contents.size()) {
-    const ssize_t n = ::write(fd, contents.data() + done, contents.size() - done);
-    if (n <= 0) {
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return Status::Error(path + ": write failed");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    ::unlink(tmp.c_str());
-    return Status::Error(path + ": flush to disk failed");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    ::unlink(tmp.c_str());
-    return Status::Error(path + ": cannot replace file");
-  }
-  return Status::Ok();
+  return WriteFileChecked(path, contents);
 }
 
 }  // namespace sweepscan

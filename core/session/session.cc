@@ -7,12 +7,15 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
 #include <sstream>
 
+#include "core/common/checked_file.h"
 #include "core/common/crc32c.h"
 #include "core/common/json_reader.h"
 
@@ -218,16 +221,96 @@ Status WriteSessionMeta(const std::string& path, const SessionMeta& meta) {
 // ---------------------------------------------------------------------------
 // frames.bin reading
 
+double FramesDamage::SecondsLost() const {
+  if (!has_before || !has_after || time_after_ns < time_before_ns) return 0.0;
+  return static_cast<double>(time_after_ns - time_before_ns) * 1e-9;
+}
+
+uint64_t FramesLoadReport::damaged_bytes() const {
+  uint64_t n = 0;
+  for (const FramesDamage& d : damage) n += d.bytes;
+  return n;
+}
+
+double FramesLoadReport::seconds_lost() const {
+  double s = 0.0;
+  for (const FramesDamage& d : damage) s += d.SecondsLost();
+  return s;
+}
+
+std::string FramesLoadReport::DamageSummary() const {
+  if (damage.empty()) return std::string();
+  char buf[160];
+  std::ostringstream s;
+  std::snprintf(buf, sizeof(buf), "%llu damaged record%s skipped (%llu bytes; about %.2f s of data lost): ",
+                static_cast<unsigned long long>(corrupt_records_skipped),
+                corrupt_records_skipped == 1 ? "" : "s",
+                static_cast<unsigned long long>(damaged_bytes()), seconds_lost());
+  s << buf;
+  const size_t shown = std::min<size_t>(damage.size(), 5);
+  for (size_t i = 0; i < shown; ++i) {
+    const FramesDamage& d = damage[i];
+    if (i > 0) s << ", ";
+    s << RecordAt(d.first_record, d.offset) << " (" << d.reason;
+    if (d.records > 1) s << ", " << d.records << " records";
+    if (d.has_before) {
+      std::snprintf(buf, sizeof(buf), ", %.2f s at %.1f s into the recording", d.SecondsLost(),
+                    static_cast<double>(d.time_before_ns - first_time_ns) * 1e-9);
+      s << buf;
+    } else {
+      s << ", at the start of the recording";
+    }
+    s << ")";
+  }
+  if (damage.size() > shown) s << " and " << damage.size() - shown << " more places";
+  return s.str();
+}
+
 std::string FramesLoadReport::ToString() const {
   std::ostringstream s;
   s << "format " << format_version << ", " << records << " records, " << record_bytes
     << " frame bytes, file " << file_bytes << " bytes";
   if (truncated_tail)
     s << "; torn tail dropped (" << tail_bytes_dropped << " bytes: " << tail_reason << ")";
-  if (corrupt_records_skipped > 0)
-    s << "; " << corrupt_records_skipped << " corrupt records skipped";
+  if (corrupt_records_skipped > 0) s << "; " << DamageSummary();
   return s.str();
 }
+
+namespace {
+
+constexpr size_t kRecordHeader = 12;  // u32 length + i64 receive time.
+
+// True when an intact record starts at `pos`: plausible length, fits, CRC good.
+bool IntactRecordAt(const uint8_t* data, size_t n, size_t pos) {
+  if (n - pos < kSessionRecordOverhead) return false;
+  const uint32_t length = GetU32(data + pos);
+  if (length > kSessionMaxRecordBytes || n - pos < kSessionRecordOverhead + length) return false;
+  return Crc32c(data + pos, kRecordHeader + length) == GetU32(data + pos + kRecordHeader + length);
+}
+
+// The next position after `pos` where an intact record starts; n if none.
+size_t NextIntactRecord(const uint8_t* data, size_t n, size_t pos) {
+  for (size_t q = pos + 1; q + kSessionRecordOverhead <= n; ++q) {
+    if (IntactRecordAt(data, n, q)) return q;
+  }
+  return n;
+}
+
+// How many records the damaged bytes [pos, end) held, from their length
+// fields while those are usable (at least 1).
+uint64_t RecordsIn(const uint8_t* data, size_t pos, size_t end) {
+  uint64_t count = 0;
+  while (pos < end) {
+    ++count;
+    if (end - pos < kSessionRecordOverhead) break;
+    const uint32_t length = GetU32(data + pos);
+    if (length > kSessionMaxRecordBytes || end - pos < kSessionRecordOverhead + length) break;
+    pos += kSessionRecordOverhead + length;
+  }
+  return std::max<uint64_t>(count, 1);
+}
+
+}  // namespace
 
 Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& source,
                             const FramesLoadOptions& options, std::vector<SessionRecord>* records,
@@ -253,6 +336,39 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
   }
   size_t pos = kSessionFramesHeaderSize;
   uint64_t index = 0;
+  bool have_good = false;
+  int64_t last_good_time = 0;
+  // Skips damage starting at `pos` up to the next intact record (or the
+  // end): the record's own length when it leads to an intact record (a
+  // flipped byte in the payload or CRC), else a search byte by byte (a
+  // damaged length field).
+  auto skip_damage = [&](const std::string& why) {
+    size_t next = n;
+    const uint32_t length = GetU32(data + pos);
+    const size_t by_length = pos + kSessionRecordOverhead + length;
+    if (length <= kSessionMaxRecordBytes && by_length <= n &&
+        (by_length == n || IntactRecordAt(data, n, by_length))) {
+      next = by_length;
+    } else {
+      next = NextIntactRecord(data, n, pos);
+    }
+    FramesDamage d;
+    d.first_record = index;
+    d.offset = pos;
+    d.bytes = next - pos;
+    d.records = RecordsIn(data, pos, next);
+    d.reason = why;
+    d.has_before = have_good;
+    d.time_before_ns = last_good_time;
+    if (next < n) {
+      d.has_after = true;
+      d.time_after_ns = GetI64(data + next + 4);
+    }
+    rep.corrupt_records_skipped += d.records;
+    index += d.records;
+    rep.damage.push_back(std::move(d));
+    pos = next;
+  };
   while (pos < n) {
     const size_t left = n - pos;
     auto torn = [&](const std::string& why) {
@@ -266,12 +382,22 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
     }
     const uint32_t length = GetU32(data + pos);
     if (length > kSessionMaxRecordBytes) {
-      return Status::Error(source + ": " + RecordAt(index, pos) + ": absurd length " +
-                           std::to_string(length) + " (limit " +
-                           std::to_string(kSessionMaxRecordBytes) + ")");
+      const std::string why = "absurd length " + std::to_string(length) + " (limit " +
+                              std::to_string(kSessionMaxRecordBytes) + ")";
+      if (!options.skip_corrupt_records) {
+        return Status::Error(source + ": " + RecordAt(index, pos) + ": " + why);
+      }
+      skip_damage(why);
+      continue;
     }
     const size_t total = kSessionRecordOverhead + length;
     if (left < total) {
+      // Either a torn tail or a damaged length field in the middle: with
+      // skipping on, an intact record further on tells them apart.
+      if (options.skip_corrupt_records && NextIntactRecord(data, n, pos) < n) {
+        skip_damage("length " + std::to_string(length) + " runs past the end of the file");
+        continue;
+      }
       torn("needs " + std::to_string(total) + " bytes, " + std::to_string(left) + " left");
       break;
     }
@@ -286,15 +412,17 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
       if (!options.skip_corrupt_records) {
         return Status::Error(source + ": " + RecordAt(index, pos) + ": CRC mismatch");
       }
-      ++rep.corrupt_records_skipped;
-      pos += total;
-      ++index;
+      skip_damage("CRC mismatch");
       continue;
     }
     SessionRecord r;
     r.receive_time_ns = GetI64(data + pos + 4);
     r.bytes.assign(data + pos + 12, data + pos + 12 + length);
     rep.record_bytes += length;
+    if (!have_good) rep.first_time_ns = r.receive_time_ns;
+    rep.last_time_ns = r.receive_time_ns;
+    have_good = true;
+    last_good_time = r.receive_time_ns;
     records->push_back(std::move(r));
     pos += total;
     ++index;
@@ -307,10 +435,24 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
 
 Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
                       std::vector<SessionRecord>* records, FramesLoadReport* report) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open for reading");
-  std::vector<uint8_t> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return Status::Error(path + ": read error");
+  const Status regular = CheckRegularFile(path);  // A folder named frames.bin is a clear error.
+  if (!regular.ok()) return regular;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::Error(Errno(path + ": cannot open for reading"));
+  std::vector<uint8_t> data;
+  uint8_t chunk[1 << 16];
+  for (;;) {
+    const ssize_t k = ::read(fd, chunk, sizeof(chunk));
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) {
+      const Status s = Status::Error(Errno(path + ": read error"));
+      ::close(fd);
+      return s;
+    }
+    if (k == 0) break;
+    data.insert(data.end(), chunk, chunk + k);
+  }
+  ::close(fd);
   return LoadFramesFromMemory(data.data(), data.size(), path, options, records, report);
 }
 

@@ -85,11 +85,30 @@ struct SessionRecord {
 };
 
 struct FramesLoadOptions {
-  // false (default): a corrupt record before the end of the file is an error.
-  // true: it is skipped (counted in corrupt_records_skipped) when its length
-  // field is plausible, so the next record can be found; an absurd length is
-  // still an error (nothing after it can be located).
+  // false (default here; `--strict` in the CLI): a corrupt record before the
+  // end of the file is an error.
+  // true (what the CLI and the app use by default): the damaged bytes are
+  // skipped up to the next intact record (found by its CRC, whatever the
+  // damaged length field says) and described in FramesLoadReport::damage.
   bool skip_corrupt_records = false;
+};
+
+// One damaged stretch of frames.bin that was skipped.
+struct FramesDamage {
+  uint64_t first_record = 0;   // Index of the first record lost.
+  uint64_t records = 0;        // Records lost (read from their length fields where usable).
+  uint64_t offset = 0;         // Byte offset of the damage in the file.
+  uint64_t bytes = 0;          // Bytes skipped.
+  std::string reason;          // "CRC mismatch", "absurd length 4294967295".
+  // Receive times (ns, workstation wall clock) of the intact records around
+  // it; has_before / has_after are false at the start / end of the file.
+  bool has_before = false;
+  bool has_after = false;
+  int64_t time_before_ns = 0;
+  int64_t time_after_ns = 0;
+
+  // Seconds of data lost: the gap between the intact neighbours (0 if unknown).
+  double SecondsLost() const;
 };
 
 struct FramesLoadReport {
@@ -101,8 +120,18 @@ struct FramesLoadReport {
   bool truncated_tail = false;  // A torn final record was dropped.
   uint64_t tail_bytes_dropped = 0;
   std::string tail_reason;  // e.g. "record 812 at byte 53211: needs 96 bytes, 40 left".
-  uint64_t corrupt_records_skipped = 0;
+  uint64_t corrupt_records_skipped = 0;  // Sum of damage[i].records.
+  std::vector<FramesDamage> damage;      // Skipped damaged stretches, in file order.
+  int64_t first_time_ns = 0;             // Receive times of the first and last good record.
+  int64_t last_time_ns = 0;
 
+  bool damaged() const { return !damage.empty(); }
+  uint64_t damaged_bytes() const;
+  double seconds_lost() const;
+  // One line: "3 damaged records skipped (252 bytes; about 0.30 s of data lost):
+  // record 12 at byte 4567 (CRC mismatch, 0.10 s at 1.2 s into the recording), ..."
+  // (at most 5 places listed). Empty when not damaged.
+  std::string DamageSummary() const;
   std::string ToString() const;
 };
 

@@ -6,7 +6,6 @@
 #include <variant>
 
 #include "hardware/codecs/x4_codec.h"
-#include "hardware/link/hmac_sha256.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -23,7 +22,117 @@ double StepToward(double value, double target, double step) {
 
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
+LinkDecoderOptions ClientDecoderOptions(const AgentOptions& options) {
+  LinkDecoderOptions decoder_options;
+  decoder_options.max_payload = options.max_client_payload;
+  decoder_options.max_work_per_feed = options.max_client_work_per_call;
+  return decoder_options;
+}
+
+void Append(const std::vector<uint8_t>& bytes, std::vector<uint8_t>* out) {
+  out->insert(out->end(), bytes.begin(), bytes.end());
+}
+
+std::string OldVersionReason(uint8_t version) {
+  return "protocol version " + std::to_string(version) +
+         " is not supported: this agent speaks version " +
+         std::to_string(kLinkProtocolVersion) + "; update the workstation";
+}
+
 }  // namespace
+
+std::vector<uint8_t> EncodeOldVersionRefusal(Time now, uint8_t version, const std::string& reason) {
+  std::vector<uint8_t> body;
+  EncodeLinkPayload(AuthResult{AuthOutcome::kDenied, reason}, &body);
+  std::vector<uint8_t> out;
+  AppendRawLinkFrame(LinkSender::kAgent, 0, now, static_cast<uint8_t>(LinkMessageType::kAuthResult),
+                     body.data(), body.size(), &out, nullptr, version);
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// AgentHandshake
+
+AgentHandshake::AgentHandshake(const AgentOptions& options, Time now, std::vector<uint8_t>* out)
+    : options_(options), decoder_(ClientDecoderOptions(options)), connected_at_(now) {
+  Hello hello;
+  hello.auth_required = true;
+  hello.name = options_.name;
+  hello.devices = options_.devices;
+  Append(encoder_.Encode(now, hello), out);
+  const auto& source = options_.random_source;
+  const bool nonce_ok =
+      source ? source(nonce_.data(), nonce_.size()) : FillRandomBytes(nonce_.data(), nonce_.size());
+  if (!nonce_ok) {
+    // Never fall back to a guessable nonce: a replayed response would pass.
+    Deny(now, "agent has no random source", out);
+    return;
+  }
+  AuthChallenge challenge;
+  challenge.nonce = nonce_;
+  Append(encoder_.Encode(now, challenge), out);
+}
+
+void AgentHandshake::Deny(Time now, const std::string& reason, std::vector<uint8_t>* out,
+                          uint8_t version) {
+  state_ = State::kDenied;
+  denial_ = reason;
+  if (version == kLinkProtocolVersion) {
+    Append(encoder_.Encode(now, AuthResult{AuthOutcome::kDenied, reason}), out);
+  } else {
+    Append(EncodeOldVersionRefusal(now, version, reason), out);
+  }
+}
+
+AgentHandshake::State AgentHandshake::OnBytes(const uint8_t* data, size_t n, Time now,
+                                              std::vector<uint8_t>* out) {
+  if (state_ != State::kPending) return state_;
+  std::vector<LinkMessage> messages;
+  decoder_.Feed(data, n, &messages);
+  for (size_t i = 0; i < messages.size(); ++i) {
+    const LinkMessage& m = messages[i];
+    if (m.header.sender != LinkSender::kClient) continue;
+    if (m.header.version < kLinkProtocolVersion) {
+      Deny(now, OldVersionReason(m.header.version), out, m.header.version);
+      return state_;
+    }
+    if (const auto* hello = std::get_if<Hello>(&m.payload)) {
+      client_name_ = hello->name;
+      if (hello->protocol_version < kLinkProtocolVersion) {
+        Deny(now, OldVersionReason(static_cast<uint8_t>(hello->protocol_version)), out);
+        return state_;
+      }
+    } else if (const auto* response = std::get_if<AuthResponse>(&m.payload)) {
+      const Sha256Digest expected = LinkAuthMac(options_.key, nonce_, response->client_nonce);
+      if (!ConstantTimeEqual(expected.data(), response->mac.data(), kLinkMacSize)) {
+        auth_failure_ = true;
+        Deny(now, "authentication failed", out);
+        return state_;
+      }
+      session_key_ = LinkDeriveSessionKey(options_.key, nonce_, response->client_nonce);
+      last_client_sequence_ = m.header.sequence;
+      state_ = State::kAuthenticated;
+      pending_.assign(std::make_move_iterator(messages.begin() + static_cast<std::ptrdiff_t>(i) + 1),
+                      std::make_move_iterator(messages.end()));
+      return state_;
+    } else if (std::holds_alternative<EmergencyStop>(m.payload)) {
+      estop_ = true;  // Stopping is always allowed; no ack before authentication.
+    }
+    // Anything else before authentication: no effect and no answer.
+  }
+  if (decoder_.BufferedBytes() > options_.max_client_backlog) Deny(now, "input flood", out);
+  return state_;
+}
+
+AgentHandshake::State AgentHandshake::Tick(Time now, std::vector<uint8_t>* out) {
+  if (state_ == State::kPending && now - connected_at_ >= options_.auth_timeout) {
+    Deny(now, "authentication timeout", out);
+  }
+  return state_;
+}
+
+// ---------------------------------------------------------------------------
+// AgentCore
 
 bool AgentOptions::IsValid(std::string* error) const {
   auto fail = [error](const std::string& message) {
@@ -32,7 +141,9 @@ bool AgentOptions::IsValid(std::string* error) const {
   };
   if (require_auth && key.empty()) return fail("authentication required but the key is empty");
   if (name.size() > kLinkMaxStringSize) return fail("name longer than 255 bytes");
-  if (watchdog <= Duration::zero()) return fail("watchdog period must be positive");
+  if (watchdog < kAgentMinWatchdog || watchdog > kAgentMaxWatchdog) {
+    return fail("watchdog period must be within 100..5000 ms");
+  }
   if (!PositiveFinite(v_max_mps)) return fail("v_max must be positive and finite");
   if (!PositiveFinite(w_max_radps)) return fail("w_max must be positive and finite");
   if (!PositiveFinite(accel_max_mps2)) return fail("accel_max must be positive and finite");
@@ -51,8 +162,11 @@ bool AgentOptions::IsValid(std::string* error) const {
     return fail("low battery threshold must be >= 0");
   }
   if (lidar_request_spacing < Duration::zero()) return fail("lidar request spacing must be >= 0");
-  if (max_client_payload < kLinkMacSize || max_client_payload > kLinkMaxPayload) {
-    return fail("max client payload must be within [32, 65536]");
+  if (max_client_payload < kLinkNonceSize + kLinkMacSize || max_client_payload > kLinkMaxPayload) {
+    return fail("max client payload must be within [64, 65536]");
+  }
+  if (max_client_backlog < 2 * (max_client_payload + kLinkMaxFrameSize - kLinkMaxPayload)) {
+    return fail("max client backlog must hold two client frames");
   }
   return true;
 }
@@ -61,14 +175,12 @@ void AgentOutput::Clear() {
   to_client.clear();
   for (auto& bytes : to_device) bytes.clear();
   close_client = false;
+  close_reason.clear();
+  auth_failure = false;
 }
 
 AgentCore::AgentCore(const AgentOptions& options)
-    : options_(options), decoder_([&options] {
-        LinkDecoderOptions decoder_options;
-        decoder_options.max_payload = options.max_client_payload;
-        return decoder_options;
-      }()) {}
+    : options_(options), decoder_(ClientDecoderOptions(options)) {}
 
 void AgentCore::Start(Time now, AgentOutput* out) {
   if (started_) return;
@@ -90,40 +202,97 @@ void AgentCore::OnClientConnected(Time now, AgentOutput* out) {
   client_connected_ = true;
   closing_ = false;
   authenticated_ = !options_.require_auth;
+  frame_auth_ = false;
   auth_attempted_ = false;
   client_name_.clear();
   connected_at_ = now;
   last_client_frame_ = now;
-  decoder_.Reset();
+  decoder_ = LinkDecoder(ClientDecoderOptions(options_));
   encoder_ = LinkEncoder(LinkSender::kAgent);  // Each connection numbers from 0.
   have_status_time_ = false;
+  handshake_.reset();
+  if (options_.require_auth) {
+    handshake_ = std::make_unique<AgentHandshake>(options_, now, &out->to_client);
+    HandleHandshakeState(handshake_->state(), now, out);
+    return;
+  }
   SendGreeting(now, out);
 }
 
+bool AgentCore::AdoptClient(AgentHandshake* handshake, Time now, AgentOutput* out) {
+  if (client_connected_ || handshake->state() != AgentHandshake::State::kAuthenticated) {
+    return false;
+  }
+  ++counters_.connections;
+  client_connected_ = true;
+  closing_ = false;
+  authenticated_ = true;
+  auth_attempted_ = true;
+  frame_auth_ = true;
+  session_key_ = handshake->session_key();
+  last_client_sequence_ = handshake->last_client_sequence();
+  client_name_ = handshake->client_name();
+  connected_at_ = now;
+  last_client_frame_ = now;
+  decoder_ = std::move(handshake->decoder());
+  encoder_ = LinkEncoder(LinkSender::kAgent, handshake->next_agent_sequence());
+  have_status_time_ = false;
+  ++counters_.auth_ok;
+  Send(now, AuthResult{AuthOutcome::kOk, ""}, out);
+  SendStatus(now, out);
+  std::vector<LinkMessage> pending = std::move(handshake->pending_messages());
+  for (const LinkMessage& message : pending) {
+    if (closing_) break;
+    HandleMessage(message, now, out);
+  }
+  return true;
+}
+
+void AgentCore::NoteDeniedHandshake(const AgentHandshake& handshake) {
+  ++counters_.auth_denied;
+  if (handshake.denial().rfind("protocol version", 0) == 0) ++counters_.old_protocol_refused;
+  if (handshake.denial() == "input flood") ++counters_.input_floods;
+}
+
+void AgentCore::HandleHandshakeState(AgentHandshake::State state, Time now, AgentOutput* out) {
+  if (handshake_ == nullptr) return;
+  if (handshake_->TakeEmergencyStop()) EmergencyStopFromUnauthenticated(now, out);
+  if (state == AgentHandshake::State::kDenied) {
+    NoteDeniedHandshake(*handshake_);
+    closing_ = true;
+    out->close_client = true;
+    out->close_reason = handshake_->denial();
+    out->auth_failure = handshake_->auth_failure();
+    handshake_.reset();
+  } else if (state == AgentHandshake::State::kAuthenticated) {
+    std::unique_ptr<AgentHandshake> done = std::move(handshake_);
+    client_connected_ = false;  // AdoptClient takes the slot ...
+    --counters_.connections;    // ... and counts it (OnClientConnected did already).
+    AdoptClient(done.get(), now, out);
+  }
+}
+
+void AgentCore::EmergencyStopFromUnauthenticated(Time now, AgentOutput* out) {
+  const bool was_latched = estop_latched_;
+  estop_latched_ = true;
+  HardStop(now, out);
+  if (watchdog_ == WatchdogState::kArmed) watchdog_ = WatchdogState::kIdle;
+  if (!was_latched && client_authenticated()) SendStatus(now, out);
+}
+
+bool AgentCore::client_work_pending() const {
+  if (!client_connected_ || closing_) return false;
+  return handshake_ != nullptr ? handshake_->work_pending() : decoder_.work_pending();
+}
+
 void AgentCore::SendGreeting(Time now, AgentOutput* out) {
+  // Only without authentication (serial links); AgentHandshake greets otherwise.
   Hello hello;
   hello.auth_required = options_.require_auth;
   hello.name = options_.name;
   hello.devices = options_.devices;
   Send(now, hello, out);
-  if (!options_.require_auth) {
-    SendStatus(now, out);
-    return;
-  }
-  if (authenticated_) return;  // Serial re-Hello on an authenticated link: nothing to prove.
-  // A fresh nonce for every challenge; one attempt per nonce.
-  auth_attempted_ = false;
-  const auto& source = options_.random_source;
-  nonce_ok_ =
-      source ? source(nonce_.data(), nonce_.size()) : FillRandomBytes(nonce_.data(), nonce_.size());
-  if (!nonce_ok_) {
-    // Never fall back to a guessable nonce: a replayed response would pass.
-    Deny(now, "agent has no random source", out);
-    return;
-  }
-  AuthChallenge challenge;
-  challenge.nonce = nonce_;
-  Send(now, challenge, out);
+  SendStatus(now, out);
 }
 
 void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
@@ -132,10 +301,13 @@ void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
   closing_ = false;
   const bool was_authenticated = authenticated_;
   authenticated_ = false;
+  frame_auth_ = false;
+  handshake_.reset();
   decoder_.Reset();
   // A dropped connection trips the watchdog at once (docs/protocol.md).
   if (was_authenticated && MotionCommanded()) {
     ++watchdog_trips_;
+    last_trip_ = now;
     watchdog_ = WatchdogState::kTripped;
     HardStop(now, out);
   }
@@ -143,18 +315,66 @@ void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
 
 void AgentCore::OnClientBytes(const uint8_t* data, size_t n, Time now, AgentOutput* out) {
   if (!client_connected_ || closing_) return;
+  if (handshake_ != nullptr) {
+    HandleHandshakeState(handshake_->OnBytes(data, n, now, &out->to_client), now, out);
+    return;
+  }
   std::vector<LinkMessage> messages;
   decoder_.Feed(data, n, &messages);
   for (const LinkMessage& message : messages) {
     if (closing_) break;
     HandleMessage(message, now, out);
   }
+  if (!closing_ && decoder_.BufferedBytes() > options_.max_client_backlog) {
+    ++counters_.input_floods;
+    closing_ = true;
+    out->close_client = true;
+    out->close_reason = "input flood";
+  }
+}
+
+bool AgentCore::FrameAuthentic(const LinkMessage& message) {
+  if (!message.header.signed_frame) {
+    ++counters_.frames_unsigned;
+    return false;
+  }
+  if (!LinkFrameTagValid(session_key_, message)) {
+    ++counters_.frames_bad_tag;
+    return false;
+  }
+  // Strictly after the last accepted frame (mod 2^32, within half the range).
+  const uint32_t delta = message.header.sequence - last_client_sequence_;
+  if (delta == 0 || delta >= 0x80000000u) {
+    ++counters_.frames_replayed;
+    return false;
+  }
+  last_client_sequence_ = message.header.sequence;
+  return true;
 }
 
 void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput* out) {
   if (message.header.sender != LinkSender::kClient) {
     // Our own frames echoed back (a serial loop) or a confused peer.
     ++counters_.client_frames_from_wrong_sender;
+    return;
+  }
+  if (message.header.version < kLinkProtocolVersion) {
+    // An old client (serial links; TCP ones meet AgentHandshake first).
+    ++counters_.old_protocol_refused;
+    const auto refusal = EncodeOldVersionRefusal(now, message.header.version,
+                                                 OldVersionReason(message.header.version));
+    out->to_client.insert(out->to_client.end(), refusal.begin(), refusal.end());
+    closing_ = true;
+    out->close_client = true;
+    out->close_reason = "old protocol version";
+    return;
+  }
+  if (frame_auth_ && !FrameAuthentic(message)) {
+    // Injected, replayed, reordered or unsigned: no effect, does not feed the
+    // watchdog. Only stopping is allowed without a valid tag (no ack).
+    if (std::holds_alternative<EmergencyStop>(message.payload)) {
+      EmergencyStopFromUnauthenticated(now, out);
+    }
     return;
   }
   ++frames_received_;
@@ -164,7 +384,7 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
   if (const auto* hello = std::get_if<Hello>(&payload)) {
     client_name_ = hello->name;
     if (hello->protocol_version < kLinkProtocolVersion) {
-      Deny(now, "protocol version", out);
+      Deny(now, OldVersionReason(static_cast<uint8_t>(hello->protocol_version)), out);
       return;
     }
     // Serial: the client may have opened the port after our Hello; say it again.
@@ -184,9 +404,12 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
       std::holds_alternative<Heartbeat>(payload) || std::holds_alternative<LidarMotor>(payload);
   if (!is_command) return;  // Agent-to-client types and unknown types: ignored.
 
-  // Stopping is always allowed; nothing else before authentication.
-  if (!authenticated_ && type != static_cast<uint8_t>(LinkMessageType::kEmergencyStop)) {
-    Ack(now, message, AckResult::kNotAuthenticated, out);
+  // Stopping is always allowed; nothing else before authentication (and
+  // no answer: an unauthenticated peer gets nothing beyond the challenge).
+  if (!authenticated_) {
+    if (type == static_cast<uint8_t>(LinkMessageType::kEmergencyStop)) {
+      EmergencyStopFromUnauthenticated(now, out);
+    }
     return;
   }
 
@@ -238,27 +461,14 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
   }
 }
 
-void AgentCore::HandleAuthResponse(const AuthResponse& response, Time now, AgentOutput* out) {
+void AgentCore::HandleAuthResponse(const AuthResponse&, Time now, AgentOutput* out) {
   if (!options_.require_auth) {
     // Nothing to check on an open link; tell the client it may proceed.
     Send(now, AuthResult{AuthOutcome::kOk, "authentication not required"}, out);
     return;
   }
-  if (auth_attempted_ || authenticated_) {
-    Deny(now, "one attempt per connection", out);
-    return;
-  }
-  auth_attempted_ = true;
-  const Sha256Digest expected = LinkAuthMac(options_.key, nonce_.data(), nonce_.size());
-  if (!nonce_ok_ || !ConstantTimeEqual(expected.data(), response.mac.data(), kLinkMacSize)) {
-    Deny(now, "authentication failed", out);
-    return;
-  }
-  authenticated_ = true;
-  last_client_frame_ = now;
-  ++counters_.auth_ok;
-  Send(now, AuthResult{AuthOutcome::kOk, ""}, out);
-  SendStatus(now, out);
+  // Authentication is AgentHandshake's; a second response is refused.
+  Deny(now, "one attempt per connection", out);
 }
 
 void AgentCore::Deny(Time now, const std::string& reason, AgentOutput* out) {
@@ -267,6 +477,7 @@ void AgentCore::Deny(Time now, const std::string& reason, AgentOutput* out) {
   Send(now, AuthResult{AuthOutcome::kDenied, reason}, out);
   closing_ = true;
   out->close_client = true;
+  out->close_reason = reason;
 }
 
 void AgentCore::OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, Time now,
@@ -312,14 +523,14 @@ void AgentCore::Tick(Time now, AgentOutput* out) {
     ++lidar_requests_sent_;
   }
 
-  if (client_connected_ && !closing_ && !authenticated_ &&
-      now - connected_at_ >= options_.auth_timeout) {
-    Deny(now, "authentication timeout", out);
+  if (client_connected_ && !closing_ && handshake_ != nullptr) {
+    HandleHandshakeState(handshake_->Tick(now, &out->to_client), now, out);
   }
 
   // Watchdog first, so a quiet link never gets one more ramp step.
   if (watchdog_ == WatchdogState::kArmed && now - last_client_frame_ >= options_.watchdog) {
     ++watchdog_trips_;
+    last_trip_ = now;
     watchdog_ = WatchdogState::kTripped;
     HardStop(now, out);
     if (client_authenticated()) SendStatus(now, out);

@@ -8,11 +8,14 @@
 //
 // What it does:
 //  - per connection: Hello (+ AuthChallenge with a fresh 32-byte CSPRNG nonce
-//    when authentication is required), checks the client's
-//    AuthResponse = HMAC-SHA256(key, "sweepscan-link-v1" || nonce) in
-//    constant time; a wrong key gets AuthResult denied and the connection is
-//    closed. Until then only Hello, AuthResponse and EmergencyStop are
-//    accepted; everything else is acked "not authenticated" with no effect.
+//    when authentication is required), checks the client's AuthResponse =
+//    HMAC-SHA256(key, "sweepscan-link-v2" || agent_nonce || client_nonce) in
+//    constant time (AgentHandshake); a wrong key gets AuthResult denied and
+//    the connection is closed. Until then only Hello, AuthResponse and
+//    EmergencyStop act; nothing else is answered. After it, every client
+//    frame must carry a tag under the session key (HKDF of the key and both
+//    nonces) and a sequence number after the last one accepted; others are
+//    dropped and counted (injection, replay, reorder).
 //  - device bytes -> Telemetry frames stamped with the robot receive time.
 //  - DriveCommand -> clamped to |v| <= v_max, |w| <= w_max (the "commanded"
 //    set-point), then ramped with the acceleration limits (the "applied"
@@ -41,15 +44,20 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/common/time.h"
 #include "hardware/codecs/motor_board_codec.h"
+#include "hardware/link/hmac_sha256.h"
 #include "hardware/link/link_protocol.h"
 
 namespace sweepscan {
 namespace hardware {
+
+inline constexpr Duration kAgentMinWatchdog = std::chrono::milliseconds(100);
+inline constexpr Duration kAgentMaxWatchdog = std::chrono::milliseconds(5000);
 
 struct AgentOptions {
   std::string name = "sweepscan-robotd 0.1.0";  // Sent in Hello.
@@ -59,15 +67,18 @@ struct AgentOptions {
   // (physical access); the client is then authenticated from the start.
   bool require_auth = true;
   std::vector<uint8_t> key;  // Pre-shared key, raw bytes; must not be empty when require_auth.
-  // An unauthenticated connection is closed after this long, so a silent
-  // client cannot hold the single client slot.
-  Duration auth_timeout = std::chrono::seconds(5);
+  // An unauthenticated connection is closed after this long (it never holds
+  // the client slot meanwhile: see RobotAgent).
+  Duration auth_timeout = std::chrono::seconds(2);
   // Re-send Hello (and a fresh challenge) when the client sends Hello. Needed
   // on a serial link, where the client may open the port after the agent's
   // first Hello went out; off for TCP (the agent speaks first on connect).
   bool hello_on_client_hello = false;
 
-  Duration watchdog = kLinkDefaultWatchdog;  // 500 ms.
+  // 500 ms; within [kAgentMinWatchdog, kAgentMaxWatchdog] (a longer one
+  // would leave a robot driving blind; a shorter one trips between the
+  // client's 100 ms heartbeats).
+  Duration watchdog = kLinkDefaultWatchdog;
   double v_max_mps = 0.5;                    // |commanded v| <= v_max.
   double w_max_radps = 1.5;                  // |commanded w| <= w_max.
   double accel_max_mps2 = 1.0;               // Ramp of applied v (speeding up and slowing down).
@@ -79,8 +90,16 @@ struct AgentOptions {
   // Delay between the start-up requests to the lidar (A5 90, then A5 92): the
   // X4 answers one request at a time.
   Duration lidar_request_spacing = std::chrono::milliseconds(100);
-  // The agent's limit on client frames (clients send only small messages).
-  size_t max_client_payload = 1024;
+  // The agent's limit on client frames (clients send only small messages:
+  // the largest is a Hello with a 255-byte name). Lower = less CRC work per
+  // byte of a flood of forged candidates.
+  size_t max_client_payload = 288;
+  // CRC work (bytes checked) per OnClientBytes / ContinueClientBytes call:
+  // the rest waits (client_work_pending()), so timers keep their time.
+  size_t max_client_work_per_call = 256 * 1024;
+  // Client bytes waiting to be decoded beyond this: the connection is
+  // dropped ("input flood"; a real client sends a few hundred bytes/s).
+  size_t max_client_backlog = 1 << 20;
   // Nonce source; null = FillRandomBytes (/dev/urandom). Tests may inject one.
   std::function<bool(uint8_t*, size_t)> random_source;
 
@@ -94,6 +113,8 @@ struct AgentOutput {
   std::vector<uint8_t> to_client;
   std::array<std::vector<uint8_t>, 3> to_device;  // lidar, imu, motor board.
   bool close_client = false;
+  std::string close_reason;     // Why, for the log ("authentication failed", "input flood").
+  bool auth_failure = false;    // The close is a failed authentication (address lockout).
 
   bool empty() const {
     return to_client.empty() && to_device[0].empty() && to_device[1].empty() &&
@@ -114,7 +135,75 @@ struct AgentCounters {
   uint64_t telemetry_frames_sent = 0;
   uint64_t status_frames_sent = 0;
   uint64_t client_frames_from_wrong_sender = 0;  // Good frames whose sender byte is "agent".
+  // After the handshake: frames refused because they were unsigned, carried
+  // a wrong tag, or repeated / went back in sequence (replay, reorder, injection).
+  uint64_t frames_unsigned = 0;
+  uint64_t frames_bad_tag = 0;
+  uint64_t frames_replayed = 0;
+  uint64_t old_protocol_refused = 0;  // Peers speaking protocol version 1.
+  uint64_t input_floods = 0;          // Connections dropped for a decode backlog.
 };
+
+// One connection's authentication, before it may become the client (TCP):
+// Hello and AuthChallenge go out; AuthResponse is checked; EmergencyStop is
+// noted (stopping is always allowed); nothing else is answered (no acks, no
+// Status, no Telemetry). It ends authenticated (the session key derived from
+// both nonces, handed to AgentCore::AdoptClient), or denied with one
+// AuthResult (wrong key, protocol version 1, deadline, input flood) after
+// which the connection is closed. Work per call is bounded like AgentCore's.
+class AgentHandshake {
+ public:
+  enum class State { kPending, kAuthenticated, kDenied };
+
+  // Appends Hello and AuthChallenge (fresh nonce) to *out.
+  AgentHandshake(const AgentOptions& options, Time now, std::vector<uint8_t>* out);
+  // Bytes from the connection (nullptr, 0: go on with pending work).
+  State OnBytes(const uint8_t* data, size_t n, Time now, std::vector<uint8_t>* out);
+  // The authentication deadline.
+  State Tick(Time now, std::vector<uint8_t>* out);
+
+  State state() const { return state_; }
+  bool work_pending() const { return decoder_.work_pending(); }
+  const std::string& denial() const { return denial_; }
+  bool auth_failure() const { return auth_failure_; }  // Denied for a wrong key.
+  // An EmergencyStop arrived since the last call (clears the flag).
+  bool TakeEmergencyStop() {
+    const bool e = estop_;
+    estop_ = false;
+    return e;
+  }
+
+  // kAuthenticated: what AgentCore::AdoptClient takes over.
+  const LinkSessionKey& session_key() const { return session_key_; }
+  uint32_t next_agent_sequence() const { return encoder_.next_sequence(); }
+  uint32_t last_client_sequence() const { return last_client_sequence_; }
+  const std::string& client_name() const { return client_name_; }
+  LinkDecoder& decoder() { return decoder_; }
+  std::vector<LinkMessage>& pending_messages() { return pending_; }
+  const LinkDecoderStats& stats() const { return decoder_.stats(); }
+
+ private:
+  void Deny(Time now, const std::string& reason, std::vector<uint8_t>* out,
+            uint8_t version = kLinkProtocolVersion);
+
+  AgentOptions options_;
+  LinkDecoder decoder_;
+  LinkEncoder encoder_{LinkSender::kAgent};
+  State state_ = State::kPending;
+  Time connected_at_;
+  LinkNonce nonce_{};
+  LinkSessionKey session_key_{};
+  uint32_t last_client_sequence_ = 0;
+  std::string client_name_;
+  std::string denial_;
+  bool auth_failure_ = false;
+  bool estop_ = false;
+  std::vector<LinkMessage> pending_;
+};
+
+// "protocol version 1 is not supported: ..." in a version-1 frame, so an old
+// client can show why it is refused (docs/protocol.md, "Versioning").
+std::vector<uint8_t> EncodeOldVersionRefusal(Time now, uint8_t version, const std::string& reason);
 
 class AgentCore {
  public:
@@ -126,6 +215,20 @@ class AgentCore {
   // A client connected (TCP accept, or the serial link opened): new encoder
   // sequence, Hello, and AuthChallenge with a fresh nonce when required.
   void OnClientConnected(Time now, AgentOutput* out);
+  // A connection authenticated by its own AgentHandshake (RobotAgent runs
+  // one per pending TCP connection) becomes the client: AuthResult ok,
+  // Status, then the frames it sent after its AuthResponse. False (nothing
+  // done) while another client is connected.
+  bool AdoptClient(AgentHandshake* handshake, Time now, AgentOutput* out);
+  // Counts a pending connection's failed handshake (auth_denied, ...).
+  void NoteDeniedHandshake(const AgentHandshake& handshake);
+  // EmergencyStop from a connection that has not authenticated (stopping is
+  // always allowed; no ack).
+  void EmergencyStopFromUnauthenticated(Time now, AgentOutput* out);
+  // Decode work left over by the per-call bound; RobotAgent calls
+  // ContinueClientBytes() soon (after serving its timers).
+  bool client_work_pending() const;
+  void ContinueClientBytes(Time now, AgentOutput* out) { OnClientBytes(nullptr, 0, now, out); }
   // The connection is gone: trips the watchdog at once if motion was commanded.
   void OnClientDisconnected(Time now, AgentOutput* out);
   // Bytes from the client link, any chunking.
@@ -148,6 +251,10 @@ class AgentCore {
   const AgentCounters& counters() const { return counters_; }
   const AgentOptions& options() const { return options_; }
   const std::string& client_name() const { return client_name_; }
+  // Robot times of the last valid frame of the authenticated client and of
+  // the last watchdog trip (for measuring the watchdog under load).
+  Time last_client_frame_time() const { return last_client_frame_; }
+  Time last_watchdog_trip_time() const { return last_trip_; }
 
  private:
   // Hello, then AuthChallenge with a fresh nonce (or Status when no auth is needed).
@@ -158,6 +265,9 @@ class AgentCore {
   void Deny(Time now, const std::string& reason, AgentOutput* out);
   void HandleMessage(const LinkMessage& message, Time now, AgentOutput* out);
   void HandleAuthResponse(const AuthResponse& response, Time now, AgentOutput* out);
+  // Signed, valid tag, sequence after the last accepted one (after auth).
+  bool FrameAuthentic(const LinkMessage& message);
+  void HandleHandshakeState(AgentHandshake::State state, Time now, AgentOutput* out);
   // Zero to the motors at once (e-stop and watchdog).
   void HardStop(Time now, AgentOutput* out);
   void SendMotorCommand(Time now, AgentOutput* out);
@@ -175,8 +285,10 @@ class AgentCore {
   bool closing_ = false;  // Denied: ignore the rest of this connection's bytes.
   bool authenticated_ = false;
   bool auth_attempted_ = false;
-  bool nonce_ok_ = false;  // The random source worked for this connection's nonce.
-  std::array<uint8_t, kLinkNonceSize> nonce_{};
+  std::unique_ptr<AgentHandshake> handshake_;  // While authenticating (single-connection use).
+  bool frame_auth_ = false;  // Every client frame must carry a valid tag (authenticated TCP).
+  LinkSessionKey session_key_{};
+  uint32_t last_client_sequence_ = 0;
   Time connected_at_;
   Time last_client_frame_;  // Last valid frame from the authenticated client.
   std::string client_name_;
@@ -213,6 +325,7 @@ class AgentCore {
   uint32_t frames_received_ = 0;
   uint32_t commands_refused_ = 0;
   uint32_t watchdog_trips_ = 0;
+  Time last_trip_;
   AgentCounters counters_;
 };
 

@@ -59,6 +59,9 @@ bool RobotAgentConfig::IsValid(QString* error) const {
     return fail(QStringLiteral("listen address '%1' is not an IP address").arg(listen_address));
   }
   if (tick_ms <= 0 || tick_ms > 100) return fail(QStringLiteral("tick period must be 1..100 ms"));
+  if (!(sim_time_scale >= 1.0 && sim_time_scale <= 1000.0)) {
+    return fail(QStringLiteral("simulation time scale must be 1..1000"));
+  }
   if (sim_step_ms <= 0 || sim_step_ms > 100) {
     return fail(QStringLiteral("simulator step must be 1..100 ms"));
   }
@@ -79,7 +82,8 @@ RobotAgent::~RobotAgent() { Shutdown(); }
 
 Time RobotAgent::Now() const {
   if (sim_ != nullptr) {
-    return Time(config_.sim_clock_origin) + Duration(clock_.nsecsElapsed());
+    const double elapsed_ns = static_cast<double>(clock_.nsecsElapsed()) * config_.sim_time_scale;
+    return Time(config_.sim_clock_origin) + Duration(static_cast<int64_t>(elapsed_ns));
   }
   return Time(
       std::chrono::duration_cast<Duration>(std::chrono::steady_clock::now().time_since_epoch()));
@@ -151,6 +155,7 @@ void RobotAgent::Shutdown() {
   if (sim_timer_ != nullptr) sim_timer_->stop();
   if (reopen_timer_ != nullptr) reopen_timer_->stop();
   if (client_ != nullptr) DropClient(QStringLiteral("agent shutting down"));
+  while (!pending_.empty()) ClosePending(0, QString());
   if (server_ != nullptr) server_->close();
   for (SerialStream*& device : devices_) {
     if (device != nullptr) device->Close();
@@ -210,10 +215,153 @@ void RobotAgent::OnNewTcpConnection() {
       emit logMessage(QStringLiteral("refused %1: %2").arg(peer, refusal));
       continue;
     }
+    socket->setReadBufferSize(config_.socket_read_buffer_bytes);
+    if (!core_->options().require_auth) {
+      // An open TCP link (no key configured on purpose): the client at once.
+      client_peer_ = peer;
+      AttachClient(new TcpStream(socket, this));
+      continue;
+    }
+    if (static_cast<int>(pending_.size()) >= config_.max_pending_connections) {
+      ClosePending(0, QStringLiteral("too many connections authenticating"));
+    }
     auto* stream = new TcpStream(socket, this);
-    client_peer_ = peer;
-    AttachClient(stream);
+    Pending p;
+    p.stream = stream;
+    p.peer = peer;
+    std::vector<uint8_t> bytes;
+    p.handshake = std::make_unique<AgentHandshake>(core_->options(), Now(), &bytes);
+    connect(stream, &ByteStream::bytesReceived, this,
+            [this, stream](const QByteArray& b) { OnPendingBytes(stream, b); });
+    connect(stream, &ByteStream::closed, this, [this, stream](const QString&) {
+      for (size_t i = 0; i < pending_.size(); ++i) {
+        if (pending_[i].stream == stream) {
+          ClosePending(i, QString());
+          return;
+        }
+      }
+    });
+    pending_.push_back(std::move(p));
+    HandlePending(pending_.size() - 1, pending_.back().handshake->state(), &bytes);
   }
+}
+
+void RobotAgent::OnPendingBytes(TcpStream* stream, const QByteArray& received) {
+  for (size_t i = 0; i < pending_.size(); ++i) {
+    if (pending_[i].stream != stream) continue;
+    std::vector<uint8_t> bytes;
+    const auto state = pending_[i].handshake->OnBytes(
+        reinterpret_cast<const uint8_t*>(received.constData()),
+        static_cast<size_t>(received.size()), Now(), &bytes);
+    HandlePending(i, state, &bytes);
+    return;
+  }
+}
+
+void RobotAgent::HandlePending(size_t index, AgentHandshake::State state,
+                               std::vector<uint8_t>* bytes) {
+  Pending& p = pending_[index];
+  if (p.handshake->TakeEmergencyStop()) {
+    core_->EmergencyStopFromUnauthenticated(Now(), &out_);
+    Dispatch(&out_);
+  }
+  if (!bytes->empty()) p.stream->Write(bytes->data(), bytes->size());
+  bytes->clear();
+  if (state == AgentHandshake::State::kDenied) {
+    const QString reason = QString::fromStdString(p.handshake->denial());
+    core_->NoteDeniedHandshake(*p.handshake);
+    if (p.handshake->auth_failure()) last_auth_failure_ms_.insert(p.peer, clock_.elapsed());
+    // Let the denial reach the peer, then close.
+    TcpStream* stream = p.stream;
+    const QString peer = p.peer;
+    pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(index));
+    stream->disconnect(this);
+    if (QTcpSocket* socket = stream->socket()) {
+      socket->disconnectFromHost();
+      connect(socket, &QTcpSocket::disconnected, stream, &QObject::deleteLater);
+      QTimer::singleShot(1000, stream, [stream] { stream->Abort(); stream->deleteLater(); });
+    } else {
+      stream->deleteLater();
+    }
+    emit logMessage(QStringLiteral("refused %1: %2").arg(peer, reason));
+    return;
+  }
+  if (state == AgentHandshake::State::kAuthenticated) {
+    Pending done = std::move(p);
+    pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(index));
+    done.stream->disconnect(this);
+    if (client_ != nullptr) {
+      // Another connection authenticated first.
+      LinkEncoder encoder(LinkSender::kAgent, done.handshake->next_agent_sequence());
+      const auto denied = encoder.Encode(Now(), AuthResult{AuthOutcome::kDenied, "busy"});
+      done.stream->Write(denied.data(), denied.size());
+      if (QTcpSocket* socket = done.stream->socket()) socket->disconnectFromHost();
+      done.stream->deleteLater();
+      return;
+    }
+    client_ = done.stream;
+    client_peer_ = done.peer;
+    connect(done.stream, &ByteStream::bytesReceived, this, &RobotAgent::OnClientBytes);
+    connect(done.stream, &ByteStream::closed, this,
+            [this](const QString& reason) { DropClient(reason); });
+    core_->AdoptClient(done.handshake.get(), Now(), &out_);
+    emit clientConnected(client_peer_);
+    Dispatch(&out_);
+    return;
+  }
+  if (p.handshake->work_pending()) ScheduleContinue();
+}
+
+void RobotAgent::ClosePending(size_t index, const QString& reason) {
+  if (index >= pending_.size()) return;
+  TcpStream* stream = pending_[index].stream;
+  const QString peer = pending_[index].peer;
+  pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(index));
+  stream->disconnect(this);
+  stream->Abort();
+  stream->deleteLater();
+  if (!reason.isEmpty()) emit logMessage(QStringLiteral("closed %1: %2").arg(peer, reason));
+}
+
+void RobotAgent::TickPending() {
+  const Time now = Now();
+  for (size_t i = 0; i < pending_.size();) {
+    std::vector<uint8_t> bytes;
+    const auto state = pending_[i].handshake->Tick(now, &bytes);
+    const size_t before = pending_.size();
+    HandlePending(i, state, &bytes);
+    if (pending_.size() == before) ++i;
+  }
+}
+
+// Decode work the per-call bound left over: continue from the event loop, so
+// timers (the watchdog tick) run in between.
+void RobotAgent::ScheduleContinue() {
+  if (continue_scheduled_) return;
+  continue_scheduled_ = true;
+  QTimer::singleShot(0, this, [this] {
+    continue_scheduled_ = false;
+    if (client_ != nullptr && core_->client_work_pending()) {
+      core_->ContinueClientBytes(Now(), &out_);
+      Dispatch(&out_);
+    }
+    for (size_t i = 0; i < pending_.size(); ++i) {
+      if (!pending_[i].handshake->work_pending()) continue;
+      std::vector<uint8_t> bytes;
+      const auto state = pending_[i].handshake->OnBytes(nullptr, 0, Now(), &bytes);
+      HandlePending(i, state, &bytes);
+      break;  // Indices may have moved; the next round takes the others.
+    }
+    bool more = client_ != nullptr && core_->client_work_pending();
+    for (const Pending& p : pending_) more = more || p.handshake->work_pending();
+    if (more) ScheduleContinue();
+  });
+}
+
+bool RobotAgent::SendQueueFull(ByteStream* stream) const {
+  const auto* tcp = qobject_cast<const TcpStream*>(stream);
+  return tcp != nullptr && tcp->socket() != nullptr &&
+         tcp->socket()->bytesToWrite() > config_.max_send_queue_bytes;
 }
 
 void RobotAgent::AttachClient(ByteStream* stream) {
@@ -244,11 +392,13 @@ void RobotAgent::OnClientBytes(const QByteArray& bytes) {
   core_->OnClientBytes(reinterpret_cast<const uint8_t*>(bytes.constData()),
                        static_cast<size_t>(bytes.size()), Now(), &out_);
   Dispatch(&out_);
+  if (client_ != nullptr && core_->client_work_pending()) ScheduleContinue();
 }
 
 void RobotAgent::OnTick() {
   core_->Tick(Now(), &out_);
   Dispatch(&out_);
+  TickPending();
 }
 
 void RobotAgent::OnSimStep() {
@@ -274,14 +424,24 @@ void RobotAgent::Dispatch(AgentOutput* out) {
     }
   }
   const bool close = out->close_client;
+  const bool auth_failure = out->auth_failure;
+  const QString close_reason = QString::fromStdString(out->close_reason);
   if (client_ != nullptr && !out->to_client.empty()) {
     client_->Write(out->to_client.data(), out->to_client.size());
   }
   out->Clear();
+  if (!close && client_ != nullptr && SendQueueFull(client_)) {
+    // The peer stopped reading: drop it (the watchdog trips at once, so a
+    // robot it was driving stops) instead of queueing without bound.
+    if (auto* tcp = qobject_cast<TcpStream*>(client_)) tcp->Abort();
+    DropClient(QStringLiteral("peer stopped reading (send queue over %1 bytes)")
+                   .arg(config_.max_send_queue_bytes));
+    return;
+  }
   if (close && client_ != nullptr) {
     if (config_.link == RobotAgentConfig::LinkKind::kTcp) {
-      last_auth_failure_ms_.insert(client_peer_, clock_.elapsed());
-      DropClient(QStringLiteral("denied"));
+      if (auth_failure) last_auth_failure_ms_.insert(client_peer_, clock_.elapsed());
+      DropClient(close_reason.isEmpty() ? QStringLiteral("denied") : close_reason);
     } else {
       // A serial line cannot be closed: start the session over.
       core_->OnClientDisconnected(Now(), out);

@@ -4,9 +4,16 @@
 //
 //   devices: three SerialStreams (X4 128000, HI219 115200, motor board 115200)
 //            or a SimDevices advanced from a timer;
-//   link:    a QTcpServer (127.0.0.1 unless told otherwise; one client at a
-//            time, others get AuthResult denied "busy"), a serial port, or the
-//            master of a pseudo-terminal (sweepscan-sim --pty);
+//   link:    a QTcpServer (127.0.0.1 unless told otherwise). Each new
+//            connection authenticates on its own (AgentHandshake, deadline
+//            2 s, no answers beyond the challenge); only an authenticated
+//            one becomes the client, so keyless connections never hold the
+//            slot. While a client is connected, new connections get
+//            AuthResult denied "busy". Or a serial port, or the master of a
+//            pseudo-terminal (sweepscan-sim --pty). Every connection has a
+//            bounded send queue (a peer that stops reading is dropped) and a
+//            bounded read buffer; decode work per event is bounded, so the
+//            tick timer (watchdog) keeps its time under any input;
 //   timer:   Tick() every tick_period (watchdog, ramps, motor and Status cadence).
 //
 // Robot clock: CLOCK_MONOTONIC (std::chrono::steady_clock) for real devices;
@@ -104,9 +111,21 @@ struct RobotAgentConfig {
   // Robot time at Start() with virtual devices: sim::SimWorld::kStartTimeS
   // (1 s; not included here to keep the simulator out of sweepscan-robotd).
   Duration sim_clock_origin = std::chrono::seconds(1);
+  // With virtual devices: robot seconds per wall-clock second (soak tests
+  // stream an hour of scanning in minutes). 1 = real time.
+  double sim_time_scale = 1.0;
   // After a denied authentication, further connections from the same
   // address are refused for this long (slows down key guessing).
   int auth_failure_delay_ms = 1000;
+  // Connections still authenticating, at most (the oldest is closed when a
+  // new one arrives beyond this). They never hold the client slot.
+  int max_pending_connections = 16;
+  // Bytes queued for a peer that does not read them: beyond this the peer is
+  // dropped (and the robot stopped if it was driving). ~30 s of telemetry.
+  qint64 max_send_queue_bytes = 1 << 20;
+  // Qt's read buffer per agent socket: bounds the bytes one read hands to
+  // the decoder, hence the work between two watchdog ticks.
+  qint64 socket_read_buffer_bytes = 64 * 1024;
 
   bool IsValid(QString* error) const;
 };
@@ -131,6 +150,7 @@ class RobotAgent : public QObject {
   const AgentCore& core() const { return *core_; }
   VirtualDevices* virtual_devices() const { return sim_.get(); }  // Null for real devices.
   bool has_client() const { return client_ != nullptr; }
+  int pending_connections() const { return static_cast<int>(pending_.size()); }
 
  signals:
   void clientConnected(const QString& peer);
@@ -138,7 +158,18 @@ class RobotAgent : public QObject {
   void logMessage(const QString& message);
 
  private:
+  struct Pending {
+    TcpStream* stream = nullptr;
+    QString peer;
+    std::unique_ptr<AgentHandshake> handshake;
+  };
   void OnNewTcpConnection();
+  void OnPendingBytes(TcpStream* stream, const QByteArray& bytes);
+  void HandlePending(size_t index, AgentHandshake::State state, std::vector<uint8_t>* bytes);
+  void ClosePending(size_t index, const QString& reason);
+  void TickPending();
+  void ScheduleContinue();
+  bool SendQueueFull(ByteStream* stream) const;
   void AttachClient(ByteStream* stream);
   void DropClient(const QString& reason);
   void OnClientBytes(const QByteArray& bytes);
@@ -161,6 +192,8 @@ class RobotAgent : public QObject {
   QTimer* sim_timer_ = nullptr;
   QTimer* reopen_timer_ = nullptr;
   QHash<QString, qint64> last_auth_failure_ms_;  // Peer address -> clock_ ms.
+  std::vector<Pending> pending_;                // Connections still authenticating.
+  bool continue_scheduled_ = false;             // Decode work left by the per-call bound.
   AgentOutput out_;
 };
 

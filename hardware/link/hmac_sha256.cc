@@ -1,188 +1,156 @@
 #include "hardware/link/hmac_sha256.h"
 
-#include <algorithm>
-#include <cstdio>
-#include <cstring>
-#include <random>
+#include <openssl/crypto.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
+#include <openssl/kdf.h>
+#include <openssl/rand.h>
 
-#include "hardware/link/link_protocol.h"
+#include <cstring>
 
 namespace sweepscan {
 namespace hardware {
-namespace {
 
-constexpr uint32_t kK[64] = {
-    0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
-    0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
-    0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
-    0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
-    0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
-    0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
-    0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
-    0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
+struct Sha256::Context {
+  EVP_MD_CTX* ctx = nullptr;
+};
 
-inline uint32_t Rotr(uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
-
-}  // namespace
-
-void Sha256::Reset() {
-  state_ = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
-            0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
-  block_used_ = 0;
-  total_bytes_ = 0;
+Sha256::Sha256() : context_(std::make_unique<Context>()) {
+  context_->ctx = EVP_MD_CTX_new();
+  Reset();
 }
 
-// FIPS 180-4 section 6.2.2: message schedule W, then 64 rounds.
-void Sha256::Compress(const uint8_t* block) {
-  uint32_t w[64];
-  for (int t = 0; t < 16; ++t) {
-    w[t] = (static_cast<uint32_t>(block[4 * t]) << 24) |
-           (static_cast<uint32_t>(block[4 * t + 1]) << 16) |
-           (static_cast<uint32_t>(block[4 * t + 2]) << 8) | static_cast<uint32_t>(block[4 * t + 3]);
-  }
-  for (int t = 16; t < 64; ++t) {
-    const uint32_t s0 = Rotr(w[t - 15], 7) ^ Rotr(w[t - 15], 18) ^ (w[t - 15] >> 3);
-    const uint32_t s1 = Rotr(w[t - 2], 17) ^ Rotr(w[t - 2], 19) ^ (w[t - 2] >> 10);
-    w[t] = w[t - 16] + s0 + w[t - 7] + s1;
-  }
-  uint32_t a = state_[0], b = state_[1], c = state_[2], d = state_[3];
-  uint32_t e = state_[4], f = state_[5], g = state_[6], h = state_[7];
-  for (int t = 0; t < 64; ++t) {
-    const uint32_t big_s1 = Rotr(e, 6) ^ Rotr(e, 11) ^ Rotr(e, 25);
-    const uint32_t ch = (e & f) ^ (~e & g);
-    const uint32_t t1 = h + big_s1 + ch + kK[t] + w[t];
-    const uint32_t big_s0 = Rotr(a, 2) ^ Rotr(a, 13) ^ Rotr(a, 22);
-    const uint32_t maj = (a & b) ^ (a & c) ^ (b & c);
-    const uint32_t t2 = big_s0 + maj;
-    h = g;
-    g = f;
-    f = e;
-    e = d + t1;
-    d = c;
-    c = b;
-    b = a;
-    a = t1 + t2;
-  }
-  state_[0] += a;
-  state_[1] += b;
-  state_[2] += c;
-  state_[3] += d;
-  state_[4] += e;
-  state_[5] += f;
-  state_[6] += g;
-  state_[7] += h;
-}
+Sha256::~Sha256() { EVP_MD_CTX_free(context_->ctx); }
+
+void Sha256::Reset() { EVP_DigestInit_ex(context_->ctx, EVP_sha256(), nullptr); }
 
 void Sha256::Update(const uint8_t* data, size_t n) {
-  if (n == 0 || data == nullptr) return;
-  total_bytes_ += n;
-  while (n > 0) {
-    if (block_used_ == 0 && n >= kSha256BlockSize) {
-      Compress(data);
-      data += kSha256BlockSize;
-      n -= kSha256BlockSize;
-      continue;
-    }
-    const size_t take = std::min(n, kSha256BlockSize - block_used_);
-    std::memcpy(block_.data() + block_used_, data, take);
-    block_used_ += take;
-    data += take;
-    n -= take;
-    if (block_used_ == kSha256BlockSize) {
-      Compress(block_.data());
-      block_used_ = 0;
-    }
-  }
+  if (n > 0) EVP_DigestUpdate(context_->ctx, data, n);
 }
 
 Sha256Digest Sha256::Final() {
-  const uint64_t bit_length = total_bytes_ * 8;
-  // Padding: 0x80, zeros up to 56 mod 64, then the 64-bit big-endian length.
-  uint8_t pad[kSha256BlockSize * 2] = {0x80};
-  const size_t pad_size =
-      (block_used_ < 56 ? 56 - block_used_ : 56 + kSha256BlockSize - block_used_);
-  uint8_t length[8];
-  for (int i = 0; i < 8; ++i) length[i] = static_cast<uint8_t>(bit_length >> (56 - 8 * i));
-  Update(pad, pad_size);
-  Update(length, 8);
-  Sha256Digest digest;
-  for (int i = 0; i < 8; ++i) {
-    digest[4 * i] = static_cast<uint8_t>(state_[i] >> 24);
-    digest[4 * i + 1] = static_cast<uint8_t>(state_[i] >> 16);
-    digest[4 * i + 2] = static_cast<uint8_t>(state_[i] >> 8);
-    digest[4 * i + 3] = static_cast<uint8_t>(state_[i]);
-  }
+  Sha256Digest digest{};
+  unsigned int size = 0;
+  EVP_DigestFinal_ex(context_->ctx, digest.data(), &size);
   Reset();
   return digest;
 }
 
 Sha256Digest Sha256Hash(const uint8_t* data, size_t n) {
-  Sha256 sha;
-  sha.Update(data, n);
-  return sha.Final();
+  Sha256Digest digest{};
+  unsigned int size = 0;
+  EVP_Digest(data, n, digest.data(), &size, EVP_sha256(), nullptr);
+  return digest;
 }
 
 Sha256Digest HmacSha256(const uint8_t* key, size_t key_size, const uint8_t* message,
                         size_t message_size, const uint8_t* message2, size_t message2_size) {
-  // K0: the key, hashed if longer than a block, zero-padded to a block.
-  uint8_t k0[kSha256BlockSize] = {0};
-  if (key_size > kSha256BlockSize) {
-    const Sha256Digest hashed = Sha256Hash(key, key_size);
-    std::memcpy(k0, hashed.data(), hashed.size());
-  } else if (key_size > 0) {
-    std::memcpy(k0, key, key_size);
+  Sha256Digest digest{};
+  static const uint8_t kEmpty = 0;
+  if (message2_size == 0) {
+    unsigned int size = 0;
+    HMAC(EVP_sha256(), key_size > 0 ? key : &kEmpty, static_cast<int>(key_size),
+         message_size > 0 ? message : &kEmpty, message_size, digest.data(), &size);
+    return digest;
   }
-  uint8_t ipad[kSha256BlockSize];
-  uint8_t opad[kSha256BlockSize];
-  for (size_t i = 0; i < kSha256BlockSize; ++i) {
-    ipad[i] = k0[i] ^ 0x36;
-    opad[i] = k0[i] ^ 0x5c;
+  // Two parts: the EVP_MAC interface (OpenSSL 3) streams them without a copy.
+  EVP_MAC* mac = EVP_MAC_fetch(nullptr, "HMAC", nullptr);
+  EVP_MAC_CTX* ctx = mac != nullptr ? EVP_MAC_CTX_new(mac) : nullptr;
+  char digest_name[] = "SHA256";
+  OSSL_PARAM params[] = {OSSL_PARAM_construct_utf8_string("digest", digest_name, 0),
+                         OSSL_PARAM_construct_end()};
+  size_t size = 0;
+  if (ctx != nullptr && EVP_MAC_init(ctx, key_size > 0 ? key : &kEmpty, key_size, params) == 1) {
+    EVP_MAC_update(ctx, message, message_size);
+    EVP_MAC_update(ctx, message2, message2_size);
+    EVP_MAC_final(ctx, digest.data(), &size, digest.size());
   }
-  Sha256 inner;
-  inner.Update(ipad, sizeof(ipad));
-  inner.Update(message, message_size);
-  inner.Update(message2, message2_size);
-  const Sha256Digest inner_digest = inner.Final();
-  Sha256 outer;
-  outer.Update(opad, sizeof(opad));
-  outer.Update(inner_digest.data(), inner_digest.size());
-  // Key material should not linger on the stack longer than needed.
-  volatile uint8_t* wipe = k0;
-  for (size_t i = 0; i < kSha256BlockSize; ++i) wipe[i] = 0;
-  return outer.Final();
+  EVP_MAC_CTX_free(ctx);
+  EVP_MAC_free(mac);
+  return digest;
 }
 
-Sha256Digest LinkAuthMac(const std::vector<uint8_t>& key, const uint8_t* nonce, size_t nonce_size) {
-  const size_t context_size = sizeof(kLinkAuthContext) - 1;  // 17 bytes, no terminator.
-  return HmacSha256(key.data(), key.size(), reinterpret_cast<const uint8_t*>(kLinkAuthContext),
-                    context_size, nonce, nonce_size);
+bool HkdfSha256(const uint8_t* salt, size_t salt_size, const uint8_t* ikm, size_t ikm_size,
+                const uint8_t* info, size_t info_size, uint8_t* out, size_t out_size) {
+  EVP_PKEY_CTX* ctx = EVP_PKEY_CTX_new_id(EVP_PKEY_HKDF, nullptr);
+  if (ctx == nullptr) return false;
+  static const uint8_t kEmpty = 0;
+  size_t size = out_size;
+  const bool ok =
+      EVP_PKEY_derive_init(ctx) == 1 && EVP_PKEY_CTX_set_hkdf_md(ctx, EVP_sha256()) == 1 &&
+      EVP_PKEY_CTX_set1_hkdf_salt(ctx, salt_size > 0 ? salt : &kEmpty,
+                                  static_cast<int>(salt_size)) == 1 &&
+      EVP_PKEY_CTX_set1_hkdf_key(ctx, ikm_size > 0 ? ikm : &kEmpty, static_cast<int>(ikm_size)) ==
+          1 &&
+      (info_size == 0 ||
+       EVP_PKEY_CTX_add1_hkdf_info(ctx, info, static_cast<int>(info_size)) == 1) &&
+      EVP_PKEY_derive(ctx, out, &size) == 1 && size == out_size;
+  EVP_PKEY_CTX_free(ctx);
+  return ok;
+}
+
+Sha256Digest LinkAuthMac(const std::vector<uint8_t>& key, const LinkNonce& agent_nonce,
+                         const LinkNonce& client_nonce) {
+  std::vector<uint8_t> message(kLinkAuthContext, kLinkAuthContext + sizeof(kLinkAuthContext) - 1);
+  message.insert(message.end(), agent_nonce.begin(), agent_nonce.end());
+  message.insert(message.end(), client_nonce.begin(), client_nonce.end());
+  return HmacSha256(key.data(), key.size(), message.data(), message.size());
+}
+
+LinkSessionKey LinkDeriveSessionKey(const std::vector<uint8_t>& key, const LinkNonce& agent_nonce,
+                                    const LinkNonce& client_nonce) {
+  uint8_t salt[2 * kLinkNonceSize];
+  std::memcpy(salt, agent_nonce.data(), kLinkNonceSize);
+  std::memcpy(salt + kLinkNonceSize, client_nonce.data(), kLinkNonceSize);
+  LinkSessionKey session{};
+  HkdfSha256(salt, sizeof(salt), key.data(), key.size(),
+             reinterpret_cast<const uint8_t*>(kLinkSessionKeyInfo), sizeof(kLinkSessionKeyInfo) - 1,
+             session.data(), session.size());
+  return session;
+}
+
+LinkTag LinkFrameTag(const LinkSessionKey& session_key, const uint8_t* header24,
+                     const uint8_t* payload, size_t payload_size) {
+  const Sha256Digest full = HmacSha256(session_key.data(), session_key.size(), header24,
+                                       kLinkSignedHeaderSize, payload, payload_size);
+  LinkTag tag{};
+  std::memcpy(tag.data(), full.data(), tag.size());
+  return tag;
+}
+
+LinkFrameSigner MakeLinkFrameSigner(const LinkSessionKey& session_key) {
+  return [session_key](const uint8_t* header24, const uint8_t* payload, size_t n) {
+    return LinkFrameTag(session_key, header24, payload, n);
+  };
+}
+
+bool LinkFrameTagValid(const LinkSessionKey& session_key, const LinkMessage& message) {
+  if (!message.header.signed_frame || message.signed_bytes.size() < kLinkSignedHeaderSize) {
+    return false;
+  }
+  const LinkTag expected =
+      LinkFrameTag(session_key, message.signed_bytes.data(),
+                   message.signed_bytes.data() + kLinkSignedHeaderSize,
+                   message.signed_bytes.size() - kLinkSignedHeaderSize);
+  return ConstantTimeEqual(expected.data(), message.tag.data(), expected.size());
+}
+
+bool MakeLinkAuthResponse(const std::vector<uint8_t>& key, const AuthChallenge& challenge,
+                          AuthResponse* response, LinkSessionKey* session_key) {
+  if (!FillRandomBytes(response->client_nonce.data(), response->client_nonce.size())) return false;
+  const Sha256Digest mac = LinkAuthMac(key, challenge.nonce, response->client_nonce);
+  std::memcpy(response->mac.data(), mac.data(), mac.size());
+  *session_key = LinkDeriveSessionKey(key, challenge.nonce, response->client_nonce);
+  return true;
 }
 
 bool ConstantTimeEqual(const uint8_t* a, const uint8_t* b, size_t n) {
-  // Accumulate every difference; no early exit. volatile keeps the compiler
-  // from turning the loop back into a short-circuiting memcmp.
-  volatile uint8_t diff = 0;
-  for (size_t i = 0; i < n; ++i) diff = diff | static_cast<uint8_t>(a[i] ^ b[i]);
-  return diff == 0;
+  return n == 0 || CRYPTO_memcmp(a, b, n) == 0;
 }
 
 bool FillRandomBytes(uint8_t* out, size_t n) {
   if (n == 0) return true;
-  if (FILE* f = std::fopen("/dev/urandom", "rb")) {
-    const size_t got = std::fread(out, 1, n, f);
-    std::fclose(f);
-    if (got == n) return true;
-  }
-  try {
-    std::random_device device;
-    for (size_t i = 0; i < n; i += 4) {
-      const uint32_t r = device();
-      for (size_t j = 0; j < 4 && i + j < n; ++j) out[i + j] = static_cast<uint8_t>(r >> (8 * j));
-    }
-    return true;
-  } catch (...) {
-    return false;
-  }
+  return RAND_bytes(out, static_cast<int>(n)) == 1;
 }
 
 std::string ToHex(const uint8_t* data, size_t n) {

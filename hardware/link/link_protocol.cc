@@ -15,6 +15,7 @@ namespace {
 constexpr size_t kOffVersion = 2;
 constexpr size_t kOffType = 3;
 constexpr size_t kOffSender = 4;
+constexpr size_t kOffFlags = 5;
 constexpr size_t kOffSequence = 8;
 constexpr size_t kOffTime = 12;
 constexpr size_t kOffPayloadSize = 20;
@@ -117,6 +118,7 @@ struct PayloadWriter {
     out->insert(out->end(), m.nonce.begin(), m.nonce.end());
   }
   void operator()(const AuthResponse& m) const {
+    out->insert(out->end(), m.client_nonce.begin(), m.client_nonce.end());
     out->insert(out->end(), m.mac.begin(), m.mac.end());
   }
   void operator()(const AuthResult& m) const {
@@ -205,6 +207,7 @@ LinkHeader ReadHeader(const uint8_t* p) {
   h.version = p[kOffVersion];
   h.type = p[kOffType];
   h.sender = static_cast<LinkSender>(p[kOffSender]);
+  h.signed_frame = (p[kOffFlags] & kLinkFlagSigned) != 0;
   h.sequence = ReadU32Le(p + kOffSequence);
   h.time = TimeFromNanoseconds(ReadI64Le(p + kOffTime));
   h.payload_size = ReadU32Le(p + kOffPayloadSize);
@@ -253,8 +256,9 @@ bool ParseAuth(LinkMessageType type, Reader& r, size_t n, LinkPayload* out, std:
     return true;
   }
   if (type == LinkMessageType::kAuthResponse) {
-    if (!ExactPayloadSize(t, n, kLinkMacSize, error)) return false;
+    if (!ExactPayloadSize(t, n, kLinkNonceSize + kLinkMacSize, error)) return false;
     AuthResponse m;
+    r.Bytes(m.client_nonce.data(), m.client_nonce.size());
     r.Bytes(m.mac.data(), m.mac.size());
     *out = m;
     return true;
@@ -431,23 +435,29 @@ void EncodeLinkPayload(const LinkPayload& payload, std::vector<uint8_t>* out) {
 }
 
 bool AppendRawLinkFrame(LinkSender sender, uint32_t sequence, Time time, uint8_t type,
-                        const uint8_t* payload, size_t n, std::vector<uint8_t>* out) {
+                        const uint8_t* payload, size_t n, std::vector<uint8_t>* out,
+                        const LinkFrameSigner& signer, uint8_t version) {
   if (n > kLinkMaxPayload || (n > 0 && payload == nullptr)) return false;
+  const bool sign = static_cast<bool>(signer) && version >= 2;
   const size_t start = out->size();
-  out->reserve(start + n + kLinkFrameOverhead);
+  out->reserve(start + n + kLinkFrameOverhead + (sign ? kLinkTagSize : 0));
   out->push_back(kLinkSync1);
   out->push_back(kLinkSync2);
-  out->push_back(kLinkProtocolVersion);
+  out->push_back(version);
   out->push_back(type);
   out->push_back(static_cast<uint8_t>(sender));
-  out->push_back(0);    // reserved
-  AppendU16Le(0, out);  // reserved
+  out->push_back(sign ? kLinkFlagSigned : 0);  // flags
+  AppendU16Le(0, out);                         // reserved
   AppendU32Le(sequence, out);
   AppendI64Le(ToNanoseconds(time), out);
   AppendU32Le(static_cast<uint32_t>(n), out);
   AppendU32Le(Crc32c(out->data() + start, kOffHeaderCrc), out);
   if (n > 0) out->insert(out->end(), payload, payload + n);
-  AppendU32Le(Crc32c(out->data() + start, kLinkHeaderSize + n), out);
+  if (sign) {
+    const LinkTag tag = signer(out->data() + start, payload, n);
+    out->insert(out->end(), tag.begin(), tag.end());
+  }
+  AppendU32Le(Crc32c(out->data() + start, out->size() - start), out);
   return true;
 }
 
@@ -461,7 +471,12 @@ bool AppendLinkFrame(LinkSender sender, uint32_t sequence, Time time, const Link
 
 std::vector<uint8_t> LinkEncoder::Encode(Time time, const LinkPayload& payload) {
   std::vector<uint8_t> out;
-  if (AppendLinkFrame(sender_, next_sequence_, time, payload, &out)) ++next_sequence_;
+  std::vector<uint8_t> body;
+  EncodeLinkPayload(payload, &body);
+  if (AppendRawLinkFrame(sender_, next_sequence_, time, LinkPayloadType(payload), body.data(),
+                         body.size(), &out, signer_)) {
+    ++next_sequence_;
+  }
   return out;
 }
 
@@ -475,7 +490,10 @@ std::vector<uint8_t> LinkEncoder::EncodeTelemetry(Time t, LinkDevice device, Tim
     m.device = static_cast<uint8_t>(device);
     m.receive_time = receive_time;
     if (k > 0) m.bytes.assign(bytes + pos, bytes + pos + k);
-    AppendLinkFrame(sender_, next_sequence_++, t, m, &out);
+    std::vector<uint8_t> body;
+    EncodeLinkPayload(m, &body);
+    AppendRawLinkFrame(sender_, next_sequence_++, t, static_cast<uint8_t>(LinkMessageType::kTelemetry),
+                       body.data(), body.size(), &out, signer_);
     pos += k;
   } while (pos < n);
   return out;
@@ -522,7 +540,7 @@ Status ParseLinkFrame(const uint8_t* data, size_t n, LinkMessage* out) {
   if (data[0] != kLinkSync1 || data[1] != kLinkSync2) {
     return Status::Error("link frame: no E7 5C sync bytes at its start");
   }
-  if (data[kOffVersion] != kLinkProtocolVersion) {
+  if (data[kOffVersion] < kLinkMinReadableVersion || data[kOffVersion] > kLinkProtocolVersion) {
     return Status::Error("link frame: unsupported protocol version " +
                          std::to_string(data[kOffVersion]));
   }
@@ -534,11 +552,12 @@ Status ParseLinkFrame(const uint8_t* data, size_t n, LinkMessage* out) {
     return Status::Error("link frame: payload size " + std::to_string(h.payload_size) +
                          " beyond the limit " + std::to_string(kLinkMaxPayload));
   }
-  if (n != kLinkFrameOverhead + h.payload_size) {
+  const size_t tag_size = h.signed_frame ? kLinkTagSize : 0;
+  if (n != kLinkFrameOverhead + h.payload_size + tag_size) {
     return Status::Error("link frame: " + std::to_string(n) + " bytes, header announces " +
-                         std::to_string(kLinkFrameOverhead + h.payload_size));
+                         std::to_string(kLinkFrameOverhead + h.payload_size + tag_size));
   }
-  const size_t crc_at = kLinkHeaderSize + h.payload_size;
+  const size_t crc_at = kLinkHeaderSize + h.payload_size + tag_size;
   if (Crc32c(data, crc_at) != ReadU32Le(data + crc_at)) {
     return Status::Error("link frame: frame CRC mismatch");
   }
@@ -601,11 +620,12 @@ LinkDecoder::Parse LinkDecoder::TryFrame(const uint8_t* p, size_t n,
   // p[0..1] are the sync bytes. Check what is available as early as possible
   // so a bad candidate is rejected without waiting for more bytes.
   if (n <= kOffVersion) return Parse::kNeedMore;
-  if (p[kOffVersion] != kLinkProtocolVersion) {
+  if (p[kOffVersion] < kLinkMinReadableVersion || p[kOffVersion] > kLinkProtocolVersion) {
     ++stats_.codec.framing_errors;
     return Parse::kRejected;
   }
   if (n < kLinkHeaderSize) return Parse::kNeedMore;
+  work_ += kOffHeaderCrc;
   if (Crc32c(p, kOffHeaderCrc) != ReadU32Le(p + kOffHeaderCrc)) {
     ++stats_.codec.checksum_errors;
     return Parse::kRejected;
@@ -615,9 +635,11 @@ LinkDecoder::Parse LinkDecoder::TryFrame(const uint8_t* p, size_t n,
     ++stats_.codec.length_errors;
     return Parse::kRejected;
   }
-  const size_t frame_size = kLinkFrameOverhead + h.payload_size;
+  const size_t tag_size = h.signed_frame ? kLinkTagSize : 0;
+  const size_t frame_size = kLinkFrameOverhead + h.payload_size + tag_size;
   if (n < frame_size) return Parse::kNeedMore;
-  const size_t crc_at = kLinkHeaderSize + h.payload_size;
+  const size_t crc_at = kLinkHeaderSize + h.payload_size + tag_size;
+  work_ += crc_at;
   if (Crc32c(p, crc_at) != ReadU32Le(p + crc_at)) {
     ++stats_.codec.checksum_errors;
     return Parse::kRejected;
@@ -640,6 +662,13 @@ LinkDecoder::Parse LinkDecoder::TryFrame(const uint8_t* p, size_t n,
   if (std::holds_alternative<UnknownMessage>(m.payload)) ++stats_.unknown_types;
   ++stats_.codec.frames_ok;
   if (options_.keep_raw_frames) m.raw.assign(p, p + frame_size);
+  if (h.signed_frame) {
+    std::copy(p + kLinkHeaderSize + h.payload_size, p + crc_at, m.tag.begin());
+    m.signed_bytes.reserve(kLinkSignedHeaderSize + h.payload_size);
+    m.signed_bytes.assign(p, p + kLinkSignedHeaderSize);
+    m.signed_bytes.insert(m.signed_bytes.end(), p + kLinkHeaderSize,
+                          p + kLinkHeaderSize + h.payload_size);
+  }
   out->push_back(std::move(m));
   return Parse::kConsumed;
 }
@@ -648,7 +677,13 @@ void LinkDecoder::Feed(const uint8_t* data, size_t n, std::vector<LinkMessage>* 
   if (data == nullptr) n = 0;
   stats_.codec.bytes_in += n;
   buffer_.Append(data, n);
+  work_ = 0;
+  work_pending_ = false;
   while (buffer_.size() > 0) {
+    if (options_.max_work_per_feed > 0 && work_ >= options_.max_work_per_feed) {
+      work_pending_ = true;  // The rest waits for the next Feed().
+      break;
+    }
     const uint8_t* p = buffer_.data();
     const size_t avail = buffer_.size();
     if (p[0] != kLinkSync1) {
@@ -668,7 +703,8 @@ void LinkDecoder::Feed(const uint8_t* data, size_t n, std::vector<LinkMessage>* 
       buffer_.Consume(1);
       continue;
     }
-    const size_t frame_size = kLinkFrameOverhead + ReadU32Le(p + kOffPayloadSize);
+    const size_t frame_size = kLinkFrameOverhead + ReadU32Le(p + kOffPayloadSize) +
+                              ((p[kOffFlags] & kLinkFlagSigned) != 0 ? kLinkTagSize : 0);
     buffer_.Consume(frame_size);
   }
   buffer_.Compact();

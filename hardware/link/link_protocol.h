@@ -22,6 +22,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -38,16 +39,31 @@ namespace hardware {
 
 inline constexpr uint8_t kLinkSync1 = 0xE7;
 inline constexpr uint8_t kLinkSync2 = 0x5C;
-inline constexpr uint8_t kLinkProtocolVersion = 1;
+// Version 2 (this code) adds per-frame authentication (header flags, a
+// 16-byte tag after the payload) and the two-nonce handshake. Receivers
+// accept version-1 frames only to tell the operator to update the other end.
+inline constexpr uint8_t kLinkProtocolVersion = 2;
+inline constexpr uint8_t kLinkMinReadableVersion = 1;
 inline constexpr size_t kLinkHeaderSize = 28;
 inline constexpr size_t kLinkCrcSize = 4;
 inline constexpr size_t kLinkFrameOverhead = kLinkHeaderSize + kLinkCrcSize;  // 32
 inline constexpr size_t kLinkMaxPayload = 65536;  // Hard limit; larger frames are length errors.
-inline constexpr size_t kLinkMaxFrameSize = kLinkMaxPayload + kLinkFrameOverhead;
 inline constexpr size_t kLinkNonceSize = 32;
 inline constexpr size_t kLinkMacSize = 32;
-// HMAC-SHA256 input prefix of the AuthResponse: HMAC(key, kLinkAuthContext || nonce).
-inline constexpr char kLinkAuthContext[] = "sweepscan-link-v1";
+// HMAC-SHA256 input prefix of the AuthResponse:
+// HMAC(key, kLinkAuthContext || agent_nonce || client_nonce).
+inline constexpr char kLinkAuthContext[] = "sweepscan-link-v2";
+// HKDF info of the session key (docs/protocol.md, "Frame authentication").
+inline constexpr char kLinkSessionKeyInfo[] = "sweepscan-link-v2 session";
+// Header byte 5 (flags), bit 0: a kLinkTagSize-byte tag follows the payload.
+inline constexpr uint8_t kLinkFlagSigned = 0x01;
+inline constexpr size_t kLinkTagSize = 16;
+// The tag covers header bytes 0..23 (everything before header_crc) and the payload.
+inline constexpr size_t kLinkSignedHeaderSize = 24;
+using LinkNonce = std::array<uint8_t, kLinkNonceSize>;
+using LinkTag = std::array<uint8_t, kLinkTagSize>;
+inline constexpr size_t kLinkMaxFrameSize = kLinkMaxPayload + kLinkFrameOverhead + kLinkTagSize;
+
 // Agent stops the robot when no valid frame arrived for this long (docs/protocol.md).
 inline constexpr Duration kLinkDefaultWatchdog = std::chrono::milliseconds(500);
 // Telemetry payload: device u8, 3 reserved bytes, robot receive time i64.
@@ -95,10 +111,11 @@ struct Hello {
   std::vector<HelloDevice> devices;  // Agent: the devices it streams; client: empty. <= 255.
 };
 struct AuthChallenge {
-  std::array<uint8_t, kLinkNonceSize> nonce{};
+  LinkNonce nonce{};  // The agent's nonce, fresh per connection.
 };
 struct AuthResponse {
-  std::array<uint8_t, kLinkMacSize> mac{};  // HMAC-SHA256(key, kLinkAuthContext || nonce).
+  LinkNonce client_nonce{};                 // The client's nonce, fresh per connection.
+  std::array<uint8_t, kLinkMacSize> mac{};  // HMAC-SHA256(key, kLinkAuthContext || agent_nonce || client_nonce).
 };
 enum class AuthOutcome : uint8_t { kOk = 0, kDenied = 1 };
 struct AuthResult {
@@ -190,6 +207,7 @@ struct LinkHeader {
   uint8_t version = kLinkProtocolVersion;
   uint8_t type = 0;
   LinkSender sender = LinkSender::kAgent;
+  bool signed_frame = false;  // Flags bit 0: a tag follows the payload.
   uint32_t sequence = 0;
   // Sender's monotonic clock: robot time for the agent, the workstation's
   // steady clock for the client (only echoed back, never mixed with robot time).
@@ -203,7 +221,17 @@ struct LinkMessage {
   // The complete frame as received; filled only with
   // LinkDecoderOptions::keep_raw_frames (the session recorder stores it).
   std::vector<uint8_t> raw;
+  // Signed frames only: the tag, and the bytes it covers (header bytes
+  // 0..23 followed by the payload), for LinkFrameTagValid (hmac_sha256.h).
+  LinkTag tag{};
+  std::vector<uint8_t> signed_bytes;
 };
+
+// Computes the tag of a frame being encoded from its header bytes 0..23 and
+// its payload (hardware/link/hmac_sha256.h: MakeLinkFrameSigner). Kept as a
+// callback so the protocol code itself needs no crypto library.
+using LinkFrameSigner =
+    std::function<LinkTag(const uint8_t* header24, const uint8_t* payload, size_t payload_size)>;
 
 // ---------------------------------------------------------------------------
 // Encoding.
@@ -219,9 +247,13 @@ bool AppendLinkFrame(LinkSender sender, uint32_t sequence, Time time, const Link
                      std::vector<uint8_t>* out);
 
 // Wraps already encoded payload bytes in a frame (header, CRCs) of type
-// `type`. Returns false (appending nothing) when n > kLinkMaxPayload.
+// `type`. Returns false (appending nothing) when n > kLinkMaxPayload. With a
+// signer, the frame is signed (flags bit 0, tag after the payload). `version`
+// other than kLinkProtocolVersion only for telling an old peer why it is refused.
 bool AppendRawLinkFrame(LinkSender sender, uint32_t sequence, Time time, uint8_t type,
-                        const uint8_t* payload, size_t n, std::vector<uint8_t>* out);
+                        const uint8_t* payload, size_t n, std::vector<uint8_t>* out,
+                        const LinkFrameSigner& signer = nullptr,
+                        uint8_t version = kLinkProtocolVersion);
 
 // One side of a connection: numbers frames 0, 1, 2, ... (wrapping at 2^32).
 class LinkEncoder {
@@ -244,10 +276,14 @@ class LinkEncoder {
 
   uint32_t next_sequence() const { return next_sequence_; }
   LinkSender sender() const { return sender_; }
+  // From now on every frame is signed (the client after the handshake).
+  void SetSigner(LinkFrameSigner signer) { signer_ = std::move(signer); }
+  bool signing() const { return static_cast<bool>(signer_); }
 
  private:
   LinkSender sender_;
   uint32_t next_sequence_;
+  LinkFrameSigner signer_;
 };
 
 // ---------------------------------------------------------------------------
@@ -304,6 +340,11 @@ struct LinkDecoderStats {
 struct LinkDecoderOptions {
   size_t max_payload = kLinkMaxPayload;  // May only be lowered (e.g. on the agent).
   bool keep_raw_frames = false;          // Copy each frame's bytes into LinkMessage::raw.
+  // Upper bound of the CRC work of one Feed() call, in bytes checked (0: no
+  // bound). When reached, Feed() returns with the rest buffered; call
+  // Feed(nullptr, 0, out) again (after serving timers) to go on. Bounds the
+  // time a flood of frame candidates can keep the agent's watchdog waiting.
+  size_t max_work_per_feed = 0;
 };
 
 // Streaming decoder, any chunking. Resync: at each position it looks for the
@@ -329,6 +370,9 @@ class LinkDecoder {
 
   const LinkDecoderStats& stats() const { return stats_; }
   size_t BufferedBytes() const { return buffer_.size(); }
+  // True when the last Feed() stopped at max_work_per_feed with complete
+  // candidates left in the buffer.
+  bool work_pending() const { return work_pending_; }
   // Forgets buffered bytes and the sequence history (reconnect). Counters kept.
   void Reset();
 
@@ -339,6 +383,8 @@ class LinkDecoder {
   LinkDecoderOptions options_;
   StreamBuffer buffer_;
   LinkDecoderStats stats_;
+  size_t work_ = 0;  // CRC bytes checked in the current Feed().
+  bool work_pending_ = false;
   std::array<SequenceTracker, 2> trackers_;
 };
 

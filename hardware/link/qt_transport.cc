@@ -1,5 +1,10 @@
 #include "hardware/link/qt_transport.h"
 
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
+
 #include <errno.h>
 #include <fcntl.h>
 #include <pty.h>
@@ -282,19 +287,42 @@ bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error)
   return true;
 }
 
-bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error) {
+bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
+                 KeyFilePermissions permissions, QString* warning) {
+  auto fail = [&](const QString& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  struct stat st;
+  if (::stat(QFile::encodeName(path).constData(), &st) != 0) {
+    return fail(QStringLiteral("key file %1: %2").arg(path, QString::fromLocal8Bit(std::strerror(errno))));
+  }
+  if (S_ISDIR(st.st_mode)) return fail(QStringLiteral("key file %1 is a folder").arg(path));
+  if (st.st_size > kMaxKeyFileBytes) {
+    return fail(QStringLiteral("key file %1 is %2 bytes; key files over %3 bytes are refused")
+                    .arg(path)
+                    .arg(static_cast<qint64>(st.st_size))
+                    .arg(kMaxKeyFileBytes));
+  }
+  if ((st.st_mode & 077) != 0 && permissions != KeyFilePermissions::kAny) {
+    const QString message =
+        QStringLiteral("key file %1 is readable by others (mode %2); restrict it: chmod 600 %1")
+            .arg(path)
+            .arg(static_cast<unsigned>(st.st_mode & 0777), 4, 8, QLatin1Char('0'));
+    if (permissions == KeyFilePermissions::kOwnerOnly) return fail(message);
+    if (warning != nullptr) *warning = message;
+  }
   QFile file(path);
   if (!file.open(QIODevice::ReadOnly)) {
-    if (error != nullptr) *error = QStringLiteral("key file %1: %2").arg(path, file.errorString());
-    return false;
+    return fail(QStringLiteral("key file %1: %2").arg(path, file.errorString()));
   }
-  QByteArray bytes = file.read(1 << 16);
+  QByteArray bytes = file.read(kMaxKeyFileBytes + 1);
+  if (bytes.size() > kMaxKeyFileBytes) {
+    return fail(QStringLiteral("key file %1 is over %2 bytes; refused").arg(path).arg(kMaxKeyFileBytes));
+  }
   if (bytes.endsWith('\n')) bytes.chop(1);
   if (bytes.endsWith('\r')) bytes.chop(1);
-  if (bytes.isEmpty()) {
-    if (error != nullptr) *error = QStringLiteral("key file %1 is empty").arg(path);
-    return false;
-  }
+  if (bytes.isEmpty()) return fail(QStringLiteral("key file %1 is empty").arg(path));
   key->assign(bytes.begin(), bytes.end());
   return true;
 }

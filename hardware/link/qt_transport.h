@@ -147,9 +147,20 @@ struct LinkAddress {
 };
 bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error);
 
+// What ReadKeyFile says about a key file that others may read.
+enum class KeyFilePermissions {
+  kAny,        // Accept (the workstation's default).
+  kWarn,       // Accept, with a warning in *warning (sweepscan-sim).
+  kOwnerOnly,  // Refuse group- or world-readable files, like ssh (sweepscan-robotd).
+};
+inline constexpr qint64 kMaxKeyFileBytes = 64 * 1024;
+
 // Reads a pre-shared key file: its bytes, with one trailing newline (LF or
-// CR LF) removed so `echo secret > key` works. Empty files are refused.
-bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error);
+// CR LF) removed so `echo secret > key` works. Empty files, folders and files
+// over kMaxKeyFileBytes are refused (never cut).
+bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
+                 KeyFilePermissions permissions = KeyFilePermissions::kAny,
+                 QString* warning = nullptr);
 
 }  // namespace hardware
 }  // namespace sweepscan

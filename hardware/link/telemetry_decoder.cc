@@ -180,14 +180,15 @@ bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
 namespace {
 
 Status DecodeSessionWithProgress(const std::string& session_dir,
-                                 const TelemetryDecoderOptions& options, SensorLog* log,
+                                 const TelemetryDecoderOptions& options,
+                                 const FramesLoadOptions& frames_options, SensorLog* log,
                                  SessionDecodeInfo* info, const DecodeProgress& progress) {
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(session_dir + ": decoder options: " + error);
   // Reading the file is the first tenth of the work, decoding the rest.
   if (progress && !progress(0.0)) return Status::Error(session_dir + ": cancelled");
   Session session;
-  const Status s = LoadSession(session_dir, FramesLoadOptions(), &session);
+  const Status s = LoadSession(session_dir, frames_options, &session);
   if (!s.ok()) return s;
   SessionDecodeInfo result;
   result.meta = session.meta;
@@ -204,7 +205,8 @@ Status DecodeSessionWithProgress(const std::string& session_dir,
   return Status::Ok();
 }
 
-Status DecodeSessionWithMeta(const std::string& session_dir, SensorLog* log,
+Status DecodeSessionWithMeta(const std::string& session_dir,
+                             const FramesLoadOptions& frames_options, SensorLog* log,
                              SessionDecodeInfo* info, const DecodeProgress& progress) {
   SessionMeta meta;
   const std::string meta_path = session_dir +
@@ -215,23 +217,35 @@ Status DecodeSessionWithMeta(const std::string& session_dir, SensorLog* log,
   TelemetryDecoderOptions options;
   options.wheel_distance_m = meta.geometry.wheel_distance_m;
   options.lidar_angle_convention = meta.lidar_angle_convention;
-  return DecodeSessionWithProgress(session_dir, options, log, info, progress);
+  return DecodeSessionWithProgress(session_dir, options, frames_options, log, info, progress);
 }
 
 }  // namespace
 
+FramesLoadOptions DefaultSessionFramesOptions() {
+  FramesLoadOptions options;
+  options.skip_corrupt_records = true;
+  return options;
+}
+
 Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
                      SensorLog* log, SessionDecodeInfo* info) {
-  return DecodeSessionWithProgress(session_dir, options, log, info, nullptr);
+  return DecodeSessionWithProgress(session_dir, options, DefaultSessionFramesOptions(), log, info,
+                                   nullptr);
 }
 
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info) {
-  return DecodeSessionWithMeta(session_dir, log, info, nullptr);
+  return DecodeSessionWithMeta(session_dir, DefaultSessionFramesOptions(), log, info, nullptr);
 }
 
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info,
                      const DecodeProgress& progress) {
-  return DecodeSessionWithMeta(session_dir, log, info, progress);
+  return DecodeSessionWithMeta(session_dir, DefaultSessionFramesOptions(), log, info, progress);
+}
+
+Status DecodeSession(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                     SensorLog* log, SessionDecodeInfo* info, const DecodeProgress& progress) {
+  return DecodeSessionWithMeta(session_dir, frames_options, log, info, progress);
 }
 
 }  // namespace hardware

@@ -94,16 +94,28 @@ struct SessionDecodeInfo {
   std::string ToString() const;
 };
 
+// What DecodeSession uses unless told otherwise: damaged records of
+// frames.bin are skipped and described in info->frames.damage (a measuring
+// instrument must not lose an hour of scanning to one bad sector). Callers
+// warn with info->frames.DamageSummary(); `--strict` refuses instead.
+FramesLoadOptions DefaultSessionFramesOptions();
+
 // Loads a session folder and decodes it with the geometry and lidar angle
 // convention of its meta.json (and otherwise default decoder options).
 // Records that do not hold exactly one valid link frame are skipped and
-// counted; a corrupt frames.bin or meta.json is an error (LoadSession).
+// counted; damaged stretches of frames.bin are skipped and reported in
+// info->frames (DefaultSessionFramesOptions); a corrupt meta.json is an error.
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info);
 // Progress of a long decode: called with the fraction done (0..1, monotone,
 // ending at 1 on success); returning false cancels (the call then fails with
 // "cancelled"). Called every 4096 records, so a cancel takes effect within
 // milliseconds.
 using DecodeProgress = std::function<bool(double fraction)>;
+// The same with explicit frames.bin options (skip_corrupt_records = false:
+// a damaged record is an error with its place, the CLI's --strict).
+Status DecodeSession(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                     SensorLog* log, SessionDecodeInfo* info,
+                     const DecodeProgress& progress = nullptr);
 // The same with progress and cancel (the desktop app's open job).
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info,
                      const DecodeProgress& progress);

@@ -8,8 +8,14 @@ Status OpenRecording(const std::string& session_dir, Recording* recording) {
 
 Status OpenRecording(const std::string& session_dir, Recording* recording,
                      const DecodeProgress& progress) {
+  return OpenRecording(session_dir, DefaultSessionFramesOptions(), recording, progress);
+}
+
+Status OpenRecording(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                     Recording* recording, const DecodeProgress& progress) {
   *recording = Recording();
-  const Status s = DecodeSession(session_dir, &recording->log, &recording->decode, progress);
+  const Status s =
+      DecodeSession(session_dir, frames_options, &recording->log, &recording->decode, progress);
   if (!s.ok()) return s;
   recording->session_dir = session_dir;
   recording->geometry = recording->decode.meta.geometry;

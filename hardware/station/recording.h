@@ -34,14 +34,20 @@ struct Recording {
   PoseBuffer truth_poses;    //   the true trajectory (1 kHz)
 };
 
-// Decodes a session folder (docs/session-format.md). A corrupt meta.json or
-// frame log is refused with the file, the place and the reason; frames that
-// are not valid link frames are counted in decode.frames_refused and skipped.
+// Decodes a session folder (docs/session-format.md). A corrupt meta.json is
+// refused with the file, the place and the reason; damaged stretches of
+// frames.bin are skipped and described in decode.frames.damage (show
+// decode.frames.DamageSummary() to the operator); frames that are not valid
+// link frames are counted in decode.frames_refused and skipped.
 Status OpenRecording(const std::string& session_dir, Recording* recording);
 // The same with progress and cancel (DecodeProgress: fraction 0..1; return
 // false to cancel, which fails with "cancelled").
 Status OpenRecording(const std::string& session_dir, Recording* recording,
                      const DecodeProgress& progress);
+// With explicit frames.bin options (skip_corrupt_records = false refuses a
+// damaged session: the CLI's --strict).
+Status OpenRecording(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                     Recording* recording, const DecodeProgress& progress = nullptr);
 
 // Runs a scenario's world in-process (no bytes: the simulator's records
 // directly) and keeps its ground truth.

@@ -272,6 +272,17 @@ void RobotConnection::OnBytes(const QByteArray& bytes) {
 
 void RobotConnection::HandleMessage(const LinkMessage& message) {
   if (message.header.sender != LinkSender::kAgent) return;
+  if (message.header.version < kLinkProtocolVersion) {
+    // An old agent: it cannot read our frames. Say so once and stop retrying.
+    const auto* result = std::get_if<AuthResult>(&message.payload);
+    Fail(result != nullptr && !result->reason.empty()
+             ? QString::fromStdString(result->reason)
+             : QStringLiteral("the agent speaks protocol version %1, this workstation %2: "
+                              "update sweepscan-robotd")
+                   .arg(message.header.version)
+                   .arg(kLinkProtocolVersion));
+    return;
+  }
   const LinkPayload& payload = message.payload;
   if (const auto* hello = std::get_if<Hello>(&payload)) {
     health_.agent_name = hello->name;
@@ -293,10 +304,15 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     if (answered_challenge_ || authenticated_) return;  // One attempt per connection.
     answered_challenge_ = true;
     AuthResponse response;
-    const Sha256Digest mac =
-        LinkAuthMac(options_.key, challenge->nonce.data(), challenge->nonce.size());
-    std::copy(mac.begin(), mac.end(), response.mac.begin());
+    LinkSessionKey session_key;
+    if (!MakeLinkAuthResponse(options_.key, *challenge, &response, &session_key)) {
+      ScheduleReconnect(QStringLiteral("no random source for the client nonce"));
+      return;
+    }
     SendMessage(response, false);
+    // Every frame after the response carries a tag under the session key
+    // (docs/protocol.md, "Frame authentication").
+    encoder_.SetSigner(MakeLinkFrameSigner(session_key));
   } else if (const auto* result = std::get_if<AuthResult>(&payload)) {
     if (result->outcome == AuthOutcome::kOk) {
       authenticated_ = true;
@@ -308,8 +324,9 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     const QString reason = QString::fromStdString(result->reason);
     health_.last_error = QStringLiteral("denied: %1").arg(reason);
     emit authenticationFailed(reason);
-    if (reason == QLatin1String("authentication failed")) {
-      // A wrong key stays wrong: hammering the agent would only lock us out.
+    if (reason == QLatin1String("authentication failed") || reason.startsWith("protocol version")) {
+      // A wrong key stays wrong (hammering the agent would only lock us
+      // out); so does a protocol version the agent does not speak.
       if (stream_ != nullptr) {
         stream_->disconnect(this);
         stream_->Close();
@@ -336,6 +353,20 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
 }
 
 void RobotConnection::OnClosed(const QString& reason) { ScheduleReconnect(reason); }
+
+void RobotConnection::Fail(const QString& reason) {
+  health_.last_error = reason;
+  emit authenticationFailed(reason);
+  if (stream_ != nullptr) {
+    stream_->disconnect(this);
+    stream_->Close();
+    stream_.release()->deleteLater();  // We may be inside its bytesReceived signal.
+  }
+  const bool was_authenticated = authenticated_;
+  authenticated_ = false;
+  if (was_authenticated) emit authenticatedChanged(false);
+  SetState(LinkHealth::State::kFailed);
+}
 
 void RobotConnection::ScheduleReconnect(const QString& reason) {
   if (stopping_) return;

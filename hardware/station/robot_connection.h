@@ -159,6 +159,8 @@ class RobotConnection : public QObject {
   void OnBytes(const QByteArray& bytes);
   void OnClosed(const QString& reason);
   void HandleMessage(const LinkMessage& message);
+  // A final failure (old agent): state failed, no retry.
+  void Fail(const QString& reason);
   void ScheduleReconnect(const QString& reason);
   void SetState(LinkHealth::State state);
   bool SendMessage(const LinkPayload& payload, bool require_auth);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 
@@ -96,6 +97,66 @@ TEST(CloudIoTest, VoxelDownsampleKeepsOnePointPerVoxel) {
   const auto out = VoxelDownsample(pts, 0.5);
   ASSERT_EQ(out.size(), 2u);
   EXPECT_NEAR(std::min(out[0].x(), out[1].x()), 0.1f + 0.0001f * 499.5f, 1e-4);
+}
+
+// Headers are checked against the file size before anything is allocated
+// (issue 16: `element vertex -5` or 2^64-1 aborted with std::bad_alloc; 10
+// declared vertices followed by 1.2 MB of junk were accepted).
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string PlyHeaderFor(const std::string& count) {
+  return "ply\nformat binary_little_endian 1.0\nelement vertex " + count +
+         "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+}
+
+TEST(CloudHeaderTest, ForgedOrOversizedCountsAreRefusedWithoutAllocating) {
+  std::vector<Eigen::Vector3f> xyz;
+  for (const char* count : {"-5", "18446744073709551615", "1e9", "4000000000"}) {
+    const std::string path = TempPath("forged.ply");
+    WriteText(path, PlyHeaderFor(count) + std::string(120, '\0'));
+    const Status s = LoadCloudPositions(path, &xyz);
+    EXPECT_FALSE(s.ok()) << count;
+    EXPECT_NE(s.message().find("forged.ply: not a readable point cloud"), std::string::npos)
+        << s.message();
+  }
+  const std::string pcd = TempPath("forged.pcd");
+  WriteText(pcd,
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\n"
+            "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2000000000\nDATA binary\n" +
+                std::string(24, '\0'));
+  const Status s = LoadCloudPositions(pcd, &xyz);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("POINTS 2000000000"), std::string::npos) << s.message();
+}
+
+TEST(CloudHeaderTest, TrailingJunkAndShortDataAreRefused) {
+  std::vector<Eigen::Vector3f> xyz;
+  const std::string junk = TempPath("junk.ply");
+  WriteText(junk, PlyHeaderFor("10") + std::string(120, '\0') + std::string(1200000, 'j'));
+  Status s = LoadCloudPositions(junk, &xyz);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("trailing junk"), std::string::npos) << s.message();
+  const std::string exact = TempPath("exact.ply");
+  WriteText(exact, PlyHeaderFor("10") + std::string(120, '\0'));
+  s = LoadCloudPositions(exact, &xyz);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(xyz.size(), 10u);
+  const std::string cut = TempPath("cut.ply");
+  WriteText(cut, PlyHeaderFor("10") + std::string(100, '\0'));
+  EXPECT_FALSE(LoadCloudPositions(cut, &xyz).ok());
+}
+
+TEST(CloudHeaderTest, AFolderIsAClearError) {
+  const std::string dir = TempPath("folder.ply");
+  std::remove(dir.c_str());
+  ASSERT_EQ(std::system(("mkdir -p " + dir).c_str()), 0);
+  std::vector<Eigen::Vector3f> xyz;
+  const Status s = LoadCloudPositions(dir, &xyz);
+  EXPECT_NE(s.message().find("is a folder"), std::string::npos) << s.message();
+  const Status w = SaveCloud(dir, RandomCloud(3));
+  EXPECT_NE(w.message().find("is a folder"), std::string::npos) << w.message();
 }
 
 }  // namespace

@@ -214,15 +214,77 @@ TEST(SessionTest, CorruptRecordInTheMiddleIsRefusedWithRecordAndOffset) {
   EXPECT_EQ(s.frames.corrupt_records_skipped, 1u);
   EXPECT_EQ(s.records[17].bytes, RecordBytes(18));
 
-  // An absurd length is refused even when skipping (nothing after it can be found).
+  // An absurd length is refused by default, and skipped when skipping: the
+  // next intact record is found by its CRC.
   file = ReadAll(dir + "/frames.bin");
   file[offsets[5] + 3] = 0x7F;
   WriteAll(dir + "/frames.bin", file);
-  st = LoadSession(dir, skip, &s);
+  st = LoadSession(dir, FramesLoadOptions(), &s);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.message().find("record 5 at byte " + std::to_string(offsets[5]) + ": absurd length"),
             std::string::npos)
       << st.message();
+  st = LoadSession(dir, skip, &s);
+  ASSERT_TRUE(st.ok()) << st.message();
+  EXPECT_EQ(s.records.size(), 38u);
+  EXPECT_EQ(s.frames.corrupt_records_skipped, 2u);
+  EXPECT_EQ(s.records[5].bytes, RecordBytes(6));
+}
+
+// Issue 16: one flipped byte in the middle of frames.bin made every command
+// refuse the whole session. Skipping loses only the damaged record, and the
+// report says how many records, how many seconds and where.
+TEST(SessionTest, DamageIsSkippedAndDescribedRecordsSecondsAndPlace) {
+  TempDir tmp;
+  const std::string dir = tmp.Sub("d.sweepscan");
+  const std::vector<size_t> offsets = WriteSession(dir, 100);  // Record i at 1000 i ns.
+  Bytes file = ReadAll(dir + "/frames.bin");
+  file[offsets[40] + 13] ^= 0x01;  // Payload of record 40.
+  file[offsets[70] + 1] ^= 0x80;   // Length field of record 70: 32 KiB more than it is.
+  WriteAll(dir + "/frames.bin", file);
+  FramesLoadOptions skip;
+  skip.skip_corrupt_records = true;
+  Session s;
+  const Status st = LoadSession(dir, skip, &s);
+  ASSERT_TRUE(st.ok()) << st.message();
+  EXPECT_EQ(s.records.size(), 98u);
+  const FramesLoadReport& f = s.frames;
+  ASSERT_EQ(f.damage.size(), 2u);
+  EXPECT_EQ(f.damage[0].first_record, 40u);
+  EXPECT_EQ(f.damage[0].records, 1u);
+  EXPECT_EQ(f.damage[0].offset, offsets[40]);
+  EXPECT_EQ(f.damage[0].bytes, offsets[41] - offsets[40]);
+  EXPECT_EQ(f.damage[0].time_before_ns, 39000);
+  EXPECT_EQ(f.damage[0].time_after_ns, 41000);
+  EXPECT_DOUBLE_EQ(f.damage[0].SecondsLost(), 2e-6);
+  EXPECT_EQ(f.damage[1].offset, offsets[70]);
+  EXPECT_EQ(f.damage[1].bytes, offsets[71] - offsets[70]);
+  EXPECT_EQ(f.corrupt_records_skipped, 2u);
+  EXPECT_EQ(s.records[40].bytes, RecordBytes(41));
+  EXPECT_EQ(s.records[69].bytes, RecordBytes(71));
+  const std::string summary = f.DamageSummary();
+  EXPECT_NE(summary.find("2 damaged records skipped"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("record 40 at byte " + std::to_string(offsets[40])), std::string::npos)
+      << summary;
+  EXPECT_FALSE(LoadSession(dir, FramesLoadOptions(), &s).ok());  // Strict: refused.
+}
+
+TEST(SessionTest, FramesFileThatIsAFolderIsAClearError) {
+  TempDir tmp;
+  const std::string dir = tmp.Sub("x.sweepscan");
+  WriteSession(dir, 3);
+  ASSERT_EQ(::unlink((dir + "/frames.bin").c_str()), 0);
+  ASSERT_EQ(::mkdir((dir + "/frames.bin").c_str(), 0755), 0);
+  Session s;
+  const Status st = LoadSession(dir, FramesLoadOptions(), &s);  // Used to throw ios_base::failure.
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("frames.bin: is a folder"), std::string::npos) << st.message();
+  ASSERT_EQ(::rmdir((dir + "/frames.bin").c_str()), 0);
+  ASSERT_EQ(::mkdir((dir + "/meta.json.d").c_str(), 0755), 0);
+  ASSERT_EQ(::unlink((dir + "/meta.json").c_str()), 0);
+  ASSERT_EQ(::rename((dir + "/meta.json.d").c_str(), (dir + "/meta.json").c_str()), 0);
+  const Status meta = LoadSession(dir, FramesLoadOptions(), &s);
+  EXPECT_NE(meta.message().find("meta.json: is a folder"), std::string::npos) << meta.message();
 }
 
 TEST(SessionTest, EveryByteFlipIsDetectedOrHarmless) {

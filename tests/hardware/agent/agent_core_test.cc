@@ -85,10 +85,17 @@ class AgentHarness {
     const AuthChallenge* challenge = LastChallenge();
     ASSERT_NE(challenge, nullptr);
     AuthResponse response;
-    const Sha256Digest mac = LinkAuthMac(key, challenge->nonce.data(), challenge->nonce.size());
-    std::copy(mac.begin(), mac.end(), response.mac.begin());
+    LinkSessionKey session;
+    ASSERT_TRUE(MakeLinkAuthResponse(key, *challenge, &response, &session));
     Send(t, Hello{});
     Send(t, response);
+    // Every frame after the response is signed with the session key.
+    client.SetSigner(MakeLinkFrameSigner(session));
+    session_key = session;
+  }
+  void SendBytes(Time t, const std::vector<uint8_t>& frame) {
+    agent.OnClientBytes(frame.data(), frame.size(), t, &out);
+    Collect();
   }
   template <typename T>
   std::vector<T> All() const {
@@ -114,6 +121,7 @@ class AgentHarness {
   std::vector<MotorCommand> motor_commands;
   std::vector<uint8_t> lidar_bytes;
   bool closed = false;
+  LinkSessionKey session_key{};
 };
 
 TEST(AgentOptionsTest, Validation) {
@@ -189,14 +197,11 @@ TEST(AgentCoreTest, WrongKeyIsDeniedClosedAndNeverMoves) {
   AgentHarness h(TestOptions());
   h.Start(Ms(0));
   h.Connect(Ms(0));
-  // Commands before authentication: refused, no effect.
+  // Commands before authentication: no effect and no answer.
   h.Send(Ms(1), DriveCommand{0.3, 0.5});
   h.Send(Ms(2), LidarMotor{true});
   h.Send(Ms(3), Heartbeat{});
-  for (const auto& ack : h.All<CommandAck>()) {
-    EXPECT_EQ(ack.result, AckResult::kNotAuthenticated);
-  }
-  EXPECT_EQ(h.All<CommandAck>().size(), 3u);
+  EXPECT_TRUE(h.All<CommandAck>().empty());
   EXPECT_TRUE(h.lidar_bytes.size() <= 2u);  // Only the start-up stop (A5 65).
   h.Authenticate(Ms(5), Key("wrong key"));
   const auto results = h.All<AuthResult>();
@@ -234,8 +239,8 @@ TEST(AgentCoreTest, ReplayedResponseFailsOnANewNonce) {
   h.Connect(Ms(0));
   const AuthChallenge old = *h.LastChallenge();
   AuthResponse recorded;
-  const Sha256Digest mac = LinkAuthMac(options.key, old.nonce.data(), old.nonce.size());
-  std::copy(mac.begin(), mac.end(), recorded.mac.begin());
+  LinkSessionKey unused;
+  ASSERT_TRUE(MakeLinkAuthResponse(options.key, old, &recorded, &unused));
   h.agent.OnClientDisconnected(Ms(1), &h.out);
   h.Connect(Ms(2));
   h.Send(Ms(3), recorded);
@@ -246,10 +251,11 @@ TEST(AgentCoreTest, UnauthenticatedClientIsDroppedAfterTheAuthTimeout) {
   AgentHarness h(TestOptions());
   h.Start(Ms(0));
   h.Connect(Ms(0));
-  h.TickRange(Ms(0), Ms(4900), milliseconds(100));
+  h.TickRange(Ms(0), Ms(1900), milliseconds(100));
   EXPECT_FALSE(h.closed);
-  h.Tick(Ms(5000));
+  h.Tick(Ms(2000));
   EXPECT_TRUE(h.closed);
+  EXPECT_EQ(h.All<AuthResult>().back().reason, "authentication timeout");
 }
 
 TEST(AgentCoreTest, EmergencyStopIsAcceptedEvenUnauthenticated) {
@@ -257,8 +263,7 @@ TEST(AgentCoreTest, EmergencyStopIsAcceptedEvenUnauthenticated) {
   h.Start(Ms(0));
   h.Connect(Ms(0));
   h.Send(Ms(1), EmergencyStop{});
-  ASSERT_EQ(h.All<CommandAck>().size(), 1u);
-  EXPECT_EQ(h.All<CommandAck>()[0].result, AckResult::kAccepted);
+  EXPECT_TRUE(h.All<CommandAck>().empty());  // Acts, but no answer before authentication.
   EXPECT_TRUE(h.agent.status(Ms(1)).emergency_stop_latched);
 }
 
@@ -494,6 +499,165 @@ TEST(AgentCoreTest, MissingRandomSourceRefusesToAuthenticate) {
   h.Connect(Ms(0));
   EXPECT_TRUE(h.closed);
   EXPECT_EQ(h.All<AuthResult>().back().outcome, AuthOutcome::kDenied);
+}
+
+// ---------------------------------------------------------------------------
+// Issue 16: per-frame authentication after the handshake, version 1 peers,
+// no answers before authentication, bounded work per call.
+
+TEST(AgentCoreTest, UnauthenticatedPeerGetsNothingBeyondTheChallenge) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  ASSERT_EQ(h.received.size(), 2u);  // Hello, AuthChallenge.
+  for (int i = 0; i < 1000; ++i) h.Send(Ms(1), Heartbeat{});
+  h.TickRange(Ms(1), Ms(1900));
+  EXPECT_EQ(h.received.size(), 2u);
+}
+
+TEST(AgentCoreTest, OldProtocolVersionGetsAReadableRefusal) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  // A version-1 client's Hello, as the old RobotConnection wrote it.
+  std::vector<uint8_t> body;
+  EncodeLinkPayload(Hello{1, false, "sweepscan 0.0.9", {}}, &body);
+  std::vector<uint8_t> frame;
+  ASSERT_TRUE(AppendRawLinkFrame(LinkSender::kClient, 0, Ms(1), 0x01, body.data(), body.size(),
+                                 &frame, nullptr, 1));
+  h.SendBytes(Ms(1), frame);
+  EXPECT_TRUE(h.closed);
+  ASSERT_FALSE(h.received.empty());
+  const LinkMessage& last = h.received.back();
+  EXPECT_EQ(last.header.version, 1);  // An old client can read it.
+  const auto* result = std::get_if<AuthResult>(&last.payload);
+  ASSERT_NE(result, nullptr);
+  EXPECT_EQ(result->outcome, AuthOutcome::kDenied);
+  EXPECT_NE(result->reason.find("protocol version 1 is not supported"), std::string::npos)
+      << result->reason;
+  EXPECT_EQ(h.agent.counters().old_protocol_refused, 1u);
+}
+
+class SignedFramesTest : public ::testing::Test {
+ protected:
+  SignedFramesTest() : h_(TestOptions()) {
+    h_.Start(Ms(0));
+    h_.Connect(Ms(0));
+    h_.Authenticate(Ms(0), TestOptions().key);
+  }
+  size_t Acks() const { return h_.All<CommandAck>().size(); }
+  AgentHarness h_;
+};
+
+TEST_F(SignedFramesTest, SignedFramesDrive) {
+  h_.Send(Ms(10), DriveCommand{0.2, 0.0});
+  ASSERT_EQ(Acks(), 1u);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
+}
+
+TEST_F(SignedFramesTest, InjectedUnsignedFramesHaveNoEffect) {
+  // Someone able to write into the TCP stream, without the session key.
+  LinkEncoder attacker(LinkSender::kClient, h_.client.next_sequence());
+  h_.SendBytes(Ms(10), attacker.Encode(Ms(10), DriveCommand{0.5, 1.0}));
+  h_.SendBytes(Ms(10), attacker.Encode(Ms(10), ClearEmergencyStop{}));
+  h_.SendBytes(Ms(10), attacker.Encode(Ms(10), LidarMotor{true}));
+  EXPECT_EQ(Acks(), 0u);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kIdle);
+  h_.TickRange(Ms(10), Ms(300));
+  EXPECT_FALSE(h_.AnyNonZeroMotorCommand());
+  EXPECT_EQ(h_.agent.counters().frames_unsigned, 3u);
+  // Frames with a tag under another key are refused too.
+  LinkSessionKey wrong = h_.session_key;
+  wrong[0] ^= 1;
+  attacker.SetSigner(MakeLinkFrameSigner(wrong));
+  h_.SendBytes(Ms(300), attacker.Encode(Ms(300), DriveCommand{0.5, 1.0}));
+  EXPECT_EQ(h_.agent.counters().frames_bad_tag, 1u);
+  EXPECT_EQ(Acks(), 0u);
+  // The real client still drives (its sequence numbers are its own).
+  h_.Send(Ms(310), DriveCommand{0.1, 0.0});
+  EXPECT_EQ(Acks(), 1u);
+}
+
+TEST_F(SignedFramesTest, ReplayedAndReorderedFramesAreRefused) {
+  const std::vector<uint8_t> drive = h_.client.Encode(Ms(10), DriveCommand{0.2, 0.0});
+  const std::vector<uint8_t> stop = h_.client.Encode(Ms(11), Stop{});
+  const std::vector<uint8_t> later = h_.client.Encode(Ms(12), Heartbeat{});
+  h_.SendBytes(Ms(12), later);  // Sequence n + 2 first ...
+  h_.SendBytes(Ms(12), drive);  // ... then n and n + 1: reordered, refused.
+  h_.SendBytes(Ms(12), stop);
+  EXPECT_EQ(Acks(), 1u);
+  EXPECT_EQ(h_.agent.counters().frames_replayed, 2u);
+  h_.SendBytes(Ms(13), later);  // The same frame again: replay, refused.
+  EXPECT_EQ(Acks(), 1u);
+  EXPECT_EQ(h_.agent.counters().frames_replayed, 3u);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kIdle);  // The Drive never acted.
+}
+
+TEST_F(SignedFramesTest, RefusedFramesDoNotFeedTheWatchdog) {
+  h_.Send(Ms(0), DriveCommand{0.2, 0.0});
+  LinkEncoder attacker(LinkSender::kClient, 1000);
+  for (Time t = Ms(0); t <= Ms(700); t += milliseconds(10)) {
+    h_.SendBytes(t, attacker.Encode(t, Heartbeat{}));  // Unsigned: not a sign of life.
+    h_.Tick(t);
+  }
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+}
+
+// Frame candidates with a good header CRC and a bad frame CRC: each costs a
+// CRC over the largest payload the agent accepts. The work per call is
+// bounded, so the caller's timers (the watchdog tick) run in between.
+std::vector<uint8_t> ForgedCandidates(size_t count, size_t payload_size) {
+  std::vector<uint8_t> bytes;
+  for (size_t i = 0; i < count; ++i) {
+    std::vector<uint8_t> frame;
+    std::vector<uint8_t> payload(payload_size, 0xA5);
+    AppendRawLinkFrame(LinkSender::kClient, static_cast<uint32_t>(i), Time(), 0x14, payload.data(),
+                       payload.size(), &frame);
+    frame.back() ^= 0xFF;  // Bad frame CRC.
+    // Only the 28 header bytes are sent: the next candidate starts inside
+    // the payload this one announced, so every candidate waits for a CRC
+    // over bytes that are mostly other candidates.
+    bytes.insert(bytes.end(), frame.begin(), frame.begin() + kLinkHeaderSize);
+  }
+  return bytes;
+}
+
+TEST_F(SignedFramesTest, ForgedCandidateFloodIsWorkedOffInBoundedSlices) {
+  const AgentOptions options = TestOptions();
+  h_.Send(Ms(0), DriveCommand{0.2, 0.0});
+  const std::vector<uint8_t> flood = ForgedCandidates(20000, options.max_client_payload - 32);
+  h_.agent.OnClientBytes(flood.data(), flood.size(), Ms(0), &h_.out);
+  h_.Collect();
+  EXPECT_TRUE(h_.agent.client_work_pending());
+  int calls = 1;
+  Time t = Ms(0);
+  while (h_.agent.client_work_pending() && calls < 100000) {
+    t += milliseconds(1);
+    h_.agent.ContinueClientBytes(t, &h_.out);
+    h_.Tick(t);
+    ++calls;
+  }
+  EXPECT_FALSE(h_.agent.client_work_pending());
+  // 560 kB of input at ~10 CRC bytes per byte: many slices of <= 256 KiB.
+  EXPECT_GT(calls, 10);
+  // The flood fed nothing: the watchdog trips 500 ms after the Drive.
+  h_.TickRange(t, Ms(490));
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
+  h_.TickRange(Ms(500), Ms(510));
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  EXPECT_FALSE(h_.closed);
+}
+
+TEST_F(SignedFramesTest, AnUndecodedBacklogBeyondTheLimitDropsTheConnection) {
+  const AgentOptions options = TestOptions();
+  h_.Send(Ms(0), DriveCommand{0.2, 0.0});
+  const std::vector<uint8_t> flood = ForgedCandidates(60000, options.max_client_payload - 32);
+  ASSERT_GT(flood.size(), options.max_client_backlog);
+  h_.SendBytes(Ms(1), flood);
+  EXPECT_TRUE(h_.closed);
+  EXPECT_EQ(h_.agent.counters().input_floods, 1u);
+  h_.agent.OnClientDisconnected(Ms(2), &h_.out);
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);  // Stopped at once.
 }
 
 }  // namespace

@@ -94,9 +94,11 @@ int main(int argc, char** argv) {
   }
   send(Hello{});
   AuthResponse response;
-  const auto mac = LinkAuthMac(key, challenge.nonce.data(), challenge.nonce.size());
-  std::copy(mac.begin(), mac.end(), response.mac.begin());
+  LinkSessionKey session_key;
+  if (!MakeLinkAuthResponse(key, challenge, &response, &session_key)) return 1;
   send(response);
+  // Every frame after the response carries a tag (per-frame MAC, protocol v2).
+  encoder.SetSigner(MakeLinkFrameSigner(session_key));
   if (!wait_for(
           [](const LinkMessage& m) { return std::holds_alternative<AuthResult>(m.payload); })) {
     return 1;

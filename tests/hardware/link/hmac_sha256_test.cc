@@ -73,16 +73,64 @@ TEST(HmacSha256Test, Rfc4231TestCases) {
             "9b09ffa71b942fcb27635fbcd5b0e944bfdc63644f0713938a7f51535c3a35e2");
 }
 
-TEST(HmacSha256Test, LinkAuthMacIsHmacOfContextAndNonce) {
-  std::vector<uint8_t> nonce;
-  for (uint8_t i = 0; i < 32; ++i) nonce.push_back(i);
-  const Sha256Digest mac = LinkAuthMac(Bytes("secret"), nonce.data(), nonce.size());
-  // Independent reference: Python hmac.new(b"secret", b"sweepscan-link-v1" + bytes(range(32)),
-  // sha256).
-  EXPECT_EQ(Hex(mac), "28f38d5f211907eaae55dfda88f84116f747c1f7f395415502d85444fb54226d");
-  std::vector<uint8_t> joined = Bytes("sweepscan-link-v1");
-  joined.insert(joined.end(), nonce.begin(), nonce.end());
-  EXPECT_EQ(Hex(mac), HmacHex(Bytes("secret"), joined));
+TEST(HmacSha256Test, TwoPartMessageEqualsTheJoinedMessage) {
+  const std::vector<uint8_t> key = Bytes("key");
+  const std::vector<uint8_t> a = Bytes("first part, "), b = Repeat(0x42, 300);
+  std::vector<uint8_t> joined = a;
+  joined.insert(joined.end(), b.begin(), b.end());
+  EXPECT_EQ(HmacSha256(key.data(), key.size(), a.data(), a.size(), b.data(), b.size()),
+            HmacSha256(key.data(), key.size(), joined.data(), joined.size()));
+}
+
+TEST(HkdfSha256Test, Rfc5869TestCase1) {
+  std::vector<uint8_t> salt, info;
+  for (uint8_t i = 0; i <= 0x0c; ++i) salt.push_back(i);
+  for (uint8_t i = 0xf0; i <= 0xf9; ++i) info.push_back(i);
+  const std::vector<uint8_t> ikm = Repeat(0x0b, 22);
+  std::vector<uint8_t> okm(42);
+  ASSERT_TRUE(HkdfSha256(salt.data(), salt.size(), ikm.data(), ikm.size(), info.data(), info.size(),
+                         okm.data(), okm.size()));
+  EXPECT_EQ(ToHex(okm.data(), okm.size()),
+            "3cb25f25faacd57a90434f64d0362f2a2d2d0a90cf1a5a4c5db02d56ecc4c5bf34007208d5b887185865");
+}
+
+LinkNonce Nonce(uint8_t first) {
+  LinkNonce n{};
+  for (size_t i = 0; i < n.size(); ++i) n[i] = static_cast<uint8_t>(first + i);
+  return n;
+}
+
+TEST(LinkCryptoTest, AuthMacAndSessionKeyMatchAnIndependentReference) {
+  // Python: hmac.new(b"secret", b"sweepscan-link-v2" + bytes(range(32)) + bytes(range(32, 64)),
+  // sha256); the session key with an HKDF written from RFC 5869.
+  const Sha256Digest mac = LinkAuthMac(Bytes("secret"), Nonce(0), Nonce(32));
+  EXPECT_EQ(Hex(mac), "287cfae0a3c01409ad7108cdd2b61cbf260807916943bb0132c870ea51709f14");
+  const LinkSessionKey key = LinkDeriveSessionKey(Bytes("secret"), Nonce(0), Nonce(32));
+  EXPECT_EQ(ToHex(key.data(), key.size()),
+            "84095b1cae8c83922340e811d9e6d42240909d56dfb2a6b80819b5c546a1ee8b");
+}
+
+TEST(LinkCryptoTest, SignedFramesVerifyAndAnyChangeBreaksTheTag) {
+  const LinkSessionKey key = LinkDeriveSessionKey(Bytes("secret"), Nonce(0), Nonce(32));
+  LinkEncoder encoder(LinkSender::kClient, 7);
+  encoder.SetSigner(MakeLinkFrameSigner(key));
+  const std::vector<uint8_t> frame = encoder.Encode(Time(), DriveCommand{0.5, -0.25});
+  ASSERT_EQ(frame.size(), kLinkFrameOverhead + 16 + kLinkTagSize);
+  LinkMessage m;
+  ASSERT_TRUE(ParseLinkFrame(frame.data(), frame.size(), &m).ok());
+  EXPECT_TRUE(m.header.signed_frame);
+  // ParseLinkFrame does not keep the signed bytes; the streaming decoder does.
+  LinkDecoder decoder;
+  auto messages = decoder.Feed(frame);
+  ASSERT_EQ(messages.size(), 1u);
+  EXPECT_TRUE(LinkFrameTagValid(key, messages[0]));
+  LinkSessionKey other = key;
+  other[31] ^= 1;
+  EXPECT_FALSE(LinkFrameTagValid(other, messages[0]));
+  // A changed payload with recomputed CRCs (an attacker without the key).
+  LinkMessage changed = messages[0];
+  changed.signed_bytes[kLinkSignedHeaderSize] ^= 1;
+  EXPECT_FALSE(LinkFrameTagValid(key, changed));
 }
 
 TEST(HmacSha256Test, ConstantTimeEqual) {

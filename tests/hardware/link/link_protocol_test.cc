@@ -45,6 +45,7 @@ std::vector<LinkPayload> AllMessages() {
   out.push_back(challenge);
   AuthResponse response;
   for (size_t i = 0; i < response.mac.size(); ++i) response.mac[i] = uint8_t(255 - i);
+  for (size_t i = 0; i < response.client_nonce.size(); ++i) response.client_nonce[i] = uint8_t(i);
   out.push_back(response);
   out.push_back(AuthResult{AuthOutcome::kOk, ""});
   out.push_back(AuthResult{AuthOutcome::kDenied, "wrong key"});
@@ -136,7 +137,7 @@ TEST(LinkFrameTest, HeaderLayoutByHand) {
   ASSERT_TRUE(AppendLinkFrame(LinkSender::kAgent, 0x01020304,
                               TimeFromNanoseconds(0x1122334455667788), Heartbeat{}, &f));
   ASSERT_EQ(f.size(), kLinkFrameOverhead);
-  const Bytes header = {0xE7, 0x5C, 0x01, 0x14, 0x01, 0x00, 0x00, 0x00, 0x04, 0x03, 0x02, 0x01,
+  const Bytes header = {0xE7, 0x5C, 0x02, 0x14, 0x01, 0x00, 0x00, 0x00, 0x04, 0x03, 0x02, 0x01,
                         0x88, 0x77, 0x66, 0x55, 0x44, 0x33, 0x22, 0x11, 0x00, 0x00, 0x00, 0x00};
   EXPECT_EQ(Bytes(f.begin(), f.begin() + 24), header);
   const uint32_t header_crc = Crc32cBitwise(f.data(), 24);
@@ -152,17 +153,61 @@ TEST(LinkFrameTest, WorkedExampleOfTheDocumentation) {
   ASSERT_TRUE(
       AppendLinkFrame(LinkSender::kClient, 7, TimeFromSeconds(1.0), DriveCommand{0.5, -0.25}, &f));
   const Bytes expected = {
-      0xE7, 0x5C, 0x01, 0x10, 0x02, 0x00, 0x00, 0x00,  // sync, version, type, sender, reserved
+      0xE7, 0x5C, 0x02, 0x10, 0x02, 0x00, 0x00, 0x00,  // sync, version 2, type, sender, flags
       0x07, 0x00, 0x00, 0x00,                          // sequence 7
       0x00, 0xCA, 0x9A, 0x3B, 0x00, 0x00, 0x00, 0x00,  // time 1e9 ns
       0x10, 0x00, 0x00, 0x00,                          // payload size 16
-      0x53, 0x92, 0x2F, 0x74,                          // header CRC-32C 0x742F9253
+      0x8F, 0xA1, 0x11, 0x90,                          // header CRC-32C 0x9011A18F
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xE0, 0x3F,  // v = 0.5 (binary64 LE)
       0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xD0, 0xBF,  // w = -0.25
       0x3C, 0x59, 0x4A, 0xD2};                         // frame CRC-32C 0xD24A593C
   EXPECT_EQ(f, expected);
   EXPECT_EQ(ReadU32Le(f.data() + 24), Crc32cBitwise(f.data(), 24));
   EXPECT_EQ(ReadU32Le(f.data() + 44), Crc32cBitwise(f.data(), 44));
+}
+
+// The signed form of the same frame (docs/protocol.md, "Frame
+// authentication"): flags bit 0, the 16-byte tag after the payload. The tag
+// is computed by a stand-in signer here (the real one, HMAC-SHA256 under the
+// session key, is checked against Python in hmac_sha256_test).
+TEST(LinkFrameTest, SignedFrameLayout) {
+  Bytes f;
+  Bytes covered;
+  const LinkFrameSigner signer = [&covered](const uint8_t* h, const uint8_t* p, size_t n) {
+    covered.assign(h, h + kLinkSignedHeaderSize);
+    covered.insert(covered.end(), p, p + n);
+    LinkTag tag;
+    for (size_t i = 0; i < tag.size(); ++i) tag[i] = static_cast<uint8_t>(0xA0 + i);
+    return tag;
+  };
+  Bytes body;
+  EncodeLinkPayload(DriveCommand{0.5, -0.25}, &body);
+  ASSERT_TRUE(AppendRawLinkFrame(LinkSender::kClient, 7, TimeFromSeconds(1.0), 0x10, body.data(),
+                                 body.size(), &f, signer));
+  ASSERT_EQ(f.size(), 64u);
+  EXPECT_EQ(f[5], kLinkFlagSigned);
+  EXPECT_EQ(ReadU32Le(f.data() + 20), 16u);  // payload_size excludes the tag
+  EXPECT_EQ(ReadU32Le(f.data() + 24), 0x292AED68u);
+  EXPECT_EQ(Bytes(f.begin(), f.begin() + 24), Bytes(covered.begin(), covered.begin() + 24));
+  EXPECT_EQ(Bytes(f.begin() + 28, f.begin() + 44), Bytes(covered.begin() + 24, covered.end()));
+  EXPECT_EQ(f[44], 0xA0);
+  EXPECT_EQ(ReadU32Le(f.data() + 60), Crc32cBitwise(f.data(), 60));
+  LinkDecoder d;
+  const auto out = d.Feed(f);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_TRUE(out[0].header.signed_frame);
+  EXPECT_EQ(out[0].tag[0], 0xA0);
+  EXPECT_EQ(out[0].signed_bytes, covered);
+  EXPECT_EQ(std::get<DriveCommand>(out[0].payload).v_mps, 0.5);
+  LinkMessage parsed;
+  EXPECT_TRUE(ParseLinkFrame(f.data(), f.size(), &parsed).ok());
+  // Version 1 frames (old sessions, old peers) are still read.
+  Bytes v1;
+  ASSERT_TRUE(AppendRawLinkFrame(LinkSender::kClient, 7, TimeFromSeconds(1.0), 0x10, body.data(),
+                                 body.size(), &v1, nullptr, 1));
+  EXPECT_EQ(ReadU32Le(v1.data() + 24), 0x742F9253u);  // The version-1 worked example.
+  ASSERT_TRUE(ParseLinkFrame(v1.data(), v1.size(), &parsed).ok());
+  EXPECT_EQ(parsed.header.version, 1);
 }
 
 TEST(LinkFrameTest, EveryMessageTypeRoundTrips) {
@@ -295,9 +340,9 @@ TEST(LinkDecoderTest, GarbageAndCorruptFramesAreRejectedAndCountedGoodOnesSurviv
         stream.insert(stream.end(), f.begin(), f.begin() + 60);
         break;
       }
-      case 4: {  // Wrong version.
+      case 4: {  // Unknown version (3: newer than this code).
         Bytes f = bad_enc.EncodeHeartbeat(kT0);
-        f[2] = 2;
+        f[2] = 3;
         stream.insert(stream.end(), f.begin(), f.end());
         break;
       }

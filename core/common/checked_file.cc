@@ -1,0 +1,199 @@
+#include "core/common/checked_file.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace sweepscan {
+namespace {
+
+constexpr size_t kBufferSize = 1 << 16;
+
+std::string FolderOf(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  if (slash == std::string::npos) return ".";
+  if (slash == 0) return "/";
+  return path.substr(0, slash);
+}
+
+std::string BaseOf(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+std::string ErrnoText(int error_number) { return std::strerror(error_number); }
+
+// Parses the PID of "BASE.tmp-PID"; -1 if `name` is not a temporary of BASE.
+long TemporaryPid(const std::string& name, const std::string& base) {
+  const std::string prefix = base + ".tmp-";
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return -1;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::strtol(digits.c_str(), nullptr, 10);
+}
+
+}  // namespace
+
+bool IsTemporaryFileName(const std::string& name) {
+  const size_t at = name.rfind(".tmp-");
+  if (at == std::string::npos || at + 5 >= name.size()) return false;
+  return name.find_first_not_of("0123456789", at + 5) == std::string::npos;
+}
+
+int RemoveStaleTemporaries(const std::string& path) {
+  const std::string folder = FolderOf(path);
+  const std::string base = BaseOf(path);
+  DIR* d = ::opendir(folder.c_str());
+  if (d == nullptr) return 0;
+  int removed = 0;
+  std::vector<std::string> stale;
+  while (const dirent* e = ::readdir(d)) {
+    const long pid = TemporaryPid(e->d_name, base);
+    if (pid <= 0 || pid == static_cast<long>(::getpid())) continue;
+    // kill(pid, 0) fails with ESRCH only when no such process exists.
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) stale.push_back(e->d_name);
+  }
+  ::closedir(d);
+  for (const std::string& name : stale) {
+    if (::unlink((folder + "/" + name).c_str()) == 0) ++removed;
+  }
+  return removed;
+}
+
+Status CheckRegularFile(const std::string& path, uint64_t* size) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0) {
+    return Status::Error(path + ": cannot open for reading: " + ErrnoText(errno));
+  }
+  if (S_ISDIR(st.st_mode)) return Status::Error(path + ": is a folder, expected a file");
+  if (!S_ISREG(st.st_mode)) return Status::Error(path + ": not a regular file");
+  if (size != nullptr) *size = static_cast<uint64_t>(st.st_size);
+  return Status::Ok();
+}
+
+CheckedFileWriter::~CheckedFileWriter() { Abort(); }
+
+Status CheckedFileWriter::Fail(const std::string& what, int error_number) {
+  failed_ = path_ + ": " + what + (error_number != 0 ? ": " + ErrnoText(error_number) : "");
+  return Status::Error(failed_);
+}
+
+Status CheckedFileWriter::Open(const std::string& path) {
+  Abort();
+  path_ = path;
+  failed_.clear();
+  bytes_ = 0;
+  buffer_.clear();
+  if (path.empty()) return Fail("empty file name", 0);
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    return Fail("is a folder, cannot write a file there", 0);
+  }
+  RemoveStaleTemporaries(path);
+  tmp_ = path + ".tmp-" + std::to_string(::getpid());
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    const int e = errno;
+    tmp_.clear();
+    return Fail("cannot create " + BaseOf(path) + ".tmp-" + std::to_string(::getpid()) +
+                    " in " + FolderOf(path),
+                e);
+  }
+  buffer_.reserve(kBufferSize);
+  return Status::Ok();
+}
+
+Status CheckedFileWriter::FlushBuffer() {
+  const char* p = buffer_.data();
+  size_t n = buffer_.size();
+  while (n > 0) {
+    const ssize_t k = ::write(fd_, p, n);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) return Fail("write failed", errno);
+    if (k == 0) return Fail("write failed", ENOSPC);
+    p += k;
+    n -= static_cast<size_t>(k);
+  }
+  buffer_.clear();
+  return Status::Ok();
+}
+
+Status CheckedFileWriter::Write(const void* data, size_t n) {
+  if (!failed_.empty()) return Status::Error(failed_);
+  if (fd_ < 0) return Fail("not open", 0);
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const size_t k = std::min(n, kBufferSize - buffer_.size());
+    buffer_.insert(buffer_.end(), p, p + k);
+    p += k;
+    n -= k;
+    bytes_ += k;
+    if (buffer_.size() == kBufferSize) {
+      const Status s = FlushBuffer();
+      if (!s.ok()) return s;
+    }
+  }
+  return Status::Ok();
+}
+
+Status CheckedFileWriter::Commit() {
+  if (!failed_.empty()) {
+    const Status s = Status::Error(failed_);
+    Abort();
+    return s;
+  }
+  if (fd_ < 0) return Fail("not open", 0);
+  Status s = FlushBuffer();
+  if (s.ok() && ::fsync(fd_) != 0) s = Fail("flush to disk (fsync) failed", errno);
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0 && s.ok()) s = Fail("close failed", errno);
+  if (s.ok() && std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    s = Fail("cannot rename the finished temporary file over it", errno);
+  }
+  if (!s.ok()) {
+    ::unlink(tmp_.c_str());
+    tmp_.clear();
+    return s;
+  }
+  tmp_.clear();
+  // Make the new directory entry durable too.
+  const int dir = ::open(FolderOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+  return Status::Ok();
+}
+
+void CheckedFileWriter::Abort() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    fd_ = -1;
+  }
+  if (!tmp_.empty()) {
+    ::unlink(tmp_.c_str());
+    tmp_.clear();
+  }
+  buffer_.clear();
+}
+
+Status WriteFileChecked(const std::string& path, const std::string& contents) {
+  CheckedFileWriter w;
+  Status s = w.Open(path);
+  if (!s.ok()) return s;
+  s = w.Write(contents);
+  if (!s.ok()) return s;
+  return w.Commit();
+}
+
+}  // namespace sweepscan

@@ -1,0 +1,268 @@
+// sweepscan-cli under faults and bad input (issue 16), as the real binary:
+// one exit-code rule for every command (0 ok, 1 failed while working, 2 bad
+// input), always one error line, never an abort; outputs that are complete
+// or absent on a full file system; sessions that survive a damaged frames.bin.
+//
+// "Full disk" is a real failed write: the CLI runs with a file size limit
+// (ulimit -f, SIGXFSZ ignored), so write() fails with EFBIG exactly as it
+// fails with ENOSPC on a full disk; CheckedFileTest covers a full tmpfs.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tests/testing/run_command.h"
+
+namespace {
+
+using sweepscan::testing::CommandRun;
+
+std::string Dir() {
+  static const std::string dir = [] {
+    const std::string d = ::testing::TempDir() + "/sweepscan_cli_robust_" + std::to_string(::getpid());
+    std::system(("rm -rf '" + d + "' && mkdir -p '" + d + "'").c_str());
+    return d;
+  }();
+  return dir;
+}
+std::string Tmp(const std::string& name) { return Dir() + "/" + name; }
+std::string Scenario(const std::string& name) {
+  return std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name + ".json";
+}
+
+CommandRun Cli(const std::string& args) {
+  return sweepscan::testing::RunCommand(std::string(SWEEPSCAN_CLI) + " " + args);
+}
+// The CLI with files limited to `kib` KiB: writes beyond fail (EFBIG).
+CommandRun CliWithFullDisk(const std::string& args, int kib = 32) {
+  return sweepscan::testing::RunCommand("sh -c \"trap '' XFSZ; ulimit -f " +
+                                        std::to_string(kib * 2) + "; exec " + SWEEPSCAN_CLI +
+                                        " " + args + "\"");
+}
+
+// Exactly one line, an error line, naming `what`.
+void ExpectOneErrorLine(const CommandRun& r, const std::string& what) {
+  EXPECT_EQ(r.out.rfind("sweepscan-cli: error: ", 0), 0u) << r.out;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+  EXPECT_NE(r.out.find(what), std::string::npos) << r.out;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+std::string LsA(const std::string& dir) {
+  return sweepscan::testing::RunCommand("ls -A '" + dir + "'").out;
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+// One simulated session shared by the tests (1-2 s to make).
+class CliRobustnessTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const CommandRun r = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("lab.ply") +
+                             " --overwrite");
+    ASSERT_EQ(r.code, 0) << r.out;
+  }
+  static std::string Session() { return Tmp("lab.sweepscan"); }
+  // A copy of the session with byte `offset` of frames.bin flipped (or, with
+  // offset < 0, at the middle of the file).
+  static std::string DamagedCopy(const std::string& name, long offset = -1) {
+    const std::string dir = Tmp(name);
+    std::system(("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "'").c_str());
+    std::fstream f(dir + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(0, std::ios::end);
+    const long size = static_cast<long>(f.tellg());
+    const long at = offset >= 0 ? offset : size / 2;
+    f.seekg(at);
+    char c = 0;
+    f.read(&c, 1);
+    c = static_cast<char>(c ^ 0xFF);
+    f.seekp(at);
+    f.write(&c, 1);
+    return dir;
+  }
+};
+
+TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
+  for (const char* command : {"simulate", "info", "reconstruct", "export", "repair", "calibrate",
+                              "evaluate"}) {
+    const CommandRun r = Cli(std::string(command) + " --no-such-option");
+    EXPECT_EQ(r.code, 2) << command << ": " << r.out;
+    EXPECT_NE(r.out.find("unknown option --no-such-option"), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(Cli("no-such-command").code, 2);
+  EXPECT_EQ(Cli("").code, 2);
+}
+
+TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
+  const std::string missing = Tmp("missing.sweepscan");
+  for (const std::string& args :
+       {"info " + missing, "reconstruct " + missing + " --out " + Tmp("m.ply"),
+        "export " + missing + " --out " + Tmp("m-csv"), "repair " + missing + " --out " + Tmp("m2"),
+        "calibrate " + missing + " --auto", "evaluate " + missing,
+        "evaluate " + Tmp("missing.ply"), "simulate --scenario " + Tmp("missing.json") + " --out " + Tmp("m.ply")}) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    ExpectOneErrorLine(r, "missing");
+  }
+}
+
+TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
+  // Before: reconstruct and simulate exited 0 leaving a short PLY whose
+  // header promised every vertex; --out X.pcd aborted (exit 134) and left
+  // X.pcd.tmp-PID behind.
+  const std::string out = Tmp("full");
+  std::system(("mkdir -p '" + out + "'").c_str());
+  for (const char* ext : {"ply", "pcd"}) {
+    const std::string cloud = out + "/cloud." + ext;
+    CommandRun r = CliWithFullDisk("reconstruct " + Session() + " --out " + cloud);
+    EXPECT_EQ(r.code, 1) << r.out;
+    ExpectOneErrorLine(r, cloud + ": write failed: File too large");
+    r = CliWithFullDisk("simulate --scenario " + Scenario("lab") + " --out " + cloud +
+                        " --session " + Tmp("full-sim.sweepscan") + " --overwrite",
+                        4096);
+    EXPECT_EQ(r.code, 1) << r.out;
+    ExpectOneErrorLine(r, cloud + ": write failed: File too large");
+  }
+  const CommandRun r = CliWithFullDisk("export " + Session() + " --out " + out + "/csv");
+  EXPECT_EQ(r.code, 1) << r.out;
+  ExpectOneErrorLine(r, out + "/csv/lidar.csv: write failed: File too large");
+  EXPECT_EQ(LsA(out), "csv\n");  // No cloud, no temporary.
+  EXPECT_EQ(LsA(out + "/csv"), "");
+}
+
+TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {
+  // Before: exit 1 in reconstruct but exit 2 in simulate.
+  const std::string folder = Tmp("a-folder.ply");
+  std::system(("mkdir -p '" + folder + "'").c_str());
+  for (const std::string& args :
+       {"reconstruct " + Session() + " --out " + folder,
+        "simulate --scenario " + Scenario("lab") + " --out " + folder + " --session " +
+            Tmp("u.sweepscan") + " --overwrite",
+        "export " + Session() + " --out " + Tmp("lab.ply"),
+        "repair " + Session() + " --out " + Tmp("lab.ply/x"),
+        "calibrate --scenario " + Scenario("lab_circle") + " --auto --out " + folder}) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 1) << args << ": " << r.out;
+    ExpectOneErrorLine(r, "");
+  }
+}
+
+TEST_F(CliRobustnessTest, ForgedPlyHeadersAreExitTwoNotAnAbort) {
+  // Before: std::bad_alloc (exit 134) for -5 and 2^64-1; exit 0 with
+  // nonsense figures for 10 vertices followed by 1.2 MB of junk.
+  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex ";
+  const std::string props = "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  WriteText(Tmp("neg.ply"), header + "-5" + props);
+  WriteText(Tmp("huge.ply"), header + "18446744073709551615" + props + std::string(64, '\0'));
+  WriteText(Tmp("junk.ply"), header + "10" + props + std::string(1200000, 'j'));
+  for (const char* name : {"neg.ply", "huge.ply", "junk.ply"}) {
+    const CommandRun r = Cli("evaluate " + Tmp(name));
+    EXPECT_EQ(r.code, 2) << name << ": " << r.out;
+    ExpectOneErrorLine(r, std::string(name) + ": not a readable point cloud");
+  }
+}
+
+TEST_F(CliRobustnessTest, AFolderWhereAFileIsExpectedIsExitTwo) {
+  // Before: info and reconstruct died of an uncaught std::ios_base::failure.
+  const std::string dir = Tmp("folder-frames.sweepscan");
+  std::system(("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "' && rm '" + dir +
+               "/frames.bin' && mkdir '" + dir + "/frames.bin'")
+                  .c_str());
+  for (const std::string& args : {"info " + dir, "reconstruct " + dir + " --out " + Tmp("f.ply"),
+                                  "export " + dir + " --out " + Tmp("f-csv"),
+                                  "evaluate " + dir}) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    ExpectOneErrorLine(r, "frames.bin: is a folder");
+  }
+  std::system(("mkdir -p '" + Tmp("cloud-folder.ply") + "'").c_str());
+  const CommandRun r = Cli("evaluate " + Tmp("cloud-folder.ply"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  ExpectOneErrorLine(r, "is a folder");
+  const CommandRun c = Cli("reconstruct " + Session() + " --out " + Tmp("f.ply") + " --calibration " + Dir());
+  EXPECT_EQ(c.code, 2) << c.out;
+  ExpectOneErrorLine(c, "is a folder");
+}
+
+TEST_F(CliRobustnessTest, OneFlippedByteLosesOneRecordWithAWarning) {
+  // Before: every command refused the whole session ("record 9375 ... CRC
+  // mismatch", exit 2) with no remedy.
+  const std::string dir = DamagedCopy("rot.sweepscan");
+  CommandRun r = Cli("reconstruct " + dir + " --out " + Tmp("rot.ply") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("sweepscan-cli: warning: " + dir + "/frames.bin: 1 damaged record skipped"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("s of data lost"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("sweepscan-cli repair"), std::string::npos) << r.out;
+  const CommandRun good = Cli("reconstruct " + Session() + " --out " + Tmp("good.ply") + " --json");
+  ASSERT_EQ(good.code, 0) << good.out;
+  const auto points = [](const std::string& out) {
+    return nlohmann::json::parse(out.substr(out.find('{')))["points"].get<long>();
+  };
+  // One record (a fraction of one revolution) is all that is lost.
+  EXPECT_GT(points(r.out), points(good.out) - 1000);
+
+  // --strict refuses, with the place and the remedy.
+  r = Cli("reconstruct " + dir + " --out " + Tmp("rot.ply") + " --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  ExpectOneErrorLine(r, "CRC mismatch (run without --strict");
+
+  // info reports the damage.
+  r = Cli("info " + dir + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(info["damage"]["damaged"].get<bool>());
+  EXPECT_EQ(info["damage"]["records_skipped"].get<int>(), 1);
+  EXPECT_GT(info["damage"]["places"][0]["byte_offset"].get<long>(), 16);
+  r = Cli("info " + Session() + " --json");
+  EXPECT_FALSE(nlohmann::json::parse(r.out)["damage"]["damaged"].get<bool>());
+  EXPECT_EQ(Cli("info " + dir + " --strict").code, 2);
+}
+
+TEST_F(CliRobustnessTest, RepairWritesACleanCopyThatPassesStrict) {
+  const std::string dir = DamagedCopy("rot2.sweepscan");
+  const std::string fixed = Tmp("fixed.sweepscan");
+  std::system(("rm -rf '" + fixed + "'").c_str());
+  CommandRun r = Cli("repair " + dir + " --out " + fixed + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(r.out);
+  EXPECT_EQ(report["damage"]["records_skipped"].get<int>(), 1);
+  r = Cli("info " + fixed + " --strict --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["frames"]["records"].get<long>(),
+            report["records_kept"].get<long>());
+  EXPECT_TRUE(Exists(fixed + "/meta.json"));
+  // The damaged session is untouched; NEW must be new.
+  EXPECT_EQ(Cli("info " + dir + " --strict").code, 2);
+  r = Cli("repair " + dir + " --out " + fixed);
+  EXPECT_EQ(r.code, 2) << r.out;
+  ExpectOneErrorLine(r, "not empty");
+}
+
+TEST_F(CliRobustnessTest, CalibrateAndEvaluateAcceptStrictAndWarn) {
+  const std::string dir = DamagedCopy("rot3.sweepscan");
+  CommandRun r = Cli("evaluate " + dir + " --json");
+  EXPECT_EQ(r.code, 0) << r.out.substr(0, 400);
+  EXPECT_NE(r.out.find("warning: " + dir + "/frames.bin: 1 damaged record"), std::string::npos);
+  r = Cli("evaluate " + dir + " --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  r = Cli("calibrate " + dir + " --auto --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  ExpectOneErrorLine(r, "CRC mismatch");
+}
+
+}  // namespace

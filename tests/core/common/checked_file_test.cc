@@ -1,0 +1,176 @@
+// The checked writer (core/common/checked_file.h) under real failures: a
+// file size limit (RLIMIT_FSIZE, write() fails with EFBIG, no privileges
+// needed) and, when the test runs as root, a full 64 KiB tmpfs (ENOSPC).
+// Also the cloud writer on top of it, which used to report success after a
+// failed write (PCL's PLY writer) or abort (PCL's PCD writer).
+#include "core/common/checked_file.h"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/mount.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/cloud/cloud_io.h"
+
+namespace sweepscan {
+namespace {
+
+std::string TempDir(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "/checked_file_" + name + "_" +
+                          std::to_string(::getpid());
+  ::mkdir(dir.c_str(), 0755);
+  return dir;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+std::string Read(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+int CountEntries(const std::string& dir) {
+  int n = 0;
+  std::FILE* p = ::popen(("ls -A " + dir + " | wc -l").c_str(), "r");
+  if (p != nullptr) {
+    if (std::fscanf(p, "%d", &n) != 1) n = -1;
+    ::pclose(p);
+  }
+  return n;
+}
+
+std::vector<CloudPoint> ManyPoints(size_t n) {
+  std::vector<CloudPoint> pts(n);
+  for (size_t i = 0; i < n; ++i) {
+    pts[i].x = static_cast<float>(i);
+    pts[i].time_ns = static_cast<int64_t>(i) * 1000;
+  }
+  return pts;
+}
+
+// Runs `body` in a child whose files may not grow beyond `limit` bytes;
+// returns the child's exit code (SIGXFSZ ignored, so write() fails with EFBIG).
+template <typename Body>
+int WithFileSizeLimit(rlim_t limit, Body body) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    struct rlimit r = {limit, limit};
+    ::setrlimit(RLIMIT_FSIZE, &r);
+    ::_exit(body());
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
+}
+
+TEST(CheckedFileTest, WritesCompleteFilesAndReplacesAtomically) {
+  const std::string dir = TempDir("ok");
+  const std::string path = dir + "/a.txt";
+  ASSERT_TRUE(WriteFileChecked(path, std::string(300000, 'a')).ok());
+  EXPECT_EQ(Read(path).size(), 300000u);
+  ASSERT_TRUE(WriteFileChecked(path, "short").ok());
+  EXPECT_EQ(Read(path), "short");
+  EXPECT_EQ(CountEntries(dir), 1);  // No temporary left.
+}
+
+TEST(CheckedFileTest, AFailedWriteLeavesTheOldFileAndNoTemporary) {
+  const std::string dir = TempDir("efbig");
+  const std::string path = dir + "/out.txt";
+  ASSERT_TRUE(WriteFileChecked(path, "old content").ok());
+  const int code = WithFileSizeLimit(100000, [&] {
+    const Status s = WriteFileChecked(path, std::string(1 << 20, 'x'));
+    if (s.ok()) return 1;
+    // One line naming the file and the OS error.
+    if (s.message().find(path + ": write failed: File too large") != 0) return 2;
+    return 0;
+  });
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(Read(path), "old content");
+  EXPECT_EQ(CountEntries(dir), 1);
+}
+
+TEST(CheckedFileTest, CloudOnAFullFileSystemIsAnErrorNotAShortFile) {
+  // Before: PCL's PLY writer returned success after the failed write, leaving
+  // a short PLY whose header promised every vertex; its PCD writer threw.
+  const std::string dir = TempDir("cloud");
+  for (const char* name : {"/c.ply", "/c.pcd"}) {
+    const std::string path = dir + name;
+    const int code = WithFileSizeLimit(200000, [&] {
+      const Status s = SaveCloud(path, ManyPoints(100000));
+      if (s.ok()) return 1;
+      return s.message().find("File too large") != std::string::npos ? 0 : 2;
+    });
+    EXPECT_EQ(code, 0) << name;
+    EXPECT_FALSE(Exists(path)) << name;
+  }
+  EXPECT_EQ(CountEntries(dir), 0);
+}
+
+TEST(CheckedFileTest, FullTmpfsGivesNoSpaceLeftOnDevice) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root to mount a small tmpfs";
+  const std::string dir = TempDir("tmpfs");
+  if (::mount("tmpfs", dir.c_str(), "tmpfs", 0, "size=64k") != 0) {
+    GTEST_SKIP() << "cannot mount tmpfs here";
+  }
+  const Status s = SaveCloud(dir + "/full.ply", ManyPoints(100000));
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(dir + "/full.ply: write failed: No space left on device"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(CountEntries(dir), 0);
+  const Status t = WriteFileChecked(dir + "/meta.json", std::string(1 << 20, ' '));
+  EXPECT_FALSE(t.ok());
+  EXPECT_EQ(CountEntries(dir), 0);
+  ::umount(dir.c_str());
+}
+
+TEST(CheckedFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
+  const std::string dir = TempDir("stale");
+  const std::string path = dir + "/cloud.ply";
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);  // Reaped: no process has this PID now.
+  const std::string stale = path + ".tmp-" + std::to_string(dead);
+  const std::string alive = path + ".tmp-1";  // init: running.
+  const std::string other = dir + "/other.ply.tmp-" + std::to_string(dead);
+  for (const std::string& p : {stale, alive, other}) std::ofstream(p) << "partial";
+  ASSERT_TRUE(WriteFileChecked(path, "new").ok());
+  EXPECT_FALSE(Exists(stale));
+  EXPECT_TRUE(Exists(alive));   // Its writer may still be running.
+  EXPECT_TRUE(Exists(other));   // Another file's temporary is not ours to judge.
+  EXPECT_TRUE(IsTemporaryFileName("cloud.ply.tmp-123"));
+  EXPECT_FALSE(IsTemporaryFileName("cloud.ply"));
+  EXPECT_FALSE(IsTemporaryFileName("x.tmp-"));
+}
+
+TEST(CheckedFileTest, AFolderWhereAFileIsExpectedIsAClearError) {
+  const std::string dir = TempDir("folder");
+  const Status w = WriteFileChecked(dir, "x");
+  EXPECT_FALSE(w.ok());
+  EXPECT_NE(w.message().find("is a folder"), std::string::npos) << w.message();
+  const Status r = CheckRegularFile(dir);
+  EXPECT_NE(r.message().find("is a folder"), std::string::npos) << r.message();
+  const Status m = CheckRegularFile(dir + "/missing");
+  EXPECT_NE(m.message().find("No such file or directory"), std::string::npos) << m.message();
+  const Status c = WriteFileChecked("/nonexistent-dir/x.json", "x");
+  EXPECT_NE(c.message().find("/nonexistent-dir/x.json: cannot create"), std::string::npos)
+      << c.message();
+}
+
+}  // namespace
+}  // namespace sweepscan
