@@ -18,9 +18,9 @@
 #include <QVBoxLayout>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 
 #include "core/calibration/calibration_file.h"
+#include "core/common/checked_file.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -384,11 +384,9 @@ std::vector<PickPair> CalibrationPanel::pairs() const {
 }
 
 bool CalibrationPanel::SavePairs(const QString& path, QString* error) const {
-  std::ofstream out(path.toStdString());
-  out << PairsToJson(pairs());
-  out.close();
-  if (!out) {
-    *error = tr("%1: cannot write the pairs file").arg(path);
+  const Status s = WriteFileChecked(path.toStdString(), PairsToJson(pairs()));
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
     return false;
   }
   return true;

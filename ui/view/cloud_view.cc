@@ -25,6 +25,7 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkVariant.h>
 
+#include <QBuffer>
 #include <QElapsedTimer>
 #include <QFileInfo>
 #include <QMouseEvent>
@@ -32,6 +33,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "core/common/checked_file.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -865,8 +868,19 @@ QImage CloudView::GrabImage() {
 
 bool CloudView::SaveScreenshot(const QString& path, QString* error) {
   const QImage image = GrabImage();
-  if (image.isNull() || !image.save(path)) {
-    *error = QStringLiteral("%1: cannot write the image").arg(path);
+  // Encoded in memory, then written through the checked writer (complete
+  // or absent, never half an image; core/common/checked_file.h).
+  QByteArray bytes;
+  QBuffer buffer(&bytes);
+  buffer.open(QIODevice::WriteOnly);
+  const QByteArray format = QFileInfo(path).suffix().toLower().toLatin1();
+  if (image.isNull() || !image.save(&buffer, format.isEmpty() ? "PNG" : format.constData())) {
+    *error = QStringLiteral("%1: cannot encode the image").arg(path);
+    return false;
+  }
+  const Status s = WriteFileChecked(path.toStdString(), bytes.toStdString());
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
     return false;
   }
   return true;

@@ -13,6 +13,7 @@
 #include "core/calibration/automatic.h"
 #include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
+#include "core/common/checked_file.h"
 #include "core/common/json_reader.h"
 #include "core/evaluation/report.h"
 #include "core/pose/pose_estimator.h"
@@ -586,6 +587,13 @@ void Workspace::OpenSession(const QString& dir, double speed) {
           QString ignored;
           StopRecording(&ignored);
         }
+        // A damaged recording opens without its damaged records; say what
+        // was lost (how many records and seconds, where).
+        if (recording->decode.frames.damaged()) {
+          emit message(tr("%1: %2")
+                           .arg(dir)
+                           .arg(QString::fromStdString(recording->decode.frames.DamageSummary())));
+        }
         opened_ = recording;
         opened_circle_ = *circle;
         pass_labels_.clear();
@@ -803,7 +811,7 @@ bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_n
     report["previous"] = {{"calibration_rad", angles(previous_calibration_)},
                           {"evaluation", EvaluationToJson(*previous_evaluation_)}};
   }
-  const Status s = WriteFileAtomically(path.toStdString(), report.dump(2) + "\n");
+  const Status s = WriteFileChecked(path.toStdString(), report.dump(2) + "\n");
   if (!s.ok()) {
     *error = QString::fromStdString(s.message());
     return false;
