@@ -327,8 +327,10 @@ int Main(int argc, char** argv) {
   const Options o = ParseOptions(app, resources);
 
   Workspace workspace;
-  if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
   MainWindow window(&workspace, resources);
+  // After the window has restored its settings (which hold the folder the
+  // operator chose last), so that the command line wins.
+  if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
   const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty();
   window.SetInteractive(!scripted);
   window.resize(1400, 860);
