@@ -137,7 +137,10 @@ TEST(LinkSoakTest, StreamedScanningKeepsMemoryFlatLosesNothingAndRecordsItAll) {
   ASSERT_TRUE(DecodeSession(dir.toStdString(), FramesLoadOptions(), &log, &info).ok());
   EXPECT_EQ(info.frames_refused, 0u);
   EXPECT_EQ(info.link.sequence[0].gaps, 0u);
-  EXPECT_GT(ToSeconds(info.last_robot_time - info.first_robot_time), seconds - 2.0);
+  // Spanning the run: at 60x a few seconds of robot time are a few tens of
+  // wall milliseconds of start-up (authentication, the first frames), which
+  // a loaded machine (CTest -j2) stretches; 3 % is 300 ms of wall time.
+  EXPECT_GT(ToSeconds(info.last_robot_time - info.first_robot_time), 0.97 * seconds);
   EXPECT_GT(log.scans.size(), static_cast<size_t>(6.0 * seconds * 0.9));  // The X4 turns ~7 Hz.
 }
 
