@@ -36,6 +36,7 @@
 #include "hardware/link/hmac_sha256.h"
 #include "hardware/link/qt_transport.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -44,16 +45,8 @@ namespace {
 const char kKey[] = "hardening test key";
 std::vector<uint8_t> KeyBytes() { return std::vector<uint8_t>(kKey, kKey + sizeof(kKey) - 1); }
 
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer timer;
-  timer.start();
-  while (!done()) {
-    if (timer.elapsed() > timeout_ms) return done();
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-  }
-  return true;
-}
-void Pump(int ms) { WaitFor([] { return false; }, ms); }
+using testing::WaitFor;
+using testing::Pump;
 
 // Resident memory of this process (agent and test), MiB.
 double RssMiB() {

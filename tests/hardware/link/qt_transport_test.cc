@@ -16,20 +16,13 @@
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/codecs/x4_codec.h"
 #include "hardware/station/direct_device.h"
+#include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
 namespace hardware {
 namespace {
 
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer timer;
-  timer.start();
-  while (!done()) {
-    if (timer.elapsed() > timeout_ms) return done();
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-  }
-  return true;
-}
+using testing::WaitFor;
 
 TEST(LinkAddressTest, Parses) {
   LinkAddress a;

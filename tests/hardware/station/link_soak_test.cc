@@ -26,6 +26,7 @@
 #include "hardware/emulation/sim_devices.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -48,15 +49,7 @@ double RssMiB() {
   return 0.0;
 }
 
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer timer;
-  timer.start();
-  while (!done()) {
-    if (timer.elapsed() > timeout_ms) return done();
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-  }
-  return true;
-}
+using testing::WaitFor;
 
 TEST(LinkSoakTest, StreamedScanningKeepsMemoryFlatLosesNothingAndRecordsItAll) {
   const double seconds = EnvOr("SWEEPSCAN_SOAK_SECONDS", 600.0);

@@ -43,6 +43,7 @@
 #include "hardware/emulation/simulate_session.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -56,19 +57,8 @@ std::vector<uint8_t> KeyBytes(const std::string& s = kKey) {
   return std::vector<uint8_t>(s.begin(), s.end());
 }
 
-// Pumps the event loop until `done` or the timeout; returns done().
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer timer;
-  timer.start();
-  while (!done()) {
-    if (timer.elapsed() > timeout_ms) return done();
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-  }
-  return true;
-}
-void Pump(int ms) {
-  WaitFor([] { return false; }, ms);
-}
+using testing::WaitFor;
+using testing::Pump;
 
 sim::SimConfig LabWorld() {
   sim::SimConfig config;
