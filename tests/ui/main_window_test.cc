@@ -418,8 +418,12 @@ class CalibrationTest : public AppTest {
     const QString session = DiamondSession();
     ASSERT_TRUE(QFileInfo::exists(session));
     bool replayed = false, split = false;
-    QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
-    QObject::connect(workspace_.get(), &Workspace::passesSplit, [&] { split = true; });
+    // Disconnected when this returns: the lambdas hold references to these
+    // locals, and later replays (Show calibrated) emit the same signals.
+    QObject context;
+    QObject::connect(workspace_.get(), &Workspace::replayFinished, &context,
+                     [&] { replayed = true; });
+    QObject::connect(workspace_.get(), &Workspace::passesSplit, &context, [&] { split = true; });
     window_->OpenSessionPath(session);
     ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000)) << window_->last_error().toStdString();
     ASSERT_TRUE(workspace_->circle_drive()) << workspace_->circle_drive_note().toStdString();
