@@ -260,6 +260,26 @@ TEST(NeighbourIndexTest, KnnMatchesBruteForce) {
     SCOPED_TRACE(NeighbourBackendName(b));
     NeighbourIndex index;
     ASSERT_TRUE(index.Build(pts, b));
+    // Every point at once, in blocks of an odd size: the range queries the
+    // evaluation makes (KnnRange) against brute force.
+    const size_t block = 1000 + 3;
+    std::vector<uint32_t> ri(block * k);
+    std::vector<float> rd(block * k);
+    for (size_t begin = 0; begin < index.size(); begin += block) {
+      const size_t end = std::min(index.size(), begin + block);
+      index.KnnRange(begin, end, k, ri.data(), rd.data());
+      for (size_t s = begin; s < end; s += 5) {
+        const Eigen::Vector3f q(index.sorted_point(s));
+        std::vector<float> truth;
+        for (const auto& p : pts) truth.push_back((p - q).squaredNorm());
+        std::partial_sort(truth.begin(), truth.begin() + k, truth.end());
+        for (int j = 0; j < k; ++j) {
+          ASSERT_FLOAT_EQ(rd[(s - begin) * k + j], truth[static_cast<size_t>(j)]) << s << " " << j;
+          const Eigen::Vector3f p(index.sorted_point(ri[(s - begin) * k + j]));
+          ASSERT_FLOAT_EQ((p - q).squaredNorm(), rd[(s - begin) * k + j]);
+        }
+      }
+    }
     for (size_t i = 0; i < pts.size(); i += 37) {
       std::vector<float> truth;
       for (const auto& p : pts) truth.push_back((p - pts[i]).squaredNorm());
