@@ -15,6 +15,7 @@
 
 #include "core/calibration/internal.h"
 #include "core/calibration/passes.h"
+#include "core/evaluation/plane_scoring.h"
 #include "core/geometry/plane.h"
 
 namespace sweepscan {
@@ -72,18 +73,31 @@ struct FoundPlane {
 
 // Sequential RANSAC (seeded): the largest plane first, its inliers removed,
 // until the best plane holds fewer than min_count points. Point i is an
-// inlier when |n . p_i + d| < threshold[i].
+// inlier when |n . p_i + d| < threshold[i]. The hypotheses of a plane are
+// drawn in order from `rng` and scored at once on every core by the
+// evaluation's vectorised count (core/evaluation/plane_scoring.h, in float
+// over a structure of arrays); the first with the most inliers wins, as in
+// a serial loop, so the result does not depend on the thread count.
 std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts,
                                       const std::vector<double>& threshold, size_t min_count,
                                       int max_planes, int iterations, std::mt19937_64* rng) {
   std::vector<FoundPlane> out;
   std::vector<size_t> remaining(pts.size());
   for (size_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
+  PointsSoa soa;
+  std::vector<Eigen::Vector4f> hypotheses;
+  std::vector<size_t> counts;
   while (static_cast<int>(out.size()) < max_planes && remaining.size() >= min_count) {
+    soa.Resize(remaining.size());
+    soa.band.resize(remaining.size());
+    for (size_t k = 0; k < remaining.size(); ++k) {
+      const Eigen::Vector3d& p = pts[remaining[k]];
+      soa.Set(k, static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+      soa.band[k] = static_cast<float>(threshold[remaining[k]]);
+    }
     std::uniform_int_distribution<size_t> pick(0, remaining.size() - 1);
-    size_t best_count = 0;
-    Eigen::Vector3d best_n = Eigen::Vector3d::UnitZ();
-    double best_d = 0.0;
+    hypotheses.clear();
+    std::vector<Eigen::Vector4d> models;
     for (int it = 0; it < iterations; ++it) {
       const Eigen::Vector3d& a = pts[remaining[pick(*rng)]];
       const Eigen::Vector3d& b = pts[remaining[pick(*rng)]];
@@ -91,10 +105,19 @@ std::vector<FoundPlane> SegmentPlanes(const std::vector<Eigen::Vector3d>& pts,
       Eigen::Vector3d n = (b - a).cross(c - a);
       if (n.norm() < 1e-6) continue;
       n.normalize();
-      const double d = -n.dot(a);
-      size_t count = 0;
-      for (size_t i : remaining) count += std::abs(n.dot(pts[i]) + d) < threshold[i];
-      if (count > best_count) best_count = count, best_n = n, best_d = d;
+      models.emplace_back(n.x(), n.y(), n.z(), -n.dot(a));
+      hypotheses.push_back(models.back().cast<float>());
+    }
+    ScoreHypotheses(soa, hypotheses, -1.0f, true, &counts);
+    size_t best_count = 0;
+    Eigen::Vector3d best_n = Eigen::Vector3d::UnitZ();
+    double best_d = 0.0;
+    for (size_t h = 0; h < models.size(); ++h) {
+      if (counts[h] > best_count) {
+        best_count = counts[h];
+        best_n = models[h].head<3>();
+        best_d = models[h][3];
+      }
     }
     if (best_count < min_count) break;
     // Refine by least squares on the inliers, then take the final inliers.

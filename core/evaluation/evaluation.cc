@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "core/evaluation/parallel.h"
+#include "core/evaluation/plane_scoring.h"
 
 namespace sweepscan {
 
@@ -203,35 +204,12 @@ struct Moments {
   Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
 };
 
-// RANSAC's subsample as a structure of arrays.
-struct Soa {
-  std::vector<float> x, y, z;
-};
-
-// |(a, b, c, d) . (x, y, z, 1)| summed as Eigen's SSE dot of two
-// Vector4f does ((ax + cz) + (by + d)), as PCL's plane model computes it.
-inline float Distance(float a, float b, float c, float d, float x, float y, float z) {
-  return std::abs((a * x + c * z) + (b * y + d));
-}
-
 // The largest float t with (double)t < threshold: |dist| <= t in float is
 // PCL's |dist| < threshold in double.
 float FloatBelow(double threshold) {
   float t = static_cast<float>(threshold);
   while (static_cast<double>(t) >= threshold) t = std::nextafter(t, 0.0f);
   return t;
-}
-
-// Number of subsample points within t (FloatBelow) of the plane (a, b, c, d):
-// a loop over the structure of arrays that the compiler vectorises.
-size_t CountWithin(const Soa& s, float a, float b, float c, float d, float t) {
-  const size_t m = s.x.size();
-  const float* x = s.x.data();
-  const float* y = s.y.data();
-  const float* z = s.z.data();
-  uint32_t count = 0;
-  for (size_t i = 0; i < m; ++i) count += Distance(a, b, c, d, x[i], y[i], z[i]) <= t ? 1u : 0u;
-  return count;
 }
 
 DeviationHistogram HistogramParallel(const std::vector<Eigen::Vector3f>& points,
@@ -329,7 +307,7 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
   const double cos_level = std::cos(options.classify_angle_deg / kRadToDeg);
   const double sin_plumb = std::sin(options.classify_angle_deg / kRadToDeg);
   const float threshold = FloatBelow(options.plane_distance_m);
-  Soa sub;
+  PointsSoa sub;
   std::vector<uint8_t> in_band;
   while (static_cast<int>(planes->size()) < options.max_planes && remaining.size() >= min_count) {
     runner->Report(std::max(static_cast<double>(planes->size()) / options.max_planes,
@@ -342,15 +320,11 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
       m = options.ransac_max_points;
       step = static_cast<double>(remaining.size()) / static_cast<double>(m);
     }
-    sub.x.resize(m);
-    sub.y.resize(m);
-    sub.z.resize(m);
+    sub.Resize(m);
     for (size_t k = 0; k < m; ++k) {
       const Eigen::Vector3f& p =
           points[remaining[step == 1.0 ? k : static_cast<size_t>(static_cast<double>(k) * step)]];
-      sub.x[k] = p.x();
-      sub.y[k] = p.y();
-      sub.z[k] = p.z();
+      sub.Set(k, p.x(), p.y(), p.z());
     }
     // RANSAC exactly as PCL's SACSegmentation runs it (so that the planes are
     // those of the PCL version): a fresh boost::mt19937 seeded 12345 per
@@ -403,7 +377,7 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
       if (batch.size() < static_cast<size_t>(kHypothesisBatch)) stop = true;
       if (!runner->For(batch.size(), 1, [&](size_t h, size_t, size_t) {
             const Eigen::Vector4f& q = batch[h];
-            batch_count[h] = CountWithin(sub, q[0], q[1], q[2], q[3], threshold);
+            batch_count[h] = CountWithinPlane(sub, q, threshold);
           })) {
         return Cancelled();
       }
@@ -432,8 +406,7 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
     std::vector<Eigen::Vector3d> in;
     in.reserve(best_count);
     for (size_t k = 0; k < m; ++k) {
-      if (Distance(best_model[0], best_model[1], best_model[2], best_model[3], sub.x[k], sub.y[k],
-                   sub.z[k]) <= threshold) {
+      if (PlaneDistance(best_model, sub.x[k], sub.y[k], sub.z[k]) <= threshold) {
         in.emplace_back(sub.x[k], sub.y[k], sub.z[k]);
       }
     }
