@@ -78,7 +78,8 @@ int LoadRecording(const Args& args, RecordingInput* in) {
 int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
                    ReconstructionResult* result) {
   ReconstructionOptions options;
-  if (args.Has("pose-source") && !ParsePoseSource(args.Get("pose-source"), &options.pose.source)) {
+  if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
+                                  options.pose.source == PoseSource::kSfm)) {
     PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
     return kExitBadInput;
   }

@@ -21,6 +21,7 @@
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
+#include "core/sfm/wheeled.h"
 #include "hardware/link/telemetry_decoder.h"
 
 namespace sweepscan::app {
@@ -49,7 +50,9 @@ const char* const kReconstructUsage =
     "\n"
     "Options:\n"
     "  --calibration FILE     mounting error to undo (calibration JSON); default: meta.json's\n"
-    "  --pose-source S        ekf (default) or odometry\n"
+    "  --pose-source S        ekf (default), odometry, or sfm: the EKF corrected by the planes the\n"
+    "                         scans cross (lidar-only structure from motion, docs/sfm.md; the\n"
+    "                         position along the walls stays the EKF's)\n"
     "  --no-ekf               same as --pose-source odometry\n"
     "  --no-deskew            place each whole scan at its first sample's pose\n"
     "  --strict               refuse a session with damaged records (default: skip them, with a warning)\n"
@@ -207,11 +210,17 @@ int RunReconstruct(int argc, char** argv) {
   if (args.Has("pose-source")) {
     if (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
         options.pose.source == PoseSource::kTruth) {
-      PrintError("--pose-source must be ekf or odometry for a session, got '" + args.Get("pose-source") + "'");
+      PrintError("--pose-source must be ekf, odometry or sfm for a session, got '" + args.Get("pose-source") + "'");
       return kExitBadInput;
     }
   }
-  if (args.Flag("no-ekf")) options.pose.source = PoseSource::kOdometry;
+  if (args.Flag("no-ekf")) {
+    if (options.pose.source == PoseSource::kSfm) {
+      PrintError("--no-ekf contradicts --pose-source sfm (it corrects the EKF's poses)");
+      return kExitBadInput;
+    }
+    options.pose.source = PoseSource::kOdometry;
+  }
   options.assembly.deskew = !args.Flag("no-deskew");
   Decoded d;
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
@@ -225,7 +234,20 @@ int RunReconstruct(int argc, char** argv) {
     }
   }
   ReconstructionResult result;
-  Status s = Reconstruct(d.log, d.info.meta.geometry, options, nullptr, &result);
+  // sfm: the EKF's poses corrected by the planes (core/sfm/wheeled.h), then
+  // given to the reconstruction like any poses.
+  sfm::WheeledSfmResult sfm_result;
+  if (options.pose.source == PoseSource::kSfm) {
+    const Status s = sfm::WheeledSfmFromLog(d.log, d.info.meta.geometry, options.calibration, options.pose.initial_pose,
+                                            PoseSource::kEkf, sfm::SequenceInit(), sfm::WheeledSfmOptions(),
+                                            &sfm_result);
+    if (!s.ok()) {
+      PrintError(args.positional()[0] + ": sfm: " + s.message());
+      return kExitFailure;
+    }
+  }
+  Status s = Reconstruct(d.log, d.info.meta.geometry, options,
+                         options.pose.source == PoseSource::kSfm ? &sfm_result.poses : nullptr, &result);
   if (!s.ok()) {
     PrintError(args.positional()[0] + ": " + s.message());
     return kExitFailure;
@@ -235,7 +257,7 @@ int RunReconstruct(int argc, char** argv) {
     PrintError(s.message());
     return kExitFailure;
   }
-  const nlohmann::json report = {
+  nlohmann::json report = {
       {"session", args.positional()[0]},
       {"out", args.Get("out")},
       {"pose_source", PoseSourceName(options.pose.source)},
@@ -249,9 +271,21 @@ int RunReconstruct(int argc, char** argv) {
       {"samples_without_pose", result.stats.no_pose},
       {"ekf_rejected", result.ekf_counters.rejected},
   };
+  if (options.pose.source == PoseSource::kSfm) {
+    const sfm::SequenceResult& seq = sfm_result.sequence;
+    report["sfm"] = {{"scans", seq.poses.size()},
+                     {"lines", seq.lines_total},
+                     {"lines_assigned", seq.lines_assigned},
+                     {"planes", seq.planes.size()}};
+  }
   if (args.Flag("json")) {
     std::cout << report.dump(2) << "\n";
   } else {
+    if (options.pose.source == PoseSource::kSfm) {
+      const sfm::SequenceResult& seq = sfm_result.sequence;
+      std::printf("sfm: %zu scans placed, %d lines (%d on %zu planes)\n", seq.poses.size(), seq.lines_total,
+                  seq.lines_assigned, seq.planes.size());
+    }
     std::printf("%zu scans, %zu samples -> %zu points in %s (poses: %s, deskew %s)\n", d.log.scans.size(),
                 result.stats.samples_in, result.stats.points_out, args.Get("out").c_str(),
                 PoseSourceName(options.pose.source), options.assembly.deskew ? "on" : "off");

@@ -2,6 +2,7 @@
 // motion (Choi et al. 2017, section 3), and its synthetic protocol
 // (section 5.1); `sweepscan-cli sfm`: the sequence pipeline (section 4) on a
 // simulated rig. docs/sfm.md describes the formats and the math.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -11,6 +12,8 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_recording.h"
+#include "core/calibration/calibration_file.h"
 #include "core/common/json_reader.h"
 #include "core/cloud/cloud_io.h"
 #include "core/sfm/p3l_json.h"
@@ -18,6 +21,7 @@
 #include "core/sfm/sequence.h"
 #include "core/sfm/sequence_json.h"
 #include "core/sfm/synthetic.h"
+#include "core/sfm/wheeled.h"
 
 namespace sweepscan::app {
 
@@ -133,18 +137,39 @@ int RunP3l(int argc, char** argv) {
 }
 
 const char* const kSfmUsage =
-    "usage: sweepscan-cli sfm --rig-scenario room|stairwell [--frames N] [--seed 1]\n"
+    "usage: sweepscan-cli sfm SESSION|--scenario FILE [--seed N] --out CLOUD.ply|CLOUD.pcd\n"
+    "                     [--motion-prior ekf|odometry|none|truth] [--init INIT.json]\n"
+    "                     [--calibration FILE] [--poses POSES.csv] [--planes PLANES.json]\n"
+    "                     [--no-refine] [--strict] [--json]\n"
+    "       sweepscan-cli sfm --rig-scenario room|stairwell [--frames N] [--seed 1]\n"
     "                     [--init INIT.json] [--write-init INIT.json] [--out CLOUD.ply]\n"
     "                     [--poses POSES.csv] [--planes PLANES.json] [--no-refine] [--json]\n"
     "\n"
-    "Lidar-only structure from motion (Choi et al. 2017, section 4) on a simulated\n"
-    "hand-held rig of two 2D lidars (core/sim/rig.h): the room walk (650 frames,\n"
-    "1300 scans) or the stairwell walk (1750 frames, 3500 scans). Initialisation\n"
+    "The wheeled scanner (SESSION, or --scenario FILE simulated in-process, with\n"
+    "its ground truth): every X4 scan, deskewed, is placed by the planes its lines\n"
+    "lie on (floor, ceiling, walls, found on the way), with the wheel + IMU EKF\n"
+    "(--motion-prior ekf, the default) or the wheels alone (odometry) as the motion\n"
+    "prior for what the planes do not fix: a vertical scan sees two normal\n"
+    "directions, so the position along the walls comes from the prior.\n"
+    "--motion-prior truth (--scenario only): the simulation's true poses as the prior.\n"
+    "--motion-prior none: the paper's lidar-only tracking (constant velocity), which\n"
+    "needs --init (three known planes; with --scenario, by default the truth's: the\n"
+    "three distinct planes most samples of the first scan lie on).\n"
+    "--init INIT.json: three known planes (world frame) with lines of the first scan\n"
+    "(lidar 0; \"near\": [r cos theta, r sin theta] of a sample). Writes the cloud\n"
+    "placed by the corrected poses (deskewed per sample), --poses a CSV (scan, time,\n"
+    "pose, the prior's pose, the truth's with --scenario), --planes the planes, and\n"
+    "prints the planes found and the poses against the prior (and the truth).\n"
+    "Calibration: meta.json's for a session, none for --scenario, or --calibration.\n"
+    "\n"
+    "--rig-scenario: lidar-only structure from motion (Choi et al. 2017, section 4)\n"
+    "on a simulated hand-held rig of two 2D lidars (core/sim/rig.h): the room walk\n"
+    "(650 frames, 1300 scans) or the stairwell walk (1750 frames, 3500 scans). Initialisation\n"
     "from three planes and their lines in the first frame: --init INIT.json, or\n"
     "by default the truth's (the faces the first frame's lines hit; --write-init\n"
     "saves it). Writes the refined cloud (PLY), the poses (CSV: frame, time, x, y,\n"
     "z, qw, qx, qy, qz and the errors against the truth), the planes (JSON) and\n"
-    "prints the errors, planes found and times. SESSION input: not yet.\n";
+    "prints the errors, planes found and times.\n";
 
 namespace {
 
@@ -168,11 +193,240 @@ Status WritePosesCsv(const std::string& path, const sfm::SequenceResult& r, cons
   return WriteFileAtomically(path, csv.str());
 }
 
+nlohmann::json PlanesJson(const std::vector<sfm::FoundPlane>& found) {
+  nlohmann::json planes = nlohmann::json::array();
+  for (const sfm::FoundPlane& fp : found) {
+    planes.push_back({{"normal", {fp.plane.normal.x(), fp.plane.normal.y(), fp.plane.normal.z()}},
+                      {"d", fp.plane.d},
+                      {"initial", fp.initial},
+                      {"first_frame", fp.first_frame},
+                      {"lines", fp.observations},
+                      {"frames", fp.frames}});
+  }
+  return planes;
+}
+
+nlohmann::json WheeledErrorsJson(const sfm::WheeledErrors& e) {
+  return {{"frames", e.frames},
+          {"along_mean_m", e.along_mean_m},
+          {"along_max_m", e.along_max_m},
+          {"along_final_m", e.along_final_m},
+          {"lateral_mean_m", e.lateral_mean_m},
+          {"lateral_max_m", e.lateral_max_m},
+          {"lateral_final_m", e.lateral_final_m},
+          {"height_mean_m", e.height_mean_m},
+          {"height_max_m", e.height_max_m},
+          {"heading_mean_deg", e.heading_mean_deg},
+          {"heading_max_deg", e.heading_max_deg},
+          {"heading_final_deg", e.heading_final_deg},
+          {"tilt_mean_deg", e.tilt_mean_deg},
+          {"tilt_max_deg", e.tilt_max_deg},
+          {"trans_mean_m", e.trans_mean_m},
+          {"trans_max_m", e.trans_max_m}};
+}
+
+void PrintWheeledErrors(const char* name, const sfm::WheeledErrors& e) {
+  std::printf("%-16s along %.3f / %.3f m, lateral %.4f / %.4f m, height %.4f / %.4f m, heading %.3f / %.3f deg, "
+              "tilt %.3f / %.3f deg (mean / max); final: along %.3f m, lateral %.4f m, heading %.3f deg\n",
+              name, e.along_mean_m, e.along_max_m, e.lateral_mean_m, e.lateral_max_m, e.height_mean_m,
+              e.height_max_m, e.heading_mean_deg, e.heading_max_deg, e.tilt_mean_deg, e.tilt_max_deg,
+              e.along_final_m, e.lateral_final_m, e.heading_final_deg);
+}
+
+double YawDeg(const Rigid3d& p) {
+  const Eigen::Matrix3d R = p.rotation().toRotationMatrix();
+  return std::atan2(R(1, 0), R(0, 0)) * 180.0 / M_PI;
+}
+
+Status WriteWheeledPosesCsv(const std::string& path, const sfm::WheeledSfmResult& r, const PoseBuffer* truth) {
+  std::ostringstream csv;
+  csv << "scan,time_s,x,y,z,qw,qx,qy,qz,yaw_deg,prior_x,prior_y,prior_z,prior_yaw_deg";
+  if (truth != nullptr) csv << ",truth_x,truth_y,truth_z,truth_yaw_deg";
+  csv << "\n";
+  const sfm::SequenceResult& seq = r.sequence;
+  for (size_t k = 0; k < seq.poses.size(); ++k) {
+    const Rigid3d& p = seq.poses[k];
+    const Rigid3d& q = r.prior[k];
+    char line[512];
+    std::snprintf(line, sizeof(line), "%u,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%.5f,%.6f,%.6f,%.6f,%.5f",
+                  r.scans[k], seq.frame_times_s[k], p.translation().x(), p.translation().y(), p.translation().z(),
+                  p.rotation().w(), p.rotation().x(), p.rotation().y(), p.rotation().z(), YawDeg(p),
+                  q.translation().x(), q.translation().y(), q.translation().z(), YawDeg(q));
+    csv << line;
+    Rigid3d t;
+    if (truth != nullptr) {
+      if (truth->Lookup(TimeFromSeconds(seq.frame_times_s[k]), &t)) {
+        std::snprintf(line, sizeof(line), ",%.6f,%.6f,%.6f,%.5f", t.translation().x(), t.translation().y(),
+                      t.translation().z(), YawDeg(t));
+        csv << line;
+      } else {
+        csv << ",,,,";
+      }
+    }
+    csv << "\n";
+  }
+  return WriteFileAtomically(path, csv.str());
+}
+
+// `sfm SESSION` / `sfm --scenario FILE`: the wheeled scanner (wheeled.h).
+int RunSfmWheeled(const Args& args) {
+  for (const char* key : {"frames", "write-init"}) {
+    if (args.Has(key)) {
+      PrintError(std::string("sfm: --") + key + " is for --rig-scenario");
+      return kExitBadInput;
+    }
+  }
+  if (!args.Has("out")) {
+    PrintError("sfm needs --out CLOUD.ply (see sweepscan-cli help sfm)");
+    return kExitBadInput;
+  }
+  const std::string prior_name = args.Get("motion-prior", "ekf");
+  if (prior_name != "ekf" && prior_name != "odometry" && prior_name != "none" && prior_name != "truth") {
+    PrintError("--motion-prior must be ekf, odometry, none or truth, got '" + prior_name + "'");
+    return kExitBadInput;
+  }
+  sfm::SequenceInit init;
+  Status s;
+  if (args.Has("init")) {
+    nlohmann::json doc;
+    s = ReadJsonFile(args.Get("init"), &doc);
+    if (s.ok()) s = sfm::ParseSequenceInit(doc, &init);
+    if (s.ok() && !init.planes[0].known) {
+      s = Status::Error("the wheeled scanner's initialisation needs the three planes given (normal, d): one "
+                        "vertical scan has one line per plane");
+    }
+    if (!s.ok()) {
+      PrintError(args.Get("init") + ": " + s.message());
+      return kExitBadInput;
+    }
+  }
+  MountingError calibration;
+  if (args.Has("calibration")) {
+    s = LoadCalibrationFile(args.Get("calibration"), &calibration);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  RecordingInput in;
+  const int code = LoadRecording(args, &in);
+  if (code != kExitOk) return code;
+  if (!args.Has("calibration") && !in.session_dir.empty()) calibration = in.decode.meta.calibration;
+  if (prior_name == "truth" && !in.has_truth) {
+    PrintError("--motion-prior truth needs a simulated input (--scenario)");
+    return kExitBadInput;
+  }
+  const Rigid3d body_from_lidar = BodyFromLidar(in.geometry, calibration);
+  sfm::WheeledSfmOptions options;
+  if (args.Flag("no-refine")) options.sequence.refine_passes = 0;
+  if (prior_name == "none") {
+    // The paper's tracking: constant velocity, no prior terms; the prior
+    // (the EKF) only gives the first pose.
+    options.motion.predict = false;
+    options.motion.constrain = false;
+    if (!args.Has("init")) {
+      std::vector<std::string> chosen;
+      s = in.has_truth ? sfm::WheeledInitFromTruth(in.log.scans, in.truth_poses, body_from_lidar, in.scenario.scene,
+                                                   options.min_scan_samples, &init, &chosen)
+                       : Status::Error("--motion-prior none needs --init INIT.json (three known planes) for a session");
+      if (!s.ok()) {
+        PrintError(s.message());
+        return kExitBadInput;
+      }
+    }
+  }
+  const PoseSource prior_source = prior_name == "odometry" ? PoseSource::kOdometry : PoseSource::kEkf;
+  const sfm::MotionPrior weights = sfm::WheeledMotionPrior(prior_source);
+  options.motion.abs_tilt_sigma_rad = weights.abs_tilt_sigma_rad;
+  options.motion.abs_yaw_sigma_rad = weights.abs_yaw_sigma_rad;
+  sfm::WheeledSfmResult result;
+  // truth: what the planes do with a perfect prior (a check of the pipeline).
+  s = prior_name == "truth"
+          ? sfm::RunWheeledSfm(in.log.scans, body_from_lidar, in.truth_poses, init, options, &result)
+          : sfm::WheeledSfmFromLog(in.log, in.geometry, calibration, in.start, prior_source, init, options, &result);
+  if (!s.ok()) {
+    PrintError(in.name + ": " + s.message());
+    return args.Has("init") && s.message().rfind("init:", 0) == 0 ? kExitBadInput : kExitFailure;
+  }
+  const sfm::SequenceResult& seq = result.sequence;
+  // The cloud: every sample deskewed with the corrected poses.
+  ReconstructionOptions ro;
+  ro.pose.source = PoseSource::kSfm;
+  ro.pose.initial_pose = in.start;
+  ro.calibration = calibration;
+  if (in.has_truth) {
+    ro.assembly.min_range_m = in.scenario.lidar.min_range_m;
+    ro.assembly.max_range_m = in.scenario.lidar.max_range_m;
+  }
+  ReconstructionResult cloud;
+  s = Reconstruct(in.log, in.geometry, ro, &result.poses, &cloud);
+  if (s.ok()) s = SaveCloud(args.Get("out"), cloud.points);
+  if (s.ok() && args.Has("poses")) {
+    s = WriteWheeledPosesCsv(args.Get("poses"), result, in.has_truth ? &in.truth_poses : nullptr);
+  }
+  const nlohmann::json planes = PlanesJson(seq.planes);
+  if (s.ok() && args.Has("planes")) {
+    s = WriteFileAtomically(args.Get("planes"), nlohmann::json({{"planes", planes}}).dump(2) + "\n");
+  }
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitFailure;
+  }
+  // The prior as a buffer, to compare the SfM poses with.
+  PoseBuffer prior_buffer;
+  for (size_t k = 0; k < result.prior.size(); ++k) {
+    prior_buffer.Add(TimeFromSeconds(seq.frame_times_s[k]), result.prior[k]);
+  }
+  const sfm::WheeledErrors vs_prior = sfm::EvaluateWheeled(seq.frame_times_s, seq.poses, prior_buffer);
+  sfm::WheeledErrors prior_vs_truth, tracked_vs_truth, sfm_vs_truth;
+  if (in.has_truth) {
+    prior_vs_truth = sfm::EvaluateWheeled(seq.frame_times_s, result.prior, in.truth_poses);
+    tracked_vs_truth = sfm::EvaluateWheeled(seq.frame_times_s, seq.tracked, in.truth_poses);
+    sfm_vs_truth = sfm::EvaluateWheeled(seq.frame_times_s, seq.poses, in.truth_poses);
+  }
+  const char* prior_label = prior_name == "none" ? "ekf" : prior_name.c_str();
+  if (args.Flag("json")) {
+    nlohmann::json out = {{"input", in.name},
+                          {"out", args.Get("out")},
+                          {"motion_prior", prior_name},
+                          {"scans", seq.poses.size()},
+                          {"lines", seq.lines_total},
+                          {"lines_assigned", seq.lines_assigned},
+                          {"planes", planes},
+                          {"weak_frames", seq.frames_weak},
+                          {"points", cloud.stats.points_out},
+                          {"tracking_s", seq.tracking_seconds},
+                          {"refinement_s", seq.refine.seconds},
+                          {"sfm_vs_prior", WheeledErrorsJson(vs_prior)}};
+    if (in.has_truth) {
+      out["prior_vs_truth"] = WheeledErrorsJson(prior_vs_truth);
+      out["tracked_vs_truth"] = WheeledErrorsJson(tracked_vs_truth);
+      out["sfm_vs_truth"] = WheeledErrorsJson(sfm_vs_truth);
+    }
+    std::cout << out.dump() << "\n";
+    return kExitOk;
+  }
+  std::printf("%s: %zu scans, %d lines (%d on planes), %zu planes; %zu points in %s (motion prior %s)\n",
+              in.name.c_str(), seq.poses.size(), seq.lines_total, seq.lines_assigned, seq.planes.size(),
+              cloud.stats.points_out, args.Get("out").c_str(), prior_name.c_str());
+  std::printf("time: tracking %.2f s, refinement %.2f s (%d passes, %d iterations, cost %.4g -> %.4g)\n",
+              seq.tracking_seconds, seq.refine.seconds, seq.refine.passes, seq.refine.iterations,
+              seq.refine.initial_cost, seq.refine.final_cost);
+  if (prior_name != "truth") PrintWheeledErrors((std::string("sfm vs ") + prior_label + ":").c_str(), vs_prior);
+  if (in.has_truth) {
+    if (prior_name != "truth") PrintWheeledErrors((std::string(prior_label) + " vs truth:").c_str(), prior_vs_truth);
+    PrintWheeledErrors("tracked vs truth:", tracked_vs_truth);
+    PrintWheeledErrors("sfm vs truth:", sfm_vs_truth);
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int RunSfm(int argc, char** argv) {
-  Args args({"help", "json", "no-refine"},
-            {"rig-scenario", "frames", "seed", "init", "write-init", "out", "poses", "planes"});
+  Args args({"help", "json", "no-refine", "strict"},
+            {"rig-scenario", "frames", "seed", "init", "write-init", "out", "poses", "planes", "scenario",
+             "motion-prior", "calibration"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error);
@@ -182,11 +436,22 @@ int RunSfm(int argc, char** argv) {
     std::cout << kSfmUsage;
     return kExitOk;
   }
-  if (!args.positional().empty() || !args.Has("rig-scenario")) {
-    PrintError(args.positional().empty()
-                   ? "sfm needs --rig-scenario (room, stairwell)\n" + std::string(kSfmUsage)
-                   : "sfm: session input is not supported yet; use --rig-scenario\n" + std::string(kSfmUsage));
+  if (!args.positional().empty() || args.Has("scenario")) {
+    if (args.Has("rig-scenario")) {
+      PrintError("sfm: give SESSION, --scenario FILE or --rig-scenario NAME, one of them");
+      return kExitBadInput;
+    }
+    return RunSfmWheeled(args);
+  }
+  if (!args.Has("rig-scenario")) {
+    PrintError("sfm needs SESSION, --scenario FILE or --rig-scenario (room, stairwell)\n" + std::string(kSfmUsage));
     return kExitBadInput;
+  }
+  for (const char* key : {"motion-prior", "calibration"}) {
+    if (args.Has(key)) {
+      PrintError(std::string("sfm: --") + key + " is for the wheeled scanner (SESSION or --scenario)");
+      return kExitBadInput;
+    }
   }
   sim::RigSimConfig config;
   Status s = sfm::RigScenarioByName(args.Get("rig-scenario"), &config);
@@ -282,15 +547,7 @@ int RunSfm(int argc, char** argv) {
       return kExitFailure;
     }
   }
-  nlohmann::json planes = nlohmann::json::array();
-  for (const sfm::FoundPlane& fp : result.planes) {
-    planes.push_back({{"normal", {fp.plane.normal.x(), fp.plane.normal.y(), fp.plane.normal.z()}},
-                      {"d", fp.plane.d},
-                      {"initial", fp.initial},
-                      {"first_frame", fp.first_frame},
-                      {"lines", fp.observations},
-                      {"frames", fp.frames}});
-  }
+  const nlohmann::json planes = PlanesJson(result.planes);
   if (args.Has("planes")) {
     s = WriteFileAtomically(args.Get("planes"), nlohmann::json({{"planes", planes}}).dump(2) + "\n");
     if (!s.ok()) {

@@ -93,7 +93,8 @@ int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
     config.seed = seed;
   }
   ReconstructionOptions& options = request->options;
-  if (args.Has("pose-source") && !ParsePoseSource(args.Get("pose-source"), &options.pose.source)) {
+  if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
+                                  options.pose.source == PoseSource::kSfm)) {
     PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
     return kExitBadInput;
   }

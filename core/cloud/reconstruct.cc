@@ -10,8 +10,10 @@ Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
       !options.assembly.IsValid(&error)) {
     return Status::Error(error);
   }
-  if (options.pose.source == PoseSource::kTruth) {
-    if (truth == nullptr || truth->empty()) return Status::Error("pose source 'truth' needs ground truth");
+  if (options.pose.source == PoseSource::kTruth || options.pose.source == PoseSource::kSfm) {
+    if (truth == nullptr || truth->empty()) {
+      return Status::Error(std::string("pose source '") + PoseSourceName(options.pose.source) + "' needs given poses");
+    }
     result->poses = *truth;
   } else {
     if (log.wheels.empty()) return Status::Error("the recording has no wheel odometry records");

@@ -27,7 +27,9 @@ struct ReconstructionResult {
   PoseEkf::Counters ekf_counters;
 };
 
-// `truth` is required when options.pose.source is kTruth and ignored otherwise.
+// `truth` (the given poses) is required when options.pose.source is kTruth
+// or kSfm (poses computed elsewhere: the simulation's truth, or core/sfm's
+// corrected EKF poses) and ignored otherwise.
 Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
                    const ReconstructionOptions& options, const PoseBuffer* truth,
                    ReconstructionResult* result);

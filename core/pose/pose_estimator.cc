@@ -13,12 +13,14 @@ const char* PoseSourceName(PoseSource source) {
       return "odometry";
     case PoseSource::kTruth:
       return "truth";
+    case PoseSource::kSfm:
+      return "sfm";
   }
   return "unknown";
 }
 
 bool ParsePoseSource(const std::string& name, PoseSource* source) {
-  for (PoseSource s : {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kTruth}) {
+  for (PoseSource s : {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kTruth, PoseSource::kSfm}) {
     if (name == PoseSourceName(s)) {
       *source = s;
       return true;

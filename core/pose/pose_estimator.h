@@ -31,7 +31,10 @@
 
 namespace sweepscan {
 
-enum class PoseSource : uint8_t { kEkf = 0, kOdometry = 1, kTruth = 2 };
+// kSfm: lidar-only structure from motion on top of the EKF (core/sfm/
+// wheeled.h); like kTruth, its poses are computed elsewhere and given to
+// the reconstruction, never by the PoseEstimator.
+enum class PoseSource : uint8_t { kEkf = 0, kOdometry = 1, kTruth = 2, kSfm = 3 };
 const char* PoseSourceName(PoseSource source);
 bool ParsePoseSource(const std::string& name, PoseSource* source);
 

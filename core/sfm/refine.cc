@@ -63,6 +63,49 @@ struct PosePriorCost {
   double wt_, wr_;
 };
 
+// The motion prior between two consecutive poses (refine.h).
+struct RelativeMotionCost {
+  RelativeMotionCost(const Rigid3d& delta, const Eigen::Matrix<double, 6, 1>& sqrt_info)
+      : q_(delta.rotation().normalized()), t_(delta.translation()), s_(sqrt_info) {}
+  template <typename T>
+  bool operator()(const T* a, const T* b, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> qa(a), qb(b);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> ta(a + 4), tb(b + 4);
+    const Eigen::Quaternion<T> qa_inv = qa.conjugate();
+    const Eigen::Quaternion<T> q_rel = qa_inv * qb;
+    const Eigen::Matrix<T, 3, 1> t_rel = qa_inv * (tb - ta);
+    const Eigen::Quaternion<T> dq = q_.conjugate().cast<T>() * q_rel;
+    const T s = dq.w() < T(0) ? T(-2) : T(2);
+    r[0] = T(s_[0]) * s * dq.x();
+    r[1] = T(s_[1]) * s * dq.y();
+    r[2] = T(s_[2]) * s * dq.z();
+    for (int i = 0; i < 3; ++i) r[3 + i] = T(s_[3 + i]) * (t_rel[i] - T(t_[i]));
+    return true;
+  }
+  Eigen::Quaterniond q_;
+  Eigen::Vector3d t_;
+  Eigen::Matrix<double, 6, 1> s_;
+};
+
+// The prior's absolute orientation (refine.h): the world-frame rotation
+// error 2 vec(q q_p^-1), its x and y (tilt) and z (yaw) weighted apart.
+struct AbsoluteOrientationCost {
+  AbsoluteOrientationCost(const Eigen::Quaterniond& q, double s_tilt, double s_yaw)
+      : q_(q.normalized()), s_tilt_(s_tilt), s_yaw_(s_yaw) {}
+  template <typename T>
+  bool operator()(const T* pose, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(pose);
+    const Eigen::Quaternion<T> dq = q * q_.conjugate().cast<T>();
+    const T s = dq.w() < T(0) ? T(-2) : T(2);
+    r[0] = T(s_tilt_) * s * dq.x();
+    r[1] = T(s_tilt_) * s * dq.y();
+    r[2] = T(s_yaw_) * s * dq.z();
+    return true;
+  }
+  Eigen::Quaterniond q_;
+  double s_tilt_, s_yaw_;
+};
+
 using PoseManifold = ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
 using PlaneManifold = ceres::ProductManifold<ceres::SphereManifold<3>, ceres::EuclideanManifold<1>>;
 
@@ -110,7 +153,29 @@ Status RefinePosesAndPlanes(const std::vector<LineObs>& lines, const RefineOptio
     ++blocks;
   }
   if (blocks == 0) return Status::Error("refinement: no assigned lines");
-  if (options.prior_translation_m > 0.0) {
+  const MotionPrior* motion = options.motion;
+  if (motion != nullptr) {
+    if (static_cast<int>(motion->world_from_rig.size()) != num_poses) {
+      return Status::Error("refinement: the motion prior has " + std::to_string(motion->world_from_rig.size()) +
+                           " poses for " + std::to_string(num_poses));
+    }
+    for (int i = 1; i < num_poses; ++i) {
+      const Rigid3d delta = motion->world_from_rig[i - 1].inverse() * motion->world_from_rig[i];
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativeMotionCost, 6, 7, 7>(
+                                   new RelativeMotionCost(delta, motion->SqrtInformation(delta))),
+                               nullptr, pose_blocks[i - 1].data(), pose_blocks[i].data());
+      pose_used[i - 1] = pose_used[i] = true;
+    }
+    if (motion->abs_tilt_sigma_rad > 0.0 || motion->abs_yaw_sigma_rad > 0.0) {
+      const double s_tilt = motion->abs_tilt_sigma_rad > 0.0 ? motion->point_sigma_m / motion->abs_tilt_sigma_rad : 0.0;
+      const double s_yaw = motion->abs_yaw_sigma_rad > 0.0 ? motion->point_sigma_m / motion->abs_yaw_sigma_rad : 0.0;
+      for (int i = 0; i < num_poses; ++i) {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AbsoluteOrientationCost, 3, 7>(
+                                     new AbsoluteOrientationCost(motion->world_from_rig[i].rotation(), s_tilt, s_yaw)),
+                                 nullptr, pose_blocks[i].data());
+      }
+    }
+  } else if (options.prior_translation_m > 0.0) {
     for (int i = 0; i < num_poses; ++i) {
       if (!pose_used[i]) continue;
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PosePriorCost, 6, 7>(new PosePriorCost(
@@ -119,7 +184,7 @@ Status RefinePosesAndPlanes(const std::vector<LineObs>& lines, const RefineOptio
                                nullptr, pose_blocks[i].data());
     }
   }
-  auto* ordering = new ceres::ParameterBlockOrdering;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (int i = 0; i < num_poses; ++i) {
     if (!pose_used[i]) continue;
     problem.SetManifold(pose_blocks[i].data(), &pose_manifold);
@@ -148,8 +213,12 @@ Status RefinePosesAndPlanes(const std::vector<LineObs>& lines, const RefineOptio
   ceres::Solver::Options so;
   // Every residual touches one pose and one plane: eliminate the poses
   // (6 x 6 blocks) and solve the small dense system of the planes.
-  so.linear_solver_type = ceres::DENSE_SCHUR;
-  so.linear_solver_ordering.reset(ordering);
+  if (motion != nullptr) {
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  } else {
+    so.linear_solver_type = ceres::DENSE_SCHUR;
+    so.linear_solver_ordering = ordering;
+  }
   so.max_num_iterations = options.max_iterations;
   so.num_threads = std::max(1, options.threads);
   so.function_tolerance = 1e-9;

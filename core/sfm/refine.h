@@ -14,7 +14,9 @@
 // invariant to a rigid motion of the world): either the first pose is held
 // constant, or planes that fix all six degrees of freedom (three with
 // independent normals: the initial planes) are. A weak prior holds each pose
-// near its tracked value along directions its lines leave free.
+// near its tracked value along directions its lines leave free; with a
+// motion prior (another pose source), the relative motion of consecutive
+// poses does instead.
 #ifndef SWEEPSCAN_CORE_SFM_REFINE_H_
 #define SWEEPSCAN_CORE_SFM_REFINE_H_
 
@@ -36,6 +38,15 @@ struct RefineOptions {
   // directions that a frame's lines leave free.
   double prior_translation_m = 1.0;
   double prior_rotation_rad = 0.3;
+  // A motion prior (sequence.h; not owned, may be null): every pose takes
+  // part, each pair of consecutive poses (X_{k-1}, X_k) gains the term
+  //   || diag(sqrt_info_k) [2 vec(q_D^-1 q_E); t_E - t_D] ||^2,
+  //   E = X_{k-1}^-1 X_k,  D = the prior's relative motion,
+  // and the weak prior above is dropped (the chain holds every direction).
+  // Consecutive poses then share residuals, so the poses cannot be
+  // eliminated block by block (DENSE_SCHUR): the sparse Cholesky of the
+  // whole system solves it (the chain is banded, the planes few).
+  const MotionPrior* motion = nullptr;
 };
 
 // Lines with plane < 0 are ignored. Poses indexed by LineObs::frame, planes

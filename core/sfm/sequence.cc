@@ -33,22 +33,53 @@ void ExtractRigLines(const Scan& scan, int scan_index, int frame, const Rig& rig
                      std::vector<ScanLine>* scan_lines, std::vector<LineObs>* out) {
   *scan_lines = ExtractLines(scan.points, o);
   const Rigid3d& T = rig.rig_from_lidar[scan.lidar];
+  const bool deskewed = scan.deskewed.size() == scan.points.size();
   for (size_t k = 0; k < scan_lines->size(); ++k) {
     const ScanLine& l = (*scan_lines)[k];
     LineObs obs;
     obs.frame = frame;
     obs.scan = scan_index;
     obs.line = static_cast<int>(k);
-    obs.centroid = T * Eigen::Vector3d(l.centroid.x(), l.centroid.y(), 0.0);
-    obs.direction = (T.rotation() * Eigen::Vector3d(l.direction.x(), l.direction.y(), 0.0)).normalized();
-    double s2 = 0.0;
+    Eigen::Vector3d centroid(l.centroid.x(), l.centroid.y(), 0.0);
+    Eigen::Vector3d direction(l.direction.x(), l.direction.y(), 0.0);
+    if (deskewed) {
+      // Total least squares in 3D on the deskewed samples: centroid and
+      // principal axis of their scatter (the same fit as FitScanLine's).
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (int i : l.indices) {
+        if (!scan.deskewed[i].allFinite()) continue;
+        mean += scan.deskewed[i];
+        ++n;
+      }
+      if (n >= 2) {
+        mean /= n;
+        Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+        for (int i : l.indices) {
+          if (!scan.deskewed[i].allFinite()) continue;
+          const Eigen::Vector3d q = scan.deskewed[i] - mean;
+          S += q * q.transpose();
+        }
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
+        Eigen::Vector3d u = es.eigenvectors().col(2).normalized();
+        if (u.dot(direction) < 0.0) u = -u;
+        centroid = mean;
+        direction = u;
+      }
+    }
+    obs.centroid = T * centroid;
+    obs.direction = (T.rotation() * direction).normalized();
+    double s2 = 0.0, lo = 0.0, hi = 0.0;
     for (int i : l.indices) {
-      const double a = (scan.points[i] - l.centroid).dot(l.direction);
+      const double a = deskewed && scan.deskewed[i].allFinite() ? (scan.deskewed[i] - centroid).dot(direction)
+                                                                : (scan.points[i] - l.centroid).dot(l.direction);
       s2 += a * a;
+      lo = std::min(lo, a);
+      hi = std::max(hi, a);
     }
     obs.count = static_cast<int>(l.indices.size());
     obs.sigma = std::sqrt(s2 / std::max(1, obs.count));
-    obs.half_length = 0.5 * l.length;
+    obs.half_length = deskewed ? 0.5 * (hi - lo) : 0.5 * l.length;
     out->push_back(obs);
   }
 }
@@ -237,10 +268,21 @@ struct Tracker {
       WorldPlane best;
       for (int trial = 0; trial < o.new_plane_max_pairs; ++trial) {
         const size_t i = pick(rng), j = pick(rng);
+        if (i == j) continue;
         const Eigen::Vector3d cr = v[i].cross(v[j]);
-        if (i == j || cr.norm() < min_sin) continue;
         WorldPlane p;
-        p.normal = cr.normalized();
+        if (cr.norm() >= min_sin) {
+          p.normal = cr.normalized();
+        } else if (o.new_plane_parallel_separation_m > 0.0) {
+          // Parallel lines: the plane through both, n = u_i x (c_j - c_i)
+          // with the part of c_j - c_i along the lines removed.
+          Eigen::Vector3d w = c[j] - c[i];
+          w -= w.dot(v[i]) * v[i];
+          if (w.norm() < o.new_plane_parallel_separation_m) continue;
+          p.normal = v[i].cross(w).normalized();
+        } else {
+          continue;
+        }
         p.d = -p.normal.dot(c[i]);
         if (!inlier(i, p) || !inlier(j, p)) continue;
         int count = 0;
@@ -335,8 +377,23 @@ void LinePlaneDistance(const LineObs& line, const Rigid3d& world_from_rig, const
   *sin_angle = std::abs(plane.normal.dot(v));
 }
 
-double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
-                  const SequenceOptions& options, Rigid3d* pose) {
+Eigen::Matrix<double, 6, 1> MotionPrior::SqrtInformation(const Rigid3d& delta) const {
+  const double dist = delta.translation().norm();
+  const double angle = Eigen::AngleAxisd(delta.rotation()).angle();
+  Eigen::Matrix<double, 6, 1> s;
+  for (int a = 0; a < 3; ++a) {
+    s[a] = point_sigma_m / (r0_rad[a] + r_per_rad * angle + r_per_m * dist);
+    s[3 + a] = point_sigma_m / (t0_m[a] + t_per_m[a] * dist);
+  }
+  return s;
+}
+
+namespace {
+
+// UpdatePose with an optional prior (sequence.h).
+double UpdatePoseImpl(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
+                      const SequenceOptions& options, const Rigid3d* prior_pose,
+                      const Eigen::Matrix<double, 6, 1>* sqrt_info, Rigid3d* pose) {
   Eigen::Matrix3d R = pose->rotation().toRotationMatrix();
   Eigen::Vector3d t = pose->translation();
   double lambda_min = 0.0;
@@ -361,9 +418,25 @@ double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<Wo
       g += w * (J0 * r0 + J1 * r1);
       wsum += w;
     }
-    if (wsum <= 0.0) return 0.0;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(H / wsum);
-    lambda_min = std::max(0.0, es.eigenvalues()[0]);
+    if (wsum <= 0.0 && prior_pose == nullptr) return 0.0;
+    if (wsum > 0.0) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(H / wsum);
+      lambda_min = std::max(0.0, es.eigenvalues()[0]);
+    }
+    if (prior_pose != nullptr) {
+      // e = [Log(R_p^T R); R_p^T (t - t_p)]; under R <- exp([w]x) R,
+      // t <- t + dt: de/dw = R^T (to first order), de/dt = R_p^T.
+      const Eigen::Matrix3d Rp = prior_pose->rotation().toRotationMatrix();
+      const Eigen::AngleAxisd aa(Rp.transpose() * R);
+      Eigen::Matrix<double, 6, 1> e;
+      e << aa.angle() * aa.axis(), Rp.transpose() * (t - prior_pose->translation());
+      Eigen::Matrix<double, 6, 6> J = Eigen::Matrix<double, 6, 6>::Zero();
+      J.topLeftCorner<3, 3>() = R.transpose();
+      J.bottomRightCorner<3, 3>() = Rp.transpose();
+      const Eigen::Matrix<double, 6, 6> SJ = sqrt_info->asDiagonal() * J;
+      H += SJ.transpose() * SJ;
+      g += SJ.transpose() * sqrt_info->cwiseProduct(e);
+    }
     // Damping keeps directions the lines do not constrain at the start pose.
     const double mu = 1e-6 * H.trace() + 1e-12;
     const Eigen::Matrix<double, 6, 1> delta = -(H + mu * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(g);
@@ -376,9 +449,28 @@ double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<Wo
   return lambda_min;
 }
 
+}  // namespace
+
+double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
+                  const SequenceOptions& options, Rigid3d* pose) {
+  return UpdatePoseImpl(lines, planes, options, nullptr, nullptr, pose);
+}
+
+double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
+                  const SequenceOptions& options, const Rigid3d& prior_pose,
+                  const Eigen::Matrix<double, 6, 1>& sqrt_info, Rigid3d* pose) {
+  return UpdatePoseImpl(lines, planes, options, &prior_pose, &sqrt_info, pose);
+}
+
 std::vector<Eigen::Vector3d> ScanPointsInWorld(const Scan& scan, const Rig& rig, const Rigid3d& world_from_rig) {
   std::vector<Eigen::Vector3d> out;
   const Rigid3d T = world_from_rig * rig.rig_from_lidar[scan.lidar];
+  if (scan.deskewed.size() == scan.points.size()) {
+    for (const Eigen::Vector3d& p : scan.deskewed) {
+      if (p.allFinite()) out.push_back(T * p);
+    }
+    return out;
+  }
   for (const Eigen::Vector2d& p : scan.points) {
     if (p.allFinite()) out.push_back(T * Eigen::Vector3d(p.x(), p.y(), 0.0));
   }
@@ -387,6 +479,11 @@ std::vector<Eigen::Vector3d> ScanPointsInWorld(const Scan& scan, const Rig& rig,
 
 Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const SequenceInit& init,
                    const SequenceOptions& options, SequenceResult* result) {
+  return RunSequence(scans, rig, init, options, nullptr, result);
+}
+
+Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const SequenceInit& init,
+                   const SequenceOptions& options, const MotionPrior* prior, SequenceResult* result) {
   const auto start = std::chrono::steady_clock::now();
   *result = SequenceResult();
   SequenceResult& r = *result;
@@ -406,6 +503,13 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
     r.frame_scans.back().push_back(static_cast<int>(i));
   }
   const int num_frames = static_cast<int>(r.frame_times_s.size());
+  if (prior != nullptr && static_cast<int>(prior->world_from_rig.size()) != num_frames) {
+    return Status::Error("motion prior: " + std::to_string(prior->world_from_rig.size()) + " poses for " +
+                         std::to_string(num_frames) + " frames");
+  }
+  // The prior's relative motion into frame k, and its square-root information.
+  auto prior_delta = [&](int k) { return prior->world_from_rig[k - 1].inverse() * prior->world_from_rig[k]; };
+  const bool constrain = prior != nullptr && prior->constrain;
   Tracker tr(scans, rig, options, result);
 
   // ---- Initialisation (frame 0) ----
@@ -445,7 +549,11 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
     return Status::Error("the first frame has no scan of lidar " + std::to_string(ref.lidar));
   };
   const bool known = init.planes[0].known;
+  // With a prior, no plane at all: every plane is found on the way.
+  bool discover = prior != nullptr && !known;
+  for (const InitPlane& p : init.planes) discover = discover && !p.known && p.lines.empty();
   for (const InitPlane& p : init.planes) {
+    if (discover) break;
     if (p.known != known) return Status::Error("init: give all three planes or none");
     if (p.lines.empty() || (!known && p.lines.size() < 2)) {
       return Status::Error(known ? "init: every plane needs at least one line of the first frame"
@@ -462,7 +570,24 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
     }
   }
   r.tracked.assign(num_frames, Rigid3d::Identity());
-  if (known) {
+  if (discover) {
+    r.tracked[0] = prior->world_from_rig[0];
+    r.gauge_first_pose = true;
+  } else if (known && prior != nullptr) {
+    // The first pose is the prior's (the lines correct it below): one
+    // scan of the wheeled scanner sees planes of two normal directions
+    // only, for which the minimal solver is degenerate.
+    r.tracked[0] = prior->world_from_rig[0];
+    for (int j = 0; j < 3; ++j) {
+      FoundPlane fp;
+      fp.plane = init.planes[j].plane;
+      fp.plane.d /= fp.plane.normal.norm();
+      fp.plane.normal.normalize();
+      fp.initial = true;
+      r.planes.push_back(fp);
+      tr.planes.push_back(fp.plane);
+    }
+  } else if (known) {
     // The planes are given: the first pose by the minimal solver (section 3)
     // on the first line of each plane, further lines ranking the candidates.
     std::array<WorldPlane, 3> P;
@@ -527,20 +652,25 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
       tr.planes.push_back(fp.plane);
     }
   }
-  {
+  if (prior == nullptr) {
     const Eigen::Vector3d n0 = tr.planes[0].normal, n1 = tr.planes[1].normal, n2 = tr.planes[2].normal;
     if (std::abs(n0.cross(n1).dot(n2)) < 0.05) {
       return Status::Error("init: the three planes' normals share a direction; the pose is not determined");
     }
   }
   std::vector<const LineObs*> first;
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < 3 && !discover; ++j) {
     for (size_t idx : init_lines[j]) {
       r.lines[idx].plane = j;
       first.push_back(&r.lines[idx]);
     }
   }
-  if (known) UpdatePose(first, tr.planes, options, &r.tracked[0]);
+  if (known && prior != nullptr) {
+    UpdatePose(first, tr.planes, options, prior->world_from_rig[0],
+               prior->SqrtInformation(Rigid3d::Identity()), &r.tracked[0]);
+  } else if (known) {
+    UpdatePose(first, tr.planes, options, &r.tracked[0]);
+  }
   for (const LineObs* l : first) tr.GrowExtent(*l, r.tracked[0], l->plane);
   // The other lines of the first frame.
   std::vector<size_t> pending;
@@ -561,15 +691,26 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
     const size_t begin = r.lines.size();
     for (int si : r.frame_scans[k]) ExtractRigLines(scans[si], si, k, rig, options.lines, &scratch, &r.lines);
     const size_t end = r.lines.size();
-    const Rigid3d predicted = Predict(r.tracked, r.frame_times_s, k);
+    const Rigid3d predicted = prior != nullptr && prior->predict ? r.tracked[k - 1] * prior_delta(k)
+                                                                 : Predict(r.tracked, r.frame_times_s, k);
     Rigid3d pose = predicted;
+    Eigen::Matrix<double, 6, 1> sqrt_info = Eigen::Matrix<double, 6, 1>::Zero();
+    if (constrain) sqrt_info = prior->SqrtInformation(prior_delta(k));
+    auto update = [&](const std::vector<const LineObs*>& lines) {
+      return constrain ? UpdatePose(lines, tr.planes, options, predicted, sqrt_info, &pose)
+                       : UpdatePose(lines, tr.planes, options, &pose);
+    };
     // Eq. 38-39 at the prediction, pose update, then again with tight gates.
     std::vector<const LineObs*> assigned = tr.AssignAll(begin, end, pose, options.assoc_distance_m, options.assoc_angle_deg);
-    double lambda = UpdatePose(assigned, tr.planes, options, &pose);
+    double lambda = update(assigned);
     assigned = tr.AssignAll(begin, end, pose, options.assoc_tight_distance_m, options.assoc_tight_angle_deg);
-    lambda = UpdatePose(assigned, tr.planes, options, &pose);
+    lambda = update(assigned);
     constexpr double kWeak = 1e-4;
-    if (lambda < kWeak || assigned.size() < 3) {
+    if (prior != nullptr) {
+      // No relocalisation: the prior's prediction holds what the lines leave free.
+      if (lambda < kWeak) ++r.frames_weak;
+      assigned = tr.AssignAll(begin, end, pose, options.assoc_tight_distance_m, options.assoc_tight_angle_deg);
+    } else if (lambda < kWeak || assigned.size() < 3) {
       // The least squares does not fix the pose: try the minimal solver.
       Rigid3d relocated = predicted;
       const int score = tr.RelocaliseP3l(begin, end, predicted, &relocated);
@@ -606,6 +747,11 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
   }
   r.tracking_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  if (r.planes.empty()) {
+    return Status::Error("no planes found: no " + std::to_string(options.new_plane_min_inliers) +
+                         " lines of at least " + std::to_string(options.lines.min_length_m).substr(0, 4) +
+                         " m on one plane");
+  }
   // ---- Joint refinement (Eq. 40) ----
   r.poses = r.tracked;
   std::vector<WorldPlane> planes = tr.planes;
@@ -613,8 +759,9 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
   ro.huber_m = options.refine_huber_m;
   ro.max_iterations = options.refine_max_iterations;
   ro.threads = options.threads;
-  ro.fix_first_pose = r.gauge_first_pose;
-  if (!r.gauge_first_pose) ro.fixed_planes = {0, 1, 2};
+  ro.fix_first_pose = r.gauge_first_pose || constrain;
+  if (!discover && !r.gauge_first_pose) ro.fixed_planes = {0, 1, 2};
+  if (constrain) ro.motion = prior;
   for (int pass = 0; pass < options.refine_passes; ++pass) {
     if (pass > 0) {
       // Re-associate every line with the refined poses and planes.

@@ -40,6 +40,13 @@ struct Scan {
   double time_s = 0.0;
   int lidar = 0;
   std::vector<Eigen::Vector2d> points;
+  // Optional, empty or the same size as `points`: the samples deskewed to
+  // `time_s` (lidar frame, NaN for dropouts). A scan taken while the sensor
+  // moves (the X4's revolution lasts ~140 ms) is not rigid: its samples,
+  // moved to one instant by another pose source, leave the scan plane by
+  // the motion during the revolution. Lines are then found in `points`
+  // (segmentation only needs the 2D order) and fitted to these 3D samples.
+  std::vector<Eigen::Vector3d> deskewed;
 };
 
 // A line of the first frame, designated by the index of the extracted line
@@ -92,6 +99,12 @@ struct SequenceOptions {
   // Joint refinement (Eq. 40): passes (re-associating every frame with the
   // refined poses between passes); 0 skips it.
   int refine_passes = 2;
+  // New planes also from pairs of (nearly) parallel lines whose centroids
+  // lie at least this far apart across the lines (0: only non-parallel
+  // pairs). A scanner that keeps its scan plane's orientation (the wheeled
+  // scanner driving straight) sees every floor line parallel to every
+  // other: the floor is the plane through two of them, n = u_i x (c_j - c_i).
+  double new_plane_parallel_separation_m = 0.0;
   double refine_huber_m = 0.02;
   int refine_max_iterations = 50;
   int threads = 2;
@@ -148,11 +161,67 @@ struct SequenceResult {
   double tracking_seconds = 0.0;
 };
 
+// A motion prior from another pose source (the wheeled scanner's EKF or
+// odometry; docs/sfm.md, "The wheeled scanner"): its pose of every frame.
+// Only its relative motion between consecutive frames is trusted,
+//   D_k = P_{k-1}^-1 P_k,
+// with independent errors per axis of frame k-1's rig frame, each standard
+// deviation a floor plus a part proportional to the motion (wheels slip in
+// proportion to the distance, a gyro drifts with time):
+//   sigma_t[a] = t0[a] + t_per_m[a] |D_k.t|,
+//   sigma_r[a] = r0[a] + r_per_rad |angle(D_k.R)| + r_per_m |D_k.t|.
+// The lines' cost (squared metres times samples, Eq. 40) and the prior's
+// (squared, per unit sigma) are put on one scale by `point_sigma_m`: the
+// prior's residuals are multiplied by it, as if each line sample had that
+// standard deviation.
+struct MotionPrior {
+  std::vector<Rigid3d> world_from_rig;  // per frame
+  // Prediction P: X_k = X_{k-1} D_k (else the constant-velocity model).
+  bool predict = true;
+  // The relative-motion terms in the pose update and in the refinement
+  // (else the prior only predicts).
+  bool constrain = true;
+  // The defaults suit the wheeled scanner's EKF between two X4 scans
+  // (143 ms, ~3 cm): 0.2 mm + 1 % of the distance along the motion, 0.2 %
+  // across it, 0.1 mrad + 1 % of the turn + 2 mrad per metre. Softer chains
+  // (0.5 mm + 2 %, 0.3 mrad) let the sequence bend to fit the lines'
+  // millimetre biases: docs/sfm.md, "The wheeled scanner".
+  Eigen::Vector3d t0_m = Eigen::Vector3d(0.0002, 0.0002, 0.0002);
+  Eigen::Vector3d t_per_m = Eigen::Vector3d(0.01, 0.002, 0.002);
+  Eigen::Vector3d r0_rad = Eigen::Vector3d(0.0001, 0.0001, 0.0001);
+  double r_per_rad = 0.01;
+  double r_per_m = 0.002;
+  double point_sigma_m = 0.01;
+  // Absolute orientation terms in the refinement (0: none): the prior's
+  // tilt (roll, pitch: the EKF's come from the IMU's gravity reference) and
+  // yaw (the EKF's is held by the IMU's yaw; odometry's drifts: none), as
+  // standard deviations of the world-frame rotation error per frame. They
+  // hold the gauge: one fixed first pose does not, since a chain of soft
+  // relative terms lets the whole sequence turn about it at the cost of
+  // one link, and the wheeled scanner's lines hardly see pitch and yaw.
+  double abs_tilt_sigma_rad = 0.0;
+  double abs_yaw_sigma_rad = 0.0;
+
+  // Square-root information (diagonal) of D_k's error, in the prior's units
+  // scaled by point_sigma_m: [rotation (3), translation (3)].
+  Eigen::Matrix<double, 6, 1> SqrtInformation(const Rigid3d& delta) const;
+};
+
 // The rig-frame points of a scan (NaNs skipped) at a pose: the cloud.
 std::vector<Eigen::Vector3d> ScanPointsInWorld(const Scan& scan, const Rig& rig, const Rigid3d& world_from_rig);
 
 Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const SequenceInit& init,
                    const SequenceOptions& options, SequenceResult* result);
+// With a motion prior (one pose per frame; `prior` may be null). Then the
+// initialisation may give no plane at all (every `InitPlane::lines` empty:
+// the planes are all found as the sequence goes, the world is the prior's,
+// the gauge is the first pose at the prior's), or three known planes with
+// lines of the first frame (their normals may share a direction: the first
+// pose is the prior's, corrected by those lines, not the minimal solver's).
+// The minimal solver does not relocalise: the prior's prediction stands for
+// it.
+Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const SequenceInit& init,
+                   const SequenceOptions& options, const MotionPrior* prior, SequenceResult* result);
 
 // Association test (Eq. 38-39) of a line (rig frame) at a pose: the largest
 // point-to-plane distance of the line's extreme points and centroid, and the
@@ -166,6 +235,14 @@ void LinePlaneDistance(const LineObs& line, const Rigid3d& world_from_rig, const
 // the lines do not fix the pose); a weak direction stays at the start pose.
 double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
                   const SequenceOptions& options, Rigid3d* pose);
+// The same with a prior on the pose: the cost gains
+//   || diag(sqrt_info) [Log(R_p^T R); R_p^T (t - t_p)] ||^2
+// (rotation first, in the prior pose's axes), which holds the directions
+// the lines leave free at the prior. Returns the smallest eigenvalue of the
+// lines' part alone (what the lines fix).
+double UpdatePose(const std::vector<const LineObs*>& lines, const std::vector<WorldPlane>& planes,
+                  const SequenceOptions& options, const Rigid3d& prior_pose,
+                  const Eigen::Matrix<double, 6, 1>& sqrt_info, Rigid3d* pose);
 
 }  // namespace sweepscan::sfm
 

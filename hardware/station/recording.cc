@@ -38,6 +38,9 @@ void SimulateRecording(const sim::SimConfig& scenario, Recording* recording) {
 
 Status ReconstructRecording(const Recording& recording, ReconstructionOptions options,
                             ReconstructionResult* result) {
+  if (options.pose.source == PoseSource::kSfm) {
+    return Status::Error("pose source 'sfm' is computed by core/sfm (sfm::WheeledSfmFromLog), not here");
+  }
   if (options.pose.source == PoseSource::kTruth && !recording.has_truth) {
     return Status::Error("pose source 'truth' needs a simulated recording (a scenario)");
   }

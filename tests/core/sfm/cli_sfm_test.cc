@@ -151,5 +151,67 @@ TEST(CliSfmTest, BadInputExits2) {
   EXPECT_EQ(CliWithErrors("sfm").code, 2);
 }
 
+// `sfm SESSION` and `reconstruct SESSION --pose-source sfm` on a session
+// that `simulate` recorded (the lab drive, through the real bytes).
+TEST(CliSfmTest, WheeledSession) {
+  const std::string dir = Tmp("lab.sweepscan"), poses = Tmp("wheeled_poses.csv"), planes = Tmp("wheeled_planes.json");
+  testing::CommandRun run = Cli("simulate --scenario " + std::string(SWEEPSCAN_SOURCE_DIR) +
+                                "/resources/scenarios/lab.json --out " + Tmp("lab_ekf.ply") + " --session " + dir +
+                                " --overwrite --json");
+  ASSERT_EQ(run.code, 0) << run.out;
+  run = Cli("sfm " + dir + " --out " + Tmp("lab_sfm.ply") + " --poses " + poses + " --planes " + planes + " --json");
+  ASSERT_EQ(run.code, 0) << run.out;
+  const nlohmann::json out = nlohmann::json::parse(run.out);
+  EXPECT_EQ(out["motion_prior"], "ekf");
+  const int scans = out["scans"].get<int>();
+  EXPECT_GT(scans, 350);
+  EXPECT_GE(out["planes"].size(), 4u);
+  EXPECT_GT(out["points"].get<int>(), 200000);
+  // A session has no truth; the SfM poses against the EKF's: within a
+  // centimetre (both are within one of the truth on this drive).
+  EXPECT_FALSE(out.contains("sfm_vs_truth"));
+  EXPECT_LT(out["sfm_vs_prior"]["lateral_mean_m"].get<double>(), 0.01);
+  EXPECT_LT(out["sfm_vs_prior"]["along_mean_m"].get<double>(), 0.01);
+  std::ifstream csv(poses);
+  std::string line;
+  int rows = 0;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("scan,time_s,x,y,z,qw,qx,qy,qz,yaw_deg,prior_x", 0), 0u) << line;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, scans);
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(planes))["planes"].size(), out["planes"].size());
+  // reconstruct --pose-source sfm places every sample the EKF places.
+  run = Cli("reconstruct " + dir + " --pose-source sfm --out " + Tmp("lab_rs.ply") + " --json");
+  ASSERT_EQ(run.code, 0) << run.out;
+  const nlohmann::json rs = nlohmann::json::parse(run.out);
+  EXPECT_EQ(rs["pose_source"], "sfm");
+  EXPECT_EQ(rs["sfm"]["planes"], out["planes"].size());
+  run = Cli("reconstruct " + dir + " --out " + Tmp("lab_re.ply") + " --json");
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(nlohmann::json::parse(run.out)["points"], rs["points"]);
+}
+
+TEST(CliSfmTest, WheeledBadInputExits2WithOneLine) {
+  const std::string lab = std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json";
+  auto expect_one_line = [](const testing::CommandRun& r, const std::string& what) {
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(what), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << r.out;
+  };
+  expect_one_line(CliWithErrors("sfm " + Tmp("no_such.sweepscan") + " --out " + Tmp("x.ply")), "no_such.sweepscan");
+  expect_one_line(CliWithErrors("sfm --scenario " + lab), "--out");
+  expect_one_line(CliWithErrors("sfm --scenario " + lab + " --out " + Tmp("x.ply") + " --motion-prior gps"), "gps");
+  expect_one_line(CliWithErrors("sfm --scenario " + lab + " --rig-scenario room --out " + Tmp("x.ply")), "one of them");
+  expect_one_line(CliWithErrors("sfm --scenario " + lab + " --frames 10 --out " + Tmp("x.ply")), "--rig-scenario");
+  expect_one_line(CliWithErrors("simulate --scenario " + lab + " --out " + Tmp("x.ply") + " --pose-source sfm"),
+                  "pose-source");
+  const std::string init = Tmp("wheeled_bad_init.json");
+  std::ofstream(init) << R"({"planes": [{"lines": [{"lidar": 0, "line": 0}, {"lidar": 0, "line": 1}]},
+                                        {"lines": [{"lidar": 0, "line": 1}, {"lidar": 0, "line": 2}]},
+                                        {"lines": [{"lidar": 0, "line": 2}, {"lidar": 0, "line": 3}]}]})";
+  expect_one_line(CliWithErrors("sfm --scenario " + lab + " --out " + Tmp("x.ply") + " --init " + init),
+                  "three planes given");
+}
+
 }  // namespace
 }  // namespace sweepscan::sfm
