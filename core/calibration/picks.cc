@@ -46,6 +46,41 @@ bool SwappedPassesFitBetter(const Pick& a, const Pick& b, const SampleStore& sto
 
 }  // namespace
 
+Pick SamplePick(const LidarObservation& o) {
+  Pick p;
+  p.has_sample = true;
+  p.sample.time_ns = o.time_ns;
+  p.sample.range_m = o.range_m;
+  p.sample.theta_rad = o.theta;
+  return p;
+}
+
+Pick PositionPick(const SampleRef& ref) {
+  Pick p;
+  p.has_sample = true;
+  p.by_position = true;
+  p.position = ref;
+  return p;
+}
+
+Status FindPickedSample(const Pick& pick, const SampleStore& store, LidarObservation* out) {
+  if (!pick.has_sample) return Status::Error("a world pick names no sample");
+  if (!pick.by_position) return store.Find(pick.sample, out);
+  double gap_s = 0.0;
+  if (store.LostSamplesBefore(pick.position, &gap_s)) {
+    // The beam is the position as received: counted from the other end of
+    // the gap, it may be another sample than when the file was written.
+    return Status::Error(
+        "sample " + RefName(pick.position) +
+        " is named by its position in the revolution as received (an older pairs file), and "
+        "that revolution lost samples before it (a gap of " +
+        calibration_internal::Num(gap_s * 1e3) +
+        " ms: a lost packet), so it may name another sample than when the file was written; "
+        "pick it again (picks are now named by time, docs/calibration.md)");
+  }
+  return store.Find(pick.position, out);
+}
+
 Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store,
                     const std::vector<PassWindow>& windows, const RobotGeometry& geometry,
                     const MountingError& calibration, std::vector<ObservationPair>* pairs) {
@@ -71,7 +106,7 @@ Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store
       const std::string where =
           "pair " + std::to_string(k + 1) + " pass" + std::to_string(side + 1) + ": ";
       Status s = p[side]->has_sample
-                     ? store.Find(p[side]->sample, o[side])
+                     ? FindPickedSample(*p[side], store, o[side])
                      : store.Nearest(windows[side], p[side]->world, geometry, calibration, o[side]);
       if (!s.ok()) return Status::Error(where + s.message());
       const int pass = PassOfTime(windows, o[side]->time_ns);
@@ -91,19 +126,28 @@ namespace {
 
 Pick ParsePick(const JsonObject& o) {
   Pick p;
-  o.AllowOnly({"scan", "beam", "world"});
-  const bool has_sample = o.Has("scan") || o.Has("beam");
-  if (has_sample == o.Has("world")) {
-    o.Fail("", "give either scan and beam, or world, not " +
-                   std::string(has_sample ? "both" : "neither"));
+  o.AllowOnly({"time_ns", "range_m", "theta_rad", "scan", "beam", "world"});
+  const bool by_time = o.Has("time_ns");
+  const bool by_position = o.Has("scan") || o.Has("beam");
+  const int forms = int{by_time} + int{by_position} + int{o.Has("world")};
+  if (forms != 1) {
+    o.Fail("", "give one of time_ns, scan and beam, or world, not " +
+                   std::string(forms == 0 ? "none" : "several"));
   }
-  if (has_sample) {
+  if (!by_time && (o.Has("range_m") || o.Has("theta_rad"))) {
+    o.Fail(o.Has("range_m") ? "range_m" : "theta_rad", "only checks a pick by time_ns");
+  }
+  if (by_time) {
+    p.has_sample = true;
+    p.sample.time_ns = o.Integer("time_ns");
+    if (o.Has("range_m")) p.sample.range_m = o.Number("range_m");
+    if (o.Has("theta_rad")) p.sample.theta_rad = o.Number("theta_rad");
+  } else if (by_position) {
     const int64_t scan = o.Integer("scan");
     const int64_t beam = o.Integer("beam");
     if (scan < 0 || scan > 0xffffffffLL) o.Fail("scan", "out of range: " + std::to_string(scan));
     if (beam < 0 || beam > 0xffff) o.Fail("beam", "out of range: " + std::to_string(beam));
-    p.has_sample = true;
-    p.sample = {static_cast<uint32_t>(scan), static_cast<uint16_t>(beam)};
+    p = PositionPick({static_cast<uint32_t>(scan), static_cast<uint16_t>(beam)});
   } else {
     const nlohmann::json& w = o.Array("world");
     if (w.size() != 3)
@@ -159,9 +203,13 @@ std::string PairsToJson(const std::vector<PickPair>& pairs) {
   nlohmann::json list = nlohmann::json::array();
   auto pick = [](const Pick& p) {
     nlohmann::json o;
-    if (p.has_sample) {
-      o["scan"] = p.sample.scan;
-      o["beam"] = p.sample.beam;
+    if (p.has_sample && p.by_position) {
+      o["scan"] = p.position.scan;
+      o["beam"] = p.position.beam;
+    } else if (p.has_sample) {
+      o["time_ns"] = p.sample.time_ns;
+      if (std::isfinite(p.sample.range_m)) o["range_m"] = p.sample.range_m;
+      if (std::isfinite(p.sample.theta_rad)) o["theta_rad"] = p.sample.theta_rad;
     } else {
       o["world"] = {p.world.x(), p.world.y(), p.world.z()};
     }

@@ -21,12 +21,24 @@
 namespace sweepscan {
 
 // One picked feature: a raw sample, or an approximate world position that
-// snaps to the nearest sample of its pass.
+// snaps to the nearest sample of its pass. A sample is named by its time
+// stamp (`sample`), which a lost packet does not change; files written before
+// that name it by (scan, beam) as received (`position`, by_position), which
+// a lost packet earlier in the revolution renumbers (docs/calibration.md).
 struct Pick {
   bool has_sample = false;
-  SampleRef sample;
+  bool by_position = false;  // has_sample: `position` instead of `sample`
+  SampleName sample;
+  SampleRef position;
   Eigen::Vector3d world = Eigen::Vector3d::Zero();  // used when !has_sample
 };
+
+// The pick of a sample the store holds, by its name (time, range, angle).
+Pick SamplePick(const LidarObservation& o);
+// A version-1 pick by (scan, beam) as received.
+Pick PositionPick(const SampleRef& ref);
+// The sample a pick names; a world pick is an error here.
+Status FindPickedSample(const Pick& pick, const SampleStore& store, LidarObservation* out);
 struct PickPair {
   Pick pass1, pass2;
 };

@@ -1,9 +1,10 @@
-// The raw samples of a recording, addressable by (scan, beam), and their
-// re-projection under a candidate calibration.
+// The raw samples of a recording, addressable by (scan, beam) and by time,
+// and their re-projection under a candidate calibration.
 #include "core/calibration/samples.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <string>
 
@@ -17,6 +18,8 @@ uint64_t Key(const SampleRef& r) { return (static_cast<uint64_t>(r.scan) << 16) 
 }  // namespace
 
 using calibration_internal::Finite;
+using calibration_internal::kNsPerS;
+using calibration_internal::Num;
 using calibration_internal::RefName;
 
 Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometry& geometry,
@@ -29,6 +32,7 @@ Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometr
 
 SampleStore::SampleStore(const SensorLog& log, const PoseBuffer& poses, double min_range_m,
                          double max_range_m) {
+  std::vector<int64_t> spacing;
   for (const LidarScan& scan : log.scans) {
     size_t hint = 0;
     for (const LidarSample& s : scan.samples) {
@@ -38,10 +42,87 @@ SampleStore::SampleStore(const SensorLog& log, const PoseBuffer& poses, double m
       o.ref = {scan.index, s.beam};
       o.time_ns = ToNanoseconds(s.time);
       o.p_lidar = LidarPoint(s.range_m, s.theta);
+      o.range_m = s.range_m;
+      o.theta = s.theta;
+      if (!observations_.empty() && o.time_ns <= observations_.back().time_ns) {
+        time_sorted_ = false;
+      }
       by_ref_[Key(o.ref)] = observations_.size();
       observations_.push_back(o);
     }
+    // Lost samples: the X4 samples at a fixed rate, so consecutive samples of
+    // a revolution are one period apart (the median spacing); a lost packet
+    // leaves a gap of its 40 periods. 20 periods tolerates receive-time jitter.
+    const std::vector<LidarSample>& v = scan.samples;
+    if (v.size() < 3) continue;
+    spacing.clear();
+    for (size_t i = 1; i < v.size(); ++i) spacing.push_back((v[i].time - v[i - 1].time).count());
+    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+    const int64_t period = spacing[spacing.size() / 2];
+    if (period <= 0) continue;
+    for (size_t i = 1; i < v.size(); ++i) {
+      const int64_t gap = (v[i].time - v[i - 1].time).count();
+      if (gap > 20 * period) {
+        first_loss_[scan.index] = {v[i].beam, gap};
+        break;
+      }
+    }
   }
+}
+
+bool SampleStore::LostSamplesBefore(const SampleRef& ref, double* gap_s) const {
+  const auto it = first_loss_.find(ref.scan);
+  if (it == first_loss_.end() || ref.beam < it->second.first) return false;
+  if (gap_s != nullptr) *gap_s = static_cast<double>(it->second.second) / kNsPerS;
+  return true;
+}
+
+Status SampleStore::Find(const SampleName& name, LidarObservation* out) const {
+  const std::string what = "sample at time " + std::to_string(name.time_ns) + " ns";
+  // Exact match: the same bytes decoded with the same options give the same
+  // time stamps to the nanosecond.
+  size_t found = observations_.size(), matches = 0;
+  int64_t nearest = std::numeric_limits<int64_t>::max();
+  const auto consider = [&](size_t i) {
+    const int64_t d = observations_[i].time_ns - name.time_ns;
+    if (d == 0) {
+      found = i;
+      ++matches;
+    } else if (std::llabs(d) < std::llabs(nearest)) {
+      nearest = d;
+    }
+  };
+  if (time_sorted_) {
+    const auto it =
+        std::lower_bound(observations_.begin(), observations_.end(), name.time_ns,
+                         [](const LidarObservation& o, int64_t t) { return o.time_ns < t; });
+    const size_t k = static_cast<size_t>(it - observations_.begin());
+    if (k > 0) consider(k - 1);
+    if (k < observations_.size()) consider(k);
+  } else {
+    for (size_t i = 0; i < observations_.size(); ++i) consider(i);
+  }
+  if (matches == 0) {
+    return Status::Error(
+        what + " is not a valid sample of the recording" +
+        (nearest == std::numeric_limits<int64_t>::max()
+             ? std::string(" (it has none)")
+             : " (the nearest is " + Num(static_cast<double>(std::llabs(nearest)) * 1e-6) +
+                   " ms away: another recording, or decoded with other serial settings?)"));
+  }
+  if (matches > 1) return Status::Error(what + " is ambiguous: two samples have that time");
+  const LidarObservation& o = observations_[found];
+  if (std::isfinite(name.range_m) && std::abs(o.range_m - name.range_m) > 0.5e-3) {
+    return Status::Error(what + " measured " + Num(o.range_m) + " m, the pick says " +
+                         Num(name.range_m) + " m: the recording or its timing changed since");
+  }
+  if (std::isfinite(name.theta_rad) &&
+      std::abs(std::remainder(o.theta - name.theta_rad, 2.0 * M_PI)) > 1e-4) {
+    return Status::Error(what + " has scan angle " + Num(o.theta) + " rad, the pick says " +
+                         Num(name.theta_rad) + " rad: the recording or its timing changed since");
+  }
+  *out = o;
+  return Status::Ok();
 }
 
 Status SampleStore::Find(const SampleRef& ref, LidarObservation* out) const {

@@ -13,7 +13,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "core/calibration/passes.h"
@@ -24,11 +26,27 @@
 
 namespace sweepscan {
 
-// A raw sample's address in the recording.
+// A raw sample's address in the recording as decoded: its revolution and
+// its position in it as received. Unique within one decode, but a lost X4
+// packet (40 samples) renumbers the later beams of its revolution, so a file
+// that must name the same sample in another decode of the bytes names it by
+// SampleName instead.
 struct SampleRef {
   uint32_t scan = 0;
   uint16_t beam = 0;
   bool operator==(const SampleRef& o) const { return scan == o.scan && beam == o.beam; }
+};
+
+// A raw sample's name that survives lost packets (docs/calibration.md,
+// "Pairs file"): its time stamp, which the decoder derives from the packet's
+// own receive time and the sample clock, never from its position, with what
+// the sample measured as a check that the recording is decoded with the same
+// timing (a change of the session's serial settings shifts every time stamp).
+struct SampleName {
+  int64_t time_ns = 0;
+  // The sample's range and scan angle as decoded; NaN: not checked.
+  double range_m = std::numeric_limits<double>::quiet_NaN();
+  double theta_rad = std::numeric_limits<double>::quiet_NaN();
 };
 
 // What the solver re-projects: a point in the lidar frame (Eq. 1 for a real
@@ -39,6 +57,9 @@ struct LidarObservation {
   int64_t time_ns = 0;
   Eigen::Vector3d p_lidar = Eigen::Vector3d::Zero();
   Rigid3d world_from_body;
+  // The raw measurement p_lidar came from (a real sample; 0 for a virtual one).
+  float range_m = 0.0f;
+  float theta = 0.0f;
 };
 
 // p_W(c) = world_from_body * body_from_lidar(g, c) * p_lidar.
@@ -46,8 +67,8 @@ Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometr
                                    const MountingError& calibration);
 
 // The valid raw samples of a recording with their interpolated poses,
-// addressable by (scan, beam). Samples without a pose or out of range are
-// left out (as the assembler leaves them out).
+// addressable by (scan, beam) and by time stamp. Samples without a pose or
+// out of range are left out (as the assembler leaves them out).
 class SampleStore {
  public:
   SampleStore() = default;
@@ -57,6 +78,17 @@ class SampleStore {
   const std::vector<LidarObservation>& observations() const { return observations_; }
   // Error if the recording has no such valid sample.
   Status Find(const SampleRef& ref, LidarObservation* out) const;
+  // The valid sample with exactly this time stamp; error if there is none
+  // (with the nearest one's distance in time), if two samples share it, or
+  // if its range or angle differs from the name's (by more than 0.5 mm, the
+  // X4's range unit, resp. 1e-4 rad, a hundredth of the beam spacing).
+  Status Find(const SampleName& name, LidarObservation* out) const;
+  // Whether samples of ref.scan were lost before ref.beam (a gap of more
+  // than 20 sample periods, half an X4 packet, between two consecutive
+  // samples of the revolution, the period being the revolution's median
+  // spacing): then (scan, beam) may name another sample than in a decode
+  // without the loss. *gap_s: the first such gap.
+  bool LostSamplesBefore(const SampleRef& ref, double* gap_s) const;
   // Indices of the observations whose time lies in the window.
   std::vector<size_t> InWindow(const PassWindow& window) const;
   // Nearest observation of the window to `world` under `calibration`;
@@ -67,7 +99,10 @@ class SampleStore {
 
  private:
   std::vector<LidarObservation> observations_;  // time order
+  bool time_sorted_ = true;  // Strictly increasing times (binary search by time).
   std::unordered_map<uint64_t, size_t> by_ref_;
+  // Per revolution with a loss: the beam after the first gap, and the gap (ns).
+  std::unordered_map<uint32_t, std::pair<uint16_t, int64_t>> first_loss_;
 };
 
 }  // namespace sweepscan

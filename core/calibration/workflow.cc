@@ -15,7 +15,7 @@ Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
       LidarObservation o;
       if (!k->has_sample) {
         region.extend(k->world);
-      } else if (store.Find(k->sample, &o).ok()) {
+      } else if (FindPickedSample(*k, store, &o).ok()) {
         region.extend(ProjectObservation(o, geometry, calibration));
       }
     }

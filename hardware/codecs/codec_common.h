@@ -6,12 +6,15 @@
 #ifndef SWEEPSCAN_HARDWARE_CODECS_CODEC_COMMON_H_
 #define SWEEPSCAN_HARDWARE_CODECS_CODEC_COMMON_H_
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
+
+#include "core/common/time.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -110,6 +113,17 @@ Int SaturatingRound(double value) {
   if (r <= lo) return std::numeric_limits<Int>::min();
   if (r >= hi) return std::numeric_limits<Int>::max();
   return static_cast<Int>(r);  // Truncation toward zero after the +-0.5 shift.
+}
+
+// Serial transmission time of `bytes` bytes on an 8N1 line (start bit, 8
+// data bits, stop bit: 10 bits a byte) at `baud` bits per second:
+// bytes * 10 / baud, rounded to the nearest ns. 0 when baud <= 0 or is not
+// finite (no transmission term). E.g. an 82-byte HI219 0x91 frame at 115200
+// baud: 7 118 056 ns; a 24-byte motor feedback frame: 2 083 333 ns; a
+// 90-byte X4 packet (40 samples) at 128000 baud: 7 031 250 ns.
+inline Duration SerialTransmissionTime(double bytes, double baud) {
+  if (!(baud > 0) || !std::isfinite(baud)) return Duration(0);
+  return Duration(static_cast<int64_t>(std::llround(bytes * 10.0 / baud * 1e9)));
 }
 
 }  // namespace hardware

@@ -176,6 +176,7 @@ void Hi219Decoder::Feed(const uint8_t* data, size_t n, Time receive_time) {
     }
     ImuSample sample;
     sample.receive_time = receive_time;
+    sample.frame_bytes = total;
     if (!ParseHi219Payload(p + kHi219HeaderSize, len, &sample)) ++stats_.payload_errors;
     if (sample.fields != 0) {
       sample.UpdateDerived();

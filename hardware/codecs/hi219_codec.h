@@ -59,6 +59,10 @@ enum ImuField : uint32_t {
 // derived from them. Fields whose bit is not set in `fields` are zero.
 struct ImuSample {
   Time receive_time;  // Receive time of the Feed() chunk holding the frame's last byte.
+  // Bytes of the whole frame (header + LEN), 0 when not decoded from bytes:
+  // what the frame's serial transmission time is computed from (the 0x91
+  // frame is 82 bytes, legacy frames vary with their items).
+  size_t frame_bytes = 0;
   uint32_t fields = 0;
   bool Has(ImuField f) const { return (fields & f) != 0; }
 

@@ -111,12 +111,15 @@ X4Decoder::X4Decoder(const X4DecoderOptions& options) : options_(options) {
 
 void X4Decoder::Reset() {
   buffer_.Clear();
+  line_known_ = false;
   scan_open_ = false;
   current_scan_ = X4Scan();
 }
 
 void X4Decoder::NoteError() {
   if (scan_open_) current_scan_.had_errors = true;
+  // Bytes were lost or garbled: the next packet may not follow the last one.
+  line_known_ = false;
 }
 
 void X4Decoder::Feed(const uint8_t* data, size_t n, Time receive_time) {
@@ -170,6 +173,7 @@ X4Decoder::Parse X4Decoder::TryResponse(const uint8_t* p, size_t n, Time receive
     ++scan_start_headers_;
     // A new scan session: a revolution in progress belongs to the old one.
     scan_open_ = false;
+    line_known_ = false;
     current_scan_ = X4Scan();
     return Parse::kConsumed;
   }
@@ -184,6 +188,7 @@ X4Decoder::Parse X4Decoder::TryResponse(const uint8_t* p, size_t n, Time receive
     std::copy(q + 4, q + 20, info.serial.begin());
     info.receive_time = receive_time;
     device_infos_.push_back(info);
+    line_known_ = false;  // The sample stream was interrupted.
     buffer_.Consume(total);
     stats_.bytes_in_frames += total;
     ++stats_.frames_ok;
@@ -198,6 +203,7 @@ X4Decoder::Parse X4Decoder::TryResponse(const uint8_t* p, size_t n, Time receive
     health.error_code = ReadU16Le(q + 1);
     health.receive_time = receive_time;
     health_.push_back(health);
+    line_known_ = false;  // The sample stream was interrupted.
     buffer_.Consume(total);
     stats_.bytes_in_frames += total;
     ++stats_.frames_ok;
@@ -223,7 +229,8 @@ X4Decoder::Parse X4Decoder::TryPacket(const uint8_t* p, size_t n, Time receive_t
     return Parse::kRejected;
   }
   X4Packet packet;
-  DecodePacket(p, lsn, total, receive_time, &packet);
+  const Time t_last = LastSampleTime(lsn, total, receive_time);
+  DecodePacket(p, lsn, receive_time, t_last, &packet);
   buffer_.Consume(total);
   stats_.bytes_in_frames += total;
   ++stats_.frames_ok;
@@ -232,7 +239,29 @@ X4Decoder::Parse X4Decoder::TryPacket(const uint8_t* p, size_t n, Time receive_t
   return Parse::kConsumed;
 }
 
-void X4Decoder::DecodePacket(const uint8_t* p, size_t lsn, size_t packet_bytes, Time receive_time,
+Time X4Decoder::LastSampleTime(size_t lsn, size_t packet_bytes, Time receive_time) {
+  const Time received = receive_time - options_.latency;
+  if (!(options_.baud_rate > 0)) return received;
+  const Duration tx = SerialTransmissionTime(static_cast<double>(packet_bytes), options_.baud_rate);
+  // e_k = max(R_k - latency, e_{k-1} + tx_k).
+  Time end = received;
+  if (line_known_) end = std::max(end, line_end_ + tx);
+  const Time begin = end - tx;  // b_k
+  Time t_last = begin;
+  if (line_known_ && begin <= line_end_) {
+    // Queued behind packet k-1: the samples followed its samples at the
+    // sample rate, and were all taken before the transmission began.
+    const Time by_clock = previous_last_sample_ +
+                          SecondsToDuration(static_cast<double>(lsn) / options_.sample_rate_hz);
+    t_last = std::min(begin, by_clock);
+  }
+  line_known_ = true;
+  line_end_ = end;
+  previous_last_sample_ = t_last;
+  return t_last;
+}
+
+void X4Decoder::DecodePacket(const uint8_t* p, size_t lsn, Time receive_time, Time t_last,
                              X4Packet* packet) const {
   packet->ct = p[2];
   packet->ring_start = (p[2] & 0x01) != 0;
@@ -247,10 +276,7 @@ void X4Decoder::DecodePacket(const uint8_t* p, size_t lsn, size_t packet_bytes, 
   packet->first_level_end_deg = a_lsa;
   double diff = a_lsa - a_fsa;
   if (diff < 0) diff += 360.0;
-  // Times: t_last = receive - latency - transmission; t_i = t_last - (LSN-1-i) * period.
-  double transmit_s = 0;
-  if (options_.baud_rate > 0) transmit_s = packet_bytes * 10.0 / options_.baud_rate;
-  const Time t_last = receive_time - options_.latency - SecondsToDuration(transmit_s);
+  // Times: t_i = t_last - (LSN-1-i) * period.
   const double period_s = 1.0 / options_.sample_rate_hz;
 
   packet->samples.resize(lsn);

@@ -144,11 +144,25 @@ struct X4Scan {
 };
 
 struct X4DecoderOptions {
-  // Time-stamp rule: the X4 samples at a fixed rate, so within a packet
-  //   t_i = t_last - (LSN - 1 - i) / sample_rate_hz,
-  //   t_last = receive_time - latency - packet_bytes * 10 / baud_rate
-  // (10 bits per byte on 8N1: the last sample was taken before the packet was
-  // sent). baud_rate <= 0 drops the transmission term.
+  // Time-stamp rule (docs/device-codecs.md, "Time stamps on a busy line").
+  // The X4 samples at a fixed rate, so within packet k (n_k = LSN samples)
+  //   t_i = t_k - (n_k - 1 - i) / sample_rate_hz,
+  // where t_k is the time of its last sample. The line carries one byte at a
+  // time (8N1: tx_k = bytes_k * 10 / baud_rate), so packet k's transmission
+  // ended at
+  //   e_k = max(R_k - latency,  e_{k-1} + tx_k)
+  // (R_k: receive time of the chunk holding its last byte; e_{k-1} + tx_k:
+  // it cannot have finished before the previous packet finished plus its
+  // own transmission), and its transmission began at b_k = e_k - tx_k. A packet
+  // is sent once its last sample is taken, unless the line is still busy
+  // with the previous one: then it waits and b_k = e_{k-1}, which only
+  // bounds t_k from above; the sample clock gives it:
+  //   idle   (b_k > e_{k-1}):  t_k = b_k
+  //   queued (b_k = e_{k-1}):  t_k = min(b_k, t_{k-1} + n_k / sample_rate_hz)
+  // The previous packet counts only while the stream is contiguous (no
+  // bytes skipped, no response, no Reset() since); otherwise t_k = b_k.
+  // baud_rate <= 0 drops the transmission terms and the busy-line rule:
+  // t_k = R_k - latency.
   double sample_rate_hz = 5000.0;
   Duration latency{0};
   double baud_rate = 128000.0;
@@ -205,8 +219,12 @@ class X4Decoder {
   enum class Parse { kNeedMore, kConsumed, kRejected };
   Parse TryResponse(const uint8_t* p, size_t n, Time receive_time);
   Parse TryPacket(const uint8_t* p, size_t n, Time receive_time);
-  void DecodePacket(const uint8_t* p, size_t lsn, size_t packet_bytes, Time receive_time,
+  // `t_last`: the time of the packet's last sample (the time-stamp rule).
+  void DecodePacket(const uint8_t* p, size_t lsn, Time receive_time, Time t_last,
                     X4Packet* packet) const;
+  // The time-stamp rule of X4DecoderOptions for a packet of `packet_bytes`
+  // bytes and `lsn` samples; advances the busy-line state.
+  Time LastSampleTime(size_t lsn, size_t packet_bytes, Time receive_time);
   void AddToScan(const X4Packet& packet);
   void NoteError();
 
@@ -215,6 +233,12 @@ class X4Decoder {
   DecoderStats stats_;
   uint64_t scan_start_headers_ = 0;
   uint64_t samples_before_first_ring_ = 0;
+
+  // Busy-line state: the previous packet's end of transmission e_{k-1} and
+  // last-sample time t_{k-1}, while the stream has been contiguous since it.
+  bool line_known_ = false;
+  Time line_end_;
+  Time previous_last_sample_;
 
   bool scan_open_ = false;  // A ring-start packet has been seen.
   X4Scan current_scan_;

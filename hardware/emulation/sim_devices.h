@@ -7,12 +7,13 @@
 // to `now` and returns every chunk of device bytes that the agent could have
 // read by `now`: a frame's bytes become available when the data in it was
 // measured plus its serial transmission time (bytes * 10 / baud, 8N1). For
-// the X4 that is exactly the rule X4Decoder inverts (t_last = receive -
-// bytes * 10 / baud), so decoded lidar sample times equal the simulated ones.
-// For the HI219 and the motor board the decoded receive time is the sample
-// time plus ImuTransmissionTime() resp. MotorTransmissionTime(); give those as
-// TelemetryDecoderOptions::imu_latency / motor_latency to get the sample times
-// back.
+// the X4 the decoder's time-stamp rule (X4DecoderOptions: the transmission
+// time, and the sample clock for the short packets before a ring start,
+// which it sees as queued) recovers the simulated sample times. For the
+// HI219 and the motor board the decoded receive time is the sample time plus
+// ImuTransmissionTime() resp. MotorTransmissionTime(), which is what
+// TelemetryDecoder subtracts by default (each frame's length at
+// TelemetryDecoderOptions::imu_baud / motor_baud).
 //
 // Output does not depend on how AdvanceTo is chunked (the world's noise does
 // not either), and writes take effect at the time they are given.

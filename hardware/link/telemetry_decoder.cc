@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/common/json_reader.h"
+
 namespace sweepscan {
 namespace hardware {
 
@@ -15,7 +17,41 @@ bool TelemetryDecoderOptions::IsValid(std::string* error) const {
     *error = "lidar_angle_convention.sign must be 1 or -1";
     return false;
   }
+  if (!(imu_baud >= 0) || !std::isfinite(imu_baud) || !(motor_baud >= 0) ||
+      !std::isfinite(motor_baud)) {
+    *error = "imu_baud and motor_baud must be finite and >= 0";
+    return false;
+  }
   return x4.IsValid(error);
+}
+
+Status SerialSettingsFromMeta(const SessionMeta& meta, const std::string& source,
+                              TelemetryDecoderOptions* options) {
+  const nlohmann::json& settings = meta.settings;
+  if (!settings.is_object() || !settings.contains("serial")) return Status::Ok();
+  TelemetryDecoderOptions o = *options;
+  try {
+    const JsonObject root(settings, "settings");
+    const JsonObject serial = root.Object("serial");
+    serial.AllowOnly({"lidar_baud", "imu_baud", "motor_baud", "lidar_latency_s", "imu_latency_s",
+                      "motor_latency_s"});
+    const auto baud = [&serial](const char* key, double* out) {
+      if (serial.Has(key)) *out = serial.InRange(key, 0.0, 1e9, *out);
+    };
+    const auto latency = [&serial](const char* key, Duration* out) {
+      if (serial.Has(key)) *out = FromSeconds(serial.InRange(key, 0.0, 1.0, 0.0));
+    };
+    baud("lidar_baud", &o.x4.baud_rate);
+    baud("imu_baud", &o.imu_baud);
+    baud("motor_baud", &o.motor_baud);
+    latency("lidar_latency_s", &o.x4.latency);
+    latency("imu_latency_s", &o.imu_latency);
+    latency("motor_latency_s", &o.motor_latency);
+  } catch (const JsonError& e) {
+    return Status::Error(source + ": " + e.what());
+  }
+  *options = o;
+  return Status::Ok();
 }
 
 std::string TelemetryDecoderStats::ToString() const {
@@ -75,7 +111,8 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& t) {
       hi219_.Feed(t.bytes, t.receive_time);
       for (const ImuSample& s : hi219_.TakeSamples()) {
         ImuMeasurement m;
-        m.time = s.receive_time - options_.imu_latency;
+        m.time = s.receive_time - options_.imu_latency -
+                 SerialTransmissionTime(static_cast<double>(s.frame_bytes), options_.imu_baud);
         m.has_gyro = s.Has(kImuGyro);
         m.has_attitude = s.Has(kImuEuler);
         if (!m.has_gyro && !m.has_attitude) {
@@ -95,7 +132,9 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& t) {
       motor_.Feed(t.bytes, t.receive_time);
       for (const MotorFeedback& f : motor_.TakeRecords()) {
         WheelSpeedMeasurement w;
-        w.time = f.receive_time - options_.motor_latency;
+        w.time =
+            f.receive_time - options_.motor_latency -
+            SerialTransmissionTime(static_cast<double>(kMotorFeedbackSize), options_.motor_baud);
         WheelsFromTwist(Twist2d{f.vx_mps, f.wz_radps}, options_.wheel_distance_m, &w.left_mps,
                         &w.right_mps);
         pending_.wheels.push_back(w);
@@ -217,6 +256,8 @@ Status DecodeSessionWithMeta(const std::string& session_dir,
   TelemetryDecoderOptions options;
   options.wheel_distance_m = meta.geometry.wheel_distance_m;
   options.lidar_angle_convention = meta.lidar_angle_convention;
+  const Status serial = SerialSettingsFromMeta(meta, meta_path, &options);
+  if (!serial.ok()) return serial;
   return DecodeSessionWithProgress(session_dir, options, frames_options, log, info, progress);
 }
 

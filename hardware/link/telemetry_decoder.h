@@ -34,12 +34,19 @@ struct TelemetryDecoderOptions {
   double wheel_distance_m = RobotGeometry().wheel_distance_m;
   LidarAngleConvention lidar_angle_convention;
   X4DecoderOptions x4;  // keep_packets is forced off (only revolutions are used).
-  // Subtracted from the frame receive times. Defaults: the serial
-  // transmission time of one frame (the sample was taken before its bytes
-  // were sent), 82 bytes of HI219 0x91 frame and 24 bytes of motor feedback
-  // at 115200 baud 8N1, 10 bits a byte: 7.118 ms and 2.083 ms.
-  Duration imu_latency{7'118'056};
-  Duration motor_latency{2'083'333};
+  // IMU and motor-board frame times (docs/device-codecs.md, "Time stamps"):
+  // the data in a frame was measured before its bytes were sent, so
+  //   t = receive_time - latency - frame_bytes * 10 / baud
+  // with each decoded frame's own length (8N1, 10 bits a byte): an 82-byte
+  // HI219 0x91 frame at 115200 baud is 7.118 ms, a legacy frame its own
+  // length, a 24-byte motor feedback frame 2.083 ms. baud <= 0 drops the
+  // transmission term. latency: further delay (adapter, driver), 0 by default.
+  // A session's meta.json may set these under settings.serial
+  // (SerialSettingsFromMeta); the lidar's are x4.baud_rate and x4.latency.
+  double imu_baud = 115200.0;
+  double motor_baud = 115200.0;
+  Duration imu_latency{0};
+  Duration motor_latency{0};
 
   bool IsValid(std::string* error) const;
 };
@@ -80,6 +87,16 @@ class TelemetryDecoder {
   SensorLog pending_;
 };
 
+// Applies a session's settings.serial (docs/session-format.md) to *options:
+//   "serial": {"lidar_baud": 128000, "imu_baud": 115200, "motor_baud": 115200,
+//              "lidar_latency_s": 0, "imu_latency_s": 0, "motor_latency_s": 0}
+// every key optional (absent: the option is left as it is, so sessions
+// without the key decode as before); bauds are numbers >= 0 (0: no
+// transmission term), latencies numbers in [0, 1] s. Strict: unknown keys and
+// wrong types are refused with `source` and the JSON path.
+Status SerialSettingsFromMeta(const SessionMeta& meta, const std::string& source,
+                              TelemetryDecoderOptions* options);
+
 // What DecodeSession found, for `sweepscan-cli info` and the logs.
 struct SessionDecodeInfo {
   SessionMeta meta;
@@ -100,8 +117,9 @@ struct SessionDecodeInfo {
 // warn with info->frames.DamageSummary(); `--strict` refuses instead.
 FramesLoadOptions DefaultSessionFramesOptions();
 
-// Loads a session folder and decodes it with the geometry and lidar angle
-// convention of its meta.json (and otherwise default decoder options).
+// Loads a session folder and decodes it with the geometry, lidar angle
+// convention and serial settings (settings.serial) of its meta.json, and
+// otherwise default decoder options.
 // Records that do not hold exactly one valid link frame are skipped and
 // counted; damaged stretches of frames.bin are skipped and reported in
 // info->frames (DefaultSessionFramesOptions); a corrupt meta.json is an error.
@@ -119,8 +137,8 @@ Status DecodeSession(const std::string& session_dir, const FramesLoadOptions& fr
 // The same with progress and cancel (the desktop app's open job).
 Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDecodeInfo* info,
                      const DecodeProgress& progress);
-// The same with explicit decoder options (wheel distance and convention are
-// still taken from the options, not from meta.json).
+// The same with explicit decoder options (wheel distance, convention and
+// serial settings are taken from the options, not from meta.json).
 Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
                      SensorLog* log, SessionDecodeInfo* info);
 // The decoding part alone, on records already loaded; *info must not be null

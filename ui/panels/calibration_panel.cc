@@ -403,7 +403,8 @@ bool CalibrationPanel::LoadPairs(const QString& path, QString* error) {
   for (const PickPair& p : loaded) {
     if (p.pass1.has_sample || p.pass2.has_sample) {
       *error =
-          tr("%1: picks by (scan, beam) are for the CLI; the panel takes world picks").arg(path);
+          tr("%1: picks of raw samples (time_ns, or scan and beam) are for the CLI; the panel "
+             "takes world picks").arg(path);
       return false;
     }
     PairPoints q;

@@ -126,8 +126,7 @@ const Drive& GetDrive(int case_index) {
             (ProjectObservation(o, d.config.geometry, c.truth) - c.corners()[j]).norm();
         if (dist < best) {
           best = dist;
-          picks[k]->has_sample = true;
-          picks[k]->sample = o.ref;
+          *picks[k] = SamplePick(o);
         }
       }
     }
@@ -408,12 +407,25 @@ TEST(SolvePairsTest, DegenerateRealPicksWarn) {
 TEST(ResolvePairsTest, UnknownSampleAndWrongPassAndWorldSnap) {
   const Drive& d = GetDrive(0);
   std::vector<ObservationPair> pairs;
-  // Unknown scan.
+  // No sample at that time.
   std::vector<PickPair> picks = d.corner_picks;
-  picks[1].pass1.sample.scan = 999999;
+  picks[1].pass1.sample.time_ns += 1;
   Status st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.message().find("pair 2 pass1"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("the nearest is 1e-06 ms away"), std::string::npos) << st.message();
+  // The right time with another range: the recording or its timing changed.
+  picks = d.corner_picks;
+  picks[1].pass1.sample.range_m += 0.002;
+  st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("the pick says"), std::string::npos) << st.message();
+  // Unknown (scan, beam) of an older file.
+  picks = d.corner_picks;
+  picks[1].pass1 = PositionPick({999999, 10});
+  st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("(scan 999999, beam 10)"), std::string::npos) << st.message();
   // Both picks in pass 1.
   picks = d.corner_picks;
   picks[0].pass2 = picks[0].pass1;
@@ -453,8 +465,8 @@ TEST(ResolvePairsTest, WorldPicksInEitherPassOrderResolveToTheSameSamples) {
   ASSERT_TRUE(ResolvePairs(world, d.store, d.windows, d.config.geometry, {}, &swapped).ok());
   ASSERT_EQ(in_order.size(), swapped.size());
   for (size_t k = 0; k < in_order.size(); ++k) {
-    EXPECT_EQ(in_order[k].pass1.ref, truth[k].pass1.sample) << k;
-    EXPECT_EQ(in_order[k].pass2.ref, truth[k].pass2.sample) << k;
+    EXPECT_EQ(in_order[k].pass1.time_ns, truth[k].pass1.sample.time_ns) << k;
+    EXPECT_EQ(in_order[k].pass2.time_ns, truth[k].pass2.sample.time_ns) << k;
     EXPECT_EQ(swapped[k].pass1.ref, in_order[k].pass1.ref) << k;
     EXPECT_EQ(swapped[k].pass2.ref, in_order[k].pass2.ref) << k;
   }
@@ -569,15 +581,36 @@ TEST(PairsFileTest, RoundTripAndStrictness) {
   std::vector<PickPair> pairs(4);
   for (int k = 0; k < 4; ++k) {
     pairs[k].pass1.has_sample = true;
-    pairs[k].pass1.sample = {static_cast<uint32_t>(10 + k), static_cast<uint16_t>(200 + k)};
+    pairs[k].pass1.sample.time_ns = 1'000'000'123'456'789 + 200'000 * k;
+    pairs[k].pass1.sample.range_m = 1.25f + 0.001f * static_cast<float>(k);  // float, as decoded
+    pairs[k].pass1.sample.theta_rad = -0.75f;
     pairs[k].pass2.world = Eigen::Vector3d(5.0, 0.16, 1.0 + 0.1 * k);
   }
+  pairs[2].pass2 = PositionPick({12, 345});  // An older file's pick, kept as it was.
   std::vector<PickPair> back;
   ASSERT_TRUE(ParsePairs(PairsToJson(pairs), "mem", &back).ok());
   ASSERT_EQ(back.size(), 4u);
-  EXPECT_EQ(back[3].pass1.sample, pairs[3].pass1.sample);
+  EXPECT_TRUE(back[3].pass1.has_sample && !back[3].pass1.by_position);
+  EXPECT_EQ(back[3].pass1.sample.time_ns, 1'000'000'124'056'789);
+  EXPECT_EQ(back[3].pass1.sample.range_m, pairs[3].pass1.sample.range_m);
+  EXPECT_EQ(back[3].pass1.sample.theta_rad, -0.75);
   EXPECT_FALSE(back[3].pass2.has_sample);
   EXPECT_DOUBLE_EQ(back[3].pass2.world.z(), 1.3);
+  EXPECT_TRUE(back[2].pass2.has_sample && back[2].pass2.by_position);
+  EXPECT_EQ(back[2].pass2.position, (SampleRef{12, 345}));
+
+  // A version-1 file by (scan, beam), as written before picks were named
+  // by time, loads as such; a pick by time alone (no checks) too.
+  ASSERT_TRUE(ParsePairs(R"({"format":"sweepscan-pairs","version":1,"pairs":[
+      {"pass1":{"scan":41,"beam":512},"pass2":{"time_ns":7}}]})",
+                         "old.json", &back)
+                  .ok());
+  ASSERT_EQ(back.size(), 1u);
+  EXPECT_TRUE(back[0].pass1.has_sample && back[0].pass1.by_position);
+  EXPECT_EQ(back[0].pass1.position, (SampleRef{41, 512}));
+  EXPECT_TRUE(back[0].pass2.has_sample && !back[0].pass2.by_position);
+  EXPECT_EQ(back[0].pass2.sample.time_ns, 7);
+  EXPECT_TRUE(std::isnan(back[0].pass2.sample.range_m));
 
   const auto fails = [](const std::string& text, const std::string& expect) {
     std::vector<PickPair> p;
@@ -598,7 +631,13 @@ TEST(PairsFileTest, RoundTripAndStrictness) {
   fails(head + R"({"pass1":{"world":[1,2,NaN]},"pass2":{"scan":1,"beam":2}}]})", "not valid JSON");
   fails(head + R"({"pass1":{"world":[1,2,"a"]},"pass2":{"scan":1,"beam":2}}]})", "element 2");
   fails(head + R"({"pass1":{"world":[1,2,3],"scan":1,"beam":1},"pass2":{"scan":1,"beam":2}}]})",
-        "not both");
+        "not several");
+  fails(head + R"({"pass1":{"time_ns":5,"scan":1,"beam":1},"pass2":{"scan":1,"beam":2}}]})",
+        "not several");
+  fails(head + R"({"pass1":{"scan":1,"beam":1,"range_m":2},"pass2":{"scan":1,"beam":2}}]})",
+        "range_m: only checks a pick by time_ns");
+  fails(head + R"({"pass1":{"time_ns":1.5},"pass2":{"scan":1,"beam":2}}]})", "integer");
+  fails(head + R"({"pass1":{},"pass2":{"scan":1,"beam":2}}]})", "not none");
   fails(head + R"({"pass1":{"scan":1,"beam":7,"x":1},"pass2":{"scan":1,"beam":2}}]})",
         "unknown key");
   fails(head + R"({"pass1":{"world":[1,2,1e999]},"pass2":{"scan":1,"beam":2}}]})", "");

@@ -502,6 +502,76 @@ TEST(X4TimeTest, SampleTimesFollowTheDocumentedRule) {
   EXPECT_EQ(d2.TakePackets()[0].samples[2].time, kT0);
 }
 
+// The busy-line rule (X4DecoderOptions, docs/device-codecs.md) on hand-checked
+// values: 5 kHz, 128000 baud (78.125 us a byte), no latency. A 40-sample
+// packet is 90 bytes (7.03125 ms on the line), a 1-sample ring-start packet
+// 12 bytes (0.9375 ms).
+TEST(X4TimeTest, PacketQueuedBehindThePreviousOneTakesItsTimeFromTheSampleClock) {
+  X4DecoderOptions o;
+  o.sample_rate_hz = 5000;
+  o.baud_rate = 128000;
+  auto packet = [](bool ring_start, size_t n) {
+    X4PacketToEncode p;
+    p.ring_start = ring_start;
+    p.distances_mm.assign(n, 1000.0);
+    p.first_angle_deg = 10.0;
+    p.last_angle_deg = 10.0 + 0.5 * static_cast<double>(n - 1);
+    Bytes out;
+    EXPECT_TRUE(EncodeX4ScanPacket(p, &out));
+    return out;
+  };
+  const Bytes a = packet(false, 40), ring = packet(true, 1), c = packet(false, 40);
+  ASSERT_EQ(a.size(), 90u);
+  ASSERT_EQ(ring.size(), 12u);
+  // A received at 100 s: idle line, t_A = 100 s - 7.03125 ms = 99.99296875 s.
+  // The ring-start packet right behind it, at 100.0009375 s: its
+  // transmission began at 100 s = e_A (queued), so its sample is the one
+  // after A's last: t = t_A + 200 us = 99.99316875 s (the transmission rule
+  // alone would give 100 s, 6.83 ms late).
+  // C, 40 samples later on the sample clock and sent at once:
+  // R_C = t_ring + 8 ms + 7.03125 ms = 100.0082 s; idle (b_C = 100.00116875 s
+  // > e_ring = 100.0009375 s), t_C = b_C = t_ring + 8 ms.
+  X4Decoder d(o);
+  d.Feed(a, kT0);
+  d.Feed(ring, kT0 + Duration(937'500));
+  d.Feed(c, kT0 + Duration(8'200'000));
+  auto packets = d.TakePackets();
+  ASSERT_EQ(packets.size(), 3u);
+  EXPECT_EQ(ToNanoseconds(packets[0].samples.back().time), 99'992'968'750);
+  EXPECT_EQ(ToNanoseconds(packets[0].samples.front().time), 99'985'168'750);  // - 39 x 200 us.
+  EXPECT_EQ(ToNanoseconds(packets[1].samples[0].time), 99'993'168'750);
+  EXPECT_EQ(ToNanoseconds(packets[2].samples.back().time), 100'001'168'750);
+  EXPECT_EQ(ToNanoseconds(packets[2].samples.front().time), 99'993'368'750);  // ring + 200 us.
+
+  // A receive time that comes too early for the line (here all three in one
+  // chunk at 100 s): each packet ends no earlier than the previous one plus
+  // its own transmission, e = 100 s, 100.0009375 s, 100.00796875 s; the
+  // later two are queued, so the sample clock times them: t_ring = t_A +
+  // 200 us as above, t_C = min(b_C = 100.0009375 s, t_ring + 8 ms) =
+  // 100.0009375 s (the line bound is the tighter one).
+  Bytes all = a;
+  all.insert(all.end(), ring.begin(), ring.end());
+  all.insert(all.end(), c.begin(), c.end());
+  X4Decoder one_chunk(o);
+  one_chunk.Feed(all, kT0);
+  packets = one_chunk.TakePackets();
+  ASSERT_EQ(packets.size(), 3u);
+  EXPECT_EQ(ToNanoseconds(packets[0].samples.back().time), 99'992'968'750);
+  EXPECT_EQ(ToNanoseconds(packets[1].samples[0].time), 99'993'168'750);
+  EXPECT_EQ(ToNanoseconds(packets[2].samples.back().time), 100'000'937'500);
+
+  // A garbage byte between A and the ring-start packet: the stream is not
+  // known to be contiguous, so the ring-start packet gets the transmission
+  // rule alone: 100.0009375 s - 0.9375 ms = 100 s.
+  X4Decoder broken(o);
+  broken.Feed(a, kT0);
+  broken.Feed(Bytes{0x00}, kT0 + Duration(100'000));
+  broken.Feed(ring, kT0 + Duration(937'500));
+  packets = broken.TakePackets();
+  ASSERT_EQ(packets.size(), 2u);
+  EXPECT_EQ(ToNanoseconds(packets[1].samples[0].time), 100'000'000'000);
+}
+
 TEST(X4TimeTest, PacketGetsTheTimeOfTheChunkWithItsLastByte) {
   X4DecoderOptions o;
   o.baud_rate = 0;
@@ -522,7 +592,13 @@ TEST(X4TimeTest, PacketGetsTheTimeOfTheChunkWithItsLastByte) {
 TEST(X4RobustnessTest, GarbageAndCorruptPacketsAreCountedGoodOnesKept) {
   std::mt19937 rng(11);
   const Bytes clean = MakeScanStream(2, 3, &rng);  // Header + 8 packets.
-  X4Decoder ref;
+  // Every chunk comes at kT0, and the busy-line rule times a packet after
+  // an error differently from one that follows its predecessor
+  // (X4TimeTest.PacketQueuedBehind...): compare without the line model, so
+  // that each packet's time is its receive time.
+  X4DecoderOptions no_line;
+  no_line.baud_rate = 0;
+  X4Decoder ref(no_line);
   ref.Feed(clean, kT0);
   const auto ref_packets = ref.TakePackets();
   ASSERT_EQ(ref_packets.size(), 8u);
@@ -563,7 +639,7 @@ TEST(X4RobustnessTest, GarbageAndCorruptPacketsAreCountedGoodOnesKept) {
   add(frames[8]);
 
   for (size_t chunk : {size_t{1}, size_t{7}, size_t{64}, stream.size()}) {
-    X4Decoder d;
+    X4Decoder d(no_line);
     for (size_t pos = 0; pos < stream.size(); pos += chunk) {
       d.Feed(stream.data() + pos, std::min(chunk, stream.size() - pos), kT0);
     }

@@ -414,8 +414,10 @@ TEST(SimDevicesTest, TelemetryPathReconstructsTheDirectCloud) {
   TelemetryDecoderOptions options;
   options.wheel_distance_m = config.geometry.wheel_distance_m;
   options.lidar_angle_convention = config.lidar.angle_convention;
-  options.imu_latency = devices.ImuTransmissionTime();
-  options.motor_latency = devices.MotorTransmissionTime();
+  // The decoder's default transmission terms (82- and 24-byte frames at
+  // 115200 baud) are the simulator's delays: no latency option needed.
+  ASSERT_EQ(SerialTransmissionTime(82, options.imu_baud), devices.ImuTransmissionTime());
+  ASSERT_EQ(SerialTransmissionTime(24, options.motor_baud), devices.MotorTransmissionTime());
   TelemetryDecoder decoder(options);
   for (const TimedBytes& b : out) {
     Telemetry t;

@@ -94,7 +94,9 @@ void ExpectExpectedLog(const SensorLog& log, const TelemetryDecoderOptions& o) {
     const double v = std::round((0.2 + 0.01 * i) * 1000) / 1000;  // mm/s on the wire.
     EXPECT_NEAR(log.wheels[i].left_mps, v - 0.5 * kWheelDistance, 1e-12);
     EXPECT_NEAR(log.wheels[i].right_mps, v + 0.5 * kWheelDistance, 1e-12);
-    EXPECT_EQ(log.wheels[i].time, kT0 + std::chrono::milliseconds(10 * i + 2) - o.motor_latency);
+    // Receive time - latency - 24 bytes * 10 / 115200 baud (2 083 333 ns).
+    EXPECT_EQ(log.wheels[i].time,
+              kT0 + std::chrono::milliseconds(10 * i + 2) - o.motor_latency - Duration(2'083'333));
   }
   // IMU: SI units.
   ASSERT_EQ(log.imu.size(), 3u);
@@ -104,7 +106,9 @@ void ExpectExpectedLog(const SensorLog& log, const TelemetryDecoderOptions& o) {
     EXPECT_NEAR(log.imu[i].pitch, -2.5 * M_PI / 180.0, 1e-6);
     EXPECT_NEAR(log.imu[i].yaw, (90.0 - i) * M_PI / 180.0, 1e-6);
     EXPECT_TRUE(log.imu[i].has_gyro && log.imu[i].has_attitude);
-    EXPECT_EQ(log.imu[i].time, kT0 + std::chrono::milliseconds(10 * i + 1) - o.imu_latency);
+    // Receive time - latency - 82 bytes * 10 / 115200 baud (7 118 056 ns).
+    EXPECT_EQ(log.imu[i].time,
+              kT0 + std::chrono::milliseconds(10 * i + 1) - o.imu_latency - Duration(7'118'056));
   }
   // Lidar: two revolutions of 1 + 40 samples.
   ASSERT_EQ(log.scans.size(), 2u);
@@ -163,6 +167,64 @@ TEST(TelemetryDecoderTest, DeviceBytesDecodeIntoTheExpectedSensorLog) {
     EXPECT_EQ(log.scans[1].samples[i].theta,
               static_cast<float>(
                   o.lidar_angle_convention.ThetaFromX4Degrees(scans[1].samples[i].angle_deg)));
+  }
+}
+
+// Each frame's own length and the configured baud set its transmission
+// time (docs/device-codecs.md, "Frame times of the IMU and the motor board");
+// a session's settings.serial configures them. Hand-checked values.
+TEST(TelemetryDecoderTest, SerialSettingsOfTheSessionSetFrameTimes) {
+  auto decode = [](const TelemetryDecoderOptions& o, const Bytes& imu_frame) {
+    TelemetryDecoder d(o);
+    d.AddTelemetry(Telemetry{uint8_t(LinkDevice::kImu), kT0, imu_frame});
+    d.AddTelemetry(
+        Telemetry{uint8_t(LinkDevice::kMotorBoard), kT0, EncodeMotorFeedback(MakeFeedback(0))});
+    SensorLog log;
+    d.TakeInto(&log);
+    EXPECT_EQ(log.imu.size(), 1u);
+    EXPECT_EQ(log.wheels.size(), 1u);
+    return log;
+  };
+  const Bytes frame91 = EncodeHi219Packet91Frame(MakeImu(0));
+  const Bytes legacy = EncodeHi219LegacyFrame(MakeImu(0));
+  // acc, gyro, Euler and quaternion items: 7 + 7 + 7 + 17 = 38 payload bytes.
+  ASSERT_EQ(legacy.size(), 6u + 38u);
+
+  // Defaults, as before they were configurable: 82 bytes at 115200 baud =
+  // 7 118 056 ns, 24 bytes = 2 083 333 ns; a 44-byte legacy frame: 3 819 444 ns.
+  TelemetryDecoderOptions o;
+  EXPECT_EQ(decode(o, frame91).imu[0].time, kT0 - Duration(7'118'056));
+  EXPECT_EQ(decode(o, frame91).wheels[0].time, kT0 - Duration(2'083'333));
+  EXPECT_EQ(decode(o, legacy).imu[0].time, kT0 - Duration(3'819'444));
+
+  // A session without settings.serial keeps them.
+  SessionMeta meta;
+  TelemetryDecoderOptions from_meta;
+  ASSERT_TRUE(SerialSettingsFromMeta(meta, "meta.json", &from_meta).ok());
+  EXPECT_EQ(from_meta.imu_baud, 115200.0);
+  EXPECT_EQ(from_meta.x4.baud_rate, 128000.0);
+
+  // IMU at 460800 baud plus 1 ms: 82 * 10 / 460800 = 1 779 514 ns + 1 ms;
+  // motor board without the transmission term (baud 0); lidar at 230400.
+  meta.settings = nlohmann::json::parse(
+      R"({"serial": {"imu_baud": 460800, "imu_latency_s": 0.001, "motor_baud": 0,
+                     "lidar_baud": 230400, "lidar_latency_s": 0.0005}})");
+  ASSERT_TRUE(SerialSettingsFromMeta(meta, "meta.json", &from_meta).ok());
+  EXPECT_EQ(from_meta.x4.baud_rate, 230400.0);
+  EXPECT_EQ(from_meta.x4.latency, Duration(500'000));
+  EXPECT_EQ(decode(from_meta, frame91).imu[0].time, kT0 - Duration(2'779'514));
+  EXPECT_EQ(decode(from_meta, frame91).wheels[0].time, kT0);
+
+  // Strict: unknown keys, wrong types, out-of-range values.
+  for (const char* bad : {R"({"serial": {"imu_bud": 9600}})", R"({"serial": {"imu_baud": "fast"}})",
+                          R"({"serial": {"motor_baud": -1}})",
+                          R"({"serial": {"imu_latency_s": 2}})", R"({"serial": 5})"}) {
+    meta.settings = nlohmann::json::parse(bad);
+    TelemetryDecoderOptions x;
+    const Status st = SerialSettingsFromMeta(meta, "s/meta.json", &x);
+    EXPECT_FALSE(st.ok()) << bad;
+    EXPECT_NE(st.message().find("s/meta.json: settings.serial"), std::string::npos) << st.message();
+    EXPECT_EQ(x.imu_baud, 115200.0) << bad;  // Untouched on error.
   }
 }
 
