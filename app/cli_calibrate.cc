@@ -86,7 +86,13 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
   if (args.Flag("auto")) {
     // A drive that is not a circle is refused before solving, a degenerate
     // result after (docs/calibration.md): one line, exit 1, no file.
-    const Status s = SolveAutomatic(store, in.geometry, {}, AutoCalibrationOptions(), summary);
+    AutoCalibrationOptions options;
+    // The poses' heading error that alpha absorbs (automatic.h): the EKF's
+    // by default; none for simulated truth; odometry's heading drifts.
+    const std::string source = args.Get("pose-source", "ekf");
+    if (source == "truth") options.pose_heading_sigma_rad = 0.0;
+    if (source == "odometry") options.pose_heading_sigma_rad = 0.02;
+    const Status s = SolveAutomatic(store, in.geometry, {}, options, summary);
     if (!s.ok()) {
       const bool refused = s.message().rfind("refused: ", 0) == 0;
       PrintError((refused ? "calibration " : "calibration failed: ") + s.message());
@@ -137,6 +143,7 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
+  if (summary.method == "auto-planes") report["path_scale"] = summary.path_scale;
   report["warnings"] = summary.warnings;
   nlohmann::json trace = nlohmann::json::array();
   for (const auto& it : summary.trace) {

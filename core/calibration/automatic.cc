@@ -30,6 +30,10 @@ using calibration_internal::ProjectT;
 
 bool AutoCalibrationOptions::IsValid(std::string* error) const {
   if (!solver.IsValid(error)) return false;
+  if (!(pose_heading_sigma_rad >= 0.0 && pose_heading_sigma_rad < 1.0)) {
+    *error = "automatic calibration: pose_heading_sigma_rad must be in [0, 1) rad";
+    return false;
+  }
   if (max_segmentation_points < 100 || max_points_per_plane < 10 || max_planes < 1 ||
       ransac_iterations < 1) {
     *error = "automatic calibration: point and plane counts too small";
@@ -145,6 +149,7 @@ struct AutoSamples {
   std::vector<Prepared> prepared;  // per entry of `sample`
   std::vector<double> sigma;  // per entry of `sample`, metres (the noise model in the header)
   int64_t t0 = 0;             // time of the first sample
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // mean body position (the path scale's centre)
 };
 
 Status SelectAutoSamples(const SampleStore& store, const RobotGeometry& geometry,
@@ -184,6 +189,8 @@ Status SelectAutoSamples(const SampleStore& store, const RobotGeometry& geometry
                               options.model_noise_m * options.model_noise_m));
   }
   out->t0 = store.observations()[sample.front()].time_ns;
+  for (const Prepared& p : prepared) out->centre += p.t_wb;
+  out->centre /= static_cast<double>(prepared.size());
   return Status::Ok();
 }
 
@@ -499,8 +506,10 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     for (const FoundPlane& fp : used) start.push_back(fp.plane);
     const RobustLoss loss = so_opts.loss == RobustLoss::kNone ? RobustLoss::kHuber : so_opts.loss;
     double abg[3] = {c.alpha, c.beta, c.gamma};
+    double scale = 1.0;  // this round's path scale, folded into the poses below
     PlaneProblem problem(abg, start, chosen, in.prepared, in.sigma, loss,
-                         options.robust_scale_sigmas);
+                         options.robust_scale_sigmas, &scale, in.centre,
+                         options.estimate_path_scale);
     if (residuals == 0) return Status::Error("automatic calibration: no residual points left");
     if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
     std::vector<CalibrationIteration> inner_trace;
@@ -523,6 +532,12 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     const MountingError next = FromArray(abg);
     const double change = AngleChange(c, next);
     c = next;
+    if (scale != 1.0) {
+      // The poses of the next round's segmentation (and of the statistics):
+      // t_WB -> centre + scale (t_WB - centre).
+      for (Prepared& p : in.prepared) p.t_wb = in.centre + scale * (p.t_wb - in.centre);
+      summary->path_scale *= scale;
+    }
     if (last_band) ++final_rounds;
     // Re-segmenting can flip a few boundary points in or out of a plane, so
     // the angles settle to within ~1e-5 rad, not to the LM tolerance: stop
@@ -544,6 +559,7 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
                          std::to_string(so_opts.max_outer_iterations) + " outer iterations");
   }
   summary->message = "angles stopped changing at the final inlier band";
+  summary->sigma_rad[0] = std::hypot(summary->sigma_rad[0], options.pose_heading_sigma_rad);
   const std::string refused = RefuseResult(*summary, options);
   if (!refused.empty()) {
     summary->converged = false;

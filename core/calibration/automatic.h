@@ -73,6 +73,20 @@ struct AutoCalibrationOptions {
   // or whose residuals collapsed (RMS of r_i / sigma_i below min_rms_sigmas:
   // the X4's noise cannot vanish, so the cloud folded onto one plane) or
   // whose sigma collapsed (below min_sigma_rad), is refused.
+  // The path's distance scale as a nuisance parameter (one number, about
+  // the centre of the robot's positions): a wheel-radius error scales the
+  // whole circle the EKF integrates (its yaw comes from the IMU, its speed
+  // from the wheels alone), the two passes of a wall then disagree by twice
+  // the radius error, and the angles absorbed it (1 % of wheel radius: ~1.5
+  // mrad of alpha on the lab circle). The cloud's two passes observe it.
+  bool estimate_path_scale = true;
+  // The poses' own heading error over the drive, which alpha cannot tell
+  // from a mounting yaw (a constant heading error turns the whole cloud
+  // about z, as alpha does); added in quadrature to alpha's sigma. The
+  // default is the EKF's, measured by the robustness sweep (docs/results.md,
+  // "Robustness": EKF-pose alpha errors of 1.0 mrad RMS where truth poses
+  // give 0.1); the CLI passes 0 for truth poses and 20 mrad for odometry.
+  double pose_heading_sigma_rad = 0.001;
   bool require_circle_drive = true;
   double max_abs_angle_rad = 0.45;
   double min_rms_sigmas = 0.05;

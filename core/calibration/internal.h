@@ -89,10 +89,16 @@ class PlaneProblem {
   // bits). planes[s] starts the surface's parameters; chosen[s] indexes
   // `prepared` and `sigma`. Residuals are added surface by surface in chosen
   // order.
+  //
+  // scale (owned by the caller, starting at 1): the path's distance scale
+  // about `centre`, a nuisance parameter: t_WB -> centre + scale (t_WB -
+  // centre) (automatic.h, estimate_path_scale); held constant unless
+  // estimate_scale.
   PlaneProblem(double* abg, const std::vector<Plane>& planes,
                const std::vector<std::vector<size_t>>& chosen,
                const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
-               RobustLoss loss, double loss_scale);
+               RobustLoss loss, double loss_scale, double* scale, const Eigen::Vector3d& centre,
+               bool estimate_scale);
   ~PlaneProblem();
   PlaneProblem(const PlaneProblem&) = delete;
   PlaneProblem& operator=(const PlaneProblem&) = delete;

@@ -117,11 +117,15 @@ class PlanePointsCost final : public ceres::CostFunction {
  public:
   static constexpr int kPointsPerBlock = 64;
 
-  PlanePointsCost(RobustLoss loss, double loss_scale) : loss_(loss), loss_scale_(loss_scale) {
-    mutable_parameter_block_sizes()->assign({3, 4});
+  // Parameter blocks: the angles (3), the plane (n, d) (4), the path scale
+  // s (1): t_WB -> centre + s (t_WB - centre), so p_W gains (s - 1) w with
+  // w = t_WB - centre, and dr/ds = n . w / sigma.
+  PlanePointsCost(RobustLoss loss, double loss_scale, const Eigen::Vector3d& centre)
+      : loss_(loss), loss_scale_(loss_scale), centre_(centre) {
+    mutable_parameter_block_sizes()->assign({3, 4, 1});
   }
   void Add(const Prepared& o, double inv_sigma) {
-    points_.push_back({o.r_wb, o.r_wb * o.t_bl + o.t_wb, o.p_l, inv_sigma});
+    points_.push_back({o.r_wb, o.r_wb * o.t_bl + o.t_wb, o.p_l, o.t_wb - centre_, inv_sigma});
     set_num_residuals(static_cast<int>(points_.size()));
   }
 
@@ -131,9 +135,10 @@ class PlanePointsCost final : public ceres::CostFunction {
     rot.Update(parameters[0]);
     const Eigen::Map<const Eigen::Vector3d> n(parameters[1]);
     const double d = parameters[1][3];
+    const double s1 = parameters[2][0] - 1.0;
     for (size_t i = 0; i < points_.size(); ++i) {
       const Point& pt = points_[i];
-      const Eigen::Vector3d p_w = pt.r_wb * (rot.r * pt.p_l) + pt.u;
+      const Eigen::Vector3d p_w = pt.r_wb * (rot.r * pt.p_l) + pt.u + s1 * pt.w;
       double scale = 1.0;
       RobustResidual(loss_, loss_scale_, (n.dot(p_w) + d) * pt.inv_sigma, &residuals[i], &scale);
       if (jacobians == nullptr) continue;
@@ -146,6 +151,7 @@ class PlanePointsCost final : public ceres::CostFunction {
         for (int k = 0; k < 3; ++k) jacobians[1][4 * i + k] = p_w[k] * w;
         jacobians[1][4 * i + 3] = w;
       }
+      if (jacobians[2] != nullptr) jacobians[2][i] = n.dot(pt.w) * w;
     }
     return true;
   }
@@ -154,10 +160,12 @@ class PlanePointsCost final : public ceres::CostFunction {
   struct Point {
     Eigen::Matrix3d r_wb;
     Eigen::Vector3d u, p_l;  // u = R_WB t_BL + t_WB
+    Eigen::Vector3d w;       // t_WB - centre
     double inv_sigma;
   };
   RobustLoss loss_;
   double loss_scale_;
+  Eigen::Vector3d centre_;
   std::vector<Point> points_;
 };
 
@@ -285,7 +293,8 @@ void ComputeCovariance(ceres::Problem* problem, double* abg, int num_residuals,
 // The automatic mode's plane problem
 
 struct PlaneProblem::Impl {
-  double* abg;  // the caller's
+  double* abg;    // the caller's
+  double* scale;  // the caller's
   std::vector<std::array<double, 4>> params;  // n (unit), d per plane
   ceres::Problem problem;
 };
@@ -293,9 +302,11 @@ struct PlaneProblem::Impl {
 PlaneProblem::PlaneProblem(double* abg, const std::vector<Plane>& planes,
                            const std::vector<std::vector<size_t>>& chosen,
                            const std::vector<Prepared>& prepared, const std::vector<double>& sigma,
-                           RobustLoss loss, double loss_scale)
+                           RobustLoss loss, double loss_scale, double* scale,
+                           const Eigen::Vector3d& centre, bool estimate_scale)
     : impl_(std::make_unique<Impl>()) {
   impl_->abg = abg;
+  impl_->scale = scale;
   ceres::Problem& problem = impl_->problem;
   problem.AddParameterBlock(abg, 3);
   std::vector<std::array<double, 4>>& params = impl_->params;
@@ -306,12 +317,13 @@ PlaneProblem::PlaneProblem(double* abg, const std::vector<Plane>& planes,
     problem.AddParameterBlock(params[s].data(), 4, new PlaneManifold());
     // Rows stay in the order of `chosen` (ClusteredAngleSigma's groups).
     for (size_t begin = 0; begin < chosen[s].size(); begin += PlanePointsCost::kPointsPerBlock) {
-      auto cost = std::make_unique<PlanePointsCost>(loss, loss_scale);
+      auto cost = std::make_unique<PlanePointsCost>(loss, loss_scale, centre);
       const size_t end = std::min(chosen[s].size(), begin + PlanePointsCost::kPointsPerBlock);
       for (size_t j = begin; j < end; ++j) cost->Add(prepared[chosen[s][j]], 1.0 / sigma[chosen[s][j]]);
-      problem.AddResidualBlock(cost.release(), nullptr, abg, params[s].data());
+      problem.AddResidualBlock(cost.release(), nullptr, abg, params[s].data(), scale);
     }
   }
+  if (problem.HasParameterBlock(scale) && !estimate_scale) problem.SetParameterBlockConstant(scale);
 }
 
 PlaneProblem::~PlaneProblem() = default;
@@ -326,6 +338,9 @@ PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   for (auto& p : impl_->params) ordering->AddElementToGroup(p.data(), 0);
   ordering->AddElementToGroup(impl_->abg, 1);
+  if (impl_->problem.HasParameterBlock(impl_->scale)) {
+    ordering->AddElementToGroup(impl_->scale, 1);
+  }
   so.linear_solver_ordering = ordering;
   so.num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   TraceCallback callback(impl_->abg, trace, options.progress);

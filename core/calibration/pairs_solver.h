@@ -77,6 +77,9 @@ struct CalibrationSummary {
   double final_rms_m = 0.0;
   double initial_cost = 0.0, final_cost = 0.0;
   double condition_number = 0.0;
+  // Automatic mode: the path's distance scale estimated as a nuisance
+  // (AutoCalibrationOptions::estimate_path_scale; 1 if not estimated).
+  double path_scale = 1.0;
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
   int planes = 0;  // automatic mode

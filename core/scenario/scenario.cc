@@ -117,7 +117,7 @@ void ReadLidar(const JsonObject& l, SimConfig* config) {
   l.AllowOnly({"scan_rate_hz", "sample_rate_hz", "min_range_m", "max_range_m", "range_noise_m",
                "range_noise_fraction", "range_quantum_m", "dropout_probability",
                "grazing_dropout_start_deg", "grazing_dropout_end_deg", "angle_sign",
-               "angle_offset_rad", "model_angle_correction"});
+               "angle_offset_rad", "model_angle_correction", "range_offset_m", "time_offset_s"});
   sim::LidarSpec& s = c.lidar;
   s.scan_rate_hz = l.InRange("scan_rate_hz", 1.0, 50.0, s.scan_rate_hz);
   s.sample_rate_hz = l.InRange("sample_rate_hz", 100.0, 100000.0, s.sample_rate_hz);
@@ -138,6 +138,8 @@ void ReadLidar(const JsonObject& l, SimConfig* config) {
   }
   s.angle_convention.offset_rad = l.Number("angle_offset_rad", s.angle_convention.offset_rad);
   s.model_angle_correction = l.Bool("model_angle_correction", s.model_angle_correction);
+  s.range_offset_m = l.InRange("range_offset_m", -0.1, 0.1, s.range_offset_m);
+  s.time_offset_s = l.InRange("time_offset_s", -0.1, 0.1, s.time_offset_s);
   if (s.max_range_m <= s.min_range_m) l.Fail("max_range_m", "must exceed min_range_m");
   if (s.grazing_dropout_end_deg <= s.grazing_dropout_start_deg) {
     l.Fail("grazing_dropout_end_deg", "must exceed grazing_dropout_start_deg");
@@ -288,7 +290,9 @@ json ScenarioToJson(const SimConfig& c) {
         {"grazing_dropout_end_deg", l.grazing_dropout_end_deg},
         {"angle_sign", l.angle_convention.sign},
         {"angle_offset_rad", l.angle_convention.offset_rad},
-        {"model_angle_correction", l.model_angle_correction}}},
+        {"model_angle_correction", l.model_angle_correction},
+        {"range_offset_m", l.range_offset_m},
+        {"time_offset_s", l.time_offset_s}}},
       {"imu",
        {{"rate_hz", c.imu.rate_hz},
         {"gyro_noise_rad_s", c.imu.gyro_noise_rad_s},

@@ -40,14 +40,17 @@ bool SimConfig::IsValid(std::string* error) const {
   const LidarSpec& l = lidar;
   if (!Finite({l.scan_rate_hz, l.sample_rate_hz, l.min_range_m, l.max_range_m, l.range_noise_m,
                l.range_noise_fraction, l.range_quantum_m, l.dropout_probability,
-               l.grazing_dropout_start_deg, l.grazing_dropout_end_deg}) ||
+               l.grazing_dropout_start_deg, l.grazing_dropout_end_deg, l.range_offset_m,
+               l.time_offset_s}) ||
+      std::abs(l.range_offset_m) > 0.1 || std::abs(l.time_offset_s) > 0.1 ||
       l.scan_rate_hz <= 0 || l.sample_rate_hz <= 0 || l.sample_rate_hz < 10 * l.scan_rate_hz ||
       l.min_range_m < 0 || l.max_range_m <= l.min_range_m || l.range_noise_m < 0 ||
       l.range_noise_fraction < 0 || l.range_quantum_m < 0 || l.dropout_probability < 0 ||
       l.dropout_probability > 1 || l.grazing_dropout_end_deg <= l.grazing_dropout_start_deg) {
     *error =
         "lidar: rates must be positive (at least 10 samples per scan), 0 <= min_range < "
-        "max_range, noise >= 0, dropout within [0, 1], grazing start < end";
+        "max_range, noise >= 0, dropout within [0, 1], grazing start < end, |range offset| and "
+        "|time offset| <= 0.1";
     return false;
   }
   if (!Finite({imu.rate_hz, imu.gyro_noise_rad_s, imu.gyro_bias_rad_s, imu.tilt_noise_rad,
@@ -244,7 +247,10 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     const Time time = RobotTime(t_s);
     const double encoder_deg = phase * 360.0;
     const LidarAngleConvention& convention = spec.angle_convention;
-    const Rigid3d world_from_lidar = TrueWorldFromLidar(time);
+    // Measured at t + time_offset_s, stamped t.
+    const Rigid3d world_from_lidar =
+        spec.time_offset_s == 0.0 ? TrueWorldFromLidar(time)
+                                  : TrueWorldFromLidar(RobotTime(t_s + spec.time_offset_s));
     RayHit hit;
     SampleTruth truth;
     double range = 0.0;
@@ -279,7 +285,7 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
         p_keep *= std::clamp(1.0 - (inc - start_rad) / span_rad, 0.0, 1.0);
       }
       const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * hit.range);
-      const double noisy = hit.range + sigma * lidar_gauss_(lidar_rng_);
+      const double noisy = hit.range + spec.range_offset_m + sigma * lidar_gauss_(lidar_rng_);
       const bool kept = lidar_uniform_(lidar_rng_) < p_keep;
       if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
         range = spec.range_quantum_m > 0.0

@@ -41,6 +41,13 @@ struct LidarSpec {
   double range_noise_m = 0.002;        // a
   double range_noise_fraction = 0.002;  // b
   double range_quantum_m = 0.001;      // X4 distance unit: Si >> 2 is whole millimetres
+  // Systematic errors (docs/scenario-format.md; the calibration's
+  // robustness sweep draws them): a constant added to every range (the
+  // X4's zero offset), and a clock offset: the sample stamped t is measured
+  // at t + time_offset_s (a late or early time stamp of the lidar against
+  // the IMU and the wheels).
+  double range_offset_m = 0.0;
+  double time_offset_s = 0.0;
   double dropout_probability = 0.01;
   double grazing_dropout_start_deg = 70.0;  // incidence beyond which returns fade out
   double grazing_dropout_end_deg = 88.0;    // all lost beyond this

@@ -47,7 +47,8 @@ void MakeNoiseFree(sim::SimConfig* c) {
 }
 
 ReconstructionResult SimulateAndReconstruct(const sim::SimConfig& config, PoseSource source,
-                                            bool deskew, const MountingError& calibration) {
+                                            bool deskew, const MountingError& calibration,
+                                            bool ekf_gyro_bias) {
   sim::SimWorld world(config);
   const SensorLog log = world.RunAll();
   const PoseBuffer truth = world.TruthPoses(1000.0);
@@ -56,6 +57,7 @@ ReconstructionResult SimulateAndReconstruct(const sim::SimConfig& config, PoseSo
   options.pose.initial_pose = config.start;
   options.assembly.deskew = deskew;
   options.calibration = calibration;
+  options.pose.ekf.estimate_gyro_bias = ekf_gyro_bias;
   ReconstructionResult result;
   const Status s = Reconstruct(log, config.geometry, options, &truth, &result);
   EXPECT_TRUE(s.ok()) << s.message();

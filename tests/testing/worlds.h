@@ -18,8 +18,11 @@ sim::SimConfig CircleConfig(uint64_t seed = 1);
 void MakeNoiseFree(sim::SimConfig* config);
 
 // Simulates and reconstructs; truth poses are used when source == kTruth.
+// ekf_gyro_bias: EkfOptions::estimate_gyro_bias (the default filter has it;
+// references made with the filter before the bias state pass false).
 ReconstructionResult SimulateAndReconstruct(const sim::SimConfig& config, PoseSource source,
-                                            bool deskew, const MountingError& calibration = {});
+                                            bool deskew, const MountingError& calibration = {},
+                                            bool ekf_gyro_bias = EkfOptions().estimate_gyro_bias);
 
 }  // namespace sweepscan::testing
 

@@ -74,7 +74,9 @@ Outcome RunCase(uint64_t seed, const MountingError& truth, PoseSource source) {
   }
   const SampleStore store(log, poses);
   CalibrationSummary s;
-  const Status st = SolveAutomatic(store, config.geometry, {}, AutoCalibrationOptions(), &s);
+  AutoCalibrationOptions options;
+  if (source == PoseSource::kTruth) options.pose_heading_sigma_rad = 0.0;  // as the CLI does
+  const Status st = SolveAutomatic(store, config.geometry, {}, options, &s);
   Outcome out;
   out.ok = st.ok();
   EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
@@ -109,9 +111,12 @@ TEST_P(AutomaticSweepTest, EachAngleWithinHalfMradAndSigmaHonest) {
       sum_z2 += z.squaredNorm();
       n += 3;
       // Truth poses: the 0.5 mrad. EKF poses: the filter's own
-      // attitude error (roll, and heading drift between the passes) adds to
-      // the mount's; 1 mrad is what holds (docs/calibration.md, "Results").
-      EXPECT_LT(o.error_mrad.cwiseAbs().maxCoeff(), source == PoseSource::kTruth ? 0.5 : 1.0)
+      // heading error over the drive adds to alpha (1.0 mrad RMS, up to 2.4
+      // over 12 drives at these sensor errors: docs/results.md,
+      // "Robustness"; with the filter before the gyro bias state and no
+      // path scale, 0.8 RMS and up to 2.1 there, 3.1 RMS with the sweep's
+      // larger biases). The 3 sigma bound below is the real check.
+      EXPECT_LT(o.error_mrad.cwiseAbs().maxCoeff(), source == PoseSource::kTruth ? 0.5 : 2.5)
           << "seed " << seed;
     }
   }
