@@ -3,14 +3,10 @@
 
 Seeded drives with sensor errors drawn across the HI219 and X4 data-sheet
 ranges and random mounting angles up to 2 deg, each calibrated by the
-command line as a user would:
+command line as a user would: the automatic mode on a one-turn circle in
+the lab (resources/scenarios/lab_circle.json's path, EKF poses),
 
-  * the automatic mode on a one-turn circle in the lab
-    (resources/scenarios/lab_circle.json's path, EKF poses):
-        sweepscan-cli calibrate --scenario DRIVE.json --auto --json
-  * four refined corner pairs on the diamond target
-    (resources/scenarios/lab_circle_diamond.json's path):
-        sweepscan-cli calibrate --scenario DRIVE.json --pairs corners.json --refine --json
+    sweepscan-cli calibrate --scenario DRIVE.json --auto --json
 
 Each drive's scenario is written to WORKDIR, so any drive can be re-run
 alone. Prints one line per drive and the summary table (markdown); --csv
@@ -18,7 +14,7 @@ writes every angle's error and sigma.
 
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
-           [--no-refined] [--default-sensors]
+           [--default-sensors]
 """
 import argparse
 import json
@@ -31,15 +27,6 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 NAMES = ("alpha", "beta", "gamma")
-
-# The diamond target (core/sim/scene.h, LabTarget::kDiamond): a 0.6 m board
-# turned 45 deg, front face 0.16 m from the y = 0 wall, centred at x = 5 m,
-# 1.35 m high. A world pick snaps to the nearest sample of its pass; the
-# refinement then fits the corner in each pass.
-HALF_DIAGONAL = 0.6 / math.sqrt(2.0)
-CORNERS = [(5.0 - HALF_DIAGONAL, 0.16, 1.35), (5.0 + HALF_DIAGONAL, 0.16, 1.35),
-           (5.0, 0.16, 1.35 - HALF_DIAGONAL), (5.0, 0.16, 1.35 + HALF_DIAGONAL)]
-
 
 def draw_errors(rng):
     """The sensor errors the issue names, across the data sheets' ranges.
@@ -98,18 +85,11 @@ def main():
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--workdir", default=os.path.join(ROOT, "out", "robustness"))
     ap.add_argument("--csv")
-    ap.add_argument("--no-refined", action="store_true")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
-    pairs_path = os.path.join(a.workdir, "corners.json")
-    with open(pairs_path, "w") as f:
-        json.dump({"format": "sweepscan-pairs", "version": 1,
-                   "comment": "the diamond's four true corners, picked in both passes",
-                   "pairs": [{"pass1": {"world": list(c)}, "pass2": {"world": list(c)}} for c in CORNERS]},
-                  f, indent=1)
-    modes = ["auto"] + ([] if a.no_refined else ["refined"])
+    modes = ["auto"]
     errors = {m: [[], [], []] for m in modes}
     inside = {m: 0 for m in modes}
     counted = {m: 0 for m in modes}
@@ -122,11 +102,11 @@ def main():
         if a.default_sensors:
             sensor = {}
         for mode in modes:
-            base = "lab_circle.json" if mode == "auto" else "lab_circle_diamond.json"
+            base = "lab_circle.json"
             path = os.path.join(a.workdir, "drive_%03d_%s.json" % (seed, mode))
             with open(path, "w") as f:
                 json.dump(scenario(base, seed, angles, sensor), f, indent=1)
-            extra = ["--auto"] if mode == "auto" else ["--pairs", pairs_path, "--refine"]
+            extra = ["--auto"]
             d, why = calibrate(a.cli, ["--scenario", path] + extra)
             if d is None:
                 refused[mode].append((seed, why))
