@@ -90,7 +90,7 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
     // The poses' heading error that alpha absorbs (automatic.h): the EKF's
     // by default; none for simulated truth; odometry's heading drifts.
     const std::string source = args.Get("pose-source", "ekf");
-    if (source == "truth") options.pose_heading_sigma_rad = 0.0;
+    if (source == "truth") options.pose_heading_sigma_rad = options.pose_tilt_sigma_rad = 0.0;
     if (source == "odometry") options.pose_heading_sigma_rad = 0.02;
     const Status s = SolveAutomatic(store, in.geometry, {}, options, summary);
     if (!s.ok()) {

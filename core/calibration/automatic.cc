@@ -30,8 +30,9 @@ using calibration_internal::ProjectT;
 
 bool AutoCalibrationOptions::IsValid(std::string* error) const {
   if (!solver.IsValid(error)) return false;
-  if (!(pose_heading_sigma_rad >= 0.0 && pose_heading_sigma_rad < 1.0)) {
-    *error = "automatic calibration: pose_heading_sigma_rad must be in [0, 1) rad";
+  if (!(pose_heading_sigma_rad >= 0.0 && pose_heading_sigma_rad < 1.0) ||
+      !(pose_tilt_sigma_rad >= 0.0 && pose_tilt_sigma_rad < 1.0)) {
+    *error = "automatic calibration: pose_heading_sigma_rad and pose_tilt_sigma_rad must be in [0, 1) rad";
     return false;
   }
   if (max_segmentation_points < 100 || max_points_per_plane < 10 || max_planes < 1 ||
@@ -560,6 +561,8 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
   }
   summary->message = "angles stopped changing at the final inlier band";
   summary->sigma_rad[0] = std::hypot(summary->sigma_rad[0], options.pose_heading_sigma_rad);
+  summary->sigma_rad[1] = std::hypot(summary->sigma_rad[1], options.pose_tilt_sigma_rad);
+  summary->sigma_rad[2] = std::hypot(summary->sigma_rad[2], options.pose_tilt_sigma_rad);
   const std::string refused = RefuseResult(*summary, options);
   if (!refused.empty()) {
     summary->converged = false;

@@ -132,6 +132,33 @@ TEST(CliCalibrateTest, AutomaticRefusesAStraightDrive) {
   EXPECT_FALSE(std::ifstream(Tmp("straight_calib.json")).good());
 }
 
+// Odometry poses with a slipping wheel (the left encoder over-reads by 30 %
+// for 3 s): the path the wheels integrate is no circle, so --auto refuses it
+// (exit 1, one line, no file); the EKF's poses of the same drive keep the
+// circle (the gyro outvotes the slipping wheel) and calibrate.
+TEST(CliCalibrateTest, AutomaticRefusesOdometryWithASlippingWheel) {
+  std::ifstream in(Scenario("lab_circle"));
+  nlohmann::json scenario = nlohmann::json::parse(in);
+  scenario["slips"] = {{{"start_s", 5.0}, {"duration_s", 3.0}, {"wheel", "left"}, {"extra", 0.3}}};
+  Write(Tmp("slip.json"), scenario.dump());
+  std::remove(Tmp("slip_calib.json").c_str());
+  const CliRun r = Cli("calibrate --scenario " + Tmp("slip.json") +
+                       " --auto --pose-source odometry --out " + Tmp("slip_calib.json"));
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(Lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("calibration refused: not a calibration drive"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::ifstream(Tmp("slip_calib.json")).good());
+  const CliRun ekf = Cli("calibrate --scenario " + Tmp("slip.json") + " --auto --json");
+  ASSERT_EQ(ekf.code, 0) << ekf.out;
+  const nlohmann::json j = nlohmann::json::parse(ekf.out);
+  const double truth[3] = {-0.0058, 0.0126, 0.0355};
+  const char* names[3] = {"alpha", "beta", "gamma"};
+  for (int k = 0; k < 3; ++k) {
+    const double error = j["mounting_error_rad"][names[k]].get<double>() - truth[k];
+    EXPECT_LT(std::abs(error), 3.0 * j["sigma_rad"][names[k]].get<double>()) << names[k];
+  }
+}
+
 TEST(CliCalibrateTest, PairsOnScenario) {
   // The corners of the target board as world picks in both passes.
   const std::string text = WorldPairs({{{4.7, 0.16, 1.5}, {5.3, 0.16, 1.5}, {5.3, 0.16, 0.9},
