@@ -512,6 +512,24 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
                          options.robust_scale_sigmas, &scale, in.centre,
                          options.estimate_path_scale);
     if (residuals == 0) return Status::Error("automatic calibration: no residual points left");
+    if (outer == 0) {
+      // Before solving: do the planes seen in both passes constrain all three
+      // angles? The condition of the angles' Schur complement (the planes
+      // projected out) at the start; a direction it leaves (nearly) free
+      // would be filled by noise and pose errors.
+      CalibrationSummary pre;
+      problem.CheckObservability(so_opts, &pre);
+      if (!(pre.condition_number <= so_opts.max_condition_number)) {
+        static const char* kNames[3] = {"alpha", "beta", "gamma"};
+        const int w = std::max(0, pre.weakest_angle);
+        return Status::Error(
+            "refused: the drive leaves " + std::string(kNames[w]) +
+            " weakly determined (Jacobian condition number " + std::to_string(pre.condition_number) +
+            " > " + std::to_string(so_opts.max_condition_number) + ", " + std::to_string(used.size()) +
+            " planes seen in both passes): drive the circle where the floor and walls facing "
+            "different ways are within the lidar's range from both sides of it");
+      }
+    }
     if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
     std::vector<CalibrationIteration> inner_trace;
     const PlaneProblem::Outcome cs = problem.Solve(so_opts, &inner_trace);

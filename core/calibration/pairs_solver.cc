@@ -254,6 +254,7 @@ void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationO
   const double lmax = std::max(0.0, eig.eigenvalues()[2]);
   summary->condition_number =
       lmin > 0.0 ? std::sqrt(lmax / lmin) : std::numeric_limits<double>::infinity();
+  eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&summary->weakest_angle);
   if (!(summary->condition_number <= options.max_condition_number)) {
     Eigen::Vector3d v = eig.eigenvectors().col(0).cwiseAbs();
     int worst = 0;

@@ -77,6 +77,7 @@ struct CalibrationSummary {
   double final_rms_m = 0.0;
   double initial_cost = 0.0, final_cost = 0.0;
   double condition_number = 0.0;
+  int weakest_angle = -1;  // 0 alpha, 1 beta, 2 gamma: the least determined (observability check)
   // Automatic mode: the path's distance scale estimated as a nuisance
   // (AutoCalibrationOptions::estimate_path_scale; 1 if not estimated).
   double path_scale = 1.0;

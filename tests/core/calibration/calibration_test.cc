@@ -545,6 +545,33 @@ TEST(AutomaticTest, StraightDriveIsRefused) {
   EXPECT_TRUE(s.trace.empty());  // refused before solving
 }
 
+// Before solving: a circle under a floor and a ceiling with no wall in the
+// X4's range (two 40 m slabs) has two planes seen in both passes, but
+// horizontal planes cannot tell a yaw of the scan plane (alpha): refused,
+// naming alpha, before any LM iteration.
+TEST(AutomaticTest, DriveThatLeavesAnAngleFreeIsRefusedBeforeSolving) {
+  sim::SimConfig c = testing::CircleConfig(1);
+  c.mounting_error = kPaper;
+  sim::Box floor, ceiling;
+  floor.label = "floor";
+  floor.center = Eigen::Vector3d(5.0, 1.7, -0.05);
+  floor.size = Eigen::Vector3d(40.0, 40.0, 0.1);
+  ceiling.label = "ceiling";
+  ceiling.center = Eigen::Vector3d(5.0, 1.7, 2.55);
+  ceiling.size = Eigen::Vector3d(40.0, 40.0, 0.1);
+  c.scene = sim::Scene({floor, ceiling});
+  sim::SimWorld world(c);
+  const SensorLog log = world.RunAll();
+  CalibrationSummary s;
+  const Status st = SolveAutomatic(SampleStore(log, world.TruthPoses(1000.0)), c.geometry, {},
+                                   AutoCalibrationOptions(), &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.message().rfind("refused: the drive leaves alpha weakly determined", 0), 0u)
+      << st.message();
+  EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  EXPECT_TRUE(s.trace.empty());  // refused before solving
+}
+
 // After the solve: a result at the angle bound, or with residuals or sigma
 // collapsed, is refused. The thresholds are moved onto a good solve of the
 // paper's drive (gamma = 35.5 mrad, RMS/sigma ~0.8, sigma >= 0.01 mrad) to
