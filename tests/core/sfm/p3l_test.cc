@@ -39,6 +39,41 @@ TEST(PolynomialTest, WideRangeOfRootMagnitudes) {
   for (size_t i = 0; i < 6; ++i) EXPECT_NEAR(r[i], want[i], 1e-9 * (1 + std::abs(want[i])));
 }
 
+// Degree-16 polynomials built from known factors: 4-10 real roots spread
+// over [-5, 5] (at least 0.05 apart) and complex pairs far from the real
+// axis. Every real root is found, and no complex pair is taken for one:
+// the eigenvalue iteration (EISPACK's hqr on the companion matrix) against
+// the roots the polynomial was made of.
+TEST(PolynomialTest, RandomProductsOfDegreeSixteen) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int real_count = 4 + 2 * (trial % 4);  // 4, 6, 8, 10
+    std::vector<double> want;
+    while (static_cast<int>(want.size()) < real_count) {
+      const double x = u(rng);
+      bool apart = true;
+      for (double w : want) apart = apart && std::abs(w - x) >= 0.05;
+      if (apart) want.push_back(x);
+    }
+    Poly p = Poly::Constant(1.0);
+    for (double x : want) p = p * Poly::Linear(-x, 1.0);
+    for (int k = real_count; k < 16; k += 2) {
+      // (x - a)^2 + b^2 with b >= 1: a pair far from the real axis.
+      const double a = u(rng), b = 1.0 + std::abs(u(rng));
+      p = p * (Poly::Linear(-a, 1.0) * Poly::Linear(-a, 1.0) + Poly::Constant(b * b));
+    }
+    ASSERT_EQ(p.deg, 16);
+    std::vector<double> r = RealRoots(p);
+    std::sort(r.begin(), r.end());
+    std::sort(want.begin(), want.end());
+    ASSERT_EQ(r.size(), want.size()) << "trial " << trial;
+    for (size_t i = 0; i < want.size(); ++i) {
+      EXPECT_NEAR(r[i], want[i], 1e-7 * (1.0 + std::abs(want[i]))) << "trial " << trial;
+    }
+  }
+}
+
 bool Contains(const std::vector<PoseCandidate>& c, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
               double tol) {
   for (const PoseCandidate& p : c) {
