@@ -527,17 +527,22 @@ TEST(GyroBiasCalibrationTest, BiasOfTwoMradPerSecondDoesNotReachAlpha) {
 
 // --- Refusals (issue 14) --------------------------------------------------------
 
+// The automatic mode on a simulated drive with truth poses.
+Status SolveAutomaticOnTruth(const sim::SimConfig& c, CalibrationSummary* s) {
+  sim::SimWorld world(c);
+  const SensorLog log = world.RunAll();
+  return SolveAutomatic(SampleStore(log, world.TruthPoses(1000.0)), c.geometry, {},
+                        AutoCalibrationOptions(), s);
+}
+
 // A straight drive along the lab: no circle, so no two passes of each
 // wall; refused before solving, with what to drive instead.
 TEST(AutomaticTest, StraightDriveIsRefused) {
   sim::SimConfig c = testing::CircleConfig(1);
   c.start = {2.0, 2.5, 0.0};
   c.path = {{0.2, 0.0, 20.0}};
-  sim::SimWorld world(c);
-  const SensorLog log = world.RunAll();
   CalibrationSummary s;
-  const Status st = SolveAutomatic(SampleStore(log, world.TruthPoses(1000.0)), c.geometry, {},
-                                   AutoCalibrationOptions(), &s);
+  const Status st = SolveAutomaticOnTruth(c, &s);
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.message().rfind("refused: not a calibration drive", 0), 0u) << st.message();
   EXPECT_NE(st.message().find("circle"), std::string::npos) << st.message();
@@ -560,11 +565,8 @@ TEST(AutomaticTest, DriveThatLeavesAnAngleFreeIsRefusedBeforeSolving) {
   ceiling.center = Eigen::Vector3d(5.0, 1.7, 2.55);
   ceiling.size = Eigen::Vector3d(40.0, 40.0, 0.1);
   c.scene = sim::Scene({floor, ceiling});
-  sim::SimWorld world(c);
-  const SensorLog log = world.RunAll();
   CalibrationSummary s;
-  const Status st = SolveAutomatic(SampleStore(log, world.TruthPoses(1000.0)), c.geometry, {},
-                                   AutoCalibrationOptions(), &s);
+  const Status st = SolveAutomaticOnTruth(c, &s);
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.message().rfind("refused: the drive leaves alpha weakly determined", 0), 0u)
       << st.message();
