@@ -4,6 +4,7 @@
 //             [--speed X] [--screenshot PATH] [--window-screenshot PATH]
 //             [--export-cloud PATH] [--quit-after S] [--orbit-benchmark N]
 //             [--pairs FILE [--calibration-tour DIR]]
+//             [--pose-source ekf|odometry|sfm] [--pose-source-tour PNG]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
@@ -51,6 +52,8 @@ struct Options {
   int orbit_frames = 0;        // > 0: the orbit benchmark after --replay.
   QString pairs;               // With --replay: load into the calibration panel and solve.
   QString tour;                // With --replay and --pairs: the calibration tour's folder.
+  QString pose_source;         // Of the session replayed (as if chosen in Tools > Pose Source).
+  QString pose_source_tour;    // With --replay: the pose source screenshot.
 };
 
 // resources/: beside the executable's install prefix, else the source tree.
@@ -101,10 +104,22 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
       "With --replay (a circle drive) and --pairs: go through the calibration steps and the "
       "evaluation, saving a window screenshot of each into DIR, then quit.",
       "DIR");
+  const QCommandLineOption pose_source(
+      "pose-source",
+      "Poses of opened sessions: ekf (default), odometry or sfm (the EKF corrected by the planes "
+      "the scans cross), as `sweepscan-cli reconstruct --pose-source`. Kept like the choice in "
+      "Tools > Pose Source.",
+      "S");
+  const QCommandLineOption pose_source_tour(
+      "pose-source-tour",
+      "With --replay: once the session is shown, choose Tools > Pose Source > SfM, wait for it, "
+      "save a screenshot with the menu open as PNG, then quit.",
+      "PNG");
   const QCommandLineOption sessions(
       "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
-                     export_cloud, quit_after, orbit, pairs, tour, sessions});
+                     export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
+                     sessions});
   parser.process(app);
 
   Options o;
@@ -122,6 +137,8 @@ Options ParseOptions(const QApplication& app, const QString& resources) {
   if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
   o.pairs = parser.value(pairs);
   o.tour = parser.value(tour);
+  o.pose_source = parser.value(pose_source);
+  o.pose_source_tour = parser.value(pose_source_tour);
   return o;
 }
 
@@ -331,7 +348,17 @@ int Main(int argc, char** argv) {
   // After the window has restored its settings (which hold the folder the
   // operator chose last), so that the command line wins.
   if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
-  const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty();
+  if (!o.pose_source.isEmpty()) {
+    PoseSource source;
+    if (!ParsePoseSource(o.pose_source.toStdString(), &source) || source == PoseSource::kTruth) {
+      std::fprintf(stderr, "sweepscan: --pose-source must be ekf, odometry or sfm, got '%s'\n",
+                   qPrintable(o.pose_source));
+      return 2;
+    }
+    workspace.SetPoseSource(source);
+  }
+  const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty() ||
+                        !o.pose_source_tour.isEmpty();
   window.SetInteractive(!scripted);
   window.resize(1400, 860);
   window.show();
@@ -351,14 +378,17 @@ int Main(int argc, char** argv) {
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);
     if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);
-    if (!o.tour.isEmpty() && !o.pairs.isEmpty()) {
+    if (!o.pose_source_tour.isEmpty()) {
+      StartPoseSourceTour(o.pose_source_tour, &workspace, &window);
+    } else if (!o.tour.isEmpty() && !o.pairs.isEmpty()) {
       StartCalibrationTour(o.pairs, o.tour, &workspace, &window);
     } else if (!o.pairs.isEmpty()) {
       StartCalibrationDemo(o.pairs, &workspace, &window);
     }
     workspace.OpenSession(o.replay, o.speed);
   }
-  if (scripted && o.tour.isEmpty()) {  // Follow the robot in demos: fit the view every few seconds.
+  // Follow the robot in demos: fit the view every few seconds (not in the tours).
+  if (scripted && o.tour.isEmpty() && o.pose_source_tour.isEmpty()) {
     auto* fit = new QTimer(&window);
     QObject::connect(fit, &QTimer::timeout, window.view(), &CloudView::FitToCloud);
     fit->start(3000);

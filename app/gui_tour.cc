@@ -1,8 +1,14 @@
 #include "app/gui_tour.h"
 
+#include <QAction>
 #include <QCoreApplication>
 #include <QDir>
 #include <QElapsedTimer>
+#include <QGuiApplication>
+#include <QMenu>
+#include <QMenuBar>
+#include <QPixmap>
+#include <QScreen>
 #include <QThread>
 #include <cstdio>
 #include <functional>
@@ -167,7 +173,100 @@ class Tour {
   bool failed_ = false;
 };
 
+// The pose source tour: SfM chosen from Tools > Pose Source on the session
+// shown, then the menu open over the SfM cloud. Menus are windows of their
+// own, so the picture is the screen's (the window at its top left).
+void RunPoseSourceTour(const QString& png, ui::Workspace* workspace, ui::MainWindow* window) {
+  auto fail = [window](const QString& message) {
+    std::fprintf(stderr, "sweepscan: pose source tour: %s\n", qPrintable(message));
+    window->SetInteractive(false);
+    window->close();
+    QCoreApplication::exit(1);
+  };
+  QAction* sfm = window->pose_source_action(PoseSource::kSfm);
+  auto* submenu = window->findChild<QMenu*>(QStringLiteral("poseSourceMenu"));
+  QMenu* tools = nullptr;
+  for (QAction* a : window->menuBar()->actions()) {
+    if (a->menu() != nullptr && a->menu()->actions().contains(submenu->menuAction())) {
+      tools = a->menu();
+    }
+  }
+  if (sfm == nullptr || submenu == nullptr || tools == nullptr) {
+    return fail(QStringLiteral("no Tools > Pose Source"));
+  }
+  bool replayed = false;
+  auto c =
+      QObject::connect(workspace, &ui::Workspace::replayFinished, window, [&] { replayed = true; });
+  // One job at a time: a circle drive's pass split runs after its replay.
+  WaitFor([&] { return !workspace->job_running(); }, 60000);
+  QElapsedTimer clock;
+  clock.start();
+  sfm->trigger();
+  // Done, or refused / failed (the choice went back to the EKF).
+  const bool done = WaitFor(
+      [&] {
+        return !workspace->job_running() &&
+               (replayed || workspace->pose_source() != PoseSource::kSfm);
+      },
+      300000);
+  QObject::disconnect(c);
+  if (!done || workspace->shown_pose_source() != PoseSource::kSfm) {
+    return fail(QStringLiteral("SfM did not finish: %1").arg(window->last_error()));
+  }
+  const double sfm_s = clock.nsecsElapsed() * 1e-9;
+  // Into the room: the ceiling hidden (View > Hide Ceiling), the walls and
+  // the floor the SfM planes came from in sight.
+  window->view()->SetClipHeight(2.0);
+  window->view()->ViewOblique();
+  window->view()->SetLodActive(false);
+  window->view()->RenderNow();
+  // Tools opened from the menu bar, its Pose Source submenu beside it.
+  window->menuBar()->setActiveAction(tools->menuAction());
+  WaitFor([&] { return tools->isVisible(); }, 2000);
+  tools->setActiveAction(submenu->menuAction());
+  submenu->popup(tools->mapToGlobal(tools->actionGeometry(submenu->menuAction()).topRight()));
+  submenu->setActiveAction(sfm);
+  WaitFor([] { return false; }, 300);
+  const QPixmap shot = QGuiApplication::primaryScreen()->grabWindow(0);
+  const QRect area = window->frameGeometry().united(submenu->geometry()).united(tools->geometry());
+  const bool saved = shot.copy(area).save(png);
+  const nlohmann::json j = {{"file", png.toStdString()},
+                            {"saved", saved},
+                            {"reprocess_sfm_s", sfm_s},
+                            {"status", window->pose_source_status().toStdString()}};
+  std::printf("%s\n", j.dump().c_str());
+  std::fflush(stdout);
+  submenu->close();
+  tools->close();
+  if (!saved) return fail(png + QStringLiteral(": cannot write the image"));
+  window->SetInteractive(false);
+  window->close();
+  QCoreApplication::exit(0);
+}
+
 }  // namespace
+
+void StartPoseSourceTour(const QString& png, ui::Workspace* workspace, ui::MainWindow* window) {
+  auto started = std::make_shared<bool>(false);
+  // A session that does not open ends the tour (else it would wait forever).
+  QObject::connect(workspace, &ui::Workspace::jobFinished, window,
+                   [=](const QString& what, bool ok, const QString& message) {
+                     if (*started || ok) return;
+                     *started = true;
+                     std::fprintf(stderr, "sweepscan: pose source tour: %s: %s\n", qPrintable(what),
+                                  qPrintable(message));
+                     window->SetInteractive(false);
+                     window->close();
+                     QCoreApplication::exit(1);
+                   });
+  QObject::connect(workspace, &ui::Workspace::replayFinished, window,
+                   [=] {
+                     if (*started) return;
+                     *started = true;
+                     RunPoseSourceTour(png, workspace, window);
+                   },
+                   Qt::QueuedConnection);
+}
 
 void StartCalibrationTour(const QString& pairs, const QString& out_dir, ui::Workspace* workspace,
                           ui::MainWindow* window) {

@@ -20,6 +20,13 @@ namespace sweepscan::app {
 void StartCalibrationTour(const QString& pairs, const QString& out_dir, ui::Workspace* workspace,
                           ui::MainWindow* window);
 
+// --pose-source-tour PNG, with --replay SESSION: once the session is shown
+// (with the EKF), chooses Tools > Pose Source > SfM as an operator would,
+// waits for the SfM re-processing, and saves a screenshot of the window
+// with that menu open into PNG, then closes the window. Prints one JSON
+// line (file, seconds the SfM re-processing took, the status bar's text).
+void StartPoseSourceTour(const QString& png, ui::Workspace* workspace, ui::MainWindow* window);
+
 }  // namespace sweepscan::app
 
 #endif  // SWEEPSCAN_APP_GUI_TOUR_H_

@@ -37,6 +37,9 @@ namespace {
 
 constexpr int kTickMs = 33;  // ~30 Hz: drain the mailbox, render once.
 constexpr int kMaxRecent = 8;
+// The pose sources an opened session can be made with, in menu order.
+constexpr PoseSource kPoseSources[] = {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm};
+const QString kPoseSourceKey = QStringLiteral("session/pose_source");
 
 // View appearance changes are edits: undoable (Ctrl+Z / Ctrl+Shift+Z).
 class ColorModeCommand : public QUndoCommand {
@@ -192,8 +195,21 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                                  : QStringLiteral("%1 - sweepscan").arg(QFileInfo(dir).fileName()));
     if (!dir.isEmpty() && !workspace_->unsaved()) AddRecent(dir);
     UpdateActions();
+    ShowPoseSource();
   });
   connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::UpdateActions);
+  // The choice (menu, replay panel) follows the workspace, which may give it
+  // back to the cloud shown when SfM fails; it is kept for the next start.
+  connect(workspace_, &Workspace::poseSourceChanged, this, [this](int source) {
+    const auto s = static_cast<PoseSource>(source);
+    if (QAction* a = pose_source_action(s)) a->setChecked(true);
+    QSettings().setValue(kPoseSourceKey, QString::fromLatin1(PoseSourceName(s)));
+    ShowPoseSource();
+  });
+  connect(workspace_, &Workspace::shownPoseSourceChanged, this, &MainWindow::ShowPoseSource);
+  connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::ShowPoseSource);
+  connect(workspace_, &Workspace::poseSourceFailed, this,
+          [this](const QString& m) { ShowError(tr("Pose source"), m); });
   connect(workspace_, &Workspace::authenticatedChanged, this, &MainWindow::UpdateActions);
 
   qApp->installEventFilter(this);
@@ -388,6 +404,8 @@ void MainWindow::BuildRobotMenu() {
 
 void MainWindow::BuildToolsMenu() {
   QMenu* tools = menuBar()->addMenu(tr("&Tools"));
+  BuildPoseSourceMenu(tools);
+  tools->addSeparator();
   tools->addAction(tr("&Sessions Folder…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(this, tr("Where new recordings go"),
                                                           workspace_->sessions_root());
@@ -408,6 +426,68 @@ void MainWindow::BuildToolsMenu() {
     statusBar()->showMessage(on ? tr("Measure: Shift + click the first point") : QString(), 6000);
   });
   tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
+}
+
+void MainWindow::BuildPoseSourceMenu(QMenu* parent) {
+  QMenu* menu = parent->addMenu(tr("&Pose Source"));
+  menu->setObjectName(QStringLiteral("poseSourceMenu"));
+  menu->setToolTipsVisible(true);
+  // SfM is a batch method over the whole log: it cannot place scans as
+  // they arrive, so the choice is for sessions opened, and says so.
+  QAction* note = menu->addAction(tr("For opened sessions (live scans use the EKF)"));
+  note->setEnabled(false);
+  menu->addSeparator();
+  pose_source_group_ = new QActionGroup(this);
+  pose_source_group_->setExclusive(true);
+  const QString texts[] = {tr("&EKF (wheels + IMU)"), tr("&Odometry (wheels only)"),
+                           tr("&SfM (EKF corrected by planes)")};
+  const QString tips[] = {
+      tr("The wheel + IMU extended Kalman filter, as recorded live"),
+      tr("Wheel odometry alone (no IMU): shows what the IMU adds"),
+      tr("Lidar-only structure from motion: the EKF's poses corrected by the floor, ceiling and "
+         "walls the scans cross (docs/sfm.md). Runs over the whole session, then replays it")};
+  for (int i = 0; i < 3; ++i) {
+    QAction* a = menu->addAction(texts[i]);
+    a->setCheckable(true);
+    a->setToolTip(tips[i]);
+    a->setData(static_cast<int>(kPoseSources[i]));
+    pose_source_group_->addAction(a);
+  }
+  pose_source_group_->actions().front()->setChecked(true);
+  connect(pose_source_group_, &QActionGroup::triggered, this, [this](QAction* a) {
+    workspace_->SetPoseSource(static_cast<PoseSource>(a->data().toInt()));
+  });
+}
+
+QAction* MainWindow::pose_source_action(PoseSource source) const {
+  for (QAction* a : pose_source_group_->actions()) {
+    if (a->data().toInt() == static_cast<int>(source)) return a;
+  }
+  return nullptr;
+}
+
+QString MainWindow::pose_source_status() const { return pose_source_label_->text(); }
+
+// The status bar says what the cloud shown is made with, and while a new
+// choice is being computed, what is coming.
+void MainWindow::ShowPoseSource() {
+  const PoseSource shown = workspace_->shown_pose_source();
+  const PoseSource chosen = workspace_->pose_source();
+  const bool opened = workspace_->recording_opened() != nullptr && !workspace_->recording();
+  QString text = tr("Poses: %1").arg(PoseSourceTitle(shown));
+  if (!opened) {
+    text += tr(" (live)");
+  } else if (chosen != shown) {
+    text += tr(" → %1…").arg(PoseSourceTitle(chosen));
+  }
+  pose_source_label_->setText(text);
+  QString tip = opened ? tr("The cloud of the opened session is made with the %1 poses.")
+                             .arg(PoseSourceTitle(shown))
+                       : tr("Live clouds and recordings always use the EKF; Tools > Pose Source "
+                            "(now %1) applies to opened sessions.")
+                             .arg(PoseSourceTitle(chosen));
+  if (!workspace_->sfm_summary().isEmpty()) tip += QLatin1Char('\n') + workspace_->sfm_summary();
+  pose_source_label_->setToolTip(tip);
 }
 
 void MainWindow::BuildHelpMenu() {
@@ -442,6 +522,9 @@ void MainWindow::BuildStatusBar() {
   speed_label_ = new QLabel;
   points_label_ = new QLabel;
   points_label_->setObjectName(QStringLiteral("statusPoints"));
+  pose_source_label_ = new QLabel;
+  pose_source_label_->setObjectName(QStringLiteral("statusPoseSource"));
+  pose_source_label_->setContentsMargins(12, 0, 12, 0);  // Apart from the speeds beside it.
   fps_label_ = new QLabel;
   progress_ = new QProgressBar;
   progress_->setMaximumWidth(260);
@@ -453,7 +536,8 @@ void MainWindow::BuildStatusBar() {
   connect(cancel_, &QToolButton::clicked, workspace_, &Workspace::CancelJob);
   statusBar()->addPermanentWidget(progress_);
   statusBar()->addPermanentWidget(cancel_);
-  for (QLabel* l : {link_label_, pose_label_, speed_label_, points_label_, fps_label_}) {
+  for (QLabel* l :
+       {link_label_, pose_label_, speed_label_, pose_source_label_, points_label_, fps_label_}) {
     statusBar()->addPermanentWidget(l);
   }
 }
@@ -486,6 +570,13 @@ void MainWindow::RestoreSettings() {
   }
   const QString root = s.value(QStringLiteral("sessions/root")).toString();
   if (!root.isEmpty()) workspace_->set_sessions_root(root);
+  PoseSource source = PoseSource::kEkf;
+  if (ParsePoseSource(s.value(kPoseSourceKey).toString().toStdString(), &source) &&
+      pose_source_action(source) != nullptr) {
+    workspace_->SetPoseSource(source);
+    pose_source_action(source)->setChecked(true);
+  }
+  ShowPoseSource();
   RebuildRecentMenu();
 }
 
@@ -504,6 +595,7 @@ void MainWindow::SaveSettings() {
   s.setValue(QStringLiteral("view/color"), static_cast<int>(view_->color_mode()));
   s.setValue(QStringLiteral("view/point_size"), view_->point_size());
   s.setValue(QStringLiteral("sessions/root"), workspace_->sessions_root());
+  s.setValue(kPoseSourceKey, QString::fromLatin1(PoseSourceName(workspace_->pose_source())));
 }
 
 void MainWindow::OnTick() {

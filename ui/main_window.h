@@ -3,7 +3,8 @@
 // menus with the usual shortcuts, a status bar (link, pose, speeds, points,
 // frame rate, job progress with cancel), keyboard teleop and an emergency
 // stop on Space that works whatever has focus. Window layout and last
-// settings persist in QSettings.
+// settings (the pose source of opened sessions among them) persist in
+// QSettings.
 //
 // A GUI timer (30 Hz) drains the workspace's mailbox into the view and
 // renders at most once per tick. GUI thread only.
@@ -63,6 +64,10 @@ class MainWindow : public QMainWindow {
   QAction* measure_action() const { return measure_; }
   double measured_distance() const { return measured_m_; }
   void Measure(const Eigen::Vector3d& point);
+  // Tools > Pose Source: the checkable action of kEkf, kOdometry or kSfm
+  // (an exclusive group; triggering one re-processes the opened session).
+  QAction* pose_source_action(PoseSource source) const;
+  QString pose_source_status() const;  // The status bar's "Poses: ..." text.
   // Brings a dock (by object name, e.g. "evaluationDock") to the front.
   void RaiseDock(const QString& name);
 
@@ -78,7 +83,9 @@ class MainWindow : public QMainWindow {
   void BuildRobotMenu();
   void BuildToolsMenu();
   void BuildHelpMenu();
+  void BuildPoseSourceMenu(QMenu* parent);
   void BuildStatusBar();
+  void ShowPoseSource();
   void RestoreSettings();
   void SaveSettings();
   void OnTick();
@@ -102,6 +109,7 @@ class MainWindow : public QMainWindow {
   QAction* stop_record_ = nullptr;
   QAction* estop_ = nullptr;
   QActionGroup* color_group_ = nullptr;
+  QActionGroup* pose_source_group_ = nullptr;
   QAction* measure_ = nullptr;
   std::vector<Eigen::Vector3d> measure_points_;
   double measured_m_ = 0.0;
@@ -110,6 +118,7 @@ class MainWindow : public QMainWindow {
   QLabel* pose_label_;
   QLabel* speed_label_;
   QLabel* points_label_;
+  QLabel* pose_source_label_;
   QLabel* fps_label_;
   QProgressBar* progress_;
   QToolButton* cancel_;

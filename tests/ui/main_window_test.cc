@@ -1,8 +1,9 @@
 // The desktop app driven through its real widgets (QTest) and its workspace,
 // under a real display (xvfb-run in CI): the built-in simulator over loopback
 // TCP, the VTK view's rendered image, the emergency stop on Space, a wrong
-// key against a sweepscan-sim process, save / open, corrupt sessions, and
-// replay against `sweepscan-cli reconstruct`.
+// key against a sweepscan-sim process, save / open, corrupt sessions,
+// replay against `sweepscan-cli reconstruct`, and the pose source of opened
+// sessions (EKF, odometry, SfM) against `reconstruct --pose-source`.
 #include "ui/main_window.h"
 
 #include <QVTKOpenGLNativeWidget.h>
@@ -10,6 +11,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QComboBox>
 #include <QDir>
 #include <QElapsedTimer>
 #include <QFileInfo>
@@ -42,6 +44,7 @@
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
+#include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/workspace.h"
@@ -332,6 +335,212 @@ TEST_F(AppTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
     ASSERT_EQ(replayed[i].y, expected[i].y) << i;
     ASSERT_EQ(replayed[i].z, expected[i].z) << i;
   }
+}
+
+// The cloud `sweepscan-cli reconstruct SESSION --pose-source SOURCE` writes.
+std::vector<CloudPoint> CliCloud(const std::string& session, const std::string& source,
+                                 const std::string& out) {
+  const auto rec = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " reconstruct " + session +
+                                       " --pose-source " + source + " --out " + out);
+  EXPECT_EQ(rec.code, 0) << rec.out;
+  std::vector<CloudPoint> cloud;
+  EXPECT_TRUE(LoadCloud(out, &cloud).ok()) << out;
+  return cloud;
+}
+
+// Point for point, as the PLY holds them (float coordinates).
+::testing::AssertionResult SameCloud(const std::vector<CloudPoint>& got,
+                                     const std::vector<CloudPoint>& expected) {
+  if (got.size() != expected.size()) {
+    return ::testing::AssertionFailure() << got.size() << " points, expected " << expected.size();
+  }
+  for (size_t i = 0; i < expected.size(); ++i) {
+    if (got[i].x != expected[i].x || got[i].y != expected[i].y || got[i].z != expected[i].z) {
+      return ::testing::AssertionFailure() << "point " << i << ": (" << got[i].x << ", " << got[i].y
+                                           << ", " << got[i].z << "), expected (" << expected[i].x
+                                           << ", " << expected[i].y << ", " << expected[i].z << ")";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// Tools > Pose Source on an opened session: SfM re-processes it on a job
+// thread while the GUI keeps handling events, and the cloud is the one
+// `sweepscan-cli reconstruct --pose-source sfm` gives, point for point;
+// the status bar and the replay panel say so; the cloud can be evaluated
+// and coloured by deviation; back to the EKF (from the replay panel) gives
+// the EKF cloud again, and odometry the odometry cloud. The choice persists:
+// the app started again opens the session with SfM straight away.
+TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
+  const std::string dir = tmp_.path().toStdString();
+  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
+                                       kResources.toStdString() +
+                                       "/scenarios/lab_circle.json --out " + dir + "/c.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  const std::string session = dir + "/c.sweepscan";
+  const std::vector<CloudPoint> ekf = CliCloud(session, "ekf", dir + "/ekf.ply");
+  const std::vector<CloudPoint> sfm = CliCloud(session, "sfm", dir + "/sfm.ply");
+  const std::vector<CloudPoint> odometry = CliCloud(session, "odometry", dir + "/odo.ply");
+  ASSERT_GT(sfm.size(), 10000u);
+  ASSERT_FALSE(SameCloud(sfm, ekf));  // Else the test could not tell them apart.
+
+  int replays = 0;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { ++replays; });
+  QString failed;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished,
+                   [&](const QString&, bool ok, const QString& m) {
+                     if (!ok) failed = m;
+                   });
+  EXPECT_EQ(workspace_->pose_source(), PoseSource::kEkf);  // The default.
+  EXPECT_NE(window_->pose_source_status().indexOf("live"), -1)
+      << window_->pose_source_status().toStdString();
+  window_->OpenSessionPath(QString::fromStdString(session));
+  ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), ekf));
+  EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
+
+  // SfM from the menu. The view settles first, so that what is measured is
+  // the job's effect on the event loop (see the calibration test).
+  ASSERT_TRUE(WaitFor([&] { return !window_->view()->lod_active(); }, 10000));
+  window_->view()->RenderNow();
+  WaitFor([] { return false; }, 100);
+  QAction* sfm_action = window_->pose_source_action(PoseSource::kSfm);
+  ASSERT_NE(sfm_action, nullptr);
+  replays = 0;
+  sfm_action->trigger();
+  EXPECT_TRUE(sfm_action->isChecked());
+  EXPECT_TRUE(workspace_->job_running());  // SfM runs on a job thread...
+  QElapsedTimer gap;
+  gap.start();
+  qint64 worst = 0;
+  int job_events = 0;
+  while (workspace_->job_running()) {  // ...and the GUI keeps going.
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+    worst = std::max(worst, gap.restart());
+    ++job_events;
+  }
+  EXPECT_LT(worst, 200) << job_events << " event loop passes";
+  std::printf("sfm job: %d event loop passes, longest gap %lld ms\n", job_events,
+              static_cast<long long>(worst));
+  ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
+  EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kSfm);
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), sfm));
+  ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == sfm.size(); }, 10000));
+  EXPECT_EQ(window_->pose_source_status(), "Poses: SfM");
+  QComboBox* box = window_->replay_panel()->pose_source_box();
+  EXPECT_EQ(box->currentData().toInt(), static_cast<int>(PoseSource::kSfm));
+  EXPECT_NE(window_->replay_panel()->pose_source_text().indexOf("planes"), -1)
+      << window_->replay_panel()->pose_source_text().toStdString();
+  EXPECT_EQ(QSettings().value("session/pose_source").toString(), "sfm");
+
+  // The SfM cloud is evaluated and coloured like any other (once the
+  // calibration panel has split this circle drive's passes: one job at a time).
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  EXPECT_EQ(workspace_->pass_labels().size(), sfm.size());
+  EvaluationPanel* evaluation = window_->evaluation_panel();
+  bool evaluated = false, evaluated_ok = false;
+  QObject::connect(evaluation, &EvaluationPanel::evaluated, [&](bool ok) {
+    evaluated = true;
+    evaluated_ok = ok;
+  });
+  evaluation->Evaluate();
+  ASSERT_TRUE(WaitFor([&] { return evaluated; }, 120000));
+  ASSERT_TRUE(evaluated_ok) << failed.toStdString();
+  EXPECT_EQ(workspace_->evaluation()->points_in, sfm.size());
+  EXPECT_EQ(workspace_->deviation_map().size(), sfm.size());
+  evaluation->ShowDeviations(true);
+  EXPECT_EQ(window_->view()->color_mode(), CloudView::ColorMode::kDeviation);
+  EXPECT_TRUE(window_->view()->has_point_values(CloudView::ColorMode::kDeviation));
+
+  // Back to the EKF from the replay panel: the EKF cloud again, and the
+  // deviations of the SfM cloud are gone with it.
+  replays = 0;
+  box->setCurrentIndex(box->findData(static_cast<int>(PoseSource::kEkf)));
+  emit box->activated(box->currentIndex());
+  EXPECT_TRUE(window_->pose_source_action(PoseSource::kEkf)->isChecked());
+  ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), ekf));
+  EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
+  EXPECT_NE(window_->view()->color_mode(), CloudView::ColorMode::kDeviation);
+  EXPECT_TRUE(workspace_->deviation_map().empty());
+  // Odometry alone, as `reconstruct --pose-source odometry`.
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  replays = 0;
+  window_->pose_source_action(PoseSource::kOdometry)->trigger();
+  ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), odometry));
+  EXPECT_EQ(QSettings().value("session/pose_source").toString(), "odometry");
+  EXPECT_TRUE(failed.isEmpty()) << failed.toStdString();
+
+  // SfM chosen, the app closed and started again: the choice is back, and
+  // opening the session computes the SfM poses in the open job.
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  sfm_action->trigger();
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running() && replays == 2; }, 120000));
+  window_->close();
+  window_.reset();
+  workspace_ = std::make_unique<Workspace>();
+  window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
+  window_->SetInteractive(false);
+  window_->show();
+  EXPECT_EQ(workspace_->pose_source(), PoseSource::kSfm);
+  EXPECT_TRUE(window_->pose_source_action(PoseSource::kSfm)->isChecked());
+  EXPECT_EQ(window_->replay_panel()->pose_source_box()->currentData().toInt(),
+            static_cast<int>(PoseSource::kSfm));
+  bool reopened = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { reopened = true; });
+  window_->OpenSessionPath(QString::fromStdString(session));
+  ASSERT_TRUE(WaitFor([&] { return reopened; }, 120000)) << window_->last_error().toStdString();
+  EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kSfm);
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), sfm));
+}
+
+// A cancelled SfM leaves the cloud as it was and gives the choice back to
+// the poses shown; live recording always uses the EKF whatever the choice.
+TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
+  const std::string dir = tmp_.path().toStdString();
+  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
+                                       kResources.toStdString() + "/scenarios/lab.json --out " +
+                                       dir + "/lab.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  window_->OpenSessionPath(tmp_.path() + "/lab.sweepscan");
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
+  QString message;
+  bool finished = false;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished,
+                   [&](const QString&, bool ok, const QString& m) {
+                     finished = true;
+                     message = ok ? QString() : m;
+                   });
+  replayed = false;
+  window_->pose_source_action(PoseSource::kSfm)->trigger();
+  workspace_->CancelJob();
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  EXPECT_NE(message.indexOf("ancel"), -1) << message.toStdString();
+  EXPECT_EQ(workspace_->pose_source(), PoseSource::kEkf);
+  EXPECT_TRUE(window_->pose_source_action(PoseSource::kEkf)->isChecked());
+  EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kEkf);
+  WaitFor([] { return false; }, 300);
+  EXPECT_FALSE(replayed);  // Nothing re-processed.
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), before));
+
+  // SfM chosen, then a live recording: the EKF places the scans.
+  window_->pose_source_action(PoseSource::kSfm)->trigger();
+  finished = false;
+  ASSERT_TRUE(WaitFor([&] { return finished && replayed; }, 60000)) << message.toStdString();
+  EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kSfm);
+  ConnectToSimulator();
+  QString error;
+  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kEkf);
+  EXPECT_EQ(workspace_->pose_source(), PoseSource::kSfm);  // Kept for the next session opened.
+  EXPECT_NE(window_->pose_source_status().indexOf("EKF (live)"), -1)
+      << window_->pose_source_status().toStdString();
+  EXPECT_NE(window_->replay_panel()->pose_source_text().indexOf("live"), -1);
+  ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
 }
 
 TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {

@@ -187,12 +187,14 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
     QString error;
     if (!path.isEmpty() && !ExportReport(path, &error)) summary_->setText(error);
   });
-  // A new cloud (another session, a before / after replay) has neither the
-  // old planes nor the old deviations.
-  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+  // A new cloud (another session, a before / after replay, another pose
+  // source) has neither the old planes nor the old deviations.
+  auto forget = [this] {
     view_->SetPlanes({});
     deviations_shown_->setChecked(false);
-  });
+  };
+  connect(workspace_, &Workspace::sessionChanged, this, forget);
+  connect(workspace_, &Workspace::shownPoseSourceChanged, this, forget);
   connect(planes_, &QTableWidget::itemSelectionChanged, this, &EvaluationPanel::ShowHistogram);
   connect(workspace_, &Workspace::evaluationFinished, this, &EvaluationPanel::Show);
 }

@@ -5,6 +5,7 @@
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
+#include <QSignalBlocker>
 #include <QSlider>
 #include <QVBoxLayout>
 
@@ -35,6 +36,27 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   row->addWidget(speed_);
   row->addWidget(pause_);
   layout->addLayout(row);
+  // The pose source: the same choice as Tools > Pose Source.
+  auto* poses_row = new QHBoxLayout;
+  auto* poses_label = new QLabel(tr("Poses"));
+  pose_source_ = new QComboBox;
+  pose_source_->setObjectName(QStringLiteral("poseSourceBox"));
+  for (PoseSource s : {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm}) {
+    pose_source_->addItem(PoseSourceTitle(s), static_cast<int>(s));
+  }
+  pose_source_->setToolTip(
+      tr("Which poses place the opened session's scans: the wheel + IMU EKF, wheel odometry "
+         "alone, or SfM (the EKF corrected by the planes the scans cross, computed over the "
+         "whole session). Live scans always use the EKF."));
+  poses_label->setBuddy(pose_source_);
+  poses_row->addWidget(poses_label);
+  poses_row->addWidget(pose_source_, 1);
+  layout->addLayout(poses_row);
+  pose_note_ = new QLabel;
+  pose_note_->setObjectName(QStringLiteral("poseSourceNote"));
+  pose_note_->setWordWrap(true);
+  pose_note_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  layout->addWidget(pose_note_);
   setSizePolicy(QSizePolicy::Preferred, QSizePolicy::Maximum);
 
   connect(speed_, QOverload<int>::of(&QComboBox::currentIndexChanged), this,
@@ -55,8 +77,40 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     session_->setText(dir.isEmpty() ? tr("No session") : QFileInfo(dir).fileName());
     session_->setToolTip(dir);
     if (!workspace_->replaying()) slider_->setEnabled(false);
+    ShowPoseSource();
   });
+  connect(pose_source_, QOverload<int>::of(&QComboBox::activated), this, [this] {
+    workspace_->SetPoseSource(static_cast<PoseSource>(pose_source_->currentData().toInt()));
+  });
+  connect(workspace_, &Workspace::poseSourceChanged, this, &ReplayPanel::ShowPoseSource);
+  connect(workspace_, &Workspace::shownPoseSourceChanged, this, &ReplayPanel::ShowPoseSource);
+  connect(workspace_, &Workspace::recordingChanged, this, &ReplayPanel::ShowPoseSource);
+  ShowPoseSource();
 }
+
+void ReplayPanel::ShowPoseSource() {
+  {
+    const QSignalBlocker block(pose_source_);
+    const int i = pose_source_->findData(static_cast<int>(workspace_->pose_source()));
+    if (i >= 0) pose_source_->setCurrentIndex(i);
+  }
+  const bool opened = workspace_->recording_opened() != nullptr && !workspace_->recording();
+  const PoseSource shown = workspace_->shown_pose_source();
+  QString note;
+  if (!opened) {
+    note = tr("Applies to opened sessions; live scans always use the EKF.");
+  } else if (workspace_->pose_source() != shown) {
+    note = tr("Computing the %1 poses; showing %2.")
+               .arg(PoseSourceTitle(workspace_->pose_source()), PoseSourceTitle(shown));
+  } else if (!workspace_->sfm_summary().isEmpty()) {
+    note = workspace_->sfm_summary();
+  } else {
+    note = tr("Cloud made with the %1 poses.").arg(PoseSourceTitle(shown));
+  }
+  pose_note_->setText(note);
+}
+
+QString ReplayPanel::pose_source_text() const { return pose_note_->text(); }
 
 double ReplayPanel::speed() const { return speed_->currentData().toDouble(); }
 

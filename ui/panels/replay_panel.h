@@ -1,5 +1,7 @@
 // Replay panel: the opened session, a time slider (seek), speed 1x..20x or
-// as fast as possible, pause. GUI thread. Calls only the Workspace.
+// as fast as possible, pause, and the pose source the session is made with
+// (EKF, odometry, SfM; the same choice as Tools > Pose Source). GUI thread.
+// Calls only the Workspace.
 #ifndef SWEEPSCAN_UI_PANELS_REPLAY_PANEL_H_
 #define SWEEPSCAN_UI_PANELS_REPLAY_PANEL_H_
 
@@ -21,6 +23,8 @@ class ReplayPanel : public QWidget {
   // 0 = as fast as possible.
   double speed() const;
   void SetSpeed(double speed);
+  QComboBox* pose_source_box() const { return pose_source_; }
+  QString pose_source_text() const;  // What the cloud shown is made with.
 
  private:
   Workspace* workspace_;
@@ -29,6 +33,10 @@ class ReplayPanel : public QWidget {
   QLabel* position_;
   QComboBox* speed_;
   QPushButton* pause_;
+  QComboBox* pose_source_;
+  QLabel* pose_note_;
+  void ShowPoseSource();
+
   double length_s_ = 0.0;
   bool dragging_ = false;
 };

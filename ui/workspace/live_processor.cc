@@ -3,6 +3,8 @@
 #include <QTimer>
 #include <algorithm>
 
+#include "core/geometry/transform.h"
+
 namespace sweepscan::ui {
 namespace {
 
@@ -40,7 +42,22 @@ LiveProcessor::~LiveProcessor() = default;
 void LiveProcessor::Reset(const ReconstructionOptions& options, const RobotGeometry& geometry) {
   options_ = options;
   geometry_ = geometry;
-  pipeline_ = std::make_unique<LivePipeline>(options, geometry);
+  given_poses_.reset();
+  ResetPipeline();
+}
+
+void LiveProcessor::ResetPipeline() {
+  if (given_poses_ != nullptr) {
+    // As Reconstruct with given poses: one assembler over every scan in order.
+    pipeline_.reset();
+    given_assembler_ = std::make_unique<Assembler>(
+        options_.assembly, BodyFromLidar(geometry_, options_.calibration), options_.pose.source);
+    given_chunks_ = std::make_unique<PointChunks>();
+  } else {
+    given_assembler_.reset();
+    given_chunks_.reset();
+    pipeline_ = std::make_unique<LivePipeline>(options_, geometry_);
+  }
   published_chunk_ = 0;
   published_offset_ = 0;
   total_points_ = 0;
@@ -50,9 +67,40 @@ void LiveProcessor::Reset(const ReconstructionOptions& options, const RobotGeome
   Publish(true);
 }
 
+PointChunks* LiveProcessor::chunks() const {
+  if (given_chunks_ != nullptr) return given_chunks_.get();
+  return pipeline_ != nullptr ? &pipeline_->cloud() : nullptr;
+}
+
+bool LiveProcessor::LatestPose(Pose2d* pose, Time* time) const {
+  if (given_poses_ != nullptr) {
+    // Given poses cover the whole recording: the robot is where the replay is.
+    const PoseBuffer& poses = *given_poses_;
+    if (poses.empty() || latest_time_ < poses.earliest()) return false;
+    *time = std::min(latest_time_, poses.latest());
+    Rigid3d world_from_body;
+    if (!poses.Lookup(*time, &world_from_body)) return false;
+    *pose = {world_from_body.translation().x(), world_from_body.translation().y(),
+             YawFromQuaternion(world_from_body.rotation())};
+    return true;
+  }
+  if (pipeline_ == nullptr || pipeline_->estimator().poses().empty()) return false;
+  *pose = pipeline_->estimator().LatestPose2d();
+  *time = pipeline_->estimator().poses().latest();
+  return true;
+}
+
 void LiveProcessor::AddRecords(const SensorLog& batch) {
-  if (pipeline_ == nullptr) return;
-  pipeline_->Add(batch);
+  if (given_assembler_ != nullptr) {
+    // Only the scans matter: the poses are known already.
+    for (const LidarScan& scan : batch.scans) {
+      given_assembler_->AddScan(scan, *given_poses_, given_chunks_.get());
+    }
+  } else if (pipeline_ != nullptr) {
+    pipeline_->Add(batch);
+  } else {
+    return;
+  }
   scans_ += batch.scans.size();
   const Time last = LastTime(batch);
   if (last > latest_time_) latest_time_ = last;
@@ -60,42 +108,45 @@ void LiveProcessor::AddRecords(const SensorLog& batch) {
 }
 
 void LiveProcessor::Finish() {
-  if (pipeline_ == nullptr) return;
-  pipeline_->Finish();
+  if (given_chunks_ != nullptr) {
+    given_chunks_->Seal();
+  } else if (pipeline_ != nullptr) {
+    pipeline_->Finish();
+  } else {
+    return;
+  }
   Publish(false);
 }
 
 std::vector<CloudPoint> LiveProcessor::Flatten() const {
-  if (pipeline_ == nullptr) return {};
-  return pipeline_->cloud().Flatten();
+  const PointChunks* c = chunks();
+  return c != nullptr ? c->Flatten() : std::vector<CloudPoint>();
 }
 
 void LiveProcessor::Publish(bool reset) {
   LiveBatch batch;
   batch.reset = reset;
-  if (pipeline_ != nullptr) {
+  if (PointChunks* c = chunks()) {
     // New points: the sealed chunks not published yet, then the open chunk's
     // new tail (PointChunks keeps the order when it seals the open chunk).
-    PointChunks& chunks = pipeline_->cloud();
-    const auto sealed = chunks.SealedChunks();
+    const auto sealed = c->SealedChunks();
     for (; published_chunk_ < sealed.size(); ++published_chunk_) {
-      const CloudChunk& c = *sealed[published_chunk_];
-      batch.points.insert(batch.points.end(), c.begin() + published_offset_, c.end());
+      const CloudChunk& chunk = *sealed[published_chunk_];
+      batch.points.insert(batch.points.end(), chunk.begin() + published_offset_, chunk.end());
       published_offset_ = 0;
     }
-    const CloudChunk& open = chunks.open_chunk();
+    const CloudChunk& open = c->open_chunk();
     batch.points.insert(batch.points.end(), open.begin() + published_offset_, open.end());
     published_offset_ = open.size();
     total_points_ += batch.points.size();
 
-    const PoseBuffer& poses = pipeline_->estimator().poses();
-    if (!poses.empty()) {
+    Time pose_time;
+    if (LatestPose(&batch.pose, &pose_time)) {
       batch.has_pose = true;
-      batch.pose = pipeline_->estimator().LatestPose2d();
       if (last_trajectory_time_ == Time::min() ||
-          ToSeconds(poses.latest() - last_trajectory_time_) >= kTrajectoryStepS) {
+          ToSeconds(pose_time - last_trajectory_time_) >= kTrajectoryStepS) {
         batch.trajectory.push_back(batch.pose);
-        last_trajectory_time_ = poses.latest();
+        last_trajectory_time_ = pose_time;
       }
     }
   }
@@ -107,12 +158,19 @@ void LiveProcessor::Publish(bool reset) {
 }
 
 void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recording,
-                                const ReconstructionOptions& options, double speed) {
+                                const ReconstructionOptions& options, double speed,
+                                std::shared_ptr<const PoseBuffer> given_poses) {
   StopReplay();
   replay_ = std::move(recording);
-  ReconstructionOptions o = options;
-  o.pose.initial_pose = replay_->start;
-  Reset(o, replay_->geometry);
+  options_ = options;
+  options_.pose.initial_pose = replay_->start;
+  geometry_ = replay_->geometry;
+  const bool given =
+      options.pose.source == PoseSource::kSfm || options.pose.source == PoseSource::kTruth;
+  given_poses_ = given ? std::move(given_poses) : nullptr;
+  // Given nothing, nothing is placed (the assembler counts the samples).
+  if (given && given_poses_ == nullptr) given_poses_ = std::make_shared<PoseBuffer>();
+  ResetPipeline();
   replay_start_ = FirstTime(replay_->log);
   replay_end_ = LastTime(replay_->log);
   replay_position_ = replay_start_;
@@ -154,8 +212,7 @@ void LiveProcessor::SeekReplay(double robot_time_s) {
   const Time target = replay_start_ + FromSeconds(std::max(0.0, robot_time_s));
   if (target < replay_position_) {
     // Backwards: the EKF cannot un-see records; start over from the beginning.
-    ReconstructionOptions o = options_;
-    Reset(o, geometry_);
+    ResetPipeline();
     replay_position_ = replay_start_;
     next_wheel_ = next_imu_ = next_scan_ = 0;
   }

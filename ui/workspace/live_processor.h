@@ -9,6 +9,12 @@
 // at full speed. For the same records the replayed cloud equals the offline
 // Reconstruct (LivePipeline's guarantee), hence `sweepscan-cli reconstruct`.
 //
+// A replay may also be given its poses, computed beforehand over the whole
+// log (SfM, core/sfm/wheeled.h: a batch method): then no estimator runs and
+// each scan, once released, is placed with the given poses by the same
+// Assembler as Reconstruct with given poses, so the cloud equals
+// `sweepscan-cli reconstruct --pose-source sfm` too.
+//
 // Threading: lives on the processing thread; every slot is called through
 // queued connections (QMetaObject::invokeMethod) from the workspace.
 #ifndef SWEEPSCAN_UI_WORKSPACE_LIVE_PROCESSOR_H_
@@ -18,6 +24,7 @@
 #include <QObject>
 #include <memory>
 
+#include "core/cloud/assembler.h"
 #include "core/cloud/live_pipeline.h"
 #include "core/cloud/reconstruct.h"
 #include "hardware/station/recording.h"
@@ -34,15 +41,20 @@ class LiveProcessor : public QObject {
   ~LiveProcessor() override;
 
   // Slots (processing thread).
-  // Starts a new cloud: drops the old pipeline, posts a reset batch.
+  // Starts a new cloud (live, EKF or odometry by options.pose.source):
+  // drops the old pipeline, posts a reset batch.
   void Reset(const ReconstructionOptions& options, const RobotGeometry& geometry);
   // Live records from the robot (each stream in time order).
   void AddRecords(const SensorLog& batch);
   // End of a recording: places the scans still waiting for poses.
   void Finish();
 
+  // `given_poses`: world_from_body over the whole recording, required when
+  // options.pose.source is kSfm or kTruth (poses computed elsewhere) and
+  // ignored otherwise.
   void StartReplay(std::shared_ptr<const hardware::Recording> recording,
-                   const ReconstructionOptions& options, double speed);
+                   const ReconstructionOptions& options, double speed,
+                   std::shared_ptr<const PoseBuffer> given_poses = nullptr);
   void SetReplaySpeed(double speed);  // 0 = as fast as possible.
   void SetReplayPaused(bool paused);
   void SeekReplay(double robot_time_s);
@@ -58,13 +70,22 @@ class LiveProcessor : public QObject {
   void replayFinished();
 
  private:
+  // A new pipeline (or assembler, with given poses) under options_ / geometry_.
+  void ResetPipeline();
+  PointChunks* chunks() const;
+  // The robot's latest pose and its time; false before the first pose.
+  bool LatestPose(Pose2d* pose, Time* time) const;
   void Publish(bool reset);
   void OnReplayTick();
   // Feeds every record with time < until (robot time) not fed yet.
   void FeedReplayUntil(Time until);
 
   BatchMailbox* mailbox_;
-  std::unique_ptr<LivePipeline> pipeline_;
+  std::unique_ptr<LivePipeline> pipeline_;  // Null while replaying with given poses.
+  // Replay with given poses: the poses, their assembler and the cloud.
+  std::shared_ptr<const PoseBuffer> given_poses_;
+  std::unique_ptr<Assembler> given_assembler_;
+  std::unique_ptr<PointChunks> given_chunks_;
   ReconstructionOptions options_;
   RobotGeometry geometry_;
   size_t published_chunk_ = 0;   // Next chunk index to publish from.

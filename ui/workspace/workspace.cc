@@ -18,6 +18,7 @@
 #include "core/evaluation/report.h"
 #include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
+#include "core/sfm/wheeled.h"
 #include "hardware/link/qt_transport.h"
 #include "ui/workspace/live_processor.h"
 #include "ui/workspace/sim_robot.h"
@@ -56,7 +57,46 @@ bool CopyFolder(const QString& from, const QString& to, QString* error) {
   return true;
 }
 
+// The job that computes SfM poses for the opened session (its failures
+// give the pose source choice back to the cloud shown).
+QString SfmJobName() { return QObject::tr("Structure from motion"); }
+
+// The SfM poses of a loaded session exactly as `sweepscan-cli reconstruct
+// --pose-source sfm` computes them (app/cli_session.cc): the EKF as the
+// motion prior from the session's start, planes found on the way (no
+// designated ones), the wheeled scanner's default options.
+Status ComputeSfmPoses(const hardware::Recording& recording, const MountingError& calibration,
+                       PoseBuffer* poses, QString* summary) {
+  sfm::WheeledSfmResult result;
+  const Status s = sfm::WheeledSfmFromLog(recording.log, recording.geometry, calibration,
+                                          recording.start, PoseSource::kEkf, sfm::SequenceInit(),
+                                          sfm::WheeledSfmOptions(), &result);
+  if (!s.ok()) return s;
+  *poses = std::move(result.poses);
+  const sfm::SequenceResult& seq = result.sequence;
+  *summary = QObject::tr("SfM: %1 scans placed, %2 of %3 lines on %4 planes")
+                 .arg(seq.poses.size())
+                 .arg(seq.lines_assigned)
+                 .arg(seq.lines_total)
+                 .arg(seq.planes.size());
+  return Status::Ok();
+}
+
 }  // namespace
+
+QString PoseSourceTitle(PoseSource source) {
+  switch (source) {
+    case PoseSource::kEkf:
+      return QObject::tr("EKF");
+    case PoseSource::kOdometry:
+      return QObject::tr("Odometry");
+    case PoseSource::kTruth:
+      return QObject::tr("Truth");
+    case PoseSource::kSfm:
+      return QObject::tr("SfM");
+  }
+  return QString();
+}
 
 Workspace::Workspace(QObject* parent) : QObject(parent) {
   io_thread_.setObjectName(QStringLiteral("io"));
@@ -80,6 +120,12 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
           [this](const QString& what, bool ok, const QString& message) {
             if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
             if (what == tr("Evaluating") && !ok) emit evaluationFinished(false, message);
+            // SfM failed, was cancelled or refused: the cloud keeps its
+            // poses, and the choice shows them again.
+            if (what == SfmJobName() && !ok && pose_source_ != shown_pose_source_) {
+              pose_source_ = shown_pose_source_;
+              emit poseSourceChanged(static_cast<int>(pose_source_));
+            }
           });
   io_thread_.start();
   processing_thread_.start();
@@ -437,6 +483,7 @@ void Workspace::ResetCloud(const Pose2d& start, const RobotGeometry& geometry) {
   });
   point_count_ = 0;
   scan_count_ = 0;
+  SetShownPoseSource(PoseSource::kEkf);
 }
 
 bool Workspace::StartRecording(QString* error) {
@@ -488,6 +535,7 @@ bool Workspace::StartRecording(QString* error) {
   unsaved_ = true;
   session_dir_ = dir;
   opened_.reset();
+  SetShownPoseSource(PoseSource::kEkf);  // Live: always the EKF.
   emit recordingChanged(true);
   emit sessionChanged(dir);
   emit message(QStringLiteral("Recording to %1").arg(dir));
@@ -553,10 +601,16 @@ void Workspace::NewSession() {
 void Workspace::OpenSession(const QString& dir, double speed) {
   auto recording = std::make_shared<hardware::Recording>();
   auto circle = std::make_shared<OpenedCircle>();
+  // SfM: its poses, what it found, or why it could not place the scans.
+  const PoseSource source = pose_source_;
+  auto sfm_poses = std::make_shared<PoseBuffer>();
+  auto sfm_summary = std::make_shared<QString>();
+  auto sfm_error = std::make_shared<QString>();
   const std::string path = dir.toStdString();
   RunJob(
       QStringLiteral("Opening %1").arg(dir),
-      [this, recording, circle, path](std::atomic<bool>* cancel) -> QString {
+      [this, recording, circle, path, source, sfm_poses, sfm_summary,
+       sfm_error](std::atomic<bool>* cancel) -> QString {
         // Progress to the status bar at most every 2 %; a cancel stops the decoder.
         auto last = std::make_shared<double>(-1.0);
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
@@ -580,9 +634,19 @@ void Workspace::OpenSession(const QString& dir, double speed) {
                                         .arg(circle->circle.radius_m, 0, 'f', 2)
                                   : QString::fromStdString(why);
         circle->poses = poses;
+        if (source == PoseSource::kSfm && !*cancel) {
+          // The batch over the whole log, now that it is loaded (no cancel
+          // points inside: a cancel drops the result when it returns).
+          const QString name = QFileInfo(QString::fromStdString(path)).fileName();
+          QMetaObject::invokeMethod(
+              this, [this, name] { emit jobProgress(tr("%1: %2").arg(SfmJobName(), name), -1.0); });
+          const Status sfm = ComputeSfmPoses(*recording, recording->decode.meta.calibration,
+                                             sfm_poses.get(), sfm_summary.get());
+          if (!sfm.ok()) *sfm_error = QString::fromStdString(sfm.message());
+        }
         return QString();
       },
-      [this, recording, circle, dir, speed] {
+      [this, recording, circle, dir, speed, source, sfm_poses, sfm_summary, sfm_error] {
         if (recording_) {
           QString ignored;
           StopRecording(&ignored);
@@ -600,16 +664,104 @@ void Workspace::OpenSession(const QString& dir, double speed) {
         deviation_map_.clear();
         session_dir_ = dir;
         unsaved_ = false;
-        replaying_ = true;
-        ReconstructionOptions options;
-        options.calibration = recording->decode.meta.calibration;
-        shown_calibration_ = options.calibration;
         calibration_.reset();
-        LiveProcessor* p = processor_;
-        std::shared_ptr<const hardware::Recording> r = recording;
-        QMetaObject::invokeMethod(p, [p, r, options, speed] { p->StartReplay(r, options, speed); });
+        PoseSource shown = source;
+        if (source == PoseSource::kSfm && !sfm_error->isEmpty()) {
+          // The session is fine; only SfM cannot place it (too few planes,
+          // say): open it with the EKF and say why.
+          shown = PoseSource::kEkf;
+          if (pose_source_ == PoseSource::kSfm) {
+            pose_source_ = shown;
+            emit poseSourceChanged(static_cast<int>(shown));
+          }
+          emit poseSourceFailed(
+              tr("SfM cannot place %1: %2. Showing the EKF poses.").arg(dir, *sfm_error));
+        }
+        sfm_summary_ = shown == PoseSource::kSfm ? *sfm_summary : QString();
+        ReplayOpened(recording->decode.meta.calibration, shown,
+                     shown == PoseSource::kSfm ? sfm_poses : nullptr, speed);
         emit sessionChanged(dir);
       });
+}
+
+void Workspace::SetPoseSource(PoseSource source) {
+  if (source == PoseSource::kTruth) source = PoseSource::kEkf;  // Sessions have no truth.
+  if (opened_ == nullptr || recording_) {
+    // Nothing opened to re-process: the next session opened uses it.
+    if (source != pose_source_) {
+      pose_source_ = source;
+      emit poseSourceChanged(static_cast<int>(source));
+    }
+    return;
+  }
+  if (job_running()) {
+    // One job at a time (and an opening session already chose its poses).
+    emit poseSourceChanged(static_cast<int>(pose_source_));
+    emit jobFinished(tr("Pose source"), false,
+                     tr("Another task is still running: let it finish (or cancel it), then "
+                        "choose the pose source again."));
+    return;
+  }
+  const bool changed = source != pose_source_;
+  pose_source_ = source;
+  if (changed) emit poseSourceChanged(static_cast<int>(source));
+  if (source != shown_pose_source_) Reprocess(shown_calibration_, source, false);
+}
+
+void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
+                          bool same_points) {
+  if (opened_ == nullptr) return;
+  // Deviations belong to the points they were measured on, pass labels to
+  // the points in their order; both go when the new cloud comes (a failed
+  // SfM keeps the cloud and them).
+  auto forget = [this, same_points] {
+    if (!same_points) pass_labels_.clear();
+    deviation_map_.clear();
+  };
+  if (source != PoseSource::kSfm) {
+    forget();
+    ReplayOpened(calibration, source, nullptr, 0.0);
+    return;
+  }
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  auto poses = std::make_shared<PoseBuffer>();
+  auto summary = std::make_shared<QString>();
+  RunJob(
+      SfmJobName(),
+      [recording, calibration, poses, summary](std::atomic<bool>*) -> QString {
+        const Status s = ComputeSfmPoses(*recording, calibration, poses.get(), summary.get());
+        return s.ok() ? QString()
+                      : tr("SfM cannot place this session: %1")
+                            .arg(QString::fromStdString(s.message()));
+      },
+      [this, recording, calibration, poses, summary, forget] {
+        if (opened_ != recording) return;  // Another session (or a recording) since.
+        forget();
+        sfm_summary_ = *summary;
+        emit message(*summary);
+        ReplayOpened(calibration, PoseSource::kSfm, poses, 0.0);
+      });
+}
+
+void Workspace::ReplayOpened(const MountingError& calibration, PoseSource source,
+                             std::shared_ptr<const PoseBuffer> given, double speed) {
+  if (opened_ == nullptr) return;
+  ReconstructionOptions options;
+  options.calibration = calibration;
+  options.pose.source = source;
+  shown_calibration_ = calibration;
+  replaying_ = true;
+  LiveProcessor* p = processor_;
+  std::shared_ptr<const hardware::Recording> r = opened_;
+  QMetaObject::invokeMethod(
+      p, [p, r, options, speed, given] { p->StartReplay(r, options, speed, given); });
+  SetShownPoseSource(source);
+}
+
+void Workspace::SetShownPoseSource(PoseSource source) {
+  if (source != PoseSource::kSfm) sfm_summary_.clear();
+  shown_pose_source_ = source;
+  emit shownPoseSourceChanged(static_cast<int>(source));
 }
 
 namespace {
@@ -821,13 +973,10 @@ bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_n
 
 void Workspace::ShowCalibrated(const MountingError& calibration) {
   if (opened_ == nullptr) return;
-  shown_calibration_ = calibration;
-  ReconstructionOptions options;
-  options.calibration = calibration;
-  replaying_ = true;
-  LiveProcessor* p = processor_;
-  std::shared_ptr<const hardware::Recording> r = opened_;
-  QMetaObject::invokeMethod(p, [p, r, options] { p->StartReplay(r, options, 0.0); });
+  // With the poses shown: SfM places the scans under the calibration too,
+  // so its poses are computed again (a job). The same points in the same
+  // order: the pass labels stay valid.
+  Reprocess(calibration, shown_pose_source_, true);
 }
 
 void Workspace::SetReplaySpeed(double speed) {

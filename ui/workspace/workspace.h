@@ -1,7 +1,8 @@
 // The desktop app without its widgets: the current session, the robot link
 // on an I/O thread, the live pipeline on a processing thread, the built-in
-// simulated robot, replay, and the long jobs (open, export) on worker
-// threads with progress and cancel. Every button of the app calls a method
+// simulated robot, replay, the pose source of opened sessions (EKF,
+// odometry, SfM), and the long jobs (open, SfM, export) on worker threads
+// with progress and cancel. Every button of the app calls a method
 // here, and the UI tests drive the same methods (docs/architecture.md, "ui/").
 //
 // Threads (docs/architecture.md):
@@ -12,7 +13,8 @@
 //                      immutable LiveBatches to mailbox(); the view drains it
 //                      on a GUI timer;
 //   robot thread       the built-in simulator's agent and devices (SimRobot);
-//   job threads        open a session, export a cloud (one at a time).
+//   job threads        open a session, SfM poses, export a cloud (one at
+//                      a time).
 //
 // Lives on the GUI thread; not thread-safe.
 #ifndef SWEEPSCAN_UI_WORKSPACE_WORKSPACE_H_
@@ -59,6 +61,9 @@ struct ConnectOptions {
   // from its scenario.
   RobotGeometry geometry;
 };
+
+// A pose source as the operator reads it: "EKF", "Odometry", "SfM", "Truth".
+QString PoseSourceTitle(PoseSource source);
 
 struct DriveLimits {
   double v_max_mps = 0.3;
@@ -137,6 +142,28 @@ class Workspace : public QObject {
   void ExportCloud(const QString& path);
   void CancelJob();
   bool job_running() const { return job_thread_ != nullptr; }
+
+  // ---- Pose source of opened sessions (docs/desktop-app.md) -------------
+  // Which poses place an opened session's scans: the EKF (wheels + IMU, the
+  // default), wheel odometry alone, or SfM: the EKF's poses corrected by
+  // the planes the scans cross (core/sfm/wheeled.h), the same as
+  // `sweepscan-cli reconstruct --pose-source ekf|odometry|sfm`. SfM is a
+  // batch method over the whole log, so it runs on a job thread after the
+  // log is loaded (progress, cancel) and the session then replays with the
+  // SfM poses given. Live clouds and recordings always use the EKF (SfM
+  // needs the whole log); the choice applies to sessions opened, and
+  // setting it re-processes the one shown. When SfM fails (or is
+  // cancelled, or another job runs) the cloud keeps its poses and the
+  // choice goes back to them (poseSourceChanged); a session opened with
+  // SfM that SfM cannot place opens with the EKF instead and says why
+  // (poseSourceFailed). kTruth is not offered (no truth in a session).
+  void SetPoseSource(PoseSource source);
+  PoseSource pose_source() const { return pose_source_; }
+  // What the cloud shown is made with (kEkf for live clouds).
+  PoseSource shown_pose_source() const { return shown_pose_source_; }
+  // The SfM result of the cloud shown ("182 scans placed by 23 planes"),
+  // empty for other sources.
+  QString sfm_summary() const { return sfm_summary_; }
 
   // Where new recordings go (default: ~/sweepscan-sessions, QSettings).
   QString sessions_root() const { return sessions_root_; }
@@ -229,11 +256,24 @@ class Workspace : public QObject {
   void calibrationFinished(bool ok, const QString& message);
   void evaluationFinished(bool ok, const QString& message);
   void passesSplit(bool ok, const QString& message);
+  void poseSourceChanged(int source);       // The choice (a PoseSource).
+  void shownPoseSourceChanged(int source);  // A new cloud is on its way, made with this.
+  void poseSourceFailed(const QString& message);
 
  private:
   bool PrepareLink(const ConnectOptions& options, hardware::RobotConnectionOptions* link,
                    QString* error);
   void ResetCloud(const Pose2d& start, const RobotGeometry& geometry);
+  // Replays the opened session under `calibration` with `source`'s poses
+  // (`given` for SfM) at `speed`.
+  void ReplayOpened(const MountingError& calibration, PoseSource source,
+                    std::shared_ptr<const PoseBuffer> given, double speed);
+  // Re-processes the opened session under `calibration` with `source`: a
+  // job computing the SfM poses first, or at once for the EKF / odometry.
+  // `same_points`: the new cloud has the old one's points in the same order
+  // (another calibration only), so the pass labels stay.
+  void Reprocess(const MountingError& calibration, PoseSource source, bool same_points);
+  void SetShownPoseSource(PoseSource source);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success);
   void OnScriptTick();
@@ -270,6 +310,9 @@ class Workspace : public QObject {
   bool replaying_ = false;
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;
+  PoseSource pose_source_ = PoseSource::kEkf;
+  PoseSource shown_pose_source_ = PoseSource::kEkf;
+  QString sfm_summary_;
   MountingError robot_calibration_;
   struct OpenedCircle {
     bool ok = false;
