@@ -99,6 +99,23 @@ class AppTest : public ::testing::Test {
     workspace_.reset();
   }
 
+  // Records the lab drive through the real bytes with the CLI: tmp/lab.sweepscan.
+  void SimulateLabSession() {
+    const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
+                                         kResources.toStdString() + "/scenarios/lab.json --out " +
+                                         tmp_.path().toStdString() + "/lab.ply");
+    ASSERT_EQ(sim.code, 0) << sim.out;
+  }
+  // Opens a session and waits until its replay has finished.
+  void OpenAndReplay(const QString& session) {
+    bool replayed = false;
+    const auto c = QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+    window_->OpenSessionPath(session);
+    const bool done = WaitFor([&] { return replayed; }, 120000);
+    QObject::disconnect(c);
+    ASSERT_TRUE(done);
+  }
+
   void ConnectToSimulator(const QString& scenario = "lab.json") {
     ConnectOptions o;
     o.kind = LinkKind::kSimulator;
@@ -250,11 +267,7 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
 
 TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   // Record a short session through the real bytes with the CLI.
-  const std::string dir = tmp_.path().toStdString();
-  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
-                                       kResources.toStdString() + "/scenarios/lab.json --out " +
-                                       dir + "/lab.ply");
-  ASSERT_EQ(sim.code, 0) << sim.out;
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
   const QString good = tmp_.path() + "/lab.sweepscan";
   ASSERT_TRUE(QFileInfo::exists(good + "/meta.json"));
 
@@ -498,15 +511,8 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
 // A cancelled SfM leaves the cloud as it was and gives the choice back to
 // the poses shown; live recording always uses the EKF whatever the choice.
 TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
-  const std::string dir = tmp_.path().toStdString();
-  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
-                                       kResources.toStdString() + "/scenarios/lab.json --out " +
-                                       dir + "/lab.ply");
-  ASSERT_EQ(sim.code, 0) << sim.out;
-  bool replayed = false;
-  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
-  window_->OpenSessionPath(tmp_.path() + "/lab.sweepscan");
-  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
   const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
   QString message;
   bool finished = false;
@@ -515,7 +521,8 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
                      finished = true;
                      message = ok ? QString() : m;
                    });
-  replayed = false;
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
   window_->pose_source_action(PoseSource::kSfm)->trigger();
   workspace_->CancelJob();
   ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
@@ -544,11 +551,7 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
 }
 
 TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
-  const std::string dir = tmp_.path().toStdString();
-  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
-                                       kResources.toStdString() + "/scenarios/lab.json --out " +
-                                       dir + "/lab.ply");
-  ASSERT_EQ(sim.code, 0) << sim.out;
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
   const QString session = tmp_.path() + "/lab.sweepscan";
   std::vector<double> fractions;
   QString finished_message;
@@ -1002,15 +1005,8 @@ TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
 // The distance tool: two Shift + clicks on cloud points measure the
 // distance between the points under the cursor.
 TEST_F(AppTest, MeasureDistanceBetweenTwoClickedPoints) {
-  const std::string dir = tmp_.path().toStdString();
-  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
-                                       kResources.toStdString() + "/scenarios/lab.json --out " +
-                                       dir + "/lab.ply");
-  ASSERT_EQ(sim.code, 0) << sim.out;
-  bool replayed = false;
-  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
-  window_->OpenSessionPath(tmp_.path() + "/lab.sweepscan");
-  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
   const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot();
   CloudView* view = window_->view();
   ASSERT_TRUE(WaitFor([&] { return view->point_count() == cloud.size(); }, 10000));
