@@ -36,8 +36,9 @@ const char* const kEvaluateUsage =
     "  --threads N   worker threads (default: every core; the result does not depend on it)\n"
     "  --timing      print the wall time of each stage on stderr\n"
     "  --strict      refuse a SESSION with damaged records (default: skip them, with a warning)\n"
-    "  --neighbours kdtree|grid|flann   the shared neighbour structure (for measurements; the\n"
-    "                same result with each): nanoflann (default), voxel hash grid, PCL KdTreeFLANN\n"
+    "  --neighbours batched|kdtree|grid|flann   the shared neighbour structure (for measurements;\n"
+    "                the same result with each): batched Morton kd-tree (default), nanoflann,\n"
+    "                voxel hash grid, PCL KdTreeFLANN\n"
     "On a terminal (and without --json) the progress is shown on stderr.\n";
 
 namespace {
@@ -149,14 +150,18 @@ int RunEvaluate(int argc, char** argv) {
   }
   if (args.Has("neighbours")) {
     const std::string b = args.Get("neighbours");
-    if (b == "kdtree") {
+    if (b == "batched") {
+      options.neighbours = NeighbourBackend::kBatched;
+    } else if (b == "kdtree") {
       options.neighbours = NeighbourBackend::kKdTree;
     } else if (b == "grid") {
       options.neighbours = NeighbourBackend::kVoxelGrid;
     } else if (b == "flann") {
       options.neighbours = NeighbourBackend::kPclKdTree;
     } else {
-      PrintError("--neighbours is kdtree (nanoflann, the default), grid (voxel hash grid) or flann (PCL)");
+      PrintError(
+          "--neighbours is batched (the default), kdtree (nanoflann), grid (voxel hash grid) or "
+          "flann (PCL)");
       return kExitBadInput;
     }
   }

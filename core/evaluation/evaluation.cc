@@ -554,7 +554,7 @@ Status RemoveStatisticalOutliers(const std::vector<Eigen::Vector3f>& points, int
   }
   Runner runner(0, nullptr);
   NeighbourIndex index;
-  index.Build(points, NeighbourBackend::kKdTree, ForOf(&runner));
+  index.Build(points, NeighbourBackend::kBatched, ForOf(&runner));
   NeighbourPass pass;
   RunNeighbourPass(index, k, &runner, &pass);
   std::vector<uint8_t> flags;
@@ -609,7 +609,7 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
   if (!s.ok()) return s;
   Runner runner(0, nullptr);
   NeighbourIndex index;
-  index.Build(points, NeighbourBackend::kKdTree, ForOf(&runner));
+  index.Build(points, NeighbourBackend::kBatched, ForOf(&runner));
   NeighbourPass pass;
   RunNeighbourPass(index, 0, &runner, &pass);
   std::vector<uint32_t> all(points.size());

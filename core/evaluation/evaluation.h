@@ -76,7 +76,7 @@ struct EvaluationOptions {
   // result does not depend on it.
   int threads = 0;
   // The shared neighbour structure (docs/performance.md compares them).
-  NeighbourBackend neighbours = NeighbourBackend::kKdTree;
+  NeighbourBackend neighbours = NeighbourBackend::kBatched;
 
   bool IsValid(std::string* error) const;
 };

@@ -1,6 +1,8 @@
 // nanoflann and PCL's KdTreeFLANN live in this translation unit only.
 #include "core/evaluation/neighbours.h"
 
+#include "core/evaluation/batched_tree.h"
+
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -178,6 +180,7 @@ const char* NeighbourBackendName(NeighbourBackend backend) {
     case NeighbourBackend::kKdTree: return "nanoflann kd-tree";
     case NeighbourBackend::kVoxelGrid: return "voxel hash grid";
     case NeighbourBackend::kPclKdTree: return "PCL KdTreeFLANN";
+    case NeighbourBackend::kBatched: return "batched Morton kd-tree";
   }
   return "?";
 }
@@ -187,6 +190,7 @@ struct NeighbourIndex::Impl {
   std::vector<Piece> pieces;
   Grid grid;
   pcl::KdTreeFLANN<pcl::PointXYZ> flann;
+  BatchedKdTree batched;
   size_t extra_bytes = 0;
 
   int GridKnn(const std::vector<float>& xyz, const float* q, int k, uint32_t* idx,
@@ -248,6 +252,10 @@ bool NeighbourIndex::Build(const std::vector<Eigen::Vector3f>& points, Neighbour
     return false;
   }
   switch (backend) {
+    case NeighbourBackend::kBatched:
+      impl_->batched.Build(xyz_.data(), keys.data(), n);
+      impl_->extra_bytes = impl_->batched.MemoryBytes();
+      break;
     case NeighbourBackend::kKdTree: {
       keys = std::vector<uint64_t>();
       const size_t piece = size_t{1} << kPieceBits;
@@ -405,6 +413,8 @@ int NeighbourIndex::Knn(const float* q, int k, uint32_t* idx, float* d2, int64_t
     }
     case NeighbourBackend::kVoxelGrid:
       return impl_->GridKnn(xyz_, q, n, idx, d2);
+    case NeighbourBackend::kBatched:
+      return impl_->batched.Knn(q, n, idx, d2);
     case NeighbourBackend::kPclKdTree: {
       thread_local pcl::Indices i;
       thread_local std::vector<float> d;
@@ -422,6 +432,9 @@ int NeighbourIndex::Knn(const float* q, int k, uint32_t* idx, float* d2, int64_t
 bool NeighbourIndex::NearestWhere(const float* q, const std::function<bool(uint32_t)>& accept,
                                   uint32_t* idx, float* d2, int64_t near) const {
   if (size() == 0) return false;
+  if (impl_->backend == NeighbourBackend::kBatched) {
+    return impl_->batched.NearestWhere(q, accept, idx, d2);
+  }
   if (impl_->backend != NeighbourBackend::kKdTree) {
     // Growing k-nearest queries until an accepted point comes up.
     std::vector<uint32_t> i;
@@ -460,6 +473,10 @@ bool NeighbourIndex::NearestWhere(const float* q, const std::function<bool(uint3
 }
 
 void NeighbourIndex::KnnRange(size_t begin, size_t end, int k, uint32_t* idx, float* d2) const {
+  if (impl_->backend == NeighbourBackend::kBatched) {
+    impl_->batched.KnnRange(begin, end, k, idx, d2);
+    return;
+  }
   for (size_t s = begin; s < end; ++s) {
     Knn(sorted_point(s), k, idx + (s - begin) * static_cast<size_t>(k),
         d2 + (s - begin) * static_cast<size_t>(k), static_cast<int64_t>(s));

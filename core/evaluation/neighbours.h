@@ -5,11 +5,14 @@
 // bounding box, radix-sorted), so that neighbours are near in memory and
 // queries in that order walk the structure coherently. Three backends, by
 // measurement on scanner clouds (docs/performance.md, "Evaluation"):
-//   kKdTree     nanoflann's KDTreeSingleIndexAdaptor (the default);
+//   kBatched    a kd-tree over the Morton codes whose range queries answer a
+//               group of neighbouring points at once (batched_tree.h; the
+//               default);
+//   kKdTree     nanoflann's KDTreeSingleIndexAdaptor;
 //   kVoxelGrid  a hash grid with cells sized from the data, searched in
 //               rings of cells until the k-th neighbour is provably found;
 //   kPclKdTree  PCL's KdTreeFLANN (what the evaluation used before).
-// All three are exact: the same k distances for every query.
+// All four are exact: the same k distances for every query.
 //
 // Queries are const and may run on many threads at once.
 #ifndef SWEEPSCAN_CORE_EVALUATION_NEIGHBOURS_H_
@@ -25,7 +28,7 @@
 
 namespace sweepscan {
 
-enum class NeighbourBackend { kKdTree, kVoxelGrid, kPclKdTree };
+enum class NeighbourBackend { kKdTree, kVoxelGrid, kPclKdTree, kBatched };
 const char* NeighbourBackendName(NeighbourBackend backend);
 
 class NeighbourIndex {
@@ -47,7 +50,7 @@ class NeighbourIndex {
   // whose bounding box is nearer than its k-th neighbour so far. Returns
   // false if cancelled (the index is then unusable).
   bool Build(const std::vector<Eigen::Vector3f>& points,
-             NeighbourBackend backend = NeighbourBackend::kKdTree,
+             NeighbourBackend backend = NeighbourBackend::kBatched,
              const ParallelFor& parallel_for = nullptr);
 
   size_t size() const { return order_.size(); }

@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "core/cloud/cloud_io.h"
+#include "core/evaluation/batched_tree.h"
 #include "core/evaluation/cloud_arrays.h"
 #include "core/evaluation/evaluation.h"
 #include "core/evaluation/neighbours.h"
@@ -36,8 +37,8 @@ const std::vector<Eigen::Vector3f>& Points() {
   return points;
 }
 
-const NeighbourBackend kBackends[] = {NeighbourBackend::kKdTree, NeighbourBackend::kVoxelGrid,
-                                      NeighbourBackend::kPclKdTree};
+const NeighbourBackend kBackends[] = {NeighbourBackend::kBatched, NeighbourBackend::kKdTree,
+                                      NeighbourBackend::kVoxelGrid, NeighbourBackend::kPclKdTree};
 
 // Spatial sort and structure build, one thread.
 void BM_NeighbourBuild(benchmark::State& state) {
@@ -50,7 +51,7 @@ void BM_NeighbourBuild(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * Points().size()));
 }
-BENCHMARK(BM_NeighbourBuild)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_NeighbourBuild)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->Iterations(2);
 
 // The 21 nearest (20 and the point itself) of every point, one thread.
 void BM_NeighbourQueries(benchmark::State& state) {
@@ -62,6 +63,7 @@ void BM_NeighbourQueries(benchmark::State& state) {
   constexpr size_t block = 4096;
   std::vector<uint32_t> idx(block * k);
   std::vector<float> d2(block * k);
+  const size_t fallbacks = BatchedKdTree::ThreadFallbacks();
   for (auto _ : state) {
     for (size_t b = 0; b < index.size(); b += block) {
       index.KnnRange(b, std::min(index.size(), b + block), k, idx.data(), d2.data());
@@ -69,8 +71,11 @@ void BM_NeighbourQueries(benchmark::State& state) {
     benchmark::DoNotOptimize(d2.data());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * index.size()));
+  // Queries the batched tree answered by a descent of their own.
+  state.counters["fallbacks"] =
+      static_cast<double>(BatchedKdTree::ThreadFallbacks() - fallbacks);
 }
-BENCHMARK(BM_NeighbourQueries)->DenseRange(0, 2)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_NeighbourQueries)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // The whole evaluation on 1 and 2 threads.
 void BM_EvaluateCloud(benchmark::State& state) {

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "core/cloud/cloud_io.h"
+#include "core/evaluation/batched_tree.h"
 #include "core/evaluation/cloud_arrays.h"
 #include "core/evaluation/evaluation.h"
 #include "tests/testing/worlds.h"
@@ -224,18 +225,18 @@ TEST(EvaluationThreadsTest, IdenticalOnOneTwoAndThreeThreads) {
   }
 }
 
-// The three neighbour structures are exact: the same outliers and density.
+// The four neighbour structures are exact: the same outliers and density.
 TEST(NeighbourIndexTest, BackendsAgree) {
   const auto& pts = World(0);
-  CloudEvaluation r[3];
-  const NeighbourBackend backends[3] = {NeighbourBackend::kKdTree, NeighbourBackend::kVoxelGrid,
-                                        NeighbourBackend::kPclKdTree};
-  for (int b = 0; b < 3; ++b) {
+  CloudEvaluation r[4];
+  const NeighbourBackend backends[4] = {NeighbourBackend::kBatched, NeighbourBackend::kKdTree,
+                                        NeighbourBackend::kVoxelGrid, NeighbourBackend::kPclKdTree};
+  for (int b = 0; b < 4; ++b) {
     EvaluationOptions o;
     o.neighbours = backends[b];
     ASSERT_TRUE(EvaluateCloud(pts, o, &r[b]).ok()) << NeighbourBackendName(backends[b]);
   }
-  for (int b = 1; b < 3; ++b) {
+  for (int b = 1; b < 4; ++b) {
     SCOPED_TRACE(NeighbourBackendName(backends[b]));
     EXPECT_EQ(r[b].points_after_outliers, r[0].points_after_outliers);
     EXPECT_NEAR(r[b].mean_nn_distance_m, r[0].mean_nn_distance_m, 1e-9);
@@ -258,8 +259,8 @@ TEST(NeighbourIndexTest, KnnMatchesBruteForce) {
   for (int i = 0; i < 50; ++i) pts.push_back(pts[static_cast<size_t>(i) * 7]);  // duplicates
   pts.emplace_back(40.0f, 40.0f, 40.0f);                                         // far away
   const int k = 12;
-  for (NeighbourBackend b : {NeighbourBackend::kKdTree, NeighbourBackend::kVoxelGrid,
-                             NeighbourBackend::kPclKdTree}) {
+  for (NeighbourBackend b : {NeighbourBackend::kBatched, NeighbourBackend::kKdTree,
+                             NeighbourBackend::kVoxelGrid, NeighbourBackend::kPclKdTree}) {
     SCOPED_TRACE(NeighbourBackendName(b));
     NeighbourIndex index;
     ASSERT_TRUE(index.Build(pts, b));
@@ -295,6 +296,53 @@ TEST(NeighbourIndexTest, KnnMatchesBruteForce) {
         const Eigen::Vector3f p(index.sorted_point(idx[j]));
         EXPECT_EQ(p, pts[index.order()[idx[j]]]);
       }
+    }
+  }
+}
+
+// The batched tree's two kernels (AVX2 and portable) and its fallback:
+// a sparse slab next to a dense cluster, so that a group's radius guessed
+// from its neighbour is often too small, every point against brute force,
+// and the two kernels equal bit for bit.
+TEST(NeighbourIndexTest, BatchedKernelsAndFallbackAreExact) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> g(0.0f, 0.002f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < 4000; ++i) pts.emplace_back(4.0f * u(rng), 4.0f * u(rng), 0.05f * u(rng));
+  for (int c = 0; c < 6; ++c) {  // dense blobs inside the slab
+    const Eigen::Vector3f centre(4.0f * u(rng), 4.0f * u(rng), 0.02f);
+    for (int i = 0; i < 500; ++i) pts.push_back(centre + Eigen::Vector3f(g(rng), g(rng), g(rng)));
+  }
+  for (int i = 0; i < 30; ++i) pts.push_back(pts[static_cast<size_t>(i) * 101]);  // duplicates
+  const int k = 21;
+  NeighbourIndex index;
+  ASSERT_TRUE(index.Build(pts, NeighbourBackend::kBatched));
+  const size_t n = index.size();
+  std::vector<uint32_t> idx[2];
+  std::vector<float> d2[2];
+  const size_t fallbacks = BatchedKdTree::ThreadFallbacks();
+  for (int pass = 0; pass < 2; ++pass) {
+    BatchedKdTree::AllowAvx2(pass == 0);
+    idx[pass].resize(n * k);
+    d2[pass].resize(n * k);
+    for (size_t b = 0; b < n; b += 4096) {
+      const size_t e = std::min(n, b + 4096);
+      index.KnnRange(b, e, k, &idx[pass][b * k], &d2[pass][b * k]);
+    }
+  }
+  BatchedKdTree::AllowAvx2(true);
+  EXPECT_GT(BatchedKdTree::ThreadFallbacks(), fallbacks) << "the fallback was not exercised";
+  EXPECT_EQ(d2[0], d2[1]);
+  for (size_t s = 0; s < n; ++s) {
+    const Eigen::Vector3f q(index.sorted_point(s));
+    std::vector<float> truth;
+    for (size_t t = 0; t < n; ++t) truth.push_back((Eigen::Vector3f(index.sorted_point(t)) - q).squaredNorm());
+    std::partial_sort(truth.begin(), truth.begin() + k, truth.end());
+    for (int j = 0; j < k; ++j) {
+      ASSERT_FLOAT_EQ(d2[0][s * k + j], truth[static_cast<size_t>(j)]) << s << " " << j;
+      const Eigen::Vector3f p(index.sorted_point(idx[0][s * k + j]));
+      ASSERT_FLOAT_EQ((p - q).squaredNorm(), d2[0][s * k + j]);
     }
   }
 }
