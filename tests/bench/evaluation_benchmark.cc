@@ -6,6 +6,7 @@
 // "Evaluation".
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 #include "core/cloud/cloud_io.h"
@@ -44,11 +45,16 @@ const NeighbourBackend kBackends[] = {NeighbourBackend::kBatched, NeighbourBacke
 void BM_NeighbourBuild(benchmark::State& state) {
   const NeighbourBackend backend = kBackends[state.range(0)];
   state.SetLabel(NeighbourBackendName(backend));
+  size_t bytes = 0;
   for (auto _ : state) {
     NeighbourIndex index;
     index.Build(Points(), backend);
     benchmark::DoNotOptimize(index.size());
+    bytes = index.MemoryBytes();
   }
+  // Sorted copy, order and the structure.
+  state.counters["bytes_per_point"] =
+      static_cast<double>(bytes) / static_cast<double>(std::max<size_t>(1, Points().size()));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * Points().size()));
 }
 BENCHMARK(BM_NeighbourBuild)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->Iterations(2);
