@@ -1,5 +1,7 @@
 // sweepscan-cli calibrate: argument parsing and printing around the
 // calibration workflows in core (SolveAutomatic, CalibrateFromPicks).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -12,6 +14,7 @@
 #include "app/cli_recording.h"
 #include "core/calibration/automatic.h"
 #include "core/calibration/calibration_file.h"
+#include "core/calibration/passes.h"
 #include "core/calibration/picks.h"
 #include "core/calibration/samples.h"
 #include "core/calibration/workflow.h"
@@ -80,18 +83,40 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
 
 // The solve: automatic, or the picks workflow. Returns an exit code and
 // prints one error line on failure.
+// Odometry poses for the automatic mode: how far their heading departs from
+// the EKF's (which fuses the IMU's yaw) over the drive, at most this, or the
+// calibration is refused (docs/calibration.md, "What the automatic mode
+// refuses"): unequal wheel radii turn the odometry's circle by tens of
+// mrad a turn, which the angles absorbed (alpha 6-120 mrad off, beta up to
+// 72 mrad, in the robustness sweep's drives).
+constexpr double kMaxOdometryDepartureRad = 0.01;
+
 int SolveCalibration(const Args& args, const RecordingInput& in, const SampleStore& store,
-                     const std::vector<PickPair>& picks, CalibrationSummary* summary,
-                     std::unique_ptr<CalibrationSummary>* baseline) {
+                     const std::vector<PickPair>& picks, double odometry_departure_rad,
+                     CalibrationSummary* summary, std::unique_ptr<CalibrationSummary>* baseline) {
   if (args.Flag("auto")) {
     // A drive that is not a circle is refused before solving, a degenerate
     // result after (docs/calibration.md): one line, exit 1, no file.
     AutoCalibrationOptions options;
     // The poses' heading error that alpha absorbs (automatic.h): the EKF's
-    // by default; none for simulated truth; odometry's heading drifts.
+    // by default; none for simulated truth; odometry's is its departure
+    // from the EKF's heading on top of the EKF's own.
     const std::string source = args.Get("pose-source", "ekf");
     if (source == "truth") options.pose_heading_sigma_rad = options.pose_tilt_sigma_rad = 0.0;
-    if (source == "odometry") options.pose_heading_sigma_rad = 0.02;
+    if (source == "odometry") {
+      if (odometry_departure_rad > kMaxOdometryDepartureRad) {
+        char text[320];
+        std::snprintf(text, sizeof(text),
+                      "calibration refused: the odometry's heading departs %.1f mrad from the "
+                      "EKF's (IMU-fused) over the drive, more than %.0f: unequal wheel radii or "
+                      "slip would bend the calibration; use --pose-source ekf",
+                      1e3 * odometry_departure_rad, 1e3 * kMaxOdometryDepartureRad);
+        PrintError(text);
+        return kExitFailure;
+      }
+      options.pose_heading_sigma_rad =
+          std::hypot(options.pose_heading_sigma_rad, std::max(0.0, odometry_departure_rad));
+    }
     const Status s = SolveAutomatic(store, in.geometry, {}, options, summary);
     if (!s.ok()) {
       const bool refused = s.message().rfind("refused: ", 0) == 0;
@@ -143,7 +168,13 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
-  if (summary.method == "auto-planes") report["path_scale"] = summary.path_scale;
+  if (summary.method == "auto-planes") {
+    report["path_scale"] = summary.path_scale;
+    report["rms_sigmas"] = summary.rms_sigmas;
+    report["sigma_iid_rad"] = {{"alpha", summary.sigma_iid_rad[0]},
+                               {"beta", summary.sigma_iid_rad[1]},
+                               {"gamma", summary.sigma_iid_rad[2]}};
+  }
   report["warnings"] = summary.warnings;
   nlohmann::json trace = nlohmann::json::array();
   for (const auto& it : summary.trace) {
@@ -219,10 +250,20 @@ int RunCalibrate(int argc, char** argv) {
   code = RecordingPoses(args, in, MountingError{}, &recon);
   if (code != kExitOk) return code;
   const SampleStore store(in.log, recon.poses);
+  double odometry_departure_rad = -1.0;
+  if (args.Flag("auto") && args.Get("pose-source", "ekf") == "odometry") {
+    ReconstructionResult ekf;
+    const Status s = hardware::ReconstructRecording(in, ReconstructionOptions(), &ekf);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitFailure;
+    }
+    odometry_departure_rad = MaxHeadingDeparture(recon.poses, ekf.poses);
+  }
 
   CalibrationSummary summary;
   std::unique_ptr<CalibrationSummary> baseline;  // raw picks, with --refine
-  code = SolveCalibration(args, in, store, picks, &summary, &baseline);
+  code = SolveCalibration(args, in, store, picks, odometry_departure_rad, &summary, &baseline);
   if (code != kExitOk) return code;
   if (args.Has("out")) {
     const Status w = SaveCalibrationFile(args.Get("out"), summary.angles, &summary);

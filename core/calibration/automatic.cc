@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <utility>
@@ -380,6 +381,7 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
     summary->plane_reports.push_back(rep);
   }
   summary->final_rms_m = std::sqrt(sq / residuals);
+  summary->rms_sigmas = std::sqrt(sq_norm / residuals);
   problem->CheckObservability(so_opts, summary);
   if (so_opts.compute_covariance) {
     // The iid estimate, with s^2 from the normalised residuals
@@ -425,18 +427,13 @@ std::string RefuseResult(const CalibrationSummary& s, const AutoCalibrationOptio
              "the poses, and drive a slow circle";
     }
   }
-  // The normalised RMS over all residual points, from the plane reports.
-  double sq = 0.0;
-  int n = 0;
-  for (const auto& p : s.plane_reports) {
-    sq += p.rms_sigmas * p.rms_sigmas * p.points;
-    n += p.points;
-  }
-  const double rms_sigmas = n > 0 ? std::sqrt(sq / n) : 0.0;
-  if (rms_sigmas < options.min_rms_sigmas) {
-    return "refused: the residuals collapsed (RMS " + std::to_string(s.final_rms_m) + " m, " +
-           std::to_string(rms_sigmas) +
-           " of the range noise): the cloud folded onto a plane, not a calibration";
+  char text[400];
+  if (s.rms_sigmas >= 0.0 && s.rms_sigmas < options.min_rms_sigmas) {
+    std::snprintf(text, sizeof(text),
+                  "refused: the residuals collapsed (RMS %.3g m, %.3g of the range noise): the cloud "
+                  "folded onto a plane, not a calibration",
+                  s.final_rms_m, s.rms_sigmas);
+    return text;
   }
   if (s.sigma_rad.minCoeff() >= 0.0 && s.sigma_rad.minCoeff() < options.min_sigma_rad) {
     return "refused: the 1-sigma collapsed (" + std::to_string(s.sigma_rad.minCoeff()) +

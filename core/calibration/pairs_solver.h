@@ -75,6 +75,9 @@ struct CalibrationSummary {
       Eigen::Vector3d::Constant(-1.0);  // 1-sigma (alpha, beta, gamma); -1: unknown
   double initial_rms_m = 0.0;  // RMS pair distance (pairs) or point-to-plane distance (auto)
   double final_rms_m = 0.0;
+  // Automatic mode: the RMS of the normalised residuals r_i / sigma_i at the
+  // end (about 0.7-1 when the noise model holds; -1: not computed).
+  double rms_sigmas = -1.0;
   double initial_cost = 0.0, final_cost = 0.0;
   double condition_number = 0.0;
   int weakest_angle = -1;  // 0 alpha, 1 beta, 2 gamma: the least determined (observability check)

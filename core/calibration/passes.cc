@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "core/geometry/transform.h"
 
@@ -109,31 +110,63 @@ bool FitCircleDrive(const PoseBuffer& poses, CircleDrive* circle, std::string* w
     return false;
   }
   const double radius = std::sqrt(r2);
-  // How far the path strays from the circle, and how far round it goes
-  // (the polar angle about the centre, unwrapped).
-  double worst = 0.0, swept = 0.0;
+  // How far the path strays from the circle, and how far round it goes: the
+  // span of the polar angle about the centre, unwrapped, so that a circle
+  // driven forward and then backward (which cancels a lidar time offset,
+  // docs/calibration.md) counts its turn once.
+  double worst = 0.0, swept = 0.0, lo = 0.0, hi = 0.0;
   double last = 0.0;
   for (size_t i = 0; i < poses.size(); ++i) {
     const Eigen::Vector2d d = poses.pose(i).translation().head<2>() - centre;
     worst = std::max(worst, std::abs(d.norm() - radius));
     const double phi = std::atan2(d.y(), d.x());
     if (i > 0) swept += std::remainder(phi - last, 2.0 * M_PI);
+    lo = std::min(lo, swept);
+    hi = std::max(hi, swept);
     last = phi;
   }
-  const double turns = std::abs(swept) / (2.0 * M_PI);
+  const double turns = (hi - lo) / (2.0 * M_PI);
+  char text[160];
   if (worst > 0.15 * radius) {
-    *why = "the drive strays " + std::to_string(worst) + " m from its best circle (radius " +
-           std::to_string(radius) + " m): not a circle drive";
+    std::snprintf(text, sizeof(text),
+                  "the drive strays %.2f m from its best circle (radius %.2f m): not a circle drive",
+                  worst, radius);
+    *why = text;
     return false;
   }
   if (turns < min_turns) {
-    *why = "the drive goes " + std::to_string(turns) + " turns round its circle, need " +
-           std::to_string(min_turns);
+    std::snprintf(text, sizeof(text), "the drive goes %.2f turns round its circle, need %.2f",
+                  turns, min_turns);
+    *why = text;
     return false;
   }
   circle->centre = centre;
   circle->radius_m = radius;
   return true;
+}
+
+double MaxHeadingDeparture(const PoseBuffer& poses, const PoseBuffer& reference) {
+  const auto yaw = [](const Rigid3d& pose) {
+    const Eigen::Matrix3d r = pose.rotation().toRotationMatrix();
+    return std::atan2(r(1, 0), r(0, 0));
+  };
+  bool started = false;
+  double last_a = 0.0, last_b = 0.0, turn_a = 0.0, turn_b = 0.0, worst = -1.0;
+  size_t hint = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    Rigid3d ref;
+    if (!reference.LookupWithHint(poses.time(i), &hint, &ref)) continue;
+    const double a = yaw(poses.pose(i)), b = yaw(ref);
+    if (started) {
+      turn_a += std::remainder(a - last_a, 2.0 * M_PI);
+      turn_b += std::remainder(b - last_b, 2.0 * M_PI);
+    }
+    started = true;
+    last_a = a;
+    last_b = b;
+    worst = std::max(worst, std::abs(turn_a - turn_b));
+  }
+  return worst;
 }
 
 std::vector<uint8_t> LabelCirclePasses(const std::vector<CloudPoint>& points,

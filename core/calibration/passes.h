@@ -83,6 +83,15 @@ struct CircleDrive {
 bool FitCircleDrive(const PoseBuffer& poses, CircleDrive* circle, std::string* why,
                     double min_turns = 0.9);
 
+// How far the heading of `poses` departs from that of `reference` over the
+// same drive: the largest |(psi(t) - psi(t0)) - (psi_ref(t) - psi_ref(t0))|,
+// radians, at `poses`' times that `reference` covers (t0 the first), both
+// headings unwrapped. Odometry against the EKF (which fuses the IMU's yaw):
+// unequal wheel radii or slip turn the odometry's heading steadily away, and
+// the automatic calibration would absorb that turn into the angles. -1 if
+// the two share no time.
+double MaxHeadingDeparture(const PoseBuffer& poses, const PoseBuffer& reference);
+
 // The pass of every point of a circle drive (CircleDrive::PassOf with the
 // robot's position at the point's own time): 0 near side (pass A), 1 far
 // side (pass B), kNoPass where the poses do not cover the point's time.

@@ -133,6 +133,40 @@ TEST(FitCircleDriveTest, FindsTheCircleAndLabelsPasses) {
   }
   EXPECT_FALSE(FitCircleDrive(quarter, &circle, &why));
   EXPECT_NE(why.find("turns"), std::string::npos) << why;
+  EXPECT_NE(why.find("0.25 turns"), std::string::npos) << why;  // "%.2f", not 0.250000
+
+  // Forward one turn, then backward along the same circle: one turn
+  // covered (the span of the polar angle), not zero (the net angle).
+  PoseBuffer back_and_forth;
+  for (int i = 0; i <= 400; ++i) {
+    const double phi = 2.0 * M_PI * (i <= 200 ? i : 400 - i) / 200;
+    back_and_forth.Add(TimeFromNanoseconds(int64_t{100'000'000} * i),
+                       Rigid3d::FromPose(centre.x() + radius * std::cos(phi),
+                                         centre.y() + radius * std::sin(phi), 0, 0, 0,
+                                         phi + M_PI / 2));
+  }
+  EXPECT_TRUE(FitCircleDrive(back_and_forth, &circle, &why)) << why;
+}
+
+// Two headings over one drive: the same turns, one source turning 2 % more
+// (unequal wheel radii) and offset by a constant (a different start): the
+// departure is 2 % of the total turn, the offset does not count, and the
+// +-pi wrap of atan2 does not either.
+TEST(MaxHeadingDepartureTest, MeasuresTheTurnOneSourceAddsOverTheDrive) {
+  PoseBuffer a, reference;
+  const int n = 1000;
+  const double total = 4.0 * M_PI;  // two turns
+  for (int i = 0; i < n; ++i) {
+    const double psi = total * i / (n - 1);
+    const Time t = TimeFromNanoseconds(int64_t{50'000'000} * i);
+    reference.Add(t, Rigid3d::FromPose(0, 0, 0, 0, 0, psi));
+    a.Add(t, Rigid3d::FromPose(0, 0, 0, 0, 0, 1.0 + 1.02 * psi));
+  }
+  EXPECT_NEAR(MaxHeadingDeparture(a, reference), 0.02 * total, 1e-9);
+  EXPECT_NEAR(MaxHeadingDeparture(reference, reference), 0.0, 1e-12);
+  PoseBuffer later;  // no common time
+  later.Add(TimeFromNanoseconds(int64_t{1'000'000'000'000}), Rigid3d());
+  EXPECT_EQ(MaxHeadingDeparture(later, reference), -1.0);
 }
 
 }  // namespace
