@@ -3,8 +3,10 @@
 
 Seeded drives with sensor errors drawn across the HI219 and X4 data-sheet
 ranges and random mounting angles up to 2 deg, each calibrated by the
-command line as a user would: the automatic mode on a one-turn circle in
-the lab (resources/scenarios/lab_circle.json's path, EKF poses),
+command line as a user would: the automatic mode on the calibration drive
+docs/calibration.md asks for, two slow turns of a circle in the lab
+(resources/scenarios/lab_circle_two_turns.json's path, EKF poses; --drive
+lab_circle.json for one turn),
 
     sweepscan-cli calibrate --scenario DRIVE.json --auto --json
 
@@ -14,7 +16,7 @@ writes every angle's error and sigma.
 
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
-           [--default-sensors]
+           [--drive lab_circle_two_turns.json] [--default-sensors]
 """
 import argparse
 import json
@@ -85,6 +87,9 @@ def main():
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--workdir", default=os.path.join(ROOT, "out", "robustness"))
     ap.add_argument("--csv")
+    ap.add_argument("--drive", default="lab_circle_two_turns.json",
+                    help="the path's scenario in resources/scenarios (lab_circle_two_turns.json, "
+                         "the default: two turns; lab_circle.json: one turn)")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
     a = ap.parse_args()
@@ -102,7 +107,7 @@ def main():
         if a.default_sensors:
             sensor = {}
         for mode in modes:
-            base = "lab_circle.json"
+            base = a.drive
             path = os.path.join(a.workdir, "drive_%03d_%s.json" % (seed, mode))
             with open(path, "w") as f:
                 json.dump(scenario(base, seed, angles, sensor), f, indent=1)

@@ -482,10 +482,13 @@ TEST(AutomaticTest, EmptyRecordingFails) {
 
 // --- Gyro bias (issue 14) -----------------------------------------------------
 
-// Automatic mode on EKF poses of the lab circle (seed 1, the paper's angles)
-// with a gyro z bias; the filter with or without its bias state.
-Eigen::Vector3d EkfAutoErrorMrad(double gyro_bias_rad_s, bool estimate_gyro_bias) {
+// Automatic mode on EKF poses of the lab circle (seed 1, the paper's angles,
+// one turn or two) with a gyro z bias; the filter with or without its bias
+// state.
+Eigen::Vector3d EkfAutoErrorMrad(double gyro_bias_rad_s, bool estimate_gyro_bias,
+                                 double turns = 1.0) {
   sim::SimConfig c = testing::CircleConfig(1);
+  c.path = {CircleSegment(0.83, 0.2, turns, /*left=*/true)};
   c.mounting_error = kPaper;
   c.imu.gyro_bias_rad_s = gyro_bias_rad_s;
   sim::SimWorld world(c);
@@ -499,9 +502,9 @@ Eigen::Vector3d EkfAutoErrorMrad(double gyro_bias_rad_s, bool estimate_gyro_bias
       SolveAutomatic(SampleStore(log, est.poses()), c.geometry, {}, AutoCalibrationOptions(), &s);
   EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
   const Eigen::Vector3d e = ErrorMrad(s.angles, c.mounting_error);
-  std::printf("[calib] gyro bias %.1f mrad/s, EKF %s the bias state: err(mrad) alpha %+7.3f beta "
-              "%+7.3f gamma %+7.3f  sigma(mrad) %.3f %.3f %.3f\n",
-              1e3 * gyro_bias_rad_s, estimate_gyro_bias ? "with" : "without", e[0], e[1], e[2],
+  std::printf("[calib] %.0f turn(s), gyro bias %.1f mrad/s, EKF %s the bias state: err(mrad) "
+              "alpha %+7.3f beta %+7.3f gamma %+7.3f  sigma(mrad) %.3f %.3f %.3f\n",
+              turns, 1e3 * gyro_bias_rad_s, estimate_gyro_bias ? "with" : "without", e[0], e[1], e[2],
               1e3 * s.sigma_rad[0], 1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2]);
   return e;
 }
@@ -523,6 +526,15 @@ TEST(GyroBiasCalibrationTest, BiasOfTwoMradPerSecondDoesNotReachAlpha) {
     const Eigen::Vector3d frozen = EkfAutoErrorMrad(0.002, false);
     EXPECT_GT(std::abs(frozen[0]), std::abs(biased[0]));
   }
+}
+
+// The issue's bound on the calibration drive docs/calibration.md asks for,
+// two slow turns: a 2 mrad/s gyro bias leaves every angle within 0.5 mrad.
+TEST(GyroBiasCalibrationTest, TwoTurnsWithBiasOfTwoMradPerSecondGiveAlphaWithinHalfAMilliradian) {
+  const Eigen::Vector3d e = EkfAutoErrorMrad(0.002, true, 2.0);
+  EXPECT_LT(std::abs(e[0]), 0.5);
+  EXPECT_LT(std::abs(e[1]), 0.5);
+  EXPECT_LT(std::abs(e[2]), 0.5);
 }
 
 // --- Refusals (issue 14) --------------------------------------------------------

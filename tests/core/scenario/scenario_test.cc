@@ -29,7 +29,8 @@ TEST(ScenarioTest, MinimalFileGetsDefaults) {
 }
 
 TEST(ScenarioTest, ShippedScenariosLoad) {
-  for (const char* name : {"lab", "lab_circle", "lab_circle_diamond", "lab_slip", "stairwell"}) {
+  for (const char* name : {"lab", "lab_circle", "lab_circle_two_turns", "lab_circle_diamond",
+                           "lab_slip", "stairwell"}) {
     sim::SimConfig c;
     const Status s = LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name + ".json", &c);
     EXPECT_TRUE(s.ok()) << s.message();
