@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/evaluation/k_best.h"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #define SWEEPSCAN_BATCHED_AVX2 1
@@ -35,25 +37,6 @@ inline float BoxBox2(const float* alo, const float* ahi, const float* blo, const
   return s;
 }
 
-// The k best so far, ascending. While fewer than k, only distances under
-// `bound` enter.
-struct KBest {
-  int k = 0, n = 0;
-  uint32_t* idx = nullptr;
-  float* d2 = nullptr;
-  float bound = kInf;
-  float Worst() const { return n < k ? bound : d2[k - 1]; }
-  void Add(float d, uint32_t i) {
-    int j = n < k ? n++ : k - 1;
-    while (j > 0 && d2[j - 1] > d) {
-      d2[j] = d2[j - 1];
-      idx[j] = idx[j - 1];
-      --j;
-    }
-    d2[j] = d;
-    idx[j] = i;
-  }
-};
 
 // A group's candidates as a structure of arrays, reused across groups.
 struct Candidates {
@@ -339,12 +322,10 @@ void BatchedKdTree::Build(const float* xyz, const uint64_t* keys, size_t n) {
   }
 }
 
-int BatchedKdTree::Knn(const float* q, int k, uint32_t* idx, float* d2) const {
-  const int want = static_cast<int>(std::min<size_t>(static_cast<size_t>(std::max(k, 0)), n_));
-  if (want == 0) return 0;
-  KBest best{want, 0, idx, d2};
+template <class Worst, class Visit>
+void BatchedKdTree::Descend(const float* q, const Worst& worst, const Visit& visit) const {
   // Depth first, the nearer child first; a node is skipped when its box is
-  // no nearer than the k-th best so far. The depth is at most 48 splits.
+  // no nearer than worst(). The depth is at most 48 splits.
   struct Entry {
     int32_t node;
     float d2;
@@ -354,13 +335,12 @@ int BatchedKdTree::Knn(const float* q, int k, uint32_t* idx, float* d2) const {
   stack[sp++] = {0, 0.0f};
   while (sp > 0) {
     const Entry e = stack[--sp];
-    if (e.d2 >= best.Worst()) continue;
+    if (e.d2 >= worst()) continue;
     const Node& node = nodes_[static_cast<size_t>(e.node)];
     if (node.left < 0) {
       for (uint32_t s = node.begin; s < node.end; ++s) {
         const float dx = xyz_[3 * s] - q[0], dy = xyz_[3 * s + 1] - q[1], dz = xyz_[3 * s + 2] - q[2];
-        const float d = dx * dx + dy * dy + dz * dz;
-        if (d < best.Worst()) best.Add(d, s);
+        visit(s, dx * dx + dy * dy + dz * dz);
       }
       continue;
     }
@@ -375,6 +355,13 @@ int BatchedKdTree::Knn(const float* q, int k, uint32_t* idx, float* d2) const {
       stack[sp++] = {node.right, dr};
     }
   }
+}
+
+int BatchedKdTree::Knn(const float* q, int k, uint32_t* idx, float* d2) const {
+  const int want = static_cast<int>(std::min<size_t>(static_cast<size_t>(std::max(k, 0)), n_));
+  if (want == 0) return 0;
+  KBest best{want, 0, idx, d2};
+  Descend(q, [&best] { return best.Worst(); }, [&best](uint32_t s, float d) { best.Add(d, s); });
   return best.n;
 }
 
@@ -384,40 +371,15 @@ bool BatchedKdTree::NearestWhere(const float* q, const std::function<bool(uint32
   float best = kInf;
   uint32_t best_s = 0;
   bool found = false;
-  struct Entry {
-    int32_t node;
-    float d2;
-  };
-  Entry stack[2 * 49 + 2];
-  int sp = 0;
-  stack[sp++] = {0, 0.0f};
-  while (sp > 0) {
-    const Entry e = stack[--sp];
-    if (e.d2 >= best) continue;
-    const Node& node = nodes_[static_cast<size_t>(e.node)];
-    if (node.left < 0) {
-      for (uint32_t s = node.begin; s < node.end; ++s) {
-        const float dx = xyz_[3 * s] - q[0], dy = xyz_[3 * s + 1] - q[1], dz = xyz_[3 * s + 2] - q[2];
-        const float d = dx * dx + dy * dy + dz * dz;
+  Descend(
+      q, [&best] { return best; },
+      [&](uint32_t s, float d) {
         if (d < best && accept(s)) {
           best = d;
           best_s = s;
           found = true;
         }
-      }
-      continue;
-    }
-    const Node& l = nodes_[static_cast<size_t>(node.left)];
-    const Node& r = nodes_[static_cast<size_t>(node.right)];
-    const float dl = PointBox2(q, l.lo, l.hi), dr = PointBox2(q, r.lo, r.hi);
-    if (dl <= dr) {
-      stack[sp++] = {node.right, dr};
-      stack[sp++] = {node.left, dl};
-    } else {
-      stack[sp++] = {node.left, dl};
-      stack[sp++] = {node.right, dr};
-    }
-  }
+      });
   if (!found) return false;
   *idx = best_s;
   *d2 = best;
@@ -513,7 +475,7 @@ void BatchedKdTree::KnnRange(size_t begin, size_t end, int k, uint32_t* idx, flo
       if (!done) {
         KBest best{k, 0, oi, od, r2};
         for (size_t j = 0; j < m; ++j) {
-          if (cd[j] < best.Worst()) best.Add(cd[j], c.s[j]);
+          best.Add(cd[j], c.s[j]);
         }
         if (best.n < k) {
           ++t_fallbacks;

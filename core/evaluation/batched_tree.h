@@ -79,6 +79,10 @@ class BatchedKdTree {
     int32_t left = -1, right = -1;  // leaf: both -1
   };
   int32_t BuildNode(const uint64_t* keys, uint32_t begin, uint32_t end, int bit);
+  // The nearest-first descent shared by Knn and NearestWhere: visit(s, d2)
+  // for every point of the leaves nearer than worst().
+  template <class Worst, class Visit>
+  void Descend(const float* q, const Worst& worst, const Visit& visit) const;
 
   const float* xyz_ = nullptr;
   size_t n_ = 0;

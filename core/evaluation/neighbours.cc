@@ -2,6 +2,7 @@
 #include "core/evaluation/neighbours.h"
 
 #include "core/evaluation/batched_tree.h"
+#include "core/evaluation/k_best.h"
 
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
@@ -114,29 +115,10 @@ struct Grid {
   }
 };
 
-// The k best so far, ascending.
-struct Best {
-  int k = 0, n = 0;
-  uint32_t* idx;
-  float* d2;
-  float bound = std::numeric_limits<float>::max();
-  float Worst() const { return n < k ? bound : d2[k - 1]; }
-  void Add(float d, uint32_t i) {
-    if (d >= Worst()) return;
-    int j = n < k ? n++ : k - 1;
-    while (j > 0 && d2[j - 1] > d) {
-      d2[j] = d2[j - 1];
-      idx[j] = idx[j - 1];
-      --j;
-    }
-    d2[j] = d;
-    idx[j] = i;
-  }
-};
 
 // nanoflann result set over the forest: indices offset by the piece's start.
 struct ForestResult {
-  Best* best;
+  KBest* best;
   uint32_t offset;
   float worstDist() const { return best->Worst(); }
   bool addPoint(float d, uint32_t i) {
@@ -339,7 +321,7 @@ bool NeighbourIndex::Build(const std::vector<Eigen::Vector3f>& points, Neighbour
 int NeighbourIndex::Impl::GridKnn(const std::vector<float>& xyz, const float* q, int k,
                                   uint32_t* idx, float* d2) const {
   const Grid& g = grid;
-  Best best{k, 0, idx, d2};
+  KBest best{k, 0, idx, d2};
   const auto scan = [&](uint32_t b, uint32_t e) {
     for (uint32_t s = b; s < e; ++s) {
       const float dx = xyz[3 * s] - q[0], dy = xyz[3 * s + 1] - q[1], dz = xyz[3 * s + 2] - q[2];
@@ -393,7 +375,7 @@ int NeighbourIndex::Knn(const float* q, int k, uint32_t* idx, float* d2, int64_t
   if (n <= 0) return 0;
   switch (impl_->backend) {
     case NeighbourBackend::kKdTree: {
-      Best best{n, 0, idx, d2};
+      KBest best{n, 0, idx, d2};
       const auto& pieces = impl_->pieces;
       const size_t first = near >= 0 ? static_cast<size_t>(near) >> kPieceBits : 0;
       const nanoflann::SearchParams params;
