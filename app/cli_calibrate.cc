@@ -127,6 +127,12 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
   }
   PickCalibrationOptions options;
   options.refine = args.Flag("refine");
+  // The EKF's (or the odometry's) distance scale from the room's planes
+  // first (workflow.h); simulated truth needs none.
+  options.path_scale_from_planes = args.Get("pose-source", "ekf") != "truth";
+  if (args.Get("pose-source", "ekf") == "truth") {
+    options.pose_heading_sigma_rad = options.pose_tilt_sigma_rad = 0.0;
+  }
   PickCalibrationResult result;
   const Status s = CalibrateFromPicks(store, in.geometry, picks, options, &result);
   using Failure = PickCalibrationResult::Failure;
@@ -145,6 +151,7 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
       return kExitFailure;
   }
   *summary = result.summary;
+  summary->path_scale = result.path_scale;  // applied to the poses first (1: none)
   if (result.has_baseline) *baseline = std::make_unique<CalibrationSummary>(result.baseline);
   return kExitOk;
 }
@@ -168,6 +175,9 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
+  if (summary.method != "auto-planes" && summary.path_scale != 1.0) {
+    report["path_scale"] = summary.path_scale;
+  }
   if (summary.method == "auto-planes") {
     report["path_scale"] = summary.path_scale;
     report["rms_sigmas"] = summary.rms_sigmas;

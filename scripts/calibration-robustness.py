@@ -67,6 +67,22 @@ def scenario(base, seed, angles, errors):
     return d
 
 
+def diamond_pairs():
+    """The lab-diamond board's four corners as world picks in both passes.
+
+    The board (core/sim/scene.cc, LabScene): 0.6 m square at x 4.7-5.3,
+    z 1.05-1.65, its face at y = 0.16, turned 45 deg in its plane. With
+    --refine the picks only mark the target: the region around them, grown
+    by 25 cm, gives the sightings, and the board's corners are fitted to
+    all of each pass's samples (docs/calibration.md, "Refined corners").
+    """
+    h = 0.3 * math.sqrt(2.0)
+    corners = [(5.0, 0.16, 1.35 + h), (5.0 + h, 0.16, 1.35), (5.0, 0.16, 1.35 - h),
+               (5.0 - h, 0.16, 1.35)]
+    return {"format": "sweepscan-pairs", "version": 1,
+            "pairs": [{"pass1": {"world": list(c)}, "pass2": {"world": list(c)}} for c in corners]}
+
+
 def calibrate(cli, args):
     p = subprocess.run([cli, "calibrate"] + args + ["--json"], capture_output=True, text=True)
     if p.returncode != 0:
@@ -90,11 +106,15 @@ def main():
     ap.add_argument("--drive", default="lab_circle_two_turns.json",
                     help="the path's scenario in resources/scenarios (lab_circle_two_turns.json, "
                          "the default: two turns; lab_circle.json: one turn)")
+    ap.add_argument("--mode", choices=["auto", "refined"], default="auto",
+                    help="auto: calibrate --auto; refined: the diamond board drive "
+                         "(lab_circle_diamond.json: two turns at 0.05 m/s), four world picks at "
+                         "the board's corners, calibrate --pairs --refine")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
-    modes = ["auto"]
+    modes = [a.mode]
     errors = {m: [[], [], []] for m in modes}
     inside = {m: 0 for m in modes}
     counted = {m: 0 for m in modes}
@@ -107,11 +127,16 @@ def main():
         if a.default_sensors:
             sensor = {}
         for mode in modes:
-            base = a.drive
+            base = a.drive if mode == "auto" else "lab_circle_diamond.json"
             path = os.path.join(a.workdir, "drive_%03d_%s.json" % (seed, mode))
             with open(path, "w") as f:
                 json.dump(scenario(base, seed, angles, sensor), f, indent=1)
             extra = ["--auto"]
+            if mode == "refined":
+                pairs = os.path.join(a.workdir, "pairs_%03d.json" % seed)
+                with open(pairs, "w") as f:
+                    json.dump(diamond_pairs(), f, indent=1)
+                extra = ["--pairs", pairs, "--refine"]
             d, why = calibrate(a.cli, ["--scenario", path] + extra)
             if d is None:
                 refused[mode].append((seed, why))

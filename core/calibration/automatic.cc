@@ -553,6 +553,7 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
       // t_WB -> centre + scale (t_WB - centre).
       for (Prepared& p : in.prepared) p.t_wb = in.centre + scale * (p.t_wb - in.centre);
       summary->path_scale *= scale;
+      summary->path_centre = in.centre;
     }
     if (last_band) ++final_rounds;
     // Re-segmenting can flip a few boundary points in or out of a plane, so

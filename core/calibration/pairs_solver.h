@@ -84,6 +84,7 @@ struct CalibrationSummary {
   // Automatic mode: the path's distance scale estimated as a nuisance
   // (AutoCalibrationOptions::estimate_path_scale; 1 if not estimated).
   double path_scale = 1.0;
+  Eigen::Vector3d path_centre = Eigen::Vector3d::Zero();  // the scale's centre
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
   int planes = 0;  // automatic mode

@@ -30,6 +30,15 @@ Eigen::Vector3d ProjectObservation(const LidarObservation& o, const RobotGeometr
 // ----------------------------------------------------------------------------
 // SampleStore
 
+SampleStore SampleStore::ScaledAbout(const Eigen::Vector3d& centre, double scale) const {
+  SampleStore out = *this;
+  for (LidarObservation& o : out.observations_) {
+    o.world_from_body = Rigid3d(centre + scale * (o.world_from_body.translation() - centre),
+                                o.world_from_body.rotation());
+  }
+  return out;
+}
+
 SampleStore::SampleStore(const SensorLog& log, const PoseBuffer& poses, double min_range_m,
                          double max_range_m) {
   std::vector<int64_t> spacing;

@@ -76,6 +76,9 @@ class SampleStore {
               double max_range_m = 10.0);
 
   const std::vector<LidarObservation>& observations() const { return observations_; }
+  // A copy whose poses' positions are scaled about `centre`: t_WB -> centre
+  // + scale (t_WB - centre) (the automatic mode's path scale, automatic.h).
+  SampleStore ScaledAbout(const Eigen::Vector3d& centre, double scale) const;
   // Error if the recording has no such valid sample.
   Status Find(const SampleRef& ref, LidarObservation* out) const;
   // The valid sample with exactly this time stamp; error if there is none

@@ -2,7 +2,10 @@
 // desktop app's calibration panel run it (workflow.h).
 #include "core/calibration/workflow.h"
 
+#include <cmath>
 #include <string>
+
+#include "core/calibration/automatic.h"
 
 namespace sweepscan {
 
@@ -30,12 +33,31 @@ Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
   return region;
 }
 
-Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometry,
+Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geometry,
                           const std::vector<PickPair>& picks,
                           const PickCalibrationOptions& options, PickCalibrationResult* result) {
   using Failure = PickCalibrationResult::Failure;
   *result = PickCalibrationResult();
   const MountingError& initial = options.initial;
+  // The poses' distance scale first, from the room's planes (options).
+  std::string scale_warning;
+  SampleStore scaled;
+  bool use_scaled = false;
+  if (options.path_scale_from_planes) {
+    CalibrationSummary planes;
+    AutoCalibrationOptions auto_options;
+    auto_options.solver.progress = options.solver.progress;
+    const Status a = SolveAutomatic(recorded, geometry, initial, auto_options, &planes);
+    if (a.ok()) {
+      scaled = recorded.ScaledAbout(planes.path_centre, planes.path_scale);
+      use_scaled = true;
+      result->path_scale = planes.path_scale;
+    } else {
+      scale_warning = "the poses' distance scale was not corrected (the room's planes gave none: " +
+                      a.message() + ")";
+    }
+  }
+  const SampleStore& store = use_scaled ? scaled : recorded;
   result->region = TargetRegionFromPicks(picks, store, geometry, initial);
   if (result->region.isEmpty()) {
     result->failure = Failure::kNoValidPick;
@@ -76,6 +98,13 @@ Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometr
   if (!s.ok()) {
     result->failure = Failure::kSolveFailed;
     return s;
+  }
+  if (!scale_warning.empty()) summary.warnings.push_back(scale_warning);
+  for (CalibrationSummary* sum : {&summary, &result->baseline}) {
+    if (sum->sigma_rad.minCoeff() < 0.0) continue;  // unknown
+    sum->sigma_rad[0] = std::hypot(sum->sigma_rad[0], options.pose_heading_sigma_rad);
+    sum->sigma_rad[1] = std::hypot(sum->sigma_rad[1], options.pose_tilt_sigma_rad);
+    sum->sigma_rad[2] = std::hypot(sum->sigma_rad[2], options.pose_tilt_sigma_rad);
   }
   // The pairs and corners under the result, for display.
   std::vector<ObservationPair> resolved;

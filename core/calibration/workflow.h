@@ -37,6 +37,21 @@ struct PickCalibrationOptions {
   bool refine = false;
   CalibrationOptions solver;
   MountingError initial;  // the angles the target region and the solve start from
+  // Correct the poses' distance scale first: the automatic mode's path
+  // scale (SolveAutomatic on the same recording, from the room's planes
+  // seen in both passes) applied to every pose. A wheel-radius error scales
+  // the circle the EKF integrates, and the target's two passes then
+  // disagree by twice the radius error, which the picks' solve cannot tell
+  // from the angles (docs/results.md, "Robustness": 4.5 mrad RMS of alpha
+  // without it on drives with +-1 % wheel errors). Costs one automatic
+  // solve; skipped, with a warning, if that fails. Off for truth poses.
+  bool path_scale_from_planes = false;
+  // The poses' own heading and tilt errors, added in quadrature to the
+  // solve's sigma (alpha; beta and gamma), as in the automatic mode
+  // (AutoCalibrationOptions::pose_heading_sigma_rad): four corner pairs
+  // give sigma from their own misfit only. 0 for truth poses.
+  double pose_heading_sigma_rad = 0.001;
+  double pose_tilt_sigma_rad = 0.00025;
 };
 
 struct PickCalibrationResult {
@@ -54,6 +69,7 @@ struct PickCalibrationResult {
   // refine: the raw picks' solve (method "pairs"), when it succeeded.
   bool has_baseline = false;
   CalibrationSummary baseline;
+  double path_scale = 1.0;      // applied to the poses (path_scale_from_planes)
   Eigen::AlignedBox3d region;  // the target region used
   TargetSightings sightings;   // the target's sightings in that region
 

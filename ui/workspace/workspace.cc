@@ -805,6 +805,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
         JobCalibrationProgress progress(this, cancel);
         PickCalibrationOptions o;
         o.refine = refine;
+        o.path_scale_from_planes = true;  // as the CLI on EKF poses (workflow.h)
         o.solver.progress = &progress;
         s = CalibrateFromPicks(store, recording->geometry, picks, o, result.get());
         if (!s.ok()) return *error = QString::fromStdString(s.message());
