@@ -18,6 +18,7 @@
 #include "core/calibration/picks.h"
 #include "core/calibration/samples.h"
 #include "core/calibration/workflow.h"
+#include "core/pose/pose_estimator.h"
 
 namespace sweepscan::app {
 
@@ -262,13 +263,11 @@ int RunCalibrate(int argc, char** argv) {
   const SampleStore store(in.log, recon.poses);
   double odometry_departure_rad = -1.0;
   if (args.Flag("auto") && args.Get("pose-source", "ekf") == "odometry") {
-    ReconstructionResult ekf;
-    const Status s = hardware::ReconstructRecording(in, ReconstructionOptions(), &ekf);
-    if (!s.ok()) {
-      PrintError(s.message());
-      return kExitFailure;
-    }
-    odometry_departure_rad = MaxHeadingDeparture(recon.poses, ekf.poses);
+    // The EKF's poses of the same recording (no cloud needed).
+    PoseEstimatorOptions ekf;
+    ekf.initial_pose = in.start;
+    odometry_departure_rad =
+        MaxHeadingDeparture(recon.poses, EstimatePoses(in.log, ekf, in.geometry).poses());
   }
 
   CalibrationSummary summary;

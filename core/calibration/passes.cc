@@ -146,17 +146,14 @@ bool FitCircleDrive(const PoseBuffer& poses, CircleDrive* circle, std::string* w
 }
 
 double MaxHeadingDeparture(const PoseBuffer& poses, const PoseBuffer& reference) {
-  const auto yaw = [](const Rigid3d& pose) {
-    const Eigen::Matrix3d r = pose.rotation().toRotationMatrix();
-    return std::atan2(r(1, 0), r(0, 0));
-  };
   bool started = false;
   double last_a = 0.0, last_b = 0.0, turn_a = 0.0, turn_b = 0.0, worst = -1.0;
   size_t hint = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     Rigid3d ref;
     if (!reference.LookupWithHint(poses.time(i), &hint, &ref)) continue;
-    const double a = yaw(poses.pose(i)), b = yaw(ref);
+    const double a = YawFromQuaternion(poses.pose(i).rotation()),
+                 b = YawFromQuaternion(ref.rotation());
     if (started) {
       turn_a += std::remainder(a - last_a, 2.0 * M_PI);
       turn_b += std::remainder(b - last_b, 2.0 * M_PI);
