@@ -256,24 +256,51 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     double range = 0.0;
     double theta = convention.ThetaFromX4Degrees(encoder_deg);
     Eigen::Vector3d dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
-    bool found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
-    if (found && spec.model_angle_correction) {
-      // Fixed point: the direction depends on the range it returns. Converges
-      // in 2-3 steps on a surface (the correction changes slowly with d);
-      // a sample that keeps jumping across a depth edge is lost, like the
-      // X4's mixed returns at edges.
-      bool converged = false;
-      for (int k = 0; k < 5 && found; ++k) {
-        const double previous = hit.range;
-        theta = convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(hit.range * 1e3));
-        dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
-        found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
-        if (found && std::abs(hit.range - previous) < 1e-4) {
-          converged = true;
-          break;
+    bool found = false;
+    if (!spec.model_angle_correction) {
+      found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
+    } else {
+      // The X4 triangulates: its laser leaves the head beside the rotation
+      // axis, so at one encoder angle the beam is a fixed line that misses
+      // the centre, and a return at distance d lies at encoder + c(d) seen
+      // from the centre. The correction is that line: tan c(d) = 21.8/d -
+      // 21.8/155.3 (d in mm) is a line 21.6 mm from the centre, to within
+      // 0.13 mm between 0.12 and 10 m (0.9 mm from 0.05 m). The device
+      // measures the first surface along it, so: cast along the chord of
+      // c(d) between those ranges to find that surface, then solve the fixed
+      // point d = range(encoder + c(d)) on it (2-3 steps; c changes slowly
+      // along a surface). A return whose fixed point leaves that surface is
+      // shadowed from the centre's view (a depth edge) and is lost, like
+      // the X4's mixed returns at edges. Iterating from the bare encoder
+      // angle instead lands at a depth edge on whichever surface the first
+      // guess hits: the far one at one end of a board and the near one at
+      // the other, which shifted fitted target edges by half a beam step
+      // (docs/calibration.md, "Refined corners").
+      const auto at = [&](double d_m) {
+        return world_from_lidar *
+               LidarPoint(d_m, convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(d_m * 1e3)));
+      };
+      const Eigen::Vector3d near = at(std::max(spec.min_range_m, 0.05));
+      const Eigen::Vector3d chord = at(spec.max_range_m) - near;
+      RayHit first;
+      if (config_.scene.Cast(near, chord.normalized(), 1e-6, chord.norm(), &first)) {
+        const Eigen::Vector3d centre = world_from_lidar.translation();
+        const double first_range = (near + first.range * chord.normalized() - centre).norm();
+        double previous = first_range;
+        for (int k = 0; k < 5; ++k) {
+          theta = convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(previous * 1e3));
+          dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
+          if (!config_.scene.Cast(centre, dir, 1e-6, spec.max_range_m, &hit) ||
+              std::abs(hit.range - first_range) > 0.01) {
+            break;
+          }
+          if (std::abs(hit.range - previous) < 1e-4) {
+            found = true;
+            break;
+          }
+          previous = hit.range;
         }
       }
-      if (!converged) found = false;
     }
     if (found) {
       truth = {hit.primitive, hit.face, hit.range};
