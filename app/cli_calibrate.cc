@@ -23,7 +23,8 @@
 namespace sweepscan::app {
 
 const char* const kCalibrateUsage =
-    "usage: sweepscan-cli calibrate SESSION|--scenario FILE (--pairs PAIRS.json [--refine] | --auto)\n"
+    "usage: sweepscan-cli calibrate SESSION|--scenario FILE\n"
+    "           (--pairs PAIRS.json [--refine [--board-thickness M]] | --auto)\n"
     "                               [--out CALIB.json] [--pose-source ekf|odometry|truth] [--json]\n"
     "\n"
     "Solves the lidar's mounting error (alpha, beta, gamma) from a circle drive with\n"
@@ -67,6 +68,23 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
   if (args.Flag("refine") && !args.Has("pairs")) {
     PrintError("--refine needs --pairs FILE");
     return kExitBadInput;
+  }
+  if (args.Has("board-thickness")) {
+    double t = 0.0;
+    std::string error;
+    if (!args.Flag("refine")) {
+      PrintError("--board-thickness needs --refine (only the board fit uses it)");
+      return kExitBadInput;
+    }
+    if (!args.GetDouble("board-thickness", &t, &error)) {
+      PrintError(error);
+      return kExitBadInput;
+    }
+    if (!(t >= 0.0 && t <= 0.05)) {
+      PrintError("--board-thickness: " + args.Get("board-thickness") +
+                 " is not a thickness in metres within 0-0.05");
+      return kExitBadInput;
+    }
   }
   if (args.Has("pairs")) {
     const Status s = LoadPairsFile(args.Get("pairs"), picks);
@@ -128,6 +146,10 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
   }
   PickCalibrationOptions options;
   options.refine = args.Flag("refine");
+  if (args.Has("board-thickness")) {
+    std::string unused;  // checked in ParseCalibrateArgs
+    args.GetDouble("board-thickness", &options.solver.board_thickness_m, &unused);
+  }
   // The EKF's (or the odometry's) distance scale from the room's planes
   // first (workflow.h); simulated truth needs none.
   options.path_scale_from_planes = args.Get("pose-source", "ekf") != "truth";
@@ -176,6 +198,7 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
+  if (summary.method == "refined-corners") report["board_thickness_m"] = summary.board_thickness_m;
   if (summary.method != "auto-planes" && summary.path_scale != 1.0) {
     report["path_scale"] = summary.path_scale;
   }
@@ -244,7 +267,8 @@ void PrintCalibration(const Args& args, const RecordingInput& in,
 }  // namespace
 
 int RunCalibrate(int argc, char** argv) {
-  Args args({"json", "auto", "refine", "help", "strict"}, {"scenario", "pairs", "out", "pose-source", "seed"});
+  Args args({"json", "auto", "refine", "help", "strict"},
+            {"scenario", "pairs", "out", "pose-source", "seed", "board-thickness"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help calibrate)");

@@ -37,8 +37,8 @@ double AngleStep(const LidarObservation& a, const LidarObservation& b) {
 }
 
 // Where a scan line leaves the board, in board coordinates. kUpper/kLower:
-// the midpoint between a line's outermost sample and where its next beam
-// meets the plane (error along the line, U(-s/2, s/2)). kLeft/kRight: a
+// the midpoint between where a line's outermost beam and its next beam
+// cross the plane (error along the line, U(-s/2, s/2)). kLeft/kRight: a
 // sample of the outermost line, moved out by half the line spacing (error
 // across the lines, shared by the whole line).
 enum class EdgeSide { kUpper, kLower, kLeft, kRight };
@@ -50,7 +50,17 @@ struct EdgePoint {
   // 2 sigma of noise. A line whose outermost sample fell out of the band
   // (noise, dropout) ends a whole spacing short and is dropped by this test.
   double limit = std::numeric_limits<double>::infinity();
+  // The board's thickness seen along this beam (LineEndPoints): an edge
+  // whose outward normal N has N . shift > 0 faces the beam, which can hit
+  // its edge face, and the hit/miss boundary lies `shift` beyond it.
+  Eigen::Vector2d shift = Eigen::Vector2d::Zero();
 };
+
+// The point on edge k that p stands for: p itself, or p moved back by its
+// shift when the edge faces the beam (see LineEndPoints).
+Eigen::Vector2d OnEdge(const EdgePoint& p, const Eigen::Vector2d& edge_normal) {
+  return edge_normal.dot(p.shift) > 0.0 ? Eigen::Vector2d(p.uv - p.shift) : p.uv;
+}
 
 // A rectangle in the board plane: centre c, first axis at angle phi from u,
 // half sizes a (along the first axis) and b. Edge k has the outward normal
@@ -97,10 +107,11 @@ int AssignEdge(const Rect& r, const EdgePoint& p) {
 double Residual(const Rect& r, const EdgePoint& p, int k) {
   const Eigen::Vector2d n = EdgeNormal(r.phi, k);
   const double h = (k % 2 == 0) ? r.b : r.a;
+  const Eigen::Vector2d q = OnEdge(p, n);
   if (p.side == EdgeSide::kUpper || p.side == EdgeSide::kLower) {
-    return p.uv.y() - (r.c.y() + (h - n.x() * (p.uv.x() - r.c.x())) / n.y());
+    return q.y() - (r.c.y() + (h - n.x() * (q.x() - r.c.x())) / n.y());
   }
-  return p.uv.x() - (r.c.x() + (h - n.y() * (p.uv.y() - r.c.y())) / n.x());
+  return q.x() - (r.c.x() + (h - n.y() * (q.y() - r.c.y())) / n.x());
 }
 
 // For fixed phi and assignments the offsets of the edge points along their
@@ -129,8 +140,8 @@ bool SolveForPhi(double phi, const std::vector<EdgePoint>& pts, const std::vecto
       a << 1.0, across / along, 0.0, 0.0;
     }
     a[(k % 2 == 0) ? 3 : 2] = 1.0 / along;
-    const double y = vertical ? pts[j].uv.y() + across / along * pts[j].uv.x()
-                              : pts[j].uv.x() + across / along * pts[j].uv.y();
+    const Eigen::Vector2d q = OnEdge(pts[j], n);
+    const double y = vertical ? q.y() + across / along * q.x() : q.x() + across / along * q.y();
     rows[j] = {a, y};
     ata += pts[j].weight * a * a.transpose();
     aty += pts[j].weight * y * a;
@@ -409,10 +420,12 @@ Status FindBoardLines(const std::vector<LidarObservation>& samples,
 // ----------------------------------------------------------------------------
 // Edge extraction
 
-// Each line's top and bottom end points: the midpoint between the outermost
-// sample and where the next beam of that scan meets the plane.
-Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::vector<Line>& lines,
-                     const Plane& plane, const BoardFrame& f, const Rigid3d& body_from_lidar,
+// Each line's top and bottom end points: the midpoint between where the
+// outermost sample's beam and the next beam of that scan cross the plane,
+// with the board's thickness as each point's shift.
+Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::vector<double>& band,
+                     const std::vector<Line>& lines, const Plane& plane, const BoardFrame& f,
+                     const Rigid3d& body_from_lidar, double board_thickness_m,
                      std::vector<EdgePoint>* edge_points_out) {
   const Eigen::Vector3d& u = f.u;
   const Eigen::Vector3d& v = f.v;
@@ -438,29 +451,56 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::ve
       if (!(std::abs(step) > 0.0) || !(dtheta > 0.0)) continue;
       // The next beam beyond the outermost sample, one local step further
       // (the step varies along the line with the triangulation correction;
-      // the median step if a dropout left a gap), intersected with the
-      // plane: o + t d with n . (o + t d) + d0 = 0.
+      // the median step if a dropout left a gap).
       const double next =
           std::abs(step) > 0.5 * dtheta && std::abs(step) < 1.5 * dtheta ? step
                                                                          : std::copysign(dtheta, step);
-      const double th = theta(i) + next;
       const Rigid3d world_from_lidar = samples[i].world_from_body * body_from_lidar;
       const Eigen::Vector3d o = world_from_lidar.translation();
-      const Eigen::Vector3d dir =
-          world_from_lidar.rotation() * Eigen::Vector3d(0.0, std::sin(th), std::cos(th));
-      const double denom = plane.normal.dot(dir);
-      if (std::abs(denom) < 1e-6) continue;
-      const double t = -plane.SignedDistance(o) / denom;
-      if (!(t > 0.0)) continue;
-      const Eigen::Vector3d miss = o + t * dir - c;
-      const Eigen::Vector2d miss_uv(miss.dot(u), miss.dot(v));
-      const Eigen::Vector2d hit_uv = l.uv[last].first;
+      const auto beam = [&](double th) -> Eigen::Vector3d {
+        return world_from_lidar.rotation() * Eigen::Vector3d(0.0, std::sin(th), std::cos(th));
+      };
+      // Where a beam from o crosses the plane: o + t d with n . (o + t d) + d0 = 0.
+      const auto crossing = [&](const Eigen::Vector3d& d, Eigen::Vector2d* uv) {
+        const double denom = plane.normal.dot(d);
+        if (std::abs(denom) < 1e-6) return false;
+        const double t = -plane.SignedDistance(o) / denom;
+        if (!(t > 0.0)) return false;
+        const Eigen::Vector3d q = o + t * d - c;
+        *uv = Eigen::Vector2d(q.dot(u), q.dot(v));
+        return true;
+      };
+      // Both ends of the interval are beam crossings, not the sample's
+      // projection: a beam that hit the board's edge face (below) lies
+      // beyond the edge where it crosses the front plane but projects onto
+      // the edge itself, and the crossing does not carry the range noise.
+      const Eigen::Vector3d hit_dir = beam(theta(i));
+      Eigen::Vector2d hit_uv, miss_uv;
+      if (!crossing(hit_dir, &hit_uv) || !crossing(beam(theta(i) + next), &miss_uv)) continue;
       const double s = (miss_uv - hit_uv).norm();
       if (s > 0.2) continue;  // grazing beam: no useful bound
-      const Eigen::Vector2d mid = 0.5 * (hit_uv + miss_uv);
-      edge_points.push_back({mid, end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
-                             1.0 / (s * s / 12.0 + kInPlaneNoise * kInPlaneNoise),
-                             0.5 * s + 2.0 * kInPlaneNoise});
+      EdgePoint p{0.5 * (hit_uv + miss_uv), end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
+                  1.0 / (s * s / 12.0 + kInPlaneNoise * kInPlaneNoise),
+                  0.5 * s + 2.0 * kInPlaneNoise};
+      // The board's thickness T. A beam that crosses the front plane just
+      // beyond an edge can still hit that edge's face, T deep, if going
+      // deeper carries it back over the edge: per unit of depth the beam d
+      // moves q = (d - (d.n) n) / |d.n| in the plane, so the hits reach the
+      // edge line translated by D = -T q wherever N . D > 0 (N the edge's
+      // outward normal: the bottom edges for a lidar below the board). The
+      // midpoint above locates that boundary, so the edge is at mid - D
+      // (OnEdge, once the point's edge is known). Such a hit projects onto
+      // the edge, inside the band, and without this the bottom edges came
+      // out half a beam step low (a 5 mm board 2-4 mm too large in the
+      // near pass). Hits deeper than the sample's band are not on the
+      // board's line, so T counts up to the band.
+      const double depth = std::min(board_thickness_m, band[i]);
+      const double dn = std::abs(plane.normal.dot(hit_dir));
+      if (depth > 0.0 && dn > 1e-3) {
+        const Eigen::Vector3d q = (hit_dir - plane.normal.dot(hit_dir) * plane.normal) / dn;
+        p.shift = -depth * Eigen::Vector2d(q.dot(u), q.dot(v));
+      }
+      edge_points.push_back(p);
     }
   }
   if (edge_points.size() < 6) {
@@ -569,23 +609,65 @@ Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
   return Status::Ok();
 }
 
+// r with its parameter q of (c_u, c_v, a, b, phi) moved by delta.
+Rect Perturbed(const Rect& r, int q, double delta) {
+  Rect out = r;
+  double* p[5] = {&out.c.x(), &out.c.y(), &out.a, &out.b, &out.phi};
+  *p[q] += delta;
+  return out;
+}
+constexpr double kRectStep = 1e-6;  // central differences: metres, radians
+
+// Covariance of the rectangle's parameters (c_u, c_v, a, b, phi) at the
+// solution, for the assignment `edge`: (J^T W J)^-1 with J the residuals'
+// derivatives (central differences), scaled by chi^2 / dof when above 1
+// (the edge points scatter more than their model: noise, a rough edge).
+Eigen::Matrix<double, 5, 5> RectCovariance(const Rect& rect, const std::vector<EdgePoint>& pts,
+                                           const std::vector<int>& edge) {
+  Eigen::Matrix<double, 5, 5> n = Eigen::Matrix<double, 5, 5>::Zero();
+  double chi2 = 0.0;
+  int used = 0;
+  for (size_t j = 0; j < pts.size(); ++j) {
+    if (edge[j] < 0) continue;
+    Eigen::Matrix<double, 5, 1> g;
+    for (int q = 0; q < 5; ++q) {
+      g[q] = (Residual(Perturbed(rect, q, kRectStep), pts[j], edge[j]) -
+              Residual(Perturbed(rect, q, -kRectStep), pts[j], edge[j])) /
+             (2.0 * kRectStep);
+    }
+    n += pts[j].weight * g * g.transpose();
+    const double r = Residual(rect, pts[j], edge[j]);
+    chi2 += pts[j].weight * r * r;
+    ++used;
+  }
+  const double scale = used > 5 ? std::max(1.0, chi2 / (used - 5)) : 1.0;
+  Eigen::FullPivLU<Eigen::Matrix<double, 5, 5>> lu(n);
+  if (!lu.isInvertible()) return Eigen::Matrix<double, 5, 5>::Zero();
+  return scale * lu.inverse();
+}
+
 // ----------------------------------------------------------------------------
 // Corners
 
 // The rectangle's corners in the world, clockwise from the one nearest
 // 112.5 deg, each with its nearest kept sample; and the rectangle's size
 // and rotation.
-Status CornersFromRect(const Rect& rect, const BoardFrame& f, const std::vector<Eigen::Vector3d>& pts,
+// The rectangle's corners in the board plane, counter-clockwise from
+// c + a e1 + b e2.
+std::array<Eigen::Vector2d, 4> RectCorners(const Rect& rect) {
+  const Eigen::Vector2d e1(std::cos(rect.phi), std::sin(rect.phi));
+  const Eigen::Vector2d e2(-std::sin(rect.phi), std::cos(rect.phi));
+  return {rect.c + rect.a * e1 + rect.b * e2, rect.c - rect.a * e1 + rect.b * e2,
+          rect.c - rect.a * e1 - rect.b * e2, rect.c + rect.a * e1 - rect.b * e2};
+}
+
+Status CornersFromRect(const Rect& rect, const Eigen::Matrix<double, 5, 5>& rect_covariance,
+                       const BoardFrame& f, const std::vector<Eigen::Vector3d>& pts,
                        const std::vector<size_t>& keep, BoardCorners* out) {
   const Eigen::Vector3d& u = f.u;
   const Eigen::Vector3d& v = f.v;
   const Eigen::Vector3d& c = f.c;
-  const Eigen::Vector2d e1(std::cos(rect.phi), std::sin(rect.phi));
-  const Eigen::Vector2d e2(-std::sin(rect.phi), std::cos(rect.phi));
-  std::array<Eigen::Vector2d, 4> uv = {rect.c + rect.a * e1 + rect.b * e2,
-                                       rect.c - rect.a * e1 + rect.b * e2,
-                                       rect.c - rect.a * e1 - rect.b * e2,
-                                       rect.c + rect.a * e1 - rect.b * e2};
+  const std::array<Eigen::Vector2d, 4> uv = RectCorners(rect);
   std::array<double, 4> ang;
   for (int k = 0; k < 4; ++k) ang[k] = std::atan2(uv[k].y() - rect.c.y(), uv[k].x() - rect.c.x());
   int first = 0;
@@ -595,7 +677,20 @@ Status CornersFromRect(const Rect& rect, const BoardFrame& f, const std::vector<
       first = k;
     }
   }
-  // uv[] runs counter-clockwise (first axis, then +90 deg steps); walk it backwards.
+  // uv[] runs counter-clockwise (first axis, then +90 deg steps); walk it
+  // backwards. G: the world corners' derivatives by the rectangle's
+  // parameters (central differences), for their covariance G C G^T.
+  Eigen::Matrix<double, 12, 5> g;
+  for (int q = 0; q < 5; ++q) {
+    const std::array<Eigen::Vector2d, 4> a = RectCorners(Perturbed(rect, q, -kRectStep));
+    const std::array<Eigen::Vector2d, 4> b = RectCorners(Perturbed(rect, q, kRectStep));
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d d =
+          (b[(first - k + 4) % 4] - a[(first - k + 4) % 4]) / (2.0 * kRectStep);
+      g.block<3, 1>(3 * k, q) = d.x() * u + d.y() * v;
+    }
+  }
+  out->covariance = g * rect_covariance * g.transpose();
   for (int k = 0; k < 4; ++k) {
     const Eigen::Vector2d& p = uv[(first - k + 4) % 4];
     out->corners[k] = c + p.x() * u + p.y() * v;
@@ -619,7 +714,9 @@ Status CornersFromRect(const Rect& rect, const BoardFrame& f, const std::vector<
 }  // namespace
 
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
-                       const MountingError& calibration, BoardCorners* out) {
+                       const MountingError& calibration, double board_thickness_m,
+                       BoardCorners* out) {
+  if (!(board_thickness_m >= 0.0)) return Status::Error("board fit: the board's thickness must be >= 0");
   if (samples.size() < 20) {
     return Status::Error("board fit: " + std::to_string(samples.size()) +
                          " samples, need at least 20");
@@ -638,7 +735,8 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   if (!s.ok()) return s;
   // Edge extraction.
   std::vector<EdgePoint> edge_points;
-  s = LineEndPoints(samples, lines, plane, frame, body_from_lidar, &edge_points);
+  s = LineEndPoints(samples, band, lines, plane, frame, body_from_lidar, board_thickness_m,
+                    &edge_points);
   if (!s.ok()) return s;
   Rect rect = BoundingRect(edge_points);
   AddSidePoints(lines, rect, &edge_points);
@@ -647,7 +745,7 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   double cost = 0.0;
   s = FitRectangle(edge_points, &rect, &edge, &cost);
   if (!s.ok()) return s;
-  s = CornersFromRect(rect, frame, pts, keep, out);
+  s = CornersFromRect(rect, RectCovariance(rect, edge_points, edge), frame, pts, keep, out);
   if (!s.ok()) return s;
   size_t used = 0;
   for (int e : edge) used += e >= 0;

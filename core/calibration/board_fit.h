@@ -53,6 +53,12 @@ struct BoardCorners {
   size_t points = 0;          // inliers used
   size_t scans = 0;
   size_t edge_points = 0;  // scan-line end points (and side points) in the rectangle fit
+  // Covariance of the four corners (world x, y, z of corner 0, then 1, ...)
+  // from the rectangle fit: the edge points' variances (s^2/12 and the
+  // range noise) through the fit's five parameters (centre, half sizes,
+  // rotation), scaled up by the fit's chi^2 per degree of freedom when
+  // that exceeds 1. In the board plane only (rank 5).
+  Eigen::Matrix<double, 12, 12> covariance = Eigen::Matrix<double, 12, 12>::Zero();
 };
 
 // Fits the board from the samples of one pass (points near the target, all
@@ -61,10 +67,15 @@ struct BoardCorners {
 //  2. per scan line the longest gap-free run of in-plane samples, kept if it
 //     reaches the height of the longest line's middle (a convex board
 //     always does; a run on the sill below does not);
-//  3. edge points: each line's top and bottom sample and, beyond each, where
-//     the next beam of that scan would have met the plane; the edge lies
-//     between the two, so the midpoint is unbiased with error
-//     U(-s/2, s/2), s the local spacing (variance s^2/12);
+//  3. edge points: where each line's top and bottom sample's beam and,
+//     beyond each, the next beam of that scan cross the plane; the edge
+//     lies between the two, so the midpoint is unbiased with error
+//     U(-s/2, s/2), s the local spacing (variance s^2/12). A board of
+//     thickness T (`board_thickness_m`) is also hit on the edge faces that
+//     face the beams (its bottom edges, for a lidar below it), which moves
+//     the boundary between hits and misses T tan(incidence) beyond those
+//     edges; each point carries that shift and the fit removes it on the
+//     edges it applies to;
 //  4. a rectangle (centre, rotation, width, height) by weighted least
 //     squares of the edge points' offsets along their scan line from the
 //     rectangle's boundary. For a fixed rotation this is linear; the
@@ -73,7 +84,8 @@ struct BoardCorners {
 //     spacing beyond the outermost line (the upright board's side edges,
 //     located only to the scan spacing; mount the target as a diamond).
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
-                       const MountingError& calibration, BoardCorners* corners);
+                       const MountingError& calibration, double board_thickness_m,
+                       BoardCorners* corners);
 
 // The target's samples on a circle drive: every valid sample whose world
 // position under `calibration` lies in `region` (a box around the target,

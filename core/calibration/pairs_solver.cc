@@ -452,6 +452,10 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     *error = "calibration: min_pairs must be >= 2 (three angles need at least two pairs)";
     return false;
   }
+  if (!(board_thickness_m >= 0.0 && board_thickness_m <= 0.05)) {
+    *error = "calibration: board_thickness_m must be within 0-0.05 m (a target board, not a box)";
+    return false;
+  }
   if (!(max_condition_number > 1.0) || !(min_pick_spread_m >= 0.0)) {
     *error = "calibration: max_condition_number must be > 1 and min_pick_spread_m >= 0";
     return false;

@@ -54,6 +54,10 @@ struct CalibrationOptions {
   // change by less than outer_tolerance_rad.
   int max_outer_iterations = 15;
   double outer_tolerance_rad = 1e-6;
+  // Refined corners: the target board's thickness (FitBoardCorners). The
+  // simulated lab's board is 5 mm; measure yours (0 for a sheet on a
+  // stand). docs/calibration.md, "The target".
+  double board_thickness_m = 0.005;
   CalibrationProgress* progress = nullptr;  // not owned; may be null
 
   bool IsValid(std::string* error) const;
@@ -85,6 +89,7 @@ struct CalibrationSummary {
   // (AutoCalibrationOptions::estimate_path_scale; 1 if not estimated).
   double path_scale = 1.0;
   Eigen::Vector3d path_centre = Eigen::Vector3d::Zero();  // the scale's centre
+  double board_thickness_m = 0.0;  // refined corners: the target's, as the board fit took it
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
   int planes = 0;  // automatic mode

@@ -115,9 +115,10 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
     for (int k = 0; k < 2; ++k) {
       result->has_corners =
           result->has_corners &&
-          FitBoardCorners(result->sightings.passes[k], geometry, initial, &before[k]).ok() &&
+          FitBoardCorners(result->sightings.passes[k], geometry, initial,
+                          options.solver.board_thickness_m, &before[k]).ok() &&
           FitBoardCorners(result->sightings.passes[k], geometry, summary.angles,
-                          &result->corners[k])
+                          options.solver.board_thickness_m, &result->corners[k])
               .ok();
     }
   }

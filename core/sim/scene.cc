@@ -167,6 +167,10 @@ Box MakeBox(const std::string& label, double x0, double x1, double y0, double y1
 }
 }  // namespace
 
+double LabTargetThickness(LabTarget target) {
+  return target == LabTarget::kSquare ? 0.02 : 0.005;
+}
+
 Scene LabScene(LabTarget target) {
   Scene s;
   s.Add(MakeBox("room", 0, 10, 0, 5, 0, 2.5, /*inside=*/true));
@@ -178,10 +182,11 @@ Scene LabScene(LabTarget target) {
   s.Add(MakeBox("cabinet_south", 1.0, 2.0, 0.0, 0.45, 0.0, 1.2));
   // The window sill and the target board standing on it.
   s.Add(MakeBox("window_sill", 4.0, 6.0, 0.0, 0.14, 0.0, 0.85));
+  const double front = 0.16, back = front - LabTargetThickness(target);
   if (target == LabTarget::kSquare) {
-    s.Add(MakeBox("target", 4.7, 5.3, 0.14, 0.16, 0.9, 1.5));
+    s.Add(MakeBox("target", 4.7, 5.3, back, front, 0.9, 1.5));
   } else {
-    Box b = MakeBox("target", 4.7, 5.3, 0.155, 0.16, 1.05, 1.65);
+    Box b = MakeBox("target", 4.7, 5.3, back, front, 1.05, 1.65);
     b.pitch = M_PI / 4;
     s.Add(b);
   }

@@ -77,10 +77,14 @@ class Scene {
 // upright board's side edges run parallel to the scan lines and are located
 // only to the scan spacing (~5 cm); every edge of a diamond crosses the scan
 // lines at 45 deg, so all four corners can be fitted to millimetres. Thin,
-// because a beam passing just below a thick board's bottom edge hits its
-// edge face, which biases the fitted edge outwards (docs/calibration.md).
+// because a beam passing just below a board's bottom edge hits its edge
+// face: the board fit removes that given the thickness, and with less of
+// it there is less to remove (docs/calibration.md, "The target").
 enum class LabTarget { kSquare, kDiamond };
 Scene LabScene(LabTarget target = LabTarget::kSquare);
+// The target board's thickness: 20 mm upright, 5 mm for the diamond
+// (CalibrationOptions::board_thickness_m of a refined calibration).
+double LabTargetThickness(LabTarget target);
 // A stairwell: a 9 x 3 x 6 m shaft with a flat run-up, a straight flight of
 // 14 steps (0.28 m deep, 0.17 m high) along +x and a landing.
 Scene StairwellScene();

@@ -132,7 +132,8 @@ void BM_FitBoardCorners(benchmark::State& state) {
   static const DiamondData* d = new DiamondData();
   for (auto _ : state) {
     BoardCorners b;
-    const Status st = FitBoardCorners(d->board[1], d->config.geometry, d->config.mounting_error, &b);
+    const Status st = FitBoardCorners(d->board[1], d->config.geometry, d->config.mounting_error,
+                                      sim::LabTargetThickness(sim::LabTarget::kDiamond), &b);
     if (!st.ok()) state.SkipWithError(st.message().c_str());
     benchmark::DoNotOptimize(b.corners);
   }

@@ -20,6 +20,7 @@
 #include <QLineEdit>
 #include <QProcess>
 #include <QPushButton>
+#include <QDoubleSpinBox>
 #include <QSettings>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
@@ -762,11 +763,26 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   EXPECT_NEAR(saved[1].pass2.world.x(), picked[1].b.x(), 1e-6);
 
   panel->ShowPass(-1);
+  // The board's thickness: 5 mm by default, typed into its box, kept in the
+  // settings, and only for the refined solve.
+  auto* thickness = panel->findChild<QDoubleSpinBox*>(QStringLiteral("boardThickness"));
+  ASSERT_NE(thickness, nullptr);
+  EXPECT_DOUBLE_EQ(thickness->value(), 5.0);
+  thickness->selectAll();
+  QTest::keyClicks(thickness, QStringLiteral("12"));
+  EXPECT_DOUBLE_EQ(thickness->value(), 12.0);
+  EXPECT_DOUBLE_EQ(QSettings().value(QStringLiteral("calibration/board_thickness_mm")).toDouble(), 12.0);
+  panel->SetRefine(false);
+  EXPECT_FALSE(thickness->isEnabled());
   panel->SetRefine(true);
+  EXPECT_TRUE(thickness->isEnabled());
+  thickness->selectAll();
+  QTest::keyClicks(thickness, QStringLiteral("5"));
   panel->Solve();
   ASSERT_TRUE(WaitForSolve(panel)) << panel->result_text().toStdString();
   const PickCalibrationResult* r = workspace_->calibration_result();
   ASSERT_NE(r, nullptr);
+  EXPECT_DOUBLE_EQ(r->summary.board_thickness_m, 0.005);
   const double got[3] = {r->summary.angles.alpha, r->summary.angles.beta, r->summary.angles.gamma};
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(got[k], kTruthRad[k], 3e-3) << k;

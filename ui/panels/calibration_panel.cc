@@ -1,6 +1,7 @@
 #include "ui/panels/calibration_panel.h"
 
 #include <QCheckBox>
+#include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QGridLayout>
 #include <QGroupBox>
@@ -11,6 +12,7 @@
 #include <QPainterPath>
 #include <QPushButton>
 #include <QScrollArea>
+#include <QSettings>
 #include <QTableWidget>
 #include <QTimer>
 #include <QUndoCommand>
@@ -254,6 +256,30 @@ QWidget* CalibrationPanel::BuildSolveStep() {
   refine_ = new QCheckBox(tr("Snap picks to the fitted board corners (refine)"));
   refine_->setChecked(true);
   layout->addWidget(refine_);
+  // The board's thickness: beams passing its bottom edges hit their edge
+  // faces, which the board fit takes out (docs/calibration.md, "The target").
+  auto* thickness_row = new QHBoxLayout;
+  auto* thickness_label = new QLabel(tr("Board thickness:"));
+  thickness_ = new QDoubleSpinBox;
+  thickness_->setObjectName(QStringLiteral("boardThickness"));
+  thickness_->setRange(0.0, 50.0);
+  thickness_->setDecimals(1);
+  thickness_->setSingleStep(0.5);
+  thickness_->setSuffix(tr(" mm"));
+  thickness_->setToolTip(
+      tr("The target board's thickness (0 for a sheet). Beams that pass its bottom edges hit "
+         "their edge faces; the refined fit takes that out."));
+  thickness_->setValue(
+      QSettings().value(QStringLiteral("calibration/board_thickness_mm"), 5.0).toDouble());
+  thickness_label->setBuddy(thickness_);
+  thickness_row->addWidget(thickness_label);
+  thickness_row->addWidget(thickness_);
+  thickness_row->addStretch(1);
+  layout->addLayout(thickness_row);
+  connect(refine_, &QCheckBox::toggled, thickness_, &QWidget::setEnabled);
+  connect(thickness_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, [](double mm) {
+    QSettings().setValue(QStringLiteral("calibration/board_thickness_mm"), mm);
+  });
   auto* row = new QHBoxLayout;
   solve_ = new QPushButton(tr("Solve"));
   solve_->setToolTip(tr("Levenberg-Marquardt on the picked pairs (Miao et al. Eq. 15-17)"));
@@ -419,6 +445,10 @@ bool CalibrationPanel::LoadPairs(const QString& path, QString* error) {
 
 void CalibrationPanel::SetRefine(bool refine) { refine_->setChecked(refine); }
 
+void CalibrationPanel::SetBoardThickness(double metres) { thickness_->setValue(metres * 1e3); }
+
+double CalibrationPanel::board_thickness() const { return thickness_->value() * 1e-3; }
+
 void CalibrationPanel::Solve() {
   const std::vector<PickPair> p = pairs();
   if (p.size() < 4) {
@@ -426,7 +456,7 @@ void CalibrationPanel::Solve() {
     return;
   }
   StartSolving();
-  workspace_->Calibrate(p, refine_->isChecked());
+  workspace_->Calibrate(p, refine_->isChecked(), board_thickness());
 }
 
 void CalibrationPanel::SolveAutomatic() {

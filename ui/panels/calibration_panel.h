@@ -28,6 +28,7 @@
 #include "ui/workspace/workspace.h"
 
 class QCheckBox;
+class QDoubleSpinBox;
 class QLabel;
 class QPushButton;
 class QTableWidget;
@@ -57,6 +58,10 @@ class CalibrationPanel : public QWidget {
   void CancelSolve();
   bool solving() const { return solving_; }
   void SetRefine(bool refine);
+  // The target board's thickness for the refined solve (kept in the
+  // settings; CalibrationOptions::board_thickness_m).
+  void SetBoardThickness(double metres);
+  double board_thickness() const;
   // Step 2: pass A (0), pass B (1) or both (-1) in the view.
   void ShowPass(int pass);
   bool LoadCalibration(const QString& path, QString* error);
@@ -99,6 +104,7 @@ class CalibrationPanel : public QWidget {
   std::vector<PairPoints> pairs_;
   QTableWidget* table_;
   QCheckBox* refine_;
+  QDoubleSpinBox* thickness_;
   QPushButton* solve_;
   QPushButton* auto_;
   QPushButton* cancel_;

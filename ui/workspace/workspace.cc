@@ -785,7 +785,8 @@ class JobCalibrationProgress : public CalibrationProgress {
 
 }  // namespace
 
-void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
+void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
+                          double board_thickness_m) {
   if (opened_ == nullptr) {
     emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
     return;
@@ -795,7 +796,8 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
   auto error = std::make_shared<QString>();
   RunJob(
       tr("Calibrating"),
-      [this, recording, picks, refine, result, error](std::atomic<bool>* cancel) -> QString {
+      [this, recording, picks, refine, board_thickness_m, result,
+       error](std::atomic<bool>* cancel) -> QString {
         ReconstructionOptions options;  // EKF poses, uncalibrated: the picks' frame
         ReconstructionResult poses;
         Status s = hardware::ReconstructRecording(*recording, options, &poses);
@@ -805,6 +807,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine) {
         JobCalibrationProgress progress(this, cancel);
         PickCalibrationOptions o;
         o.refine = refine;
+        o.solver.board_thickness_m = board_thickness_m;
         o.path_scale_from_planes = true;  // as the CLI on EKF poses (workflow.h)
         o.solver.progress = &progress;
         s = CalibrateFromPicks(store, recording->geometry, picks, o, result.get());

@@ -173,9 +173,10 @@ class Workspace : public QObject {
   // Picks -> mounting error on a job thread (CalibrateFromPicks, the same
   // workflow as `sweepscan-cli calibrate --pairs`): poses by the EKF, the
   // target region from the picks, the pairs solve or, with refine, the
-  // refined-corners solve with the raw picks as baseline. Progress per LM
+  // refined-corners solve (the board `board_thickness_m` thick) with the
+  // raw picks as baseline. Progress per LM
   // iteration (calibrationIteration), cancel through CancelJob().
-  void Calibrate(const std::vector<PickPair>& picks, bool refine);
+  void Calibrate(const std::vector<PickPair>& picks, bool refine, double board_thickness_m);
   // The automatic mode (no picks): planes seen in both passes, the same
   // SolveAutomatic as `sweepscan-cli calibrate --auto` with EKF poses. The
   // result arrives like a picks solve (calibrationFinished), with method
