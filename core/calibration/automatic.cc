@@ -58,8 +58,8 @@ bool AutoCalibrationOptions::IsValid(std::string* error) const {
       !(range_noise_m + model_noise_m > 0.0) || !(membership_sigmas > 0.0) ||
       !(edge_margin_m >= 0.0) || !(surface_step_m > 0.0) || !(robust_scale_sigmas > 0.0) ||
       !(covariance_block_s > 0.0) || !(max_abs_angle_rad > 0.0) || !(min_rms_sigmas >= 0.0) ||
-      !(min_sigma_rad >= 0.0) ||
-      !std::isfinite(range_noise_m + range_noise_fraction + model_noise_m + membership_sigmas +
+      !(min_sigma_rad >= 0.0) || !(max_rms_sigmas > min_rms_sigmas) ||
+      !std::isfinite(max_rms_sigmas + range_noise_m + range_noise_fraction + model_noise_m + membership_sigmas +
                      edge_margin_m + robust_scale_sigmas + covariance_block_s +
                      max_abs_angle_rad + min_rms_sigmas + min_sigma_rad)) {
     *error =
@@ -433,6 +433,14 @@ std::string RefuseResult(const CalibrationSummary& s, const AutoCalibrationOptio
                   "refused: the residuals collapsed (RMS %.3g m, %.3g of the range noise): the cloud "
                   "folded onto a plane, not a calibration",
                   s.final_rms_m, s.rms_sigmas);
+    return text;
+  }
+  if (s.rms_sigmas > options.max_rms_sigmas) {
+    std::snprintf(text, sizeof(text),
+                  "refused: the residuals are %.2f times the lidar's noise model (RMS %.3g m, more "
+                  "than %.2f): the planes' bands and sigma assume that model, so neither sigma nor "
+                  "the angles can be trusted; check the lidar's window and range noise, and the poses",
+                  s.rms_sigmas, s.final_rms_m, options.max_rms_sigmas);
     return text;
   }
   if (s.sigma_rad.minCoeff() >= 0.0 && s.sigma_rad.minCoeff() < options.min_sigma_rad) {

@@ -629,10 +629,22 @@ TEST(AutomaticTest, ResultsAtTheBoundOrCollapsedAreRefused) {
   EXPECT_FALSE(s.converged);
   o = AutoCalibrationOptions();
   o.min_rms_sigmas = 5.0;  // as if the X4's noise had vanished from the residuals
+  o.max_rms_sigmas = 10.0;
   st = SolveAutomatic(d.store, d.config.geometry, {}, o, &s);
   ASSERT_FALSE(st.ok());
   EXPECT_EQ(st.message().rfind("refused: the residuals collapsed", 0), 0u) << st.message();
   EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  o = AutoCalibrationOptions();
+  o.min_rms_sigmas = 0.01;
+  o.max_rms_sigmas = 0.1;  // as if the lidar were ten times noisier than its model
+  st = SolveAutomatic(d.store, d.config.geometry, {}, o, &s);
+  ASSERT_FALSE(st.ok());
+  EXPECT_EQ(st.message().rfind("refused: the residuals are ", 0), 0u) << st.message();
+  EXPECT_NE(st.message().find("times the lidar's noise model"), std::string::npos) << st.message();
+  EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  o = AutoCalibrationOptions();
+  o.max_rms_sigmas = o.min_rms_sigmas;
+  EXPECT_FALSE(SolveAutomatic(d.store, d.config.geometry, {}, o, &s).ok());
 }
 
 TEST(RefinedCornersTest, TooFewSamplesFails) {
