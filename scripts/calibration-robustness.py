@@ -16,7 +16,8 @@ writes every angle's error and sigma.
 
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
-           [--drive lab_circle_two_turns.json] [--default-sensors]
+           [--drive lab_circle_two_turns.json] [--mode auto|refined]
+           [--pose-source ekf|truth|odometry] [--default-sensors]
 """
 import argparse
 import json
@@ -110,6 +111,9 @@ def main():
                     help="auto: calibrate --auto; refined: the diamond board drive "
                          "(lab_circle_diamond.json: two turns at 0.05 m/s), four world picks at "
                          "the board's corners, calibrate --pairs --refine")
+    ap.add_argument("--pose-source", choices=["ekf", "truth", "odometry"], default="ekf",
+                    help="the poses the calibration uses (truth: the simulator's, to separate the "
+                         "method's own error from the poses')")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
     a = ap.parse_args()
@@ -137,7 +141,7 @@ def main():
                 with open(pairs, "w") as f:
                     json.dump(diamond_pairs(), f, indent=1)
                 extra = ["--pairs", pairs, "--refine"]
-            d, why = calibrate(a.cli, ["--scenario", path] + extra)
+            d, why = calibrate(a.cli, ["--scenario", path, "--pose-source", a.pose_source] + extra)
             if d is None:
                 refused[mode].append((seed, why))
                 print("seed %3d %-7s refused: %s" % (seed, mode, why), flush=True)
