@@ -114,6 +114,20 @@ TEST(CliCalibrateTest, AutomaticOnScenarioWritesCalibration) {
   EXPECT_LT(tilt_after, 0.1);
 }
 
+// `calibrate SCENARIO --auto --out FILE [extra]` is refused: exit 1, one
+// line that starts with "calibration refused: " + `message`, and no file.
+CliRun ExpectAutoRefused(const std::string& scenario, const std::string& extra,
+                         const std::string& message) {
+  const std::string out = scenario.substr(0, scenario.size() - 5) + "_calib.json";
+  std::remove(out.c_str());
+  const CliRun r = Cli("calibrate --scenario " + scenario + " --auto --out " + out + extra);
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(Lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("calibration refused: " + message), std::string::npos) << r.out;
+  EXPECT_FALSE(std::ifstream(out).good());
+  return r;
+}
+
 // A straight drive (no circle) is refused by --auto before solving: exit 1,
 // one line that says what to drive instead, no calibration file.
 TEST(CliCalibrateTest, AutomaticRefusesAStraightDrive) {
@@ -122,14 +136,8 @@ TEST(CliCalibrateTest, AutomaticRefusesAStraightDrive) {
     "mounting_error_rad":{"alpha":-0.0058,"beta":0.0126,"gamma":0.0355},
     "path":{"start":{"x_m":2.0,"y_m":2.5,"yaw_rad":0.0},
             "segments":[{"v_mps":0.2,"w_radps":0.0,"duration_s":20.0}]}})");
-  std::remove(Tmp("straight_calib.json").c_str());
-  const CliRun r = Cli("calibrate --scenario " + Tmp("straight.json") + " --auto --out " +
-                       Tmp("straight_calib.json"));
-  EXPECT_EQ(r.code, 1) << r.out;
-  EXPECT_EQ(Lines(r.out), 1) << r.out;
-  EXPECT_NE(r.out.find("calibration refused: not a calibration drive"), std::string::npos) << r.out;
+  const CliRun r = ExpectAutoRefused(Tmp("straight.json"), "", "not a calibration drive");
   EXPECT_NE(r.out.find("circle"), std::string::npos) << r.out;
-  EXPECT_FALSE(std::ifstream(Tmp("straight_calib.json")).good());
 }
 
 // A lidar far noisier than the noise model the automatic mode assumes (10 mm
@@ -146,14 +154,8 @@ TEST(CliCalibrateTest, AutomaticRefusesResidualsOutOfLineWithTheNoiseModel) {
   noisy["lidar"]["range_noise_m"] = 0.01;
   noisy["lidar"]["range_noise_fraction"] = 0.01;
   Write(Tmp("noisy_lidar.json"), noisy.dump());
-  std::remove(Tmp("noisy_lidar_calib.json").c_str());
-  const CliRun r = Cli("calibrate --scenario " + Tmp("noisy_lidar.json") + " --auto --out " +
-                       Tmp("noisy_lidar_calib.json"));
-  EXPECT_EQ(r.code, 1) << r.out;
-  EXPECT_EQ(Lines(r.out), 1) << r.out;
-  EXPECT_NE(r.out.find("calibration refused: the residuals are"), std::string::npos) << r.out;
+  const CliRun r = ExpectAutoRefused(Tmp("noisy_lidar.json"), "", "the residuals are");
   EXPECT_NE(r.out.find("times the lidar's noise model"), std::string::npos) << r.out;
-  EXPECT_FALSE(std::ifstream(Tmp("noisy_lidar_calib.json")).good());
 
   nlohmann::json worst = base;
   worst["lidar"]["range_noise_m"] = 0.003;
@@ -179,15 +181,9 @@ TEST(CliCalibrateTest, AutomaticRefusesOdometryWithASlippingWheel) {
   nlohmann::json scenario = nlohmann::json::parse(in);
   scenario["slips"] = {{{"start_s", 5.0}, {"duration_s", 3.0}, {"wheel", "left"}, {"extra", 0.3}}};
   Write(Tmp("slip.json"), scenario.dump());
-  std::remove(Tmp("slip_calib.json").c_str());
-  const CliRun r = Cli("calibrate --scenario " + Tmp("slip.json") +
-                       " --auto --pose-source odometry --out " + Tmp("slip_calib.json"));
-  EXPECT_EQ(r.code, 1) << r.out;
-  EXPECT_EQ(Lines(r.out), 1) << r.out;
-  EXPECT_NE(r.out.find("calibration refused: the odometry's heading departs"), std::string::npos)
-      << r.out;
+  const CliRun r = ExpectAutoRefused(Tmp("slip.json"), " --pose-source odometry",
+                                     "the odometry's heading departs");
   EXPECT_NE(r.out.find("--pose-source ekf"), std::string::npos) << r.out;
-  EXPECT_FALSE(std::ifstream(Tmp("slip_calib.json")).good());
   const CliRun ekf = Cli("calibrate --scenario " + Tmp("slip.json") + " --auto --json");
   ASSERT_EQ(ekf.code, 0) << ekf.out;
   const nlohmann::json j = nlohmann::json::parse(ekf.out);
