@@ -384,17 +384,16 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
   summary->rms_sigmas = std::sqrt(sq_norm / residuals);
   problem->CheckObservability(so_opts, summary);
   if (so_opts.compute_covariance) {
-    // The iid estimate, with s^2 from the normalised residuals
-    // themselves (not the robust cost), ...
-    const double saved_cost = final_cost;
-    summary->final_cost = 0.5 * sq_norm;
-    problem->ComputeCovariance(residuals, summary);
-    summary->final_cost = saved_cost;
-    summary->sigma_iid_rad = summary->sigma_rad;
-    // ... and the cluster-robust one; report the larger per angle.
-    Eigen::Vector3d clustered;
-    if (problem->ClusteredAngleSigma(group_of_row, &clustered)) {
-      summary->sigma_rad = summary->sigma_rad.cwiseMax(clustered);
+    // The iid estimate, with s^2 from the normalised residuals themselves
+    // (not the robust cost), and the cluster-robust one; report the larger
+    // per angle.
+    const double s2 = sq_norm / std::max(1, residuals - 3);
+    Eigen::Vector3d iid, clustered;
+    if (problem->AngleSigmas(group_of_row, s2, &iid, &clustered)) {
+      summary->sigma_iid_rad = iid;
+      summary->sigma_rad = iid.cwiseMax(clustered);
+    } else {
+      summary->warnings.push_back("covariance could not be computed (rank-deficient Jacobian)");
     }
   }
 }

@@ -114,12 +114,12 @@ class PlaneProblem {
 
   const std::array<double, 4>& plane(size_t s) const;  // n_s (3), d_s
 
-  // Final statistics on the solved problem: the angles' observability, the
-  // iid covariance (s^2 from summary->final_cost) and the cluster-robust one
-  // (rows grouped by group_of_row).
+  // Final statistics on the solved problem: the angles' observability ...
   void CheckObservability(const CalibrationOptions& options, CalibrationSummary* summary);
-  void ComputeCovariance(int num_residuals, CalibrationSummary* summary);
-  bool ClusteredAngleSigma(const std::vector<int>& group_of_row, Eigen::Vector3d* sigma);
+  // ... and the angles' 1-sigma from one Jacobian: iid, s2 (J'J)^-1, and
+  // cluster-robust over the rows' groups (pairs_solver.cc).
+  bool AngleSigmas(const std::vector<int>& group_of_row, double s2, Eigen::Vector3d* iid,
+                   Eigen::Vector3d* clustered);
 
  private:
   struct Impl;

@@ -364,18 +364,17 @@ void PlaneProblem::CheckObservability(const CalibrationOptions& options,
   calibration_internal::CheckObservability(&impl_->problem, impl_->abg, options, summary);
 }
 
-void PlaneProblem::ComputeCovariance(int num_residuals, CalibrationSummary* summary) {
-  calibration_internal::ComputeCovariance(&impl_->problem, impl_->abg, num_residuals, summary);
-}
-
-// Cluster-robust covariance of the angles (the "sandwich"):
+// The angles' covariance from one evaluation of the Jacobian J (tangent
+// space) and the residuals r: the iid estimate s^2 (J'J)^-1 (the angles'
+// block of it, i.e. the inverse of their Schur complement) and the
+// cluster-robust one ("sandwich"):
 //   Cov = H^-1 (sum_g J_g' r_g r_g' J_g) H^-1,  H = J'J,
 // J and r over all parameters (angles and planes, tangent space), rows
 // grouped by g. With independent rows it reduces to the familiar
 // (J'J)^-1 s^2; with errors shared inside a group (a pose error lasting a
 // second) it grows accordingly, where the iid formula would not.
-bool PlaneProblem::ClusteredAngleSigma(const std::vector<int>& group_of_row,
-                                       Eigen::Vector3d* sigma) {
+bool PlaneProblem::AngleSigmas(const std::vector<int>& group_of_row, double s2,
+                               Eigen::Vector3d* iid, Eigen::Vector3d* clustered) {
   ceres::Problem* problem = &impl_->problem;
   ceres::CRSMatrix crs;
   std::vector<double> residuals;
@@ -404,8 +403,11 @@ bool PlaneProblem::ClusteredAngleSigma(const std::vector<int>& group_of_row,
   if (groups > 1) meat *= groups / (groups - 1.0);
   const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
   const Eigen::MatrixXd cov = hinv * meat * hinv;
-  for (int i = 0; i < 3; ++i) (*sigma)[i] = std::sqrt(std::max(0.0, cov(i, i)));
-  return sigma->allFinite();
+  for (int i = 0; i < 3; ++i) {
+    (*iid)[i] = std::sqrt(std::max(0.0, hinv(i, i) * s2));
+    (*clustered)[i] = std::sqrt(std::max(0.0, cov(i, i)));
+  }
+  return iid->allFinite() && clustered->allFinite();
 }
 
 }  // namespace calibration_internal

@@ -41,6 +41,10 @@ SampleStore SampleStore::ScaledAbout(const Eigen::Vector3d& centre, double scale
 
 SampleStore::SampleStore(const SensorLog& log, const PoseBuffer& poses, double min_range_m,
                          double max_range_m) {
+  size_t total = 0;
+  for (const LidarScan& scan : log.scans) total += scan.samples.size();
+  observations_.reserve(total);
+  by_ref_.reserve(total);
   std::vector<int64_t> spacing;
   for (const LidarScan& scan : log.scans) {
     size_t hint = 0;
