@@ -13,6 +13,18 @@
 namespace sweepscan::sfm {
 namespace {
 
+// Stops the solve at the next iteration once `cancel` is set.
+class CancelCallback : public ceres::IterationCallback {
+ public:
+  explicit CancelCallback(const std::atomic<bool>* cancel) : cancel_(cancel) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return cancel_ != nullptr && cancel_->load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* cancel_;
+};
+
 // Residuals of one line on one plane (Eq. 40): the plane distance of the
 // line's centroid, and sigma times the sine of the line-plane angle. Pose
 // block: quaternion (x, y, z, w; Eigen's storage) then translation; plane
@@ -225,8 +237,11 @@ Status RefinePosesAndPlanes(const std::vector<LineObs>& lines, const RefineOptio
   so.gradient_tolerance = 1e-12;
   so.parameter_tolerance = 1e-10;
   so.logging_type = ceres::SILENT;
+  CancelCallback cancel(options.cancel);
+  if (options.cancel != nullptr) so.callbacks.push_back(&cancel);
   ceres::Solver::Summary cs;
   ceres::Solve(so, &problem, &cs);
+  if (options.cancel != nullptr && options.cancel->load()) return Status::Error("cancelled");
   if (!cs.IsSolutionUsable()) return Status::Error("refinement failed: " + cs.message);
 
   for (int i = 0; i < num_poses; ++i) {

@@ -47,6 +47,7 @@ struct RefineOptions {
   // eliminated block by block (DENSE_SCHUR): the sparse Cholesky of the
   // whole system solves it (the chain is banded, the planes few).
   const MotionPrior* motion = nullptr;
+  const std::atomic<bool>* cancel = nullptr;  // SequenceOptions::cancel
 };
 
 // Lines with plane < 0 are ignored. Poses indexed by LineObs::frame, planes

@@ -688,6 +688,7 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
   // ---- Tracking ----
   std::vector<ScanLine> scratch;
   for (int k = 1; k < num_frames; ++k) {
+    if (options.cancel != nullptr && options.cancel->load()) return Status::Error("cancelled");
     const size_t begin = r.lines.size();
     for (int si : r.frame_scans[k]) ExtractRigLines(scans[si], si, k, rig, options.lines, &scratch, &r.lines);
     const size_t end = r.lines.size();
@@ -762,6 +763,7 @@ Status RunSequence(const std::vector<Scan>& scans, const Rig& rig, const Sequenc
   ro.fix_first_pose = r.gauge_first_pose || constrain;
   if (!discover && !r.gauge_first_pose) ro.fixed_planes = {0, 1, 2};
   if (constrain) ro.motion = prior;
+  ro.cancel = options.cancel;
   for (int pass = 0; pass < options.refine_passes; ++pass) {
     if (pass > 0) {
       // Re-associate every line with the refined poses and planes.

@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <atomic>
 #include <vector>
 
 #include "core/common/status.h"
@@ -109,6 +110,11 @@ struct SequenceOptions {
   int refine_max_iterations = 50;
   int threads = 2;
   uint64_t seed = 1;
+  // Set from another thread (the desktop app's Cancel) to stop the run:
+  // checked once a frame while tracking and once an iteration of the
+  // refinement, which then returns the error "cancelled". Not owned; may be
+  // null.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 // A line-plane observation (rig frame), in the compact form that Eq. 40

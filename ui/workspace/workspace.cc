@@ -65,12 +65,16 @@ QString SfmJobName() { return QObject::tr("Structure from motion"); }
 // --pose-source sfm` computes them (app/cli_session.cc): the EKF as the
 // motion prior from the session's start, planes found on the way (no
 // designated ones), the wheeled scanner's default options.
+// `cancel` stops it within a frame of tracking or an iteration of the
+// refinement (SequenceOptions::cancel).
 Status ComputeSfmPoses(const hardware::Recording& recording, const MountingError& calibration,
-                       PoseBuffer* poses, QString* summary) {
+                       const std::atomic<bool>* cancel, PoseBuffer* poses, QString* summary) {
   sfm::WheeledSfmResult result;
+  sfm::WheeledSfmOptions options;
+  options.sequence.cancel = cancel;
   const Status s = sfm::WheeledSfmFromLog(recording.log, recording.geometry, calibration,
                                           recording.start, PoseSource::kEkf, sfm::SequenceInit(),
-                                          sfm::WheeledSfmOptions(), &result);
+                                          options, &result);
   if (!s.ok()) return s;
   *poses = std::move(result.poses);
   const sfm::SequenceResult& seq = result.sequence;
@@ -635,12 +639,12 @@ void Workspace::OpenSession(const QString& dir, double speed) {
                                   : QString::fromStdString(why);
         circle->poses = poses;
         if (source == PoseSource::kSfm && !*cancel) {
-          // The batch over the whole log, now that it is loaded (no cancel
-          // points inside: a cancel drops the result when it returns).
+          // The batch over the whole log, now that it is loaded (a cancel
+          // stops it within a frame or a refinement iteration).
           const QString name = QFileInfo(QString::fromStdString(path)).fileName();
           QMetaObject::invokeMethod(
               this, [this, name] { emit jobProgress(tr("%1: %2").arg(SfmJobName(), name), -1.0); });
-          const Status sfm = ComputeSfmPoses(*recording, recording->decode.meta.calibration,
+          const Status sfm = ComputeSfmPoses(*recording, recording->decode.meta.calibration, cancel,
                                              sfm_poses.get(), sfm_summary.get());
           if (!sfm.ok()) *sfm_error = QString::fromStdString(sfm.message());
         }
@@ -728,8 +732,8 @@ void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
   auto summary = std::make_shared<QString>();
   RunJob(
       SfmJobName(),
-      [recording, calibration, poses, summary](std::atomic<bool>*) -> QString {
-        const Status s = ComputeSfmPoses(*recording, calibration, poses.get(), summary.get());
+      [recording, calibration, poses, summary](std::atomic<bool>* cancel) -> QString {
+        const Status s = ComputeSfmPoses(*recording, calibration, cancel, poses.get(), summary.get());
         return s.ok() ? QString()
                       : tr("SfM cannot place this session: %1")
                             .arg(QString::fromStdString(s.message()));

@@ -6,8 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <string>
+#include <thread>
 
 #include "core/scenario/scenario.h"
 #include "core/sfm/rig_scenario.h"
@@ -138,6 +141,47 @@ TEST(WheeledSfmTest, TruthPriorStaysAtTheTruth) {
   EXPECT_LT(e.lateral_mean_m, 0.002);
   EXPECT_LT(e.heading_mean_deg, 0.03);
   EXPECT_LT(e.tilt_mean_deg, 0.03);
+}
+
+// The desktop app's Cancel (SequenceOptions::cancel): set before the run,
+// it stops at the first frame; set while the run is under way (from another
+// thread, once the first frames are tracked), it stops within a frame or a
+// refinement iteration. Either way the error is "cancelled" and no poses
+// come back.
+TEST(WheeledSfmTest, CancelStopsTheRun) {
+  sim::SimConfig config;
+  ASSERT_TRUE(LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config).ok());
+  hardware::Recording in;
+  hardware::SimulateRecording(config, &in);
+  const Rigid3d body_from_lidar = BodyFromLidar(in.geometry, MountingError());
+  std::atomic<bool> cancel{true};
+  WheeledSfmOptions options;
+  options.sequence.cancel = &cancel;
+  WheeledSfmResult r;
+  Status s = RunWheeledSfm(in.log.scans, body_from_lidar, in.truth_poses, SequenceInit(), options, &r);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.message(), "cancelled");
+  EXPECT_TRUE(r.poses.empty());
+
+  // Uncancelled, the same run places every scan (the check is not a no-op).
+  cancel = false;
+  WheeledSfmResult whole;
+  ASSERT_TRUE(RunWheeledSfm(in.log.scans, body_from_lidar, in.truth_poses, SequenceInit(), options, &whole).ok());
+  EXPECT_FALSE(whole.poses.empty());
+
+  // Mid-run: cancelled from another thread shortly after the start.
+  std::atomic<bool> started{false};
+  std::thread canceller([&] {
+    while (!started) std::this_thread::yield();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    cancel = true;
+  });
+  started = true;
+  WheeledSfmResult part;
+  s = RunWheeledSfm(in.log.scans, body_from_lidar, in.truth_poses, SequenceInit(), options, &part);
+  canceller.join();
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.message(), "cancelled");
 }
 
 // Why a prior: one vertical scan of the lab sees planes of two normal
