@@ -52,6 +52,13 @@ Outcome RunScenario(const std::string& file, uint64_t seed, PoseSource prior_sou
   return run;
 }
 
+// The lab drive (resources/scenarios/lab.json) recorded through the bytes.
+void SimulateLab(hardware::Recording* in) {
+  sim::SimConfig config;
+  ASSERT_TRUE(LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config).ok());
+  hardware::SimulateRecording(config, in);
+}
+
 // The planes found are true faces of the lab (within 2 deg and 5 cm) and
 // include the floor, the ceiling and both long walls.
 void ExpectTruePlanes(const WheeledSfmResult& r, const sim::Scene& scene) {
@@ -128,10 +135,8 @@ TEST(WheeledSfmTest, SlipDriveOdometryHeadingIsNotRecovered) {
 // With the truth as the prior the corrected poses stay at the truth: the
 // cost's minimum is where it should be (deskew, line fits, planes).
 TEST(WheeledSfmTest, TruthPriorStaysAtTheTruth) {
-  sim::SimConfig config;
-  ASSERT_TRUE(LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config).ok());
   hardware::Recording in;
-  hardware::SimulateRecording(config, &in);
+  ASSERT_NO_FATAL_FAILURE(SimulateLab(&in));
   WheeledSfmResult r;
   const Status s = RunWheeledSfm(in.log.scans, BodyFromLidar(in.geometry, MountingError()), in.truth_poses,
                                  SequenceInit(), WheeledSfmOptions(), &r);
@@ -149,10 +154,8 @@ TEST(WheeledSfmTest, TruthPriorStaysAtTheTruth) {
 // refinement iteration. Either way the error is "cancelled" and no poses
 // come back.
 TEST(WheeledSfmTest, CancelStopsTheRun) {
-  sim::SimConfig config;
-  ASSERT_TRUE(LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config).ok());
   hardware::Recording in;
-  hardware::SimulateRecording(config, &in);
+  ASSERT_NO_FATAL_FAILURE(SimulateLab(&in));
   const Rigid3d body_from_lidar = BodyFromLidar(in.geometry, MountingError());
   std::atomic<bool> cancel{true};
   WheeledSfmOptions options;
@@ -190,10 +193,8 @@ TEST(WheeledSfmTest, CancelStopsTheRun) {
 // (started at the true pose, on the true planes) cannot hold the position
 // along the walls: it loses the room.
 TEST(WheeledSfmTest, LidarOnlyTrackingIsNotEnough) {
-  sim::SimConfig config;
-  ASSERT_TRUE(LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config).ok());
   hardware::Recording in;
-  hardware::SimulateRecording(config, &in);
+  ASSERT_NO_FATAL_FAILURE(SimulateLab(&in));
   const Rigid3d body_from_lidar = BodyFromLidar(in.geometry, MountingError());
   WheeledSfmOptions options;
   SequenceInit init;
