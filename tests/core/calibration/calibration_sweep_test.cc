@@ -14,6 +14,7 @@
 
 #include "core/calibration/calibration.h"
 #include "core/cloud/reconstruct.h"
+#include "core/scenario/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
 
@@ -141,9 +142,45 @@ INSTANTIATE_TEST_SUITE_P(PoseSources, AutomaticSweepTest,
 namespace sweepscan {
 namespace {
 
-// Measurement aid (docs/calibration.md, "What biased the automatic mode"):
-// SWEEPSCAN_DIAG=1 prints the kept planes and the errors under option
-// variants for a few drives. Skipped otherwise.
+// One drive of the honest-uncertainty sweeps: the lab circle (`turns` of
+// it at 0.2 m/s) with sensor errors and mounting angles drawn from `seed`,
+// calibrated automatically on EKF poses; the error (truth subtracted).
+struct SweepDrive {
+  Eigen::Vector3d error_rad, sigma_rad;
+};
+SweepDrive DrawnSensorErrorDrive(uint64_t seed, double turns) {
+  std::mt19937_64 rng(seed);
+  auto u = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  sim::SimConfig config = testing::CircleConfig(seed);
+  config.path = {CircleSegment(0.83, 0.2, turns, /*left=*/true)};
+  const double max_angle = 2.0 * M_PI / 180.0;
+  config.mounting_error = {u(-max_angle, max_angle), u(-max_angle, max_angle), u(-max_angle, max_angle)};
+  config.imu.gyro_bias_rad_s = u(-0.002, 0.002);
+  config.imu.gyro_noise_rad_s = u(0.001, 0.005);
+  config.imu.tilt_noise_rad = u(0.1, 0.5) * M_PI / 180.0;
+  config.lidar.range_noise_m = u(0.001, 0.003);
+  config.lidar.range_noise_fraction = u(0.001, 0.004);
+  config.lidar.range_offset_m = u(-0.005, 0.005);
+  config.lidar.time_offset_s = u(-0.003, 0.003);
+  config.odometry.scale_error_left = u(-0.01, 0.01);
+  config.odometry.scale_error_right = u(-0.01, 0.01);
+  const ReconstructionResult r = testing::SimulateAndReconstruct(config, PoseSource::kEkf, true);
+  sim::SimWorld world(config);
+  const SensorLog log = world.RunAll();
+  CalibrationSummary s;
+  const Status st =
+      SolveAutomatic(SampleStore(log, r.poses), config.geometry, {}, AutoCalibrationOptions(), &s);
+  EXPECT_TRUE(st.ok()) << "seed " << seed << ": " << st.message();
+  const MountingError& t = config.mounting_error;
+  SweepDrive d;
+  d.error_rad = Eigen::Vector3d(s.angles.alpha - t.alpha, s.angles.beta - t.beta, s.angles.gamma - t.gamma);
+  d.sigma_rad = s.sigma_rad;
+  std::printf("[coverage] seed %llu, %.0f turn(s): err(mrad) %+7.3f %+7.3f %+7.3f  sigma %.3f %.3f %.3f\n",
+              static_cast<unsigned long long>(seed), turns, 1e3 * d.error_rad[0], 1e3 * d.error_rad[1],
+              1e3 * d.error_rad[2], 1e3 * d.sigma_rad[0], 1e3 * d.sigma_rad[1], 1e3 * d.sigma_rad[2]);
+  return d;
+}
+
 // Issue 14's honest-uncertainty check: drives with sensor errors drawn
 // across the HI219 and X4 data sheets (scripts/calibration-robustness.py
 // draws the same ranges for its 30-drive table in docs/results.md) and
@@ -153,41 +190,49 @@ TEST(AutomaticSweepTest, SigmaCoversRandomSensorErrors) {
   constexpr int kDrives = 20;
   int inside = 0, count = 0;
   for (int drive = 0; drive < kDrives; ++drive) {
-    std::mt19937_64 rng(7000 + drive);
-    auto u = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
-    sim::SimConfig config = testing::CircleConfig(7000 + drive);
-    const double max_angle = 2.0 * M_PI / 180.0;
-    config.mounting_error = {u(-max_angle, max_angle), u(-max_angle, max_angle), u(-max_angle, max_angle)};
-    config.imu.gyro_bias_rad_s = u(-0.002, 0.002);
-    config.imu.gyro_noise_rad_s = u(0.001, 0.005);
-    config.imu.tilt_noise_rad = u(0.1, 0.5) * M_PI / 180.0;
-    config.lidar.range_noise_m = u(0.001, 0.003);
-    config.lidar.range_noise_fraction = u(0.001, 0.004);
-    config.lidar.range_offset_m = u(-0.005, 0.005);
-    config.lidar.time_offset_s = u(-0.003, 0.003);
-    config.odometry.scale_error_left = u(-0.01, 0.01);
-    config.odometry.scale_error_right = u(-0.01, 0.01);
-    const ReconstructionResult r = testing::SimulateAndReconstruct(config, PoseSource::kEkf, true);
-    sim::SimWorld world(config);
-    const SensorLog log = world.RunAll();
-    CalibrationSummary s;
-    const Status st = SolveAutomatic(SampleStore(log, r.poses), config.geometry, {},
-                                     AutoCalibrationOptions(), &s);
-    ASSERT_TRUE(st.ok()) << "drive " << drive << ": " << st.message();
-    const MountingError& t = config.mounting_error;
-    const Eigen::Vector3d e(s.angles.alpha - t.alpha, s.angles.beta - t.beta, s.angles.gamma - t.gamma);
+    const SweepDrive d = DrawnSensorErrorDrive(7000 + drive, 1.0);
     for (int k = 0; k < 3; ++k) {
-      inside += std::abs(e[k]) <= 3.0 * s.sigma_rad[k];
+      inside += std::abs(d.error_rad[k]) <= 3.0 * d.sigma_rad[k];
       ++count;
     }
-    std::printf("[coverage] drive %2d err(mrad) %+7.3f %+7.3f %+7.3f  sigma %.3f %.3f %.3f\n", drive,
-                1e3 * e[0], 1e3 * e[1], 1e3 * e[2], 1e3 * s.sigma_rad[0], 1e3 * s.sigma_rad[1],
-                1e3 * s.sigma_rad[2]);
   }
   std::printf("[coverage] %d of %d angles inside 3 sigma\n", inside, count);
   EXPECT_GE(inside, static_cast<int>(std::ceil(0.95 * count)));
 }
 
+// The drive docs/calibration.md asks for (two turns), on 12 more seeds with
+// the same drawn sensor errors: issue 14's aims are 0.5 mrad RMS and 1 mrad
+// at most per angle. Beta and gamma meet them; alpha does not on every set
+// of drives (here 0.74 RMS, 1.20 max; the script's seeds 1-30 gave 0.47 /
+// 0.93 and 31-60 0.60 / 1.40, docs/results.md), so alpha is held to what
+// it does, and to its sigma, which covers it.
+TEST(AutomaticSweepTest, TwoTurnsOnDrawnSensorErrors) {
+  constexpr int kDrives = 12;
+  Eigen::Vector3d sq = Eigen::Vector3d::Zero(), worst = Eigen::Vector3d::Zero();
+  int inside = 0;
+  for (int drive = 0; drive < kDrives; ++drive) {
+    const SweepDrive d = DrawnSensorErrorDrive(7100 + drive, 2.0);
+    sq += d.error_rad.cwiseAbs2();
+    worst = worst.cwiseMax(d.error_rad.cwiseAbs());
+    for (int k = 0; k < 3; ++k) inside += std::abs(d.error_rad[k]) <= 3.0 * d.sigma_rad[k];
+  }
+  const Eigen::Vector3d rms = (sq / kDrives).cwiseSqrt();
+  std::printf("[aims] two turns, %d drives: RMS (mrad) %.3f %.3f %.3f, max %.3f %.3f %.3f, %d of %d "
+              "inside 3 sigma\n",
+              kDrives, 1e3 * rms[0], 1e3 * rms[1], 1e3 * rms[2], 1e3 * worst[0], 1e3 * worst[1],
+              1e3 * worst[2], inside, 3 * kDrives);
+  EXPECT_LT(rms[0], 1.0e-3);
+  EXPECT_LT(worst[0], 1.6e-3);
+  for (int k = 1; k < 3; ++k) {
+    EXPECT_LT(rms[k], 0.5e-3) << k;
+    EXPECT_LT(worst[k], 1.0e-3) << k;
+  }
+  EXPECT_EQ(inside, 3 * kDrives);
+}
+
+// Measurement aid (docs/calibration.md, "What biased the automatic mode"):
+// SWEEPSCAN_DIAG=1 prints the kept planes and the errors under option
+// variants for a few drives. Skipped otherwise.
 TEST(AutomaticDiagnostics, PlanesAndVariants) {
   if (std::getenv("SWEEPSCAN_DIAG") == nullptr) GTEST_SKIP() << "set SWEEPSCAN_DIAG=1";
   const int seeds = SeedCount();
