@@ -230,8 +230,21 @@ const char* kAngleNames[3] = {"alpha", "beta", "gamma"};
 // columns after the other parameters (planes) are projected out, i.e. of the
 // Schur complement S = Jc'Jc - Jc'Jp (Jp'Jp)^+ Jp'Jc. Condition =
 // sqrt(lambda_max / lambda_min) of S.
+// `what`: what constrains the angles and what to change when it does not
+// ("the picks" / "spread the picks over the target"; the planes'
+// equivalents in the automatic mode).
+struct ObservabilityHint {
+  const char* what;
+  const char* remedy;
+};
+constexpr ObservabilityHint kPicksHint{"the picks", "spread the picks over the target"};
+constexpr ObservabilityHint kPlanesHint{
+    "the planes seen in both passes",
+    "drive the circle where the floor and walls facing different ways are within the lidar's "
+    "range from both sides of it"};
+
 void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationOptions& options,
-                        CalibrationSummary* summary) {
+                        const ObservabilityHint& hint, CalibrationSummary* summary) {
   ceres::CRSMatrix crs;
   ceres::Problem::EvaluateOptions eval;
   double cost = 0.0;
@@ -260,9 +273,9 @@ void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationO
     int worst = 0;
     v.maxCoeff(&worst);
     summary->warnings.push_back(
-        "the picks leave " + std::string(kAngleNames[worst]) +
+        std::string(hint.what) + " leave " + kAngleNames[worst] +
         " (nearly) unobservable: Jacobian condition number " + Num(summary->condition_number, 3) +
-        " > " + Num(options.max_condition_number, 3) + "; spread the picks over the target");
+        " > " + Num(options.max_condition_number, 3) + "; " + hint.remedy);
   }
 }
 
@@ -361,7 +374,8 @@ const std::array<double, 4>& PlaneProblem::plane(size_t s) const { return impl_-
 
 void PlaneProblem::CheckObservability(const CalibrationOptions& options,
                                       CalibrationSummary* summary) {
-  calibration_internal::CheckObservability(&impl_->problem, impl_->abg, options, summary);
+  calibration_internal::CheckObservability(&impl_->problem, impl_->abg, options, kPlanesHint,
+                                           summary);
 }
 
 // The angles' covariance from one evaluation of the Jacobian J (tangent
@@ -621,7 +635,7 @@ Status SolvePairs(const std::vector<ObservationPair>& pairs, const RobotGeometry
   summary->final_rms_m = rms();
   summary->message = cs.message;
   summary->outer_iterations = 1;
-  CheckObservability(&problem, abg, options, summary);
+  CheckObservability(&problem, abg, options, kPicksHint, summary);
   if (cs.termination_type == ceres::USER_FAILURE) {
     return Status::Error("calibration cancelled");
   }
