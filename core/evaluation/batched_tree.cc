@@ -59,6 +59,18 @@ struct Candidates {
   }
 };
 
+// The arrays both rank-selection kernels (portable and AVX2) work on:
+// candidates (x, y, z, sample), their distances, the selection and ranks.
+struct RankArrays {
+  explicit RankArrays(Candidates* c)
+      : cx(c->x.data()), cy(c->y.data()), cz(c->z.data()), cs(c->s.data()), cd(c->d.data()),
+        sd(c->sel_d.data()), ss(c->sel_s.data()), rank(c->rank.data()) {}
+  const float *cx, *cy, *cz;
+  const uint32_t* cs;
+  float *cd, *sd;
+  uint32_t *ss, *rank;
+};
+
 thread_local size_t t_fallbacks = 0;
 // Above kRankMax candidates within a query's bound (after Shrink, which
 // aims at kRankTarget) the selection inserts instead of ranking (quadratic).
@@ -125,14 +137,11 @@ bool FinishRanks(size_t p, size_t kk, const float* sd, const uint32_t* ss, const
 
 bool RankSelectPortable(const float* q, float t2, size_t kk, Candidates* c, uint32_t* oi,
                         float* od) {
-  const float* cx = c->x.data();
-  const float* cy = c->y.data();
-  const float* cz = c->z.data();
-  const uint32_t* cs = c->s.data();
-  float* cd = c->d.data();
-  float* sd = c->sel_d.data();
-  uint32_t* ss = c->sel_s.data();
-  uint32_t* rank = c->rank.data();
+  const RankArrays a(c);
+  const float *cx = a.cx, *cy = a.cy, *cz = a.cz;
+  const uint32_t* cs = a.cs;
+  float *cd = a.cd, *sd = a.sd;
+  uint32_t *ss = a.ss, *rank = a.rank;
   const size_t m = c->m;
   const float qx = q[0], qy = q[1], qz = q[2];
   for (size_t j = 0; j < m; ++j) {
@@ -178,14 +187,11 @@ const CompressTable kCompress;
 
 __attribute__((target("avx2,popcnt"))) bool RankSelectAvx2(const float* q, float t2, size_t kk,
                                                          Candidates* c, uint32_t* oi, float* od) {
-  const float* cx = c->x.data();
-  const float* cy = c->y.data();
-  const float* cz = c->z.data();
-  const uint32_t* cs = c->s.data();
-  float* cd = c->d.data();
-  float* sd = c->sel_d.data();
-  uint32_t* ss = c->sel_s.data();
-  uint32_t* rank = c->rank.data();
+  const RankArrays a(c);
+  const float *cx = a.cx, *cy = a.cy, *cz = a.cz;
+  const uint32_t* cs = a.cs;
+  float *cd = a.cd, *sd = a.sd;
+  uint32_t *ss = a.ss, *rank = a.rank;
   const size_t m = c->m;
   const size_t m8 = (m + 7) & ~size_t{7};  // the arrays hold m + 8, padded
   const __m256 vqx = _mm256_set1_ps(q[0]), vqy = _mm256_set1_ps(q[1]), vqz = _mm256_set1_ps(q[2]);
