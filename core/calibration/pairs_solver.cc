@@ -226,10 +226,21 @@ ceres::Solver::Options SolverOptions(const CalibrationOptions& o) {
 
 const char* kAngleNames[3] = {"alpha", "beta", "gamma"};
 
-// Observability of the angles: the singular values of the Jacobian's angle
-// columns after the other parameters (planes) are projected out, i.e. of the
-// Schur complement S = Jc'Jc - Jc'Jp (Jp'Jp)^+ Jp'Jc. Condition =
-// sqrt(lambda_max / lambda_min) of S.
+// H = J'J from a Jacobian in Ceres' compressed rows, one row's few non-zeros
+// at a time (a plane-point row touches 3 angles, 4 plane parameters and the
+// path scale; a dense row would cost n^2 each).
+Eigen::MatrixXd NormalMatrix(const ceres::CRSMatrix& crs) {
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(crs.num_cols, crs.num_cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) {
+      for (int b = crs.rows[r]; b < crs.rows[r + 1]; ++b) {
+        h(crs.cols[a], crs.cols[b]) += crs.values[a] * crs.values[b];
+      }
+    }
+  }
+  return h;
+}
+
 // `what`: what constrains the angles and what to change when it does not
 // ("the picks" / "spread the picks over the target"; the planes'
 // equivalents in the automatic mode).
@@ -243,24 +254,24 @@ constexpr ObservabilityHint kPlanesHint{
     "drive the circle where the floor and walls facing different ways are within the lidar's "
     "range from both sides of it"};
 
+// Observability of the angles: the singular values of the Jacobian's angle
+// columns after the other parameters (planes) are projected out, i.e. of the
+// Schur complement S = Jc'Jc - Jc'Jp (Jp'Jp)^+ Jp'Jc, all blocks of H = J'J.
+// Condition = sqrt(lambda_max / lambda_min) of S.
 void CheckObservability(ceres::Problem* problem, double* abg, const CalibrationOptions& options,
                         const ObservabilityHint& hint, CalibrationSummary* summary) {
   ceres::CRSMatrix crs;
   ceres::Problem::EvaluateOptions eval;
   double cost = 0.0;
   if (!problem->Evaluate(eval, &cost, nullptr, nullptr, &crs)) return;
-  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r) {
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) j(r, crs.cols[k]) = crs.values[k];
-  }
+  const Eigen::MatrixXd h = NormalMatrix(crs);
   // The angle block is the first parameter block added (columns 0..2).
-  const Eigen::MatrixXd jc = j.leftCols(3);
-  Eigen::Matrix3d s = jc.transpose() * jc;
-  if (j.cols() > 3) {
-    const Eigen::MatrixXd jp = j.rightCols(j.cols() - 3);
-    const Eigen::MatrixXd h = jp.transpose() * jp;
-    const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
-    s -= jc.transpose() * jp * hinv * jp.transpose() * jc;
+  Eigen::Matrix3d s = h.topLeftCorner<3, 3>();
+  const Eigen::Index np = h.cols() - 3;
+  if (np > 0) {
+    const Eigen::MatrixXd hpp_inv =
+        h.bottomRightCorner(np, np).completeOrthogonalDecomposition().pseudoInverse();
+    s -= h.topRightCorner(3, np) * hpp_inv * h.bottomLeftCorner(np, 3);
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
   const double lmin = std::max(0.0, eig.eigenvalues()[0]);
@@ -398,18 +409,15 @@ bool PlaneProblem::AngleSigmas(const std::vector<int>& group_of_row, double s2,
   }
   if (static_cast<size_t>(crs.num_rows) != group_of_row.size()) return false;
   const int n = crs.num_cols;
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  const Eigen::MatrixXd h = NormalMatrix(crs);
   std::unordered_map<int, Eigen::VectorXd> score;  // sum_rows_in_g J_row' r_row
-  Eigen::VectorXd row(n);
   for (int r = 0; r < crs.num_rows; ++r) {
-    row.setZero();
-    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) row[crs.cols[k]] = crs.values[k];
-    h.selfadjointView<Eigen::Lower>().rankUpdate(row);
     auto it = score.find(group_of_row[r]);
     if (it == score.end()) it = score.emplace(group_of_row[r], Eigen::VectorXd::Zero(n)).first;
-    it->second += row * residuals[r];
+    for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) {
+      it->second[crs.cols[k]] += crs.values[k] * residuals[r];
+    }
   }
-  h = h.selfadjointView<Eigen::Lower>();
   Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(n, n);
   for (const auto& [g, s] : score) meat += s * s.transpose();
   // Small-sample correction G / (G - 1) for G groups.
