@@ -35,41 +35,84 @@ void PoseEkf::Initialize(Time time, const State& state, const Covariance& covari
   }
   initialized_ = true;
   yaw_offset_known_ = false;
+  history_.clear();
+}
+
+void PoseEkf::PredictState(const EkfOptions& options, const State& s, const Covariance& p,
+                           double dt, State* s_pred, Covariance* p_pred, Covariance* f_out) {
+  const double psi = s[kPsi], v = s[kV], w = s[kW];
+  const double h = psi + 0.5 * w * dt;
+  const double c = std::cos(h), sn = std::sin(h);
+
+  // (Eq. 6) state prediction.
+  *s_pred = s;
+  (*s_pred)[kX] += v * dt * c;
+  (*s_pred)[kY] += v * dt * sn;
+  (*s_pred)[kPsi] = WrapAngle(psi + w * dt);
+
+  // (Eq. 7) F = df/ds.
+  Covariance& f = *f_out;
+  f.setIdentity();
+  f(kX, kPsi) = -v * dt * sn;
+  f(kX, kV) = dt * c;
+  f(kX, kW) = -v * dt * sn * 0.5 * dt;
+  f(kY, kPsi) = v * dt * c;
+  f(kY, kV) = dt * sn;
+  f(kY, kW) = v * dt * c * 0.5 * dt;
+  f(kPsi, kW) = dt;
+
+  State q;
+  q << options.position_sigma * options.position_sigma,
+      options.position_sigma * options.position_sigma, options.yaw_sigma * options.yaw_sigma,
+      options.accel_sigma * options.accel_sigma,
+      options.angular_accel_sigma * options.angular_accel_sigma,
+      options.tilt_sigma * options.tilt_sigma, options.tilt_sigma * options.tilt_sigma,
+      options.yaw_offset_sigma * options.yaw_offset_sigma,
+      options.estimate_gyro_bias ? options.gyro_bias_sigma * options.gyro_bias_sigma : 0.0;
+  *p_pred = f * p * f.transpose();
+  p_pred->diagonal() += q * dt;
 }
 
 void PoseEkf::Predict(Time time) {
   const double dt = ToSeconds(time - time_);
   if (dt <= 0.0) return;
-  const double psi = state_[kPsi], v = state_[kV], w = state_[kW];
-  const double h = psi + 0.5 * w * dt;
-  const double c = std::cos(h), s = std::sin(h);
-
-  // (Eq. 6) state prediction.
-  state_[kX] += v * dt * c;
-  state_[kY] += v * dt * s;
-  state_[kPsi] = WrapAngle(psi + w * dt);
-
-  // (Eq. 7) F = df/ds.
-  Covariance f = Covariance::Identity();
-  f(kX, kPsi) = -v * dt * s;
-  f(kX, kV) = dt * c;
-  f(kX, kW) = -v * dt * s * 0.5 * dt;
-  f(kY, kPsi) = v * dt * c;
-  f(kY, kV) = dt * s;
-  f(kY, kW) = v * dt * c * 0.5 * dt;
-  f(kPsi, kW) = dt;
-
-  State q;
-  q << options_.position_sigma * options_.position_sigma,
-      options_.position_sigma * options_.position_sigma, options_.yaw_sigma * options_.yaw_sigma,
-      options_.accel_sigma * options_.accel_sigma,
-      options_.angular_accel_sigma * options_.angular_accel_sigma,
-      options_.tilt_sigma * options_.tilt_sigma, options_.tilt_sigma * options_.tilt_sigma,
-      options_.yaw_offset_sigma * options_.yaw_offset_sigma,
-      options_.estimate_gyro_bias ? options_.gyro_bias_sigma * options_.gyro_bias_sigma : 0.0;
-  covariance_ = f * covariance_ * f.transpose();
-  covariance_.diagonal() += q * dt;
+  if (keep_history_) history_.push_back({time_, state_, covariance_});
+  Covariance f;
+  State s;
+  Covariance p;
+  PredictState(options_, state_, covariance_, dt, &s, &p, &f);
+  state_ = s;
+  covariance_ = p;
   time_ = time;
+}
+
+std::vector<PoseEkf::Estimate> PoseEkf::Smooth() const {
+  std::vector<Estimate> out;
+  if (!initialized_) return out;
+  out = history_;
+  out.push_back({time_, state_, covariance_});
+  // Backward from the last estimate, which is already the smoothed one.
+  for (size_t k = out.size() - 1; k-- > 0;) {
+    const Estimate& next = out[k + 1];  // smoothed
+    Estimate& e = out[k];               // filtered, becomes smoothed
+    const double dt = ToSeconds(next.time - e.time);
+    State s_pred;
+    Covariance p_pred, f;
+    PredictState(options_, e.state, e.covariance, dt, &s_pred, &p_pred, &f);
+    // C = P F^T (P-)^-1 = ((P-)^-1 F P)^T, P and P- symmetric. LDLT treats
+    // a zero pivot (g frozen at 0 with variance 0) as a pseudo-inverse.
+    const Eigen::LDLT<Covariance> ldlt(p_pred);
+    const Covariance c = ldlt.solve(f * e.covariance).transpose();
+    State dx = next.state - s_pred;
+    dx[kPsi] = WrapAngle(dx[kPsi]);
+    dx[kYawOffset] = WrapAngle(dx[kYawOffset]);
+    e.state += c * dx;
+    e.state[kPsi] = WrapAngle(e.state[kPsi]);
+    e.state[kYawOffset] = WrapAngle(e.state[kYawOffset]);
+    e.covariance += c * (next.covariance - p_pred) * c.transpose();
+    e.covariance = 0.5 * (e.covariance + e.covariance.transpose());
+  }
+  return out;
 }
 
 // GCC 12 reports -Warray-bounds inside Eigen's vectorised copies for the

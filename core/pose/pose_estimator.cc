@@ -30,7 +30,20 @@ bool ParsePoseSource(const std::string& name, PoseSource* source) {
 }
 
 PoseEstimator::PoseEstimator(const PoseEstimatorOptions& options, const RobotGeometry& geometry)
-    : options_(options), geometry_(geometry), ekf_(options.ekf), odometry_(geometry.wheel_distance_m) {}
+    : options_(options), geometry_(geometry), ekf_(options.ekf), odometry_(geometry.wheel_distance_m) {
+  ekf_.KeepHistory(options.smooth && options.source == PoseSource::kEkf);
+}
+
+void PoseEstimator::SmoothPoses() {
+  if (!options_.smooth || options_.source != PoseSource::kEkf || !ekf_.initialized()) return;
+  PoseBuffer smoothed;
+  for (const PoseEkf::Estimate& e : ekf_.Smooth()) {
+    const PoseEkf::State& s = e.state;
+    smoothed.Add(e.time, Rigid3d::FromPose(s[PoseEkf::kX], s[PoseEkf::kY], 0.0, s[PoseEkf::kRoll],
+                                           s[PoseEkf::kPitch], s[PoseEkf::kPsi]));
+  }
+  poses_ = std::move(smoothed);
+}
 
 void PoseEstimator::EnsureInitialized(Time time) {
   if (odometry_.initialized()) return;
@@ -148,6 +161,7 @@ PoseEstimator EstimatePoses(const SensorLog& log, const PoseEstimatorOptions& op
       estimator.AddImu(log.imu[j++]);
     }
   }
+  estimator.SmoothPoses();
   return estimator;
 }
 

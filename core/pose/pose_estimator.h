@@ -15,6 +15,12 @@
 // A drive that starts moving at once keeps the prior g = 0 +- prior sigma
 // and learns g from the IMU yaw.
 //
+// Smoothing: a whole recording's EKF poses can be smoothed (options.smooth,
+// EstimatePoses only): the Rauch-Tung-Striebel pass of ekf.h, so every pose
+// uses every reading of the drive. The calibration uses it; the live
+// pipeline cannot (it has no future readings), and `reconstruct` does not by
+// default so that a replayed session's cloud equals the live one's.
+//
 // Lives on the processing thread.
 #ifndef SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
 #define SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
@@ -51,6 +57,8 @@ struct PoseEstimatorOptions {
   double standstill_max_wheel_mps = 0.0005;
   // Where the robot starts in the world; the cloud is expressed in this frame.
   Pose2d initial_pose;
+  // EKF only: EstimatePoses returns the smoothed poses (see above).
+  bool smooth = false;
 };
 
 class PoseEstimator {
@@ -61,6 +69,11 @@ class PoseEstimator {
   void AddImu(const ImuMeasurement& m);
 
   const PoseBuffer& poses() const { return poses_; }
+  // Replaces poses() by the EKF's smoothed estimates, one per filter time
+  // (ekf.h, Smooth); needs options.smooth (the filter keeps its history
+  // only then) and the EKF source, else a no-op. For a whole recording:
+  // records added after it are not smoothed.
+  void SmoothPoses();
   PoseBuffer* mutable_poses() { return &poses_; }
   const PoseEkf& ekf() const { return ekf_; }
   // Heading of the latest estimate (for tests and status displays).
@@ -97,7 +110,7 @@ class PoseEstimator {
 
 // Runs the estimator over a whole log, merging wheel and IMU records by
 // time (an IMU record goes first on a tie). Returns the estimator, whose
-// poses() and ekf() hold the result.
+// poses() and ekf() hold the result; poses() smoothed with options.smooth.
 PoseEstimator EstimatePoses(const SensorLog& log, const PoseEstimatorOptions& options,
                             const RobotGeometry& geometry);
 

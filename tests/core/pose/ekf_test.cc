@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
 #include <random>
+#include <vector>
 
 namespace sweepscan {
 namespace {
@@ -89,6 +92,104 @@ TEST(EkfTest, CovarianceStaysSymmetricPositiveDefinite) {
   EXPECT_LT((p - p.transpose()).norm(), 1e-12);
   Eigen::SelfAdjointEigenSolver<PoseEkf::Covariance> eig(p);
   EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
+}
+
+// The smoother (ekf.h, "Smoothing") on a case with a closed-form answer: a
+// robot standing still whose heading psi is pinned (prior 1e-8, w known to
+// be 0), so the IMU's yaw readings z_i = psi + b + n_i inform only the
+// heading reference b, whose random walk is switched off. The filter is then
+// recursive least squares: its b at step k is the mean of z_1..z_k, with
+// variance R / k. The smoother's b at every step must be the mean of all N
+// readings, with variance R / N, the batch answer, where the filter's first
+// estimates are a reading or two.
+TEST(EkfTest, SmootherGivesEveryTimeTheMeanOfAllReadings) {
+  EkfOptions o;
+  o.yaw_offset_sigma = 1e-12;      // b constant
+  o.yaw_sigma = 1e-12;             // psi moves only through w
+  o.angular_accel_sigma = 1e-12;   // w constant (0)
+  o.gate_chi2_1dof = 0.0;          // keep every reading (the gate refuses ~1 in 1000 here)
+  PoseEkf ekf(o);
+  PoseEkf::State var;
+  // psi pinned to 1e-12 rad^2: the readings' mean then has R / N = 7.6e-8
+  // of variance, which a psi prior of 1e-8 would visibly add to.
+  var << 1e-8, 1e-8, 1e-12, 1e-12, 1e-12, 0.003, 0.003, 1.0, 0.003 * 0.003;
+  ekf.Initialize(TimeFromSeconds(0), PoseEkf::State::Zero(), var.asDiagonal());
+  ekf.KeepHistory(true);
+  constexpr int kN = 1000;
+  const double b_true = 0.4;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, o.imu_yaw_sigma);
+  std::vector<double> z(kN);
+  double mean = 0.0;
+  for (int i = 0; i < kN; ++i) {
+    z[i] = b_true + n(rng);
+    mean += z[i] / kN;
+    ekf.UpdateYaw(TimeFromSeconds(0.01 * (i + 1)), z[i]);
+  }
+  const std::vector<PoseEkf::Estimate> smoothed = ekf.Smooth();
+  const std::vector<PoseEkf::Estimate>& filtered = ekf.history();
+  ASSERT_EQ(smoothed.size(), filtered.size() + 1);  // the filter times and the current one
+  const double r = o.imu_yaw_sigma * o.imu_yaw_sigma;
+  ASSERT_EQ(filtered.size(), static_cast<size_t>(kN));  // t = 0 and the first N - 1 readings
+  // The forward filter after k readings: their mean (recursive least
+  // squares), with variance R / k. Its first estimates are a reading or two.
+  double running = 0.0, worst_forward = 0.0;
+  for (size_t k = 1; k < filtered.size(); ++k) {
+    running += (z[k - 1] - running) / k;
+    ASSERT_NEAR(filtered[k].state[PoseEkf::kYawOffset], running, 1e-6) << "step " << k;
+    ASSERT_NEAR(filtered[k].covariance(PoseEkf::kYawOffset, PoseEkf::kYawOffset), r / k, 0.02 * r / k);
+    worst_forward = std::max(worst_forward, std::abs(filtered[k].state[PoseEkf::kYawOffset] - mean));
+  }
+  EXPECT_GT(worst_forward, 3e-3);  // a reading's noise (8.7 mrad) early on
+  // The smoother: the mean of all N at every time, and its variance R / N.
+  // (1e-6: the pinned psi and w still take ~1e-8 of each innovation.)
+  for (size_t k = 1; k < smoothed.size(); ++k) {
+    ASSERT_NEAR(smoothed[k].state[PoseEkf::kYawOffset], mean, 1e-6) << "step " << k;
+    ASSERT_NEAR(smoothed[k].covariance(PoseEkf::kYawOffset, PoseEkf::kYawOffset), r / kN, 0.02 * r / kN)
+        << "step " << k;
+    ASSERT_NEAR(smoothed[k].state[PoseEkf::kPsi], 0.0, 1e-5) << "step " << k;
+  }
+  // The last smoothed estimate is the filter's own.
+  EXPECT_EQ(smoothed.back().state, ekf.state());
+  EXPECT_EQ(smoothed.back().covariance, ekf.covariance());
+}
+
+// The smoother with the gyro-bias state frozen (g's variance exactly 0, a
+// singular predicted covariance) and through a heading that wraps at pi:
+// finite everywhere, g stays 0, and the smoothed heading is no further from
+// the truth than the filter's on a noisy turn in place.
+TEST(EkfTest, SmootherWithFrozenBiasAndWrappingHeading) {
+  EkfOptions o;
+  o.estimate_gyro_bias = false;
+  PoseEkf ekf = MakeFilter(o);
+  ekf.KeepHistory(true);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0, 1);
+  const double w = 0.5;  // rad/s: 12 s turn through +-pi twice
+  std::vector<double> truth;
+  for (int i = 1; i <= 1200; ++i) {
+    const Time t = TimeFromSeconds(i * 0.01);
+    const double psi = WrapAngle(w * i * 0.01);
+    truth.push_back(psi);
+    ekf.UpdateWheels(t, 0.0, w + 0.05 * n(rng));
+    ekf.UpdateGyro(t, w + 0.005 * n(rng));
+    ekf.UpdateYaw(t, WrapAngle(psi + 0.2 + 0.0087 * n(rng)));
+  }
+  const std::vector<PoseEkf::Estimate> smoothed = ekf.Smooth();
+  const std::vector<PoseEkf::Estimate>& filtered = ekf.history();
+  ASSERT_EQ(smoothed.size(), 1201u);
+  double sq_f = 0.0, sq_s = 0.0;
+  for (size_t k = 1; k < smoothed.size(); ++k) {
+    const auto& s = smoothed[k].state;
+    ASSERT_TRUE(s.allFinite()) << k;
+    ASSERT_TRUE(smoothed[k].covariance.allFinite()) << k;
+    EXPECT_EQ(s[PoseEkf::kGyroBias], 0.0);
+    EXPECT_LE(std::abs(s[PoseEkf::kPsi]), M_PI);
+    const double t_psi = truth[k - 1];
+    if (k < filtered.size()) sq_f += std::pow(WrapAngle(filtered[k].state[PoseEkf::kPsi] - t_psi), 2);
+    if (k < filtered.size()) sq_s += std::pow(WrapAngle(s[PoseEkf::kPsi] - t_psi), 2);
+  }
+  EXPECT_LT(sq_s, sq_f);
 }
 
 TEST(EkfTest, OptionsValidation) {
