@@ -201,7 +201,7 @@ int RunEvaluate(int argc, char** argv) {
     if (args.Has("calibration")) runs.emplace_back("calibrated", calibration);
     for (const auto& [title, c] : runs) {
       ReconstructionResult r;
-      code = RecordingPoses(args, in, c, &r);
+      code = RecordingPoses(args, in, c, /*smooth=*/false, &r);  // the cloud `reconstruct` makes
       if (code != kExitOk) return code;
       std::vector<Eigen::Vector3f> pts;
       pts.reserve(r.points.size());

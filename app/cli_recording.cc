@@ -76,8 +76,9 @@ int LoadRecording(const Args& args, RecordingInput* in) {
 
 // Poses for the recording: EKF (default), odometry, or the simulation's truth.
 int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
-                   ReconstructionResult* result) {
+                   bool smooth, ReconstructionResult* result) {
   ReconstructionOptions options;
+  options.pose.smooth = smooth;
   if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
                                   options.pose.source == PoseSource::kSfm)) {
     PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");

@@ -28,9 +28,11 @@ void PrintSessionError(const Args& args, const std::string& session_dir, const S
 int LoadRecording(const Args& args, RecordingInput* in);
 
 // Poses for the recording (--pose-source: EKF by default, odometry, or the
-// simulation's truth) and its cloud under `calibration`. Returns an exit code.
+// simulation's truth) and its cloud under `calibration`; `smooth`: the EKF's
+// poses smoothed over the whole recording (pose_estimator.h). Returns an
+// exit code.
 int RecordingPoses(const Args& args, const RecordingInput& in, const MountingError& calibration,
-                   ReconstructionResult* result);
+                   bool smooth, ReconstructionResult* result);
 
 }  // namespace sweepscan::app
 

@@ -17,7 +17,7 @@ writes every angle's error and sigma.
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
            [--drive lab_circle_two_turns.json] [--mode auto|refined]
-           [--pose-source ekf|truth|odometry] [--default-sensors]
+           [--pose-source ekf|truth|odometry] [--no-smooth] [--default-sensors]
 """
 import argparse
 import json
@@ -114,6 +114,9 @@ def main():
     ap.add_argument("--pose-source", choices=["ekf", "truth", "odometry"], default="ekf",
                     help="the poses the calibration uses (truth: the simulator's, to separate the "
                          "method's own error from the poses')")
+    ap.add_argument("--no-smooth", action="store_true",
+                    help="EKF poses from the forward filter alone (calibrate --no-smooth); by "
+                         "default calibrate smooths them over the drive")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
     a = ap.parse_args()
@@ -141,6 +144,8 @@ def main():
                 with open(pairs, "w") as f:
                     json.dump(diamond_pairs(), f, indent=1)
                 extra = ["--pairs", pairs, "--refine"]
+            if a.no_smooth:
+                extra.append("--no-smooth")
             d, why = calibrate(a.cli, ["--scenario", path, "--pose-source", a.pose_source] + extra)
             if d is None:
                 refused[mode].append((seed, why))

@@ -83,10 +83,14 @@ struct AutoCalibrationOptions {
   // The poses' own heading error over the drive, which alpha cannot tell
   // from a mounting yaw (a constant heading error turns the whole cloud
   // about z, as alpha does); added in quadrature to alpha's sigma. The
-  // default is the EKF's, measured by the robustness sweep (docs/results.md,
-  // "Robustness": EKF-pose alpha errors of 1.0 mrad RMS where truth poses
-  // give 0.1); the CLI passes 0 for truth poses and 20 mrad for odometry.
-  double pose_heading_sigma_rad = 0.001;
+  // default is the smoothed EKF's (what `calibrate` and the app use),
+  // measured by the robustness sweep (docs/results.md, "Robustness": over
+  // 120 two-turn drives alpha's error is 0.39 mrad RMS on smoothed EKF
+  // poses, of which ~0.3 is the poses' and ~0.2 the method's own, as truth
+  // poses show; every error within 1.7 sigma). The CLI passes 1 mrad for the
+  // forward filter (--no-smooth: 0.54 mrad RMS, up to 1.4), 0 for truth
+  // poses, and more for odometry.
+  double pose_heading_sigma_rad = 0.0005;
   // The same for the poses' tilt (roll and pitch, which beta and gamma
   // cannot tell from a tilted body), added to beta's and gamma's sigma:
   // the sweep's EKF-pose beta errors were 0.29 mrad RMS against a reported

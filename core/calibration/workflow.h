@@ -49,8 +49,10 @@ struct PickCalibrationOptions {
   // The poses' own heading and tilt errors, added in quadrature to the
   // solve's sigma (alpha; beta and gamma), as in the automatic mode
   // (AutoCalibrationOptions::pose_heading_sigma_rad): four corner pairs
-  // give sigma from their own misfit only. 0 for truth poses.
-  double pose_heading_sigma_rad = 0.001;
+  // give sigma from their own misfit only. 0 for truth poses; the default
+  // is the smoothed EKF's, 1 mrad for the forward filter's (the CLI's
+  // --no-smooth).
+  double pose_heading_sigma_rad = 0.0005;
   double pose_tilt_sigma_rad = 0.00025;
 };
 

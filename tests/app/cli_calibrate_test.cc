@@ -114,6 +114,38 @@ TEST(CliCalibrateTest, AutomaticOnScenarioWritesCalibration) {
   EXPECT_LT(tilt_after, 0.1);
 }
 
+// The EKF's poses are smoothed over the drive unless --no-smooth
+// (docs/calibration.md, "The poses"), and the report says which; alpha's
+// sigma carries the poses' heading term of each (0.5 and 1 mrad, in
+// quadrature with the solve's own). Truth poses are never smoothed.
+TEST(CliCalibrateTest, AutomaticSmoothsTheEkfPosesUnlessAsked) {
+  const std::string args = "calibrate --scenario " + Scenario("lab_circle") + " --auto --json";
+  const CliRun smoothed = Cli(args);
+  const CliRun forward = Cli(args + " --no-smooth");
+  const CliRun truth = Cli(args + " --pose-source truth");
+  ASSERT_EQ(smoothed.code, 0) << smoothed.out;
+  ASSERT_EQ(forward.code, 0) << forward.out;
+  ASSERT_EQ(truth.code, 0) << truth.out;
+  const nlohmann::json s = nlohmann::json::parse(smoothed.out);
+  const nlohmann::json f = nlohmann::json::parse(forward.out);
+  EXPECT_TRUE(s["poses_smoothed"].get<bool>());
+  EXPECT_FALSE(f["poses_smoothed"].get<bool>());
+  EXPECT_FALSE(nlohmann::json::parse(truth.out)["poses_smoothed"].get<bool>());
+  // Different poses, different angles; both near the truth.
+  EXPECT_GT(std::abs(s["mounting_error_rad"]["alpha"].get<double>() -
+                     f["mounting_error_rad"]["alpha"].get<double>()),
+            1e-6);
+  for (const char* k : {"alpha", "beta", "gamma"}) {
+    EXPECT_LT(std::abs(s["error_rad"][k].get<double>()), 1.5e-3) << k;
+    EXPECT_LT(std::abs(f["error_rad"][k].get<double>()), 2.5e-3) << k;
+  }
+  const double sigma_s = s["sigma_rad"]["alpha"].get<double>();
+  const double sigma_f = f["sigma_rad"]["alpha"].get<double>();
+  EXPECT_GE(sigma_s, 0.5e-3);
+  EXPECT_LT(sigma_s, sigma_f);
+  EXPECT_GE(sigma_f, 1.0e-3);
+}
+
 // `calibrate SCENARIO --auto --out FILE [extra]` is refused: exit 1, one
 // line that starts with "calibration refused: " + `message`, and no file.
 CliRun ExpectAutoRefused(const std::string& scenario, const std::string& extra,

@@ -50,18 +50,22 @@ void BM_DeskewTransformAssemble(benchmark::State& state) {
 }
 BENCHMARK(BM_DeskewTransformAssemble)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
-// EKF over the lab's wheel and IMU records (items = records).
+// EKF over the lab's wheel and IMU records (items = records); Arg(1): and
+// the Rauch-Tung-Striebel pass over them (PoseEstimatorOptions::smooth,
+// what the calibration uses).
 void BM_PoseEstimation(benchmark::State& state) {
   const LabData& lab = Lab();
   for (auto _ : state) {
     PoseEstimatorOptions o;
     o.initial_pose = lab.config.start;
+    o.smooth = state.range(0) != 0;
     benchmark::DoNotOptimize(EstimatePoses(lab.log, o, lab.config.geometry).poses().size());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) *
                           static_cast<int64_t>(lab.log.wheels.size() + lab.log.imu.size()));
+  state.counters["drive_s"] = ToSeconds(lab.poses.latest() - lab.poses.earliest());
 }
-BENCHMARK(BM_PoseEstimation)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PoseEstimation)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The simulated world (ray casting + sensor models) of the lab drive;
 // the counter x_real_time is simulated seconds per wall-clock second.

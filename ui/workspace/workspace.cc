@@ -626,8 +626,9 @@ void Workspace::OpenSession(const QString& dir, double speed) {
           return !*cancel;
         });
         if (!s.ok()) return QString::fromStdString(s.message());
-        // Is it a calibration drive? The EKF poses (as Calibrate uses them;
-        // a few ms per minute of drive) and the circle through them.
+        // Is it a calibration drive? The EKF poses (a few ms per minute of
+        // drive; Calibrate smooths them, which moves the circle by mm) and
+        // the circle through them.
         PoseEstimatorOptions pose;
         pose.initial_pose = recording->start;
         auto poses = std::make_shared<PoseBuffer>(
@@ -802,7 +803,10 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
       tr("Calibrating"),
       [this, recording, picks, refine, board_thickness_m, result,
        error](std::atomic<bool>* cancel) -> QString {
-        ReconstructionOptions options;  // EKF poses, uncalibrated: the picks' frame
+        // EKF poses smoothed over the drive, uncalibrated, as `sweepscan-cli
+        // calibrate` uses them: the picks snap to samples under these.
+        ReconstructionOptions options;
+        options.pose.smooth = true;
         ReconstructionResult poses;
         Status s = hardware::ReconstructRecording(*recording, options, &poses);
         if (!s.ok()) return *error = QString::fromStdString(s.message());
@@ -839,9 +843,12 @@ void Workspace::CalibrateAutomatic() {
       tr("Calibrating"),
       [this, recording, result](std::atomic<bool>* cancel) -> QString {
         // As `sweepscan-cli calibrate SESSION --auto`: EKF poses of the
-        // uncalibrated recording, SolveAutomatic with its default options.
+        // uncalibrated recording smoothed over the drive, SolveAutomatic
+        // with its default options.
+        ReconstructionOptions options;
+        options.pose.smooth = true;
         ReconstructionResult poses;
-        Status s = hardware::ReconstructRecording(*recording, ReconstructionOptions(), &poses);
+        Status s = hardware::ReconstructRecording(*recording, options, &poses);
         if (!s.ok()) return QString::fromStdString(s.message());
         if (*cancel) return QString();
         const SampleStore store(recording->log, poses.poses);

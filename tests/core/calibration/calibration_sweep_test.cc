@@ -14,6 +14,7 @@
 
 #include "core/calibration/calibration.h"
 #include "core/cloud/reconstruct.h"
+#include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
@@ -52,6 +53,7 @@ Outcome RunCase(uint64_t seed, const MountingError& truth, PoseSource source) {
     ReconstructionOptions options;
     options.pose.source = source;
     options.pose.initial_pose = config.start;
+    options.pose.smooth = true;  // as `calibrate` does (EKF only)
     ReconstructionResult r;
     EXPECT_TRUE(Reconstruct(log, config.geometry, options, &truth_poses, &r).ok());
     poses = r.poses;
@@ -114,13 +116,13 @@ TEST_P(AutomaticSweepTest, EachAngleWithinHalfMradAndSigmaHonest) {
       worst_z = std::max(worst_z, z.cwiseAbs().maxCoeff());
       sum_z2 += z.squaredNorm();
       n += 3;
-      // Truth poses: the issue's 0.5 mrad. EKF poses: the filter's own
-      // heading error over the drive adds to alpha (1.0 mrad RMS, up to 2.4
-      // over 12 drives at these sensor errors: docs/results.md,
-      // "Robustness"; with the filter before the gyro bias state and no
-      // path scale, 0.8 RMS and up to 2.1 there, 3.1 RMS with the sweep's
-      // larger biases). The 3 sigma bound below is the real check.
-      EXPECT_LT(o.error_mrad.cwiseAbs().maxCoeff(), source == PoseSource::kTruth ? 0.5 : 2.5)
+      // Truth poses: the issue's 0.5 mrad. EKF poses (smoothed, as
+      // `calibrate` takes them): what is left of the filter's heading error
+      // adds to alpha (0.89 mrad at most on these three drives; over 120
+      // drives 0.39 RMS and one in about 65 above 1 mrad, up to 1.14:
+      // docs/results.md, "Robustness"; on the forward filter's poses this
+      // bound was 2.5). The 3 sigma bound below is the other check.
+      EXPECT_LT(o.error_mrad.cwiseAbs().maxCoeff(), source == PoseSource::kTruth ? 0.5 : 1.2)
           << "seed " << seed;
     }
   }
@@ -164,12 +166,16 @@ SweepDrive DrawnSensorErrorDrive(uint64_t seed, double turns) {
   config.lidar.time_offset_s = u(-0.003, 0.003);
   config.odometry.scale_error_left = u(-0.01, 0.01);
   config.odometry.scale_error_right = u(-0.01, 0.01);
-  const ReconstructionResult r = testing::SimulateAndReconstruct(config, PoseSource::kEkf, true);
+  // EKF poses smoothed over the drive, as `calibrate` uses them.
   sim::SimWorld world(config);
   const SensorLog log = world.RunAll();
+  PoseEstimatorOptions pose;
+  pose.initial_pose = config.start;
+  pose.smooth = true;
+  const PoseBuffer poses = EstimatePoses(log, pose, config.geometry).poses();
   CalibrationSummary s;
   const Status st =
-      SolveAutomatic(SampleStore(log, r.poses), config.geometry, {}, AutoCalibrationOptions(), &s);
+      SolveAutomatic(SampleStore(log, poses), config.geometry, {}, AutoCalibrationOptions(), &s);
   EXPECT_TRUE(st.ok()) << "seed " << seed << ": " << st.message();
   const MountingError& t = config.mounting_error;
   SweepDrive d;
@@ -201,11 +207,12 @@ TEST(AutomaticSweepTest, SigmaCoversRandomSensorErrors) {
 }
 
 // The drive docs/calibration.md asks for (two turns), on 12 more seeds with
-// the same drawn sensor errors: issue 14's aims are 0.5 mrad RMS and 1 mrad
-// at most per angle. Beta and gamma meet them; alpha does not on every set
-// of drives (here 0.74 RMS, 1.20 max; the script's seeds 1-30 gave 0.47 /
-// 0.93 and 31-60 0.60 / 1.40, docs/results.md), so alpha is held to what
-// it does, and to its sigma, which covers it.
+// the same drawn sensor errors, on smoothed EKF poses: issue 14's aims are
+// 0.5 mrad RMS and 1 mrad at most per angle. Beta and gamma meet them, and
+// alpha's RMS (0.45 here; 0.74 on the forward filter's poses). Alpha's
+// largest error here is 1.12 mrad (seed 7103; 1 drive in about 65
+// passes 1 mrad, docs/results.md, "Robustness"), so its max is held to
+// 1.2, and to its sigma, which covers it.
 TEST(AutomaticSweepTest, TwoTurnsOnDrawnSensorErrors) {
   constexpr int kDrives = 12;
   Eigen::Vector3d sq = Eigen::Vector3d::Zero(), worst = Eigen::Vector3d::Zero();
@@ -221,8 +228,8 @@ TEST(AutomaticSweepTest, TwoTurnsOnDrawnSensorErrors) {
               "inside 3 sigma\n",
               kDrives, 1e3 * rms[0], 1e3 * rms[1], 1e3 * rms[2], 1e3 * worst[0], 1e3 * worst[1],
               1e3 * worst[2], inside, 3 * kDrives);
-  EXPECT_LT(rms[0], 1.0e-3);
-  EXPECT_LT(worst[0], 1.6e-3);
+  EXPECT_LT(rms[0], 0.5e-3);
+  EXPECT_LT(worst[0], 1.2e-3);
   for (int k = 1; k < 3; ++k) {
     EXPECT_LT(rms[k], 0.5e-3) << k;
     EXPECT_LT(worst[k], 1.0e-3) << k;
