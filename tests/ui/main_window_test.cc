@@ -915,6 +915,8 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   const double got[3] = {r->summary.angles.alpha, r->summary.angles.beta, r->summary.angles.gamma};
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], kTruthRad[k], 1e-3) << k;
   EXPECT_NE(panel->result_text().indexOf("planes"), -1);
+  EXPECT_NE(panel->result_text().indexOf("smoothed over the drive"), -1)
+      << panel->result_text().toStdString();
 }
 
 // The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for

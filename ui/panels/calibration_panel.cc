@@ -510,6 +510,10 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
                      .arg(angle(s.angles.beta, s.sigma_rad[1]))
                      .arg(angle(s.angles.gamma, s.sigma_rad[2]))
                      .arg(s.method == "file" ? message.toHtmlEscaped() : ghost);
+  // Workspace::Calibrate and CalibrateAutomatic solve on the EKF's poses
+  // smoothed over the drive (as `sweepscan-cli calibrate`), while the view
+  // shows the forward filter's cloud: say which the angles rest on.
+  if (s.method != "file") text += tr("<br>poses: the EKF's, smoothed over the drive");
   if (r->has_baseline) {
     text += tr("<br>raw picks alone (the paper's method): %1 mm -> %2 mm")
                 .arg(r->baseline.initial_rms_m * 1e3, 0, 'f', 1)
