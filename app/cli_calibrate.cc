@@ -133,6 +133,16 @@ constexpr double kMaxOdometryDepartureRad = 0.01;
 int SolveCalibration(const Args& args, const RecordingInput& in, const SampleStore& store,
                      const std::vector<PickPair>& picks, double odometry_departure_rad,
                      CalibrationSummary* summary, std::unique_ptr<CalibrationSummary>* baseline) {
+  // EKF poses take roll and pitch from the IMU: a tilt far noisier than the
+  // data sheet bends beta and gamma unseen (workflow.h, CheckImuTiltNoise).
+  // Odometry and truth poses do not use the IMU's tilt.
+  if (args.Get("pose-source", "ekf") == "ekf") {
+    const Status tilt = CheckImuTiltNoise(in.log);
+    if (!tilt.ok()) {
+      PrintError("calibration " + tilt.message());
+      return kExitFailure;
+    }
+  }
   if (args.Flag("auto")) {
     // A drive that is not a circle is refused before solving, a degenerate
     // result after (docs/calibration.md): one line, exit 1, no file.

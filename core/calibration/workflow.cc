@@ -2,7 +2,9 @@
 // desktop app's calibration panel run it (workflow.h).
 #include "core/calibration/workflow.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "core/calibration/automatic.h"
@@ -146,6 +148,45 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
     result->pair_checks.push_back(check);
   }
   return s;
+}
+
+ImuTiltNoise MeasureImuTiltNoise(const SensorLog& log, double max_gap_s) {
+  std::vector<double> droll, dpitch;
+  const ImuMeasurement* previous = nullptr;
+  for (const ImuMeasurement& m : log.imu) {
+    if (!m.has_attitude) continue;
+    if (previous != nullptr && ToSeconds(m.time - previous->time) <= max_gap_s) {
+      droll.push_back(std::abs(WrapAngle(m.roll - previous->roll)));
+      dpitch.push_back(std::abs(WrapAngle(m.pitch - previous->pitch)));
+    }
+    previous = &m;
+  }
+  ImuTiltNoise noise;
+  noise.pairs = static_cast<int>(droll.size());
+  if (droll.empty()) return noise;
+  // sigma of a difference of two independent readings is sqrt(2) sigma; the
+  // median of |N(0, s^2)| is s / 1.4826.
+  auto sigma = [](std::vector<double>* d) {
+    std::nth_element(d->begin(), d->begin() + d->size() / 2, d->end());
+    return 1.4826 * (*d)[d->size() / 2] / std::sqrt(2.0);
+  };
+  noise.roll_rad = sigma(&droll);
+  noise.pitch_rad = sigma(&dpitch);
+  return noise;
+}
+
+Status CheckImuTiltNoise(const SensorLog& log, double max_rad) {
+  const ImuTiltNoise noise = MeasureImuTiltNoise(log);
+  if (noise.pairs < 100 || noise.worst_rad() <= max_rad) return Status::Ok();
+  char text[400];
+  std::snprintf(text, sizeof(text),
+                "refused: the IMU's tilt readings scatter %.2f deg (roll) and %.2f deg (pitch) "
+                "RMS (measured between consecutive readings), more than %.1f deg (the HI219's "
+                "data sheet: 0.1-0.5): the EKF's roll and pitch would wander and bend beta and "
+                "gamma; check the IMU and its mounting (vibration)",
+                noise.roll_rad * 180.0 / M_PI, noise.pitch_rad * 180.0 / M_PI,
+                max_rad * 180.0 / M_PI);
+  return Status::Error(text);
 }
 
 }  // namespace sweepscan

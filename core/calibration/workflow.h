@@ -101,6 +101,33 @@ Status CalibrateFromPicks(const SampleStore& store, const RobotGeometry& geometr
                           const std::vector<PickPair>& picks,
                           const PickCalibrationOptions& options, PickCalibrationResult* result);
 
+// The IMU's tilt readings against its data sheet, before a calibration on
+// EKF poses (docs/calibration.md, "What the automatic mode refuses"). The
+// EKF takes the body's roll and pitch from these readings with the HI219's
+// 0.3 deg of noise (EkfOptions::imu_tilt_sigma); an IMU far noisier (a
+// vibrating mount, a bad unit) makes the filter's tilt wander, which beta
+// and gamma cannot tell from a mounting error, with residuals that look
+// normal: on the two-turn lab circle, 1.5 deg of white tilt noise put gamma
+// 2.96 mrad off at a sigma of 0.45, 3 deg put beta 14 mrad off at 1.17.
+//
+// The white noise of the readings is measured from consecutive differences
+// (the body's true tilt on a floor changes by far less in 10 ms):
+//   sigma = 1.4826 median(|r_{i+1} - r_i|) / sqrt(2)
+// per axis (the median so that a bump or a threshold does not count), over
+// pairs of attitude readings at most `max_gap_s` apart.
+struct ImuTiltNoise {
+  double roll_rad = 0.0, pitch_rad = 0.0;
+  int pairs = 0;  // consecutive pairs used
+  double worst_rad() const { return roll_rad > pitch_rad ? roll_rad : pitch_rad; }
+};
+ImuTiltNoise MeasureImuTiltNoise(const SensorLog& log, double max_gap_s = 0.05);
+
+// Refuses ("refused: ..." in the message) when the larger of the two
+// exceeds `max_rad`: 1 deg by default, twice the HI219 data sheet's worst
+// (0.1-0.5 deg); up to 1 deg the sweep's results stay within 2 sigma. Ok
+// when there are fewer than 100 pairs (nothing to judge).
+Status CheckImuTiltNoise(const SensorLog& log, double max_rad = 0.0174533);
+
 }  // namespace sweepscan
 
 #endif  // SWEEPSCAN_CORE_CALIBRATION_WORKFLOW_H_

@@ -203,6 +203,40 @@ TEST(CliCalibrateTest, AutomaticRefusesResidualsOutOfLineWithTheNoiseModel) {
   }
 }
 
+// An IMU whose tilt readings scatter 3 deg (six times the HI219's worst;
+// beta came out 14 mrad off at a sigma of 1.2, residuals normal) is refused
+// on EKF poses, in both modes, before solving: exit 1, one line, no file.
+// Truth poses do not use the IMU and calibrate; the data sheet's worst IMU
+// (0.5 deg) calibrates on EKF poses.
+TEST(CliCalibrateTest, RefusesAnImuWhoseTiltIsFarNoisierThanItsDataSheet) {
+  std::ifstream in(Scenario("lab_circle"));
+  const nlohmann::json base = nlohmann::json::parse(in);
+  nlohmann::json shaky = base;
+  shaky["imu"]["tilt_noise_rad"] = 3.0 * M_PI / 180.0;
+  Write(Tmp("shaky_imu.json"), shaky.dump());
+  const CliRun r = ExpectAutoRefused(Tmp("shaky_imu.json"), "", "the IMU's tilt readings scatter");
+  EXPECT_NE(r.out.find("more than 1.0 deg"), std::string::npos) << r.out;
+  // The picks mode (the target board's corners as world picks) likewise.
+  Write(Tmp("shaky_pairs.json"), WorldPairs({{{4.7, 0.16, 1.5}, {5.3, 0.16, 1.5},
+                                              {5.3, 0.16, 0.9}, {4.7, 0.16, 0.9}}}));
+  const CliRun picks = Cli("calibrate --scenario " + Tmp("shaky_imu.json") + " --pairs " +
+                           Tmp("shaky_pairs.json"));
+  EXPECT_EQ(picks.code, 1) << picks.out;
+  EXPECT_EQ(Lines(picks.out), 1) << picks.out;
+  EXPECT_NE(picks.out.find("calibration refused: the IMU's tilt readings scatter"),
+            std::string::npos)
+      << picks.out;
+  const CliRun truth = Cli("calibrate --scenario " + Tmp("shaky_imu.json") +
+                           " --auto --pose-source truth --json");
+  EXPECT_EQ(truth.code, 0) << truth.out;
+
+  nlohmann::json worst = base;
+  worst["imu"]["tilt_noise_rad"] = 0.5 * M_PI / 180.0;
+  Write(Tmp("worst_imu.json"), worst.dump());
+  const CliRun ok = Cli("calibrate --scenario " + Tmp("worst_imu.json") + " --auto --json");
+  EXPECT_EQ(ok.code, 0) << ok.out;
+}
+
 // Odometry poses with a slipping wheel (the left encoder over-reads by 30 %
 // for 3 s): the odometry's heading turns away from the IMU-fused (EKF) one,
 // so --auto refuses it (exit 1, one line, no file); the EKF's poses of the

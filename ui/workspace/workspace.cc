@@ -808,7 +808,11 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
         ReconstructionOptions options;
         options.pose.smooth = true;
         ReconstructionResult poses;
-        Status s = hardware::ReconstructRecording(*recording, options, &poses);
+        // An IMU far noisier than its data sheet bends the EKF's tilt and
+        // so beta and gamma, unseen by the residuals (workflow.h).
+        Status s = CheckImuTiltNoise(recording->log);
+        if (!s.ok()) return *error = QString::fromStdString(s.message());
+        s = hardware::ReconstructRecording(*recording, options, &poses);
         if (!s.ok()) return *error = QString::fromStdString(s.message());
         if (*cancel) return QString();
         const SampleStore store(recording->log, poses.poses);
@@ -848,7 +852,9 @@ void Workspace::CalibrateAutomatic() {
         ReconstructionOptions options;
         options.pose.smooth = true;
         ReconstructionResult poses;
-        Status s = hardware::ReconstructRecording(*recording, options, &poses);
+        Status s = CheckImuTiltNoise(recording->log);  // as in Calibrate
+        if (!s.ok()) return QString::fromStdString(s.message());
+        s = hardware::ReconstructRecording(*recording, options, &poses);
         if (!s.ok()) return QString::fromStdString(s.message());
         if (*cancel) return QString();
         const SampleStore store(recording->log, poses.poses);
