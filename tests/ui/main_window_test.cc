@@ -9,6 +9,8 @@
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <QAction>
 #include <QApplication>
 #include <QComboBox>
@@ -627,9 +629,12 @@ bool OnDiamond(const Eigen::Vector3d& p) {
 class CalibrationTest : public AppTest {
  protected:
   // Opens the diamond drive and waits for its replay and its pass split.
-  void OpenDiamond() {
-    const QString session = DiamondSession();
-    ASSERT_TRUE(QFileInfo::exists(session));
+  void OpenDiamond() { OpenCircleDrive(DiamondSession()); }
+
+  // Opens a circle drive's session and waits for its replay and its pass
+  // split (a job: nothing else can run on the job thread before it ends).
+  void OpenCircleDrive(const QString& session) {
+    ASSERT_TRUE(QFileInfo::exists(session)) << session.toStdString();
     bool replayed = false, split = false;
     // Disconnected when this returns: the lambdas hold references to these
     // locals, and later replays (Show calibrated) emit the same signals.
@@ -917,6 +922,30 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   EXPECT_NE(panel->result_text().indexOf("planes"), -1);
   EXPECT_NE(panel->result_text().indexOf("smoothed over the drive"), -1)
       << panel->result_text().toStdString();
+}
+
+// An IMU whose tilt readings are far noisier than its data sheet (3 deg;
+// the diamond drive otherwise): the Automatic button refuses, as the CLI
+// does, with the reason in the panel; nothing is kept and the app goes on.
+TEST_F(CalibrationTest, AutomaticRefusesAnImuFarNoisierThanItsDataSheet) {
+  std::ifstream in(kResources.toStdString() + "/scenarios/lab_circle_diamond.json");
+  nlohmann::json scenario = nlohmann::json::parse(in);
+  scenario["imu"]["tilt_noise_rad"] = 3.0 * M_PI / 180.0;
+  const std::string dir = tmp_.path().toStdString();
+  std::ofstream(dir + "/shaky.json") << scenario.dump();
+  const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " + dir +
+                                       "/shaky.json --out " + dir + "/shaky.ply");
+  ASSERT_EQ(sim.code, 0) << sim.out;
+  ASSERT_NO_FATAL_FAILURE(OpenCircleDrive(tmp_.path() + "/shaky.sweepscan"));
+  CalibrationPanel* panel = window_->calibration_panel();
+  panel->SolveAutomatic();
+  EXPECT_FALSE(WaitForSolve(panel));
+  const QString text = panel->result_text();
+  EXPECT_NE(text.indexOf("Not solved"), -1) << text.toStdString();
+  EXPECT_NE(text.indexOf("tilt readings scatter"), -1) << text.toStdString();
+  EXPECT_EQ(workspace_->calibration_result(), nullptr);
+  EXPECT_TRUE(window_->isVisible());
+  EXPECT_FALSE(workspace_->job_running());
 }
 
 // The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for
