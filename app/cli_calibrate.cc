@@ -51,7 +51,10 @@ const char* const kCalibrateUsage =
     "                    smoothed over the whole recording (Rauch-Tung-Striebel), which\n"
     "                    takes the IMU's yaw noise out of alpha (docs/calibration.md)\n"
     "  --strict          refuse a session with damaged records (default: skip them, with a warning)\n"
-    "  --json            print the result as JSON\n";
+    "  --json            print the result as JSON\n"
+    "\n"
+    "On EKF poses both modes refuse an IMU whose tilt readings are far noisier than its\n"
+    "data sheet (more than 1 deg RMS; exit 1, no file written).\n";
 
 namespace {
 
