@@ -10,6 +10,10 @@ bool EkfOptions::IsValid(std::string* error) const {
                            tilt_sigma,  yaw_offset_sigma,    wheel_v_sigma,    wheel_w_sigma,
                            gyro_sigma,  imu_yaw_sigma,       imu_tilt_sigma,   gyro_bias_sigma,
                            gyro_bias_prior_sigma};
+  if (!std::isfinite(tilt_sigma_per_metre) || tilt_sigma_per_metre < 0.0) {
+    *error = "EKF tilt_sigma_per_metre must be >= 0 and finite";
+    return false;
+  }
   for (double v : values) {
     if (!std::isfinite(v) || v <= 0.0) {
       *error = "EKF noise standard deviations must be positive and finite";
@@ -69,6 +73,12 @@ void PoseEkf::PredictState(const EkfOptions& options, const State& s, const Cova
       options.tilt_sigma * options.tilt_sigma, options.tilt_sigma * options.tilt_sigma,
       options.yaw_offset_sigma * options.yaw_offset_sigma,
       options.estimate_gyro_bias ? options.gyro_bias_sigma * options.gyro_bias_sigma : 0.0;
+  // The tilt wanders with the floor under the wheels: its variance grows by
+  // tilt_sigma_per_metre^2 per metre driven (|v| dt) as well as in time.
+  const double q_tilt_distance =
+      options.tilt_sigma_per_metre * options.tilt_sigma_per_metre * std::abs(v);
+  q[kRoll] += q_tilt_distance;
+  q[kPitch] += q_tilt_distance;
   *p_pred = f * p * f.transpose();
   p_pred->diagonal() += q * dt;
 }

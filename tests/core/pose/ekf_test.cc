@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace sweepscan {
@@ -190,6 +191,30 @@ TEST(EkfTest, SmootherWithFrozenBiasAndWrappingHeading) {
     if (k < filtered.size()) sq_s += std::pow(WrapAngle(s[PoseEkf::kPsi] - t_psi), 2);
   }
   EXPECT_LT(sq_s, sq_f);
+}
+
+// The tilt's random walk grows with the distance driven (ekf.h): hand-worked
+// variances from a zero covariance. At rest, 10 s add tilt_sigma^2 10 =
+// 1e-7 rad^2; at 0.2 m/s (either way) they add (1e-8 + 0.00224^2 0.2) 10 =
+// 1.01352e-5, the 1 mrad/sqrt(s) the filter had before.
+TEST(EkfTest, TiltRandomWalkGrowsWithTheDistanceDriven) {
+  const EkfOptions o;
+  for (double v : {0.0, 0.2, -0.2}) {
+    PoseEkf::State s = PoseEkf::State::Zero();
+    s[PoseEkf::kV] = v;
+    PoseEkf::State s_pred;
+    PoseEkf::Covariance p_pred, f;
+    PoseEkf::PredictState(o, s, PoseEkf::Covariance::Zero(), 10.0, &s_pred, &p_pred, &f);
+    const double expected = v == 0.0 ? 1e-7 : 1.01352e-5;
+    EXPECT_NEAR(p_pred(PoseEkf::kRoll, PoseEkf::kRoll), expected, 1e-12) << v;
+    EXPECT_NEAR(p_pred(PoseEkf::kPitch, PoseEkf::kPitch), expected, 1e-12) << v;
+  }
+  EkfOptions bad;
+  bad.tilt_sigma_per_metre = -1e-3;
+  std::string error;
+  EXPECT_FALSE(bad.IsValid(&error));
+  bad.tilt_sigma_per_metre = 0.0;  // a tilt that changes in time only
+  EXPECT_TRUE(bad.IsValid(&error)) << error;
 }
 
 TEST(EkfTest, OptionsValidation) {
