@@ -6,6 +6,7 @@
 #include <string>
 
 #include "app/cli_common.h"
+#include "core/calibration/workflow.h"
 #include "core/scenario/scenario.h"
 
 namespace sweepscan::app {
@@ -79,6 +80,9 @@ int RecordingPoses(const Args& args, const RecordingInput& in, const MountingErr
                    bool smooth, ReconstructionResult* result) {
   ReconstructionOptions options;
   options.pose.smooth = smooth;
+  // A calibration's smoothed poses take the IMU's tilt noise as measured on
+  // the recording, if above the data sheet's (workflow.h).
+  if (smooth) UseMeasuredTiltNoise(in.log, &options.pose.ekf);
   if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
                                   options.pose.source == PoseSource::kSfm)) {
     PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");

@@ -189,4 +189,9 @@ Status CheckImuTiltNoise(const SensorLog& log, double max_rad) {
   return Status::Error(text);
 }
 
+void UseMeasuredTiltNoise(const SensorLog& log, EkfOptions* ekf) {
+  const ImuTiltNoise noise = MeasureImuTiltNoise(log);
+  if (noise.pairs >= 100) ekf->imu_tilt_sigma = std::max(ekf->imu_tilt_sigma, noise.worst_rad());
+}
+
 }  // namespace sweepscan

@@ -807,6 +807,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
         // calibrate` uses them: the picks snap to samples under these.
         ReconstructionOptions options;
         options.pose.smooth = true;
+        UseMeasuredTiltNoise(recording->log, &options.pose.ekf);  // as the CLI (workflow.h)
         ReconstructionResult poses;
         // An IMU far noisier than its data sheet bends the EKF's tilt and
         // so beta and gamma, unseen by the residuals (workflow.h).
@@ -851,6 +852,7 @@ void Workspace::CalibrateAutomatic() {
         // with its default options.
         ReconstructionOptions options;
         options.pose.smooth = true;
+        UseMeasuredTiltNoise(recording->log, &options.pose.ekf);  // as the CLI (workflow.h)
         ReconstructionResult poses;
         Status s = CheckImuTiltNoise(recording->log);  // as in Calibrate
         if (!s.ok()) return QString::fromStdString(s.message());

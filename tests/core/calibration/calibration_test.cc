@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -601,6 +602,25 @@ TEST(ImuTiltNoiseTest, MeasuredFromConsecutiveReadings) {
     }
   }
   EXPECT_TRUE(CheckImuTiltNoise(SensorLog()).ok());  // nothing to judge
+}
+
+// The calibration's EKF takes the measured tilt noise when it is above the
+// data sheet's 0.3 deg (workflow.h), never below it, and keeps the data
+// sheet's when there is nothing to measure.
+TEST(ImuTiltNoiseTest, TheCalibrationsEkfTakesTheMeasuredNoiseAboveTheDataSheets) {
+  const double data_sheet = EkfOptions().imu_tilt_sigma;
+  for (double deg : {0.1, 0.45}) {
+    sim::SimConfig c = testing::CircleConfig(4);
+    c.imu.tilt_noise_rad = deg * M_PI / 180.0;
+    sim::SimWorld world(c);
+    EkfOptions ekf;
+    UseMeasuredTiltNoise(world.RunAll(), &ekf);
+    const double expected = std::max(data_sheet, c.imu.tilt_noise_rad);
+    EXPECT_NEAR(ekf.imu_tilt_sigma, expected, 0.05 * expected) << deg;
+  }
+  EkfOptions ekf;
+  UseMeasuredTiltNoise(SensorLog(), &ekf);
+  EXPECT_EQ(ekf.imu_tilt_sigma, data_sheet);
 }
 
 // --- Refusals (issue 14) --------------------------------------------------------
