@@ -136,7 +136,7 @@ Status CheckImuTiltNoise(const SensorLog& log, double max_rad = 0.0174533);
 // readings are less noisy than they are, the smoother averages too few of
 // them, and a scan line's pitch error moves the target's corners along the
 // board (seed 36 of the refined sweep, 0.45 deg of tilt noise: alpha -3.27
-// -> -2.69 mrad). Never below the data sheet: the HI219 low-passes its tilt,
+// -> -2.67 mrad). Never below the data sheet: the HI219 low-passes its tilt,
 // and a correlated noise's consecutive differences under-read it.
 void UseMeasuredTiltNoise(const SensorLog& log, EkfOptions* ekf);
 
