@@ -788,6 +788,20 @@ class JobCalibrationProgress : public CalibrationProgress {
   std::atomic<bool>* cancel_;
 };
 
+// The poses both calibration buttons solve on, as `sweepscan-cli calibrate`
+// makes them: the uncalibrated recording's EKF poses smoothed over the drive,
+// the filter taking the IMU's measured tilt noise if above the data sheet's;
+// an IMU far noisier than its data sheet is refused first, since it bends
+// the EKF's tilt and so beta and gamma, unseen by the residuals (workflow.h).
+Status CalibrationPoses(const hardware::Recording& recording, ReconstructionResult* poses) {
+  const Status tilt = CheckImuTiltNoise(recording.log);
+  if (!tilt.ok()) return tilt;
+  ReconstructionOptions options;
+  options.pose.smooth = true;
+  UseMeasuredTiltNoise(recording.log, &options.pose.ekf);
+  return hardware::ReconstructRecording(recording, options, poses);
+}
+
 }  // namespace
 
 void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
@@ -803,17 +817,9 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
       tr("Calibrating"),
       [this, recording, picks, refine, board_thickness_m, result,
        error](std::atomic<bool>* cancel) -> QString {
-        // EKF poses smoothed over the drive, uncalibrated, as `sweepscan-cli
-        // calibrate` uses them: the picks snap to samples under these.
-        ReconstructionOptions options;
-        options.pose.smooth = true;
-        UseMeasuredTiltNoise(recording->log, &options.pose.ekf);  // as the CLI (workflow.h)
+        // The picks snap to samples under these poses.
         ReconstructionResult poses;
-        // An IMU far noisier than its data sheet bends the EKF's tilt and
-        // so beta and gamma, unseen by the residuals (workflow.h).
-        Status s = CheckImuTiltNoise(recording->log);
-        if (!s.ok()) return *error = QString::fromStdString(s.message());
-        s = hardware::ReconstructRecording(*recording, options, &poses);
+        Status s = CalibrationPoses(*recording, &poses);
         if (!s.ok()) return *error = QString::fromStdString(s.message());
         if (*cancel) return QString();
         const SampleStore store(recording->log, poses.poses);
@@ -847,16 +853,10 @@ void Workspace::CalibrateAutomatic() {
   RunJob(
       tr("Calibrating"),
       [this, recording, result](std::atomic<bool>* cancel) -> QString {
-        // As `sweepscan-cli calibrate SESSION --auto`: EKF poses of the
-        // uncalibrated recording smoothed over the drive, SolveAutomatic
-        // with its default options.
-        ReconstructionOptions options;
-        options.pose.smooth = true;
-        UseMeasuredTiltNoise(recording->log, &options.pose.ekf);  // as the CLI (workflow.h)
+        // As `sweepscan-cli calibrate SESSION --auto`: SolveAutomatic with
+        // its default options.
         ReconstructionResult poses;
-        Status s = CheckImuTiltNoise(recording->log);  // as in Calibrate
-        if (!s.ok()) return QString::fromStdString(s.message());
-        s = hardware::ReconstructRecording(*recording, options, &poses);
+        Status s = CalibrationPoses(*recording, &poses);
         if (!s.ok()) return QString::fromStdString(s.message());
         if (*cancel) return QString();
         const SampleStore store(recording->log, poses.poses);
