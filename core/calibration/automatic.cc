@@ -27,7 +27,8 @@ using calibration_internal::kNsPerS;
 using calibration_internal::PlaneProblem;
 using calibration_internal::Prepare;
 using calibration_internal::Prepared;
-using calibration_internal::ProjectT;
+using calibration_internal::MountingRotation;
+using calibration_internal::ProjectWith;
 
 bool AutoCalibrationOptions::IsValid(std::string* error) const {
   if (!solver.IsValid(error)) return false;
@@ -58,13 +59,14 @@ bool AutoCalibrationOptions::IsValid(std::string* error) const {
       !(range_noise_m + model_noise_m > 0.0) || !(membership_sigmas > 0.0) ||
       !(edge_margin_m >= 0.0) || !(surface_step_m > 0.0) || !(robust_scale_sigmas > 0.0) ||
       !(covariance_block_s > 0.0) || !(max_abs_angle_rad > 0.0) || !(min_rms_sigmas >= 0.0) ||
+      !(lm_angle_tolerance_rad >= 0.0) ||
       !(min_sigma_rad >= 0.0) || !(max_rms_sigmas > min_rms_sigmas) ||
       !std::isfinite(max_rms_sigmas + range_noise_m + range_noise_fraction + model_noise_m + membership_sigmas +
                      edge_margin_m + robust_scale_sigmas + covariance_block_s +
-                     max_abs_angle_rad + min_rms_sigmas + min_sigma_rad)) {
+                     max_abs_angle_rad + min_rms_sigmas + min_sigma_rad + lm_angle_tolerance_rad)) {
     *error =
         "automatic calibration: noise model, membership, edge margin, robust scale, "
-        "covariance block and refusal thresholds must be finite and positive";
+        "covariance block, LM angle tolerance and refusal thresholds must be finite and positive";
     return false;
   }
   return true;
@@ -199,13 +201,10 @@ Status SelectAutoSamples(const SampleStore& store, const RobotGeometry& geometry
 // p_W of every sample under the angles c.
 std::vector<Eigen::Vector3d> ProjectSamples(const std::vector<Prepared>& prepared,
                                             const MountingError& c) {
-  double abg[3] = {c.alpha, c.beta, c.gamma};
+  const double abg[3] = {c.alpha, c.beta, c.gamma};
+  const Eigen::Matrix3d r_c = MountingRotation(abg);
   std::vector<Eigen::Vector3d> pts(prepared.size());
-  for (size_t i = 0; i < prepared.size(); ++i) {
-    double p[3];
-    ProjectT(prepared[i], abg, p);
-    pts[i] = Eigen::Vector3d(p[0], p[1], p[2]);
-  }
+  for (size_t i = 0; i < prepared.size(); ++i) pts[i] = ProjectWith(prepared[i], r_c);
   return pts;
 }
 
@@ -358,6 +357,7 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
   summary->final_cost = final_cost;
   summary->planes = static_cast<int>(used.size());
   summary->residual_blocks = residuals;
+  const Eigen::Matrix3d r_c = MountingRotation(abg);
   double sq = 0.0, sq_norm = 0.0;
   for (size_t s = 0; s < used.size(); ++s) {
     CalibrationSummary::PlaneReport rep;
@@ -368,9 +368,7 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
     rep.sightings = sightings[s];
     double ps = 0.0, pn = 0.0;
     for (size_t m : chosen[s]) {
-      double p[3];
-      ProjectT(prepared[m], abg, p);
-      const double r = rep.normal.dot(Eigen::Vector3d(p[0], p[1], p[2])) + rep.d;
+      const double r = rep.normal.dot(ProjectWith(prepared[m], r_c)) + rep.d;
       ps += r * r;
       pn += (r / sigma[m]) * (r / sigma[m]);
     }
@@ -536,7 +534,8 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     }
     if (outer == 0) summary->initial_rms_m = std::sqrt(sq_before / residuals);
     std::vector<CalibrationIteration> inner_trace;
-    const PlaneProblem::Outcome cs = problem.Solve(so_opts, &inner_trace);
+    const PlaneProblem::Outcome cs =
+        problem.Solve(so_opts, options.lm_angle_tolerance_rad, &inner_trace);
     for (auto it : inner_trace) {
       it.iteration = static_cast<int>(trace.size());
       trace.push_back(it);

@@ -56,6 +56,15 @@ struct AutoCalibrationOptions {
   // where two surfaces meet, and parallel surfaces a few cm apart) and gives
   // no residual.
   double edge_margin_m = 0.05;
+  // Each round's LM solve ends once a successful step moves no angle by
+  // more than this, besides Ceres' own tolerances. Why: the Huber loss makes
+  // LM converge linearly (a tenth of the way per step at the final band,
+  // half at the first), so Ceres' function tolerance of 1e-12 took 11-28
+  // steps a round to settle the eighth digit; 1e-7 rad is a thousandth of
+  // the smallest sigma the mode reports and a hundredth of the rounds' own
+  // settling (a round at the final band that moves the angles less than
+  // 1e-5 rad ends the mode).
+  double lm_angle_tolerance_rad = 1e-7;
   // Huber scale on the normalised residuals r_i / sigma_i (used when
   // solver.loss is kNone; another loss uses this scale too).
   double robust_scale_sigmas = 2.0;

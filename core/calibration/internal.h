@@ -66,6 +66,23 @@ void ProjectT(const Prepared& o, const T* abg, T* p_w) {
   }
 }
 
+// The same for many samples under one c: R(c) = Rz(alpha) Ry(beta) Rx(gamma)
+// computed once (MountingRotation) instead of six sines and cosines a sample.
+inline Eigen::Matrix3d MountingRotation(const double* abg) {
+  const double ca = std::cos(abg[0]), sa = std::sin(abg[0]);
+  const double cb = std::cos(abg[1]), sb = std::sin(abg[1]);
+  const double cg = std::cos(abg[2]), sg = std::sin(abg[2]);
+  Eigen::Matrix3d rz, ry, rx;
+  rz << ca, -sa, 0, sa, ca, 0, 0, 0, 1;
+  ry << cb, 0, sb, 0, 1, 0, -sb, 0, cb;
+  rx << 1, 0, 0, 0, cg, -sg, 0, sg, cg;
+  return rz * ry * rx;
+}
+
+inline Eigen::Vector3d ProjectWith(const Prepared& o, const Eigen::Matrix3d& r_c) {
+  return o.r_wb * (r_c * o.p_l + o.t_bl) + o.t_wb;
+}
+
 inline MountingError FromArray(const double* abg) { return {abg[0], abg[1], abg[2]}; }
 
 inline double AngleChange(const MountingError& a, const MountingError& b) {
@@ -105,14 +122,21 @@ class PlaneProblem {
 
   struct Outcome {
     bool cancelled = false;     // the progress callback asked to stop
-    bool lm_converged = false;  // Ceres' CONVERGENCE
+    bool lm_converged = false;  // Ceres' CONVERGENCE, or the angles' step below the tolerance
     double initial_cost = 0.0, final_cost = 0.0;
     std::string message;
   };
   // One LM solve from the current angles; appends its iterations to `trace`.
-  Outcome Solve(const CalibrationOptions& options, std::vector<CalibrationIteration>* trace);
+  // It also stops, converged, once a successful step moves no angle by more
+  // than angle_tolerance_rad (0: only Ceres' own tolerances).
+  Outcome Solve(const CalibrationOptions& options, double angle_tolerance_rad,
+                std::vector<CalibrationIteration>* trace);
 
   const std::array<double, 4>& plane(size_t s) const;  // n_s (3), d_s
+
+  // The residuals and the Jacobian's angle columns at the current angles
+  // and planes (for tests of the analytic Jacobian).
+  bool EvaluateAngles(std::vector<double>* residuals, Eigen::MatrixXd* d_angles);
 
   // Final statistics on the solved problem: the angles' observability ...
   void CheckObservability(const CalibrationOptions& options, CalibrationSummary* summary);

@@ -51,35 +51,31 @@ struct PairCost {
 // Analytic Jacobian (the problem has ~60 000 of these residuals and LM
 // evaluates them a few dozen times; automatic differentiation spent most of
 // the solve recomputing the same sines and cosines per point). With
-// p_W = R_WB R(c) p_L + u, u = R_WB t_BL + t_WB, R(c) = Rz(alpha) Ry(beta)
-// Rx(gamma) (Eq. 1, 13, 14):
-//   dr/dc_k = (R_WB' n) . (dR/dc_k p_L) / sigma,   dr/dn = p_W / sigma,
-//   dr/dd = 1 / sigma;
+// p_W = R_WB q + u, q = R(c) p_L, u = R_WB t_BL + t_WB, R(c) = Rz(alpha)
+// Ry(beta) Rx(gamma) (Eq. 1, 13, 14), each derivative of R(c) is a cross
+// product with an axis after R(c):
+//   dR/dalpha = [a_0]x R,  dR/dbeta = [a_1]x R,  dR/dgamma = [a_2]x R,
+//   a_0 = e_z,  a_1 = Rz(alpha) e_y,  a_2 = Rz(alpha) Ry(beta) e_x,
+// so with m = R_WB' n (scalar triple product, m . (a x q) = a . (q x m)):
+//   dr/dc_k = a_k . (q x m) / sigma,   dr/dn = p_W / sigma,   dr/dd = 1 / sigma;
 // the plane block is (n, d) with the sphere manifold on n (ProductManifold),
 // so that the planes can be eliminated (Schur) from the normal equations.
-// R(c) and its three derivatives depend on c only: computed once per
-// thread and value of c.
-struct RotationAndDerivatives {
+// R(c) and the axes depend on c only: computed once per thread and value of
+// c.
+struct RotationAndAxes {
   double abg[3] = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
-  Eigen::Matrix3d r, d[3];
+  Eigen::Matrix3d r;
+  Eigen::Vector3d axis[3];
 
   void Update(const double* c) {
     if (c[0] == abg[0] && c[1] == abg[1] && c[2] == abg[2]) return;
     std::copy(c, c + 3, abg);
+    r = MountingRotation(c);
     const double ca = std::cos(c[0]), sa = std::sin(c[0]);
     const double cb = std::cos(c[1]), sb = std::sin(c[1]);
-    const double cg = std::cos(c[2]), sg = std::sin(c[2]);
-    Eigen::Matrix3d rz, ry, rx, drz, dry, drx;
-    rz << ca, -sa, 0, sa, ca, 0, 0, 0, 1;
-    drz << -sa, -ca, 0, ca, -sa, 0, 0, 0, 0;
-    ry << cb, 0, sb, 0, 1, 0, -sb, 0, cb;
-    dry << -sb, 0, cb, 0, 0, 0, -cb, 0, -sb;
-    rx << 1, 0, 0, 0, cg, -sg, 0, sg, cg;
-    drx << 0, 0, 0, 0, -sg, -cg, 0, cg, -sg;
-    r = rz * ry * rx;
-    d[0] = drz * ry * rx;
-    d[1] = rz * dry * rx;
-    d[2] = rz * ry * drx;
+    axis[0] = Eigen::Vector3d::UnitZ();
+    axis[1] = Eigen::Vector3d(-sa, ca, 0.0);
+    axis[2] = Eigen::Vector3d(ca * cb, sa * cb, -sb);
   }
 };
 
@@ -112,10 +108,12 @@ void RobustResidual(RobustLoss loss, double k, double r, double* r_tilde, double
 
 // Up to kPointsPerBlock points of one plane in one residual block: Ceres'
 // per-block overhead (its evaluation, loss and Jacobian plumbing) was most
-// of the solve with a block per point.
+// of the solve with a block per point. 256 rather than 64: the two-turn
+// solve (BM_SolveAutomaticTwoTurnsEkf, 86 k rows) took 15 % less time;
+// 1024 was no faster, 4096 slower (too few blocks to share out).
 class PlanePointsCost final : public ceres::CostFunction {
  public:
-  static constexpr int kPointsPerBlock = 64;
+  static constexpr int kPointsPerBlock = 256;
 
   // Parameter blocks: the angles (3), the plane (n, d) (4), the path scale
   // s (1): t_WB -> centre + s (t_WB - centre), so p_W gains (s - 1) w with
@@ -131,21 +129,24 @@ class PlanePointsCost final : public ceres::CostFunction {
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    thread_local RotationAndDerivatives rot;
+    thread_local RotationAndAxes rot;
     rot.Update(parameters[0]);
     const Eigen::Map<const Eigen::Vector3d> n(parameters[1]);
     const double d = parameters[1][3];
     const double s1 = parameters[2][0] - 1.0;
     for (size_t i = 0; i < points_.size(); ++i) {
       const Point& pt = points_[i];
-      const Eigen::Vector3d p_w = pt.r_wb * (rot.r * pt.p_l) + pt.u + s1 * pt.w;
+      // lazyProduct: the 3 x 3 products inline (Eigen's general product
+      // was a call per point, ~5 % of the solve).
+      const Eigen::Vector3d q = rot.r.lazyProduct(pt.p_l);
+      const Eigen::Vector3d p_w = pt.r_wb.lazyProduct(q) + pt.u + s1 * pt.w;
       double scale = 1.0;
       RobustResidual(loss_, loss_scale_, (n.dot(p_w) + d) * pt.inv_sigma, &residuals[i], &scale);
       if (jacobians == nullptr) continue;
       const double w = scale * pt.inv_sigma;
       if (jacobians[0] != nullptr) {
-        const Eigen::Vector3d m = pt.r_wb.transpose() * n;
-        for (int k = 0; k < 3; ++k) jacobians[0][3 * i + k] = m.dot(rot.d[k] * pt.p_l) * w;
+        const Eigen::Vector3d c = q.cross(pt.r_wb.transpose().lazyProduct(n));
+        for (int k = 0; k < 3; ++k) jacobians[0][3 * i + k] = rot.axis[k].dot(c) * w;
       }
       if (jacobians[1] != nullptr) {
         for (int k = 0; k < 3; ++k) jacobians[1][4 * i + k] = p_w[k] * w;
@@ -171,13 +172,15 @@ class PlanePointsCost final : public ceres::CostFunction {
 
 using PlaneManifold = ceres::ProductManifold<ceres::SphereManifold<3>, ceres::EuclideanManifold<1>>;
 
-// Records the per-iteration trace (the paper's Fig. 8) and lets the caller
-// cancel. Needs Solver::Options::update_state_every_iteration.
+// Records the per-iteration trace (the paper's Fig. 8), lets the caller
+// cancel and, with angle_tolerance_rad > 0, ends the solve once a
+// successful step moves no angle by more than that. Needs
+// Solver::Options::update_state_every_iteration.
 class TraceCallback : public ceres::IterationCallback {
  public:
   TraceCallback(const double* abg, std::vector<CalibrationIteration>* trace,
-                CalibrationProgress* progress)
-      : abg_(abg), trace_(trace), progress_(progress) {}
+                CalibrationProgress* progress, double angle_tolerance_rad = 0.0)
+      : abg_(abg), trace_(trace), progress_(progress), angle_tolerance_rad_(angle_tolerance_rad) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     CalibrationIteration it;
     it.iteration = static_cast<int>(trace_->size());
@@ -187,13 +190,19 @@ class TraceCallback : public ceres::IterationCallback {
     if (progress_ != nullptr && !progress_->OnIteration(it.iteration, it.angles, it.cost)) {
       return ceres::SOLVER_ABORT;
     }
-    return ceres::SOLVER_CONTINUE;
+    const bool small_step = s.iteration > 0 && s.step_is_successful &&
+                            std::max({std::abs(abg_[0] - previous_[0]), std::abs(abg_[1] - previous_[1]),
+                                      std::abs(abg_[2] - previous_[2])}) < angle_tolerance_rad_;
+    std::copy(abg_, abg_ + 3, previous_);
+    return small_step ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
   }
 
  private:
   const double* abg_;
   std::vector<CalibrationIteration>* trace_;
   CalibrationProgress* progress_;
+  double angle_tolerance_rad_;
+  double previous_[3] = {0.0, 0.0, 0.0};
 };
 
 ceres::LossFunction* MakeLoss(RobustLoss loss, double scale) {
@@ -354,6 +363,7 @@ PlaneProblem::PlaneProblem(double* abg, const std::vector<Plane>& planes,
 PlaneProblem::~PlaneProblem() = default;
 
 PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
+                                          double angle_tolerance_rad,
                                           std::vector<CalibrationIteration>* trace) {
   ceres::Solver::Options so = SolverOptions(options);
   // Every residual holds the angles and one plane: eliminating the planes
@@ -368,13 +378,14 @@ PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
   }
   so.linear_solver_ordering = ordering;
   so.num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  TraceCallback callback(impl_->abg, trace, options.progress);
+  TraceCallback callback(impl_->abg, trace, options.progress, angle_tolerance_rad);
   so.callbacks.push_back(&callback);
   ceres::Solver::Summary cs;
   ceres::Solve(so, &impl_->problem, &cs);
   Outcome out;
   out.cancelled = cs.termination_type == ceres::USER_FAILURE;
-  out.lm_converged = cs.termination_type == ceres::CONVERGENCE;
+  out.lm_converged =
+      cs.termination_type == ceres::CONVERGENCE || cs.termination_type == ceres::USER_SUCCESS;
   out.initial_cost = cs.initial_cost;
   out.final_cost = cs.final_cost;
   out.message = cs.message;
@@ -382,6 +393,18 @@ PlaneProblem::Outcome PlaneProblem::Solve(const CalibrationOptions& options,
 }
 
 const std::array<double, 4>& PlaneProblem::plane(size_t s) const { return impl_->params[s]; }
+
+bool PlaneProblem::EvaluateAngles(std::vector<double>* residuals, Eigen::MatrixXd* d_angles) {
+  ceres::Problem::EvaluateOptions eval;
+  eval.parameter_blocks = {impl_->abg};
+  ceres::CRSMatrix crs;
+  if (!impl_->problem.Evaluate(eval, nullptr, residuals, nullptr, &crs)) return false;
+  d_angles->setZero(crs.num_rows, 3);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) (*d_angles)(r, crs.cols[a]) = crs.values[a];
+  }
+  return true;
+}
 
 void PlaneProblem::CheckObservability(const CalibrationOptions& options,
                                       CalibrationSummary* summary) {

@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 
+#include "core/calibration/internal.h"
 #include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/world.h"
@@ -705,6 +706,75 @@ TEST(AutomaticTest, ResultsAtTheBoundOrCollapsedAreRefused) {
   o = AutoCalibrationOptions();
   o.max_rms_sigmas = o.min_rms_sigmas;
   EXPECT_FALSE(SolveAutomatic(d.store, d.config.geometry, {}, o, &s).ok());
+}
+
+// The plane problem's analytic angle Jacobian (pairs_solver.cc: the
+// derivatives of R(c) as cross products with the axes a_k, through the
+// Huber loss inside the residual) against central differences, on samples
+// of the paper's drive and the floor: its points are inside the loss's
+// scale, the walls' and the ceiling's far outside. (Ceres' own check_gradients is no
+// referee here: its Ridders differences disagree with both this Jacobian
+// and plain central differences on the Huber branch.)
+TEST(AutomaticTest, AngleJacobianMatchesCentralDifferences) {
+  using calibration_internal::PlaneProblem;
+  using calibration_internal::Prepare;
+  using calibration_internal::Prepared;
+  const Drive& d = GetDrive(0);
+  std::vector<Prepared> prepared;
+  std::vector<double> sigma;
+  std::vector<std::vector<size_t>> chosen(1);
+  for (size_t i = 0; i < d.store.observations().size(); i += 997) {
+    prepared.push_back(Prepare(d.store.observations()[i], d.config.geometry));
+    sigma.push_back(0.003 + 0.002 * (i % 3));
+    chosen[0].push_back(prepared.size() - 1);
+  }
+  ASSERT_GT(prepared.size(), 100u);
+  Plane plane;  // the floor
+  plane.normal = Eigen::Vector3d::UnitZ();
+  plane.d = 0.0;
+  const MountingError& truth = kCases[0].truth;
+  double abg[3] = {truth.alpha, truth.beta, truth.gamma};
+  double scale = 1.0;
+  PlaneProblem problem(abg, {plane}, chosen, prepared, sigma, RobustLoss::kHuber, 2.0, &scale,
+                       Eigen::Vector3d(4.0, 2.0, 0.0), true);
+  std::vector<double> r;
+  Eigen::MatrixXd analytic, unused;
+  ASSERT_TRUE(problem.EvaluateAngles(&r, &analytic));
+  int inside = 0, outside = 0;
+  for (double v : r) (std::abs(v) < 2.0 ? inside : outside)++;
+  EXPECT_GT(inside, 3);
+  EXPECT_GT(outside, 3);
+  const double h = 1e-6;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> plus, minus;
+    const double c = abg[k];
+    abg[k] = c + h;
+    ASSERT_TRUE(problem.EvaluateAngles(&plus, &unused));
+    abg[k] = c - h;
+    ASSERT_TRUE(problem.EvaluateAngles(&minus, &unused));
+    abg[k] = c;
+    for (size_t i = 0; i < r.size(); ++i) {
+      const double numeric = (plus[i] - minus[i]) / (2.0 * h);
+      EXPECT_NEAR(analytic(i, k), numeric, 1e-5 * std::max(1.0, std::abs(numeric)))
+          << "angle " << k << " row " << i;
+    }
+  }
+}
+
+// Each round's LM ends once a step moves no angle by more than
+// lm_angle_tolerance_rad (Huber makes LM converge linearly): the angles
+// then agree with a solve run to Ceres' 1e-12 function tolerance to well
+// within the mode's settling (1e-5 rad), in fewer steps (here 57 against
+// 70; on the two-turn drive of BM_SolveAutomaticTwoTurnsEkf 58 against 83).
+TEST(AutomaticTest, AngleStepToleranceEndsTheRoundsEarlyAtTheSameAngles) {
+  const Drive& d = GetDrive(0);
+  AutoCalibrationOptions early, full;
+  full.lm_angle_tolerance_rad = 0.0;
+  CalibrationSummary a, b;
+  ASSERT_TRUE(SolveAutomatic(d.store, d.config.geometry, {}, early, &a).ok());
+  ASSERT_TRUE(SolveAutomatic(d.store, d.config.geometry, {}, full, &b).ok());
+  EXPECT_LT(ErrorMrad(a.angles, b.angles).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_LT(a.trace.size(), b.trace.size());
 }
 
 TEST(RefinedCornersTest, TooFewSamplesFails) {
