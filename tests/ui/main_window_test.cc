@@ -891,6 +891,17 @@ TEST_F(CalibrationTest, SolveCanBeCancelledAndTheAppStaysResponsive) {
                         << ", last " << window_->view()->last_render_ms() << " ms, view "
                         << window_->view()->width() << "x" << window_->view()->height()
                         << " (was " << height_before << ")";
+  // Another task asked for meanwhile is refused with the name of the one
+  // in the way (the operator knows what to wait for or cancel).
+  QString refused;
+  {
+    QObject context;
+    QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                     [&](const QString&, bool ok, const QString& m) { refused = ok ? "" : m; });
+    workspace_->SetPoseSource(PoseSource::kOdometry);
+  }
+  EXPECT_TRUE(refused.startsWith("Calibrating is still running")) << refused.toStdString();
+  EXPECT_EQ(workspace_->pose_source(), PoseSource::kEkf);
   panel->CancelSolve();
   ASSERT_TRUE(WaitFor([&] { return done; }, 30000));
   EXPECT_FALSE(ok);

@@ -703,8 +703,9 @@ void Workspace::SetPoseSource(PoseSource source) {
     // One job at a time (and an opening session already chose its poses).
     emit poseSourceChanged(static_cast<int>(pose_source_));
     emit jobFinished(tr("Pose source"), false,
-                     tr("Another task is still running: let it finish (or cancel it), then "
-                        "choose the pose source again."));
+                     tr("%1 is still running: let it finish (or cancel it), then choose the pose "
+                        "source again.")
+                         .arg(job_what_));
     return;
   }
   const bool changed = source != pose_source_;
@@ -1043,9 +1044,13 @@ void Workspace::ExportCloud(const QString& path) {
 void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
                        std::function<void()> on_success) {
   if (job_thread_ != nullptr) {
-    emit jobFinished(what, false, QStringLiteral("Another task is still running."));
+    // Name the task in the way, so the operator knows what to wait for.
+    emit jobFinished(what, false,
+                     tr("%1 is still running: let it finish (or cancel it), then try again.")
+                         .arg(job_what_));
     return;
   }
+  job_what_ = what;
   job_cancel_ = false;
   emit jobProgress(what, -1.0);  // Indeterminate until the job reports a fraction.
   job_thread_ = std::make_unique<std::thread>([this, what, work, on_success] {

@@ -330,6 +330,7 @@ class Workspace : public QObject {
   size_t scan_count_ = 0;
 
   std::unique_ptr<std::thread> job_thread_;
+  QString job_what_;  // the running (or last) job's name, as its progress shows it
   std::atomic<bool> job_cancel_{false};
 };
 
