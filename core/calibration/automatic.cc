@@ -152,6 +152,11 @@ struct AutoSamples {
   std::vector<size_t> seg_index;  // the even subsample RANSAC runs on (indices into `sample`)
   std::vector<Prepared> prepared;  // per entry of `sample`
   std::vector<double> sigma;  // per entry of `sample`, metres (the noise model in the header)
+  // Per entry of `sample`, copied out of the observations once: the rounds
+  // read them for every member of every plane, and a LidarObservation is
+  // a cache line and a half.
+  std::vector<int64_t> time_ns;
+  std::vector<uint32_t> scan;
   int64_t t0 = 0;             // time of the first sample
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // mean body position (the path scale's centre)
 };
@@ -184,9 +189,13 @@ Status SelectAutoSamples(const SampleStore& store, const RobotGeometry& geometry
   std::vector<double>& sigma = out->sigma;
   prepared.reserve(sample.size());
   sigma.reserve(sample.size());
+  out->time_ns.reserve(sample.size());
+  out->scan.reserve(sample.size());
   for (size_t i : sample) {
     const LidarObservation& o = store.observations()[i];
     prepared.push_back(Prepare(o, geometry));
+    out->time_ns.push_back(o.time_ns);
+    out->scan.push_back(o.ref.scan);
     const double rho = o.p_lidar.norm();
     sigma.push_back(std::sqrt(options.range_noise_m * options.range_noise_m +
                               std::pow(options.range_noise_fraction * rho, 2) +
@@ -240,12 +249,12 @@ std::vector<FoundPlane> SegmentSurfaces(const std::vector<Eigen::Vector3d>& pts,
 // The pass split: keep surfaces seen from more than one place, at least two
 // sightings (time gaps > 1 s) or one long sighting (floor, ceiling: seen
 // from every heading of the circle). sightings[s]: the kept surface's count.
-void KeepSurfacesSeenTwice(std::vector<FoundPlane>* planes, const SampleStore& store,
-                           const std::vector<size_t>& sample, std::vector<FoundPlane>* used,
-                           std::vector<int>* sightings) {
+void KeepSurfacesSeenTwice(std::vector<FoundPlane>* planes, const AutoSamples& in,
+                           std::vector<FoundPlane>* used, std::vector<int>* sightings) {
   for (auto& fp : *planes) {
     std::vector<int64_t> times;
-    for (size_t m : fp.members) times.push_back(store.observations()[sample[m]].time_ns);
+    times.reserve(fp.members.size());
+    for (size_t m : fp.members) times.push_back(in.time_ns[m]);
     const auto windows = SplitByTimeGaps(times, 1.0, 20);
     double span = 0.0;
     for (const auto& w : windows) span += w.duration_s();
@@ -262,18 +271,16 @@ void KeepSurfacesSeenTwice(std::vector<FoundPlane>* planes, const SampleStore& s
 // a parallel surface a little in front or behind (the board 2 cm in
 // front of the sill), which the per-point band cannot separate at 3
 // sigma. Two rounds of reject-and-refit.
-void DropOffsetRuns(const SampleStore& store, const std::vector<size_t>& sample,
-                    const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& sigma,
+void DropOffsetRuns(const AutoSamples& in, const std::vector<Eigen::Vector3d>& pts,
                     const AutoCalibrationOptions& options, std::vector<FoundPlane>* used) {
+  const std::vector<double>& sigma = in.sigma;
   for (auto& fp : *used) {
     for (int round = 0; round < 2; ++round) {
       std::vector<size_t> keep;
       size_t begin = 0;
       const auto& mem = fp.members;  // ascending sample index = time order
       for (size_t i = 1; i <= mem.size(); ++i) {
-        const bool split = i == mem.size() ||
-                           store.observations()[sample[mem[i]]].ref.scan !=
-                               store.observations()[sample[mem[i - 1]]].ref.scan ||
+        const bool split = i == mem.size() || in.scan[mem[i]] != in.scan[mem[i - 1]] ||
                            mem[i] - mem[i - 1] > 1;  // a sample between them is off this plane
         if (!split) continue;
         double sum = 0.0, var = 0.0;
@@ -327,7 +334,7 @@ std::vector<std::vector<size_t>> ChooseResidualPoints(const std::vector<FoundPla
 // The residual rows, surface by surface in chosen order: each row's
 // covariance block (time since the first sample, in covariance_block_s
 // blocks), and the sum of squared distances to the planes before the solve.
-void ResidualRows(const SampleStore& store, const AutoSamples& in,
+void ResidualRows(const AutoSamples& in,
                   const std::vector<FoundPlane>& used,
                   const std::vector<std::vector<size_t>>& chosen,
                   const std::vector<Eigen::Vector3d>& pts, const AutoCalibrationOptions& options,
@@ -336,7 +343,7 @@ void ResidualRows(const SampleStore& store, const AutoSamples& in,
     const Plane& pl = used[s].plane;
     for (size_t m : chosen[s]) {
       group_of_row->push_back(
-          static_cast<int>((store.observations()[in.sample[m]].time_ns - in.t0) /
+          static_cast<int>((in.time_ns[m] - in.t0) /
                            static_cast<int64_t>(options.covariance_block_s * kNsPerS)));
       const double r = pl.SignedDistance(pts[m]);
       *sq_before += r * r;
@@ -491,19 +498,19 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     std::vector<FoundPlane> planes = SegmentSurfaces(pts, threshold, in.seg_index, options);
     std::vector<FoundPlane> used;
     std::vector<int> sightings;
-    KeepSurfacesSeenTwice(&planes, store, sample, &used, &sightings);
+    KeepSurfacesSeenTwice(&planes, in, &used, &sightings);
     if (used.size() < 2) {
       summary->trace = trace;
       return Status::Error("automatic calibration: found " + std::to_string(used.size()) +
                            " plane(s) seen in both passes, need at least 2");
     }
-    if (last_band) DropOffsetRuns(store, sample, pts, in.sigma, options, &used);
+    if (last_band) DropOffsetRuns(in, pts, options, &used);
     const std::vector<std::vector<size_t>> chosen = ChooseResidualPoints(used, pts, options);
 
     // The solve.
     std::vector<int> group_of_row;
     double sq_before = 0.0;
-    ResidualRows(store, in, used, chosen, pts, options, &group_of_row, &sq_before);
+    ResidualRows(in, used, chosen, pts, options, &group_of_row, &sq_before);
     const int residuals = static_cast<int>(group_of_row.size());
     std::vector<Plane> start;
     for (const FoundPlane& fp : used) start.push_back(fp.plane);

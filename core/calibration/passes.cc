@@ -12,7 +12,8 @@ std::vector<PassWindow> SplitByTimeGaps(std::vector<int64_t> times_ns, double ga
                                         size_t min_count) {
   std::vector<PassWindow> out;
   if (times_ns.empty()) return out;
-  std::sort(times_ns.begin(), times_ns.end());
+  // The automatic mode's planes pass their members in time order already.
+  if (!std::is_sorted(times_ns.begin(), times_ns.end())) std::sort(times_ns.begin(), times_ns.end());
   const double gap_ns = gap_s * 1e9;
   PassWindow w{times_ns[0], times_ns[0], 1};
   for (size_t i = 1; i < times_ns.size(); ++i) {
