@@ -38,7 +38,7 @@ const char* const kCalibrateUsage =
     "  --refine          with --pairs: replace each pick by the board corner fitted in its pass\n"
     "                    (all sightings of the target, alternately near and far; reports the\n"
     "                    raw picks as the paper's baseline too). Best with a thin board turned\n"
-    "                    45 deg and two turns at 0.05 m/s: see docs/calibration.md\n"
+    "                    45 deg and three turns at 0.05 m/s: see docs/calibration.md\n"
     "  --board-thickness M  with --refine: the target board's thickness in metres (default\n"
     "                    0.005; 0 for a sheet): beams that pass an edge can hit its edge face\n"
     "  --auto            no picks: planes seen in both passes (floor, ceiling, walls, board);\n"

@@ -3,10 +3,10 @@
 
 Seeded drives with sensor errors drawn across the HI219 and X4 data-sheet
 ranges and random mounting angles up to 2 deg, each calibrated by the
-command line as a user would: the automatic mode on the calibration drive
-docs/calibration.md asks for, two slow turns of a circle in the lab
-(resources/scenarios/lab_circle_two_turns.json's path, EKF poses; --drive
-lab_circle.json for one turn),
+command line as a user would: the automatic mode on slow turns of a circle
+in the lab (resources/scenarios/lab_circle_two_turns.json's path, EKF poses;
+--turns 3 for the three turns docs/calibration.md asks for since 2026-11-24,
+--drive lab_circle.json for one turn),
 
     sweepscan-cli calibrate --scenario DRIVE.json --auto --json
 
@@ -16,7 +16,7 @@ writes every angle's error and sigma.
 
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
-           [--drive lab_circle_two_turns.json] [--mode auto|refined]
+           [--drive lab_circle_two_turns.json] [--turns N] [--mode auto|refined]
            [--pose-source ekf|truth|odometry] [--no-smooth] [--default-sensors]
 """
 import argparse
@@ -104,6 +104,9 @@ def main():
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--workdir", default=os.path.join(ROOT, "out", "robustness"))
     ap.add_argument("--csv")
+    ap.add_argument("--turns", type=float, default=None,
+                    help="turns of the circle instead of the scenario's (both modes; e.g. 3, the "
+                         "calibration drive docs/calibration.md asks for)")
     ap.add_argument("--drive", default="lab_circle_two_turns.json",
                     help="the path's scenario in resources/scenarios (lab_circle_two_turns.json, "
                          "the default: two turns; lab_circle.json: one turn)")
@@ -136,8 +139,12 @@ def main():
         for mode in modes:
             base = a.drive if mode == "auto" else "lab_circle_diamond.json"
             path = os.path.join(a.workdir, "drive_%03d_%s.json" % (seed, mode))
+            drive = scenario(base, seed, angles, sensor)
+            if a.turns is not None:
+                for segment in drive["path"]["segments"]:
+                    segment["turns"] = a.turns
             with open(path, "w") as f:
-                json.dump(scenario(base, seed, angles, sensor), f, indent=1)
+                json.dump(drive, f, indent=1)
             extra = ["--auto"]
             if mode == "refined":
                 pairs = os.path.join(a.workdir, "pairs_%03d.json" % seed)

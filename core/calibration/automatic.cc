@@ -474,7 +474,7 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     std::string why;
     if (!FitCircleDrive(PathOfSamples(store), &circle, &why)) {
       return Status::Error("refused: not a calibration drive: " + why +
-                           "; drive one or two slow turns of a circle (docs/calibration.md)");
+                           "; drive three slow turns of a circle (docs/calibration.md)");
     }
   }
   const std::vector<size_t>& sample = in.sample;

@@ -155,13 +155,13 @@ QWidget* CalibrationPanel::BuildTargetStep() {
   auto* layout = new QVBoxLayout(box);
   auto* target = new QLabel(
       tr("Mount a thin board (0.6 m, 5 mm) turned 45° like a diamond, 1-2 m beside the "
-         "circle, its face towards the circle's centre. Then record two turns of a 1 m circle "
-         "at 0.05 m/s and open the recording."));
+         "circle, its face towards the circle's centre. Then record three turns of a 1 m circle "
+         "at 0.05 m/s (about 6 minutes) and open the recording."));
   target->setWordWrap(true);
   layout->addWidget(target);
   auto* drive = new QPushButton(tr("Record a calibration drive"));
   drive->setToolTip(
-      tr("Starts recording and a 1 m circle at 0.05 m/s, two turns (the Drive "
+      tr("Starts recording and a 1 m circle at 0.05 m/s, three turns (the Drive "
          "panel's scripted circle); Robot > Stop Recording when it ends, then open "
          "the recording"));
   connect(drive, &QPushButton::clicked, this, [this] {
@@ -170,7 +170,10 @@ QWidget* CalibrationPanel::BuildTargetStep() {
       result_->setText(error);
       return;
     }
-    workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 2.0));
+    // Three turns: six sightings of the target and of every wall instead of
+    // four average the heading's and the board fit's noise (docs/results.md,
+    // "Robustness": the worst angles of 120 automatic and 60 refined drives).
+    workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 3.0));
   });
   layout->addWidget(drive);
   return box;
