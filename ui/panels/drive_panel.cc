@@ -67,7 +67,7 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   auto* script_form = new QFormLayout(script);
   radius_ = Spin(0.2, 5.0, 0.1, 1.0, tr(" m"));
   speed_ = Spin(0.01, 0.5, 0.01, 0.05, tr(" m/s"));
-  turns_ = Spin(0.25, 5.0, 0.25, 2.0, QString(), 2);
+  turns_ = Spin(0.25, 5.0, 0.25, 3.0, QString(), 2);  // the calibration drive (docs/calibration.md)
   script_form->addRow(tr("Radius"), radius_);
   script_form->addRow(tr("Speed"), speed_);
   script_form->addRow(tr("Turns"), turns_);
