@@ -36,6 +36,11 @@ ConnectionPanel::ConnectionPanel(Workspace* workspace, const QString& scenarios_
        QDir(scenarios_dir).entryInfoList({QStringLiteral("*.json")}, QDir::Files, QDir::Name)) {
     scenario_->addItem(f.completeBaseName(), f.absoluteFilePath());
   }
+  // Sized for about 20 characters, not the longest scenario's name: a long
+  // name would widen the dock and take the width from the 3D view (the list
+  // shows the names in full when opened).
+  scenario_->setSizeAdjustPolicy(QComboBox::AdjustToMinimumContentsLengthWithIcon);
+  scenario_->setMinimumContentsLength(20);
   scenario_->setToolTip(tr("The simulated world (resources/scenarios)"));
   sim_form->addRow(tr("Scenario"), scenario_);
   pages_->addWidget(sim_page);
