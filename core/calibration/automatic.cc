@@ -27,7 +27,6 @@ using calibration_internal::kNsPerS;
 using calibration_internal::PlaneProblem;
 using calibration_internal::Prepare;
 using calibration_internal::Prepared;
-using calibration_internal::MountingRotation;
 using calibration_internal::ProjectWith;
 
 bool AutoCalibrationOptions::IsValid(std::string* error) const {
@@ -210,8 +209,7 @@ Status SelectAutoSamples(const SampleStore& store, const RobotGeometry& geometry
 // p_W of every sample under the angles c.
 std::vector<Eigen::Vector3d> ProjectSamples(const std::vector<Prepared>& prepared,
                                             const MountingError& c) {
-  const double abg[3] = {c.alpha, c.beta, c.gamma};
-  const Eigen::Matrix3d r_c = MountingRotation(abg);
+  const Eigen::Matrix3d r_c = MountingRotation(c).toRotationMatrix();
   std::vector<Eigen::Vector3d> pts(prepared.size());
   for (size_t i = 0; i < prepared.size(); ++i) pts[i] = ProjectWith(prepared[i], r_c);
   return pts;
@@ -364,7 +362,7 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
   summary->final_cost = final_cost;
   summary->planes = static_cast<int>(used.size());
   summary->residual_blocks = residuals;
-  const Eigen::Matrix3d r_c = MountingRotation(abg);
+  const Eigen::Matrix3d r_c = MountingRotation(FromArray(abg)).toRotationMatrix();
   double sq = 0.0, sq_norm = 0.0;
   for (size_t s = 0; s < used.size(); ++s) {
     CalibrationSummary::PlaneReport rep;

@@ -66,19 +66,8 @@ void ProjectT(const Prepared& o, const T* abg, T* p_w) {
   }
 }
 
-// The same for many samples under one c: R(c) = Rz(alpha) Ry(beta) Rx(gamma)
-// computed once (MountingRotation) instead of six sines and cosines a sample.
-inline Eigen::Matrix3d MountingRotation(const double* abg) {
-  const double ca = std::cos(abg[0]), sa = std::sin(abg[0]);
-  const double cb = std::cos(abg[1]), sb = std::sin(abg[1]);
-  const double cg = std::cos(abg[2]), sg = std::sin(abg[2]);
-  Eigen::Matrix3d rz, ry, rx;
-  rz << ca, -sa, 0, sa, ca, 0, 0, 0, 1;
-  ry << cb, 0, sb, 0, 1, 0, -sb, 0, cb;
-  rx << 1, 0, 0, 0, cg, -sg, 0, sg, cg;
-  return rz * ry * rx;
-}
-
+// The same for many samples under one c, with R(c) computed once
+// (MountingRotation, robot_model.h) instead of six sines and cosines a sample.
 inline Eigen::Vector3d ProjectWith(const Prepared& o, const Eigen::Matrix3d& r_c) {
   return o.r_wb * (r_c * o.p_l + o.t_bl) + o.t_wb;
 }

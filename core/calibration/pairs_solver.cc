@@ -70,7 +70,7 @@ struct RotationAndAxes {
   void Update(const double* c) {
     if (c[0] == abg[0] && c[1] == abg[1] && c[2] == abg[2]) return;
     std::copy(c, c + 3, abg);
-    r = MountingRotation(c);
+    r = MountingRotation(FromArray(c)).toRotationMatrix();
     const double ca = std::cos(c[0]), sa = std::sin(c[0]);
     const double cb = std::cos(c[1]), sb = std::sin(c[1]);
     axis[0] = Eigen::Vector3d::UnitZ();
