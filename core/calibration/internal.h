@@ -32,8 +32,10 @@ inline std::string RefName(const SampleRef& r) {
   return "(scan " + std::to_string(r.scan) + ", beam " + std::to_string(r.beam) + ")";
 }
 
-// What the cost functors need of an observation, in doubles: the lidar-frame
-// point p_L, the mount translation t_BL = (l1, 0, h) and the body pose.
+// What the cost functors need of an observation, in doubles: the lidar point
+// in the nominal mount's axes N p_L (N = identity on sweepscan's robot, a
+// tf mount for a ROS bag: robot_model.h), the mount translation
+// t_BL = (l1, l_y, h) and the body pose.
 struct Prepared {
   Eigen::Matrix3d r_wb;
   Eigen::Vector3d t_wb, t_bl, p_l;
@@ -43,12 +45,12 @@ inline Prepared Prepare(const LidarObservation& o, const RobotGeometry& g) {
   Prepared p;
   p.r_wb = o.world_from_body.rotation().toRotationMatrix();
   p.t_wb = o.world_from_body.translation();
-  p.t_bl = Eigen::Vector3d(g.lidar_offset_x_m, 0.0, g.lidar_height_m);
-  p.p_l = o.p_lidar;
+  p.t_bl = g.LidarTranslation();
+  p.p_l = g.NominalFromLidar(o.p_lidar);
   return p;
 }
 
-// p_W(c) = R_WB (Rz(alpha) Ry(beta) Rx(gamma) p_L + t_BL) + t_WB   (Eq. 1, 13, 14)
+// p_W(c) = R_WB (Rz(alpha) Ry(beta) Rx(gamma) N p_L + t_BL) + t_WB   (Eq. 1, 13, 14)
 template <typename T>
 void ProjectT(const Prepared& o, const T* abg, T* p_w) {
   using std::cos;

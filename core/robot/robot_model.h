@@ -24,6 +24,14 @@
 // gamma tilts the scan within its own plane (the cloud leans sideways), beta
 // pitches the scan plane forwards, alpha yaws it away from perpendicular to
 // the travel direction.
+//
+// Other robots (a ROS bag's tf tree, docs/ros-bags.md) mount their lidar
+// elsewhere: a nominal mount rotation N (body_from_lidar as drawn, identity
+// for sweepscan's own robot) and a sideways offset l_y. The mounting error
+// stays in the body frame, applied on top of the nominal mount:
+//   body_from_lidar = [R(alpha, beta, gamma) * N | (l1, l_y, h)],
+// so the three angles mean the same for every robot: how far the real scan
+// plane is turned from the drawn one, about the body's axes.
 #ifndef SWEEPSCAN_CORE_ROBOT_ROBOT_MODEL_H_
 #define SWEEPSCAN_CORE_ROBOT_ROBOT_MODEL_H_
 
@@ -39,6 +47,24 @@ struct RobotGeometry {
   double lidar_offset_x_m = 0.10;  // l1: lidar ahead of the centre of motion.
   double imu_offset_x_m = 0.05;    // l2: IMU ahead of the centre of motion.
   double wheel_distance_m = 0.15;  // wheel contact point to the centre of motion (half the track).
+  double lidar_offset_y_m = 0.0;   // l_y: lidar left of the centre of motion (0 on sweepscan's robot).
+  // N: the nominal body_from_lidar rotation (identity: L parallel to B).
+  Eigen::Quaterniond lidar_mount = Eigen::Quaterniond::Identity();
+
+  // True when N is the identity to the last bit (sweepscan's own robot):
+  // then no product with N is formed, so native sessions compute exactly
+  // what they computed before N existed.
+  bool HasNominalMountRotation() const {
+    return !(lidar_mount.w() == 1.0 && lidar_mount.x() == 0.0 && lidar_mount.y() == 0.0 &&
+             lidar_mount.z() == 0.0);
+  }
+  // N * p: a lidar-frame point in the nominal mount's axes (parallel to B).
+  Eigen::Vector3d NominalFromLidar(const Eigen::Vector3d& p_lidar) const {
+    return HasNominalMountRotation() ? Eigen::Vector3d(lidar_mount * p_lidar) : p_lidar;
+  }
+  Eigen::Vector3d LidarTranslation() const {
+    return {lidar_offset_x_m, lidar_offset_y_m, lidar_height_m};
+  }
 
   bool IsValid(std::string* error) const;
 };
@@ -84,7 +110,8 @@ inline Eigen::Quaterniond MountingRotation(const MountingError& e) {
 }
 
 inline Rigid3d BodyFromLidar(const RobotGeometry& g, const MountingError& e) {
-  return Rigid3d({g.lidar_offset_x_m, 0.0, g.lidar_height_m}, MountingRotation(e));
+  if (!g.HasNominalMountRotation()) return Rigid3d(g.LidarTranslation(), MountingRotation(e));
+  return Rigid3d(g.LidarTranslation(), (MountingRotation(e) * g.lidar_mount).normalized());
 }
 
 // Differential drive (Eq. 2-3): v = (v_r + v_l) / 2, w = (v_r - v_l) / (2 d),

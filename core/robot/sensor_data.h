@@ -38,6 +38,10 @@ struct LidarSample {
   float range_m = 0.0f;
   float theta = 0.0f;
   uint16_t beam = 0;  // index within its scan
+  // Return strength in the lidar's own units; 0 where the lidar reports none
+  // (the X4). Kept from imported recordings (sensor_msgs/LaserScan
+  // intensities); fits in the struct's padding (24 bytes either way).
+  float intensity = 0.0f;
 };
 
 // One revolution of the lidar, samples in time order.

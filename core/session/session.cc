@@ -112,13 +112,20 @@ std::string UtcNowIso8601() {
 Pose2d SessionStartPose(const SessionMeta& meta) {
   Pose2d start;
   const json& s = meta.settings;
-  if (!s.is_object() || !s.contains("scenario")) return start;
-  const json& sc = s["scenario"];
-  if (!sc.is_object() || !sc.contains("path") || !sc["path"].is_object() ||
-      !sc["path"].contains("start") || !sc["path"]["start"].is_object()) {
-    return start;
+  if (!s.is_object()) return start;
+  const json* found = nullptr;
+  if (s.contains("scenario")) {
+    const json& sc = s["scenario"];
+    if (sc.is_object() && sc.contains("path") && sc["path"].is_object() &&
+        sc["path"].contains("start") && sc["path"]["start"].is_object()) {
+      found = &sc["path"]["start"];
+    }
+  } else if (s.contains("import") && s["import"].is_object() && s["import"].contains("start") &&
+             s["import"]["start"].is_object()) {
+    found = &s["import"]["start"];  // an imported bag: its odometry frame
   }
-  const json& st = sc["path"]["start"];
+  if (found == nullptr) return start;
+  const json& st = *found;
   const auto number = [&](const char* key, double* out) {
     if (st.contains(key) && st[key].is_number() && std::isfinite(st[key].get<double>())) {
       *out = st[key].get<double>();
@@ -131,7 +138,7 @@ Pose2d SessionStartPose(const SessionMeta& meta) {
 }
 
 json SessionMetaToJson(const SessionMeta& m) {
-  return json{
+  json j{
       {"format", "sweepscan-session"},
       {"format_version", m.format_version},
       {"created_utc", m.created_utc},
@@ -152,6 +159,17 @@ json SessionMetaToJson(const SessionMeta& m) {
       {"settings", m.settings.is_object() ? m.settings : json::object()},
       {"notes", m.notes},
   };
+  // A mount other than sweepscan's own (an imported ROS bag's tf): written
+  // only when set, so native sessions' meta.json is unchanged.
+  if (!m.content.empty()) j["content"] = m.content;
+  if (m.geometry.lidar_offset_y_m != 0.0) {
+    j["robot"]["lidar_offset_y_m"] = m.geometry.lidar_offset_y_m;
+  }
+  if (m.geometry.HasNominalMountRotation()) {
+    const Eigen::Quaterniond& q = m.geometry.lidar_mount;
+    j["robot"]["lidar_mount"] = {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}};
+  }
+  return j;
 }
 
 Status SessionMetaFromJson(const json& j, const std::string& source, SessionMeta* meta) {
@@ -159,7 +177,7 @@ Status SessionMetaFromJson(const json& j, const std::string& source, SessionMeta
   try {
     const JsonObject root(j, "");
     root.AllowOnly({"format", "format_version", "created_utc", "robot", "lidar_angle_convention",
-                    "calibration", "link", "agent", "settings", "notes"});
+                    "calibration", "link", "agent", "settings", "notes", "content"});
     if (root.String("format") != "sweepscan-session") {
       root.Fail("format", "expected \"sweepscan-session\", got \"" + root.String("format") + "\"");
     }
@@ -171,12 +189,31 @@ Status SessionMetaFromJson(const json& j, const std::string& source, SessionMeta
     }
     m.format_version = static_cast<uint32_t>(version);
     m.created_utc = root.String("created_utc");
+    m.content = root.String("content", "");
+    if (!m.content.empty() && m.content != kSessionContentMeasurements) {
+      root.Fail("content", "unknown content \"" + m.content + "\" (this program reads \"" +
+                               kSessionContentMeasurements + "\" or none: link frames)");
+    }
     const JsonObject r = root.Object("robot");
-    r.AllowOnly({"lidar_height_m", "lidar_offset_x_m", "imu_offset_x_m", "wheel_distance_m"});
-    m.geometry.lidar_height_m = r.Positive("lidar_height_m");
+    r.AllowOnly({"lidar_height_m", "lidar_offset_x_m", "imu_offset_x_m", "wheel_distance_m",
+                 "lidar_offset_y_m", "lidar_mount"});
+    // sweepscan's robot has its lidar above the floor; an imported robot's
+    // may sit at or below its base frame's origin.
+    m.geometry.lidar_height_m = m.content.empty() ? r.Positive("lidar_height_m")
+                                                  : r.Number("lidar_height_m");
     m.geometry.lidar_offset_x_m = r.Number("lidar_offset_x_m");
     m.geometry.imu_offset_x_m = r.Number("imu_offset_x_m");
     m.geometry.wheel_distance_m = r.Positive("wheel_distance_m");
+    m.geometry.lidar_offset_y_m = r.Number("lidar_offset_y_m", 0.0);
+    if (r.Has("lidar_mount")) {
+      const JsonObject q = r.Object("lidar_mount");
+      q.AllowOnly({"x", "y", "z", "w"});
+      const Eigen::Quaterniond mount(q.Number("w"), q.Number("x"), q.Number("y"), q.Number("z"));
+      if (std::abs(mount.norm() - 1.0) > 1e-6) {
+        q.Fail("w", "not a unit quaternion (norm " + std::to_string(mount.norm()) + ")");
+      }
+      m.geometry.lidar_mount = mount;
+    }
     const JsonObject a = root.Object("lidar_angle_convention");
     a.AllowOnly({"sign", "offset_rad"});
     const int64_t sign = a.Integer("sign");

@@ -61,13 +61,21 @@ struct SessionMeta {
   std::string agent;          // The agent's Hello name, if known.
   nlohmann::json settings = nlohmann::json::object();  // Owned by the components that wrote them.
   std::string notes;
+  // What frames.bin's records hold: "" (the default, not written) = robot
+  // link frames as received; kSessionContentMeasurements = decoded sensor
+  // measurements (core/session/measurements.h), as an imported ROS bag
+  // gives them. Readers that do not know this key refuse the session.
+  std::string content;
 };
+inline constexpr char kSessionContentMeasurements[] = "measurements";
 
 // The world pose the recording starts at, which fixes the frame its clouds
 // and picks are in: a simulated session's scenario start
 // (settings.scenario.path.start, written by `sweepscan-cli simulate`), so
-// that it lines up with the scenario's world; otherwise the origin (a real
-// robot's world is its start pose).
+// that it lines up with the scenario's world; an imported bag's first
+// odometry pose (settings.import.start), so that its clouds are in the
+// bag's odometry frame; otherwise the origin (a real robot's world is its
+// start pose).
 Pose2d SessionStartPose(const SessionMeta& meta);
 
 nlohmann::json SessionMetaToJson(const SessionMeta& meta);

@@ -169,6 +169,16 @@ TelemetryDecoderStats TelemetryDecoder::stats() const {
 std::string SessionDecodeInfo::ToString() const {
   std::ostringstream s;
   s << "frames.bin: " << frames.ToString() << "\n";
+  if (measurements) {
+    const MeasurementDecodeStats& m = measurement_stats;
+    s << "content: decoded measurements (" << m.scans << " scans, " << m.samples << " samples, "
+      << m.imu << " IMU, " << m.twists << " odometry twists)\n";
+    if (frames_refused > 0)
+      s << "records refused: " << frames_refused << " (first: " << first_refusal << ")\n";
+    s << "robot time: " << ToSeconds(first_robot_time) << " .. " << ToSeconds(last_robot_time)
+      << " s";
+    return s.str();
+  }
   s << "link: " << link.ToString() << "\n";
   if (frames_refused > 0)
     s << "records refused: " << frames_refused << " (first: " << first_refusal << ")\n";
@@ -233,6 +243,20 @@ Status DecodeSessionWithProgress(const std::string& session_dir,
   result.meta = session.meta;
   result.frames = session.frames;
   SensorLog decoded;
+  if (session.meta.content == kSessionContentMeasurements) {
+    // An imported recording: the records are measurements, not link frames.
+    DecodeMeasurementRecords(session.records, session.meta.geometry, &decoded,
+                             &result.measurement_stats);
+    result.measurements = true;
+    result.frames_refused = result.measurement_stats.refused;
+    result.first_refusal = result.measurement_stats.first_refusal;
+    result.first_robot_time = result.measurement_stats.first_time;
+    result.last_robot_time = result.measurement_stats.last_time;
+    if (progress) progress(1.0);
+    *log = std::move(decoded);
+    if (info != nullptr) *info = std::move(result);
+    return Status::Ok();
+  }
   DecodeProgress decode_progress;
   if (progress) decode_progress = [&](double f) { return progress(0.1 + 0.9 * f); };
   if (!DecodeSessionRecords(session.records, options, &decoded, &result, decode_progress)) {

@@ -21,6 +21,7 @@
 #include "core/common/status.h"
 #include "core/robot/robot_model.h"
 #include "core/robot/sensor_data.h"
+#include "core/session/measurements.h"
 #include "core/session/session.h"
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/codecs/motor_board_codec.h"
@@ -107,6 +108,10 @@ struct SessionDecodeInfo {
   TelemetryDecoderStats telemetry;
   Time first_robot_time;  // Header time of the first / last agent frame.
   Time last_robot_time;
+  // Measurement sessions (meta.content "measurements", an imported bag):
+  // what their records held; the link and telemetry counters stay zero.
+  bool measurements = false;
+  MeasurementDecodeStats measurement_stats;
 
   std::string ToString() const;
 };
