@@ -40,6 +40,11 @@ int RunInfo(int argc, char** argv);
 int RunReconstruct(int argc, char** argv);
 int RunExport(int argc, char** argv);
 int RunRepair(int argc, char** argv);
+// cli_ros.cc: ROS bags (docs/ros-bags.md).
+extern const char* const kImportUsage;
+extern const char* const kBagInfoUsage;
+int RunImport(int argc, char** argv);
+int RunBagInfo(int argc, char** argv);  // `info BAG`
 extern const char* const kRepairUsage;
 extern const char* const kInfoUsage;
 extern const char* const kReconstructUsage;

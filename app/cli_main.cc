@@ -16,9 +16,10 @@ const char* kUsage =
     "\n"
     "Commands:\n"
     "  simulate   record a simulated scan (scenario file) as a session and reconstruct it\n"
-    "  info       describe a recorded session\n"
+    "  info       describe a recorded session or a ROS bag\n"
     "  reconstruct  build the cloud of a recorded session\n"
     "  export     write a session's decoded sensor records as CSV\n"
+    "  import     turn a ROS 1 or ROS 2 bag (2D lidar, odometry, IMU, tf) into a session\n"
     "  repair     write a clean copy of a damaged session (intact records only)\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
@@ -56,6 +57,8 @@ int Main(int argc, char** argv) {
       std::cout << kP3lUsage;
     } else if (topic == "sfm") {
       std::cout << kSfmUsage;
+    } else if (topic == "import") {
+      std::cout << kImportUsage;
     } else if (topic == "repair") {
       std::cout << kRepairUsage;
     } else {
@@ -68,6 +71,7 @@ int Main(int argc, char** argv) {
   if (command == "reconstruct") return RunReconstruct(argc, argv);
   if (command == "export") return RunExport(argc, argv);
   if (command == "repair") return RunRepair(argc, argv);
+  if (command == "import") return RunImport(argc, argv);
   if (command == "calibrate") return RunCalibrate(argc, argv);
   if (command == "evaluate") return RunEvaluate(argc, argv);
   if (command == "p3l") return RunP3l(argc, argv);

@@ -21,19 +21,21 @@
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
+#include "core/io/ros/ros_bag.h"
 #include "core/sfm/wheeled.h"
 #include "hardware/link/telemetry_decoder.h"
 
 namespace sweepscan::app {
 
 const char* const kInfoUsage =
-    "usage: sweepscan-cli info SESSION [--strict] [--json]\n"
+    "usage: sweepscan-cli info SESSION|BAG [--strict] [--json]\n"
     "\n"
     "Describes a recorded session: robot geometry and calibration from meta.json,\n"
     "how many link frames were recorded (and whether a torn tail was dropped),\n"
     "damage (records skipped because frames.bin is corrupt there: how many, how\n"
     "many seconds, where), what the devices sent (scans, IMU and wheel records,\n"
-    "decoder errors), and the robot-time span. --strict: exit 2 if damaged.\n";
+    "decoder errors), and the robot-time span. --strict: exit 2 if damaged.\n"
+    "Given a ROS bag, describes the bag instead (sweepscan-cli help import).\n";
 
 const char* const kRepairUsage =
     "usage: sweepscan-cli repair SESSION --out NEW [--json]\n"
@@ -62,7 +64,8 @@ const char* const kExportUsage =
     "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
     "\n"
     "Writes the session's decoded sensor records as CSV for other tools:\n"
-    "  DIR/lidar.csv   robot_time_s,scan,beam,range_m,theta_rad   (range 0: no return)\n"
+    "  DIR/lidar.csv   robot_time_s,scan,beam,range_m,theta_rad   (range 0: no return;\n"
+    "                  a last column intensity when the lidar gave them, e.g. an imported bag)\n"
     "  DIR/imu.csv     robot_time_s,gyro_z_rad_s,roll_rad,pitch_rad,yaw_rad\n"
     "  DIR/wheels.csv  robot_time_s,left_mps,right_mps\n";
 
@@ -170,6 +173,10 @@ nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
 }  // namespace
 
 int RunInfo(int argc, char** argv) {
+  // A ROS bag (a file or a ROS 2 bag folder) rather than a session folder.
+  for (int i = 2; i < argc; ++i) {
+    if (argv[i][0] != '-' && io::LooksLikeRosBag(argv[i])) return RunBagInfo(argc, argv);
+  }
   Args args({"json", "help", "strict"}, {});
   int code;
   if (!ParseCommon(&args, argc, argv, kInfoUsage, &code)) return code;
@@ -335,10 +342,22 @@ int RunExport(int argc, char** argv) {
   };
   constexpr size_t kChunk = 1 << 20;
   size_t samples = 0;
-  Status s = write("lidar.csv", "robot_time_s,scan,beam,range_m,theta_rad", [&](std::string* t, auto&& flush) {
+  // Intensities only where the lidar gave them (an imported bag's; the X4 has none).
+  bool intensities = false;
+  for (const auto& scan : d.log.scans) {
+    for (const auto& m : scan.samples) intensities = intensities || m.intensity != 0.0f;
+  }
+  const char* lidar_header =
+      intensities ? "robot_time_s,scan,beam,range_m,theta_rad,intensity" : "robot_time_s,scan,beam,range_m,theta_rad";
+  Status s = write("lidar.csv", lidar_header, [&](std::string* t, auto&& flush) {
     for (const auto& scan : d.log.scans) {
       for (const auto& m : scan.samples) {
-        line(t, "%.9f,%u,%u,%.4f,%.6f\n", ToSeconds(m.time), scan.index, m.beam, m.range_m, m.theta);
+        if (intensities) {
+          line(t, "%.9f,%u,%u,%.4f,%.6f,%g\n", ToSeconds(m.time), scan.index, m.beam, m.range_m, m.theta,
+               m.intensity);
+        } else {
+          line(t, "%.9f,%u,%u,%.4f,%.6f\n", ToSeconds(m.time), scan.index, m.beam, m.range_m, m.theta);
+        }
         ++samples;
         if (t->size() > kChunk) flush();
       }

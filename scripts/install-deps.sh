@@ -11,6 +11,14 @@ packages=(
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-14 libclang-rt-14-dev
   xvfb xauth libgl1-mesa-dri socat
+  # ROS bags (docs/ros-bags.md): ROS 1 through Debian's rosbag_storage and
+  # message headers (rosbag/bag.h needs the ROS 2 pluginlib beside them);
+  # ROS 2's sqlite3 and MCAP storages need sqlite3, zstd and lz4.
+  librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev
+  libgeometry-msgs-dev libtf2-msgs-dev pluginlib-dev librcpputils-dev librcutils-dev
+  libament-index-cpp-dev libsqlite3-dev libzstd-dev liblz4-dev
+  # The independent writers and readers the tests check against.
+  python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs
 )
 
 missing=()

@@ -1,0 +1,232 @@
+// sweepscan-cli's ROS commands: `info BAG` (what a bag holds) and `import
+// BAG --out NAME.sweepscan` (a bag -> a session that reconstruct, calibrate,
+// evaluate, sfm and the app open like a native one). docs/ros-bags.md.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "app/cli_args.h"
+#include "app/cli_common.h"
+#include "core/io/ros/import.h"
+#include "core/io/ros/ros_bag.h"
+#include "core/io/ros/tf_tree.h"
+
+namespace sweepscan::app {
+
+const char* const kImportUsage =
+    "usage: sweepscan-cli import BAG --out NAME.sweepscan [options]\n"
+    "\n"
+    "Turns a ROS recording of a 2D lidar on a moving robot into a session:\n"
+    "a ROS 1 .bag, a ROS 2 bag folder (sqlite3 or MCAP storage) or a single\n"
+    ".db3 / .mcap file. LaserScans keep their per-beam times and intensities,\n"
+    "nav_msgs/Odometry gives the EKF its speed, sensor_msgs/Imu its attitude and\n"
+    "turn rate, and tf the lidar's mount. Then use reconstruct, calibrate,\n"
+    "evaluate and sfm on NAME.sweepscan (docs/ros-bags.md).\n"
+    "\n"
+    "Options:\n"
+    "  --scan TOPIC           sensor_msgs/LaserScan topic (default: the only one)\n"
+    "  --odom TOPIC|none      nav_msgs/Odometry topic (default: the only one, if any)\n"
+    "  --imu TOPIC|none       sensor_msgs/Imu topic (default: the only one, if any)\n"
+    "  --base-frame F         the robot's frame (default: the odometry's child frame,\n"
+    "                         else base_footprint, else base_link)\n"
+    "  --mount x,y,z,roll,pitch,yaw   the lidar's pose in the base frame (m, rad),\n"
+    "                         instead of tf's base -> scan frame\n"
+    "  --wheel-distance M     half the wheel track (m; default 0.15): sets how much the\n"
+    "                         odometry's turn rate is trusted\n"
+    "  --notes TEXT           notes for meta.json\n"
+    "  --json                 print the report as JSON\n";
+
+const char* const kBagInfoUsage =
+    "usage: sweepscan-cli info BAG [--json]\n"
+    "\n"
+    "Describes a ROS bag: format, compression, topics with types, counts and\n"
+    "rates, the time span, and the frames in tf with the lidar's mount.\n";
+
+namespace {
+
+std::string Seconds(int64_t ns) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3f", static_cast<double>(ns) * 1e-9);
+  return buf;
+}
+
+double Rate(const io::RosTopicInfo& t) {
+  return t.message_count > 1 && t.last_ns > t.first_ns
+             ? static_cast<double>(t.message_count - 1) / (static_cast<double>(t.last_ns - t.first_ns) * 1e-9)
+             : 0.0;
+}
+
+bool ParseMount(const std::string& text, Rigid3d* mount) {
+  std::vector<double> v;
+  std::stringstream s(text);
+  std::string item;
+  while (std::getline(s, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) return false;
+    v.push_back(x);
+  }
+  if (v.size() != 6) return false;
+  *mount = Rigid3d::FromPose(v[0], v[1], v[2], v[3], v[4], v[5]);
+  return true;
+}
+
+// tf's frames and the mount import would use, read from the bag (a short
+// import dry run would cost a whole pass; this reads only tf).
+class TfSink : public io::RosMessageSink {
+ public:
+  bool OnLaserScan(const io::RosMessageInfo&, const io::RosLaserScan&) override { return true; }
+  bool OnOdometry(const io::RosMessageInfo&, const io::RosOdometry&) override { return true; }
+  bool OnImu(const io::RosMessageInfo&, const io::RosImu&) override { return true; }
+  bool OnTf(const io::RosMessageInfo& info, const io::RosTfMessage& m) override {
+    for (const io::RosTransform& t : m.transforms) {
+      edges.insert(io::NormalizeFrame(t.header.frame_id) + " -> " + io::NormalizeFrame(t.child_frame_id) +
+                   (info.topic->find("static") != std::string::npos ? " (static)" : ""));
+    }
+    return true;
+  }
+  std::set<std::string> edges;
+};
+
+}  // namespace
+
+int RunBagInfo(int argc, char** argv) {
+  Args args({"json", "help", "strict"}, {});
+  std::string error;
+  if (!args.Parse(argc, argv, 2, &error) || args.positional().size() != 1) {
+    PrintError(error.empty() ? "expected one BAG" : error);
+    std::cerr << kBagInfoUsage;
+    return kExitBadInput;
+  }
+  const std::string bag = args.positional()[0];
+  io::RosBagSummary summary;
+  Status s = io::SummarizeRosBag(bag, &summary);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitBadInput;
+  }
+  TfSink tf;
+  io::RosReadOptions read;
+  for (const io::RosTopicInfo& t : summary.topics) {
+    if (t.kind() == io::RosMessageKind::kTf) read.topics.insert(t.topic);
+  }
+  if (!read.topics.empty()) {
+    s = io::ReadRosBag(bag, read, &tf, nullptr);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  nlohmann::json topics = nlohmann::json::array();
+  for (const io::RosTopicInfo& t : summary.topics) {
+    topics.push_back({{"topic", t.topic},
+                      {"type", t.type},
+                      {"serialization", t.serialization},
+                      {"messages", t.message_count},
+                      {"rate_hz", Rate(t)},
+                      {"sweepscan_reads", t.kind() != io::RosMessageKind::kOther}});
+  }
+  if (args.Flag("json")) {
+    std::cout << nlohmann::json{{"bag", bag},
+                                {"format", summary.format},
+                                {"compression", summary.compression},
+                                {"bytes", summary.file_bytes},
+                                {"messages", summary.message_count},
+                                {"start_s", static_cast<double>(summary.start_ns) * 1e-9},
+                                {"end_s", static_cast<double>(summary.end_ns) * 1e-9},
+                                {"duration_s", static_cast<double>(summary.end_ns - summary.start_ns) * 1e-9},
+                                {"topics", topics},
+                                {"tf", tf.edges}}
+                     .dump(2)
+              << "\n";
+    return kExitOk;
+  }
+  std::printf("bag %s (%s, compression %s, %llu bytes)\n", bag.c_str(), summary.format.c_str(),
+              summary.compression.c_str(), static_cast<unsigned long long>(summary.file_bytes));
+  std::printf("%llu messages, %s s (%s .. %s s since the epoch)\n",
+              static_cast<unsigned long long>(summary.message_count),
+              Seconds(summary.end_ns - summary.start_ns).c_str(), Seconds(summary.start_ns).c_str(),
+              Seconds(summary.end_ns).c_str());
+  std::printf("topics:\n");
+  for (const io::RosTopicInfo& t : summary.topics) {
+    std::printf("  %-28s %-30s %8llu msgs %8.2f Hz%s\n", t.topic.c_str(), t.type.c_str(),
+                static_cast<unsigned long long>(t.message_count), Rate(t),
+                t.kind() != io::RosMessageKind::kOther ? "" : "  (not used)");
+  }
+  std::printf("tf:%s\n", tf.edges.empty() ? " none" : "");
+  for (const std::string& e : tf.edges) std::printf("  %s\n", e.c_str());
+  return kExitOk;
+}
+
+int RunImport(int argc, char** argv) {
+  Args args({"json", "help"}, {"out", "scan", "odom", "imu", "base-frame", "mount", "wheel-distance", "notes"});
+  std::string error;
+  if (!args.Parse(argc, argv, 2, &error)) {
+    PrintError(error);
+    return kExitBadInput;
+  }
+  if (args.Flag("help")) {
+    std::cout << kImportUsage;
+    return kExitOk;
+  }
+  if (args.positional().size() != 1 || !args.Has("out")) {
+    PrintError(args.positional().size() != 1 ? "expected one BAG" : "import needs --out NAME.sweepscan");
+    std::cerr << kImportUsage;
+    return kExitBadInput;
+  }
+  io::RosImportOptions options;
+  options.scan_topic = args.Get("scan");
+  options.odom_topic = args.Get("odom");
+  options.imu_topic = args.Get("imu");
+  options.base_frame = args.Get("base-frame");
+  options.notes = args.Get("notes");
+  if (args.Has("mount")) {
+    if (!ParseMount(args.Get("mount"), &options.base_from_scan)) {
+      PrintError("--mount wants six numbers x,y,z,roll,pitch,yaw (m, rad), got '" + args.Get("mount") + "'");
+      return kExitBadInput;
+    }
+    options.has_mount = true;
+  }
+  if (args.Has("wheel-distance")) {
+    char* end = nullptr;
+    options.wheel_distance_m = std::strtod(args.Get("wheel-distance").c_str(), &end);
+    if (*end != '\0' || !(options.wheel_distance_m > 0.0)) {
+      PrintError("--wheel-distance wants a positive number of metres, got '" + args.Get("wheel-distance") + "'");
+      return kExitBadInput;
+    }
+  }
+  io::RosImportReport report;
+  const Status s = io::ImportRosBag(args.positional()[0], args.Get("out"), options, &report);
+  if (!s.ok()) {
+    PrintError(s.message());
+    // A session folder in the way or an unwritable output is a failure while
+    // working; everything else is about the bag.
+    return s.message().rfind(args.Get("out"), 0) == 0 ? kExitFailure : kExitBadInput;
+  }
+  if (args.Flag("json")) {
+    std::cout << report.ToJson().dump(2) << "\n";
+    return kExitOk;
+  }
+  for (const std::string& w : report.warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
+  std::printf("imported %s (%s) into %s\n", report.bag.c_str(), report.format.c_str(), report.session.c_str());
+  std::printf("scans: %s, %llu scans, %llu samples (%llu beams without a return, %llu out of range)\n",
+              report.scan_topic.empty() ? "none" : report.scan_topic.c_str(),
+              static_cast<unsigned long long>(report.scans), static_cast<unsigned long long>(report.samples),
+              static_cast<unsigned long long>(report.no_returns),
+              static_cast<unsigned long long>(report.out_of_range));
+  std::printf("odometry: %s, IMU: %s\n",
+              report.odom_topic.empty() ? "none" : (report.odom_topic + " (" + std::to_string(report.odometry) + ")").c_str(),
+              report.imu_topic.empty() ? "none" : (report.imu_topic + " (" + std::to_string(report.imu) + ")").c_str());
+  const Eigen::Vector3d t = report.base_from_scan.translation();
+  const Eigen::Vector3d rpy = RollPitchYawFromQuaternion(report.base_from_scan.rotation());
+  if (report.scan_topic.empty()) return kExitOk;
+  std::printf("mount: %s\n  %s_from_%s: x %.4f y %.4f z %.4f m, roll %.4f pitch %.4f yaw %.4f rad\n",
+              report.mount_source.c_str(), report.base_frame.c_str(), report.scan_frame.c_str(), t.x(), t.y(),
+              t.z(), rpy[0], rpy[1], rpy[2]);
+  std::printf("beam times: %s\n", report.time_rule.c_str());
+  return kExitOk;
+}
+
+}  // namespace sweepscan::app

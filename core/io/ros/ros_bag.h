@@ -1,0 +1,28 @@
+// Any ROS bag, whichever its format: a ROS 1 .bag (rosbag_storage), a ROS 2
+// bag folder (metadata.yaml with sqlite3 or MCAP storage), or a single .db3
+// or .mcap file. Picks the reader by what the path holds (magic bytes, not
+// the suffix) and forwards to it (docs/ros-bags.md).
+//
+// Pure functions; any thread.
+#ifndef SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_
+#define SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_
+
+#include <string>
+
+#include "core/common/status.h"
+#include "core/io/ros/ros_messages.h"
+
+namespace sweepscan::io {
+
+// True if `path` is something ReadRosBag would try: a ROS 1 bag, an MCAP or
+// sqlite3 file, or a folder with a metadata.yaml (the CLI uses it to tell a
+// bag from a sweepscan session folder).
+bool LooksLikeRosBag(const std::string& path);
+
+Status SummarizeRosBag(const std::string& path, RosBagSummary* summary);
+Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
+                  RosReadStats* stats);
+
+}  // namespace sweepscan::io
+
+#endif  // SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_

@@ -1,0 +1,278 @@
+#include "core/io/rosbag1/rosbag1.h"
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/LaserScan.h>
+#include <tf2_msgs/TFMessage.h>
+
+namespace sweepscan::io {
+namespace {
+
+constexpr char kMagic[] = "#ROSBAG V2.0\n";
+
+int64_t Ns(const ros::Time& t) { return static_cast<int64_t>(t.toNSec()); }
+
+RosHeader Header(const std_msgs::Header& h) { return {Ns(h.stamp), h.frame_id}; }
+
+template <size_t N, typename Src>
+void CopyArray(const Src& src, std::array<double, N>* dst) {
+  std::copy(src.begin(), src.begin() + N, dst->begin());
+}
+
+RosLaserScan Convert(const sensor_msgs::LaserScan& m) {
+  RosLaserScan s;
+  s.header = Header(m.header);
+  s.angle_min = m.angle_min;
+  s.angle_max = m.angle_max;
+  s.angle_increment = m.angle_increment;
+  s.time_increment = m.time_increment;
+  s.scan_time = m.scan_time;
+  s.range_min = m.range_min;
+  s.range_max = m.range_max;
+  s.ranges = m.ranges;
+  s.intensities = m.intensities;
+  return s;
+}
+
+RosOdometry Convert(const nav_msgs::Odometry& m) {
+  RosOdometry o;
+  o.header = Header(m.header);
+  o.child_frame_id = m.child_frame_id;
+  const auto& p = m.pose.pose;
+  o.position = {p.position.x, p.position.y, p.position.z};
+  o.orientation = {p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w};
+  CopyArray(m.pose.covariance, &o.pose_covariance);
+  const auto& t = m.twist.twist;
+  o.linear_velocity = {t.linear.x, t.linear.y, t.linear.z};
+  o.angular_velocity = {t.angular.x, t.angular.y, t.angular.z};
+  CopyArray(m.twist.covariance, &o.twist_covariance);
+  return o;
+}
+
+RosImu Convert(const sensor_msgs::Imu& m) {
+  RosImu i;
+  i.header = Header(m.header);
+  i.orientation = {m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w};
+  CopyArray(m.orientation_covariance, &i.orientation_covariance);
+  i.angular_velocity = {m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z};
+  CopyArray(m.angular_velocity_covariance, &i.angular_velocity_covariance);
+  i.linear_acceleration = {m.linear_acceleration.x, m.linear_acceleration.y,
+                           m.linear_acceleration.z};
+  CopyArray(m.linear_acceleration_covariance, &i.linear_acceleration_covariance);
+  return i;
+}
+
+RosTfMessage Convert(const tf2_msgs::TFMessage& m) {
+  RosTfMessage tf;
+  tf.transforms.reserve(m.transforms.size());
+  for (const auto& t : m.transforms) {
+    RosTransform r;
+    r.header = Header(t.header);
+    r.child_frame_id = t.child_frame_id;
+    r.translation = {t.transform.translation.x, t.transform.translation.y,
+                     t.transform.translation.z};
+    r.rotation = {t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z,
+                  t.transform.rotation.w};
+    tf.transforms.push_back(std::move(r));
+  }
+  return tf;
+}
+
+// The compression of the first chunk record: the bag header record (op 3)
+// comes first, then chunks (op 5) whose header has "compression=...".
+// Record = u32 header_len, header fields (u32 len, "name=value"), u32
+// data_len, data (docs/ros-bags.md, "ROS 1 bags").
+std::string FirstChunkCompression(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  f.seekg(sizeof(kMagic) - 1);
+  for (int record = 0; record < 4 && f; ++record) {
+    uint32_t header_len = 0, data_len = 0;
+    if (!f.read(reinterpret_cast<char*>(&header_len), 4) || header_len > (1u << 20)) break;
+    std::string header(header_len, '\0');
+    if (!f.read(&header[0], header_len)) break;
+    if (!f.read(reinterpret_cast<char*>(&data_len), 4)) break;
+    std::map<std::string, std::string> fields;
+    for (size_t pos = 0; pos + 4 <= header.size();) {
+      uint32_t len = 0;
+      std::memcpy(&len, header.data() + pos, 4);
+      pos += 4;
+      if (len > header.size() - pos) break;
+      const std::string field = header.substr(pos, len);
+      pos += len;
+      const size_t eq = field.find('=');
+      if (eq != std::string::npos) fields[field.substr(0, eq)] = field.substr(eq + 1);
+    }
+    const auto op = fields.find("op");
+    if (op != fields.end() && op->second.size() == 1 && op->second[0] == 0x05) {
+      const auto c = fields.find("compression");
+      return c == fields.end() ? std::string() : c->second;
+    }
+    f.seekg(data_len, std::ios::cur);
+  }
+  return std::string();
+}
+
+// Deserialises a message as Msg and hands it on; throws (counted as
+// undecodable by the caller) when the bag's definition of the type differs
+// from the one sweepscan was built with (their MD5 sums disagree).
+template <typename Msg, typename Fn>
+bool Deliver(const rosbag::MessageInstance& m, Fn&& fn) {
+  const boost::shared_ptr<Msg> p = m.instantiate<Msg>();
+  if (!p) {
+    throw std::runtime_error(std::string("message definition differs from ") +
+                             ros::message_traits::DataType<Msg>::value() + "'s (MD5 " + m.getMD5Sum() + ")");
+  }
+  return fn(*p);
+}
+
+// Opens the bag; the library's exceptions become a Status with the advice an
+// operator needs.
+Status Open(const std::string& path, rosbag::Bag* bag) {
+  if (!LooksLikeRosbag1(path)) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) return Status::Error(path + ": cannot open: " + std::strerror(errno));
+    return Status::Error(path + ": not a ROS 1 bag (it does not start with \"#ROSBAG V2.0\")");
+  }
+  try {
+    bag->open(path, rosbag::bagmode::Read);
+  } catch (const rosbag::BagUnindexedException&) {
+    return Status::Error(path +
+                         ": the bag has no index (a recording cut short?): run `rosbag reindex " +
+                         path + "` and import the reindexed bag");
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": cannot read the ROS 1 bag: " + e.what());
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+bool LooksLikeRosbag1(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  char head[sizeof(kMagic) - 1] = {};
+  return f.read(head, sizeof(head)) && std::memcmp(head, kMagic, sizeof(head)) == 0;
+}
+
+Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary) {
+  rosbag::Bag bag;
+  Status s = Open(path, &bag);
+  if (!s.ok()) return s;
+  RosBagSummary out;
+  out.format = "rosbag1";
+  try {
+    out.file_bytes = bag.getSize();
+    rosbag::View all(bag);
+    out.message_count = all.size();
+    if (out.message_count > 0) {
+      out.start_ns = Ns(all.getBeginTime());
+      out.end_ns = Ns(all.getEndTime());
+    }
+    std::map<std::string, RosTopicInfo> topics;
+    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+      RosTopicInfo& t = topics[c->topic];
+      t.topic = c->topic;
+      t.type = c->datatype;
+      t.serialization = "ros1";
+    }
+    for (auto& [name, t] : topics) {
+      rosbag::View v(bag, rosbag::TopicQuery(name));
+      t.message_count = v.size();
+      if (t.message_count > 0) {
+        t.first_ns = Ns(v.getBeginTime());
+        t.last_ns = Ns(v.getEndTime());
+      }
+      out.topics.push_back(t);
+    }
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": cannot read the ROS 1 bag's index: " + e.what());
+  }
+  const std::string c = FirstChunkCompression(path);
+  out.compression = c.empty() ? "none" : c;
+  *summary = std::move(out);
+  return Status::Ok();
+}
+
+Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
+                   RosReadStats* stats) {
+  rosbag::Bag bag;
+  Status s = Open(path, &bag);
+  if (!s.ok()) return s;
+  RosReadStats st;
+  try {
+    // The topics to decode: those asked for, or every known type's.
+    std::vector<std::string> topics;
+    {
+      rosbag::View all(bag);
+      for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+        const bool wanted = options.topics.empty()
+                                ? RosMessageKindFromType(c->datatype) != RosMessageKind::kOther
+                                : options.topics.count(c->topic) > 0;
+        if (wanted && std::find(topics.begin(), topics.end(), c->topic) == topics.end()) {
+          topics.push_back(c->topic);
+        }
+      }
+      st.messages_skipped = all.size();
+    }
+    rosbag::View view(bag, rosbag::TopicQuery(topics));
+    const uint32_t total = view.size();
+    st.messages_skipped -= std::min<uint64_t>(st.messages_skipped, total);
+    uint64_t done = 0;
+    for (const rosbag::MessageInstance& m : view) {
+      if (options.progress && (done & 1023) == 0 &&
+          !options.progress(total == 0 ? 0.0 : static_cast<double>(done) / total)) {
+        return Status::Error(path + ": cancelled");
+      }
+      ++done;
+      const std::string& topic = m.getTopic();
+      const std::string& type = m.getDataType();
+      RosMessageInfo info{&topic, &type, Ns(m.getTime())};
+      st.bytes_read += m.size();
+      const RosMessageKind kind = RosMessageKindFromType(type);
+      bool go_on = true;
+      try {
+        switch (kind) {
+          case RosMessageKind::kLaserScan:
+            go_on = Deliver<sensor_msgs::LaserScan>(m, [&](const auto& p) { return sink->OnLaserScan(info, Convert(p)); });
+            break;
+          case RosMessageKind::kOdometry:
+            go_on = Deliver<nav_msgs::Odometry>(m, [&](const auto& p) { return sink->OnOdometry(info, Convert(p)); });
+            break;
+          case RosMessageKind::kImu:
+            go_on = Deliver<sensor_msgs::Imu>(m, [&](const auto& p) { return sink->OnImu(info, Convert(p)); });
+            break;
+          case RosMessageKind::kTf:
+            go_on = Deliver<tf2_msgs::TFMessage>(m, [&](const auto& p) { return sink->OnTf(info, Convert(p)); });
+            break;
+          case RosMessageKind::kOther:
+            ++st.messages_skipped;
+            continue;
+        }
+        ++st.messages_read;
+      } catch (const rosbag::BagException&) {
+        throw;  // the file itself: fails the read below
+      } catch (const std::exception& e) {
+        ++st.messages_undecodable;
+        sink->OnUndecodable(info, e.what());
+      }
+      if (!go_on) return Status::Error(path + ": cancelled");
+    }
+    if (options.progress) options.progress(1.0);
+  } catch (const std::exception& e) {
+    if (stats != nullptr) *stats = st;
+    return Status::Error(path + ": ROS 1 bag unreadable after " + std::to_string(st.messages_read) +
+                         " messages: " + e.what());
+  }
+  if (stats != nullptr) *stats = st;
+  return Status::Ok();
+}
+
+}  // namespace sweepscan::io

@@ -1,0 +1,308 @@
+// ImportRosBag on small ROS 1 bags written by ROS's own Python writer
+// (tests/tools/make_test_rosbags.py, Debian's python3-rosbag): every value
+// below is what that script wrote, worked through the rules of import.h by
+// hand.
+#include "core/io/ros/import.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+
+#include "core/session/measurements.h"
+#include "core/session/session.h"
+
+namespace sweepscan::io {
+namespace {
+
+std::string Shell(const std::string& command) {
+  std::string out;
+  std::unique_ptr<FILE, int (*)(FILE*)> p(popen(command.c_str(), "r"), &pclose);
+  char buf[512];
+  while (p && fgets(buf, sizeof(buf), p.get())) out += buf;
+  return out;
+}
+
+bool Exists(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0;
+}
+
+class ImportTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    char tmpl[] = "/tmp/ros_import_test.XXXXXX";
+    dir_ = mkdtemp(tmpl);
+    const std::string cmd = std::string(SWEEPSCAN_PYTHON3) + " " + SWEEPSCAN_SOURCE_DIR +
+                            "/tests/tools/make_test_rosbags.py " + dir_ + " 2>&1";
+    const std::string out = Shell(cmd);
+    ASSERT_TRUE(Exists(dir_ + "/rules.bag")) << cmd << "\n" << out;
+  }
+  static void TearDownTestSuite() { std::system(("rm -rf " + dir_).c_str()); }
+
+  static std::string Bag(const std::string& name) { return dir_ + "/" + name + ".bag"; }
+  static std::string Out(const std::string& name) { return dir_ + "/" + name + ".sweepscan"; }
+
+  // Imports and loads the session's measurements.
+  static void ImportAndLoad(const std::string& name, const RosImportOptions& options,
+                            RosImportReport* report, SessionMeta* meta, SensorLog* log) {
+    std::system(("rm -rf " + Out(name)).c_str());
+    const Status s = ImportRosBag(Bag(name), Out(name), options, report);
+    ASSERT_TRUE(s.ok()) << s.message();
+    Session session;
+    const Status l = LoadSession(Out(name), FramesLoadOptions(), &session);
+    ASSERT_TRUE(l.ok()) << l.message();
+    *meta = session.meta;
+    MeasurementDecodeStats stats;
+    DecodeMeasurementRecords(session.records, session.meta.geometry, log, &stats);
+    EXPECT_EQ(stats.refused, 0u) << stats.first_refusal;
+  }
+
+  static std::string dir_;
+};
+std::string ImportTest::dir_;
+
+// Robot time = header stamp - (T0 - 1 s): the script's t(s) is 1 + s here.
+// The script builds stamps through doubles, so times agree to a microsecond.
+constexpr double kTimeTol = 1e-6;
+
+TEST_F(ImportTest, ScansFollowTheMessageRules) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("rules", RosImportOptions(), &r, &meta, &log);
+  EXPECT_EQ(r.scan_topic, "/scan");
+  EXPECT_EQ(r.scans, 4u);              // scan 2 refused
+  EXPECT_EQ(r.scans_refused, 1u);
+  EXPECT_NE(r.first_scan_refusal.find("/scan message 2: 10 ranges"), std::string::npos) << r.first_scan_refusal;
+  EXPECT_EQ(r.no_returns, 3u);         // NaN, inf, -inf
+  EXPECT_EQ(r.out_of_range, 2u);       // 0.05 < range_min, 12 > range_max
+  EXPECT_EQ(r.out_of_order, 1u);       // scan 4 stamped before scan 3
+  EXPECT_EQ(r.time_origin_ns, (1700000100LL - 1) * 1000000000LL);
+  ASSERT_EQ(log.scans.size(), 4u);
+
+  // Scan 0: t_i = stamp + i * 1 ms; theta_i = -0.4 + 0.1 i; intensities kept.
+  const auto& s0 = log.scans[0].samples;
+  ASSERT_EQ(s0.size(), 3u);
+  const int beams[] = {0, 6, 7};
+  const float ranges[] = {1.0f, 2.5f, 3.0f};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(s0[k].beam, beams[k]);
+    EXPECT_EQ(s0[k].range_m, ranges[k]);
+    EXPECT_NEAR(s0[k].theta, -0.4 + 0.1 * beams[k], 1e-6);
+    EXPECT_NEAR(ToSeconds(s0[k].time.time_since_epoch()), 1.0 + 0.001 * beams[k], kTimeTol);
+    EXPECT_EQ(s0[k].intensity, 10.0f + beams[k]);
+  }
+  // Scan 1: time_increment 0, scan_time 0.2 s, pi/2 a beam: 0.05 s a beam.
+  const auto& s1 = log.scans[1].samples;
+  ASSERT_EQ(s1.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(ToSeconds(s1[i].time.time_since_epoch()), 1.2 + 0.05 * i, kTimeTol);
+    EXPECT_EQ(s1[i].intensity, 0.0f);  // the message has none
+  }
+  EXPECT_NE(r.time_rule.find("scan_time * angle_increment / (2 pi)"), std::string::npos) << r.time_rule;
+  // Sorted by start: scan 4 (stamped 1.5 s) before scan 3 (beams at 1.598..1.6).
+  EXPECT_NEAR(ToSeconds(log.scans[2].start_time().time_since_epoch()), 1.5, kTimeTol);
+  // Scan 3, time_increment -1 ms: beam 2 first (1.598 s), beam 0 last (the stamp, 1.6 s).
+  const auto& s3 = log.scans[3].samples;
+  ASSERT_EQ(s3.size(), 3u);
+  EXPECT_EQ(s3[0].beam, 2);
+  EXPECT_EQ(s3[2].beam, 0);
+  EXPECT_NEAR(ToSeconds(s3[0].time.time_since_epoch()), 1.598, kTimeTol);
+  EXPECT_NEAR(ToSeconds(s3[2].time.time_since_epoch()), 1.6, kTimeTol);
+}
+
+TEST_F(ImportTest, MountComesFromTheTfChain) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("rules", RosImportOptions(), &r, &meta, &log);
+  EXPECT_EQ(r.base_frame, "base_footprint");  // the odometry's child frame
+  EXPECT_EQ(r.scan_frame, "laser");
+  EXPECT_EQ(r.mount_source, "tf: base_footprint -> mast -> laser");
+  // base_footprint -> mast (0.1, 0, 0.3), mast -> laser (0, 0.05, 0.2).
+  EXPECT_NEAR(meta.geometry.lidar_offset_x_m, 0.1, 1e-12);
+  EXPECT_NEAR(meta.geometry.lidar_offset_y_m, 0.05, 1e-12);
+  EXPECT_NEAR(meta.geometry.lidar_height_m, 0.5, 1e-12);
+  // The laser is turned -90 deg about y: exactly sweepscan's vertical mount,
+  // so N = R_S Ry(pi/2) is the identity (and not written to meta.json).
+  EXPECT_FALSE(meta.geometry.HasNominalMountRotation());
+  EXPECT_LT(meta.geometry.lidar_mount.angularDistance(Eigen::Quaterniond::Identity()), 1e-7);
+  // A beam at angle 0 (along x_S) points up, as Eq. 1's theta 0 does.
+  const Rigid3d bl = BodyFromLidar(meta.geometry, MountingError());
+  EXPECT_TRUE((bl * LidarPoint(1.0, 0.0)).isApprox(Eigen::Vector3d(0.1, 0.05, 1.5), 1e-6));
+  EXPECT_EQ(meta.content, kSessionContentMeasurements);
+  EXPECT_EQ(meta.link, "rosbag1:" + Bag("rules"));
+}
+
+TEST_F(ImportTest, OdometryAndImuBecomeTwistsAndAttitude) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("rules", RosImportOptions(), &r, &meta, &log);
+  // Twist (0.25 m/s, 0.1 rad/s) through d = 0.15 m: 0.235, 0.265 m/s.
+  ASSERT_EQ(log.wheels.size(), 2u);
+  EXPECT_NEAR(log.wheels[0].left_mps, 0.235, 1e-12);
+  EXPECT_NEAR(log.wheels[0].right_mps, 0.265, 1e-12);
+  const Twist2d t = TwistFromWheels(log.wheels[1].left_mps, log.wheels[1].right_mps, 0.15);
+  EXPECT_NEAR(t.v, 0.3, 1e-12);
+  EXPECT_NEAR(t.w, -0.2, 1e-12);
+  // The session's world is the odometry frame: the first pose (1, 2, 0.5).
+  const Pose2d start = SessionStartPose(meta);
+  EXPECT_EQ(start.x, 1.0);
+  EXPECT_EQ(start.y, 2.0);
+  EXPECT_NEAR(start.yaw, 0.5, 1e-12);
+  // IMU frame turned +90 deg about z: yaw 1.0 in the IMU's frame is
+  // 1 - pi/2 for the body; its gyro (0.2, 0, 0.3) is (0, 0.2, 0.3) there.
+  ASSERT_EQ(log.imu.size(), 2u);
+  EXPECT_TRUE(log.imu[0].has_attitude);
+  EXPECT_NEAR(log.imu[0].yaw, 1.0 - M_PI / 2, 1e-9);
+  EXPECT_NEAR(log.imu[0].roll, 0.0, 1e-9);
+  EXPECT_NEAR(log.imu[0].gyro_z, 0.3, 1e-12);
+  // orientation_covariance[0] = -1: no attitude, the yaw rate kept.
+  EXPECT_FALSE(log.imu[1].has_attitude);
+  EXPECT_TRUE(log.imu[1].has_gyro);
+  EXPECT_NEAR(log.imu[1].gyro_z, 0.4, 1e-12);
+  EXPECT_EQ(r.imu_without_attitude, 1u);
+}
+
+TEST_F(ImportTest, ProvenanceNamesTheBagAndItsHash) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("rules", RosImportOptions(), &r, &meta, &log);
+  const std::string sha = Shell("sha256sum " + Bag("rules")).substr(0, 64);
+  ASSERT_EQ(sha.size(), 64u);
+  EXPECT_EQ(meta.settings["import"]["sha256"], sha);
+  EXPECT_EQ(meta.settings["import"]["topics"]["scan"], "/scan");
+  EXPECT_EQ(meta.settings["import"]["format"], "rosbag1");
+}
+
+TEST_F(ImportTest, PoseOnlyOdometryIsDifferentiated) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("pose_only_odom", RosImportOptions(), &r, &meta, &log);
+  EXPECT_TRUE(r.twist_from_poses);
+  EXPECT_TRUE(log.scans.empty());
+  ASSERT_EQ(log.wheels.size(), 10u);  // one per interval
+  for (const WheelSpeedMeasurement& w : log.wheels) {
+    const Twist2d t = TwistFromWheels(w.left_mps, w.right_mps, 0.15);
+    EXPECT_NEAR(t.v, 0.5, 1e-9);   // 0.05 m each 0.1 s along the mean heading
+    EXPECT_NEAR(t.w, 0.2, 1e-9);   // 0.02 rad each 0.1 s
+  }
+}
+
+TEST_F(ImportTest, ClockJumpIsRefusedAndLeavesNothing) {
+  const Status s = ImportRosBag(Bag("clock_jump"), Out("clock_jump"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("/scan: message 3 is stamped 5.2"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("clock jumped back"), std::string::npos) << s.message();
+  EXPECT_FALSE(Exists(Out("clock_jump")));
+}
+
+TEST_F(ImportTest, BagWithoutSensorsIsRefused) {
+  const Status s = ImportRosBag(Bag("no_sensor"), Out("no_sensor"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("nothing sweepscan reads"), std::string::npos) << s.message();
+  EXPECT_FALSE(Exists(Out("no_sensor")));
+}
+
+TEST_F(ImportTest, MissingTfPathNamesTheFramesAndTheOverride) {
+  Status s = ImportRosBag(Bag("no_tf_path"), Out("no_tf_path"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("tf has no path from base_footprint to laser (frames in tf: base_footprint, camera)"),
+            std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find("--mount"), std::string::npos);
+  // The override gives the mount instead.
+  RosImportOptions o;
+  o.has_mount = true;
+  o.base_from_scan = Rigid3d::FromPose(0.2, 0.0, 0.3, 0.0, -M_PI / 2, 0.0);
+  RosImportReport r;
+  s = ImportRosBag(Bag("no_tf_path"), Out("no_tf_path"), o, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.mount_source, "--mount");
+  SessionMeta meta;
+  ASSERT_TRUE(ReadSessionMeta(Out("no_tf_path") + "/meta.json", &meta).ok());
+  EXPECT_NEAR(meta.geometry.lidar_offset_x_m, 0.2, 1e-12);
+  EXPECT_NEAR(meta.geometry.lidar_height_m, 0.3, 1e-12);
+}
+
+TEST_F(ImportTest, SeveralScanTopicsNeedAChoice) {
+  Status s = ImportRosBag(Bag("two_scans"), Out("two_scans"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("2 LaserScan topics (/scan_front, /scan_rear): choose one with --scan"),
+            std::string::npos)
+      << s.message();
+  RosImportOptions o;
+  o.scan_topic = "/scan_rear";
+  RosImportReport r;
+  s = ImportRosBag(Bag("two_scans"), Out("two_scans"), o, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(r.scan_topic, "/scan_rear");
+  o.scan_topic = "/odom";
+  s = ImportRosBag(Bag("rules"), Out("odom_as_scan"), o, nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("/odom is nav_msgs/Odometry, not LaserScan"), std::string::npos) << s.message();
+}
+
+TEST_F(ImportTest, CancelLeavesNoSession) {
+  RosImportOptions o;
+  // Pass 1 (tf, first messages) is 0..0.1 of the work: cancel as pass 2 starts.
+  o.progress = [](double f) { return f < 0.08; };
+  const Status s = ImportRosBag(Bag("rules"), Out("cancelled"), o, nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("cancelled"), std::string::npos) << s.message();
+  EXPECT_FALSE(Exists(Out("cancelled")));
+}
+
+TEST_F(ImportTest, ExistingSessionIsNotOverwritten) {
+  ASSERT_TRUE(ImportRosBag(Bag("rules"), Out("twice"), RosImportOptions(), nullptr).ok());
+  const Status s = ImportRosBag(Bag("rules"), Out("twice"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_TRUE(Exists(Out("twice") + "/frames.bin"));  // the first import is intact
+}
+
+TEST_F(ImportTest, TruncatedBagIsRefusedWithTheReindexAdvice) {
+  std::ifstream in(Bag("rules"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string cut = dir_ + "/cut.bag";
+  std::ofstream(cut, std::ios::binary).write(bytes.data(), bytes.size() / 2);
+  const Status s = ImportRosBag(cut, Out("cut"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(cut + ":"), std::string::npos) << s.message();
+  EXPECT_FALSE(Exists(Out("cut")));
+}
+
+TEST_F(ImportTest, UnknownChunkCompressionIsRefused) {
+  std::ifstream in(Bag("rules"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = bytes.find("compression=none");
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, 16, "compression=brot");
+  const std::string odd = dir_ + "/odd.bag";
+  std::ofstream(odd, std::ios::binary).write(bytes.data(), bytes.size());
+  const Status s = ImportRosBag(odd, Out("odd"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(odd + ":"), std::string::npos) << s.message();
+  EXPECT_FALSE(Exists(Out("odd")));
+}
+
+TEST_F(ImportTest, NotABagIsRefused) {
+  const std::string text = dir_ + "/notes.txt";
+  std::ofstream(text) << "not a bag\n";
+  const Status s = ImportRosBag(text, Out("notes"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("not a ROS bag"), std::string::npos) << s.message();
+}
+
+}  // namespace
+}  // namespace sweepscan::io
