@@ -7,6 +7,11 @@
 #include <new>
 #include <string>
 
+namespace sweepscan {
+struct SensorLog;
+struct SessionMeta;
+}  // namespace sweepscan
+
 namespace sweepscan::app {
 
 constexpr int kExitOk = 0;
@@ -45,6 +50,9 @@ extern const char* const kImportUsage;
 extern const char* const kBagInfoUsage;
 int RunImport(int argc, char** argv);
 int RunBagInfo(int argc, char** argv);  // `info BAG`
+// `export SESSION --format rosbag --out FILE.bag` (cli_ros.cc).
+class Args;
+int ExportRosbag(const Args& args, const SensorLog& log, const SessionMeta& meta);
 extern const char* const kRepairUsage;
 extern const char* const kInfoUsage;
 extern const char* const kReconstructUsage;

@@ -2,6 +2,7 @@
 // BAG --out NAME.sweepscan` (a bag -> a session that reconstruct, calibrate,
 // evaluate, sfm and the app open like a native one). docs/ros-bags.md.
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -12,6 +13,10 @@
 #include "core/io/ros/import.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/io/ros/tf_tree.h"
+#include "core/io/rosbag1/rosbag1_writer.h"
+#include "core/calibration/calibration.h"
+#include "core/cloud/reconstruct.h"
+#include "core/session/session.h"
 
 namespace sweepscan::app {
 
@@ -33,6 +38,7 @@ const char* const kImportUsage =
     "                         else base_footprint, else base_link)\n"
     "  --mount x,y,z,roll,pitch,yaw   the lidar's pose in the base frame (m, rad),\n"
     "                         instead of tf's base -> scan frame\n"
+    "  --imu-mount x,y,z,roll,pitch,yaw   the IMU's pose in the base frame, instead of tf's\n"
     "  --wheel-distance M     half the wheel track (m; default 0.15): sets how much the\n"
     "                         odometry's turn rate is trusted\n"
     "  --notes TEXT           notes for meta.json\n"
@@ -161,7 +167,7 @@ int RunBagInfo(int argc, char** argv) {
 }
 
 int RunImport(int argc, char** argv) {
-  Args args({"json", "help"}, {"out", "scan", "odom", "imu", "base-frame", "mount", "wheel-distance", "notes"});
+  Args args({"json", "help"}, {"out", "scan", "odom", "imu", "base-frame", "mount", "imu-mount", "wheel-distance", "notes"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error);
@@ -188,6 +194,13 @@ int RunImport(int argc, char** argv) {
       return kExitBadInput;
     }
     options.has_mount = true;
+  }
+  if (args.Has("imu-mount")) {
+    if (!ParseMount(args.Get("imu-mount"), &options.base_from_imu)) {
+      PrintError("--imu-mount wants six numbers x,y,z,roll,pitch,yaw (m, rad), got '" + args.Get("imu-mount") + "'");
+      return kExitBadInput;
+    }
+    options.has_imu_mount = true;
   }
   if (args.Has("wheel-distance")) {
     char* end = nullptr;
@@ -226,6 +239,86 @@ int RunImport(int argc, char** argv) {
               report.mount_source.c_str(), report.base_frame.c_str(), report.scan_frame.c_str(), t.x(), t.y(),
               t.z(), rpy[0], rpy[1], rpy[2]);
   std::printf("beam times: %s\n", report.time_rule.c_str());
+  return kExitOk;
+}
+
+int ExportRosbag(const Args& args, const SensorLog& log, const SessionMeta& meta) {
+  ReconstructionOptions options;
+  options.calibration = meta.calibration;
+  options.pose.initial_pose = SessionStartPose(meta);
+  if (args.Flag("no-ekf")) options.pose.source = PoseSource::kOdometry;
+  if (args.Has("calibration")) {
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &options.calibration);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  ReconstructionResult result;
+  Status s = Reconstruct(log, meta.geometry, options, nullptr, &result);
+  if (!s.ok()) {
+    PrintError(args.positional()[0] + ": " + s.message());
+    return kExitFailure;
+  }
+  // Robot time back to the bag's clock for an imported session (its
+  // whole-second origin, docs/ros-bags.md); a native session's robot time
+  // is the agent's clock, kept as it is.
+  int64_t origin = 0;
+  if (meta.settings.contains("import") && meta.settings["import"].contains("time_origin_ns")) {
+    origin = meta.settings["import"]["time_origin_ns"].get<int64_t>();
+  }
+  // Intensities are the samples', found by (scan, beam): the cloud keeps
+  // provenance, not the intensity itself. Points come scan by scan, so one
+  // beam table a scan.
+  std::vector<const LidarScan*> scans;
+  for (const LidarScan& scan : log.scans) {
+    if (scan.index >= scans.size()) scans.resize(scan.index + 1, nullptr);
+    scans[scan.index] = &scan;
+  }
+  io::RosExport out;
+  out.frame_id = args.Has("frame") ? args.Get("frame") : "odom";
+  out.points.reserve(result.points.size());
+  std::vector<float> beam_intensity;
+  uint32_t table_scan = std::numeric_limits<uint32_t>::max();
+  for (const CloudPoint& p : result.points) {
+    if (p.scan != table_scan) {
+      table_scan = p.scan;
+      beam_intensity.assign(65536, 0.0f);
+      if (p.scan < scans.size() && scans[p.scan] != nullptr) {
+        for (const LidarSample& sample : scans[p.scan]->samples) beam_intensity[sample.beam] = sample.intensity;
+      }
+    }
+    out.points.push_back({p.x, p.y, p.z, beam_intensity[p.beam], p.time_ns + origin});
+  }
+  // The poses at up to 20 Hz: RViz draws a Path of an hour's drive at once.
+  int64_t next = std::numeric_limits<int64_t>::min();
+  for (size_t i = 0; i < result.poses.size(); ++i) {
+    const int64_t t = ToNanoseconds(result.poses.time(i));
+    if (t < next && i + 1 != result.poses.size()) continue;
+    next = t + 50000000;
+    const Rigid3d& pose = result.poses.pose(i);
+    const Eigen::Quaterniond& q = pose.rotation();
+    out.poses.push_back({t + origin,
+                         {pose.translation().x(), pose.translation().y(), pose.translation().z()},
+                         {q.x(), q.y(), q.z(), q.w()}});
+  }
+  s = io::WriteRosbag1Export(args.Get("out"), out);
+  if (!s.ok()) {
+    PrintError(s.message());
+    return kExitFailure;
+  }
+  if (args.Flag("json")) {
+    std::cout << nlohmann::json{{"out", args.Get("out")},
+                                {"points", out.points.size()},
+                                {"poses", out.poses.size()},
+                                {"frame", out.frame_id},
+                                {"pose_source", PoseSourceName(options.pose.source)}}
+                     .dump(2)
+              << "\n";
+  } else {
+    std::printf("wrote %zu points (/sweepscan/cloud) and %zu poses (/sweepscan/path) in frame %s to %s\n",
+                out.points.size(), out.poses.size(), out.frame_id.c_str(), args.Get("out").c_str());
+  }
   return kExitOk;
 }
 

@@ -62,8 +62,15 @@ const char* const kReconstructUsage =
 
 const char* const kExportUsage =
     "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
+    "       sweepscan-cli export SESSION --format rosbag --out FILE.bag [--calibration FILE]\n"
+    "                            [--no-ekf] [--frame F]\n"
     "\n"
-    "Writes the session's decoded sensor records as CSV for other tools:\n"
+    "--format rosbag: the session's cloud (as reconstruct makes it) as one\n"
+    "sensor_msgs/PointCloud2 on /sweepscan/cloud (x y z intensity time) and its\n"
+    "poses as a nav_msgs/Path on /sweepscan/path, in frame F (default odom), in a\n"
+    "ROS 1 bag that rosbag and RViz read (docs/ros-bags.md, \"Back to ROS\").\n"
+    "\n"
+    "Default (--format csv): the session's decoded sensor records as CSV for other tools:\n"
     "  DIR/lidar.csv   robot_time_s,scan,beam,range_m,theta_rad   (range 0: no return;\n"
     "                  a last column intensity when the lidar gave them, e.g. an imported bag)\n"
     "  DIR/imu.csv     robot_time_s,gyro_z_rad_s,roll_rad,pitch_rad,yaw_rad\n"
@@ -301,15 +308,21 @@ int RunReconstruct(int argc, char** argv) {
 }
 
 int RunExport(int argc, char** argv) {
-  Args args({"json", "help", "strict"}, {"out"});
+  Args args({"json", "help", "strict", "no-ekf"}, {"out", "format", "calibration", "frame"});
   int code;
   if (!ParseCommon(&args, argc, argv, kExportUsage, &code)) return code;
+  const std::string format = args.Has("format") ? args.Get("format") : "csv";
+  if (format != "csv" && format != "rosbag") {
+    PrintError("--format must be csv or rosbag, got '" + format + "'");
+    return kExitBadInput;
+  }
   if (!args.Has("out")) {
-    PrintError("export needs --out DIR");
+    PrintError(format == "csv" ? "export needs --out DIR" : "export --format rosbag needs --out FILE.bag");
     return kExitBadInput;
   }
   Decoded d;
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
+  if (format == "rosbag") return ExportRosbag(args, d.log, d.info.meta);
   const std::string dir = args.Get("out");
   if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
     PrintError(dir + ": cannot create folder: " + std::strerror(errno));

@@ -16,7 +16,12 @@ Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
     }
     result->poses = *truth;
   } else {
-    if (log.wheels.empty()) return Status::Error("the recording has no wheel odometry records");
+    // The EKF runs on the IMU alone when there is no odometry (an imported
+    // bag without it: the robot turns in place, docs/ros-bags.md); wheel
+    // odometry alone needs wheels.
+    if (log.wheels.empty() && (log.imu.empty() || options.pose.source == PoseSource::kOdometry)) {
+      return Status::Error("the recording has no wheel odometry records");
+    }
     PoseEstimator estimator = EstimatePoses(log, options.pose, geometry);
     result->ekf_counters = estimator.ekf().counters();
     result->poses = std::move(*estimator.mutable_poses());

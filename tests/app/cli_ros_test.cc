@@ -7,7 +7,9 @@
 #include <sys/stat.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
+#include <map>
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -178,6 +180,57 @@ TEST(CliRosCalibrationTest, AutomaticCalibrationOnAnImportedCircle) {
   ASSERT_EQ(r.code, 0) << r.out;
 }
 
+// Back to ROS: the cloud and poses in a ROS 1 bag that ROS's own Python
+// reader reads: the same points as reconstruct's PLY, the intensities of
+// the samples, the poses in the odometry frame.
+TEST(CliRosExportTest, CloudAndPathReadByRosbag) {
+  const std::string bag = Source("tests/data/ros/datmo_parallel.bag");
+  CommandRun r = Import(bag, Tmp("exp.sweepscan"), "--mount=-0.12,0,0.1,0,0,0");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("export " + Tmp("exp.sweepscan") + " --format rosbag --out " + Tmp("exp.bag") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(Cli("reconstruct " + Tmp("exp.sweepscan") + " --out " + Tmp("exp.ply")).code, 0);
+  std::vector<sweepscan::CloudPoint> ply;
+  ASSERT_TRUE(sweepscan::LoadCloud(Tmp("exp.ply"), &ply).ok());
+  r = RunCommand(std::string(SWEEPSCAN_PYTHON3) + " " + Source("tests/tools/read_rosbag1_export.py") + " " + Tmp("exp.bag"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["types"]["/sweepscan/cloud"], "sensor_msgs/PointCloud2");
+  EXPECT_EQ(j["types"]["/sweepscan/path"], "nav_msgs/Path");
+  EXPECT_EQ(j["cloud"]["frame"], "odom");
+  EXPECT_EQ(j["cloud"]["fields"], nlohmann::json::array({"x", "y", "z", "intensity", "time"}));
+  ASSERT_EQ(j["cloud"]["points"].get<size_t>(), ply.size());
+  // 37343 valid beams in the bag (tests/data/ros/README.md), less those
+  // before the first IMU reading (no pose yet: this bag has no odometry).
+  EXPECT_GT(ply.size(), 37000u);
+  EXPECT_LE(ply.size(), 37343u);
+  EXPECT_EQ(j["cloud"]["first"][0].get<float>(), ply.front().x);
+  EXPECT_EQ(j["cloud"]["last"][2].get<float>(), ply.back().z);
+  // The intensity of each placed point is its beam's in the bag, as the
+  // CSV export of the session has it (every beam's: 1755121 in all).
+  RunCommand("rm -rf " + Tmp("exp_csv"));
+  ASSERT_EQ(Cli("export " + Tmp("exp.sweepscan") + " --out " + Tmp("exp_csv")).code, 0);
+  std::map<std::pair<unsigned, unsigned>, double> intensity;
+  std::ifstream csv(Tmp("exp_csv") + "/lidar.csv");
+  std::string line;
+  std::getline(csv, line);
+  double all = 0.0;
+  while (std::getline(csv, line)) {
+    unsigned scan = 0, beam = 0;
+    double t = 0, r = 0, th = 0, i = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%u,%u,%lf,%lf,%lf", &t, &scan, &beam, &r, &th, &i), 6) << line;
+    intensity[{scan, beam}] = i;
+    all += i;
+  }
+  EXPECT_EQ(all, 1755121.0);  // python3-rosbag's sum over the bag
+  double placed = 0.0;
+  for (const sweepscan::CloudPoint& p : ply) placed += intensity.at({p.scan, p.beam});
+  EXPECT_EQ(j["cloud"]["intensity_sum"].get<double>(), placed);
+  // Stamps back on the bag's clock: the first beam of the recording, 2019-12-08.
+  EXPECT_NEAR(j["cloud"]["first"][4].get<double>(), 1575811285.36, 0.5);
+  EXPECT_GT(j["path"]["poses"].get<int>(), 100);
+}
+
 // A real Husky's odometry and IMU, no laser: the session has poses only.
 TEST(CliRosRealBagTest, HuskyOdometryAndImu) {
   CommandRun r = Import(Source("tests/data/ros/husky_test1.bag"), Tmp("husky.sweepscan"), "--json");
@@ -194,6 +247,28 @@ TEST(CliRosRealBagTest, HuskyOdometryAndImu) {
   r = Cli("info " + Source("tests/data/ros/husky_test1.bag") + " --json");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_EQ(nlohmann::json::parse(r.out)["compression"], "bz2");
+  // The IMU's mount is in robot_localization's launch file, not in the bag
+  // (static_transform_publisher 0 -0.3 0.52 -1.5708 0 1.5708 base_link
+  // imu_link): without it the yaw rate is read on the wrong axis.
+  r = Import(Source("tests/data/ros/husky_test1.bag"), Tmp("husky_imu.sweepscan"),
+             "--imu-mount 0,-0.3,0.52,1.570796327,0,-1.570796327 --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json k = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  EXPECT_EQ(k["imu_mount"], "--imu-mount");
+  // With the mount, the IMU's yaw rate integrates to the odometry's turn
+  // (-3.46 rad over the drive); without, to -0.13 rad.
+  RunCommand("rm -rf " + Tmp("husky_csv"));
+  ASSERT_EQ(Cli("export " + Tmp("husky_imu.sweepscan") + " --out " + Tmp("husky_csv")).code, 0);
+  std::ifstream imu(Tmp("husky_csv") + "/imu.csv");
+  std::string line;
+  std::getline(imu, line);
+  double turned = 0.0, last_t = -1.0;
+  while (std::getline(imu, line)) {
+    const double t = std::stod(line), w = std::stod(line.substr(line.find(',') + 1));
+    if (last_t >= 0.0) turned += w * (t - last_t);
+    last_t = t;
+  }
+  EXPECT_NEAR(turned, -3.46, 0.15);
 }
 
 // A real RPLIDAR: every count as python3-rosbag reads the bag

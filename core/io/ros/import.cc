@@ -462,15 +462,21 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     r.warnings.push_back("no LaserScan: the session has poses (odometry, IMU) but no cloud");
   }
   Rigid3d base_from_imu;
-  if (!r.imu_topic.empty()) {
+  if (!r.imu_topic.empty() && options.has_imu_mount) {
+    base_from_imu = options.base_from_imu;
+    r.imu_mount_source = "--imu-mount";
+  } else if (!r.imu_topic.empty()) {
     const std::string imu_frame = NormalizeFrame(first.first_[r.imu_topic].frame_id);
     std::string path;
     bool moving = false;
-    if (!first.tf_.Resolve(r.base_frame, imu_frame, &base_from_imu, &path, &moving).ok()) {
+    if (first.tf_.Resolve(r.base_frame, imu_frame, &base_from_imu, &path, &moving).ok()) {
+      r.imu_mount_source = "tf: " + path;
+    } else {
       base_from_imu = Rigid3d::Identity();
+      r.imu_mount_source = "none: the IMU's axes are the robot's";
       if (imu_frame != r.base_frame) {
         r.warnings.push_back("tf has no path from " + r.base_frame + " to the IMU's frame " + imu_frame +
-                             ": its axes are taken as the robot's");
+                             ": its axes are taken as the robot's (--imu-mount gives its mount)");
       }
     }
   }
@@ -573,6 +579,7 @@ nlohmann::json RosImportReport::ToJson() const {
           {"mount", {{"source", mount_source},
                      {"x_m", t.x()}, {"y_m", t.y()}, {"z_m", t.z()},
                      {"roll_rad", rpy[0]}, {"pitch_rad", rpy[1]}, {"yaw_rad", rpy[2]}}},
+          {"imu_mount", imu_mount_source},
           {"time_rule", time_rule},
           {"time_origin_ns", time_origin_ns},
           {"scans", scans},

@@ -57,6 +57,10 @@ struct RosImportOptions {
   // Overrides tf: base_from_scan as x, y, z (m), roll, pitch, yaw (rad).
   bool has_mount = false;
   Rigid3d base_from_scan;
+  // Overrides tf for the IMU: base_from_imu (mounts often live in a launch
+  // file's static_transform_publisher, not in the bag).
+  bool has_imu_mount = false;
+  Rigid3d base_from_imu;
   // Half the wheel track (m), used only to store twists as wheel speeds
   // (core/session/measurements.h); the EKF's yaw-rate noise is per wheel,
   // so it sets how much the odometry's turn rate is trusted. sweepscan's
@@ -73,6 +77,7 @@ struct RosImportReport {
   std::string scan_topic, odom_topic, imu_topic;  // "" when not used
   std::string base_frame, scan_frame;
   std::string mount_source;  // "tf: base_link -> laser (static)" or "--mount"
+  std::string imu_mount_source;  // "tf: ...", "--imu-mount" or "none: the IMU's axes are the robot's"
   Rigid3d base_from_scan;
   std::string time_rule;  // how per-sample times were made
   int64_t time_origin_ns = 0;
