@@ -30,6 +30,7 @@
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
+#include "ui/panels/ros_import_dialog.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -184,6 +185,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     progress_->setRange(0, f < 0 ? 0 : 1000);
     if (f >= 0) progress_->setValue(static_cast<int>(1000 * f));
   });
+  // An opened session whose lidar reports intensities (an imported bag):
+  // View > Colour by > Intensity has values once the replay is complete.
+  connect(workspace_, &Workspace::replayFinished, this, [this] {
+    const std::vector<float> intensity = workspace_->IntensityValues();
+    if (!intensity.empty()) view_->SetPointValues(CloudView::ColorMode::kIntensity, intensity);
+  });
   connect(workspace_, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
             progress_->setVisible(false);
@@ -270,6 +277,17 @@ void MainWindow::BuildFileMenu() {
   });
   open->setShortcut(QKeySequence::Open);
   recent_menu_ = file->addMenu(tr("Open &Recent"));
+  // A ROS 1 .bag, an .mcap or .db3, or a ROS 2 bag folder's metadata.yaml.
+  QAction* import_ros = file->addAction(tr("&Import ROS Recording…"), this, [this] {
+    QSettings settings;
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Import ROS recording"), settings.value(QStringLiteral("rosImport/dir")).toString(),
+        tr("ROS bags (*.bag *.mcap *.db3 metadata.yaml);;All files (*)"));
+    if (path.isEmpty()) return;
+    settings.setValue(QStringLiteral("rosImport/dir"), QFileInfo(path).absolutePath());
+    ImportRosRecordingPath(path);
+  });
+  import_ros->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
   QAction* save_as = file->addAction(tr("Save Session &As…"), this, [this] {
     const QString dir = QFileDialog::getSaveFileName(
         this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
@@ -318,9 +336,10 @@ void MainWindow::BuildViewMenu() {
   QMenu* color = view->addMenu(tr("&Colour by"));
   color_group_ = new QActionGroup(this);
   const QString names[CloudView::kColorModes] = {
-      tr("&Height"), tr("&Time"), tr("&Range (the X4 reports no intensity)"),
+      tr("&Height"), tr("&Time"), tr("&Range"),
       tr("&Pass (circle drive: A cyan, B magenta)"),
-      tr("&Deviation from Fitted Plane (after an evaluation)")};
+      tr("&Deviation from Fitted Plane (after an evaluation)"),
+      tr("&Intensity (lidars that report it, e.g. an imported bag; not the X4)")};
   for (int i = 0; i < CloudView::kColorModes; ++i) {
     QAction* a = color->addAction(names[i]);
     a->setCheckable(true);
@@ -501,7 +520,7 @@ void MainWindow::BuildHelpMenu() {
                    "Space: emergency stop (whatever has focus)\n"
                    "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
                    "Ctrl+R / Ctrl+Shift+R: record / stop\n"
-                   "Ctrl+O: open session;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+                   "Ctrl+O: open session;  Ctrl+I: import a ROS recording;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
                    "Shift + click: pick a point (calibration pairs, or the distance tool)\n"
                    "M: measure distance;  C: hide the ceiling\n"
                    "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
@@ -712,6 +731,14 @@ bool MainWindow::ConfirmDiscard() {
     return SaveSessionTo(dir);
   }
   return true;
+}
+
+RosImportDialog* MainWindow::ImportRosRecordingPath(const QString& path) {
+  if (!ConfirmDiscard()) return nullptr;
+  // A ROS 2 bag is its folder; its metadata.yaml is what a file chooser picks.
+  const QFileInfo f(path);
+  const QString bag = f.fileName() == QStringLiteral("metadata.yaml") ? f.absolutePath() : path;
+  return new RosImportDialog(workspace_, bag, replay_panel_->speed(), this);
 }
 
 void MainWindow::OpenSessionPath(const QString& dir) {

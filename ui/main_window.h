@@ -34,6 +34,7 @@ class DrivePanel;
 class ReplayPanel;
 class CalibrationPanel;
 class EvaluationPanel;
+class RosImportDialog;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -58,6 +59,10 @@ class MainWindow : public QMainWindow {
 
   // Actions the tests and the command line trigger.
   void OpenSessionPath(const QString& dir);
+  // File > Import ROS Recording… with the bag chosen: the topic chooser,
+  // shown once the bag is read (docs/ros-bags.md). Null if the operator
+  // keeps an unsaved recording instead.
+  RosImportDialog* ImportRosRecordingPath(const QString& path);
   bool SaveSessionTo(const QString& dir);
   void ShowError(const QString& title, const QString& message);
   // The distance tool (Tools > Measure Distance, M): two Shift + clicks.

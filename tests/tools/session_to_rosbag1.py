@@ -75,6 +75,9 @@ def main():
     ap.add_argument("--intensity", action="store_true",
                     help="intensity = 100 * range (the X4 has none; to test that they pass)")
     ap.add_argument("--scan-frame", default="laser")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="write the drive N times, each shifted by its length (for throughput "
+                         "benchmarks: scripts/ros-import-bench.sh)")
     a = ap.parse_args()
 
     meta = json.load(open(a.meta))
@@ -205,8 +208,18 @@ def main():
             m.ranges = ranges
             m.intensities = intensities
             bag.write("/scan", m, stamp(a.epoch, tb))
-        for t, _, topic, msg in sorted(out, key=lambda e: (e[0], e[1])):
-            real_bag.write(topic, msg, t)
+        out.sort(key=lambda e: (e[0], e[1]))
+        span = (out[-1][0] - out[0][0]).to_sec() + 0.1
+        for k in range(a.repeat):
+            shift = rospy.Duration.from_sec(k * span)
+            for t, _, topic, msg in out:
+                if k > 0:
+                    if topic == "/tf_static":
+                        continue
+                    # Stamps inside the message move with the log time.
+                    for stamped in (msg.transforms if topic == "/tf" else [msg]):
+                        stamped.header.stamp = (stamped.header.stamp + rospy.Duration.from_sec(span))
+                real_bag.write(topic, msg, t + shift)
 
 
 if __name__ == "__main__":

@@ -40,9 +40,9 @@ namespace sweepscan::ui {
 namespace {
 
 const char* const kArrayNames[CloudView::kColorModes] = {"height", "time", "range", "pass",
-                                                         "deviation"};
+                                                         "deviation", "intensity"};
 const char* const kBarTitles[CloudView::kColorModes] = {"height (m)", "time (s)", "range (m)",
-                                                        "pass", "deviation (mm)"};
+                                                        "pass", "deviation (mm)", "intensity"};
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // The calibration panel's pick colours: pass A cyan, pass B magenta.
 constexpr double kPassColors[2][3] = {{0.0, 0.78, 1.0}, {1.0, 0.24, 0.78}};
@@ -338,7 +338,7 @@ void CloudView::Clear() {
   lod_active_ = false;
   have_origin_ = false;
   have_points_ = false;
-  has_values_[3] = has_values_[4] = false;
+  has_values_[3] = has_values_[4] = has_values_[5] = false;
   pass_filter_ = -1;
   range_lo_[0] = 0.0;
   range_hi_[0] = 3.0;
@@ -418,6 +418,17 @@ void CloudView::ApplyLookupTable() {
     color_bar_->SetLabelFormat("%.0f");
     return;
   }
+  if (color_mode_ == ColorMode::kIntensity) {
+    // Grey levels, dark grey (weak) to white (strong): visible on the dark
+    // background, and read as intensity the way other viewers show it.
+    for (int i = 0; i < 256; ++i) {
+      const double v = 0.25 + 0.75 * i / 255.0;
+      lut_->SetTableValue(i, v, v, v, 1.0);
+    }
+    lut_->SetTableRange(intensity_lo_, intensity_hi_);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
   lut_->SetHueRange(0.667, 0.0);
   lut_->SetSaturationRange(1.0, 1.0);
   lut_->SetValueRange(1.0, 1.0);
@@ -449,6 +460,18 @@ void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values)
   }
   has_values_[m] = true;
   if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
+  if (mode == ColorMode::kIntensity) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (float v : values) {
+      if (std::isfinite(v)) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    }
+    intensity_lo_ = std::isfinite(lo) ? lo : 0.0;
+    intensity_hi_ = std::isfinite(hi) && hi > lo ? hi : intensity_lo_ + 1.0;
+    if (color_mode_ == ColorMode::kIntensity) ApplyLookupTable();
+  }
   RequestRender();
 }
 
@@ -518,6 +541,7 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
     chunk->arrays[2]->InsertNextValue(p.range_m);
     chunk->arrays[3]->InsertNextValue(kNaN);
     chunk->arrays[4]->InsertNextValue(kNaN);
+    chunk->arrays[5]->InsertNextValue(kNaN);
     ++chunk->size;
     z_lo = std::min(z_lo, p.z);
     z_hi = std::max(z_hi, p.z);

@@ -60,10 +60,13 @@ namespace sweepscan::ui {
 class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
  public:
-  // Height, time and range come with every point; pass and deviation are
-  // computed after the fact (SetPointValues) and are NaN (grey) until then.
-  enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2, kPass = 3, kDeviation = 4 };
-  static constexpr int kColorModes = 5;
+  // Height, time and range come with every point; pass, deviation and
+  // intensity are given after the fact (SetPointValues) and are NaN (grey)
+  // until then. Intensity: the lidar's return strength, for lidars that
+  // report one (an imported bag's; the X4 reports none), in grey levels
+  // over the values' range, as intensity is shown in CloudCompare and RViz.
+  enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2, kPass = 3, kDeviation = 4, kIntensity = 5 };
+  static constexpr int kColorModes = 6;
   static constexpr size_t kChunkPoints = 65536;
   static constexpr int kLodLevels = 4;
   static constexpr int kLodStrides[kLodLevels] = {8, 32, 128, 256};
@@ -231,7 +234,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   float z_min_ = 0.0f, z_max_ = 0.0f, t_max_ = 0.0f, r_max_ = 0.0f;
   double range_lo_[3] = {0.0, 0.0, 0.0};
   double range_hi_[3] = {3.0, 60.0, 8.0};
-  bool has_values_[kColorModes] = {true, true, true, false, false};
+  bool has_values_[kColorModes] = {true, true, true, false, false, false};
+  double intensity_lo_ = 0.0, intensity_hi_ = 1.0;
   double deviation_max_mm_ = 30.0;
   int pass_filter_ = -1;
   bool have_points_ = false;

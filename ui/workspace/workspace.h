@@ -33,6 +33,7 @@
 #include "core/calibration/workflow.h"
 #include "core/cloud/reconstruct.h"
 #include "core/evaluation/evaluation.h"
+#include "core/io/ros/import.h"
 #include "core/sim/world.h"
 #include "hardware/station/direct_device.h"
 #include "hardware/station/recording.h"
@@ -140,6 +141,23 @@ class Workspace : public QObject {
   bool replaying() const { return replaying_; }
   // Writes the cloud shown (PLY or PCD by extension) on a job thread.
   void ExportCloud(const QString& path);
+
+  // ---- ROS recordings (docs/ros-bags.md; workspace_import.cc) -----------
+  // Reads what a bag holds (topics, types, counts, tf) on a job thread: an
+  // MCAP without a summary is read whole. rosBagInspected(bag, ok, why);
+  // then ros_bag_summary() holds it.
+  void InspectRosBag(const QString& bag);
+  const io::RosBagSummary& ros_bag_summary() const { return ros_bag_summary_; }
+  // Imports the bag into a new session folder on a job thread (progress,
+  // cancel: nothing is left behind), then opens it at `speed` like any
+  // session; the import's warnings go to message().
+  void ImportRosRecording(const QString& bag, const QString& session_dir,
+                          const io::RosImportOptions& options, double speed = 0.0);
+  // Imports go under sessions_root() by default, beside the recordings.
+  // The opened session's intensities, one per point of CloudSnapshot() (the
+  // sample each came from, by scan and beam); empty when its lidar reports
+  // none (the X4) or nothing is opened.
+  std::vector<float> IntensityValues() const;
   void CancelJob();
   bool job_running() const { return job_thread_ != nullptr; }
 
@@ -260,6 +278,7 @@ class Workspace : public QObject {
   void poseSourceChanged(int source);       // The choice (a PoseSource).
   void shownPoseSourceChanged(int source);  // A new cloud is on its way, made with this.
   void poseSourceFailed(const QString& message);
+  void rosBagInspected(const QString& bag, bool ok, const QString& message);
 
  private:
   bool PrepareLink(const ConnectOptions& options, hardware::RobotConnectionOptions* link,
@@ -280,6 +299,7 @@ class Workspace : public QObject {
   void OnScriptTick();
   void InvokeOnConnection(std::function<void(hardware::RobotConnection*)> call);
 
+  io::RosBagSummary ros_bag_summary_;
   BatchMailbox mailbox_;
   QThread io_thread_;
   QThread processing_thread_;

@@ -1,0 +1,185 @@
+// File > Import ROS Recording… driven through its real widgets (QTest)
+// under a real display (xvfb-run in CI): the topic chooser filled from the
+// bag, the import and replay equal to `sweepscan-cli import` +
+// `reconstruct`, a bag without a mount refused with the reason and then
+// imported with one, and a file that is no bag.
+#include <QVTKOpenGLNativeWidget.h>
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDialogButtonBox>
+#include <QDir>
+#include <QElapsedTimer>
+#include <QFile>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPointer>
+#include <QPushButton>
+#include <QSettings>
+#include <QSurfaceFormat>
+#include <QTemporaryDir>
+#include <QTest>
+#include <QThread>
+#include <algorithm>
+#include <functional>
+
+#include "core/cloud/cloud_io.h"
+#include "tests/testing/run_command.h"
+#include "ui/main_window.h"
+#include "ui/panels/ros_import_dialog.h"
+#include "ui/view/cloud_view.h"
+#include "ui/workspace/workspace.h"
+
+namespace sweepscan::ui {
+namespace {
+
+const QString kResources = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
+const std::string kData = SWEEPSCAN_SOURCE_DIR "/tests/data";
+
+bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  while (!done()) {
+    if (clock.elapsed() > timeout_ms) return false;
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+    QThread::msleep(2);
+  }
+  return true;
+}
+
+class RosImportUiTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(tmp_.isValid());
+    QSettings::setDefaultFormat(QSettings::IniFormat);
+    QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, tmp_.path() + "/settings");
+    workspace_ = std::make_unique<Workspace>();
+    workspace_->set_sessions_root(tmp_.path() + "/sessions");
+    window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
+    window_->SetInteractive(false);
+    window_->resize(1100, 700);
+    window_->show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
+  }
+  void TearDown() override {
+    window_.reset();
+    workspace_.reset();
+  }
+
+  // Opens the chooser on `bag` and waits until the bag is read.
+  QPointer<RosImportDialog> OpenChooser(const std::string& bag) {
+    QPointer<RosImportDialog> dialog = window_->ImportRosRecordingPath(QString::fromStdString(bag));
+    EXPECT_TRUE(dialog);
+    EXPECT_TRUE(WaitFor([&] { return !dialog || dialog->ready(); }, 30000));
+    return dialog;
+  }
+  void ClickImport(RosImportDialog* dialog) {
+    QTest::mouseClick(dialog->buttons()->button(QDialogButtonBox::Ok), Qt::LeftButton);
+  }
+
+  QTemporaryDir tmp_;
+  std::unique_ptr<Workspace> workspace_;
+  std::unique_ptr<MainWindow> window_;
+};
+
+// A ROS 2 MCAP written by @mcap/core: the chooser shows its topics; the
+// imported session replays to the cloud the CLI makes of the same bag.
+TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
+  const std::string bag = kData + "/ros2/ros2_zstd.mcap";
+  QPointer<RosImportDialog> dialog = OpenChooser(bag);
+  ASSERT_TRUE(dialog && dialog->isVisible());
+  ASSERT_EQ(dialog->scan_topic()->count(), 1);  // one LaserScan: no "none" offered
+  EXPECT_TRUE(dialog->scan_topic()->currentText().startsWith("/scan  (20 messages")) << dialog->scan_topic()->currentText().toStdString();
+  EXPECT_EQ(dialog->odom_topic()->currentData().toString(), "/odom");
+  EXPECT_EQ(dialog->odom_topic()->itemData(dialog->odom_topic()->count() - 1).toString(), "none");
+  EXPECT_EQ(dialog->imu_topic()->currentData().toString(), "/imu");
+  const QString session = tmp_.path() + "/imported.sweepscan";
+  dialog->session_dir()->setText(session);
+
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  ClickImport(dialog);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 60000)) << window_->last_error().toStdString();
+  EXPECT_EQ(workspace_->session_dir(), session);
+
+  const std::string dir = tmp_.path().toStdString();
+  const auto cli = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " import " + bag + " --out " + dir +
+                                       "/cli.sweepscan && " + SWEEPSCAN_CLI + " reconstruct " + dir +
+                                       "/cli.sweepscan --out " + dir + "/cli.ply");
+  ASSERT_EQ(cli.code, 0) << cli.out;
+  std::vector<CloudPoint> expected;
+  ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
+  const std::vector<CloudPoint> shown = workspace_->CloudSnapshot();
+  ASSERT_GT(expected.size(), 100u);
+  ASSERT_EQ(shown.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    ASSERT_EQ(shown[i].x, expected[i].x) << i;
+    ASSERT_EQ(shown[i].z, expected[i].z) << i;
+  }
+}
+
+// A real car's bag with no tf to its laser: the import is refused with the
+// reason (and leaves nothing); with the mount given it imports.
+TEST_F(RosImportUiTest, MissingMountIsRefusedThenGiven) {
+  const std::string bag = kData + "/ros/datmo_parallel.bag";
+  const QString session = tmp_.path() + "/car.sweepscan";
+  QPointer<RosImportDialog> dialog = OpenChooser(bag);
+  ASSERT_TRUE(dialog);
+  EXPECT_EQ(dialog->odom_topic()->currentData().toString(), "none");  // the bag has no odometry
+  dialog->session_dir()->setText(session);
+  ClickImport(dialog);
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running() && !window_->last_error().isEmpty(); }, 30000));
+  EXPECT_TRUE(window_->last_error().contains("tf has no path from base_link to laser")) << window_->last_error().toStdString();
+  EXPECT_FALSE(QDir(session).exists());
+
+  dialog = OpenChooser(bag);
+  ASSERT_TRUE(dialog);
+  dialog->use_lidar_mount()->setChecked(true);
+  dialog->lidar_mount()->setText("-0.12, 0, 0.1, 0, 0, 0.5x");
+  dialog->session_dir()->setText(session);
+  ClickImport(dialog);
+  EXPECT_TRUE(dialog->isVisible());  // a malformed mount keeps the dialog, with the reason
+  EXPECT_TRUE(dialog->error_label()->text().contains("six numbers"));
+  dialog->lidar_mount()->setText("-0.12, 0, 0.1, 0, 0, 0");
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  ClickImport(dialog);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 60000)) << window_->last_error().toStdString();
+  EXPECT_GT(workspace_->CloudSnapshot().size(), 37000u);
+  // The RPLIDAR's intensities (0 or 47) reach View > Colour by > Intensity.
+  const std::vector<float> intensity = workspace_->IntensityValues();
+  ASSERT_EQ(intensity.size(), workspace_->CloudSnapshot().size());
+  EXPECT_TRUE(std::all_of(intensity.begin(), intensity.end(), [](float v) { return v == 0.0f || v == 47.0f; }));
+  EXPECT_GT(std::count(intensity.begin(), intensity.end(), 47.0f), 30000);
+  ASSERT_TRUE(WaitFor([&] { return window_->view()->has_point_values(CloudView::ColorMode::kIntensity); }, 5000));
+  window_->view()->SetColorMode(CloudView::ColorMode::kIntensity);
+}
+
+TEST_F(RosImportUiTest, NotABagSaysSoAndTheAppGoesOn) {
+  const QString text = tmp_.path() + "/notes.bag";
+  QFile f(text);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write("not a bag\n");
+  f.close();
+  bool inspected_ok = true;
+  QPointer<RosImportDialog> dialog = window_->ImportRosRecordingPath(text);
+  ASSERT_TRUE(dialog);
+  QObject::connect(dialog, &RosImportDialog::inspected, [&](bool ok) { inspected_ok = ok; });
+  ASSERT_TRUE(WaitFor([&] { return !dialog; }, 30000));  // it closes itself
+  EXPECT_FALSE(inspected_ok);
+  EXPECT_TRUE(window_->last_error().contains("not a ROS bag")) << window_->last_error().toStdString();
+  EXPECT_FALSE(workspace_->job_running());
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
+  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QApplication app(argc, argv);
+  return RUN_ALL_TESTS();
+}

@@ -1,0 +1,257 @@
+// Workspace, by concern: the calibration (picks, automatic, the pass
+// split, loading a calibration file, showing the calibrated cloud) and the
+// evaluation, each a job on the job thread.
+#include <QDateTime>
+#include <QFileInfo>
+#include <QMetaObject>
+
+#include "core/calibration/automatic.h"
+#include "core/calibration/calibration_file.h"
+#include "core/common/checked_file.h"
+#include "core/evaluation/report.h"
+#include "ui/workspace/workspace.h"
+
+namespace sweepscan::ui {
+namespace {
+
+// The deviation map's band: a point farther than this from every fitted
+// plane is on none (furniture, the robot's own clutter) and shows grey.
+constexpr double kDeviationBandM = 0.05;
+
+}  // namespace
+
+namespace {
+
+// LM iterations to the GUI thread; the cancel flag back to the solver.
+class JobCalibrationProgress : public CalibrationProgress {
+ public:
+  JobCalibrationProgress(Workspace* workspace, std::atomic<bool>* cancel)
+      : workspace_(workspace), cancel_(cancel) {}
+  bool OnIteration(int iteration, const MountingError&, double cost) override {
+    Workspace* w = workspace_;
+    QMetaObject::invokeMethod(
+        w, [w, iteration, cost] { emit w->calibrationIteration(iteration, cost); });
+    return !*cancel_;
+  }
+
+ private:
+  Workspace* workspace_;
+  std::atomic<bool>* cancel_;
+};
+
+// The poses both calibration buttons solve on, as `sweepscan-cli calibrate`
+// makes them: the uncalibrated recording's EKF poses smoothed over the drive,
+// the filter taking the IMU's measured tilt noise if above the data sheet's;
+// an IMU far noisier than its data sheet is refused first, since it bends
+// the EKF's tilt and so beta and gamma, unseen by the residuals (workflow.h).
+Status CalibrationPoses(const hardware::Recording& recording, ReconstructionResult* poses) {
+  const Status tilt = CheckImuTiltNoise(recording.log);
+  if (!tilt.ok()) return tilt;
+  ReconstructionOptions options;
+  options.pose.smooth = true;
+  UseMeasuredTiltNoise(recording.log, &options.pose.ekf);
+  return hardware::ReconstructRecording(recording, options, poses);
+}
+
+}  // namespace
+
+void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
+                          double board_thickness_m) {
+  if (opened_ == nullptr) {
+    emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
+    return;
+  }
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  auto result = std::make_shared<PickCalibrationResult>();
+  auto error = std::make_shared<QString>();
+  RunJob(
+      tr("Calibrating"),
+      [this, recording, picks, refine, board_thickness_m, result,
+       error](std::atomic<bool>* cancel) -> QString {
+        // The picks snap to samples under these poses.
+        ReconstructionResult poses;
+        Status s = CalibrationPoses(*recording, &poses);
+        if (!s.ok()) return *error = QString::fromStdString(s.message());
+        if (*cancel) return QString();
+        const SampleStore store(recording->log, poses.poses);
+        JobCalibrationProgress progress(this, cancel);
+        PickCalibrationOptions o;
+        o.refine = refine;
+        o.solver.board_thickness_m = board_thickness_m;
+        o.path_scale_from_planes = true;  // as the CLI on EKF poses (workflow.h)
+        o.solver.progress = &progress;
+        s = CalibrateFromPicks(store, recording->geometry, picks, o, result.get());
+        if (!s.ok()) return *error = QString::fromStdString(s.message());
+        return QString();
+      },
+      [this, result] {
+        calibration_ = result;
+        const MountingError& a = result->summary.angles;
+        emit calibrationFinished(true, tr("alpha %1, beta %2, gamma %3 mrad")
+                                           .arg(a.alpha * 1e3, 0, 'f', 2)
+                                           .arg(a.beta * 1e3, 0, 'f', 2)
+                                           .arg(a.gamma * 1e3, 0, 'f', 2));
+      });
+}
+
+void Workspace::CalibrateAutomatic() {
+  if (opened_ == nullptr) {
+    emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
+    return;
+  }
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  auto result = std::make_shared<PickCalibrationResult>();
+  RunJob(
+      tr("Calibrating"),
+      [this, recording, result](std::atomic<bool>* cancel) -> QString {
+        // As `sweepscan-cli calibrate SESSION --auto`: SolveAutomatic with
+        // its default options.
+        ReconstructionResult poses;
+        Status s = CalibrationPoses(*recording, &poses);
+        if (!s.ok()) return QString::fromStdString(s.message());
+        if (*cancel) return QString();
+        const SampleStore store(recording->log, poses.poses);
+        JobCalibrationProgress progress(this, cancel);
+        AutoCalibrationOptions o;
+        o.solver.progress = &progress;
+        s = SolveAutomatic(store, recording->geometry, {}, o, &result->summary);
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, result] {
+        calibration_ = result;
+        emit calibrationFinished(true, QString());
+      });
+}
+
+bool Workspace::LoadCalibration(const QString& path, QString* error) {
+  auto result = std::make_shared<PickCalibrationResult>();
+  const Status s = LoadCalibrationFile(path.toStdString(), &result->summary.angles);
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
+    return false;
+  }
+  result->summary.method = "file";
+  result->summary.converged = true;
+  result->summary.initial = result->summary.angles;
+  calibration_ = result;
+  emit calibrationFinished(true, tr("loaded %1").arg(path));
+  return true;
+}
+
+void Workspace::SplitPasses() {
+  if (opened_ == nullptr || !opened_circle_.ok) {
+    emit passesSplit(false, opened_ == nullptr ? tr("Open a calibration drive's session first.")
+                                               : tr("Not a circle drive: %1")
+                                                     .arg(opened_circle_.note));
+    return;
+  }
+  auto points = std::make_shared<std::vector<CloudPoint>>(CloudSnapshot());
+  auto labels = std::make_shared<std::vector<float>>();
+  const OpenedCircle circle = opened_circle_;
+  RunJob(
+      tr("Splitting the passes"),
+      [points, labels, circle](std::atomic<bool>*) -> QString {
+        const std::vector<uint8_t> pass = LabelCirclePasses(*points, *circle.poses, circle.circle);
+        labels->resize(pass.size());
+        for (size_t i = 0; i < pass.size(); ++i) {
+          (*labels)[i] = pass[i] == kNoPass ? std::numeric_limits<float>::quiet_NaN()
+                                            : static_cast<float>(pass[i]);
+        }
+        return QString();
+      },
+      [this, labels] {
+        pass_labels_ = std::move(*labels);
+        size_t a = 0, b = 0;
+        for (float v : pass_labels_) (v == 0.0f ? a : b) += (v == 0.0f || v == 1.0f) ? 1 : 0;
+        emit passesSplit(true, tr("pass A (near side) %L1 points, pass B (far side) %L2 points")
+                                   .arg(a)
+                                   .arg(b));
+      });
+  // A refused job (another task running) reports through jobFinished.
+}
+
+void Workspace::Evaluate() {
+  auto points = std::make_shared<std::vector<Eigen::Vector3f>>();
+  {
+    const std::vector<CloudPoint> cloud = CloudSnapshot();
+    points->reserve(cloud.size());
+    for (const CloudPoint& p : cloud) points->emplace_back(p.x, p.y, p.z);
+  }
+  if (points->empty()) {
+    emit evaluationFinished(false, tr("The cloud is empty: open or record a session first."));
+    return;
+  }
+  auto result = std::make_shared<CloudEvaluation>();
+  auto deviations = std::make_shared<std::vector<float>>();
+  const MountingError shown = shown_calibration_;
+  RunJob(
+      tr("Evaluating"),
+      [this, points, result, deviations](std::atomic<bool>* cancel) -> QString {
+        // Stage and fraction to the status bar (at most ~50 calls a second,
+        // from the evaluation's threads); Cancel stops it within 100 ms.
+        EvaluationControl control;
+        control.cancel = cancel;
+        control.progress = [this](const EvaluationProgress& p) {
+          const QString what =
+              tr("Evaluating: %1").arg(QString::fromLatin1(EvaluationStageName(p.stage)));
+          const double f = p.fraction;
+          QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
+          return true;
+        };
+        const Status s = EvaluateCloud(*points, EvaluationOptions(), result.get(), control);
+        if (!s.ok()) return QString::fromStdString(s.message());
+        // The deviation map over every point shown (outliers included: the
+        // operator sees them grey or far off white).
+        *deviations = DeviationMapMm(*points, result->planes, kDeviationBandM);
+        return QString();
+      },
+      [this, result, shown, deviations] {
+        previous_evaluation_ = evaluation_;
+        previous_calibration_ = evaluated_calibration_;
+        evaluation_ = result;
+        deviation_map_ = std::move(*deviations);
+        evaluated_calibration_ = shown;
+        emit evaluationFinished(true, QString());
+      });
+}
+
+bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_name,
+                                     QString* error) const {
+  if (evaluation_ == nullptr) {
+    *error = tr("Evaluate first.");
+    return false;
+  }
+  auto angles = [](const MountingError& c) {
+    return nlohmann::json{{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}};
+  };
+  nlohmann::json report = {{"format", "sweepscan-evaluation-report"},
+                           {"version", 1},
+                           {"session", session_dir_.toStdString()},
+                           {"created", QDateTime::currentDateTimeUtc()
+                                           .toString(Qt::ISODateWithMs)
+                                           .toStdString()},
+                           {"image", image_name.toStdString()},
+                           {"calibration_rad", angles(evaluated_calibration_)},
+                           {"evaluation", EvaluationToJson(*evaluation_)}};
+  if (previous_evaluation_ != nullptr) {
+    report["previous"] = {{"calibration_rad", angles(previous_calibration_)},
+                          {"evaluation", EvaluationToJson(*previous_evaluation_)}};
+  }
+  const Status s = WriteFileChecked(path.toStdString(), report.dump(2) + "\n");
+  if (!s.ok()) {
+    *error = QString::fromStdString(s.message());
+    return false;
+  }
+  return true;
+}
+
+void Workspace::ShowCalibrated(const MountingError& calibration) {
+  if (opened_ == nullptr) return;
+  // With the poses shown: SfM places the scans under the calibration too,
+  // so its poses are computed again (a job). The same points in the same
+  // order: the pass labels stay valid.
+  Reprocess(calibration, shown_pose_source_, true);
+}
+
+
+}  // namespace sweepscan::ui
