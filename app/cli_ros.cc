@@ -87,13 +87,17 @@ class TfSink : public io::RosMessageSink {
   bool OnOdometry(const io::RosMessageInfo&, const io::RosOdometry&) override { return true; }
   bool OnImu(const io::RosMessageInfo&, const io::RosImu&) override { return true; }
   bool OnTf(const io::RosMessageInfo& info, const io::RosTfMessage& m) override {
+    const bool is_static = info.topic->find("static") != std::string::npos;
     for (const io::RosTransform& t : m.transforms) {
       edges.insert(io::NormalizeFrame(t.header.frame_id) + " -> " + io::NormalizeFrame(t.child_frame_id) +
-                   (info.topic->find("static") != std::string::npos ? " (static)" : ""));
+                   (is_static ? " (static)" : ""));
     }
-    return true;
+    // /tf repeats its edges at the odometry's rate all the bag long: its
+    // first thousand messages name them (as the import reads it).
+    return is_static || ++dynamic < 1000;
   }
   std::set<std::string> edges;
+  uint64_t dynamic = 0;
 };
 
 }  // namespace
@@ -118,9 +122,15 @@ int RunBagInfo(int argc, char** argv) {
   for (const io::RosTopicInfo& t : summary.topics) {
     if (t.kind() == io::RosMessageKind::kTf) read.topics.insert(t.topic);
   }
-  if (!read.topics.empty()) {
-    s = io::ReadRosBag(bag, read, &tf, nullptr);
-    if (!s.ok()) {
+  // /tf_static whole, then the first of /tf (a stop there ends the read).
+  for (const bool statics : {true, false}) {
+    io::RosReadOptions part;
+    for (const std::string& t : read.topics) {
+      if ((t.find("static") != std::string::npos) == statics) part.topics.insert(t);
+    }
+    if (part.topics.empty()) continue;
+    s = io::ReadRosBag(bag, part, &tf, nullptr);
+    if (!s.ok() && tf.dynamic < 1000) {
       PrintError(s.message());
       return kExitBadInput;
     }

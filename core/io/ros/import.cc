@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <future>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -44,9 +45,21 @@ class FirstPassSink : public RosMessageSink {
   }
   bool OnImu(const RosMessageInfo& info, const RosImu& m) override { return First(info, m.header); }
   bool OnTf(const RosMessageInfo& info, const RosTfMessage& m) override {
-    tf_.Add(m, info.topic->find("static") != std::string::npos);
+    const bool is_static = info.topic->find("static") != std::string::npos;
+    tf_.Add(m, is_static);
+    // A robot's /tf carries its motion (odom -> base) at the odometry's
+    // rate, all the bag long; the joints it also carries are all in its
+    // first messages. Enough of them to see a joint move.
+    if (!is_static && ++dynamic_tf_ >= kDynamicTfMessages) {
+      tf_stopped_ = true;
+      return false;
+    }
     return true;
   }
+
+  static constexpr uint64_t kDynamicTfMessages = 1000;
+  uint64_t dynamic_tf_ = 0;
+  bool tf_stopped_ = false;
 
   TfTree tf_;
   std::map<std::string, RosHeader> first_;  // topic -> header of its first message
@@ -398,6 +411,10 @@ Status ChooseTopic(const RosBagSummary& summary, RosMessageKind kind, const std:
 
 Status ImportRosBag(const std::string& bag, const std::string& session_dir,
                     const RosImportOptions& options, RosImportReport* report) {
+  // The readers keep the bag open across the passes; closed when done.
+  struct Release {
+    ~Release() { ReleaseRosBags(); }
+  } release;
   RosImportReport r;
   r.bag = bag;
   r.session = session_dir;
@@ -433,9 +450,17 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   };
   read.progress = progress(0.0, 0.05);
   RosReadStats stats;
-  if (!read.topics.empty()) {
-    s = ReadRosBag(bag, read, &first, &stats);
-    if (!s.ok()) return s;
+  // /tf_static whole (a few messages), then the first of /tf's: reading
+  // both at once would stop /tf_static where /tf stops.
+  for (const bool statics : {true, false}) {
+    RosReadOptions part = read;
+    part.topics.clear();
+    for (const std::string& t : read.topics) {
+      if ((t.find("static") != std::string::npos) == statics) part.topics.insert(t);
+    }
+    if (part.topics.empty()) continue;
+    s = ReadRosBag(bag, part, &first, &stats);
+    if (!s.ok() && !first.tf_stopped_) return s;
   }
   read.topics = sensors;
   read.progress = progress(0.05, 0.1);
@@ -523,6 +548,11 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   s = SessionWriter::Create(session_dir, meta, SessionWriterOptions(), &writer);
   if (!s.ok()) return s;
 
+  // The bag's SHA-256 on the second core while pass 2 reads it.
+  std::atomic<bool> stop_hash{false};
+  std::string sha;
+  std::future<Status> hash = std::async(std::launch::async, [&] { return HashBag(bag, &sha, &stop_hash); });
+
   // Pass 2: the sensor topics, written as they are read.
   WritingSink sink(writer.get(), r, base_from_imu, &r);
   read.progress = progress(0.1, 1.0);
@@ -548,8 +578,7 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     if (r.time_gaps > 0) {
       r.warnings.push_back(std::to_string(r.time_gaps) + " gaps of more than 1 s within a topic");
     }
-    std::string sha;
-    const Status h = HashBag(bag, &sha);
+    const Status h = hash.get();
     nlohmann::json provenance = r.ToJson();
     provenance["sha256"] = h.ok() ? sha : "";
     if (r.has_start) {
@@ -560,6 +589,8 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   }
   writer.reset();
   if (!s.ok()) {
+    stop_hash = true;
+    if (hash.valid()) hash.wait();
     RemoveSession(session_dir);
     return s;
   }

@@ -14,19 +14,22 @@
 namespace sweepscan::io {
 namespace {
 
-Status HashFile(const std::string& path, EVP_MD_CTX* ctx) {
+Status HashFile(const std::string& path, EVP_MD_CTX* ctx, const std::atomic<bool>* stop) {
   std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) return Status::Error(path + ": cannot open: " + std::strerror(errno));
   std::vector<unsigned char> buf(1 << 20);
   size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), f.get())) > 0) EVP_DigestUpdate(ctx, buf.data(), n);
+  while ((n = std::fread(buf.data(), 1, buf.size(), f.get())) > 0) {
+    if (stop != nullptr && *stop) return Status::Error(path + ": stopped");
+    EVP_DigestUpdate(ctx, buf.data(), n);
+  }
   if (std::ferror(f.get())) return Status::Error(path + ": read failed: " + std::strerror(errno));
   return Status::Ok();
 }
 
 }  // namespace
 
-Status HashBag(const std::string& path, std::string* sha256_hex) {
+Status HashBag(const std::string& path, std::string* sha256_hex, const std::atomic<bool>* stop) {
   std::vector<std::string> files;
   struct stat st;
   if (stat(path.c_str(), &st) != 0) return Status::Error(path + ": " + std::strerror(errno));
@@ -44,7 +47,7 @@ Status HashBag(const std::string& path, std::string* sha256_hex) {
   std::unique_ptr<EVP_MD_CTX, void (*)(EVP_MD_CTX*)> ctx(EVP_MD_CTX_new(), &EVP_MD_CTX_free);
   EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr);
   for (const std::string& f : files) {
-    const Status s = HashFile(f, ctx.get());
+    const Status s = HashFile(f, ctx.get(), stop);
     if (!s.ok()) return s;
   }
   unsigned char digest[EVP_MAX_MD_SIZE];

@@ -54,4 +54,6 @@ Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMes
                               "nor a ROS 2 bag folder with metadata.yaml)");
 }
 
+void ReleaseRosBags() { ReleaseRosbag1Cache(); }
+
 }  // namespace sweepscan::io

@@ -22,6 +22,8 @@ bool LooksLikeRosBag(const std::string& path);
 Status SummarizeRosBag(const std::string& path, RosBagSummary* summary);
 Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
                   RosReadStats* stats);
+// Closes what the readers keep open between calls (the last ROS 1 bag).
+void ReleaseRosBags();
 
 }  // namespace sweepscan::io
 

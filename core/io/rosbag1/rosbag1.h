@@ -8,7 +8,8 @@
 // one chunk whatever the bag's size. A bag whose index is missing (a
 // recording cut short, "rosbag reindex" not run) is refused with that advice.
 //
-// Pure functions; any thread (each call opens its own rosbag::Bag).
+// Any thread; calls are serialised (the last bag opened is kept open for the
+// next call, ReleaseRosbag1Cache).
 #ifndef SWEEPSCAN_CORE_IO_ROSBAG1_ROSBAG1_H_
 #define SWEEPSCAN_CORE_IO_ROSBAG1_ROSBAG1_H_
 
@@ -34,6 +35,10 @@ Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary);
 // stats->messages_undecodable and reported to the sink; the rest goes on.
 Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
                    RosReadStats* stats);
+
+// Readers keep the last bag opened (its index read) for the next call on
+// the same unchanged file; this closes it. ImportRosBag calls it when done.
+void ReleaseRosbag1Cache();
 
 }  // namespace sweepscan::io
 

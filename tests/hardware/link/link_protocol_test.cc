@@ -117,6 +117,7 @@ TEST(Crc32cTest, CheckValueOfTheCatalogue) {
   EXPECT_EQ(Crc32c(p, 0), 0u);
   // Continuation: CRC(a || b) == Crc32c(b, Crc32c(a)).
   EXPECT_EQ(Crc32c(p + 4, 5, Crc32c(p, 4)), 0xE3069283u);
+  EXPECT_EQ(Crc32cTable(p + 4, 5, Crc32cTable(p, 4)), 0xE3069283u);
 }
 
 TEST(Crc32cTest, SlicingByEightMatchesBitwiseForAllLengthsAndAlignments) {
@@ -126,6 +127,9 @@ TEST(Crc32cTest, SlicingByEightMatchesBitwiseForAllLengthsAndAlignments) {
   for (size_t start = 0; start < 9; ++start) {
     for (size_t n = 0; start + n <= data.size(); n += 7) {
       ASSERT_EQ(Crc32c(data.data() + start, n), Crc32cBitwise(data.data() + start, n))
+          << start << " " << n;
+      // The portable tables too, where the CPU's instruction answers above.
+      ASSERT_EQ(Crc32cTable(data.data() + start, n), Crc32cBitwise(data.data() + start, n))
           << start << " " << n;
     }
   }
