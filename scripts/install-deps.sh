@@ -16,7 +16,7 @@ packages=(
   # ROS 2's sqlite3 and MCAP storages need sqlite3, zstd and lz4.
   librosbag-storage-dev libroscpp-core-dev libsensor-msgs-dev libnav-msgs-dev
   libgeometry-msgs-dev libtf2-msgs-dev pluginlib-dev librcpputils-dev librcutils-dev
-  libament-index-cpp-dev libsqlite3-dev libzstd-dev liblz4-dev
+  libament-index-cpp-dev libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev
   # The independent writers and readers the tests check against.
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs
 )

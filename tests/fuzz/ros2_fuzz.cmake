@@ -11,7 +11,7 @@ add_library(sweepscan_ros2_fuzz STATIC
   ${PROJECT_SOURCE_DIR}/core/io/ros2/mcap_records.cc
   ${PROJECT_SOURCE_DIR}/core/io/ros/ros_messages.cc)
 target_link_libraries(sweepscan_ros2_fuzz PUBLIC sweepscan_base PkgConfig::SWEEPSCAN_ROS2_ZSTD
-                      PkgConfig::SWEEPSCAN_ROS2_LZ4)
+                      PkgConfig::SWEEPSCAN_ROS2_LZ4 PkgConfig::SWEEPSCAN_ROS2_ZLIB)
 target_compile_options(sweepscan_ros2_fuzz PRIVATE
   -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
   -fno-omit-frame-pointer -g)

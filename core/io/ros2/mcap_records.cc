@@ -14,27 +14,15 @@
 
 #include "core/io/ros2/mcap.h"
 
+#include <zlib.h>
+
 namespace sweepscan::io {
 
-namespace {
-
-std::array<uint32_t, 256> MakeCrcTable() {
-  std::array<uint32_t, 256> t{};
-  for (uint32_t i = 0; i < 256; ++i) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? (c >> 1) ^ 0xEDB88320u : c >> 1;
-    t[i] = c;
-  }
-  return t;
-}
-
-}  // namespace
-
+// MCAP's CRC is zlib's CRC-32 (ISO-HDLC); zlib's own, which runs several
+// times faster than a byte-wise table (it was half the time of an MCAP
+// import, docs/performance.md).
 uint32_t McapCrc32(const uint8_t* data, size_t n, uint32_t crc) {
-  static const std::array<uint32_t, 256> kTable = MakeCrcTable();
-  crc = ~crc;
-  for (size_t i = 0; i < n; ++i) crc = kTable[(crc ^ data[i]) & 0xFFu] ^ (crc >> 8);
-  return ~crc;
+  return static_cast<uint32_t>(crc32_z(crc, data, n));
 }
 
 namespace mcap_internal {
