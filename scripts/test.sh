@@ -7,6 +7,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
+# The independent ROS 2 writers the import tests check against (npm).
+scripts/install-test-tools.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/ccache}"
 # Let clones at other paths (CI checks out afresh) share the cache.

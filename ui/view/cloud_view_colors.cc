@@ -1,0 +1,212 @@
+// CloudView's colours: the colour modes (height, time, range, pass,
+// deviation, intensity), their lookup tables and colour bar, the colour
+// ranges that grow with a live cloud, values given after the fact
+// (SetPointValues), and the pass filter that draws one pass of a circle drive.
+#include <vtkLookupTable.h>
+#include <vtkPointData.h>
+#include <vtkScalarBarActor.h>
+#include <vtkVariant.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "ui/view/cloud_view.h"
+#include "ui/view/cloud_view_chunk.h"
+
+namespace sweepscan::ui {
+using cloud_view_internal::kArrayNames;
+using cloud_view_internal::kNaN;
+namespace {
+
+const char* const kBarTitles[CloudView::kColorModes] = {"height (m)", "time (s)", "range (m)",
+                                                        "pass", "deviation (mm)", "intensity"};
+// The calibration panel's pick colours: pass A cyan, pass B magenta.
+constexpr double kPassColors[2][3] = {{0.0, 0.78, 1.0}, {1.0, 0.24, 0.78}};
+
+// The next colour range end that covers `value`: doubling from `current`,
+// so that a growing cloud re-maps its colours O(log n) times.
+double Grow(double current, double value) {
+  double hi = std::max(current, 1e-3);
+  while (value > hi) hi *= 2.0;
+  return hi;
+}
+
+}  // namespace
+
+void CloudView::UpdateRanges(float z, float t, float r) {
+  bool changed = false;
+  if (!have_points_) {
+    z_min_ = z_max_ = z;
+    have_points_ = true;
+    // Height: start with the floor-to-ceiling span of a room.
+    range_lo_[0] = std::floor(z);
+  }
+  z_min_ = std::min(z_min_, z);
+  z_max_ = std::max(z_max_, z);
+  t_max_ = std::max(t_max_, t);
+  r_max_ = std::max(r_max_, r);
+  if (z_min_ < range_lo_[0]) {
+    range_lo_[0] = std::floor(z_min_);
+    changed = true;
+  }
+  const double spans[3] = {z_max_ - range_lo_[0], t_max_, r_max_};
+  for (int i = 0; i < 3; ++i) {
+    const double hi_span = range_hi_[i] - range_lo_[i];
+    if (spans[i] > hi_span) {
+      range_hi_[i] = range_lo_[i] + Grow(hi_span, spans[i]);
+      changed = true;
+    }
+  }
+  if (changed) ApplyLookupTable();
+}
+
+void CloudView::ApplyLookupTable() {
+  const int m = static_cast<int>(color_mode_);
+  color_bar_->SetTitle(kBarTitles[m]);
+  lut_->ResetAnnotations();
+  lut_->SetNanColor(0.42, 0.43, 0.45, 1.0);
+  if (color_mode_ == ColorMode::kPass) {
+    // Two categories, as swatches in the colour bar.
+    lut_->IndexedLookupOn();
+    lut_->SetNumberOfTableValues(2);
+    for (int k = 0; k < 2; ++k) {
+      lut_->SetTableValue(k, kPassColors[k][0], kPassColors[k][1], kPassColors[k][2], 1.0);
+    }
+    lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
+    lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
+    lut_->SetTableRange(0.0, 1.0);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
+  lut_->IndexedLookupOff();
+  lut_->SetNumberOfTableValues(256);
+  if (color_mode_ == ColorMode::kDeviation) {
+    // Diverging blue - white - red: the sign of a deviation matters (a
+    // surface in front of or behind its plane), white is on the plane.
+    for (int i = 0; i < 256; ++i) {
+      const double x = i / 255.0 * 2.0 - 1.0;  // -1 .. 1
+      const double a = std::abs(x);
+      if (x < 0) {
+        lut_->SetTableValue(i, 1.0 - 0.85 * a, 1.0 - 0.6 * a, 1.0 - 0.1 * a, 1.0);
+      } else {
+        lut_->SetTableValue(i, 1.0 - 0.1 * a, 1.0 - 0.8 * a, 1.0 - 0.85 * a, 1.0);
+      }
+    }
+    lut_->SetTableRange(-deviation_max_mm_, deviation_max_mm_);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
+  if (color_mode_ == ColorMode::kIntensity) {
+    // Grey levels, dark grey (weak) to white (strong): visible on the dark
+    // background, and read as intensity the way other viewers show it.
+    for (int i = 0; i < 256; ++i) {
+      const double v = 0.25 + 0.75 * i / 255.0;
+      lut_->SetTableValue(i, v, v, v, 1.0);
+    }
+    lut_->SetTableRange(intensity_lo_, intensity_hi_);
+    color_bar_->SetLabelFormat("%.0f");
+    return;
+  }
+  lut_->SetHueRange(0.667, 0.0);
+  lut_->SetSaturationRange(1.0, 1.0);
+  lut_->SetValueRange(1.0, 1.0);
+  lut_->SetAlphaRange(1.0, 1.0);
+  lut_->ForceBuild();
+  lut_->SetTableRange(range_lo_[m], range_hi_[m]);
+  color_bar_->SetLabelFormat("%.1f");
+}
+
+void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values) {
+  const int m = static_cast<int>(mode);
+  if (m < 3) return;  // Height, time and range come with the points.
+  size_t offset = 0;
+  for (auto& c : chunks_) {
+    vtkFloatArray* a = c->arrays[m];
+    for (size_t i = 0; i < c->size; ++i) {
+      a->SetValue(static_cast<vtkIdType>(i), offset + i < values.size() ? values[offset + i] : kNaN);
+    }
+    a->Modified();
+    for (int level = 0; level < kLodLevels; ++level) {
+      if (!c->lod_poly[level]) continue;
+      auto* thin = vtkFloatArray::SafeDownCast(c->lod_poly[level]->GetPointData()->GetArray(m));
+      for (vtkIdType j = 0; j < thin->GetNumberOfTuples(); ++j) {
+        thin->SetValue(j, a->GetValue(j * kLodStrides[level]));
+      }
+      thin->Modified();
+    }
+    offset += c->size;
+  }
+  has_values_[m] = true;
+  if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
+  if (mode == ColorMode::kIntensity) {
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    for (float v : values) {
+      if (std::isfinite(v)) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    }
+    intensity_lo_ = std::isfinite(lo) ? lo : 0.0;
+    intensity_hi_ = std::isfinite(hi) && hi > lo ? hi : intensity_lo_ + 1.0;
+    if (color_mode_ == ColorMode::kIntensity) ApplyLookupTable();
+  }
+  RequestRender();
+}
+
+void CloudView::SetDeviationRange(double max_mm) {
+  deviation_max_mm_ = std::max(0.1, max_mm);
+  if (color_mode_ == ColorMode::kDeviation) ApplyLookupTable();
+  RequestRender();
+}
+
+void CloudView::SetPassFilter(int pass) {
+  pass = pass < 0 || pass > 1 ? -1 : pass;
+  if (pass == pass_filter_) return;
+  pass_filter_ = pass;
+  ApplyPassFilter();
+  RequestRender();
+}
+
+void CloudView::ApplyPassFilter() {
+  // Rebuilds each chunk's vertex list (full and thinned) with the points of
+  // the pass shown; the point arrays stay as they are.
+  auto rebuild = [this](vtkPolyData* poly, vtkFloatArray* pass) {
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    verts->Use32BitStorage();
+    const vtkIdType n = pass->GetNumberOfTuples();
+    const float want = static_cast<float>(pass_filter_);
+    for (vtkIdType i = 0; i < n; ++i) {
+      if (pass_filter_ < 0 || pass->GetValue(i) == want) verts->InsertNextCell(1, &i);
+    }
+    poly->SetVerts(verts);
+    poly->Modified();
+    return verts;
+  };
+  for (auto& c : chunks_) {
+    c->verts = rebuild(c->poly, c->arrays[3]);
+    for (auto& thin : c->lod_poly) {
+      if (thin) rebuild(thin, vtkFloatArray::SafeDownCast(thin->GetPointData()->GetArray(3)));
+    }
+  }
+}
+
+size_t CloudView::drawn_point_count() const {
+  size_t n = 0;
+  for (const auto& c : chunks_) n += static_cast<size_t>(c->verts->GetNumberOfCells());
+  return n;
+}
+
+void CloudView::SetColorMode(ColorMode mode) {
+  color_mode_ = mode;
+  for (auto& c : chunks_) {
+    c->mapper->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
+    for (auto& m : c->lod_mapper) {
+      if (m) m->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
+    }
+  }
+  ApplyLookupTable();
+  RequestRender();
+  emit colorModeChanged(static_cast<int>(mode));
+}
+
+}  // namespace sweepscan::ui
