@@ -1,0 +1,351 @@
+// The main window's menus (File, Edit, View, Robot, Tools with the pose
+// source, Help): their actions, shortcuts and the undoable view edits.
+#include <QAction>
+#include <QActionGroup>
+#include <QDockWidget>
+#include <QLabel>
+#include <QStatusBar>
+#include <QApplication>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QMenu>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QSettings>
+#include <QUndoCommand>
+#include <QUndoStack>
+#include <algorithm>
+#include <functional>
+
+#include "ui/main_window.h"
+#include "ui/panels/calibration_panel.h"
+#include "ui/panels/connection_panel.h"
+#include "ui/panels/device_check_dialog.h"
+#include "ui/panels/drive_panel.h"
+#include "ui/panels/evaluation_panel.h"
+#include "ui/panels/replay_panel.h"
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+// The pose sources an opened session can be made with, in menu order.
+constexpr PoseSource kPoseSources[] = {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm};
+
+// View appearance changes are edits: undoable (Ctrl+Z / Ctrl+Shift+Z).
+class ColorModeCommand : public QUndoCommand {
+ public:
+  ColorModeCommand(CloudView* view, CloudView::ColorMode to, std::function<void()> sync)
+      : view_(view), from_(view->color_mode()), to_(to), sync_(std::move(sync)) {
+    setText(QObject::tr("colour mode"));
+  }
+  void redo() override {
+    view_->SetColorMode(to_);
+    sync_();
+  }
+  void undo() override {
+    view_->SetColorMode(from_);
+    sync_();
+  }
+
+ private:
+  CloudView* view_;
+  CloudView::ColorMode from_, to_;
+  std::function<void()> sync_;
+};
+
+class PointSizeCommand : public QUndoCommand {
+ public:
+  PointSizeCommand(CloudView* view, double to) : view_(view), from_(view->point_size()), to_(to) {
+    setText(QObject::tr("point size"));
+  }
+  void redo() override { view_->SetPointSize(to_); }
+  void undo() override { view_->SetPointSize(from_); }
+
+ private:
+  CloudView* view_;
+  double from_, to_;
+};
+
+}  // namespace
+
+void MainWindow::BuildMenus() {
+  BuildFileMenu();
+  BuildEditMenu();
+  BuildViewMenu();
+  BuildRobotMenu();
+  BuildToolsMenu();
+  BuildHelpMenu();
+}
+
+void MainWindow::BuildFileMenu() {
+  QMenu* file = menuBar()->addMenu(tr("&File"));
+  QAction* new_session = file->addAction(tr("&New Session"), this, [this] {
+    if (ConfirmDiscard()) workspace_->NewSession();
+  });
+  new_session->setShortcut(QKeySequence::New);
+  QAction* open = file->addAction(tr("&Open Session…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(
+        this, tr("Open session folder (NAME.sweepscan)"), workspace_->sessions_root());
+    if (!dir.isEmpty()) OpenSessionPath(dir);
+  });
+  open->setShortcut(QKeySequence::Open);
+  recent_menu_ = file->addMenu(tr("Open &Recent"));
+  // A ROS 1 .bag, an .mcap or .db3, or a ROS 2 bag folder's metadata.yaml.
+  QAction* import_ros = file->addAction(tr("&Import ROS Recording…"), this, [this] {
+    QSettings settings;
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Import ROS recording"), settings.value(QStringLiteral("rosImport/dir")).toString(),
+        tr("ROS bags (*.bag *.mcap *.db3 metadata.yaml);;All files (*)"));
+    if (path.isEmpty()) return;
+    settings.setValue(QStringLiteral("rosImport/dir"), QFileInfo(path).absolutePath());
+    ImportRosRecordingPath(path);
+  });
+  import_ros->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
+  QAction* save_as = file->addAction(tr("Save Session &As…"), this, [this] {
+    const QString dir = QFileDialog::getSaveFileName(
+        this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
+    if (dir.isEmpty()) return;
+    SaveSessionTo(dir.endsWith(QStringLiteral(".sweepscan")) ? dir
+                                                             : dir + QStringLiteral(".sweepscan"));
+  });
+  save_as->setShortcut(QKeySequence::SaveAs);
+  file->addSeparator();
+  QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
+    const QString path = QFileDialog::getSaveFileName(this, tr("Export cloud"), QString(),
+                                                      tr("PLY (*.ply);;PCD (*.pcd)"));
+    if (!path.isEmpty()) workspace_->ExportCloud(path);
+  });
+  export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+  QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {
+    const QString path =
+        QFileDialog::getSaveFileName(this, tr("Save screenshot"), QString(), tr("PNG (*.png)"));
+    QString error;
+    if (!path.isEmpty() && !view_->SaveScreenshot(path, &error)) ShowError(tr("Screenshot"), error);
+  });
+  shot->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_P));
+  file->addSeparator();
+  QAction* quit = file->addAction(tr("&Quit"), this, &QWidget::close);
+  quit->setShortcut(QKeySequence::Quit);
+}
+
+void MainWindow::BuildEditMenu() {
+  QMenu* edit = menuBar()->addMenu(tr("&Edit"));
+  QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
+  undo->setShortcut(QKeySequence::Undo);
+  QAction* redo = undo_->createRedoAction(this, tr("&Redo"));
+  redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence::Redo});
+  edit->addAction(undo);
+  edit->addAction(redo);
+}
+
+void MainWindow::BuildViewMenu() {
+  QMenu* view = menuBar()->addMenu(tr("&View"));
+  view->addAction(tr("&3D"), view_, &CloudView::ViewOblique)->setShortcut(Qt::Key_0);
+  view->addAction(tr("&Top"), view_, &CloudView::ViewTop)->setShortcut(Qt::Key_1);
+  view->addAction(tr("&Front"), view_, &CloudView::ViewFront)->setShortcut(Qt::Key_2);
+  view->addAction(tr("&Side"), view_, &CloudView::ViewSide)->setShortcut(Qt::Key_3);
+  view->addAction(tr("&Fit to Cloud"), view_, &CloudView::FitToCloud)->setShortcut(Qt::Key_F);
+  view->addSeparator();
+  QMenu* color = view->addMenu(tr("&Colour by"));
+  color_group_ = new QActionGroup(this);
+  const QString names[CloudView::kColorModes] = {
+      tr("&Height"), tr("&Time"), tr("&Range"),
+      tr("&Pass (circle drive: A cyan, B magenta)"),
+      tr("&Deviation from Fitted Plane (after an evaluation)"),
+      tr("&Intensity (lidars that report it, e.g. an imported bag; not the X4)")};
+  for (int i = 0; i < CloudView::kColorModes; ++i) {
+    QAction* a = color->addAction(names[i]);
+    a->setCheckable(true);
+    a->setData(i);
+    color_group_->addAction(a);
+    connect(a, &QAction::triggered, this, [this, i] {
+      if (static_cast<int>(view_->color_mode()) == i) return;
+      undo_->push(new ColorModeCommand(view_, static_cast<CloudView::ColorMode>(i), [this] {
+        color_group_->actions()[static_cast<int>(view_->color_mode())]->setChecked(true);
+      }));
+    });
+  }
+  color_group_->actions()[0]->setChecked(true);
+  view->addAction(
+          tr("Larger Points"), this,
+          [this] {
+            undo_->push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
+          })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Plus));
+  view->addAction(
+          tr("Smaller Points"), this,
+          [this] {
+            undo_->push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
+          })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Minus));
+  view->addSeparator();
+  auto toggle = [this, view](const QString& text, auto setter) {
+    QAction* a = view->addAction(text);
+    a->setCheckable(true);
+    a->setChecked(true);
+    connect(a, &QAction::toggled, view_, setter);
+    return a;
+  };
+  toggle(tr("Show &Grid"), &CloudView::SetGridVisible);
+  toggle(tr("Show &Axes"), &CloudView::SetAxesVisible);
+  toggle(tr("Show Tra&jectory"), &CloudView::SetTrajectoryVisible);
+  toggle(tr("Show &Robot"), &CloudView::SetRobotVisible);
+  toggle(tr("Show Colour &Bar"), &CloudView::SetColorBarVisible);
+  QAction* ceiling = view->addAction(tr("Hide &Ceiling (above 2 m)"));
+  ceiling->setCheckable(true);
+  ceiling->setShortcut(QKeySequence(Qt::Key_C));
+  connect(ceiling, &QAction::toggled, view_, [this](bool on) {
+    view_->SetClipHeight(on ? 2.0 : std::numeric_limits<double>::quiet_NaN());
+  });
+  view->addSeparator();
+  QMenu* panels = view->addMenu(tr("&Panels"));
+  for (QDockWidget* dock : findChildren<QDockWidget*>())
+    panels->addAction(dock->toggleViewAction());
+}
+
+void MainWindow::BuildRobotMenu() {
+  QMenu* robot = menuBar()->addMenu(tr("&Robot"));
+  robot
+      ->addAction(tr("&Connect"), this,
+                  [this] {
+                    QString error;
+                    if (!connection_panel_->ConnectNow(&error))
+                      ShowError(tr("Cannot connect"), error);
+                  })
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
+  robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect)
+      ->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));
+  robot->addSeparator();
+  record_ = robot->addAction(tr("&Record"), this, [this] {
+    QString error;
+    if (!workspace_->StartRecording(&error)) ShowError(tr("Cannot record"), error);
+  });
+  record_->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_R));
+  stop_record_ = robot->addAction(tr("&Stop Recording"), this, [this] {
+    QString error;
+    if (!workspace_->StopRecording(&error)) ShowError(tr("Recording"), error);
+  });
+  stop_record_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_R));
+  robot->addSeparator();
+  // Space is handled in eventFilter so that it works whatever has focus; the
+  // action shows the binding in the menu.
+  estop_ = robot->addAction(tr("&Emergency Stop\tSpace"), workspace_, &Workspace::EmergencyStop);
+  robot->addAction(tr("C&lear Emergency Stop"), workspace_, &Workspace::ClearEmergencyStop);
+  robot->addAction(tr("&Abort Scripted Drive"), workspace_, &Workspace::AbortScriptedDrive);
+}
+
+void MainWindow::BuildToolsMenu() {
+  QMenu* tools = menuBar()->addMenu(tr("&Tools"));
+  BuildPoseSourceMenu(tools);
+  tools->addSeparator();
+  tools->addAction(tr("&Sessions Folder…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(this, tr("Where new recordings go"),
+                                                          workspace_->sessions_root());
+    if (!dir.isEmpty()) workspace_->set_sessions_root(dir);
+  });
+  tools->addAction(tr("&Device Check…"), this, [this] {
+    auto* dialog = new DeviceCheckDialog(workspace_, this);
+    dialog->setAttribute(Qt::WA_DeleteOnClose);
+    dialog->show();
+  });
+  measure_ = tools->addAction(tr("&Measure Distance"));
+  measure_->setCheckable(true);
+  measure_->setShortcut(Qt::Key_M);
+  measure_->setToolTip(tr("Shift + click two points: the distance between them"));
+  connect(measure_, &QAction::toggled, this, [this](bool on) {
+    measure_points_.clear();
+    if (!on) view_->ClearMeasurement();
+    statusBar()->showMessage(on ? tr("Measure: Shift + click the first point") : QString(), 6000);
+  });
+  tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
+}
+
+void MainWindow::BuildPoseSourceMenu(QMenu* parent) {
+  QMenu* menu = parent->addMenu(tr("&Pose Source"));
+  menu->setObjectName(QStringLiteral("poseSourceMenu"));
+  menu->setToolTipsVisible(true);
+  // SfM is a batch method over the whole log: it cannot place scans as
+  // they arrive, so the choice is for sessions opened, and says so.
+  QAction* note = menu->addAction(tr("For opened sessions (live scans use the EKF)"));
+  note->setEnabled(false);
+  menu->addSeparator();
+  pose_source_group_ = new QActionGroup(this);
+  pose_source_group_->setExclusive(true);
+  const QString texts[] = {tr("&EKF (wheels + IMU)"), tr("&Odometry (wheels only)"),
+                           tr("&SfM (EKF corrected by planes)")};
+  const QString tips[] = {
+      tr("The wheel + IMU extended Kalman filter, as recorded live"),
+      tr("Wheel odometry alone (no IMU): shows what the IMU adds"),
+      tr("Lidar-only structure from motion: the EKF's poses corrected by the floor, ceiling and "
+         "walls the scans cross (docs/sfm.md). Runs over the whole session, then replays it")};
+  for (int i = 0; i < 3; ++i) {
+    QAction* a = menu->addAction(texts[i]);
+    a->setCheckable(true);
+    a->setToolTip(tips[i]);
+    a->setData(static_cast<int>(kPoseSources[i]));
+    pose_source_group_->addAction(a);
+  }
+  pose_source_group_->actions().front()->setChecked(true);
+  connect(pose_source_group_, &QActionGroup::triggered, this, [this](QAction* a) {
+    workspace_->SetPoseSource(static_cast<PoseSource>(a->data().toInt()));
+  });
+}
+
+QAction* MainWindow::pose_source_action(PoseSource source) const {
+  for (QAction* a : pose_source_group_->actions()) {
+    if (a->data().toInt() == static_cast<int>(source)) return a;
+  }
+  return nullptr;
+}
+
+QString MainWindow::pose_source_status() const { return pose_source_label_->text(); }
+
+// The status bar says what the cloud shown is made with, and while a new
+// choice is being computed, what is coming.
+void MainWindow::ShowPoseSource() {
+  const PoseSource shown = workspace_->shown_pose_source();
+  const PoseSource chosen = workspace_->pose_source();
+  const bool opened = workspace_->recording_opened() != nullptr && !workspace_->recording();
+  QString text = tr("Poses: %1").arg(PoseSourceTitle(shown));
+  if (!opened) {
+    text += tr(" (live)");
+  } else if (chosen != shown) {
+    text += tr(" → %1…").arg(PoseSourceTitle(chosen));
+  }
+  pose_source_label_->setText(text);
+  QString tip = opened ? tr("The cloud of the opened session is made with the %1 poses.")
+                             .arg(PoseSourceTitle(shown))
+                       : tr("Live clouds and recordings always use the EKF; Tools > Pose Source "
+                            "(now %1) applies to opened sessions.")
+                             .arg(PoseSourceTitle(chosen));
+  if (!workspace_->sfm_summary().isEmpty()) tip += QLatin1Char('\n') + workspace_->sfm_summary();
+  pose_source_label_->setToolTip(tip);
+}
+
+void MainWindow::BuildHelpMenu() {
+  QMenu* help = menuBar()->addMenu(tr("&Help"));
+  help->addAction(
+          tr("&Keyboard"), this,
+          [this] {
+            QMessageBox::information(
+                this, tr("Keyboard"),
+                tr("Arrows / W A S D: drive while held (release stops)\n"
+                   "Space: emergency stop (whatever has focus)\n"
+                   "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
+                   "Ctrl+R / Ctrl+Shift+R: record / stop\n"
+                   "Ctrl+O: open session;  Ctrl+I: import a ROS recording;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+                   "Shift + click: pick a point (calibration pairs, or the distance tool)\n"
+                   "M: measure distance;  C: hide the ceiling\n"
+                   "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
+          })
+      ->setShortcut(QKeySequence::HelpContents);
+  help->addAction(tr("&About sweepscan"), this, [this] {
+    QMessageBox::about(this, tr("About sweepscan"),
+                       tr("<b>sweepscan 0.1.0</b><p>Operator workstation for mobile 3D lidar "
+                          "scanning with a vertical 2D lidar (Miao et al. 2022; Choi et al. "
+                          "2017).</p>"));
+  });
+}
+
+}  // namespace sweepscan::ui
