@@ -42,6 +42,7 @@
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/link/qt_transport.h"
 #include "tests/testing/run_command.h"
+#include "tests/ui/app_fixture.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
@@ -55,18 +56,8 @@
 namespace sweepscan::ui {
 namespace {
 
-const QString kResources = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
-
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer clock;
-  clock.start();
-  while (!done()) {
-    if (clock.elapsed() > timeout_ms) return false;
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    QThread::msleep(2);
-  }
-  return true;
-}
+using testing::kResources;
+using testing::WaitFor;
 
 // Pixels that differ clearly from the view's gradient background.
 int CountBrightPixels(const QImage& image) {
@@ -83,25 +74,8 @@ int CountBrightPixels(const QImage& image) {
   return n;
 }
 
-class AppTest : public ::testing::Test {
+class AppTest : public testing::AppFixture {
  protected:
-  void SetUp() override {
-    ASSERT_TRUE(tmp_.isValid());
-    QSettings::setDefaultFormat(QSettings::IniFormat);
-    QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, tmp_.path() + "/settings");
-    workspace_ = std::make_unique<Workspace>();
-    workspace_->set_sessions_root(tmp_.path() + "/sessions");
-    window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
-    window_->SetInteractive(false);
-    window_->resize(1100, 700);
-    window_->show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
-  }
-  void TearDown() override {
-    window_.reset();
-    workspace_.reset();
-  }
-
   // Records the lab drive through the real bytes with the CLI: tmp/lab.sweepscan.
   void SimulateLabSession() {
     const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
@@ -130,9 +104,6 @@ class AppTest : public ::testing::Test {
         << hardware::LinkHealth::StateName(workspace_->health().state);
   }
 
-  QTemporaryDir tmp_;
-  std::unique_ptr<Workspace> workspace_;
-  std::unique_ptr<MainWindow> window_;
 };
 
 TEST_F(AppTest, DrivesTheSimulatorAndTheViewShowsTheGrowingCloud) {

@@ -27,6 +27,7 @@
 
 #include "core/cloud/cloud_io.h"
 #include "tests/testing/run_command.h"
+#include "tests/ui/app_fixture.h"
 #include "ui/main_window.h"
 #include "ui/panels/ros_import_dialog.h"
 #include "ui/view/cloud_view.h"
@@ -35,39 +36,11 @@
 namespace sweepscan::ui {
 namespace {
 
-const QString kResources = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
 const std::string kData = SWEEPSCAN_SOURCE_DIR "/tests/data";
+using testing::WaitFor;
 
-bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer clock;
-  clock.start();
-  while (!done()) {
-    if (clock.elapsed() > timeout_ms) return false;
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    QThread::msleep(2);
-  }
-  return true;
-}
-
-class RosImportUiTest : public ::testing::Test {
+class RosImportUiTest : public testing::AppFixture {
  protected:
-  void SetUp() override {
-    ASSERT_TRUE(tmp_.isValid());
-    QSettings::setDefaultFormat(QSettings::IniFormat);
-    QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, tmp_.path() + "/settings");
-    workspace_ = std::make_unique<Workspace>();
-    workspace_->set_sessions_root(tmp_.path() + "/sessions");
-    window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
-    window_->SetInteractive(false);
-    window_->resize(1100, 700);
-    window_->show();
-    ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
-  }
-  void TearDown() override {
-    window_.reset();
-    workspace_.reset();
-  }
-
   // Opens the chooser on `bag` and waits until the bag is read.
   QPointer<RosImportDialog> OpenChooser(const std::string& bag) {
     QPointer<RosImportDialog> dialog = window_->ImportRosRecordingPath(QString::fromStdString(bag));
@@ -79,9 +52,6 @@ class RosImportUiTest : public ::testing::Test {
     QTest::mouseClick(dialog->buttons()->button(QDialogButtonBox::Ok), Qt::LeftButton);
   }
 
-  QTemporaryDir tmp_;
-  std::unique_ptr<Workspace> workspace_;
-  std::unique_ptr<MainWindow> window_;
 };
 
 // A ROS 2 MCAP written by @mcap/core: the chooser shows its topics; the

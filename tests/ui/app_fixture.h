@@ -1,0 +1,64 @@
+// The desktop app as its UI tests drive it (tests/ui/*_test.cc): a
+// workspace and its main window, shown under a real display (xvfb-run in
+// CI), with settings and sessions in a temporary folder, and a wait that
+// keeps the event loop running.
+#ifndef SWEEPSCAN_TESTS_UI_APP_FIXTURE_H_
+#define SWEEPSCAN_TESTS_UI_APP_FIXTURE_H_
+
+#include <gtest/gtest.h>
+
+#include <QCoreApplication>
+#include <QElapsedTimer>
+#include <QSettings>
+#include <QTemporaryDir>
+#include <QTest>
+#include <QThread>
+#include <functional>
+#include <memory>
+
+#include "ui/main_window.h"
+#include "ui/workspace/workspace.h"
+
+namespace sweepscan::testing {
+
+inline const QString kResources = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
+
+// Runs the event loop until `done` or the timeout; false on the timeout.
+inline bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  while (!done()) {
+    if (clock.elapsed() > timeout_ms) return false;
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+    QThread::msleep(2);
+  }
+  return true;
+}
+
+class AppFixture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(tmp_.isValid());
+    QSettings::setDefaultFormat(QSettings::IniFormat);
+    QSettings::setPath(QSettings::IniFormat, QSettings::UserScope, tmp_.path() + "/settings");
+    workspace_ = std::make_unique<ui::Workspace>();
+    workspace_->set_sessions_root(tmp_.path() + "/sessions");
+    window_ = std::make_unique<ui::MainWindow>(workspace_.get(), kResources);
+    window_->SetInteractive(false);
+    window_->resize(1100, 700);
+    window_->show();
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
+  }
+  void TearDown() override {
+    window_.reset();
+    workspace_.reset();
+  }
+
+  QTemporaryDir tmp_;
+  std::unique_ptr<ui::Workspace> workspace_;
+  std::unique_ptr<ui::MainWindow> window_;
+};
+
+}  // namespace sweepscan::testing
+
+#endif  // SWEEPSCAN_TESTS_UI_APP_FIXTURE_H_
