@@ -103,6 +103,10 @@ class TfSink : public io::RosMessageSink {
 }  // namespace
 
 int RunBagInfo(int argc, char** argv) {
+  // The readers keep the bag open between calls: closed on every way out.
+  struct Release {
+    ~Release() { io::ReleaseRosBags(); }
+  } release;
   Args args({"json", "help", "strict"}, {});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error) || args.positional().size() != 1) {

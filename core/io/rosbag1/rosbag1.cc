@@ -168,8 +168,11 @@ struct CachedBag {
   struct timespec mtime = {};
   rosbag::Bag bag;
 };
+// A plain pointer on purpose: a static unique_ptr would close the bag during
+// static destruction, after rosbag's own statics (console_bridge,
+// class_loader) are gone, and crash the process at exit.
 std::mutex g_cache_mutex;
-std::unique_ptr<CachedBag> g_cache;
+CachedBag* g_cache = nullptr;
 
 // Opens `path` (or reuses it) with g_cache_mutex held by *lock for as long
 // as the caller uses *bag: rosbag::Bag is not thread-safe.
@@ -179,14 +182,15 @@ Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosb
   if (stat(path.c_str(), &st) != 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
   if (g_cache == nullptr || g_cache->path != path || g_cache->size != st.st_size ||
       g_cache->mtime.tv_sec != st.st_mtim.tv_sec || g_cache->mtime.tv_nsec != st.st_mtim.tv_nsec) {
-    g_cache.reset();
+    delete g_cache;
+    g_cache = nullptr;
     auto fresh = std::make_unique<CachedBag>();
     const Status s = Open(path, &fresh->bag);
     if (!s.ok()) return s;
     fresh->path = path;
     fresh->size = st.st_size;
     fresh->mtime = st.st_mtim;
-    g_cache = std::move(fresh);
+    g_cache = fresh.release();
   }
   *bag = &g_cache->bag;
   return Status::Ok();
@@ -196,7 +200,8 @@ Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosb
 
 void ReleaseRosbag1Cache() {
   std::lock_guard<std::mutex> lock(g_cache_mutex);
-  g_cache.reset();
+  delete g_cache;
+  g_cache = nullptr;
 }
 
 bool LooksLikeRosbag1(const std::string& path) {
