@@ -21,6 +21,7 @@
 #include <QTimer>
 #include <algorithm>
 #include <cstdio>
+#include <string>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -63,7 +64,7 @@ QString ResourcesDir() {
   return QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
 }
 
-Options ParseOptions(const QApplication& app, const QString& resources) {
+Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   QCommandLineParser parser;
   parser.setApplicationDescription(QStringLiteral(
       "Operator workstation for mobile 3D lidar scanning: connect, drive, watch the cloud grow, "
@@ -334,12 +335,47 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
   return exit_code;
 }
 
-int Main(int argc, char** argv) {
-  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
-  QApplication app(argc, argv);
+void SetApplicationNames() {
   QCoreApplication::setOrganizationName(QStringLiteral("sweepscan"));
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan"));
   QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
+}
+
+bool AsksForHelpOrVersion(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h" || a == "-?" || a == "--help-all" || a == "--version" || a == "-v") {
+      return true;
+    }
+  }
+  return false;
+}
+
+// Qt finds a display through one of these; without any, QApplication aborts
+// with a paragraph about platform plugins.
+bool HasDisplay() {
+  return !qEnvironmentVariableIsEmpty("DISPLAY") || !qEnvironmentVariableIsEmpty("WAYLAND_DISPLAY") ||
+         !qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM");
+}
+
+int Main(int argc, char** argv) {
+  // --help and --version need no window: answered without a display (an
+  // operator asking over ssh), as QCommandLineParser prints them and exits.
+  if (AsksForHelpOrVersion(argc, argv)) {
+    QCoreApplication core(argc, argv);
+    SetApplicationNames();
+    ParseOptions(core, ResourcesDir());
+    return 0;
+  }
+  if (!HasDisplay()) {
+    std::fprintf(stderr,
+                 "sweepscan: no display (DISPLAY is not set): run it on a desktop, over ssh -X, or under "
+                 "xvfb-run; sweepscan-cli does the processing without one\n");
+    return 2;
+  }
+  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QApplication app(argc, argv);
+  SetApplicationNames();
   const QString resources = ResourcesDir();
   const Options o = ParseOptions(app, resources);
 
