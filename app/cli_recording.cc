@@ -6,6 +6,7 @@
 #include <string>
 
 #include "app/cli_common.h"
+#include "core/calibration/calibration_file.h"
 #include "core/calibration/workflow.h"
 #include "core/scenario/scenario.h"
 
@@ -97,6 +98,19 @@ int RecordingPoses(const Args& args, const RecordingInput& in, const MountingErr
   if (!s.ok()) {
     PrintError(s.message());
     return kExitFailure;
+  }
+  return kExitOk;
+}
+
+int SessionReconstructionOptions(const Args& args, const SessionMeta& meta, ReconstructionOptions* options) {
+  options->calibration = meta.calibration;
+  options->pose.initial_pose = SessionStartPose(meta);
+  if (args.Has("calibration")) {
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &options->calibration);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
   }
   return kExitOk;
 }

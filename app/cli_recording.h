@@ -23,6 +23,11 @@ void WarnAboutDamage(const std::string& session_dir, const FramesLoadReport& fra
 // damaged record's error says how to go on).
 void PrintSessionError(const Args& args, const std::string& session_dir, const Status& status);
 
+// What `reconstruct` and `export --format rosbag` make a session's cloud
+// with: meta.json's calibration (or --calibration FILE's), its start pose.
+// Returns an exit code; prints one error line otherwise.
+int SessionReconstructionOptions(const Args& args, const SessionMeta& meta, ReconstructionOptions* options);
+
 // SESSION or --scenario FILE [--seed N]. Returns an exit code (kExitOk on
 // success); prints one error line otherwise.
 int LoadRecording(const Args& args, RecordingInput* in);

@@ -10,6 +10,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_recording.h"
 #include "core/io/ros/import.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/io/ros/tf_tree.h"
@@ -258,16 +259,8 @@ int RunImport(int argc, char** argv) {
 
 int ExportRosbag(const Args& args, const SensorLog& log, const SessionMeta& meta) {
   ReconstructionOptions options;
-  options.calibration = meta.calibration;
-  options.pose.initial_pose = SessionStartPose(meta);
   if (args.Flag("no-ekf")) options.pose.source = PoseSource::kOdometry;
-  if (args.Has("calibration")) {
-    const Status s = LoadCalibrationFile(args.Get("calibration"), &options.calibration);
-    if (!s.ok()) {
-      PrintError(s.message());
-      return kExitBadInput;
-    }
-  }
+  if (const int code = SessionReconstructionOptions(args, meta, &options); code != kExitOk) return code;
   ReconstructionResult result;
   Status s = Reconstruct(log, meta.geometry, options, nullptr, &result);
   if (!s.ok()) {

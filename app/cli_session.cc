@@ -238,15 +238,7 @@ int RunReconstruct(int argc, char** argv) {
   options.assembly.deskew = !args.Flag("no-deskew");
   Decoded d;
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
-  options.calibration = d.info.meta.calibration;
-  options.pose.initial_pose = SessionStartPose(d.info.meta);
-  if (args.Has("calibration")) {
-    const Status s = LoadCalibrationFile(args.Get("calibration"), &options.calibration);
-    if (!s.ok()) {
-      PrintError(s.message());
-      return kExitBadInput;
-    }
-  }
+  if ((code = SessionReconstructionOptions(args, d.info.meta, &options)) != kExitOk) return code;
   ReconstructionResult result;
   // sfm: the EKF's poses corrected by the planes (core/sfm/wheeled.h), then
   // given to the reconstruction like any poses.

@@ -151,11 +151,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     if (f >= 0) progress_->setValue(static_cast<int>(1000 * f));
   });
   // An opened session whose lidar reports intensities (an imported bag):
-  // View > Colour by > Intensity has values once the replay is complete.
-  connect(workspace_, &Workspace::replayFinished, this, [this] {
-    const std::vector<float> intensity = workspace_->IntensityValues();
-    if (!intensity.empty()) view_->SetPointValues(CloudView::ColorMode::kIntensity, intensity);
-  });
+  // View > Colour by > Intensity has values once the replay is complete and
+  // the view holds every point (OnTick: the replay's last batches, and the
+  // reset that starts it, may still be in the mailbox when it finishes).
+  connect(workspace_, &Workspace::replayFinished, this,
+          [this] { pending_intensity_ = workspace_->IntensityValues(); });
+  connect(workspace_, &Workspace::sessionChanged, this, [this] { pending_intensity_.clear(); });
   connect(workspace_, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
             progress_->setVisible(false);
@@ -321,6 +322,10 @@ void MainWindow::OnTick() {
                                .arg(b.pose.yaw * 180.0 / M_PI, 0, 'f', 1));
     }
     workspace_->NoteBatch(b.total_points, b.scans);
+  }
+  if (!pending_intensity_.empty() && view_->point_count() == pending_intensity_.size()) {
+    view_->SetPointValues(CloudView::ColorMode::kIntensity, pending_intensity_);
+    pending_intensity_.clear();
   }
   if (!keys_held_.isEmpty())
     UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).

@@ -136,6 +136,7 @@ class MainWindow : public QMainWindow {
   uint64_t fps_frames_ = 0;
   double fps_ = 0.0;
   std::vector<double> latencies_ms_;
+  std::vector<float> pending_intensity_;  // for the view, once it holds every point
 };
 
 }  // namespace sweepscan::ui

@@ -20,6 +20,7 @@
 
 #include "core/cloud/cloud_io.h"
 #include "tests/testing/binned_cloud.h"
+#include "tests/testing/cli_files.h"
 #include "tests/testing/run_command.h"
 
 namespace {
@@ -27,24 +28,11 @@ namespace {
 using sweepscan::testing::CommandRun;
 using sweepscan::testing::RunCommand;
 
-std::string Source(const std::string& path) { return std::string(SWEEPSCAN_SOURCE_DIR) + "/" + path; }
-// One folder per test process: CTest runs the cases of this file side by side.
-// Made again when a suite's teardown has removed it and another suite of the
-// same process follows (the whole binary run at once).
-std::string Tmp(const std::string& name) {
-  static const std::string dir = [] {
-    std::string t = ::testing::TempDir() + "/sweepscan_ros2_XXXXXX";
-    return std::string(mkdtemp(&t[0]));
-  }();
-  mkdir(dir.c_str(), 0700);
-  return dir + "/" + name;
-}
+std::string Source(const std::string& path) { return sweepscan::testing::SourcePath(path); }
+std::string Tmp(const std::string& name) { return sweepscan::testing::ProcessTmp(name); }
 CommandRun Cli(const std::string& args) { return RunCommand(std::string(SWEEPSCAN_CLI) + " " + args); }
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
+std::string ReadFile(const std::string& path) { return sweepscan::testing::ReadWholeFile(path); }
 
 // Rows of a CSV file of export, less its header: one ROS message each.
 int CsvRows(const std::string& path) {

@@ -5,9 +5,12 @@
 #ifndef SWEEPSCAN_TESTS_UI_APP_FIXTURE_H_
 #define SWEEPSCAN_TESTS_UI_APP_FIXTURE_H_
 
+#include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
 
+#include <QApplication>
 #include <QCoreApplication>
+#include <QSurfaceFormat>
 #include <QElapsedTimer>
 #include <QSettings>
 #include <QTemporaryDir>
@@ -58,6 +61,16 @@ class AppFixture : public ::testing::Test {
   std::unique_ptr<ui::Workspace> workspace_;
   std::unique_ptr<ui::MainWindow> window_;
 };
+
+// The UI tests' main(): listing the tests (CTest's discovery) needs no
+// display; running them does (xvfb-run in CI).
+inline int RunUiTests(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
+  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QApplication app(argc, argv);
+  return RUN_ALL_TESTS();
+}
 
 }  // namespace sweepscan::testing
 

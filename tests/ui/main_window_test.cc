@@ -1111,12 +1111,4 @@ TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {
 }  // namespace
 }  // namespace sweepscan::ui
 
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  // Listing the tests (CTest's discovery) needs no display; running them does
-  // (xvfb-run in CI).
-  if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
-  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
-  QApplication app(argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }

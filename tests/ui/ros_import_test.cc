@@ -146,10 +146,4 @@ TEST_F(RosImportUiTest, NotABagSaysSoAndTheAppGoesOn) {
 }  // namespace
 }  // namespace sweepscan::ui
 
-int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
-  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
-  QApplication app(argc, argv);
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }
