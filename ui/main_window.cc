@@ -312,6 +312,7 @@ void MainWindow::OnTick() {
 
   for (LiveBatch& b : workspace_->mailbox()->TakeAll()) {
     if (b.reset) view_->Clear();
+    view_->AppendSealed(b.sealed);
     view_->AppendPoints(b.points);
     view_->AppendTrajectory(b.trajectory);
     if (b.has_pose) {

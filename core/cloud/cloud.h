@@ -30,11 +30,17 @@ static_assert(sizeof(CloudPoint) == 32, "CloudPoint layout");
 
 using CloudChunk = std::vector<CloudPoint>;
 
+class PackedChunk;
+class CloudPager;
+
+// Sealed chunks are packed (core/cloud/packed_chunk.h: 20 bytes a point
+// instead of CloudPoint's 32, every attribute exact) and may be paged out
+// to disk under the pager's memory budget (core/cloud/cloud_pager.h).
 class PointChunks {
  public:
-  explicit PointChunks(size_t chunk_capacity = 65536) : chunk_capacity_(chunk_capacity) {
-    open_.reserve(chunk_capacity_);
-  }
+  // `pager`: null for CloudPager::Default().
+  explicit PointChunks(size_t chunk_capacity = 65536, CloudPager* pager = nullptr);
+  ~PointChunks();
 
   // Processing thread only.
   void Append(const CloudPoint& p) {
@@ -43,18 +49,10 @@ class PointChunks {
   }
   // Publishes the open chunk even if not full (end of a recording, or a
   // viewer tick that wants the newest points).
-  void Seal() {
-    if (open_.empty()) return;
-    auto chunk = std::make_shared<const CloudChunk>(std::move(open_));
-    open_ = CloudChunk();
-    open_.reserve(chunk_capacity_);
-    std::lock_guard<std::mutex> lock(mutex_);
-    sealed_.push_back(std::move(chunk));
-    sealed_points_ += sealed_.back()->size();
-  }
+  void Seal();
 
   // Any thread: the sealed chunks so far (cheap: copies shared pointers).
-  std::vector<std::shared_ptr<const CloudChunk>> SealedChunks() const {
+  std::vector<std::shared_ptr<const PackedChunk>> SealedChunks() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return sealed_;
   }
@@ -67,19 +65,15 @@ class PointChunks {
   // the open chunk's new tail; when the open chunk is sealed it becomes the
   // next sealed chunk with the same points in the same order.
   const CloudChunk& open_chunk() const { return open_; }
-  // Processing thread only: everything, sealed and open, copied out.
-  std::vector<CloudPoint> Flatten() const {
-    std::vector<CloudPoint> all;
-    for (const auto& c : SealedChunks()) all.insert(all.end(), c->begin(), c->end());
-    all.insert(all.end(), open_.begin(), open_.end());
-    return all;
-  }
+  // Processing thread only: everything, sealed and open, decoded.
+  std::vector<CloudPoint> Flatten() const;
 
  private:
   size_t chunk_capacity_;
+  CloudPager* pager_;
   CloudChunk open_;
   mutable std::mutex mutex_;
-  std::vector<std::shared_ptr<const CloudChunk>> sealed_;
+  std::vector<std::shared_ptr<const PackedChunk>> sealed_;
   size_t sealed_points_ = 0;
 };
 

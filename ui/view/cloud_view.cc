@@ -35,22 +35,12 @@
 #include <cmath>
 #include <limits>
 
+#include "core/cloud/cloud_pager.h"
 #include "core/common/checked_file.h"
 
 namespace sweepscan::ui {
-using cloud_view_internal::kArrayNames;
+using cloud_view_internal::kScalarName;
 using cloud_view_internal::kNaN;
-namespace {
-
-vtkSmartPointer<vtkFloatArray> NewArray(const char* name, vtkIdType reserve) {
-  auto a = vtkSmartPointer<vtkFloatArray>::New();
-  a->SetName(name);
-  a->Allocate(reserve);
-  return a;
-}
-
-}  // namespace
-
 
 CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   window_ = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
@@ -77,7 +67,20 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   settle_->setSingleShot(true);
   settle_->setInterval(kSettleMs);
   connect(settle_, &QTimer::timeout, this, [this] {
-    if (!interacting_ && lod_active_) SetLodActive(false);
+    if (interacting_) return;
+    PlanRest();
+    refine_timer_->start();
+  });
+  // The rest level, built in slices between events (never more than
+  // kRefineSliceMs of the GUI thread at a time), then drawn.
+  refine_timer_ = new QTimer(this);
+  refine_timer_->setInterval(0);
+  connect(refine_timer_, &QTimer::timeout, this, [this] {
+    if (!RefineSlice(kRefineSliceMs)) return;
+    refine_timer_->stop();
+    lod_active_ = false;
+    ShowLevels();
+    RequestRender();
   });
 
   ViewOblique();
@@ -228,86 +231,101 @@ void CloudView::BuildGrid() {
   renderer_->AddActor(grid_);
 }
 
-void CloudView::AddPointsActor(vtkPolyData* poly, vtkSmartPointer<vtkPolyDataMapper>* mapper,
-                               vtkSmartPointer<vtkActor>* actor) {
-  // Every cloud actor (full or thinned) shares the lookup table, the colour
-  // array in use, the point size and the clip.
-  *mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-  (*mapper)->SetInputData(poly);
-  (*mapper)->SetLookupTable(lut_);
-  (*mapper)->UseLookupTableScalarRangeOn();
-  (*mapper)->SetScalarModeToUsePointFieldData();
-  (*mapper)->SelectColorArray(kArrayNames[static_cast<int>(color_mode_)]);
-  (*mapper)->ScalarVisibilityOn();
-  ApplyClip(*mapper);
-  *actor = vtkSmartPointer<vtkActor>::New();
-  (*actor)->SetMapper(*mapper);
-  (*actor)->GetProperty()->SetPointSize(point_size_);
-  (*actor)->GetProperty()->SetRepresentationToPoints();
-  renderer_->AddActor(*actor);
+void CloudView::NewDrawnActor(Drawn* d) {
+  // Every cloud actor (either level of any chunk) shares the lookup table,
+  // the point size and the clip; its one scalar array is the colour mode's.
+  d->mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  d->mapper->SetLookupTable(lut_);
+  d->mapper->UseLookupTableScalarRangeOn();
+  d->mapper->SetScalarModeToUsePointFieldData();
+  d->mapper->SelectColorArray(kScalarName);
+  d->mapper->ScalarVisibilityOn();
+  ApplyClip(d->mapper);
+  d->actor = vtkSmartPointer<vtkActor>::New();
+  d->actor->SetMapper(d->mapper);
+  d->actor->GetProperty()->SetPointSize(point_size_);
+  d->actor->GetProperty()->SetRepresentationToPoints();
+  renderer_->AddActor(d->actor);
 }
 
-CloudView::Chunk* CloudView::NewChunk() {
+CloudView::Chunk* CloudView::GrowingChunk() {
+  if (!chunks_.empty() && !chunks_.back()->sealed()) return chunks_.back().get();
   auto chunk = std::make_unique<Chunk>();
-  chunk->points = vtkSmartPointer<vtkPoints>::New();
-  chunk->points->SetDataTypeToFloat();
-  chunk->points->Allocate(kChunkPoints);
-  chunk->verts = vtkSmartPointer<vtkCellArray>::New();
-  chunk->verts->Use32BitStorage();  // 8 bytes a point instead of 16.
-  chunk->verts->AllocateExact(kChunkPoints, kChunkPoints);
-  chunk->poly = vtkSmartPointer<vtkPolyData>::New();
-  chunk->poly->SetPoints(chunk->points);
-  chunk->poly->SetVerts(chunk->verts);
-  for (int i = 0; i < kColorModes; ++i) {
-    chunk->arrays[i] = NewArray(kArrayNames[i], kChunkPoints);
-    chunk->poly->GetPointData()->AddArray(chunk->arrays[i]);
-  }
-  AddPointsActor(chunk->poly, &chunk->mapper, &chunk->actor);
+  chunk->growing.reserve(kChunkPoints);
+  Drawn& d = chunk->rest;
+  d.stride = 1;
+  d.points = vtkSmartPointer<vtkPoints>::New();
+  d.points->SetDataTypeToFloat();
+  d.points->Allocate(kChunkPoints);
+  d.scalar = vtkSmartPointer<vtkFloatArray>::New();
+  d.scalar->SetName(kScalarName);
+  d.scalar->Allocate(kChunkPoints);
+  d.verts = vtkSmartPointer<vtkCellArray>::New();
+  d.verts->Use32BitStorage();  // 8 bytes a point instead of 16.
+  d.verts->AllocateExact(kChunkPoints, kChunkPoints);
+  d.poly = vtkSmartPointer<vtkPolyData>::New();
+  d.poly->SetPoints(d.points);
+  d.poly->SetVerts(d.verts);
+  d.poly->GetPointData()->AddArray(d.scalar);
+  NewDrawnActor(&d);
+  d.mapper->SetInputData(d.poly);
+  chunk->bounds = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
   chunks_.push_back(std::move(chunk));
   return chunks_.back().get();
 }
 
-void CloudView::SealChunk(Chunk* chunk) {
-  chunk->sealed = true;
-  chunk->points->Squeeze();
-  for (int level = 0; level < kLodLevels; ++level) {
-    const vtkIdType stride = kLodStrides[level];
-    auto points = vtkSmartPointer<vtkPoints>::New();
-    points->SetDataTypeToFloat();
-    auto verts = vtkSmartPointer<vtkCellArray>::New();
-    verts->Use32BitStorage();
-    auto poly = vtkSmartPointer<vtkPolyData>::New();
-    vtkSmartPointer<vtkFloatArray> arrays[kColorModes];
-    for (int k = 0; k < kColorModes; ++k) {
-      arrays[k] = NewArray(kArrayNames[k], static_cast<vtkIdType>(chunk->size) / stride + 1);
-    }
-    for (vtkIdType i = 0; i < static_cast<vtkIdType>(chunk->size); i += stride) {
-      const vtkIdType id = points->InsertNextPoint(chunk->points->GetPoint(i));
-      verts->InsertNextCell(1, &id);
-      for (int k = 0; k < kColorModes; ++k) {
-        arrays[k]->InsertNextValue(chunk->arrays[k]->GetValue(i));
-      }
-    }
-    poly->SetPoints(points);
-    poly->SetVerts(verts);
-    for (int k = 0; k < kColorModes; ++k) poly->GetPointData()->AddArray(arrays[k]);
-    chunk->lod_poly[level] = poly;
-    AddPointsActor(poly, &chunk->lod_mapper[level], &chunk->lod_actor[level]);
-    chunk->lod_actor[level]->SetVisibility(lod_level_ == level);
+void CloudView::RemoveChunkActors(Chunk* chunk) {
+  for (Drawn* d : {&chunk->motion, &chunk->rest}) {
+    if (d->actor) renderer_->RemoveActor(d->actor);
+    *d = Drawn();
   }
-  chunk->actor->SetVisibility(lod_level_ < 0);
+}
+
+void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed) {
+  // The growing chunk's points are the packed chunk's first points: the
+  // sealed chunk takes its place (and its values given so far).
+  std::vector<uint16_t> values[3];
+  size_t known = 0;
+  if (!chunks_.empty() && !chunks_.back()->sealed()) {
+    Chunk* growing = chunks_.back().get();
+    known = growing->size;
+    for (int k = 0; k < 3; ++k) values[k] = std::move(growing->values[k]);
+    RemoveChunkActors(growing);
+    chunks_.pop_back();
+  }
+  auto chunk = std::make_unique<Chunk>();
+  chunk->size = packed->size();
+  chunk->bounds = packed->bounds();
+  for (int k = 0; k < 3; ++k) {
+    if (!values[k].empty() || has_values_[3 + k]) {
+      values[k].resize(chunk->size, cloud_view_internal::kNoValue);
+      chunk->values[k] = std::move(values[k]);
+    }
+  }
+  chunk->packed = std::move(packed);
+  Chunk* c = chunk.get();
+  chunks_.push_back(std::move(chunk));
+  point_count_ += c->size - known;
+  BuildDrawn(c, motion_stride_, &c->motion);
+  // A chunk sealed at rest is drawn in full until the next plan.
+  if (!lod_active_) BuildDrawn(c, 1, &c->rest);
+  ShowLevels();
+}
+
+void CloudView::SealGrowing() {
+  Chunk* growing = chunks_.back().get();
+  AddSealed(PackedChunk::Pack(growing->growing.data(), growing->growing.size(),
+                              &CloudPager::Default()));
 }
 
 void CloudView::Clear() {
-  for (auto& c : chunks_) {
-    renderer_->RemoveActor(c->actor);
-    for (auto& a : c->lod_actor) {
-      if (a) renderer_->RemoveActor(a);
-    }
-  }
+  for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
+  refine_queue_.clear();
   point_count_ = 0;
-  lod_level_ = -1;
+  motion_stride_ = 1;
   lod_active_ = false;
   have_origin_ = false;
   have_points_ = false;
@@ -328,44 +346,76 @@ void CloudView::Clear() {
   RequestRender();
 }
 
+void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks) {
+  if (chunks.empty()) return;
+  for (const auto& packed : chunks) {
+    if (packed->size() == 0) continue;
+    if (!have_origin_) {
+      time_origin_ns_ = packed->first_time_ns();
+      have_origin_ = true;
+    }
+    const auto& b = packed->bounds();
+    const float t_hi = static_cast<float>((packed->last_time_ns() - time_origin_ns_) * 1e-9);
+    AddSealed(packed);
+    UpdateRanges(static_cast<float>(b[4]), t_hi, packed->max_range_m());
+    UpdateRanges(static_cast<float>(b[5]), t_hi, packed->max_range_m());
+  }
+  UpdateMotionStride();
+  if (point_count_ > lod_budget_) {
+    SetLodActive(true);
+    settle_->start();
+  }
+  RequestRender();
+}
+
 void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
   if (points.empty()) return;
   if (!have_origin_) {
     time_origin_ns_ = points.front().time_ns;
     have_origin_ = true;
   }
-  Chunk* chunk = chunks_.empty() || chunks_.back()->sealed ? NewChunk() : chunks_.back().get();
+  Chunk* chunk = GrowingChunk();
   float z_lo = points.front().z, z_hi = z_lo, t_hi = 0.0f, r_hi = 0.0f;
+  const int m = static_cast<int>(color_mode_);
   for (const CloudPoint& p : points) {
     if (chunk->size >= kChunkPoints) {
-      chunk->points->Modified();
-      SealChunk(chunk);
-      chunk = NewChunk();
+      SealGrowing();
+      chunk = GrowingChunk();
     }
-    const vtkIdType id = chunk->points->InsertNextPoint(p.x, p.y, p.z);
+    Drawn& d = chunk->rest;
+    const vtkIdType id = d.points->InsertNextPoint(p.x, p.y, p.z);
     // A new point has no pass yet: drawn only while no pass filter is on.
-    if (pass_filter_ < 0) chunk->verts->InsertNextCell(1, &id);
+    if (pass_filter_ < 0) d.verts->InsertNextCell(1, &id);
     const float t = static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9);
-    chunk->arrays[0]->InsertNextValue(p.z);
-    chunk->arrays[1]->InsertNextValue(t);
-    chunk->arrays[2]->InsertNextValue(p.range_m);
-    chunk->arrays[3]->InsertNextValue(kNaN);
-    chunk->arrays[4]->InsertNextValue(kNaN);
-    chunk->arrays[5]->InsertNextValue(kNaN);
+    d.scalar->InsertNextValue(m == 0 ? p.z : m == 1 ? t : m == 2 ? p.range_m : kNaN);
+    chunk->growing.push_back(p);
+    for (auto& v : chunk->values) {
+      if (!v.empty()) v.push_back(cloud_view_internal::kNoValue);
+    }
     ++chunk->size;
+    auto& b = chunk->bounds;
+    b[0] = std::min<double>(b[0], p.x);
+    b[1] = std::max<double>(b[1], p.x);
+    b[2] = std::min<double>(b[2], p.y);
+    b[3] = std::max<double>(b[3], p.y);
+    b[4] = std::min<double>(b[4], p.z);
+    b[5] = std::max<double>(b[5], p.z);
+    ++point_count_;
     z_lo = std::min(z_lo, p.z);
     z_hi = std::max(z_hi, p.z);
     t_hi = std::max(t_hi, t);
     r_hi = std::max(r_hi, p.range_m);
   }
   // Only the growing chunk is marked modified: it alone is uploaded again.
-  chunk->points->Modified();
-  chunk->verts->Modified();
-  for (auto& a : chunk->arrays) a->Modified();
-  chunk->poly->Modified();
-  point_count_ += points.size();
-  // While points stream in, sealed chunks are drawn thinned (renders stay
-  // short and the GUI responsive); full detail returns when the data pauses.
+  Drawn& d = chunk->rest;
+  d.points->Modified();
+  d.verts->Modified();
+  d.scalar->Modified();
+  d.poly->Modified();
+  UpdateMotionStride();
+  // While points stream in, sealed chunks are drawn at the motion level
+  // (renders stay short and the GUI responsive); the rest level returns when
+  // the data pauses.
   if (point_count_ > lod_budget_) {
     SetLodActive(true);
     settle_->start();
@@ -399,9 +449,8 @@ void CloudView::AppendTrajectory(const std::vector<Pose2d>& poses) {
 void CloudView::SetPointSize(double pixels) {
   point_size_ = pixels;
   for (auto& c : chunks_) {
-    c->actor->GetProperty()->SetPointSize(pixels);
-    for (auto& a : c->lod_actor) {
-      if (a) a->GetProperty()->SetPointSize(pixels);
+    for (Drawn* d : {&c->motion, &c->rest}) {
+      if (d->actor) d->actor->GetProperty()->SetPointSize(pixels);
     }
   }
   RequestRender();
@@ -447,33 +496,13 @@ void CloudView::SetClipHeight(double z) {
     clip_planes_->AddItem(plane);
   }
   for (auto& c : chunks_) {
-    ApplyClip(c->mapper);
-    for (auto& m : c->lod_mapper) {
-      if (m) ApplyClip(m);
+    for (Drawn* d : {&c->motion, &c->rest}) {
+      if (d->mapper) ApplyClip(d->mapper);
     }
   }
   // The planes too: a hidden ceiling must not tint the view from above.
   ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
   SetPlanesVisible(planes_visible_);  // Labels of hidden planes go with them.
-  RequestRender();
-}
-
-void CloudView::SetLodActive(bool active, size_t budget) {
-  lod_active_ = active;
-  if (budget == 0) budget = lod_budget_;
-  // The finest detail that keeps the drawn points within the budget.
-  int level = -1;
-  if (active && point_count_ > budget) {
-    level = 0;
-    while (level + 1 < kLodLevels && point_count_ / kLodStrides[level] > budget) ++level;
-  }
-  if (level == lod_level_) return;
-  lod_level_ = level;
-  for (auto& c : chunks_) {
-    if (!c->sealed) continue;  // The growing chunk is always drawn in full.
-    c->actor->SetVisibility(level < 0);
-    for (int k = 0; k < kLodLevels; ++k) c->lod_actor[k]->SetVisibility(level == k);
-  }
   RequestRender();
 }
 
@@ -576,15 +605,21 @@ bool CloudView::PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tole
   const float clip_z = std::isnan(clip_height_) ? std::numeric_limits<float>::infinity()
                                                 : static_cast<float>(clip_height_);
   for (const auto& c : chunks_) {
-    double b[6];
-    c->points->GetBounds(b);
-    if (!RayHitsBox(o, d, b, margin)) continue;
-    const float* p = static_cast<const float*>(c->points->GetVoidPointer(0));
-    const float* pass = c->arrays[3]->GetPointer(0);
-    const float want = static_cast<float>(pass_filter_);
-    for (size_t i = 0; i < c->size; ++i, p += 3) {
-      if (pass_filter_ >= 0 && pass[i] != want) continue;  // Not drawn: not pickable.
-      if (p[2] > clip_z) continue;                          // Clipped: not pickable.
+    if (c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin)) continue;
+    // Every point of the chunk, not only those drawn: the pick is the true
+    // point under the cursor, whatever the level of detail.
+    std::shared_ptr<const ChunkPayload> payload;
+    const float* p;
+    if (c->sealed()) {
+      payload = c->packed->Pin();
+      p = payload->xyz.data();
+    } else {
+      p = &c->growing.front().x;
+    }
+    const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
+    for (size_t i = 0; i < c->size; ++i, p += step) {
+      if (!Passes(*c, i)) continue;  // Not drawn: not pickable.
+      if (p[2] > clip_z) continue;   // Clipped: not pickable.
       const Eigen::Vector3d v(p[0] - o.x(), p[1] - o.y(), p[2] - o.z());
       const double t = v.dot(d);
       if (t <= 0 || t >= best_t) continue;
@@ -624,9 +659,7 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
   // frame of 10 M points takes seconds in software); full detail follows
   // when the view has been still for kSettleMs, as after a camera move.
   if (point_count_ > lod_budget_) {
-    // Half the budget: the frame that shows a pick should come within
-    // ~50 ms (measured: docs/performance.md, "Desktop app").
-    SetLodActive(true, lod_budget_ / 2);
+    SetLodActive(true);
     settle_->start();
   }
   for (int k = 0; k < 2; ++k) {

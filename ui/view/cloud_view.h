@@ -1,19 +1,23 @@
 // The 3D view: the cloud in chunks, the robot and its trajectory, a floor
 // grid, axes and a colour bar, in a QVTKOpenGLNativeWidget.
 //
-// Incremental by construction (core/cloud/cloud.h): points arrive in order,
-// fill the growing chunk, and a full chunk is sealed: its VTK arrays never
-// change again, so the GPU keeps its buffers and a render uploads only the
-// growing chunk. Colour ranges grow geometrically (doubling) so that
-// re-mapping every chunk's colours happens a handful of times per session,
-// not per frame.
+// Memory (docs/cloud-store.md): the points themselves live once, in the
+// cloud store's packed chunks (20 bytes a point, shared with the processing
+// thread, paged to disk above the memory budget); VTK holds only what is
+// drawn. Points arrive in order and fill the growing chunk (drawn in full);
+// the store seals it and the view swaps it for the packed chunk.
 //
-// Level of detail: each sealed chunk also keeps every 8th, 32nd, 128th and
-// 256th point. While the camera moves or points stream in, and more than
-// lod_budget() points are shown, the view draws the finest thinned level that
-// stays within the budget (a software renderer draws ~10 M points a second);
-// when the camera and the data have been still for kSettleMs it draws
-// everything once.
+// Level of detail with point budgets (cloud_view_lod.cc):
+// * motion: while the camera moves or points stream in, every
+//   motion_stride-th point of each sealed chunk, the stride the smallest
+//   power of two that keeps the cloud within lod_budget();
+// * rest: once the camera and the data have been still for kSettleMs, the
+//   chunks in the view frustum get finer strides, nearest first, up to
+//   rest_budget() points, built in slices of at most kRefineSliceMs on the
+//   GUI thread; at full resolution (the cloud within the budget) the view
+//   draws exactly the cloud.
+// Colours: one float scalar per drawn point (the colour mode's), mapped by
+// the shared lookup table; never three colour arrays.
 //
 // Render requests are coalesced: RequestRender() marks the view dirty and
 // the owner's timer calls RenderIfDirty() (ParaView's pqView::render()).
@@ -37,6 +41,7 @@
 #include <vector>
 
 #include "core/cloud/cloud.h"
+#include "core/cloud/packed_chunk.h"
 #include "core/pose/odometry.h"
 
 class QMouseEvent;
@@ -68,9 +73,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2, kPass = 3, kDeviation = 4, kIntensity = 5 };
   static constexpr int kColorModes = 6;
   static constexpr size_t kChunkPoints = 65536;
-  static constexpr int kLodLevels = 4;
-  static constexpr int kLodStrides[kLodLevels] = {8, 32, 128, 256};
   static constexpr int kSettleMs = 400;
+  static constexpr int kRefineSliceMs = 25;
 
   explicit CloudView(QWidget* parent = nullptr);
   ~CloudView() override;
@@ -83,7 +87,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
  public:
   // ---- Content ----
   void Clear();
+  // Points in order; the view packs a growing chunk itself when it fills.
   void AppendPoints(const std::vector<CloudPoint>& points);
+  // Chunks sealed by the cloud store, in order. The growing chunk's points
+  // are the first points of the first one (the store seals what it grew).
+  void AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks);
   void SetRobotPose(const Pose2d& pose);
   void AppendTrajectory(const std::vector<Pose2d>& poses);
   size_t point_count() const { return point_count_; }
@@ -121,13 +129,23 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetClipHeight(double z);
   double clip_height() const { return clip_height_; }
   // Points drawn at most while the camera moves or data streams.
-  void SetLodBudget(size_t points) { lod_budget_ = points; }
+  void SetLodBudget(size_t points);
   size_t lod_budget() const { return lod_budget_; }
-  int lod_level() const { return lod_level_; }  // -1 full, else the kLodStrides index
-  // Thinned chunks on or off (automatic; benchmarks force it).
-  // `budget`: points drawn at most while active (default lod_budget()).
-  void SetLodActive(bool active, size_t budget = 0);
+  // Points drawn at most at rest (the finest detail the view reaches).
+  void SetRestBudget(size_t points);
+  size_t rest_budget() const { return rest_budget_; }
+  // While active: every lod_level()-th point of sealed chunks; -1 when the
+  // rest level is drawn.
+  int lod_level() const { return lod_active_ ? motion_stride_ : -1; }
+  // The motion level on (automatic while the camera moves; benchmarks force
+  // it), or off: the rest level, planned and built at once (screenshots,
+  // benchmarks; the settle timer builds it in slices instead).
+  void SetLodActive(bool active);
   bool lod_active() const { return lod_active_; }
+  // Points in VTK's arrays now (both levels), and the bytes they take.
+  size_t vtk_point_count() const;
+  // Whether the rest level is being built (slices still to come).
+  bool refining() const { return !refine_queue_.empty(); }
 
   // ---- Camera ----
   void ViewTop();
@@ -185,10 +203,23 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
  private:
   struct Chunk;
-  Chunk* NewChunk();
-  void AddPointsActor(vtkPolyData* poly, vtkSmartPointer<vtkPolyDataMapper>* mapper,
-                      vtkSmartPointer<vtkActor>* actor);
-  void SealChunk(Chunk* chunk);
+  struct Drawn;
+  Chunk* GrowingChunk();
+  void SealGrowing();  // The view's own packing of a full growing chunk.
+  void AddSealed(std::shared_ptr<const PackedChunk> packed);
+  void RemoveChunkActors(Chunk* chunk);
+  void NewDrawnActor(Drawn* drawn);
+  // (Re)builds `drawn` as every stride-th point of the chunk.
+  void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn);
+  void ThinMotion(Chunk* chunk, int stride);  // Keeps every (stride / old)-th.
+  void Recolor(Chunk* chunk, Drawn* drawn);   // The colour mode's scalar.
+  void RefilterVerts(const Chunk& chunk, Drawn* drawn);
+  float ValueOf(const Chunk& chunk, int mode, size_t i) const;
+  bool Passes(const Chunk& chunk, size_t i) const;
+  void UpdateMotionStride();
+  void ShowLevels();  // Actor visibility from lod_active_ and what is built.
+  void PlanRest();
+  bool RefineSlice(int max_ms);  // True when the queue is empty.
   void UpdateRanges(float z, float t, float r);
   void ApplyLookupTable();
   void BuildGrid();
@@ -230,6 +261,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t point_count_ = 0;
   int64_t time_origin_ns_ = 0;
   bool have_origin_ = false;
+  // Values given after the fact, quantised: v = lo + q * step.
+  double value_lo_[3] = {0.0, 0.0, 0.0};
+  double value_step_[3] = {1.0, 1.0, 1.0};
   // Data extents and the colour ranges shown (which grow by doubling).
   float z_min_ = 0.0f, z_max_ = 0.0f, t_max_ = 0.0f, r_max_ = 0.0f;
   double range_lo_[3] = {0.0, 0.0, 0.0};
@@ -240,11 +274,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   int pass_filter_ = -1;
   bool have_points_ = false;
   // Measured under llvmpipe on 2 cores: a frame costs ~30 ms plus ~0.17 us a
-  // point, so 120 000 points keep camera motion above 20 frames/s (10 M
-  // points: 22 frames/s drawing every 128th).
+  // point, so 120 000 points keep camera motion above 20 frames/s; at rest
+  // 3 M points are a ~0.5 s frame (docs/performance.md, "Desktop app").
   size_t lod_budget_ = 120'000;
+  size_t rest_budget_ = 3'000'000;
+  int motion_stride_ = 1;
   bool lod_active_ = false;
-  int lod_level_ = -1;
+  std::vector<Chunk*> refine_queue_;  // Nearest first.
+  QTimer* refine_timer_ = nullptr;
   bool interacting_ = false;
   QTimer* settle_ = nullptr;
   bool dirty_ = true;

@@ -1,7 +1,15 @@
 // CloudView's internals shared by its source files (cloud_view.cc: content,
-// camera, picking; cloud_view_colors.cc: colour modes and lookup tables):
-// the chunk of points with its actors, and the per-point arrays' names.
-// Not for use outside ui/view/.
+// camera, picking; cloud_view_colors.cc: colour modes and lookup tables;
+// cloud_view_lod.cc: the level of detail): the chunk of points with what is
+// drawn of it. Not for use outside ui/view/.
+//
+// A chunk's points live in one place: the shared packed chunk of the cloud
+// store (core/cloud/packed_chunk.h, 20 bytes a point, pageable), or, for the
+// one growing chunk, a short vector of CloudPoints. VTK holds only what is
+// drawn: every motion_stride-th point (the motion level, a few hundred per
+// chunk) and, at rest, every rest-stride-th point of the chunks in view up
+// to the rest budget. Each drawn level carries one scalar array, the
+// colour mode's, mapped through the shared lookup table on the GPU side.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 
@@ -13,32 +21,53 @@
 #include <vtkPolyDataMapper.h>
 #include <vtkSmartPointer.h>
 
+#include <array>
+#include <cstdint>
 #include <limits>
+#include <memory>
+#include <vector>
 
+#include "core/cloud/packed_chunk.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
 
 namespace cloud_view_internal {
-// One float array per ColorMode, by these names (the mappers select them).
-inline const char* const kArrayNames[CloudView::kColorModes] = {"height", "time", "range", "pass",
-                                                                "deviation", "intensity"};
+inline const char* const kScalarName = "scalar";
 inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+inline constexpr uint16_t kNoValue = 0xFFFF;
 }  // namespace cloud_view_internal
 
-struct CloudView::Chunk {
+// One drawn level of a chunk: the points i = 0, stride, 2 stride, ... of the
+// chunk (all of them, whatever the pass filter), the vertex cells of those
+// the filter shows, and the colour mode's scalar.
+struct CloudView::Drawn {
+  int stride = 0;  // 0: nothing built.
   vtkSmartPointer<vtkPoints> points;
+  vtkSmartPointer<vtkFloatArray> scalar;
   vtkSmartPointer<vtkCellArray> verts;
-  vtkSmartPointer<vtkFloatArray> arrays[kColorModes];
   vtkSmartPointer<vtkPolyData> poly;
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   vtkSmartPointer<vtkActor> actor;
-  // Thinned copies (every kLodStrides[k]-th point); sealed chunks only.
-  vtkSmartPointer<vtkPolyData> lod_poly[kLodLevels];
-  vtkSmartPointer<vtkActor> lod_actor[kLodLevels];
-  vtkSmartPointer<vtkPolyDataMapper> lod_mapper[kLodLevels];
+  // Motion level only: time (s from the cloud's start) and range of its
+  // points, so that a new colour mode never reads the (maybe paged) chunk.
+  std::vector<float> time_s, range_m;
+  size_t size() const { return points ? static_cast<size_t>(points->GetNumberOfPoints()) : 0; }
+};
+
+struct CloudView::Chunk {
+  std::shared_ptr<const PackedChunk> packed;  // Sealed chunks.
+  std::vector<CloudPoint> growing;            // The growing chunk's points.
   size_t size = 0;
-  bool sealed = false;
+  std::array<double, 6> bounds{};  // x min, x max, y min, y max, z min, z max
+  // Values given after the fact (pass, deviation, intensity), one per point,
+  // quantised to 16 bits over their range (CloudView::value_lo_/step_);
+  // empty when none were given.
+  std::vector<uint16_t> values[3];
+  Drawn motion;  // Sealed chunks: the level drawn while the camera moves.
+  Drawn rest;    // The growing chunk: every point; sealed: the rest level.
+  int rest_target = 0;  // The rest stride the last plan asked for (0: none).
+  bool sealed() const { return packed != nullptr; }
 };
 
 }  // namespace sweepscan::ui

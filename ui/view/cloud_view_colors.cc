@@ -14,8 +14,7 @@
 #include "ui/view/cloud_view_chunk.h"
 
 namespace sweepscan::ui {
-using cloud_view_internal::kArrayNames;
-using cloud_view_internal::kNaN;
+using cloud_view_internal::kNoValue;
 namespace {
 
 const char* const kBarTitles[CloudView::kColorModes] = {"height (m)", "time (s)", "range (m)",
@@ -119,35 +118,39 @@ void CloudView::ApplyLookupTable() {
 void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values) {
   const int m = static_cast<int>(mode);
   if (m < 3) return;  // Height, time and range come with the points.
+  // Kept in 16 bits over the values' range (65 535 steps: far finer than the
+  // 256 colours of the lookup table, and 2 bytes a point instead of 4).
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (float v : values) {
+    if (std::isfinite(v)) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  if (!std::isfinite(lo)) lo = hi = 0.0f;
+  value_lo_[m - 3] = lo;
+  value_step_[m - 3] = hi > lo ? (static_cast<double>(hi) - lo) / (kNoValue - 1) : 1.0;
   size_t offset = 0;
   for (auto& c : chunks_) {
-    vtkFloatArray* a = c->arrays[m];
-    for (size_t i = 0; i < c->size; ++i) {
-      a->SetValue(static_cast<vtkIdType>(i), offset + i < values.size() ? values[offset + i] : kNaN);
-    }
-    a->Modified();
-    for (int level = 0; level < kLodLevels; ++level) {
-      if (!c->lod_poly[level]) continue;
-      auto* thin = vtkFloatArray::SafeDownCast(c->lod_poly[level]->GetPointData()->GetArray(m));
-      for (vtkIdType j = 0; j < thin->GetNumberOfTuples(); ++j) {
-        thin->SetValue(j, a->GetValue(j * kLodStrides[level]));
+    std::vector<uint16_t>& q = c->values[m - 3];
+    q.assign(c->size, kNoValue);
+    for (size_t i = 0; i < c->size && offset + i < values.size(); ++i) {
+      const float v = values[offset + i];
+      if (std::isfinite(v)) {
+        q[i] = static_cast<uint16_t>(std::lround((v - value_lo_[m - 3]) / value_step_[m - 3]));
       }
-      thin->Modified();
     }
     offset += c->size;
+    if (mode == color_mode_) {
+      Recolor(c.get(), &c->motion);
+      Recolor(c.get(), &c->rest);
+    }
   }
   has_values_[m] = true;
   if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
   if (mode == ColorMode::kIntensity) {
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-    for (float v : values) {
-      if (std::isfinite(v)) {
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-      }
-    }
-    intensity_lo_ = std::isfinite(lo) ? lo : 0.0;
-    intensity_hi_ = std::isfinite(hi) && hi > lo ? hi : intensity_lo_ + 1.0;
+    intensity_lo_ = lo;
+    intensity_hi_ = hi > lo ? hi : intensity_lo_ + 1.0;
     if (color_mode_ == ColorMode::kIntensity) ApplyLookupTable();
   }
   RequestRender();
@@ -168,41 +171,32 @@ void CloudView::SetPassFilter(int pass) {
 }
 
 void CloudView::ApplyPassFilter() {
-  // Rebuilds each chunk's vertex list (full and thinned) with the points of
-  // the pass shown; the point arrays stay as they are.
-  auto rebuild = [this](vtkPolyData* poly, vtkFloatArray* pass) {
-    auto verts = vtkSmartPointer<vtkCellArray>::New();
-    verts->Use32BitStorage();
-    const vtkIdType n = pass->GetNumberOfTuples();
-    const float want = static_cast<float>(pass_filter_);
-    for (vtkIdType i = 0; i < n; ++i) {
-      if (pass_filter_ < 0 || pass->GetValue(i) == want) verts->InsertNextCell(1, &i);
-    }
-    poly->SetVerts(verts);
-    poly->Modified();
-    return verts;
-  };
+  // Rebuilds each drawn level's vertex list with the points of the pass
+  // shown; the point arrays stay as they are.
   for (auto& c : chunks_) {
-    c->verts = rebuild(c->poly, c->arrays[3]);
-    for (auto& thin : c->lod_poly) {
-      if (thin) rebuild(thin, vtkFloatArray::SafeDownCast(thin->GetPointData()->GetArray(3)));
+    for (Drawn* d : {&c->motion, &c->rest}) {
+      if (d->poly) RefilterVerts(*c, d);
     }
   }
 }
 
 size_t CloudView::drawn_point_count() const {
   size_t n = 0;
-  for (const auto& c : chunks_) n += static_cast<size_t>(c->verts->GetNumberOfCells());
+  for (const auto& c : chunks_) {
+    if (pass_filter_ < 0) {
+      n += c->size;
+      continue;
+    }
+    for (size_t i = 0; i < c->size; ++i) n += Passes(*c, i) ? 1 : 0;
+  }
   return n;
 }
 
 void CloudView::SetColorMode(ColorMode mode) {
   color_mode_ = mode;
   for (auto& c : chunks_) {
-    c->mapper->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
-    for (auto& m : c->lod_mapper) {
-      if (m) m->SelectColorArray(kArrayNames[static_cast<int>(mode)]);
-    }
+    Recolor(c.get(), &c->motion);
+    Recolor(c.get(), &c->rest);
   }
   ApplyLookupTable();
   RequestRender();

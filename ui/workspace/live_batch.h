@@ -14,13 +14,18 @@
 #include <vector>
 
 #include "core/cloud/cloud.h"
+#include "core/cloud/packed_chunk.h"
 #include "core/pose/odometry.h"
 
 namespace sweepscan::ui {
 
 struct LiveBatch {
-  bool reset = false;              // Forget every point shown before (new recording, seek).
-  std::vector<CloudPoint> points;  // New points, in assembly order.
+  bool reset = false;  // Forget every point shown before (new recording, seek).
+  // New points, in assembly order: chunks the store sealed (shared, not
+  // copied; the first one holds the points of the open chunk published
+  // before), then the new points of the open chunk.
+  std::vector<std::shared_ptr<const PackedChunk>> sealed;
+  std::vector<CloudPoint> points;
   std::vector<Pose2d> trajectory;  // New robot poses (world), ~10 Hz.
   bool has_pose = false;
   Pose2d pose;                // The robot's latest estimated pose.
@@ -42,6 +47,11 @@ class BatchMailbox {
       return;
     }
     LiveBatch& last = queue_.back();
+    if (!batch.sealed.empty()) {
+      // The open chunk whose tail `last` carries is the first sealed one.
+      last.points.clear();
+      last.sealed.insert(last.sealed.end(), batch.sealed.begin(), batch.sealed.end());
+    }
     last.points.insert(last.points.end(), batch.points.begin(), batch.points.end());
     last.trajectory.insert(last.trajectory.end(), batch.trajectory.begin(), batch.trajectory.end());
     if (batch.has_pose) {

@@ -3,6 +3,7 @@
 #include <QTimer>
 #include <algorithm>
 
+#include "core/cloud/packed_chunk.h"
 #include "core/geometry/transform.h"
 
 namespace sweepscan::ui {
@@ -127,12 +128,13 @@ void LiveProcessor::Publish(bool reset) {
   LiveBatch batch;
   batch.reset = reset;
   if (PointChunks* c = chunks()) {
-    // New points: the sealed chunks not published yet, then the open chunk's
-    // new tail (PointChunks keeps the order when it seals the open chunk).
+    // New points: the sealed chunks not published yet (shared: the view
+    // draws from the same packed chunks), then the open chunk's new tail.
+    // The first new sealed chunk holds the open chunk published before.
     const auto sealed = c->SealedChunks();
     for (; published_chunk_ < sealed.size(); ++published_chunk_) {
-      const CloudChunk& chunk = *sealed[published_chunk_];
-      batch.points.insert(batch.points.end(), chunk.begin() + published_offset_, chunk.end());
+      batch.sealed.push_back(sealed[published_chunk_]);
+      total_points_ += sealed[published_chunk_]->size() - published_offset_;
       published_offset_ = 0;
     }
     const CloudChunk& open = c->open_chunk();
@@ -153,7 +155,7 @@ void LiveProcessor::Publish(bool reset) {
   batch.robot_time_s = ToSeconds(latest_time_);
   batch.total_points = total_points_;
   batch.scans = scans_;
-  if (!reset && batch.points.empty() && !batch.has_pose) return;
+  if (!reset && batch.points.empty() && batch.sealed.empty() && !batch.has_pose) return;
   mailbox_->Push(std::move(batch));
 }
 

@@ -1,4 +1,5 @@
 #include "core/cloud/cloud.h"
+#include "core/cloud/packed_chunk.h"
 
 #include <gtest/gtest.h>
 
@@ -32,8 +33,10 @@ TEST(PointChunksTest, ReaderSeesOnlyCompleteImmutableChunks) {
     while (!done) {
       for (const auto& c : chunks.SealedChunks()) {
         if (c->size() != 64) ++bad;
-        for (size_t i = 0; i < c->size(); ++i) {
-          if ((*c)[i].scan != (*c)[0].scan || (*c)[i].beam != i) ++bad;
+        std::vector<CloudPoint> points;
+        c->Decode(&points);
+        for (size_t i = 0; i < points.size(); ++i) {
+          if (points[i].scan != points[0].scan || points[i].beam != i) ++bad;
         }
       }
     }

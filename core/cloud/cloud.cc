@@ -1,0 +1,35 @@
+#include "core/cloud/cloud.h"
+
+#include "core/cloud/cloud_pager.h"
+#include "core/cloud/packed_chunk.h"
+
+namespace sweepscan {
+
+PointChunks::PointChunks(size_t chunk_capacity, CloudPager* pager)
+    : chunk_capacity_(chunk_capacity), pager_(pager != nullptr ? pager : &CloudPager::Default()) {
+  open_.reserve(chunk_capacity_);
+}
+
+PointChunks::~PointChunks() = default;
+
+void PointChunks::Seal() {
+  if (open_.empty()) return;
+  auto chunk = PackedChunk::Pack(open_.data(), open_.size(), pager_);
+  open_.clear();  // Keeps its capacity: the next chunk fills the same buffer.
+  std::lock_guard<std::mutex> lock(mutex_);
+  sealed_points_ += chunk->size();
+  sealed_.push_back(std::move(chunk));
+}
+
+std::vector<CloudPoint> PointChunks::Flatten() const {
+  const auto sealed = SealedChunks();
+  std::vector<CloudPoint> all;
+  size_t n = open_.size();
+  for (const auto& c : sealed) n += c->size();
+  all.reserve(n);
+  for (const auto& c : sealed) c->Decode(&all);
+  all.insert(all.end(), open_.begin(), open_.end());
+  return all;
+}
+
+}  // namespace sweepscan

@@ -1,0 +1,123 @@
+// The compact cloud store's unit: a sealed chunk of up to 65 536 points in
+// 20 bytes a point (an X4's; 22 for a lidar whose ranges are not whole
+// quarter millimetres), every CloudPoint attribute recoverable bit for bit.
+//
+// Why these bytes (docs/cloud-store.md has the layout):
+//   x, y, z   float32 each          12 B  exact (the view draws floats anyway)
+//   range     uint16 quarter mm      2 B  the X4's own unit (raw / 4 mm), so
+//                                         exact for it; a chunk whose ranges
+//                                         are not whole steps keeps float32 (4 B)
+//   time      uint32 ns after its    4 B  exact; a scan lasts ~0.14 s, far
+//             scan run's start              inside 2^32 ns (4.29 s)
+//   beam      uint16                 2 B  exact
+// A scan run is a stretch of points with one scan index, pose source, flags
+// and a time origin: ~700 points of an X4 share 24 bytes.
+// CloudPoint is 32 bytes; the view's old per-point arrays were ~300.
+//
+// Paging (docs/cloud-store.md, "Out of core"): the header (size, bounds,
+// time span, runs) stays in memory; the per-point payload may be written to
+// the pager's cache file and dropped when the process is over its memory
+// budget, and is read back on the next Pin(). A sealed chunk never changes,
+// so a payload is written at most once.
+//
+// Threading: immutable after Pack(); Pin() may be called from any thread.
+#ifndef SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_
+#define SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "core/cloud/cloud.h"
+
+namespace sweepscan {
+
+class CloudPager;
+
+struct ScanRun {
+  uint32_t first = 0;  // Index of the run's first point in the chunk.
+  uint32_t scan = 0;
+  int64_t time0_ns = 0;  // Times of the run's points are time0_ns + dt.
+  uint8_t pose_source = 0;
+  uint8_t flags = 0;
+};
+
+// The per-point arrays (structure of arrays, in the order points were given).
+struct ChunkPayload {
+  std::vector<float> xyz;          // 3 per point
+  std::vector<uint16_t> range_q;   // quarter millimetres, or empty ...
+  std::vector<float> range_f;      // ... and these instead
+  std::vector<uint32_t> dt_ns;     // after the run's time0_ns
+  std::vector<uint16_t> beam;
+  size_t bytes() const {
+    return xyz.size() * 4 + range_q.size() * 2 + range_f.size() * 4 + dt_ns.size() * 4 +
+           beam.size() * 2;
+  }
+};
+
+class PackedChunk {
+ public:
+  static constexpr double kRangeStepM = 0.00025;  // The X4's range unit.
+
+  // `pager` (may be null: never paged) accounts the payload and may page it out.
+  static std::shared_ptr<const PackedChunk> Pack(const CloudPoint* points, size_t n,
+                                                 CloudPager* pager);
+  ~PackedChunk();
+  PackedChunk(const PackedChunk&) = delete;
+  PackedChunk& operator=(const PackedChunk&) = delete;
+
+  size_t size() const { return size_; }
+  // Axis-aligned bounds: x min, x max, y min, y max, z min, z max (VTK's order).
+  const std::array<double, 6>& bounds() const { return bounds_; }
+  int64_t first_time_ns() const { return first_time_ns_; }
+  int64_t last_time_ns() const { return last_time_ns_; }
+  float max_range_m() const { return max_range_m_; }
+  const std::vector<ScanRun>& runs() const { return runs_; }
+
+  // The payload, read back from the cache file if it was paged out. Holding
+  // the pointer keeps it in memory. Never null (a failed read is fatal: the
+  // cache file is ours and open; see docs/cloud-store.md).
+  std::shared_ptr<const ChunkPayload> Pin() const;
+  bool resident() const;
+  size_t payload_bytes() const { return payload_bytes_; }
+
+  // Appends the chunk's points, decoded exactly, to `out`.
+  void Decode(std::vector<CloudPoint>* out) const;
+  static void DecodeFrom(const PackedChunk& chunk, const ChunkPayload& payload, size_t begin,
+                         size_t end, std::vector<CloudPoint>* out);
+  // Range and time of point i (the view's colours), from a pinned payload.
+  float RangeOf(const ChunkPayload& payload, size_t i) const {
+    return payload.range_q.empty() ? payload.range_f[i]
+                                   : static_cast<float>(payload.range_q[i] * kRangeStepM);
+  }
+  int64_t TimeOf(const ChunkPayload& payload, size_t i, size_t run) const {
+    return runs_[run].time0_ns + payload.dt_ns[i];
+  }
+
+ private:
+  friend class CloudPager;
+  PackedChunk() = default;
+
+  size_t size_ = 0;
+  std::array<double, 6> bounds_{};
+  int64_t first_time_ns_ = 0, last_time_ns_ = 0;
+  float max_range_m_ = 0.0f;
+  std::vector<ScanRun> runs_;
+  size_t payload_bytes_ = 0;
+  CloudPager* pager_ = nullptr;
+  // Paging state, under mutex_.
+  mutable std::mutex mutex_;
+  mutable std::shared_ptr<const ChunkPayload> payload_;
+  mutable int64_t file_offset_ = -1;  // Where the payload is in the cache file, once written.
+  mutable uint64_t last_use_ = 0;     // The pager's clock at the last Pin().
+};
+
+// The range of a CloudPoint as a whole number of kRangeStepM, if it is one
+// (the float that the step gives back is bit for bit the same).
+bool QuantiseRange(float range_m, uint16_t* q);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_

@@ -1,0 +1,194 @@
+// The compact cloud store: packed chunks give back every point they were
+// given, bit for bit, in memory and after being paged out to the cache file
+// and read back; the pager keeps the resident bytes within its budget and
+// leaves no file behind.
+#include "core/cloud/packed_chunk.h"
+
+#include <gtest/gtest.h>
+
+#include <stdlib.h>
+
+#include <atomic>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <thread>
+
+#include "core/cloud/cloud_pager.h"
+
+namespace sweepscan {
+namespace {
+
+// A fresh empty folder, removed with the object.
+struct ScratchDir {
+  ScratchDir() {
+    std::string t = ::testing::TempDir() + "/sweepscan_pager_XXXXXX";
+    path = mkdtemp(&t[0]);
+  }
+  ~ScratchDir() { std::filesystem::remove_all(path); }
+  bool empty() const { return std::filesystem::is_empty(path); }
+  std::string path;
+};
+
+// Points as the assembler makes them from an X4 (ranges in the X4's quarter
+// millimetres) or, with `any_range`, from a lidar with float ranges; scans
+// of ~700 samples, 0.2 ms apart, with the odd long gap (a paused drive),
+// a pose source change and a time that goes back (a new recording).
+std::vector<CloudPoint> MakePoints(size_t n, uint32_t seed, bool any_range) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> coord(-30.0f, 30.0f);
+  std::uniform_int_distribution<int> raw(480, 40000);  // 0.12 .. 10 m in quarter mm
+  std::uniform_real_distribution<float> any(0.1f, 80.0f);
+  std::vector<CloudPoint> points(n);
+  int64_t t = 1'700'000'000'000'000'000;
+  uint32_t scan = 7;
+  uint16_t beam = 0;
+  for (size_t i = 0; i < n; ++i) {
+    CloudPoint& p = points[i];
+    p.x = coord(rng);
+    p.y = coord(rng);
+    p.z = coord(rng) * 0.1f;
+    p.range_m = any_range ? any(rng) : static_cast<float>(raw(rng) * PackedChunk::kRangeStepM);
+    t += 200'000 + (rng() % 1000);
+    if (i % 5000 == 4999) t += 9'000'000'000;  // A 9 s gap: beyond 32 bits of ns.
+    if (i == n / 2) t -= 50'000'000'000;        // Time goes back.
+    p.time_ns = t;
+    if (++beam == 700) {
+      beam = 0;
+      ++scan;
+    }
+    p.scan = scan;
+    p.beam = beam;
+    p.pose_source = i < n / 3 ? 0 : 2;
+    p.flags = (i / 900) % 2;
+  }
+  return points;
+}
+
+::testing::AssertionResult SamePoints(const std::vector<CloudPoint>& a,
+                                      const std::vector<CloudPoint>& b) {
+  if (a.size() != b.size()) return ::testing::AssertionFailure() << a.size() << " vs " << b.size();
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::memcmp(&a[i], &b[i], sizeof(CloudPoint)) != 0) {
+      return ::testing::AssertionFailure()
+             << "point " << i << ": time " << a[i].time_ns << " vs " << b[i].time_ns << ", range "
+             << a[i].range_m << " vs " << b[i].range_m << ", scan " << a[i].scan << " vs "
+             << b[i].scan;
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(PackedChunkTest, GivesBackEveryPointBitForBitInTwentyBytes) {
+  const auto points = MakePoints(65536, 1, false);
+  const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  std::vector<CloudPoint> back;
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+  EXPECT_EQ(chunk->payload_bytes(), 20u * points.size());
+  // The runs: a scan lasts 0.14 s, so ~1 run per 700 points (plus the gaps,
+  // the source and flag changes); 24 bytes each are well under a byte a point.
+  EXPECT_LT(chunk->runs().size() * sizeof(ScanRun), points.size() / 8);
+  EXPECT_EQ(chunk->first_time_ns(), points.front().time_ns);
+  // Bounds hold every point.
+  for (const CloudPoint& p : points) {
+    EXPECT_GE(p.x, chunk->bounds()[0]);
+    EXPECT_LE(p.x, chunk->bounds()[1]);
+    EXPECT_GE(p.z, chunk->bounds()[4]);
+    EXPECT_LE(p.z, chunk->bounds()[5]);
+  }
+}
+
+TEST(PackedChunkTest, RangesThatAreNotQuarterMillimetresStayFloats) {
+  const auto points = MakePoints(10000, 2, true);
+  const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  std::vector<CloudPoint> back;
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+  EXPECT_EQ(chunk->payload_bytes(), 22u * points.size());
+  uint16_t q = 0;
+  EXPECT_TRUE(QuantiseRange(2.5f, &q));
+  EXPECT_EQ(q, 10000);
+  EXPECT_FALSE(QuantiseRange(2.50001f, &q));
+  EXPECT_FALSE(QuantiseRange(20.0f, &q));  // Beyond 16 bits of quarter mm.
+  EXPECT_FALSE(QuantiseRange(-1.0f, &q));
+}
+
+TEST(PackedChunkTest, PointChunksPackWhatTheySealAndFlattenExactly) {
+  const auto points = MakePoints(25000, 3, false);
+  PointChunks chunks(4096);
+  for (const CloudPoint& p : points) chunks.Append(p);
+  EXPECT_EQ(chunks.SealedChunks().size(), 25000u / 4096u);
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+}
+
+TEST(CloudPagerTest, PagesOutAboveTheBudgetAndReadsBackExactly) {
+  ScratchDir dir;
+  const size_t per_chunk = 20 * 4096;
+  CloudPager pager(3 * per_chunk, dir.path);
+  const auto points = MakePoints(20 * 4096, 4, false);
+  PointChunks chunks(4096, &pager);
+  for (const CloudPoint& p : points) {
+    chunks.Append(p);
+    ASSERT_LE(pager.resident_bytes(), 3 * per_chunk);
+  }
+  EXPECT_EQ(pager.page_outs(), 17u);
+  EXPECT_EQ(pager.paged_out_chunks(), 17u);
+  const auto sealed = chunks.SealedChunks();
+  EXPECT_FALSE(sealed.front()->resident());
+  EXPECT_TRUE(sealed.back()->resident());
+  // The cache file has no name: nothing in the directory, during or after.
+  EXPECT_TRUE(dir.empty());
+
+  // Everything comes back, twice over (the second time from pages read in
+  // again after they were dropped once more; a payload is written once).
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_GE(pager.page_ins(), 34u);
+  EXPECT_LE(pager.resident_bytes(), 3 * per_chunk);
+
+  // A bigger budget keeps what is read back.
+  pager.SetBudget(100 * per_chunk);
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_EQ(pager.paged_out_chunks(), 0u);
+  EXPECT_EQ(pager.resident_bytes(), 20 * per_chunk);
+}
+
+TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
+  // The view (GUI thread) and an export (a job thread) read sealed chunks
+  // while the processing thread appends and the pager evicts.
+  ScratchDir dir;
+  CloudPager pager(2 * 20 * 1024, dir.path);
+  const auto points = MakePoints(64 * 1024, 5, false);
+  PointChunks chunks(1024, &pager);
+  std::atomic<bool> done{false};
+  std::atomic<size_t> bad{0}, checked{0};
+  auto reader = [&] {
+    while (!done) {
+      const auto sealed = chunks.SealedChunks();
+      size_t offset = 0;
+      for (const auto& c : sealed) {
+        std::vector<CloudPoint> got;
+        c->Decode(&got);
+        for (size_t i = 0; i < got.size(); ++i) {
+          if (std::memcmp(&got[i], &points[offset + i], sizeof(CloudPoint)) != 0) ++bad;
+        }
+        offset += got.size();
+        ++checked;
+      }
+    }
+  };
+  std::thread a(reader), b(reader);
+  for (const CloudPoint& p : points) chunks.Append(p);
+  done = true;
+  a.join();
+  b.join();
+  EXPECT_EQ(bad.load(), 0u);
+  EXPECT_GT(checked.load(), 0u);
+  EXPECT_GT(pager.page_outs(), 0u);
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+}
+
+}  // namespace
+}  // namespace sweepscan

@@ -1,0 +1,314 @@
+// CloudView's level of detail: what VTK holds of each chunk (the motion and
+// rest levels), the rest plan under the point budget, and its building in
+// slices. See cloud_view.h for the scheme and docs/cloud-store.md for why.
+#include <vtkCamera.h>
+#include <vtkPointData.h>
+#include <vtkProperty.h>
+#include <vtkRenderer.h>
+
+#include <QElapsedTimer>
+#include <QTimer>
+#include <algorithm>
+#include <cmath>
+
+#include "ui/view/cloud_view.h"
+#include "ui/view/cloud_view_chunk.h"
+
+namespace sweepscan::ui {
+using cloud_view_internal::kNaN;
+using cloud_view_internal::kNoValue;
+using cloud_view_internal::kScalarName;
+
+float CloudView::ValueOf(const Chunk& chunk, int mode, size_t i) const {
+  const std::vector<uint16_t>& v = chunk.values[mode - 3];
+  if (i >= v.size() || v[i] == kNoValue) return kNaN;
+  return static_cast<float>(value_lo_[mode - 3] + v[i] * value_step_[mode - 3]);
+}
+
+bool CloudView::Passes(const Chunk& chunk, size_t i) const {
+  if (pass_filter_ < 0) return true;
+  const float pass = ValueOf(chunk, 3, i);
+  return !std::isnan(pass) && std::abs(pass - pass_filter_) < 0.5f;
+}
+
+void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
+  // Every stride-th point: representative of the chunk, as a chunk's points
+  // are consecutive samples along the scan lines (each line thinned evenly).
+  const size_t n = (chunk->size + stride - 1) / stride;
+  const bool motion = d == &chunk->motion;
+  std::shared_ptr<const ChunkPayload> payload;
+  if (chunk->sealed()) payload = chunk->packed->Pin();
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(n));
+  float* xyz = static_cast<float*>(points->GetVoidPointer(0));
+  std::vector<float> time_s(n), range_m(n);
+  const std::vector<ScanRun>* runs = chunk->sealed() ? &chunk->packed->runs() : nullptr;
+  size_t run = 0;
+  for (size_t k = 0, i = 0; k < n; ++k, i += stride) {
+    if (chunk->sealed()) {
+      while (run + 1 < runs->size() && (*runs)[run + 1].first <= i) ++run;
+      std::copy_n(&payload->xyz[3 * i], 3, xyz + 3 * k);
+      time_s[k] = static_cast<float>((chunk->packed->TimeOf(*payload, i, run) - time_origin_ns_) * 1e-9);
+      range_m[k] = chunk->packed->RangeOf(*payload, i);
+    } else {
+      const CloudPoint& p = chunk->growing[i];
+      xyz[3 * k] = p.x;
+      xyz[3 * k + 1] = p.y;
+      xyz[3 * k + 2] = p.z;
+      time_s[k] = static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9);
+      range_m[k] = p.range_m;
+    }
+  }
+  d->stride = stride;
+  d->points = points;
+  d->scalar = vtkSmartPointer<vtkFloatArray>::New();
+  d->scalar->SetName(kScalarName);
+  d->scalar->SetNumberOfValues(static_cast<vtkIdType>(n));
+  d->poly = vtkSmartPointer<vtkPolyData>::New();
+  d->poly->SetPoints(points);
+  d->poly->GetPointData()->AddArray(d->scalar);
+  if (motion) {
+    d->time_s = std::move(time_s);
+    d->range_m = std::move(range_m);
+    Recolor(chunk, d);
+  } else {
+    // The rest level keeps no side arrays: its scalar is filled here, and a
+    // new colour mode reads the chunk again.
+    const int m = static_cast<int>(color_mode_);
+    float* s = d->scalar->GetPointer(0);
+    for (size_t k = 0; k < n; ++k) {
+      s[k] = m == 0 ? xyz[3 * k + 2] : m == 1 ? time_s[k] : m == 2 ? range_m[k]
+                                                           : ValueOf(*chunk, m, k * stride);
+    }
+  }
+  RefilterVerts(*chunk, d);
+  if (!d->actor) NewDrawnActor(d);
+  d->mapper->SetInputData(d->poly);
+}
+
+void CloudView::ThinMotion(Chunk* chunk, int stride) {
+  Drawn& d = chunk->motion;
+  if (d.stride == 0 || stride % d.stride != 0) {
+    BuildDrawn(chunk, stride, &d);
+    return;
+  }
+  // Every stride-th point is every (stride / old)-th of the old level: no
+  // need to read the (maybe paged) chunk.
+  const size_t f = static_cast<size_t>(stride / d.stride);
+  const size_t n = (chunk->size + stride - 1) / stride;
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToFloat();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(n));
+  const float* src = static_cast<const float*>(d.points->GetVoidPointer(0));
+  float* dst = static_cast<float*>(points->GetVoidPointer(0));
+  for (size_t k = 0; k < n; ++k) {
+    std::copy_n(src + 3 * k * f, 3, dst + 3 * k);
+    d.time_s[k] = d.time_s[k * f];
+    d.range_m[k] = d.range_m[k * f];
+  }
+  d.time_s.resize(n);
+  d.time_s.shrink_to_fit();
+  d.range_m.resize(n);
+  d.range_m.shrink_to_fit();
+  d.stride = stride;
+  d.points = points;
+  d.scalar = vtkSmartPointer<vtkFloatArray>::New();
+  d.scalar->SetName(kScalarName);
+  d.scalar->SetNumberOfValues(static_cast<vtkIdType>(n));
+  d.poly = vtkSmartPointer<vtkPolyData>::New();
+  d.poly->SetPoints(points);
+  d.poly->GetPointData()->AddArray(d.scalar);
+  Recolor(chunk, &d);
+  RefilterVerts(*chunk, &d);
+  d.mapper->SetInputData(d.poly);
+}
+
+void CloudView::Recolor(Chunk* chunk, Drawn* d) {
+  if (!d->scalar) return;
+  const int m = static_cast<int>(color_mode_);
+  const size_t n = d->size();
+  float* s = d->scalar->GetPointer(0);
+  const float* xyz = static_cast<const float*>(d->points->GetVoidPointer(0));
+  if (d == &chunk->motion) {
+    for (size_t k = 0; k < n; ++k) {
+      s[k] = m == 0 ? xyz[3 * k + 2] : m == 1 ? d->time_s[k] : m == 2 ? d->range_m[k]
+                                                             : ValueOf(*chunk, m, k * d->stride);
+    }
+  } else if (!chunk->sealed()) {
+    for (size_t k = 0; k < n; ++k) {
+      const CloudPoint& p = chunk->growing[k];
+      s[k] = m == 0 ? p.z
+             : m == 1 ? static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9)
+             : m == 2 ? p.range_m
+                      : ValueOf(*chunk, m, k);
+    }
+  } else if (m == 0) {
+    for (size_t k = 0; k < n; ++k) s[k] = xyz[3 * k + 2];
+  } else if (m >= 3) {
+    for (size_t k = 0; k < n; ++k) s[k] = ValueOf(*chunk, m, k * d->stride);
+  } else {
+    BuildDrawn(chunk, d->stride, d);  // Time and range: read the chunk again.
+    return;
+  }
+  d->scalar->Modified();
+}
+
+void CloudView::RefilterVerts(const Chunk& chunk, Drawn* d) {
+  const size_t n = d->size();
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->Use32BitStorage();  // 8 bytes a point instead of 16.
+  verts->AllocateEstimate(static_cast<vtkIdType>(n), 1);
+  for (size_t k = 0; k < n; ++k) {
+    if (!Passes(chunk, k * d->stride)) continue;
+    const vtkIdType id = static_cast<vtkIdType>(k);
+    verts->InsertNextCell(1, &id);
+  }
+  d->verts = verts;
+  d->poly->SetVerts(verts);
+  d->poly->Modified();
+}
+
+void CloudView::UpdateMotionStride() {
+  int stride = 1;
+  while (point_count_ / stride > lod_budget_) stride *= 2;
+  if (stride == motion_stride_) return;
+  const bool coarser = stride > motion_stride_;
+  motion_stride_ = stride;
+  for (auto& c : chunks_) {
+    if (!c->sealed()) continue;
+    if (coarser) {
+      ThinMotion(c.get(), stride);
+    } else {
+      BuildDrawn(c.get(), stride, &c->motion);
+    }
+  }
+  ShowLevels();
+}
+
+void CloudView::ShowLevels() {
+  for (auto& c : chunks_) {
+    if (!c->sealed()) {
+      if (c->rest.actor) c->rest.actor->SetVisibility(true);  // The growing chunk, in full.
+      continue;
+    }
+    const bool rest = !lod_active_ && c->rest.stride > 0;
+    if (c->rest.actor) c->rest.actor->SetVisibility(rest);
+    if (c->motion.actor) c->motion.actor->SetVisibility(!rest);
+  }
+}
+
+void CloudView::PlanRest() {
+  // The chunks in the view frustum (and under the clip height), nearest
+  // first: a uniform stride that fits them in the rest budget, then the
+  // budget left over spent on the nearest (finer strides, down to every
+  // point), as Potree spends its point budget on the nodes nearest and
+  // largest on screen.
+  refine_queue_.clear();
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  double planes[24];
+  camera->GetFrustumPlanes(renderer_->GetTiledAspectRatio(), planes);
+  double eye[3];
+  camera->GetPosition(eye);
+  struct Candidate {
+    Chunk* chunk;
+    double distance;
+  };
+  std::vector<Candidate> visible;
+  size_t total = 0;
+  for (auto& c : chunks_) {
+    if (!c->sealed()) continue;
+    const auto& b = c->bounds;
+    bool inside = std::isnan(clip_height_) || b[4] <= clip_height_;
+    for (int p = 0; p < 6 && inside; ++p) {
+      // The box corner farthest along the plane's inward normal.
+      const double* n = planes + 4 * p;
+      const double x = n[0] >= 0 ? b[1] : b[0], y = n[1] >= 0 ? b[3] : b[2],
+                   z = n[2] >= 0 ? b[5] : b[4];
+      if (n[0] * x + n[1] * y + n[2] * z + n[3] < 0) inside = false;
+    }
+    if (!inside) {
+      c->rest_target = 0;
+      if (c->rest.actor) renderer_->RemoveActor(c->rest.actor);
+      c->rest = Drawn();  // Out of view: its memory back.
+      continue;
+    }
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      const double q = std::clamp(eye[k], b[2 * k], b[2 * k + 1]);
+      d2 += (eye[k] - q) * (eye[k] - q);
+    }
+    visible.push_back({c.get(), d2});
+    total += c->size;
+  }
+  std::stable_sort(visible.begin(), visible.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
+  size_t stride = 1;
+  while (total / stride > rest_budget_) stride *= 2;
+  size_t used = 0;
+  for (const Candidate& v : visible) {
+    v.chunk->rest_target = static_cast<int>(stride);
+    used += (v.chunk->size + stride - 1) / stride;
+  }
+  for (const Candidate& v : visible) {
+    int& t = v.chunk->rest_target;
+    while (t > 1) {
+      const size_t now = (v.chunk->size + t - 1) / t, finer = (v.chunk->size + t / 2 - 1) / (t / 2);
+      if (used + finer - now > rest_budget_) break;
+      used += finer - now;
+      t /= 2;
+    }
+  }
+  for (const Candidate& v : visible) {
+    if (v.chunk->rest.stride != v.chunk->rest_target) refine_queue_.push_back(v.chunk);
+  }
+}
+
+bool CloudView::RefineSlice(int max_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  size_t done = 0;
+  while (done < refine_queue_.size() && clock.elapsed() < max_ms) {
+    Chunk* c = refine_queue_[done++];
+    BuildDrawn(c, c->rest_target, &c->rest);
+    c->rest.actor->SetVisibility(false);  // Shown when the level is complete.
+  }
+  refine_queue_.erase(refine_queue_.begin(), refine_queue_.begin() + done);
+  return refine_queue_.empty();
+}
+
+void CloudView::SetLodActive(bool active) {
+  if (active) {
+    refine_queue_.clear();
+    refine_timer_->stop();
+    if (lod_active_) return;
+    lod_active_ = true;
+  } else {
+    refine_timer_->stop();
+    PlanRest();
+    while (!RefineSlice(1 << 30)) {
+    }
+    lod_active_ = false;
+  }
+  ShowLevels();
+  RequestRender();
+}
+
+void CloudView::SetLodBudget(size_t points) {
+  lod_budget_ = std::max<size_t>(points, 1000);
+  UpdateMotionStride();
+  RequestRender();
+}
+
+void CloudView::SetRestBudget(size_t points) {
+  rest_budget_ = std::max<size_t>(points, 1000);
+  if (!lod_active_) SetLodActive(false);  // Re-planned at once.
+}
+
+size_t CloudView::vtk_point_count() const {
+  size_t n = 0;
+  for (const auto& c : chunks_) n += c->motion.size() + c->rest.size();
+  return n;
+}
+
+}  // namespace sweepscan::ui
