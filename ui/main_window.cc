@@ -156,7 +156,17 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   // reset that starts it, may still be in the mailbox when it finishes).
   connect(workspace_, &Workspace::replayFinished, this,
           [this] { pending_intensity_ = workspace_->IntensityValues(); });
-  connect(workspace_, &Workspace::sessionChanged, this, [this] { pending_intensity_.clear(); });
+  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+    pending_intensity_.clear();
+    room_view_pending_ = true;
+    room_view_ready_ = false;
+    room_view_camera_ = view_->camera_generation();
+  });
+  // A session opened: into the room once it has replayed, at the next tick
+  // (which drains its last batches into the view).
+  connect(workspace_, &Workspace::replayFinished, this, [this] {
+    if (room_view_pending_) room_view_ready_ = true;
+  });
   connect(workspace_, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
             progress_->setVisible(false);
@@ -232,6 +242,8 @@ void MainWindow::BuildStatusBar() {
   pose_source_label_->setObjectName(QStringLiteral("statusPoseSource"));
   pose_source_label_->setContentsMargins(12, 0, 12, 0);  // Apart from the speeds beside it.
   fps_label_ = new QLabel;
+  clip_label_ = new QLabel;
+  clip_label_->setObjectName(QStringLiteral("statusClip"));
   progress_ = new QProgressBar;
   progress_->setMaximumWidth(260);
   progress_->setTextVisible(true);
@@ -243,7 +255,8 @@ void MainWindow::BuildStatusBar() {
   statusBar()->addPermanentWidget(progress_);
   statusBar()->addPermanentWidget(cancel_);
   for (QLabel* l :
-       {link_label_, pose_label_, speed_label_, pose_source_label_, points_label_, fps_label_}) {
+       {link_label_, pose_label_, speed_label_, pose_source_label_, clip_label_, points_label_,
+        fps_label_}) {
     statusBar()->addPermanentWidget(l);
   }
 }
@@ -304,6 +317,21 @@ void MainWindow::SaveSettings() {
   s.setValue(kPoseSourceKey, QString::fromLatin1(PoseSourceName(workspace_->pose_source())));
 }
 
+QString MainWindow::clip_status() const {
+  if (std::isnan(view_->clip_height())) return QString();
+  return tr("Ceiling hidden above %1 m (C)").arg(view_->clip_height(), 0, 'f', 2);
+}
+
+void MainWindow::ApplyRoomView() {
+  room_view_pending_ = room_view_ready_ = false;
+  const double ceiling = view_->ShowRoom();
+  if (std::isnan(ceiling)) return;
+  ceiling_z_ = ceiling;
+  ceiling_->setChecked(true);
+  view_->SetClipHeight(ceiling - 0.05);  // Also when it was checked already.
+  clip_label_->setText(clip_status());
+}
+
 void MainWindow::OnTick() {
   // Event-loop latency: how late this tick is against its period.
   const double elapsed = tick_clock_.nsecsElapsed() * 1e-6;
@@ -323,6 +351,14 @@ void MainWindow::OnTick() {
                                .arg(b.pose.yaw * 180.0 / M_PI, 0, 'f', 1));
     }
     workspace_->NoteBatch(b.total_points, b.scans);
+  }
+  if (room_view_ready_) {
+    // Not over a camera someone has placed since the session opened.
+    if (view_->camera_generation() == room_view_camera_) {
+      ApplyRoomView();
+    } else {
+      room_view_pending_ = room_view_ready_ = false;
+    }
   }
   if (!pending_intensity_.empty() && view_->point_count() == pending_intensity_.size()) {
     view_->SetPointValues(CloudView::ColorMode::kIntensity, pending_intensity_);
@@ -345,6 +381,12 @@ void MainWindow::OnTick() {
     if (workspace_->recording()) link += tr(" · REC");
     link_label_->setText(tr("Link: %1").arg(link));
     fps_label_->setText(tr("%1 fps").arg(fps_, 0, 'f', 0));
+    // A live cloud: into the room once it shows a ceiling.
+    if (room_view_pending_ && workspace_->recording_opened() == nullptr &&
+        view_->camera_generation() == room_view_camera_ && view_->point_count() > 200'000 &&
+        !std::isnan(view_->FindCeiling())) {
+      ApplyRoomView();
+    }
   }
   const Twist2d c = workspace_->commanded();
   speed_label_->setText(tr("v %1 m/s  w %2 rad/s").arg(c.v, 0, 'f', 2).arg(c.w, 0, 'f', 2));

@@ -13,6 +13,7 @@
 
 #include <QElapsedTimer>
 #include <QMainWindow>
+#include <limits>
 #include <QSet>
 #include <vector>
 
@@ -75,6 +76,13 @@ class MainWindow : public QMainWindow {
   QString pose_source_status() const;  // The status bar's "Poses: ..." text.
   // Brings a dock (by object name, e.g. "evaluationDock") to the front.
   void RaiseDock(const QString& name);
+  // The room view: the ceiling the cloud shows hidden (View > Hide Ceiling,
+  // C, checked; the status bar says so) and the camera looking into the
+  // room. Done when an opened session has replayed, and once for a live
+  // cloud when it first shows a ceiling; the operator's toggle is kept.
+  void ApplyRoomView();
+  QAction* ceiling_action() const { return ceiling_; }
+  QString clip_status() const;  // The status bar's text about the clip.
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -116,6 +124,14 @@ class MainWindow : public QMainWindow {
   QActionGroup* color_group_ = nullptr;
   QActionGroup* pose_source_group_ = nullptr;
   QAction* measure_ = nullptr;
+  QAction* ceiling_ = nullptr;
+  double ceiling_z_ = std::numeric_limits<double>::quiet_NaN();  // NaN: none found.
+  // The room view waits for the next session opened (its replay finished,
+  // its points drained into the view) or live cloud; a camera moved since
+  // (by the operator, a script, a test) cancels it.
+  bool room_view_pending_ = true;
+  bool room_view_ready_ = false;
+  uint64_t room_view_camera_ = 0;  // The view's camera generation when it was asked for.
   std::vector<Eigen::Vector3d> measure_points_;
   double measured_m_ = 0.0;
 
@@ -125,6 +141,7 @@ class MainWindow : public QMainWindow {
   QLabel* points_label_;
   QLabel* pose_source_label_;
   QLabel* fps_label_;
+  QLabel* clip_label_;
   QProgressBar* progress_;
   QToolButton* cancel_;
 

@@ -192,11 +192,16 @@ void MainWindow::BuildViewMenu() {
   toggle(tr("Show Tra&jectory"), &CloudView::SetTrajectoryVisible);
   toggle(tr("Show &Robot"), &CloudView::SetRobotVisible);
   toggle(tr("Show Colour &Bar"), &CloudView::SetColorBarVisible);
-  QAction* ceiling = view->addAction(tr("Hide &Ceiling (above 2 m)"));
-  ceiling->setCheckable(true);
-  ceiling->setShortcut(QKeySequence(Qt::Key_C));
-  connect(ceiling, &QAction::toggled, view_, [this](bool on) {
-    view_->SetClipHeight(on ? 2.0 : std::numeric_limits<double>::quiet_NaN());
+  ceiling_ = view->addAction(tr("Hide &Ceiling"));
+  ceiling_->setCheckable(true);
+  ceiling_->setShortcut(QKeySequence(Qt::Key_C));
+  ceiling_->setToolTip(tr("Hides the points above the ceiling's height found in the cloud (2 m "
+                          "when it shows no ceiling), to see into the room"));
+  connect(ceiling_, &QAction::toggled, view_, [this](bool on) {
+    // Just under the ceiling found: the walls to their top.
+    const double z = std::isnan(ceiling_z_) ? 2.0 : ceiling_z_ - 0.05;
+    view_->SetClipHeight(on ? z : std::numeric_limits<double>::quiet_NaN());
+    clip_label_->setText(clip_status());
   });
   view->addSeparator();
   QMenu* panels = view->addMenu(tr("&Panels"));

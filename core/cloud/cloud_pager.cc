@@ -91,7 +91,18 @@ size_t CloudPager::budget() const {
 
 void CloudPager::SetCacheDirectory(const std::string& dir) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (dir == cache_dir_) return;
   cache_dir_ = dir;
+  if (fd_ >= 0 && in_file_ == 0) {
+    ::close(fd_);
+    fd_ = -1;
+    file_end_ = 0;
+  }
+}
+
+size_t CloudPager::file_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return static_cast<size_t>(file_end_);
 }
 
 size_t CloudPager::resident_bytes() const {
@@ -131,9 +142,12 @@ void CloudPager::Remove(const PackedChunk* chunk) {
   } else {
     --paged_out_;
   }
-  // The file space of a dropped chunk is not reused: a cache lives as long as
-  // the cloud it pages (one session in the app), and a new cloud after a
-  // Clear() starts writing where the old one stopped.
+  // The file space of a dropped chunk is not reused one by one (a cache
+  // lives as long as the cloud it pages, one session in the app); when the
+  // last chunk in the file goes (the cloud cleared), the file is emptied.
+  if (chunk->file_offset_ >= 0 && --in_file_ == 0 && fd_ >= 0) {
+    if (::ftruncate(fd_, 0) == 0) file_end_ = 0;
+  }
 }
 
 void CloudPager::Touch(const PackedChunk* chunk) {
@@ -170,6 +184,7 @@ void CloudPager::EvictLocked() {
         int64_t offset = 0;
         if (!WriteLocked(victim, *victim->payload_, &offset)) return;  // Stays resident.
         victim->file_offset_ = offset;
+        ++in_file_;
       }
       // A reader holding a pin keeps its copy until it lets go.
       victim->payload_.reset();
@@ -185,12 +200,12 @@ void CloudPager::EvictLocked() {
 bool CloudPager::WriteLocked(const PackedChunk* chunk, const ChunkPayload& p, int64_t* offset) {
   (void)chunk;
   if (fd_ < 0) {
-    std::string dir = cache_dir_;
-    if (dir.empty()) {
-      const char* tmp = std::getenv("TMPDIR");
-      dir = tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
-    }
+    // The cache directory, else (read-only, full, gone) the temporary one.
+    const char* tmp = std::getenv("TMPDIR");
+    const std::string temporary = tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
+    std::string dir = cache_dir_.empty() ? temporary : cache_dir_;
     fd_ = OpenUnnamed(dir);
+    if (fd_ < 0 && dir != temporary) fd_ = OpenUnnamed(dir = temporary);
     if (fd_ < 0) {
       std::fprintf(stderr, "sweepscan: cannot create the cloud cache file in %s: %s\n",
                    dir.c_str(), std::strerror(errno));

@@ -3,13 +3,14 @@
 // file (docs/cloud-store.md, "Out of core").
 //
 // The cache file is created on the first page-out in the cache directory
-// (the session's folder's parent for the app, TMPDIR otherwise) and unlinked
-// at once: it has no name, so a crash or a power loss leaves nothing behind,
-// and the kernel frees it when the process ends. Payloads are appended and
+// (the session's folder's parent for the app, TMPDIR otherwise or when
+// that directory refuses it) and unlinked at once: it has no name, so a
+// crash or a power loss leaves nothing behind, and the kernel frees it when
+// the process ends. Payloads are appended and
 // never rewritten (a sealed chunk never changes).
 //
 // Budget: resident payload bytes. Default: a quarter of physical memory, as
-// the issue asks; the app's --memory-budget and the CLI set it.
+// the issue asks; the app's --memory-budget sets it.
 //
 // Threading: any thread. Lock order: the pager's mutex, then a chunk's.
 #ifndef SWEEPSCAN_CORE_CLOUD_CLOUD_PAGER_H_
@@ -40,7 +41,10 @@ class CloudPager {
 
   void SetBudget(size_t bytes);
   size_t budget() const;
-  void SetCacheDirectory(const std::string& dir);  // Takes effect for a new cache file.
+  // Where the cache file goes (its filesystem: not a RAM-backed /tmp). Takes
+  // effect at once if no live chunk is in the file, else for the next file.
+  void SetCacheDirectory(const std::string& dir);
+  size_t file_bytes() const;  // The cache file's size now.
 
   size_t resident_bytes() const;
   size_t paged_out_chunks() const;
@@ -66,6 +70,7 @@ class CloudPager {
   int64_t file_end_ = 0;
   size_t resident_ = 0;
   size_t paged_out_ = 0;
+  size_t in_file_ = 0;  // Live chunks with a copy in the cache file.
   uint64_t page_outs_ = 0, page_ins_ = 0;
   // Resident chunks, least recently used first.
   std::list<const PackedChunk*> lru_;

@@ -19,6 +19,7 @@
 #include <functional>
 #include <memory>
 
+#include "tests/testing/run_command.h"
 #include "ui/main_window.h"
 #include "ui/workspace/workspace.h"
 
@@ -55,6 +56,24 @@ class AppFixture : public ::testing::Test {
   void TearDown() override {
     window_.reset();
     workspace_.reset();
+  }
+
+  // Records the lab drive through the real bytes with the CLI: tmp/lab.sweepscan.
+  void SimulateLabSession() {
+    const auto sim = RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
+                                kResources.toStdString() + "/scenarios/lab.json --out " +
+                                tmp_.path().toStdString() + "/lab.ply");
+    ASSERT_EQ(sim.code, 0) << sim.out;
+  }
+  // Opens a session and waits until its replay has finished.
+  void OpenAndReplay(const QString& session) {
+    bool replayed = false;
+    const auto c = QObject::connect(workspace_.get(), &ui::Workspace::replayFinished,
+                                    [&] { replayed = true; });
+    window_->OpenSessionPath(session);
+    const bool done = WaitFor([&] { return replayed; }, 120000);
+    QObject::disconnect(c);
+    ASSERT_TRUE(done);
   }
 
   QTemporaryDir tmp_;

@@ -76,23 +76,6 @@ int CountBrightPixels(const QImage& image) {
 
 class AppTest : public testing::AppFixture {
  protected:
-  // Records the lab drive through the real bytes with the CLI: tmp/lab.sweepscan.
-  void SimulateLabSession() {
-    const auto sim = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
-                                         kResources.toStdString() + "/scenarios/lab.json --out " +
-                                         tmp_.path().toStdString() + "/lab.ply");
-    ASSERT_EQ(sim.code, 0) << sim.out;
-  }
-  // Opens a session and waits until its replay has finished.
-  void OpenAndReplay(const QString& session) {
-    bool replayed = false;
-    const auto c = QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
-    window_->OpenSessionPath(session);
-    const bool done = WaitFor([&] { return replayed; }, 120000);
-    QObject::disconnect(c);
-    ASSERT_TRUE(done);
-  }
-
   void ConnectToSimulator(const QString& scenario = "lab.json") {
     ConnectOptions o;
     o.kind = LinkKind::kSimulator;

@@ -34,6 +34,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "core/cloud/cloud_pager.h"
 #include "core/common/checked_file.h"
@@ -129,10 +130,13 @@ void CloudView::BuildRobotAndTrajectory() {
   trajectory_poly_->SetLines(vtkSmartPointer<vtkCellArray>::New());
   auto trajectory_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   trajectory_mapper->SetInputData(trajectory_poly_);
+  // Drawn in front of the floor's points it runs over (their noise is
+  // centimetres): a large depth offset toward the camera.
+  trajectory_mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -20000.0);
   trajectory_ = vtkSmartPointer<vtkActor>::New();
   trajectory_->SetMapper(trajectory_mapper);
   trajectory_->GetProperty()->SetColor(1.0, 0.85, 0.2);
-  trajectory_->GetProperty()->SetLineWidth(2.0);
+  trajectory_->GetProperty()->SetLineWidth(3.0);
   renderer_->AddActor(trajectory_);
 }
 
@@ -171,6 +175,7 @@ void CloudView::InstallObservers() {
   start->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
     auto* view = static_cast<CloudView*>(self);
     view->interacting_ = true;
+    ++view->camera_generation_;
     view->SetLodActive(true);
   });
   auto end = vtkSmartPointer<vtkCallbackCommand>::New();
@@ -426,7 +431,7 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
 }
 
 void CloudView::SetRobotPose(const Pose2d& pose) {
-  robot_->SetPosition(pose.x, pose.y, 0.05);
+  robot_->SetPosition(pose.x, pose.y, 0.1);
   robot_->SetOrientation(0.0, 0.0, pose.yaw * 180.0 / M_PI);
   robot_->VisibilityOn();
   RequestRender();
@@ -434,7 +439,8 @@ void CloudView::SetRobotPose(const Pose2d& pose) {
 
 void CloudView::AppendTrajectory(const std::vector<Pose2d>& poses) {
   if (poses.empty()) return;
-  for (const Pose2d& p : poses) trajectory_points_->InsertNextPoint(p.x, p.y, 0.02);
+  // Above the floor's points (their noise is ~1-2 cm), so the path shows.
+  for (const Pose2d& p : poses) trajectory_points_->InsertNextPoint(p.x, p.y, 0.08);
   const vtkIdType n = trajectory_points_->GetNumberOfPoints();
   auto line = vtkSmartPointer<vtkCellArray>::New();
   if (n >= 2) {
@@ -507,6 +513,7 @@ void CloudView::SetClipHeight(double z) {
 }
 
 void CloudView::SetCamera(const double direction[3], const double up[3]) {
+  ++camera_generation_;
   vtkCamera* camera = renderer_->GetActiveCamera();
   camera->SetFocalPoint(0, 0, 0);
   camera->SetPosition(-direction[0], -direction[1], -direction[2]);
@@ -688,6 +695,7 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
 }
 
 void CloudView::LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position) {
+  ++camera_generation_;
   vtkCamera* camera = renderer_->GetActiveCamera();
   camera->SetFocalPoint(focal.data());
   camera->SetPosition(position.data());
@@ -696,6 +704,7 @@ void CloudView::LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& posi
 }
 
 void CloudView::Orbit(double degrees) {
+  ++camera_generation_;
   renderer_->GetActiveCamera()->Azimuth(degrees);
   RequestRender();
 }
@@ -713,6 +722,18 @@ void CloudView::RenderNow() {
   renderer_->ResetCameraClippingRange();
   window_->Render();
   last_render_ms_ = clock.nsecsElapsed() * 1e-6;
+  if (!renderer_known_) {
+    // The rest budget's default from the renderer: a software one (Mesa's
+    // llvmpipe) draws ~6 M points a second and keeps ~200 bytes of working
+    // memory per point drawn in a frame (measured: docs/performance.md), a
+    // GPU draws hundreds of millions from its own memory.
+    renderer_known_ = true;
+    const std::string caps = window_->ReportCapabilities();
+    software_renderer_ = caps.find("llvmpipe") != std::string::npos ||
+                         caps.find("softpipe") != std::string::npos ||
+                         caps.find("swrast") != std::string::npos;
+    if (!rest_budget_set_) rest_budget_ = software_renderer_ ? 1'000'000 : 10'000'000;
+  }
 }
 
 QImage CloudView::GrabImage() {

@@ -128,12 +128,21 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // so that the floor, the walls and a calibration target are seen from above.
   void SetClipHeight(double z);
   double clip_height() const { return clip_height_; }
+  // The height of a room's ceiling (the highest dense horizontal layer of
+  // points in the top third of the cloud's height), NaN if it has none.
+  double FindCeiling() const;
+  // Looks into the room: the ceiling (if any) clipped just under its height,
+  // the camera 50 degrees above the floor from the south-west, the cloud
+  // fitted. Returns the ceiling's height or NaN.
+  double ShowRoom();
   // Points drawn at most while the camera moves or data streams.
   void SetLodBudget(size_t points);
   size_t lod_budget() const { return lod_budget_; }
   // Points drawn at most at rest (the finest detail the view reaches).
   void SetRestBudget(size_t points);
   size_t rest_budget() const { return rest_budget_; }
+  // Whether the first frame found a software renderer (Mesa llvmpipe).
+  bool software_renderer() const { return software_renderer_; }
   // While active: every lod_level()-th point of sealed chunks; -1 when the
   // rest level is drawn.
   int lod_level() const { return lod_active_ ? motion_stride_ : -1; }
@@ -144,6 +153,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool lod_active() const { return lod_active_; }
   // Points in VTK's arrays now (both levels), and the bytes they take.
   size_t vtk_point_count() const;
+  // The positions of the points drawn now (the level shown of every chunk;
+  // the pass filter and the clip are not applied), for tests and figures.
+  std::vector<Eigen::Vector3f> DrawnPoints() const;
   // Whether the rest level is being built (slices still to come).
   bool refining() const { return !refine_queue_.empty(); }
 
@@ -157,6 +169,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void Orbit(double degrees);
   // Puts the camera at `position` looking at `focal`, z up.
   void LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position);
+  // Counts the camera placements (View menu, LookAt, Orbit, the mouse);
+  // FitToCloud keeps the direction and does not count.
+  uint64_t camera_generation() const { return camera_generation_; }
 
   // ---- Picking layer ----
   // The cloud point under display position `pos` (widget pixels): among the
@@ -275,14 +290,20 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool have_points_ = false;
   // Measured under llvmpipe on 2 cores: a frame costs ~30 ms plus ~0.17 us a
   // point, so 120 000 points keep camera motion above 20 frames/s; at rest
-  // 3 M points are a ~0.5 s frame (docs/performance.md, "Desktop app").
+  // 1 M points are a ~0.16 s frame (docs/performance.md, "Desktop app").
+  // The rest budget's default is set at the first frame from the renderer
+  // (1 M in software, 10 M on a GPU) unless SetRestBudget() chose one.
   size_t lod_budget_ = 120'000;
-  size_t rest_budget_ = 3'000'000;
+  size_t rest_budget_ = 1'000'000;
+  bool rest_budget_set_ = false;
+  bool renderer_known_ = false;
+  bool software_renderer_ = false;
   int motion_stride_ = 1;
   bool lod_active_ = false;
   std::vector<Chunk*> refine_queue_;  // Nearest first.
   QTimer* refine_timer_ = nullptr;
   bool interacting_ = false;
+  uint64_t camera_generation_ = 0;
   QTimer* settle_ = nullptr;
   bool dirty_ = true;
   uint64_t frames_rendered_ = 0;

@@ -302,6 +302,7 @@ void CloudView::SetLodBudget(size_t points) {
 
 void CloudView::SetRestBudget(size_t points) {
   rest_budget_ = std::max<size_t>(points, 1000);
+  rest_budget_set_ = true;
   if (!lod_active_) SetLodActive(false);  // Re-planned at once.
 }
 
@@ -309,6 +310,19 @@ size_t CloudView::vtk_point_count() const {
   size_t n = 0;
   for (const auto& c : chunks_) n += c->motion.size() + c->rest.size();
   return n;
+}
+
+std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {
+  std::vector<Eigen::Vector3f> out;
+  for (const auto& c : chunks_) {
+    // The level ShowLevels() makes visible.
+    const bool rest = !c->sealed() || (!lod_active_ && c->rest.stride > 0);
+    const Drawn& d = rest ? c->rest : c->motion;
+    if (!d.points) continue;
+    const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
+    for (size_t k = 0; k < d.size(); ++k) out.emplace_back(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+  }
+  return out;
 }
 
 }  // namespace sweepscan::ui

@@ -124,6 +124,11 @@ std::vector<CloudPoint> LiveProcessor::Flatten() const {
   return c != nullptr ? c->Flatten() : std::vector<CloudPoint>();
 }
 
+size_t LiveProcessor::CloudSize() const {
+  const PointChunks* c = chunks();
+  return c != nullptr ? c->sealed_point_count() + c->open_chunk().size() : 0;
+}
+
 void LiveProcessor::Publish(bool reset) {
   LiveBatch batch;
   batch.reset = reset;

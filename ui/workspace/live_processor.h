@@ -63,6 +63,7 @@ class LiveProcessor : public QObject {
   // The whole cloud assembled since the last reset (processing thread; the
   // workspace reads it through a blocking queued call for save/export).
   std::vector<CloudPoint> Flatten() const;
+  size_t CloudSize() const;
 
  signals:
   // Replay position (robot seconds from the recording's start) and length.

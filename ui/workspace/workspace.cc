@@ -117,6 +117,8 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
       [this] {
         replaying_ = false;
         emit replayFinished();
+        // After every slot of replayFinished (the intensities read the samples).
+        ReleaseOpenedSamples();
       },
       Qt::QueuedConnection);
   // A calibration's failures (bad picks, solver) and cancels arrive as a
@@ -215,6 +217,7 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
   }
   ResetCloud(live_start_, live_geometry_);
   opened_.reset();
+  opened_samples_released_ = false;
   replaying_ = false;
   health_ = hardware::LinkHealth();
   authenticated_ = false;
@@ -353,6 +356,7 @@ bool Workspace::StartRecording(QString* error) {
   const QString name =
       QDateTime::currentDateTimeUtc().toString(QStringLiteral("yyyyMMdd-HHmmss-zzz"));
   const QString dir = sessions_root_ + QLatin1Char('/') + name + QStringLiteral(".sweepscan");
+  PageBeside(dir);
   // The recorder, the live decoder and the cloud restart at the same frame:
   // what is shown is exactly what the session holds. The reset is posted
   // from the I/O thread, after every batch of earlier frames and before any
@@ -389,6 +393,7 @@ bool Workspace::StartRecording(QString* error) {
   unsaved_ = true;
   session_dir_ = dir;
   opened_.reset();
+  opened_samples_released_ = false;
   SetShownPoseSource(PoseSource::kEkf);  // Live: always the EKF.
   emit recordingChanged(true);
   emit sessionChanged(dir);
@@ -447,12 +452,14 @@ void Workspace::NewSession() {
   session_dir_.clear();
   unsaved_ = false;
   opened_.reset();
+  opened_samples_released_ = false;
   replaying_ = false;
   ResetCloud(live_start_, live_geometry_);
   emit sessionChanged(QString());
 }
 
 void Workspace::OpenSession(const QString& dir, double speed) {
+  PageBeside(dir);
   auto recording = std::make_shared<hardware::Recording>();
   auto circle = std::make_shared<OpenedCircle>();
   // SfM: its poses, what it found, or why it could not place the scans.
@@ -514,6 +521,7 @@ void Workspace::OpenSession(const QString& dir, double speed) {
                            .arg(QString::fromStdString(recording->decode.frames.DamageSummary())));
         }
         opened_ = recording;
+        opened_samples_released_ = false;
         opened_circle_ = *circle;
         pass_labels_.clear();
         deviation_map_.clear();
@@ -567,6 +575,12 @@ void Workspace::SetPoseSource(PoseSource source) {
 void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
                           bool same_points) {
   if (opened_ == nullptr) return;
+  if (opened_samples_released_) {
+    WithOpenedSamples([this, calibration, source, same_points] {
+      Reprocess(calibration, source, same_points);
+    });
+    return;
+  }
   // Deviations belong to the points they were measured on, pass labels to
   // the points in their order; both go when the new cloud comes (a failed
   // SfM keeps the cloud and them).
@@ -606,6 +620,7 @@ void Workspace::ReplayOpened(const MountingError& calibration, PoseSource source
   options.calibration = calibration;
   options.pose.source = source;
   shown_calibration_ = calibration;
+  shown_given_ = given;
   replaying_ = true;
   LiveProcessor* p = processor_;
   std::shared_ptr<const hardware::Recording> r = opened_;
@@ -621,6 +636,7 @@ void Workspace::SetShownPoseSource(PoseSource source) {
 }
 
 void Workspace::SetReplaySpeed(double speed) {
+  replay_speed_ = speed;
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(p, [p, speed] { p->SetReplaySpeed(speed); });
 }
@@ -631,6 +647,14 @@ void Workspace::SetReplayPaused(bool paused) {
 }
 
 void Workspace::SeekReplay(double position_s) {
+  if (opened_samples_released_ && !recording_) {
+    // The replay let its samples go when it finished: replay again, then seek.
+    WithOpenedSamples([this, position_s] {
+      ReplayOpened(shown_calibration_, shown_pose_source_, shown_given_, replay_speed_);
+      SeekReplay(position_s);
+    });
+    return;
+  }
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(p, [p, position_s] { p->SeekReplay(position_s); });
 }

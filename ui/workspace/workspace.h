@@ -250,6 +250,8 @@ class Workspace : public QObject {
   // Every point assembled since the last reset, copied on the processing
   // thread (blocks until it has finished its current batch).
   std::vector<CloudPoint> CloudSnapshot() const;
+  // Its number of points (without decoding them).
+  size_t CloudSize() const;
   // Points and scans assembled, as of the last batch the view took.
   size_t point_count() const { return point_count_; }
   size_t scan_count() const { return scan_count_; }
@@ -294,6 +296,16 @@ class Workspace : public QObject {
   // (another calibration only), so the pass labels stay.
   void Reprocess(const MountingError& calibration, PoseSource source, bool same_points);
   void SetShownPoseSource(PoseSource source);
+  // Memory: a replayed session above kKeepSamplesAtMost lidar samples keeps
+  // only its wheel and IMU records (the samples take 24 bytes each, more
+  // than the cloud store's 20 a point); what needs them again (another pose
+  // source or calibration, a calibration, a seek) opens the session again
+  // in a job first, then calls `then`.
+  static constexpr size_t kKeepSamplesAtMost = 4'000'000;
+  void ReleaseOpenedSamples();
+  void WithOpenedSamples(std::function<void()> then);
+  // The cloud store pages beside `folder` (a session, the sessions folder).
+  void PageBeside(const QString& folder);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success);
   void OnScriptTick();
@@ -328,6 +340,9 @@ class Workspace : public QObject {
   QString session_dir_;
   QString sessions_root_;
   std::shared_ptr<hardware::Recording> opened_;
+  bool opened_samples_released_ = false;
+  std::shared_ptr<const PoseBuffer> shown_given_;  // SfM's poses of the cloud shown.
+  double replay_speed_ = 0.0;
   bool replaying_ = false;
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;

@@ -61,6 +61,10 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
     emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
     return;
   }
+  if (opened_samples_released_) {
+    WithOpenedSamples([=] { Calibrate(picks, refine, board_thickness_m); });
+    return;
+  }
   std::shared_ptr<const hardware::Recording> recording = opened_;
   auto result = std::make_shared<PickCalibrationResult>();
   auto error = std::make_shared<QString>();
@@ -97,6 +101,10 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
 void Workspace::CalibrateAutomatic() {
   if (opened_ == nullptr) {
     emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
+    return;
+  }
+  if (opened_samples_released_) {
+    WithOpenedSamples([this] { CalibrateAutomatic(); });
     return;
   }
   std::shared_ptr<const hardware::Recording> recording = opened_;

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <memory>
 #include <thread>
 
 #include "core/cloud/cloud_pager.h"
@@ -155,6 +156,25 @@ TEST(CloudPagerTest, PagesOutAboveTheBudgetAndReadsBackExactly) {
   EXPECT_EQ(pager.resident_bytes(), 20 * per_chunk);
 }
 
+TEST(CloudPagerTest, TheCacheFileIsEmptiedWhenItsCloudGoes) {
+  // The app opens one session after another in one process: a cloud's file
+  // space comes back when the cloud is cleared, not at exit.
+  ScratchDir dir;
+  const size_t per_chunk = 20 * 1024;
+  CloudPager pager(2 * per_chunk, dir.path);
+  const auto points = MakePoints(10 * 1024, 6, false);
+  for (int round = 0; round < 2; ++round) {
+    auto chunks = std::make_unique<PointChunks>(1024, &pager);
+    for (const CloudPoint& p : points) chunks->Append(p);
+    EXPECT_EQ(pager.file_bytes(), 8 * per_chunk) << round;  // Each written once.
+    EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
+    chunks.reset();
+    EXPECT_EQ(pager.file_bytes(), 0u) << round;
+    EXPECT_EQ(pager.resident_bytes(), 0u);
+    EXPECT_EQ(pager.paged_out_chunks(), 0u);
+  }
+}
+
 TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   // The view (GUI thread) and an export (a job thread) read sealed chunks
   // while the processing thread appends and the pager evicts.
@@ -164,8 +184,11 @@ TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   PointChunks chunks(1024, &pager);
   std::atomic<bool> done{false};
   std::atomic<size_t> bad{0}, checked{0};
+  std::atomic<int> started{0};
   auto reader = [&] {
-    while (!done) {
+    ++started;
+    for (;;) {
+      const bool last = done;  // One whole pass after the writer is done.
       const auto sealed = chunks.SealedChunks();
       size_t offset = 0;
       for (const auto& c : sealed) {
@@ -177,9 +200,11 @@ TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
         offset += got.size();
         ++checked;
       }
+      if (last) break;
     }
   };
   std::thread a(reader), b(reader);
+  while (started < 2) std::this_thread::yield();  // Readers running before the writer.
   for (const CloudPoint& p : points) chunks.Append(p);
   done = true;
   a.join();

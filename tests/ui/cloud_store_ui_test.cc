@@ -1,0 +1,240 @@
+// The cloud store and the view's level of detail through the real app
+// (docs/cloud-store.md), under a real display (xvfb-run in CI): the rest
+// level at full resolution draws exactly the cloud and within a budget only
+// cloud points; a cloud larger than the memory budget opens paged to disk,
+// equals `sweepscan-cli reconstruct` point for point and picks the true
+// point under the cursor (not a drawn representative); an opened room is
+// shown looking into it with its ceiling hidden.
+#include <gtest/gtest.h>
+
+#include <QAction>
+#include <QLabel>
+#include <QStatusBar>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "core/cloud/cloud_io.h"
+#include "core/cloud/cloud_pager.h"
+#include "tests/ui/app_fixture.h"
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+using testing::WaitFor;
+
+using Xyz = std::array<float, 3>;
+
+std::vector<Xyz> Positions(const std::vector<CloudPoint>& cloud) {
+  std::vector<Xyz> out;
+  out.reserve(cloud.size());
+  for (const CloudPoint& p : cloud) out.push_back({p.x, p.y, p.z});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<Xyz> Positions(const std::vector<Eigen::Vector3f>& drawn) {
+  std::vector<Xyz> out;
+  out.reserve(drawn.size());
+  for (const Eigen::Vector3f& p : drawn) out.push_back({p.x(), p.y(), p.z()});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+bool Contains(const std::vector<Xyz>& sorted, const Xyz& p) {
+  return std::binary_search(sorted.begin(), sorted.end(), p);
+}
+
+class CloudStoreUiTest : public testing::AppFixture {
+ protected:
+  void TearDown() override {
+    AppFixture::TearDown();
+    CloudPager::Default().SetBudget(CloudPager::DefaultBudgetBytes());
+  }
+  // The lab drive opened and replayed; the view holds all of it.
+  void OpenLab() {
+    ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+    ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
+    const size_t n = workspace_->CloudSize();
+    ASSERT_GT(n, 100000u);
+    ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == n; }, 10000));
+  }
+};
+
+TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot());
+  if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
+  ASSERT_TRUE(std::isnan(view->clip_height()));
+  view->ViewOblique();  // The whole cloud in the frustum.
+
+  // The rest level with the cloud within the budget: every point, once.
+  view->SetRestBudget(cloud.size());
+  view->SetLodActive(false);
+  EXPECT_EQ(Positions(view->DrawnPoints()), cloud);
+
+  // Within a quarter of it: at most the budget (and the growing chunk),
+  // every one a cloud point.
+  const size_t budget = cloud.size() / 4;
+  view->SetRestBudget(budget);
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
+  EXPECT_GT(drawn.size(), budget / 2);
+  EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+
+  // The motion level within its budget, likewise.
+  view->SetLodBudget(20000);
+  view->SetLodActive(true);
+  EXPECT_GE(view->lod_level(), 4);
+  drawn = Positions(view->DrawnPoints());
+  EXPECT_LE(drawn.size(), 20000 + CloudView::kChunkPoints);
+  EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+}
+
+TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {
+  // 1 MiB holds 52 428 points of the store (20 B each): the lab drive's
+  // ~270 000 go mostly to the cache file (as --memory-budget 1 would).
+  CloudPager& pager = CloudPager::Default();
+  pager.SetBudget(size_t{1} << 20);
+  const uint64_t page_outs_before = pager.page_outs();
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  EXPECT_GT(pager.page_outs(), page_outs_before);
+  EXPECT_GE(pager.paged_out_chunks(), 2u);
+  EXPECT_LE(pager.resident_bytes(), (size_t{1} << 20) + 20 * CloudView::kChunkPoints);
+
+  // Paged out and read back, the cloud is the CLI's point for point.
+  const std::string dir = tmp_.path().toStdString();
+  const auto rec = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " reconstruct " + dir +
+                              "/lab.sweepscan --out " + dir + "/cli.ply");
+  ASSERT_EQ(rec.code, 0) << rec.out;
+  std::vector<CloudPoint> expected;
+  ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  const std::vector<Xyz> cloud = Positions(snapshot);
+  ASSERT_EQ(cloud, Positions(expected));
+
+  // The floor from above at the motion level (every 8th point or sparser):
+  // a click on a floor point picks a point of the cloud under the cursor,
+  // read from its (paged) chunk, often one the view does not draw.
+  CloudView* view = window_->view();
+  view->SetClipHeight(0.10);
+  view->ViewTop();
+  view->SetLodBudget(30000);
+  view->SetLodActive(true);
+  view->RenderNow();
+  ASSERT_GE(view->lod_level(), 8);
+  const std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  const uint64_t page_ins_before = pager.page_ins();
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<size_t> any(0, snapshot.size() - 1);
+  int picks = 0, undrawn = 0;
+  while (picks < 40) {
+    const CloudPoint& p = snapshot[any(rng)];
+    if (p.z > 0.02) continue;
+    const QPointF px = view->WorldToWidget(Eigen::Vector3d(p.x, p.y, p.z));
+    if (px.x() < 10 || px.y() < 10 || px.x() > view->width() - 10 || px.y() > view->height() - 10) {
+      continue;
+    }
+    Eigen::Vector3d got;
+    ASSERT_TRUE(view->PickPoint(px.toPoint(), &got)) << p.x << " " << p.y;
+    const Xyz g{static_cast<float>(got.x()), static_cast<float>(got.y()),
+                static_cast<float>(got.z())};
+    ASSERT_TRUE(Contains(cloud, g)) << got.transpose();
+    const QPointF at = view->WorldToWidget(got);
+    EXPECT_LE(std::hypot(at.x() - px.toPoint().x(), at.y() - px.toPoint().y()), 6.5);
+    EXPECT_LE(got.z(), 0.10);  // Under the clip: what is on screen.
+    if (!Contains(drawn, g)) ++undrawn;
+    ++picks;
+  }
+  // Representatives alone would never give an undrawn point.
+  EXPECT_GE(undrawn, picks / 2);
+  EXPECT_GT(pager.page_ins(), page_ins_before);
+}
+
+TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  QAction* ceiling = window_->ceiling_action();
+  // The lab's ceiling is at 2.5 m: hidden just under it, and said so.
+  ASSERT_TRUE(WaitFor([&] { return ceiling->isChecked(); }, 5000));
+  EXPECT_NEAR(view->clip_height(), 2.45, 0.06);
+  auto* label = window_->statusBar()->findChild<QLabel*>(QStringLiteral("statusClip"));
+  ASSERT_NE(label, nullptr);
+  EXPECT_EQ(label->text(), window_->clip_status());
+  EXPECT_TRUE(label->text().startsWith(QStringLiteral("Ceiling hidden above 2.4")))
+      << label->text().toStdString();
+  view->RenderNow();
+
+  // The middle of the floor, where the robot drove (y = 2.5 m): seen, not
+  // hidden behind the ceiling.
+  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot();
+  const CloudPoint* floor = nullptr;
+  for (const CloudPoint& p : cloud) {
+    if (p.z < 0.02 && std::abs(p.x - 4.0) < 0.05 && std::abs(p.y - 2.0) < 0.05) floor = &p;
+  }
+  ASSERT_NE(floor, nullptr);
+  const QPoint at = view->WorldToWidget(Eigen::Vector3d(floor->x, floor->y, floor->z)).toPoint();
+  ASSERT_TRUE(view->rect().contains(at));
+  Eigen::Vector3d picked;
+  ASSERT_TRUE(view->PickPoint(at, &picked));
+  EXPECT_LT(picked.z(), 0.3) << picked.transpose();
+
+  // The operator's toggle (View > Hide Ceiling, C): the ceiling comes back
+  // and is what the same pixel shows, then goes again.
+  ceiling->trigger();
+  EXPECT_TRUE(std::isnan(view->clip_height()));
+  EXPECT_TRUE(label->text().isEmpty());
+  ASSERT_TRUE(view->PickPoint(at, &picked));
+  EXPECT_GT(picked.z(), 2.4) << picked.transpose();
+  ceiling->trigger();
+  EXPECT_NEAR(view->clip_height(), 2.45, 0.06);
+  EXPECT_FALSE(label->text().isEmpty());
+}
+
+// FindCeiling on its own: a room's ceiling layer, and none in the open.
+TEST(CloudViewRoomTest, FindsTheCeilingOfARoomAndNoneWithoutOne) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  auto room = [&](bool with_ceiling) {
+    std::vector<CloudPoint> points;
+    for (int i = 0; i < 200000; ++i) {
+      CloudPoint p{};
+      // At random: the view samples every n-th point, which a regular
+      // pattern of faces would alias.
+      const int face = static_cast<int>(4 * u(rng)) % 4;
+      if (face == 0) {  // Floor.
+        p.x = 6 * u(rng), p.y = 4 * u(rng), p.z = 0;
+      } else if (face == 1 && with_ceiling) {
+        p.x = 6 * u(rng), p.y = 4 * u(rng), p.z = 2.7f;
+      } else {  // Walls, up to 2.7 m.
+        const bool x_wall = u(rng) < 0.5f;
+        p.x = x_wall ? (u(rng) < 0.5f ? 0.0f : 6.0f) : 6 * u(rng);
+        p.y = x_wall ? 4 * u(rng) : (u(rng) < 0.5f ? 0.0f : 4.0f);
+        p.z = 2.7f * u(rng);
+      }
+      p.range_m = 2.0f;
+      p.scan = static_cast<uint32_t>(i / 1000);
+      p.time_ns = int64_t{i} * 200000;
+      points.push_back(p);
+    }
+    return points;
+  };
+  CloudView view;
+  view.AppendPoints(room(true));
+  EXPECT_NEAR(view.FindCeiling(), 2.7, 0.051);
+  view.Clear();
+  view.AppendPoints(room(false));
+  EXPECT_TRUE(std::isnan(view.FindCeiling()));
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }

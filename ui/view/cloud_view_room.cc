@@ -1,0 +1,66 @@
+// CloudView's room view: a room scan opened looking into the room, its
+// ceiling hidden, instead of looking down on the ceiling (an orange box with
+// the interior hidden).
+#include <vtkCamera.h>
+#include <vtkRenderer.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "ui/view/cloud_view.h"
+#include "ui/view/cloud_view_chunk.h"
+
+namespace sweepscan::ui {
+
+double CloudView::FindCeiling() const {
+  // Heights of a representative sample: the motion level of sealed chunks
+  // (every motion_stride-th point) and the growing chunk.
+  std::vector<float> z;
+  for (const auto& c : chunks_) {
+    const Drawn& d = c->sealed() ? c->motion : c->rest;
+    if (!d.points) continue;
+    const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
+    for (size_t k = 0; k < d.size(); ++k) z.push_back(p[3 * k + 2]);
+  }
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  if (z.size() < 1000) return kNone;
+  const auto [lo_it, hi_it] = std::minmax_element(z.begin(), z.end());
+  const double lo = *lo_it, hi = *hi_it;
+  // A room is at least 1.8 m high; a scan of a ceiling-less yard or a lone
+  // object has no ceiling to hide.
+  if (hi - lo < 1.8) return kNone;
+  constexpr double kBin = 0.05;
+  const int bins = static_cast<int>((hi - lo) / kBin) + 1;
+  std::vector<size_t> count(bins, 0);
+  for (float v : z) ++count[std::min(bins - 1, static_cast<int>((v - lo) / kBin))];
+  // Walls give each bin of height about the same count; a ceiling is a
+  // horizontal layer that puts many times that into a few bins near the top.
+  std::vector<size_t> middle(count.begin() + bins / 4, count.begin() + 3 * bins / 4);
+  std::nth_element(middle.begin(), middle.begin() + middle.size() / 2, middle.end());
+  const double wall = std::max<double>(1.0, static_cast<double>(middle[middle.size() / 2]));
+  for (int b = bins - 1; b >= bins * 2 / 3; --b) {
+    const size_t layer = count[b] + (b > 0 ? count[b - 1] : 0);
+    if (layer >= 6.0 * wall && layer >= z.size() / 50) {
+      // The layer's lower edge: the lowest of its dense bins.
+      int first = b;
+      while (first > 0 && count[first - 1] >= 3.0 * wall) --first;
+      return lo + first * kBin;
+    }
+  }
+  return kNone;
+}
+
+double CloudView::ShowRoom() {
+  const double ceiling = FindCeiling();
+  // Just under the ceiling: the walls to their top, the ceiling hidden.
+  if (!std::isnan(ceiling)) SetClipHeight(ceiling - 0.05);
+  // From the south-west, 50 degrees above the floor: over the walls into
+  // the room, the floor and the robot's path in view.
+  const double d[3] = {0.47, 0.43, -0.77}, up[3] = {0, 0, 1};
+  SetCamera(d, up);
+  return ceiling;
+}
+
+}  // namespace sweepscan::ui
