@@ -2,15 +2,24 @@
 # Desktop-app figures for docs/performance.md (Xvfb, Mesa llvmpipe):
 #   1. a 10-minute simulated session replayed at 10x: event-loop latency
 #      (p50, p99 of the GUI tick's lateness), frames rendered, memory;
-#   2. a session of about 10 M points opened and shown at full speed: time
-#      to open and show, orbiting frame rate in full and with the level of
-#      detail, memory;
-#   3. a simulated hour replayed as fast as possible: memory at the end
-#      (grows with the data only).
-# Usage: scripts/gui-bench.sh [WORKDIR]   (after scripts/build.sh)
+#   2. sessions of about 10 M and 100 M points (a 32.5-minute and a
+#      5.7-hour drive) opened and shown at full speed: time to open and
+#      show, orbiting frame rates at the rest and the motion level, time
+#      back to the rest level, picks, memory (resident, peak, the cloud
+#      store's, VTK's points, the heap);
+#   3. the 100 M session under a 1 GiB memory budget (paged to disk);
+#   4. the 100 M session replayed at 20x for 10 minutes (up to ~58 M
+#      points): event-loop latency while the cloud grows;
+#   5. CloudCompare (Debian's `cloudcompare`) opening the same clouds as
+#      PLY, `-SILENT -O`: its wall time and peak resident memory.
+# Usage: scripts/gui-bench.sh [WORKDIR] [SECTIONS]   (after scripts/build.sh)
+#   SECTIONS: any of 1..5 (default all), e.g. "2 5". The sessions take
+#   ~20 GB of disk in WORKDIR, made once (simulate: ~4 minutes for 100 M).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-/tmp/sweepscan-gui-bench}
+sections=${2:-1 2 3 4 5}
+want() { [[ " $sections " == *" $1 "* ]]; }
 mkdir -p "$work"
 cli=build/app/sweepscan-cli
 app=build/app/sweepscan
@@ -34,19 +43,42 @@ json.dump(d, open(out, "w"), indent=1)
 PY
 }
 
-for s in 600 1950 3600; do
+for s in 600 1950 20400; do
   if [ ! -d "$work/lab_$s.sweepscan" ]; then
     make_scenario $s "$work/lab_$s.json"
     $cli simulate --scenario "$work/lab_$s.json" --out "$work/lab_$s.ply" --overwrite > /dev/null
   fi
 done
 
-echo "## 10-minute session at 10x (60 s of it)"
-xvfb-run -a -s "-screen 0 1600x1000x24" $app --replay "$work/lab_600.sweepscan" --speed 10 \
-  --quit-after 60 2>/dev/null | tail -1
-echo "## ~10 M points: open, show, orbit (60 frames each)"
-xvfb-run -a -s "-screen 0 1600x1000x24" $app --replay "$work/lab_1950.sweepscan" --speed 0 \
-  --orbit-benchmark 60 2>/dev/null | tail -1
-echo "## a simulated hour, replayed as fast as possible"
-xvfb-run -a -s "-screen 0 1600x1000x24" $app --replay "$work/lab_3600.sweepscan" --speed 0 \
-  --orbit-benchmark 10 2>/dev/null | tail -1
+gui() { xvfb-run -a -s "-screen 0 1600x1000x24" $app "$@" 2>/dev/null | tail -1; }
+
+if want 1; then
+  echo "## 10-minute session at 10x (60 s of it)"
+  gui --replay "$work/lab_600.sweepscan" --speed 10 --quit-after 60
+fi
+if want 2; then
+  for s in 1950 20400; do
+    echo "## lab_$s: open, show, orbit (30 frames at each level), picks"
+    gui --replay "$work/lab_$s.sweepscan" --speed 0 --orbit-benchmark 30
+  done
+fi
+if want 3; then
+  echo "## lab_20400 under --memory-budget 1024 (MiB)"
+  gui --replay "$work/lab_20400.sweepscan" --speed 0 --orbit-benchmark 30 --memory-budget 1024
+fi
+if want 4; then
+  echo "## lab_20400 replayed at 20x for 600 s"
+  gui --replay "$work/lab_20400.sweepscan" --speed 20 --quit-after 600
+fi
+if want 5; then
+  if ! command -v CloudCompare > /dev/null; then
+    echo "CloudCompare is not installed (apt-get install cloudcompare)" >&2
+    exit 1
+  fi
+  for s in 1950 20400; do
+    echo "## CloudCompare -SILENT -O lab_$s.ply"
+    # -SILENT still makes a QApplication: it needs a display.
+    ( cd "$work" && /usr/bin/time -f "wall %e s, peak resident %M KiB" xvfb-run -a \
+        CloudCompare -SILENT -NO_TIMESTAMP -O "lab_$s.ply" 2>&1 > /dev/null | tail -1 )
+  done
+fi

@@ -28,20 +28,13 @@ std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, s
   payload->range_q.resize(n);
   bool quantised = true;
   auto& b = chunk->bounds_;
-  b = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-       std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-       std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  b = EmptyBounds();
   for (size_t i = 0; i < n; ++i) {
     const CloudPoint& p = points[i];
     payload->xyz[3 * i] = p.x;
     payload->xyz[3 * i + 1] = p.y;
     payload->xyz[3 * i + 2] = p.z;
-    b[0] = std::min<double>(b[0], p.x);
-    b[1] = std::max<double>(b[1], p.x);
-    b[2] = std::min<double>(b[2], p.y);
-    b[3] = std::max<double>(b[3], p.y);
-    b[4] = std::min<double>(b[4], p.z);
-    b[5] = std::max<double>(b[5], p.z);
+    ExtendBounds(&b, p);
     payload->beam[i] = p.beam;
     chunk->max_range_m_ = std::max(chunk->max_range_m_, p.range_m);
     chunk->last_time_ns_ = std::max(chunk->last_time_ns_, p.time_ns);

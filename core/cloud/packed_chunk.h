@@ -24,8 +24,10 @@
 #ifndef SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_
 #define SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -113,6 +115,20 @@ class PackedChunk {
   mutable int64_t file_offset_ = -1;  // Where the payload is in the cache file, once written.
   mutable uint64_t last_use_ = 0;     // The pager's clock at the last Pin().
 };
+
+// Axis-aligned bounds in VTK's order (x min, x max, y min, y max, z min,
+// z max): empty, and grown by a point.
+inline std::array<double, 6> EmptyBounds() {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  return {inf, -inf, inf, -inf, inf, -inf};
+}
+inline void ExtendBounds(std::array<double, 6>* b, const CloudPoint& p) {
+  const double v[3] = {p.x, p.y, p.z};
+  for (int k = 0; k < 3; ++k) {
+    (*b)[2 * k] = std::min((*b)[2 * k], v[k]);
+    (*b)[2 * k + 1] = std::max((*b)[2 * k + 1], v[k]);
+  }
+}
 
 // The range of a CloudPoint as a whole number of kRangeStepM, if it is one
 // (the float that the step gives back is bit for bit the same).

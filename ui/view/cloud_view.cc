@@ -274,9 +274,7 @@ CloudView::Chunk* CloudView::GrowingChunk() {
   d.poly->GetPointData()->AddArray(d.scalar);
   NewDrawnActor(&d);
   d.mapper->SetInputData(d.poly);
-  chunk->bounds = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
-                   std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  chunk->bounds = EmptyBounds();
   chunks_.push_back(std::move(chunk));
   return chunks_.back().get();
 }
@@ -398,13 +396,7 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
       if (!v.empty()) v.push_back(cloud_view_internal::kNoValue);
     }
     ++chunk->size;
-    auto& b = chunk->bounds;
-    b[0] = std::min<double>(b[0], p.x);
-    b[1] = std::max<double>(b[1], p.x);
-    b[2] = std::min<double>(b[2], p.y);
-    b[3] = std::max<double>(b[3], p.y);
-    b[4] = std::min<double>(b[4], p.z);
-    b[5] = std::max<double>(b[5], p.z);
+    ExtendBounds(&chunk->bounds, p);
     ++point_count_;
     z_lo = std::min(z_lo, p.z);
     z_hi = std::max(z_hi, p.z);
