@@ -63,6 +63,7 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   BuildAxes();
   BuildAnnotations();
   InstallObservers();
+  InstallBatchObserver();
 
   settle_ = new QTimer(this);
   settle_->setSingleShot(true);
@@ -326,6 +327,7 @@ void CloudView::SealGrowing() {
 void CloudView::Clear() {
   for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
+  ClearBatches();
   refine_queue_.clear();
   point_count_ = 0;
   motion_stride_ = 1;
@@ -451,6 +453,9 @@ void CloudView::SetPointSize(double pixels) {
       if (d->actor) d->actor->GetProperty()->SetPointSize(pixels);
     }
   }
+  for (auto& b : batches_) {
+    for (Batch::Level& l : b->level) l.drawn.actor->GetProperty()->SetPointSize(pixels);
+  }
   RequestRender();
 }
 
@@ -497,6 +502,9 @@ void CloudView::SetClipHeight(double z) {
     for (Drawn* d : {&c->motion, &c->rest}) {
       if (d->mapper) ApplyClip(d->mapper);
     }
+  }
+  for (auto& b : batches_) {
+    for (Batch::Level& l : b->level) ApplyClip(l.drawn.mapper);
   }
   // The planes too: a hidden ceiling must not tint the view from above.
   ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
@@ -711,6 +719,7 @@ void CloudView::RenderNow() {
   dirty_ = false;
   QElapsedTimer clock;
   clock.start();
+  SyncBatches();  // Their bounds for the clipping range.
   renderer_->ResetCameraClippingRange();
   window_->Render();
   last_render_ms_ = clock.nsecsElapsed() * 1e-6;

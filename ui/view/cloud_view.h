@@ -219,6 +219,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
  private:
   struct Chunk;
   struct Drawn;
+  struct Batch;
+  static constexpr size_t kBatchChunks = 16;
+  void SyncBatches();  // Before every frame (cloud_view_batches.cc).
+  void ClearBatches();
+  void InstallBatchObserver();
   Chunk* GrowingChunk();
   void SealGrowing();  // The view's own packing of a full growing chunk.
   void AddSealed(std::shared_ptr<const PackedChunk> packed);
@@ -267,6 +272,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkAxesActor> axes_;
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
+  std::vector<std::unique_ptr<Batch>> batches_;
 
   ColorMode color_mode_ = ColorMode::kHeight;
   double point_size_ = 2.0;

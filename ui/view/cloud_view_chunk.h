@@ -70,6 +70,17 @@ struct CloudView::Chunk {
   bool sealed() const { return packed != nullptr; }
 };
 
+// kBatchChunks consecutive sealed chunks drawn as one actor a level
+// (cloud_view_batches.cc).
+struct CloudView::Batch {
+  struct Level {
+    Drawn drawn;  // poly, mapper and actor only
+    std::vector<vtkPolyData*> sources;  // The chunks' levels it was built from.
+    vtkMTimeType built = 0;
+  };
+  Level level[2];  // motion, rest
+};
+
 }  // namespace sweepscan::ui
 
 #endif  // SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_

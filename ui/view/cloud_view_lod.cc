@@ -83,8 +83,7 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
     }
   }
   RefilterVerts(*chunk, d);
-  if (!d->actor) NewDrawnActor(d);
-  d->mapper->SetInputData(d->poly);
+  // Drawn through its batch (cloud_view_batches.cc), no actor of its own.
 }
 
 void CloudView::ThinMotion(Chunk* chunk, int stride) {
@@ -121,7 +120,6 @@ void CloudView::ThinMotion(Chunk* chunk, int stride) {
   d.poly->GetPointData()->AddArray(d.scalar);
   Recolor(chunk, &d);
   RefilterVerts(*chunk, &d);
-  d.mapper->SetInputData(d.poly);
 }
 
 void CloudView::Recolor(Chunk* chunk, Drawn* d) {
@@ -271,7 +269,6 @@ bool CloudView::RefineSlice(int max_ms) {
   while (done < refine_queue_.size() && clock.elapsed() < max_ms) {
     Chunk* c = refine_queue_[done++];
     BuildDrawn(c, c->rest_target, &c->rest);
-    c->rest.actor->SetVisibility(false);  // Shown when the level is complete.
   }
   refine_queue_.erase(refine_queue_.begin(), refine_queue_.begin() + done);
   return refine_queue_.empty();
@@ -309,6 +306,9 @@ void CloudView::SetRestBudget(size_t points) {
 size_t CloudView::vtk_point_count() const {
   size_t n = 0;
   for (const auto& c : chunks_) n += c->motion.size() + c->rest.size();
+  for (const auto& b : batches_) {
+    for (const Batch::Level& l : b->level) n += l.drawn.poly ? l.drawn.poly->GetNumberOfPoints() : 0;
+  }
   return n;
 }
 
