@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -139,6 +141,7 @@ void CloudPager::Remove(const PackedChunk* chunk) {
     lru_.erase(it->second);
     where_.erase(it);
     resident_ -= chunk->payload_bytes();
+    unreturned_ += chunk->payload_bytes();
   } else {
     --paged_out_;
   }
@@ -148,6 +151,7 @@ void CloudPager::Remove(const PackedChunk* chunk) {
   if (chunk->file_offset_ >= 0 && --in_file_ == 0 && fd_ >= 0) {
     if (::ftruncate(fd_, 0) == 0) file_end_ = 0;
   }
+  MaybeTrimLocked();
 }
 
 void CloudPager::Touch(const PackedChunk* chunk) {
@@ -194,6 +198,23 @@ void CloudPager::EvictLocked() {
     resident_ -= victim->payload_bytes();
     ++paged_out_;
     ++page_outs_;
+    unreturned_ += victim->payload_bytes();
+  }
+  MaybeTrimLocked();
+}
+
+void CloudPager::MaybeTrimLocked() {
+  // Freed payloads (128 KiB to 768 KiB arrays) go back to the system: glibc
+  // serves such blocks from its heap once it has raised its mmap threshold,
+  // and a free in the middle of a heap returns nothing (measured: 874 MiB
+  // paged out, resident memory unchanged). Trimming walks the heap, so at
+  // most once a second and after 256 MiB (a fixed mmap threshold instead
+  // made every page-in fault fresh pages: picks 20 times slower).
+  const auto now = std::chrono::steady_clock::now();
+  if (unreturned_ >= (size_t{256} << 20) && now - last_trim_ >= std::chrono::seconds(1)) {
+    malloc_trim(0);
+    unreturned_ = 0;
+    last_trim_ = now;
   }
 }
 

@@ -17,6 +17,7 @@
 #define SWEEPSCAN_CORE_CLOUD_CLOUD_PAGER_H_
 
 #include <cstdint>
+#include <chrono>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -60,6 +61,7 @@ class CloudPager {
 
  private:
   void EvictLocked();  // Until within budget.
+  void MaybeTrimLocked();  // Freed payloads back to the system (malloc_trim).
   bool WriteLocked(const PackedChunk* chunk, const ChunkPayload& payload, int64_t* offset);
   std::shared_ptr<ChunkPayload> ReadLocked(const PackedChunk* chunk, int64_t offset);
 
@@ -71,6 +73,8 @@ class CloudPager {
   size_t resident_ = 0;
   size_t paged_out_ = 0;
   size_t in_file_ = 0;  // Live chunks with a copy in the cache file.
+  size_t unreturned_ = 0;  // Payload bytes dropped since the last malloc_trim.
+  std::chrono::steady_clock::time_point last_trim_{};
   uint64_t page_outs_ = 0, page_ins_ = 0;
   // Resident chunks, least recently used first.
   std::list<const PackedChunk*> lru_;

@@ -1,5 +1,7 @@
 // Workspace's memory: what an opened session keeps of its samples once the
 // cloud is built, and where the cloud store pages (docs/cloud-store.md).
+#include <malloc.h>
+
 #include <QDir>
 #include <QFileInfo>
 #include <QMetaObject>
@@ -35,7 +37,12 @@ void Workspace::ReleaseOpenedSamples() {
   opened_ = light;
   opened_samples_released_ = true;
   LiveProcessor* p = processor_;
-  QMetaObject::invokeMethod(p, [p] { p->StopReplay(); });
+  QMetaObject::invokeMethod(p, [p] {
+    p->StopReplay();
+    // The samples (24 bytes each, gigabytes for hours) back to the system:
+    // a free in the middle of glibc's heap returns nothing by itself.
+    malloc_trim(0);
+  });
 }
 
 void Workspace::WithOpenedSamples(std::function<void()> then) {
