@@ -21,6 +21,7 @@
 
 #include "tests/testing/run_command.h"
 #include "ui/main_window.h"
+#include "ui/panels/connection_panel.h"
 #include "ui/workspace/workspace.h"
 
 namespace sweepscan::testing {
@@ -64,6 +65,16 @@ class AppFixture : public ::testing::Test {
                                 kResources.toStdString() + "/scenarios/lab.json --out " +
                                 tmp_.path().toStdString() + "/lab.ply");
     ASSERT_EQ(sim.code, 0) << sim.out;
+  }
+  void ConnectToSimulator(const QString& scenario = "lab.json") {
+    ui::ConnectOptions o;
+    o.kind = ui::LinkKind::kSimulator;
+    o.scenario_path = kResources + "/scenarios/" + scenario;
+    window_->connection_panel()->SetOptions(o);
+    QString error;
+    ASSERT_TRUE(window_->connection_panel()->ConnectNow(&error)) << error.toStdString();
+    ASSERT_TRUE(WaitFor([&] { return workspace_->authenticated(); }, 10000))
+        << hardware::LinkHealth::StateName(workspace_->health().state);
   }
   // Opens a session and waits until its replay has finished.
   void OpenAndReplay(const QString& session) {
