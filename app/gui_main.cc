@@ -382,6 +382,7 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
       {"frames_rendered", window->view()->frames_rendered()},
       {"event_loop_latency_ms",
        {{"p50", Percentile(latency, 0.5)}, {"p99", Percentile(latency, 0.99)}}},
+      {"insertion_ms", window->insertion_ms()},
       {"rss_mib", ResidentMiB()},
       {"memory", MemoryBreakdown(window)},
       {"last_error", window->last_error().toStdString()}};

@@ -340,8 +340,11 @@ void MainWindow::OnTick() {
 
   for (LiveBatch& b : workspace_->mailbox()->TakeAll()) {
     if (b.reset) view_->Clear();
+    QElapsedTimer insertion;
+    insertion.start();
     view_->AppendSealed(b.sealed);
     view_->AppendPoints(b.points);
+    insertion_ms_ += insertion.nsecsElapsed() * 1e-6;
     view_->AppendTrajectory(b.trajectory);
     if (b.has_pose) {
       view_->SetRobotPose(b.pose);

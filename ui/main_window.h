@@ -56,6 +56,9 @@ class MainWindow : public QMainWindow {
   QString last_error() const { return last_error_; }
   // Event-loop latency samples (ms) measured by the GUI tick, for figures.
   const std::vector<double>& tick_latencies_ms() const { return latencies_ms_; }
+  // GUI-thread time spent taking new points into the view (the mailbox's
+  // batches: sealed chunks and the growing chunk's points), ms in all.
+  double insertion_ms() const { return insertion_ms_; }
   double frames_per_second() const { return fps_; }
 
   // Actions the tests and the command line trigger.
@@ -153,6 +156,7 @@ class MainWindow : public QMainWindow {
   uint64_t fps_frames_ = 0;
   double fps_ = 0.0;
   std::vector<double> latencies_ms_;
+  double insertion_ms_ = 0.0;
   std::vector<float> pending_intensity_;  // for the view, once it holds every point
 };
 
