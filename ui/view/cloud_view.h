@@ -237,7 +237,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   float ValueOf(const Chunk& chunk, int mode, size_t i) const;
   bool Passes(const Chunk& chunk, size_t i) const;
   void UpdateMotionStride();
-  void ShowLevels();  // Actor visibility from lod_active_ and what is built.
+  void ShowLevels();  // The batches' visibility from lod_active_.
   void PlanRest();
   bool RefineSlice(int max_ms);  // True when the queue is empty.
   void UpdateRanges(float z, float t, float r);

@@ -34,10 +34,13 @@ void CloudView::SyncBatches() {
     for (Batch::Level& l : batches_.back()->level) renderer_->RemoveActor(l.drawn.actor);
     batches_.pop_back();
   }
-  while (batches_.size() < want) {
-    auto b = std::make_unique<Batch>();
-    for (Batch::Level& l : b->level) NewDrawnActor(&l.drawn);
-    batches_.push_back(std::move(b));
+  if (batches_.size() < want) {
+    while (batches_.size() < want) {
+      auto b = std::make_unique<Batch>();
+      for (Batch::Level& l : b->level) NewDrawnActor(&l.drawn);
+      batches_.push_back(std::move(b));
+    }
+    ShowLevels();
   }
   for (size_t i = 0; i < batches_.size(); ++i) {
     const size_t first = i * kBatchChunks, end = std::min(sealed, first + kBatchChunks);
@@ -64,8 +67,6 @@ void CloudView::SyncBatches() {
       now.Modified();
       l.built = now.GetMTime();
     }
-    batches_[i]->level[0].drawn.actor->SetVisibility(lod_active_);
-    batches_[i]->level[1].drawn.actor->SetVisibility(!lod_active_);
   }
 }
 

@@ -40,7 +40,9 @@ inline constexpr uint16_t kNoValue = 0xFFFF;
 
 // One drawn level of a chunk: the points i = 0, stride, 2 stride, ... of the
 // chunk (all of them, whatever the pass filter), the vertex cells of those
-// the filter shows, and the colour mode's scalar.
+// the filter shows, and the colour mode's scalar. Only the growing chunk and
+// the batches have a mapper and an actor; sealed chunks' levels are drawn
+// through their batch.
 struct CloudView::Drawn {
   int stride = 0;  // 0: nothing built.
   vtkSmartPointer<vtkPoints> points;

@@ -185,14 +185,12 @@ void CloudView::UpdateMotionStride() {
 }
 
 void CloudView::ShowLevels() {
-  for (auto& c : chunks_) {
-    if (!c->sealed()) {
-      if (c->rest.actor) c->rest.actor->SetVisibility(true);  // The growing chunk, in full.
-      continue;
-    }
-    const bool rest = !lod_active_ && c->rest.stride > 0;
-    if (c->rest.actor) c->rest.actor->SetVisibility(rest);
-    if (c->motion.actor) c->motion.actor->SetVisibility(!rest);
+  // Sealed chunks show through their batches (the growing chunk's own actor
+  // is always shown, in full): the motion level while active, else the
+  // rest level (each chunk's where it has one, cloud_view_batches.cc).
+  for (auto& b : batches_) {
+    b->level[0].drawn.actor->SetVisibility(lod_active_);
+    b->level[1].drawn.actor->SetVisibility(!lod_active_);
   }
 }
 
@@ -315,7 +313,7 @@ size_t CloudView::vtk_point_count() const {
 std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {
   std::vector<Eigen::Vector3f> out;
   for (const auto& c : chunks_) {
-    // The level ShowLevels() makes visible.
+    // The level drawn now (ShowLevels(), the batches).
     const bool rest = !c->sealed() || (!lod_active_ && c->rest.stride > 0);
     const Drawn& d = rest ? c->rest : c->motion;
     if (!d.points) continue;
