@@ -2,28 +2,16 @@
 #ifndef SWEEPSCAN_APP_AGENT_MAIN_COMMON_H_
 #define SWEEPSCAN_APP_AGENT_MAIN_COMMON_H_
 
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <QCommandLineOption>
 #include <QCommandLineParser>
 #include <QCoreApplication>
-#include <QSocketNotifier>
-#include <csignal>
 #include <cstdio>
 
+#include "app/quit_on_signal.h"
 #include "hardware/agent/robot_agent.h"
 #include "hardware/link/qt_transport.h"
 
 namespace sweepscan::app {
-
-namespace internal {
-inline int signal_fds[2] = {-1, -1};
-inline void OnSignal(int) {
-  const char byte = 1;
-  (void)!::write(signal_fds[1], &byte, 1);  // Async-signal-safe; the event loop does the rest.
-}
-}  // namespace internal
 
 // The options both agents take: the TCP listen address, the key file, the
 // watchdog and the motion limits. Add() registers them; Apply() reads them
@@ -134,12 +122,7 @@ inline void LogAgentEvents(hardware::RobotAgent* agent) {
 // through the loop (a self-pipe wakes it), so the motors get their zero
 // command before the process exits.
 inline int RunAgentUntilSignal(QCoreApplication* app, hardware::RobotAgent* agent) {
-  if (::socketpair(AF_UNIX, SOCK_STREAM, 0, internal::signal_fds) == 0) {
-    auto* notifier = new QSocketNotifier(internal::signal_fds[0], QSocketNotifier::Read, app);
-    QObject::connect(notifier, &QSocketNotifier::activated, app, &QCoreApplication::quit);
-    ::signal(SIGINT, internal::OnSignal);
-    ::signal(SIGTERM, internal::OnSignal);
-  }
+  QuitOnSignals(app);
   const int rc = app->exec();
   agent->Shutdown();
   return rc;

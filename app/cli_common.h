@@ -67,6 +67,10 @@ extern const char* const kSimulateUsage;
 extern const char* const kCalibrateUsage;
 extern const char* const kEvaluateUsage;
 
+// The headless recorder (app/cli_record.cc): `record`.
+int RunRecord(int argc, char** argv);
+extern const char* const kRecordUsage;
+
 // Lidar-only structure from motion (app/cli_sfm.cc): `p3l`, `sfm`.
 int RunP3l(int argc, char** argv);
 extern const char* const kP3lUsage;

@@ -20,12 +20,14 @@ const char* kUsage =
     "  reconstruct  build the cloud of a recorded session\n"
     "  export     write a session's decoded sensor records as CSV\n"
     "  import     turn a ROS 1 or ROS 2 bag (2D lidar, odometry, IMU, tf) into a session\n"
+    "  record     record a session from a robot agent (robotd or the simulator), headless\n"
     "  repair     write a clean copy of a damaged session (intact records only)\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  p3l        6-DoF pose from three scan lines on three known planes (lidar-only SfM)\n"
     "  sfm        lidar-only structure from motion of a simulated 2D-lidar rig (poses, planes, cloud)\n"
     "  help       show this text, or `help <command>` for one command\n"
+    "  --version  print the version\n"
     "\n"
     "Every command accepts --json (machine-readable output on stdout) and --help.\n"
     "Exit codes: 0 ok, 1 failed while working (cannot write an output, out of memory),\n"
@@ -59,6 +61,8 @@ int Main(int argc, char** argv) {
       std::cout << kSfmUsage;
     } else if (topic == "import") {
       std::cout << kImportUsage;
+    } else if (topic == "record") {
+      std::cout << kRecordUsage;
     } else if (topic == "repair") {
       std::cout << kRepairUsage;
     } else {
@@ -66,7 +70,12 @@ int Main(int argc, char** argv) {
     }
     return kExitOk;
   }
+  if (command == "--version" || command == "version") {
+    std::cout << "sweepscan-cli 0.1.0\n";
+    return kExitOk;
+  }
   if (command == "simulate") return RunSimulate(argc, argv);
+  if (command == "record") return RunRecord(argc, argv);
   if (command == "info") return RunInfo(argc, argv);
   if (command == "reconstruct") return RunReconstruct(argc, argv);
   if (command == "export") return RunExport(argc, argv);

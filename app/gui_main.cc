@@ -64,10 +64,13 @@ struct Options {
   long long lod_budget = -1;        // Points drawn while the camera moves.
 };
 
-// resources/: beside the executable's install prefix, else the source tree.
+// The scenarios' folder's parent: PREFIX/share/sweepscan when installed
+// (the package: /usr/share/sweepscan), else the source tree's resources/.
 QString ResourcesDir() {
-  const QString beside = QCoreApplication::applicationDirPath() + QStringLiteral("/../resources");
-  if (QFileInfo::exists(beside + QStringLiteral("/scenarios"))) return QDir(beside).absolutePath();
+  const QString bin = QCoreApplication::applicationDirPath();
+  for (const QString& beside : {bin + QStringLiteral("/../share/sweepscan"), bin + QStringLiteral("/../resources")}) {
+    if (QFileInfo::exists(beside + QStringLiteral("/scenarios"))) return QDir(beside).absolutePath();
+  }
   return QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
 }
 

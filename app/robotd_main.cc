@@ -3,17 +3,14 @@
 // (docs/protocol.md) on TCP (loopback unless told otherwise, pre-shared key
 // required) or on a serial port, and stops the robot by itself when the link
 // goes quiet. Behaviour: docs/robot-agent.md. Thin: parsing and wiring.
-#include <signal.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <QCommandLineParser>
 #include <QCoreApplication>
-#include <QSocketNotifier>
 #include <cstdio>
 #include <exception>
 
 #include "app/agent_main_common.h"
+#include "app/robotd_config.h"
+#include "app/service_notify.h"
 #include "hardware/agent/robot_agent.h"
 #include "hardware/link/qt_transport.h"
 
@@ -54,10 +51,36 @@ int AgentMain(int argc, char** argv) {
       "PORT");
   const QCommandLineOption name(QStringLiteral("name"),
                                 "Robot name in the Hello (default robot-1).", "NAME");
+  const QCommandLineOption config_file(
+      QStringLiteral("config"),
+      "Read options from FILE: lines 'key = value', a key being a long option without its "
+      "dashes (the packaged service uses /etc/sweepscan/robotd.conf). The command line "
+      "overrides the file.",
+      "FILE");
   const sweepscan::app::AgentCommandLine common;
   common.Add(&parser);
-  parser.addOptions({lidar, imu, motor, serial, name});
-  if (!parser.parse(QCoreApplication::arguments())) return Fail(parser.errorText());
+  parser.addOptions({lidar, imu, motor, serial, name, config_file});
+  QStringList arguments = QCoreApplication::arguments();
+  if (!parser.parse(arguments)) return Fail(parser.errorText());
+  if (parser.isSet(config_file) && !parser.isSet(QStringLiteral("help")) &&
+      !parser.isSet(QStringLiteral("version"))) {
+    // Every option but the file itself, help and version may come from it.
+    QStringList keys;
+    for (const QCommandLineOption* option :
+         {&lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
+          &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha}) {
+      keys << option->names().first();
+    }
+    QStringList from_file;
+    QString file_error;
+    if (!sweepscan::app::ReadAgentConfigFile(parser.value(config_file), keys, &from_file,
+                                             &file_error)) {
+      return Fail(file_error);
+    }
+    // The file's options first: QCommandLineParser::value() is the last one given.
+    arguments = QStringList{arguments.first()} + from_file + arguments.mid(1);
+    if (!parser.parse(arguments)) return Fail(parser.errorText());
+  }
   if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
   if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
   if (!parser.positionalArguments().isEmpty()) {
@@ -74,7 +97,11 @@ int AgentMain(int argc, char** argv) {
   config.imu_port = parser.value(imu);
   config.motor_port = parser.value(motor);
   if (config.lidar_port.isEmpty() && config.imu_port.isEmpty() && config.motor_port.isEmpty()) {
-    return Fail(QStringLiteral("no device port given (--lidar, --imu, --motor)"));
+    // The stable names the udev rules give (docs/deployment.md); a device
+    // not plugged in yet is retried every second.
+    config.lidar_port = QStringLiteral("/dev/sweepscan/lidar");
+    config.imu_port = QStringLiteral("/dev/sweepscan/imu");
+    config.motor_port = QStringLiteral("/dev/sweepscan/motor");
   }
   auto describe = [&](uint8_t device, const QString& port, int baud, const char* what) {
     if (!port.isEmpty()) {
@@ -105,12 +132,23 @@ int AgentMain(int argc, char** argv) {
   RobotAgent agent(config);
   sweepscan::app::LogAgentEvents(&agent);
   if (!agent.Start(&error)) return Fail(error);
+  QString serving;
   if (config.link == RobotAgentConfig::LinkKind::kTcp) {
-    std::printf("listening on %s:%u\n", qPrintable(config.listen_address), agent.tcp_port());
+    serving = QStringLiteral("listening on %1:%2").arg(config.listen_address).arg(agent.tcp_port());
   } else {
-    std::printf("serving the link on %s\n", qPrintable(config.link_serial_port));
+    serving = QStringLiteral("serving the link on %1").arg(config.link_serial_port);
   }
+  std::printf("%s\n", qPrintable(serving));
   std::fflush(stdout);
+
+  sweepscan::app::ServiceNotifier service;
+  service.Ready(serving);
+  QObject::connect(&agent, &RobotAgent::clientConnected, &service, [&](const QString& peer) {
+    service.Status(serving + QStringLiteral(", client ") + peer);
+  });
+  QObject::connect(&agent, &RobotAgent::clientDisconnected, &service,
+                   [&](const QString&, const QString&) { service.Status(serving + QStringLiteral(", no client")); });
+  QObject::connect(&app, &QCoreApplication::aboutToQuit, &service, [&] { service.Stopping(); });
 
   return sweepscan::app::RunAgentUntilSignal(&app, &agent);
 }

@@ -4,13 +4,10 @@
 // The workstation connects exactly as to a robot: TCP on loopback (key
 // required) or a pseudo-terminal (--pty prints the slave path, a real serial
 // device to open with QSerialPort). Behaviour: docs/robot-agent.md.
-#include <signal.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
+// --device-ptys serves the devices themselves on pseudo-terminals instead,
+// for a real sweepscan-robotd to open as its device ports.
 #include <QCommandLineParser>
 #include <QCoreApplication>
-#include <QSocketNotifier>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -19,6 +16,7 @@
 #include "core/scenario/scenario.h"
 #include "core/sim/world.h"
 #include "hardware/agent/robot_agent.h"
+#include "hardware/emulation/device_ptys.h"
 #include "hardware/emulation/sim_devices.h"
 #include "hardware/link/qt_transport.h"
 
@@ -39,6 +37,32 @@ int Fail(const QString& message) {
 }  // namespace
 
 namespace {
+
+// --device-ptys: the devices on ptys until SIGINT or SIGTERM. stdout: one
+// line per device with its paths, then "started" when the world's clock
+// starts (every agent has opened its lidar port).
+int ServeDevicePtys(QCoreApplication* app, std::unique_ptr<SimDevices> sim, int copies) {
+  sweepscan::hardware::DevicePtys ptys(std::move(sim), copies);
+  QString error;
+  if (!ptys.Open(&error)) return Fail(error);
+  const char* names[3] = {"lidar", "imu", "motor"};
+  for (int device = 0; device < 3; ++device) {
+    std::printf("%s", names[device]);
+    for (int copy = 0; copy < copies; ++copy) std::printf(" %s", qPrintable(ptys.SlavePaths(copy)[device]));
+    std::printf("\n");
+  }
+  std::fflush(stdout);
+  QObject::connect(&ptys, &sweepscan::hardware::DevicePtys::worldStarted, [] {
+    std::printf("started\n");
+    std::fflush(stdout);
+  });
+  sweepscan::app::QuitOnSignals(app);
+  const int rc = app->exec();
+  std::fprintf(stderr, "sweepscan-sim: device bytes not taken by a pty: %llu\n",
+               static_cast<unsigned long long>(ptys.bytes_dropped()));
+  return rc;
+}
+
 int AgentMain(int argc, char** argv) {
   QCoreApplication app(argc, argv);
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan-sim"));
@@ -57,9 +81,16 @@ int AgentMain(int argc, char** argv) {
                                     "Follow the scenario's path instead of drive commands.");
   const QCommandLineOption pty(QStringLiteral("pty"),
                                "Serve the link on a new pseudo-terminal; prints its path.");
+  const QCommandLineOption device_ptys(
+      QStringLiteral("device-ptys"),
+      "No agent: serve the X4, HI219 and motor board themselves on new pseudo-terminals, "
+      "for sweepscan-robotd's --lidar, --imu and --motor; prints 'lidar PATH', 'imu PATH', "
+      "'motor PATH'. With --copies N, N sets fed the same bytes (one line per device, N "
+      "paths); only the first set's commands reach the devices.");
+  const QCommandLineOption copies(QStringLiteral("copies"), "Sets of device ptys (default 1).", "N");
   const sweepscan::app::AgentCommandLine common;
   common.Add(&parser);
-  parser.addOptions({scenario, scripted, pty});
+  parser.addOptions({scenario, scripted, pty, device_ptys, copies});
   if (!parser.parse(QCoreApplication::arguments())) return Fail(parser.errorText());
   if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
   if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
@@ -73,6 +104,18 @@ int AgentMain(int argc, char** argv) {
   const sweepscan::Status loaded =
       sweepscan::LoadScenario(parser.value(scenario).toStdString(), &world);
   if (!loaded.ok()) return Fail(QString::fromStdString(loaded.message()));
+
+  const SimDevices::Mode mode =
+      parser.isSet(scripted) ? SimDevices::Mode::kScripted : SimDevices::Mode::kCommanded;
+  if (parser.isSet(device_ptys)) {
+    if (parser.isSet(pty) || parser.isSet(common.listen)) {
+      return Fail(QStringLiteral("--device-ptys serves no link: no --pty or --listen"));
+    }
+    bool ok = true;
+    const int n = parser.isSet(copies) ? parser.value(copies).toInt(&ok) : 1;
+    if (!ok || n < 1 || n > 8) return Fail(QStringLiteral("--copies expects 1..8"));
+    return ServeDevicePtys(&app, std::make_unique<SimDevices>(world, mode), n);
+  }
 
   RobotAgentConfig config;
   QString error;
@@ -94,8 +137,6 @@ int AgentMain(int argc, char** argv) {
     return Fail(error);
   }
 
-  const SimDevices::Mode mode =
-      parser.isSet(scripted) ? SimDevices::Mode::kScripted : SimDevices::Mode::kCommanded;
   auto devices = std::make_unique<SimDevices>(world, mode);
   RobotAgent agent(config,
                    std::make_unique<SimDevicesAdapter<SimDevices, TimedBytes>>(std::move(devices)));

@@ -68,11 +68,8 @@ void ReadScene(const JsonObject& o, SimConfig* c) {
   if (c->scene.boxes().empty()) o.Fail("boxes", "the scene has no boxes");
 }
 
-void ReadPath(const JsonObject& o, SimConfig* c) {
-  o.AllowOnly({"start", "segments"});
-  const JsonObject start = o.Object("start");
-  start.AllowOnly({"x_m", "y_m", "yaw_rad"});
-  c->start = {start.Number("x_m"), start.Number("y_m"), start.Number("yaw_rad")};
+// o.segments: straight/turning segments or circles (docs/scenario-format.md).
+void ReadSegments(const JsonObject& o, std::vector<sim::DriveSegment>* path) {
   const json& segs = o.Array("segments");
   if (segs.empty()) o.Fail("segments", "needs at least one segment");
   for (size_t i = 0; i < segs.size(); ++i) {
@@ -81,17 +78,25 @@ void ReadPath(const JsonObject& o, SimConfig* c) {
       s.AllowOnly({"circle_radius_m", "v_mps", "turns", "direction"});
       const std::string dir = s.String("direction", "left");
       if (dir != "left" && dir != "right") s.Fail("direction", "must be 'left' or 'right'");
-      c->path.push_back(CircleSegment(s.Positive("circle_radius_m"), s.Positive("v_mps"),
-                                      s.Positive("turns"), dir == "left"));
+      path->push_back(CircleSegment(s.Positive("circle_radius_m"), s.Positive("v_mps"),
+                                    s.Positive("turns"), dir == "left"));
     } else {
       s.AllowOnly({"v_mps", "w_radps", "duration_s"});
-      c->path.push_back({s.Number("v_mps"), s.Number("w_radps"), s.Positive("duration_s")});
+      path->push_back({s.Number("v_mps"), s.Number("w_radps"), s.Positive("duration_s")});
     }
-    const sim::DriveSegment& d = c->path.back();
+    const sim::DriveSegment& d = path->back();
     if (std::abs(d.v) > 2.0 || std::abs(d.w) > 5.0) {
       s.Fail("v_mps", "speed beyond the robot's limits (|v| <= 2 m/s, |w| <= 5 rad/s)");
     }
   }
+}
+
+void ReadPath(const JsonObject& o, SimConfig* c) {
+  o.AllowOnly({"start", "segments"});
+  const JsonObject start = o.Object("start");
+  start.AllowOnly({"x_m", "y_m", "yaw_rad"});
+  c->start = {start.Number("x_m"), start.Number("y_m"), start.Number("yaw_rad")};
+  ReadSegments(o, &c->path);
 }
 
 // One reader per section of the file (docs/scenario-format.md); each throws
@@ -229,6 +234,29 @@ Status ScenarioFromJson(const json& j, const std::string& source, SimConfig* con
   std::string error;
   if (!c.IsValid(&error)) return Status::Error(source + ": " + error);
   *config = std::move(c);
+  return Status::Ok();
+}
+
+Status LoadDriveScript(const std::string& path, std::vector<sim::DriveSegment>* segments) {
+  json j;
+  Status s = ReadJsonFile(path, &j);
+  if (!s.ok()) return s;
+  if (j.is_object() && j.contains("format")) {  // A scenario: its path's segments.
+    SimConfig scenario;
+    s = ScenarioFromJson(j, path, &scenario);
+    if (!s.ok()) return s;
+    *segments = scenario.path;
+    return Status::Ok();
+  }
+  std::vector<sim::DriveSegment> read;
+  try {
+    const JsonObject root(j, "");
+    root.AllowOnly({"segments"});
+    ReadSegments(root, &read);
+  } catch (const JsonError& e) {
+    return Status::Error(path + ": " + e.what());
+  }
+  *segments = std::move(read);
   return Status::Ok();
 }
 

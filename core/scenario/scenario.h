@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/common/status.h"
 #include "core/sim/world.h"
@@ -17,6 +18,10 @@ constexpr int kScenarioFormatVersion = 1;
 
 Status ScenarioFromJson(const nlohmann::json& j, const std::string& source, sim::SimConfig* config);
 Status LoadScenario(const std::string& path, sim::SimConfig* config);
+// A drive script (`sweepscan-cli record --drive-script`, docs/scenario-format.md
+// "Drive scripts"): {"segments": [...]} with the segments of a scenario's
+// path, or a whole scenario file (its path's segments).
+Status LoadDriveScript(const std::string& path, std::vector<sim::DriveSegment>* segments);
 // The full, explicit form of a configuration (every default written out);
 // loading it back gives the same configuration.
 nlohmann::json ScenarioToJson(const sim::SimConfig& config);

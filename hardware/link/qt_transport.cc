@@ -1,6 +1,7 @@
 #include "hardware/link/qt_transport.h"
 
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 
 #include <cerrno>
 #include <cstring>
@@ -43,6 +44,17 @@ SerialStream::SerialStream(QObject* parent) : ByteStream(parent), port_(new QSer
 
 SerialStream::~SerialStream() { Close(); }
 
+namespace {
+// Unix98 pseudo-terminal slaves (/dev/pts/N, or a symlink to one) have the
+// major numbers 136..143 (Documentation/admin-guide/devices.txt).
+bool IsPseudoTerminal(const QString& port) {
+  struct stat st;
+  if (::stat(QFile::encodeName(port).constData(), &st) != 0 || !S_ISCHR(st.st_mode)) return false;
+  const unsigned major_number = major(st.st_rdev);
+  return major_number >= 136 && major_number <= 143;
+}
+}  // namespace
+
 bool SerialStream::Open(const QString& port, qint32 baud, QString* error) {
   name_ = port;
   baud_ = baud;
@@ -51,8 +63,18 @@ bool SerialStream::Open(const QString& port, qint32 baud, QString* error) {
     if (error != nullptr) *error = QStringLiteral("%1: %2").arg(port, port_->errorString());
     return false;
   }
-  // A pseudo-terminal accepts any rate; a real adapter refuses odd ones.
-  if (!port_->setBaudRate(baud) || !port_->setDataBits(QSerialPort::Data8) ||
+  // A pseudo-terminal has no line rate, and a real adapter refuses odd ones.
+  // Setting the X4's 128000 (not a POSIX rate) needs termios2 (TCSETS2),
+  // which some layers between us and a pty do not pass (qemu-user 7.2, which
+  // runs the arm64 build here): on a pty, a rate that cannot be set is moot.
+  if (!port_->setBaudRate(baud) && !IsPseudoTerminal(port)) {
+    if (error != nullptr) {
+      *error = QStringLiteral("%1: cannot set %2 baud: %3").arg(port).arg(baud).arg(port_->errorString());
+    }
+    port_->close();
+    return false;
+  }
+  if (!port_->setDataBits(QSerialPort::Data8) ||
       !port_->setParity(QSerialPort::NoParity) || !port_->setStopBits(QSerialPort::OneStop) ||
       !port_->setFlowControl(QSerialPort::NoFlowControl)) {
     if (error != nullptr) {

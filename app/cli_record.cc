@@ -1,0 +1,318 @@
+// `sweepscan-cli record`: the headless recorder. Connects to a robot agent
+// (sweepscan-robotd or sweepscan-sim) over TCP or a serial link with the
+// app's own RobotConnection, records a session exactly as the app does
+// (same frames, same crash-safe writer: everything older than a second is on
+// disk whatever happens to the process), prints the link's health once a
+// second, and stops cleanly on Ctrl+C, SIGTERM, --duration or the end of a
+// drive script, sending Stop first.
+#include <QCoreApplication>
+#include <QDir>
+#include <QElapsedTimer>
+#include <QFileInfo>
+#include <QTimer>
+#include <nlohmann/json.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/cli_args.h"
+#include "app/cli_common.h"
+#include "app/quit_on_signal.h"
+#include "core/calibration/calibration_file.h"
+#include "core/scenario/scenario.h"
+#include "hardware/link/qt_transport.h"
+#include "hardware/station/robot_connection.h"
+
+namespace sweepscan::app {
+
+const char* const kRecordUsage =
+    "usage: sweepscan-cli record --connect HOST:PORT --key-file K --out NAME.sweepscan [options]\n"
+    "       sweepscan-cli record --serial PORT[@BAUD] --out NAME.sweepscan [options]\n"
+    "\n"
+    "Records a session from a robot agent (sweepscan-robotd, or sweepscan-sim) as the\n"
+    "app does: every link frame, durable at least once a second, so a crash or a\n"
+    "power cut keeps everything older than a second. Prints the link's health on\n"
+    "stderr once a second. Ctrl+C or SIGTERM stops the robot and closes the session.\n"
+    "The link reconnects by itself after a drop; the session goes on.\n"
+    "\n"
+    "Options:\n"
+    "  --connect HOST:PORT    the agent's TCP address (robotd's --listen)\n"
+    "  --key-file K           the agent's pre-shared key (robotd's --key-file)\n"
+    "  --serial PORT[@BAUD]   the link on a serial port instead (default 921600 baud)\n"
+    "  --out NAME.sweepscan   the new session folder (must not exist)\n"
+    "  --duration S           stop after S seconds of recording (default: until Ctrl+C,\n"
+    "                         or the end of the drive script)\n"
+    "  --drive-script FILE    drive this path while recording: {\"segments\": [...]} with the\n"
+    "                         segments of a scenario's path, or a scenario file (its path);\n"
+    "                         docs/scenario-format.md \"Drive scripts\"\n"
+    "  --scenario FILE        the simulated world behind sweepscan-sim, stored in the session\n"
+    "                         so that it reopens in the scenario's frame (as the app does)\n"
+    "  --calibration FILE     the robot's mounting error, stored as the session's calibration\n"
+    "  --connect-timeout S    give up if no authenticated link within S seconds (default 10)\n"
+    "  --json                 print the summary as JSON on stdout\n"
+    "\n"
+    "Exit codes: 0 recorded, 1 the link never came up or the session could not be\n"
+    "written, 2 bad options or the key was refused.\n";
+
+namespace {
+
+struct RecordOptions {
+  hardware::RobotConnectionOptions link;
+  QString out;
+  double duration_s = -1.0;  // < 0: until a signal (or the script's end).
+  double connect_timeout_s = 10.0;
+  std::vector<sim::DriveSegment> script;
+  SessionMeta meta;
+};
+
+bool ParsePositive(const Args& args, const std::string& key, double* out) {
+  if (!args.Has(key)) return true;
+  const std::string v = args.Get(key);
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !(d > 0.0) || !(d < 1e7)) {
+    PrintError("--" + key + " expects a positive number of seconds, got '" + v + "'");
+    return false;
+  }
+  *out = d;
+  return true;
+}
+
+// Returns kExitOk or the exit code of the error it printed.
+int ParseRecordOptions(const Args& args, RecordOptions* o) {
+  if (!args.positional().empty()) {
+    PrintError("unexpected argument '" + args.positional()[0] + "'");
+    return kExitBadInput;
+  }
+  if (args.Has("connect") == args.Has("serial")) {
+    PrintError("give either --connect HOST:PORT or --serial PORT");
+    return kExitBadInput;
+  }
+  if (!args.Has("out")) {
+    PrintError("record needs --out NAME.sweepscan (a new session folder)");
+    return kExitBadInput;
+  }
+  o->out = QString::fromStdString(args.Get("out"));
+  if (QFileInfo::exists(o->out)) {
+    PrintError(args.Get("out") + ": exists; record writes a new session folder");
+    return kExitBadInput;
+  }
+  QString error;
+  hardware::LinkAddress address;
+  const QString text = args.Has("connect") ? "tcp:" + QString::fromStdString(args.Get("connect"))
+                                           : "serial:" + QString::fromStdString(args.Get("serial"));
+  if (!hardware::ParseLinkAddress(text, &address, &error)) {
+    PrintError(error.toStdString());
+    return kExitBadInput;
+  }
+  o->link.address = text;
+  o->link.client_name = "sweepscan-cli 0.1.0 record";
+  if (args.Has("connect")) {
+    if (!args.Has("key-file")) {
+      PrintError("--connect needs --key-file K (the robot's key; robotd's --key-file)");
+      return kExitBadInput;
+    }
+    if (!hardware::ReadKeyFile(QString::fromStdString(args.Get("key-file")), &o->link.key, &error)) {
+      PrintError(error.toStdString());
+      return kExitBadInput;
+    }
+  }
+  if (!ParsePositive(args, "duration", &o->duration_s) ||
+      !ParsePositive(args, "connect-timeout", &o->connect_timeout_s)) {
+    return kExitBadInput;
+  }
+  if (args.Has("drive-script")) {
+    const Status s = LoadDriveScript(args.Get("drive-script"), &o->script);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  // The session's meta as the app fills it (ui/workspace/workspace.cc,
+  // PrepareLink): the simulator's scenario and geometry, the calibration.
+  if (args.Has("scenario")) {
+    sim::SimConfig scenario;
+    const Status s = LoadScenario(args.Get("scenario"), &scenario);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+    o->meta.geometry = scenario.geometry;
+    o->meta.lidar_angle_convention = scenario.lidar.angle_convention;
+    o->meta.settings["scenario"] = ScenarioToJson(scenario);
+  }
+  if (args.Has("calibration")) {
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &o->meta.calibration);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
+    }
+  }
+  o->link.session_meta = o->meta;
+  o->link.decoder.wheel_distance_m = o->meta.geometry.wheel_distance_m;
+  o->link.decoder.lidar_angle_convention = o->meta.lidar_angle_convention;
+  if (!o->link.IsValid(&error)) {
+    PrintError(error.toStdString());
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
+
+// One line a second on stderr: what an operator watches over ssh.
+void PrintHealth(double elapsed_s, const hardware::LinkHealth& h, bool recording) {
+  std::fprintf(stderr,
+               "%7.1f s  %-12s  lidar %5.1f/s  imu %5.1f/s  motor %5.1f/s  %6.1f kB/s  "
+               "lost %llu  crc %llu  rtt %.1f ms  records %llu%s\n",
+               elapsed_s, hardware::LinkHealth::StateName(h.state), h.devices[0].frames_per_s,
+               h.devices[1].frames_per_s, h.devices[2].frames_per_s, h.bytes_per_s / 1e3,
+               static_cast<unsigned long long>(h.frames_missing),
+               static_cast<unsigned long long>(h.crc_errors), h.latency_last_ms,
+               static_cast<unsigned long long>(h.session_records), recording ? "" : "  (not recording)");
+  if (h.state != hardware::LinkHealth::State::kConnected && !h.last_error.isEmpty()) {
+    std::fprintf(stderr, "          last error: %s\n", qPrintable(h.last_error));
+  }
+}
+
+}  // namespace
+
+int RunRecord(int argc, char** argv) {
+  Args args({"json", "help"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
+                               "scenario", "calibration", "connect-timeout"});
+  std::string parse_error;
+  if (!args.Parse(argc, argv, 2, &parse_error)) {
+    PrintError(parse_error);
+    return kExitBadInput;
+  }
+  if (args.Flag("help")) {
+    std::cout << kRecordUsage;
+    return kExitOk;
+  }
+  RecordOptions o;
+  if (const int code = ParseRecordOptions(args, &o); code != kExitOk) return code;
+
+  int qt_argc = 1;
+  QCoreApplication app(qt_argc, argv);
+  QuitOnSignals(&app);
+  hardware::RobotConnection connection(o.link);
+  QString error;
+  if (!connection.Start(&error)) {
+    PrintError(error.toStdString());
+    return kExitBadInput;
+  }
+
+  int exit_code = kExitOk;
+  QString refused;
+  QElapsedTimer clock;  // Since the session started.
+  QElapsedTimer since_start;
+  since_start.start();
+  QTimer script_timer;
+  script_timer.setTimerType(Qt::PreciseTimer);
+  QElapsedTimer script_clock;
+  double script_s = 0.0;
+  for (const sim::DriveSegment& s : o.script) script_s += s.duration_s;
+
+  // The session starts when the link is authenticated (as the app's Record
+  // button on a connected link) and stays open across reconnections.
+  QObject::connect(&connection, &hardware::RobotConnection::authenticatedChanged, &app, [&](bool on) {
+    if (!on) return;
+    // The lidar's motor on at every (re)connection, as the app does: the
+    // agent may have stopped it when the link dropped.
+    connection.SetLidarMotor(true);
+    if (connection.recording()) return;
+    QString start_error;
+    if (!connection.StartRecording(o.out, o.meta, &start_error)) {
+      PrintError(start_error.toStdString());
+      exit_code = kExitFailure;
+      app.quit();
+      return;
+    }
+    clock.start();
+    std::fprintf(stderr, "recording to %s from %s (%s)\n", qPrintable(o.out), qPrintable(o.link.address),
+                 connection.health().agent_name.c_str());
+    if (o.duration_s > 0) QTimer::singleShot(static_cast<int>(o.duration_s * 1e3), &app, &QCoreApplication::quit);
+    if (!o.script.empty()) {
+      script_clock.start();
+      script_timer.start(100);  // 10 Hz, as the app's scripted drives.
+    }
+  });
+  QObject::connect(&script_timer, &QTimer::timeout, &app, [&] {
+    double t = script_clock.elapsed() * 1e-3;
+    for (const sim::DriveSegment& s : o.script) {
+      if (t < s.duration_s) {
+        connection.Drive(s.v, s.w);
+        return;
+      }
+      t -= s.duration_s;
+    }
+    script_timer.stop();
+    connection.StopMotion();
+    std::fprintf(stderr, "drive script done (%.1f s)\n", script_s);
+    if (o.duration_s < 0) app.quit();
+  });
+  QObject::connect(&connection, &hardware::RobotConnection::authenticationFailed, &app,
+                   [&](const QString& reason) {
+                     // Final only if the connection gave up (a wrong key, a
+                     // protocol it does not speak); "busy" is retried. The
+                     // state is set after the signal, hence the queued look.
+                     QTimer::singleShot(0, &app, [&, reason] {
+                       if (connection.health().state != hardware::LinkHealth::State::kFailed) return;
+                       refused = reason;
+                       app.quit();
+                     });
+                   });
+  QTimer health_timer;
+  QObject::connect(&health_timer, &QTimer::timeout, &app, [&] {
+    const hardware::LinkHealth h = connection.health();
+    PrintHealth(connection.recording() ? clock.elapsed() * 1e-3 : since_start.elapsed() * 1e-3, h,
+                connection.recording());
+    if (!connection.recording() && since_start.elapsed() > o.connect_timeout_s * 1e3) {
+      PrintError("no authenticated link to " + o.link.address.toStdString() + " within " +
+                 std::to_string(static_cast<int>(o.connect_timeout_s)) + " s" +
+                 (h.last_error.isEmpty() ? "" : " (" + h.last_error.toStdString() + ")"));
+      exit_code = kExitFailure;
+      app.quit();
+    }
+  });
+  health_timer.start(1000);
+
+  app.exec();
+  script_timer.stop();
+  const bool recorded = connection.recording();
+  const double seconds = recorded ? clock.elapsed() * 1e-3 : 0.0;
+  const hardware::LinkHealth health = connection.health();
+  const Status closed = recorded ? connection.StopRecording() : Status::Ok();
+  connection.Shutdown();  // Sends Stop first.
+  if (!refused.isEmpty()) {
+    PrintError("refused: " + refused.toStdString() +
+               (refused == QLatin1String("authentication failed")
+                    ? " (is --key-file the robot's key, robotd's --key-file?)"
+                    : ""));
+    return kExitBadInput;
+  }
+  if (!closed.ok()) {
+    PrintError(closed.message());
+    return kExitFailure;
+  }
+  if (!recorded) return exit_code == kExitOk ? kExitFailure : exit_code;
+  const int signal = QuitSignal();
+  if (args.Flag("json")) {
+    const nlohmann::json summary = {
+        {"session", QDir(o.out).absolutePath().toStdString()},
+        {"seconds", seconds},
+        {"records", health.session_records},
+        {"frames_lost", health.frames_missing},
+        {"reconnects", health.reconnects},
+        {"stopped_by", signal != 0 ? "signal" : (o.duration_s > 0 ? "duration" : "script")}};
+    std::cout << summary.dump() << "\n";
+  } else {
+    std::printf("%s: %.1f s, %llu records, %llu frames lost in transit, %llu reconnects\n",
+                qPrintable(o.out), seconds, static_cast<unsigned long long>(health.session_records),
+                static_cast<unsigned long long>(health.frames_missing),
+                static_cast<unsigned long long>(health.reconnects));
+  }
+  return exit_code;
+}
+
+}  // namespace sweepscan::app

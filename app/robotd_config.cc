@@ -1,0 +1,48 @@
+#include "app/robotd_config.h"
+
+#include <QFile>
+#include <QSet>
+
+namespace sweepscan::app {
+
+bool ReadAgentConfigFile(const QString& path, const QStringList& keys, QStringList* args,
+                         QString* error) {
+  constexpr qint64 kMaxBytes = 64 * 1024;  // A configuration, not a data file.
+  QFile file(path);
+  if (!file.open(QIODevice::ReadOnly)) {
+    *error = QStringLiteral("config file %1: %2").arg(path, file.errorString());
+    return false;
+  }
+  const QByteArray bytes = file.read(kMaxBytes + 1);
+  if (bytes.size() > kMaxBytes) {
+    *error = QStringLiteral("config file %1 is over %2 bytes").arg(path).arg(kMaxBytes);
+    return false;
+  }
+  QSet<QString> seen;
+  const QList<QByteArray> lines = bytes.split('\n');
+  for (int i = 0; i < lines.size(); ++i) {
+    const auto fail = [&](const QString& why) {
+      *error = QStringLiteral("%1:%2: %3").arg(path).arg(i + 1).arg(why);
+      return false;
+    };
+    QString line = QString::fromUtf8(lines[i]);
+    const int hash = line.indexOf(QLatin1Char('#'));
+    if (hash >= 0) line.truncate(hash);
+    line = line.trimmed();
+    if (line.isEmpty()) continue;
+    const int equals = line.indexOf(QLatin1Char('='));
+    if (equals < 0) return fail(QStringLiteral("expected 'key = value', got '%1'").arg(line));
+    const QString key = line.left(equals).trimmed();
+    const QString value = line.mid(equals + 1).trimmed();
+    if (!keys.contains(key)) {
+      return fail(QStringLiteral("unknown key '%1' (keys: %2)").arg(key, keys.join(QStringLiteral(", "))));
+    }
+    if (value.isEmpty()) return fail(QStringLiteral("'%1' has no value").arg(key));
+    if (seen.contains(key)) return fail(QStringLiteral("'%1' is set twice").arg(key));
+    seen.insert(key);
+    *args << QStringLiteral("--") + key << value;
+  }
+  return true;
+}
+
+}  // namespace sweepscan::app

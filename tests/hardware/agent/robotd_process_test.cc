@@ -1,0 +1,311 @@
+// sweepscan-robotd as a process, on its real device ports: the simulated X4,
+// HI219 and motor board on pseudo-terminals (DevicePtys, byte-exact), the
+// workstation's RobotConnection over loopback TCP. Run for the amd64 build
+// and, when the arm64 cross-build exists (scripts/build-arm64.sh; CMake
+// option SWEEPSCAN_ROBOTD_ARM64), for the arm64 binary under
+// qemu-aarch64-static: the same sensor records from the same device bytes,
+// and the watchdog stopping the robot within its bound under emulation.
+// Lines "figure: ..." are the figures docs/performance.md quotes
+// (scripts/arm64-e2e.sh collects them).
+#include <gtest/gtest.h>
+
+#include <QCoreApplication>
+#include <QElapsedTimer>
+#include <QFile>
+#include <QProcess>
+#include <QTemporaryDir>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/scenario/scenario.h"
+#include "hardware/codecs/motor_board_codec.h"
+#include "hardware/emulation/device_ptys.h"
+#include "hardware/link/telemetry_decoder.h"
+#include "hardware/station/robot_connection.h"
+#include "tests/testing/qt_wait.h"
+
+namespace sweepscan {
+namespace hardware {
+namespace {
+
+using sweepscan::testing::WaitFor;
+
+struct Build {
+  std::string name;
+  QStringList command;  // Program and leading arguments (qemu's, for arm64).
+};
+
+std::vector<Build> Builds() {
+  std::vector<Build> builds = {{"amd64", {QStringLiteral(SWEEPSCAN_ROBOTD)}}};
+  const QString arm64 = QStringLiteral(SWEEPSCAN_ROBOTD_ARM64);
+  if (!arm64.isEmpty() && QFile::exists(arm64)) {
+    builds.push_back({"arm64", {QStringLiteral(SWEEPSCAN_QEMU_AARCH64), "-L", "/", arm64}});
+  }
+  return builds;
+}
+
+std::string Scenario(const char* name) {
+  return std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" + name;
+}
+
+// CPU seconds (user + system) the process has used, from /proc.
+double CpuSeconds(qint64 pid) {
+  QFile stat(QStringLiteral("/proc/%1/stat").arg(pid));
+  if (!stat.open(QIODevice::ReadOnly)) return 0.0;
+  const QByteArray line = stat.readAll();
+  const QList<QByteArray> fields = line.mid(line.lastIndexOf(')') + 2).split(' ');
+  // After the command: state is field 3, utime 14 and stime 15 (proc(5)).
+  return (fields.value(11).toDouble() + fields.value(12).toDouble()) / ::sysconf(_SC_CLK_TCK);
+}
+
+// One robotd process on one set of device ptys, serving TCP on a free port.
+class Robotd {
+ public:
+  Robotd(const Build& build, const std::array<QString, 3>& ports, const QString& key_file,
+         const QStringList& extra = {}) {
+    QStringList args = build.command.mid(1);
+    args << "--lidar" << ports[0] << "--imu" << ports[1] << "--motor" << ports[2] << "--listen"
+         << "127.0.0.1:0" << "--key-file" << key_file << extra;
+    process_.start(build.command.first(), args);
+  }
+  ~Robotd() {
+    if (process_.state() != QProcess::NotRunning) {
+      process_.terminate();  // SIGTERM: it stops the motors and exits.
+      if (!process_.waitForFinished(10000)) process_.kill();
+    }
+  }
+  // Waits for "listening on 127.0.0.1:PORT" (qemu starts slowly).
+  bool WaitListening(int timeout_ms) {
+    return WaitFor(
+        [&] {
+          out_ += process_.readAllStandardOutput();
+          const int at = out_.indexOf("listening on 127.0.0.1:");
+          if (at < 0) return false;
+          const int end = out_.indexOf('\n', at);
+          if (end < 0) return false;
+          port_ = out_.mid(at + 23, end - at - 23).toUShort();
+          return port_ != 0;
+        },
+        timeout_ms);
+  }
+  QString Address() const { return QStringLiteral("tcp:127.0.0.1:%1").arg(port_); }
+  qint64 pid() const { return process_.processId(); }
+  QString Stderr() { return QString::fromUtf8(process_.readAllStandardError()); }
+  int Terminate() {
+    process_.terminate();
+    process_.waitForFinished(10000);
+    return process_.exitStatus() == QProcess::NormalExit ? process_.exitCode() : -1;
+  }
+
+ private:
+  QProcess process_;
+  QByteArray out_;
+  quint16 port_ = 0;
+};
+
+class RobotdProcessTest : public ::testing::TestWithParam<Build> {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(dir_.isValid());
+    key_file_ = dir_.filePath("robot.key");
+    QFile key(key_file_);
+    ASSERT_TRUE(key.open(QIODevice::WriteOnly));
+    key.write("a pre-shared key of the robot link, 32+ bytes long");
+    key.close();
+    key.setPermissions(QFile::ReadOwner | QFile::WriteOwner);
+  }
+  RobotConnectionOptions Client(const QString& address, const QString& session = QString()) {
+    RobotConnectionOptions o;
+    o.address = address;
+    o.key.assign(std::begin(kKey), std::end(kKey) - 1);
+    o.session_dir = session;
+    return o;
+  }
+  static constexpr char kKey[] = "a pre-shared key of the robot link, 32+ bytes long";
+  QTemporaryDir dir_;
+  QString key_file_;
+};
+
+// Index of the first record of `b` (from `b_first`) found in `a`, comparing
+// `same` on a run of `run` records; -1 if none.
+template <typename T, typename Same>
+long Align(const std::vector<T>& a, const std::vector<T>& b, size_t b_first, size_t run, Same same) {
+  if (b.size() < b_first + run) return -1;
+  for (size_t i = 0; i + run <= a.size(); ++i) {
+    bool all = true;
+    for (size_t k = 0; k < run && all; ++k) all = same(a[i + k], b[b_first + k]);
+    if (all) return static_cast<long>(i);
+  }
+  return -1;
+}
+
+bool SameImu(const ImuMeasurement& x, const ImuMeasurement& y) {
+  return x.gyro_z == y.gyro_z && x.roll == y.roll && x.pitch == y.pitch && x.yaw == y.yaw;
+}
+bool SameWheels(const WheelSpeedMeasurement& x, const WheelSpeedMeasurement& y) {
+  return x.left_mps == y.left_mps && x.right_mps == y.right_mps;
+}
+bool SameScan(const LidarScan& x, const LidarScan& y) {
+  if (x.samples.size() != y.samples.size()) return false;
+  for (size_t i = 0; i < x.samples.size(); ++i) {
+    if (x.samples[i].range_m != y.samples[i].range_m || x.samples[i].theta != y.samples[i].theta) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Checks that every record of `b` from b_first on equals `a`'s from the
+// aligned index, over their overlap; returns the overlap's length and the
+// spread (max - min) of the time offsets b - a, in seconds.
+template <typename T, typename Same, typename TimeOf>
+size_t ExpectSameRun(const char* what, const std::vector<T>& a, const std::vector<T>& b, size_t b_first,
+                     Same same, TimeOf time_of, double* spread_s) {
+  const long at = Align(a, b, b_first, 10, same);
+  EXPECT_GE(at, 0) << what << ": no run of 10 of the arm64 records found in the amd64 ones";
+  if (at < 0) return 0;
+  const size_t n = std::min(a.size() - static_cast<size_t>(at), b.size() - b_first);
+  double lo = 1e9, hi = -1e9;
+  size_t mismatches = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const T& x = a[static_cast<size_t>(at) + k];
+    const T& y = b[b_first + k];
+    if (!same(x, y)) ++mismatches;
+    const double d = ToSeconds(time_of(y) - time_of(x));
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  EXPECT_EQ(mismatches, 0u) << what << ": of " << n << " records in both";
+  *spread_s = hi - lo;
+  return n;
+}
+
+// Two robotd processes (the amd64 build and the one under test) read the
+// very same device bytes (two sets of ptys, one stream) and two workstations
+// record them at once: the sessions decode to the same sensor records.
+TEST_P(RobotdProcessTest, RecordsTheSameSensorRecordsAsTheAmd64BuildFromTheSameDeviceBytes) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab_circle.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kScripted), 2);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  Robotd reference(Builds()[0], ptys.SlavePaths(0), key_file_);
+  Robotd tested(GetParam(), ptys.SlavePaths(1), key_file_);
+  ASSERT_TRUE(reference.WaitListening(10000)) << reference.Stderr().toStdString();
+  ASSERT_TRUE(tested.WaitListening(60000)) << tested.Stderr().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return ptys.started(); }, 30000));
+
+  const QString session_a = dir_.filePath("amd64.sweepscan");
+  const QString session_b = dir_.filePath(QString::fromStdString(GetParam().name) + "-b.sweepscan");
+  RobotConnection a(Client(reference.Address()));
+  RobotConnection b(Client(tested.Address()));
+  ASSERT_TRUE(a.Start(&error) && b.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return a.authenticated() && b.authenticated(); }, 30000));
+  ASSERT_TRUE(a.StartRecording(session_a, SessionMeta(), &error)) << error.toStdString();
+  ASSERT_TRUE(b.StartRecording(session_b, SessionMeta(), &error)) << error.toStdString();
+  a.SetLidarMotor(true);  // Set 0's commands reach the devices.
+  const double cpu0 = CpuSeconds(tested.pid());
+  QElapsedTimer wall;
+  wall.start();
+  sweepscan::testing::Pump(8000);
+  const double cpu_per_s = (CpuSeconds(tested.pid()) - cpu0) / (wall.elapsed() * 1e-3);
+  const LinkHealth health = b.health();
+  ASSERT_TRUE(a.StopRecording().ok());
+  ASSERT_TRUE(b.StopRecording().ok());
+  a.Shutdown();
+  b.Shutdown();
+  EXPECT_EQ(tested.Terminate(), 0) << "SIGTERM ends robotd cleanly";
+  EXPECT_EQ(ptys.bytes_dropped(), 0u) << "an agent did not keep up with its device ports";
+
+  SensorLog log_a, log_b;
+  SessionDecodeInfo info_a, info_b;
+  ASSERT_TRUE(DecodeSession(session_a.toStdString(), &log_a, &info_a).ok());
+  ASSERT_TRUE(DecodeSession(session_b.toStdString(), &log_b, &info_b).ok());
+  EXPECT_EQ(info_b.link.sequence[0].frames_missing, 0u);
+  EXPECT_EQ(info_b.link.codec.checksum_errors, 0u);
+  ASSERT_GE(log_b.imu.size(), 500u);  // 100 Hz for most of 8 s.
+  ASSERT_GE(log_b.scans.size(), 30u);  // ~7 Hz.
+  double imu_spread = 0, wheel_spread = 0, scan_spread = 0;
+  // From the second record (scan) on: the first may be a partial one.
+  const size_t imu = ExpectSameRun("imu", log_a.imu, log_b.imu, 1, SameImu,
+                                   [](const ImuMeasurement& m) { return m.time; }, &imu_spread);
+  const size_t wheels = ExpectSameRun("wheels", log_a.wheels, log_b.wheels, 1, SameWheels,
+                                      [](const WheelSpeedMeasurement& m) { return m.time; }, &wheel_spread);
+  const size_t scans = ExpectSameRun("scans", log_a.scans, log_b.scans, 1, SameScan,
+                                     [](const LidarScan& s) { return s.start_time(); }, &scan_spread);
+  EXPECT_GE(imu, 500u);
+  EXPECT_GE(wheels, 250u);
+  EXPECT_GE(scans, 30u);
+  // Both agents stamp the bytes as they read them: the offsets between the
+  // two clocks vary only by how late each read (qemu is slower).
+  EXPECT_LT(imu_spread, 0.25) << "robot-time jitter between the two agents, s";
+  std::printf("figure: %s robotd: %zu IMU, %zu wheel records and %zu scans identical to amd64's; "
+              "time-stamp spread %.1f ms (IMU), %.1f ms (scans); round trip mean %.2f ms, max %.2f ms; "
+              "CPU %.1f %% of one core while streaming\n",
+              GetParam().name.c_str(), imu, wheels, scans, imu_spread * 1e3, scan_spread * 1e3,
+              health.latency_mean_ms, health.latency_max_ms, cpu_per_s * 100.0);
+}
+
+// The link watchdog under emulation: the workstation drives, then goes quiet;
+// robotd must send the motor board its zero within 500 ms (+ a tick and the
+// serial write), measured at the board (the pty) in wall-clock time.
+TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_, {"--watchdog-ms", "500"});
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return ptys.started(); }, 30000));
+
+  QElapsedTimer wall;
+  wall.start();
+  MotorCommandDecoder board;
+  double last_moving_ms = -1, zero_ms = -1;
+  QObject::connect(&ptys, &DevicePtys::hostBytes, [&](int, int device, const QByteArray& bytes) {
+    if (device != static_cast<int>(LinkDevice::kMotorBoard)) return;
+    board.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), static_cast<size_t>(bytes.size()), Time());
+    for (const MotorCommand& c : board.TakeRecords()) {
+      if (c.vx_mps > 0.2) last_moving_ms = wall.elapsed();
+      if (c.vx_mps == 0.0 && last_moving_ms >= 0 && zero_ms < 0) zero_ms = wall.elapsed();
+    }
+  });
+  RobotConnection client(Client(robotd.Address()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  for (int i = 0; i < 20; ++i) {  // 2 s of driving at 10 Hz.
+    client.Drive(0.3, 0.0);
+    sweepscan::testing::Pump(100);
+  }
+  ASSERT_GE(last_moving_ms, 0) << "the board never got a drive command";
+  ASSERT_LT(zero_ms, 0) << "stopped while still driving";
+  client.SetHeartbeatEnabled(false);
+  client.Drive(0.3, 0.0);
+  const double quiet_from_ms = wall.elapsed();
+  ASSERT_TRUE(WaitFor([&] { return zero_ms >= 0; }, 5000)) << "the watchdog never stopped the robot";
+  const double reaction_ms = zero_ms - quiet_from_ms;
+  // 500 ms watchdog + a 10 ms tick; emulation and a loaded machine: + 150 ms.
+  EXPECT_LE(reaction_ms, 660.0);
+  EXPECT_GE(reaction_ms, 450.0);
+  std::printf("figure: %s robotd: watchdog stop %.0f ms after the last command (watchdog 500 ms)\n",
+              GetParam().name.c_str(), reaction_ms);
+  client.Shutdown();
+}
+
+INSTANTIATE_TEST_SUITE_P(Builds, RobotdProcessTest, ::testing::ValuesIn(Builds()),
+                         [](const ::testing::TestParamInfo<Build>& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace hardware
+}  // namespace sweepscan
+
+int main(int argc, char** argv) {
+  QCoreApplication app(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
