@@ -114,10 +114,13 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
       PrintError("--connect needs --key-file K (the robot's key; robotd's --key-file)");
       return kExitBadInput;
     }
-    if (!hardware::ReadKeyFile(QString::fromStdString(args.Get("key-file")), &o->link.key, &error)) {
+    QString warning;
+    if (!hardware::ReadKeyFile(QString::fromStdString(args.Get("key-file")), &o->link.key, &error,
+                               hardware::KeyFilePermissions::kWarn, &warning)) {
       PrintError(error.toStdString());
       return kExitBadInput;
     }
+    if (!warning.isEmpty()) std::cerr << "sweepscan-cli: warning: " << warning.toStdString() << "\n";
   }
   if (!ParsePositive(args, "duration", &o->duration_s) ||
       !ParsePositive(args, "connect-timeout", &o->connect_timeout_s)) {
@@ -304,6 +307,7 @@ int RunRecord(int argc, char** argv) {
         {"records", health.session_records},
         {"frames_lost", health.frames_missing},
         {"reconnects", health.reconnects},
+        {"round_trip_ms", {{"mean", health.latency_mean_ms}, {"max", health.latency_max_ms}}},
         {"stopped_by", signal != 0 ? "signal" : (o.duration_s > 0 ? "duration" : "script")}};
     std::cout << summary.dump() << "\n";
   } else {

@@ -1,0 +1,203 @@
+// `sweepscan-cli record` against the simulated robot (a sweepscan-sim
+// process on loopback TCP): a scripted drive recorded headless, a clean stop
+// on SIGTERM, a session that survives SIGKILL, a wrong key refused with the
+// app's message, bad options refused. The same recorder on robotd's real
+// device ports (and the arm64 build) is in robotd_process_test.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <QCoreApplication>
+#include <QDir>
+#include <QElapsedTimer>
+#include <QFile>
+#include <QJsonDocument>
+#include <QJsonObject>
+#include <QProcess>
+#include <QTemporaryDir>
+#include <string>
+
+#include "core/common/time.h"
+#include "hardware/link/telemetry_decoder.h"
+#include "tests/testing/qt_wait.h"
+
+namespace sweepscan {
+namespace {
+
+using sweepscan::testing::WaitFor;
+
+const QString kScenario = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources/scenarios/lab.json");
+
+class CliRecordTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(dir_.isValid());
+    key_ = WriteKey("robot.key", "the simulated robot's key, long enough");
+    sim_.start(QStringLiteral(SWEEPSCAN_SIM),
+               {"--scenario", kScenario, "--listen", "127.0.0.1:0", "--key-file", key_});
+    QByteArray out;
+    ASSERT_TRUE(WaitFor(
+        [&] {
+          out += sim_.readAllStandardOutput();
+          return out.contains('\n');
+        },
+        10000));
+    ASSERT_TRUE(out.startsWith("listening on 127.0.0.1:")) << out.toStdString();
+    address_ = QString::fromUtf8(out.mid(13).trimmed());
+  }
+  void TearDown() override {
+    sim_.terminate();
+    sim_.waitForFinished(5000);
+  }
+  QString WriteKey(const QString& name, const QByteArray& bytes) {
+    const QString path = dir_.filePath(name);
+    QFile f(path);
+    f.open(QIODevice::WriteOnly);
+    f.write(bytes);
+    f.close();
+    f.setPermissions(QFile::ReadOwner | QFile::WriteOwner);
+    return path;
+  }
+  void StartRecord(QProcess* p, const QString& out, const QStringList& extra = {}) {
+    p->start(QStringLiteral(SWEEPSCAN_CLI),
+             QStringList{"record", "--connect", address_, "--key-file", key_, "--out", out} + extra);
+  }
+  // Waits for the recorder's first health line: the session is being written.
+  static bool WaitRecording(QProcess* p, QByteArray* err) {
+    return WaitFor(
+        [&] {
+          *err += p->readAllStandardError();
+          return err->contains("recording to") && err->contains(" s  connected");
+        },
+        15000);
+  }
+  static double RecordedSeconds(const QString& session, SensorLog* log) {
+    hardware::SessionDecodeInfo info;
+    const Status s = hardware::DecodeSession(session.toStdString(), log, &info);
+    EXPECT_TRUE(s.ok()) << s.message();
+    if (log->imu.empty()) return 0.0;
+    return ToSeconds(log->imu.back().time - log->imu.front().time);
+  }
+
+  QTemporaryDir dir_;
+  QString key_;
+  QString address_;
+  QProcess sim_;
+};
+
+TEST_F(CliRecordTest, DrivesAScriptHeadlessAndTheSessionHoldsTheDrive) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0, "w_radps": 0, "duration_s": 1},
+                          {"v_mps": 0.2, "w_radps": 0, "duration_s": 3}]})");
+  f.close();
+  const QString session = dir_.filePath("drive.sweepscan");
+  QProcess record;
+  StartRecord(&record, session, {"--drive-script", script, "--scenario", kScenario, "--json"});
+  ASSERT_TRUE(record.waitForFinished(30000));
+  const QByteArray err = record.readAllStandardError();
+  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script done")) << err.toStdString();
+  const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
+  EXPECT_EQ(summary["stopped_by"].toString(), "script");
+  EXPECT_EQ(summary["frames_lost"].toInt(), 0);
+
+  SensorLog log;
+  EXPECT_NEAR(RecordedSeconds(session, &log), 4.0, 0.6);
+  ASSERT_FALSE(log.scans.empty()) << "the recorder turns the lidar on";
+  // The wheels' distance: 0.2 m/s for 3 s, with the board's lag.
+  double distance = 0.0;
+  for (size_t i = 1; i < log.wheels.size(); ++i) {
+    const double dt = ToSeconds(log.wheels[i].time - log.wheels[i - 1].time);
+    distance += 0.5 * (log.wheels[i].left_mps + log.wheels[i].right_mps) * dt;
+  }
+  EXPECT_NEAR(distance, 0.6, 0.08);
+  // The scenario travels with the session, as the app records it.
+  QFile meta(session + "/meta.json");
+  ASSERT_TRUE(meta.open(QIODevice::ReadOnly));
+  EXPECT_TRUE(meta.readAll().contains("\"scenario\""));
+}
+
+TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
+  const QString clean = dir_.filePath("clean.sweepscan");
+  QProcess record;
+  StartRecord(&record, clean, {"--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(2500);
+  ::kill(static_cast<pid_t>(record.processId()), SIGTERM);
+  ASSERT_TRUE(record.waitForFinished(10000));
+  EXPECT_EQ(record.exitStatus(), QProcess::NormalExit);
+  EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+  const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
+  EXPECT_EQ(summary["stopped_by"].toString(), "signal");
+  SensorLog log;
+  const double clean_s = RecordedSeconds(clean, &log);
+  EXPECT_NEAR(clean_s, summary["seconds"].toDouble(), 0.3);
+  EXPECT_GE(clean_s, 2.5);
+
+  const QString killed = dir_.filePath("killed.sweepscan");
+  QProcess victim;
+  StartRecord(&victim, killed);
+  err.clear();
+  ASSERT_TRUE(WaitRecording(&victim, &err)) << err.toStdString();
+  sweepscan::testing::Pump(3000);
+  ::kill(static_cast<pid_t>(victim.processId()), SIGKILL);
+  ASSERT_TRUE(victim.waitForFinished(5000));
+  // Recording began at most ~1 s before the first health line; everything
+  // older than a second is on disk (the writer's promise).
+  SensorLog survived;
+  EXPECT_GE(RecordedSeconds(killed, &survived), 3.0 - 1.0 - 0.2);
+  EXPECT_FALSE(survived.scans.empty());
+}
+
+TEST_F(CliRecordTest, AWrongKeyIsRefusedWithTheAppsMessageAndLeavesNoSession) {
+  const QString session = dir_.filePath("refused.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", address_, "--key-file", WriteKey("wrong.key", "not the robot's key at all"),
+                "--out", session});
+  ASSERT_TRUE(record.waitForFinished(20000));
+  const std::string err = record.readAllStandardError().toStdString();
+  EXPECT_EQ(record.exitCode(), 2) << err;
+  // The app's connection panel says "Refused: authentication failed".
+  EXPECT_NE(err.find("refused: authentication failed"), std::string::npos) << err;
+  EXPECT_FALSE(QFileInfo::exists(session));
+}
+
+TEST_F(CliRecordTest, BadOptionsAreRefusedBeforeConnecting) {
+  struct Case {
+    QStringList args;
+    const char* says;
+  };
+  const QString out = dir_.filePath("x.sweepscan");
+  QDir().mkpath(dir_.filePath("exists.sweepscan"));
+  const Case cases[] = {
+      {{"record", "--out", out}, "either --connect"},
+      {{"record", "--connect", address_, "--serial", "/dev/null", "--out", out}, "either --connect"},
+      {{"record", "--connect", address_, "--out", out}, "--key-file"},
+      {{"record", "--connect", address_, "--key-file", key_}, "--out"},
+      {{"record", "--connect", address_, "--key-file", key_, "--out", dir_.filePath("exists.sweepscan")}, "exists"},
+      {{"record", "--connect", address_, "--key-file", key_, "--out", out, "--duration", "-1"}, "--duration"},
+      {{"record", "--connect", address_, "--key-file", key_, "--out", out, "--drive-script", "/nonexistent.json"},
+       "/nonexistent.json"},
+  };
+  for (const Case& c : cases) {
+    QProcess p;
+    p.start(QStringLiteral(SWEEPSCAN_CLI), c.args);
+    ASSERT_TRUE(p.waitForFinished(10000));
+    const std::string err = p.readAllStandardError().toStdString();
+    EXPECT_EQ(p.exitCode(), 2) << c.args.join(' ').toStdString() << ": " << err;
+    EXPECT_NE(err.find(c.says), std::string::npos) << c.args.join(' ').toStdString() << ": " << err;
+  }
+  EXPECT_FALSE(QFileInfo::exists(out));
+}
+
+}  // namespace
+}  // namespace sweepscan
+
+int main(int argc, char** argv) {
+  QCoreApplication app(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
