@@ -9,6 +9,9 @@
 // Lines "figure: ..." are the figures docs/performance.md quotes
 // (scripts/arm64-e2e.sh collects them).
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
@@ -304,6 +307,72 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
   std::printf("figure: %s robotd: watchdog stop %.0f ms after the last command (watchdog 500 ms)\n",
               GetParam().name.c_str(), reaction_ms);
   client.Shutdown();
+}
+
+// As the packaged service runs it: options from a config file (the command
+// line overriding it), and systemd's notification protocol (sd_notify) on a
+// datagram socket: READY=1 once listening, WATCHDOG=1 at half WatchdogSec,
+// STOPPING=1 on SIGTERM.
+TEST_P(RobotdProcessTest, ConfigFileAndServiceNotifications) {
+  DevicePtys ptys(std::make_unique<SimDevices>(sim::SimConfig(), SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  const auto ports = ptys.SlavePaths(0);
+  const QString config = dir_.filePath("robotd.conf");
+  QFile f(config);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(QStringLiteral("# as /etc/sweepscan/robotd.conf\nlidar = %1\nimu=%2\n  motor =  %3  # the board\n"
+                         "listen = 127.0.0.1:1\nkey-file = %4\nwatchdog-ms = 300\n")
+              .arg(ports[0], ports[1], ports[2], key_file_)
+              .toUtf8());
+  f.close();
+
+  const QString socket_path = dir_.filePath("notify");
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", qPrintable(socket_path));
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+  QStringList messages;
+  auto receive = [&] {
+    char buffer[512];
+    ssize_t n;
+    while ((n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0) messages << QString::fromUtf8(buffer, static_cast<int>(n));
+  };
+
+  QProcess robotd;
+  QProcessEnvironment env = QProcessEnvironment::systemEnvironment();
+  env.insert("NOTIFY_SOCKET", socket_path);
+  env.insert("WATCHDOG_USEC", "400000");  // systemd sets WATCHDOG_PID too; it may be omitted.
+  robotd.setProcessEnvironment(env);
+  // --listen on the command line wins over the file's (port 1 needs root).
+  robotd.start(GetParam().command.first(),
+               GetParam().command.mid(1) + QStringList{"--config", config, "--listen", "127.0.0.1:0"});
+  ASSERT_TRUE(WaitFor([&] { return robotd.readAllStandardOutput().contains("listening on 127.0.0.1:"); }, 60000))
+      << robotd.readAllStandardError().toStdString();
+  ASSERT_TRUE(WaitFor([&] {
+    receive();
+    return messages.filter("WATCHDOG=1").size() >= 3;
+  }, 10000)) << messages.join('|').toStdString();
+  ASSERT_FALSE(messages.isEmpty());
+  EXPECT_TRUE(messages.first().startsWith("READY=1\nSTATUS=listening on 127.0.0.1:")) << messages.first().toStdString();
+  EXPECT_TRUE(ptys.started()) << "robotd opened the file's device ports";
+  robotd.terminate();
+  ASSERT_TRUE(robotd.waitForFinished(20000));
+  EXPECT_EQ(robotd.exitCode(), 0);
+  receive();
+  EXPECT_EQ(messages.last(), "STOPPING=1");
+  ::close(fd);
+
+  // A bad line is refused with the file and line.
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly | QIODevice::Truncate));
+  f.write("lidar = /dev/null\nspeed = 3\n");
+  f.close();
+  robotd.start(GetParam().command.first(), GetParam().command.mid(1) + QStringList{"--config", config});
+  ASSERT_TRUE(robotd.waitForFinished(60000));
+  EXPECT_EQ(robotd.exitCode(), 2);
+  EXPECT_TRUE(robotd.readAllStandardError().contains(QStringLiteral("%1:2: unknown key 'speed'").arg(config).toUtf8()));
 }
 
 INSTANTIATE_TEST_SUITE_P(Builds, RobotdProcessTest, ::testing::ValuesIn(Builds()),
