@@ -2,7 +2,10 @@
 # Installs what is missing, builds everything and runs every test:
 #   1. a short libFuzzer run of every fuzz target on its seed corpus
 #      (clang build in ./build-fuzz; skipped with SWEEPSCAN_SKIP_FUZZ=1);
-#   2. the GoogleTest suites through CTest (gcc build in ./build).
+#   2. the arm64 cross-build of sweepscan-robotd (./build-arm64), which the
+#      suite runs under qemu-aarch64-static (robotd_process_test);
+#   3. the GoogleTest suites through CTest (gcc build in ./build);
+#   4. the Debian packages, installed, run and removed (scripts/package-smoke.sh).
 # GUI tests, when present, run under xvfb-run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,6 +28,13 @@ if [ "${SWEEPSCAN_SKIP_FUZZ:-0}" != "1" ]; then
   (cd build-fuzz && ctest --output-on-failure -R '_fuzz_smoke$')
 fi
 
+scripts/build-arm64.sh
+
+scripts/build.sh -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=ON -DSWEEPSCAN_WERROR=ON \
+  -DSWEEPSCAN_ROBOTD_ARM64="$PWD/build-arm64/app/sweepscan-robotd"
+if [ "${SWEEPSCAN_SKIP_PACKAGES:-0}" != "1" ]; then
+  scripts/package.sh
+  scripts/package-smoke.sh
+fi
 # The main suite last, so its summary closes the output.
-scripts/build.sh -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=ON -DSWEEPSCAN_WERROR=ON
 (cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
