@@ -436,6 +436,8 @@ int Main(int argc, char** argv) {
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   SetApplicationNames();
+  // Wayland desktops match the window to packaging/sweepscan.desktop by this.
+  QGuiApplication::setDesktopFileName(QStringLiteral("sweepscan"));
   const QString resources = ResourcesDir();
   const Options o = ParseOptions(app, resources);
 

@@ -10,7 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(crossbuild-essential-arm64 qemu-user-static file pkg-config cmake ninja-build ccache
+packages=(crossbuild-essential-arm64 qemu-user-static file pkg-config cmake ninja-build ccache help2man
           qtbase5-dev-tools qtbase5-dev:arm64 libqt5serialport5-dev:arm64 libssl-dev:arm64
           libsystemd-dev:arm64)
 SUDO=""
@@ -35,9 +35,11 @@ export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/ccache}"
 export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
 cmake -S . -B build-arm64 -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_TOOLCHAIN_FILE="$PWD/cmake/toolchains/aarch64-linux-gnu.cmake" \
-  -DSWEEPSCAN_ROBOT_ONLY=ON -DSWEEPSCAN_WERROR=ON "$@" > build-arm64.log 2>&1 \
-  || { cat build-arm64.log; exit 1; }
-cmake --build build-arm64 -j"$(nproc 2>/dev/null || echo 2)" --target sweepscan-robotd
+  -DSWEEPSCAN_ROBOT_ONLY=ON -DSWEEPSCAN_WERROR=ON "$@" > build-arm64.configure.log 2>&1 \
+  || { cat build-arm64.configure.log; exit 1; }
+# Everything the robot-only tree has: robotd and its man page (help2man runs
+# it under qemu), which the package needs.
+cmake --build build-arm64 -j"$(nproc 2>/dev/null || echo 2)"
 
 bin=build-arm64/app/sweepscan-robotd
 file -b "$bin" | grep -q "ARM aarch64" || { echo "build-arm64: $bin is not an aarch64 binary" >&2; exit 1; }

@@ -32,6 +32,7 @@ scripts/build-arm64.sh
 
 scripts/build.sh -DSWEEPSCAN_BUILD_TESTS=ON -DSWEEPSCAN_BUILD_BENCHMARKS=ON -DSWEEPSCAN_WERROR=ON \
   -DSWEEPSCAN_ROBOTD_ARM64="$PWD/build-arm64/app/sweepscan-robotd"
+scripts/check-service-files.sh
 if [ "${SWEEPSCAN_SKIP_PACKAGES:-0}" != "1" ]; then
   scripts/package.sh
   scripts/package-smoke.sh
