@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +21,7 @@
 #include "core/common/crc32c.h"
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
+#include "core/cloud/las_writer.h"
 #include "core/cloud/reconstruct.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/sfm/wheeled.h"
@@ -46,9 +48,11 @@ const char* const kRepairUsage =
     "or be an empty folder.\n";
 
 const char* const kReconstructUsage =
-    "usage: sweepscan-cli reconstruct SESSION --out CLOUD.ply|CLOUD.pcd [options]\n"
+    "usage: sweepscan-cli reconstruct SESSION --out CLOUD.las|CLOUD.ply|CLOUD.pcd [options]\n"
     "\n"
-    "Decodes the session's raw frames and builds the cloud.\n"
+    "Decodes the session's raw frames and builds the cloud. The suffix chooses the\n"
+    "format: LAS 1.4 (point format 6, GPS time from the session's start, range, scan\n"
+    "and beam as extra bytes; docs/las-format.md), or PLY / PCD (docs/cloud-format.md).\n"
     "\n"
     "Options:\n"
     "  --calibration FILE     mounting error to undo (calibration JSON); default: meta.json's\n"
@@ -62,8 +66,14 @@ const char* const kReconstructUsage =
 
 const char* const kExportUsage =
     "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
+    "       sweepscan-cli export SESSION --out FILE.las|FILE.ply|FILE.pcd [--calibration FILE]\n"
+    "                            [--pose-source S] [--no-ekf] [--no-deskew] [--strict] [--json]\n"
     "       sweepscan-cli export SESSION --format rosbag --out FILE.bag [--calibration FILE]\n"
     "                            [--no-ekf] [--frame F]\n"
+    "\n"
+    "--out ending in .las, .ply or .pcd: the session's cloud, reconstructed exactly as\n"
+    "`reconstruct` does with the same options (see sweepscan-cli help reconstruct);\n"
+    ".las is LAS 1.4 (docs/las-format.md), written in chunks with bounded memory.\n"
     "\n"
     "--format rosbag: the session's cloud (as reconstruct makes it) as one\n"
     "sensor_msgs/PointCloud2 on /sweepscan/cloud (x y z intensity time) and its\n"
@@ -212,14 +222,64 @@ int RunInfo(int argc, char** argv) {
   return kExitOk;
 }
 
-int RunReconstruct(int argc, char** argv) {
-  Args args({"json", "help", "no-ekf", "no-deskew", "strict"}, {"out", "calibration", "pose-source"});
-  int code;
-  if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
-  if (!args.Has("out")) {
-    PrintError("reconstruct needs --out CLOUD.ply (see sweepscan-cli help reconstruct)");
-    return kExitBadInput;
+namespace {
+
+bool HasSuffix(const std::string& path, const std::string& suffix) {
+  return path.size() >= suffix.size() &&
+         std::equal(suffix.rbegin(), suffix.rend(), path.rbegin(),
+                    [](char s, char p) { return std::tolower(static_cast<unsigned char>(p)) == s; });
+}
+bool IsCloudFile(const std::string& path) {
+  return HasSuffix(path, ".las") || HasSuffix(path, ".ply") || HasSuffix(path, ".pcd");
+}
+
+// LAS System Identifier (spec §2.4): the hardware for a robot's recording,
+// the operation otherwise (a simulation, an imported bag of unknown sensors).
+std::string LasSystemIdentifier(const SessionMeta& meta) {
+  if (meta.content == kSessionContentMeasurements) return "OTHER";
+  if (meta.link.rfind("sim", 0) == 0) return "sweepscan simulation";
+  return "sweepscan YDLIDAR X4";
+}
+
+// The cloud as LAS 1.4 (docs/las-format.md), appended in chunks as a
+// streamed project will be; *report describes the file.
+Status WriteLas(const std::string& session, const std::string& path, const std::vector<CloudPoint>& points,
+                const SessionMeta& meta, nlohmann::json* report) {
+  LasExtent extent;
+  extent.Add(points.data(), points.size());
+  LasWriterOptions o;
+  o.extent = extent;
+  const Status time = SetLasTimeFromSession(meta.created_utc, extent, &o);
+  if (!time.ok()) std::cerr << "sweepscan-cli: warning: " << session << "/" << kSessionMetaFile << ": " << time.message() << "\n";
+  o.system_identifier = LasSystemIdentifier(meta);
+  o.generating_software = "sweepscan 0.1.0";
+  LasWriter writer;
+  Status s = writer.Open(path, o);
+  constexpr size_t kChunk = 1 << 16;
+  for (size_t i = 0; s.ok() && i < points.size(); i += kChunk) {
+    s = writer.Append(points.data() + i, std::min(kChunk, points.size() - i));
   }
+  if (s.ok()) s = writer.Finish();
+  if (!s.ok()) return s;
+  const LasWriteStats& w = writer.stats();
+  const LasQuantisation& q = w.quantisation;
+  *report = {{"version", "1.4"},
+             {"point_format", kLasPointFormat},
+             {"points", w.points},
+             {"non_finite_skipped", w.non_finite},
+             {"bytes", w.bytes},
+             {"scale_m", q.scale},
+             {"offset_m", {q.offset[0], q.offset[1], q.offset[2]}},
+             {"min_m", {w.min[0], w.min[1], w.min[2]}},
+             {"max_m", {w.max[0], w.max[1], w.max[2]}},
+             {"gps_time", o.adjusted_gps_time ? "adjusted standard GPS time" : "robot seconds"},
+             {"gps_time_of_first_point_s", o.gps_time_at_origin_s}};
+  return Status::Ok();
+}
+
+// `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`.
+int ReconstructToFile(const Args& args) {
+  int code;
   ReconstructionOptions options;
   if (args.Has("pose-source")) {
     if (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
@@ -258,7 +318,9 @@ int RunReconstruct(int argc, char** argv) {
     PrintError(args.positional()[0] + ": " + s.message());
     return kExitFailure;
   }
-  s = SaveCloud(args.Get("out"), result.points);
+  nlohmann::json las;
+  s = HasSuffix(args.Get("out"), ".las") ? WriteLas(args.positional()[0], args.Get("out"), result.points, d.info.meta, &las)
+                                         : SaveCloud(args.Get("out"), result.points);
   if (!s.ok()) {
     PrintError(s.message());
     return kExitFailure;
@@ -277,6 +339,7 @@ int RunReconstruct(int argc, char** argv) {
       {"samples_without_pose", result.stats.no_pose},
       {"ekf_rejected", result.ekf_counters.rejected},
   };
+  if (!las.is_null()) report["las"] = las;
   if (options.pose.source == PoseSource::kSfm) {
     const sfm::SequenceResult& seq = sfm_result.sequence;
     report["sfm"] = {{"scans", seq.poses.size()},
@@ -295,14 +358,45 @@ int RunReconstruct(int argc, char** argv) {
     std::printf("%zu scans, %zu samples -> %zu points in %s (poses: %s, deskew %s)\n", d.log.scans.size(),
                 result.stats.samples_in, result.stats.points_out, args.Get("out").c_str(),
                 PoseSourceName(options.pose.source), options.assembly.deskew ? "on" : "off");
+    if (!las.is_null()) {
+      std::printf("LAS 1.4, point format 6: scale %g m, offset (%g, %g, %g) m, GPS time: %s\n",
+                  las["scale_m"].get<double>(), las["offset_m"][0].get<double>(), las["offset_m"][1].get<double>(),
+                  las["offset_m"][2].get<double>(), las["gps_time"].get<std::string>().c_str());
+    }
   }
   return kExitOk;
 }
 
+}  // namespace
+
+int RunReconstruct(int argc, char** argv) {
+  Args args({"json", "help", "no-ekf", "no-deskew", "strict"}, {"out", "calibration", "pose-source"});
+  int code;
+  if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
+  if (!args.Has("out")) {
+    PrintError("reconstruct needs --out CLOUD.las|CLOUD.ply|CLOUD.pcd (see sweepscan-cli help reconstruct)");
+    return kExitBadInput;
+  }
+  return ReconstructToFile(args);
+}
+
 int RunExport(int argc, char** argv) {
-  Args args({"json", "help", "strict", "no-ekf"}, {"out", "format", "calibration", "frame"});
+  Args args({"json", "help", "strict", "no-ekf", "no-deskew"}, {"out", "format", "calibration", "frame", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kExportUsage, &code)) return code;
+  // --out FILE.las|.ply|.pcd: the cloud, exactly as `reconstruct` makes it.
+  if (args.Has("out") && IsCloudFile(args.Get("out"))) {
+    if (args.Has("format") || args.Has("frame")) {
+      PrintError("--format and --frame are for csv and rosbag exports; --out " + args.Get("out") +
+                 " exports the cloud in the format its suffix names");
+      return kExitBadInput;
+    }
+    return ReconstructToFile(args);
+  }
+  if (args.Has("pose-source") || args.Flag("no-deskew")) {
+    PrintError("--pose-source and --no-deskew are for cloud exports (--out FILE.las|FILE.ply|FILE.pcd)");
+    return kExitBadInput;
+  }
   const std::string format = args.Has("format") ? args.Get("format") : "csv";
   if (format != "csv" && format != "rosbag") {
     PrintError("--format must be csv or rosbag, got '" + format + "'");

@@ -27,7 +27,7 @@ using sweepscan::testing::CommandRun;
 std::string Dir() {
   static const std::string dir = [] {
     const std::string d = ::testing::TempDir() + "/sweepscan_cli_robust_" + std::to_string(::getpid());
-    std::system(("rm -rf '" + d + "' && mkdir -p '" + d + "'").c_str());
+    sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && mkdir -p '" + d + "'");
     return d;
   }();
   return dir;
@@ -80,7 +80,7 @@ class CliRobustnessTest : public ::testing::Test {
   // offset < 0, at the middle of the file).
   static std::string DamagedCopy(const std::string& name, long offset = -1) {
     const std::string dir = Tmp(name);
-    std::system(("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "'").c_str());
+    sweepscan::testing::ShellOrFail("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "'");
     std::fstream f(dir + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
     f.seekg(0, std::ios::end);
     const long size = static_cast<long>(f.tellg());
@@ -124,7 +124,7 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
   // header promised every vertex; --out X.pcd aborted (exit 134) and left
   // X.pcd.tmp-PID behind.
   const std::string out = Tmp("full");
-  std::system(("mkdir -p '" + out + "'").c_str());
+  sweepscan::testing::ShellOrFail("mkdir -p '" + out + "'");
   for (const char* ext : {"ply", "pcd"}) {
     const std::string cloud = out + "/cloud." + ext;
     CommandRun r = CliWithFullDisk("reconstruct " + Session() + " --out " + cloud);
@@ -146,12 +146,13 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
 TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {
   // Before: exit 1 in reconstruct but exit 2 in simulate.
   const std::string folder = Tmp("a-folder.ply");
-  std::system(("mkdir -p '" + folder + "'").c_str());
+  sweepscan::testing::ShellOrFail("mkdir -p '" + folder + "'");
   for (const std::string& args :
        {"reconstruct " + Session() + " --out " + folder,
         "simulate --scenario " + Scenario("lab") + " --out " + folder + " --session " +
             Tmp("u.sweepscan") + " --overwrite",
-        "export " + Session() + " --out " + Tmp("lab.ply"),
+        "export " + Session() + " --out " + folder,  // A cloud (.ply) where a folder is.
+        "export " + Session() + " --out " + Session() + "/meta.json",  // CSV folder where a file is.
         "repair " + Session() + " --out " + Tmp("lab.ply/x"),
         "calibrate --scenario " + Scenario("lab_circle") + " --auto --out " + folder}) {
     const CommandRun r = Cli(args);
@@ -178,9 +179,8 @@ TEST_F(CliRobustnessTest, ForgedPlyHeadersAreExitTwoNotAnAbort) {
 TEST_F(CliRobustnessTest, AFolderWhereAFileIsExpectedIsExitTwo) {
   // Before: info and reconstruct died of an uncaught std::ios_base::failure.
   const std::string dir = Tmp("folder-frames.sweepscan");
-  std::system(("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "' && rm '" + dir +
-               "/frames.bin' && mkdir '" + dir + "/frames.bin'")
-                  .c_str());
+  sweepscan::testing::ShellOrFail("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "' && rm '" + dir +
+               "/frames.bin' && mkdir '" + dir + "/frames.bin'");
   for (const std::string& args : {"info " + dir, "reconstruct " + dir + " --out " + Tmp("f.ply"),
                                   "export " + dir + " --out " + Tmp("f-csv"),
                                   "evaluate " + dir}) {
@@ -188,7 +188,7 @@ TEST_F(CliRobustnessTest, AFolderWhereAFileIsExpectedIsExitTwo) {
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     ExpectOneErrorLine(r, "frames.bin: is a folder");
   }
-  std::system(("mkdir -p '" + Tmp("cloud-folder.ply") + "'").c_str());
+  sweepscan::testing::ShellOrFail("mkdir -p '" + Tmp("cloud-folder.ply") + "'");
   const CommandRun r = Cli("evaluate " + Tmp("cloud-folder.ply"));
   EXPECT_EQ(r.code, 2) << r.out;
   ExpectOneErrorLine(r, "is a folder");
@@ -236,7 +236,7 @@ TEST_F(CliRobustnessTest, OneFlippedByteLosesOneRecordWithAWarning) {
 TEST_F(CliRobustnessTest, RepairWritesACleanCopyThatPassesStrict) {
   const std::string dir = DamagedCopy("rot2.sweepscan");
   const std::string fixed = Tmp("fixed.sweepscan");
-  std::system(("rm -rf '" + fixed + "'").c_str());
+  sweepscan::testing::ShellOrFail("rm -rf '" + fixed + "'");
   CommandRun r = Cli("repair " + dir + " --out " + fixed + " --json");
   ASSERT_EQ(r.code, 0) << r.out;
   const nlohmann::json report = nlohmann::json::parse(r.out);

@@ -3,8 +3,14 @@
 //   ninja -C build-release core_benchmark && build-release/tests/core_benchmark
 // Figures are recorded in docs/performance.md.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
+
+#include <random>
+#include <string>
 
 #include "core/cloud/assembler.h"
+#include "core/cloud/cloud_io.h"
+#include "core/cloud/las_writer.h"
 #include "core/pose/pose_estimator.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
@@ -81,6 +87,73 @@ void BM_SimulateLab(benchmark::State& state) {
   state.counters["x_real_time"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimulateLab)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// 10 M points of a 10 x 5 x 2.5 m room (a 1 M-point source, 32 MB, appended
+// ten times in 64 Ki-point chunks, as a project streams its sessions).
+constexpr size_t kBenchSourcePoints = 1 << 20;
+constexpr int kBenchRepeats = 10;
+const std::vector<CloudPoint>& BenchCloud() {
+  static const std::vector<CloudPoint>* cloud = [] {
+    auto* pts = new std::vector<CloudPoint>(kBenchSourcePoints);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> x(0.0f, 10.0f), y(0.0f, 5.0f), z(0.0f, 2.5f);
+    for (size_t i = 0; i < pts->size(); ++i) {
+      CloudPoint& p = (*pts)[i];
+      p = {x(rng), y(rng), z(rng), 3.0f, static_cast<int64_t>(i) * 200'000, static_cast<uint32_t>(i / 720),
+           static_cast<uint16_t>(i % 720), 0, 0};
+    }
+    return pts;
+  }();
+  return *cloud;
+}
+// Arg(0): /dev/shm (tmpfs: the writer and the page cache), Arg(1): /tmp
+// (the disk, with the checked writer's fsync). items/s = points written.
+std::string BenchFolder(int64_t arg) { return arg == 0 ? "/dev/shm" : "/tmp"; }
+
+// LAS 1.4 export (core/cloud/las_writer.h): PDRF 6 + 11 extra bytes, 41 bytes a point.
+void BM_LasWrite(benchmark::State& state) {
+  const std::vector<CloudPoint>& src = BenchCloud();
+  LasWriterOptions o;
+  o.extent.Add(src.data(), src.size());
+  SetLasTimeFromSession("2026-11-22T10:15:00Z", o.extent, &o);
+  const std::string path = BenchFolder(state.range(0)) + "/sweepscan_bench_" + std::to_string(::getpid()) + ".las";
+  for (auto _ : state) {
+    state.PauseTiming();
+    ::unlink(path.c_str());  // Not timed: freeing the previous file's pages.
+    state.ResumeTiming();
+    LasWriter w;
+    Status s = w.Open(path, o);
+    for (int r = 0; r < kBenchRepeats && s.ok(); ++r) {
+      for (size_t i = 0; i < src.size() && s.ok(); i += 65536) s = w.Append(src.data() + i, 65536);
+    }
+    if (s.ok()) s = w.Finish();
+    if (!s.ok()) state.SkipWithError(s.message().c_str());
+  }
+  ::unlink(path.c_str());
+  const int64_t points = static_cast<int64_t>(state.iterations()) * kBenchRepeats * static_cast<int64_t>(src.size());
+  state.SetItemsProcessed(points);
+  state.SetBytesProcessed(points * kLasRecordSize);
+}
+BENCHMARK(BM_LasWrite)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same 10 M points as PLY (SaveCloud, 32 bytes a point), for comparison;
+// SaveCloud takes the whole cloud in memory.
+void BM_PlyWrite(benchmark::State& state) {
+  std::vector<CloudPoint> all;
+  for (int r = 0; r < kBenchRepeats; ++r) all.insert(all.end(), BenchCloud().begin(), BenchCloud().end());
+  const std::string path = BenchFolder(state.range(0)) + "/sweepscan_bench_" + std::to_string(::getpid()) + ".ply";
+  for (auto _ : state) {
+    state.PauseTiming();
+    ::unlink(path.c_str());
+    state.ResumeTiming();
+    const Status s = SaveCloud(path, all);
+    if (!s.ok()) state.SkipWithError(s.message().c_str());
+  }
+  ::unlink(path.c_str());
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(all.size()));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(all.size()) * 32);
+}
+BENCHMARK(BM_PlyWrite)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace sweepscan
