@@ -193,6 +193,38 @@ TEST_F(CliRecordTest, BadOptionsAreRefusedBeforeConnecting) {
   EXPECT_FALSE(QFileInfo::exists(out));
 }
 
+// The link on a serial port: sweepscan-sim --pty offers a pseudo-terminal,
+// a real serial device (no authentication on serial links, as the app).
+TEST(CliRecordSerialTest, RecordsOverASerialLink) {
+  QTemporaryDir dir;
+  ASSERT_TRUE(dir.isValid());
+  QProcess sim;
+  sim.start(QStringLiteral(SWEEPSCAN_SIM), {"--scenario", kScenario, "--pty"});
+  QByteArray out;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        out += sim.readAllStandardOutput();
+        return out.contains('\n');
+      },
+      10000));
+  const QString pty = QString::fromUtf8(out.trimmed());
+  ASSERT_TRUE(pty.startsWith("/dev/pts/")) << out.toStdString();
+  const QString session = dir.filePath("serial.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--serial", pty, "--out", session, "--duration", "3", "--json"});
+  ASSERT_TRUE(record.waitForFinished(20000));
+  EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+  sim.terminate();
+  sim.waitForFinished(5000);
+  SensorLog log;
+  hardware::SessionDecodeInfo info;
+  ASSERT_TRUE(hardware::DecodeSession(session.toStdString(), &log, &info).ok());
+  EXPECT_NE(info.meta.link.find("serial:" + pty.toStdString()), std::string::npos) << info.meta.link;
+  ASSERT_GE(log.imu.size(), 200u);  // 100 Hz for most of 3 s.
+  EXPECT_FALSE(log.scans.empty());
+}
+
 }  // namespace
 }  // namespace sweepscan
 

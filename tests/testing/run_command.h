@@ -3,10 +3,12 @@
 #ifndef SWEEPSCAN_TESTS_TESTING_RUN_COMMAND_H_
 #define SWEEPSCAN_TESTS_TESTING_RUN_COMMAND_H_
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 namespace sweepscan::testing {
@@ -26,6 +28,14 @@ inline CommandRun RunCommand(const std::string& command) {
   const int status = pclose(p);
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// Runs a setup or clean-up command (mkdir, cp, rm -rf) through the shell; a
+// failure is a (non-fatal) test failure, so it also works in destructors and
+// static tear-downs.
+inline void ShellOrFail(const std::string& command) {
+  const int status = std::system(command.c_str());
+  if (status != 0) ADD_FAILURE() << "`" << command << "` failed (status " << status << ")";
 }
 
 }  // namespace sweepscan::testing

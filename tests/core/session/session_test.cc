@@ -19,6 +19,7 @@
 
 #include "core/common/crc32c.h"
 #include "core/common/json_reader.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan {
 namespace {
@@ -33,7 +34,7 @@ class TempDir {
     char tmpl[] = "/tmp/sweepscan_session_test_XXXXXX";
     path_ = ::mkdtemp(tmpl);
   }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
+  ~TempDir() { sweepscan::testing::ShellOrFail("rm -rf '" + path_ + "'"); }
   const std::string& path() const { return path_; }
   std::string Sub(const std::string& name) const { return path_ + "/" + name; }
 

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,9 @@ struct Build {
   std::string name;
   QStringList command;  // Program and leading arguments (qemu's, for arm64).
 };
+
+// gtest prints the parameter in test names (ctest lists them).
+void PrintTo(const Build& build, std::ostream* os) { *os << build.name; }
 
 std::vector<Build> Builds() {
   std::vector<Build> builds = {{"amd64", {QStringLiteral(SWEEPSCAN_ROBOTD)}}};

@@ -11,13 +11,14 @@
 #include "core/cloud/reconstruct.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "tests/testing/worlds.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan::hardware {
 namespace {
 
 std::string FreshDir(const std::string& name) {
   const std::string dir = ::testing::TempDir() + "/sweepscan_simsession_" + name;
-  std::system(("rm -rf '" + dir + "'").c_str());
+  sweepscan::testing::ShellOrFail("rm -rf '" + dir + "'");
   return dir;
 }
 

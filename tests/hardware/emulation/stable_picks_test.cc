@@ -22,6 +22,7 @@
 #include "hardware/link/link_protocol.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "tests/testing/worlds.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan::hardware {
 namespace {
@@ -64,7 +65,7 @@ TEST(StablePicksTest, PairsFileNamesTheSameSamplesAfterOneLostPacket) {
   sim::SimConfig config = testing::LabConfig(3);
   config.path = {{0.2, 0.0, 4.0}, {0.0, 0.3, 4.0}};
   const std::string dir = ::testing::TempDir() + "/sweepscan_stable_picks.sweepscan";
-  std::system(("rm -rf '" + dir + "'").c_str());
+  sweepscan::testing::ShellOrFail("rm -rf '" + dir + "'");
   SimulateSessionReport report;
   const Status simulated = SimulateSession(config, dir, SimulateSessionOptions(), &report);
   ASSERT_TRUE(simulated.ok()) << simulated.message();
@@ -201,7 +202,7 @@ TEST(StablePicksTest, PairsFileNamesTheSameSamplesAfterOneLostPacket) {
   EXPECT_NE(rl.message().find("pair 1 pass1"), std::string::npos) << rl.message();
   EXPECT_NE(rl.message().find("lost samples"), std::string::npos) << rl.message();
   EXPECT_NE(rl.message().find("pick it again"), std::string::npos) << rl.message();
-  std::system(("rm -rf '" + dir + "'").c_str());
+  sweepscan::testing::ShellOrFail("rm -rf '" + dir + "'");
 }
 
 }  // namespace

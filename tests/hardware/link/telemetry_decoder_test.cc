@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <string>
 #include <vector>
+#include "tests/testing/run_command.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -247,7 +248,7 @@ class TempDir {
     char tmpl[] = "/tmp/sweepscan_telemetry_test_XXXXXX";
     path_ = ::mkdtemp(tmpl);
   }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
+  ~TempDir() { sweepscan::testing::ShellOrFail("rm -rf '" + path_ + "'"); }
   const std::string& path() const { return path_; }
 
  private:

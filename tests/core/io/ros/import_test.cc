@@ -18,6 +18,7 @@
 
 #include "core/session/measurements.h"
 #include "core/session/session.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan::io {
 namespace {
@@ -45,7 +46,7 @@ class ImportTest : public ::testing::Test {
     const std::string out = Shell(cmd);
     ASSERT_TRUE(Exists(dir_ + "/rules.bag")) << cmd << "\n" << out;
   }
-  static void TearDownTestSuite() { std::system(("rm -rf " + dir_).c_str()); }
+  static void TearDownTestSuite() { sweepscan::testing::ShellOrFail("rm -rf " + dir_); }
 
   static std::string Bag(const std::string& name) { return dir_ + "/" + name + ".bag"; }
   static std::string Out(const std::string& name) { return dir_ + "/" + name + ".sweepscan"; }
@@ -53,7 +54,7 @@ class ImportTest : public ::testing::Test {
   // Imports and loads the session's measurements.
   static void ImportAndLoad(const std::string& name, const RosImportOptions& options,
                             RosImportReport* report, SessionMeta* meta, SensorLog* log) {
-    std::system(("rm -rf " + Out(name)).c_str());
+    sweepscan::testing::ShellOrFail("rm -rf " + Out(name));
     const Status s = ImportRosBag(Bag(name), Out(name), options, report);
     ASSERT_TRUE(s.ok()) << s.message();
     Session session;

@@ -14,6 +14,7 @@
 
 #include "core/io/ros2/ros2_bag.h"
 #include "tests/core/io/ros2/ros2_test_bags.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan::io {
 namespace {
@@ -46,7 +47,7 @@ class Scratch {
   const std::string& dir() const { return dir_; }
 
  private:
-  void Remove() const { std::system(("rm -rf '" + dir_ + "'").c_str()); }
+  void Remove() const { sweepscan::testing::ShellOrFail("rm -rf '" + dir_ + "'"); }
   std::string dir_;
 };
 
