@@ -155,42 +155,47 @@ fi
 ok "systemd-analyze verify $unit: nothing about the unit"
 
 # --- the agent, as the service runs it ---------------------------------------
-# As the user sweepscan, with the installed configuration and key (a free
-# port instead of 5600): proves both are readable and valid for that user.
-setpriv --reuid=sweepscan --regid=sweepscan --init-groups --inh-caps=-all \
-  sweepscan-robotd --config /etc/sweepscan/robotd.conf --listen 127.0.0.1:0 \
-  >"$work/robotd.out" 2>"$work/robotd.err" &
-robotd_pid=$!
-port=""
-for _ in $(seq 1 100); do
-  port=$(sed -n 's/^listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' "$work/robotd.out")
-  [ -n "$port" ] && break
-  kill -0 "$robotd_pid" 2>/dev/null || break
-  sleep 0.1
-done
-[ -n "$port" ] || { cat "$work/robotd.out" "$work/robotd.err"; fail "sweepscan-robotd (user sweepscan) did not print 'listening on 127.0.0.1:PORT'"; }
-ok "sweepscan-robotd as sweepscan with /etc/sweepscan/robotd.conf: listening on 127.0.0.1:$port"
-if (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null; then
-  ok "a TCP connection to 127.0.0.1:$port is accepted"
-else
-  fail "cannot connect to 127.0.0.1:$port"
-fi
-kill -TERM "$robotd_pid"
-status=124
-for _ in $(seq 1 50); do
-  if ! kill -0 "$robotd_pid" 2>/dev/null; then
-    wait "$robotd_pid"
-    status=$?
-    break
+# run_as_service WHAT COMMAND...: the agent as the user sweepscan, with the
+# installed configuration and key (a free port instead of 5600): proves
+# both are readable and valid for that user; then SIGTERM must end it with 0.
+run_as_service() {
+  local what=$1
+  shift
+  setpriv --reuid=sweepscan --regid=sweepscan --init-groups --inh-caps=-all \
+    "$@" --config /etc/sweepscan/robotd.conf --listen 127.0.0.1:0 \
+    >"$work/robotd.out" 2>"$work/robotd.err" &
+  robotd_pid=$!
+  local port="" status=124
+  for _ in $(seq 1 300); do
+    port=$(sed -n 's/^listening on 127\.0\.0\.1:\([0-9][0-9]*\)$/\1/p' "$work/robotd.out")
+    [ -n "$port" ] && break
+    kill -0 "$robotd_pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  [ -n "$port" ] || { cat "$work/robotd.out" "$work/robotd.err"; fail "$what (user sweepscan) did not print 'listening on 127.0.0.1:PORT'"; }
+  ok "$what as sweepscan with /etc/sweepscan/robotd.conf: listening on 127.0.0.1:$port"
+  if (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null; then
+    ok "$what: a TCP connection to 127.0.0.1:$port is accepted"
+  else
+    fail "$what: cannot connect to 127.0.0.1:$port"
   fi
-  sleep 0.1
-done
-robotd_pid_done=$robotd_pid
-robotd_pid=""
-[ "$status" -eq 0 ] || { cat "$work/robotd.err"; fail "sweepscan-robotd (pid $robotd_pid_done) exited $status on SIGTERM, not 0"; }
-ok "sweepscan-robotd stopped on SIGTERM with exit status 0"
+  kill -TERM "$robotd_pid"
+  for _ in $(seq 1 100); do
+    if ! kill -0 "$robotd_pid" 2>/dev/null; then
+      wait "$robotd_pid"
+      status=$?
+      break
+    fi
+    sleep 0.1
+  done
+  local done_pid=$robotd_pid
+  robotd_pid=""
+  [ "$status" -eq 0 ] || { cat "$work/robotd.err"; fail "$what (pid $done_pid) exited $status on SIGTERM, not 0"; }
+  ok "$what stopped on SIGTERM with exit status 0"
+}
+run_as_service sweepscan-robotd sweepscan-robotd
 
-# --- the arm64 package (not installed: checked from the outside) -------------
+# --- the arm64 package, from the outside (installed and run at the end) -------
 if [ -n "$arm64_deb" ]; then
   a=$(dpkg-deb -f "$arm64_deb" Architecture)
   [ "$a" = arm64 ] || fail "$arm64_deb: Architecture $a"
@@ -271,5 +276,28 @@ ok "dpkg -P: none of the $(wc -l <"$work/files") paths dpkg -L listed is left (b
 ok "/etc/sweepscan is gone after purge"
 getent passwd sweepscan >/dev/null || fail "purge removed the user sweepscan (it should stay)"
 ok "the user sweepscan stays after purge (Debian's recommendation)"
+
+# --- the arm64 package, installed and run under emulation -------------------
+# What the Raspberry Pi gets: with multiarch its arm64 dependencies install
+# beside this machine's (scripts/build-arm64.sh put them there), and the
+# aarch64 agent runs under qemu-aarch64-static (no binfmt needed), as the
+# service user with the configuration and key its own postinst made.
+if [ -n "$arm64_deb" ] && dpkg --print-foreign-architectures | grep -qx arm64 &&
+  command -v qemu-aarch64-static >/dev/null; then
+  apt-get install -y --no-install-recommends "./$arm64_deb" >"$work/apt-arm64.log" 2>&1 \
+    || { tail -n 30 "$work/apt-arm64.log"; fail "apt-get install ./$arm64_deb"; }
+  [ "$(dpkg-query -W -f='${Architecture}' sweepscan-robotd)" = arm64 ] || fail "sweepscan-robotd:arm64 is not what is installed"
+  st=$(stat -c '%a %U:%G %s' "$key")
+  [ "$st" = "400 sweepscan:sweepscan 32" ] || fail "arm64 postinst: $key is '$st'"
+  ok "installed $(basename "$arm64_deb") with apt (multiarch): user, key and conffile made by its postinst"
+  run_as_service "sweepscan-robotd (arm64, qemu)" qemu-aarch64-static -L / /usr/bin/sweepscan-robotd
+  dpkg -P sweepscan-robotd >"$work/purge-arm64.log" 2>&1 || { cat "$work/purge-arm64.log"; fail "dpkg -P sweepscan-robotd:arm64"; }
+  if [ -e /usr/bin/sweepscan-robotd ] || [ -e /etc/sweepscan ]; then
+    fail "dpkg -P sweepscan-robotd:arm64 left files"
+  fi
+  ok "dpkg -P sweepscan-robotd (arm64): program and /etc/sweepscan gone"
+else
+  echo "note: the arm64 package was not installed (no arm64 deb, no arm64 architecture or no qemu-aarch64-static)"
+fi
 
 echo "package-smoke: all checks passed"
