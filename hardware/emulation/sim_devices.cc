@@ -117,10 +117,39 @@ class SimDevices::Impl : public sim::SensorSink {
     // Snap when closer than the board's own resolution (1 mm/s, 1 mrad/s),
     // so a settled board stops issuing new segments.
     if (std::abs(next.v - target_.v) < 1e-4 && std::abs(next.w - target_.w) < 1e-4) next = target_;
+    if (next.v != 0.0 && Blocked(t, next.v)) next.v = 0.0;
     if (next.v != current_.v || next.w != current_.w) {
       current_ = next;
       world_.CommandTwist(t, current_);
     }
+  }
+
+  // True when driving at v for the next control period would bring the
+  // footprint nearer than its radius to a surface ahead (v > 0) or behind
+  // (v < 0): rays at bumper height (10 cm, below every table top and above
+  // the floor) across +-75 deg of the direction of travel (a wall beside
+  // the robot does not stop it sliding along). A robot already touching may
+  // still back away or turn.
+  bool Blocked(Time t, double v) const {
+    const double radius = options_.body_radius_m;
+    if (radius <= 0.0) return false;
+    const Pose2d pose = world_.trajectory().PoseAt(PathSeconds(t));
+    const double reach = radius + std::abs(v) * options_.motor_control_period_s + 0.005;
+    const double heading = pose.yaw + (v < 0.0 ? M_PI : 0.0);
+    const Eigen::Vector3d origin(pose.x, pose.y, 0.10);
+    for (int k = -5; k <= 5; ++k) {
+      const double a = heading + k * (M_PI / 12.0);  // 15 deg apart.
+      sim::RayHit hit;
+      // Along a ray at angle d off the direction of travel the circle's edge
+      // advances by cos(d) of the step: a wall at that angle stops the robot
+      // when its range is under the radius plus that advance.
+      const double advance = (reach - radius) * std::cos(k * (M_PI / 12.0));
+      if (world_.config().scene.Cast(origin, Eigen::Vector3d(std::cos(a), std::sin(a), 0.0), 0.0,
+                                     radius + advance, &hit)) {
+        return true;
+      }
+    }
+    return false;
   }
 
   // ---- SensorSink: measurements become device frames ---------------------

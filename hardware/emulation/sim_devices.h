@@ -78,6 +78,11 @@ struct SimDevicesOptions {
   // tick following the command.
   double motor_time_constant_s = 0.05;
   double motor_control_period_s = 0.01;
+  // The robot's footprint, a circle of this radius around the centre of
+  // motion: the simulated robot stops at walls and furniture instead of
+  // driving through them (as a bumper stop does; turning on the spot stays
+  // allowed). <= 0: no collisions (a robot that drives through walls).
+  double body_radius_m = 0.22;
   // Battery voltage reported in the feedback: start, and linear drop.
   double battery_start_v = 12.1;
   double battery_drop_v_per_hour = 0.4;

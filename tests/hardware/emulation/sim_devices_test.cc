@@ -372,6 +372,59 @@ TEST(SimDevicesTest, CommandedRobotFollowsMotorCommands) {
   EXPECT_NEAR(frames.back().wz_radps, 0.5, 0.05);
 }
 
+// Distance from (x, y) to the nearest surface at bumper height (10 cm),
+// horizontally: the nearest hit of 360 rays.
+double HorizontalClearance(const sim::Scene& scene, double x, double y) {
+  double nearest = 1e9;
+  for (int i = 0; i < 360; ++i) {
+    const double a = i * M_PI / 180.0;
+    sim::RayHit hit;
+    if (scene.Cast(Eigen::Vector3d(x, y, 0.10), Eigen::Vector3d(std::cos(a), std::sin(a), 0.0), 0.0, 50.0, &hit)) {
+      nearest = std::min(nearest, hit.range);
+    }
+  }
+  return nearest;
+}
+
+// Driven straight at a wall for long enough to cross the room, the robot
+// stops with its footprint touching the wall instead of driving through it
+// (the keyboard used to drive it out of the lab), and can still back away.
+TEST(SimDevicesTest, TheCommandedRobotStopsAtWallsAndCanBackAway) {
+  const sim::SimConfig config = ShortLab();
+  for (const double radius : {0.22, 0.0}) {
+    SimDevicesOptions options;
+    options.body_radius_m = radius;
+    SimDevices devices(config, SimDevices::Mode::kCommanded, options);
+    std::vector<TimedBytes> out;
+    MotorCommand forward;
+    forward.vx_mps = 0.5;
+    devices.WriteToDevice(LinkDevice::kMotorBoard, EncodeMotorCommand(forward), kStart);
+    devices.AdvanceTo(kStart + FromSeconds(40.0), &out);  // 20 m at 0.5 m/s: far beyond the room.
+    const sim::Trajectory& traj = devices.world().trajectory();
+    const Pose2d p = traj.PoseAt(39.0);
+    const double clearance = HorizontalClearance(config.scene, p.x, p.y);
+    if (radius == 0.0) {
+      // Without a footprint it drives through the wall: 19.5 m from its start.
+      EXPECT_NEAR(std::hypot(p.x - config.start.x, p.y - config.start.y), 0.5 * 39.0, 0.1);
+      continue;
+    }
+    EXPECT_GT(std::hypot(p.x - config.start.x, p.y - config.start.y), 1.0) << "it drove";
+    // Stopped within a control period's travel (5 mm) of touching.
+    EXPECT_GE(clearance, radius - 0.002);
+    EXPECT_LE(clearance, radius + 0.012);
+    EXPECT_EQ(traj.TwistAt(39.0).v, 0.0);
+    EXPECT_EQ(devices.CurrentTwist().v, 0.0);
+
+    MotorCommand back;
+    back.vx_mps = -0.2;
+    devices.WriteToDevice(LinkDevice::kMotorBoard, EncodeMotorCommand(back), kStart + FromSeconds(40.0));
+    devices.AdvanceTo(kStart + FromSeconds(42.0), &out);
+    const Pose2d q = traj.PoseAt(41.9);
+    EXPECT_GT(HorizontalClearance(config.scene, q.x, q.y), clearance + 0.2)
+        << "backing away from the wall is allowed";
+  }
+}
+
 TEST(SimDevicesTest, GarbageWrittenToDevicesIsIgnoredAndCounted) {
   const sim::SimConfig config = ShortLab();
   SimDevices devices(config, SimDevices::Mode::kCommanded);
