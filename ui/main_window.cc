@@ -257,6 +257,10 @@ void MainWindow::BuildStatusBar() {
   for (QLabel* l :
        {link_label_, pose_label_, speed_label_, pose_source_label_, clip_label_, points_label_,
         fps_label_}) {
+    // A gap before each field, so that a long message on the left (a
+    // session's path) is cut off visibly apart from the first field
+    // instead of running into it.
+    l->setContentsMargins(12, 0, 0, 0);
     statusBar()->addPermanentWidget(l);
   }
 }
