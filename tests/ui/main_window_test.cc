@@ -376,7 +376,11 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
     worst = std::max(worst, gap.restart());
     ++job_events;
   }
-  EXPECT_LT(worst, 200) << job_events << " event loop passes";
+  // A job that blocked the GUI would stall it for the whole solve (seconds);
+  // alone the longest gap is ~15 ms, but with another test on both cores of
+  // a 2-core CI machine the GUI thread is sometimes not scheduled for a
+  // quarter of a second (283 ms seen), which is not a freeze.
+  EXPECT_LT(worst, 500) << job_events << " event loop passes";
   std::printf("sfm job: %d event loop passes, longest gap %lld ms\n", job_events,
               static_cast<long long>(worst));
   ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
