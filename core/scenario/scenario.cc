@@ -53,10 +53,12 @@ void ReadScene(const JsonObject& o, SimConfig* c) {
       c->scene = sim::LabScene(sim::LabTarget::kDiamond);
     } else if (preset == "stairwell") {
       c->scene = sim::StairwellScene();
+    } else if (preset == "office-floor") {
+      c->scene = sim::OfficeFloorScene();
     } else if (preset == "empty") {
       c->scene = sim::Scene();
     } else {
-      o.Fail("preset", "unknown preset '" + preset + "' (lab, lab-diamond, stairwell, empty)");
+      o.Fail("preset", "unknown preset '" + preset + "' (lab, lab-diamond, stairwell, office-floor, empty)");
     }
   }
   if (o.Has("boxes")) {

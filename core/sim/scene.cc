@@ -206,4 +206,51 @@ Scene StairwellScene() {
   return s;
 }
 
+namespace {
+constexpr double kFloorHeight = 2.7, kDoorHeight = 2.05;
+}  // namespace
+
+std::vector<RoomTruth> OfficeFloorRooms() {
+  return {{"corridor", 0.0, 16.0, 0.0, 2.0},
+          {"room_a", 0.0, 5.0, 2.1, 8.0},
+          {"room_b", 5.1, 10.6, 2.1, 8.0},
+          {"room_c", 10.7, 16.0, 2.1, 8.0}};
+}
+
+std::vector<DoorTruth> OfficeFloorDoors() {
+  return {{"door_a", {2.0, 2.05}, {2.9, 2.05}},
+          {"door_b", {7.0, 2.05}, {7.9, 2.05}},
+          {"door_c", {12.5, 2.05}, {13.4, 2.05}},
+          {"door_ab", {5.05, 6.0}, {5.05, 6.9}}};
+}
+
+Scene OfficeFloorScene() {
+  Scene s;
+  const double h = kFloorHeight;
+  s.Add(MakeBox("building", 0, 16, 0, 8, 0, h, /*inside=*/true));
+  // The corridor wall, cut by three doors, each with its lintel.
+  s.Add(MakeBox("wall_corridor_1", 0.0, 2.0, 2.0, 2.1, 0, h));
+  s.Add(MakeBox("wall_corridor_2", 2.9, 7.0, 2.0, 2.1, 0, h));
+  s.Add(MakeBox("wall_corridor_3", 7.9, 12.5, 2.0, 2.1, 0, h));
+  s.Add(MakeBox("wall_corridor_4", 13.4, 16.0, 2.0, 2.1, 0, h));
+  s.Add(MakeBox("lintel_a", 2.0, 2.9, 2.0, 2.1, kDoorHeight, h));
+  s.Add(MakeBox("lintel_b", 7.0, 7.9, 2.0, 2.1, kDoorHeight, h));
+  s.Add(MakeBox("lintel_c", 12.5, 13.4, 2.0, 2.1, kDoorHeight, h));
+  // A|B with a door at its north end; B|C closed.
+  s.Add(MakeBox("wall_ab_1", 5.0, 5.1, 2.1, 6.0, 0, h));
+  s.Add(MakeBox("wall_ab_2", 5.0, 5.1, 6.9, 8.0, 0, h));
+  s.Add(MakeBox("lintel_ab", 5.0, 5.1, 6.0, 6.9, kDoorHeight, h));
+  s.Add(MakeBox("wall_bc", 10.6, 10.7, 2.1, 8.0, 0, h));
+  // Furniture, different in every room (below 1 m only where a plan's
+  // section at 1 m should not see it).
+  s.Add(MakeBox("desk_a", 0.3, 1.7, 7.2, 7.9, 0, 0.75));
+  s.Add(MakeBox("cabinet_a", 4.4, 4.95, 3.0, 4.0, 0, 1.9));
+  s.Add(MakeBox("desk_b", 6.0, 8.0, 7.3, 8.0, 0, 0.75));
+  s.Add(MakeBox("table_b", 8.2, 9.4, 4.8, 5.6, 0, 0.75));
+  s.Add(MakeBox("cabinet_b", 9.95, 10.55, 3.0, 3.5, 0, 1.2));
+  s.Add(MakeBox("shelves_c", 15.5, 15.95, 3.0, 6.0, 0, 2.0));
+  s.Add(MakeBox("desk_c", 11.5, 13.0, 7.3, 8.0, 0, 0.75));
+  return s;
+}
+
 }  // namespace sweepscan::sim

@@ -88,6 +88,30 @@ double LabTargetThickness(LabTarget target);
 // A stairwell: a 9 x 3 x 6 m shaft with a flat run-up, a straight flight of
 // 14 steps (0.28 m deep, 0.17 m high) along +x and a landing.
 Scene StairwellScene();
+// An office floor for projects of several sessions (issue 29): a 16 x 8 x
+// 2.7 m storey with its corner at the origin, a 2 m corridor along y = 0 and
+// three rooms north of it (A: x 0-5, B: 5.1-10.6, C: 10.7-16, all y 2.1-8),
+// separated by 0.1 m solid walls (the corridor wall at y 2.0-2.1, A|B at x
+// 5.0-5.1, B|C at x 10.6-10.7). Doors are 0.9 m gaps, 2.05 m high with a
+// lintel above: from the corridor into A (x 2.0-2.9), B (7.0-7.9) and C
+// (12.5-13.4), and between A and B (y 6.0-6.9). Desks, cabinets and shelves
+// make each room different, so that no room matches another turned by a
+// multiple of 90 deg; the corridor is bare (only its doors break it along x).
+// OfficeFloorTruth() lists what a floor plan should find.
+Scene OfficeFloorScene();
+
+// The floor plan's truth of OfficeFloorScene: the rooms' inner faces (so
+// their inner dimensions) and the doors.
+struct RoomTruth {
+  std::string label;
+  double x0, x1, y0, y1;  // inner faces (m)
+};
+std::vector<RoomTruth> OfficeFloorRooms();
+struct DoorTruth {
+  std::string label;
+  Eigen::Vector2d a, b;  // the opening's two jambs at the wall's centre line
+};
+std::vector<DoorTruth> OfficeFloorDoors();
 
 }  // namespace sweepscan::sim
 

@@ -31,6 +31,26 @@ sim::SimConfig CircleConfig(uint64_t seed) {
   return c;
 }
 
+sim::SimConfig BuildingConfig(char drive, uint64_t seed) {
+  sim::SimConfig c;
+  c.name = std::string("building_") + drive;
+  c.seed = seed;
+  c.scene = sim::OfficeFloorScene();
+  const double turn = 2 * M_PI / 0.3, quarter = 0.5 * M_PI / 0.3;
+  const sim::DriveSegment rest{0.0, 0.0, 1.0}, spin{0.0, 0.3, turn}, left{0.0, 0.3, quarter};
+  if (drive == 'a') {
+    c.start = {2.45, 5.0, -M_PI / 2};
+    c.path = {rest, spin, {0.2, 0.0, 20.0}, left, {0.2, 0.0, 25.0}, left, {0.2, 0.0, 20.0}, spin};
+  } else if (drive == 'b') {
+    c.start = {7.45, 4.0, -M_PI / 2};
+    c.path = {rest, spin, {0.2, 0.0, 15.0}, left, {0.2, 0.0, 27.5}, left, {0.2, 0.0, 20.0}, spin};
+  } else {
+    c.start = {1.0, 1.0, 0.0};
+    c.path = {rest, {0.25, 0.0, 56.0}};
+  }
+  return c;
+}
+
 void MakeNoiseFree(sim::SimConfig* c) {
   c->lidar.range_noise_m = 0.0;
   c->lidar.range_noise_fraction = 0.0;

@@ -14,6 +14,12 @@ sim::SimConfig LabConfig(uint64_t seed = 1);
 // The paper's calibration drive: a circle of radius 0.83 m at 0.2 m/s around
 // a centre 1.7 m in front of the target board, slightly more than one turn.
 sim::SimConfig CircleConfig(uint64_t seed = 1);
+// The office floor's drives (resources/scenarios/building_{a,b,c}.json, the
+// same paths): 'a' from room A through the corridor into room B, 'b' from
+// room B into room C, 'c' along the corridor. config.start is where the
+// operator put the robot down: the truth a project's registration is
+// checked against (a session's own frame is its start pose).
+sim::SimConfig BuildingConfig(char drive, uint64_t seed = 1);
 // Every sensor perfect (no noise, no dropouts, no scale error, no bias).
 void MakeNoiseFree(sim::SimConfig* config);
 
