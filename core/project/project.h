@@ -1,0 +1,121 @@
+// A project: many sessions of one building in one frame (issue 29).
+//
+// A project file (docs/project-format.md, "sweepscan-project" version 1) is
+// a small JSON document beside the session folders. It lists each session
+// with the calibration to build its cloud with and its pose in the
+// project's frame, project_from_session, plus the evidence of how that pose
+// was found (the method, the reference session, the residual, the overlap,
+// the 6x6 covariance, picked pairs, a direction the data left free). The
+// cloud data stays in the sessions: the project never copies points.
+//
+// A session's own frame is the robot's pose at its first record (x forward,
+// y left, z up, the floor under the wheels at z = 0): where the operator put
+// the robot down. It is the same frame whatever the session's meta.json says
+// about a simulated start or an imported odometry frame, so that a project
+// never depends on knowledge a real robot does not have. The first session
+// added is the anchor (project_from_session = identity) unless another is
+// marked; every other session is unplaced until registration places it.
+//
+// Loading is strict, as for scenarios: unknown keys, wrong types, a
+// non-unit quaternion or a duplicate id are refused with the file and the
+// JSON path. Saving is atomic (a crash never leaves half a project).
+//
+// Pure data and file I/O; no threads of its own. Callers serialise access.
+#ifndef SWEEPSCAN_CORE_PROJECT_PROJECT_H_
+#define SWEEPSCAN_CORE_PROJECT_PROJECT_H_
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/common/status.h"
+#include "core/geometry/transform.h"
+#include "core/robot/robot_model.h"
+
+namespace sweepscan {
+
+constexpr int kProjectFormatVersion = 1;
+// The file name suffix the app and the CLI propose for project files.
+inline constexpr const char* kProjectSuffix = ".sweepscan-project";
+
+// One pair picked by the operator: the same physical point in the session
+// (source) and in the reference (target), each in its own session frame.
+struct PickedPair {
+  Eigen::Vector3d source = Eigen::Vector3d::Zero();
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();
+};
+
+// How a session's pose was found, kept so that a reviewer can judge it.
+struct RegistrationEvidence {
+  // "anchor", "manual" (typed in), "pairs", "planes", "planes+icp",
+  // "pairs+icp", "icp".
+  std::string method;
+  std::string reference;  // id of the session it was aligned to ("" for the anchor)
+  double rms_m = 0.0;     // residual RMS of the final stage (m)
+  double overlap = 0.0;   // share of the session's points matched in the reference, [0, 1]
+  uint64_t correspondences = 0;
+  int iterations = 0;
+  // Covariance of the pose's error in the reference's frame, se(3) order
+  // (rotation x y z in rad, translation x y z in m), row-major; zero when
+  // unknown.
+  std::array<double, 36> covariance{};
+  // The data leave the pose free along this unit direction (a corridor);
+  // zero when fully constrained.
+  Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();
+  std::vector<PickedPair> pairs;
+  std::string time_utc;  // when it was computed, ISO 8601
+  // 1-sigma of the rotation (rad) and translation (m) from the covariance:
+  // the square roots of the largest eigenvalues of its two diagonal blocks.
+  double SigmaRotation() const;
+  double SigmaTranslation() const;
+};
+
+struct ProjectSession {
+  std::string id;    // unique in the project; the session folder's name by default
+  std::string path;  // the session folder, relative to the project file's folder (or absolute)
+  // The calibration to build its cloud with; none: the session's own
+  // meta.json calibration.
+  std::optional<MountingError> calibration;
+  // Pose in the project's frame; none: not placed yet.
+  std::optional<Rigid3d> project_from_session;
+  RegistrationEvidence registration;
+  bool visible = true;
+  std::string color = "#1f77b4";  // #rrggbb, the app's colour for "colour by session"
+};
+
+struct Project {
+  std::string name;
+  std::string description;  // free text: the building, the floor, the operator
+  std::vector<ProjectSession> sessions;
+
+  // Index of the session with this id, or -1.
+  int Find(const std::string& id) const;
+  // The anchor: the session placed with method "anchor", or -1.
+  int Anchor() const;
+  // Adds a session folder (path as given; relative paths are relative to
+  // the project's folder). The id is the folder's name without
+  // ".sweepscan", made unique with a suffix; the first session becomes the
+  // anchor. Refuses a path already in the project.
+  Status AddSession(const std::string& path, ProjectSession** added);
+  // Removes it; refuses the anchor while other sessions are placed.
+  Status RemoveSession(const std::string& id);
+};
+
+// The distinct colours new sessions get in turn (Tableau 10).
+std::string SessionColor(size_t index);
+
+// The folder `path` resolves against: the project file's folder.
+std::string ProjectDirectory(const std::string& project_file);
+// A session's folder as an absolute (or working-directory-relative) path.
+std::string ResolveSessionPath(const std::string& project_file, const ProjectSession& session);
+
+Status LoadProject(const std::string& path, Project* project);
+Status SaveProject(const std::string& path, const Project& project);
+Status ProjectFromJson(const std::string& text, const std::string& source, Project* project);
+std::string ProjectToJson(const Project& project);
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_PROJECT_PROJECT_H_

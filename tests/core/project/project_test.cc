@@ -1,0 +1,154 @@
+// The project file: a round trip keeps every field; strict loading refuses
+// what a hand edit can get wrong, naming the place; ids and the anchor.
+#include "core/project/project.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace sweepscan {
+namespace {
+
+Project TwoSessions() {
+  Project p;
+  p.name = "office floor";
+  p.description = "3rd floor, east wing";
+  EXPECT_TRUE(p.AddSession("scans/room_a.sweepscan", nullptr).ok());
+  ProjectSession* b = nullptr;
+  EXPECT_TRUE(p.AddSession("scans/room_b.sweepscan/", &b).ok());
+  b->calibration = MountingError{0.01, -0.02, 0.003};
+  b->project_from_session =
+      Rigid3d::FromPose(5.0, -1.0, 0.002, 0.001, -0.002, 1.2);
+  b->registration.method = "planes+icp";
+  b->registration.reference = "room_a";
+  b->registration.rms_m = 0.0041;
+  b->registration.overlap = 0.37;
+  b->registration.correspondences = 123456;
+  b->registration.iterations = 12;
+  for (int i = 0; i < 6; ++i) b->registration.covariance[i * 7] = (i < 3 ? 1e-8 : 4e-6) * (i + 1);
+  b->registration.pairs = {{{1, 2, 3}, {4, 5, 6}}, {{0.5, 0.25, 1}, {2, 2, 2}}};
+  b->registration.time_utc = "2026-11-26T07:00:00Z";
+  b->visible = false;
+  return p;
+}
+
+TEST(ProjectTest, RoundTripKeepsEverything) {
+  const Project p = TwoSessions();
+  ASSERT_EQ(p.sessions.size(), 2u);
+  EXPECT_EQ(p.sessions[0].id, "room_a");
+  EXPECT_EQ(p.sessions[1].id, "room_b");
+  EXPECT_EQ(p.Anchor(), 0);
+  EXPECT_NE(p.sessions[0].color, p.sessions[1].color);
+
+  Project q;
+  const Status s = ProjectFromJson(ProjectToJson(p), "p.json", &q);
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_EQ(q.sessions.size(), 2u);
+  EXPECT_EQ(q.name, p.name);
+  EXPECT_EQ(q.description, p.description);
+  const ProjectSession& a = q.sessions[1];
+  const ProjectSession& b = p.sessions[1];
+  EXPECT_EQ(a.path, b.path);
+  ASSERT_TRUE(a.calibration.has_value());
+  EXPECT_EQ(a.calibration->gamma, b.calibration->gamma);
+  ASSERT_TRUE(a.project_from_session.has_value());
+  EXPECT_TRUE(a.project_from_session->translation().isApprox(b.project_from_session->translation(), 1e-15));
+  EXPECT_NEAR(a.project_from_session->rotation().angularDistance(b.project_from_session->rotation()), 0.0, 1e-12);
+  EXPECT_EQ(a.registration.method, "planes+icp");
+  EXPECT_EQ(a.registration.reference, "room_a");
+  EXPECT_EQ(a.registration.correspondences, 123456u);
+  EXPECT_EQ(a.registration.covariance, b.registration.covariance);
+  ASSERT_EQ(a.registration.pairs.size(), 2u);
+  EXPECT_EQ(a.registration.pairs[1].target, Eigen::Vector3d(2, 2, 2));
+  EXPECT_FALSE(a.visible);
+  // The worst 1-sigma of each block: sqrt of its largest variance.
+  EXPECT_NEAR(a.registration.SigmaRotation(), std::sqrt(3e-8), 1e-15);
+  EXPECT_NEAR(a.registration.SigmaTranslation(), std::sqrt(24e-6), 1e-12);
+  // And the text is stable: saving what was read gives the same bytes.
+  EXPECT_EQ(ProjectToJson(q), ProjectToJson(p));
+}
+
+TEST(ProjectTest, IdsAreUniqueAndPathsAreNotAddedTwice) {
+  Project p;
+  ASSERT_TRUE(p.AddSession("a/room.sweepscan", nullptr).ok());
+  ProjectSession* s = nullptr;
+  ASSERT_TRUE(p.AddSession("b/room.sweepscan", &s).ok());
+  EXPECT_EQ(s->id, "room-2");
+  EXPECT_FALSE(s->project_from_session.has_value());  // only the first is placed
+  const Status again = p.AddSession("a/./room.sweepscan", nullptr);
+  EXPECT_FALSE(again.ok());
+  EXPECT_NE(again.message().find("already in the project"), std::string::npos) << again.message();
+}
+
+TEST(ProjectTest, TheAnchorStaysWhileOthersArePlacedOnIt) {
+  Project p = TwoSessions();
+  EXPECT_FALSE(p.RemoveSession("room_a").ok());
+  EXPECT_TRUE(p.RemoveSession("room_b").ok());
+  EXPECT_TRUE(p.RemoveSession("room_a").ok());
+  EXPECT_FALSE(p.RemoveSession("nothing").ok());
+}
+
+// Each edit breaks one rule; the message names the JSON path.
+TEST(ProjectTest, StrictLoadingNamesThePlace) {
+  const std::string good = ProjectToJson(TwoSessions());
+  struct Case {
+    std::string from, to, expect;
+  };
+  const Case cases[] = {
+      {"\"sweepscan-project\"", "\"sweepscan-session\"", "format"},
+      {"\"version\": 1", "\"version\": 2", "version 1, the file is version 2"},
+      {"\"visible\": false", "\"visble\": false", "visble"},
+      {"\"color\": \"#f28e2b\"", "\"color\": \"orange\"", "sessions[1].color"},
+      {"\"method\": \"planes+icp\"", "\"method\": \"guess\"", "sessions[1].registration.method"},
+      {"\"reference\": \"room_a\"", "\"reference\": \"room_z\"", "unknown session 'room_z'"},
+      {"\"id\": \"room_b\"", "\"id\": \"room_a\"", "appears twice"},
+      {"\"overlap\": 0.37", "\"overlap\": 1.37", "sessions[1].registration.overlap"},
+      {"\"alpha_rad\": 0.01", "\"alpha_rad\": \"0.01\"", "sessions[1].calibration.alpha_rad"},
+  };
+  for (const Case& c : cases) {
+    std::string text = good;
+    const size_t at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    Project p;
+    const Status s = ProjectFromJson(text, "office.sweepscan-project", &p);
+    ASSERT_FALSE(s.ok()) << c.to;
+    EXPECT_NE(s.message().find("office.sweepscan-project: "), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find(c.expect), std::string::npos) << s.message();
+  }
+  // A rotation that is not one.
+  nlohmann::json j = nlohmann::json::parse(good);
+  j["sessions"][1]["project_from_session"]["rotation_wxyz"][0] = 0.5;
+  Project p;
+  const Status s = ProjectFromJson(j.dump(), "x", &p);
+  EXPECT_NE(s.message().find("sessions[1].project_from_session.rotation_wxyz: must be a unit quaternion"),
+            std::string::npos)
+      << s.message();
+  EXPECT_FALSE(ProjectFromJson("{\"format\": \"sweepscan-project\", \"version\": 1, \"sessions\": [}", "x", &p).ok());
+}
+
+TEST(ProjectTest, SavesAtomicallyAndResolvesPathsAgainstItsFolder) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "sweepscan_project_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "sub");
+  const std::string file = (dir / "sub" / "floor.sweepscan-project").string();
+  Project p = TwoSessions();
+  p.sessions[0].path = "../room_a.sweepscan";
+  p.sessions[1].path = "/data/room_b.sweepscan";
+  ASSERT_TRUE(SaveProject(file, p).ok());
+  Project q;
+  const Status s = LoadProject(file, &q);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(ResolveSessionPath(file, q.sessions[0]), (dir / "room_a.sweepscan").string());
+  EXPECT_EQ(ResolveSessionPath(file, q.sessions[1]), "/data/room_b.sweepscan");
+  EXPECT_EQ(ProjectDirectory("floor.sweepscan-project"), ".");
+  const Status missing = LoadProject((dir / "none.sweepscan-project").string(), &q);
+  EXPECT_NE(missing.message().find("cannot open"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sweepscan
