@@ -151,7 +151,11 @@ struct PlaneAlignOptions {
   size_t score_samples = 8000;
   int rescore_count = 24;
   // Refusals: best score below min_overlap (the clouds share nothing), or
-  // best / second (next distinct hypothesis) below min_score_ratio.
+  // best / second below min_score_ratio, where second is the best
+  // hypothesis that differs from the best by at least distinct_yaw_deg or
+  // distinct_translation_m (closer ones would converge to the same pose).
+  double distinct_yaw_deg = 10.0;
+  double distinct_translation_m = 1.0;
   double min_overlap = 0.08;
   double min_score_ratio = 1.25;
   int threads = 0;  // 0 = all hardware threads; the result does not depend on it

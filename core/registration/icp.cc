@@ -1,0 +1,219 @@
+// Fine registration: robust point-to-plane ICP, Gauss-Newton on se(3).
+//
+// Source points p_i (downsampled), target points t_j with PCA normals n_j
+// (computed once). At the current T = target_from_source each source point
+// q_i = T p_i is matched to its nearest target point t_j (exact, through the
+// NeighbourIndex) if |q_i - t_j| < d_k, the current correspondence distance,
+// and t_j lies on a surface (variation below the limit). The residual is
+//   r_i = n_j . (q_i - t_j).
+// Perturbing T on the left, T(xi) = Exp(xi) T with xi = (omega, v),
+// q_i(xi) ~ q_i + omega x q_i + v, so
+//   J_i = dr_i/dxi = [ (q_i x n_j)^T, n_j^T ].
+// IRLS: with weights w_i = w(r_i / c) fixed, one Gauss-Newton step solves
+//   (sum w_i J_i^T J_i) xi = - sum w_i J_i^T r_i      (6x6 normal matrix H)
+// and T <- Exp(xi) T (retraction q' = R(omega) q + v, exact to first order).
+// Weights: Cauchy w = 1 / (1 + (r/c)^2); Geman-McClure w = 1 / (1 +
+// (r/c)^2)^2; c = robust_k * 1.4826 * median |r_i| (the MAD about zero, re-
+// estimated every iteration, never below min_scale_m * robust_k). d_k
+// shrinks geometrically from max_distance_m to min_distance_m, so early
+// iterations see far correspondences (basin of attraction) and late ones
+// only near ones (trimming what is not shared).
+//
+// Degeneracy: H re-expressed about the correspondences' centroid with the
+// rotation scaled by their RMS radius and divided by the weight sum has
+// dimensionless eigenvalues (its translation block is the weighted mean of
+// n n^T): an eigenvalue below degeneracy_threshold is a direction no surface
+// constrains (a corridor's axis). Refused, or the update is held at zero
+// along it (pseudo-inverse) and the direction reported.
+//
+// Covariance: sigma^2 H^-1 with sigma^2 = sum w r^2 / (sum w - 6) at the
+// result; it assumes independent residuals, so it is a lower bound
+// (neighbouring points' errors are correlated through the trajectory).
+//
+// Parallel: correspondences and normal sums in blocks of 2048 points,
+// combined in block order: the result does not depend on the thread count.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/registration/internal.h"
+#include "core/registration/registration.h"
+
+namespace sweepscan {
+
+using registration_internal::Control;
+using registration_internal::Degeneracy;
+using registration_internal::Matrix6d;
+using registration_internal::NormalSums;
+using registration_internal::Surface;
+using registration_internal::Vector6d;
+
+namespace {
+
+constexpr size_t kBlock = 2048;
+constexpr double kPrepareShare = 0.2;
+
+double RobustWeight(RobustLoss loss, double r, double c) {
+  const double u = (r / c) * (r / c);
+  switch (loss) {
+    case RobustLoss::kNone: return 1.0;
+    case RobustLoss::kCauchy: return 1.0 / (1.0 + u);
+    case RobustLoss::kGemanMcClure: return 1.0 / ((1.0 + u) * (1.0 + u));
+  }
+  return 1.0;
+}
+
+}  // namespace
+
+Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
+                 const std::vector<Eigen::Vector3f>& target_in, const Rigid3d& initial,
+                 const IcpOptions& options, const RegistrationControl& control_in,
+                 RegistrationResult* result) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error("icp: " + error);
+  *result = RegistrationResult();
+  result->method = "icp";
+  result->target_from_source = initial;
+  Control control(control_in, options.threads);
+  const auto cancelled = [] { return Status::Error(kRegistrationCancelled); };
+  if (!control.Report(RegistrationStage::kPrepare, 0.0, 0, 0.0, true)) return cancelled();
+
+  const std::vector<Eigen::Vector3f> source = VoxelDownsample(source_in, options.source_voxel_m);
+  const std::vector<Eigen::Vector3f> target = VoxelDownsample(target_in, options.target_voxel_m);
+  if (source.size() < options.min_correspondences || target.size() < static_cast<size_t>(options.normal_k)) {
+    return Status::Error("icp: too few points (source " + std::to_string(source.size()) +
+                         ", target " + std::to_string(target.size()) + " after downsampling)");
+  }
+  Surface surface;
+  if (!registration_internal::BuildSurface(target, options.normal_k, &control, &surface)) {
+    return cancelled();
+  }
+  if (!control.Report(RegistrationStage::kIcp, kPrepareShare, 0, 0.0, true)) return cancelled();
+
+  const size_t n = source.size();
+  const size_t blocks = Control::Blocks(n, kBlock);
+  std::vector<int64_t> hint(n, -1);
+  std::vector<uint32_t> match(n);
+  std::vector<float> residual(n, std::numeric_limits<float>::quiet_NaN());
+  std::vector<NormalSums> block_sums(blocks);
+  std::vector<float> abs_r;
+  abs_r.reserve(n);
+
+  Rigid3d t = initial;
+  double distance = options.max_distance_m;
+  bool converged = false;
+  for (int it = 0;; ++it) {
+    // (1) Correspondences at T.
+    const Eigen::Matrix3f rf = t.rotation().toRotationMatrix().cast<float>();
+    const Eigen::Vector3f tf = t.translation().cast<float>();
+    const float d2max = static_cast<float>(distance * distance);
+    const bool ok = control.For(n, kBlock, [&](size_t, size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        const Eigen::Vector3f q = rf * source[i] + tf;
+        uint32_t idx = 0;
+        float d2 = 0.0f;
+        residual[i] = std::numeric_limits<float>::quiet_NaN();
+        if (surface.index.Knn(q.data(), 1, &idx, &d2, hint[i]) < 1) continue;
+        hint[i] = idx;
+        if (d2 > d2max || surface.variation[idx] > options.max_surface_variation) continue;
+        const float* p = surface.index.sorted_point(idx);
+        residual[i] = surface.normals[idx].dot(q - Eigen::Vector3f(p[0], p[1], p[2]));
+        match[i] = idx;
+      }
+    });
+    if (!ok) return cancelled();
+
+    // (2) Robust scale: the median absolute residual (MAD about zero).
+    abs_r.clear();
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isnan(residual[i])) abs_r.push_back(std::abs(residual[i]));
+    }
+    if (abs_r.size() < options.min_correspondences) {
+      result->target_from_source = t;
+      result->correspondences = abs_r.size();
+      result->iterations = it;
+      char buf[200];
+      std::snprintf(buf, sizeof(buf),
+                    "icp: %zu correspondences within %.3f m at iteration %d, at least %zu needed "
+                    "(no overlap, or the initial pose is too far off)",
+                    abs_r.size(), distance, it, options.min_correspondences);
+      return Status::Error(buf);
+    }
+    std::nth_element(abs_r.begin(), abs_r.begin() + abs_r.size() / 2, abs_r.end());
+    const double sigma = std::max(1.4826 * abs_r[abs_r.size() / 2], options.min_scale_m);
+    const double c = options.robust_k * sigma;
+
+    // (3) IRLS weights and the normal equations, summed in block order.
+    const bool ok_sums = control.For(n, kBlock, [&](size_t b, size_t begin, size_t end) {
+      NormalSums s;
+      for (size_t i = begin; i < end; ++i) {
+        if (std::isnan(residual[i])) continue;
+        const Eigen::Vector3d q = t * source[i].cast<double>();
+        const float* p = surface.index.sorted_point(match[i]);
+        const Eigen::Vector3d nj = surface.normals[match[i]].cast<double>();
+        const double r = nj.dot(q - Eigen::Vector3d(p[0], p[1], p[2]));
+        s.Add(q, nj, r, RobustWeight(options.loss, r, c));
+      }
+      block_sums[b] = s;
+    });
+    if (!ok_sums) return cancelled();
+    NormalSums sums;
+    for (const NormalSums& s : block_sums) sums.Add(s);
+    const Degeneracy degeneracy =
+        registration_internal::AnalyseDegeneracy(sums, options.degeneracy_threshold);
+
+    result->target_from_source = t;
+    result->iterations = it;
+    result->correspondences = sums.count;
+    result->overlap = static_cast<double>(sums.count) / static_cast<double>(n);
+    result->rms_m = std::sqrt(sums.r2 / static_cast<double>(sums.count));
+    result->eigenvalues = degeneracy.eigenvalues;
+    if (degeneracy.free_count > 0) {
+      result->degenerate = true;
+      result->free_direction = degeneracy.free_direction;
+      result->free_is_rotation = degeneracy.free_is_rotation;
+      if (options.degeneracy == DegeneracyPolicy::kRefuse) {
+        result->covariance = registration_internal::Covariance(sums, degeneracy);
+        char buf[320];
+        std::snprintf(buf, sizeof(buf),
+                      "icp: degenerate: the clouds do not constrain the %s %s in the target frame "
+                      "(normalised eigenvalue %.2g < %.2g; %d free direction%s); refusing rather "
+                      "than answering along it",
+                      degeneracy.free_is_rotation ? "rotation about" : "translation along",
+                      registration_internal::FormatDirection(degeneracy.free_direction).c_str(),
+                      degeneracy.eigenvalues[0], options.degeneracy_threshold,
+                      degeneracy.free_count, degeneracy.free_count > 1 ? "s" : "");
+        return Status::Error(buf);
+      }
+    }
+    if (converged || it >= options.max_iterations) {
+      result->covariance = registration_internal::Covariance(sums, degeneracy);
+      break;
+    }
+
+    // (4) The Gauss-Newton step, in the normalised coordinates xi'' (so a
+    // held direction is the eigenvector there): xi'' = -sum_i u_i u_i^T g'' /
+    // lambda_i over the constrained directions, xi = basis xi''.
+    const Vector6d gn = degeneracy.basis.transpose() * sums.g / sums.w;
+    Vector6d xin = Vector6d::Zero();
+    for (int i = degeneracy.free_count; i < 6; ++i) {
+      const Vector6d u = degeneracy.eigenvectors.col(i);
+      xin -= u * (u.dot(gn) / degeneracy.eigenvalues[i]);
+    }
+    const Vector6d xi = degeneracy.basis * xin;
+    t = registration_internal::LeftUpdate(xi, t);
+    converged = distance <= options.min_distance_m &&
+                xi.head<3>().norm() < options.convergence_rotation_rad &&
+                xi.tail<3>().norm() < options.convergence_translation_m;
+    distance = std::max(options.min_distance_m, distance * options.distance_shrink);
+    if (!control.Report(RegistrationStage::kIcp,
+                        kPrepareShare + (1.0 - kPrepareShare) * (it + 1) / (options.max_iterations + 1),
+                        it + 1, result->rms_m)) {
+      return cancelled();
+    }
+  }
+  control.Report(RegistrationStage::kDone, 1.0, result->iterations, result->rms_m, true);
+  return Status::Ok();
+}
+
+}  // namespace sweepscan
