@@ -21,6 +21,10 @@ const char kSweepscanSessionWkt[] =
     "LOCAL_CS[\"sweepscan session frame (x forward and y left at the start pose, z up; metres)\","
     "LOCAL_DATUM[\"sweepscan session start pose\",32767],UNIT[\"metre\",1],"
     "AXIS[\"X\",EAST],AXIS[\"Y\",NORTH]]";
+const char kSweepscanProjectWkt[] =
+    "LOCAL_CS[\"sweepscan project frame (x forward and y left at the anchor session's start pose, z up; "
+    "metres)\",LOCAL_DATUM[\"sweepscan project anchor\",32767],UNIT[\"metre\",1],"
+    "AXIS[\"X\",EAST],AXIS[\"Y\",NORTH]]";
 
 namespace {
 

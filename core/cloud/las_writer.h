@@ -54,6 +54,9 @@ inline constexpr int64_t kUnixSecondsAtGpsEpoch = 315964800;  // 1980-01-06T00:0
 // (Debian 12 has 9.1.1, and GDAL and PDAL parse through it) refuses it; the
 // name states z (up, metres) instead.
 extern const char kSweepscanSessionWkt[];
+// The same for a project's cloud: the project's frame (its anchor session's
+// start pose; docs/project-format.md).
+extern const char kSweepscanProjectWkt[];
 
 // The extent of a cloud (m) and what the writer needs from a first pass.
 // Non-finite points are counted and left out, as the writer does.
@@ -135,6 +138,13 @@ class LasWriter {
   // Any number of points, any number of calls. A point outside the options'
   // extent fails the export (sticky: later calls and Finish fail too).
   Status Append(const CloudPoint* points, size_t n);
+  // Between Appends: the Point Source ID and the time mapping of the points
+  // that follow (a project's sessions: each its own id and its own clock).
+  void SetSource(uint16_t point_source_id, int64_t time_origin_ns, double gps_time_at_origin_s) {
+    options_.point_source_id = point_source_id;
+    options_.time_origin_ns = time_origin_ns;
+    options_.gps_time_at_origin_s = gps_time_at_origin_s;
+  }
   // Writes the remaining records, fills the header's counts and bounds,
   // fsyncs and renames the file into place.
   Status Finish();

@@ -1,0 +1,59 @@
+#include "hardware/station/session_cloud.h"
+
+#include "core/cloud/reconstruct.h"
+#include "hardware/station/recording.h"
+
+namespace sweepscan::hardware {
+
+Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
+                        const SessionCloudOptions& options, SessionCloud* cloud) {
+  if (options.pose_source != PoseSource::kEkf && options.pose_source != PoseSource::kOdometry) {
+    return Status::Error("a project's session clouds are built from the EKF or the wheels alone");
+  }
+  SessionCloud out;
+  out.id = session.id;
+  out.dir = ResolveSessionPath(project_file, session);
+  Recording rec;
+  Status s = OpenRecording(out.dir, options.frames, &rec, options.progress);
+  if (!s.ok()) return Status::Error("session '" + session.id + "': " + s.message());
+  out.meta = rec.decode.meta;
+  if (!rec.decode.frames.damage.empty()) out.damage = rec.decode.frames.DamageSummary();
+  const nlohmann::json& settings = out.meta.settings;
+  if (settings.is_object() && settings.contains("scenario")) {
+    const Pose2d start = rec.start;
+    out.has_true_start = true;
+    out.world_from_session_truth = Rigid3d::FromPose(start.x, start.y, 0.0, 0.0, 0.0, start.yaw);
+  }
+  // The session's own frame: the robot's pose at its first record.
+  rec.start = Pose2d();
+  ReconstructionOptions ro;
+  ro.pose.source = options.pose_source;
+  ro.calibration = session.calibration ? *session.calibration : out.meta.calibration;
+  out.calibration = ro.calibration;
+  ReconstructionResult result;
+  s = ReconstructRecording(rec, ro, &result);
+  if (!s.ok()) return Status::Error("session '" + session.id + "': " + s.message());
+  out.points = std::move(result.points);
+  *cloud = std::move(out);
+  return Status::Ok();
+}
+
+void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points) {
+  const Eigen::Matrix3d r = t.rotation().toRotationMatrix();
+  const Eigen::Vector3d o = t.translation();
+  for (CloudPoint& p : *points) {
+    const Eigen::Vector3d q = r * Eigen::Vector3d(p.x, p.y, p.z) + o;
+    p.x = static_cast<float>(q.x());
+    p.y = static_cast<float>(q.y());
+    p.z = static_cast<float>(q.z());
+  }
+}
+
+std::vector<Eigen::Vector3f> Positions(const std::vector<CloudPoint>& points) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(points.size());
+  for (const CloudPoint& p : points) out.emplace_back(p.x, p.y, p.z);
+  return out;
+}
+
+}  // namespace sweepscan::hardware

@@ -1,0 +1,56 @@
+// A project session's cloud (core/project/project.h), built the one way the
+// CLI's `project` commands and the desktop app's project tree build it: the
+// session folder decoded (hardware/station/recording.h), its poses from the
+// EKF (or the wheels alone) starting at the identity, so the cloud is in
+// the session's own frame (where the operator put the robot down) whatever
+// meta.json says about a simulated or imported start, under the project's
+// calibration for it or the session's own.
+//
+// Pure functions, no Qt; any thread (the app loads clouds on a worker).
+#ifndef SWEEPSCAN_HARDWARE_STATION_SESSION_CLOUD_H_
+#define SWEEPSCAN_HARDWARE_STATION_SESSION_CLOUD_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/cloud/cloud.h"
+#include "core/common/status.h"
+#include "core/geometry/transform.h"
+#include "core/pose/pose_estimator.h"
+#include "core/project/project.h"
+#include "core/session/session.h"
+#include "hardware/link/telemetry_decoder.h"
+
+namespace sweepscan::hardware {
+
+struct SessionCloudOptions {
+  PoseSource pose_source = PoseSource::kEkf;  // kEkf or kOdometry
+  FramesLoadOptions frames;                   // skip damaged records (default) or refuse them
+  DecodeProgress progress;                    // 0..1 of the decoding; false cancels
+};
+
+struct SessionCloud {
+  std::string id;
+  std::string dir;  // the resolved session folder
+  SessionMeta meta;
+  std::string damage;  // frames.bin's damage summary, "" if none (warn the operator)
+  MountingError calibration;  // what the cloud was built with
+  std::vector<CloudPoint> points;  // the session's own frame
+  // A simulated session (meta.json's settings.scenario): the scenario's
+  // start pose, the truth of where the operator put the robot down. Only
+  // for checking registrations against truth; never used to place a cloud.
+  bool has_true_start = false;
+  Rigid3d world_from_session_truth;
+};
+
+Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
+                        const SessionCloudOptions& options, SessionCloud* cloud);
+
+// p <- t * p for every point (double precision in, float out).
+void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points);
+std::vector<Eigen::Vector3f> Positions(const std::vector<CloudPoint>& points);
+
+}  // namespace sweepscan::hardware
+
+#endif  // SWEEPSCAN_HARDWARE_STATION_SESSION_CLOUD_H_
