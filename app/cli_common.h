@@ -67,6 +67,10 @@ extern const char* const kSimulateUsage;
 extern const char* const kCalibrateUsage;
 extern const char* const kEvaluateUsage;
 
+// Projects of many sessions (app/cli_project*.cc): `project`.
+int RunProject(int argc, char** argv);
+extern const char* const kProjectUsage;
+
 // The headless recorder (app/cli_record.cc): `record`.
 int RunRecord(int argc, char** argv);
 extern const char* const kRecordUsage;

@@ -21,6 +21,7 @@ const char* kUsage =
     "  export     write a session's decoded sensor records as CSV\n"
     "  import     turn a ROS 1 or ROS 2 bag (2D lidar, odometry, IMU, tf) into a session\n"
     "  record     record a session from a robot agent (robotd or the simulator), headless\n"
+    "  project    a building in many sessions: new, add, align (registration), export\n"
     "  repair     write a clean copy of a damaged session (intact records only)\n"
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
@@ -63,6 +64,8 @@ int Main(int argc, char** argv) {
       std::cout << kImportUsage;
     } else if (topic == "record") {
       std::cout << kRecordUsage;
+    } else if (topic == "project") {
+      std::cout << kProjectUsage;
     } else if (topic == "repair") {
       std::cout << kRepairUsage;
     } else {
@@ -80,6 +83,7 @@ int Main(int argc, char** argv) {
   if (command == "reconstruct") return RunReconstruct(argc, argv);
   if (command == "export") return RunExport(argc, argv);
   if (command == "repair") return RunRepair(argc, argv);
+  if (command == "project") return RunProject(argc, argv);
   if (command == "import") return RunImport(argc, argv);
   if (command == "calibrate") return RunCalibrate(argc, argv);
   if (command == "evaluate") return RunEvaluate(argc, argv);

@@ -1,0 +1,216 @@
+// sweepscan-cli project: a building as many sessions in one frame
+// (core/project/project.h, docs/project-format.md). This file parses the
+// subcommands and edits the project file; cli_project_align.cc registers
+// sessions and cli_project_export.cc writes the project's cloud.
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "app/cli_args.h"
+#include "app/cli_common.h"
+#include "app/cli_project.h"
+#include "core/calibration/calibration_file.h"
+#include "core/project/project.h"
+
+namespace sweepscan::app {
+
+const char* const kProjectUsage =
+    "usage: sweepscan-cli project <subcommand> PROJECT.sweepscan-project [options]\n"
+    "\n"
+    "A project is a building scanned in several sessions (drives), each placed in\n"
+    "one frame by registration (docs/project-format.md, docs/registration.md). The\n"
+    "first session added is the anchor: the project's frame is its start pose.\n"
+    "\n"
+    "Subcommands:\n"
+    "  new PROJECT [SESSION...] [--name N] [--description D]\n"
+    "                     create a project file (refuses to overwrite one)\n"
+    "  add PROJECT SESSION... [--calibration FILE]\n"
+    "                     add session folders (unplaced until aligned)\n"
+    "  remove PROJECT ID  take a session out (its folder is left alone)\n"
+    "  info PROJECT       the sessions, their poses and how each was found\n"
+    "  align PROJECT [--session ID] [--to ID] [--pairs FILE] [--no-icp]\n"
+    "        [--hold-free] [--pose-source ekf|odometry]\n"
+    "                     place unplaced sessions (or --session ID again) against\n"
+    "                     placed ones: planes (or the picked --pairs) then\n"
+    "                     point-to-plane ICP; a session whose overlap leaves a\n"
+    "                     direction free (a bare corridor) is refused, or with\n"
+    "                     --hold-free kept at the coarse pose along it, and said\n"
+    "  export PROJECT --out FILE.las|FILE.ply|FILE.pcd [--sessions ID,ID]\n"
+    "                     the placed, visible sessions' clouds in the project frame;\n"
+    "                     LAS is streamed one session at a time, each its own\n"
+    "                     Point Source ID\n"
+    "\n"
+    "Options:\n"
+    "  --json             machine-readable output on stdout\n"
+    "  --strict           refuse sessions with damaged records (default: skip them)\n"
+    "\n"
+    "--pairs FILE: {\"pairs\": [{\"source\": [x, y, z], \"target\": [x, y, z]}, ...]},\n"
+    "three or more points picked in the session (source) and in --to (target),\n"
+    "each in its own session's frame (metres).\n";
+
+namespace {
+
+namespace fs = std::filesystem;
+
+int Fail(int code, const std::string& message) {
+  PrintError(message);
+  return code;
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(digits) << v;
+  return o.str();
+}
+
+int RunNew(const Args& args) {
+  const std::vector<std::string>& pos = args.positional();
+  const std::string file = pos[0];
+  if (fs::exists(file)) return Fail(kExitBadInput, file + ": exists already (use `project add` to extend it)");
+  Project project;
+  project.name = args.Get("name", fs::path(file).stem().string());
+  project.description = args.Get("description");
+  for (size_t i = 1; i < pos.size(); ++i) {
+    const Status s = project.AddSession(pos[i], nullptr);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+  }
+  const Status s = SaveProject(file, project);
+  if (!s.ok()) return Fail(kExitFailure, s.message());
+  if (args.Flag("json")) {
+    std::cout << nlohmann::json{{"project", file}, {"sessions", project.sessions.size()}}.dump(2) << "\n";
+  } else {
+    std::cout << "created " << file << " with " << project.sessions.size() << " session(s)\n";
+  }
+  return kExitOk;
+}
+
+int RunAdd(const Args& args) {
+  const std::vector<std::string>& pos = args.positional();
+  if (pos.size() < 2) return Fail(kExitBadInput, "project add needs PROJECT and at least one SESSION");
+  Project project;
+  Status s = LoadProject(pos[0], &project);
+  if (!s.ok()) return Fail(kExitBadInput, s.message());
+  std::optional<MountingError> calibration;
+  if (args.Has("calibration")) {
+    MountingError m;
+    s = LoadCalibrationFile(args.Get("calibration"), &m);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+    calibration = m;
+  }
+  for (size_t i = 1; i < pos.size(); ++i) {
+    ProjectSession probe;
+    probe.path = pos[i];
+    if (!fs::is_directory(ResolveSessionPath(pos[0], probe))) {
+      return Fail(kExitBadInput, pos[i] + ": not a session folder (paths are relative to the project's folder)");
+    }
+    ProjectSession* added = nullptr;
+    s = project.AddSession(pos[i], &added);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+    added->calibration = calibration;
+    std::cerr << "added '" << added->id << "'"
+              << (added->project_from_session ? " as the anchor" : ", not placed yet") << "\n";
+  }
+  s = SaveProject(pos[0], project);
+  if (!s.ok()) return Fail(kExitFailure, s.message());
+  return kExitOk;
+}
+
+int RunRemove(const Args& args) {
+  const std::vector<std::string>& pos = args.positional();
+  if (pos.size() != 2) return Fail(kExitBadInput, "project remove needs PROJECT and one session ID");
+  Project project;
+  Status s = LoadProject(pos[0], &project);
+  if (!s.ok()) return Fail(kExitBadInput, s.message());
+  s = project.RemoveSession(pos[1]);
+  if (!s.ok()) return Fail(kExitBadInput, s.message());
+  s = SaveProject(pos[0], project);
+  if (!s.ok()) return Fail(kExitFailure, s.message());
+  return kExitOk;
+}
+
+int RunProjectInfo(const Args& args) {
+  const std::string file = args.positional()[0];
+  Project project;
+  const Status s = LoadProject(file, &project);
+  if (!s.ok()) return Fail(kExitBadInput, s.message());
+  nlohmann::json sessions = nlohmann::json::array();
+  std::ostringstream text;
+  text << "project '" << project.name << "' (" << file << "): " << project.sessions.size() << " session(s)\n";
+  if (!project.description.empty()) text << "  " << project.description << "\n";
+  for (const ProjectSession& ps : project.sessions) {
+    const std::string dir = ResolveSessionPath(file, ps);
+    const bool present = fs::is_directory(dir);
+    nlohmann::json j = {{"id", ps.id}, {"path", ps.path}, {"present", present}, {"visible", ps.visible},
+                        {"placed", ps.project_from_session.has_value()}};
+    text << "  " << ps.id << "  " << ps.path << (present ? "" : "  [MISSING]") << (ps.visible ? "" : "  [hidden]");
+    if (!ps.project_from_session) {
+      text << "\n      not placed (sweepscan-cli project align)\n";
+      sessions.push_back(j);
+      continue;
+    }
+    const RegistrationEvidence& e = ps.registration;
+    const Rigid3d& t = *ps.project_from_session;
+    const Eigen::Vector3d ypr = t.rotation().toRotationMatrix().eulerAngles(2, 1, 0);
+    const double yaw_deg = std::atan2(std::sin(ypr[0]), std::cos(ypr[0])) * 180.0 / M_PI;
+    text << "\n      at x " << Fixed(t.translation().x(), 3) << " y " << Fixed(t.translation().y(), 3) << " z "
+         << Fixed(t.translation().z(), 3) << " m, yaw " << Fixed(yaw_deg, 2) << " deg; " << e.method;
+    if (!e.reference.empty()) text << " against '" << e.reference << "'";
+    j["translation_m"] = {t.translation().x(), t.translation().y(), t.translation().z()};
+    j["yaw_deg"] = yaw_deg;
+    j["method"] = e.method;
+    j["reference"] = e.reference;
+    if (e.method != "anchor") {
+      text << ": rms " << Fixed(e.rms_m * 1000, 1) << " mm, overlap " << Fixed(e.overlap * 100, 0)
+           << " %, 1-sigma " << Fixed(e.SigmaTranslation() * 1000, 2) << " mm / "
+           << Fixed(e.SigmaRotation() * 180 / M_PI, 4) << " deg";
+      if (!e.free_direction.isZero()) {
+        text << "; FREE along (" << Fixed(e.free_direction.x(), 2) << ", " << Fixed(e.free_direction.y(), 2)
+             << ", " << Fixed(e.free_direction.z(), 2) << ")";
+      }
+      j["rms_m"] = e.rms_m;
+      j["overlap"] = e.overlap;
+      j["sigma_translation_m"] = e.SigmaTranslation();
+      j["sigma_rotation_deg"] = e.SigmaRotation() * 180 / M_PI;
+      j["pairs"] = e.pairs.size();
+    }
+    text << "\n";
+    sessions.push_back(j);
+  }
+  if (args.Flag("json")) {
+    std::cout << nlohmann::json{{"project", file}, {"name", project.name}, {"sessions", sessions}}.dump(2) << "\n";
+  } else {
+    std::cout << text.str();
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int RunProject(int argc, char** argv) {
+  if (argc < 3 || std::string(argv[2]) == "--help" || std::string(argv[2]) == "-h") {
+    std::cout << kProjectUsage;
+    return argc < 3 ? kExitBadInput : kExitOk;
+  }
+  const std::string sub = argv[2];
+  Args args({"json", "strict", "no-icp", "hold-free", "help"},
+            {"name", "description", "calibration", "session", "to", "pairs", "pose-source", "out", "sessions"});
+  std::string error;
+  if (!args.Parse(argc, argv, 3, &error)) return Fail(kExitBadInput, error + "\n" + kProjectUsage);
+  if (args.Flag("help")) {
+    std::cout << kProjectUsage;
+    return kExitOk;
+  }
+  if (args.positional().empty()) return Fail(kExitBadInput, "project " + sub + " needs a PROJECT file");
+  if (sub == "new") return RunNew(args);
+  if (sub == "add") return RunAdd(args);
+  if (sub == "remove") return RunRemove(args);
+  if (sub == "info") return RunProjectInfo(args);
+  if (sub == "align") return RunProjectAlign(args);
+  if (sub == "export") return RunProjectExport(args);
+  return Fail(kExitBadInput, "unknown project subcommand '" + sub + "'\n" + kProjectUsage);
+}
+
+}  // namespace sweepscan::app

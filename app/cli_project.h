@@ -1,0 +1,37 @@
+// The pieces of `sweepscan-cli project` shared by its files.
+#ifndef SWEEPSCAN_APP_CLI_PROJECT_H_
+#define SWEEPSCAN_APP_CLI_PROJECT_H_
+
+#include <map>
+#include <string>
+
+#include "app/cli_args.h"
+#include "hardware/station/session_cloud.h"
+
+namespace sweepscan::app {
+
+int RunProjectAlign(const Args& args);   // cli_project_align.cc
+int RunProjectExport(const Args& args);  // cli_project_export.cc
+
+// Session clouds of one project, each built once per command, with the
+// command's --strict and --pose-source; warnings (damaged records) on stderr.
+class SessionClouds {
+ public:
+  SessionClouds(std::string project_file, hardware::SessionCloudOptions options)
+      : file_(std::move(project_file)), options_(std::move(options)) {}
+  // Null with *error set on failure.
+  const hardware::SessionCloud* Get(const ProjectSession& session, std::string* error);
+  void Drop(const std::string& id) { clouds_.erase(id); }
+
+ private:
+  std::string file_;
+  hardware::SessionCloudOptions options_;
+  std::map<std::string, hardware::SessionCloud> clouds_;
+};
+
+// --strict and --pose-source; kExitOk or an exit code after one error line.
+int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions* options);
+
+}  // namespace sweepscan::app
+
+#endif  // SWEEPSCAN_APP_CLI_PROJECT_H_

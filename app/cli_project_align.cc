@@ -1,0 +1,270 @@
+// sweepscan-cli project align: places a project's sessions by registration
+// (core/registration/registration.h, docs/registration.md).
+//
+// Each unplaced session S is registered against every placed session R (or
+// --to): coarse from the planes both see (or the operator's --pairs), then
+// point-to-plane ICP. The pairing with the largest overlap wins and
+// project_from_S = project_from_R * R_from_S. Passes repeat until no session
+// can be placed, so a session that overlaps only one placed later still
+// finds it. A simulated session knows where the robot was put down in the
+// scenario's world; when both are simulated, the pose is compared with that
+// truth and the difference printed (never used to place anything).
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "app/cli_common.h"
+#include "app/cli_project.h"
+#include "core/common/json_reader.h"
+#include "core/pose/pose_estimator.h"
+#include "core/registration/registration.h"
+#include "core/session/session.h"
+
+namespace sweepscan::app {
+
+int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions* options) {
+  options->frames.skip_corrupt_records = !args.Flag("strict");
+  if (args.Has("pose-source")) {
+    if (!ParsePoseSource(args.Get("pose-source"), &options->pose_source) ||
+        (options->pose_source != PoseSource::kEkf && options->pose_source != PoseSource::kOdometry)) {
+      PrintError("--pose-source must be ekf or odometry, got '" + args.Get("pose-source") + "'");
+      return kExitBadInput;
+    }
+  }
+  return kExitOk;
+}
+
+const hardware::SessionCloud* SessionClouds::Get(const ProjectSession& session, std::string* error) {
+  auto it = clouds_.find(session.id);
+  if (it != clouds_.end()) return &it->second;
+  hardware::SessionCloud cloud;
+  std::cerr << "building the cloud of '" << session.id << "'...\n";
+  const Status s = hardware::LoadSessionCloud(file_, session, options_, &cloud);
+  if (!s.ok()) {
+    *error = s.message();
+    return nullptr;
+  }
+  if (!cloud.damage.empty()) {
+    std::cerr << "sweepscan-cli: warning: " << cloud.dir << ": " << cloud.damage << "\n";
+  }
+  return &clouds_.emplace(session.id, std::move(cloud)).first->second;
+}
+
+namespace {
+
+std::string Mm(double m) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(1) << m * 1000.0 << " mm";
+  return o.str();
+}
+
+std::string Deg(double rad, int digits = 3) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(digits) << rad * 180.0 / M_PI << " deg";
+  return o.str();
+}
+
+Status LoadPairs(const std::string& path, std::vector<PointPair>* pairs) {
+  nlohmann::json j;
+  Status s = ReadJsonFile(path, &j);
+  if (!s.ok()) return s;
+  try {
+    if (!j.is_object()) throw JsonError("expected a JSON object, got " + JsonTypeName(j));
+    const JsonObject o(j, "");
+    o.AllowOnly({"pairs"});
+    const nlohmann::json& a = o.Array("pairs");
+    for (size_t i = 0; i < a.size(); ++i) {
+      const std::string where = "pairs[" + std::to_string(i) + "]";
+      if (!a[i].is_object()) throw JsonError(where + ": expected an object");
+      const JsonObject p(a[i], where);
+      p.AllowOnly({"source", "target"});
+      PointPair pair;
+      for (const char* key : {"source", "target"}) {
+        const nlohmann::json& v = p.Array(key);
+        if (v.size() != 3) p.Fail(key, "expected 3 numbers");
+        Eigen::Vector3d x;
+        for (int k = 0; k < 3; ++k) {
+          if (!v[k].is_number()) p.Fail(key, "expected 3 numbers");
+          x[k] = v[k].get<double>();
+        }
+        (std::string(key) == "source" ? pair.source : pair.target) = x;
+      }
+      pairs->push_back(pair);
+    }
+  } catch (const JsonError& e) {
+    return Status::Error(path + ": " + e.what());
+  }
+  return Status::Ok();
+}
+
+struct Attempt {
+  std::string reference;
+  Status status;
+  RegistrationResult coarse, fine;
+  std::string method;
+};
+
+// Coarse then fine registration of `source` against `target`.
+Attempt Register(const Args& args, const std::vector<PointPair>& pairs, const std::string& reference,
+                 const std::vector<Eigen::Vector3f>& source, const std::vector<Eigen::Vector3f>& target) {
+  Attempt a;
+  a.reference = reference;
+  const bool hold = args.Flag("hold-free");
+  if (!pairs.empty()) {
+    a.status = AlignByPairs(pairs, &a.coarse);
+    a.method = "pairs";
+  } else {
+    a.status = AlignByPlanes(source, target, PlaneAlignOptions(), &a.coarse);
+    a.method = "planes";
+    // A corridor: the planes fix all but one direction; --hold-free goes on
+    // from the coarse pose and keeps it along that direction.
+    if (!a.status.ok() && hold && a.coarse.degenerate) a.status = Status::Ok();
+  }
+  if (!a.status.ok() || args.Flag("no-icp")) {
+    a.fine = a.coarse;
+    return a;
+  }
+  IcpOptions icp;
+  icp.degeneracy = hold ? DegeneracyPolicy::kHold : DegeneracyPolicy::kRefuse;
+  a.status = RefineIcp(source, target, a.coarse.target_from_source, icp, RegistrationControl(), &a.fine);
+  a.method += "+icp";
+  return a;
+}
+
+RegistrationEvidence Evidence(const Attempt& a, const std::vector<PointPair>& pairs) {
+  RegistrationEvidence e;
+  e.method = a.method;
+  e.reference = a.reference;
+  const RegistrationResult& r = a.fine;
+  e.rms_m = r.rms_m;
+  e.overlap = r.overlap;
+  e.correspondences = r.correspondences;
+  e.iterations = r.iterations;
+  for (int i = 0; i < 36; ++i) e.covariance[i] = r.covariance(i / 6, i % 6);
+  if (r.degenerate && !r.free_is_rotation) e.free_direction = r.free_direction;
+  for (const PointPair& p : pairs) e.pairs.push_back({p.source, p.target});
+  e.time_utc = UtcNowIso8601();
+  return e;
+}
+
+}  // namespace
+
+int RunProjectAlign(const Args& args) {
+  const std::string file = args.positional()[0];
+  Project project;
+  Status s = LoadProject(file, &project);
+  if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
+  hardware::SessionCloudOptions cloud_options;
+  if (const int code = SessionCloudOptionsFromArgs(args, &cloud_options); code != kExitOk) return code;
+  if (project.Anchor() < 0) return (PrintError(file + ": no anchor session (add a session first)"), kExitBadInput);
+
+  // Which sessions to place and against which.
+  std::vector<std::string> todo;
+  if (args.Has("session")) {
+    const int i = project.Find(args.Get("session"));
+    if (i < 0) return (PrintError("no session '" + args.Get("session") + "' in " + file), kExitBadInput);
+    if (i == project.Anchor()) return (PrintError("'" + args.Get("session") + "' is the anchor: it defines the frame"), kExitBadInput);
+    project.sessions[i].project_from_session.reset();  // placed again
+    todo.push_back(args.Get("session"));
+  } else {
+    for (const ProjectSession& ps : project.sessions) {
+      if (!ps.project_from_session) todo.push_back(ps.id);
+    }
+  }
+  if (args.Has("to") && project.Find(args.Get("to")) < 0) {
+    return (PrintError("no session '" + args.Get("to") + "' in " + file), kExitBadInput);
+  }
+  std::vector<PointPair> pairs;
+  if (args.Has("pairs")) {
+    if (!args.Has("to") || todo.size() != 1) {
+      PrintError("--pairs needs --session ID and --to ID: the picks belong to one pair of sessions");
+      return kExitBadInput;
+    }
+    s = LoadPairs(args.Get("pairs"), &pairs);
+    if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
+  }
+
+  SessionClouds clouds(file, cloud_options);
+  std::ostream& text = args.Flag("json") ? std::cerr : std::cout;  // stdout is the JSON's
+  nlohmann::json report = nlohmann::json::array();
+  std::map<std::string, std::string> refusals;
+  bool progress = true;
+  while (progress && !todo.empty()) {
+    progress = false;
+    for (auto it = todo.begin(); it != todo.end();) {
+      ProjectSession& ps = project.sessions[project.Find(*it)];
+      std::string error;
+      const hardware::SessionCloud* src = clouds.Get(ps, &error);
+      if (src == nullptr) return (PrintError(error), kExitBadInput);
+      const std::vector<Eigen::Vector3f> source = hardware::Positions(src->points);
+      std::optional<Attempt> best;
+      std::string reasons;
+      for (const ProjectSession& ref : project.sessions) {
+        if (!ref.project_from_session || ref.id == ps.id) continue;
+        if (args.Has("to") && ref.id != args.Get("to")) continue;
+        const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
+        if (tgt == nullptr) return (PrintError(error), kExitBadInput);
+        std::cerr << "aligning '" << ps.id << "' to '" << ref.id << "'...\n";
+        Attempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
+        if (!a.status.ok()) {
+          reasons += "\n  against '" + ref.id + "': " + a.status.message();
+          continue;
+        }
+        if (!best || a.fine.overlap > best->fine.overlap) best = std::move(a);
+      }
+      if (!best) {
+        refusals[ps.id] = reasons.empty() ? "\n  no placed session to align it to" : reasons;
+        ++it;
+        continue;
+      }
+      const ProjectSession& ref = project.sessions[project.Find(best->reference)];
+      ps.project_from_session = *ref.project_from_session * best->fine.target_from_source;
+      ps.registration = Evidence(*best, pairs);
+      const RegistrationResult& r = best->fine;
+      nlohmann::json j = {{"session", ps.id}, {"reference", ref.id}, {"method", best->method},
+                          {"rms_m", r.rms_m}, {"overlap", r.overlap}, {"iterations", r.iterations},
+                          {"sigma_translation_m", r.TranslationSigmaM()},
+                          {"sigma_rotation_deg", r.RotationSigmaDeg()}};
+      text << "placed '" << ps.id << "' against '" << ref.id << "' (" << best->method << "): rms "
+                << Mm(r.rms_m) << ", overlap " << std::lround(r.overlap * 100) << " %, 1-sigma "
+                << Mm(r.TranslationSigmaM()) << " / " << std::setprecision(3) << r.RotationSigmaDeg() << " deg\n";
+      if (r.degenerate) {
+        text << "  free direction (" << r.free_direction.transpose()
+                  << "): held at the coarse pose, not measured\n";
+        j["free_direction"] = {r.free_direction.x(), r.free_direction.y(), r.free_direction.z()};
+      }
+      const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
+      if (src->has_true_start && tgt != nullptr && tgt->has_true_start) {
+        const Rigid3d truth = tgt->world_from_session_truth.inverse() * src->world_from_session_truth;
+        const Rigid3d diff = truth.inverse() * r.target_from_source;
+        const double dt = diff.translation().norm();
+        const double dr = Eigen::AngleAxisd(diff.rotation()).angle();
+        text << "  against the simulation's truth: " << Mm(dt) << ", " << Deg(dr) << "\n";
+        j["truth_error_m"] = dt;
+        j["truth_error_deg"] = dr * 180.0 / M_PI;
+      }
+      report.push_back(j);
+      it = todo.erase(it);
+      progress = true;
+    }
+  }
+  s = SaveProject(file, project);
+  if (!s.ok()) return (PrintError(s.message()), kExitFailure);
+  if (args.Flag("json")) {
+    nlohmann::json refused = nlohmann::json::object();
+    for (const auto& [id, why] : refusals) refused[id] = why.substr(1);
+    std::cout << nlohmann::json{{"placed", report}, {"refused", refused}}.dump(2) << "\n";
+  }
+  if (!todo.empty()) {
+    std::string message = "could not place:";
+    for (const auto& [id, why] : refusals) message += "\n'" + id + "':" + why;
+    PrintError(message);
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace sweepscan::app
