@@ -1,0 +1,190 @@
+// ASCII DXF, AutoCAD Release 12 (AC1009), written from Autodesk's DXF
+// reference: pairs of lines "group code" / "value". The subset (HEADER,
+// TABLES with LTYPE, STYLE and LAYER, ENTITIES with LINE, POINT and TEXT,
+// EOF) is specified field by field in docs/plan-formats.md, "DXF".
+// No handles ($HANDLING 0, R12 allows it), no BLOCKS, no subclass markers
+// (those are R13's).
+#include <cmath>
+#include <cstdio>
+
+#include "core/common/checked_file.h"
+#include "core/plan/plan_writers.h"
+
+namespace sweepscan::plan {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+class Dxf {
+ public:
+  // Group codes right-aligned in three columns, as AutoCAD writes them.
+  void Code(int code, const std::string& value) {
+    char buf[8];
+    std::snprintf(buf, sizeof(buf), "%3d\n", code);
+    s_ += buf;
+    s_ += value;
+    s_ += '\n';
+  }
+  void Int(int code, int v) { Code(code, std::to_string(v)); }
+  void Real(int code, double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof(buf), "%.6f", std::abs(v) < 5e-7 ? 0.0 : v);
+    Code(code, buf);
+  }
+  // A 2D point in the plane z = 0: codes base, base + 10, base + 20.
+  void Point(int base, const Eigen::Vector2d& p) {
+    Real(base, p.x());
+    Real(base + 10, p.y());
+    Real(base + 20, 0.0);
+  }
+  void Line(const char* layer, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    Code(0, "LINE");
+    Code(8, layer);
+    Point(10, a);
+    Point(11, b);
+  }
+  // Centred on `at` (72 = 1: the alignment point 11 is the baseline's
+  // middle), turned by `degrees` counter-clockwise.
+  void Text(const char* layer, const Eigen::Vector2d& at, double height, double degrees, const std::string& text) {
+    Code(0, "TEXT");
+    Code(8, layer);
+    Point(10, at);
+    Real(40, height);
+    Code(1, text);
+    Real(50, degrees);
+    Int(72, 1);
+    Point(11, at);
+  }
+  const std::string& str() const { return s_; }
+
+ private:
+  std::string s_;
+};
+
+// A label for the segment a -> b: centred, `offset` metres to its left as
+// read, turned along it so that it reads left to right or bottom to top.
+void Label(Dxf* d, const char* layer, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double height,
+           const std::string& text) {
+  double angle = std::atan2(b.y() - a.y(), b.x() - a.x()) * 180.0 / kPi;
+  if (angle > 90.0) angle -= 180.0;
+  if (angle <= -90.0) angle += 180.0;
+  const double r = angle * kPi / 180.0;
+  const Eigen::Vector2d at = 0.5 * (a + b) + 0.4 * height * Eigen::Vector2d(-std::sin(r), std::cos(r));
+  d->Text(layer, at, height, angle + 0.0, text);
+}
+
+}  // namespace
+
+bool DxfOptions::IsValid(std::string* error) const {
+  if (!std::isfinite(text_height_m) || text_height_m <= 0.0) {
+    *error = "DXF text height must be a finite number > 0 m";
+    return false;
+  }
+  return true;
+}
+
+Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
+  std::string error;
+  if (!o.IsValid(&error)) return Status::Error(error);
+  Eigen::Vector2d lo = plan.min, hi = plan.max;
+  for (const WallFace& f : plan.faces) {
+    if (!f.a.allFinite() || !f.b.allFinite()) return Status::Error("the plan has a face that is not finite");
+    lo = lo.cwiseMin(f.a).cwiseMin(f.b);
+    hi = hi.cwiseMax(f.a).cwiseMax(f.b);
+  }
+  if (!lo.allFinite() || !hi.allFinite()) return Status::Error("the plan's extent is not finite");
+  Dxf d;
+  // HEADER: version, units (6 = metres), the drawing's extent.
+  d.Code(0, "SECTION");
+  d.Code(2, "HEADER");
+  d.Code(9, "$ACADVER");
+  d.Code(1, "AC1009");
+  d.Code(9, "$INSUNITS");
+  d.Int(70, 6);
+  d.Code(9, "$EXTMIN");
+  d.Point(10, lo);
+  d.Code(9, "$EXTMAX");
+  d.Point(10, hi);
+  d.Code(0, "ENDSEC");
+  // TABLES: the linetype and text style the layers and TEXT refer to, the layers.
+  d.Code(0, "SECTION");
+  d.Code(2, "TABLES");
+  d.Code(0, "TABLE");
+  d.Code(2, "LTYPE");
+  d.Int(70, 1);
+  d.Code(0, "LTYPE");
+  d.Code(2, "CONTINUOUS");
+  d.Int(70, 0);
+  d.Code(3, "Solid line");
+  d.Int(72, 65);
+  d.Int(73, 0);
+  d.Real(40, 0.0);
+  d.Code(0, "ENDTAB");
+  d.Code(0, "TABLE");
+  d.Code(2, "STYLE");
+  d.Int(70, 1);
+  d.Code(0, "STYLE");
+  d.Code(2, "STANDARD");
+  d.Int(70, 0);
+  d.Real(40, 0.0);
+  d.Real(41, 1.0);
+  d.Real(50, 0.0);
+  d.Int(71, 0);
+  d.Real(42, o.text_height_m);
+  d.Code(3, "txt");
+  d.Code(4, "");
+  d.Code(0, "ENDTAB");
+  struct Layer {
+    const char* name;
+    int colour;  // AutoCAD colour index: 7 black/white, 5 blue, 1 red, 8 grey
+  };
+  const Layer layers[] = {{"0", 7},
+                          {kDxfLayerWalls, 7},
+                          {kDxfLayerOpenings, 5},
+                          {kDxfLayerDimensions, 1},
+                          {kDxfLayerSection, 8}};
+  d.Code(0, "TABLE");
+  d.Code(2, "LAYER");
+  d.Int(70, static_cast<int>(sizeof(layers) / sizeof(layers[0])));
+  for (const Layer& l : layers) {
+    d.Code(0, "LAYER");
+    d.Code(2, l.name);
+    d.Int(70, 0);
+    d.Int(62, l.colour);
+    d.Code(6, "CONTINUOUS");
+  }
+  d.Code(0, "ENDTAB");
+  d.Code(0, "ENDSEC");
+  // ENTITIES.
+  d.Code(0, "SECTION");
+  d.Code(2, "ENTITIES");
+  for (const WallFace& f : plan.faces) d.Line(f.structural ? kDxfLayerWalls : kDxfLayerSection, f.a, f.b);
+  for (const Opening& op : plan.openings) {
+    d.Line(kDxfLayerOpenings, op.a, op.b);
+    Label(&d, kDxfLayerOpenings, op.a, op.b, o.text_height_m, FormatMetres(op.width_m));
+  }
+  for (const Dimension& dim : plan.dimensions) {
+    d.Line(kDxfLayerDimensions, dim.a, dim.b);
+    Label(&d, kDxfLayerDimensions, dim.a, dim.b, o.text_height_m, FormatMetres(dim.distance_m));
+  }
+  if (o.section_points) {
+    for (const Eigen::Vector2d& p : plan.points) {
+      d.Code(0, "POINT");
+      d.Code(8, kDxfLayerSection);
+      d.Point(10, p);
+    }
+  }
+  d.Code(0, "ENDSEC");
+  d.Code(0, "EOF");
+  *out = d.str();
+  return Status::Ok();
+}
+
+Status WritePlanDxf(const std::string& path, const FloorPlan& plan, const DxfOptions& options) {
+  std::string dxf;
+  const Status s = PlanDxf(plan, options, &dxf);
+  if (!s.ok()) return s;
+  return WriteFileChecked(path, dxf);
+}
+
+}  // namespace sweepscan::plan
