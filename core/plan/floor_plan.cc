@@ -35,13 +35,21 @@
 //     wall that overlap are one opening: its jambs are the intersection of
 //     the two gaps on the centre line (every point seen on either face is
 //     wall, so the door is at most the intersection).
-// (9) Dimensions: faces i, j parallel, facing each other (n_i . n_j < 0 and
-//     (c_j - c_i) . n_i > 0), overlapping; from stations every 5 cm along the
-//     overlap a ray along n_i must reach line j without an obstacle
-//     (clear); at least kMinClear metres of clear stations make it a
-//     dimension, one per pair of lines (the pair of faces with the longest
-//     clear stretch), drawn at the middle of that stretch. distance = mean of
-//     the distances of each face's station point to the other face's line.
+// (8b) Structure: a face is a wall's (structural) when it is one of a wall
+//     pair, or nothing was seen behind it (the outer shell), or it is at
+//     least kMinStructuralLength long and not within kFurnitureDepth in
+//     front of a parallel face facing the same way; otherwise it is
+//     furniture (a cabinet's front, shelves against a wall).
+// (9) Dimensions: structural faces i, j parallel, facing each other
+//     (n_i . n_j < 0 and (c_j - c_i) . n_i > 0), overlapping; from stations
+//     every 5 cm along the overlap a ray along n_i must reach line j without
+//     an obstacle (an occupied cell, another face, an opening: an inner
+//     dimension stays in its room); each run of at least kMinClear metres of
+//     clear stations is a candidate, drawn at its middle. Per pair of lines
+//     the longest candidate of each room is kept (two candidates are in one
+//     room unless a structural face crosses the segment between them).
+//     distance = mean of the distances of each face's station point to the
+//     other face's line (the two lines are parallel only within 2 deg).
 #include "core/plan/floor_plan.h"
 
 #include <algorithm>
@@ -357,11 +365,11 @@ void Planner::WallOpenings(FloorPlan* plan) const {
 
 void Planner::Dimensions(FloorPlan* plan) const {
   const std::vector<WallFace>& fs = plan->faces;
-  struct Best {
+  struct Candidate {
     double clear = 0.0;
     Dimension dim;
   };
-  std::map<std::pair<int, int>, Best> best;  // by pair of lines
+  std::map<std::pair<int, int>, std::vector<Candidate>> by_lines;
   constexpr double kStation = 0.05;
   for (size_t i = 0; i < fs.size(); ++i) {
     for (size_t j = 0; j < fs.size(); ++j) {
@@ -373,40 +381,62 @@ void Planner::Dimensions(FloorPlan* plan) const {
       if (fs[i].normal.dot(fs[j].normal) >= 0 || (cj - ci).dot(fs[i].normal) <= o_.max_wall_thickness_m) continue;
       const double tj0 = ui.dot(fs[j].a - fs[i].a), tj1 = ui.dot(fs[j].b - fs[i].a);
       const double t0 = std::max(0.0, std::min(tj0, tj1)), t1 = std::min(fs[i].Length(), std::max(tj0, tj1));
-      if (t1 - t0 < kStation) continue;
-      const Eigen::Vector2d nj(-uj.y(), uj.x());
-      // The longest run of clear stations.
-      double run_start = -1, best_start = 0, best_len = 0;
+      if (t1 - t0 < kMinClear) continue;
+      const Eigen::Vector2d nj(-uj.y(), uj.x()), ni(-ui.y(), ui.x());
+      // Every maximal run of clear stations is a candidate.
+      double run_start = -1.0;
+      const auto finish = [&](double last) {
+        const double len = last - run_start + kStation;
+        if (len >= kMinClear) {
+          const Eigen::Vector2d p = fs[i].a + 0.5 * (run_start + last) * ui;
+          const Eigen::Vector2d q = fs[j].a + uj * uj.dot(p - fs[j].a);  // p's foot on j
+          const double d_ij = std::abs(nj.dot(p - fs[j].a)), d_ji = std::abs(ni.dot(q - fs[i].a));
+          by_lines[{fs[i].line, fs[j].line}].push_back(Candidate{
+              len, Dimension{p, p + d_ij * fs[i].normal, 0.5 * (d_ij + d_ji), static_cast<int>(i), static_cast<int>(j)}});
+        }
+        run_start = -1.0;
+      };
+      double last = 0.0;
       for (double t = t0 + 0.5 * kStation; t <= t1; t += kStation) {
         const Eigen::Vector2d p = fs[i].a + t * ui;
         const double to_j = std::abs(nj.dot(p - fs[j].a));
         const bool clear = FirstHit(p, fs[i].normal, *plan, static_cast<int>(i), static_cast<int>(j), to_j,
                                     /*openings_block=*/true) >= to_j - o_.line_tolerance_m - 0.03;
         if (clear && run_start < 0) run_start = t;
-        if ((!clear || t + kStation > t1) && run_start >= 0) {
-          const double end = clear ? t : t - kStation;
-          if (end - run_start + kStation > best_len) {
-            best_len = end - run_start + kStation;
-            best_start = run_start;
-          }
-          run_start = -1;
-        }
+        if (!clear && run_start >= 0) finish(last);
+        last = t;
       }
-      if (best_len < kMinClear) continue;
-      const Eigen::Vector2d p = fs[i].a + (best_start + 0.5 * (best_len - kStation)) * ui;
-      const Eigen::Vector2d q = fs[j].a + uj * uj.dot(p - fs[j].a);  // p's foot on j
-      const double d_ij = std::abs(nj.dot(p - fs[j].a));
-      const Eigen::Vector2d ni(-ui.y(), ui.x());
-      const double d_ji = std::abs(ni.dot(q - fs[i].a));
-      Best& b = best[{fs[i].line, fs[j].line}];
-      if (best_len > b.clear) {
-        b.clear = best_len;
-        // The dimension line: from p across to j's line along i's normal.
-        b.dim = Dimension{p, p + d_ij * fs[i].normal, 0.5 * (d_ij + d_ji), static_cast<int>(i), static_cast<int>(j)};
-      }
+      if (run_start >= 0) finish(last);
     }
   }
-  for (const auto& [key, b] : best) plan->dimensions.push_back(b.dim);
+  // One dimension per pair of lines and room: candidates of the same pair
+  // are one room unless a wall face separates them (crosses the segment
+  // joining their middles, which lie half way between the two lines). The
+  // longest clear stretch is kept.
+  for (auto& [key, cands] : by_lines) {
+    std::sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.clear > b.clear; });
+    std::vector<Dimension> kept;
+    for (const Candidate& c : cands) {
+      const Eigen::Vector2d m = 0.5 * (c.dim.a + c.dim.b);
+      bool same_room = false;
+      for (const Dimension& k : kept) {
+        const Eigen::Vector2d mk = 0.5 * (k.a + k.b);
+        const double len = (mk - m).norm();
+        bool wall_between = false;
+        for (const WallFace& f : fs) {
+          // Segments m -> mk and f.a -> f.b cross when each one's ends lie on
+          // opposite sides of the other (signs of the cross products).
+          if (!f.structural) continue;
+          const double s1 = Cross(f.b - f.a, m - f.a), s2 = Cross(f.b - f.a, mk - f.a);
+          const double s3 = Cross(mk - m, f.a - m), s4 = Cross(mk - m, f.b - m);
+          wall_between = wall_between || (s1 * s2 < 0 && s3 * s4 < 0);
+        }
+        same_room = same_room || len < 1e-9 || !wall_between;
+      }
+      if (!same_room) kept.push_back(c.dim);
+    }
+    for (const Dimension& k : kept) plan->dimensions.push_back(k);
+  }
 }
 
 }  // namespace

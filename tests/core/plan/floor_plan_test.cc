@@ -1,0 +1,247 @@
+// The floor plan against the office floor's truth (core/sim/scene.h): the
+// three simulated drives (tests/testing/worlds.h BuildingConfig a, b, c)
+// reconstructed with the true poses in the world frame and merged, cut at
+// 1.0 m. The truth: OfficeFloorRooms() (every room's inner faces) and
+// OfficeFloorDoors() (the doors' jambs on the walls' centre lines).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "core/plan/floor_plan.h"
+#include "core/plan/section.h"
+#include "core/sim/scene.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan::plan {
+namespace {
+
+constexpr double kFaceTolerance = 0.005;  // m, the brief's 5 mm
+constexpr double kDoorTolerance = 0.02;   // m, door widths
+
+// A truth wall face: the line x = offset (vertical) or y = offset, over [lo, hi].
+struct TruthLine {
+  bool vertical;  // x = offset
+  double offset, lo, hi;
+};
+
+// Every room's four inner faces, collinear ones merged (y = 8 is one line for
+// rooms A, B and C).
+std::vector<TruthLine> TruthLines() {
+  std::vector<TruthLine> lines;
+  const auto add = [&](bool vertical, double offset, double lo, double hi) {
+    for (TruthLine& l : lines) {
+      if (l.vertical == vertical && std::abs(l.offset - offset) < 1e-9) {
+        l.lo = std::min(l.lo, lo);
+        l.hi = std::max(l.hi, hi);
+        return;
+      }
+    }
+    lines.push_back({vertical, offset, lo, hi});
+  };
+  for (const sim::RoomTruth& r : sim::OfficeFloorRooms()) {
+    add(true, r.x0, r.y0, r.y1);
+    add(true, r.x1, r.y0, r.y1);
+    add(false, r.y0, r.x0, r.x1);
+    add(false, r.y1, r.x0, r.x1);
+  }
+  return lines;
+}
+
+// The truth line a face lies on: both ends within `tolerance` of it, inside
+// its extent (15 cm of slack: a face ends where its last point is), or null.
+const TruthLine* Match(const std::vector<TruthLine>& truth, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                       double tolerance) {
+  for (const TruthLine& l : truth) {
+    const int across = l.vertical ? 0 : 1, along = 1 - across;
+    if (std::abs(a[across] - l.offset) > tolerance || std::abs(b[across] - l.offset) > tolerance) continue;
+    if (std::min(a[along], b[along]) < l.lo - 0.15 || std::max(a[along], b[along]) > l.hi + 0.15) continue;
+    return &l;
+  }
+  return nullptr;
+}
+
+class OfficeFloorPlanTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    cloud_ = new std::vector<Eigen::Vector3f>();
+    for (const char drive : {'a', 'b', 'c'}) {
+      const ReconstructionResult r =
+          testing::SimulateAndReconstruct(testing::BuildingConfig(drive), PoseSource::kTruth, /*deskew=*/true);
+      for (const CloudPoint& p : r.points) cloud_->emplace_back(p.x, p.y, p.z);
+    }
+    plan_ = new FloorPlan();
+    status_ = new Status(BuildFloorPlan(*cloud_, FloorPlanOptions(), plan_));
+  }
+  static void TearDownTestSuite() {
+    delete cloud_;
+    delete plan_;
+    delete status_;
+  }
+  void SetUp() override { ASSERT_TRUE(status_->ok()) << status_->message(); }
+
+  static std::vector<Eigen::Vector3f>* cloud_;
+  static FloorPlan* plan_;
+  static Status* status_;
+};
+std::vector<Eigen::Vector3f>* OfficeFloorPlanTest::cloud_ = nullptr;
+FloorPlan* OfficeFloorPlanTest::plan_ = nullptr;
+Status* OfficeFloorPlanTest::status_ = nullptr;
+
+std::string Describe(const WallFace& f) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "face (%.4f, %.4f)-(%.4f, %.4f), %zu points, rms %.1f mm", f.a.x(), f.a.y(),
+                f.b.x(), f.b.y(), f.points, 1e3 * f.rms_m);
+  return buf;
+}
+
+TEST_F(OfficeFloorPlanTest, EveryWallFaceOnATruthFaceWithin5mm) {
+  const std::vector<TruthLine> truth = TruthLines();
+  std::vector<int> seen(truth.size(), 0);
+  int structural = 0;
+  for (const WallFace& f : plan_->faces) {
+    if (!f.structural) continue;  // furniture: checked below not to be a wall
+    ++structural;
+    const TruthLine* l = Match(truth, f.a, f.b, kFaceTolerance);
+    EXPECT_NE(l, nullptr) << "a wall face where the truth has none: " << Describe(f);
+    if (l != nullptr) seen[l - truth.data()] = 1;
+  }
+  // Every truth line is seen by these drives (the corridor from both
+  // sides, every room from inside).
+  for (size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_TRUE(seen[i]) << (truth[i].vertical ? "x = " : "y = ") << truth[i].offset << " not found";
+  }
+  EXPECT_GE(structural, static_cast<int>(truth.size()));
+}
+
+TEST_F(OfficeFloorPlanTest, FurnitureIsNotAWall) {
+  // The cabinets and shelves cut at 1 m are faces but not walls'.
+  const std::vector<TruthLine> truth = TruthLines();
+  for (const WallFace& f : plan_->faces) {
+    if (f.structural) continue;
+    EXPECT_EQ(Match(truth, f.a, f.b, 0.03), nullptr) << "a wall face taken for furniture: " << Describe(f);
+  }
+  for (const Wall& w : plan_->walls) {
+    EXPECT_TRUE(plan_->faces[w.face_a].structural && plan_->faces[w.face_b].structural);
+  }
+}
+
+TEST_F(OfficeFloorPlanTest, WallsAreTheTenCentimetreWalls) {
+  // The inner walls' centre lines: corridor y = 2.05, A|B x = 5.05, B|C x = 10.65.
+  const std::vector<TruthLine> centres = {{false, 2.05, 0.0, 16.0}, {true, 5.05, 2.1, 8.0}, {true, 10.65, 2.1, 8.0}};
+  std::vector<int> seen(centres.size(), 0);
+  for (const Wall& w : plan_->walls) {
+    const TruthLine* l = Match(centres, w.a, w.b, kFaceTolerance);
+    EXPECT_NE(l, nullptr) << "a wall where the truth has none: (" << w.a.transpose() << ")-(" << w.b.transpose()
+                          << ")";
+    if (l != nullptr) seen[l - centres.data()] = 1;
+    EXPECT_NEAR(w.thickness_m, 0.1, kFaceTolerance);
+  }
+  for (size_t i = 0; i < centres.size(); ++i) EXPECT_TRUE(seen[i]) << "wall " << i << " not found";
+}
+
+TEST_F(OfficeFloorPlanTest, DoorsFoundWithTheirWidths) {
+  const std::vector<sim::DoorTruth> doors = sim::OfficeFloorDoors();
+  std::vector<int> found(doors.size(), 0);
+  for (const Opening& o : plan_->openings) {
+    const Eigen::Vector2d mid = 0.5 * (o.a + o.b);
+    int match = -1;
+    for (size_t d = 0; d < doors.size(); ++d) {
+      if ((mid - 0.5 * (doors[d].a + doors[d].b)).norm() < 0.1) match = static_cast<int>(d);
+    }
+    ASSERT_GE(match, 0) << "an opening where there is no door: (" << o.a.transpose() << ")-(" << o.b.transpose()
+                        << ")";
+    ++found[match];
+    const double width = (doors[match].b - doors[match].a).norm();
+    EXPECT_NEAR(o.width_m, width, kDoorTolerance) << doors[match].label;
+    EXPECT_GE(o.wall, 0) << doors[match].label << " should be an opening of a wall (both faces)";
+    std::printf("%s: width %.4f m (truth %.3f)\n", doors[match].label.c_str(), o.width_m, width);
+  }
+  for (size_t d = 0; d < doors.size(); ++d) EXPECT_EQ(found[d], 1) << doors[d].label;
+}
+
+TEST_F(OfficeFloorPlanTest, RoomInnerDimensionsWithin5mm) {
+  int checked = 0;
+  for (const sim::RoomTruth& room : sim::OfficeFloorRooms()) {
+    for (const bool along_x : {true, false}) {
+      const double truth = along_x ? room.x1 - room.x0 : room.y1 - room.y0;
+      const Dimension* found = nullptr;
+      for (const Dimension& d : plan_->dimensions) {
+        const Eigen::Vector2d m = 0.5 * (d.a + d.b), u = (d.b - d.a).normalized();
+        const bool inside = m.x() > room.x0 && m.x() < room.x1 && m.y() > room.y0 && m.y() < room.y1;
+        if (inside && std::abs(along_x ? u.x() : u.y()) > 0.99) found = &d;
+      }
+      ASSERT_NE(found, nullptr) << room.label << (along_x ? " x" : " y") << " dimension missing";
+      EXPECT_NEAR(found->distance_m, truth, kFaceTolerance) << room.label << (along_x ? " x" : " y");
+      std::printf("%s %s: %.4f m (truth %.3f)\n", room.label.c_str(), along_x ? "x" : "y", found->distance_m, truth);
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 8);
+  // No dimension that is not a room's: each is one of the eight.
+  for (const Dimension& d : plan_->dimensions) {
+    bool known = false;
+    for (const sim::RoomTruth& room : sim::OfficeFloorRooms()) {
+      known = known || std::abs(d.distance_m - (room.x1 - room.x0)) < 0.01 ||
+              std::abs(d.distance_m - (room.y1 - room.y0)) < 0.01;
+    }
+    EXPECT_TRUE(known) << "dimension " << d.distance_m << " m at (" << d.a.transpose() << ")";
+  }
+}
+
+TEST_F(OfficeFloorPlanTest, VerticalSectionAlongTheCorridor) {
+  // Along the corridor's middle: the floor at z = 0, the ceiling at 2.7 m,
+  // the end walls at s = 0 and 16 m.
+  VerticalSectionOptions o;
+  o.a = {0.0, 1.0};
+  o.b = {16.0, 1.0};
+  std::vector<Eigen::Vector2d> s_z;
+  ASSERT_TRUE(VerticalSection(*cloud_, o, &s_z).ok());
+  ASSERT_GT(s_z.size(), 1000u);
+  Eigen::Vector2d lo = s_z.front(), hi = s_z.front();
+  for (const Eigen::Vector2d& p : s_z) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  EXPECT_NEAR(lo.y(), 0.0, 0.03);
+  EXPECT_NEAR(hi.y(), 2.7, 0.03);  // the storey's height (OfficeFloorScene)
+  EXPECT_GE(lo.x(), 0.0);
+  EXPECT_LE(hi.x(), 16.0);
+  EXPECT_LT(lo.x(), 0.05);
+  EXPECT_GT(hi.x(), 15.95);
+}
+
+TEST(FloorPlanRefusalTest, BadInputIsRefusedWithAReason) {
+  FloorPlan plan;
+  FloorPlanOptions o;
+  Status s = BuildFloorPlan({}, o, &plan);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("empty"), std::string::npos) << s.message();
+  const std::vector<Eigen::Vector3f> cloud = {{0, 0, 1}, {1, 0, 1}, {2, 0, 1}};
+  for (const double band : {0.0, -0.1, std::nan("")}) {
+    o.section.band_m = band;
+    s = BuildFloorPlan(cloud, o, &plan);
+    EXPECT_FALSE(s.ok());
+    EXPECT_NE(s.message().find("band"), std::string::npos) << s.message();
+  }
+  o = FloorPlanOptions();
+  o.section.height_m = INFINITY;
+  EXPECT_FALSE(BuildFloorPlan(cloud, o, &plan).ok());
+  o = FloorPlanOptions();
+  s = BuildFloorPlan(cloud, o, &plan);  // three points: the cut misses the cloud
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("holds 3 points"), std::string::npos) << s.message();
+  const std::vector<Eigen::Vector3f> nan_cloud = {{NAN, 0, 1}};
+  s = BuildFloorPlan(nan_cloud, FloorPlanOptions(), &plan);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("no finite point"), std::string::npos) << s.message();
+  std::vector<Eigen::Vector2d> s_z;
+  VerticalSectionOptions v;
+  v.b = v.a;
+  EXPECT_FALSE(VerticalSection(cloud, v, &s_z).ok());
+}
+
+}  // namespace
+}  // namespace sweepscan::plan
