@@ -22,6 +22,7 @@
 #include "core/pose/pose_estimator.h"
 #include "core/registration/registration.h"
 #include "core/session/session.h"
+#include "hardware/station/project_align.h"
 
 namespace sweepscan::app {
 
@@ -100,54 +101,16 @@ Status LoadPairs(const std::string& path, std::vector<PointPair>* pairs) {
   return Status::Ok();
 }
 
-struct Attempt {
-  std::string reference;
-  Status status;
-  RegistrationResult coarse, fine;
-  std::string method;
-};
-
-// Coarse then fine registration of `source` against `target`.
-Attempt Register(const Args& args, const std::vector<PointPair>& pairs, const std::string& reference,
-                 const std::vector<Eigen::Vector3f>& source, const std::vector<Eigen::Vector3f>& target) {
-  Attempt a;
-  a.reference = reference;
-  const bool hold = args.Flag("hold-free");
-  if (!pairs.empty()) {
-    a.status = AlignByPairs(pairs, &a.coarse);
-    a.method = "pairs";
-  } else {
-    a.status = AlignByPlanes(source, target, PlaneAlignOptions(), &a.coarse);
-    a.method = "planes";
-    // A corridor: the planes fix all but one direction; --hold-free goes on
-    // from the coarse pose and keeps it along that direction.
-    if (!a.status.ok() && hold && a.coarse.degenerate) a.status = Status::Ok();
-  }
-  if (!a.status.ok() || args.Flag("no-icp")) {
-    a.fine = a.coarse;
-    return a;
-  }
-  IcpOptions icp;
-  icp.degeneracy = hold ? DegeneracyPolicy::kHold : DegeneracyPolicy::kRefuse;
-  a.status = RefineIcp(source, target, a.coarse.target_from_source, icp, RegistrationControl(), &a.fine);
-  a.method += "+icp";
-  return a;
-}
-
-RegistrationEvidence Evidence(const Attempt& a, const std::vector<PointPair>& pairs) {
-  RegistrationEvidence e;
-  e.method = a.method;
-  e.reference = a.reference;
-  const RegistrationResult& r = a.fine;
-  e.rms_m = r.rms_m;
-  e.overlap = r.overlap;
-  e.correspondences = r.correspondences;
-  e.iterations = r.iterations;
-  for (int i = 0; i < 36; ++i) e.covariance[i] = r.covariance(i / 6, i % 6);
-  if (r.degenerate && !r.free_is_rotation) e.free_direction = r.free_direction;
-  for (const PointPair& p : pairs) e.pairs.push_back({p.source, p.target});
-  e.time_utc = UtcNowIso8601();
-  return e;
+// The shared step (hardware/station/project_align.h) with the command's flags.
+hardware::RegistrationAttempt Register(const Args& args, const std::vector<PointPair>& pairs,
+                                       const std::string& reference,
+                                       const std::vector<Eigen::Vector3f>& source,
+                                       const std::vector<Eigen::Vector3f>& target) {
+  hardware::SessionRegistrationOptions options;
+  options.pairs = pairs;
+  options.hold_free = args.Flag("hold-free");
+  options.icp = !args.Flag("no-icp");
+  return hardware::RegisterSession(source, target, reference, options);
 }
 
 }  // namespace
@@ -200,7 +163,7 @@ int RunProjectAlign(const Args& args) {
       const hardware::SessionCloud* src = clouds.Get(ps, &error);
       if (src == nullptr) return (PrintError(error), kExitBadInput);
       const std::vector<Eigen::Vector3f> source = hardware::Positions(src->points);
-      std::optional<Attempt> best;
+      std::optional<hardware::RegistrationAttempt> best;
       std::string reasons;
       for (const ProjectSession& ref : project.sessions) {
         if (!ref.project_from_session || ref.id == ps.id) continue;
@@ -208,7 +171,7 @@ int RunProjectAlign(const Args& args) {
         const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
         if (tgt == nullptr) return (PrintError(error), kExitBadInput);
         std::cerr << "aligning '" << ps.id << "' to '" << ref.id << "'...\n";
-        Attempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
+        hardware::RegistrationAttempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
         if (!a.status.ok()) {
           reasons += "\n  against '" + ref.id + "': " + a.status.message();
           continue;
@@ -222,7 +185,7 @@ int RunProjectAlign(const Args& args) {
       }
       const ProjectSession& ref = project.sessions[project.Find(best->reference)];
       ps.project_from_session = *ref.project_from_session * best->fine.target_from_source;
-      ps.registration = Evidence(*best, pairs);
+      ps.registration = hardware::EvidenceOf(*best, pairs);
       const RegistrationResult& r = best->fine;
       nlohmann::json j = {{"session", ps.id}, {"reference", ref.id}, {"method", best->method},
                           {"rms_m", r.rms_m}, {"overlap", r.overlap}, {"iterations", r.iterations},
