@@ -81,6 +81,10 @@ extern const char* const kP3lUsage;
 int RunSfm(int argc, char** argv);
 extern const char* const kSfmUsage;
 
+// Floor plans and sections of a cloud (app/cli_plan.cc): `plan`.
+int RunPlan(int argc, char** argv);
+extern const char* const kPlanUsage;
+
 }  // namespace sweepscan::app
 
 #endif  // SWEEPSCAN_APP_CLI_COMMON_H_

@@ -27,6 +27,7 @@ const char* kUsage =
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  p3l        6-DoF pose from three scan lines on three known planes (lidar-only SfM)\n"
     "  sfm        lidar-only structure from motion of a simulated 2D-lidar rig (poses, planes, cloud)\n"
+    "  plan       floor plan of a cloud: walls, openings, room dimensions; SVG and DXF drawings\n"
     "  help       show this text, or `help <command>` for one command\n"
     "  --version  print the version\n"
     "\n"
@@ -58,6 +59,8 @@ int Main(int argc, char** argv) {
       std::cout << kExportUsage;
     } else if (topic == "p3l") {
       std::cout << kP3lUsage;
+    } else if (topic == "plan") {
+      std::cout << kPlanUsage;
     } else if (topic == "sfm") {
       std::cout << kSfmUsage;
     } else if (topic == "import") {
@@ -89,6 +92,7 @@ int Main(int argc, char** argv) {
   if (command == "evaluate") return RunEvaluate(argc, argv);
   if (command == "p3l") return RunP3l(argc, argv);
   if (command == "sfm") return RunSfm(argc, argv);
+  if (command == "plan") return RunPlan(argc, argv);
   PrintError("unknown command '" + command + "'\n" + kUsage);
   return kExitBadInput;
 }

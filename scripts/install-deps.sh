@@ -22,6 +22,9 @@ packages=(
   libament-index-cpp-dev libsqlite3-dev libzstd-dev liblz4-dev zlib1g-dev
   # The independent writers and readers the tests check against.
   python3-rosbag python3-sensor-msgs python3-nav-msgs python3-tf2-msgs python3-geometry-msgs
+  # Floor plans (docs/plan-formats.md): the DXF read by ezdxf and printed by
+  # LibreCAD, its PDF rasterised by pdftoppm.
+  python3-ezdxf librecad poppler-utils
 )
 
 missing=()

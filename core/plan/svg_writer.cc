@@ -67,8 +67,9 @@ std::string Label(const Paper& p, const Eigen::Vector2d& a, const Eigen::Vector2
                   double height, double offset) {
   const Eigen::Vector2d pa(p.X(a.x()), p.Y(a.y())), pb(p.X(b.x()), p.Y(b.y()));
   double angle = std::atan2(pb.y() - pa.y(), pb.x() - pa.x()) * 180.0 / kPi;
-  if (angle > 90.0) angle -= 180.0;
-  if (angle <= -90.0) angle += 180.0;
+  // Paper y points down: -90 deg reads bottom to top, +90 would read top to bottom.
+  if (angle > 90.0 - 1e-6) angle -= 180.0;
+  if (angle < -90.0 - 1e-6) angle += 180.0;
   const double r = angle * kPi / 180.0;
   const Eigen::Vector2d m = 0.5 * (pa + pb) + offset * Eigen::Vector2d(std::sin(r), -std::cos(r));
   return "<text x=\"" + Num(m.x()) + "\" y=\"" + Num(m.y()) + "\" font-size=\"" + Num(height) +

@@ -1,0 +1,150 @@
+// The plan's drawings read by programs we did not write: the DXF by
+// Debian's python3-ezdxf (tests/tools/check_dxf.py, with ezdxf's audit) and
+// printed by LibreCAD (`librecad dxf2pdf` under xvfb-run, rasterised by
+// pdftoppm), the SVG rendered by rsvg-convert; the PNGs must hold ink
+// (tests/tools/png_ink.py). The tools are found at configure time
+// (tests/core/plan/CMakeLists.txt).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/plan/floor_plan.h"
+#include "core/plan/plan_writers.h"
+#include "tests/testing/run_command.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan::plan {
+namespace {
+
+using sweepscan::testing::RunCommand;
+
+const std::string kDir = std::string(SWEEPSCAN_BINARY_DIR) + "/tests/core/plan/plan_writers_test_out";
+const std::string kTools = std::string(SWEEPSCAN_SOURCE_DIR) + "/tests/tools/";
+
+class PlanWritersTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::vector<Eigen::Vector3f> cloud;
+    for (const char drive : {'a', 'b'}) {
+      const ReconstructionResult r =
+          testing::SimulateAndReconstruct(testing::BuildingConfig(drive), PoseSource::kTruth, /*deskew=*/true);
+      for (const CloudPoint& p : r.points) cloud.emplace_back(p.x, p.y, p.z);
+    }
+    plan_ = new FloorPlan();
+    ASSERT_TRUE(BuildFloorPlan(cloud, FloorPlanOptions(), plan_).ok());
+    ASSERT_EQ(RunCommand("rm -rf '" + kDir + "' && mkdir -p '" + kDir + "'").code, 0);
+  }
+  static void TearDownTestSuite() { delete plan_; }
+  static FloorPlan* plan_;
+};
+FloorPlan* PlanWritersTest::plan_ = nullptr;
+
+nlohmann::json PngInk(const std::string& png) {
+  const testing::CommandRun r = RunCommand(std::string(SWEEPSCAN_PYTHON3) + " " + kTools + "png_ink.py '" + png + "'");
+  EXPECT_EQ(r.code, 0) << r.out;
+  return r.code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+}
+
+TEST_F(PlanWritersTest, DxfReadByEzdxfMatchesThePlan) {
+  const std::string path = kDir + "/plan.dxf";
+  ASSERT_TRUE(WritePlanDxf(path, *plan_, DxfOptions()).ok());
+  const testing::CommandRun r = RunCommand(std::string(SWEEPSCAN_PYTHON3) + " " + kTools + "check_dxf.py '" + path + "'");
+  ASSERT_EQ(r.code, 0) << r.out << "\n(python3-ezdxf missing? scripts/install-deps.sh)";
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dxfversion"], "AC1009");
+  EXPECT_EQ(j["insunits"], 6);
+  EXPECT_EQ(j["audit"]["errors"], 0) << j["audit"].dump();
+  for (const char* layer : {kDxfLayerWalls, kDxfLayerOpenings, kDxfLayerDimensions, kDxfLayerSection}) {
+    bool found = false;
+    for (const auto& l : j["layers"]) found = found || l == layer;
+    EXPECT_TRUE(found) << layer;
+  }
+  size_t walls = 0, furniture = 0;
+  for (const WallFace& f : plan_->faces) (f.structural ? walls : furniture)++;
+  const nlohmann::json& lines = j["counts"]["LINE"];
+  EXPECT_EQ(lines.value(kDxfLayerWalls, 0), static_cast<int>(walls));
+  EXPECT_EQ(lines.value(kDxfLayerSection, 0), static_cast<int>(furniture));
+  EXPECT_EQ(lines.value(kDxfLayerOpenings, 0), static_cast<int>(plan_->openings.size()));
+  EXPECT_EQ(lines.value(kDxfLayerDimensions, 0), static_cast<int>(plan_->dimensions.size()));
+  EXPECT_EQ(j["counts"]["POINT"].value(kDxfLayerSection, 0), static_cast<int>(plan_->points.size()));
+  // Lines in the plan's order: faces, then per opening and per dimension.
+  size_t k = 0;
+  const auto& list = j["lines"];
+  ASSERT_EQ(list.size(), plan_->faces.size() + plan_->openings.size() + plan_->dimensions.size());
+  for (const WallFace& f : plan_->faces) EXPECT_NEAR(list[k++]["length"].get<double>(), f.Length(), 2e-6);
+  for (const Opening& o : plan_->openings) EXPECT_NEAR(list[k++]["length"].get<double>(), o.width_m, 2e-6);
+  for (const Dimension& d : plan_->dimensions) EXPECT_NEAR(list[k++]["length"].get<double>(), (d.b - d.a).norm(), 2e-6);
+  // The dimension texts are the values, in the plan's order.
+  std::vector<std::string> texts;
+  for (const auto& t : j["texts"]) {
+    if (t["layer"] == kDxfLayerDimensions) texts.push_back(t["text"]);
+  }
+  ASSERT_EQ(texts.size(), plan_->dimensions.size());
+  for (size_t i = 0; i < texts.size(); ++i) EXPECT_EQ(texts[i], FormatMetres(plan_->dimensions[i].distance_m));
+  // The header's extent, written with 6 decimals (1 um).
+  EXPECT_LE(j["extmin"][0].get<double>(), plan_->min.x() + 1e-6);
+  EXPECT_GE(j["extmax"][1].get<double>(), plan_->max.y() - 1e-6);
+}
+
+TEST_F(PlanWritersTest, DxfPrintedByLibreCad) {
+  const std::string path = kDir + "/librecad.dxf";
+  ASSERT_TRUE(WritePlanDxf(path, *plan_, DxfOptions()).ok());
+  // LibreCAD 2.2's dxf2pdf takes no option values (-o, -p are parsed as
+  // flags): it prints FILE.dxf to FILE.pdf beside it. The paper size is
+  // read in drawing units, so a drawing in metres gets an A4 page 210 m
+  // wide: pdftoppm scales the page to 1200 pixels.
+  testing::CommandRun r =
+      RunCommand(std::string(SWEEPSCAN_XVFB_RUN) + " -a " + SWEEPSCAN_LIBRECAD + " dxf2pdf -a '" + path + "'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = RunCommand(std::string(SWEEPSCAN_PDFTOPPM) + " -png -singlefile -scale-to 1200 '" + kDir + "/librecad.pdf' '" +
+                 kDir + "/librecad'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json ink = PngInk(kDir + "/librecad.png");
+  EXPECT_GT(ink.value("ink", 0), 2000) << ink.dump();
+}
+
+TEST_F(PlanWritersTest, SvgRenderedByRsvg) {
+  const std::string path = kDir + "/plan.svg";
+  SvgOptions o;
+  o.title = "office floor, drives a and b";
+  ASSERT_TRUE(WritePlanSvg(path, *plan_, o).ok());
+  std::string svg;
+  ASSERT_TRUE(PlanSvg(*plan_, o, &svg).ok());
+  for (const char* group : {"<g id=\"points\"", "<g id=\"walls\"", "<g id=\"openings\"", "<g id=\"dimensions\""}) {
+    EXPECT_NE(svg.find(group), std::string::npos) << group;
+  }
+  // 1:50: a 16 m wide plan is 320 mm of paper plus two 15 mm margins.
+  const double width_mm = (plan_->max.x() - plan_->min.x()) * 20.0 + 30.0;
+  char expect[64];
+  std::snprintf(expect, sizeof(expect), "width=\"%.0f", std::floor(width_mm));
+  EXPECT_NE(svg.find(expect), std::string::npos) << expect;
+  const testing::CommandRun r =
+      RunCommand(std::string(SWEEPSCAN_RSVG_CONVERT) + " -o '" + kDir + "/plan.png' '" + path + "'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json ink = PngInk(kDir + "/plan.png");
+  EXPECT_GT(ink.value("ink", 0), 5000) << ink.dump();
+  EXPECT_GT(ink.value("width", 0), 1000);
+}
+
+TEST(PlanWritersRefusalTest, BadOptionsAndEmptySections) {
+  FloorPlan plan;
+  std::string out;
+  SvgOptions svg;
+  svg.scale = 0.0;
+  EXPECT_FALSE(PlanSvg(plan, svg, &out).ok());
+  EXPECT_FALSE(SectionSvg({}, SvgOptions(), &out).ok());
+  DxfOptions dxf;
+  dxf.text_height_m = NAN;
+  EXPECT_FALSE(PlanDxf(plan, dxf, &out).ok());
+  plan.faces.push_back(WallFace());
+  plan.faces.back().b = {NAN, 0.0};
+  EXPECT_FALSE(PlanDxf(plan, DxfOptions(), &out).ok());
+  // A failed write leaves nothing under the name.
+  const std::string missing = kDir + "/no/such/folder/plan.dxf";
+  EXPECT_FALSE(WritePlanDxf(missing, FloorPlan(), DxfOptions()).ok());
+}
+
+}  // namespace
+}  // namespace sweepscan::plan
