@@ -78,8 +78,8 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
   const auto cancelled = [] { return Status::Error(kRegistrationCancelled); };
   if (!control.Report(RegistrationStage::kPrepare, 0.0, 0, 0.0, true)) return cancelled();
 
-  const std::vector<Eigen::Vector3f> source = VoxelDownsample(source_in, options.source_voxel_m);
-  const std::vector<Eigen::Vector3f> target = VoxelDownsample(target_in, options.target_voxel_m);
+  const std::vector<Eigen::Vector3f> source = VoxelCentroids(source_in, options.source_voxel_m);
+  const std::vector<Eigen::Vector3f> target = VoxelCentroids(target_in, options.target_voxel_m);
   if (source.size() < options.min_correspondences || target.size() < static_cast<size_t>(options.normal_k)) {
     return Status::Error("icp: too few points (source " + std::to_string(source.size()) +
                          ", target " + std::to_string(target.size()) + " after downsampling)");

@@ -111,10 +111,16 @@ bool HasNonParallelPair(const std::vector<Wall>& walls, double min_angle) {
   return false;
 }
 
+struct Score {
+  double inliers = 0.0;    // fraction of the samples on target surfaces
+  double conflicts = 0.0;  // fraction near target points but off their surface
+  double value = 0.0;      // inliers - conflict_weight * conflicts
+};
+
 struct Hypothesis {
   double yaw = 0.0;
   Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  double score = 0.0;
+  Score score;
 };
 
 struct Sample {
@@ -123,28 +129,44 @@ struct Sample {
 
 struct Scorer {
   const Surface* target;
-  double inlier_distance_m, inlier_plane_m;
-  // Fraction of `samples` on the target surface under T; sums the
-  // inliers' point-to-plane normal equations if `sums` is given.
-  double Score(const Rigid3d& t, const std::vector<Sample>& samples, NormalSums* sums) const {
+  const PlaneAlignOptions* o;
+  // The samples under T against the target surface; sums the inliers'
+  // point-to-plane normal equations if `sums` is given.
+  Score Evaluate(const Rigid3d& t, const std::vector<Sample>& samples, NormalSums* sums) const {
     const Eigen::Matrix3f r = t.rotation().toRotationMatrix().cast<float>();
     const Eigen::Vector3f tr = t.translation().cast<float>();
-    const float d2max = static_cast<float>(inlier_distance_m * inlier_distance_m);
+    const float inlier2 = static_cast<float>(o->inlier_distance_m * o->inlier_distance_m);
+    const float seen2 = static_cast<float>(o->conflict_distance_m * o->conflict_distance_m);
     const float cos_normal = static_cast<float>(std::cos(30.0 * kDeg));
-    size_t inliers = 0;
+    size_t inliers = 0, conflicts = 0;
     for (const Sample& s : samples) {
       const Eigen::Vector3f q = r * s.p + tr;
       uint32_t idx = 0;
       float d2 = 0.0f;
-      if (target->index.Knn(q.data(), 1, &idx, &d2) < 1 || d2 > d2max) continue;
+      // Farther than conflict_distance_m from every target point: a part the
+      // target did not see, neither for nor against.
+      if (target->index.Knn(q.data(), 1, &idx, &d2) < 1 || d2 > seen2) continue;
+      // On an edge or a corner the target's normal says little: neutral.
+      if (target->variation[idx] > 0.1f) continue;
       const Eigen::Vector3f& nt = target->normals[idx];
       const float* tp = target->index.sorted_point(idx);
       const float res = nt.dot(q - Eigen::Vector3f(tp[0], tp[1], tp[2]));
-      if (std::abs(res) > inlier_plane_m || std::abs(nt.dot(r * s.n)) < cos_normal) continue;
+      const bool parallel = std::abs(nt.dot(r * s.n)) >= cos_normal;
+      if (d2 > inlier2 || std::abs(res) > o->inlier_plane_m || !parallel) {
+        // Parallel and just behind or before a target surface: the other
+        // face of a thin wall, which the target may never have seen.
+        if (!(parallel && std::abs(res) < o->thin_wall_m)) ++conflicts;
+        continue;
+      }
       ++inliers;
       if (sums != nullptr) sums->Add(q.cast<double>(), nt.cast<double>(), res, 1.0);
     }
-    return samples.empty() ? 0.0 : static_cast<double>(inliers) / static_cast<double>(samples.size());
+    Score score;
+    if (samples.empty()) return score;
+    score.inliers = static_cast<double>(inliers) / static_cast<double>(samples.size());
+    score.conflicts = static_cast<double>(conflicts) / static_cast<double>(samples.size());
+    score.value = score.inliers - o->conflict_weight * score.conflicts;
+    return score;
   }
 };
 
@@ -181,8 +203,8 @@ Status AlignByPlanes(const std::vector<Eigen::Vector3f>& source_in,
   const auto cancelled = [] { return Status::Error(kRegistrationCancelled); };
   if (!control.Report(RegistrationStage::kPrepare, 0.0, 0, 0.0, true)) return cancelled();
 
-  const std::vector<Eigen::Vector3f> source = VoxelDownsample(source_in, o.voxel_m);
-  const std::vector<Eigen::Vector3f> target = VoxelDownsample(target_in, o.voxel_m);
+  const std::vector<Eigen::Vector3f> source = VoxelCentroids(source_in, o.voxel_m);
+  const std::vector<Eigen::Vector3f> target = VoxelCentroids(target_in, o.voxel_m);
   if (source.size() < 100 || target.size() < 100) {
     return Status::Error("planes: too few points (source " + std::to_string(source.size()) +
                          ", target " + std::to_string(target.size()) + " voxels)");
@@ -297,21 +319,22 @@ Status AlignByPlanes(const std::vector<Eigen::Vector3f>& source_in,
       !registration_internal::BuildSurface(target, 10, &control, &target_surface)) {
     return cancelled();
   }
-  const Scorer scorer{&target_surface, o.inlier_distance_m, o.inlier_plane_m};
+  const Scorer scorer{&target_surface, &o};
   const std::vector<Sample> coarse = Subsample(source_surface, o.coarse_samples);
   const std::vector<Sample> fine = Subsample(source_surface, o.score_samples);
   std::atomic<size_t> done{0};
   if (!control.For(hyps.size(), 1, [&](size_t, size_t begin, size_t end) {
         for (size_t h = begin; h < end; ++h) {
-          hyps[h].score = scorer.Score(ToRigid(hyps[h], tilt), coarse, nullptr);
+          hyps[h].score = scorer.Evaluate(ToRigid(hyps[h], tilt), coarse, nullptr);
           control.Report(RegistrationStage::kHypotheses,
                          0.35 + 0.5 * static_cast<double>(++done) / hyps.size());
         }
       })) {
     return cancelled();
   }
-  const auto by_score = [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; };
+  const auto by_score = [](const Hypothesis& a, const Hypothesis& b) { return a.score.value > b.score.value; };
   std::stable_sort(hyps.begin(), hyps.end(), by_score);
+
   const auto distinct = [&](const Hypothesis& a, const Hypothesis& b) {
     return std::abs(WrapAngle(a.yaw - b.yaw)) >= o.distinct_yaw_deg * kDeg ||
            (a.t - b.t).norm() >= o.distinct_translation_m;
@@ -329,27 +352,28 @@ Status AlignByPlanes(const std::vector<Eigen::Vector3f>& source_in,
     }
   }
   if (!control.For(top.size(), 1, [&](size_t, size_t begin, size_t end) {
-        for (size_t h = begin; h < end; ++h) top[h].score = scorer.Score(ToRigid(top[h], tilt), fine, nullptr);
+        for (size_t h = begin; h < end; ++h) top[h].score = scorer.Evaluate(ToRigid(top[h], tilt), fine, nullptr);
       })) {
     return cancelled();
   }
   std::stable_sort(top.begin(), top.end(), by_score);
   const Hypothesis& best = top[0];
+
   double second = 0.0;
   for (const Hypothesis& h : top) {
     if (distinct(h, best)) {
-      second = h.score;
+      second = std::max(0.0, h.score.value);
       break;
     }
   }
 
   result->target_from_source = ToRigid(best, tilt);
-  result->best_score = best.score;
+  result->best_score = best.score.value;
   result->second_score = second;
-  result->overlap = best.score;
+  result->overlap = best.score.inliers;
   result->iterations = static_cast<int>(hyps.size());
   NormalSums sums;
-  scorer.Score(result->target_from_source, fine, &sums);
+  scorer.Evaluate(result->target_from_source, fine, &sums);
   const auto degeneracy = registration_internal::AnalyseDegeneracy(sums, 1e-3);
   result->covariance = registration_internal::Covariance(sums, degeneracy);
   result->correspondences = sums.count;
@@ -357,18 +381,20 @@ Status AlignByPlanes(const std::vector<Eigen::Vector3f>& source_in,
   result->eigenvalues = degeneracy.eigenvalues;
 
   char buf[320];
-  if (best.score < o.min_overlap) {
+  if (best.score.inliers < o.min_overlap) {
     std::snprintf(buf, sizeof(buf),
                   "planes: the clouds share too little: the best of %zu hypotheses puts %.1f %% "
-                  "of the source's wall points on target surfaces (at least %.1f %% needed)",
-                  hyps.size(), 100.0 * best.score, 100.0 * o.min_overlap);
+                  "of the source's wall points on target surfaces and %.1f %% against them "
+                  "(at least %.1f %% needed)",
+                  hyps.size(), 100.0 * best.score.inliers, 100.0 * best.score.conflicts,
+                  100.0 * o.min_overlap);
     return Status::Error(buf);
   }
-  if (second > 0.0 && best.score < o.min_score_ratio * second) {
+  if (second > 0.0 && best.score.value < o.min_score_ratio * second) {
     std::snprintf(buf, sizeof(buf),
                   "planes: ambiguous: the best hypothesis scores %.3f and a distinct one %.3f "
                   "(ratio %.2f < %.2f): the shared part looks alike in several poses; pick pairs",
-                  best.score, second, best.score / second, o.min_score_ratio);
+                  best.score.value, second, best.score.value / second, o.min_score_ratio);
     return Status::Error(buf);
   }
   control.Report(RegistrationStage::kDone, 1.0, 0, result->rms_m, true);

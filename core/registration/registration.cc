@@ -87,6 +87,9 @@ bool PlaneAlignOptions::IsValid(std::string* error) const {
     return fail("min_wall_angle_deg must be in (0, 90]");
   if (!(angle_tolerance_deg > 0.0)) return fail("angle_tolerance_deg must be > 0");
   if (!(inlier_distance_m > 0.0 && inlier_plane_m > 0.0)) return fail("inlier distances must be > 0");
+  if (!(conflict_distance_m >= inlier_distance_m)) return fail("conflict_distance_m must be >= inlier_distance_m");
+  if (!(thin_wall_m >= 0.0)) return fail("thin_wall_m must be >= 0");
+  if (!(conflict_weight >= 0.0)) return fail("conflict_weight must be >= 0");
   if (coarse_samples < 10 || score_samples < 10) return fail("samples must be >= 10");
   if (rescore_count < 2) return fail("rescore_count must be >= 2");
   if (!(min_overlap > 0.0 && min_overlap < 1.0)) return fail("min_overlap must be in (0, 1)");
@@ -121,7 +124,7 @@ bool IcpOptions::IsValid(std::string* error) const {
   return true;
 }
 
-std::vector<Eigen::Vector3f> VoxelDownsample(const std::vector<Eigen::Vector3f>& points,
+std::vector<Eigen::Vector3f> VoxelCentroids(const std::vector<Eigen::Vector3f>& points,
                                              double voxel_m) {
   if (points.empty() || !(voxel_m > 0.0)) return points;
   Eigen::Vector3f lo = points[0];

@@ -68,8 +68,9 @@ struct RegistrationResult {
   bool free_is_rotation = false;
   std::string method;  // "planes", "pairs", "icp"
 
-  // Planes: the best and the next distinct hypothesis's scores (overlap
-  // fractions) and how many distinct hypotheses were scored.
+  // Planes: the best and the next distinct hypothesis's scores (inlier
+  // minus conflict fractions, PlaneAlignOptions); iterations holds how many
+  // distinct hypotheses were scored.
   double best_score = 0.0;
   double second_score = 0.0;
   // Pairs: |T * source_i - target_i| for every pair, metres.
@@ -110,9 +111,11 @@ extern const char* const kRegistrationCancelled;
 
 // Voxel-grid downsampling: the centroid of the points in each cube of side
 // voxel_m (voxels ordered by their integer coordinates, so the output does
-// not depend on the input's order within a voxel or on threads).
-std::vector<Eigen::Vector3f> VoxelDownsample(const std::vector<Eigen::Vector3f>& points,
-                                             double voxel_m);
+// not depend on the input's order within a voxel or on threads). Not named
+// VoxelDownsample: core/cloud/cloud_io.h has that one (PCL's VoxelGrid), and
+// a program linking both would hold two definitions of one name.
+std::vector<Eigen::Vector3f> VoxelCentroids(const std::vector<Eigen::Vector3f>& points,
+                                            double voxel_m);
 
 // ---------------------------------------------------------------------------
 // 1. Coarse, automatic, from planes.
@@ -138,25 +141,41 @@ struct PlaneAlignOptions {
   // and both walls' yaws agree within this.
   double angle_tolerance_deg = 3.0;
   // Hypotheses closer than these are one (the best of them is kept).
-  double same_yaw_deg = 2.0;
-  double same_translation_m = 0.25;
+  double same_yaw_deg = 0.5;
+  double same_translation_m = 0.03;
   // Scoring: a source sample (walls and furniture sides: points whose
   // normal is not vertical) is an inlier if its nearest target point is
   // within inlier_distance_m, its point-to-plane distance within
-  // inlier_plane_m and the normals within 30 deg. First every hypothesis on
-  // coarse_samples points, then the best rescore_count on score_samples.
+  // inlier_plane_m and the normals within 30 deg; a conflict if its nearest
+  // target point is within conflict_distance_m but it is no inlier (the
+  // target saw that place, and something else there); otherwise neutral
+  // (a place the target did not see). Score = inlier fraction -
+  // conflict_weight * conflict fraction: overlap alone would prefer a pose
+  // that piles the source onto the target's floor and corridor (they match
+  // under many shifts) over the true pose with a partial overlap. First every
+  // hypothesis on coarse_samples points, then the best rescore_count on
+  // score_samples.
+  // A sample parallel to its nearest target surface and within thin_wall_m
+  // of it, but not within inlier_plane_m, is neutral, not a conflict: the
+  // other face of a thin wall (0.1 m partitions), which the target may not
+  // have seen.
+  double conflict_distance_m = 0.5;
+  double thin_wall_m = 0.15;
+  double conflict_weight = 2.0;
   double inlier_distance_m = 0.25;
   double inlier_plane_m = 0.05;
   size_t coarse_samples = 1500;
   size_t score_samples = 8000;
   int rescore_count = 24;
-  // Refusals: best score below min_overlap (the clouds share nothing), or
-  // best / second below min_score_ratio, where second is the best
-  // hypothesis that differs from the best by at least distinct_yaw_deg or
-  // distinct_translation_m (closer ones would converge to the same pose).
+  // Refusals: the best hypothesis's inlier fraction below min_overlap (the
+  // clouds share too little to be told apart from a look-alike: two similar
+  // rooms put a quarter of their wall points on each other's surfaces), or
+  // its score below min_score_ratio times the second's, where second is the
+  // best hypothesis that differs from the best by at least distinct_yaw_deg
+  // or distinct_translation_m (closer ones would converge to the same pose).
   double distinct_yaw_deg = 10.0;
   double distinct_translation_m = 1.0;
-  double min_overlap = 0.08;
+  double min_overlap = 0.3;
   double min_score_ratio = 1.25;
   int threads = 0;  // 0 = all hardware threads; the result does not depend on it
 
