@@ -5,6 +5,7 @@
 // OfficeFloorDoors() (the doors' jambs on the walls' centre lines).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -101,13 +102,19 @@ TEST_F(OfficeFloorPlanTest, EveryWallFaceOnATruthFaceWithin5mm) {
   const std::vector<TruthLine> truth = TruthLines();
   std::vector<int> seen(truth.size(), 0);
   int structural = 0;
+  double worst = 0.0;
   for (const WallFace& f : plan_->faces) {
     if (!f.structural) continue;  // furniture: checked below not to be a wall
     ++structural;
     const TruthLine* l = Match(truth, f.a, f.b, kFaceTolerance);
     EXPECT_NE(l, nullptr) << "a wall face where the truth has none: " << Describe(f);
-    if (l != nullptr) seen[l - truth.data()] = 1;
+    if (l != nullptr) {
+      seen[l - truth.data()] = 1;
+      const int across = l->vertical ? 0 : 1;
+      worst = std::max({worst, std::abs(f.a[across] - l->offset), std::abs(f.b[across] - l->offset)});
+    }
   }
+  std::printf("%d wall faces, largest distance of an end from its truth face %.2f mm\n", structural, 1e3 * worst);
   // Every truth line is seen by these drives (the corridor from both
   // sides, every room from inside).
   for (size_t i = 0; i < truth.size(); ++i) {
