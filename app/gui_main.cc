@@ -6,6 +6,7 @@
 //             [--pairs FILE [--calibration-tour DIR]]
 //             [--pose-source ekf|odometry|sfm] [--pose-source-tour PNG]
 //             [--memory-budget MIB] [--rest-budget N] [--lod-budget N]
+//             [--project FILE]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
@@ -36,6 +37,8 @@
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/replay_panel.h"
+#include "ui/project/project_controller.h"
+#include "ui/project/project_layer.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/workspace.h"
 
@@ -51,6 +54,7 @@ struct Options {
   bool drive_demo = false;
   QString scenario;  // Resolved to the default when not given.
   QString replay;
+  QString project;  // A project file to open at start.
   double speed = 0.0;
   QString screenshot, window_screenshot, export_cloud, sessions_dir;
   double quit_after_s = -1.0;  // < 0: run until the operator quits.
@@ -90,6 +94,9 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "drive-demo",
       "Record and drive the scenario's path with the same drive commands the keyboard sends.");
   const QCommandLineOption replay("replay", "Open and replay a session folder.", "SESSION");
+  const QCommandLineOption project(
+      "project", "Open a project (many sessions in one frame, docs/project-format.md) at start.",
+      "FILE");
   const QCommandLineOption speed(
       "speed", "Replay speed: 1 to 20, or 0 for as fast as possible (default 0).", "X", "0");
   const QCommandLineOption screenshot("screenshot", "Save the view as PNG just before quitting.",
@@ -144,7 +151,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "N");
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
                      export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
-                     sessions, memory_budget, rest_budget, lod_budget});
+                     sessions, memory_budget, rest_budget, lod_budget, project});
   parser.process(app);
 
   Options o;
@@ -163,6 +170,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   o.pairs = parser.value(pairs);
   o.tour = parser.value(tour);
   o.pose_source = parser.value(pose_source);
+  o.project = parser.value(project);
   o.pose_source_tour = parser.value(pose_source_tour);
   if (parser.isSet(memory_budget)) o.memory_budget_mib = parser.value(memory_budget).toDouble();
   if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
@@ -378,6 +386,7 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
   const nlohmann::json j = {
       {"points", workspace->CloudSize()},
       {"points_shown", window->view()->point_count()},
+      {"project_points_drawn", window->project()->layer()->drawn_points()},
       {"scans", workspace->scan_count()},
       {"link_state", hardware::LinkHealth::StateName(workspace->health().state)},
       {"authenticated", workspace->authenticated()},
@@ -478,6 +487,10 @@ int Main(int argc, char** argv) {
     }
   }
   if (o.drive_demo && !StartDriveDemo(o, &workspace, &window)) return 2;
+  if (!o.project.isEmpty() && !window.project()->OpenProject(o.project)) {
+    std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
+    return 2;
+  }
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);
     if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);

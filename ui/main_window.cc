@@ -33,6 +33,8 @@
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/panels/ros_import_dialog.h"
+#include "ui/project/project_controller.h"
+#include "ui/project/project_panel.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -104,6 +106,16 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                Qt::RightDockWidgetArea);
   tabifyDockWidget(calibration_dock, evaluation_dock);
   calibration_dock->raise();
+  project_ = std::make_unique<ProjectController>(
+      this, view_, undo_, [this](const QString& t, const QString& m) { ShowError(t, m); },
+      [this] { return interactive_; });
+  add_dock(project_->panel(), tr("Project"), QStringLiteral("projectDock"), Qt::LeftDockWidgetArea);
+  connect(project_.get(), &ProjectController::titleChanged, this, &MainWindow::UpdateTitle);
+  connect(project_.get(), &ProjectController::message, this,
+          [this](const QString& m) { statusBar()->showMessage(m, 10000); });
+  // A project opened: into the building, its ceilings hidden, once its
+  // first sessions are drawn.
+  connect(project_.get(), &ProjectController::shown, this, &MainWindow::ApplyRoomView);
   connect(calibration_panel_, &CalibrationPanel::robotCalibrationChanged, this,
           [this](const MountingError& c) {
             QSettings().setValue(QStringLiteral("robot/calibration_rad"),
@@ -174,8 +186,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
             if (!ok) ShowError(what, message);
           });
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
-    setWindowTitle(dir.isEmpty() ? QStringLiteral("sweepscan")
-                                 : QStringLiteral("%1 - sweepscan").arg(QFileInfo(dir).fileName()));
+    UpdateTitle();
     if (!dir.isEmpty() && !workspace_->unsaved()) AddRecent(dir);
     UpdateActions();
     ShowPoseSource();
@@ -206,6 +217,15 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 }
 
 MainWindow::~MainWindow() { qApp->removeEventFilter(this); }
+
+void MainWindow::UpdateTitle() {
+  QStringList parts;
+  if (!workspace_->session_dir().isEmpty()) parts << QFileInfo(workspace_->session_dir()).fileName();
+  if (!project_->title().isEmpty()) parts << project_->title();
+  parts << QStringLiteral("sweepscan");
+  setWindowTitle(parts.join(QStringLiteral(" - ")));
+  setWindowModified(project_->document()->modified());
+}
 
 void MainWindow::RaiseDock(const QString& name) {
   if (auto* dock = findChild<QDockWidget*>(name)) {
@@ -534,7 +554,7 @@ void MainWindow::ShowError(const QString& title, const QString& message) {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (!ConfirmDiscard()) {
+  if (!ConfirmDiscard() || !project_->ConfirmClose()) {
     event->ignore();
     return;
   }

@@ -15,6 +15,7 @@
 #include <QMainWindow>
 #include <limits>
 #include <QSet>
+#include <memory>
 #include <vector>
 
 #include "ui/workspace/workspace.h"
@@ -35,6 +36,7 @@ class DrivePanel;
 class ReplayPanel;
 class CalibrationPanel;
 class EvaluationPanel;
+class ProjectController;
 class RosImportDialog;
 
 class MainWindow : public QMainWindow {
@@ -50,6 +52,9 @@ class MainWindow : public QMainWindow {
   CalibrationPanel* calibration_panel() const { return calibration_panel_; }
   EvaluationPanel* evaluation_panel() const { return evaluation_panel_; }
   QUndoStack* undo_stack() const { return undo_; }
+  // Projects (ui/project/): File menu actions, the Project panel, the
+  // project's sessions in the view.
+  ProjectController* project() const { return project_.get(); }
   // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
   // then errors go to lastError() and unsaved recordings stay where they are.
   void SetInteractive(bool interactive) { interactive_ = interactive; }
@@ -110,6 +115,7 @@ class MainWindow : public QMainWindow {
   void AddRecent(const QString& dir);
   void RebuildRecentMenu();
   void UpdateActions();
+  void UpdateTitle();  // The project's file, the session's folder.
 
   Workspace* workspace_;
   QString resources_dir_;
@@ -120,6 +126,8 @@ class MainWindow : public QMainWindow {
   CalibrationPanel* calibration_panel_;
   EvaluationPanel* evaluation_panel_;
   QUndoStack* undo_;
+  // Destroyed before the view it draws into (a member, not a child).
+  std::unique_ptr<ProjectController> project_;
   QMenu* recent_menu_ = nullptr;
   QAction* record_ = nullptr;
   QAction* stop_record_ = nullptr;

@@ -24,6 +24,7 @@
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
+#include "ui/project/project_controller.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -110,6 +111,8 @@ void MainWindow::BuildFileMenu() {
                                                              : dir + QStringLiteral(".sweepscan"));
   });
   save_as->setShortcut(QKeySequence::SaveAs);
+  file->addSeparator();
+  project_->AddFileMenuActions(file);
   file->addSeparator();
   QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
     const QString path = QFileDialog::getSaveFileName(this, tr("Export cloud"), QString(),
@@ -340,6 +343,7 @@ void MainWindow::BuildHelpMenu() {
                    "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
                    "Ctrl+R / Ctrl+Shift+R: record / stop\n"
                    "Ctrl+O: open session;  Ctrl+I: import a ROS recording;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
+                   "Ctrl+Shift+O / Ctrl+S: open / save project;  Ctrl+Shift+A: add a session to it\n"
                    "Shift + click: pick a point (calibration pairs, or the distance tool)\n"
                    "M: measure distance;  C: hide the ceiling\n"
                    "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));

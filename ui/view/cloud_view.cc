@@ -456,6 +456,21 @@ void CloudView::SetPointSize(double pixels) {
   for (auto& b : batches_) {
     for (Batch::Level& l : b->level) l.drawn.actor->GetProperty()->SetPointSize(pixels);
   }
+  for (auto& layer : layers_) layer->GetProperty()->SetPointSize(pixels);
+  RequestRender();
+}
+
+void CloudView::AddLayer(vtkActor* actor) {
+  layers_.emplace_back(actor);
+  actor->GetProperty()->SetPointSize(point_size_);
+  ApplyClip(static_cast<vtkPolyDataMapper*>(actor->GetMapper()));
+  renderer_->AddActor(actor);
+  RequestRender();
+}
+
+void CloudView::RemoveLayer(vtkActor* actor) {
+  renderer_->RemoveActor(actor);
+  layers_.erase(std::remove(layers_.begin(), layers_.end(), actor), layers_.end());
   RequestRender();
 }
 
@@ -506,6 +521,7 @@ void CloudView::SetClipHeight(double z) {
   for (auto& b : batches_) {
     for (Batch::Level& l : b->level) ApplyClip(l.drawn.mapper);
   }
+  for (auto& layer : layers_) ApplyClip(static_cast<vtkPolyDataMapper*>(layer->GetMapper()));
   // The planes too: a hidden ceiling must not tint the view from above.
   ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
   SetPlanesVisible(planes_visible_);  // Labels of hidden planes go with them.
@@ -545,7 +561,7 @@ void CloudView::ViewSide() {
 void CloudView::FitToCloud() {
   // Fit to the cloud (and the robot), not to the 40 m grid.
   const bool grid = grid_->GetVisibility();
-  grid_->SetVisibility(point_count_ == 0);
+  grid_->SetVisibility(point_count_ == 0 && layers_.empty());
   renderer_->ResetCamera();
   grid_->SetVisibility(grid);
   renderer_->ResetCameraClippingRange();

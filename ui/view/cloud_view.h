@@ -203,6 +203,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
   void ClearMeasurement();
 
+  // ---- Layers (ui/project/: a project's session clouds) ----
+  // Point actors drawn with the cloud and owned by someone else: the clip
+  // (Hide Ceiling) and the point size apply to them, FitToCloud and
+  // FindCeiling take their visible points in (through each actor's
+  // matrix). Not picked, and not under the point budgets.
+  void AddLayer(vtkActor* actor);
+  void RemoveLayer(vtkActor* actor);
+
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
   bool RenderIfDirty();  // True if it rendered.
@@ -273,6 +281,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
   std::vector<std::unique_ptr<Batch>> batches_;
+  std::vector<vtkSmartPointer<vtkActor>> layers_;
 
   ColorMode color_mode_ = ColorMode::kHeight;
   double point_size_ = 2.0;

@@ -1,7 +1,11 @@
 // CloudView's room view: a room scan opened looking into the room, its
 // ceiling hidden, instead of looking down on the ceiling (an orange box with
 // the interior hidden).
+#include <vtkActor.h>
 #include <vtkCamera.h>
+#include <vtkMatrix4x4.h>
+#include <vtkMapper.h>
+#include <vtkPolyData.h>
 #include <vtkRenderer.h>
 
 #include <algorithm>
@@ -23,6 +27,21 @@ double CloudView::FindCeiling() const {
     if (!d.points) continue;
     const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
     for (size_t k = 0; k < d.size(); ++k) z.push_back(p[3 * k + 2]);
+  }
+  // Layers (a project's sessions): about 200 000 heights in all, through
+  // each actor's matrix (its third row gives z).
+  for (const auto& layer : layers_) {
+    auto* poly = vtkPolyData::SafeDownCast(layer->GetMapper()->GetInput());
+    if (!layer->GetVisibility() || poly == nullptr || poly->GetNumberOfPoints() == 0) continue;
+    vtkMatrix4x4* m = layer->GetMatrix();
+    const vtkIdType n = poly->GetNumberOfPoints();
+    const vtkIdType step = std::max<vtkIdType>(1, n * static_cast<vtkIdType>(layers_.size()) / 200'000);
+    for (vtkIdType k = 0; k < n; k += step) {
+      double p[3];
+      poly->GetPoint(k, p);
+      z.push_back(static_cast<float>(m->GetElement(2, 0) * p[0] + m->GetElement(2, 1) * p[1] +
+                                     m->GetElement(2, 2) * p[2] + m->GetElement(2, 3)));
+    }
   }
   constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   if (z.size() < 1000) return kNone;

@@ -1,0 +1,242 @@
+// Projects in the desktop app (docs/desktop-app.md, "Projects") driven
+// through the real widgets under a real display (xvfb-run in CI): the
+// office floor's drives (resources/scenarios/building_{a,b,c}.json)
+// recorded through the bytes by the CLI, a project made by the CLI and
+// opened through the app; visibility and colour through the panel and
+// undone; the recent-projects menu; b aligned against a through the panel
+// and compared with where the scenarios put the robot down; a corridor's
+// refusal that leaves the project as it was. The event loop is watched
+// while clouds load and registrations run.
+#include <gtest/gtest.h>
+
+#include <QAction>
+#include <QComboBox>
+#include <QLabel>
+#include <QElapsedTimer>
+#include <QMenu>
+#include <QMenuBar>
+#include <QPushButton>
+#include <QTest>
+#include <QTreeWidget>
+#include <QUndoStack>
+#include <algorithm>
+#include <cmath>
+
+#include "core/project/project.h"
+#include "core/scenario/scenario.h"
+#include "tests/ui/app_fixture.h"
+#include "ui/project/project_controller.h"
+#include "ui/project/project_layer.h"
+#include "ui/project/project_panel.h"
+
+namespace sweepscan::ui {
+namespace {
+
+using testing::kResources;
+using testing::RunCommand;
+using testing::WaitFor;
+
+// The three drives, recorded once for the whole binary (~6 s in parallel).
+class ProjectUiTest : public testing::AppFixture {
+ protected:
+  static void SetUpTestSuite() {
+    sessions_ = new QTemporaryDir;
+    std::string cmd;
+    for (const char* s : {"a", "b", "c"}) {
+      cmd += std::string(SWEEPSCAN_CLI) + " simulate --scenario " + kResources.toStdString() +
+             "/scenarios/building_" + s + ".json --out " + Dir() + "/" + s + ".ply --session " +
+             Dir() + "/" + s + ".sweepscan > /dev/null & ";
+    }
+    const auto run = RunCommand(cmd + "wait");
+    ASSERT_EQ(run.code, 0) << run.out;
+  }
+  static void TearDownTestSuite() { delete sessions_; }
+  static std::string Dir() { return sessions_->path().toStdString(); }
+
+  // A fresh project of a, b, c (a the anchor, the others unplaced), made
+  // by the CLI beside the sessions.
+  QString MakeProject(const std::string& name) {
+    const std::string file = Dir() + "/" + name + ".sweepscan-project";
+    const std::string cli = SWEEPSCAN_CLI;
+    const auto run = RunCommand("cd " + Dir() + " && rm -f " + file + " && " + cli + " project new " + file +
+                                " a.sweepscan && " + cli + " project add " + file + " b.sweepscan c.sweepscan");
+    EXPECT_EQ(run.code, 0) << run.out;
+    return QString::fromStdString(file);
+  }
+
+  ProjectController* project() { return window_->project(); }
+
+  // Runs the event loop while the project's job runs; the longest gap (ms).
+  qint64 WorstGapWhileBusy(int timeout_ms) {
+    QElapsedTimer clock, gap;
+    clock.start();
+    gap.start();
+    qint64 worst = 0;
+    while (project()->busy() && clock.elapsed() < timeout_ms) {
+      QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+      worst = std::max(worst, gap.restart());
+    }
+    EXPECT_FALSE(project()->busy()) << "still busy after " << timeout_ms << " ms";
+    QCoreApplication::processEvents();  // The job's last queued calls.
+    return worst;
+  }
+
+  static QTemporaryDir* sessions_;
+};
+QTemporaryDir* ProjectUiTest::sessions_ = nullptr;
+
+TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
+  const QString file = MakeProject("toggle");
+  ASSERT_TRUE(project()->OpenProject(file));
+  // The anchor's cloud is built on the job thread; the GUI keeps going.
+  const qint64 worst = WorstGapWhileBusy(60000);
+  EXPECT_LT(worst, 500);  // As in AppTest.PoseSourceSfm: a blocked GUI stalls for seconds.
+  std::printf("loading: longest event-loop gap %lld ms\n", static_cast<long long>(worst));
+  const ProjectLayer* layer = project()->layer();
+  EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});  // b, c are not placed.
+  EXPECT_GT(layer->drawn_points(), 50000u);
+  EXPECT_NE(window_->windowTitle().indexOf("toggle.sweepscan-project"), -1)
+      << window_->windowTitle().toStdString();
+  EXPECT_FALSE(window_->isWindowModified());
+  ProjectPanel* panel = project()->panel();
+  ASSERT_EQ(panel->tree()->topLevelItemCount(), 3);
+  EXPECT_EQ(panel->item("c")->text(1), "not placed");
+
+  // Hide a by its check box: an undoable edit that marks the project modified.
+  const int commands = window_->undo_stack()->count();
+  panel->item("a")->setCheckState(0, Qt::Unchecked);
+  EXPECT_TRUE(layer->drawn_sessions().empty());
+  EXPECT_FALSE(project()->document()->project().sessions[0].visible);
+  EXPECT_TRUE(window_->isWindowModified());
+  EXPECT_EQ(window_->undo_stack()->count(), commands + 1);
+  window_->undo_stack()->undo();
+  EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
+  EXPECT_EQ(panel->item("a")->checkState(0), Qt::Checked);
+  EXPECT_FALSE(window_->isWindowModified());  // Back to what the file holds.
+
+  // A colour: the lookup table's entry for a's points, undone too.
+  project()->SetColor("a", "#ff0000");
+  EXPECT_EQ(layer->drawn_color("a"), QColor(255, 0, 0));
+  window_->undo_stack()->undo();
+  EXPECT_EQ(layer->drawn_color("a"), QColor(QString::fromStdString(project()->document()->project().sessions[0].color)));
+
+  // Show only c (unplaced: nothing drawn), then undo.
+  QMenu* menu = panel->ContextMenu("c");
+  for (QAction* a : menu->actions()) {
+    if (a->text() == "Show Only This") a->trigger();
+  }
+  EXPECT_TRUE(layer->drawn_sessions().empty());
+  window_->undo_stack()->undo();
+  EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
+
+  // Closed, then opened again from File > Open Recent Project.
+  ASSERT_TRUE(project()->CloseProject());
+  EXPECT_TRUE(layer->drawn_sessions().empty());
+  EXPECT_EQ(window_->windowTitle().indexOf("toggle"), -1);
+  QAction* recent = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->menu() == nullptr) continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->menu() != nullptr && b->text().contains("Recent Projec")) recent = b->menu()->actions().value(0);
+    }
+  }
+  ASSERT_NE(recent, nullptr);
+  recent->trigger();
+  EXPECT_EQ(project()->document()->path(), file);
+  WorstGapWhileBusy(60000);
+  EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
+}
+
+TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
+  const QString file = MakeProject("align");
+  ASSERT_TRUE(project()->OpenProject(file));
+  WorstGapWhileBusy(60000);
+  ProjectPanel* panel = project()->panel();
+  panel->SelectSession("b");
+  ASSERT_EQ(panel->reference_box()->currentText(), "a");
+  ASSERT_TRUE(panel->align_button()->isEnabled());
+  bool finished = false, placed = false;
+  QString outcome;
+  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString& m) {
+    finished = true;
+    placed = ok;
+    outcome = m;
+  });
+  QTest::mouseClick(panel->align_button(), Qt::LeftButton);
+  ASSERT_TRUE(project()->busy());
+  const qint64 worst = WorstGapWhileBusy(120000);
+  EXPECT_LT(worst, 500);
+  std::printf("aligning: longest event-loop gap %lld ms\n", static_cast<long long>(worst));
+  ASSERT_TRUE(finished);
+  ASSERT_TRUE(placed) << outcome.toStdString() << " / " << window_->last_error().toStdString();
+  std::printf("%s\n", outcome.toStdString().c_str());
+
+  // Where the scenarios put the robot down: project_from_b = world_from_a^-1 world_from_b.
+  sim::SimConfig a, b;
+  ASSERT_TRUE(LoadScenario(kResources.toStdString() + "/scenarios/building_a.json", &a).ok());
+  ASSERT_TRUE(LoadScenario(kResources.toStdString() + "/scenarios/building_b.json", &b).ok());
+  const Rigid3d truth = Rigid3d::FromPose(a.start.x, a.start.y, 0, 0, 0, a.start.yaw).inverse() *
+                        Rigid3d::FromPose(b.start.x, b.start.y, 0, 0, 0, b.start.yaw);
+  const ProjectSession& s = project()->document()->project().sessions[1];
+  ASSERT_TRUE(s.project_from_session.has_value());
+  const Rigid3d diff = truth.inverse() * *s.project_from_session;
+  EXPECT_LT(diff.translation().norm(), 0.05) << outcome.toStdString();
+  EXPECT_LT(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0.5) << outcome.toStdString();
+  EXPECT_EQ(s.registration.reference, "a");
+  EXPECT_EQ(s.registration.method, "planes+icp");
+  EXPECT_NE(panel->item("b")->text(1).indexOf("planes+icp to a"), -1);
+  WaitFor([&] { return !project()->busy(); }, 60000);
+  EXPECT_EQ(project()->layer()->drawn_sessions(), (std::vector<std::string>{"a", "b"}));
+  EXPECT_TRUE(window_->isWindowModified());
+
+  // Undone: b is not placed (nor drawn); redone: placed again; then saved.
+  window_->undo_stack()->undo();
+  EXPECT_FALSE(project()->document()->project().sessions[1].project_from_session.has_value());
+  EXPECT_EQ(project()->layer()->drawn_sessions(), std::vector<std::string>{"a"});
+  window_->undo_stack()->redo();
+  ASSERT_TRUE(project()->document()->project().sessions[1].project_from_session.has_value());
+  ASSERT_TRUE(project()->SaveProject());
+  EXPECT_FALSE(window_->isWindowModified());
+  Project saved;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &saved).ok());
+  ASSERT_TRUE(saved.sessions[1].project_from_session.has_value());
+  EXPECT_LT((saved.sessions[1].project_from_session->translation() - s.project_from_session->translation()).norm(),
+            1e-9);
+}
+
+TEST_F(ProjectUiTest, RefusalShowsTheReasonAndChangesNothing) {
+  const QString file = MakeProject("refuse");
+  ASSERT_TRUE(project()->OpenProject(file));
+  WorstGapWhileBusy(60000);
+  const std::string before = ProjectToJson(project()->document()->project());
+  const int commands = window_->undo_stack()->count();
+  ProjectPanel* panel = project()->panel();
+  // c drives the bare corridor: the walls leave the translation along it free.
+  bool finished = false, placed = true;
+  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString&) {
+    finished = true;
+    placed = ok;
+  });
+  QMenu* menu = panel->ContextMenu("c");
+  QAction* to_a = nullptr;
+  for (QAction* a : menu->actions()) {
+    if (a->menu() != nullptr && a->text() == "Align to") to_a = a->menu()->actions().value(0);
+  }
+  ASSERT_NE(to_a, nullptr);
+  EXPECT_EQ(to_a->text(), "a");
+  to_a->trigger();
+  EXPECT_LT(WorstGapWhileBusy(120000), 500);
+  ASSERT_TRUE(finished);
+  EXPECT_FALSE(placed);
+  EXPECT_NE(window_->last_error().indexOf("corridor"), -1) << window_->last_error().toStdString();
+  EXPECT_NE(panel->status_label()->text().indexOf("corridor"), -1);
+  EXPECT_EQ(ProjectToJson(project()->document()->project()), before);
+  EXPECT_EQ(window_->undo_stack()->count(), commands);
+  EXPECT_FALSE(window_->isWindowModified());
+  EXPECT_EQ(panel->item("c")->text(1), "not placed");
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }

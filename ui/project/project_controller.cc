@@ -1,0 +1,414 @@
+#include "ui/project/project_controller.h"
+
+#include <QAction>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QMenu>
+#include <QMessageBox>
+#include <QSettings>
+#include <QTimer>
+#include <QUndoStack>
+#include <cmath>
+#include <optional>
+
+#include "core/registration/registration.h"
+#include "hardware/station/project_align.h"
+#include "ui/project/project_commands.h"
+#include "ui/project/project_layer.h"
+#include "ui/project/project_panel.h"
+
+namespace sweepscan::ui {
+namespace {
+
+constexpr int kMaxRecent = 8;
+const QString kRecentKey = QStringLiteral("projects/recent");
+
+QString Id(const std::string& id) { return QString::fromStdString(id); }
+
+// The CLI's "placed ... against ...: rms, overlap, 1-sigma" line.
+QString PlacedText(const std::string& id, const hardware::RegistrationAttempt& a) {
+  const RegistrationResult& r = a.fine;
+  QString text = QObject::tr("Placed '%1' against '%2' (%3): rms %4 mm, overlap %5 %, 1-sigma %6 mm / %7 deg")
+                     .arg(Id(id), Id(a.reference), Id(a.method))
+                     .arg(r.rms_m * 1e3, 0, 'f', 1)
+                     .arg(std::lround(r.overlap * 100))
+                     .arg(r.TranslationSigmaM() * 1e3, 0, 'f', 1)
+                     .arg(r.RotationSigmaDeg(), 0, 'g', 3);
+  if (r.degenerate) text += QObject::tr("; held along the free direction, not measured");
+  return text;
+}
+
+}  // namespace
+
+ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStack* undo,
+                                     std::function<void(const QString&, const QString&)> show_error,
+                                     std::function<bool()> interactive)
+    : window_(window),
+      view_(view),
+      undo_(undo),
+      show_error_(std::move(show_error)),
+      interactive_(std::move(interactive)),
+      layer_(std::make_unique<ProjectLayer>(view)) {
+  panel_ = new ProjectPanel(this);
+  // The sessions' points go to the view a few pieces a tick (ProjectLayer).
+  pump_ = new QTimer(this);
+  pump_->setInterval(33);
+  connect(pump_, &QTimer::timeout, this, [this] {
+    if (layer_->Pump()) return;
+    pump_->stop();
+    if (!jobs_.running()) LoadMissing();  // Says shown() when all is drawn.
+  });
+  connect(&document_, &ProjectDocument::opened, this, [this] {
+    // Another project: its own clouds, and none of the old one's jobs.
+    jobs_.Cancel();
+    clouds_.clear();
+    layer_->Clear();
+    shown_pending_ = document_.is_open();
+    UpdateActions();
+  });
+  connect(&document_, &ProjectDocument::changed, this, &ProjectController::OnChanged);
+  connect(&document_, &ProjectDocument::modifiedChanged, this, &ProjectController::titleChanged);
+  connect(&jobs_, &ProjectJobs::progress, panel_, &ProjectPanel::ShowProgress);
+  connect(&jobs_, &ProjectJobs::finished, panel_, [this] {
+    panel_->ShowProgress(QString(), -2.0);
+    panel_->Refresh();
+  });
+}
+
+ProjectController::~ProjectController() { jobs_.Cancel(); }
+
+bool ProjectController::busy() const { return jobs_.running() || layer_->pending(); }
+
+QString ProjectController::title() const {
+  if (!document_.is_open()) return QString();
+  return QFileInfo(document_.path()).fileName() + QStringLiteral("[*]");
+}
+
+void ProjectController::AddFileMenuActions(QMenu* file) {
+  file->addAction(tr("New &Project…"), this, [this] {
+    if (!ConfirmClose()) return;
+    QString path = QFileDialog::getSaveFileName(window_, tr("New project"), QString(),
+                                                tr("sweepscan projects (*.sweepscan-project)"));
+    if (path.isEmpty()) return;
+    if (!path.endsWith(QLatin1String(kProjectSuffix))) path += QLatin1String(kProjectSuffix);
+    NewProject(path);
+  })->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_N));
+  file->addAction(tr("Open Pro&ject…"), this, [this] {
+    if (!ConfirmClose()) return;
+    const QString path = QFileDialog::getOpenFileName(
+        window_, tr("Open project"), QString(), tr("sweepscan projects (*.sweepscan-project);;All files (*)"));
+    if (!path.isEmpty()) OpenProject(path);
+  })->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_O));
+  recent_menu_ = file->addMenu(tr("Open Recent Projec&t"));
+  // Ctrl+S: the project is what this window saves (recordings are on
+  // disk as they are made; Save Session As has Ctrl+Shift+S).
+  save_ = file->addAction(tr("Sa&ve Project"), this, [this] { SaveProject(); });
+  save_->setShortcut(QKeySequence::Save);
+  add_ = file->addAction(tr("A&dd Session to Project…"), this, [this] {
+    const QString dir = QFileDialog::getExistingDirectory(
+        window_, tr("Add a session folder (NAME.sweepscan)"),
+        QFileInfo(document_.path()).absolutePath());
+    if (!dir.isEmpty()) AddSession(dir);
+  });
+  add_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_A));
+  close_ = file->addAction(tr("C&lose Project"), this, [this] {
+    if (ConfirmClose()) CloseProject();
+  });
+  close_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_W));
+  RebuildRecentMenu();
+  UpdateActions();
+}
+
+void ProjectController::UpdateActions() {
+  for (QAction* a : {save_, add_, close_}) {
+    if (a != nullptr) a->setEnabled(document_.is_open());
+  }
+}
+
+bool ProjectController::NewProject(const QString& path) {
+  document_.New(path);
+  emit message(tr("New project %1: add sessions (File > Add Session to Project…), then save (Ctrl+S)")
+                   .arg(QFileInfo(path).fileName()));
+  return true;
+}
+
+bool ProjectController::OpenProject(const QString& path) {
+  const Status s = document_.Open(path);
+  if (!s.ok()) {
+    show_error_(tr("Cannot open the project"), QString::fromStdString(s.message()));
+    return false;
+  }
+  AddRecent(QFileInfo(path).absoluteFilePath());
+  emit message(tr("Opened %1: %2 session(s)").arg(path).arg(document_.project().sessions.size()));
+  return true;
+}
+
+bool ProjectController::SaveProject() {
+  if (!document_.is_open()) return false;
+  const Status s = document_.Save();
+  if (!s.ok()) {
+    show_error_(tr("Cannot save the project"), QString::fromStdString(s.message()));
+    return false;
+  }
+  AddRecent(QFileInfo(document_.path()).absoluteFilePath());
+  emit message(tr("Saved %1").arg(document_.path()));
+  return true;
+}
+
+bool ProjectController::AddSession(const QString& dir) {
+  if (!document_.is_open()) return false;
+  if (!QFileInfo::exists(dir + QStringLiteral("/meta.json"))) {
+    show_error_(tr("Cannot add the session"), tr("%1: not a session folder (no meta.json)").arg(dir));
+    return false;
+  }
+  Project after = document_.project();
+  ProjectSession* added = nullptr;
+  const Status s = after.AddSession(document_.StoredPath(dir), &added);
+  if (!s.ok()) {
+    show_error_(tr("Cannot add the session"), QString::fromStdString(s.message()));
+    return false;
+  }
+  Push(after, tr("add session '%1'").arg(Id(added->id)));
+  return true;
+}
+
+bool ProjectController::ConfirmClose() {
+  if (!document_.modified() || !interactive_()) return true;
+  const auto answer = QMessageBox::question(
+      window_, tr("Unsaved project"),
+      tr("The project %1 has changes that are not saved.\n\nSave them first?")
+          .arg(QFileInfo(document_.path()).fileName()),
+      QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+  if (answer == QMessageBox::Cancel) return false;
+  return answer == QMessageBox::Discard || SaveProject();
+}
+
+bool ProjectController::CloseProject() {
+  document_.Close();
+  return true;
+}
+
+void ProjectController::Push(const Project& after, const QString& text) {
+  undo_->push(new ProjectEditCommand(&document_, after, text));
+}
+
+void ProjectController::SetVisible(const std::string& id, bool visible) {
+  Project after = document_.project();
+  const int i = after.Find(id);
+  if (i < 0 || after.sessions[i].visible == visible) return;
+  after.sessions[i].visible = visible;
+  Push(after, visible ? tr("show '%1'").arg(Id(id)) : tr("hide '%1'").arg(Id(id)));
+}
+
+void ProjectController::SetColor(const std::string& id, const QString& color) {
+  Project after = document_.project();
+  const int i = after.Find(id);
+  const std::string c = color.toLower().toStdString();
+  if (i < 0 || after.sessions[i].color == c) return;
+  after.sessions[i].color = c;
+  Push(after, tr("colour of '%1'").arg(Id(id)));
+}
+
+void ProjectController::RemoveSession(const std::string& id) {
+  Project after = document_.project();
+  const Status s = after.RemoveSession(id);
+  if (!s.ok()) {
+    show_error_(tr("Cannot remove the session"), QString::fromStdString(s.message()));
+    return;
+  }
+  Push(after, tr("remove '%1'").arg(Id(id)));
+}
+
+void ProjectController::ShowOnly(const std::string& id) {
+  Project after = document_.project();
+  for (ProjectSession& s : after.sessions) s.visible = s.id == id;
+  if (ProjectToJson(after) == ProjectToJson(document_.project())) return;
+  Push(after, tr("show only '%1'").arg(Id(id)));
+}
+
+void ProjectController::Show() {
+  layer_->Sync(document_.project(), clouds_);
+  if (layer_->pending() && !pump_->isActive()) pump_->start();
+}
+
+void ProjectController::OnChanged() {
+  Show();
+  panel_->Refresh();
+  UpdateActions();
+  emit titleChanged();
+  LoadMissing();
+}
+
+void ProjectController::LoadMissing() {
+  if (jobs_.running() || !document_.is_open()) return;
+  std::vector<ProjectSession> todo;
+  for (const ProjectSession& s : document_.project().sessions) {
+    const auto c = clouds_.find(s.id);
+    if (s.project_from_session && s.visible && (c == clouds_.end() || c->second->key != CloudKey(s))) {
+      todo.push_back(s);
+    }
+  }
+  if (todo.empty()) {
+    if (shown_pending_ && !layer_->pending() && layer_->drawn_points() > 0) {
+      shown_pending_ = false;
+      emit shown();
+    }
+    return;
+  }
+  const std::string file = document_.path().toStdString();
+  const uint64_t generation = document_.generation();
+  jobs_.Run(
+      tr("Loading the project"),
+      [this, todo, file, generation](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+        for (size_t k = 0; k < todo.size() && !*cancel; ++k) {
+          const QString what = tr("Loading '%1' (%2 of %3)").arg(Id(todo[k].id)).arg(k + 1).arg(todo.size());
+          ProjectCloudPtr cloud;
+          const Status s = BuildProjectCloud(file, todo[k], [&](double f) {
+            progress(what, f);
+            return !*cancel;
+          }, &cloud);
+          if (*cancel) return tr("cancelled");
+          if (!s.ok()) return QString::fromStdString(s.message());
+          // Drawn as soon as built, not after the last one.
+          QMetaObject::invokeMethod(this, [this, cloud, generation] {
+            if (document_.generation() != generation) return;
+            clouds_[cloud->id] = cloud;
+            if (!cloud->damage.empty()) {
+              emit message(tr("%1: %2").arg(Id(cloud->id), QString::fromStdString(cloud->damage)));
+            }
+            Show();
+            panel_->Refresh();
+          });
+        }
+        return QString();
+      },
+      [this, generation](const QString& error) {
+        const bool stale = document_.generation() != generation;
+        if (!error.isEmpty() && !jobs_.cancelled() && !stale) {
+          show_error_(tr("Cannot load the project's sessions"), error);
+          return;  // Not again and again: the next edit tries again.
+        }
+        if (jobs_.cancelled() && !stale) {
+          emit message(tr("Loading cancelled"));
+          return;
+        }
+        LoadMissing();
+      });
+}
+
+bool ProjectController::Align(const std::string& id, const std::string& reference) {
+  const Project& p = document_.project();
+  const int i = p.Find(id), r = p.Find(reference);
+  if (jobs_.running() || i < 0 || r < 0 || i == r || i == p.Anchor() ||
+      !p.sessions[r].project_from_session) {
+    return false;
+  }
+  const ProjectSession source = p.sessions[i], target = p.sessions[r];
+  auto cached = [this](const ProjectSession& s) -> ProjectCloudPtr {
+    const auto c = clouds_.find(s.id);
+    return c != clouds_.end() && c->second->key == CloudKey(s) ? c->second : nullptr;
+  };
+  struct Outcome {
+    ProjectCloudPtr source, target;
+    hardware::RegistrationAttempt attempt;
+  };
+  auto out = std::make_shared<Outcome>();
+  out->source = cached(source);
+  out->target = cached(target);
+  const std::string file = document_.path().toStdString();
+  const uint64_t generation = document_.generation();
+  const QString what = tr("Aligning '%1' to '%2'").arg(Id(id), Id(reference));
+  return jobs_.Run(
+      what,
+      [out, source, target, file, what](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+        for (auto [s, cloud] : {std::pair{&source, &out->source}, std::pair{&target, &out->target}}) {
+          if (*cloud) continue;
+          const QString loading = tr("Loading '%1'").arg(Id(s->id));
+          const Status st = BuildProjectCloud(file, *s, [&](double f) {
+            progress(loading, f);
+            return !*cancel;
+          }, cloud);
+          if (*cancel) return tr("cancelled");
+          if (!st.ok()) return QString::fromStdString(st.message());
+        }
+        RegistrationControl control;
+        control.cancel = cancel;
+        control.progress = [&](const RegistrationProgress& p) {
+          progress(tr("%1: %2").arg(what, QString::fromLatin1(RegistrationStageName(p.stage))), p.fraction);
+          return !*cancel;
+        };
+        out->attempt = hardware::RegisterSession(out->source->positions, out->target->positions,
+                                                 target.id, hardware::SessionRegistrationOptions(),
+                                                 control);
+        return QString();  // A refusal is an outcome, not a failed job.
+      },
+      [this, out, id, generation](const QString& error) {
+        if (document_.generation() != generation) return;
+        for (const ProjectCloudPtr& c : {out->source, out->target}) {
+          if (c) clouds_[c->id] = c;
+        }
+        const Status& s = out->attempt.status;
+        if (!error.isEmpty() || jobs_.cancelled() || s.message() == kRegistrationCancelled) {
+          const QString why = error.isEmpty() ? tr("cancelled") : error;
+          emit message(tr("Alignment of '%1': %2").arg(Id(id), why));
+          emit alignFinished(false, why);
+          return;
+        }
+        if (!s.ok()) {
+          const QString why = tr("Cannot align '%1' to '%2': %3")
+                                  .arg(Id(id), Id(out->attempt.reference),
+                                       QString::fromStdString(s.message()));
+          show_error_(tr("Alignment refused"), why);
+          emit alignFinished(false, why);
+          return;
+        }
+        // The project as it is now (the reference may have moved meanwhile).
+        Project after = document_.project();
+        const int i = after.Find(id), r = after.Find(out->attempt.reference);
+        if (i < 0 || r < 0 || !after.sessions[r].project_from_session) {
+          emit alignFinished(false, tr("the project changed meanwhile"));
+          return;
+        }
+        after.sessions[i].project_from_session =
+            *after.sessions[r].project_from_session * out->attempt.fine.target_from_source;
+        after.sessions[i].registration = hardware::EvidenceOf(out->attempt, {});
+        // The clouds just built, shown at the new pose.
+        QString text = PlacedText(id, out->attempt);
+        if (out->source->has_truth && out->target->has_truth) {
+          // The simulation knows where each drive started: a check, never a placement.
+          const Rigid3d truth = out->target->world_from_session_truth.inverse() *
+                                out->source->world_from_session_truth;
+          const Rigid3d diff = truth.inverse() * out->attempt.fine.target_from_source;
+          text += tr("; against the simulation's truth: %1 mm, %2 deg")
+                      .arg(diff.translation().norm() * 1e3, 0, 'f', 1)
+                      .arg(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0, 'f', 3);
+        }
+        Push(after, tr("align '%1' to '%2'").arg(Id(id), Id(out->attempt.reference)));
+        emit message(text);
+        emit alignFinished(true, text);
+      });
+}
+
+void ProjectController::AddRecent(const QString& path) {
+  QSettings s;
+  QStringList recent = s.value(kRecentKey).toStringList();
+  recent.removeAll(path);
+  recent.prepend(path);
+  while (recent.size() > kMaxRecent) recent.removeLast();
+  s.setValue(kRecentKey, recent);
+  RebuildRecentMenu();
+}
+
+void ProjectController::RebuildRecentMenu() {
+  if (recent_menu_ == nullptr) return;
+  recent_menu_->clear();
+  const QStringList recent = QSettings().value(kRecentKey).toStringList();
+  for (const QString& path : recent) {
+    recent_menu_->addAction(QFileInfo(path).fileName(), this, [this, path] {
+      if (ConfirmClose()) OpenProject(path);
+    })->setToolTip(path);
+  }
+  recent_menu_->setEnabled(!recent.isEmpty());
+}
+
+}  // namespace sweepscan::ui

@@ -1,0 +1,126 @@
+// The desktop app's side of projects (issue 29, docs/desktop-app.md,
+// "Projects"): the File menu's project actions and recent projects, the
+// Project panel, the project's sessions in the cloud view, and alignment.
+//
+// * Edits (visibility, colour, adding, removing, a placement) are
+//   ProjectEditCommands on the main window's QUndoStack; the document says
+//   whether the project differs from its file (the window's [*]).
+// * Clouds are built on a job thread (ProjectJobs: progress and cancel in
+//   the panel), each session once per folder and calibration, and kept
+//   while the project is open; the view draws the placed, visible ones
+//   (ProjectLayer).
+// * Align runs the CLI's registration step (hardware/station/
+//   project_align.h) of one session against one placed reference on the
+//   job thread; success is an undoable placement, a refusal changes nothing
+//   and says why.
+//
+// GUI thread only.
+#ifndef SWEEPSCAN_UI_PROJECT_PROJECT_CONTROLLER_H_
+#define SWEEPSCAN_UI_PROJECT_PROJECT_CONTROLLER_H_
+
+#include <QObject>
+#include <QString>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "ui/project/project_document.h"
+#include "ui/project/project_jobs.h"
+
+class QAction;
+class QMenu;
+class QTimer;
+class QUndoStack;
+class QWidget;
+
+namespace sweepscan::ui {
+
+class CloudView;
+class ProjectLayer;
+class ProjectPanel;
+
+class ProjectController : public QObject {
+  Q_OBJECT
+ public:
+  // `show_error(title, message)` reports failures (a message box when the
+  // window is interactive); `interactive()` says whether dialogs may open.
+  ProjectController(QWidget* window, CloudView* view, QUndoStack* undo,
+                    std::function<void(const QString&, const QString&)> show_error,
+                    std::function<bool()> interactive);
+  ~ProjectController() override;
+
+  ProjectDocument* document() { return &document_; }
+  ProjectPanel* panel() const { return panel_; }
+  const ProjectLayer* layer() const { return layer_.get(); }
+  ProjectJobs* jobs() { return &jobs_; }
+  // File menu: New Project…, Open Project…, Open Recent Project, Save
+  // Project, Add Session to Project…, Close Project.
+  void AddFileMenuActions(QMenu* file);
+  QAction* save_action() const { return save_; }
+  // The window title's part: "floor.sweepscan-project[*]", "" without a project.
+  QString title() const;
+
+  // What the actions do, once their files are chosen (tests call these).
+  bool NewProject(const QString& path);
+  bool OpenProject(const QString& path);
+  bool SaveProject();
+  bool AddSession(const QString& dir);  // undoable
+  // Asks to save a modified project (interactive); false: the operator cancelled.
+  bool ConfirmClose();
+  bool CloseProject();  // after ConfirmClose()
+
+  // Undoable edits by session id.
+  void SetVisible(const std::string& id, bool visible);
+  void SetColor(const std::string& id, const QString& color);  // "#rrggbb"
+  void RemoveSession(const std::string& id);
+  void ShowOnly(const std::string& id);
+  // Registers session `id` against the placed `reference` on the job
+  // thread (loading either cloud first if needed). False if it cannot start
+  // (a job runs, unknown ids, the reference unplaced, `id` the anchor).
+  bool Align(const std::string& id, const std::string& reference);
+  void Cancel() { jobs_.Cancel(); }
+  // A job runs or loaded points are still on their way to the view.
+  bool busy() const;
+  // The clouds built so far, by id.
+  const std::map<std::string, ProjectCloudPtr>& clouds() const { return clouds_; }
+
+ signals:
+  void titleChanged();
+  // The project's first clouds are drawn: time for the room view.
+  void shown();
+  void message(const QString& text);  // for the status bar
+  // An alignment ended: placed, or refused / cancelled with the reason.
+  void alignFinished(bool placed, const QString& message);
+
+ private:
+  void Push(const Project& after, const QString& text);
+  void OnChanged();
+  void Show();  // The layer from the project and the clouds; pumps what is new.
+  // Builds the clouds of placed, visible sessions not built yet (one job).
+  void LoadMissing();
+  void AddRecent(const QString& path);
+  void RebuildRecentMenu();
+  void UpdateActions();
+
+  QWidget* window_;
+  CloudView* view_;
+  QUndoStack* undo_;
+  std::function<void(const QString&, const QString&)> show_error_;
+  std::function<bool()> interactive_;
+  ProjectDocument document_;
+  ProjectJobs jobs_;
+  std::unique_ptr<ProjectLayer> layer_;
+  ProjectPanel* panel_;
+  std::map<std::string, ProjectCloudPtr> clouds_;
+  QTimer* pump_ = nullptr;
+  bool shown_pending_ = false;  // shown() once the first clouds of an opened project draw
+  QMenu* recent_menu_ = nullptr;
+  QAction* save_ = nullptr;
+  QAction* add_ = nullptr;
+  QAction* close_ = nullptr;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_PROJECT_PROJECT_CONTROLLER_H_

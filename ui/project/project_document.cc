@@ -1,0 +1,68 @@
+#include "ui/project/project_document.h"
+
+#include <QDir>
+#include <QFileInfo>
+
+namespace sweepscan::ui {
+
+void ProjectDocument::New(const QString& path) {
+  const bool was = modified();
+  path_ = path;
+  project_ = Project();
+  project_.name = QFileInfo(path).completeBaseName().toStdString();
+  saved_json_.clear();  // Not on disk yet: modified until saved.
+  ++generation_;
+  emit opened();
+  Changed(was);
+}
+
+Status ProjectDocument::Open(const QString& path) {
+  Project p;
+  const Status s = LoadProject(path.toStdString(), &p);
+  if (!s.ok()) return s;
+  const bool was = modified();
+  path_ = path;
+  project_ = std::move(p);
+  saved_json_ = ProjectToJson(project_);
+  ++generation_;
+  emit opened();
+  Changed(was);
+  return Status::Ok();
+}
+
+Status ProjectDocument::Save() {
+  const Status s = SaveProject(path_.toStdString(), project_);
+  if (!s.ok()) return s;
+  const bool was = modified();
+  saved_json_ = ProjectToJson(project_);
+  if (was) emit modifiedChanged(false);
+  return s;
+}
+
+void ProjectDocument::Close() {
+  const bool was = modified();
+  path_.clear();
+  project_ = Project();
+  saved_json_.clear();
+  ++generation_;
+  emit opened();
+  Changed(was);
+}
+
+void ProjectDocument::Set(const Project& project) {
+  const bool was = modified();
+  project_ = project;
+  Changed(was);
+}
+
+std::string ProjectDocument::StoredPath(const QString& dir) const {
+  const QString folder = QFileInfo(path_).absolutePath();
+  return QDir(folder).relativeFilePath(QFileInfo(dir).absoluteFilePath()).toStdString();
+}
+
+void ProjectDocument::Changed(bool was_modified) {
+  emit changed();
+  if (modified() != was_modified) emit modifiedChanged(modified());
+}
+
+}  // namespace sweepscan::ui

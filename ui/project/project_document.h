@@ -1,0 +1,65 @@
+// The project open in the app (core/project/project.h): its file, its
+// contents and whether they differ from the file. Every edit comes through
+// Set(), called by the undo commands (project_commands.h), so that the main
+// window's QUndoStack undoes project edits like any other.
+//
+// "Modified" is a comparison, not a counter: the contents as JSON against
+// what was last read or written, so that undoing back to the saved state
+// is unmodified again whatever else the undo stack holds.
+//
+// GUI thread only.
+#ifndef SWEEPSCAN_UI_PROJECT_PROJECT_DOCUMENT_H_
+#define SWEEPSCAN_UI_PROJECT_PROJECT_DOCUMENT_H_
+
+#include <QObject>
+#include <QString>
+#include <cstdint>
+#include <string>
+
+#include "core/project/project.h"
+
+namespace sweepscan::ui {
+
+class ProjectDocument : public QObject {
+  Q_OBJECT
+ public:
+  explicit ProjectDocument(QObject* parent = nullptr) : QObject(parent) {}
+
+  bool is_open() const { return !path_.isEmpty(); }
+  QString path() const { return path_; }
+  const Project& project() const { return project_; }
+  bool modified() const { return is_open() && ProjectToJson(project_) != saved_json_; }
+  // Changes on every Open / New / Close: undo commands of an older project
+  // become obsolete instead of editing this one.
+  uint64_t generation() const { return generation_; }
+
+  // A new, empty project to be saved at `path` (nothing written yet).
+  void New(const QString& path);
+  // Reads `path`; on failure the open project stays.
+  Status Open(const QString& path);
+  // Writes the project atomically to its path.
+  Status Save();
+  void Close();
+  // The contents (the undo commands' way in).
+  void Set(const Project& project);
+  // The session folder `dir` as the project stores it: relative to the
+  // project file's folder, so that the folder of both can move.
+  std::string StoredPath(const QString& dir) const;
+
+ signals:
+  void opened();   // another project (or none) is open
+  void changed();  // the contents changed (after opened(), too)
+  void modifiedChanged(bool modified);
+
+ private:
+  void Changed(bool was_modified);
+
+  QString path_;
+  Project project_;
+  std::string saved_json_;
+  uint64_t generation_ = 0;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_PROJECT_PROJECT_DOCUMENT_H_

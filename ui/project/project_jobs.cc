@@ -1,0 +1,76 @@
+#include "ui/project/project_jobs.h"
+
+#include <QMetaObject>
+#include <cstdio>
+#include <mutex>
+
+#include "hardware/station/session_cloud.h"
+
+namespace sweepscan::ui {
+
+std::string CloudKey(const ProjectSession& session) {
+  std::string key = session.path;
+  if (session.calibration) {
+    char c[96];
+    std::snprintf(c, sizeof(c), "|%.9g,%.9g,%.9g", session.calibration->alpha,
+                  session.calibration->beta, session.calibration->gamma);
+    key += c;
+  }
+  return key;
+}
+
+Status BuildProjectCloud(const std::string& project_file, const ProjectSession& session,
+                         const std::function<bool(double)>& progress, ProjectCloudPtr* cloud) {
+  hardware::SessionCloudOptions options;
+  options.progress = progress;
+  hardware::SessionCloud built;
+  const Status s = hardware::LoadSessionCloud(project_file, session, options, &built);
+  if (!s.ok()) return s;
+  auto out = std::make_shared<ProjectCloud>();
+  out->id = session.id;
+  out->key = CloudKey(session);
+  out->positions = hardware::Positions(built.points);
+  out->damage = built.damage;
+  out->has_truth = built.has_true_start;
+  out->world_from_session_truth = built.world_from_session_truth;
+  *cloud = std::move(out);
+  return Status::Ok();
+}
+
+ProjectJobs::~ProjectJobs() {
+  cancel_ = true;
+  if (thread_ && thread_->joinable()) thread_->join();
+}
+
+bool ProjectJobs::Run(const QString& what,
+                      std::function<QString(std::atomic<bool>*, const Progress&)> work,
+                      std::function<void(const QString& error)> done) {
+  if (running_) return false;
+  if (thread_ && thread_->joinable()) thread_->join();  // The last one has finished.
+  running_ = true;
+  cancel_ = false;
+  emit progress(what, 0.0);
+  thread_ = std::make_unique<std::thread>([this, what, work = std::move(work),
+                                           done = std::move(done)] {
+    // At most every 2 % (or on a new stage): the GUI thread is not flooded.
+    auto last = std::make_shared<std::pair<QString, double>>(QString(), -1.0);
+    auto mutex = std::make_shared<std::mutex>();
+    const Progress report = [this, last, mutex](const QString& stage, double f) {
+      {
+        std::lock_guard<std::mutex> lock(*mutex);
+        if (stage == last->first && f >= 0 && f - last->second < 0.02 && f < 1.0) return;
+        *last = {stage, f};
+      }
+      QMetaObject::invokeMethod(this, [this, stage, f] { emit progress(stage, f); });
+    };
+    const QString error = work(&cancel_, report);
+    QMetaObject::invokeMethod(this, [this, what, error, done] {
+      running_ = false;
+      done(error);
+      emit finished(what, error.isEmpty(), error);
+    });
+  });
+  return true;
+}
+
+}  // namespace sweepscan::ui

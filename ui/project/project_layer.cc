@@ -1,0 +1,236 @@
+#include "ui/project/project_layer.h"
+
+#include <vtkActor.h>
+#include <vtkCellArray.h>
+#include <vtkFloatArray.h>
+#include <vtkLookupTable.h>
+#include <vtkMatrix4x4.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkTypeInt32Array.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <QColor>
+#include <algorithm>
+#include <set>
+
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+constexpr int kSlots = 256;
+
+vtkSmartPointer<vtkMatrix4x4> Matrix(const Rigid3d& t) {
+  auto m = vtkSmartPointer<vtkMatrix4x4>::New();
+  const Eigen::Matrix4d e = t.ToIsometry().matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) m->SetElement(r, c, e(r, c));
+  }
+  return m;
+}
+
+bool SameMatrix(vtkMatrix4x4* a, vtkMatrix4x4* b) {
+  if (a == nullptr || b == nullptr) return false;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      if (a->GetElement(r, c) != b->GetElement(r, c)) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+ProjectLayer::ProjectLayer(CloudView* view) : view_(view) {
+  lut_ = vtkSmartPointer<vtkLookupTable>::New();
+  lut_->SetNumberOfTableValues(kSlots);
+  lut_->SetTableRange(0, kSlots - 1);
+  for (int i = 0; i < kSlots; ++i) lut_->SetTableValue(i, 0.5, 0.5, 0.5, 1.0);
+}
+
+ProjectLayer::~ProjectLayer() { Clear(); }
+
+void ProjectLayer::Remove(Entry* e) {
+  for (auto& actor : e->pieces) view_->RemoveLayer(actor);
+  e->pieces.clear();
+}
+
+void ProjectLayer::Clear() {
+  for (auto& [id, e] : entries_) Remove(&e);
+  entries_.clear();
+}
+
+int ProjectLayer::FreeSlot() const {
+  std::set<int> used;
+  for (const auto& [id, e] : entries_) used.insert(e.slot);
+  for (int s = 0; s < kSlots; ++s) {
+    if (used.count(s) == 0) return s;
+  }
+  return kSlots - 1;  // More sessions than slots shown at once: they share the last colour.
+}
+
+ProjectLayer::Entry ProjectLayer::NewEntry(const ProjectCloudPtr& cloud, size_t sessions) const {
+  Entry e;
+  e.cloud = cloud;
+  e.slot = FreeSlot();
+  // Every k-th point above this session's share of the rest budget.
+  const size_t n = cloud->positions.size();
+  const size_t share = std::max<size_t>(1, view_->rest_budget() / std::max<size_t>(1, sessions));
+  e.stride = std::max<size_t>(1, (n + share - 1) / share);
+  return e;
+}
+
+void ProjectLayer::AddPiece(Entry* e) {
+  const std::vector<Eigen::Vector3f>& all = e->cloud->positions;
+  const size_t first = e->next;
+  const size_t last = std::min(all.size(), first + kPiecePoints * e->stride);
+  const size_t m = (last - first + e->stride - 1) / e->stride;
+  e->next = last;
+  auto xyz = vtkSmartPointer<vtkFloatArray>::New();
+  xyz->SetNumberOfComponents(3);
+  if (e->stride == 1) {
+    // In place: the positions outlive the actor (the entry holds both), and
+    // save = 1 tells VTK not to free them.
+    xyz->SetArray(const_cast<float*>(all[first].data()), static_cast<vtkIdType>(3 * m), 1);
+  } else {
+    xyz->SetNumberOfTuples(static_cast<vtkIdType>(m));
+    float* out = xyz->GetPointer(0);
+    for (size_t k = 0; k < m; ++k) {
+      const Eigen::Vector3f& p = all[first + k * e->stride];
+      out[3 * k] = p.x();
+      out[3 * k + 1] = p.y();
+      out[3 * k + 2] = p.z();
+    }
+  }
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetData(xyz);
+  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New();
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(m + 1));
+  auto connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(m));
+  for (size_t k = 0; k <= m; ++k) offsets->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
+  for (size_t k = 0; k < m; ++k) connectivity->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(offsets, connectivity);
+  auto slot = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  slot->SetName("session");
+  slot->SetNumberOfValues(static_cast<vtkIdType>(m));
+  std::fill_n(slot->GetPointer(0), m, static_cast<unsigned char>(e->slot));
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  poly->GetPointData()->SetScalars(slot);
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(poly);
+  mapper->SetLookupTable(lut_);
+  mapper->SetColorModeToMapScalars();  // Bytes are slots, not colours.
+  mapper->SetScalarModeToUsePointData();
+  mapper->SetScalarRange(0, kSlots - 1);
+  mapper->ScalarVisibilityOn();
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetRepresentationToPoints();
+  actor->PickableOff();
+  actor->SetVisibility(e->visible);
+  if (e->matrix) actor->SetUserMatrix(e->matrix);
+  view_->AddLayer(actor);
+  e->pieces.push_back(actor);
+  e->drawn += m;
+}
+
+bool ProjectLayer::Pump() {
+  int budget = kPiecesPerPump;
+  for (auto& [id, e] : entries_) {
+    // Hidden sessions wait until shown: no upload for nothing.
+    while (budget > 0 && e.visible && e.next < e.cloud->positions.size()) {
+      AddPiece(&e);
+      --budget;
+    }
+  }
+  return pending();
+}
+
+bool ProjectLayer::pending() const {
+  for (const auto& [id, e] : entries_) {
+    if (e.visible && e.next < e.cloud->positions.size()) return true;
+  }
+  return false;
+}
+
+void ProjectLayer::Sync(const Project& project,
+                        const std::map<std::string, ProjectCloudPtr>& clouds) {
+  bool changed = false;
+  // Gone from the project, or built again (another folder or calibration).
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    const int i = project.Find(it->first);
+    const auto c = clouds.find(it->first);
+    if (i < 0 || c == clouds.end() || c->second != it->second.cloud) {
+      Remove(&it->second);
+      it = entries_.erase(it);
+      changed = true;
+    } else {
+      ++it;
+    }
+  }
+  for (const ProjectSession& s : project.sessions) {
+    const auto c = clouds.find(s.id);
+    auto it = entries_.find(s.id);
+    const bool shown = s.project_from_session.has_value() && s.visible;
+    if (it == entries_.end()) {
+      if (!shown || c == clouds.end()) continue;  // Built when first shown.
+      it = entries_.emplace(s.id, NewEntry(c->second, project.sessions.size())).first;
+    }
+    Entry& e = it->second;
+    if (e.visible != shown) {
+      e.visible = shown;
+      for (auto& actor : e.pieces) actor->SetVisibility(shown);
+      changed = true;
+    }
+    if (s.project_from_session) {
+      auto m = Matrix(*s.project_from_session);
+      if (!SameMatrix(m, e.matrix)) {
+        e.matrix = m;
+        for (auto& actor : e.pieces) actor->SetUserMatrix(m);
+        changed = true;
+      }
+    }
+    const QColor color(QString::fromStdString(s.color));
+    double old[4];
+    lut_->GetTableValue(e.slot, old);
+    if (color.isValid() && (old[0] != color.redF() || old[1] != color.greenF() ||
+                            old[2] != color.blueF())) {
+      lut_->SetTableValue(e.slot, color.redF(), color.greenF(), color.blueF(), 1.0);
+      lut_->Modified();
+      changed = true;
+    }
+  }
+  if (changed) view_->RequestRender();
+}
+
+std::vector<std::string> ProjectLayer::drawn_sessions() const {
+  std::vector<std::string> ids;
+  for (const auto& [id, e] : entries_) {
+    if (e.visible && !e.pieces.empty()) ids.push_back(id);
+  }
+  return ids;
+}
+
+size_t ProjectLayer::drawn_points() const {
+  size_t n = 0;
+  for (const auto& [id, e] : entries_) n += e.visible ? e.drawn : 0;
+  return n;
+}
+
+QColor ProjectLayer::drawn_color(const std::string& id) const {
+  const auto it = entries_.find(id);
+  if (it == entries_.end() || !it->second.visible || it->second.pieces.empty()) return QColor();
+  double c[4];
+  lut_->GetTableValue(it->second.slot, c);
+  return QColor::fromRgbF(c[0], c[1], c[2]);
+}
+
+}  // namespace sweepscan::ui

@@ -1,0 +1,91 @@
+// A project's sessions in the cloud view: one point actor a session, drawn
+// as a layer of the CloudView (the clip and point size apply, FitToCloud
+// fits them). Each actor holds its session's points in the session's own
+// frame (the loaded positions, not copied: VTK reads them in place) under a
+// user matrix project_from_session, so that placing, hiding or recolouring
+// a session is a matrix, a visibility or a table entry, never a reload.
+//
+// Colour by session: every point carries one byte, its actor's slot,
+// mapped through one shared 256-entry lookup table whose slot entries are
+// the sessions' colours (the view's scalar path; no colour arrays).
+// Unplaced sessions are not drawn. A session above its share of the rest
+// budget (the view's, divided among the project's sessions) draws every
+// k-th point.
+//
+// A session's points go to VTK in pieces of kPiecePoints, a few per GUI
+// tick (Pump), as the view's chunks do: a frame that uploads a whole
+// session (a few hundred thousand points) stalls the GUI for a quarter of a
+// second under a software renderer. A piece holds its points in place
+// (stride 1) or a thinned copy.
+//
+// GUI thread only, like every VTK object.
+#ifndef SWEEPSCAN_UI_PROJECT_PROJECT_LAYER_H_
+#define SWEEPSCAN_UI_PROJECT_PROJECT_LAYER_H_
+
+#include <vtkSmartPointer.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/project/project.h"
+#include "ui/project/project_jobs.h"
+
+class vtkActor;
+class vtkLookupTable;
+class vtkMatrix4x4;
+
+namespace sweepscan::ui {
+
+class CloudView;
+
+class ProjectLayer {
+ public:
+  explicit ProjectLayer(CloudView* view);
+  ~ProjectLayer();
+  ProjectLayer(const ProjectLayer&) = delete;
+  ProjectLayer& operator=(const ProjectLayer&) = delete;
+
+  // Shows `project`: the sessions placed, visible and in `clouds` (by id),
+  // at their pose, in their colour; drops actors of sessions gone or
+  // rebuilt. Requests a render when anything changed.
+  void Sync(const Project& project, const std::map<std::string, ProjectCloudPtr>& clouds);
+  void Clear();
+  // Hands the next pieces to the view (at most kPiecesPerPump); true while
+  // pieces remain. The owner calls it from a timer while pending().
+  bool Pump();
+  bool pending() const;
+  static constexpr size_t kPiecePoints = 65536;
+  static constexpr int kPiecesPerPump = 2;
+
+  // For tests and the status bar: sessions drawn now and their points drawn.
+  std::vector<std::string> drawn_sessions() const;
+  size_t drawn_points() const;
+  // The colour the lookup table gives a drawn session's points (invalid if
+  // it is not drawn).
+  QColor drawn_color(const std::string& id) const;
+
+ private:
+  struct Entry {
+    ProjectCloudPtr cloud;
+    std::vector<vtkSmartPointer<vtkActor>> pieces;  // built so far
+    size_t stride = 1;
+    size_t next = 0;  // the first point of the next piece
+    int slot = 0;
+    bool visible = true;
+    vtkSmartPointer<vtkMatrix4x4> matrix;
+    size_t drawn = 0;  // points in the pieces built
+  };
+  Entry NewEntry(const ProjectCloudPtr& cloud, size_t sessions) const;
+  void AddPiece(Entry* entry);
+  void Remove(Entry* entry);
+  int FreeSlot() const;
+
+  CloudView* view_;
+  vtkSmartPointer<vtkLookupTable> lut_;
+  std::map<std::string, Entry> entries_;
+};
+
+}  // namespace sweepscan::ui
+
+#endif  // SWEEPSCAN_UI_PROJECT_PROJECT_LAYER_H_
