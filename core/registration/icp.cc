@@ -194,13 +194,7 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
     // (4) The Gauss-Newton step, in the normalised coordinates xi'' (so a
     // held direction is the eigenvector there): xi'' = -sum_i u_i u_i^T g'' /
     // lambda_i over the constrained directions, xi = basis xi''.
-    const Vector6d gn = degeneracy.basis.transpose() * sums.g / sums.w;
-    Vector6d xin = Vector6d::Zero();
-    for (int i = degeneracy.free_count; i < 6; ++i) {
-      const Vector6d u = degeneracy.eigenvectors.col(i);
-      xin -= u * (u.dot(gn) / degeneracy.eigenvalues[i]);
-    }
-    const Vector6d xi = degeneracy.basis * xin;
+    const Vector6d xi = registration_internal::GaussNewtonStep(sums, degeneracy);
     t = registration_internal::LeftUpdate(xi, t);
     converged = distance <= options.min_distance_m &&
                 xi.head<3>().norm() < options.convergence_rotation_rad &&

@@ -103,6 +103,12 @@ struct Degeneracy {
 };
 Degeneracy AnalyseDegeneracy(const NormalSums& sums, double threshold);
 
+// The Gauss-Newton step of H xi = -g over the constrained directions only
+// (in the normalised coordinates, so a free direction is an eigenvector
+// there and is left where it is): xi'' = -sum_i u_i u_i^T g'' / lambda_i,
+// xi = basis xi''.
+Vector6d GaussNewtonStep(const NormalSums& sums, const Degeneracy& degeneracy);
+
 // sigma^2 (J^T W J)^-1 with sigma^2 = sum w r^2 / (sum w - 6), restricted to
 // the non-free directions (pseudo-inverse in the normalised coordinates).
 Matrix6d Covariance(const NormalSums& sums, const Degeneracy& degeneracy);

@@ -92,6 +92,7 @@ bool PlaneAlignOptions::IsValid(std::string* error) const {
   if (!(conflict_weight >= 0.0)) return fail("conflict_weight must be >= 0");
   if (coarse_samples < 10 || score_samples < 10) return fail("samples must be >= 10");
   if (rescore_count < 2) return fail("rescore_count must be >= 2");
+  if (polish_iterations < 0) return fail("polish_iterations must be >= 0");
   if (!(min_overlap > 0.0 && min_overlap < 1.0)) return fail("min_overlap must be in (0, 1)");
   if (!(min_score_ratio >= 1.0)) return fail("min_score_ratio must be >= 1");
   if (!(distinct_yaw_deg > 0.0 && distinct_translation_m > 0.0))
@@ -262,6 +263,17 @@ Rigid3d LeftUpdate(const Vector6d& xi, const Rigid3d& t) {
   const Eigen::Quaterniond r =
       angle > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, w / angle)) : Eigen::Quaterniond::Identity();
   return Rigid3d(xi.tail<3>(), r) * t;
+}
+
+Vector6d GaussNewtonStep(const NormalSums& sums, const Degeneracy& degeneracy) {
+  if (!(sums.w > 0.0)) return Vector6d::Zero();
+  const Vector6d gn = degeneracy.basis.transpose() * sums.g / sums.w;
+  Vector6d xin = Vector6d::Zero();
+  for (int i = degeneracy.free_count; i < 6; ++i) {
+    const Vector6d u = degeneracy.eigenvectors.col(i);
+    xin -= u * (u.dot(gn) / degeneracy.eigenvalues[i]);
+  }
+  return degeneracy.basis * xin;
 }
 
 void NormalSums::Add(const Eigen::Vector3d& q, const Eigen::Vector3d& n, double r, double weight) {

@@ -162,6 +162,9 @@ struct PlaneAlignOptions {
   double conflict_distance_m = 0.5;
   double thin_wall_m = 0.15;
   double conflict_weight = 2.0;
+  // Gauss-Newton steps polishing each rescored hypothesis on its inliers
+  // before its final score (planes.cc says why).
+  int polish_iterations = 4;
   double inlier_distance_m = 0.25;
   double inlier_plane_m = 0.05;
   size_t coarse_samples = 1500;

@@ -36,9 +36,10 @@ RegistrationAttempt RegisterSession(const std::vector<Eigen::Vector3f>& source,
     a.status = AlignByPlanes(source, target, PlaneAlignOptions(), &a.coarse,
                              Stage(control, 0.0, coarse_end));
     a.method = "planes";
-    // A corridor: the planes fix all but one direction; hold_free goes on
-    // from the coarse pose and keeps it along that direction.
-    if (!a.status.ok() && options.hold_free && a.coarse.degenerate) a.status = Status::Ok();
+    // A corridor stays refused here, hold_free or not: the planes fix the
+    // rest but give no position along it (nor, often, which way round the
+    // corridor runs), so there is no coarse pose to hold. Picked pairs
+    // across it give one, and ICP then holds that direction.
   }
   if (!a.status.ok() || !options.icp) {
     a.fine = a.coarse;

@@ -5,9 +5,12 @@
 // (core/registration/registration.h):
 //
 //   coarse  AlignByPairs on the operator's picked pairs when given, else
-//           AlignByPlanes (a corridor's free direction refused, or with
-//           hold_free kept at the coarse pose);
-//   fine    RefineIcp from the coarse pose (unless icp is off).
+//           AlignByPlanes (a corridor's free direction refused: there is
+//           no position along it to start from);
+//   fine    RefineIcp from the coarse pose (unless icp is off); with
+//           hold_free a direction the clouds leave free (a corridor
+//           aligned from picked pairs) is kept at the coarse pose and
+//           reported instead of refused.
 //
 // The caller places the session: project_from_S = project_from_R * R_from_S
 // with R_from_S = attempt.fine.target_from_source.
@@ -28,7 +31,7 @@ namespace sweepscan::hardware {
 
 struct SessionRegistrationOptions {
   std::vector<PointPair> pairs;  // non-empty: coarse by these picks, not by planes
-  bool hold_free = false;        // a corridor: go on and hold the free direction at the coarse pose
+  bool hold_free = false;        // ICP: hold a free direction at the coarse pose instead of refusing
   bool icp = true;               // refine by ICP after the coarse step
 };
 

@@ -1,0 +1,245 @@
+// `sweepscan-cli project` end to end, as an operator or a script runs it, on
+// the simulated office floor (core/sim/scene.h OfficeFloorScene): three
+// sessions recorded through the byte-exact device emulations, each starting
+// where the operator put the robot down. The truth of every registration is
+// the scenarios' start poses (resources/scenarios/building_*.json), which the
+// project never uses to place anything.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/cloud/cloud_io.h"
+#include "core/cloud/las_writer.h"
+#include "core/geometry/transform.h"
+#include "core/project/project.h"
+#include "tests/testing/run_command.h"
+
+namespace sweepscan {
+namespace {
+
+using testing::CommandRun;
+using testing::RunCommand;
+
+std::string Dir() { return ::testing::TempDir() + "/sweepscan_project_cli"; }
+std::string P(const std::string& name) { return Dir() + "/" + name; }
+CommandRun Cli(const std::string& args) { return RunCommand(std::string(SWEEPSCAN_CLI) + " " + args); }
+
+// The scenarios' start poses: world_from_session.
+Rigid3d TrueStart(char drive) {
+  if (drive == 'a') return Rigid3d::FromPose(2.45, 5.0, 0, 0, 0, -M_PI / 2);
+  if (drive == 'b') return Rigid3d::FromPose(7.45, 4.0, 0, 0, 0, -M_PI / 2);
+  return Rigid3d::FromPose(1.0, 1.0, 0, 0, 0, 0.0);
+}
+
+class ProjectCliTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::filesystem::remove_all(Dir());
+    std::filesystem::create_directories(Dir());
+    for (char d : {'a', 'b', 'c'}) {
+      const std::string name = std::string("building_") + d;
+      const CommandRun r = Cli("simulate --scenario " + std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/" +
+                               name + ".json --out " + P(name + ".ply") + " --session " + P(name + ".sweepscan"));
+      ASSERT_EQ(r.code, 0) << r.out;
+    }
+  }
+  // A fresh project of the given sessions (the first is the anchor).
+  static std::string NewProject(const std::string& name, const std::string& sessions) {
+    std::filesystem::remove(P(name));
+    std::string list;
+    for (char d : sessions) list += " building_" + std::string(1, d) + ".sweepscan";
+    // Relative paths: the project file's folder is the base.
+    const CommandRun r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI + " project new " + name + list);
+    EXPECT_EQ(r.code, 0) << r.out;
+    return P(name);
+  }
+};
+
+// Writes a pairs file: the given world points in `source`'s and `target`'s
+// session frames, the target's off by up to 8 mm as picks are.
+void WritePairs(char source, char target, const std::vector<Eigen::Vector3d>& world, const std::string& name) {
+  const double jitter[4][3] = {{0.005, -0.003, 0.002}, {-0.004, 0.006, -0.001}, {0.002, 0.008, 0.003},
+                               {-0.006, -0.002, -0.004}};
+  nlohmann::json pairs = nlohmann::json::array();
+  for (size_t i = 0; i < world.size(); ++i) {
+    const Eigen::Vector3d s = TrueStart(source).inverse() * world[i];
+    const Eigen::Vector3d t = TrueStart(target).inverse() * world[i] + Eigen::Vector3d(jitter[i % 4]);
+    pairs.push_back({{"source", {s.x(), s.y(), s.z()}}, {"target", {t.x(), t.y(), t.z()}}});
+  }
+  std::ofstream(P(name)) << nlohmann::json{{"pairs", pairs}}.dump(2);
+}
+
+double TranslationError(const Rigid3d& estimate, const Rigid3d& truth) {
+  return (truth.inverse() * estimate).translation().norm();
+}
+double RotationErrorDeg(const Rigid3d& estimate, const Rigid3d& truth) {
+  return Eigen::AngleAxisd((truth.inverse() * estimate).rotation()).angle() * 180.0 / M_PI;
+}
+
+TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
+  const std::string project = NewProject("floor.sweepscan-project", "ab");
+  CommandRun r = Cli("project align " + project + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 2u);
+  const ProjectSession& b = p.sessions[1];
+  ASSERT_TRUE(b.project_from_session.has_value());
+  EXPECT_EQ(b.registration.method, "planes+icp");
+  EXPECT_EQ(b.registration.reference, "building_a");
+  // The truth: a_from_b = world_from_a^-1 * world_from_b. Each cloud is
+  // built from its own EKF poses, whose drift over a 2-minute drive (6 mm
+  // and 0.06 deg at the end of building_a, `simulate`'s report) bounds what
+  // any registration of the two clouds can reach.
+  const Rigid3d truth = TrueStart('a').inverse() * TrueStart('b');
+  const double dt = TranslationError(*b.project_from_session, truth);
+  const double dr = RotationErrorDeg(*b.project_from_session, truth);
+  RecordProperty("translation_error_mm", std::to_string(dt * 1000));
+  RecordProperty("rotation_error_deg", std::to_string(dr));
+  EXPECT_LT(dt, 0.02) << r.out;
+  EXPECT_LT(dr, 0.2) << r.out;
+  // The evidence is kept and says the same as the report.
+  const nlohmann::json report = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  ASSERT_EQ(report["placed"].size(), 1u);
+  EXPECT_NEAR(report["placed"][0]["truth_error_m"].get<double>(), dt, 1e-6);
+  EXPECT_GT(b.registration.overlap, 0.2);
+  EXPECT_GT(b.registration.correspondences, 1000u);
+  EXPECT_GT(b.registration.SigmaTranslation(), 0.0);
+  EXPECT_LT(b.registration.rms_m, 0.01);
+
+  // info shows it.
+  r = Cli("project info " + project + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(info["sessions"][1]["placed"].get<bool>());
+  EXPECT_EQ(info["sessions"][1]["method"], "planes+icp");
+
+  // One LAS of both, read by loaders.gl and copc.js, is the PLY export of
+  // the same project (same points, same order) to half a 0.1 mm step, and
+  // every record says which session it is (Point Source ID 1, 2).
+  r = Cli("project export " + project + " --out " + P("floor.las") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(Cli("project export " + project + " --out " + P("floor.ply")).code, 0);
+  std::vector<CloudPoint> ply;
+  ASSERT_TRUE(LoadCloud(P("floor.ply"), &ply).ok());
+  const nlohmann::json exported = nlohmann::json::parse(r.out);
+  const size_t n_a = exported["sessions"][0]["points"].get<size_t>();
+  ASSERT_EQ(exported["points"].get<size_t>(), ply.size());
+  r = RunCommand(std::string(SWEEPSCAN_NODE) + " " + SWEEPSCAN_SOURCE_DIR + "/tests/tools/read_las.mjs " +
+                 P("floor.las") + " 20 4999");
+  ASSERT_EQ(r.code, 0) << r.out << "\n(tests/tools/node_modules missing? run scripts/install-test-tools.sh)";
+  const nlohmann::json las = nlohmann::json::parse(r.out);
+  EXPECT_EQ(las["loaders_gl"]["count"].get<size_t>(), ply.size());
+  EXPECT_EQ(las["copc"]["wkt"], std::string(kSweepscanProjectWkt) + '\0');
+  EXPECT_EQ(las["copc"]["header"]["globalEncoding"], 0x11);  // GPS time from each session's start
+  size_t checked_a = 0, checked_b = 0;
+  for (const nlohmann::json& pt : las["points"]) {
+    const size_t i = pt["index"].get<size_t>();
+    const CloudPoint& q = ply[i];
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(pt["position"][k].get<double>(), (&q.x)[k], 0.00005 + 1e-6) << i;
+    }
+    EXPECT_EQ(pt["copc"]["PointSourceId"].get<int>(), i < n_a ? 1 : 2) << i;
+    (i < n_a ? checked_a : checked_b) += 1;
+  }
+  EXPECT_GT(checked_a, 50u);
+  EXPECT_GT(checked_b, 50u);
+}
+
+TEST_F(ProjectCliTest, ACorridorIsRefusedByThePlanesAndPlacedFromPairsAcrossIt) {
+  const std::string project = NewProject("corridor.sweepscan-project", "ac");
+  CommandRun r = Cli("project align " + project);
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("could not place:\n'building_c':"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("free"), std::string::npos) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_FALSE(p.sessions[1].project_from_session.has_value());  // nothing written for it
+  r = Cli("project align " + project + " --hold-free");  // no pairs: no position along it to hold
+  EXPECT_EQ(r.code, 1) << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_FALSE(p.sessions[1].project_from_session.has_value());
+
+  // Pairs picked across it (door jambs, a point on the far wall) give the
+  // position along it. ICP then refines it: the door jambs (0.1 m faces
+  // across the corridor) constrain the last direction enough here. (A
+  // corridor without them is refused by ICP too, or held with --hold-free:
+  // core/registration's CorridorRegistration test.)
+  const Rigid3d truth = TrueStart('a').inverse() * TrueStart('c');
+  WritePairs('c', 'a', {{2.0, 2.0, 1.0}, {2.9, 2.0, 1.2}, {7.0, 2.0, 1.0}, {5.0, 0.0, 1.8}}, "corridor-pairs.json");
+  r = Cli("project align " + project + " --session building_c --to building_a --pairs " + P("corridor-pairs.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  const ProjectSession& c = p.sessions[1];
+  ASSERT_TRUE(c.project_from_session.has_value());
+  EXPECT_EQ(c.registration.method, "pairs+icp");
+  const Eigen::Vector3d error = c.project_from_session->translation() - truth.translation();
+  // Across the corridor (a's x, the world's y) and in height the walls fix
+  // it; along it, the jambs and each cloud's own drift over its drive (c's
+  // 14 m straight run) leave centimetres.
+  EXPECT_LT(std::abs(error.x()), 0.01) << error.transpose();
+  EXPECT_LT(std::abs(error.z()), 0.01) << error.transpose();
+  EXPECT_LT(std::abs(error.y()), 0.05) << error.transpose();
+  EXPECT_LT(RotationErrorDeg(*c.project_from_session, truth), 0.3);
+}
+
+TEST_F(ProjectCliTest, PickedPairsPlaceASessionAndIcpRefinesIt) {
+  const std::string project = NewProject("pairs.sweepscan-project", "ab");
+  // Four corners of room B where the operator would click them.
+  WritePairs('b', 'a', {{5.1, 2.1, 1.0}, {10.6, 2.1, 1.0}, {10.6, 8.0, 1.0}, {5.1, 8.0, 1.5}}, "pairs.json");
+  const Rigid3d truth = TrueStart('a').inverse() * TrueStart('b');
+
+  CommandRun r = Cli("project align " + project + " --session building_b --to building_a --pairs " +
+                     P("pairs.json") + " --no-icp");
+  ASSERT_EQ(r.code, 0) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_EQ(p.sessions[1].registration.method, "pairs");
+  ASSERT_EQ(p.sessions[1].registration.pairs.size(), 4u);
+  EXPECT_LT(TranslationError(*p.sessions[1].project_from_session, truth), 0.03);
+  EXPECT_LT(RotationErrorDeg(*p.sessions[1].project_from_session, truth), 0.5);
+
+  r = Cli("project align " + project + " --session building_b --to building_a --pairs " + P("pairs.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_EQ(p.sessions[1].registration.method, "pairs+icp");
+  EXPECT_LT(TranslationError(*p.sessions[1].project_from_session, truth), 0.02);
+  EXPECT_LT(RotationErrorDeg(*p.sessions[1].project_from_session, truth), 0.2);
+}
+
+TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
+  const std::string project = NewProject("bad.sweepscan-project", "a");
+  // Exists already.
+  CommandRun r = Cli("project new " + project);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("exists already"), std::string::npos) << r.out;
+  // Not a session folder.
+  r = Cli("project add " + project + " " + P("nowhere.sweepscan"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("not a session folder"), std::string::npos) << r.out;
+  // Pairs without the two sessions they belong to.
+  r = Cli("project align " + project + " --pairs " + P("pairs.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--pairs needs --session ID and --to ID"), std::string::npos) << r.out;
+  // Nothing placed but the anchor: exporting another session is refused.
+  ASSERT_EQ(RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI + " project add bad.sweepscan-project building_b.sweepscan").code, 0);
+  r = Cli("project export " + project + " --out " + P("x.las") + " --sessions building_b");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("'building_b' is not placed yet"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("x.las")));
+  // A damaged project file: the place and the reason, and nothing else happens.
+  std::ofstream(P("broken.sweepscan-project")) << "{\"format\": \"sweepscan-project\", \"version\": 1, \"sessions\": [{\"id\": \"x\"}]}";
+  r = Cli("project align " + P("broken.sweepscan-project"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("broken.sweepscan-project: sessions[0].path"), std::string::npos) << r.out;
+  r = Cli("project frobnicate " + project);
+  EXPECT_EQ(r.code, 2);
+}
+
+}  // namespace
+}  // namespace sweepscan
