@@ -10,6 +10,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_project.h"
 #include "app/cli_recording.h"
 #include "core/cloud/cloud_io.h"
 #include "core/plan/floor_plan.h"
@@ -18,7 +19,7 @@
 namespace sweepscan::app {
 
 const char* const kPlanUsage =
-    "usage: sweepscan-cli plan CLOUD.ply|CLOUD.pcd|SESSION|--scenario FILE [--height H] [--band B]\n"
+    "usage: sweepscan-cli plan CLOUD.ply|CLOUD.pcd|SESSION|PROJECT|--scenario FILE [--height H] [--band B]\n"
     "                          [--opening W] [--scale N] [--svg F.svg] [--dxf F.dxf]\n"
     "                          [--section-line x0,y0,x1,y1 --section-svg F.svg] [--json]\n"
     "\n"
@@ -28,7 +29,8 @@ const char* const kPlanUsage =
     "that are not shadows of furniture) with their width, and the rooms' inner\n"
     "dimensions between facing walls across free space. A SESSION's cloud is built as\n"
     "`reconstruct` builds it (meta.json's calibration or --calibration, EKF poses or\n"
-    "--pose-source).\n"
+    "--pose-source). A PROJECT (.sweepscan-project) is drawn in its frame from its placed,\n"
+    "visible sessions (or --sessions ID,ID), each built as `project export` builds it.\n"
     "\n"
     "  --svg F.svg            the plan as SVG 1.1 at 1:N (--scale N, default 50), north up\n"
     "  --dxf F.dxf            the plan as DXF R12 in metres (layers WALLS, OPENINGS,\n"
@@ -119,6 +121,11 @@ int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
   const auto is_cloud = [](const std::string& p) {
     return p.size() > 4 && (p.substr(p.size() - 4) == ".ply" || p.substr(p.size() - 4) == ".pcd");
   };
+  const std::string suffix = kProjectSuffix;
+  if (!args.Has("scenario") && args.positional().size() == 1 && args.positional()[0].size() > suffix.size() &&
+      args.positional()[0].compare(args.positional()[0].size() - suffix.size(), suffix.size(), suffix) == 0) {
+    return ProjectPositions(args, args.positional()[0], cloud);
+  }
   if (!args.Has("scenario") && args.positional().size() == 1 && is_cloud(args.positional()[0])) {
     const Status s = LoadCloudPositions(args.positional()[0], cloud);
     if (!s.ok()) {
@@ -146,7 +153,7 @@ int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
 
 int RunPlan(int argc, char** argv) {
   Args args({"json", "help", "strict"}, {"height", "band", "opening", "scale", "svg", "dxf", "section-line",
-                                         "section-svg", "scenario", "seed", "calibration", "pose-source"});
+                                         "section-svg", "scenario", "seed", "calibration", "pose-source", "sessions"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help plan)");

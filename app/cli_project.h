@@ -4,6 +4,9 @@
 
 #include <map>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "app/cli_args.h"
 #include "hardware/station/session_cloud.h"
@@ -28,6 +31,11 @@ class SessionClouds {
   hardware::SessionCloudOptions options_;
   std::map<std::string, hardware::SessionCloud> clouds_;
 };
+
+// The placed, visible sessions' points (or --sessions ID,ID's) in the
+// project frame, one session built at a time (cli_project_export.cc): what
+// `plan PROJECT` draws. kExitOk or an exit code after one error line.
+int ProjectPositions(const Args& args, const std::string& project_file, std::vector<Eigen::Vector3f>* points);
 
 // --strict and --pose-source; kExitOk or an exit code after one error line.
 int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions* options);

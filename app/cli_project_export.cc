@@ -76,6 +76,23 @@ int ProjectCloud(const std::string& file, const hardware::SessionCloudOptions& o
 
 }  // namespace
 
+int ProjectPositions(const Args& args, const std::string& file, std::vector<Eigen::Vector3f>* points) {
+  Project project;
+  const Status s = LoadProject(file, &project);
+  if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
+  hardware::SessionCloudOptions options;
+  if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;
+  std::vector<size_t> chosen;
+  if (const int code = SelectSessions(args, project, &chosen); code != kExitOk) return code;
+  for (size_t i : chosen) {
+    hardware::SessionCloud cloud;
+    if (const int code = ProjectCloud(file, options, project.sessions[i], &cloud); code != kExitOk) return code;
+    points->reserve(points->size() + cloud.points.size());
+    for (const CloudPoint& p : cloud.points) points->emplace_back(p.x, p.y, p.z);
+  }
+  return kExitOk;
+}
+
 int RunProjectExport(const Args& args) {
   const std::string file = args.positional()[0];
   const std::string out = args.Get("out");
