@@ -53,12 +53,12 @@ namespace {
 constexpr size_t kBlock = 2048;
 constexpr double kPrepareShare = 0.2;
 
-double RobustWeight(RobustLoss loss, double r, double c) {
+double RobustWeight(IcpLoss loss, double r, double c) {
   const double u = (r / c) * (r / c);
   switch (loss) {
-    case RobustLoss::kNone: return 1.0;
-    case RobustLoss::kCauchy: return 1.0 / (1.0 + u);
-    case RobustLoss::kGemanMcClure: return 1.0 / ((1.0 + u) * (1.0 + u));
+    case IcpLoss::kNone: return 1.0;
+    case IcpLoss::kCauchy: return 1.0 / (1.0 + u);
+    case IcpLoss::kGemanMcClure: return 1.0 / ((1.0 + u) * (1.0 + u));
   }
   return 1.0;
 }

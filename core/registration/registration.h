@@ -221,7 +221,9 @@ inline Status AlignByPairs(const std::vector<PointPair>& pairs, RegistrationResu
 // ---------------------------------------------------------------------------
 // 3. Fine: robust point-to-plane ICP.
 
-enum class RobustLoss { kNone, kCauchy, kGemanMcClure };
+// Not RobustLoss: core/calibration/pairs_solver.h has that name (Ceres's
+// losses), and one file may need both.
+enum class IcpLoss { kNone, kCauchy, kGemanMcClure };
 enum class DegeneracyPolicy {
   kRefuse,  // return an error naming the free direction
   kHold,    // keep the initial transform along the free directions, report them
@@ -243,7 +245,7 @@ struct IcpOptions {
   double max_distance_m = 1.0;
   double min_distance_m = 0.08;
   double distance_shrink = 0.8;
-  RobustLoss loss = RobustLoss::kCauchy;
+  IcpLoss loss = IcpLoss::kCauchy;
   // Robust scale, re-estimated every iteration: c = robust_k * sigma with
   // sigma = 1.4826 * MAD(residuals) (the MAD of a Gaussian), sigma never
   // below min_scale_m. 2.3849 gives Cauchy 95 % efficiency on Gaussian
