@@ -149,6 +149,28 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   }
   EXPECT_GT(checked_a, 50u);
   EXPECT_GT(checked_b, 50u);
+
+  // The floor plan of the project: room B is seen by both sessions, so its
+  // inner width (5.5 m) and depth (5.9 m) measure the registration too;
+  // the corridor is 2.0 m wide; the doors are 0.9 m.
+  r = Cli("project export " + project + " --out " + P("unused.txt"));
+  EXPECT_EQ(r.code, 2) << r.out;  // an unknown suffix is refused, nothing written
+  r = Cli("plan " + project + " --json --svg " + P("floor.svg") + " --dxf " + P("floor.dxf"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json plan = nlohmann::json::parse(r.out);
+  const auto has = [&](const char* list, const char* key, double value, double tolerance) {
+    for (const nlohmann::json& e : plan[list]) {
+      if (std::abs(e[key].get<double>() - value) <= tolerance) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(has("dimensions", "distance_m", 5.5, 0.01)) << plan["dimensions"].dump();
+  EXPECT_TRUE(has("dimensions", "distance_m", 5.9, 0.01)) << plan["dimensions"].dump();
+  EXPECT_TRUE(has("dimensions", "distance_m", 2.0, 0.01)) << plan["dimensions"].dump();
+  EXPECT_TRUE(has("openings", "width_m", 0.9, 0.03)) << plan["openings"].dump();
+  EXPECT_TRUE(has("walls", "thickness_m", 0.1, 0.01)) << plan["walls"].dump();
+  EXPECT_GT(std::filesystem::file_size(P("floor.svg")), 1000u);
+  EXPECT_GT(std::filesystem::file_size(P("floor.dxf")), 1000u);
 }
 
 TEST_F(ProjectCliTest, ACorridorIsRefusedByThePlanesAndPlacedFromPairsAcrossIt) {
