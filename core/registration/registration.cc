@@ -122,6 +122,7 @@ bool IcpOptions::IsValid(std::string* error) const {
   if (!(robust_k > 0.0 && min_scale_m > 0.0)) return fail("robust_k and min_scale_m must be > 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(degeneracy_threshold > 0.0)) return fail("degeneracy_threshold must be > 0");
+  if (!(covariance_cluster_m >= 0.0)) return fail("covariance_cluster_m must be >= 0");
   return true;
 }
 

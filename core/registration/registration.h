@@ -265,6 +265,10 @@ struct IcpOptions {
   // Fewer correspondences than this: refused.
   size_t min_correspondences = 200;
   int threads = 0;  // 0 = all hardware threads; the result does not depend on it
+  // The covariance's clusters (icp.cc): correspondences in one cube of
+  // this side count as one observation of the pose (0: the textbook
+  // covariance of independent residuals).
+  double covariance_cluster_m = 1.0;
 
   bool IsValid(std::string* error) const;
 };
