@@ -190,7 +190,9 @@ int RunProjectAlign(const Args& args) {
       nlohmann::json j = {{"session", ps.id}, {"reference", ref.id}, {"method", best->method},
                           {"rms_m", r.rms_m}, {"overlap", r.overlap}, {"iterations", r.iterations},
                           {"sigma_translation_m", r.TranslationSigmaM()},
-                          {"sigma_rotation_deg", r.RotationSigmaDeg()}};
+                          {"sigma_rotation_deg", r.RotationSigmaDeg()},
+                          {"eigenvalues", {r.eigenvalues[0], r.eigenvalues[1], r.eigenvalues[2], r.eigenvalues[3],
+                                           r.eigenvalues[4], r.eigenvalues[5]}}};
       text << "placed '" << ps.id << "' against '" << ref.id << "' (" << best->method << "): rms "
                 << Mm(r.rms_m) << ", overlap " << std::lround(r.overlap * 100) << " %, 1-sigma "
                 << Mm(r.TranslationSigmaM()) << " / " << std::setprecision(3) << r.RotationSigmaDeg() << " deg\n";

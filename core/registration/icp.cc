@@ -45,6 +45,7 @@
 #include <algorithm>
 #include <array>
 #include <map>
+#include <set>
 #include <cmath>
 #include <cstdio>
 
@@ -80,7 +81,7 @@ double RobustWeight(IcpLoss loss, double r, double c) {
 Matrix6d RobustCovariance(const std::vector<Eigen::Vector3f>& source, const std::vector<float>& residual,
                           const std::vector<uint32_t>& match, const Surface& surface, const Rigid3d& t,
                           const NormalSums& sums, const Degeneracy& degeneracy, IcpLoss loss, double c,
-                          double cluster_m) {
+                          double cluster_m, const std::vector<PointPair>& pairs, double pair_lambda) {
   const Matrix6d textbook = registration_internal::Covariance(sums, degeneracy);
   if (!(sums.w > 6.0) || !(cluster_m > 0.0)) return textbook;
   Matrix6d inv = Matrix6d::Zero();
@@ -105,10 +106,20 @@ Matrix6d RobustCovariance(const std::vector<Eigen::Vector3f>& source, const std:
     auto [it, added] = clusters.try_emplace(key, Vector6d::Zero());
     it->second += RobustWeight(loss, r, c) * r * j;
   }
-  const double g = static_cast<double>(clusters.size());
+  // Each picked pair is a cluster of its own (its error is its own).
+  std::vector<Vector6d> pair_scores;
+  for (const PointPair& pp : pairs) {
+    const Eigen::Vector3d q = t * pp.source;
+    Eigen::Matrix<double, 3, 6> j;
+    j.leftCols<3>() = -registration_internal::Skew(q);
+    j.rightCols<3>() = Eigen::Matrix3d::Identity();
+    pair_scores.push_back(pair_lambda * j.transpose() * (q - pp.target));
+  }
+  const double g = static_cast<double>(clusters.size() + pair_scores.size());
   if (g < 2.0) return textbook;
   Matrix6d meat = Matrix6d::Zero();
   for (const auto& [key, s] : clusters) meat += s * s.transpose();
+  for (const Vector6d& s : pair_scores) meat += s * s.transpose();
   meat *= g / (g - 1.0);
   const Matrix6d sandwich = h_inv * meat * h_inv;
   return sandwich.trace() > textbook.trace() ? sandwich : textbook;
@@ -143,6 +154,18 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
 
   const size_t n = source.size();
   const size_t blocks = Control::Blocks(n, kBlock);
+  // Source points per covariance cluster (1 when there are none): how many
+  // points count as one observation when they are weighed against picks.
+  double design_effect = 1.0;
+  if (!options.pairs.empty() && options.covariance_cluster_m > 0.0) {
+    std::set<std::array<int64_t, 3>> cubes;
+    for (const Eigen::Vector3f& p : source) {
+      cubes.insert({static_cast<int64_t>(std::floor(p.x() / options.covariance_cluster_m)),
+                    static_cast<int64_t>(std::floor(p.y() / options.covariance_cluster_m)),
+                    static_cast<int64_t>(std::floor(p.z() / options.covariance_cluster_m))});
+    }
+    design_effect = static_cast<double>(n) / static_cast<double>(cubes.size());
+  }
   std::vector<int64_t> hint(n, -1);
   std::vector<uint32_t> match(n);
   std::vector<float> residual(n, std::numeric_limits<float>::quiet_NaN());
@@ -210,6 +233,25 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
     if (!ok_sums) return cancelled();
     NormalSums sums;
     for (const NormalSums& s : block_sums) sums.Add(s);
+    // The picked pairs as a prior: e_i = T s_i - t_i with de/dxi = [-[q]x, I]
+    // (q = T s_i), weighted sigma^2 / pair_sigma^2 against the points'
+    // unit-weight residuals (both then in units of the points' sigma), times
+    // the points' design effect: points in one covariance cluster share
+    // their errors (see the covariance above), so N of them in G cubes
+    // weigh as G observations, not N, and each pick as N / G points.
+    const double pair_lambda =
+        design_effect * sigma * sigma / (options.pair_sigma_m * options.pair_sigma_m);
+    if (!options.pairs.empty()) {
+      const double lambda = pair_lambda;
+      for (const PointPair& pp : options.pairs) {
+        const Eigen::Vector3d q = t * pp.source;
+        Eigen::Matrix<double, 3, 6> j;
+        j.leftCols<3>() = -registration_internal::Skew(q);
+        j.rightCols<3>() = Eigen::Matrix3d::Identity();
+        sums.h += lambda * j.transpose() * j;
+        sums.g += lambda * j.transpose() * (q - pp.target);
+      }
+    }
     const Degeneracy degeneracy =
         registration_internal::AnalyseDegeneracy(sums, options.degeneracy_threshold);
 
@@ -239,7 +281,7 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
     }
     if (converged || it >= options.max_iterations) {
       result->covariance = RobustCovariance(source, residual, match, surface, t, sums, degeneracy, options.loss, c,
-                                            options.covariance_cluster_m);
+                                            options.covariance_cluster_m, options.pairs, pair_lambda);
       break;
     }
 

@@ -123,6 +123,7 @@ bool IcpOptions::IsValid(std::string* error) const {
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(degeneracy_threshold > 0.0)) return fail("degeneracy_threshold must be > 0");
   if (!(covariance_cluster_m >= 0.0)) return fail("covariance_cluster_m must be >= 0");
+  if (!(pair_sigma_m > 0.0)) return fail("pair_sigma_m must be > 0");
   return true;
 }
 

@@ -269,6 +269,14 @@ struct IcpOptions {
   // this side count as one observation of the pose (0: the textbook
   // covariance of independent residuals).
   double covariance_cluster_m = 1.0;
+  // The operator's picked pairs, kept as a prior while ICP refines (they
+  // gave the coarse pose): each adds the residual T s_i - t_i, weighted as
+  // a measurement of pair_sigma_m per axis against the points' robust
+  // sigma. Where the surfaces constrain the pose the points outweigh them;
+  // along a direction they barely constrain (a corridor's axis, fixed only
+  // by door jambs) the pairs hold it instead of a bias in the residuals.
+  std::vector<PointPair> pairs;
+  double pair_sigma_m = 0.01;
 
   bool IsValid(std::string* error) const;
 };

@@ -47,6 +47,7 @@ RegistrationAttempt RegisterSession(const std::vector<Eigen::Vector3f>& source,
   }
   IcpOptions icp;
   icp.degeneracy = options.hold_free ? DegeneracyPolicy::kHold : DegeneracyPolicy::kRefuse;
+  icp.pairs = options.pairs;  // the picks stay as a prior (registration.h)
   a.status = RefineIcp(source, target, a.coarse.target_from_source, icp,
                        Stage(control, coarse_end, 1.0), &a.fine);
   a.method += "+icp";
