@@ -5,6 +5,7 @@
 // (tests/tools/png_ink.py). The tools are found at configure time
 // (tests/core/plan/CMakeLists.txt).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 
 #include "core/plan/floor_plan.h"
 #include "core/plan/plan_writers.h"
+
 #include "tests/testing/run_command.h"
 #include "tests/testing/worlds.h"
 
@@ -20,7 +22,11 @@ namespace {
 
 using sweepscan::testing::RunCommand;
 
-const std::string kDir = std::string(SWEEPSCAN_BINARY_DIR) + "/tests/core/plan/plan_writers_test_out";
+// One folder a process: ctest runs each test of this file as its own
+// process, two at a time, and a shared folder would be emptied under the
+// other's feet by the suite's set-up.
+const std::string kDir =
+    std::string(SWEEPSCAN_BINARY_DIR) + "/tests/core/plan/plan_writers_test_out_" + std::to_string(::getpid());
 const std::string kTools = std::string(SWEEPSCAN_SOURCE_DIR) + "/tests/tools/";
 
 class PlanWritersTest : public ::testing::Test {
@@ -36,7 +42,10 @@ class PlanWritersTest : public ::testing::Test {
     ASSERT_TRUE(BuildFloorPlan(cloud, FloorPlanOptions(), plan_).ok());
     ASSERT_EQ(RunCommand("rm -rf '" + kDir + "' && mkdir -p '" + kDir + "'").code, 0);
   }
-  static void TearDownTestSuite() { delete plan_; }
+  static void TearDownTestSuite() {
+    delete plan_;
+    RunCommand("rm -rf '" + kDir + "'");
+  }
   static FloorPlan* plan_;
 };
 FloorPlan* PlanWritersTest::plan_ = nullptr;

@@ -5,6 +5,7 @@
 // the scenarios' start poses (resources/scenarios/building_*.json), which the
 // project never uses to place anything.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -25,7 +26,9 @@ namespace {
 using testing::CommandRun;
 using testing::RunCommand;
 
-std::string Dir() { return ::testing::TempDir() + "/sweepscan_project_cli"; }
+// One folder a process: ctest runs each test of this file as its own
+// process, two at a time, and each process's suite set-up empties it.
+std::string Dir() { return ::testing::TempDir() + "/sweepscan_project_cli_" + std::to_string(::getpid()); }
 std::string P(const std::string& name) { return Dir() + "/" + name; }
 CommandRun Cli(const std::string& args) { return RunCommand(std::string(SWEEPSCAN_CLI) + " " + args); }
 
@@ -48,6 +51,7 @@ class ProjectCliTest : public ::testing::Test {
       ASSERT_EQ(r.code, 0) << r.out;
     }
   }
+  static void TearDownTestSuite() { std::filesystem::remove_all(Dir()); }
   // A fresh project of the given sessions (the first is the anchor).
   static std::string NewProject(const std::string& name, const std::string& sessions) {
     std::filesystem::remove(P(name));
