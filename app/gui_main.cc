@@ -6,7 +6,7 @@
 //             [--pairs FILE [--calibration-tour DIR]]
 //             [--pose-source ekf|odometry|sfm] [--pose-source-tour PNG]
 //             [--memory-budget MIB] [--rest-budget N] [--lod-budget N]
-//             [--project FILE]
+//             [--project FILE] [--floor-plan [--plan-height M]]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
@@ -16,6 +16,7 @@
 #include <QApplication>
 #include <QCommandLineParser>
 #include <QDir>
+#include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QFile>
 #include <QFileInfo>
@@ -37,6 +38,7 @@
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/replay_panel.h"
+#include "ui/plan/plan_panel.h"
 #include "ui/project/project_controller.h"
 #include "ui/project/project_layer.h"
 #include "ui/view/cloud_view.h"
@@ -55,6 +57,8 @@ struct Options {
   QString scenario;  // Resolved to the default when not given.
   QString replay;
   QString project;  // A project file to open at start.
+  bool floor_plan = false;  // View > Floor Plan shown at start.
+  double plan_height_m = -1.0;  // its cut (< 0: the last one set)
   double speed = 0.0;
   QString screenshot, window_screenshot, export_cloud, sessions_dir;
   double quit_after_s = -1.0;  // < 0: run until the operator quits.
@@ -149,6 +153,10 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   const QCommandLineOption lod_budget(
       "lod-budget", "Points drawn at most while the camera moves or points stream in (default 120000).",
       "N");
+  const QCommandLineOption floor_plan(
+      "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
+  const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m).", "M");
+  parser.addOptions({floor_plan, plan_height});
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
                      export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
                      sessions, memory_budget, rest_budget, lod_budget, project});
@@ -171,6 +179,8 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   o.tour = parser.value(tour);
   o.pose_source = parser.value(pose_source);
   o.project = parser.value(project);
+  o.floor_plan = parser.isSet(floor_plan);
+  if (parser.isSet(plan_height)) o.plan_height_m = parser.value(plan_height).toDouble();
   o.pose_source_tour = parser.value(pose_source_tour);
   if (parser.isSet(memory_budget)) o.memory_budget_mib = parser.value(memory_budget).toDouble();
   if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
@@ -490,6 +500,10 @@ int Main(int argc, char** argv) {
   if (!o.project.isEmpty() && !window.project()->OpenProject(o.project)) {
     std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
     return 2;
+  }
+  if (o.floor_plan) {
+    if (o.plan_height_m > 0) window.plan_panel()->height_box()->setValue(o.plan_height_m);
+    window.RaiseDock(QStringLiteral("planDock"));
   }
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);

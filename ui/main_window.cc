@@ -33,6 +33,8 @@
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/panels/ros_import_dialog.h"
+#include "ui/plan/plan_panel.h"
+#include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
 #include "ui/project/project_panel.h"
 #include "ui/view/cloud_view.h"
@@ -116,6 +118,17 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   // A project opened: into the building, its ceilings hidden, once its
   // first sessions are drawn.
   connect(project_.get(), &ProjectController::shown, this, &MainWindow::ApplyRoomView);
+  connect(project_->pair_picking(), &PairPicking::message, this,
+          [this](const QString& m) { statusBar()->showMessage(m, 10000); });
+  // The floor plan: a dock shown from View > Floor Plan (built only while
+  // shown), a tab beside calibration and evaluation: the tallest place.
+  plan_panel_ = new PlanPanel(project_.get(), workspace_,
+                              [this](const QString& t, const QString& m) { ShowError(t, m); });
+  QDockWidget* plan_dock =
+      add_dock(plan_panel_, tr("Floor Plan"), QStringLiteral("planDock"), Qt::RightDockWidgetArea);
+  tabifyDockWidget(evaluation_dock, plan_dock);
+  plan_dock->hide();
+  calibration_dock->raise();
   connect(calibration_panel_, &CalibrationPanel::robotCalibrationChanged, this,
           [this](const MountingError& c) {
             QSettings().setValue(QStringLiteral("robot/calibration_rad"),
@@ -128,15 +141,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                     .arg(c.gamma * 1e3, 0, 'f', 2),
                 8000);
           });
-  // Shift + click: a calibration pick, or with Tools > Measure Distance on,
-  // an end of the measured segment.
-  connect(view_, &CloudView::pointPicked, this, [this](const Eigen::Vector3d& p) {
-    if (measure_->isChecked()) {
-      Measure(p);
-    } else {
-      calibration_panel_->AddPick(p);
-    }
-  });
+  connect(view_, &CloudView::pointPicked, this, &MainWindow::PointPicked);
   connect(view_, &CloudView::colorModeChanged, this, [this](int mode) {
     if (mode >= 0 && mode < color_group_->actions().size()) {
       color_group_->actions()[mode]->setChecked(true);
@@ -231,6 +236,16 @@ void MainWindow::RaiseDock(const QString& name) {
   if (auto* dock = findChild<QDockWidget*>(name)) {
     dock->show();
     dock->raise();
+  }
+}
+
+void MainWindow::PointPicked(const PickHit& hit) {
+  if (project_->pair_picking()->active()) {
+    project_->pair_picking()->AddPick(hit);
+  } else if (measure_->isChecked()) {
+    Measure(hit.world);  // A project session's point too: the view's frame.
+  } else {
+    calibration_panel_->AddPick(hit.world);
   }
 }
 

@@ -36,8 +36,10 @@ class DrivePanel;
 class ReplayPanel;
 class CalibrationPanel;
 class EvaluationPanel;
+class PlanPanel;
 class ProjectController;
 class RosImportDialog;
+struct PickHit;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -55,6 +57,12 @@ class MainWindow : public QMainWindow {
   // Projects (ui/project/): File menu actions, the Project panel, the
   // project's sessions in the view.
   ProjectController* project() const { return project_.get(); }
+  // View > Floor Plan (ui/plan/): the plan view's dock and File > Export Floor Plan….
+  PlanPanel* plan_panel() const { return plan_panel_; }
+  // A Shift + click's point (what CloudView::pointPicked calls): a pair's
+  // pick while pairs are picked, else an end of the distance tool when it
+  // is on, else a calibration pick.
+  void PointPicked(const PickHit& hit);
   // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
   // then errors go to lastError() and unsaved recordings stay where they are.
   void SetInteractive(bool interactive) { interactive_ = interactive; }
@@ -128,6 +136,7 @@ class MainWindow : public QMainWindow {
   QUndoStack* undo_;
   // Destroyed before the view it draws into (a member, not a child).
   std::unique_ptr<ProjectController> project_;
+  PlanPanel* plan_panel_ = nullptr;
   QMenu* recent_menu_ = nullptr;
   QAction* record_ = nullptr;
   QAction* stop_record_ = nullptr;

@@ -24,6 +24,7 @@
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
+#include "ui/plan/plan_panel.h"
 #include "ui/project/project_controller.h"
 #include "ui/view/cloud_view.h"
 
@@ -120,6 +121,7 @@ void MainWindow::BuildFileMenu() {
     if (!path.isEmpty()) workspace_->ExportCloud(path);
   });
   export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+  file->addAction(tr("Export Floor P&lan…"), plan_panel_, &PlanPanel::ExportWithDialog);
   QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {
     const QString path =
         QFileDialog::getSaveFileName(this, tr("Save screenshot"), QString(), tr("PNG (*.png)"));
@@ -207,6 +209,21 @@ void MainWindow::BuildViewMenu() {
     clip_label_->setText(clip_status());
   });
   view->addSeparator();
+  if (auto* plan = findChild<QDockWidget*>(QStringLiteral("planDock"))) {
+    QAction* show_plan = plan->toggleViewAction();
+    show_plan->setText(tr("Floor &Plan"));
+    show_plan->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_F));
+    view->addAction(show_plan);
+    // A plan needs room: shown narrow (docked beside the panels), it takes
+    // about half the window.
+    connect(show_plan, &QAction::toggled, this, [this, plan](bool on) {
+      if (!on) return;
+      plan->raise();  // In front of the tabs it shares.
+      if (!plan->isFloating() && plan->width() < width() / 3) {
+        resizeDocks({plan}, {width() * 9 / 20}, Qt::Horizontal);
+      }
+    });
+  }
   QMenu* panels = view->addMenu(tr("&Panels"));
   for (QDockWidget* dock : findChildren<QDockWidget*>())
     panels->addAction(dock->toggleViewAction());

@@ -13,6 +13,7 @@
 
 #include "core/registration/registration.h"
 #include "hardware/station/project_align.h"
+#include "ui/project/pair_picking.h"
 #include "ui/project/project_commands.h"
 #include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
@@ -49,6 +50,7 @@ ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStac
       show_error_(std::move(show_error)),
       interactive_(std::move(interactive)),
       layer_(std::make_unique<ProjectLayer>(view)) {
+  picking_ = new PairPicking(this, view, window);
   panel_ = new ProjectPanel(this);
   // The sessions' points go to the view a few pieces a tick (ProjectLayer).
   pump_ = new QTimer(this);
@@ -61,8 +63,11 @@ ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStac
   connect(&document_, &ProjectDocument::opened, this, [this] {
     // Another project: its own clouds, and none of the old one's jobs.
     jobs_.Cancel();
+    picking_->Cancel();
+    preview_.clear();
     clouds_.clear();
     layer_->Clear();
+    emit cloudsChanged();
     shown_pending_ = document_.is_open();
     UpdateActions();
   });
@@ -226,8 +231,41 @@ void ProjectController::ShowOnly(const std::string& id) {
   Push(after, tr("show only '%1'").arg(Id(id)));
 }
 
+void ProjectController::SetPreview(const std::vector<std::string>& ids) {
+  if (ids == preview_) return;
+  preview_ = ids;
+  Show();
+  LoadMissing();
+}
+
+Rigid3d ProjectController::BesideProject(const std::string& id) const {
+  const auto c = clouds_.find(id);
+  if (c == clouds_.end() || c->second->bounds.isEmpty()) return Rigid3d();
+  Eigen::AlignedBox3d placed;
+  for (const ProjectSession& s : document_.project().sessions) {
+    const auto pc = clouds_.find(s.id);
+    if (!s.project_from_session || pc == clouds_.end() || pc->second->bounds.isEmpty()) continue;
+    const Eigen::AlignedBox3d b = pc->second->bounds.cast<double>();
+    for (int k = 0; k < 8; ++k) placed.extend(*s.project_from_session * b.corner(Eigen::AlignedBox3d::CornerType(k)));
+  }
+  if (placed.isEmpty()) return Rigid3d();
+  const Eigen::AlignedBox3d own = c->second->bounds.cast<double>();
+  return Rigid3d::Translation({placed.max().x() + 2.0 - own.min().x(), placed.min().y() - own.min().y(), 0.0});
+}
+
+Project ProjectController::ShownProject() const {
+  Project p = document_.project();
+  for (const std::string& id : preview_) {
+    const int i = p.Find(id);
+    if (i < 0) continue;
+    p.sessions[i].visible = true;
+    if (!p.sessions[i].project_from_session) p.sessions[i].project_from_session = BesideProject(id);
+  }
+  return p;
+}
+
 void ProjectController::Show() {
-  layer_->Sync(document_.project(), clouds_);
+  layer_->Sync(ShownProject(), clouds_);
   if (layer_->pending() && !pump_->isActive()) pump_->start();
 }
 
@@ -242,7 +280,7 @@ void ProjectController::OnChanged() {
 void ProjectController::LoadMissing() {
   if (jobs_.running() || !document_.is_open()) return;
   std::vector<ProjectSession> todo;
-  for (const ProjectSession& s : document_.project().sessions) {
+  for (const ProjectSession& s : ShownProject().sessions) {
     const auto c = clouds_.find(s.id);
     if (s.project_from_session && s.visible && (c == clouds_.end() || c->second->key != CloudKey(s))) {
       todo.push_back(s);
@@ -278,6 +316,7 @@ void ProjectController::LoadMissing() {
             }
             Show();
             panel_->Refresh();
+            emit cloudsChanged();
           });
         }
         return QString();
@@ -296,7 +335,8 @@ void ProjectController::LoadMissing() {
       });
 }
 
-bool ProjectController::Align(const std::string& id, const std::string& reference) {
+bool ProjectController::Align(const std::string& id, const std::string& reference,
+                              const hardware::SessionRegistrationOptions& options) {
   const Project& p = document_.project();
   const int i = p.Find(id), r = p.Find(reference);
   if (jobs_.running() || i < 0 || r < 0 || i == r || i == p.Anchor() ||
@@ -320,7 +360,8 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
   const QString what = tr("Aligning '%1' to '%2'").arg(Id(id), Id(reference));
   return jobs_.Run(
       what,
-      [out, source, target, file, what](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+      [out, source, target, file, what, options](std::atomic<bool>* cancel,
+                                                 const ProjectJobs::Progress& progress) {
         for (auto [s, cloud] : {std::pair{&source, &out->source}, std::pair{&target, &out->target}}) {
           if (*cloud) continue;
           const QString loading = tr("Loading '%1'").arg(Id(s->id));
@@ -338,15 +379,15 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
           return !*cancel;
         };
         out->attempt = hardware::RegisterSession(out->source->positions, out->target->positions,
-                                                 target.id, hardware::SessionRegistrationOptions(),
-                                                 control);
+                                                 target.id, options, control);
         return QString();  // A refusal is an outcome, not a failed job.
       },
-      [this, out, id, generation](const QString& error) {
+      [this, out, id, generation, options](const QString& error) {
         if (document_.generation() != generation) return;
         for (const ProjectCloudPtr& c : {out->source, out->target}) {
           if (c) clouds_[c->id] = c;
         }
+        emit cloudsChanged();
         const Status& s = out->attempt.status;
         if (!error.isEmpty() || jobs_.cancelled() || s.message() == kRegistrationCancelled) {
           const QString why = error.isEmpty() ? tr("cancelled") : error;
@@ -371,7 +412,7 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
         }
         after.sessions[i].project_from_session =
             *after.sessions[r].project_from_session * out->attempt.fine.target_from_source;
-        after.sessions[i].registration = hardware::EvidenceOf(out->attempt, {});
+        after.sessions[i].registration = hardware::EvidenceOf(out->attempt, options.pairs);
         // The clouds just built, shown at the new pose.
         QString text = PlacedText(id, out->attempt);
         if (out->source->has_truth && out->target->has_truth) {

@@ -12,7 +12,11 @@
 // * Align runs the CLI's registration step (hardware/station/
 //   project_align.h) of one session against one placed reference on the
 //   job thread; success is an undoable placement, a refusal changes nothing
-//   and says why.
+//   and says why. The registration's coarse step is planes, or the
+//   operator's picked pairs (PairPicking: a mode of the panel and the view).
+// * While pairs are picked, the session and its reference are previewed:
+//   drawn even if hidden, and an unplaced session beside the project (its
+//   frame's origin moved, never rotated) so that both can be clicked.
 //
 // GUI thread only.
 #ifndef SWEEPSCAN_UI_PROJECT_PROJECT_CONTROLLER_H_
@@ -24,7 +28,9 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "hardware/station/project_align.h"
 #include "ui/project/project_document.h"
 #include "ui/project/project_jobs.h"
 
@@ -37,6 +43,7 @@ class QWidget;
 namespace sweepscan::ui {
 
 class CloudView;
+class PairPicking;
 class ProjectLayer;
 class ProjectPanel;
 
@@ -78,7 +85,15 @@ class ProjectController : public QObject {
   // Registers session `id` against the placed `reference` on the job
   // thread (loading either cloud first if needed). False if it cannot start
   // (a job runs, unknown ids, the reference unplaced, `id` the anchor).
-  bool Align(const std::string& id, const std::string& reference);
+  // `options` as the CLI's (pairs: coarse by them, kept as the evidence).
+  bool Align(const std::string& id, const std::string& reference,
+             const hardware::SessionRegistrationOptions& options = {});
+  PairPicking* pair_picking() const { return picking_; }
+  // Sessions drawn whatever the project says (visible; an unplaced one
+  // beside the project); {} ends the preview. Their clouds load if needed.
+  void SetPreview(const std::vector<std::string>& ids);
+  // The project as drawn: the document with the preview applied.
+  Project ShownProject() const;
   void Cancel() { jobs_.Cancel(); }
   // A job runs or loaded points are still on their way to the view.
   bool busy() const;
@@ -92,6 +107,8 @@ class ProjectController : public QObject {
   void message(const QString& text);  // for the status bar
   // An alignment ended: placed, or refused / cancelled with the reason.
   void alignFinished(bool placed, const QString& message);
+  // clouds() changed (a session's cloud built, or the project closed).
+  void cloudsChanged();
 
  private:
   void Push(const Project& after, const QString& text);
@@ -102,6 +119,10 @@ class ProjectController : public QObject {
   void AddRecent(const QString& path);
   void RebuildRecentMenu();
   void UpdateActions();
+  // Where an unplaced previewed session is drawn: its box beside (+x) the
+  // placed sessions' box, 2 m apart, bottoms aligned; identity until its
+  // cloud is built.
+  Rigid3d BesideProject(const std::string& id) const;
 
   QWidget* window_;
   CloudView* view_;
@@ -113,6 +134,8 @@ class ProjectController : public QObject {
   std::unique_ptr<ProjectLayer> layer_;
   ProjectPanel* panel_;
   std::map<std::string, ProjectCloudPtr> clouds_;
+  std::vector<std::string> preview_;
+  PairPicking* picking_ = nullptr;
   QTimer* pump_ = nullptr;
   bool shown_pending_ = false;  // shown() once the first clouds of an opened project draw
   QMenu* recent_menu_ = nullptr;

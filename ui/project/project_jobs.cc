@@ -30,6 +30,7 @@ Status BuildProjectCloud(const std::string& project_file, const ProjectSession& 
   out->id = session.id;
   out->key = CloudKey(session);
   out->positions = hardware::Positions(built.points);
+  for (const Eigen::Vector3f& p : out->positions) out->bounds.extend(p);
   out->damage = built.damage;
   out->has_truth = built.has_true_start;
   out->world_from_session_truth = built.world_from_session_truth;

@@ -12,6 +12,7 @@
 #define SWEEPSCAN_UI_PROJECT_PROJECT_JOBS_H_
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <QObject>
 #include <QString>
 #include <atomic>
@@ -33,6 +34,7 @@ struct ProjectCloud {
   std::string id;
   std::string key;  // CloudKey() it was built for
   std::vector<Eigen::Vector3f> positions;
+  Eigen::AlignedBox3f bounds;  // of the positions (empty if none)
   std::string damage;  // frames.bin's damage, "" if none
   bool has_truth = false;  // a simulated session: where the robot was put down
   Rigid3d world_from_session_truth;

@@ -50,9 +50,15 @@ ProjectLayer::ProjectLayer(CloudView* view) : view_(view) {
   lut_->SetNumberOfTableValues(kSlots);
   lut_->SetTableRange(0, kSlots - 1);
   for (int i = 0; i < kSlots; ++i) lut_->SetTableValue(i, 0.5, 0.5, 0.5, 1.0);
+  view_->SetLayerPicker([this](const CloudView::PickRay& ray, double* best_t, PickHit* hit) {
+    return Pick(ray, best_t, hit);
+  });
 }
 
-ProjectLayer::~ProjectLayer() { Clear(); }
+ProjectLayer::~ProjectLayer() {
+  view_->SetLayerPicker(nullptr);
+  Clear();
+}
 
 void ProjectLayer::Remove(Entry* e) {
   for (auto& actor : e->pieces) view_->RemoveLayer(actor);
@@ -194,6 +200,7 @@ void ProjectLayer::Sync(const Project& project,
       auto m = Matrix(*s.project_from_session);
       if (!SameMatrix(m, e.matrix)) {
         e.matrix = m;
+        e.pose = *s.project_from_session;
         for (auto& actor : e.pieces) actor->SetUserMatrix(m);
         changed = true;
       }
@@ -223,6 +230,45 @@ size_t ProjectLayer::drawn_points() const {
   size_t n = 0;
   for (const auto& [id, e] : entries_) n += e.visible ? e.drawn : 0;
   return n;
+}
+
+bool ProjectLayer::drawn_pose(const std::string& id, Rigid3d* project_from_session) const {
+  const auto it = entries_.find(id);
+  if (it == entries_.end() || !it->second.visible || it->second.pieces.empty()) return false;
+  *project_from_session = it->second.pose;
+  return true;
+}
+
+bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* hit) const {
+  bool found = false;
+  for (const auto& [id, e] : entries_) {
+    if (!e.visible || e.pieces.empty()) continue;
+    // The ray in the session's frame (a rigid motion keeps t and the
+    // distances to the ray); the clip stays in the project's frame.
+    const Eigen::Matrix3d r = e.pose.rotation().toRotationMatrix();
+    const Eigen::Vector3d t = e.pose.translation();
+    const Eigen::Vector3d o = r.transpose() * (ray.origin - t);
+    const Eigen::Vector3d d = r.transpose() * ray.direction;
+    const Eigen::Vector3d z_row = r.row(2).transpose();
+    const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
+    // Every point uploaded so far (the pieces hold every k-th of them).
+    for (size_t i = 0; i < e.next; ++i) {
+      const Eigen::Vector3d p = all[i].cast<double>();
+      if (z_row.dot(p) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
+      const Eigen::Vector3d v = p - o;
+      const double along = v.dot(d);
+      if (along <= 0 || along >= *best_t) continue;
+      const double tol = ray.tolerance_per_t * along;
+      if (v.squaredNorm() - along * along <= tol * tol) {
+        *best_t = along;
+        hit->layer = QString::fromStdString(id);
+        hit->local = p;
+        hit->world = e.pose * p;
+        found = true;
+      }
+    }
+  }
+  return found;
 }
 
 QColor ProjectLayer::drawn_color(const std::string& id) const {

@@ -12,6 +12,11 @@
 // budget (the view's, divided among the project's sessions) draws every
 // k-th point.
 //
+// Picking: the layer is the view's layer picker. A Shift + click tests
+// every point of the drawn sessions (not only every k-th) through each
+// session's pose, and reports the session's id and the point in the
+// session's own frame, which is what a picked pair is made of.
+//
 // A session's points go to VTK in pieces of kPiecePoints, a few per GUI
 // tick (Pump), as the view's chunks do: a frame that uploads a whole
 // session (a few hundred thousand points) stalls the GUI for a quarter of a
@@ -30,14 +35,13 @@
 
 #include "core/project/project.h"
 #include "ui/project/project_jobs.h"
+#include "ui/view/cloud_view.h"
 
 class vtkActor;
 class vtkLookupTable;
 class vtkMatrix4x4;
 
 namespace sweepscan::ui {
-
-class CloudView;
 
 class ProjectLayer {
  public:
@@ -64,6 +68,12 @@ class ProjectLayer {
   // The colour the lookup table gives a drawn session's points (invalid if
   // it is not drawn).
   QColor drawn_color(const std::string& id) const;
+  // The pose a drawn session is shown at (false if it is not drawn).
+  bool drawn_pose(const std::string& id, Rigid3d* project_from_session) const;
+
+  // The view's layer picker (CloudView::LayerPicker): the nearest point of
+  // a drawn session under the ray, nearer than *best_t.
+  bool Pick(const CloudView::PickRay& ray, double* best_t, PickHit* hit) const;
 
  private:
   struct Entry {
@@ -74,6 +84,7 @@ class ProjectLayer {
     int slot = 0;
     bool visible = true;
     vtkSmartPointer<vtkMatrix4x4> matrix;
+    Rigid3d pose;  // project_from_session, as the matrix
     size_t drawn = 0;  // points in the pieces built
   };
   Entry NewEntry(const ProjectCloudPtr& cloud, size_t sessions) const;

@@ -16,6 +16,8 @@
 #include <QTreeWidget>
 #include <QVBoxLayout>
 
+#include "ui/project/pair_pick_box.h"
+#include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
 
 namespace sweepscan::ui {
@@ -98,7 +100,18 @@ ProjectPanel::ProjectPanel(ProjectController* controller, QWidget* parent)
     UpdateAlign();
   });
   align_row->addWidget(align_);
+  pick_ = new QPushButton(tr("Pick Pairs…"));
+  pick_->setObjectName(QStringLiteral("projectPickPairs"));
+  pick_->setToolTip(tr("Shift + click the same points in this session and the reference, then align "
+                       "by them: for what the planes refuse (a corridor)"));
+  connect(pick_, &QPushButton::clicked, this, [this] {
+    controller_->pair_picking()->Start(selected(), reference_->currentData().toString().toStdString());
+  });
+  align_row->addWidget(pick_);
   layout->addLayout(align_row);
+  pair_box_ = new PairPickBox(controller_->pair_picking());
+  layout->addWidget(pair_box_, 1);
+  connect(controller_->pair_picking(), &PairPicking::changed, this, &ProjectPanel::UpdateAlign);
 
   auto* edit_row = new QHBoxLayout;
   add_ = new QPushButton(tr("Add Session…"));
@@ -156,9 +169,17 @@ void ProjectPanel::Refresh() {
   const Project& p = doc->project();
   const std::string keep = selected();
   refreshing_ = true;
-  tree_->clear();
-  for (const ProjectSession& s : p.sessions) {
-    auto* it = new QTreeWidgetItem(tree_);
+  // Items are updated in place while the sessions are the same: a check
+  // box's click ends in this Refresh (through its undo command) while Qt
+  // is still inside that item's setData, so the item must outlive it.
+  bool same = tree_->topLevelItemCount() == static_cast<int>(p.sessions.size());
+  for (int i = 0; same && i < tree_->topLevelItemCount(); ++i) {
+    same = tree_->topLevelItem(i)->data(0, kIdRole).toString().toStdString() == p.sessions[i].id;
+  }
+  if (!same) tree_->clear();
+  for (size_t k = 0; k < p.sessions.size(); ++k) {
+    const ProjectSession& s = p.sessions[k];
+    QTreeWidgetItem* it = same ? tree_->topLevelItem(static_cast<int>(k)) : new QTreeWidgetItem(tree_);
     it->setData(0, kIdRole, QString::fromStdString(s.id));
     it->setText(0, QString::fromStdString(s.id));
     it->setFlags(it->flags() | Qt::ItemIsUserCheckable);
@@ -168,10 +189,8 @@ void ProjectPanel::Refresh() {
     bool placed = false;
     it->setText(1, Placement(s, &placed));
     it->setToolTip(1, it->text(1));
-    if (!placed) {
-      // Not drawn: said in the list, greyed.
-      it->setForeground(1, QColor(150, 150, 150));
-    }
+    // Not placed, not drawn: said in the list, greyed.
+    it->setForeground(1, placed ? tree_->palette().color(QPalette::Text) : QColor(150, 150, 150));
   }
   refreshing_ = false;
   if (!keep.empty()) SelectSession(keep);
@@ -202,7 +221,10 @@ void ProjectPanel::UpdateAlign() {
   const int keep = reference_->findData(current);
   if (keep >= 0) reference_->setCurrentIndex(keep);
   const int i = p.Find(id);
-  align_->setEnabled(i >= 0 && i != p.Anchor() && reference_->count() > 0 && !controller_->busy());
+  const bool can = i >= 0 && i != p.Anchor() && reference_->count() > 0 && !controller_->busy() &&
+                   !controller_->pair_picking()->active();
+  align_->setEnabled(can);
+  pick_->setEnabled(can);
 }
 
 void ProjectPanel::ShowProgress(const QString& what, double fraction) {

@@ -2,7 +2,8 @@
 // check box, a colour swatch (double-click or "Colour…" for QColorDialog)
 // and the placement (anchor; method, reference, rms, overlap and 1-sigma;
 // or "not placed"); the reference to align the selected session to and
-// Align; the job's progress with Cancel; a context menu (Align to, Colour,
+// Align, or Pick Pairs… for the pairs' mode (PairPickBox below the list);
+// the job's progress with Cancel; a context menu (Align to, Colour,
 // Show Only This, Remove from Project). It only calls the controller,
 // which makes every edit an undoable command.
 //
@@ -25,6 +26,7 @@ class QTreeWidgetItem;
 
 namespace sweepscan::ui {
 
+class PairPickBox;
 class ProjectController;
 
 class ProjectPanel : public QWidget {
@@ -41,6 +43,8 @@ class ProjectPanel : public QWidget {
   QTreeWidget* tree() const { return tree_; }
   QComboBox* reference_box() const { return reference_; }
   QPushButton* align_button() const { return align_; }
+  QPushButton* pick_button() const { return pick_; }
+  PairPickBox* pair_box() const { return pair_box_; }
   QToolButton* cancel_button() const { return cancel_; }
   QLabel* status_label() const { return status_; }
   void SelectSession(const std::string& id);
@@ -58,6 +62,8 @@ class ProjectPanel : public QWidget {
   QTreeWidget* tree_;
   QComboBox* reference_;
   QPushButton* align_;
+  QPushButton* pick_;
+  PairPickBox* pair_box_;
   QPushButton* add_;
   QProgressBar* progress_;
   QToolButton* cancel_;

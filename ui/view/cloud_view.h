@@ -36,6 +36,7 @@
 #include <QString>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -62,6 +63,15 @@ class vtkScalarBarActor;
 
 namespace sweepscan::ui {
 
+// What a Shift + click found: the point in the view's frame, and which
+// layer it belongs to with the point in that layer's own frame (a project
+// session's: what pairs for registration are made of).
+struct PickHit {
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();
+  QString layer;  // "" for the view's own cloud, else the layer's id
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();  // == world for the view's own cloud
+};
+
 class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
  public:
@@ -80,8 +90,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   ~CloudView() override;
 
  signals:
-  // Shift + left click on the cloud (the picking layer): the picked point.
-  void pointPicked(const Eigen::Vector3d& world);
+  // Shift + left click on the cloud or a layer (the picking layer).
+  void pointPicked(const sweepscan::ui::PickHit& hit);
   void colorModeChanged(int mode);  // A ColorMode.
 
  public:
@@ -179,12 +189,32 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // camera. Chunks whose bounding box the widened ray misses are skipped, so
   // a click tests only the chunks under the cursor. False if none.
   bool PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px = 6.0);
+  // The same, the layers' points included (through the layer picker).
+  bool PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px = 6.0);
+  // A click's viewing ray in the view's frame: a point at distance t along
+  // it (t = (p - origin) . direction) is under the cursor within
+  // tolerance_per_t * t of the ray; points above clip_z are hidden.
+  struct PickRay {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit
+    double tolerance_per_t = 0.0;
+    double clip_z = std::numeric_limits<double>::infinity();
+  };
+  // The layers' owner finds its point under the ray nearer than *best_t
+  // (then updates *best_t and *hit, and returns true). The view's own
+  // points and the layers' compete: the nearest to the camera wins.
+  using LayerPicker = std::function<bool(const PickRay& ray, double* best_t, PickHit* hit)>;
+  void SetLayerPicker(LayerPicker picker);
   // Where a world point lands in the widget (pixels), for tests and overlays.
   QPointF WorldToWidget(const Eigen::Vector3d& world);
   struct Marker {
+    Marker() = default;
+    Marker(const Eigen::Vector3d& p, const QColor& c, bool h = false, const QString& l = QString())
+        : position(p), color(c), highlighted(h), label(l) {}
     Eigen::Vector3d position = Eigen::Vector3d::Zero();
     QColor color;
     bool highlighted = false;  // drawn larger
+    QString label;             // drawn beside it in its colour ("" none): a pair's number
   };
   // Overlay markers (picked points) drawn on top of the cloud.
   void SetMarkers(const std::vector<Marker>& markers);
@@ -207,7 +237,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Point actors drawn with the cloud and owned by someone else: the clip
   // (Hide Ceiling) and the point size apply to them, FitToCloud and
   // FindCeiling take their visible points in (through each actor's
-  // matrix). Not picked, and not under the point budgets.
+  // matrix). Picked through the layer picker; not under the point budgets.
   void AddLayer(vtkActor* actor);
   void RemoveLayer(vtkActor* actor);
 
@@ -269,6 +299,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkActor> trajectory_;
   vtkSmartPointer<vtkActor> markers_[2];  // normal, highlighted
   std::vector<Marker> shown_markers_;
+  std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> marker_labels_;
+  LayerPicker layer_picker_;
   vtkSmartPointer<vtkActor> planes_;
   std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> plane_labels_;
   size_t plane_count_ = 0;

@@ -1,0 +1,52 @@
+#include "ui/plan/plan_build.h"
+
+#include <cmath>
+
+namespace sweepscan::ui {
+
+Status BuildPlanOf(const std::vector<PlanInput>& inputs, const plan::FloorPlanOptions& options,
+                   const std::function<bool(double)>& progress, plan::FloorPlan* plan) {
+  *plan = plan::FloorPlan();
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(error);
+  size_t total = 0;
+  for (const PlanInput& in : inputs) total += in.positions ? in.positions->size() : 0;
+  if (total == 0) return Status::Error("no points to draw a plan of");
+  // Progress and the cancel flag every 64 k points: ~1 ms of work apart.
+  constexpr size_t kStep = 65536;
+  const double height = options.section.height_m, band = options.section.band_m;
+  std::vector<Eigen::Vector2d> section;
+  plan::SectionStats stats;
+  size_t done = 0;
+  for (const PlanInput& in : inputs) {
+    if (!in.positions) continue;
+    // Only z first (one row of the rotation): most points are not in the slab.
+    const Eigen::Matrix3d r = in.frame_from_cloud.rotation().toRotationMatrix();
+    const Eigen::Vector3d t = in.frame_from_cloud.translation();
+    const Eigen::Vector3d z_row = r.row(2).transpose();
+    const std::vector<Eigen::Vector3f>& points = *in.positions;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if ((done + i) % kStep == 0 && !progress(0.6 * static_cast<double>(done + i) / total)) {
+        return Status::Error(kPlanCancelled);
+      }
+      const Eigen::Vector3d p = points[i].cast<double>();
+      if (!p.allFinite()) {
+        ++stats.non_finite;
+        continue;
+      }
+      if (std::abs(z_row.dot(p) + t.z() - height) > band) continue;
+      section.push_back((r.topRows<2>() * p + t.head<2>()).eval());
+    }
+    done += points.size();
+  }
+  stats.points_in = total;
+  stats.points_out = section.size();
+  if (!progress(0.6)) return Status::Error(kPlanCancelled);
+  const Status s = plan::BuildFloorPlanFromSection(section, options, plan);
+  plan->section = stats;
+  if (!s.ok()) return s;
+  progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace sweepscan::ui

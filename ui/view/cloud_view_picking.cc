@@ -1,0 +1,231 @@
+// CloudView's picking layer: Shift + click finds the point under the
+// cursor among the view's own chunks and the layers' points (a project's
+// sessions, through the layer owner's picker), and the markers that show
+// picked points, numbered when they carry a label.
+//
+// A pick tests every point, not only those drawn at the current level of
+// detail: the operator clicks what is on screen and gets the true sample
+// under the cursor, whatever the budget thinned. Points the clip hides (the
+// ceiling) or the pass filter leaves out are not pickable.
+#include <vtkActor.h>
+#include <vtkBillboardTextActor3D.h>
+#include <vtkCamera.h>
+#include <vtkCellArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderer.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <QMouseEvent>
+#include <QTimer>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ui/view/cloud_view.h"
+#include "ui/view/cloud_view_chunk.h"
+
+namespace sweepscan::ui {
+
+void CloudView::BuildMarkers() {
+  // Marker overlay: picked points as large dots drawn over the cloud.
+  for (int k = 0; k < 2; ++k) {
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(poly);
+    mapper->SetScalarModeToUsePointData();
+    // Drawn after the cloud and in front of it: markers stay visible.
+    mapper->SetResolveCoincidentTopologyToPolygonOffset();
+    markers_[k] = vtkSmartPointer<vtkActor>::New();
+    markers_[k]->SetMapper(mapper);
+    markers_[k]->GetProperty()->SetPointSize(k == 0 ? 11.0 : 17.0);
+    markers_[k]->GetProperty()->SetRenderPointsAsSpheres(true);
+    markers_[k]->PickableOff();
+    renderer_->AddActor(markers_[k]);
+  }
+}
+
+void CloudView::mousePressEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton && (event->modifiers() & Qt::ShiftModifier)) {
+    PickHit hit;
+    if (PickPoint(event->pos(), &hit)) emit pointPicked(hit);
+    event->accept();
+    return;
+  }
+  QVTKOpenGLNativeWidget::mousePressEvent(event);
+}
+
+namespace {
+
+// Ray / axis-aligned box test (slab method), the box grown by `margin`.
+bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double b[6],
+                double margin) {
+  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const double lo = b[2 * k] - margin, hi = b[2 * k + 1] + margin;
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < lo || o[k] > hi) return false;
+      continue;
+    }
+    double a = (lo - o[k]) / d[k], c = (hi - o[k]) / d[k];
+    if (a > c) std::swap(a, c);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, c);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void CloudView::SetLayerPicker(LayerPicker picker) { layer_picker_ = std::move(picker); }
+
+bool CloudView::PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px) {
+  PickHit hit;
+  if (!PickPoint(pos, &hit, tolerance_px)) return false;
+  *world = hit.world;
+  return true;
+}
+
+bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) {
+  if (point_count_ == 0 && layers_.empty()) return false;
+  // Display coordinates: device pixels, origin bottom left.
+  const double ratio = devicePixelRatioF();
+  const double x = pos.x() * ratio;
+  const double y = (height() - pos.y()) * ratio;
+  double near_w[4], far_w[4];
+  renderer_->SetDisplayPoint(x, y, 0.0);
+  renderer_->DisplayToWorld();
+  renderer_->GetWorldPoint(near_w);
+  renderer_->SetDisplayPoint(x, y, 1.0);
+  renderer_->DisplayToWorld();
+  renderer_->GetWorldPoint(far_w);
+  PickRay ray;
+  ray.origin = Eigen::Vector3d(near_w[0] / near_w[3], near_w[1] / near_w[3], near_w[2] / near_w[3]);
+  const Eigen::Vector3d f(far_w[0] / far_w[3], far_w[1] / far_w[3], far_w[2] / far_w[3]);
+  ray.direction = (f - ray.origin).normalized();
+  // World size of one pixel at distance t along the ray (perspective).
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  const double pixel_per_t =
+      2.0 * std::tan(0.5 * camera->GetViewAngle() * M_PI / 180.0) / std::max(1.0, height() * ratio);
+  ray.tolerance_per_t = tolerance_px * pixel_per_t;
+  ray.clip_z = std::isnan(clip_height_) ? std::numeric_limits<double>::infinity() : clip_height_;
+  const Eigen::Vector3d& o = ray.origin;
+  const Eigen::Vector3d& d = ray.direction;
+  const double cam_dist = camera->GetDistance();
+  const double margin = tolerance_px * pixel_per_t * (cam_dist * 2.0 + 10.0);
+  double best_t = std::numeric_limits<double>::infinity();
+  bool found = false;
+  const float clip_z = static_cast<float>(ray.clip_z);
+  for (const auto& c : chunks_) {
+    if (c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin)) continue;
+    // Every point of the chunk, not only those drawn: the pick is the true
+    // point under the cursor, whatever the level of detail.
+    std::shared_ptr<const ChunkPayload> payload;
+    const float* p;
+    if (c->sealed()) {
+      payload = c->packed->Pin();
+      p = payload->xyz.data();
+    } else {
+      p = &c->growing.front().x;
+    }
+    const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
+    for (size_t i = 0; i < c->size; ++i, p += step) {
+      if (!Passes(*c, i)) continue;  // Not drawn: not pickable.
+      if (p[2] > clip_z) continue;   // Clipped: not pickable.
+      const Eigen::Vector3d v(p[0] - o.x(), p[1] - o.y(), p[2] - o.z());
+      const double t = v.dot(d);
+      if (t <= 0 || t >= best_t) continue;
+      const double off2 = v.squaredNorm() - t * t;
+      const double tol = ray.tolerance_per_t * t;
+      if (off2 <= tol * tol) {
+        best_t = t;
+        hit->world = Eigen::Vector3d(p[0], p[1], p[2]);
+        hit->local = hit->world;
+        hit->layer.clear();
+        found = true;
+      }
+    }
+  }
+  // The layers' points compete with the cloud's: the nearest to the camera wins.
+  if (layer_picker_ && !layers_.empty() && layer_picker_(ray, &best_t, hit)) found = true;
+  return found;
+}
+
+QPointF CloudView::WorldToWidget(const Eigen::Vector3d& w) {
+  renderer_->SetWorldPoint(w.x(), w.y(), w.z(), 1.0);
+  renderer_->WorldToDisplay();
+  double d[3];
+  renderer_->GetDisplayPoint(d);
+  const double ratio = devicePixelRatioF();
+  return QPointF(d[0] / ratio, height() - d[1] / ratio);
+}
+
+void CloudView::SetMarkers(const std::vector<Marker>& markers) {
+  // Unchanged markers cost no render (a full-detail frame of millions of
+  // points is long under a software renderer).
+  const bool same = markers.size() == shown_markers_.size() &&
+                    std::equal(markers.begin(), markers.end(), shown_markers_.begin(),
+                               [](const Marker& a, const Marker& b) {
+                                 return a.position == b.position && a.color == b.color &&
+                                        a.highlighted == b.highlighted && a.label == b.label;
+                               });
+  if (same) return;
+  shown_markers_ = markers;
+  // The new marker is drawn over the thinned cloud at once (a full-detail
+  // frame of 10 M points takes seconds in software); full detail follows
+  // when the view has been still for kSettleMs, as after a camera move.
+  if (point_count_ > lod_budget_) {
+    SetLodActive(true);
+    settle_->start();
+  }
+  for (int k = 0; k < 2; ++k) {
+    auto points = vtkSmartPointer<vtkPoints>::New();
+    auto verts = vtkSmartPointer<vtkCellArray>::New();
+    auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+    colors->SetNumberOfComponents(3);
+    colors->SetName("colors");
+    for (const Marker& m : markers) {
+      if (m.highlighted != (k == 1)) continue;
+      const vtkIdType id = points->InsertNextPoint(m.position.data());
+      verts->InsertNextCell(1, &id);
+      const unsigned char rgb[3] = {static_cast<unsigned char>(m.color.red()),
+                                    static_cast<unsigned char>(m.color.green()),
+                                    static_cast<unsigned char>(m.color.blue())};
+      colors->InsertNextTypedTuple(rgb);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(points);
+    poly->SetVerts(verts);
+    poly->GetPointData()->SetScalars(colors);
+    static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetInputData(poly);
+    static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetColorModeToDirectScalars();
+  }
+  // Labels (a pair's number) beside their markers, facing the camera.
+  for (auto& label : marker_labels_) renderer_->RemoveActor(label);
+  marker_labels_.clear();
+  for (const Marker& m : markers) {
+    if (m.label.isEmpty()) continue;
+    auto label = vtkSmartPointer<vtkBillboardTextActor3D>::New();
+    label->SetInput(m.label.toUtf8().constData());
+    double at[3] = {m.position.x(), m.position.y(), m.position.z()};
+    label->SetPosition(at);
+    label->SetDisplayOffset(10, 8);  // Beside the dot, not over it.
+    vtkTextProperty* text = label->GetTextProperty();
+    text->SetFontSize(16);
+    text->SetBold(true);
+    text->SetColor(m.color.redF(), m.color.greenF(), m.color.blueF());
+    text->SetBackgroundColor(0.05, 0.05, 0.07);
+    text->SetBackgroundOpacity(0.8);
+    label->PickableOff();
+    renderer_->AddActor(label);
+    marker_labels_.push_back(label);
+  }
+  RequestRender();
+}
+
+}  // namespace sweepscan::ui
