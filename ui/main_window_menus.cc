@@ -361,7 +361,8 @@ void MainWindow::BuildHelpMenu() {
                    "Ctrl+R / Ctrl+Shift+R: record / stop\n"
                    "Ctrl+O: open session;  Ctrl+I: import a ROS recording;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
                    "Ctrl+Shift+O / Ctrl+S: open / save project;  Ctrl+Shift+A: add a session to it\n"
-                   "Shift + click: pick a point (calibration pairs, or the distance tool)\n"
+                   "Shift + click: pick a point (calibration pairs, a project's pairs, or the distance tool)\n"
+                   "Ctrl+Shift+F: floor plan;  Esc: leave pair picking\n"
                    "M: measure distance;  C: hide the ceiling\n"
                    "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
           })
