@@ -23,6 +23,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
 #include "core/cloud/reconstruct.h"
+#include "core/registration/loop_closure.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/sfm/wheeled.h"
 #include "hardware/link/telemetry_decoder.h"
@@ -61,6 +62,9 @@ const char* const kReconstructUsage =
     "                         position along the walls stays the EKF's)\n"
     "  --no-ekf               same as --pose-source odometry\n"
     "  --no-deskew            place each whole scan at its first sample's pose\n"
+    "  --loop-closure         the drive ends in the room it started in: register what it saw\n"
+    "                         at the end to what it saw at the start and spread the correction\n"
+    "                         over the loop (docs/registration.md, \"Loop closure\")\n"
     "  --strict               refuse a session with damaged records (default: skip them, with a warning)\n"
     "  --json                 print the report as JSON\n";
 
@@ -277,6 +281,54 @@ Status WriteLas(const std::string& session, const std::string& path, const std::
   return Status::Ok();
 }
 
+// --loop-closure (core/registration/loop_closure.h): the loop measured on
+// the cloud just built, its poses corrected and the cloud built again from
+// them. The report says what was found (or that the drive never left).
+int CloseLoop(const std::string& session, const Decoded& d, ReconstructionOptions* options,
+              ReconstructionResult* result, nlohmann::json* report) {
+  LoopClosure loop;
+  LoopClosureOptions lo;
+  if (options->pose.source == PoseSource::kOdometry) lo.max_drift_fraction = 0.5;  // the wheels alone
+  Status s = FindLoop(result->points, result->poses, lo, &loop);
+  if (!s.ok()) {
+    PrintError(session + ": " + s.message());
+    return kExitFailure;
+  }
+  if (!loop.found) {
+    *report = {{"found", false}, {"summary", "loop closure: the drive never left its start; nothing to close"}};
+    return kExitOk;
+  }
+  const PoseBuffer corrected = CorrectPoses(result->poses, loop);
+  const double t0 = ToSeconds(result->poses.earliest());
+  const Eigen::Vector3d t = loop.correction.translation();
+  const double angle = Eigen::AngleAxisd(loop.correction.rotation()).angle() * 180.0 / M_PI;
+  char summary[320];
+  std::snprintf(summary, sizeof(summary),
+                "loop closure (%s): the end (%.0f-%.0f s) against the start (%.0f-%.0f s): the drift over the loop "
+                "was %.1f mm and %.3f deg; rms %.1f mm, overlap %.0f %%",
+                loop.method.c_str(), ToSeconds(loop.late_begin) - t0, ToSeconds(loop.late_end) - t0,
+                ToSeconds(loop.early_begin) - t0, ToSeconds(loop.early_end) - t0, t.norm() * 1000, angle,
+                loop.registration.rms_m * 1000, loop.registration.overlap * 100);
+  *report = {{"found", true},
+             {"method", loop.method},
+             {"early_s", {ToSeconds(loop.early_begin) - t0, ToSeconds(loop.early_end) - t0}},
+             {"late_s", {ToSeconds(loop.late_begin) - t0, ToSeconds(loop.late_end) - t0}},
+             {"correction_translation_m", {t.x(), t.y(), t.z()}},
+             {"correction_rotation_deg", angle},
+             {"rms_m", loop.registration.rms_m},
+             {"overlap", loop.registration.overlap},
+             {"summary", summary}};
+  const PoseSource source = options->pose.source;
+  options->pose.source = PoseSource::kSfm;  // given poses: the corrected ones
+  s = Reconstruct(d.log, d.info.meta.geometry, *options, &corrected, result);
+  options->pose.source = source;
+  if (!s.ok()) {
+    PrintError(session + ": " + s.message());
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
 // `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`.
 int ReconstructToFile(const Args& args) {
   int code;
@@ -318,6 +370,10 @@ int ReconstructToFile(const Args& args) {
     PrintError(args.positional()[0] + ": " + s.message());
     return kExitFailure;
   }
+  nlohmann::json loop_report;
+  if (args.Flag("loop-closure") && (code = CloseLoop(args.positional()[0], d, &options, &result, &loop_report)) != kExitOk) {
+    return code;
+  }
   nlohmann::json las;
   s = HasSuffix(args.Get("out"), ".las") ? WriteLas(args.positional()[0], args.Get("out"), result.points, d.info.meta, &las)
                                          : SaveCloud(args.Get("out"), result.points);
@@ -340,7 +396,8 @@ int ReconstructToFile(const Args& args) {
       {"ekf_rejected", result.ekf_counters.rejected},
   };
   if (!las.is_null()) report["las"] = las;
-  if (options.pose.source == PoseSource::kSfm) {
+  if (!loop_report.is_null()) report["loop_closure"] = loop_report;
+  if (options.pose.source == PoseSource::kSfm && loop_report.is_null()) {
     const sfm::SequenceResult& seq = sfm_result.sequence;
     report["sfm"] = {{"scans", seq.poses.size()},
                      {"lines", seq.lines_total},
@@ -350,7 +407,8 @@ int ReconstructToFile(const Args& args) {
   if (args.Flag("json")) {
     std::cout << report.dump(2) << "\n";
   } else {
-    if (options.pose.source == PoseSource::kSfm) {
+    if (!loop_report.is_null()) std::printf("%s\n", loop_report["summary"].get<std::string>().c_str());
+    if (options.pose.source == PoseSource::kSfm && loop_report.is_null()) {
       const sfm::SequenceResult& seq = sfm_result.sequence;
       std::printf("sfm: %zu scans placed, %d lines (%d on %zu planes)\n", seq.poses.size(), seq.lines_total,
                   seq.lines_assigned, seq.planes.size());
@@ -370,7 +428,7 @@ int ReconstructToFile(const Args& args) {
 }  // namespace
 
 int RunReconstruct(int argc, char** argv) {
-  Args args({"json", "help", "no-ekf", "no-deskew", "strict"}, {"out", "calibration", "pose-source"});
+  Args args({"json", "help", "no-ekf", "no-deskew", "strict", "loop-closure"}, {"out", "calibration", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
   if (!args.Has("out")) {
@@ -381,7 +439,8 @@ int RunReconstruct(int argc, char** argv) {
 }
 
 int RunExport(int argc, char** argv) {
-  Args args({"json", "help", "strict", "no-ekf", "no-deskew"}, {"out", "format", "calibration", "frame", "pose-source"});
+  Args args({"json", "help", "strict", "no-ekf", "no-deskew", "loop-closure"},
+            {"out", "format", "calibration", "frame", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kExportUsage, &code)) return code;
   // --out FILE.las|.ply|.pcd: the cloud, exactly as `reconstruct` makes it.
@@ -393,8 +452,8 @@ int RunExport(int argc, char** argv) {
     }
     return ReconstructToFile(args);
   }
-  if (args.Has("pose-source") || args.Flag("no-deskew")) {
-    PrintError("--pose-source and --no-deskew are for cloud exports (--out FILE.las|FILE.ply|FILE.pcd)");
+  if (args.Has("pose-source") || args.Flag("no-deskew") || args.Flag("loop-closure")) {
+    PrintError("--pose-source, --no-deskew and --loop-closure are for cloud exports (--out FILE.las|FILE.ply|FILE.pcd)");
     return kExitBadInput;
   }
   const std::string format = args.Has("format") ? args.Get("format") : "csv";
