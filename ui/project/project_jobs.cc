@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "hardware/station/session_cloud.h"
+#include "ui/workspace/background_priority.h"
 
 namespace sweepscan::ui {
 
@@ -53,6 +54,7 @@ bool ProjectJobs::Run(const QString& what,
   emit progress(what, 0.0);
   thread_ = std::make_unique<std::thread>([this, what, work = std::move(work),
                                            done = std::move(done)] {
+    LowerThisThreadsPriority();
     // At most every 2 % (or on a new stage): the GUI thread is not flooded.
     auto last = std::make_shared<std::pair<QString, double>>(QString(), -1.0);
     auto mutex = std::make_shared<std::mutex>();

@@ -25,6 +25,7 @@
 #include "core/scenario/scenario.h"
 #include "core/sfm/wheeled.h"
 #include "hardware/link/qt_transport.h"
+#include "ui/workspace/background_priority.h"
 #include "ui/workspace/live_processor.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/thread_call.h"
@@ -695,6 +696,7 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
   job_cancel_ = false;
   emit jobProgress(what, -1.0);  // Indeterminate until the job reports a fraction.
   job_thread_ = std::make_unique<std::thread>([this, what, work, on_success] {
+    LowerThisThreadsPriority();
     const QString error = work(&job_cancel_);
     QMetaObject::invokeMethod(this, [this, what, error, on_success] {
       if (job_thread_ != nullptr) {
