@@ -165,7 +165,11 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   QTest::mouseClick(panel->align_button(), Qt::LeftButton);
   ASSERT_TRUE(project()->busy());
   const qint64 worst = WorstGapWhileBusy(120000);
-  EXPECT_LT(worst, 500);
+  // One frame of session a (570 k points) under the software renderer takes
+  // 150-280 ms; with ctest -j2 beside it one such frame reached 501 ms
+  // (alone: 250-360 ms). A blocked GUI would stall for the whole
+  // registration, seconds: 800 ms tells the two apart on a loaded machine.
+  EXPECT_LT(worst, 800);
   std::printf("aligning: longest event-loop gap %lld ms\n", static_cast<long long>(worst));
   ASSERT_TRUE(finished);
   ASSERT_TRUE(placed) << outcome.toStdString() << " / " << window_->last_error().toStdString();
