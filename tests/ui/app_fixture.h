@@ -28,6 +28,19 @@ namespace sweepscan::testing {
 
 inline const QString kResources = QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
 
+// Records the office floor's drives a, b and c (resources/scenarios/
+// building_*.json) as sessions DIR/a.sweepscan ... with the CLI, the three
+// at once; the project UI tests' shared set-up.
+inline void RecordOfficeFloorSessions(const std::string& dir) {
+  std::string cmd;
+  for (const char* s : {"a", "b", "c"}) {
+    cmd += std::string(SWEEPSCAN_CLI) + " simulate --scenario " + kResources.toStdString() + "/scenarios/building_" +
+           s + ".json --out " + dir + "/" + s + ".ply --session " + dir + "/" + s + ".sweepscan > /dev/null & ";
+  }
+  const auto run = RunCommand(cmd + "wait");
+  ASSERT_EQ(run.code, 0) << run.out;
+}
+
 // Runs the event loop until `done` or the timeout; false on the timeout.
 inline bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
   QElapsedTimer clock;

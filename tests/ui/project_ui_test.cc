@@ -41,14 +41,7 @@ class ProjectUiTest : public testing::AppFixture {
  protected:
   static void SetUpTestSuite() {
     sessions_ = new QTemporaryDir;
-    std::string cmd;
-    for (const char* s : {"a", "b", "c"}) {
-      cmd += std::string(SWEEPSCAN_CLI) + " simulate --scenario " + kResources.toStdString() +
-             "/scenarios/building_" + s + ".json --out " + Dir() + "/" + s + ".ply --session " +
-             Dir() + "/" + s + ".sweepscan > /dev/null & ";
-    }
-    const auto run = RunCommand(cmd + "wait");
-    ASSERT_EQ(run.code, 0) << run.out;
+    testing::RecordOfficeFloorSessions(Dir());
   }
   static void TearDownTestSuite() { delete sessions_; }
   static std::string Dir() { return sessions_->path().toStdString(); }
