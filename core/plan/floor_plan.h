@@ -92,6 +92,19 @@ struct Dimension {
   int face_a = -1, face_b = -1;
 };
 
+// A room: a connected region of free space closed by structural faces and,
+// across its openings, by its faces' lines (the door closed flush with the
+// room's wall). The outline runs on the fitted face lines, corner to corner
+// (rooms.h says how it is traced).
+struct Room {
+  std::vector<Eigen::Vector2d> outline;  // closed polygon, counter-clockwise, last != first
+  double area_m2 = 0.0;                  // of the outline (furniture inside included)
+  double perimeter_m = 0.0;
+  Eigen::Vector2d label = Eigen::Vector2d::Zero();  // a point well inside: where to write the name
+  std::vector<int> faces;                // structural faces bounding it (indices into faces)
+  std::vector<int> openings;             // openings on its outline (indices into openings)
+};
+
 struct FloorPlan {
   double height_m = 0.0, band_m = 0.0;
   SectionStats section;                 // the cut
@@ -101,6 +114,7 @@ struct FloorPlan {
   std::vector<Opening> openings;
   std::vector<Wall> walls;
   std::vector<Dimension> dimensions;
+  std::vector<Room> rooms;  // ordered by their label point: south to north, then west to east
 };
 
 // The whole plan from a cloud. Refuses an empty cloud, bad options, or a
