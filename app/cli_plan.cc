@@ -26,15 +26,16 @@ const char* const kPlanUsage =
     "A floor plan from the horizontal section at height H (default 1.0 m, z up) +- B\n"
     "(default 0.05 m): wall faces fitted as lines, walls (two faces 0.05-0.4 m apart\n"
     "back to back) with their thickness, openings (gaps of at least W, default 0.6 m,\n"
-    "that are not shadows of furniture) with their width, and the rooms' inner\n"
-    "dimensions between facing walls across free space. A SESSION's cloud is built as\n"
+    "that are not shadows of furniture) with their width, the rooms' inner\n"
+    "dimensions between facing walls across free space, and the rooms' outlines\n"
+    "(closed polygons on the walls' faces, doors closed) with their areas. A SESSION's cloud is built as\n"
     "`reconstruct` builds it (meta.json's calibration or --calibration, EKF poses or\n"
     "--pose-source). A PROJECT (.sweepscan-project) is drawn in its frame from its placed,\n"
     "visible sessions (or --sessions ID,ID), each built as `project export` builds it.\n"
     "\n"
     "  --svg F.svg            the plan as SVG 1.1 at 1:N (--scale N, default 50), north up\n"
     "  --dxf F.dxf            the plan as DXF R12 in metres (layers WALLS, OPENINGS,\n"
-    "                         DIMENSIONS, SECTION); docs/plan-formats.md\n"
+    "                         DIMENSIONS, SECTION, ROOMS); docs/plan-formats.md\n"
     "  --section-line x0,y0,x1,y1 --section-svg F.svg\n"
     "                         the vertical section along that line (m, +- B either side)\n"
     "  --calibration FILE, --pose-source S, --strict, --seed N   as for evaluate\n"
@@ -82,6 +83,15 @@ nlohmann::json PlanJson(const plan::FloorPlan& p) {
   for (const plan::Dimension& d : p.dimensions) {
     dims.push_back({{"a", Xy(d.a)}, {"b", Xy(d.b)}, {"distance_m", d.distance_m}, {"faces", {d.face_a, d.face_b}}});
   }
+  nlohmann::json rooms = nlohmann::json::array();
+  for (size_t r = 0; r < p.rooms.size(); ++r) {
+    const plan::Room& room = p.rooms[r];
+    nlohmann::json outline = nlohmann::json::array();
+    for (const Eigen::Vector2d& c : room.outline) outline.push_back(Xy(c));
+    rooms.push_back({{"name", plan::RoomName(r)}, {"outline", outline}, {"area_m2", room.area_m2},
+                     {"perimeter_m", room.perimeter_m}, {"label", Xy(room.label)}, {"faces", room.faces},
+                     {"openings", room.openings}});
+  }
   return {{"height_m", p.height_m},
           {"band_m", p.band_m},
           {"cloud_points", p.section.points_in},
@@ -90,7 +100,8 @@ nlohmann::json PlanJson(const plan::FloorPlan& p) {
           {"faces", faces},
           {"walls", walls},
           {"openings", openings},
-          {"dimensions", dims}};
+          {"dimensions", dims},
+          {"rooms", rooms}};
 }
 
 void PrintPlan(const plan::FloorPlan& p) {
@@ -98,9 +109,9 @@ void PrintPlan(const plan::FloorPlan& p) {
   for (const plan::WallFace& f : p.faces) structural += f.structural;
   std::printf("section at %.3f m +- %.3f m: %zu of %zu points\n", p.height_m, p.band_m, p.section.points_out,
               p.section.points_in);
-  std::printf("%zu faces (%zu of walls, %zu of furniture), %zu walls, %zu openings, %zu dimensions\n",
+  std::printf("%zu faces (%zu of walls, %zu of furniture), %zu walls, %zu openings, %zu dimensions, %zu rooms\n",
               p.faces.size(), structural, p.faces.size() - structural, p.walls.size(), p.openings.size(),
-              p.dimensions.size());
+              p.dimensions.size(), p.rooms.size());
   for (const plan::Wall& w : p.walls) {
     std::printf("  wall     (%.3f, %.3f) - (%.3f, %.3f)  thickness %.3f m\n", w.a.x(), w.a.y(), w.b.x(), w.b.y(),
                 w.thickness_m);
@@ -112,6 +123,11 @@ void PrintPlan(const plan::FloorPlan& p) {
   for (const plan::Dimension& d : p.dimensions) {
     std::printf("  dimension (%.3f, %.3f) - (%.3f, %.3f)  %.3f m\n", d.a.x(), d.a.y(), d.b.x(), d.b.y(),
                 d.distance_m);
+  }
+  for (size_t r = 0; r < p.rooms.size(); ++r) {
+    const plan::Room& room = p.rooms[r];
+    std::printf("  %-8s %zu corners  %s  perimeter %.3f m  doors %zu\n", plan::RoomName(r).c_str(),
+                room.outline.size(), plan::FormatArea(room.area_m2).c_str(), room.perimeter_m, room.openings.size());
   }
 }
 

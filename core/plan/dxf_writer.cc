@@ -1,11 +1,12 @@
 // ASCII DXF, AutoCAD Release 12 (AC1009), written from Autodesk's DXF
 // reference: pairs of lines "group code" / "value". The subset (HEADER,
-// TABLES with LTYPE, STYLE and LAYER, ENTITIES with LINE, POINT and TEXT,
-// EOF) is specified field by field in docs/plan-formats.md, "DXF".
+// TABLES with LTYPE, STYLE and LAYER, ENTITIES with LINE, POINT, TEXT and
+// POLYLINE / VERTEX / SEQEND, EOF) is specified field by field in docs/plan-formats.md, "DXF".
 // No handles ($HANDLING 0, R12 allows it), no BLOCKS, no subclass markers
 // (those are R13's).
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "core/common/checked_file.h"
 #include "core/plan/plan_writers.h"
@@ -55,6 +56,22 @@ class Dxf {
     Int(72, 1);
     Point(11, at);
   }
+  // A closed 2D polyline (70 = 1), its vertices as VERTEX entities after it
+  // (66 = 1) and a SEQEND: R12's only polyline (LWPOLYLINE is R14's).
+  void ClosedPolyline(const char* layer, const std::vector<Eigen::Vector2d>& corners) {
+    Code(0, "POLYLINE");
+    Code(8, layer);
+    Int(66, 1);
+    Point(10, Eigen::Vector2d::Zero());
+    Int(70, 1);
+    for (const Eigen::Vector2d& c : corners) {
+      Code(0, "VERTEX");
+      Code(8, layer);
+      Point(10, c);
+    }
+    Code(0, "SEQEND");
+    Code(8, layer);
+  }
   const std::string& str() const { return s_; }
 
  private:
@@ -93,6 +110,11 @@ Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
     hi = hi.cwiseMax(f.a).cwiseMax(f.b);
   }
   if (!lo.allFinite() || !hi.allFinite()) return Status::Error("the plan's extent is not finite");
+  for (const Room& room : plan.rooms) {
+    for (const Eigen::Vector2d& c : room.outline) {
+      if (!c.allFinite()) return Status::Error("the plan has a room corner that is not finite");
+    }
+  }
   Dxf d;
   // HEADER: version, units (6 = metres), the drawing's extent.
   d.Code(0, "SECTION");
@@ -136,13 +158,14 @@ Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
   d.Code(0, "ENDTAB");
   struct Layer {
     const char* name;
-    int colour;  // AutoCAD colour index: 7 black/white, 5 blue, 1 red, 8 grey
+    int colour;  // AutoCAD colour index: 7 black/white, 5 blue, 1 red, 8 grey, 3 green
   };
   const Layer layers[] = {{"0", 7},
                           {kDxfLayerWalls, 7},
                           {kDxfLayerOpenings, 5},
                           {kDxfLayerDimensions, 1},
-                          {kDxfLayerSection, 8}};
+                          {kDxfLayerSection, 8},
+                          {kDxfLayerRooms, 3}};
   d.Code(0, "TABLE");
   d.Code(2, "LAYER");
   d.Int(70, static_cast<int>(sizeof(layers) / sizeof(layers[0])));
@@ -166,6 +189,14 @@ Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
   for (const Dimension& dim : plan.dimensions) {
     d.Line(kDxfLayerDimensions, dim.a, dim.b);
     Label(&d, kDxfLayerDimensions, dim.a, dim.b, o.text_height_m, FormatMetres(dim.distance_m));
+  }
+  // Rooms: the outline, the name above the label point, the area below.
+  for (size_t r = 0; r < plan.rooms.size(); ++r) {
+    const Room& room = plan.rooms[r];
+    d.ClosedPolyline(kDxfLayerRooms, room.outline);
+    const Eigen::Vector2d up(0.0, 0.7 * o.text_height_m);
+    d.Text(kDxfLayerRooms, room.label + up, 1.2 * o.text_height_m, 0.0, RoomName(r));
+    d.Text(kDxfLayerRooms, room.label - up, o.text_height_m, 0.0, FormatArea(room.area_m2));
   }
   if (o.section_points) {
     for (const Eigen::Vector2d& p : plan.points) {

@@ -50,6 +50,7 @@
 //     room unless a structural face crosses the segment between them).
 //     distance = mean of the distances of each face's station point to the
 //     other face's line (the two lines are parallel only within 2 deg).
+// (10) Rooms: rooms.h.
 #include "core/plan/floor_plan.h"
 
 #include <algorithm>
@@ -59,6 +60,7 @@
 #include <utility>
 
 #include "core/plan/line_fit.h"
+#include "core/plan/rooms.h"
 
 namespace sweepscan::plan {
 namespace {
@@ -452,7 +454,8 @@ bool FloorPlanOptions::IsValid(std::string* error) const {
       !positive(opening_width_m, "opening width") || !positive(max_opening_width_m, "maximum opening width") ||
       !positive(min_wall_thickness_m, "minimum wall thickness") ||
       !positive(max_wall_thickness_m, "maximum wall thickness") ||
-      !positive(parallel_tolerance_rad, "parallel tolerance") || !positive(drawing_cell_m, "drawing cell")) {
+      !positive(parallel_tolerance_rad, "parallel tolerance") || !positive(drawing_cell_m, "drawing cell") ||
+      !positive(room_cell_m, "room cell") || !positive(min_room_area_m2, "minimum room area")) {
     return false;
   }
   if (max_opening_width_m < opening_width_m || max_wall_thickness_m < min_wall_thickness_m) {
@@ -513,6 +516,7 @@ Status BuildFloorPlanFromSection(const std::vector<Eigen::Vector2d>& section, co
   planner.Structure(plan);
   planner.WallOpenings(plan);
   planner.Dimensions(plan);
+  FindRooms(options, plan);
   return Status::Ok();
 }
 

@@ -47,6 +47,10 @@ struct FloorPlanOptions {
   double max_wall_thickness_m = 0.4;
   double parallel_tolerance_rad = 0.035;  // 2 deg
   double drawing_cell_m = 0.02;           // FloorPlan::points: one point per cell
+  // Rooms (rooms.h): the raster's cell, and the least floor area of a room
+  // (smaller closed regions are voids: inside a wall, behind a cabinet).
+  double room_cell_m = 0.05;
+  double min_room_area_m2 = 1.0;
   uint64_t seed = 1;                      // the RANSAC's std::mt19937_64
   bool IsValid(std::string* error) const;
 };
@@ -95,7 +99,7 @@ struct Dimension {
 // A room: a connected region of free space closed by structural faces and,
 // across its openings, by its faces' lines (the door closed flush with the
 // room's wall). The outline runs on the fitted face lines, corner to corner
-// (rooms.h says how it is traced).
+// (rooms.h says how it is found and traced).
 struct Room {
   std::vector<Eigen::Vector2d> outline;  // closed polygon, counter-clockwise, last != first
   double area_m2 = 0.0;                  // of the outline (furniture inside included)
@@ -114,7 +118,9 @@ struct FloorPlan {
   std::vector<Opening> openings;
   std::vector<Wall> walls;
   std::vector<Dimension> dimensions;
-  std::vector<Room> rooms;  // ordered by their label point: south to north, then west to east
+  // Ordered as a plan is read: by the outline's lowest y in 1 m bands (south
+  // to north), then by its lowest x (west to east).
+  std::vector<Room> rooms;
 };
 
 // The whole plan from a cloud. Refuses an empty cloud, bad options, or a

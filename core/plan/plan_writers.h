@@ -4,10 +4,11 @@
 // docs/plan-formats.md.
 //
 //   SVG: paper millimetres at a chosen scale (1:50 draws 1 m as 20 mm), y
-//        flipped so that +y (north) is up; groups (layers) points, walls,
-//        openings, dimensions in that order (later ones drawn on top).
+//        flipped so that +y (north) is up; groups (layers) rooms, points,
+//        walls, openings, dimensions in that order (later ones drawn on top).
 //   DXF: model space in metres ($INSUNITS 6), layers WALLS, OPENINGS,
-//        DIMENSIONS, SECTION; LINE, POINT and TEXT entities only.
+//        DIMENSIONS, SECTION, ROOMS; LINE, POINT, TEXT and closed POLYLINE
+//        (the room outlines) entities only.
 //
 // Files go through the checked writer (core/common/checked_file.h): each
 // exists under its name only when complete.
@@ -55,12 +56,17 @@ inline constexpr const char* kDxfLayerWalls = "WALLS";
 inline constexpr const char* kDxfLayerOpenings = "OPENINGS";
 inline constexpr const char* kDxfLayerDimensions = "DIMENSIONS";
 inline constexpr const char* kDxfLayerSection = "SECTION";
+inline constexpr const char* kDxfLayerRooms = "ROOMS";
 
 Status PlanDxf(const FloorPlan& plan, const DxfOptions& options, std::string* dxf);
 Status WritePlanDxf(const std::string& path, const FloorPlan& plan, const DxfOptions& options);
 
 // "5.000" : a length in metres as the drawings label it (millimetre digits).
 std::string FormatMetres(double m);
+// "Room 2": the name of plan.rooms[index] on the drawings (1-based, the
+// rooms' reading order); "29.50 m2": its area (ASCII, as DXF R12 needs).
+std::string RoomName(size_t index);
+std::string FormatArea(double m2);
 
 }  // namespace sweepscan::plan
 

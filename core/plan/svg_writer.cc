@@ -105,6 +105,14 @@ std::string FormatMetres(double m) {
   return buf;
 }
 
+std::string RoomName(size_t index) { return "Room " + std::to_string(index + 1); }
+
+std::string FormatArea(double m2) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.2f m2", m2);
+  return buf;
+}
+
 Status PlanSvg(const FloorPlan& plan, const SvgOptions& o, std::string* svg) {
   std::string error;
   if (!o.IsValid(&error)) return Status::Error(error);
@@ -125,6 +133,24 @@ Status PlanSvg(const FloorPlan& plan, const SvgOptions& o, std::string* svg) {
                 plan.height_m, plan.band_m, o.scale);
   std::string s = Header(p, desc);
   const double t = o.text_height_mm;
+  // Rooms: each outline filled pale under everything else, its name and
+  // area at its label point.
+  s += "<g id=\"rooms\" fill=\"#eef4e8\" stroke=\"none\" font-family=\"sans-serif\">\n";
+  for (size_t r = 0; r < plan.rooms.size(); ++r) {
+    const Room& room = plan.rooms[r];
+    s += "<polygon points=\"";
+    for (size_t k = 0; k < room.outline.size(); ++k) {
+      if (!Finite(room.outline[k])) return Status::Error("the plan has a room corner that is not finite");
+      s += Num(p.X(room.outline[k].x())) + "," + Num(p.Y(room.outline[k].y())) + (k + 1 < room.outline.size() ? " " : "");
+    }
+    s += "\"/>\n";
+    const double x = p.X(room.label.x()), y = p.Y(room.label.y());
+    s += "<text x=\"" + Num(x) + "\" y=\"" + Num(y - 0.2 * t) + "\" font-size=\"" + Num(1.2 * t) +
+         "\" text-anchor=\"middle\" fill=\"#406030\">" + Escape(RoomName(r)) + "</text>\n";
+    s += "<text x=\"" + Num(x) + "\" y=\"" + Num(y + 1.2 * t) + "\" font-size=\"" + Num(t) +
+         "\" text-anchor=\"middle\" fill=\"#406030\">" + Escape(FormatArea(room.area_m2)) + "</text>\n";
+  }
+  s += "</g>\n";
   // Section points and furniture (faces that are not walls'): the survey's raw evidence.
   s += "<g id=\"points\" fill=\"#a0a0a0\" stroke=\"#808080\" stroke-width=\"0.18\">\n";
   if (o.points) {

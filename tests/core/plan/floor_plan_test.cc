@@ -220,6 +220,126 @@ TEST_F(OfficeFloorPlanTest, VerticalSectionAlongTheCorridor) {
   EXPECT_GT(hi.x(), 15.95);
 }
 
+// The corner of `outline` nearest to p, and its distance.
+double NearestCorner(const std::vector<Eigen::Vector2d>& outline, const Eigen::Vector2d& p) {
+  double best = INFINITY;
+  for (const Eigen::Vector2d& q : outline) best = std::min(best, (q - p).norm());
+  return best;
+}
+
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool inside = false;  // crossings of a ray towards +x
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
+        p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) + poly[i].x()) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
+TEST_F(OfficeFloorPlanTest, RoomOutlinesAreTheRoomsInnerFacesWithin5mm) {
+  // Every room of the truth is one outline: four corners, each within 5 mm
+  // of the room's inner corner, the doors closed flush with its walls; the
+  // area within the corners' error; the label inside; nothing else.
+  const std::vector<sim::RoomTruth> truth = sim::OfficeFloorRooms();
+  ASSERT_EQ(plan_->rooms.size(), truth.size());
+  std::vector<int> found(truth.size(), 0);
+  for (const Room& room : plan_->rooms) {
+    std::printf("room: %zu corners, %.3f m2, label (%.2f, %.2f), %zu faces, %zu openings\n", room.outline.size(),
+                room.area_m2, room.label.x(), room.label.y(), room.faces.size(), room.openings.size());
+    size_t match = truth.size();
+    for (size_t t = 0; t < truth.size(); ++t) {
+      const sim::RoomTruth& r = truth[t];
+      if (room.label.x() > r.x0 && room.label.x() < r.x1 && room.label.y() > r.y0 && room.label.y() < r.y1) match = t;
+    }
+    ASSERT_LT(match, truth.size()) << "a room whose label is in no room of the truth";
+    const sim::RoomTruth& r = truth[match];
+    ++found[match];
+    EXPECT_TRUE(InsidePolygon(room.outline, room.label)) << r.label;
+    ASSERT_EQ(room.outline.size(), 4u) << r.label;
+    for (const Eigen::Vector2d& corner : {Eigen::Vector2d(r.x0, r.y0), Eigen::Vector2d(r.x1, r.y0),
+                                          Eigen::Vector2d(r.x1, r.y1), Eigen::Vector2d(r.x0, r.y1)}) {
+      const double d = NearestCorner(room.outline, corner);
+      EXPECT_LT(d, kFaceTolerance) << r.label << " corner (" << corner.transpose() << ")";
+      std::printf("  %s corner (%.1f, %.1f): %.2f mm\n", r.label.c_str(), corner.x(), corner.y(), 1e3 * d);
+    }
+    const double area = (r.x1 - r.x0) * (r.y1 - r.y0), perimeter = 2 * (r.x1 - r.x0 + r.y1 - r.y0);
+    EXPECT_NEAR(room.area_m2, area, kFaceTolerance * perimeter) << r.label;
+    EXPECT_NEAR(room.perimeter_m, perimeter, 8 * kFaceTolerance) << r.label;
+    // Counter-clockwise, as documented.
+    double twice = 0.0;
+    for (size_t k = 0; k < room.outline.size(); ++k) {
+      const Eigen::Vector2d& p = room.outline[k];
+      const Eigen::Vector2d& q = room.outline[(k + 1) % room.outline.size()];
+      twice += p.x() * q.y() - q.x() * p.y();
+    }
+    EXPECT_GT(twice, 0.0) << r.label;
+  }
+  for (size_t t = 0; t < truth.size(); ++t) EXPECT_EQ(found[t], 1) << truth[t].label;
+  // The reading order: the corridor (south) first, then A, B, C west to east.
+  EXPECT_LT(plan_->rooms.front().label.y(), 2.0);
+  for (size_t k = 2; k < plan_->rooms.size(); ++k) {
+    EXPECT_LT(plan_->rooms[k - 1].label.x(), plan_->rooms[k].label.x());
+  }
+  // The doors: the corridor reaches three, room A two (the corridor's, A|B).
+  for (const Room& room : plan_->rooms) {
+    if (room.label.y() < 2.0) {
+      EXPECT_EQ(room.openings.size(), 3u);
+    }
+    if (room.label.x() < 5.0 && room.label.y() > 2.1) {
+      EXPECT_EQ(room.openings.size(), 2u);
+    }
+  }
+}
+
+// A section drawn by hand: the points of an L-shaped room's walls, 1 cm
+// apart with +-2 mm of deterministic noise, nothing else.
+std::vector<Eigen::Vector2d> LShapedRoom() {
+  const std::vector<Eigen::Vector2d> corners = {{0, 0}, {6, 0}, {6, 3}, {3, 3}, {3, 5}, {0, 5}};
+  std::vector<Eigen::Vector2d> pts;
+  int k = 0;
+  for (size_t c = 0; c < corners.size(); ++c) {
+    const Eigen::Vector2d a = corners[c], b = corners[(c + 1) % corners.size()];
+    const Eigen::Vector2d u = (b - a).normalized(), n(-u.y(), u.x());
+    for (double t = 0.0; t < (b - a).norm(); t += 0.01) pts.push_back(a + t * u + n * (0.002 * ((k++ * 7) % 5 - 2) / 2));
+  }
+  return pts;
+}
+
+TEST(FloorPlanRoomsTest, AnLShapedRoomIsOneOutlineWithItsSixCorners) {
+  FloorPlan plan;
+  ASSERT_TRUE(BuildFloorPlanFromSection(LShapedRoom(), FloorPlanOptions(), &plan).ok());
+  ASSERT_EQ(plan.rooms.size(), 1u);
+  const Room& room = plan.rooms.front();
+  EXPECT_EQ(room.outline.size(), 6u);
+  for (const Eigen::Vector2d& corner :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(6, 0), Eigen::Vector2d(6, 3), Eigen::Vector2d(3, 3),
+        Eigen::Vector2d(3, 5), Eigen::Vector2d(0, 5)}) {
+    EXPECT_LT(NearestCorner(room.outline, corner), 0.003) << corner.transpose();
+  }
+  EXPECT_NEAR(room.area_m2, 24.0, 0.05);
+  EXPECT_NEAR(room.perimeter_m, 22.0, 0.02);
+  // The label where it fits: inside the L, not at its centroid's corner.
+  EXPECT_TRUE(InsidePolygon(room.outline, room.label)) << room.label.transpose();
+  EXPECT_EQ(room.faces.size(), 6u);
+}
+
+TEST(FloorPlanRoomsTest, AnOpenSectionHasNoRoom) {
+  // Three walls of a room (the fourth side never seen): the free space runs
+  // out of the raster, so no outline is claimed.
+  std::vector<Eigen::Vector2d> pts;
+  for (double t = 0.0; t < 4.0; t += 0.01) {
+    pts.emplace_back(t, 0.0);
+    pts.emplace_back(0.0, t);
+    pts.emplace_back(4.0, t);
+  }
+  FloorPlan plan;
+  ASSERT_TRUE(BuildFloorPlanFromSection(pts, FloorPlanOptions(), &plan).ok());
+  EXPECT_GE(plan.faces.size(), 3u);
+  EXPECT_TRUE(plan.rooms.empty());
+}
+
 TEST(FloorPlanRefusalTest, BadInputIsRefusedWithAReason) {
   FloorPlan plan;
   FloorPlanOptions o;

@@ -65,7 +65,8 @@ TEST_F(PlanWritersTest, DxfReadByEzdxfMatchesThePlan) {
   EXPECT_EQ(j["dxfversion"], "AC1009");
   EXPECT_EQ(j["insunits"], 6);
   EXPECT_EQ(j["audit"]["errors"], 0) << j["audit"].dump();
-  for (const char* layer : {kDxfLayerWalls, kDxfLayerOpenings, kDxfLayerDimensions, kDxfLayerSection}) {
+  for (const char* layer :
+       {kDxfLayerWalls, kDxfLayerOpenings, kDxfLayerDimensions, kDxfLayerSection, kDxfLayerRooms}) {
     bool found = false;
     for (const auto& l : j["layers"]) found = found || l == layer;
     EXPECT_TRUE(found) << layer;
@@ -92,6 +93,30 @@ TEST_F(PlanWritersTest, DxfReadByEzdxfMatchesThePlan) {
   }
   ASSERT_EQ(texts.size(), plan_->dimensions.size());
   for (size_t i = 0; i < texts.size(); ++i) EXPECT_EQ(texts[i], FormatMetres(plan_->dimensions[i].distance_m));
+  // Rooms: one closed polyline each, its corners and area those of the
+  // plan's outline (6 decimals), its name and area as texts.
+  ASSERT_GE(plan_->rooms.size(), 2u);
+  const nlohmann::json& polylines = j["polylines"];
+  ASSERT_EQ(polylines.size(), plan_->rooms.size());
+  std::vector<std::string> room_texts;
+  for (const auto& t : j["texts"]) {
+    if (t["layer"] == kDxfLayerRooms) room_texts.push_back(t["text"]);
+  }
+  ASSERT_EQ(room_texts.size(), 2 * plan_->rooms.size());
+  for (size_t r = 0; r < plan_->rooms.size(); ++r) {
+    const Room& room = plan_->rooms[r];
+    const nlohmann::json& pl = polylines[r];
+    EXPECT_EQ(pl["layer"], kDxfLayerRooms);
+    EXPECT_TRUE(pl["closed"].get<bool>());
+    ASSERT_EQ(pl["vertices"].size(), room.outline.size());
+    for (size_t k = 0; k < room.outline.size(); ++k) {
+      EXPECT_NEAR(pl["vertices"][k][0].get<double>(), room.outline[k].x(), 1e-6);
+      EXPECT_NEAR(pl["vertices"][k][1].get<double>(), room.outline[k].y(), 1e-6);
+    }
+    EXPECT_NEAR(pl["area"].get<double>(), room.area_m2, 1e-4);
+    EXPECT_EQ(room_texts[2 * r], RoomName(r));
+    EXPECT_EQ(room_texts[2 * r + 1], FormatArea(room.area_m2));
+  }
   // The header's extent, written with 6 decimals (1 um).
   EXPECT_LE(j["extmin"][0].get<double>(), plan_->min.x() + 1e-6);
   EXPECT_GE(j["extmax"][1].get<double>(), plan_->max.y() - 1e-6);
@@ -121,9 +146,17 @@ TEST_F(PlanWritersTest, SvgRenderedByRsvg) {
   ASSERT_TRUE(WritePlanSvg(path, *plan_, o).ok());
   std::string svg;
   ASSERT_TRUE(PlanSvg(*plan_, o, &svg).ok());
-  for (const char* group : {"<g id=\"points\"", "<g id=\"walls\"", "<g id=\"openings\"", "<g id=\"dimensions\""}) {
+  for (const char* group :
+       {"<g id=\"rooms\"", "<g id=\"points\"", "<g id=\"walls\"", "<g id=\"openings\"", "<g id=\"dimensions\""}) {
     EXPECT_NE(svg.find(group), std::string::npos) << group;
   }
+  // One filled polygon and a name per room.
+  size_t polygons = 0;
+  for (size_t at = svg.find("<polygon points="); at != std::string::npos; at = svg.find("<polygon points=", at + 1)) {
+    ++polygons;
+  }
+  EXPECT_EQ(polygons, plan_->rooms.size());
+  for (size_t r = 0; r < plan_->rooms.size(); ++r) EXPECT_NE(svg.find(">" + RoomName(r) + "<"), std::string::npos);
   // 1:50: a 16 m wide plan is 320 mm of paper plus two 15 mm margins.
   const double width_mm = (plan_->max.x() - plan_->min.x()) * 20.0 + 30.0;
   char expect[64];
