@@ -173,6 +173,14 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   EXPECT_TRUE(has("dimensions", "distance_m", 2.0, 0.01)) << plan["dimensions"].dump();
   EXPECT_TRUE(has("openings", "width_m", 0.9, 0.03)) << plan["openings"].dump();
   EXPECT_TRUE(has("walls", "thickness_m", 0.1, 0.01)) << plan["walls"].dump();
+  // Room B's outline: 5.5 x 5.9 m, its area within 5 mm along its 22.8 m
+  // perimeter, four corners.
+  EXPECT_TRUE(has("rooms", "area_m2", 5.5 * 5.9, 0.005 * 22.8)) << plan["rooms"].dump();
+  for (const nlohmann::json& room : plan["rooms"]) {
+    if (std::abs(room["area_m2"].get<double>() - 5.5 * 5.9) < 0.2) {
+      EXPECT_EQ(room["outline"].size(), 4u);
+    }
+  }
   EXPECT_GT(std::filesystem::file_size(P("floor.svg")), 1000u);
   EXPECT_GT(std::filesystem::file_size(P("floor.dxf")), 1000u);
 }
