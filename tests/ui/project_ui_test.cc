@@ -11,6 +11,8 @@
 
 #include <QAction>
 #include <QComboBox>
+#include <QDir>
+#include <QFileInfo>
 #include <QLabel>
 #include <QElapsedTimer>
 #include <QMenu>
@@ -138,6 +140,47 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   EXPECT_EQ(project()->document()->path(), file);
   WorstGapWhileBusy(60000);
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
+}
+
+TEST_F(ProjectUiTest, SaveAsMovesTheFileKeepsTheSessionsAndTheirClouds) {
+  const QString file = MakeProject("saveas");
+  ASSERT_TRUE(project()->OpenProject(file));
+  WorstGapWhileBusy(60000);
+  const ProjectCloudPtr before = project()->clouds().at("a");
+  project()->SetColor("b", "#00ff00");  // an unsaved edit goes with it
+  EXPECT_TRUE(window_->isWindowModified());
+
+  // Into a folder below the sessions' folder: every session's stored path
+  // changes ("../a.sweepscan"), the folders they name do not.
+  const QString moved = QString::fromStdString(Dir()) + "/elsewhere/deeper/moved.sweepscan-project";
+  ASSERT_TRUE(QDir().mkpath(QFileInfo(moved).absolutePath()));
+  ASSERT_TRUE(project()->SaveProjectAs(moved));
+  EXPECT_EQ(project()->document()->path(), moved);
+  EXPECT_FALSE(window_->isWindowModified());
+  EXPECT_NE(window_->windowTitle().indexOf("moved.sweepscan-project"), -1) << window_->windowTitle().toStdString();
+  EXPECT_EQ(project()->document()->project().name, "moved");
+  Project saved;
+  ASSERT_TRUE(LoadProject(moved.toStdString(), &saved).ok());
+  ASSERT_EQ(saved.sessions.size(), 3u);
+  for (const ProjectSession& s : saved.sessions) {
+    EXPECT_EQ(s.path, "../../" + s.id + ".sweepscan");
+    EXPECT_TRUE(QFileInfo::exists(QString::fromStdString(ResolveSessionPath(moved.toStdString(), s)) + "/meta.json"))
+        << s.path;
+  }
+  EXPECT_EQ(saved.sessions[1].color, "#00ff00");
+  // The same folders: a's cloud is kept, not built again.
+  QCoreApplication::processEvents();
+  EXPECT_FALSE(project()->busy());
+  EXPECT_EQ(project()->clouds().at("a"), before);
+  // The old file is as it was; the recent list leads with the new one.
+  Project old;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &old).ok());
+  EXPECT_EQ(old.sessions[0].path, "a.sweepscan");
+  EXPECT_NE(old.sessions[1].color, "#00ff00");
+  // A folder that cannot be written is a message, and the project stays.
+  EXPECT_FALSE(project()->SaveProjectAs("/proc/no/such/folder/x.sweepscan-project"));
+  EXPECT_EQ(project()->document()->path(), moved);
+  EXPECT_NE(window_->last_error().indexOf("x.sweepscan-project"), -1) << window_->last_error().toStdString();
 }
 
 TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {

@@ -172,7 +172,7 @@ void PlanPanel::Rebuild() {
     for (const ProjectSession& s : doc->project().sessions) {
       if (!s.project_from_session || !s.visible) continue;
       const auto c = project_->clouds().find(s.id);
-      if (c == project_->clouds().end() || c->second->key != CloudKey(s)) {
+      if (c == project_->clouds().end() || c->second->key != CloudKey(doc->path().toStdString(), s)) {
         waiting = true;  // Its cloud is on its way (cloudsChanged rebuilds).
         continue;
       }

@@ -73,6 +73,7 @@ ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStac
   });
   connect(&document_, &ProjectDocument::changed, this, &ProjectController::OnChanged);
   connect(&document_, &ProjectDocument::modifiedChanged, this, &ProjectController::titleChanged);
+  connect(&document_, &ProjectDocument::renamed, this, &ProjectController::titleChanged);
   connect(&jobs_, &ProjectJobs::progress, panel_, &ProjectPanel::ShowProgress);
   connect(&jobs_, &ProjectJobs::finished, panel_, [this] {
     panel_->ShowProgress(QString(), -2.0);
@@ -109,6 +110,14 @@ void ProjectController::AddFileMenuActions(QMenu* file) {
   // disk as they are made; Save Session As has Ctrl+Shift+S).
   save_ = file->addAction(tr("Sa&ve Project"), this, [this] { SaveProject(); });
   save_->setShortcut(QKeySequence::Save);
+  // No shortcut: QKeySequence::SaveAs (Ctrl+Shift+S) is Save Session As.
+  save_as_ = file->addAction(tr("Save Project &As…"), this, [this] {
+    QString path = QFileDialog::getSaveFileName(window_, tr("Save project as"), document_.path(),
+                                                tr("sweepscan projects (*.sweepscan-project)"));
+    if (path.isEmpty()) return;
+    if (!path.endsWith(QLatin1String(kProjectSuffix))) path += QLatin1String(kProjectSuffix);
+    SaveProjectAs(path);
+  });
   add_ = file->addAction(tr("A&dd Session to Project…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(
         window_, tr("Add a session folder (NAME.sweepscan)"),
@@ -125,7 +134,7 @@ void ProjectController::AddFileMenuActions(QMenu* file) {
 }
 
 void ProjectController::UpdateActions() {
-  for (QAction* a : {save_, add_, close_}) {
+  for (QAction* a : {save_, save_as_, add_, close_}) {
     if (a != nullptr) a->setEnabled(document_.is_open());
   }
 }
@@ -157,6 +166,18 @@ bool ProjectController::SaveProject() {
   }
   AddRecent(QFileInfo(document_.path()).absoluteFilePath());
   emit message(tr("Saved %1").arg(document_.path()));
+  return true;
+}
+
+bool ProjectController::SaveProjectAs(const QString& path) {
+  if (!document_.is_open()) return false;
+  const Status s = document_.SaveAs(path);
+  if (!s.ok()) {
+    show_error_(tr("Cannot save the project"), QString::fromStdString(s.message()));
+    return false;
+  }
+  AddRecent(QFileInfo(path).absoluteFilePath());
+  emit message(tr("Saved as %1").arg(path));
   return true;
 }
 
@@ -282,7 +303,8 @@ void ProjectController::LoadMissing() {
   std::vector<ProjectSession> todo;
   for (const ProjectSession& s : ShownProject().sessions) {
     const auto c = clouds_.find(s.id);
-    if (s.project_from_session && s.visible && (c == clouds_.end() || c->second->key != CloudKey(s))) {
+    if (s.project_from_session && s.visible &&
+        (c == clouds_.end() || c->second->key != CloudKey(document_.path().toStdString(), s))) {
       todo.push_back(s);
     }
   }
@@ -346,7 +368,9 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
   const ProjectSession source = p.sessions[i], target = p.sessions[r];
   auto cached = [this](const ProjectSession& s) -> ProjectCloudPtr {
     const auto c = clouds_.find(s.id);
-    return c != clouds_.end() && c->second->key == CloudKey(s) ? c->second : nullptr;
+    return c != clouds_.end() && c->second->key == CloudKey(document_.path().toStdString(), s)
+               ? c->second
+               : nullptr;
   };
   struct Outcome {
     ProjectCloudPtr source, target;

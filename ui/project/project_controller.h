@@ -62,7 +62,7 @@ class ProjectController : public QObject {
   const ProjectLayer* layer() const { return layer_.get(); }
   ProjectJobs* jobs() { return &jobs_; }
   // File menu: New Project…, Open Project…, Open Recent Project, Save
-  // Project, Add Session to Project…, Close Project.
+  // Project, Save Project As…, Add Session to Project…, Close Project.
   void AddFileMenuActions(QMenu* file);
   QAction* save_action() const { return save_; }
   // The window title's part: "floor.sweepscan-project[*]", "" without a project.
@@ -72,6 +72,7 @@ class ProjectController : public QObject {
   bool NewProject(const QString& path);
   bool OpenProject(const QString& path);
   bool SaveProject();
+  bool SaveProjectAs(const QString& path);  // ProjectDocument::SaveAs
   bool AddSession(const QString& dir);  // undoable
   // Asks to save a modified project (interactive); false: the operator cancelled.
   bool ConfirmClose();
@@ -140,6 +141,7 @@ class ProjectController : public QObject {
   bool shown_pending_ = false;  // shown() once the first clouds of an opened project draw
   QMenu* recent_menu_ = nullptr;
   QAction* save_ = nullptr;
+  QAction* save_as_ = nullptr;
   QAction* add_ = nullptr;
   QAction* close_ = nullptr;
 };

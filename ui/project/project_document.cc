@@ -39,6 +39,29 @@ Status ProjectDocument::Save() {
   return s;
 }
 
+Status ProjectDocument::SaveAs(const QString& path) {
+  if (!is_open()) return Status::Error("no project is open");
+  Project p = project_;
+  const QDir to(QFileInfo(path).absolutePath());
+  for (ProjectSession& session : p.sessions) {
+    const QString folder = QString::fromStdString(ResolveSessionPath(path_.toStdString(), session));
+    session.path = to.relativeFilePath(QFileInfo(folder).absoluteFilePath()).toStdString();
+  }
+  if (p.name == QFileInfo(path_).completeBaseName().toStdString()) {
+    p.name = QFileInfo(path).completeBaseName().toStdString();
+  }
+  const Status s = SaveProject(path.toStdString(), p);
+  if (!s.ok()) return s;
+  const bool was = modified();
+  path_ = path;
+  project_ = std::move(p);
+  saved_json_ = ProjectToJson(project_);
+  ++generation_;
+  emit renamed();
+  Changed(was);
+  return Status::Ok();
+}
+
 void ProjectDocument::Close() {
   const bool was = modified();
   path_.clear();

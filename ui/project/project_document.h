@@ -39,6 +39,13 @@ class ProjectDocument : public QObject {
   Status Open(const QString& path);
   // Writes the project atomically to its path.
   Status Save();
+  // Writes the project atomically to `path` and makes that its file: every
+  // session's folder stored again relative to the new file's folder (the
+  // same folders, so no cloud is built again), the name following the
+  // file's when it was the old file's. The undo history of the project ends
+  // here (a generation, as Open): older commands hold the old folder's
+  // relative paths. On failure nothing changes.
+  Status SaveAs(const QString& path);
   void Close();
   // The contents (the undo commands' way in).
   void Set(const Project& project);
@@ -48,6 +55,7 @@ class ProjectDocument : public QObject {
 
  signals:
   void opened();   // another project (or none) is open
+  void renamed();  // the same project, saved under another file (SaveAs)
   void changed();  // the contents changed (after opened(), too)
   void modifiedChanged(bool modified);
 

@@ -1,5 +1,7 @@
 #include "ui/project/project_jobs.h"
 
+#include <filesystem>
+
 #include <QMetaObject>
 #include <cstdio>
 #include <mutex>
@@ -9,8 +11,10 @@
 
 namespace sweepscan::ui {
 
-std::string CloudKey(const ProjectSession& session) {
-  std::string key = session.path;
+std::string CloudKey(const std::string& project_file, const ProjectSession& session) {
+  std::string key = std::filesystem::absolute(ResolveSessionPath(project_file, session))
+                        .lexically_normal()
+                        .string();
   if (session.calibration) {
     char c[96];
     std::snprintf(c, sizeof(c), "|%.9g,%.9g,%.9g", session.calibration->alpha,
@@ -29,7 +33,7 @@ Status BuildProjectCloud(const std::string& project_file, const ProjectSession& 
   if (!s.ok()) return s;
   auto out = std::make_shared<ProjectCloud>();
   out->id = session.id;
-  out->key = CloudKey(session);
+  out->key = CloudKey(project_file, session);
   out->positions = hardware::Positions(built.points);
   for (const Eigen::Vector3f& p : out->positions) out->bounds.extend(p);
   out->damage = built.damage;

@@ -41,9 +41,10 @@ struct ProjectCloud {
 };
 using ProjectCloudPtr = std::shared_ptr<const ProjectCloud>;
 
-// What a session's cloud depends on: a session whose folder or
-// calibration changes is built again.
-std::string CloudKey(const ProjectSession& session);
+// What a session's cloud depends on: a session whose folder (absolute, so
+// that the project saved elsewhere keeps its clouds) or calibration
+// changes is built again.
+std::string CloudKey(const std::string& project_file, const ProjectSession& session);
 
 // Builds the cloud of `session` of the project file `project_file`
 // (any thread). `progress` gets 0..1 and returns false to cancel.
