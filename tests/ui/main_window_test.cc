@@ -645,6 +645,7 @@ TEST_F(AppTest, MeasureDistanceBetweenTwoClickedPoints) {
   view->SetClipHeight(0.10);
   view->ViewTop();
   view->RenderNow();
+  EXPECT_TRUE(view->color_bar_drawn());  // a cloud coloured by height: its bar
   // Two floor-level points far apart, found where the top view shows them.
   const CloudPoint* a = nullptr;
   const CloudPoint* b = nullptr;

@@ -93,6 +93,10 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   EXPECT_NE(window_->windowTitle().indexOf("toggle.sweepscan-project"), -1)
       << window_->windowTitle().toStdString();
   EXPECT_FALSE(window_->isWindowModified());
+  // The height colour bar explains the session cloud's colours: the
+  // project's layers alone (coloured by session) have none to explain.
+  window_->view()->RenderNow();
+  EXPECT_FALSE(window_->view()->color_bar_drawn());
   ProjectPanel* panel = project()->panel();
   ASSERT_EQ(panel->tree()->topLevelItemCount(), 3);
   EXPECT_EQ(panel->item("c")->text(1), "not placed");

@@ -477,9 +477,11 @@ void CloudView::SetRobotVisible(bool visible) {
 }
 
 void CloudView::SetColorBarVisible(bool visible) {
-  color_bar_->SetVisibility(visible);
+  color_bar_wanted_ = visible;
   RequestRender();
 }
+
+bool CloudView::color_bar_drawn() const { return color_bar_->GetVisibility() != 0; }
 
 void CloudView::ApplyClip(vtkPolyDataMapper* mapper) const {
   mapper->SetClippingPlanes(std::isnan(clip_height_) ? nullptr : clip_planes_.Get());
@@ -576,6 +578,9 @@ void CloudView::RenderNow() {
   QElapsedTimer clock;
   clock.start();
   SyncBatches();  // Their bounds for the clipping range.
+  // The bar explains the cloud's colours: with no cloud (a project's
+  // layers alone, coloured by session) it would explain nothing.
+  color_bar_->SetVisibility(color_bar_wanted_ && point_count_ > 0);
   renderer_->ResetCameraClippingRange();
   window_->Render();
   last_render_ms_ = clock.nsecsElapsed() * 1e-6;

@@ -133,7 +133,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetAxesVisible(bool visible);
   void SetTrajectoryVisible(bool visible);
   void SetRobotVisible(bool visible);
+  // View > Show Colour Bar. The bar is drawn only while the cloud has
+  // points (a project's layers alone have no scalar to explain).
   void SetColorBarVisible(bool visible);
+  bool color_bar_drawn() const;
   // Hides every point above `z` (metres; NaN shows all): a room's ceiling,
   // so that the floor, the walls and a calibration target are seen from above.
   void SetClipHeight(double z);
@@ -321,6 +324,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkPlaneCollection> clip_planes_;
   void ApplyClip(vtkPolyDataMapper* mapper) const;
   size_t point_count_ = 0;
+  bool color_bar_wanted_ = true;  // View > Show Colour Bar; drawn only with a cloud
   int64_t time_origin_ns_ = 0;
   bool have_origin_ = false;
   // Values given after the fact, quantised: v = lo + q * step.
