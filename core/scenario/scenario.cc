@@ -124,7 +124,9 @@ void ReadLidar(const JsonObject& l, SimConfig* config) {
   l.AllowOnly({"scan_rate_hz", "sample_rate_hz", "min_range_m", "max_range_m", "range_noise_m",
                "range_noise_fraction", "range_quantum_m", "dropout_probability",
                "grazing_dropout_start_deg", "grazing_dropout_end_deg", "angle_sign",
-               "angle_offset_rad", "model_angle_correction", "range_offset_m", "time_offset_s"});
+               "angle_offset_rad", "model_angle_correction", "range_offset_m", "time_offset_s",
+               "range_scale_error", "mixed_return_share", "mixed_blend_share", "mixed_footprint_rad",
+               "mixed_min_jump_m"});
   sim::LidarSpec& s = c.lidar;
   s.scan_rate_hz = l.InRange("scan_rate_hz", 1.0, 50.0, s.scan_rate_hz);
   s.sample_rate_hz = l.InRange("sample_rate_hz", 100.0, 100000.0, s.sample_rate_hz);
@@ -147,6 +149,11 @@ void ReadLidar(const JsonObject& l, SimConfig* config) {
   s.model_angle_correction = l.Bool("model_angle_correction", s.model_angle_correction);
   s.range_offset_m = l.InRange("range_offset_m", -0.1, 0.1, s.range_offset_m);
   s.time_offset_s = l.InRange("time_offset_s", -0.1, 0.1, s.time_offset_s);
+  s.range_scale_error = l.InRange("range_scale_error", -0.05, 0.05, s.range_scale_error);
+  s.mixed_return_share = l.InRange("mixed_return_share", 0.0, 1.0, s.mixed_return_share);
+  s.mixed_blend_share = l.InRange("mixed_blend_share", 0.0, 1.0, s.mixed_blend_share);
+  s.mixed_footprint_rad = l.InRange("mixed_footprint_rad", 0.0, 0.1, s.mixed_footprint_rad);
+  s.mixed_min_jump_m = l.InRange("mixed_min_jump_m", 1e-4, 10.0, s.mixed_min_jump_m);
   if (s.max_range_m <= s.min_range_m) l.Fail("max_range_m", "must exceed min_range_m");
   if (s.grazing_dropout_end_deg <= s.grazing_dropout_start_deg) {
     l.Fail("grazing_dropout_end_deg", "must exceed grazing_dropout_start_deg");
@@ -322,7 +329,12 @@ json ScenarioToJson(const SimConfig& c) {
         {"angle_offset_rad", l.angle_convention.offset_rad},
         {"model_angle_correction", l.model_angle_correction},
         {"range_offset_m", l.range_offset_m},
-        {"time_offset_s", l.time_offset_s}}},
+        {"time_offset_s", l.time_offset_s},
+        {"range_scale_error", l.range_scale_error},
+        {"mixed_return_share", l.mixed_return_share},
+        {"mixed_blend_share", l.mixed_blend_share},
+        {"mixed_footprint_rad", l.mixed_footprint_rad},
+        {"mixed_min_jump_m", l.mixed_min_jump_m}}},
       {"imu",
        {{"rate_hz", c.imu.rate_hz},
         {"gyro_noise_rad_s", c.imu.gyro_noise_rad_s},

@@ -41,8 +41,12 @@ bool SimConfig::IsValid(std::string* error) const {
   if (!Finite({l.scan_rate_hz, l.sample_rate_hz, l.min_range_m, l.max_range_m, l.range_noise_m,
                l.range_noise_fraction, l.range_quantum_m, l.dropout_probability,
                l.grazing_dropout_start_deg, l.grazing_dropout_end_deg, l.range_offset_m,
-               l.time_offset_s}) ||
+               l.time_offset_s, l.range_scale_error, l.mixed_return_share, l.mixed_blend_share,
+               l.mixed_footprint_rad, l.mixed_min_jump_m}) ||
       std::abs(l.range_offset_m) > 0.1 || std::abs(l.time_offset_s) > 0.1 ||
+      std::abs(l.range_scale_error) > 0.05 || l.mixed_return_share < 0 ||
+      l.mixed_return_share > 1 || l.mixed_blend_share < 0 || l.mixed_blend_share > 1 ||
+      l.mixed_footprint_rad < 0 || l.mixed_footprint_rad > 0.1 || l.mixed_min_jump_m <= 0 ||
       l.scan_rate_hz <= 0 || l.sample_rate_hz <= 0 || l.sample_rate_hz < 10 * l.scan_rate_hz ||
       l.min_range_m < 0 || l.max_range_m <= l.min_range_m || l.range_noise_m < 0 ||
       l.range_noise_fraction < 0 || l.range_quantum_m < 0 || l.dropout_probability < 0 ||
@@ -50,7 +54,8 @@ bool SimConfig::IsValid(std::string* error) const {
     *error =
         "lidar: rates must be positive (at least 10 samples per scan), 0 <= min_range < "
         "max_range, noise >= 0, dropout within [0, 1], grazing start < end, |range offset| and "
-        "|time offset| <= 0.1";
+        "|time offset| <= 0.1, |range scale error| <= 0.05, mixed shares within [0, 1], "
+        "footprint within [0, 0.1] rad, mixed jump > 0";
     return false;
   }
   if (!Finite({imu.rate_hz, imu.gyro_noise_rad_s, imu.gyro_bias_rad_s, imu.tilt_noise_rad,
@@ -303,7 +308,9 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
       }
     }
     if (found) {
-      truth = {hit.primitive, hit.face, hit.range};
+      truth.primitive = hit.primitive;
+      truth.face = hit.face;
+      truth.true_range = hit.range;
       const double cos_inc = std::abs(hit.normal.dot(dir));
       double p_keep = (1.0 - spec.dropout_probability) *
                       (1.0 - config_.scene.boxes()[hit.primitive].dropout);
@@ -311,8 +318,11 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
         const double inc = std::acos(std::clamp(cos_inc, 0.0, 1.0));
         p_keep *= std::clamp(1.0 - (inc - start_rad) / span_rad, 0.0, 1.0);
       }
-      const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * hit.range);
-      const double noisy = hit.range + spec.range_offset_m + sigma * lidar_gauss_(lidar_rng_);
+      double measured = hit.range;
+      if (spec.mixed_return_share > 0.0) measured = MixedRange(hit, theta, world_from_lidar, &truth);
+      const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * measured);
+      const double noisy = measured * (1.0 + spec.range_scale_error) + spec.range_offset_m +
+                           sigma * lidar_gauss_(lidar_rng_);
       const bool kept = lidar_uniform_(lidar_rng_) < p_keep;
       if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
         range = spec.range_quantum_m > 0.0
@@ -334,6 +344,39 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     s.beam = beam_++;
     sink->OnLidarSample(scan_index_, ring_start, s);
   }
+}
+
+double SimWorld::MixedRange(const RayHit& hit, double theta, const Rigid3d& world_from_lidar,
+                            SampleTruth* truth) {
+  const LidarSpec& spec = config_.lidar;
+  const double range = hit.range;
+  // The spot's two sides, cast from the centre like the beam itself (at the
+  // beam's own, corrected, angle theta). A side is across a depth edge when
+  // its hit lies off the beam's surface by more than mixed_min_jump_m: a
+  // floor seen at grazing incidence changes range fast with angle but stays
+  // on its plane, and a room's concave corner is off it by millimetres; and
+  // its range differs by more than that too (a board's convex corner,
+  // front face beside edge face, is continuous in range).
+  const Eigen::Vector3d o = world_from_lidar.translation();
+  const Eigen::Vector3d p = o + range * (world_from_lidar.rotation() * LidarPoint(1.0, theta));
+  double other = range, jump = spec.mixed_min_jump_m;
+  for (double side : {-0.5, 0.5}) {
+    const Eigen::Vector3d d =
+        world_from_lidar.rotation() * LidarPoint(1.0, theta + side * spec.mixed_footprint_rad);
+    RayHit h;
+    if (!config_.scene.Cast(o, d, 1e-6, spec.max_range_m, &h)) continue;
+    const double off = std::abs(hit.normal.dot(o + h.range * d - p));
+    if (off > jump && std::abs(h.range - range) > spec.mixed_min_jump_m) jump = off, other = h.range;
+  }
+  if (other == range) return range;
+  truth->edge = true;
+  truth->other_range = other;
+  if (!(lidar_uniform_(lidar_rng_) < spec.mixed_return_share)) return range;
+  truth->mixed = true;
+  if (lidar_uniform_(lidar_rng_) < spec.mixed_blend_share) {
+    return range + lidar_uniform_(lidar_rng_) * (other - range);
+  }
+  return other;
 }
 
 void SimWorld::TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const {

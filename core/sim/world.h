@@ -15,7 +15,9 @@
 //    a fixed offset from the world's;
 //  * lidar: Gaussian range noise sigma = sqrt(a^2 + (b rho)^2), quantised to
 //    the X4's 1 mm, returns lost at random, more at grazing incidence
-//    and on dark surfaces, and none outside 0.12-10 m.
+//    and on dark surfaces, and none outside 0.12-10 m; optionally a range
+//    offset and scale error and mixed returns at depth edges (off by
+//    default).
 //
 // Not thread-safe; one world per thread.
 #ifndef SWEEPSCAN_CORE_SIM_WORLD_H_
@@ -48,6 +50,27 @@ struct LidarSpec {
   // the IMU and the wheels).
   double range_offset_m = 0.0;
   double time_offset_s = 0.0;
+  // Range scale error: every range reads (1 + range_scale_error) times the
+  // truth, before the offset and the noise (a triangulation lidar's baseline
+  // or focal length off by that fraction). Within +-0.01 (the X4 data
+  // sheet's relative accuracy: 1 % beyond 2 m).
+  double range_scale_error = 0.0;
+  // Mixed returns at depth edges. A triangulation lidar's spot has a width;
+  // where it straddles a depth edge the sensor sees light from both
+  // surfaces and reports a blend of their ranges, or the other surface's
+  // range at this beam's angle. A beam is an edge beam when the rays at
+  // +-mixed_footprint_rad / 2 about it (the spot's extent; default one beam
+  // step, 0.504 deg at 5 kHz / 7 Hz, so about one beam per edge crossing)
+  // hit a surface more than mixed_min_jump_m off the beam's own surface
+  // (its plane: a floor at grazing incidence is no edge) and differ in
+  // range by more than that. A share `mixed_return_share` of the edge beams report
+  // a mixed range: of those, `mixed_blend_share` a blend r + w (r_other - r)
+  // with w ~ U(0, 1), the rest r_other. 0 (the default): no mixed returns,
+  // and no random numbers drawn for them.
+  double mixed_return_share = 0.0;
+  double mixed_blend_share = 0.5;
+  double mixed_footprint_rad = 0.0088;
+  double mixed_min_jump_m = 0.03;
   double dropout_probability = 0.01;
   double grazing_dropout_start_deg = 70.0;  // incidence beyond which returns fade out
   double grazing_dropout_end_deg = 88.0;    // all lost beyond this
@@ -156,6 +179,12 @@ struct SampleTruth {
   int primitive = -1;
   int face = -1;
   double true_range = 0.0;
+  // Mixed returns (LidarSpec::mixed_return_share > 0 only): whether the
+  // beam straddles a depth edge, the other surface's range there, and
+  // whether this sample reports a mixed range.
+  bool edge = false;
+  bool mixed = false;
+  double other_range = 0.0;
 };
 
 class SimWorld {
@@ -213,6 +242,11 @@ class SimWorld {
   void EmitLidar(Time until, SensorSink* sink);
   void EmitWheels(Time until, SensorSink* sink);
   void EmitImu(Time until, SensorSink* sink);
+  // The range an edge beam reports (LidarSpec's mixed returns): hit.range
+  // if the beam at `theta` does not straddle a depth edge or is not drawn
+  // as mixed; fills the truth's edge fields.
+  double MixedRange(const RayHit& hit, double theta, const Rigid3d& world_from_lidar,
+                    SampleTruth* truth);
   // Mean left/right wheel speeds over [t0, t1] (true, before encoder errors).
   void TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const;
 

@@ -101,6 +101,131 @@ TEST(WorldTest, TrajectoryIsExact) {
   EXPECT_NEAR(t.TwistAt(100.0).v, 0.0, 1e-12);
 }
 
+// A robot standing 1 m in front of a board (the scan plane crosses it
+// from 0.8 to 1.4 m high) with the room's wall 4 m behind it: every scan
+// crosses two depth edges of more than 3 m. Noise-free, so any reported
+// range that is not the beam's own surface is a mixed return.
+SimConfig BoardBeforeAWall(double seconds) {
+  SimConfig c = testing::LabConfig();
+  testing::MakeNoiseFree(&c);
+  c.lidar.grazing_dropout_start_deg = 89.0;
+  c.lidar.grazing_dropout_end_deg = 90.0;
+  Box room;
+  room.label = "room";
+  room.center = {5.0, 5.0, 1.5};
+  room.size = {10.0, 10.0, 3.0};
+  room.inside = true;
+  Box board;
+  board.label = "board";
+  board.center = {5.0, 6.01, 1.1};
+  board.size = {1.0, 0.02, 0.6};
+  c.scene = Scene({room, board});
+  c.mounting_error = {};
+  c.start = {5.0, 5.0, 0.0};
+  c.path = {{0.0, 0.0, seconds}};
+  return c;
+}
+
+struct EdgeCounts {
+  size_t scans = 0, valid = 0, edge = 0, mixed = 0, off_surface = 0, blended = 0;
+};
+
+// Counts the edge beams and mixed returns of a run, and checks each
+// sample's range against its truth: a plain return reads its surface's
+// range, a mixed one lies between its two surfaces' ranges.
+EdgeCounts CountEdges(const SimConfig& c) {
+  SimWorld world(c);
+  world.KeepSampleTruth(true);
+  const SensorLog log = world.RunAll();
+  EdgeCounts n;
+  n.scans = log.scans.size();
+  size_t k = 0;
+  for (const auto& scan : log.scans) {
+    for (const auto& s : scan.samples) {
+      const SampleTruth& t = world.sample_truth()[k++];
+      n.edge += t.edge;
+      n.mixed += t.mixed;
+      if (s.range_m == 0.0f) continue;
+      ++n.valid;
+      const Eigen::Vector3d p = world.TrueWorldFromLidar(s.time) * LidarPoint(s.range_m, s.theta);
+      n.off_surface += c.scene.DistanceToSurface(p) > 0.01;
+      if (!t.mixed) {
+        EXPECT_NEAR(s.range_m, t.true_range, 1e-4);
+        continue;
+      }
+      EXPECT_TRUE(t.edge);
+      EXPECT_GT(std::abs(t.other_range - t.true_range), c.lidar.mixed_min_jump_m);
+      EXPECT_GE(s.range_m, std::min(t.true_range, t.other_range) - 1e-4);
+      EXPECT_LE(s.range_m, std::max(t.true_range, t.other_range) + 1e-4);
+      n.blended += std::abs(s.range_m - t.true_range) > 1e-3 &&
+                   std::abs(s.range_m - t.other_range) > 1e-3;
+    }
+  }
+  return n;
+}
+
+TEST(WorldTest, NoMixedReturnsByDefault) {
+  const EdgeCounts n = CountEdges(BoardBeforeAWall(3.0));
+  EXPECT_GT(n.valid, 10000u);
+  EXPECT_EQ(n.edge, 0u);  // not even looked for
+  EXPECT_EQ(n.mixed, 0u);
+  EXPECT_EQ(n.off_surface, 0u);
+}
+
+TEST(WorldTest, MixedReturnsAtDepthEdges) {
+  SimConfig c = BoardBeforeAWall(10.0);
+  c.lidar.mixed_return_share = 0.4;
+  c.lidar.mixed_blend_share = 0.5;
+  const EdgeCounts n = CountEdges(c);
+  // About one beam per edge crossing straddles it (the footprint is one
+  // beam step): two per scan.
+  const double per_scan = static_cast<double>(n.edge) / n.scans;
+  EXPECT_GT(per_scan, 1.5);
+  EXPECT_LT(per_scan, 3.0);
+  // The drawn share of them is mixed (binomial, ~140 edge beams: sd 0.04).
+  const double share = static_cast<double>(n.mixed) / n.edge;
+  EXPECT_NEAR(share, 0.4, 0.13) << n.mixed << " of " << n.edge;
+  // About half of those blend (strictly between the two ranges, sd 0.07).
+  EXPECT_NEAR(static_cast<double>(n.blended) / n.mixed, 0.5, 0.22) << n.blended;
+  // A mixed return lands in the air between the surfaces (or beyond the
+  // board's edge): nearly all of them off every surface, none of the rest.
+  EXPECT_LE(n.off_surface, n.mixed);
+  EXPECT_GE(n.off_surface, n.mixed * 8 / 10);
+}
+
+TEST(WorldTest, EveryEdgeBeamMixedWithoutBlending) {
+  SimConfig c = BoardBeforeAWall(3.0);
+  c.lidar.mixed_return_share = 1.0;
+  c.lidar.mixed_blend_share = 0.0;
+  const EdgeCounts n = CountEdges(c);
+  EXPECT_GT(n.edge, n.scans);
+  EXPECT_EQ(n.mixed, n.edge);
+  EXPECT_EQ(n.blended, 0u);  // each reports the other surface's range
+}
+
+TEST(WorldTest, RangeScaleErrorAndOffset) {
+  SimConfig c = testing::LabConfig();
+  testing::MakeNoiseFree(&c);
+  c.lidar.range_scale_error = 0.01;  // 1 %, the X4 data sheet's bound beyond 2 m
+  c.lidar.range_offset_m = 0.006;
+  c.path = {{0.2, 0.1, 2.0}};
+  SimWorld world(c);
+  world.KeepSampleTruth(true);
+  const SensorLog log = world.RunAll();
+  size_t k = 0, checked = 0, long_ranges = 0;
+  for (const auto& scan : log.scans) {
+    for (const auto& s : scan.samples) {
+      const SampleTruth& t = world.sample_truth()[k++];
+      if (s.range_m == 0.0f) continue;
+      ++checked;
+      long_ranges += t.true_range > 3.0;
+      EXPECT_NEAR(s.range_m, 1.01 * t.true_range + 0.006, 1e-5) << t.true_range;
+    }
+  }
+  EXPECT_GT(checked, 5000u);
+  EXPECT_GT(long_ranges, 100u);  // where a 1 % scale error is 3 cm
+}
+
 TEST(WorldTest, ConfigValidation) {
   SimConfig c = testing::LabConfig();
   std::string error;
@@ -109,6 +234,12 @@ TEST(WorldTest, ConfigValidation) {
   EXPECT_FALSE(c.IsValid(&error));
   c = testing::LabConfig();
   c.path.clear();
+  EXPECT_FALSE(c.IsValid(&error));
+  c = testing::LabConfig();
+  c.lidar.range_scale_error = 0.2;
+  EXPECT_FALSE(c.IsValid(&error));
+  c = testing::LabConfig();
+  c.lidar.mixed_return_share = 1.5;
   EXPECT_FALSE(c.IsValid(&error));
 }
 
