@@ -396,14 +396,13 @@ double SignedArea(const std::vector<Eigen::Vector2d>& poly) {
   return 0.5 * twice;
 }
 
-// Where the room's name goes: the cell deepest inside the region
-// (4-neighbour distance from its boundary), so that it fits even in an
-// L-shaped room whose centroid is outside it; cells within kLabelClear of a
-// dimension line are passed over while others are nearly as deep (the
-// dimensions are drawn through a room's middle too); ties go to the cell
-// nearest the region's centroid.
+// Where the room's name goes: the cell nearest the region's centroid among
+// those at least half as deep inside it as its deepest (4-neighbour distance
+// from its boundary), so that it fits even in an L-shaped room whose
+// centroid is outside it, and kLabelClear (less in a narrow room) from every
+// dimension line (the dimensions are drawn through a room's middle too).
 constexpr double kLabelClear = 0.5;
-constexpr double kLabelDepthShare = 0.6;
+constexpr double kLabelDepthShare = 0.5;
 
 double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d d = b - a;
@@ -442,9 +441,12 @@ Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const 
     }
   }
   const Eigen::Vector2d half = Eigen::Vector2d::Constant(0.5 * r.cell());
+  // A narrow room (a corridor, 1 m deep at most) has no point 0.5 m from
+  // its dimension line at half its depth: the clearance shrinks with it.
+  const double clearance = std::min(kLabelClear, 0.3 * deepest * r.cell());
   const auto clear = [&](const Eigen::Vector2d& p) {
     for (const Dimension& dim : dimensions) {
-      if (SegmentDistance(p, dim.a, dim.b) < kLabelClear) return false;
+      if (SegmentDistance(p, dim.a, dim.b) < clearance) return false;
     }
     return true;
   };
@@ -454,9 +456,12 @@ Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const 
   for (const auto& [i, j] : region.cells) {
     const Eigen::Vector2d p = r.Corner(i, j) + half;
     const int d = depth[key(i, j)];
-    // Deep enough and clear of dimensions ranks above any cell that is not.
+    // Deep enough and clear of dimensions ranks above any cell that is not,
+    // and the centroid decides among those; without one, the deepest cell
+    // (depths within two cells of the deepest are equal: the raster's
+    // staircase makes one end of a corridor a cell deeper than its middle).
     const bool preferred = d >= kLabelDepthShare * deepest && clear(p);
-    const int rank = (preferred ? deepest + 1 : 0) + d;
+    const int rank = preferred ? deepest + 1 : std::min(d, deepest - 2);
     const double dist = (p - centroid).squaredNorm();
     if (rank > best_rank || (rank == best_rank && dist < best_dist)) {
       best_rank = rank;
