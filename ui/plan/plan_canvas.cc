@@ -1,10 +1,10 @@
 #include "ui/plan/plan_canvas.h"
 
+#include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
 #include <QPainterPath>
 #include <QPolygonF>
-#include <QWheelEvent>
 #include <algorithm>
 #include <cmath>
 
@@ -13,112 +13,71 @@
 namespace sweepscan::ui {
 namespace {
 
-constexpr double kMinScale = 2.0, kMaxScale = 4000.0;  // pixels a metre
 const QColor kPoints(150, 156, 163);
 const QColor kWallFill(60, 60, 64);
 const QColor kFurniture(120, 120, 120);
 const QColor kOpening(21, 101, 192);
 const QColor kDimension(198, 40, 40);
+const QColor kRoomText(40, 56, 72);
+const QColor kSection(106, 27, 154);  // the section line: violet, apart from the plan's colours
 
-// Qt's angle (degrees, counter-clockwise on screen) of a widget vector.
-double ScreenAngle(const QPointF& v) { return std::atan2(-v.y(), v.x()) * 180.0 / M_PI; }
-
-// Text centred at `at`, turned by `degrees` (kept upright), on a white
-// plate; left out when longer than `room` pixels (the line it labels, at
-// a zoom too small to read both).
-void Label(QPainter* p, const QPointF& at, double degrees, const QString& text, const QColor& color,
-           double room) {
-  if (p->fontMetrics().horizontalAdvance(text) + 6 > room) return;
-  while (degrees > 90.0) degrees -= 180.0;
-  while (degrees <= -90.0) degrees += 180.0;
-  p->save();
-  p->translate(at);
-  p->rotate(-degrees);
-  const QRectF box = p->fontMetrics().boundingRect(text).adjusted(-3, -1, 3, 1);
-  const QRectF plate(-box.width() / 2, -box.height() / 2, box.width(), box.height());
-  p->setPen(Qt::NoPen);
-  p->setBrush(QColor(255, 255, 255, 230));
-  p->drawRoundedRect(plate, 2, 2);
-  p->setPen(color);
-  p->drawText(plate, Qt::AlignCenter, text);
-  p->restore();
-}
-
-// 1, 2 or 5 times a power of ten, near `m`.
-double NiceLength(double m) {
-  const double e = std::pow(10.0, std::floor(std::log10(m)));
-  for (double k : {1.0, 2.0, 5.0}) {
-    if (k * e >= m) return k * e;
-  }
-  return 10.0 * e;
+// A pale, translucent tint for room `i`: hues 137.5 deg apart (the golden
+// angle) so that neighbours, numbered south to north, differ.
+QColor RoomTint(size_t i) {
+  return QColor::fromHsv(static_cast<int>(std::fmod(200.0 + 137.5 * static_cast<double>(i), 360.0)), 70, 245, 110);
 }
 
 }  // namespace
 
-PlanCanvas::PlanCanvas(QWidget* parent) : QWidget(parent) {
+PlanCanvas::PlanCanvas(QWidget* parent) : Canvas2d(parent) {
   setObjectName(QStringLiteral("planCanvas"));
-  setMouseTracking(true);  // The cursor's coordinates.
-  setFocusPolicy(Qt::StrongFocus);
-  setMinimumSize(200, 150);
-  setCursor(Qt::OpenHandCursor);
-  setAutoFillBackground(false);
   empty_text_ = tr("No plan yet");
 }
 
 void PlanCanvas::SetPlan(const plan::FloorPlan& plan, bool fit) {
   plan_ = plan;
   empty_text_.clear();
-  if (fit || fitted_) Fit();
-  update();
+  Follow(fit);
 }
 
 void PlanCanvas::ClearPlan(const QString& why) {
   plan_.reset();
+  drag_.reset();
   empty_text_ = why;
-  fitted_ = true;
+  Unfollow();
   update();
 }
 
-void PlanCanvas::Fit() {
-  if (!plan_) return;
-  const Eigen::Vector2d size = (plan_->max - plan_->min).cwiseMax(Eigen::Vector2d(1.0, 1.0));
-  centre_ = 0.5 * (plan_->min + plan_->max);
-  // A margin of 40 px around: the dimension labels and the scale bar.
-  const double sx = std::max(1.0, width() - 80.0) / size.x();
-  const double sy = std::max(1.0, height() - 80.0) / size.y();
-  scale_ = std::clamp(std::min(sx, sy), kMinScale, kMaxScale);
-  fitted_ = true;
+bool PlanCanvas::Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const {
+  if (!plan_) return false;
+  *min = plan_->min;
+  *max = plan_->max;
+  return true;
+}
+
+QString PlanCanvas::CursorText(const Eigen::Vector2d& at) const {
+  return tr("x %1  y %2 m").arg(at.x(), 0, 'f', 2).arg(at.y(), 0, 'f', 2);
+}
+
+void PlanCanvas::SetSectionLine(const std::optional<SectionLine>& line) {
+  section_line_ = line;
   update();
 }
 
-QPointF PlanCanvas::ToWidget(const Eigen::Vector2d& p) const {
-  return {width() / 2.0 + (p.x() - centre_.x()) * scale_, height() / 2.0 - (p.y() - centre_.y()) * scale_};
-}
-
-Eigen::Vector2d PlanCanvas::ToPlan(const QPointF& w) const {
-  return {centre_.x() + (w.x() - width() / 2.0) / scale_, centre_.y() - (w.y() - height() / 2.0) / scale_};
+void PlanCanvas::SetSectionMode(bool on) {
+  if (on == section_mode_) return;
+  section_mode_ = on;
+  if (!on) drag_.reset();
+  setCursor(on ? Qt::CrossCursor : Qt::OpenHandCursor);
+  update();
+  emit sectionModeChanged(on);
 }
 
 void PlanCanvas::paintEvent(QPaintEvent*) {
   QPainter p(this);
-  p.fillRect(rect(), Qt::white);
-  p.setRenderHint(QPainter::Antialiasing, true);
-  if (!plan_) {
-    p.setPen(QColor(110, 110, 110));
-    p.drawText(rect().adjusted(20, 20, -20, -20), Qt::AlignCenter | Qt::TextWordWrap, empty_text_);
-    return;
-  }
+  if (!PaintBackground(&p, plan_.has_value(), empty_text_)) return;
   const plan::FloorPlan& plan = *plan_;
-  // The grid: 1 m, or 10 m when 1 m is too dense to read.
-  const double step = scale_ >= 12.0 ? 1.0 : 10.0;
-  const Eigen::Vector2d lo = ToPlan(QPointF(0, height())), hi = ToPlan(QPointF(width(), 0));
-  p.setPen(QPen(QColor(232, 235, 240), 1));
-  for (double x = std::ceil(lo.x() / step) * step; x <= hi.x(); x += step) {
-    p.drawLine(ToWidget({x, lo.y()}), ToWidget({x, hi.y()}));
-  }
-  for (double y = std::ceil(lo.y() / step) * step; y <= hi.y(); y += step) {
-    p.drawLine(ToWidget({lo.x(), y}), ToWidget({hi.x(), y}));
-  }
+  PaintRooms(&p, false);  // Under everything: the fills.
   // The section's points (decimated to one a 2 cm cell by the plan).
   QPolygonF points;
   points.reserve(static_cast<int>(plan.points.size()));
@@ -127,7 +86,7 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     const QPointF w = ToWidget(q);
     if (inside.contains(w)) points << w;
   }
-  p.setPen(QPen(kPoints, std::clamp(0.02 * scale_, 1.5, 3.0), Qt::SolidLine, Qt::RoundCap));
+  p.setPen(QPen(kPoints, std::clamp(0.02 * scale(), 1.5, 3.0), Qt::SolidLine, Qt::RoundCap));
   p.drawPoints(points);
   // Walls: their thickness filled.
   p.setPen(Qt::NoPen);
@@ -161,7 +120,7 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.drawLine(a, b);
     p.setPen(QPen(kOpening, 1.6));
     p.drawLine(a, leaf);
-    const double r = o.width_m * scale_;
+    const double r = o.width_m * scale();
     const double start = ScreenAngle(leaf - a), end = ScreenAngle(b - a);
     double span = end - start;
     while (span > 180.0) span -= 360.0;
@@ -169,8 +128,8 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kOpening, 1.0));
     p.drawArc(QRectF(a.x() - r, a.y() - r, 2 * r, 2 * r), static_cast<int>(start * 16), static_cast<int>(span * 16));
     const QPointF mid = ToWidget(0.5 * (o.a + o.b) - 0.3 * o.width_m * n);
-    Label(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)), kOpening,
-          1.5 * r);
+    PaintLabel(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)), kOpening,
+               1.5 * r);
   }
   // Dimensions: the line, slashes at its ends, the length above its middle.
   for (const plan::Dimension& d : plan.dimensions) {
@@ -182,83 +141,132 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kDimension, 1.6));
     p.drawLine(a - slash, a + slash);
     p.drawLine(b - slash, b + slash);
-    Label(&p, 0.5 * (a + b), ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(d.distance_m)) + tr(" m"),
-          kDimension, std::hypot(b.x() - a.x(), b.y() - a.y()) - 16.0);
+    PaintLabel(&p, 0.5 * (a + b), ScreenAngle(b - a),
+               QString::fromStdString(plan::FormatMetres(d.distance_m)) + tr(" m"), kDimension,
+               std::hypot(b.x() - a.x(), b.y() - a.y()) - 16.0);
   }
-  // The scale bar, bottom left.
-  const double bar_m = NiceLength(100.0 / scale_);
-  const double bar_px = bar_m * scale_;
-  const QPointF origin(16, height() - 18);
-  p.setPen(QPen(Qt::black, 2.0, Qt::SolidLine, Qt::FlatCap));
-  p.drawLine(origin, origin + QPointF(bar_px, 0));
-  p.drawLine(origin + QPointF(0, -5), origin + QPointF(0, 5));
-  p.drawLine(origin + QPointF(bar_px, -5), origin + QPointF(bar_px, 5));
-  p.drawText(QPointF(origin.x() + bar_px + 8, origin.y() + 5),
-             bar_m >= 1.0 ? tr("%1 m").arg(bar_m) : tr("%1 cm").arg(bar_m * 100.0));
-  // Where the cursor is, bottom right.
-  if (cursor_) {
-    const Eigen::Vector2d c = ToPlan(*cursor_);
-    const QString text = tr("x %1  y %2 m").arg(c.x(), 0, 'f', 2).arg(c.y(), 0, 'f', 2);
-    p.setPen(QColor(60, 60, 60));
-    p.drawText(QRectF(0, height() - 28, width() - 12, 24), Qt::AlignRight | Qt::AlignVCenter, text);
+  PaintRooms(&p, true);  // The names over the lines.
+  if (section_line_ && !drag_) PaintSectionLine(&p, *section_line_, false);
+  if (drag_) PaintSectionLine(&p, *drag_, true);
+  PaintScaleBar(&p);
+  PaintCursor(&p);
+}
+
+void PlanCanvas::PaintRooms(QPainter* p, bool names) const {
+  const std::vector<plan::Room>& rooms = plan_->rooms;
+  for (size_t i = 0; i < rooms.size(); ++i) {
+    const plan::Room& room = rooms[i];
+    if (room.outline.size() < 3) continue;
+    if (!names) {
+      QPolygonF outline;
+      for (const Eigen::Vector2d& v : room.outline) outline << ToWidget(v);
+      const QColor tint = RoomTint(i);
+      p->setPen(QPen(tint.darker(130), 1.0));
+      p->setBrush(tint);
+      p->drawPolygon(outline);
+      p->setBrush(Qt::NoBrush);
+      continue;
+    }
+    // Two lines at the label point, left out when the room is too small on
+    // screen to hold them (the width of a square of its area).
+    const double room_px = std::sqrt(std::max(0.0, room.area_m2)) * scale();
+    const double line_px = p->fontMetrics().height() + 2.0;
+    const QPointF at = ToWidget(room.label);
+    PaintLabel(p, at - QPointF(0, 0.5 * line_px), 0.0, tr("Room %1").arg(i + 1), kRoomText, room_px);
+    PaintLabel(p, at + QPointF(0, 0.5 * line_px), 0.0, tr("%1 m²").arg(room.area_m2, 0, 'f', 2), kRoomText,
+               room_px);
   }
+}
+
+void PlanCanvas::PaintSectionLine(QPainter* p, const SectionLine& line, bool rubber_band) const {
+  const QPointF a = ToWidget(line.a), b = ToWidget(line.b);
+  const double length = std::hypot(b.x() - a.x(), b.y() - a.y());
+  if (length < 1.0) return;
+  // On screen, y down: the plan's u = (b - a) / |b - a| and its +90 deg
+  // turn n (the way the section's viewer looks) have their y negated.
+  const QPointF u = (b - a) / length;
+  const QPointF n(u.y(), -u.x());
+  p->setPen(QPen(kSection, rubber_band ? 1.5 : 2.0, Qt::DashDotLine, Qt::FlatCap));
+  p->drawLine(a, b);
+  // At each end a short solid stroke and an arrow along n, as drawings mark a cut.
+  p->setPen(QPen(kSection, 2.5, Qt::SolidLine, Qt::FlatCap));
+  p->setBrush(kSection);
+  for (const QPointF& end : {a, b}) {
+    const QPointF tip = end + 22.0 * n;
+    p->drawLine(end, tip);
+    p->drawPolygon(QPolygonF({tip + 6.0 * n, tip - 5.0 * u, tip + 5.0 * u}));
+  }
+  p->setBrush(Qt::NoBrush);
+  QFont bold = p->font();
+  bold.setBold(true);
+  p->save();
+  p->setFont(bold);
+  PaintLabel(p, a - 14.0 * u, 0.0, QStringLiteral("A"), kSection);
+  PaintLabel(p, b + 14.0 * u, 0.0, QStringLiteral("A'"), kSection);
+  p->restore();
+  if (rubber_band) {
+    PaintLabel(p, 0.5 * (a + b) - 12.0 * n, ScreenAngle(b - a),
+               tr("%1 m").arg((line.b - line.a).norm(), 0, 'f', 2), kSection, length - 40.0);
+  }
+}
+
+bool PlanCanvas::event(QEvent* event) {
+  // Esc while a line is drawn is the canvas's, not a window shortcut's.
+  if (event->type() == QEvent::ShortcutOverride && (drag_ || section_mode_) &&
+      static_cast<QKeyEvent*>(event)->key() == Qt::Key_Escape) {
+    event->accept();
+    return true;
+  }
+  return Canvas2d::event(event);
 }
 
 void PlanCanvas::mousePressEvent(QMouseEvent* event) {
-  if (event->button() == Qt::LeftButton) {
-    dragging_ = true;
-    drag_from_ = event->localPos();
-    setCursor(Qt::ClosedHandCursor);
+  if (plan_ && event->button() == Qt::LeftButton && (section_mode_ || (event->modifiers() & Qt::ShiftModifier))) {
+    const Eigen::Vector2d at = ToPlan(event->localPos());
+    drag_ = SectionLine{at, at};
+    setFocus(Qt::MouseFocusReason);  // Esc
     event->accept();
+    update();
     return;
   }
-  QWidget::mousePressEvent(event);
+  Canvas2d::mousePressEvent(event);
 }
 
 void PlanCanvas::mouseMoveEvent(QMouseEvent* event) {
-  cursor_ = event->localPos();
-  if (dragging_) {
-    const QPointF d = event->localPos() - drag_from_;
-    drag_from_ = event->localPos();
-    centre_ -= Eigen::Vector2d(d.x(), -d.y()) / scale_;
-    fitted_ = false;
-  }
-  update();
+  if (drag_) drag_->b = ToPlan(event->localPos());
+  Canvas2d::mouseMoveEvent(event);
 }
 
 void PlanCanvas::mouseReleaseEvent(QMouseEvent* event) {
-  if (event->button() == Qt::LeftButton && dragging_) {
-    dragging_ = false;
-    setCursor(Qt::OpenHandCursor);
+  if (drag_ && event->button() == Qt::LeftButton) {
+    drag_->b = ToPlan(event->localPos());
+    const SectionLine line = *drag_;
+    drag_.reset();
+    update();
+    if ((line.b - line.a).norm() * scale() >= kMinSectionPx) {
+      section_line_ = line;
+      SetSectionMode(false);  // One line a time, then the hand again.
+      emit sectionLineDrawn();
+    }
+    event->accept();
+    return;
   }
-  QWidget::mouseReleaseEvent(event);
+  Canvas2d::mouseReleaseEvent(event);
 }
 
-void PlanCanvas::mouseDoubleClickEvent(QMouseEvent*) { Fit(); }
-
-void PlanCanvas::wheelEvent(QWheelEvent* event) {
-  // About the cursor: the plan point under it stays under it.
-  const QPointF at = event->position();
-  const Eigen::Vector2d before = ToPlan(at);
-  const double steps = event->angleDelta().y() / 120.0;
-  scale_ = std::clamp(scale_ * std::pow(1.2, steps), kMinScale, kMaxScale);
-  const Eigen::Vector2d after = ToPlan(at);
-  centre_ += before - after;
-  fitted_ = false;
-  event->accept();
-  update();
-}
-
-void PlanCanvas::resizeEvent(QResizeEvent* event) {
-  QWidget::resizeEvent(event);
-  // Not moved by the operator since the last fit: fitted to the new size.
-  if (plan_ && fitted_) Fit();
-}
-
-void PlanCanvas::leaveEvent(QEvent* event) {
-  cursor_.reset();
-  update();
-  QWidget::leaveEvent(event);
+void PlanCanvas::keyPressEvent(QKeyEvent* event) {
+  if (event->key() == Qt::Key_Escape && (drag_ || section_mode_)) {
+    // The drag first, the mode with a second Esc.
+    if (drag_) {
+      drag_.reset();
+      update();
+    } else {
+      SetSectionMode(false);
+    }
+    event->accept();
+    return;
+  }
+  Canvas2d::keyPressEvent(event);
 }
 
 }  // namespace sweepscan::ui

@@ -1,14 +1,18 @@
 // The plan view's drawing (ui/plan/plan_panel.h): a FloorPlan in 2D with
-// QPainter, as a surveyor reads one: the section's points in grey, walls
-// filled dark with their thickness, wall faces black (furniture's thin
-// grey), openings as a blue door leaf and swing between their jambs with
-// the width, inner dimensions as dimension lines with ticks and the length
-// in metres, a 1 m grid, a scale bar, and the cursor's x, y.
+// QPainter, as a surveyor reads one: rooms as pale fills with their name
+// and area, the section's points in grey, walls filled dark with their
+// thickness, wall faces black (furniture's thin grey), openings as a blue
+// door leaf and swing between their jambs with the width, inner dimensions
+// as dimension lines with ticks and the length in metres, a 1 m grid, a
+// scale bar, and the cursor's x, y.
 //
-// Plan x right, y up (the project's frame seen from above, as View > Top).
-// Left drag pans, the wheel zooms about the cursor, a double click or
-// Fit() shows the whole plan. Text and line widths stay the same size on
-// screen whatever the zoom.
+// Plan x right, y up (the project's frame seen from above, as View > Top);
+// pan, zoom and Fit as Canvas2d. A vertical section's line A -> A' is drawn
+// over the plan with arrows that point the way its viewer looks (core/plan/
+// section.h: along n, a -> b turned +90 deg). The operator draws a new one
+// by dragging with Shift held, or with a plain drag while the section mode
+// is on (SetSectionMode: the dock's Section button); Esc drops a drag under
+// way (and then leaves the mode).
 //
 // GUI thread only.
 #ifndef SWEEPSCAN_UI_PLAN_PLAN_CANVAS_H_
@@ -17,16 +21,24 @@
 #include <Eigen/Core>
 #include <QPointF>
 #include <QString>
-#include <QWidget>
 #include <optional>
 
 #include "core/plan/floor_plan.h"
+#include "ui/plan/canvas_2d.h"
 
 namespace sweepscan::ui {
 
-class PlanCanvas : public QWidget {
+// A vertical section's line in plan metres: A at a, A' at b.
+struct SectionLine {
+  Eigen::Vector2d a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::UnitX();
+};
+
+class PlanCanvas : public Canvas2d {
   Q_OBJECT
  public:
+  // Shorter drags (widget pixels) are clicks, not section lines.
+  static constexpr double kMinSectionPx = 8.0;
+
   explicit PlanCanvas(QWidget* parent = nullptr);
 
   // A new plan: fitted if `fit` or if the operator has not panned or zoomed
@@ -35,35 +47,41 @@ class PlanCanvas : public QWidget {
   void SetPlan(const plan::FloorPlan& plan, bool fit);
   void ClearPlan(const QString& why);  // why: shown in the middle
   const std::optional<plan::FloorPlan>& plan() const { return plan_; }
-  void Fit();
-  // Pixels a metre; the plan point at the widget's centre.
-  double scale() const { return scale_; }
-  Eigen::Vector2d centre() const { return centre_; }
-  // Plan metres <-> widget pixels.
-  QPointF ToWidget(const Eigen::Vector2d& p) const;
-  Eigen::Vector2d ToPlan(const QPointF& w) const;
+  Eigen::Vector2d ToPlan(const QPointF& w) const { return ToModel(w); }
 
-  QSize sizeHint() const override { return {640, 480}; }
+  // The section line drawn over the plan (none: nothing drawn).
+  void SetSectionLine(const std::optional<SectionLine>& line);
+  const std::optional<SectionLine>& section_line() const { return section_line_; }
+  // A plain left drag draws a section line instead of panning.
+  void SetSectionMode(bool on);
+  bool section_mode() const { return section_mode_; }
+  // A section line's drag under way (its rubber band).
+  bool drawing_section() const { return drag_.has_value(); }
+
+ signals:
+  // The operator drew `section_line()`.
+  void sectionLineDrawn();
+  void sectionModeChanged(bool on);
 
  protected:
+  bool Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const override;
+  QString CursorText(const Eigen::Vector2d& at) const override;
+  bool event(QEvent* event) override;
   void paintEvent(QPaintEvent* event) override;
   void mousePressEvent(QMouseEvent* event) override;
   void mouseMoveEvent(QMouseEvent* event) override;
   void mouseReleaseEvent(QMouseEvent* event) override;
-  void mouseDoubleClickEvent(QMouseEvent* event) override;
-  void wheelEvent(QWheelEvent* event) override;
-  void resizeEvent(QResizeEvent* event) override;
-  void leaveEvent(QEvent* event) override;
+  void keyPressEvent(QKeyEvent* event) override;
 
  private:
+  void PaintRooms(QPainter* p, bool names) const;
+  void PaintSectionLine(QPainter* p, const SectionLine& line, bool rubber_band) const;
+
   std::optional<plan::FloorPlan> plan_;
   QString empty_text_;
-  double scale_ = 40.0;
-  Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
-  bool fitted_ = true;  // as Fit() leaves it: follows new plans and sizes
-  bool dragging_ = false;
-  QPointF drag_from_;
-  std::optional<QPointF> cursor_;
+  std::optional<SectionLine> section_line_;
+  std::optional<SectionLine> drag_;  // the line being drawn
+  bool section_mode_ = false;
 };
 
 }  // namespace sweepscan::ui

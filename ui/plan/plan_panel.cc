@@ -8,6 +8,7 @@
 #include <QProgressBar>
 #include <QPushButton>
 #include <QSettings>
+#include <QSplitter>
 #include <QTimer>
 #include <QToolButton>
 #include <QVBoxLayout>
@@ -16,6 +17,7 @@
 #include "core/plan/plan_writers.h"
 #include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
+#include "ui/plan/section_canvas.h"
 #include "ui/project/project_controller.h"
 #include "ui/workspace/workspace.h"
 
@@ -24,6 +26,7 @@ namespace {
 
 const QString kHeightKey = QStringLiteral("plan/height_m");
 const QString kBandKey = QStringLiteral("plan/band_m");
+const QString kSectionKey = QStringLiteral("plan/section_line");  // x0, y0, x1, y1 (m)
 
 // What a build needs, taken on the GUI thread: the clouds (shared, not
 // copied) and their poses, or the session's points to convert on the job.
@@ -32,6 +35,89 @@ struct PlanSource {
   std::shared_ptr<const std::vector<CloudPoint>> session;
   QString what;  // "the project floor (a, b)", "the session lab.sweepscan"
 };
+
+// The project's placed, visible sessions whose clouds are built, or the
+// session's cloud; null with why not in `*why_not`.
+std::shared_ptr<PlanSource> TakeSource(ProjectController* project, Workspace* workspace, QString* why_not) {
+  auto source = std::make_shared<PlanSource>();
+  const ProjectDocument* doc = project->document();
+  if (doc->is_open()) {
+    QStringList ids;
+    bool waiting = false;
+    for (const ProjectSession& s : doc->project().sessions) {
+      if (!s.project_from_session || !s.visible) continue;
+      const auto c = project->clouds().find(s.id);
+      if (c == project->clouds().end() || c->second->key != CloudKey(doc->path().toStdString(), s)) {
+        waiting = true;  // Its cloud is on its way (cloudsChanged rebuilds).
+        continue;
+      }
+      // The cloud's positions, shared with the project (aliasing: no copy).
+      source->inputs.push_back(
+          {std::shared_ptr<const std::vector<Eigen::Vector3f>>(c->second, &c->second->positions),
+           *s.project_from_session});
+      ids << QString::fromStdString(s.id);
+    }
+    if (source->inputs.empty()) {
+      *why_not = waiting ? PlanPanel::tr("Waiting for the project's clouds…")
+                         : PlanPanel::tr("The project has no placed, visible session to draw.");
+      return nullptr;
+    }
+    source->what =
+        PlanPanel::tr("project %1 (%2)").arg(QString::fromStdString(doc->project().name), ids.join(", "));
+  } else if (workspace->point_count() > 0) {
+    // A copy on the processing thread (the GUI waits for its current batch).
+    source->session = std::make_shared<const std::vector<CloudPoint>>(workspace->CloudSnapshot());
+    const QString dir = workspace->session_dir();
+    source->what =
+        dir.isEmpty() ? PlanPanel::tr("the live cloud") : PlanPanel::tr("session %1").arg(QFileInfo(dir).fileName());
+  } else {
+    *why_not = PlanPanel::tr("Open a project (File > Open Project…) or a session to draw its floor plan.");
+    return nullptr;
+  }
+  return source;
+}
+
+// On the job thread: the inputs, the session's points converted.
+std::vector<PlanInput> InputsOf(const PlanSource& source) {
+  std::vector<PlanInput> inputs = source.inputs;
+  if (source.session) {
+    auto xyz = std::make_shared<std::vector<Eigen::Vector3f>>();
+    xyz->reserve(source.session->size());
+    for (const CloudPoint& p : *source.session) xyz->emplace_back(p.x, p.y, p.z);
+    inputs.push_back({xyz, Rigid3d()});
+  }
+  return inputs;
+}
+
+// What a job builds: the plan, the section, or both.
+struct Built {
+  plan::FloorPlan plan;
+  bool section_wanted = false;
+  SectionOf section;
+  QString section_error;  // "" when built
+};
+
+// The section of `inputs` into `built`; false when cancelled.
+bool BuildSection(const std::vector<PlanInput>& inputs, const plan::VerticalSectionOptions& options,
+                  std::atomic<bool>* cancel, const ProjectJobs::Progress& progress, Built* built) {
+  const QString what = PlanPanel::tr("Section A–A′");
+  const Status s = BuildSectionOf(inputs, options, [&](double f) {
+    progress(what, f);
+    return !*cancel;
+  }, &built->section);
+  built->section_wanted = true;
+  built->section_error = s.ok() ? QString() : QString::fromStdString(s.message());
+  return !*cancel;
+}
+
+// A push button at the end of `row`.
+QPushButton* AddButton(QHBoxLayout* row, const QString& text, const QString& name, const QString& tip) {
+  auto* b = new QPushButton(text);
+  if (!name.isEmpty()) b->setObjectName(name);
+  b->setToolTip(tip);
+  row->addWidget(b);
+  return b;
+}
 
 }  // namespace
 
@@ -79,23 +165,35 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
     jobs_.Cancel();
   });
   row->addWidget(cancel_);
-  auto* update = new QPushButton(tr("Update"));
-  update->setObjectName(QStringLiteral("planUpdate"));
-  update->setToolTip(tr("Builds the plan again now (a live cloud grows without rebuilding it)"));
+  QPushButton* update = AddButton(row, tr("Update"), QStringLiteral("planUpdate"),
+                                  tr("Builds the plan again now (a live cloud grows without rebuilding it)"));
   connect(update, &QPushButton::clicked, this, &PlanPanel::Rebuild);
-  row->addWidget(update);
-  fit_ = new QPushButton(tr("Fit"));
-  fit_->setToolTip(tr("The whole plan in the view (or double-click it)"));
-  row->addWidget(fit_);
-  export_ = new QPushButton(tr("Export…"));
-  export_->setObjectName(QStringLiteral("planExport"));
-  export_->setToolTip(tr("The plan as SVG (1:50, paper millimetres) or DXF R12 (metres), by the suffix"));
+  fit_ = AddButton(row, tr("Fit"), QString(), tr("The whole plan in the view (or double-click it)"));
+  export_ = AddButton(row, tr("Export…"), QStringLiteral("planExport"),
+                      tr("The plan as SVG (1:50, paper millimetres) or DXF R12 (metres), by the suffix"));
   connect(export_, &QPushButton::clicked, this, &PlanPanel::ExportWithDialog);
-  row->addWidget(export_);
+  section_tool_ = new QToolButton;
+  section_tool_->setObjectName(QStringLiteral("planSectionTool"));
+  section_tool_->setText(tr("Section"));
+  section_tool_->setCheckable(true);
+  section_tool_->setShortcut(QKeySequence(tr("S")));
+  section_tool_->setToolTip(tr("Draw a vertical section: drag its line A → A′ on the plan (S, or Shift + drag "
+                               "without it; Esc cancels). The section looks the way the arrows point."));
+  row->addWidget(section_tool_);
   layout->addLayout(row);
   canvas_ = new PlanCanvas;
   connect(fit_, &QPushButton::clicked, canvas_, &PlanCanvas::Fit);
-  layout->addWidget(canvas_, 1);
+  connect(section_tool_, &QToolButton::toggled, canvas_, &PlanCanvas::SetSectionMode);
+  connect(canvas_, &PlanCanvas::sectionModeChanged, section_tool_, &QToolButton::setChecked);
+  connect(canvas_, &PlanCanvas::sectionLineDrawn, this, [this] { SetSectionLine(canvas_->section_line()); });
+  splitter_ = new QSplitter(Qt::Vertical);
+  splitter_->setObjectName(QStringLiteral("planSplitter"));
+  splitter_->setChildrenCollapsible(false);
+  splitter_->addWidget(canvas_);
+  splitter_->addWidget(MakeSectionPane());
+  splitter_->setStretchFactor(0, 3);
+  splitter_->setStretchFactor(1, 2);
+  layout->addWidget(splitter_, 1);
   summary_ = new QLabel;
   summary_->setObjectName(QStringLiteral("planSummary"));
   summary_->setWordWrap(true);
@@ -129,6 +227,46 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
   });
   connect(&jobs_, &ProjectJobs::progress, this, &PlanPanel::ShowProgress);
   canvas_->ClearPlan(tr("Open a project (File > Open Project…) or a session to draw its floor plan."));
+  // The last section line, drawn again over the next plan.
+  const QVariantList line = settings.value(kSectionKey).toList();
+  if (line.size() == 4) {
+    SectionLine l;
+    l.a = {line[0].toDouble(), line[1].toDouble()};
+    l.b = {line[2].toDouble(), line[3].toDouble()};
+    if (l.a.allFinite() && l.b.allFinite() && (l.b - l.a).norm() >= 1e-3) {
+      canvas_->SetSectionLine(l);
+      ++line_serial_;
+      section_pane_->setVisible(true);
+    }
+  }
+}
+
+QWidget* PlanPanel::MakeSectionPane() {
+  section_pane_ = new QWidget;
+  section_pane_->setObjectName(QStringLiteral("planSectionPane"));
+  auto* layout = new QVBoxLayout(section_pane_);
+  layout->setContentsMargins(0, 0, 0, 0);
+  auto* row = new QHBoxLayout;
+  section_summary_ = new QLabel;
+  section_summary_->setObjectName(QStringLiteral("planSectionSummary"));
+  section_summary_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  row->addWidget(section_summary_, 1);
+  QPushButton* fit = AddButton(row, tr("Fit"), QString(), tr("The whole section in the view (or double-click it)"));
+  section_export_ = AddButton(row, tr("Export Section…"), QStringLiteral("planSectionExport"),
+                              tr("The section as SVG (1:50, paper millimetres, z up)"));
+  connect(section_export_, &QPushButton::clicked, this, &PlanPanel::ExportSectionWithDialog);
+  auto* clear = new QToolButton;
+  clear->setObjectName(QStringLiteral("planSectionClear"));
+  clear->setText(tr("Remove"));
+  clear->setToolTip(tr("Removes the section line and its section"));
+  connect(clear, &QToolButton::clicked, this, [this] { SetSectionLine(std::nullopt); });
+  row->addWidget(clear);
+  layout->addLayout(row);
+  section_canvas_ = new SectionCanvas;
+  connect(fit, &QPushButton::clicked, section_canvas_, &SectionCanvas::Fit);
+  layout->addWidget(section_canvas_, 1);
+  section_pane_->setVisible(false);
+  return section_pane_;
 }
 
 PlanPanel::~PlanPanel() { jobs_.Cancel(); }
@@ -164,77 +302,62 @@ void PlanPanel::Rebuild() {
   }
   again_ = false;
   stale_ = false;
-  auto source = std::make_shared<PlanSource>();
-  const ProjectDocument* doc = project_->document();
-  if (doc->is_open()) {
-    QStringList ids;
-    bool waiting = false;
-    for (const ProjectSession& s : doc->project().sessions) {
-      if (!s.project_from_session || !s.visible) continue;
-      const auto c = project_->clouds().find(s.id);
-      if (c == project_->clouds().end() || c->second->key != CloudKey(doc->path().toStdString(), s)) {
-        waiting = true;  // Its cloud is on its way (cloudsChanged rebuilds).
-        continue;
-      }
-      // The cloud's positions, shared with the project (aliasing: no copy).
-      source->inputs.push_back(
-          {std::shared_ptr<const std::vector<Eigen::Vector3f>>(c->second, &c->second->positions),
-           *s.project_from_session});
-      ids << QString::fromStdString(s.id);
-    }
-    if (source->inputs.empty()) {
-      canvas_->ClearPlan(waiting ? tr("Waiting for the project's clouds…")
-                                 : tr("The project has no placed, visible session to draw."));
-      summary_->clear();
-      return;
-    }
-    source->what = tr("project %1 (%2)").arg(QString::fromStdString(doc->project().name), ids.join(", "));
-  } else if (workspace_->point_count() > 0) {
-    // A copy on the processing thread (the GUI waits for its current batch).
-    source->session = std::make_shared<const std::vector<CloudPoint>>(workspace_->CloudSnapshot());
-    const QString dir = workspace_->session_dir();
-    source->what = dir.isEmpty() ? tr("the live cloud") : tr("session %1").arg(QFileInfo(dir).fileName());
-  } else {
-    canvas_->ClearPlan(tr("Open a project (File > Open Project…) or a session to draw its floor plan."));
+  QString why_not;
+  const std::shared_ptr<PlanSource> source = TakeSource(project_, workspace_, &why_not);
+  if (!source) {
+    canvas_->ClearPlan(why_not);
+    section_canvas_->ClearSection(why_not);
     summary_->clear();
+    section_summary_->clear();
     return;
   }
   plan::FloorPlanOptions options;
   options.section.height_m = height_->value();
   options.section.band_m = band_->value();
-  auto plan = std::make_shared<plan::FloorPlan>();
+  std::optional<plan::VerticalSectionOptions> vertical;
+  if (canvas_->section_line()) {
+    vertical.emplace();
+    vertical->a = canvas_->section_line()->a;
+    vertical->b = canvas_->section_line()->b;
+    vertical->band_m = options.section.band_m;
+  }
+  auto built = std::make_shared<Built>();
   const QString what = tr("Floor plan at %1 m").arg(options.section.height_m, 0, 'f', 2);
   const bool fit = fit_next_;
+  const uint64_t serial = line_serial_;
   fit_next_ = false;
   jobs_.Run(
       what,
-      [source, options, plan, what](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
-        std::vector<PlanInput> inputs = source->inputs;
-        if (source->session) {
-          auto xyz = std::make_shared<std::vector<Eigen::Vector3f>>();
-          xyz->reserve(source->session->size());
-          for (const CloudPoint& p : *source->session) xyz->emplace_back(p.x, p.y, p.z);
-          inputs.push_back({xyz, Rigid3d()});
-        }
+      [source, options, vertical, built, what](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+        const std::vector<PlanInput> inputs = InputsOf(*source);
         const Status s = BuildPlanOf(inputs, options, [&](double f) {
           progress(f < 0.6 ? what + tr(": cutting") : what + tr(": fitting walls"), f);
           return !*cancel;
-        }, plan.get());
+        }, &built->plan);
+        if (*cancel) return QString(kPlanCancelled);
+        // The section too, whether the plan's cut found walls or not.
+        if (vertical && !BuildSection(inputs, *vertical, cancel, progress, built.get())) {
+          return QString(kPlanCancelled);
+        }
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, source, plan, fit, options](const QString& error) {
-        progress_->setVisible(false);
-        cancel_->setVisible(false);
-        if (again_) {
-          Rebuild();
-          return;
-        }
+      [this, source, built, fit, options, serial](const QString& error) {
+        if (!JobEnded()) return;
         if (error == QLatin1String(kPlanCancelled) || jobs_.cancelled()) {
           stale_ = true;  // Built again when next asked for.
           summary_->setText(tr("Cancelled: the plan shown is the last one built (Update with a new cut)."));
           emit planBuilt(false, tr("cancelled"));
           return;
         }
+        what_ = source->what;
+        if (built->section_wanted && serial == line_serial_) {
+          section_shown_serial_ = serial;
+          ShowSection(built->section, false);
+          if (!built->section_error.isEmpty()) {
+            section_canvas_->ClearSection(tr("No section: %1").arg(built->section_error));
+          }
+        }
+        if (serial != line_serial_) RebuildSection();  // A line drawn meanwhile.
         if (!error.isEmpty()) {
           canvas_->ClearPlan(tr("No plan: %1").arg(error));
           summary_->setText(tr("No plan of %1: %2").arg(source->what, error));
@@ -242,26 +365,114 @@ void PlanPanel::Rebuild() {
           return;
         }
         ++plans_built_;
-        canvas_->SetPlan(*plan, fit);
+        const plan::FloorPlan& plan = built->plan;
+        canvas_->SetPlan(plan, fit);
         size_t structural = 0;
-        for (const plan::WallFace& f : plan->faces) structural += f.structural ? 1 : 0;
+        for (const plan::WallFace& f : plan.faces) structural += f.structural ? 1 : 0;
         title_ = tr("sweepscan plan of %1: section at %2 m ± %3 m")
                      .arg(source->what)
                      .arg(options.section.height_m, 0, 'f', 2)
                      .arg(options.section.band_m, 0, 'f', 2);
         const QString text = tr("%1 · section %L2 of %L3 points · %4 wall faces (%5 furniture), %6 walls, "
-                                "%7 openings, %8 dimensions")
+                                "%7 openings, %8 dimensions, %9 rooms")
                                  .arg(source->what)
-                                 .arg(plan->section.points_out)
-                                 .arg(plan->section.points_in)
+                                 .arg(plan.section.points_out)
+                                 .arg(plan.section.points_in)
                                  .arg(structural)
-                                 .arg(plan->faces.size() - structural)
-                                 .arg(plan->walls.size())
-                                 .arg(plan->openings.size())
-                                 .arg(plan->dimensions.size());
+                                 .arg(plan.faces.size() - structural)
+                                 .arg(plan.walls.size())
+                                 .arg(plan.openings.size())
+                                 .arg(plan.dimensions.size())
+                                 .arg(plan.rooms.size());
         summary_->setText(text);
         emit planBuilt(true, text);
       });
+}
+
+bool PlanPanel::JobEnded() {
+  progress_->setVisible(false);
+  cancel_->setVisible(false);
+  if (!again_) return true;
+  Rebuild();
+  return false;
+}
+
+void PlanPanel::SetSectionLine(const std::optional<SectionLine>& line) {
+  canvas_->SetSectionLine(line);
+  ++line_serial_;
+  QSettings settings;
+  if (!line) {
+    settings.remove(kSectionKey);
+    section_canvas_->ClearSection(tr("No section"));
+    section_shown_serial_ = 0;
+    section_summary_->clear();
+    section_pane_->setVisible(false);
+    return;
+  }
+  settings.setValue(kSectionKey, QVariantList{line->a.x(), line->a.y(), line->b.x(), line->b.y()});
+  section_pane_->setVisible(true);
+  RebuildSection();
+}
+
+void PlanPanel::RebuildSection() {
+  // A build under way ends with the section of the line it started with;
+  // its end starts this one's if the line changed (or it was cancelled).
+  if (jobs_.running() || !canvas_->section_line()) return;
+  if (!isVisible()) {
+    stale_ = true;  // Built with the plan when the dock is next shown.
+    return;
+  }
+  QString why_not;
+  const std::shared_ptr<PlanSource> source = TakeSource(project_, workspace_, &why_not);
+  if (!source) {
+    section_canvas_->ClearSection(why_not);
+    return;
+  }
+  plan::VerticalSectionOptions options;
+  options.a = canvas_->section_line()->a;
+  options.b = canvas_->section_line()->b;
+  options.band_m = band_->value();
+  auto built = std::make_shared<Built>();
+  const uint64_t serial = line_serial_;
+  jobs_.Run(
+      tr("Section A–A′"),
+      [source, options, built](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+        return BuildSection(InputsOf(*source), options, cancel, progress, built.get()) ? QString()
+                                                                                       : QString(kPlanCancelled);
+      },
+      [this, source, built, serial](const QString& error) {
+        if (!JobEnded()) return;
+        if (!error.isEmpty() || jobs_.cancelled()) return;  // The section shown stays.
+        what_ = source->what;
+        if (serial != line_serial_) {
+          RebuildSection();  // Another line drawn meanwhile.
+          return;
+        }
+        const bool new_line = section_shown_serial_ != serial;
+        section_shown_serial_ = serial;
+        if (!built->section_error.isEmpty()) {
+          section_canvas_->ClearSection(tr("No section: %1").arg(built->section_error));
+          section_summary_->setText(tr("No section: %1").arg(built->section_error));
+          return;
+        }
+        ShowSection(built->section, new_line);
+      });
+}
+
+void PlanPanel::ShowSection(const SectionOf& section, bool fit) {
+  ++sections_built_;
+  section_canvas_->SetSection(section, height_->value(), fit);
+  const plan::VerticalSectionOptions& o = section.options;
+  section_summary_->setText(tr("Section A–A′ %1 m ± %2 m · %L3 points")
+                                .arg((o.b - o.a).norm(), 0, 'f', 2)
+                                .arg(o.band_m, 0, 'f', 2)
+                                .arg(section.stats.points_out));
+  section_summary_->setToolTip(tr("A (%1, %2) → A′ (%3, %4) in the plan's frame (m); seen from the side the "
+                                  "arrows on the plan point away from")
+                                   .arg(o.a.x(), 0, 'f', 2)
+                                   .arg(o.a.y(), 0, 'f', 2)
+                                   .arg(o.b.x(), 0, 'f', 2)
+                                   .arg(o.b.y(), 0, 'f', 2));
 }
 
 bool PlanPanel::ExportPlan(const QString& path, QString* error) const {
@@ -302,6 +513,48 @@ void PlanPanel::ExportWithDialog() {
   }
   QString error;
   if (!ExportPlan(path, &error)) show_error_(tr("Cannot export the floor plan"), error);
+}
+
+}  // namespace sweepscan::ui
+
+namespace sweepscan::ui {
+
+bool PlanPanel::ExportSection(const QString& path, QString* error) const {
+  const std::optional<SectionOf>& section = section_canvas_->section();
+  if (!section || section->s_z.empty()) {
+    *error = tr("There is no section to export yet: drag its line on the floor plan (Section, or Shift + drag).");
+    return false;
+  }
+  if (QFileInfo(path).suffix().toLower() != QLatin1String("svg")) {
+    *error = tr("%1: a section is written as SVG (.svg)").arg(path);
+    return false;
+  }
+  const plan::VerticalSectionOptions& o = section->options;
+  plan::SvgOptions svg;
+  svg.title = tr("sweepscan vertical section A-A' of %1: (%2, %3) -> (%4, %5) m +- %6 m; s, z in m")
+                  .arg(what_)
+                  .arg(o.a.x(), 0, 'f', 2)
+                  .arg(o.a.y(), 0, 'f', 2)
+                  .arg(o.b.x(), 0, 'f', 2)
+                  .arg(o.b.y(), 0, 'f', 2)
+                  .arg(o.band_m, 0, 'f', 2)
+                  .toStdString();
+  const Status s = plan::WriteSectionSvg(path.toStdString(), section->s_z, svg);
+  if (!s.ok()) *error = QString::fromStdString(s.message());
+  return s.ok();
+}
+
+void PlanPanel::ExportSectionWithDialog() {
+  QString error;
+  if (!section_canvas_->section()) {
+    ExportSection(QString(), &error);
+    show_error_(tr("Cannot export the section"), error);
+    return;
+  }
+  QString path = QFileDialog::getSaveFileName(this, tr("Export section"), QString(), tr("SVG drawing, 1:50 (*.svg)"));
+  if (path.isEmpty()) return;
+  if (QFileInfo(path).suffix().toLower() != QLatin1String("svg")) path += QStringLiteral(".svg");
+  if (!ExportSection(path, &error)) show_error_(tr("Cannot export the section"), error);
 }
 
 }  // namespace sweepscan::ui
