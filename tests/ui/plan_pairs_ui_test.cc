@@ -14,6 +14,13 @@
 //   put the robot down, the buttons pressed for real; a pick through the
 //   view's own picking lands in the session under the cursor; Ctrl+Z
 //   undoes a pick, Esc leaves the project as it was.
+// * A vertical section drawn on the plan with the mouse (Shift + drag; the
+//   Section button's drag, which Esc drops) across rooms a and b: floor,
+//   ceiling and walls where the office floor has them; rebuilt with a new
+//   cut height; Export Section's SVG rendered by rsvg-convert. The dock is
+//   grabbed to build/tests/plan_section_panel.png to look at.
+// * Rooms of a hand-made plan drawn as a tinted fill with their names.
+// * plan_build.h's vertical section of posed clouds against core/plan's.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -23,10 +30,12 @@
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QImage>
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QLabel>
 #include <QPushButton>
+#include <QSettings>
 #include <QTest>
 #include <QToolButton>
 #include <QTreeWidget>
@@ -34,12 +43,15 @@
 #include <QXmlStreamReader>
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "core/project/project.h"
 #include "core/scenario/scenario.h"
 #include "tests/ui/app_fixture.h"
+#include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
 #include "ui/plan/plan_panel.h"
+#include "ui/plan/section_canvas.h"
 #include "ui/project/pair_pick_box.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
@@ -100,6 +112,15 @@ class PlanPairsUiTest : public testing::AppFixture {
   void OpenAndLoad(const QString& file) {
     ASSERT_TRUE(project()->OpenProject(file));
     WorstGapUntil([&] { return !project()->busy(); }, 60000);
+  }
+
+  // View > Floor Plan on a and b (b placed by the CLI), its first plan built.
+  PlanPanel* ShowPlanOfRoomsAB(const std::string& name) {
+    OpenAndLoad(MakeProject(name, "project align --session b --to a"));
+    PlanPanel* panel = window_->plan_panel();
+    window_->findChild<QDockWidget*>("planDock")->toggleViewAction()->trigger();
+    EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000), 500);
+    return panel;
   }
 
   static QTemporaryDir* sessions_;
@@ -182,6 +203,233 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   EXPECT_EQ(dxf_json["audit"].toObject()["errors"].toInt(), 0) << read.out.substr(0, 400);
   EXPECT_GT(dxf_json["counts"].toObject()["LINE"].toObject()["WALLS"].toInt(), 0);
   EXPECT_GT(dxf_json["counts"].toObject()["TEXT"].toObject()["DIMENSIONS"].toInt(), 0);
+}
+
+// The office floor's world (x, y) in the project's frame: a's, where the
+// scenario put the robot down.
+Eigen::Vector2d ProjectXy(const Rigid3d& start_a, double x, double y) {
+  return (start_a.inverse() * Eigen::Vector3d(x, y, 0.0)).head<2>();
+}
+
+// The section points with z in [z0, z1] and s in [s0, s1].
+std::vector<Eigen::Vector2d> Within(const std::vector<Eigen::Vector2d>& s_z, double s0, double s1, double z0,
+                                    double z1) {
+  std::vector<Eigen::Vector2d> out;
+  for (const Eigen::Vector2d& q : s_z) {
+    if (q.x() >= s0 && q.x() <= s1 && q.y() >= z0 && q.y() <= z1) out.push_back(q);
+  }
+  return out;
+}
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * v.size()));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
+  window_->resize(1600, 1000);  // As an operator's screen: room for both drawings.
+  PlanPanel* panel = ShowPlanOfRoomsAB("section");
+  PlanCanvas* canvas = panel->canvas();
+  ASSERT_TRUE(canvas->plan().has_value());
+  EXPECT_FALSE(panel->section_pane()->isVisible());  // No line yet.
+  // Along world y = 4.5 from x = -0.3 (outside a's west wall) to 10.9 (past
+  // b's east wall at 10.6): through rooms a and b, clear of their furniture.
+  const Rigid3d start_a = StartOf("building_a.json");
+  const Eigen::Vector2d a = ProjectXy(start_a, -0.3, 4.5), b = ProjectXy(start_a, 10.9, 4.5);
+  const QPoint wa = canvas->ToWidget(a).toPoint(), wb = canvas->ToWidget(b).toPoint();
+  ASSERT_TRUE(canvas->rect().contains(wa) && canvas->rect().contains(wb)) << wa.x() << "," << wa.y();
+
+  // The Section button's drag, dropped by Esc: no line, the mode kept for
+  // another try, then left by a second Esc.
+  QTest::mouseClick(panel->section_tool(), Qt::LeftButton);
+  ASSERT_TRUE(canvas->section_mode());
+  QTest::mousePress(canvas, Qt::LeftButton, Qt::NoModifier, wa);
+  QTest::mouseMove(canvas, (wa + wb) / 2);
+  EXPECT_TRUE(canvas->drawing_section());
+  QTest::keyClick(canvas, Qt::Key_Escape);
+  EXPECT_FALSE(canvas->drawing_section());
+  QTest::mouseRelease(canvas, Qt::LeftButton, Qt::NoModifier, wb);
+  EXPECT_FALSE(canvas->section_line().has_value());
+  EXPECT_TRUE(canvas->section_mode());
+  QTest::keyClick(canvas, Qt::Key_Escape);
+  EXPECT_FALSE(canvas->section_mode());
+  EXPECT_FALSE(panel->section_tool()->isChecked());
+  EXPECT_FALSE(panel->busy());
+  EXPECT_EQ(panel->sections_built(), 0u);
+  const Eigen::Vector2d centre = canvas->centre();
+  // A plain drag pans without the mode.
+  QTest::mousePress(canvas, Qt::LeftButton, Qt::NoModifier, wa);
+  QTest::mouseMove(canvas, wa + QPoint(30, 0));
+  QTest::mouseRelease(canvas, Qt::LeftButton, Qt::NoModifier, wa + QPoint(30, 0));
+  WaitFor([&] { return canvas->centre() != centre; }, 2000);
+  EXPECT_FALSE(canvas->section_line().has_value());
+  canvas->Fit();
+
+  // Shift + drag draws the line; its section is built on the job thread.
+  const QPoint fa = canvas->ToWidget(a).toPoint(), fb = canvas->ToWidget(b).toPoint();
+  QTest::mousePress(canvas, Qt::LeftButton, Qt::ShiftModifier, fa);
+  for (int k = 1; k <= 4; ++k) QTest::mouseMove(canvas, fa + (fb - fa) * k / 5);
+  QTest::mouseRelease(canvas, Qt::LeftButton, Qt::ShiftModifier, fb);
+  ASSERT_TRUE(canvas->section_line().has_value());
+  // The line where the mouse put it: within a pixel's plan metres.
+  EXPECT_LT((canvas->section_line()->a - a).norm(), 1.5 / canvas->scale());
+  EXPECT_LT((canvas->section_line()->b - b).norm(), 1.5 / canvas->scale());
+  const qint64 worst = WorstGapUntil([&] { return panel->sections_built() == 1 && !panel->busy(); }, 60000);
+  EXPECT_LT(worst, 500);
+  std::printf("section: longest event-loop gap %lld ms\n%s\n", static_cast<long long>(worst),
+              panel->section_summary_label()->text().toStdString().c_str());
+  EXPECT_TRUE(panel->section_pane()->isVisible());
+  EXPECT_EQ(QSettings().value("plan/section_line").toList().size(), 4);
+  ASSERT_TRUE(panel->section_canvas()->section().has_value());
+  const SectionOf& section = *panel->section_canvas()->section();
+  EXPECT_EQ(section.options.band_m, panel->band_box()->value());
+  EXPECT_GT(section.stats.points_in, 500000u);
+  ASSERT_GT(section.s_z.size(), 1000u);
+  const SectionLine line = *canvas->section_line();
+  EXPECT_EQ(section.options.a, line.a);
+  EXPECT_EQ(section.options.b, line.b);
+  EXPECT_NEAR(panel->section_canvas()->length(), 11.2, 3.0 / canvas->scale());
+  // s of a world x on the line drawn (where the mouse's pixels put its ends):
+  // u . (p - A), core/plan/section.h.
+  const Eigen::Vector2d u = (line.b - line.a).normalized();
+  const auto s_of = [&](double x) { return u.dot(ProjectXy(start_a, x, 4.5) - line.a); };
+  // Inside room a (x 0.5 .. 4.5) and b (5.6 .. 10.1): the floor at z 0,
+  // the ceiling at 2.7 (the storey), nothing between.
+  for (const auto& [x0, x1] : {std::pair{0.5, 4.5}, std::pair{5.6, 10.1}}) {
+    std::vector<double> z;
+    for (const Eigen::Vector2d& q : Within(section.s_z, s_of(x0), s_of(x1), -1.0, 4.0)) z.push_back(q.y());
+    ASSERT_GT(z.size(), 200u) << x0;
+    EXPECT_NEAR(Quantile(z, 0.02), 0.0, 0.03) << "floor, x " << x0 << ".." << x1;
+    EXPECT_NEAR(Quantile(z, 0.98), 2.7, 0.03) << "ceiling, x " << x0 << ".." << x1;
+    EXPECT_LT(Within(section.s_z, s_of(x0), s_of(x1), 0.3, 2.4).size(), z.size() / 50) << "clutter, x " << x0;
+  }
+  // The walls' faces: a's west wall x 0, a|b at 5.0 and 5.1, b's east wall
+  // 10.6; each a column of points from floor to ceiling at its s.
+  for (const double x : {0.0, 5.0, 5.1, 10.6}) {
+    const std::vector<Eigen::Vector2d> wall = Within(section.s_z, s_of(x) - 0.04, s_of(x) + 0.04, 0.3, 2.4);
+    ASSERT_GT(wall.size(), 100u) << "no wall at x " << x;
+    std::vector<double> s;
+    for (const Eigen::Vector2d& q : wall) s.push_back(q.x());
+    EXPECT_NEAR(Quantile(s, 0.5), s_of(x), 0.02) << "wall at x " << x;
+  }
+  // What the operator sees: the dock with its plan, line and section.
+  const QString shot = QCoreApplication::applicationDirPath() + "/plan_section_panel.png";
+  EXPECT_TRUE(panel->grab().save(shot));
+  std::printf("dock grabbed to %s\n", shot.toStdString().c_str());
+
+  // A new cut height: the plan and its section built again, the line kept.
+  panel->height_box()->setValue(1.5);
+  EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 2 && panel->sections_built() == 2 &&
+                                       !panel->busy(); }, 60000),
+            500);
+  EXPECT_DOUBLE_EQ(canvas->plan()->height_m, 1.5);
+  EXPECT_EQ(panel->section_canvas()->section()->options.a, canvas->section_line()->a);
+
+  // Export Section: SVG, rendered by rsvg-convert with ink; not another suffix.
+  const QString svg = tmp_.path() + "/section.svg";
+  QString error;
+  ASSERT_TRUE(panel->ExportSection(svg, &error)) << error.toStdString();
+  EXPECT_FALSE(panel->ExportSection(tmp_.path() + "/section.dxf", &error));
+  EXPECT_NE(error.indexOf(".svg"), -1) << error.toStdString();
+  EXPECT_FALSE(panel->ExportSection("/nonexistent-dir/section.svg", &error));
+  const std::string png = tmp_.path().toStdString() + "/section.png";
+  const auto render = RunCommand("rsvg-convert -o '" + png + "' '" + svg.toStdString() + "' 2>&1");
+  ASSERT_EQ(render.code, 0) << render.out;
+  const auto ink = RunCommand("/usr/bin/python3 " + kResources.toStdString() + "/../tests/tools/png_ink.py '" + png +
+                              "' 2>&1");
+  ASSERT_EQ(ink.code, 0) << ink.out;
+  const QJsonObject ink_json = QJsonDocument::fromJson(QByteArray::fromStdString(ink.out)).object();
+  EXPECT_GT(ink_json["width"].toInt(), ink_json["height"].toInt());  // 11.2 m long, 2.7 m high
+  EXPECT_GT(ink_json["ink"].toInt(), 5000) << ink.out;
+
+  // Removed: the pane hidden, the setting gone.
+  panel->SetSectionLine(std::nullopt);
+  EXPECT_FALSE(panel->section_pane()->isVisible());
+  EXPECT_FALSE(QSettings().contains("plan/section_line"));
+}
+
+// A plan with one room, drawn by a canvas of its own: the room's tint fills
+// its outline away from the label, its name is written at the label point;
+// the same plan without the room leaves both white.
+TEST_F(PlanPairsUiTest, RoomsAreFilledAndNamed) {
+  plan::FloorPlan plan;
+  plan.min = {0.0, 0.0};
+  plan.max = {10.0, 8.0};
+  plan::Room room;
+  room.outline = {{1.0, 1.0}, {7.0, 1.0}, {7.0, 6.0}, {1.0, 6.0}};
+  room.area_m2 = 30.0;
+  room.perimeter_m = 22.0;
+  room.label = {4.0, 3.5};
+  const auto draw = [&](bool with_room) {
+    plan::FloorPlan p = plan;
+    if (with_room) p.rooms.push_back(room);
+    PlanCanvas canvas;
+    canvas.resize(640, 480);
+    canvas.SetPlan(p, true);
+    return canvas.grab().toImage();
+  };
+  const QImage with = draw(true), without = draw(false);
+  PlanCanvas probe;
+  probe.resize(640, 480);
+  probe.SetPlan(plan, true);
+  // Inside the outline, off the 1 m grid, away from the label.
+  const QPoint fill = probe.ToWidget({2.5, 5.5}).toPoint();
+  EXPECT_EQ(without.pixelColor(fill), QColor(Qt::white));
+  EXPECT_NE(with.pixelColor(fill), QColor(Qt::white));
+  EXPECT_NE(with.pixelColor(fill), without.pixelColor(fill));
+  // The name: dark pixels (text) around the label point.
+  const QPoint label = probe.ToWidget(room.label).toPoint();
+  const auto dark = [&](const QImage& image) {
+    int n = 0;
+    for (int y = label.y() - 20; y <= label.y() + 20; ++y) {
+      for (int x = label.x() - 40; x <= label.x() + 40; ++x) n += qGray(image.pixel(x, y)) < 128;
+    }
+    return n;
+  };
+  EXPECT_GT(dark(with), 30);
+  EXPECT_EQ(dark(without), 0);
+  // Outside the outline: untouched.
+  const QPoint out = probe.ToWidget({8.5, 7.5}).toPoint();
+  EXPECT_EQ(with.pixelColor(out), without.pixelColor(out));
+}
+
+// plan_build.h's section of posed clouds, cut 64 k points at a time in the
+// common frame: the points core/plan's VerticalSection finds in the clouds
+// moved whole; cancel and a line of no length refused.
+TEST(PlanBuildTest, SectionOfPosedCloudsIsCoreSectionOfTheMovedClouds) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> x(0.f, 10.f), y(0.f, 5.f), z(0.f, 3.f);
+  auto cloud = std::make_shared<std::vector<Eigen::Vector3f>>();
+  for (int i = 0; i < 150000; ++i) cloud->emplace_back(x(rng), y(rng), z(rng));
+  const std::vector<PlanInput> inputs = {{cloud, Rigid3d::FromPose(2.0, 1.0, 0.0, 0.0, 0.0, 0.7)},
+                                         {cloud, Rigid3d()}};
+  plan::VerticalSectionOptions o;
+  o.a = {1.0, 2.0};
+  o.b = {8.0, 4.5};
+  o.band_m = 0.05;
+  SectionOf section;
+  ASSERT_TRUE(BuildSectionOf(inputs, o, [](double) { return true; }, &section).ok());
+  std::vector<Eigen::Vector3f> moved;
+  for (const PlanInput& in : inputs) {
+    for (const Eigen::Vector3f& p : *in.positions) {
+      moved.push_back((in.frame_from_cloud * p.cast<double>()).cast<float>());
+    }
+  }
+  std::vector<Eigen::Vector2d> s_z;
+  plan::SectionStats stats;
+  ASSERT_TRUE(plan::VerticalSection(moved, o, &s_z, &stats).ok());
+  EXPECT_EQ(section.stats.points_in, 300000u);
+  EXPECT_GT(stats.points_out, 1000u);
+  // float against double poses: a point on the slab's edge may go either way.
+  EXPECT_NEAR(static_cast<double>(section.stats.points_out), static_cast<double>(stats.points_out), 3.0);
+  const std::vector<Eigen::Vector2d> drawn = plan::DecimateGrid(s_z, kSectionCellM);
+  EXPECT_NEAR(static_cast<double>(section.s_z.size()), static_cast<double>(drawn.size()), 3.0);
+  int calls = 0;
+  EXPECT_EQ(BuildSectionOf(inputs, o, [&](double) { return ++calls < 3; }, &section).message(), kPlanCancelled);
+  o.b = o.a;
+  EXPECT_FALSE(BuildSectionOf(inputs, o, [](double) { return true; }, &section).ok());
 }
 
 // The four door-jamb points picked in c (the corridor) and in a, from where
