@@ -176,9 +176,9 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
   section_tool_->setObjectName(QStringLiteral("planSectionTool"));
   section_tool_->setText(tr("Section"));
   section_tool_->setCheckable(true);
-  section_tool_->setShortcut(QKeySequence(tr("S")));
-  section_tool_->setToolTip(tr("Draw a vertical section: drag its line A → A′ on the plan (S, or Shift + drag "
-                               "without it; Esc cancels). The section looks the way the arrows point."));
+  // No letter key: W A S D drive the robot (MainWindow's key filter).
+  section_tool_->setToolTip(tr("Draw a vertical section: drag its line A → A′ on the plan (or Shift + drag "
+                               "without the button; Esc cancels). The section looks the way the arrows point."));
   row->addWidget(section_tool_);
   layout->addLayout(row);
   canvas_ = new PlanCanvas;
