@@ -21,7 +21,7 @@ namespace sweepscan::app {
 const char* const kPlanUsage =
     "usage: sweepscan-cli plan CLOUD.ply|CLOUD.pcd|SESSION|PROJECT|--scenario FILE [--height H] [--band B]\n"
     "                          [--opening W] [--scale N] [--svg F.svg] [--dxf F.dxf]\n"
-    "                          [--section-line x0,y0,x1,y1 --section-svg F.svg] [--json]\n"
+    "                          [--section-line x0,y0,x1,y1 --section-svg F.svg|--section-dxf F.dxf] [--json]\n"
     "\n"
     "A floor plan from the horizontal section at height H (default 1.0 m, z up) +- B\n"
     "(default 0.05 m): wall faces fitted as lines, walls (two faces 0.05-0.4 m apart\n"
@@ -36,7 +36,7 @@ const char* const kPlanUsage =
     "  --svg F.svg            the plan as SVG 1.1 at 1:N (--scale N, default 50), north up\n"
     "  --dxf F.dxf            the plan as DXF R12 in metres (layers WALLS, OPENINGS,\n"
     "                         DIMENSIONS, SECTION, ROOMS); docs/plan-formats.md\n"
-    "  --section-line x0,y0,x1,y1 --section-svg F.svg\n"
+    "  --section-line x0,y0,x1,y1 --section-svg F.svg | --section-dxf F.dxf\n"
     "                         the vertical section along that line (m, +- B either side)\n"
     "  --calibration FILE, --pose-source S, --strict, --seed N   as for evaluate\n"
     "  --json                 the plan as JSON on stdout\n";
@@ -169,7 +169,7 @@ int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
 
 int RunPlan(int argc, char** argv) {
   Args args({"json", "help", "strict"}, {"height", "band", "opening", "scale", "svg", "dxf", "section-line",
-                                         "section-svg", "scenario", "seed", "calibration", "pose-source", "sessions"});
+                                         "section-svg", "section-dxf", "scenario", "seed", "calibration", "pose-source", "sessions"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
     PrintError(error + " (see sweepscan-cli help plan)");
@@ -192,8 +192,8 @@ int RunPlan(int argc, char** argv) {
   }
   plan::VerticalSectionOptions vertical;
   vertical.band_m = options.section.band_m;
-  if (args.Has("section-line") != args.Has("section-svg")) {
-    PrintError("--section-line x0,y0,x1,y1 and --section-svg F.svg go together");
+  if (args.Has("section-line") != (args.Has("section-svg") || args.Has("section-dxf"))) {
+    PrintError("--section-line x0,y0,x1,y1 goes with --section-svg F.svg and/or --section-dxf F.dxf");
     return kExitBadInput;
   }
   if (args.Has("section-line") && (!ParseLine(args.Get("section-line"), &vertical) || !vertical.IsValid(&error))) {
@@ -232,7 +232,13 @@ int RunPlan(int argc, char** argv) {
     section_points = s_z.size();
     plan::SvgOptions section_svg = svg;
     section_svg.title = "sweepscan vertical section " + args.Get("section-line") + " (s, z in m)";
-    if (!(s = plan::WriteSectionSvg(args.Get("section-svg"), plan::DecimateGrid(s_z, 0.01), section_svg)).ok()) {
+    const std::vector<Eigen::Vector2d> drawn = plan::DecimateGrid(s_z, 0.01);
+    if (args.Has("section-svg") && !(s = plan::WriteSectionSvg(args.Get("section-svg"), drawn, section_svg)).ok()) {
+      PrintError(s.message());
+      return kExitFailure;
+    }
+    if (args.Has("section-dxf") &&
+        !(s = plan::WriteSectionDxf(args.Get("section-dxf"), drawn, plan::DxfOptions())).ok()) {
       PrintError(s.message());
       return kExitFailure;
     }

@@ -363,6 +363,7 @@ void MainWindow::BuildHelpMenu() {
                    "Ctrl+Shift+O / Ctrl+S: open / save project;  Ctrl+Shift+A: add a session to it\n"
                    "Shift + click: pick a point (calibration pairs, a project's pairs, or the distance tool)\n"
                    "Ctrl+Shift+F: floor plan;  Esc: leave pair picking\n"
+                   "Shift + drag on the floor plan: a vertical section along the line;  Esc drops the drag\n"
                    "M: measure distance;  C: hide the ceiling\n"
                    "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
           })

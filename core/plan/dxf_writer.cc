@@ -14,6 +14,17 @@
 namespace sweepscan::plan {
 namespace {
 
+// "3" for a whole number of metres (the axes' labels), else "%.3f".
+std::string FormatNumber(double v) {
+  char buf[32];
+  if (std::abs(v - std::round(v)) < 1e-9) {
+    std::snprintf(buf, sizeof(buf), "%.0f", v);
+  } else {
+    std::snprintf(buf, sizeof(buf), "%.3f", v);
+  }
+  return buf;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 
 class Dxf {
@@ -90,6 +101,79 @@ void Label(Dxf* d, const char* layer, const Eigen::Vector2d& a, const Eigen::Vec
   d->Text(layer, at, height, angle + 0.0, text);
 }
 
+struct Layer {
+  const char* name;
+  int colour;  // AutoCAD colour index: 7 black/white, 5 blue, 1 red, 8 grey, 3 green
+};
+
+// HEADER (version, units: 6 = metres, the drawing's extent lo..hi) and
+// TABLES (the linetype and text style the layers and TEXT refer to, the
+// layers), then the ENTITIES section opened: what every drawing of ours
+// starts with.
+void Begin(Dxf* dxf, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, const std::vector<Layer>& layers,
+           double text_height_m) {
+  Dxf& d = *dxf;
+  d.Code(0, "SECTION");
+  d.Code(2, "HEADER");
+  d.Code(9, "$ACADVER");
+  d.Code(1, "AC1009");
+  d.Code(9, "$INSUNITS");
+  d.Int(70, 6);
+  d.Code(9, "$EXTMIN");
+  d.Point(10, lo);
+  d.Code(9, "$EXTMAX");
+  d.Point(10, hi);
+  d.Code(0, "ENDSEC");
+  d.Code(0, "SECTION");
+  d.Code(2, "TABLES");
+  d.Code(0, "TABLE");
+  d.Code(2, "LTYPE");
+  d.Int(70, 1);
+  d.Code(0, "LTYPE");
+  d.Code(2, "CONTINUOUS");
+  d.Int(70, 0);
+  d.Code(3, "Solid line");
+  d.Int(72, 65);
+  d.Int(73, 0);
+  d.Real(40, 0.0);
+  d.Code(0, "ENDTAB");
+  d.Code(0, "TABLE");
+  d.Code(2, "STYLE");
+  d.Int(70, 1);
+  d.Code(0, "STYLE");
+  d.Code(2, "STANDARD");
+  d.Int(70, 0);
+  d.Real(40, 0.0);
+  d.Real(41, 1.0);
+  d.Real(50, 0.0);
+  d.Int(71, 0);
+  d.Real(42, text_height_m);
+  d.Code(3, "txt");
+  d.Code(4, "");
+  d.Code(0, "ENDTAB");
+  d.Code(0, "TABLE");
+  d.Code(2, "LAYER");
+  d.Int(70, static_cast<int>(layers.size()));
+  for (const Layer& l : layers) {
+    d.Code(0, "LAYER");
+    d.Code(2, l.name);
+    d.Int(70, 0);
+    d.Int(62, l.colour);
+    d.Code(6, "CONTINUOUS");
+  }
+  d.Code(0, "ENDTAB");
+  d.Code(0, "ENDSEC");
+  d.Code(0, "SECTION");
+  d.Code(2, "ENTITIES");
+}
+
+// The ENTITIES section closed and the file ended.
+std::string End(Dxf* d) {
+  d->Code(0, "ENDSEC");
+  d->Code(0, "EOF");
+  return d->str();
+}
+
 }  // namespace
 
 bool DxfOptions::IsValid(std::string* error) const {
@@ -116,71 +200,14 @@ Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
     }
   }
   Dxf d;
-  // HEADER: version, units (6 = metres), the drawing's extent.
-  d.Code(0, "SECTION");
-  d.Code(2, "HEADER");
-  d.Code(9, "$ACADVER");
-  d.Code(1, "AC1009");
-  d.Code(9, "$INSUNITS");
-  d.Int(70, 6);
-  d.Code(9, "$EXTMIN");
-  d.Point(10, lo);
-  d.Code(9, "$EXTMAX");
-  d.Point(10, hi);
-  d.Code(0, "ENDSEC");
-  // TABLES: the linetype and text style the layers and TEXT refer to, the layers.
-  d.Code(0, "SECTION");
-  d.Code(2, "TABLES");
-  d.Code(0, "TABLE");
-  d.Code(2, "LTYPE");
-  d.Int(70, 1);
-  d.Code(0, "LTYPE");
-  d.Code(2, "CONTINUOUS");
-  d.Int(70, 0);
-  d.Code(3, "Solid line");
-  d.Int(72, 65);
-  d.Int(73, 0);
-  d.Real(40, 0.0);
-  d.Code(0, "ENDTAB");
-  d.Code(0, "TABLE");
-  d.Code(2, "STYLE");
-  d.Int(70, 1);
-  d.Code(0, "STYLE");
-  d.Code(2, "STANDARD");
-  d.Int(70, 0);
-  d.Real(40, 0.0);
-  d.Real(41, 1.0);
-  d.Real(50, 0.0);
-  d.Int(71, 0);
-  d.Real(42, o.text_height_m);
-  d.Code(3, "txt");
-  d.Code(4, "");
-  d.Code(0, "ENDTAB");
-  struct Layer {
-    const char* name;
-    int colour;  // AutoCAD colour index: 7 black/white, 5 blue, 1 red, 8 grey, 3 green
-  };
-  const Layer layers[] = {{"0", 7},
-                          {kDxfLayerWalls, 7},
-                          {kDxfLayerOpenings, 5},
-                          {kDxfLayerDimensions, 1},
-                          {kDxfLayerSection, 8},
-                          {kDxfLayerRooms, 3}};
-  d.Code(0, "TABLE");
-  d.Code(2, "LAYER");
-  d.Int(70, static_cast<int>(sizeof(layers) / sizeof(layers[0])));
-  for (const Layer& l : layers) {
-    d.Code(0, "LAYER");
-    d.Code(2, l.name);
-    d.Int(70, 0);
-    d.Int(62, l.colour);
-    d.Code(6, "CONTINUOUS");
-  }
-  d.Code(0, "ENDTAB");
-  d.Code(0, "ENDSEC");
-  // ENTITIES.
-  d.Code(0, "SECTION");
-  d.Code(2, "ENTITIES");
+  Begin(&d, lo, hi,
+        {{"0", 7},
+         {kDxfLayerWalls, 7},
+         {kDxfLayerOpenings, 5},
+         {kDxfLayerDimensions, 1},
+         {kDxfLayerSection, 8},
+         {kDxfLayerRooms, 3}},
+        o.text_height_m);
   for (const WallFace& f : plan.faces) d.Line(f.structural ? kDxfLayerWalls : kDxfLayerSection, f.a, f.b);
   for (const Opening& op : plan.openings) {
     d.Line(kDxfLayerOpenings, op.a, op.b);
@@ -205,15 +232,55 @@ Status PlanDxf(const FloorPlan& plan, const DxfOptions& o, std::string* out) {
       d.Point(10, p);
     }
   }
-  d.Code(0, "ENDSEC");
-  d.Code(0, "EOF");
-  *out = d.str();
+  *out = End(&d);
   return Status::Ok();
 }
 
 Status WritePlanDxf(const std::string& path, const FloorPlan& plan, const DxfOptions& options) {
   std::string dxf;
   const Status s = PlanDxf(plan, options, &dxf);
+  if (!s.ok()) return s;
+  return WriteFileChecked(path, dxf);
+}
+
+Status SectionDxf(const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& o, std::string* out) {
+  std::string error;
+  if (!o.IsValid(&error)) return Status::Error(error);
+  if (s_z.empty()) return Status::Error("the vertical section holds no point: nothing to draw");
+  Eigen::Vector2d lo = s_z.front(), hi = s_z.front();
+  for (const Eigen::Vector2d& q : s_z) {
+    if (!q.allFinite()) return Status::Error("the vertical section has a point that is not finite");
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  lo.y() = std::min(lo.y(), 0.0);
+  Dxf d;
+  Begin(&d, lo, hi, {{"0", 7}, {kDxfLayerSection, 8}, {kDxfLayerAxes, 1}}, o.text_height_m);
+  // The axes: the ground line z = 0, a tick and a label every metre along s
+  // and up z (at s = lo.x), as the SVG draws them.
+  d.Line(kDxfLayerAxes, {lo.x(), 0.0}, {hi.x(), 0.0});
+  const double tick = 0.075;
+  for (double m = std::ceil(lo.x()); m <= hi.x(); m += 1.0) {
+    d.Line(kDxfLayerAxes, {m, -tick}, {m, tick});
+    d.Text(kDxfLayerAxes, {m, -tick - 1.2 * o.text_height_m}, o.text_height_m, 0.0, FormatNumber(m));
+  }
+  for (double z = std::ceil(lo.y()); z <= hi.y(); z += 1.0) {
+    d.Line(kDxfLayerAxes, {lo.x() - tick, z}, {lo.x() + tick, z});
+    d.Text(kDxfLayerAxes, {lo.x() - tick - 1.5 * o.text_height_m, z - 0.4 * o.text_height_m}, o.text_height_m, 0.0,
+           FormatNumber(z));
+  }
+  for (const Eigen::Vector2d& q : s_z) {
+    d.Code(0, "POINT");
+    d.Code(8, kDxfLayerSection);
+    d.Point(10, q);
+  }
+  *out = End(&d);
+  return Status::Ok();
+}
+
+Status WriteSectionDxf(const std::string& path, const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& options) {
+  std::string dxf;
+  const Status s = SectionDxf(s_z, options, &dxf);
   if (!s.ok()) return s;
   return WriteFileChecked(path, dxf);
 }

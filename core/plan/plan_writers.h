@@ -57,9 +57,16 @@ inline constexpr const char* kDxfLayerOpenings = "OPENINGS";
 inline constexpr const char* kDxfLayerDimensions = "DIMENSIONS";
 inline constexpr const char* kDxfLayerSection = "SECTION";
 inline constexpr const char* kDxfLayerRooms = "ROOMS";
+inline constexpr const char* kDxfLayerAxes = "AXES";  // a vertical section's ground line and scales
 
 Status PlanDxf(const FloorPlan& plan, const DxfOptions& options, std::string* dxf);
 Status WritePlanDxf(const std::string& path, const FloorPlan& plan, const DxfOptions& options);
+
+// A vertical section's points (s along the line, z) as DXF R12 in metres
+// (x = s, y = z): layers SECTION (a POINT per point) and AXES (the ground
+// line z = 0, a tick and a label every metre along s and up z).
+Status SectionDxf(const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& options, std::string* dxf);
+Status WriteSectionDxf(const std::string& path, const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& options);
 
 // "5.000" : a length in metres as the drawings label it (millimetre digits).
 std::string FormatMetres(double m);

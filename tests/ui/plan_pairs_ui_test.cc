@@ -327,12 +327,22 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   EXPECT_DOUBLE_EQ(canvas->plan()->height_m, 1.5);
   EXPECT_EQ(panel->section_canvas()->section()->options.a, canvas->section_line()->a);
 
-  // Export Section: SVG, rendered by rsvg-convert with ink; not another suffix.
+  // Export Section: SVG, rendered by rsvg-convert with ink; DXF, read by
+  // ezdxf with a POINT per section point; not another suffix.
   const QString svg = tmp_.path() + "/section.svg";
   QString error;
   ASSERT_TRUE(panel->ExportSection(svg, &error)) << error.toStdString();
-  EXPECT_FALSE(panel->ExportSection(tmp_.path() + "/section.dxf", &error));
-  EXPECT_NE(error.indexOf(".svg"), -1) << error.toStdString();
+  const QString dxf = tmp_.path() + "/section.dxf";
+  ASSERT_TRUE(panel->ExportSection(dxf, &error)) << error.toStdString();
+  const auto read = RunCommand("/usr/bin/python3 " + kResources.toStdString() + "/../tests/tools/check_dxf.py '" +
+                               dxf.toStdString() + "' 2>&1");
+  ASSERT_EQ(read.code, 0) << read.out;
+  const QJsonObject dxf_json = QJsonDocument::fromJson(QByteArray::fromStdString(read.out)).object();
+  EXPECT_EQ(dxf_json["counts"].toObject()["POINT"].toObject()["SECTION"].toInt(),
+            static_cast<int>(panel->section_canvas()->section()->s_z.size()));
+  EXPECT_EQ(dxf_json["audit"].toObject()["errors"].toInt(), 0) << read.out;
+  EXPECT_FALSE(panel->ExportSection(tmp_.path() + "/section.pdf", &error));
+  EXPECT_NE(error.indexOf(".dxf"), -1) << error.toStdString();
   EXPECT_FALSE(panel->ExportSection("/nonexistent-dir/section.svg", &error));
   const std::string png = tmp_.path().toStdString() + "/section.png";
   const auto render = RunCommand("rsvg-convert -o '" + png + "' '" + svg.toStdString() + "' 2>&1");

@@ -525,8 +525,9 @@ bool PlanPanel::ExportSection(const QString& path, QString* error) const {
     *error = tr("There is no section to export yet: drag its line on the floor plan (Section, or Shift + drag).");
     return false;
   }
-  if (QFileInfo(path).suffix().toLower() != QLatin1String("svg")) {
-    *error = tr("%1: a section is written as SVG (.svg)").arg(path);
+  const QString suffix = QFileInfo(path).suffix().toLower();
+  if (suffix != QLatin1String("svg") && suffix != QLatin1String("dxf")) {
+    *error = tr("%1: a section is written as SVG (.svg) or DXF (.dxf)").arg(path);
     return false;
   }
   const plan::VerticalSectionOptions& o = section->options;
@@ -539,7 +540,9 @@ bool PlanPanel::ExportSection(const QString& path, QString* error) const {
                   .arg(o.b.y(), 0, 'f', 2)
                   .arg(o.band_m, 0, 'f', 2)
                   .toStdString();
-  const Status s = plan::WriteSectionSvg(path.toStdString(), section->s_z, svg);
+  const Status s = suffix == QLatin1String("dxf")
+                       ? plan::WriteSectionDxf(path.toStdString(), section->s_z, plan::DxfOptions())
+                       : plan::WriteSectionSvg(path.toStdString(), section->s_z, svg);
   if (!s.ok()) *error = QString::fromStdString(s.message());
   return s.ok();
 }
@@ -551,9 +554,14 @@ void PlanPanel::ExportSectionWithDialog() {
     show_error_(tr("Cannot export the section"), error);
     return;
   }
-  QString path = QFileDialog::getSaveFileName(this, tr("Export section"), QString(), tr("SVG drawing, 1:50 (*.svg)"));
+  QString filter;
+  QString path = QFileDialog::getSaveFileName(this, tr("Export section"), QString(),
+                                              tr("SVG drawing, 1:50 (*.svg);;DXF R12, metres (*.dxf)"), &filter);
   if (path.isEmpty()) return;
-  if (QFileInfo(path).suffix().toLower() != QLatin1String("svg")) path += QStringLiteral(".svg");
+  const QString suffix = QFileInfo(path).suffix().toLower();
+  if (suffix != QLatin1String("svg") && suffix != QLatin1String("dxf")) {
+    path += filter.contains(QLatin1String("dxf")) ? QStringLiteral(".dxf") : QStringLiteral(".svg");
+  }
   if (!ExportSection(path, &error)) show_error_(tr("Cannot export the section"), error);
 }
 

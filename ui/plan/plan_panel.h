@@ -73,7 +73,8 @@ class PlanPanel : public QWidget {
   // The section line (none: no section); its section is built now or
   // after the build under way, and the line kept in the settings.
   void SetSectionLine(const std::optional<SectionLine>& line);
-  // Writes the section shown as SVG (1:50, paper millimetres).
+  // Writes the section shown: SVG (*.svg, 1:50, paper millimetres) or DXF
+  // (*.dxf, R12 in metres) by the suffix.
   bool ExportSection(const QString& path, QString* error) const;
   // Export Section…: the file chosen, then ExportSection; errors shown.
   void ExportSectionWithDialog();

@@ -170,6 +170,31 @@ TEST_F(PlanWritersTest, SvgRenderedByRsvg) {
   EXPECT_GT(ink.value("width", 0), 1000);
 }
 
+TEST_F(PlanWritersTest, SectionDxfReadByEzdxf) {
+  // A section drawn by hand: a 4 m floor and a 2.5 m wall at s = 4.
+  std::vector<Eigen::Vector2d> s_z;
+  for (double s = 0.0; s <= 4.0; s += 0.01) s_z.emplace_back(s, 0.0);
+  for (double z = 0.0; z <= 2.5; z += 0.01) s_z.emplace_back(4.0, z);
+  const std::string path = kDir + "/section.dxf";
+  ASSERT_TRUE(WriteSectionDxf(path, s_z, DxfOptions()).ok());
+  const testing::CommandRun r = RunCommand(std::string(SWEEPSCAN_PYTHON3) + " " + kTools + "check_dxf.py '" + path + "'");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dxfversion"], "AC1009");
+  EXPECT_EQ(j["audit"]["errors"], 0) << j["audit"].dump();
+  EXPECT_EQ(j["counts"]["POINT"].value(kDxfLayerSection, 0), static_cast<int>(s_z.size()));
+  // The ground line (4 m) and a tick every metre along s (0..4) and up z (0..2).
+  EXPECT_EQ(j["counts"]["LINE"].value(kDxfLayerAxes, 0), 1 + 5 + 3);
+  EXPECT_NEAR(j["lines"][0]["length"].get<double>(), 4.0, 1e-6);
+  std::vector<std::string> labels;
+  for (const auto& t : j["texts"]) labels.push_back(t["text"]);
+  EXPECT_EQ(labels, (std::vector<std::string>{"0", "1", "2", "3", "4", "0", "1", "2"}));
+  EXPECT_NEAR(j["extmax"][1].get<double>(), 2.5, 0.011);
+  std::string out;
+  EXPECT_FALSE(SectionDxf({}, DxfOptions(), &out).ok());
+  EXPECT_FALSE(SectionDxf({{0.0, NAN}}, DxfOptions(), &out).ok());
+}
+
 TEST(PlanWritersRefusalTest, BadOptionsAndEmptySections) {
   FloorPlan plan;
   std::string out;
