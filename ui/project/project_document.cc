@@ -20,13 +20,7 @@ Status ProjectDocument::Open(const QString& path) {
   Project p;
   const Status s = LoadProject(path.toStdString(), &p);
   if (!s.ok()) return s;
-  const bool was = modified();
-  path_ = path;
-  project_ = std::move(p);
-  saved_json_ = ProjectToJson(project_);
-  ++generation_;
-  emit opened();
-  Changed(was);
+  Adopt(path, std::move(p), &ProjectDocument::opened);
   return Status::Ok();
 }
 
@@ -52,14 +46,18 @@ Status ProjectDocument::SaveAs(const QString& path) {
   }
   const Status s = SaveProject(path.toStdString(), p);
   if (!s.ok()) return s;
+  Adopt(path, std::move(p), &ProjectDocument::renamed);
+  return Status::Ok();
+}
+
+void ProjectDocument::Adopt(const QString& path, Project project, void (ProjectDocument::*what)()) {
   const bool was = modified();
   path_ = path;
-  project_ = std::move(p);
+  project_ = std::move(project);
   saved_json_ = ProjectToJson(project_);
   ++generation_;
-  emit renamed();
+  emit(this->*what)();
   Changed(was);
-  return Status::Ok();
 }
 
 void ProjectDocument::Close() {

@@ -61,6 +61,9 @@ class ProjectDocument : public QObject {
 
  private:
   void Changed(bool was_modified);
+  // `project`, as on disk at `path`, is the document now (a new
+  // generation); `what` (opened or renamed) says so.
+  void Adopt(const QString& path, Project project, void (ProjectDocument::*what)());
 
   QString path_;
   Project project_;
