@@ -85,7 +85,11 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   ASSERT_TRUE(project()->OpenProject(file));
   // The anchor's cloud is built on the job thread; the GUI keeps going.
   const qint64 worst = WorstGapWhileBusy(60000);
-  EXPECT_LT(worst, 500);  // As in AppTest.PoseSourceSfm: a blocked GUI stalls for seconds.
+  // A blocked GUI stalls for the whole build (seconds); what is left is one
+  // software-rendered frame of the 570 k points drawn, which reached 531 ms
+  // beside ctest -j2 and two CPU-bound sweeps on 2 cores (the aligning
+  // phase below has the same bound for the same frame).
+  EXPECT_LT(worst, 800);
   std::printf("loading: longest event-loop gap %lld ms\n", static_cast<long long>(worst));
   const ProjectLayer* layer = project()->layer();
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});  // b, c are not placed.
