@@ -237,7 +237,16 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
-  if (summary.method == "refined-corners") report["board_thickness_m"] = summary.board_thickness_m;
+  if (summary.method == "refined-corners") {
+    report["board_thickness_m"] = summary.board_thickness_m;
+    report["edge_points"] = summary.edge_points;
+    report["rejected_edge_points"] = summary.rejected_edge_points;
+    report["mixed_edge_samples"] = summary.mixed_edge_samples;
+    report["range_offsets_m"] = {summary.range_offsets_m[0], summary.range_offsets_m[1]};
+    report["sigma_range_rad"] = {{"alpha", summary.sigma_range_rad[0]},
+                                 {"beta", summary.sigma_range_rad[1]},
+                                 {"gamma", summary.sigma_range_rad[2]}};
+  }
   if (summary.method != "auto-planes" && summary.path_scale != 1.0) {
     report["path_scale"] = summary.path_scale;
   }

@@ -46,14 +46,17 @@ struct EdgePoint {
   Eigen::Vector2d uv;
   EdgeSide side;
   double weight;  // 1 / sigma^2
-  // Largest plausible offset from the true edge: half the spacing plus
-  // 2 sigma of noise. A line whose outermost sample fell out of the band
-  // (noise, dropout) ends a whole spacing short and is dropped by this test.
+  // Largest plausible offset from the true edge: half the spacing plus the
+  // noise of a crossing (LineEndPoints). A line whose outermost sample fell
+  // out of the band (noise, dropout, a mixed return) ends a whole spacing
+  // short and is dropped by this test, and one that gained a mixed return
+  // at the board's range, a spacing long.
   double limit = std::numeric_limits<double>::infinity();
   // The board's thickness seen along this beam (LineEndPoints): an edge
   // whose outward normal N has N . shift > 0 faces the beam, which can hit
   // its edge face, and the hit/miss boundary lies `shift` beyond it.
   Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+  double spacing = 0.0;  // s: the distance between the hit's and the miss's crossings
 };
 
 // The point on edge k that p stands for: p itself, or p moved back by its
@@ -420,13 +423,55 @@ Status FindBoardLines(const std::vector<LidarObservation>& samples,
 // ----------------------------------------------------------------------------
 // Edge extraction
 
+// Whether the sample of the next beam beyond a line's end (sample `last`,
+// `prev` the one before it on the line) is a mixed return: a triangulation
+// lidar whose spot straddles the board's edge reports a blend of the board's
+// and the background's ranges (docs/calibration.md, "Mixed returns"). Such a
+// sample lies behind the board (beyond its band) and off the background, which
+// the two beams after it show: extrapolated linearly to its beam, they miss it
+// by more than kMixedJump, and the background lies at least that much further
+// behind (or the background lies beyond the target's region, where the
+// samples stop). A clean miss lies on the background; a mixed return
+// reported at one surface's range cannot be told from a clean hit or miss.
+// kMixedJump: the simulator's default depth step (a sill 2 cm behind the
+// board is no background to tell a blend from).
+constexpr double kMixedJump = 0.03;
+template <typename Key>
+bool IsMixedReturn(const std::vector<LidarObservation>& samples,
+                   const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& band,
+                   const Plane& plane, const Eigen::Vector3d& lidar,
+                   const std::unordered_map<uint64_t, size_t>& by_beam, const Key& key, size_t last,
+                   size_t prev) {
+  const int dir = samples[last].ref.beam > samples[prev].ref.beam ? 1 : -1;
+  const auto find = [&](int k) -> long {
+    const auto it = by_beam.find(key(samples[last].ref.scan, samples[last].ref.beam + dir * k));
+    return it == by_beam.end() ? -1 : static_cast<long>(it->second);
+  };
+  // Depth behind the board's front, seen from the lidar.
+  const double side = plane.SignedDistance(lidar) > 0.0 ? -1.0 : 1.0;
+  const auto depth = [&](long i) { return side * plane.SignedDistance(pts[i]); };
+  const long q = find(1), n1 = find(2), n2 = find(3);
+  if (q < 0 || !(depth(q) > std::max(band[q], kMixedJump))) return false;
+  if (n1 >= 0) {
+    if (!(depth(n1) > depth(q) + kMixedJump)) return false;  // q is on the background
+    if (n2 < 0) return true;
+    const Eigen::Vector3d background = 2.0 * pts[n1] - pts[n2];
+    return (pts[q] - background).norm() > std::max(kMixedJump, 3.0 * band[q]);
+  }
+  if (n2 >= 0) return depth(n2) > depth(q) + kMixedJump;  // n1 lost (a dropout)
+  // The background lies beyond the target's region (the samples stop at it):
+  // q, inside it and behind the board, is between the two.
+  return true;
+}
+
 // Each line's top and bottom end points: the midpoint between where the
 // outermost sample's beam and the next beam of that scan cross the plane,
 // with the board's thickness as each point's shift.
-Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::vector<double>& band,
+Status LineEndPoints(const std::vector<LidarObservation>& samples,
+                     const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& band,
                      const std::vector<Line>& lines, const Plane& plane, const BoardFrame& f,
                      const Rigid3d& body_from_lidar, double board_thickness_m,
-                     std::vector<EdgePoint>* edge_points_out) {
+                     std::vector<EdgePoint>* edge_points_out, size_t* mixed_out) {
   const Eigen::Vector3d& u = f.u;
   const Eigen::Vector3d& v = f.v;
   const Eigen::Vector3d& c = f.c;
@@ -439,9 +484,20 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::ve
   }
   const double dtheta = Median(dthetas);
   // Range noise in the board plane (X4 data sheet scale) adds to the
-  // quantisation of each end point.
+  // quantisation of each end point in its weight, and a point further than
+  // s/2 + kRejectNoise from its edge is rejected (FitRectangle): a line that
+  // ends a spacing short or long. (Tighter, 4 mm, and rejecting until the
+  // set held, made the angles worse on drives with mixed returns: with most
+  // edge beams mixed, the clean points are the minority.)
   constexpr double kInPlaneNoise = 0.003;
+  constexpr double kRejectNoise = 2.0 * kInPlaneNoise;
   std::vector<EdgePoint>& edge_points = *edge_points_out;
+  std::unordered_map<uint64_t, size_t> by_beam;  // (scan, beam) -> sample
+  const auto key = [](uint32_t scan, int beam) {
+    return (static_cast<uint64_t>(scan) << 20) ^ static_cast<uint64_t>(beam & 0xfffff);
+  };
+  for (size_t i = 0; i < samples.size(); ++i) by_beam[key(samples[i].ref.scan, samples[i].ref.beam)] = i;
+  *mixed_out = 0;
   for (const auto& l : lines) {
     for (int end = 0; end < 2; ++end) {
       const size_t last = end == 0 ? l.uv.size() - 1 : 0;
@@ -479,9 +535,19 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::ve
       if (!crossing(hit_dir, &hit_uv) || !crossing(beam(theta(i) + next), &miss_uv)) continue;
       const double s = (miss_uv - hit_uv).norm();
       if (s > 0.2) continue;  // grazing beam: no useful bound
-      EdgePoint p{0.5 * (hit_uv + miss_uv), end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
+      // A mixed return just beyond the line's end straddled the edge: the edge
+      // lies within its footprint (one beam step), so its own crossing (the
+      // next beam's, on the board's local step: its reported angle carries
+      // the correction c of its blended range) is the edge point, error
+      // U(-s/2, s/2) as for a midpoint.
+      const bool mixed = IsMixedReturn(samples, pts, band, plane, o, by_beam, key, i,
+                                       l.uv[prev].second);
+      *mixed_out += mixed;
+
+      EdgePoint p{mixed ? miss_uv : Eigen::Vector2d(0.5 * (hit_uv + miss_uv)),
+                  end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
                   1.0 / (s * s / 12.0 + kInPlaneNoise * kInPlaneNoise),
-                  0.5 * s + 2.0 * kInPlaneNoise};
+                  0.5 * s + kRejectNoise};
       // The board's thickness T. A beam that crosses the front plane just
       // beyond an edge can still hit that edge's face, T deep, if going
       // deeper carries it back over the edge: per unit of depth the beam d
@@ -500,6 +566,7 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples, const std::ve
         const Eigen::Vector3d q = (hit_dir - plane.normal.dot(hit_dir) * plane.normal) / dn;
         p.shift = -depth * Eigen::Vector2d(q.dot(u), q.dot(v));
       }
+      p.spacing = s;
       edge_points.push_back(p);
     }
   }
@@ -561,22 +628,32 @@ bool SolveRectangle(const std::vector<EdgePoint>& edge_points, const std::vector
 }
 
 // The rectangle through the edge points: assign points to edges, solve,
-// repeat until the assignment holds; then drop implausible points once and
-// do it again. `edge[j]`: the edge of point j, -1 if none (or an outlier).
+// repeat until the assignment holds. Then reject the implausible points
+// (further from their edge than EdgePoint::limit) and fit again, until the
+// rejected set holds or after kRejectRounds fits (2: reject once). A clean end point lies within s/2 (plus
+// noise) of its edge; a line that lost its outermost sample (noise, a
+// dropout, a mixed return reported at the far surface's range or between
+// the two) ends one spacing short, and a line that gained a mixed return at
+// the board's range one spacing long: their points sit s/2 to 3s/2 off, on
+// one side of the edge, and would move it (docs/calibration.md, "Mixed
+// returns"). `edge[j]`: the edge of point j, -1 if none (or an outlier);
+// `rejected`: how many points the final fit rejected.
+constexpr int kRejectRounds = 2;
 Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
-                    std::vector<int>* edge_io, double* cost_io) {
+                    std::vector<int>* edge_io, double* cost_io, std::vector<bool>* rejected) {
   Rect& rect = *rect_io;
   std::vector<int>& edge = *edge_io;
   double& cost = *cost_io;
   edge.assign(edge_points.size(), -1);
   std::vector<bool> outlier(edge_points.size(), false);
   cost = 0.0;
-  // The fit before outliers were dropped, kept in case dropping them leaves
-  // an edge without points (a sparse pass: the rectangle is then that fit).
+  // The last fit that worked, kept in case rejecting points leaves an edge
+  // without points (a sparse pass: the rectangle is then that fit).
   Rect kept_rect;
   std::vector<int> kept_edge;
+  std::vector<bool> kept_outlier;
   double kept_cost = 0.0;
-  for (int pass = 0; pass < 2; ++pass) {
+  for (int pass = 0; pass < kRejectRounds; ++pass) {
     bool failed = false;
     for (int round = 0; round < 8 && !failed; ++round) {
       bool changed = round == 0;
@@ -593,19 +670,20 @@ Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
         return Status::Error(
             "board fit: the edge points do not determine a rectangle (an edge without points)");
       }
-      rect = kept_rect, edge = kept_edge, cost = kept_cost;
+      rect = kept_rect, edge = kept_edge, cost = kept_cost, outlier = kept_outlier;
       break;
     }
-    if (pass == 1) break;
-    kept_rect = rect, kept_edge = edge, kept_cost = cost;
-    bool any = false;
+    kept_rect = rect, kept_edge = edge, kept_cost = cost, kept_outlier = outlier;
+    if (pass + 1 == kRejectRounds) break;
+    std::vector<bool> next(edge_points.size(), false);
     for (size_t j = 0; j < edge_points.size(); ++j) {
-      if (edge[j] >= 0 && std::abs(Residual(rect, edge_points[j], edge[j])) > edge_points[j].limit) {
-        outlier[j] = any = true;
-      }
+      const int e = edge[j] >= 0 ? edge[j] : (outlier[j] ? AssignEdge(rect, edge_points[j]) : -1);
+      next[j] = e >= 0 && std::abs(Residual(rect, edge_points[j], e)) > edge_points[j].limit;
     }
-    if (!any) break;
+    if (next == outlier) break;
+    outlier = next;
   }
+  *rejected = outlier;
   return Status::Ok();
 }
 
@@ -644,6 +722,42 @@ Eigen::Matrix<double, 5, 5> RectCovariance(const Rect& rect, const std::vector<E
   Eigen::FullPivLU<Eigen::Matrix<double, 5, 5>> lu(n);
   if (!lu.isInvertible()) return Eigen::Matrix<double, 5, 5>::Zero();
   return scale * lu.inverse();
+}
+
+// The edges' own systematic shifts. The rejected points (FitRectangle) are
+// lines that ended a spacing short or long: dropouts, and on a triangulation
+// lidar mixed returns at the board's depth edges. As many again may remain
+// inside the rejection limit, and they need not balance: a blended return
+// only ever shortens a line. So each edge k may sit off by up to its
+// rejected share rho_k times its mean spacing s_k, taken as a 1-sigma shift
+// sigma_k = rho_k s_k / 2 along its normal, independent between edges. Edge
+// k moved by d with the others fixed moves the centre by d/2 N_k and its
+// half size h_k by d/2, so cov += sum_k sigma_k^2 g_k g_k^T with
+// g_k = (N_k / 2, [k odd] / 2, [k even] / 2, 0) over (c_u, c_v, a, b, phi).
+// Shifts shared by all edges of both passes are not in it: see
+// docs/calibration.md, "Mixed returns".
+Eigen::Matrix<double, 5, 5> EdgeShiftCovariance(const Rect& rect,
+                                                 const std::vector<EdgePoint>& pts,
+                                                 const std::vector<int>& edge,
+                                                 const std::vector<bool>& rejected) {
+  double kept[4] = {0, 0, 0, 0}, dropped[4] = {0, 0, 0, 0}, spacing[4] = {0, 0, 0, 0};
+  for (size_t j = 0; j < pts.size(); ++j) {
+    const int k = edge[j] >= 0 ? edge[j] : (rejected[j] ? AssignEdge(rect, pts[j]) : -1);
+    if (k < 0) continue;
+    (rejected[j] ? dropped : kept)[k] += 1.0;
+    spacing[k] += pts[j].spacing;
+  }
+  Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();
+  for (int k = 0; k < 4; ++k) {
+    const double n = kept[k] + dropped[k];
+    if (n <= 0.0) continue;
+    const double sigma = 0.5 * dropped[k] / n * spacing[k] / n;
+    Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
+    g.head<2>() = 0.5 * EdgeNormal(rect.phi, k);
+    g[(k % 2 == 0) ? 3 : 2] = 0.5;
+    cov += sigma * sigma * g * g.transpose();
+  }
+  return cov;
 }
 
 // ----------------------------------------------------------------------------
@@ -735,21 +849,28 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   if (!s.ok()) return s;
   // Edge extraction.
   std::vector<EdgePoint> edge_points;
-  s = LineEndPoints(samples, band, lines, plane, frame, body_from_lidar, board_thickness_m,
-                    &edge_points);
+  size_t mixed = 0;
+  s = LineEndPoints(samples, pts, band, lines, plane, frame, body_from_lidar, board_thickness_m,
+                    &edge_points, &mixed);
   if (!s.ok()) return s;
   Rect rect = BoundingRect(edge_points);
   AddSidePoints(lines, rect, &edge_points);
   // The corner model and its solve.
   std::vector<int> edge;
   double cost = 0.0;
-  s = FitRectangle(edge_points, &rect, &edge, &cost);
+  std::vector<bool> rejected;
+  s = FitRectangle(edge_points, &rect, &edge, &cost, &rejected);
   if (!s.ok()) return s;
-  s = CornersFromRect(rect, RectCovariance(rect, edge_points, edge), frame, pts, keep, out);
+  s = CornersFromRect(rect,
+                      RectCovariance(rect, edge_points, edge) +
+                          EdgeShiftCovariance(rect, edge_points, edge, rejected),
+                      frame, pts, keep, out);
   if (!s.ok()) return s;
   size_t used = 0;
   for (int e : edge) used += e >= 0;
   out->edge_points = used;
+  out->rejected_edge_points = static_cast<size_t>(std::count(rejected.begin(), rejected.end(), true));
+  out->mixed_edge_samples = mixed;
   double wsum = 0.0;
   for (size_t j = 0; j < edge_points.size(); ++j) wsum += edge[j] >= 0 ? edge_points[j].weight : 0;
   out->edge_rms_m = wsum > 0.0 ? std::sqrt(cost / wsum) : 0.0;

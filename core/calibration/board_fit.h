@@ -53,6 +53,14 @@ struct BoardCorners {
   size_t points = 0;          // inliers used
   size_t scans = 0;
   size_t edge_points = 0;  // scan-line end points (and side points) in the rectangle fit
+  // End points rejected as further from their edge than half a spacing plus
+  // noise: lines that lost or gained a sample at the edge (dropouts, mixed
+  // returns at the board's depth edges).
+  size_t rejected_edge_points = 0;
+  // Samples beyond a line's end found to be mixed returns (a blend of the
+  // board's and the background's ranges, LineEndPoints): not board samples,
+  // but they place the edge within their beam's footprint.
+  size_t mixed_edge_samples = 0;
   // Covariance of the four corners (world x, y, z of corner 0, then 1, ...)
   // from the rectangle fit: the edge points' variances (s^2/12 and the
   // range noise) through the fit's five parameters (centre, half sizes,
@@ -75,7 +83,10 @@ struct BoardCorners {
 //     face the beams (its bottom edges, for a lidar below it), which moves
 //     the boundary between hits and misses T tan(incidence) beyond those
 //     edges; each point carries that shift and the fit removes it on the
-//     edges it applies to;
+//     edges it applies to. A sample just beyond a line's end that lies
+//     between the board and the background is a mixed return (a
+//     triangulation lidar's blend at the depth edge): the edge is then
+//     at its own beam's crossing (counted in mixed_edge_samples);
 //  4. a rectangle (centre, rotation, width, height) by weighted least
 //     squares of the edge points' offsets along their scan line from the
 //     rectangle's boundary. For a fixed rotation this is linear; the
@@ -83,6 +94,9 @@ struct BoardCorners {
 //     the scan lines is crossed by none: it is then placed half a line
 //     spacing beyond the outermost line (the upright board's side edges,
 //     located only to the scan spacing; mount the target as a diamond).
+//     End points further than s/2 + 6 mm from their edge are rejected once
+//     (rejected_edge_points), and each edge's rejected share enters the
+//     covariance as a possible one-sided shift of that edge.
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
                        const MountingError& calibration, double board_thickness_m,
                        BoardCorners* corners);

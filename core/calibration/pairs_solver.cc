@@ -507,6 +507,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
     *error = "calibration: max_condition_number must be > 1 and min_pick_spread_m >= 0";
     return false;
   }
+  if (!(range_offset_sigma_m >= 0.0 && range_offset_sigma_m <= 0.1) ||
+      !(range_scale_sigma >= 0.0 && range_scale_sigma <= 0.1)) {
+    *error = "calibration: range_offset_sigma_m and range_scale_sigma must be within 0-0.1";
+    return false;
+  }
   if (max_outer_iterations < 1 || !(outer_tolerance_rad > 0.0)) {
     *error = "calibration: max_outer_iterations must be >= 1 and outer_tolerance_rad > 0";
     return false;
@@ -542,6 +547,13 @@ std::string CalibrationSummary::FullReport() const {
   s << "  RMS distance:     " << initial_rms_m << " -> " << final_rms_m << " m\n";
   s << "  cost:             " << initial_cost << " -> " << final_cost << "\n";
   s << "  condition number: " << condition_number << "\n";
+  if (rejected_edge_points >= 0) {
+    s << "  edge points:      " << edge_points << " kept, " << rejected_edge_points
+      << " rejected (lines a sample short or long at the board's edges), " << mixed_edge_samples
+      << " mixed returns beyond the lines' ends\n";
+    s << "  range offsets:    " << range_offsets_m[0] << " " << range_offsets_m[1]
+      << " m (pass 1, pass 2; estimated beside the angles)\n";
+  }
   for (const auto& w : warnings) s << "  warning: " << w << "\n";
   return s.str();
 }

@@ -58,6 +58,24 @@ struct CalibrationOptions {
   // simulated lab's board is 5 mm; measure yours (0 for a sheet on a
   // stand). docs/calibration.md, "The target".
   double board_thickness_m = 0.005;
+  // Refined corners: the lidar's range errors, which the corners share with
+  // every sample and the board fit cannot see, 1-sigma: a constant offset
+  // and a scale error (range reads (1 + e) rho + offset). The solve's sigma
+  // takes the angles' change under each (SolveRefinedCorners, marginalised
+  // as nuisance parameters). 0 (the default) leaves them out: with the
+  // path scale from the room's planes (PickCalibrationOptions) they largely
+  // cancel (docs/calibration.md, "Range errors"), and a secant at fixed
+  // poses overstated them 5-10 fold; set them for truth or unscaled poses.
+  double range_offset_sigma_m = 0.0;
+  double range_scale_sigma = 0.0;
+  // Refined corners: estimate a range offset per pass beside the angles (a
+  // nuisance: a constant offset, and a scale error as the offset it makes at
+  // each pass's distance), with a 10 mm prior; SolveRefinedCorners. Off by
+  // default: on the lab diamond the offsets and gamma are confounded (with
+  // +10 / +18 mm of true offset the estimate came out -3.4 / +4.5 mm, the
+  // corners' misfit fell from 7 to 0.3 mm and gamma stayed 2 mrad off, now
+  // at 12 sigma; docs/calibration.md, "Range errors").
+  bool estimate_range_offsets = false;
   CalibrationProgress* progress = nullptr;  // not owned; may be null
 
   bool IsValid(std::string* error) const;
@@ -90,6 +108,21 @@ struct CalibrationSummary {
   double path_scale = 1.0;
   Eigen::Vector3d path_centre = Eigen::Vector3d::Zero();  // the scale's centre
   double board_thickness_m = 0.0;  // refined corners: the target's, as the board fit took it
+  // Refined corners: the end points both passes' final board fits rejected
+  // as further from their edge than half a spacing plus noise (lines that
+  // lost or gained a sample at the edge: mixed returns, dropouts), and the
+  // points kept; -1 for the other methods.
+  int rejected_edge_points = -1;
+  int edge_points = -1;
+  // Refined corners: samples beyond the lines' ends recognised as mixed
+  // returns (BoardCorners::mixed_edge_samples), both passes; -1 otherwise.
+  int mixed_edge_samples = -1;
+  // Refined corners: the part of sigma_rad from the range offset and scale
+  // (CalibrationOptions::range_offset_sigma_m, range_scale_sigma).
+  Eigen::Vector3d sigma_range_rad = Eigen::Vector3d::Zero();
+  // Refined corners: the range offsets estimated for pass 1 and pass 2
+  // (CalibrationOptions::estimate_range_offsets; zero if not estimated).
+  Eigen::Vector2d range_offsets_m = Eigen::Vector2d::Zero();
   int residual_blocks = 0;  // pairs, or points in the automatic mode
   int outer_iterations = 0;
   int planes = 0;  // automatic mode
