@@ -14,10 +14,17 @@ Each drive's scenario is written to WORKDIR, so any drive can be re-run
 alone. Prints one line per drive and the summary table (markdown); --csv
 writes every angle's error and sigma.
 
+The refined mode also draws what real edges do (issue 32): mixed returns at
+the board's depth edges and a range scale error, beside the range offset
+every drive draws (draw_edge_effects; --edge-effects off for the sweeps of
+before 2026-11-26). They are drawn after the angles and the other errors,
+from the same seed, so every drive keeps the angles and errors it had.
+
 usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
            [--drive lab_circle_two_turns.json] [--turns N] [--mode auto|refined]
            [--pose-source ekf|truth|odometry] [--no-smooth] [--default-sensors]
+           [--edge-effects default|on|off]
 """
 import argparse
 import json
@@ -54,6 +61,21 @@ def draw_errors(rng):
             "scale_error_left": rng.uniform(-0.01, 0.01),
             "scale_error_right": rng.uniform(-0.01, 0.01),
         },
+    }
+
+
+def draw_edge_effects(rng):
+    """Mixed returns at depth edges and a range scale error (docs/scenario-format.md).
+
+    A share of 0.2-1 of the beams that straddle a depth edge report a mixed
+    range, of those a share of 0-1 a blend of the two surfaces' ranges and
+    the rest the other surface's; the scale error within +-1 % (the X4 data
+    sheet's relative accuracy beyond 2 m).
+    """
+    return {
+        "mixed_return_share": rng.uniform(0.2, 1.0),
+        "mixed_blend_share": rng.uniform(0.0, 1.0),
+        "range_scale_error": rng.uniform(-0.01, 0.01),
     }
 
 
@@ -122,6 +144,10 @@ def main():
                          "default calibrate smooths them over the drive")
     ap.add_argument("--default-sensors", action="store_true",
                     help="keep the simulator's default sensor errors (only the angles are drawn)")
+    ap.add_argument("--edge-effects", choices=["default", "on", "off", "mixed", "scale"], default="default",
+                    help="draw mixed edge returns and a range scale error per drive (default: in "
+                         "the refined mode only; off reproduces the sweeps before 2026-11-26; mixed / scale: "
+                         "only the mixed returns / only the scale error, to tell their effects apart)")
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     modes = [a.mode]
@@ -134,9 +160,18 @@ def main():
         rng = random.Random(seed)
         angles = [rng.uniform(-math.radians(2.0), math.radians(2.0)) for _ in range(3)]
         sensor = draw_errors(rng)
+        edge = draw_edge_effects(rng)
         if a.default_sensors:
             sensor = {}
         for mode in modes:
+            if a.edge_effects in ("on", "mixed", "scale") or (
+                    a.edge_effects == "default" and mode == "refined"):
+                drawn = {k: v for k, v in edge.items()
+                         if a.edge_effects != "mixed" or k.startswith("mixed")}
+                drawn = {k: v for k, v in drawn.items()
+                         if a.edge_effects != "scale" or not k.startswith("mixed")}
+                sensor = dict(sensor)
+                sensor["lidar"] = dict(sensor.get("lidar", {}), **drawn)
             base = a.drive if mode == "auto" else "lab_circle_diamond.json"
             path = os.path.join(a.workdir, "drive_%03d_%s.json" % (seed, mode))
             drive = scenario(base, seed, angles, sensor)
@@ -159,6 +194,8 @@ def main():
                 print("seed %3d %-7s refused: %s" % (seed, mode, why), flush=True)
                 continue
             got = d["mounting_error_rad"]
+            rejected = d.get("rejected_edge_points")
+            mixed = d.get("mixed_edge_samples")
             sig = d.get("sigma_rad", {})
             line = []
             for i, n in enumerate(NAMES):
@@ -169,6 +206,8 @@ def main():
                 inside[mode] += abs(e) <= 3.0 * s
                 rows.append((seed, mode, n, angles[i], got[n], e, s))
                 line.append("%s %+.3f (%.3f)" % (n, 1e3 * e, 1e3 * s))
+            if rejected is not None:
+                line.append("rejected edge points %s, mixed %s" % (rejected, mixed))
             print("seed %3d %-7s error mrad (sigma): %s" % (seed, mode, ", ".join(line)), flush=True)
     if a.csv:
         with open(a.csv, "w") as f:
