@@ -50,6 +50,28 @@ TEST(ScenarioTest, ExplicitFormRoundTrips) {
   ASSERT_EQ(b.slips.size(), 1u);
 }
 
+TEST(ScenarioTest, LidarEdgeEffectsRoundTrip) {
+  nlohmann::json j = Minimal();
+  j["lidar"] = {{"range_offset_m", 0.006}, {"range_scale_error", 0.005},
+                {"mixed_return_share", 0.4}, {"mixed_blend_share", 0.25},
+                {"mixed_footprint_rad", 0.01}, {"mixed_min_jump_m", 0.05}};
+  sim::SimConfig a, b;
+  ASSERT_TRUE(ScenarioFromJson(j, "s.json", &a).ok());
+  ASSERT_TRUE(ScenarioFromJson(ScenarioToJson(a), "again.json", &b).ok());
+  EXPECT_DOUBLE_EQ(b.lidar.range_scale_error, 0.005);
+  EXPECT_DOUBLE_EQ(b.lidar.mixed_return_share, 0.4);
+  EXPECT_DOUBLE_EQ(b.lidar.mixed_blend_share, 0.25);
+  EXPECT_DOUBLE_EQ(b.lidar.mixed_footprint_rad, 0.01);
+  EXPECT_DOUBLE_EQ(b.lidar.mixed_min_jump_m, 0.05);
+  // Off by default: today's drives unchanged.
+  sim::SimConfig c;
+  ASSERT_TRUE(ScenarioFromJson(Minimal(), "s.json", &c).ok());
+  EXPECT_EQ(c.lidar.mixed_return_share, 0.0);
+  EXPECT_EQ(c.lidar.range_scale_error, 0.0);
+  j["lidar"] = {{"mixed_return_share", 1.5}};
+  EXPECT_NE(ErrorOf(j).find("lidar.mixed_return_share"), std::string::npos) << ErrorOf(j);
+}
+
 TEST(ScenarioTest, DiamondPresetAndPitchedBoxesRoundTrip) {
   nlohmann::json j = Minimal();
   j["scene"] = {{"preset", "lab-diamond"},
