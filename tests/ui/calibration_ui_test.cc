@@ -266,6 +266,14 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   }
   EXPECT_GT(r->summary.initial_rms_m, 10.0 * r->summary.final_rms_m);
   EXPECT_NE(panel->result_text().indexOf("alpha"), -1);
+  // How the board's edges held: the refined fit's counts, as the summary has them.
+  EXPECT_GT(r->summary.edge_points, 0);
+  EXPECT_GE(r->summary.rejected_edge_points, 0);
+  EXPECT_NE(panel->result_text().indexOf(QStringLiteral("%1 edge points kept, %2 rejected")
+                                             .arg(r->summary.edge_points)
+                                             .arg(r->summary.rejected_edge_points)),
+            -1)
+      << panel->result_text().toStdString();
   // Each pair's gap before and after, and the fitted corners of both passes
   // (which the solve made coincide).
   ASSERT_EQ(r->pair_checks.size(), 4u);

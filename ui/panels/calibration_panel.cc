@@ -517,6 +517,15 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
   // smoothed over the drive (as `sweepscan-cli calibrate`), while the view
   // shows the forward filter's cloud: say which the angles rest on.
   if (s.method != "file") text += tr("<br>poses: the EKF's, smoothed over the drive");
+  // Refined picks: how the board's edges held (docs/calibration.md, "Mixed
+  // returns"): lines a sample short or long at an edge are rejected, and
+  // their share widens the sigma above.
+  if (s.rejected_edge_points >= 0) {
+    text += tr("<br>board edges: %1 edge points kept, %2 rejected, %3 mixed returns recognised")
+                .arg(s.edge_points)
+                .arg(s.rejected_edge_points)
+                .arg(s.mixed_edge_samples);
+  }
   if (r->has_baseline) {
     text += tr("<br>raw picks alone (the paper's method): %1 mm -> %2 mm")
                 .arg(r->baseline.initial_rms_m * 1e3, 0, 'f', 1)
