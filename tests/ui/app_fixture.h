@@ -105,6 +105,25 @@ class AppFixture : public ::testing::Test {
   std::unique_ptr<ui::MainWindow> window_;
 };
 
+// AppFixture with the office floor's three drives recorded once for the
+// whole test binary (RecordOfficeFloorSessions, ~6 s in parallel) into
+// Dir(): the project and plan UI tests' shared set-up.
+class OfficeFloorAppFixture : public AppFixture {
+ protected:
+  static void SetUpTestSuite() {
+    sessions_ = new QTemporaryDir;
+    RecordOfficeFloorSessions(Dir());
+  }
+  static void TearDownTestSuite() {
+    delete sessions_;
+    sessions_ = nullptr;
+  }
+  static std::string Dir() { return sessions_->path().toStdString(); }
+
+ private:
+  inline static QTemporaryDir* sessions_ = nullptr;
+};
+
 // The UI tests' main(): listing the tests (CTest's discovery) needs no
 // display; running them does (xvfb-run in CI).
 inline int RunUiTests(int argc, char** argv) {

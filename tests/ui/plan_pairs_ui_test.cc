@@ -72,15 +72,8 @@ Rigid3d StartOf(const char* scenario) {
   return Rigid3d::FromPose(c.start.x, c.start.y, 0, 0, 0, c.start.yaw);
 }
 
-class PlanPairsUiTest : public testing::AppFixture {
+class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
  protected:
-  static void SetUpTestSuite() {
-    sessions_ = new QTemporaryDir;
-    testing::RecordOfficeFloorSessions(Dir());
-  }
-  static void TearDownTestSuite() { delete sessions_; }
-  static std::string Dir() { return sessions_->path().toStdString(); }
-
   // a (the anchor), b, c, made by the CLI; `then` runs after (e.g. an align).
   QString MakeProject(const std::string& name, const std::string& then = "") {
     const std::string file = Dir() + "/" + name + ".sweepscan-project";
@@ -123,9 +116,7 @@ class PlanPairsUiTest : public testing::AppFixture {
     return panel;
   }
 
-  static QTemporaryDir* sessions_;
 };
-QTemporaryDir* PlanPairsUiTest::sessions_ = nullptr;
 
 TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   OpenAndLoad(MakeProject("plan", "project align --session b --to a"));

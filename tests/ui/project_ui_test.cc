@@ -38,16 +38,9 @@ using testing::kResources;
 using testing::RunCommand;
 using testing::WaitFor;
 
-// The three drives, recorded once for the whole binary (~6 s in parallel).
-class ProjectUiTest : public testing::AppFixture {
+// The three drives recorded once for the whole binary (OfficeFloorAppFixture).
+class ProjectUiTest : public testing::OfficeFloorAppFixture {
  protected:
-  static void SetUpTestSuite() {
-    sessions_ = new QTemporaryDir;
-    testing::RecordOfficeFloorSessions(Dir());
-  }
-  static void TearDownTestSuite() { delete sessions_; }
-  static std::string Dir() { return sessions_->path().toStdString(); }
-
   // A fresh project of a, b, c (a the anchor, the others unplaced), made
   // by the CLI beside the sessions.
   QString MakeProject(const std::string& name) {
@@ -76,9 +69,7 @@ class ProjectUiTest : public testing::AppFixture {
     return worst;
   }
 
-  static QTemporaryDir* sessions_;
 };
-QTemporaryDir* ProjectUiTest::sessions_ = nullptr;
 
 TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   const QString file = MakeProject("toggle");
