@@ -162,6 +162,10 @@ bool AgentOptions::IsValid(std::string* error) const {
     return fail("low battery threshold must be >= 0");
   }
   if (lidar_request_spacing < Duration::zero()) return fail("lidar request spacing must be >= 0");
+  if (telemetry_buffer < Duration::zero() || telemetry_buffer > std::chrono::seconds(60)) {
+    return fail("telemetry buffer must be within 0..60 s");
+  }
+  if (resume_wait <= Duration::zero()) return fail("resume wait must be positive");
   if (max_client_payload < kLinkNonceSize + kLinkMacSize || max_client_payload > kLinkMaxPayload) {
     return fail("max client payload must be within [64, 65536]");
   }
@@ -180,12 +184,16 @@ void AgentOutput::Clear() {
 }
 
 AgentCore::AgentCore(const AgentOptions& options)
-    : options_(options), decoder_(ClientDecoderOptions(options)) {}
+    : options_(options),
+      decoder_(ClientDecoderOptions(options)),
+      buffer_(options.telemetry_buffer, options.telemetry_buffer_max_bytes, Time()) {}
 
 void AgentCore::Start(Time now, AgentOutput* out) {
   if (started_) return;
   started_ = true;
   start_time_ = now;
+  // Nothing read before now was kept: a resume from before it is a break.
+  buffer_ = TelemetryBuffer(options_.telemetry_buffer, options_.telemetry_buffer_max_bytes, now);
   // The lidar may still be scanning from a previous run of the agent: stop
   // it so its replies to the requests below are not buried in scan packets.
   auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
@@ -216,6 +224,7 @@ void AgentCore::OnClientConnected(Time now, AgentOutput* out) {
     HandleHandshakeState(handshake_->state(), now, out);
     return;
   }
+  HoldTelemetry(now);
   SendGreeting(now, out);
 }
 
@@ -240,6 +249,7 @@ bool AgentCore::AdoptClient(AgentHandshake* handshake, Time now, AgentOutput* ou
   ++counters_.auth_ok;
   Send(now, AuthResult{AuthOutcome::kOk, ""}, out);
   SendStatus(now, out);
+  HoldTelemetry(now);
   std::vector<LinkMessage> pending = std::move(handshake->pending_messages());
   for (const LinkMessage& message : pending) {
     if (closing_) break;
@@ -302,6 +312,7 @@ void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
   const bool was_authenticated = authenticated_;
   authenticated_ = false;
   frame_auth_ = false;
+  telemetry_held_ = false;
   handshake_.reset();
   decoder_.Reset();
   // A dropped connection trips the watchdog at once (docs/protocol.md).
@@ -401,7 +412,8 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
       std::holds_alternative<DriveCommand>(payload) || std::holds_alternative<Stop>(payload) ||
       std::holds_alternative<EmergencyStop>(payload) ||
       std::holds_alternative<ClearEmergencyStop>(payload) ||
-      std::holds_alternative<Heartbeat>(payload) || std::holds_alternative<LidarMotor>(payload);
+      std::holds_alternative<Heartbeat>(payload) || std::holds_alternative<LidarMotor>(payload) ||
+      std::holds_alternative<TelemetryResume>(payload);
   if (!is_command) return;  // Agent-to-client types and unknown types: ignored.
 
   // Stopping is always allowed; nothing else before authentication (and
@@ -412,6 +424,18 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
     }
     return;
   }
+
+  if (const auto* resume = std::get_if<TelemetryResume>(&payload)) {
+    if (!telemetry_held_) {
+      // Buffering off, or asked twice: live telemetry is already flowing.
+      Ack(now, message, AckResult::kUnsupported, out);
+      return;
+    }
+    ReleaseTelemetry(resume, now, out);
+    Ack(now, message, AckResult::kAccepted, out);
+    return;
+  }
+  if (telemetry_held_) ReleaseTelemetry(nullptr, now, out);
 
   if (const auto* drive = std::get_if<DriveCommand>(&payload)) {
     if (estop_latched_) {
@@ -497,10 +521,67 @@ void AgentCore::OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, 
       motor_stop_flag_ = feedback.stop_flag != 0;
     }
   }
-  if (!client_connected_ || !authenticated_ || closing_) return;  // No telemetry before auth.
-  const std::vector<uint8_t> frames = encoder_.EncodeTelemetry(now, device, now, data, n);
+  const uint64_t serial = buffer_.Push(id, now, data, n, now);
+  // No telemetry before auth; held ones wait in the buffer.
+  if (!client_connected_ || !authenticated_ || closing_ || telemetry_held_) return;
+  TelemetryBuffer::Piece piece;
+  piece.serial = serial;
+  piece.device = id;
+  piece.receive_time = now;
+  piece.data = data;
+  piece.size = n;
+  SendTelemetryPiece(now, piece, out);
+}
+
+void AgentCore::SendTelemetryPiece(Time now, const TelemetryBuffer::Piece& piece,
+                                   AgentOutput* out) {
+  uint8_t flags = piece.flags;
+  if (pending_break_[piece.device - 1]) {
+    flags |= kTelemetryBreak;
+    pending_break_[piece.device - 1] = false;
+  }
+  const std::vector<uint8_t> frames =
+      encoder_.EncodeTelemetry(now, static_cast<LinkDevice>(piece.device), piece.receive_time,
+                               piece.data, piece.size, flags);
   out->to_client.insert(out->to_client.end(), frames.begin(), frames.end());
   ++counters_.telemetry_frames_sent;
+}
+
+void AgentCore::HoldTelemetry(Time now) {
+  pending_break_.fill(false);
+  if (!buffer_.enabled()) return;  // No buffer: live from the start, as before.
+  telemetry_held_ = true;
+  held_from_serial_ = buffer_.next_serial();
+  held_since_ = now;
+}
+
+void AgentCore::ReleaseTelemetry(const TelemetryResume* resume, Time now, AgentOutput* out) {
+  telemetry_held_ = false;
+  buffer_.Evict(now);
+  if (resume == nullptr) {
+    buffer_.CollectFrom(held_from_serial_, [&](const TelemetryBuffer::Piece& piece) {
+      SendTelemetryPiece(now, piece, out);
+    });
+    return;
+  }
+  ++counters_.resumes;
+  for (uint8_t d = 1; d <= 3; ++d) {
+    if (resume->devices[d - 1].have && buffer_.LostAfter(d, resume->devices[d - 1])) {
+      ++counters_.resume_breaks;
+    }
+  }
+  std::array<bool, 3> breaks{};
+  buffer_.CollectAfter(*resume, held_from_serial_,
+                       [&](const TelemetryBuffer::Piece& piece) {
+                         if (piece.serial < held_from_serial_) {
+                           ++counters_.chunks_resent;
+                           counters_.bytes_resent += piece.size;
+                         }
+                         SendTelemetryPiece(now, piece, out);
+                       },
+                       &breaks);
+  // A device with lost bytes but nothing kept: its next live chunk says so.
+  for (int d = 0; d < 3; ++d) pending_break_[d] = breaks[d];
 }
 
 void AgentCore::SetDevicePortError(LinkDevice device, bool error, Time now, AgentOutput* out) {
@@ -525,6 +606,11 @@ void AgentCore::Tick(Time now, AgentOutput* out) {
 
   if (client_connected_ && !closing_ && handshake_ != nullptr) {
     HandleHandshakeState(handshake_->Tick(now, &out->to_client), now, out);
+  }
+  // A client that never asks (an older workstation): live after resume_wait.
+  if (telemetry_held_ && client_authenticated() && !closing_ &&
+      now - held_since_ >= options_.resume_wait) {
+    ReleaseTelemetry(nullptr, now, out);
   }
 
   // Watchdog first, so a quiet link never gets one more ramp step.

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "core/common/time.h"
+#include "hardware/agent/telemetry_buffer.h"
 #include "hardware/codecs/motor_board_codec.h"
 #include "hardware/link/hmac_sha256.h"
 #include "hardware/link/link_protocol.h"
@@ -100,6 +101,16 @@ struct AgentOptions {
   // Client bytes waiting to be decoded beyond this: the connection is
   // dropped ("input flood"; a real client sends a few hundred bytes/s).
   size_t max_client_backlog = 1 << 20;
+  // Buffering across outages (docs/robot-agent.md): the last
+  // `telemetry_buffer` of device bytes are kept (0 = none; at most 60 s) in
+  // at most telemetry_buffer_max_bytes (0 = the default bound of
+  // telemetry_buffer.h, about 1.0 MB for 10 s), and a client that sends
+  // TelemetryResume gets what it missed. After a client is adopted its
+  // telemetry waits for its first command frame (at most resume_wait), so
+  // what it asks to be resent goes out before the live bytes.
+  Duration telemetry_buffer = std::chrono::seconds(10);
+  size_t telemetry_buffer_max_bytes = 0;
+  Duration resume_wait = std::chrono::seconds(1);
   // Nonce source; null = FillRandomBytes (/dev/urandom). Tests may inject one.
   std::function<bool(uint8_t*, size_t)> random_source;
 
@@ -138,6 +149,11 @@ struct AgentCounters {
   // After the handshake: frames refused because they were unsigned, carried
   // a wrong tag, or repeated / went back in sequence (replay, reorder, injection).
   uint64_t frames_unsigned = 0;
+  // Buffering across outages.
+  uint64_t resumes = 0;             // TelemetryResume requests served.
+  uint64_t resume_breaks = 0;       // Devices whose bytes after the client's position were lost.
+  uint64_t chunks_resent = 0;       // Buffered chunks sent after a resume.
+  uint64_t bytes_resent = 0;
   uint64_t frames_bad_tag = 0;
   uint64_t frames_replayed = 0;
   uint64_t old_protocol_refused = 0;  // Peers speaking protocol version 1.
@@ -241,6 +257,7 @@ class AgentCore {
   // start-up requests, auth timeout. The watchdog reacts within one tick.
   void Tick(Time now, AgentOutput* out);
 
+  const TelemetryBuffer& telemetry_buffer() const { return buffer_; }
   // State, as it would go out in the next Status.
   LinkStatus status(Time now) const;
   bool client_connected() const { return client_connected_; }
@@ -271,6 +288,12 @@ class AgentCore {
   // Zero to the motors at once (e-stop and watchdog).
   void HardStop(Time now, AgentOutput* out);
   void SendMotorCommand(Time now, AgentOutput* out);
+  // A client was adopted: hold its telemetry until it says where it is.
+  void HoldTelemetry(Time now);
+  // The client's first command frame: resend after its position (resume
+  // non-null), or send what was read since it was adopted; then live.
+  void ReleaseTelemetry(const TelemetryResume* resume, Time now, AgentOutput* out);
+  void SendTelemetryPiece(Time now, const TelemetryBuffer::Piece& piece, AgentOutput* out);
   void UpdateRamp(Time now);
   void UpdateWatchdogArming();
   bool MotionCommanded() const;
@@ -318,6 +341,11 @@ class AgentCore {
   std::array<bool, 3> port_error_{};
   float battery_v_ = 0.0f;
   bool motor_stop_flag_ = false;
+  TelemetryBuffer buffer_;
+  bool telemetry_held_ = false;
+  uint64_t held_from_serial_ = 0;
+  Time held_since_;
+  std::array<bool, 3> pending_break_{};  // Next chunk of the device carries kTelemetryBreak.
 
   // Status bookkeeping.
   bool have_status_time_ = false;

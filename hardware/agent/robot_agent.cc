@@ -201,7 +201,7 @@ void RobotAgent::OnNewTcpConnection() {
     const QString peer = socket->peerAddress().toString();
     const qint64 now_ms = clock_.elapsed();
     QString refusal;
-    if (client_ != nullptr) {
+    if (client_ != nullptr && !ClientSilent()) {
       refusal = QStringLiteral("busy");
     } else if (last_auth_failure_ms_.contains(peer) &&
                now_ms - last_auth_failure_ms_.value(peer) < config_.auth_failure_delay_ms) {
@@ -290,6 +290,14 @@ void RobotAgent::HandlePending(size_t index, AgentHandshake::State state,
     Pending done = std::move(p);
     pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(index));
     done.stream->disconnect(this);
+    if (client_ != nullptr && ClientSilent()) {
+      emit logMessage(QStringLiteral("%1 silent for %2 ms: replaced by %3")
+                          .arg(client_peer_)
+                          .arg(ToSeconds(Now() - core_->last_client_frame_time()) * 1e3, 0, 'f', 0)
+                          .arg(done.peer));
+      if (auto* tcp = qobject_cast<TcpStream*>(client_)) tcp->Abort();
+      DropClient(QStringLiteral("replaced by a new connection (silent link)"));
+    }
     if (client_ != nullptr) {
       // Another connection authenticated first.
       LinkEncoder encoder(LinkSender::kAgent, done.handshake->next_agent_sequence());
@@ -361,7 +369,14 @@ void RobotAgent::ScheduleContinue() {
 bool RobotAgent::SendQueueFull(ByteStream* stream) const {
   const auto* tcp = qobject_cast<const TcpStream*>(stream);
   return tcp != nullptr && tcp->socket() != nullptr &&
-         tcp->socket()->bytesToWrite() > config_.max_send_queue_bytes;
+         tcp->socket()->bytesToWrite() >
+             config_.max_send_queue_bytes +
+                 static_cast<qint64>(core_->telemetry_buffer().max_bytes());
+}
+
+bool RobotAgent::ClientSilent() const {
+  return client_ != nullptr && Now() - core_->last_client_frame_time() >=
+                                   std::chrono::milliseconds(config_.client_takeover_after_ms);
 }
 
 void RobotAgent::AttachClient(ByteStream* stream) {

@@ -122,7 +122,13 @@ struct RobotAgentConfig {
   int max_pending_connections = 16;
   // Bytes queued for a peer that does not read them: beyond this the peer is
   // dropped (and the robot stopped if it was driving). ~30 s of telemetry.
+  // A resume after an outage adds up to the telemetry buffer's bound on top.
   qint64 max_send_queue_bytes = 1 << 20;
+  // A client that has sent nothing for this long while another connection
+  // authenticates with the key is taken to be gone (a half-open link: its
+  // host vanished without FIN, or its Wi-Fi dropped) and is replaced,
+  // instead of refusing the new one as "busy" until TCP gives up minutes later.
+  int client_takeover_after_ms = 1000;
   // Qt's read buffer per agent socket: bounds the bytes one read hands to
   // the decoder, hence the work between two watchdog ticks.
   qint64 socket_read_buffer_bytes = 64 * 1024;
@@ -170,6 +176,8 @@ class RobotAgent : public QObject {
   void TickPending();
   void ScheduleContinue();
   bool SendQueueFull(ByteStream* stream) const;
+  // The client has sent nothing for client_takeover_after_ms.
+  bool ClientSilent() const;
   void AttachClient(ByteStream* stream);
   void DropClient(const QString& reason);
   void OnClientBytes(const QByteArray& bytes);

@@ -24,6 +24,8 @@ constexpr size_t kOffHeaderCrc = 24;
 constexpr size_t kCommandAckSize = 16;
 constexpr size_t kStatusSize = 84;
 constexpr size_t kDriveSize = 16;
+constexpr size_t kResumeSize = 48;
+constexpr size_t kRecorderEventFixedSize = 52;  // Before the reason string.
 
 void AppendU64Le(uint64_t v, std::vector<uint8_t>* out) {
   for (int i = 0; i < 8; ++i) out->push_back(static_cast<uint8_t>((v >> (8 * i)) & 0xFF));
@@ -134,6 +136,28 @@ struct PayloadWriter {
   void operator()(const ClearEmergencyStop&) const {}
   void operator()(const Heartbeat&) const {}
   void operator()(const LidarMotor& m) const { out->push_back(m.on ? 1 : 0); }
+  void operator()(const TelemetryResume& m) const {
+    for (const TelemetryResumePosition& d : m.devices) {
+      out->push_back(d.have ? 1 : 0);
+      out->push_back(0);
+      AppendU16Le(0, out);
+      AppendI64Le(d.have ? ToNanoseconds(d.after_time) : 0, out);
+      AppendU32Le(d.have ? d.bytes_at_time : 0, out);
+    }
+  }
+  void operator()(const RecorderEvent& m) const {
+    out->push_back(static_cast<uint8_t>(m.kind));
+    out->push_back(static_cast<uint8_t>((m.new_clock_epoch ? 1 : 0) | (m.resumed ? 2 : 0)));
+    AppendU16Le(0, out);
+    AppendU32Le(m.epoch, out);
+    AppendI64Le(ToNanoseconds(m.workstation_time), out);
+    AppendI64Le(ToNanoseconds(m.robot_time), out);
+    AppendI64Le(m.outage.count(), out);
+    AppendI64Le(m.robot_time_shift.count(), out);
+    AppendI64Le(m.tie_uncertainty.count(), out);
+    AppendU32Le(m.attempts, out);
+    AppendString(m.reason, out);
+  }
   void operator()(const CommandAck& m) const {
     AppendU32Le(m.acked_sequence, out);
     out->push_back(m.acked_type);
@@ -161,7 +185,7 @@ struct PayloadWriter {
   }
   void operator()(const Telemetry& m) const {
     out->push_back(m.device);
-    out->push_back(0);
+    out->push_back(m.flags);
     out->push_back(0);
     out->push_back(0);
     AppendI64Le(ToNanoseconds(m.receive_time), out);
@@ -190,6 +214,12 @@ struct TypeOf {
   }
   uint8_t operator()(const Heartbeat&) const { return uint8_t(LinkMessageType::kHeartbeat); }
   uint8_t operator()(const LidarMotor&) const { return uint8_t(LinkMessageType::kLidarMotor); }
+  uint8_t operator()(const TelemetryResume&) const {
+    return uint8_t(LinkMessageType::kTelemetryResume);
+  }
+  uint8_t operator()(const RecorderEvent&) const {
+    return uint8_t(LinkMessageType::kRecorderEvent);
+  }
   uint8_t operator()(const CommandAck&) const { return uint8_t(LinkMessageType::kCommandAck); }
   uint8_t operator()(const LinkStatus&) const { return uint8_t(LinkMessageType::kStatus); }
   uint8_t operator()(const Telemetry&) const { return uint8_t(LinkMessageType::kTelemetry); }
@@ -371,10 +401,64 @@ bool ParseTelemetry(Reader& r, size_t n, LinkPayload* out, std::string* error) {
   }
   Telemetry m;
   m.device = r.U8();
-  r.U8();
+  m.flags = r.U8();
   r.U16();  // reserved
   m.receive_time = TimeFromNanoseconds(r.I64());
   m.bytes.assign(r.here(), r.here() + r.remaining());
+  *out = std::move(m);
+  return true;
+}
+bool ParseTelemetryResume(Reader& r, size_t n, LinkPayload* out, std::string* error) {
+  if (!ExactPayloadSize(static_cast<uint8_t>(LinkMessageType::kTelemetryResume), n, kResumeSize,
+                        error)) {
+    return false;
+  }
+  TelemetryResume m;
+  for (TelemetryResumePosition& d : m.devices) {
+    const uint8_t have = r.U8();
+    r.U8();
+    r.U16();  // reserved
+    const int64_t after_ns = r.I64();
+    const uint32_t bytes = r.U32();
+    if (have > 1) return Fail("TelemetryResume: have " + std::to_string(have) + " (0 or 1)", error);
+    d.have = have == 1;
+    if (d.have) {
+      d.after_time = TimeFromNanoseconds(after_ns);
+      d.bytes_at_time = bytes;
+    }
+  }
+  *out = m;
+  return true;
+}
+
+bool ParseRecorderEvent(Reader& r, size_t n, LinkPayload* out, std::string* error) {
+  if (n < kRecorderEventFixedSize + 1) {
+    return Fail("RecorderEvent payload: " + std::to_string(n) + " bytes, needs at least " +
+                    std::to_string(kRecorderEventFixedSize + 1),
+                error);
+  }
+  RecorderEvent m;
+  const uint8_t kind = r.U8();
+  const uint8_t flags = r.U8();
+  r.U16();  // reserved
+  if (kind < 1 || kind > 2) return Fail("RecorderEvent: kind " + std::to_string(kind), error);
+  m.kind = static_cast<RecorderEventKind>(kind);
+  m.new_clock_epoch = (flags & 1) != 0;
+  m.resumed = (flags & 2) != 0;
+  m.epoch = r.U32();
+  m.workstation_time = TimeFromNanoseconds(r.I64());
+  m.robot_time = TimeFromNanoseconds(r.I64());
+  m.outage = Duration(r.I64());
+  m.robot_time_shift = Duration(r.I64());
+  m.tie_uncertainty = Duration(r.I64());
+  m.attempts = r.U32();
+  m.reason = r.String();
+  if (!r.AtEnd()) {
+    return Fail("RecorderEvent payload: fields do not fill the payload exactly", error);
+  }
+  if (m.outage.count() < 0 || m.tie_uncertainty.count() < 0) {
+    return Fail("RecorderEvent: negative outage or uncertainty", error);
+  }
   *out = std::move(m);
   return true;
 }
@@ -402,6 +486,10 @@ const char* LinkMessageTypeName(uint8_t type) {
       return "Heartbeat";
     case LinkMessageType::kLidarMotor:
       return "LidarMotor";
+    case LinkMessageType::kTelemetryResume:
+      return "TelemetryResume";
+    case LinkMessageType::kRecorderEvent:
+      return "RecorderEvent";
     case LinkMessageType::kCommandAck:
       return "CommandAck";
     case LinkMessageType::kStatus:
@@ -481,13 +569,15 @@ std::vector<uint8_t> LinkEncoder::Encode(Time time, const LinkPayload& payload) 
 }
 
 std::vector<uint8_t> LinkEncoder::EncodeTelemetry(Time t, LinkDevice device, Time receive_time,
-                                                  const uint8_t* bytes, size_t n) {
+                                                  const uint8_t* bytes, size_t n,
+                                                  uint8_t flags) {
   std::vector<uint8_t> out;
   size_t pos = 0;
   do {
     const size_t k = std::min(n - pos, kLinkMaxTelemetryBytes);
     Telemetry m;
     m.device = static_cast<uint8_t>(device);
+    m.flags = pos == 0 ? flags : static_cast<uint8_t>(flags & ~kTelemetryBreak);
     m.receive_time = receive_time;
     if (k > 0) m.bytes.assign(bytes + pos, bytes + pos + k);
     std::vector<uint8_t> body;
@@ -524,6 +614,10 @@ bool ParseLinkPayload(uint8_t type, const uint8_t* data, size_t n, LinkPayload* 
       return ParseStatus(r, n, out, error);
     case LinkMessageType::kTelemetry:
       return ParseTelemetry(r, n, out, error);
+    case LinkMessageType::kTelemetryResume:
+      return ParseTelemetryResume(r, n, out, error);
+    case LinkMessageType::kRecorderEvent:
+      return ParseRecorderEvent(r, n, out, error);
   }
   UnknownMessage m;
   m.type = type;

@@ -66,7 +66,7 @@ inline constexpr size_t kLinkMaxFrameSize = kLinkMaxPayload + kLinkFrameOverhead
 
 // Agent stops the robot when no valid frame arrived for this long (docs/protocol.md).
 inline constexpr Duration kLinkDefaultWatchdog = std::chrono::milliseconds(500);
-// Telemetry payload: device u8, 3 reserved bytes, robot receive time i64.
+// Telemetry payload: device u8, flags u8, 2 reserved bytes, robot receive time i64.
 inline constexpr size_t kTelemetryHeaderSize = 12;
 inline constexpr size_t kLinkMaxTelemetryBytes = kLinkMaxPayload - kTelemetryHeaderSize;
 inline constexpr size_t kLinkMaxStringSize = 255;  // Strings are u8 length + UTF-8 bytes.
@@ -82,9 +82,13 @@ enum class LinkMessageType : uint8_t {
   kClearEmergencyStop = 0x13,
   kHeartbeat = 0x14,
   kLidarMotor = 0x15,
+  kTelemetryResume = 0x16,
   kCommandAck = 0x20,
   kStatus = 0x30,
   kTelemetry = 0x31,
+  // Never on the wire: a note the workstation's recorder writes into its
+  // session (docs/session-format.md, "Recorder events").
+  kRecorderEvent = 0x40,
 };
 const char* LinkMessageTypeName(uint8_t type);  // "DriveCommand", ... or "unknown".
 bool IsKnownLinkMessageType(uint8_t type);
@@ -136,6 +140,33 @@ struct Heartbeat {};           // Keeps the watchdog fed; the agent acks it (lat
 struct LidarMotor {
   bool on = false;
 };
+// Client -> agent, right after a reconnection: "send me, from what you kept
+// while I was away, the device bytes after these points" (docs/protocol.md,
+// "TelemetryResume"). One position per device (lidar, IMU, motor board).
+struct TelemetryResumePosition {
+  bool have = false;        // The client holds bytes of this device from this clock epoch.
+  Time after_time;          // Receive time of the last Telemetry chunk it holds.
+  uint32_t bytes_at_time = 0;  // Bytes it holds of chunks with exactly that receive time.
+};
+struct TelemetryResume {
+  std::array<TelemetryResumePosition, 3> devices;
+};
+// The recorder's note in a session (sender kClient, never sent on a link).
+enum class RecorderEventKind : uint8_t { kLinkLost = 1, kLinkRestored = 2 };
+struct RecorderEvent {
+  RecorderEventKind kind = RecorderEventKind::kLinkLost;
+  bool new_clock_epoch = false;  // Restored: the robot clock was reset (reboot) during the outage.
+  bool resumed = false;          // Restored: the agent was asked for what it buffered.
+  uint32_t epoch = 0;            // Robot clock epoch from now on (0 = the session's first).
+  Time workstation_time;         // Workstation steady clock at the event.
+  Time robot_time;               // Lost: last robot time received; restored: first of the new link.
+  Duration outage{};             // Restored: link down (lost event -> authenticated again).
+  Duration robot_time_shift{};   // Restored: add to this epoch's robot times to place them on
+                                 // the first epoch's timeline (0 in epoch 0).
+  Duration tie_uncertainty{};    // Restored: +- of the robot-to-workstation clock tie.
+  uint32_t attempts = 0;         // Restored: connection attempts it took.
+  std::string reason;            // Lost: why ("no frame for 2.0 s", "connection reset", ...).
+};
 enum class AckResult : uint8_t {
   kAccepted = 0,
   kNotAuthenticated = 1,
@@ -185,10 +216,14 @@ struct LinkStatus {
   std::array<uint64_t, 3> device_bytes{};  // Raw bytes read per device: lidar, imu, motor board.
 };
 // Agent -> client: raw bytes of one device, as read from its serial port.
+// Telemetry flags (payload byte 1).
+inline constexpr uint8_t kTelemetryLate = 1;   // Read while no client took it; sent from the buffer.
+inline constexpr uint8_t kTelemetryBreak = 2;  // Bytes of this device before this chunk were lost.
 struct Telemetry {
   uint8_t device = 0;  // A LinkDevice value.
   Time receive_time;   // Robot clock when the agent read the bytes (the codecs' receive_time).
   std::vector<uint8_t> bytes;  // <= kLinkMaxTelemetryBytes.
+  uint8_t flags = 0;   // kTelemetryLate | kTelemetryBreak.
 };
 // A frame with a good CRC but a type this code does not know (a newer peer).
 struct UnknownMessage {
@@ -198,7 +233,8 @@ struct UnknownMessage {
 
 using LinkPayload = std::variant<Hello, AuthChallenge, AuthResponse, AuthResult, DriveCommand, Stop,
                                  EmergencyStop, ClearEmergencyStop, Heartbeat, LidarMotor,
-                                 CommandAck, LinkStatus, Telemetry, UnknownMessage>;
+                                 TelemetryResume, CommandAck, LinkStatus, Telemetry, RecorderEvent,
+                                 UnknownMessage>;
 
 // The wire type of a payload (UnknownMessage: its own `type`).
 uint8_t LinkPayloadType(const LinkPayload& payload);
@@ -272,7 +308,7 @@ class LinkEncoder {
   // Splits `bytes` into as many Telemetry frames as kLinkMaxTelemetryBytes
   // needs (all with the same receive_time) and returns them concatenated.
   std::vector<uint8_t> EncodeTelemetry(Time t, LinkDevice device, Time receive_time,
-                                       const uint8_t* bytes, size_t n);
+                                       const uint8_t* bytes, size_t n, uint8_t flags = 0);
 
   uint32_t next_sequence() const { return next_sequence_; }
   LinkSender sender() const { return sender_; }
