@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <utility>
 
 namespace sweepscan {
 
@@ -39,6 +40,7 @@ void PoseEkf::Initialize(Time time, const State& state, const Covariance& covari
   }
   initialized_ = true;
   yaw_offset_known_ = false;
+  after_gap_ = false;
   history_.clear();
 }
 
@@ -86,7 +88,8 @@ void PoseEkf::PredictState(const EkfOptions& options, const State& s, const Cova
 void PoseEkf::Predict(Time time) {
   const double dt = ToSeconds(time - time_);
   if (dt <= 0.0) return;
-  if (keep_history_) history_.push_back({time_, state_, covariance_});
+  if (keep_history_) history_.push_back({time_, state_, covariance_, after_gap_});
+  after_gap_ = false;
   Covariance f;
   State s;
   Covariance p;
@@ -100,11 +103,14 @@ std::vector<PoseEkf::Estimate> PoseEkf::Smooth() const {
   std::vector<Estimate> out;
   if (!initialized_) return out;
   out = history_;
-  out.push_back({time_, state_, covariance_});
+  out.push_back({time_, state_, covariance_, after_gap_});
   // Backward from the last estimate, which is already the smoothed one.
   for (size_t k = out.size() - 1; k-- > 0;) {
     const Estimate& next = out[k + 1];  // smoothed
     Estimate& e = out[k];               // filtered, becomes smoothed
+    // A gap: no motion model links e to next (ResumeAfterGap), so e is the
+    // last estimate of its segment and already its own smoothed one.
+    if (next.after_gap) continue;
     const double dt = ToSeconds(next.time - e.time);
     State s_pred;
     Covariance p_pred, f;
@@ -123,6 +129,46 @@ std::vector<PoseEkf::Estimate> PoseEkf::Smooth() const {
     e.covariance = 0.5 * (e.covariance + e.covariance.transpose());
   }
   return out;
+}
+
+// A gap of dt = time - time_ in the records (docs/models.md, "Gaps in the
+// data"). Nothing is predicted with the motion model; instead:
+//   x, y     held; P_xx, P_yy += position_sigma^2 (the travel bound, any
+//            direction), their correlations with the rest kept
+//   psi      held; P_psipsi += heading_sigma^2, so that the next IMU yaw
+//            (z = psi + b, b known from before the gap) sets it:
+//            K_psi = P_psipsi / (P_psipsi + P_bb + R) -> 1
+//   v, w     0, uncorrelated, variances velocity/yaw_rate_variance: the
+//            robot's speed after the gap is unrelated to the one before
+//   roll, pitch  held, uncorrelated, variance tilt_variance: the robot may
+//            stand on another patch of floor; the next tilt reading sets them
+//   b, g     held; their random walks over dt as in Q (the IMU's heading
+//            reference and gyro bias drift whether or not we hear from it)
+void PoseEkf::ResumeAfterGap(Time time, const GapReset& reset) {
+  const double dt = ToSeconds(time - time_);
+  if (!initialized_ || dt <= 0.0) return;
+  if (keep_history_) history_.push_back({time_, state_, covariance_, after_gap_});
+  Covariance& p = covariance_;
+  p(kYawOffset, kYawOffset) += options_.yaw_offset_sigma * options_.yaw_offset_sigma * dt;
+  if (options_.estimate_gyro_bias) {
+    p(kGyroBias, kGyroBias) += options_.gyro_bias_sigma * options_.gyro_bias_sigma * dt;
+  }
+  p(kX, kX) += reset.position_sigma * reset.position_sigma;
+  p(kY, kY) += reset.position_sigma * reset.position_sigma;
+  p(kPsi, kPsi) += reset.heading_sigma * reset.heading_sigma;
+  const std::pair<int, double> restarted[] = {{kV, reset.velocity_variance},
+                                              {kW, reset.yaw_rate_variance},
+                                              {kRoll, reset.tilt_variance},
+                                              {kPitch, reset.tilt_variance}};
+  for (const auto& [i, variance] : restarted) {
+    p.row(i).setZero();
+    p.col(i).setZero();
+    p(i, i) = variance;
+  }
+  state_[kV] = 0.0;
+  state_[kW] = 0.0;
+  time_ = time;
+  after_gap_ = true;
 }
 
 // GCC 12 reports -Warray-bounds inside Eigen's vectorised copies for the

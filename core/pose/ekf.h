@@ -59,6 +59,13 @@
 // drive, before and after. Updates that are not Kalman updates (the first
 // yaw reading setting b, SetGyroBias) are part of the filtered estimate at
 // their time; the backward pass needs only the predictions between times.
+//
+// Gaps in the data (docs/models.md, "Gaps in the data"): ResumeAfterGap
+// moves the filter over a hole in the records without the motion model
+// (which would invent v dt of travel) and inflates P by what the robot can
+// have done meanwhile. The estimate after the gap is marked (after_gap) and
+// the backward pass does not cross it: the last estimate before a gap is
+// the smoothed one of its segment, as the last of the drive is.
 #ifndef SWEEPSCAN_CORE_POSE_EKF_H_
 #define SWEEPSCAN_CORE_POSE_EKF_H_
 
@@ -136,6 +143,21 @@ class PoseEkf {
     Time time;
     State state;
     Covariance covariance;
+    bool after_gap = false;  // the first estimate after ResumeAfterGap
+  };
+
+  // What ResumeAfterGap does to the state (ekf.cc gives the math).
+  struct GapReset {
+    // 1-sigma of the travel (m, each of x and y) and of the turn (rad)
+    // the robot can have made in the gap; added in quadrature to P.
+    double position_sigma = 0.0;
+    double heading_sigma = 0.0;
+    // v and w restart at 0 with these variances (the next wheel and gyro
+    // readings set them); roll and pitch keep their value with this
+    // variance (the next tilt reading sets them).
+    double velocity_variance = 0.25;
+    double yaw_rate_variance = 0.25;
+    double tilt_variance = 0.003;
   };
 
   explicit PoseEkf(const EkfOptions& options) : options_(options) {}
@@ -159,6 +181,15 @@ class PoseEkf {
   // the filter: the mean gyro z over a standstill). No-op when
   // options.estimate_gyro_bias is false.
   void SetGyroBias(double bias, double variance);
+
+  // A gap in the data: moves the filter to `time` (after the current time)
+  // without predicting, with the state and covariance reset as in ekf.cc.
+  // The next updates (at `time`) belong to the estimate after the gap.
+  void ResumeAfterGap(Time time, const GapReset& reset);
+  bool yaw_offset_known() const { return yaw_offset_known_; }
+  // P_psipsi += sigma^2 (the first IMU yaw after a gap disagreed with the
+  // turn bound by more than the gate: the IMU heading is the reference).
+  void InflateHeading(double sigma) { covariance_(kPsi, kPsi) += sigma * sigma; }
 
   // Keep every filtered estimate for Smooth() (about 730 bytes a filter
   // time: 150 a second with the IMU at 100 Hz and the wheels at 50 Hz).
@@ -193,6 +224,7 @@ class PoseEkf {
   Counters counters_;
   bool yaw_offset_known_ = false;
   bool keep_history_ = false;
+  bool after_gap_ = false;  // the current estimate is the first after a gap
   std::vector<Estimate> history_;
 };
 

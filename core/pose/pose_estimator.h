@@ -21,6 +21,19 @@
 // pipeline cannot (it has no future readings), and `reconstruct` does not by
 // default so that a replayed session's cloud equals the live one's.
 //
+// Gaps in the data (docs/models.md, "Gaps in the data"): when the link to
+// the robot drops for longer than it buffers, every stream has a hole. An
+// interval longer than max_gap_s between consecutive records of the merged
+// wheel + IMU stream (once initialised) is a gap. The filter does not
+// predict across it (PoseEkf::ResumeAfterGap): the position is held with
+// its covariance inflated by the distance the robot can have covered before
+// its watchdog stopped it, v and w restart from the next readings, and the
+// heading is re-established by the first IMU yaw after the gap (b is known
+// from before), its covariance inflated by the turn bound. Poses between
+// the last record before the gap and that yaw are not stored, and the pose
+// buffer refuses lookups in between (PoseBuffer, after_gap). Wheel
+// odometry alone holds its pose across a gap. gaps() lists what was found.
+//
 // Lives on the processing thread.
 #ifndef SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
 #define SWEEPSCAN_CORE_POSE_POSE_ESTIMATOR_H_
@@ -59,7 +72,54 @@ struct PoseEstimatorOptions {
   Pose2d initial_pose;
   // EKF only: EstimatePoses returns the smoothed poses (see above).
   bool smooth = false;
+
+  // Gaps (see above). A longer interval between consecutive wheel / IMU
+  // records is a gap; the streams run at <= 20 ms spacing, so 0.5 s is 25
+  // missed wheel records and 50 IMU ones: never jitter.
+  double max_gap_s = 0.5;
+  // The bound on the robot's motion in a gap (docs/models.md). The agent's
+  // watchdog stops the motors within gap_watchdog_s of the link going
+  // quiet; they then brake at >= gap_min_deceleration_mps2 per wheel. A
+  // wheel at speed u covers at most s(u) = |u| t_w + u^2 / (2 a) meanwhile:
+  // the body travels <= (s_l + s_r) / 2 and turns <= max(s_l, s_r) / (2 d)
+  // ((s_l + s_r) / (2 d) turning in place; d = wheel_distance_m). The
+  // floors cover what the speeds before the gap do not tell: a nudge, the
+  // speed estimate's own error.
+  double gap_watchdog_s = 0.5;
+  double gap_min_deceleration_mps2 = 1.0;
+  double gap_min_position_sigma_m = 0.05;
+  double gap_min_heading_sigma_rad = 0.05;
 };
+
+// A gap in the wheel + IMU records (see above).
+struct PoseGap {
+  enum class Recovery : uint8_t {
+    kImuHeading,  // heading from the first IMU yaw after it, position held
+    kHeld,        // no IMU yaw (odometry, or no attitude): heading and position held
+  };
+  Time begin;            // the last record before the gap
+  Time end;              // the first record after it
+  Time first_pose;       // the first stored pose after it (>= end; lookups in
+                         // (begin, first_pose) fail); end until it exists
+  bool has_first_pose = false;
+  double length_s = 0.0;  // end - begin
+  Recovery recovery = Recovery::kHeld;
+  double travel_bound_m = 0.0;      // the motion bound (options above), floored
+  double turn_bound_rad = 0.0;
+  double position_sigma_m = 0.0;    // 1-sigma of x, y (the larger) after it
+  double heading_sigma_rad = 0.0;   // 1-sigma of psi at first_pose
+  // The first IMU yaw after it disagreed with the turn bound beyond the
+  // gate (the robot was carried?) and set the heading regardless.
+  bool turned_beyond_bound = false;
+  // Lidar samples (in range) not placed because they fall in the gap;
+  // filled by the reconstruction (core/cloud/reconstruct.h), 0 here.
+  size_t samples_dropped = 0;
+};
+const char* PoseGapRecoveryName(PoseGap::Recovery recovery);
+// One line for the operator, times from `origin` (the session's start):
+//   "gap at 12.3 s: 10.0 s without data; pose after it from the IMU
+//    heading, position held (+-0.20 m); 57 lidar samples dropped"
+std::string FormatPoseGap(const PoseGap& gap, Time origin);
 
 class PoseEstimator {
  public:
@@ -82,12 +142,19 @@ class PoseEstimator {
   // bias (false until the wheels first move).
   double standstill_s() const { return standstill_s_; }
   bool gyro_bias_seeded() const { return gyro_bias_seeded_; }
+  // The gaps found so far, in time order.
+  const std::vector<PoseGap>& gaps() const { return gaps_; }
 
  private:
   void EnsureInitialized(Time time);
   void RecordPose(Time time);
   void TrackStandstill(const WheelSpeedMeasurement& m);
+  void EndStandstill();
   bool HoldingGyro() const;
+  // Gap handling: called with every record's time before it is used.
+  void CheckGap(Time time);
+  void BeginAfterGap(Time begin, Time end);
+  void SettleAfterGap(PoseGap::Recovery recovery);
 
   // The initial standstill: no wheel record yet, wheels at rest so far, moved.
   enum class StartPhase { kNoWheels, kStill, kMoved };
@@ -106,6 +173,15 @@ class PoseEstimator {
   PoseEkf ekf_;
   WheelOdometry odometry_;
   PoseBuffer poses_;
+
+  bool have_last_record_ = false;
+  Time last_record_;
+  // Wheel speeds of the last wheel record (the odometry's bound at a gap).
+  double last_left_mps_ = 0.0, last_right_mps_ = 0.0;
+  std::vector<PoseGap> gaps_;
+  // After a gap, until the first IMU yaw: no pose is stored.
+  bool awaiting_heading_ = false;
+  bool next_pose_after_gap_ = false;
 };
 
 // Runs the estimator over a whole log, merging wheel and IMU records by

@@ -217,6 +217,72 @@ TEST(EkfTest, TiltRandomWalkGrowsWithTheDistanceDriven) {
   EXPECT_TRUE(bad.IsValid(&error)) << error;
 }
 
+// A gap in the records (ekf.h, ResumeAfterGap; docs/models.md, "Gaps in the
+// data"): the filter moves over 10 s without the motion model, so nothing
+// of the 0.3 m/s before it is carried across (the model would invent 3 m);
+// P grows by exactly the given bounds; the first IMU yaw after the gap sets
+// the heading; and the smoother treats the two sides as separate drives:
+// the estimates before the gap are bit for bit those of the first drive
+// smoothed alone.
+TEST(EkfTest, GapIsNotPredictedAcrossAndSplitsTheSmoother) {
+  auto drive_before = [](PoseEkf* ekf) {
+    for (int i = 1; i <= 100; ++i) {
+      const Time t = TimeFromSeconds(i * 0.02);
+      ekf->UpdateWheels(t, 0.3, 0.0);
+      ekf->UpdateYaw(t, 0.5);  // IMU reference 0.5 rad from the world's: b = 0.5
+    }
+  };
+  PoseEkf alone = MakeFilter();
+  alone.KeepHistory(true);
+  drive_before(&alone);
+  PoseEkf ekf = MakeFilter();
+  ekf.KeepHistory(true);
+  drive_before(&ekf);
+  const PoseEkf::State s0 = ekf.state();
+  const PoseEkf::Covariance p0 = ekf.covariance();
+  EXPECT_NEAR(s0[PoseEkf::kX], 0.6, 0.01);
+
+  PoseEkf::GapReset reset;
+  reset.position_sigma = 0.2;
+  reset.heading_sigma = 0.3;
+  ekf.ResumeAfterGap(TimeFromSeconds(12.0), reset);
+  EXPECT_EQ(ekf.time(), TimeFromSeconds(12.0));
+  EXPECT_EQ(ekf.state()[PoseEkf::kX], s0[PoseEkf::kX]);
+  EXPECT_EQ(ekf.state()[PoseEkf::kY], s0[PoseEkf::kY]);
+  EXPECT_EQ(ekf.state()[PoseEkf::kPsi], s0[PoseEkf::kPsi]);
+  EXPECT_EQ(ekf.state()[PoseEkf::kV], 0.0);
+  EXPECT_EQ(ekf.state()[PoseEkf::kW], 0.0);
+  const PoseEkf::Covariance& p = ekf.covariance();
+  EXPECT_NEAR(p(PoseEkf::kX, PoseEkf::kX), p0(PoseEkf::kX, PoseEkf::kX) + 0.04, 1e-15);
+  EXPECT_NEAR(p(PoseEkf::kPsi, PoseEkf::kPsi), p0(PoseEkf::kPsi, PoseEkf::kPsi) + 0.09, 1e-15);
+  EXPECT_EQ(p(PoseEkf::kV, PoseEkf::kX), 0.0);
+  EXPECT_EQ(p(PoseEkf::kV, PoseEkf::kV), reset.velocity_variance);
+
+  // The robot turned by 0.25 rad in the gap and stands still: the first
+  // yaw reading (b known) sets psi to within a few % of the turn's size.
+  ekf.UpdateWheels(TimeFromSeconds(12.0), 0.0, 0.0);
+  ekf.UpdateYaw(TimeFromSeconds(12.0), 0.5 + s0[PoseEkf::kPsi] + 0.25);
+  EXPECT_NEAR(WrapAngle(ekf.state()[PoseEkf::kPsi] - s0[PoseEkf::kPsi]), 0.25, 0.01);
+  for (int i = 1; i <= 100; ++i) {
+    const Time t = TimeFromSeconds(12.0 + i * 0.02);
+    ekf.UpdateWheels(t, 0.0, 0.0);
+    ekf.UpdateYaw(t, 0.5 + s0[PoseEkf::kPsi] + 0.25);
+  }
+  EXPECT_NEAR(ekf.state()[PoseEkf::kX], s0[PoseEkf::kX], 0.005) << "no motion invented";
+
+  const std::vector<PoseEkf::Estimate> with_gap = ekf.Smooth();
+  const std::vector<PoseEkf::Estimate> first = alone.Smooth();
+  ASSERT_GT(with_gap.size(), first.size());
+  EXPECT_TRUE(with_gap[first.size()].after_gap);
+  EXPECT_EQ(with_gap[first.size()].time, TimeFromSeconds(12.0));
+  for (size_t k = 0; k < first.size(); ++k) {
+    ASSERT_EQ(with_gap[k].time, first[k].time);
+    ASSERT_FALSE(with_gap[k].after_gap);
+    ASSERT_EQ(with_gap[k].state, first[k].state) << "estimate " << k;
+  }
+  EXPECT_EQ(with_gap[first.size() - 1].state, s0) << "the segment's end is its own smoothed estimate";
+}
+
 TEST(EkfTest, OptionsValidation) {
   EkfOptions o;
   std::string error;

@@ -57,5 +57,53 @@ TEST(PoseBufferTest, NlerpCloseToSlerpForFilterSteps) {
   }
 }
 
+// A pose added after a gap (PoseBuffer, after_gap): no time strictly inside
+// the gap is interpolated, its two ends are; a hinted walk goes through it
+// and carries on after it; without the mark the buffer answers as before.
+TEST(PoseBufferTest, RefusesLookupsInsideAGap) {
+  PoseBuffer b, plain;
+  for (int i = 0; i <= 100; ++i) {
+    const double t = i <= 50 ? i * 0.01 : 10.0 + i * 0.01;  // a hole (0.5, 10.51)
+    const Rigid3d pose = Rigid3d::FromPose(t * 0.1, 0, 0, 0, 0, t * 0.01);
+    b.Add(TimeFromSeconds(t), pose, /*after_gap=*/i == 51);
+    plain.Add(TimeFromSeconds(t), pose);
+  }
+  EXPECT_EQ(b.gap_count(), 1u);
+  EXPECT_EQ(plain.gap_count(), 0u);
+  EXPECT_TRUE(b.AfterGap(51));
+  EXPECT_FALSE(b.AfterGap(50));
+  Rigid3d p;
+  for (double t : {0.5001, 3.0, 10.0, 10.5099}) {
+    EXPECT_FALSE(b.Lookup(TimeFromSeconds(t), &p)) << t;
+    EXPECT_TRUE(b.InGap(TimeFromSeconds(t))) << t;
+    EXPECT_TRUE(plain.Lookup(TimeFromSeconds(t), &p)) << t;
+    size_t hint = 0, i = 0;
+    double s = 0.0;
+    EXPECT_FALSE(b.FindInterval(TimeFromSeconds(t), &hint, &i, &s));
+  }
+  for (double t : {0.0, 0.25, 0.5, 10.51, 10.6, 11.0}) {
+    EXPECT_TRUE(b.Lookup(TimeFromSeconds(t), &p)) << t;
+    EXPECT_FALSE(b.InGap(TimeFromSeconds(t))) << t;
+    Rigid3d q;
+    ASSERT_TRUE(plain.Lookup(TimeFromSeconds(t), &q));
+    EXPECT_EQ(p.translation(), q.translation()) << t;
+  }
+  // Time-ordered queries through the gap: refused inside, answered after.
+  size_t hint = 0;
+  int refused = 0, answered = 0;
+  for (int k = 0; k < 1200; ++k) {
+    const double t = k * 0.01 + 0.0005;
+    if (b.LookupWithHint(TimeFromSeconds(t), &hint, &p)) {
+      ++answered;
+      EXPECT_FALSE(t > 0.5 && t < 10.51) << t;
+    } else {
+      ++refused;
+      EXPECT_TRUE((t > 0.5 && t < 10.51) || t > 11.0) << t;
+    }
+  }
+  EXPECT_EQ(answered, 50 + 49);
+  EXPECT_EQ(refused, 1200 - answered);
+}
+
 }  // namespace
 }  // namespace sweepscan

@@ -227,5 +227,136 @@ TEST(PoseEstimatorTest, PoseSourceNames) {
   EXPECT_FALSE(ParsePoseSource("gps", &s));
 }
 
+// A drive with a 10 s hole in every stream (the link to the robot dropped):
+// the robot drives straight, then on an arc (0.3 m/s, 0.3 rad/s) when the
+// data stops at 9.6 s; 0.4 s later it stops (the agent's watchdog) and
+// stands still until 20 s, after the data is back at 19.6 s. Truth: 0.12 m
+// and 0.12 rad of motion inside the gap. `cut` removes the records in
+// (t0, t1) from every stream (times from the simulation's start).
+sim::SimConfig GapDrive(uint64_t seed) {
+  sim::SimConfig c = testing::LabConfig(seed);
+  c.start = {2.0, 2.5, 0.0};
+  c.path = {{0.0, 0.0, 2.0}, {0.3, 0.0, 6.0}, {0.3, 0.3, 2.0},
+            {0.0, 0.0, 10.0}, {0.3, 0.0, 5.0}, {0.2, -0.3, 3.0}};
+  return c;
+}
+constexpr double kGapFrom = 9.6, kGapTo = 19.6;
+
+SensorLog CutHole(SensorLog log, double t0, double t1) {
+  const Time a = TimeFromSeconds(sim::SimWorld::kStartTimeS + t0);
+  const Time b = TimeFromSeconds(sim::SimWorld::kStartTimeS + t1);
+  const auto inside = [&](const auto& r) { return r.time > a && r.time < b; };
+  log.wheels.erase(std::remove_if(log.wheels.begin(), log.wheels.end(), inside), log.wheels.end());
+  log.imu.erase(std::remove_if(log.imu.begin(), log.imu.end(), inside), log.imu.end());
+  for (LidarScan& scan : log.scans) {
+    scan.samples.erase(std::remove_if(scan.samples.begin(), scan.samples.end(), inside), scan.samples.end());
+  }
+  log.scans.erase(std::remove_if(log.scans.begin(), log.scans.end(),
+                                 [](const LidarScan& s) { return s.samples.empty(); }),
+                  log.scans.end());
+  return log;
+}
+
+Pose2d Pose2dOf(const Rigid3d& p) {
+  const Eigen::Matrix3d r = p.rotation().toRotationMatrix();
+  return {p.translation().x(), p.translation().y(), std::atan2(r(1, 0), r(0, 0))};
+}
+
+TEST(PoseEstimatorTest, GapInTheDataIsAGapNotAMotion) {
+  for (uint64_t seed : {1, 2, 3}) {
+    const sim::SimConfig c = GapDrive(seed);
+    sim::SimWorld world(c);
+    const SensorLog log = CutHole(world.RunAll(), kGapFrom, kGapTo);
+    const auto truth = [&](Time t) { return world.trajectory().PoseAt(ToSeconds(t) - sim::SimWorld::kStartTimeS); };
+    for (int smooth = 0; smooth < 2; ++smooth) {
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << (smooth ? " smoothed" : " filtered"));
+      PoseEstimatorOptions o;
+      o.initial_pose = c.start;
+      o.smooth = smooth == 1;
+      const PoseEstimator est = EstimatePoses(log, o, c.geometry);
+      ASSERT_EQ(est.gaps().size(), 1u);
+      const PoseGap& gap = est.gaps()[0];
+      // The gap as cut: begin = the last record before 9.6 s (IMU at 100 Hz).
+      EXPECT_NEAR(ToSeconds(gap.begin) - sim::SimWorld::kStartTimeS, kGapFrom, 0.011);
+      EXPECT_NEAR(ToSeconds(gap.end) - sim::SimWorld::kStartTimeS, kGapTo, 0.011);
+      EXPECT_NEAR(gap.length_s, kGapTo - kGapFrom, 0.022);
+      EXPECT_EQ(gap.recovery, PoseGap::Recovery::kImuHeading);
+      EXPECT_FALSE(gap.turned_beyond_bound);
+      ASSERT_TRUE(gap.has_first_pose);
+      EXPECT_GE(gap.first_pose, gap.end);
+      EXPECT_LT(ToSeconds(gap.first_pose - gap.end), 0.011) << "the first IMU yaw sets the heading";
+      // The bound from 0.3 m/s, 0.3 rad/s (wheels 0.255 and 0.345 m/s):
+      // (s_l + s_r) / 2 = 0.196 m, max(s_l, s_r) / 0.3 m = 0.77 rad.
+      EXPECT_NEAR(gap.travel_bound_m, 0.196, 0.01);
+      EXPECT_GE(gap.position_sigma_m, gap.travel_bound_m);
+
+      // The buffer: nothing inside the gap, both ends answer.
+      const PoseBuffer& poses = est.poses();
+      EXPECT_EQ(poses.gap_count(), 1u);
+      Rigid3d before, after, inside;
+      ASSERT_TRUE(poses.Lookup(gap.begin, &before));
+      ASSERT_TRUE(poses.Lookup(gap.first_pose, &after));
+      for (double f : {1e-4, 0.5, 0.9999}) {
+        const Time t = gap.begin + std::chrono::duration_cast<Duration>((gap.first_pose - gap.begin) * f);
+        EXPECT_FALSE(poses.Lookup(t, &inside)) << f;
+      }
+      // No motion invented: the position after the gap is the one before
+      // it, within the stated bound of the truth (which moved 0.12 m).
+      const Pose2d p0 = Pose2dOf(before), p1 = Pose2dOf(after);
+      const Pose2d t0 = truth(gap.begin), t1 = truth(gap.first_pose);
+      const double held = std::hypot(p1.x - p0.x, p1.y - p0.y);
+      const double error_before = std::hypot(p0.x - t0.x, p0.y - t0.y);
+      const double error_after = std::hypot(p1.x - t1.x, p1.y - t1.y);
+      const double heading_error = std::abs(WrapAngle(p1.yaw - t1.yaw));
+      std::printf("seed %llu %s: gap %.2f s, position held (moved %.1f mm), error %.1f mm before, %.1f mm "
+                  "after (bound %.0f mm); heading error after %.2f mrad (IMU sigma %.1f, turn in the gap %.0f)\n",
+                  static_cast<unsigned long long>(seed), smooth ? "smoothed" : "filtered", gap.length_s,
+                  1e3 * held, 1e3 * error_before, 1e3 * error_after, 1e3 * gap.travel_bound_m,
+                  1e3 * heading_error, 1e3 * o.ekf.imu_yaw_sigma, 1e3 * std::abs(WrapAngle(t1.yaw - t0.yaw)));
+      EXPECT_LT(held, 0.01);
+      EXPECT_LT(error_before, 0.03) << "the smoother must not smear the gap into the estimates before it";
+      EXPECT_LT(error_after, gap.travel_bound_m);
+      EXPECT_LT(heading_error, 3.0 * o.ekf.imu_yaw_sigma);
+      // And after the gap the drive goes on from there: at the end, the
+      // error is the one the gap left plus the usual drift.
+      const Pose2d last = Pose2dOf(poses.pose(poses.size() - 1)), t_last = truth(poses.latest());
+      EXPECT_LT(std::hypot(last.x - t_last.x, last.y - t_last.y), error_after + 0.05);
+    }
+    // The filter without gap handling (max_gap_s beyond the hole) predicts
+    // across it at the speed before: metres of invented travel.
+    PoseEstimatorOptions o;
+    o.initial_pose = c.start;
+    o.max_gap_s = 60.0;
+    const PoseEstimator naive = EstimatePoses(log, o, c.geometry);
+    EXPECT_TRUE(naive.gaps().empty());
+    const Pose2d n = naive.LatestPose2d(), tn = truth(naive.poses().latest());
+    EXPECT_GT(std::hypot(n.x - tn.x, n.y - tn.y), 1.0);
+  }
+}
+
+// Wheel odometry alone holds its pose over a gap too (it has no IMU yaw).
+TEST(PoseEstimatorTest, OdometryHoldsItsPoseOverAGap) {
+  sim::SimConfig c = GapDrive(1);
+  testing::MakeNoiseFree(&c);
+  sim::SimWorld world(c);
+  const SensorLog log = CutHole(world.RunAll(), kGapFrom, kGapTo);
+  PoseEstimatorOptions o;
+  o.source = PoseSource::kOdometry;
+  o.initial_pose = c.start;
+  const PoseEstimator est = EstimatePoses(log, o, c.geometry);
+  ASSERT_EQ(est.gaps().size(), 1u);
+  const PoseGap& gap = est.gaps()[0];
+  EXPECT_EQ(gap.recovery, PoseGap::Recovery::kHeld);
+  ASSERT_TRUE(gap.has_first_pose);
+  const PoseBuffer& poses = est.poses();
+  const size_t i = poses.FirstAtOrAfter(gap.first_pose);
+  ASSERT_TRUE(i > 0 && poses.AfterGap(i));
+  const Pose2d p0 = Pose2dOf(poses.pose(i - 1)), p1 = Pose2dOf(poses.pose(i));
+  EXPECT_LT(std::hypot(p1.x - p0.x, p1.y - p0.y), 0.01);
+  EXPECT_NEAR(p1.yaw, p0.yaw, 1e-3);
+  EXPECT_EQ(FormatPoseGap(gap, TimeFromSeconds(sim::SimWorld::kStartTimeS)).rfind("gap at 9.6 s: 10.0 s without data; pose after it held", 0), 0u)
+      << FormatPoseGap(gap, TimeFromSeconds(sim::SimWorld::kStartTimeS));
+}
+
 }  // namespace
 }  // namespace sweepscan
