@@ -4,7 +4,8 @@ namespace sweepscan {
 
 LivePipeline::LivePipeline(const ReconstructionOptions& options, const RobotGeometry& geometry,
                            size_t chunk_capacity)
-    : estimator_(options.pose, geometry),
+    : assembly_options_(options.assembly),
+      estimator_(options.pose, geometry),
       assembler_(options.assembly, BodyFromLidar(geometry, options.calibration), options.pose.source),
       chunks_(chunk_capacity) {}
 
@@ -13,6 +14,14 @@ void LivePipeline::Add(const SensorLog& batch) {
   imu_.insert(imu_.end(), batch.imu.begin(), batch.imu.end());
   scans_.insert(scans_.end(), batch.scans.begin(), batch.scans.end());
   Drain(false);
+}
+
+std::vector<PoseGap> LivePipeline::gaps() const {
+  std::vector<PoseGap> gaps = estimator_.gaps();
+  for (size_t k = 0; k < gaps.size() && k < gap_samples_dropped_.size(); ++k) {
+    gaps[k].samples_dropped = gap_samples_dropped_[k];
+  }
+  return gaps;
 }
 
 void LivePipeline::Finish() {
@@ -52,15 +61,15 @@ void LivePipeline::Drain(bool final) {
       // Entirely before the first pose (lidar started before the wheels):
       // nothing will ever place it; let the assembler count it and move on.
     } else if (covered && !scan.samples.empty()) {
-      size_t hint = 0, i = 0;
-      double fraction = 0.0;
-      covered = poses.FindInterval(scan.end_time(), &hint, &i, &fraction);
+      // The first pose at or after the scan's last sample closes the
+      // interval it is interpolated in (or refused in, inside a gap).
+      covered = scan.end_time() <= poses.latest();
       if (covered && !final) {
-        const size_t upper = fraction == 0.0 ? i : i + 1;
-        covered = !pending || poses.time(upper) < first_pending;
+        covered = !pending || poses.time(poses.FirstAtOrAfter(scan.end_time())) < first_pending;
       }
     }
     if (!covered && !final) break;
+    CountSamplesInGaps(scan, poses, assembly_options_, estimator_.gaps(), &gap_samples_dropped_);
     assembler_.AddScan(scan, poses, &chunks_);
     scans_.pop_front();
   }

@@ -8,11 +8,16 @@
 // sees the same measurements in the same order, and a scan is only
 // assembled once every sample's pose can be interpolated.
 //
+// Gaps in the records (core/pose/pose_estimator.h) are handled as offline:
+// a scan whose samples fall in one is placed once the pose after the gap is
+// final, and those samples are dropped and counted (gaps()).
+//
 // Lives on the processing thread; only cloud() is meant for other threads.
 #ifndef SWEEPSCAN_CORE_CLOUD_LIVE_PIPELINE_H_
 #define SWEEPSCAN_CORE_CLOUD_LIVE_PIPELINE_H_
 
 #include <deque>
+#include <vector>
 
 #include "core/cloud/assembler.h"
 #include "core/cloud/cloud.h"
@@ -37,12 +42,17 @@ class LivePipeline {
   const AssemblyStats& stats() const { return assembler_.stats(); }
   const PoseEstimator& estimator() const { return estimator_; }
   size_t scans_waiting() const { return scans_.size(); }
+  // The estimator's gaps so far, each with the lidar samples it dropped
+  // among the scans placed so far (as ReconstructionResult::gaps).
+  std::vector<PoseGap> gaps() const;
 
  private:
   void Drain(bool final);
 
+  AssemblyOptions assembly_options_;
   PoseEstimator estimator_;
   Assembler assembler_;
+  std::vector<size_t> gap_samples_dropped_;
   PointChunks chunks_;
   std::deque<WheelSpeedMeasurement> wheels_;
   std::deque<ImuMeasurement> imu_;
