@@ -75,15 +75,70 @@ TelemetryDecoder::TelemetryDecoder(const TelemetryDecoderOptions& options)
     : options_(options), x4_(ScansOnly(options.x4)) {}
 
 void TelemetryDecoder::Add(const LinkMessage& message) {
+  if (message.header.sender == LinkSender::kAgent) {
+    last_robot_time_ = std::max(last_robot_time_, message.header.time + time_shift_);
+  }
   if (const auto* t = std::get_if<Telemetry>(&message.payload)) {
     AddTelemetry(*t);
-  } else {
-    ++stats_.other_messages;
+    return;
   }
+  ++stats_.other_messages;
+  const auto* event = std::get_if<RecorderEvent>(&message.payload);
+  if (event == nullptr || message.header.sender != LinkSender::kClient) return;
+  if (event->kind == RecorderEventKind::kLinkLost) {
+    SessionLinkGap gap;
+    gap.lost_at_s = ToSeconds(last_robot_time_);
+    gap.reason = event->reason;
+    gaps_.push_back(gap);
+    return;
+  }
+  if (gaps_.empty() || gaps_.back().restored) gaps_.emplace_back();  // A lost event was cut off.
+  SessionLinkGap& gap = gaps_.back();
+  gap.restored = true;
+  gap.outage_s = ToSeconds(event->outage);
+  gap.attempts = event->attempts;
+  gap.resumed = event->resumed;
+  gap.new_clock_epoch = event->new_clock_epoch;
+  gap.epoch = event->epoch;
+  gap.robot_time_shift_s = ToSeconds(event->robot_time_shift);
+  gap.tie_uncertainty_s = ToSeconds(event->tie_uncertainty);
+  SetTimeShift(event->robot_time_shift);
 }
 
-void TelemetryDecoder::AddTelemetry(const Telemetry& t) {
+void TelemetryDecoder::AddTelemetry(const Telemetry& telemetry_in) {
   ++stats_.telemetry_messages;
+  Telemetry shifted;
+  const Telemetry* tp = &telemetry_in;
+  if (time_shift_.count() != 0) {
+    shifted = telemetry_in;
+    shifted.receive_time += time_shift_;
+    tp = &shifted;
+  }
+  const Telemetry& t = *tp;
+  if (t.device >= 1 && t.device <= 3) {
+    const int d = t.device - 1;
+    if (t.flags & kTelemetryLate) {
+      ++stats_.late_messages;
+      stats_.late_bytes += t.bytes.size();
+      if (!gaps_.empty()) {
+        ++gaps_.back().late_messages;
+        gaps_.back().late_bytes += t.bytes.size();
+      }
+    }
+    if (t.flags & kTelemetryBreak) {
+      // The agent says bytes of this device before these were lost: a frame
+      // cut there must not be spliced onto these bytes.
+      ++stats_.breaks;
+      if (d == 0) x4_.Reset();
+      if (d == 1) hi219_.Reset();
+      if (d == 2) motor_.Reset();
+      if (!gaps_.empty() && have_time_[d]) {
+        gaps_.back().data_lost_s[d] += std::max(0.0, ToSeconds(t.receive_time - last_time_[d]));
+      }
+    }
+    have_time_[d] = true;
+    last_time_[d] = t.receive_time;
+  }
   switch (static_cast<LinkDevice>(t.device)) {
     case LinkDevice::kLidar: {
       stats_.device_bytes[0] += t.bytes.size();
@@ -166,6 +221,35 @@ TelemetryDecoderStats TelemetryDecoder::stats() const {
   return s;
 }
 
+std::string SessionLinkGap::ToString() const {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(1);
+  s << "link lost at " << lost_at_s << " s (" << reason << ")";
+  if (!restored) {
+    s << "; the recording ended before it came back";
+    return s.str();
+  }
+  s << "; restored after " << outage_s << " s (" << attempts << " attempt"
+    << (attempts == 1 ? "" : "s") << ")";
+  if (new_clock_epoch) {
+    s.precision(3);
+    s << "; robot clock reset: epoch " << epoch << ", shifted " << robot_time_shift_s
+      << " s +-" << tie_uncertainty_s << " s";
+    s.precision(1);
+  }
+  if (late_messages > 0) s << "; " << late_bytes << " bytes resent from the robot's buffer";
+  static const char* kNames[3] = {"lidar", "IMU", "motor board"};
+  bool lost = false;
+  for (int d = 0; d < 3; ++d) {
+    if (data_lost_s[d] <= 0.0) continue;
+    s << (lost ? ", " : "; data lost: ") << kNames[d] << " " << data_lost_s[d] << " s";
+    lost = true;
+  }
+  if (!lost) s << "; no data lost";
+  return s.str();
+}
+
 std::string SessionDecodeInfo::ToString() const {
   std::ostringstream s;
   s << "frames.bin: " << frames.ToString() << "\n";
@@ -185,6 +269,11 @@ std::string SessionDecodeInfo::ToString() const {
   s << "robot time: " << ToSeconds(first_robot_time) << " .. " << ToSeconds(last_robot_time)
     << " s\n";
   s << "telemetry: " << telemetry.ToString();
+  if (telemetry.late_messages > 0 || telemetry.breaks > 0) {
+    s << "\n  resent after outages: " << telemetry.late_messages << " messages, "
+      << telemetry.late_bytes << " bytes; breaks " << telemetry.breaks;
+  }
+  for (const SessionLinkGap& gap : gaps) s << "\ngap: " << gap.ToString();
   return s.str();
 }
 
@@ -210,15 +299,18 @@ bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
     }
     const int k = m.header.sender == LinkSender::kAgent ? 0 : 1;
     trackers[k].Observe(m.header.sequence);
+    decoder.Add(m);
     if (k == 0) {
-      if (!have_time) info->first_robot_time = m.header.time;
-      info->last_robot_time = m.header.time;
+      // On the first clock epoch's timeline (a reboot's epoch is shifted).
+      const Time t = m.header.time + decoder.time_shift();
+      if (!have_time) info->first_robot_time = t;
+      info->last_robot_time = have_time ? std::max(info->last_robot_time, t) : t;
       have_time = true;
     }
-    decoder.Add(m);
     if ((i & 255) == 0) decoder.TakeInto(log);
   }
   decoder.TakeInto(log);
+  info->gaps = decoder.gaps();
   for (int k = 0; k < 2; ++k) info->link.sequence[k] = trackers[k].stats();
   info->link.codec.frames_ok = records.size() - info->frames_refused;
   info->link.codec.payload_errors = info->frames_refused;

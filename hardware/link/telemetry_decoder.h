@@ -18,6 +18,8 @@
 #include <functional>
 #include <string>
 
+#include <array>
+
 #include "core/common/status.h"
 #include "core/robot/robot_model.h"
 #include "core/robot/sensor_data.h"
@@ -58,6 +60,9 @@ struct TelemetryDecoderStats {
   uint64_t unknown_device_messages = 0;   // Telemetry from a device id we do not decode.
   uint64_t device_bytes[3] = {0, 0, 0};   // lidar, imu, motor board.
   uint64_t imu_samples_without_data = 0;  // HI219 frames with neither gyro nor Euler angles.
+  uint64_t late_messages = 0;   // Telemetry the agent resent from its buffer after an outage.
+  uint64_t late_bytes = 0;
+  uint64_t breaks = 0;          // Telemetry marked "bytes before this were lost" (codec restarted).
   DecoderStats x4;
   DecoderStats hi219;
   DecoderStats motor;
@@ -65,13 +70,43 @@ struct TelemetryDecoderStats {
   std::string ToString() const;
 };
 
+// One outage of the robot link within a recording, from the recorder's
+// events (docs/session-format.md, "Recorder events") and the telemetry
+// around them.
+struct SessionLinkGap {
+  double lost_at_s = 0.0;      // Robot time of the last frame before, on the session's timeline.
+  std::string reason;          // "no frame for 2.0 s", "connection reset", ...
+  bool restored = false;       // False: the recording ended during the outage.
+  double outage_s = 0.0;       // Link down (workstation clock).
+  uint32_t attempts = 0;       // Connection attempts.
+  bool resumed = false;        // The agent was asked for what it buffered.
+  bool new_clock_epoch = false;
+  uint32_t epoch = 0;
+  double robot_time_shift_s = 0.0;
+  double tie_uncertainty_s = 0.0;
+  uint64_t late_messages = 0;  // Resent by the agent from its buffer.
+  uint64_t late_bytes = 0;
+  // Per device (lidar, IMU, motor board): seconds of data lost (the time
+  // between the last bytes before and the first after, where the agent said
+  // bytes were lost); 0 when its buffer covered the outage.
+  std::array<double, 3> data_lost_s{};
+  std::string ToString() const;
+};
+
 class TelemetryDecoder {
  public:
   explicit TelemetryDecoder(const TelemetryDecoderOptions& options = TelemetryDecoderOptions());
 
-  // Any link message; only Telemetry is used.
+  // Any link message: Telemetry is decoded; a RecorderEvent of a restored
+  // link sets the time shift of the new clock epoch and opens a gap.
   void Add(const LinkMessage& message);
   void AddTelemetry(const Telemetry& telemetry);
+  // Added to every Telemetry receive time from now on: a robot clock epoch
+  // after a reboot, placed on the first epoch's timeline (RecorderEvent).
+  void SetTimeShift(Duration shift) { time_shift_ = shift; }
+  Duration time_shift() const { return time_shift_; }
+  // The link outages seen in RecorderEvents so far (DecodeSession's info).
+  const std::vector<SessionLinkGap>& gaps() const { return gaps_; }
 
   // Moves everything decoded since the last call to the end of *log (each
   // stream stays in time order as long as the telemetry was in order).
@@ -86,6 +121,11 @@ class TelemetryDecoder {
   MotorFeedbackDecoder motor_;
   TelemetryDecoderStats stats_;
   SensorLog pending_;
+  Duration time_shift_{0};
+  std::vector<SessionLinkGap> gaps_;
+  std::array<bool, 3> have_time_{};
+  std::array<Time, 3> last_time_{};  // Per device, shifted.
+  Time last_robot_time_;
 };
 
 // Applies a session's settings.serial (docs/session-format.md) to *options:
@@ -106,6 +146,7 @@ struct SessionDecodeInfo {
   std::string first_refusal;    // e.g. "record 12: link frame: frame CRC mismatch".
   LinkDecoderStats link;        // Sequence gaps per sender (frames lost before recording).
   TelemetryDecoderStats telemetry;
+  std::vector<SessionLinkGap> gaps;  // Link outages during the recording, in order.
   Time first_robot_time;  // Header time of the first / last agent frame.
   Time last_robot_time;
   // Measurement sessions (meta.content "measurements", an imported bag):

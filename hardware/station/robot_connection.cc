@@ -14,6 +14,12 @@ namespace sweepscan {
 namespace hardware {
 namespace {
 
+int64_t SteadyNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 int64_t RealtimeNs() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -42,6 +48,10 @@ bool RobotConnectionOptions::IsValid(QString* error) const {
     return fail(QStringLiteral("reconnect backoff must satisfy 0 < initial <= max"));
   }
   if (connect_timeout_ms <= 0) return fail(QStringLiteral("connect timeout must be positive"));
+  if (stall_ms != 0 && (stall_ms < 300 || stall_ms > 600000)) {
+    return fail(QStringLiteral("stall time must be 0 (off) or 300..600000 ms (the agent sends "
+                               "Status every 100 ms)"));
+  }
   if (flush_check_ms <= 0 || flush_check_ms > 250) {
     return fail(QStringLiteral("flush check period must be 1..250 ms (durability within 1 s)"));
   }
@@ -89,6 +99,12 @@ std::string LinkHealth::ToString() const {
       << " V";
   }
   s << "; reconnects " << reconnects;
+  if (outages > 0) {
+    s << "; outages " << outages << (outage_open ? " (open, " : " (last ") << outage_s << " s, "
+      << reconnect_attempts << " attempts: " << outage_reason.toStdString() << ")"
+      << "; resent " << late_chunks << " chunks " << late_bytes << " B, breaks " << breaks
+      << ", clock epoch " << clock_epoch;
+  }
   return s.str();
 }
 
@@ -128,6 +144,9 @@ bool RobotConnection::Start(QString* error) {
   connect(rate_timer_, &QTimer::timeout, this, &RobotConnection::OnRateTimer);
   rate_timer_->start(1000);
   rate_clock_.start();
+  stall_timer_ = new QTimer(this);
+  connect(stall_timer_, &QTimer::timeout, this, &RobotConnection::OnStallCheck);
+  if (options_.stall_ms > 0) stall_timer_->start(std::min(200, options_.stall_ms / 4));
   backoff_ms_ = options_.reconnect_initial_ms;
   Connect();
   return true;
@@ -141,6 +160,7 @@ void RobotConnection::Shutdown() {
   if (reconnect_timer_ != nullptr) reconnect_timer_->stop();
   if (connect_timeout_ != nullptr) connect_timeout_->stop();
   if (rate_timer_ != nullptr) rate_timer_->stop();
+  if (stall_timer_ != nullptr) stall_timer_->stop();
   if (stream_ != nullptr) {
     stream_->disconnect(this);
     stream_->Close();
@@ -202,6 +222,10 @@ void RobotConnection::Connect() {
   auth_required_ = false;
   encoder_ = LinkEncoder(LinkSender::kClient);  // Each connection numbers from 0.
   decoder_link_.Reset();
+  first_robot_ns_ = -1;
+  resume_sent_ = false;
+  last_rx_.start();
+  if (health_.outage_open) ++health_.reconnect_attempts;
   SetState(LinkHealth::State::kConnecting);
   if (address_.kind == LinkAddress::Kind::kTcp) {
     auto* socket = new QTcpSocket();
@@ -232,13 +256,16 @@ void RobotConnection::OnConnected() {
   ++health_.connects;
   if (health_.connects > 1) ++health_.reconnects;
   SetState(LinkHealth::State::kAuthenticating);
+  last_rx_.start();
   Hello hello;
   hello.name = options_.client_name;
+  handshake_sent_ns_ = SteadyNs();
   SendMessage(hello, false);
 }
 
 void RobotConnection::OnBytes(const QByteArray& bytes) {
   const int64_t receive_ns = RealtimeNs();
+  last_rx_.start();
   health_.bytes_received += static_cast<uint64_t>(bytes.size());
   std::vector<LinkMessage> messages;
   decoder_link_.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()),
@@ -249,12 +276,26 @@ void RobotConnection::OnBytes(const QByteArray& bytes) {
     if (session_ != nullptr && session_status_.ok()) {
       session_status_ = session_->Append(message.raw, receive_ns);
     }
+    TrackAgentFrame(message);
     if (std::holds_alternative<Telemetry>(message.payload)) {
       const auto& telemetry = std::get<Telemetry>(message.payload);
       if (telemetry.device >= 1 && telemetry.device <= 3) {
         ++health_.devices[telemetry.device - 1].frames;
         health_.devices[telemetry.device - 1].bytes += telemetry.bytes.size();
+        // What we hold of this device, for a TelemetryResume after an outage.
+        TelemetryResumePosition& pos = positions_[telemetry.device - 1];
+        const auto n = static_cast<uint32_t>(telemetry.bytes.size());
+        if (!pos.have || telemetry.receive_time > pos.after_time) {
+          pos = {true, telemetry.receive_time, n};
+        } else if (telemetry.receive_time == pos.after_time) {
+          pos.bytes_at_time += n;
+        }
       }
+      if (telemetry.flags & kTelemetryLate) {
+        ++health_.late_chunks;
+        health_.late_bytes += telemetry.bytes.size();
+      }
+      if (telemetry.flags & kTelemetryBreak) ++health_.breaks;
       if (options_.decode_telemetry) {
         decoder_.AddTelemetry(telemetry);
         decoded_telemetry = true;
@@ -288,10 +329,8 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     health_.agent_name = hello->name;
     auth_required_ = hello->auth_required;
     if (!auth_required_) {
-      authenticated_ = true;
-      backoff_ms_ = options_.reconnect_initial_ms;
-      SetState(LinkHealth::State::kConnected);
-      emit authenticatedChanged(true);
+      health_.clock_tie.AddBracket(handshake_sent_ns_, SteadyNs(), ToNanoseconds(message.header.time));
+      OnAuthenticated();
     }
     if (session_ != nullptr && session_status_.ok() && hello->name != "") {
       // Record which agent produced the frames; meta.json is rewritten atomically.
@@ -309,16 +348,17 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
       ScheduleReconnect(QStringLiteral("no random source for the client nonce"));
       return;
     }
+    handshake_sent_ns_ = SteadyNs();
     SendMessage(response, false);
     // Every frame after the response carries a tag under the session key
     // (docs/protocol.md, "Frame authentication").
     encoder_.SetSigner(MakeLinkFrameSigner(session_key));
   } else if (const auto* result = std::get_if<AuthResult>(&payload)) {
     if (result->outcome == AuthOutcome::kOk) {
-      authenticated_ = true;
-      backoff_ms_ = options_.reconnect_initial_ms;
-      SetState(LinkHealth::State::kConnected);
-      emit authenticatedChanged(true);
+      // The agent stamped AuthResult between our AuthResponse and now.
+      health_.clock_tie.AddBracket(handshake_sent_ns_, SteadyNs(),
+                                   ToNanoseconds(message.header.time), 0);
+      OnAuthenticated();
       return;
     }
     const QString reason = QString::fromStdString(result->reason);
@@ -338,6 +378,8 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     }
     // "busy", "retry later", timeouts: try again after the backoff.
   } else if (const auto* ack = std::get_if<CommandAck>(&payload)) {
+    health_.clock_tie.AddBracket(ToNanoseconds(ack->echo_time), SteadyNs(),
+                                 ToNanoseconds(message.header.time));
     const double latency_ms = ToSeconds(WorkstationNow() - ack->echo_time) * 1e3;
     ++health_.latency_samples;
     health_.latency_last_ms = latency_ms;
@@ -380,6 +422,7 @@ void RobotConnection::ScheduleReconnect(const QString& reason) {
   authenticated_ = false;
   if (was_authenticated) emit authenticatedChanged(false);
   if (health_.state == LinkHealth::State::kFailed) return;
+  if (was_authenticated) NoteLinkLost(reason);
   health_.last_error = reason;
   SetState(LinkHealth::State::kWaitingToReconnect);
   reconnect_timer_->start(backoff_ms_);
@@ -433,8 +476,117 @@ void RobotConnection::OnRateTimer() {
   bytes_base_ = health_.bytes_received;
 }
 
+void RobotConnection::OnStallCheck() {
+  if (stream_ == nullptr || options_.stall_ms <= 0) return;
+  if (health_.state != LinkHealth::State::kConnected &&
+      health_.state != LinkHealth::State::kAuthenticating) {
+    return;
+  }
+  if (last_rx_.elapsed() < options_.stall_ms) return;
+  // A stalled link (Wi-Fi behind a wall, a host gone without FIN): TCP
+  // would wait minutes; the agent's Status every 100 ms says 2 s is dead.
+  const QString reason =
+      QStringLiteral("no frame for %1 s").arg(last_rx_.elapsed() * 1e-3, 0, 'f', 1);
+  if (auto* tcp = dynamic_cast<TcpStream*>(stream_.get())) tcp->Abort();
+  ScheduleReconnect(reason);
+}
+
+void RobotConnection::TrackAgentFrame(const LinkMessage& message) {
+  if (message.header.sender != LinkSender::kAgent) return;
+  const int64_t t = ToNanoseconds(message.header.time);
+  if (first_robot_ns_ < 0) first_robot_ns_ = t;
+  last_robot_ns_ = std::max(last_robot_ns_, t);
+}
+
+void RobotConnection::AppendRecorderEvent(const RecorderEvent& event) {
+  if (session_ == nullptr || !session_status_.ok()) return;
+  std::vector<uint8_t> frame;
+  AppendLinkFrame(LinkSender::kClient, 0, WorkstationNow(), event, &frame);
+  session_status_ = session_->Append(frame, RealtimeNs());
+}
+
+void RobotConnection::NoteLinkLost(const QString& reason) {
+  ++health_.outages;
+  health_.outage_open = true;
+  health_.outage_reason = reason;
+  health_.reconnect_attempts = 0;
+  health_.outage_s = 0.0;
+  // The outage began with the last byte received (a stall is noticed only
+  // stall_ms later).
+  outage_before_ms_ = last_rx_.isValid() ? last_rx_.elapsed() : 0;
+  outage_clock_.start();
+  tie_before_ = health_.clock_tie;
+  RecorderEvent event;
+  event.kind = RecorderEventKind::kLinkLost;
+  event.epoch = health_.clock_epoch;
+  event.workstation_time = WorkstationNow();
+  event.robot_time = TimeFromNanoseconds(last_robot_ns_);
+  event.reason = reason.toStdString();
+  AppendRecorderEvent(event);
+  emit linkLost(reason);
+}
+
+void RobotConnection::OnAuthenticated() {
+  authenticated_ = true;
+  backoff_ms_ = options_.reconnect_initial_ms;
+  const bool after_outage = ever_authenticated_ && health_.outage_open;
+  ever_authenticated_ = true;
+  QString details;
+  if (after_outage) {
+    health_.outage_open = false;
+    health_.outage_s = (outage_clock_.elapsed() + outage_before_ms_) * 1e-3;
+    const ClockTie& tie = health_.clock_tie;
+    // last_robot_ns_ already includes this connection's frames; the robot
+    // time before the outage is where the tie before it was measured, or
+    // later: compare with the first frame of this connection.
+    const bool new_epoch =
+        NewClockEpoch(tie_before_, tie_before_.valid ? tie_before_.measured_at_ns - tie_before_.offset_ns : 0,
+                      tie, first_robot_ns_);
+    RecorderEvent event;
+    event.kind = RecorderEventKind::kLinkRestored;
+    if (new_epoch) {
+      ++health_.clock_epoch;
+      // Robot time of this epoch -> the previous epoch's, through the
+      // workstation's clock: t_prev = t + (offset_new - offset_prev).
+      if (tie.valid && tie_before_.valid) time_shift_ns_ += tie.offset_ns - tie_before_.offset_ns;
+      positions_ = {};  // Nothing of the new clock is held.
+      decoder_.SetTimeShift(Duration(time_shift_ns_));
+      event.new_clock_epoch = true;
+    }
+    event.epoch = health_.clock_epoch;
+    event.workstation_time = WorkstationNow();
+    event.robot_time = TimeFromNanoseconds(std::max<int64_t>(first_robot_ns_, 0));
+    event.outage = std::chrono::duration_cast<Duration>(
+        std::chrono::milliseconds(outage_clock_.elapsed() + outage_before_ms_));
+    event.robot_time_shift = Duration(time_shift_ns_);
+    event.tie_uncertainty = Duration(tie.valid ? tie.uncertainty_ns : 0);
+    event.attempts = health_.reconnect_attempts;
+    event.resumed = options_.resume_telemetry;
+    AppendRecorderEvent(event);
+    const double moved_ms =
+        tie.valid && tie_before_.valid ? (tie.offset_ns - tie_before_.offset_ns) * 1e-6 : 0.0;
+    details = new_epoch ? QStringLiteral("robot clock reset (new epoch %1, tie +-%2 ms)")
+                              .arg(health_.clock_epoch)
+                              .arg(tie.uncertainty_ns * 1e-6, 0, 'f', 1)
+                        : QStringLiteral("clock tie moved %1 ms +-%2 ms")
+                              .arg(moved_ms, 0, 'f', 1)
+                              .arg(tie.uncertainty_ns * 1e-6, 0, 'f', 1);
+  }
+  SetState(LinkHealth::State::kConnected);
+  // The agent holds its telemetry until our first command: ask for what it
+  // kept while we were away before anything else (docs/protocol.md).
+  if (after_outage && options_.resume_telemetry) {
+    TelemetryResume resume;
+    resume.devices = positions_;
+    resume_sent_ = SendMessage(resume, true);
+  }
+  emit authenticatedChanged(true);
+  if (after_outage) emit linkRestored(health_.outage_s, details);
+}
+
 LinkHealth RobotConnection::health() const {
   LinkHealth h = health_;
+  if (h.outage_open) h.outage_s = (outage_clock_.elapsed() + outage_before_ms_) * 1e-3;
   const LinkDecoderStats& stats = decoder_link_.stats();
   h.sequence_gaps = stats.sequence[0].gaps;
   h.frames_missing = stats.sequence[0].frames_missing;

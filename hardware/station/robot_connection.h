@@ -6,6 +6,17 @@
 // (SessionWriter, workstation receive times, durable at least once a second)
 // and decodes Telemetry into a live SensorLog (TelemetryDecoder).
 //
+// Outages (docs/robot-agent.md, "Outages and reconnection"): a link that
+// delivers nothing for stall_ms (2 s; the agent sends Status at 10 Hz) is
+// dropped and reconnected like a closed one. After a reconnection the client
+// sends TelemetryResume with the last device bytes it holds, so the agent
+// resends what it buffered meanwhile before the live bytes; the clock tie
+// is re-estimated and a robot reboot becomes a new clock epoch; a recording
+// goes on in the same session, with a RecorderEvent frame at the loss and at
+// the restoration (docs/session-format.md, "Recorder events"). The robot
+// stays stopped (its watchdog tripped) until the operator drives again:
+// nothing here re-sends motion.
+//
 // Link health (health()): per-device frames/s and bytes/s over the last
 // second, sequence gaps (frames lost in transit), CRC / length / framing
 // errors, round-trip latency from CommandAck echo times, the agent's last
@@ -32,6 +43,7 @@
 #include "hardware/link/link_protocol.h"
 #include "hardware/link/qt_transport.h"
 #include "hardware/link/telemetry_decoder.h"
+#include "hardware/station/clock_tie.h"
 
 class QTimer;
 
@@ -46,6 +58,8 @@ struct RobotConnectionOptions {
   int reconnect_initial_ms = 200;
   int reconnect_max_ms = 5000;
   int connect_timeout_ms = 3000;
+  int stall_ms = 2000;          // No byte for this long: drop and reconnect. 0 = never.
+  bool resume_telemetry = true;  // Ask the agent for what it buffered during an outage.
   // Session recording: empty = do not record.
   QString session_dir;
   SessionMeta session_meta;  // link and agent are filled in.
@@ -100,6 +114,19 @@ struct LinkHealth {
   LinkStatus agent_status;  // Last Status from the agent.
   std::string agent_name;   // From its Hello.
   uint64_t session_records = 0;
+  // Outages: times the authenticated link was lost, the one going on.
+  uint64_t outages = 0;
+  bool outage_open = false;
+  double outage_s = 0.0;        // The open outage so far, or the last one's length.
+  QString outage_reason;        // Why the last outage began.
+  uint32_t reconnect_attempts = 0;  // Of the open (or last) outage.
+  // After reconnections: chunks the agent resent from its buffer, and
+  // devices whose bytes were lost (the agent's buffer did not reach back).
+  uint64_t late_chunks = 0;
+  uint64_t late_bytes = 0;
+  uint64_t breaks = 0;
+  uint32_t clock_epoch = 0;     // Robot clock epochs seen (reboots) since Start().
+  ClockTie clock_tie;           // Workstation - robot, now.
 
   static const char* StateName(State state);
   std::string ToString() const;
@@ -150,6 +177,11 @@ class RobotConnection : public QObject {
   void stateChanged(int state);  // A LinkHealth::State.
   void authenticatedChanged(bool authenticated);
   void authenticationFailed(const QString& reason);
+  // The authenticated link was lost (stalled, closed, reset); reconnecting.
+  void linkLost(const QString& reason);
+  // Authenticated again after an outage of `outage_s`; `details` says what
+  // was resent, lost, and how the clock tie moved (for the status bar / log).
+  void linkRestored(double outage_s, const QString& details);
   void statusReceived();  // health().agent_status updated.
   void telemetryDecoded();
 
@@ -167,7 +199,14 @@ class RobotConnection : public QObject {
   void OnHeartbeat();
   void OnFlushTimer();
   void OnRateTimer();
+  void OnStallCheck();
   Time WorkstationNow() const;
+  // The authenticated link came up (first time or after an outage).
+  void OnAuthenticated();
+  // The authenticated link went down: outage bookkeeping and the session's event.
+  void NoteLinkLost(const QString& reason);
+  void AppendRecorderEvent(const RecorderEvent& event);
+  void TrackAgentFrame(const LinkMessage& message);
 
   RobotConnectionOptions options_;
   LinkAddress address_;
@@ -192,6 +231,19 @@ class RobotConnection : public QObject {
   QTimer* connect_timeout_ = nullptr;
   QTimer* flush_timer_ = nullptr;
   QTimer* rate_timer_ = nullptr;
+  QTimer* stall_timer_ = nullptr;
+  QElapsedTimer last_rx_;  // Since the last byte received on this connection.
+  // Outage bookkeeping.
+  bool ever_authenticated_ = false;
+  QElapsedTimer outage_clock_;
+  qint64 outage_before_ms_ = 0;  // Silence before the loss was noticed.
+  int64_t last_robot_ns_ = 0;       // Latest agent header time seen (this epoch).
+  ClockTie tie_before_;             // The tie when the link was lost.
+  int64_t time_shift_ns_ = 0;       // This epoch's robot time -> the first epoch's.
+  int64_t handshake_sent_ns_ = 0;   // Workstation time we sent our last handshake frame.
+  int64_t first_robot_ns_ = -1;     // First agent header time on this connection.
+  std::array<TelemetryResumePosition, 3> positions_{};  // What we hold of each device.
+  bool resume_sent_ = false;
   // Counters at the last rate sample, for per-second rates.
   std::array<DeviceRate, 3> rate_base_{};
   uint64_t frames_base_ = 0;
