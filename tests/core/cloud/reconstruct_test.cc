@@ -140,6 +140,7 @@ TEST(ReconstructTest, GapIsReportedAndOnlyItsSamplesDropped) {
     std::snprintf(expected, sizeof(expected),
                   "gap at 9.6 s: 10.0 s without data; pose after it from the IMU heading, position held "
                   "(+-%.2f m); %zu lidar samples dropped", gap.position_sigma_m, in_gap);
+    std::printf("%s\n", line.c_str());
     EXPECT_EQ(line, expected);
     EXPECT_GT(gap.position_sigma_m, 0.15);
     EXPECT_LT(gap.position_sigma_m, 0.25);
