@@ -33,9 +33,13 @@ struct AgentCommandLine {
                            "Acceleration limit in m/s^2 (default 1.0).", "MPS2"};
   QCommandLineOption alpha{QStringLiteral("alpha-max"),
                            "Angular acceleration limit in rad/s^2 (default 3.0).", "RADPS2"};
+  QCommandLineOption buffer{QStringLiteral("buffer-s"),
+                            "Keep the last S seconds of device bytes, 0..60 (default 10), and "
+                            "resend them to a workstation that reconnects after an outage.",
+                            "S"};
 
   void Add(QCommandLineParser* parser) const {
-    parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha});
+    parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha, buffer});
   }
 
   // `key_permissions`: what to do with a key file others may read
@@ -69,7 +73,9 @@ struct AgentCommandLine {
       if (!warning.isEmpty()) std::fprintf(stderr, "warning: %s\n", qPrintable(warning));
     }
     double watchdog_ms = 0.0;
-    if (!Number(parser, watchdog, &watchdog_ms, error) ||
+    double buffer_s = ToSeconds(config->agent.telemetry_buffer);
+    if (!Number(parser, buffer, &buffer_s, error) ||
+        !Number(parser, watchdog, &watchdog_ms, error) ||
         !Number(parser, v_max, &config->agent.v_max_mps, error) ||
         !Number(parser, w_max, &config->agent.w_max_radps, error) ||
         !Number(parser, accel, &config->agent.accel_max_mps2, error) ||
@@ -85,6 +91,11 @@ struct AgentCommandLine {
       }
       config->agent.watchdog = FromSeconds(watchdog_ms * 1e-3);
     }
+    if (!(buffer_s >= 0.0 && buffer_s <= 60.0)) {
+      *error = QStringLiteral("--buffer-s must be within 0..60, got %1").arg(parser.value(buffer));
+      return false;
+    }
+    config->agent.telemetry_buffer = FromSeconds(buffer_s);
     return config->IsValid(error);
   }
 

@@ -35,7 +35,10 @@ const char* const kRecordUsage =
     "app does: every link frame, durable at least once a second, so a crash or a\n"
     "power cut keeps everything older than a second. Prints the link's health on\n"
     "stderr once a second. Ctrl+C or SIGTERM stops the robot and closes the session.\n"
-    "The link reconnects by itself after a drop; the session goes on.\n"
+    "A link that drops or stays silent for --stall-s reconnects by itself with backoff;\n"
+    "the session goes on in the same folder with the gap recorded (`info` lists it), and\n"
+    "the robot sends what it buffered meanwhile (robotd --buffer-s). A reconnection never\n"
+    "drives: a --drive-script stops at the first outage and the robot stays stopped.\n"
     "\n"
     "Options:\n"
     "  --connect HOST:PORT    the agent's TCP address (robotd's --listen)\n"
@@ -51,6 +54,7 @@ const char* const kRecordUsage =
     "                         so that it reopens in the scenario's frame (as the app does)\n"
     "  --calibration FILE     the robot's mounting error, stored as the session's calibration\n"
     "  --connect-timeout S    give up if no authenticated link within S seconds (default 10)\n"
+    "  --stall-s S            a link silent this long is dropped and reconnected (default 2)\n"
     "  --json                 print the summary as JSON on stdout\n"
     "\n"
     "Exit codes: 0 recorded, 1 the link never came up or the session could not be\n"
@@ -122,10 +126,13 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
     }
     if (!warning.isEmpty()) std::cerr << "sweepscan-cli: warning: " << warning.toStdString() << "\n";
   }
+  double stall_s = o->link.stall_ms * 1e-3;
   if (!ParsePositive(args, "duration", &o->duration_s) ||
-      !ParsePositive(args, "connect-timeout", &o->connect_timeout_s)) {
+      !ParsePositive(args, "connect-timeout", &o->connect_timeout_s) ||
+      !ParsePositive(args, "stall-s", &stall_s)) {
     return kExitBadInput;
   }
+  o->link.stall_ms = static_cast<int>(stall_s * 1e3 + 0.5);
   if (args.Has("drive-script")) {
     const Status s = LoadDriveScript(args.Get("drive-script"), &o->script);
     if (!s.ok()) {
@@ -182,7 +189,7 @@ void PrintHealth(double elapsed_s, const hardware::LinkHealth& h, bool recording
 
 int RunRecord(int argc, char** argv) {
   Args args({"json", "help"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
-                               "scenario", "calibration", "connect-timeout"});
+                               "scenario", "calibration", "connect-timeout", "stall-s"});
   std::string parse_error;
   if (!args.Parse(argc, argv, 2, &parse_error)) {
     PrintError(parse_error);
@@ -265,6 +272,28 @@ int RunRecord(int argc, char** argv) {
                        app.quit();
                      });
                    });
+  // Outages: said on stderr as they happen. A drive script stops at the
+  // first one: the agent's watchdog stopped the robot, and a reconnection
+  // must not set it moving again without the operator.
+  std::vector<double> outages_s;
+  QObject::connect(&connection, &hardware::RobotConnection::linkLost, &app, [&](const QString& reason) {
+    std::fprintf(stderr, "sweepscan-cli: link lost at %.1f s (%s); reconnecting (Ctrl+C to stop)\n",
+                 connection.recording() ? clock.elapsed() * 1e-3 : since_start.elapsed() * 1e-3,
+                 qPrintable(reason));
+    if (script_timer.isActive()) {
+      script_timer.stop();
+      std::fprintf(stderr, "sweepscan-cli: drive script stopped by the outage; the robot stays "
+                           "stopped\n");
+    }
+  });
+  QObject::connect(&connection, &hardware::RobotConnection::linkRestored, &app,
+                   [&](double outage_s, const QString& details) {
+                     outages_s.push_back(outage_s);
+                     std::fprintf(stderr,
+                                  "sweepscan-cli: reconnected after %.1f s (%s); the session goes "
+                                  "on\n",
+                                  outage_s, qPrintable(details));
+                   });
   QTimer health_timer;
   QObject::connect(&health_timer, &QTimer::timeout, &app, [&] {
     const hardware::LinkHealth h = connection.health();
@@ -307,14 +336,17 @@ int RunRecord(int argc, char** argv) {
         {"records", health.session_records},
         {"frames_lost", health.frames_missing},
         {"reconnects", health.reconnects},
+        {"outages_s", outages_s},
+        {"resent_bytes", health.late_bytes},
         {"round_trip_ms", {{"mean", health.latency_mean_ms}, {"max", health.latency_max_ms}}},
         {"stopped_by", signal != 0 ? "signal" : (o.duration_s > 0 ? "duration" : "script")}};
     std::cout << summary.dump() << "\n";
   } else {
-    std::printf("%s: %.1f s, %llu records, %llu frames lost in transit, %llu reconnects\n",
+    std::printf("%s: %.1f s, %llu records, %llu frames lost in transit, %llu reconnects, "
+                "%zu outages\n",
                 qPrintable(o.out), seconds, static_cast<unsigned long long>(health.session_records),
                 static_cast<unsigned long long>(health.frames_missing),
-                static_cast<unsigned long long>(health.reconnects));
+                static_cast<unsigned long long>(health.reconnects), outages_s.size());
   }
   return exit_code;
 }

@@ -37,7 +37,9 @@ const char* const kInfoUsage =
     "how many link frames were recorded (and whether a torn tail was dropped),\n"
     "damage (records skipped because frames.bin is corrupt there: how many, how\n"
     "many seconds, where), what the devices sent (scans, IMU and wheel records,\n"
-    "decoder errors), and the robot-time span. --strict: exit 2 if damaged.\n"
+    "decoder errors), the robot-time span, and the link outages of the recording\n"
+    "(when, why, how long, what the robot resent, what was lost, clock epochs).\n"
+    "--strict: exit 2 if damaged.\n"
     "Given a ROS bag, describes the bag instead (sweepscan-cli help import).\n";
 
 const char* const kRepairUsage =
@@ -149,6 +151,28 @@ bool ParseCommon(Args* args, int argc, char** argv, const char* usage, int* code
   return true;
 }
 
+// The recording's link outages (docs/session-format.md, "Recorder events").
+nlohmann::json GapsJson(const std::vector<hardware::SessionLinkGap>& gaps) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const hardware::SessionLinkGap& g : gaps) {
+    out.push_back({{"lost_at_s", g.lost_at_s},
+                   {"reason", g.reason},
+                   {"restored", g.restored},
+                   {"outage_s", g.outage_s},
+                   {"attempts", g.attempts},
+                   {"resumed", g.resumed},
+                   {"resent_bytes", g.late_bytes},
+                   {"new_clock_epoch", g.new_clock_epoch},
+                   {"clock_epoch", g.epoch},
+                   {"robot_time_shift_s", g.robot_time_shift_s},
+                   {"clock_tie_uncertainty_s", g.tie_uncertainty_s},
+                   {"data_lost_s",
+                    {{"lidar", g.data_lost_s[0]}, {"imu", g.data_lost_s[1]},
+                     {"motor_board", g.data_lost_s[2]}}}});
+  }
+  return out;
+}
+
 nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
   const SessionMeta& m = d.info.meta;
   size_t samples = 0;
@@ -175,6 +199,7 @@ nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
         {"tail_reason", d.info.frames.tail_reason},
         {"refused", d.info.frames_refused}}},
       {"damage", DamageJson(d.info.frames)},
+      {"gaps", GapsJson(d.info.gaps)},
       {"robot_time_s", {ToSeconds(d.info.first_robot_time), ToSeconds(d.info.last_robot_time)}},
       {"duration_s", ToSeconds(d.info.last_robot_time - d.info.first_robot_time)},
       {"scans", d.log.scans.size()},
@@ -218,6 +243,7 @@ int RunInfo(int argc, char** argv) {
   } else {
     std::printf("no damage\n");
   }
+  if (d.info.gaps.empty()) std::printf("no link outages\n");
   std::printf("%.1f s of robot time: %zu scans (%zu samples), %zu IMU records, %zu wheel records\n",
               j["duration_s"].get<double>(), d.log.scans.size(), j["lidar_samples"].get<size_t>(),
               d.log.imu.size(), d.log.wheels.size());

@@ -68,7 +68,8 @@ int AgentMain(int argc, char** argv) {
     QStringList keys;
     for (const QCommandLineOption* option :
          {&lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
-          &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha}) {
+          &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha,
+          &common.buffer}) {
       keys << option->names().first();
     }
     QStringList from_file;

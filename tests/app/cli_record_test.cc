@@ -10,6 +10,7 @@
 #include <QDir>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QJsonArray>
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QProcess>
@@ -18,6 +19,7 @@
 
 #include "core/common/time.h"
 #include "hardware/link/telemetry_decoder.h"
+#include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
@@ -116,6 +118,64 @@ TEST_F(CliRecordTest, DrivesAScriptHeadlessAndTheSessionHoldsTheDrive) {
   QFile meta(session + "/meta.json");
   ASSERT_TRUE(meta.open(QIODevice::ReadOnly));
   EXPECT_TRUE(meta.readAll().contains("\"scenario\""));
+}
+
+// Issue 31: the link cut for 3 s mid-recording (testing::FaultProxy between
+// the recorder and the simulated robot). The recorder says so on stderr,
+// reconnects by itself, the drive script stops for good (the robot stays
+// stopped), the session is one folder whose `info --json` lists the gap, and
+// the robot's buffer filled it: no lidar data lost.
+TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothingLost) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+  f.close();
+  const quint16 agent_port = address_.section(':', -1).toUShort();
+  sweepscan::testing::FaultProxy proxy(agent_port);
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("flaky.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()), "--key-file",
+                key_, "--out", session, "--duration", "9", "--drive-script", script, "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(2500);
+  proxy.CutFor(3000, sweepscan::testing::FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      30000));
+  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  EXPECT_TRUE(err.contains("link lost at")) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script stopped by the outage")) << err.toStdString();
+  EXPECT_TRUE(err.contains("reconnected after")) << err.toStdString();
+  const QByteArray out = record.readAllStandardOutput();
+  const QJsonObject summary = QJsonDocument::fromJson(out).object();
+  ASSERT_EQ(summary["outages_s"].toArray().size(), 1) << out.toStdString() << err.toStdString();
+  EXPECT_NEAR(summary["outages_s"].toArray()[0].toDouble(), 3.0, 1.5);
+
+  QProcess info;
+  info.start(QStringLiteral(SWEEPSCAN_CLI), {"info", session, "--strict", "--json"});
+  ASSERT_TRUE(info.waitForFinished(30000));
+  ASSERT_EQ(info.exitCode(), 0) << info.readAllStandardError().toStdString();
+  const QJsonObject j = QJsonDocument::fromJson(info.readAllStandardOutput()).object();
+  const QJsonArray gaps = j["gaps"].toArray();
+  ASSERT_EQ(gaps.size(), 1);
+  const QJsonObject gap = gaps[0].toObject();
+  EXPECT_TRUE(gap["restored"].toBool());
+  EXPECT_GT(gap["resent_bytes"].toDouble(), 10000.0);
+  EXPECT_EQ(gap["data_lost_s"].toObject()["lidar"].toDouble(), 0.0);
+  EXPECT_FALSE(gap["new_clock_epoch"].toBool());
+  // The robot stopped at the cut and did not move again: the wheels' last
+  // records (after the reconnection) are at rest.
+  SensorLog log;
+  RecordedSeconds(session, &log);
+  ASSERT_FALSE(log.wheels.empty());
+  EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
 }
 
 TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {

@@ -90,7 +90,6 @@ RobotConnectionOptions Client(quint16 port, const QString& session_dir) {
   options.key = KeyBytes();
   options.session_dir = session_dir;
   options.session_meta.notes = "link_outage_test";
-  options.reconnect_max_ms = 1000;
   return options;
 }
 
