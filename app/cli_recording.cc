@@ -99,6 +99,11 @@ int RecordingPoses(const Args& args, const RecordingInput& in, const MountingErr
     PrintError(s.message());
     return kExitFailure;
   }
+  // Holes in the sensor data (a link outage the robot's buffer did not
+  // cover): no motion was invented across them; say how the pose resumed.
+  for (const PoseGap& gap : result->gaps) {
+    std::cerr << "sweepscan-cli: " << FormatPoseGap(gap, in.decode.first_robot_time) << "\n";
+  }
   return kExitOk;
 }
 

@@ -156,6 +156,23 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 
   connect(workspace_, &Workspace::message, this,
           [this](const QString& m) { statusBar()->showMessage(m, 6000); });
+  // A link outage stays in the status bar until the link is back.
+  connect(workspace_, &Workspace::linkOutage, this,
+          [this](bool open, double seconds, const QString& text) {
+            if (open) {
+              statusBar()->showMessage(
+                  tr("Link lost (%1): reconnecting… The robot is stopped; Disconnect stops "
+                     "trying.")
+                      .arg(text));
+            } else {
+              statusBar()->showMessage(
+                  tr("Link reconnected after %1 s (%2). The robot stays stopped until you "
+                     "drive; a recording goes on in the same session.")
+                      .arg(seconds, 0, 'f', 1)
+                      .arg(text),
+                  20000);
+            }
+          });
   connect(workspace_, &Workspace::authenticationFailed, this, [this](const QString& reason) {
     ShowError(tr("Connection refused"),
               tr("The robot refused this workstation: %1\n\nCheck the key file.").arg(reason));
@@ -420,6 +437,7 @@ void MainWindow::OnTick() {
     const hardware::LinkHealth& h = workspace_->health();
     QString link = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
     if (workspace_->authenticated()) link = tr("connected");
+    if (h.outage_open) link = tr("reconnecting (%1 s)").arg(h.outage_s, 0, 'f', 0);
     if (workspace_->recording()) link += tr(" · REC");
     link_label_->setText(tr("Link: %1").arg(link));
     fps_label_->setText(tr("%1 fps").arg(fps_, 0, 'f', 0));

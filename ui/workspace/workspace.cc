@@ -273,6 +273,26 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
           emit authenticatedChanged(a);
         },
         Qt::QueuedConnection);
+    // Outages (issue 31): the connection reconnects by itself; the operator
+    // sees it in the status bar and may Disconnect to stop trying.
+    QObject::connect(
+        connection, &hardware::RobotConnection::linkLost, this,
+        [this](const QString& reason) {
+          health_.outage_open = true;
+          // The agent's watchdog stopped the robot; nothing here may set it
+          // moving again after the reconnection: the operator drives.
+          AbortScriptedDrive();
+          commanded_ = Twist2d();
+          emit linkOutage(true, 0.0, reason);
+        },
+        Qt::QueuedConnection);
+    QObject::connect(
+        connection, &hardware::RobotConnection::linkRestored, this,
+        [this](double seconds, const QString& details) {
+          health_.outage_open = false;
+          emit linkOutage(false, seconds, details);
+        },
+        Qt::QueuedConnection);
     QObject::connect(
         connection, &hardware::RobotConnection::authenticationFailed, this,
         [this](const QString& reason) {
@@ -315,6 +335,10 @@ void Workspace::Disconnect() {
   }
   sim_.reset();
   authenticated_ = false;
+  if (health_.outage_open) {
+    health_.outage_open = false;
+    emit message(QStringLiteral("Disconnected: no longer reconnecting"));
+  }
   health_.state = hardware::LinkHealth::State::kIdle;
   commanded_ = Twist2d();
   emit linkStateChanged(static_cast<int>(health_.state));

@@ -265,6 +265,9 @@ class Workspace : public QObject {
   void authenticatedChanged(bool authenticated);
   void authenticationFailed(const QString& reason);
   void healthUpdated();
+  // The authenticated link was lost (open: `text` says why) or is back
+  // after `seconds` (`text`: what was resent, how the clock tie moved).
+  void linkOutage(bool open, double seconds, const QString& text);
   void recordingChanged(bool recording);
   void sessionChanged(const QString& dir);
   void replayProgress(double position_s, double length_s);
