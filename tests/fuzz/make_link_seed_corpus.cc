@@ -40,7 +40,9 @@ int main(int argc, char** argv) {
   WriteSeed(dir + "/link/handshake", 0, handshake);
   Bytes commands = client.EncodeDrive(t, 0.2, 0.1);
   for (const LinkPayload& p : std::vector<LinkPayload>{
-           Stop{}, EmergencyStop{}, ClearEmergencyStop{}, Heartbeat{}, LidarMotor{true}}) {
+           Stop{}, EmergencyStop{}, ClearEmergencyStop{}, Heartbeat{}, LidarMotor{true},
+           TelemetryResume{{TelemetryResumePosition{true, t, 12}, TelemetryResumePosition{},
+                            TelemetryResumePosition{true, t, 0}}}}) {
     Append(client.Encode(t, p), &commands);
   }
   WriteSeed(dir + "/link/commands", 7, commands);
@@ -51,6 +53,16 @@ int main(int argc, char** argv) {
   Append(agent.Encode(t, st), &agent_out);
   const Bytes raw = {0xAA, 0x55, 0x01, 0x01, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00};
   Append(agent.EncodeTelemetry(t, LinkDevice::kLidar, t, raw.data(), raw.size()), &agent_out);
+  // Resent after an outage (late, after a break), and the recorder's note.
+  Append(agent.EncodeTelemetry(t, LinkDevice::kLidar, t, raw.data(), raw.size(),
+                               kTelemetryLate | kTelemetryBreak),
+         &agent_out);
+  RecorderEvent event;
+  event.kind = RecorderEventKind::kLinkRestored;
+  event.outage = std::chrono::seconds(3);
+  event.attempts = 2;
+  event.reason = "no frame for 2.0 s";
+  Append(client.Encode(t, event), &agent_out);
   WriteSeed(dir + "/link/agent", 64, agent_out);
 
   // Session: a small real session's frames.bin and meta.json.

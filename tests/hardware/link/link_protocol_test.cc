@@ -81,6 +81,28 @@ std::vector<LinkPayload> AllMessages() {
   tel.bytes = {0x5A, 0xA5, 0x01, 0x02, 0xE7, 0x5C};  // Sync bytes inside a payload are harmless.
   out.push_back(tel);
   out.push_back(Telemetry{uint8_t(LinkDevice::kLidar), kT0, {}});
+  out.push_back(Telemetry{uint8_t(LinkDevice::kMotorBoard), kT0, {9}, kTelemetryLate | kTelemetryBreak});
+  TelemetryResume resume;
+  resume.devices[0] = {true, TimeFromNanoseconds(5000000123), 7};
+  resume.devices[2] = {true, TimeFromNanoseconds(-1), 0};
+  out.push_back(resume);
+  RecorderEvent lost;
+  lost.kind = RecorderEventKind::kLinkLost;
+  lost.epoch = 2;
+  lost.workstation_time = TimeFromNanoseconds(77);
+  lost.robot_time = TimeFromNanoseconds(88);
+  lost.reason = "no frame for 2.0 s";
+  out.push_back(lost);
+  RecorderEvent restored;
+  restored.kind = RecorderEventKind::kLinkRestored;
+  restored.new_clock_epoch = true;
+  restored.resumed = true;
+  restored.epoch = 3;
+  restored.outage = std::chrono::seconds(20);
+  restored.robot_time_shift = Duration(-123456789);
+  restored.tie_uncertainty = Duration(250000);
+  restored.attempts = 9;
+  out.push_back(restored);
   out.push_back(UnknownMessage{0x7F, {1, 2, 3}});
   return out;
 }
@@ -106,6 +128,71 @@ void ExpectSameMessages(const std::vector<LinkMessage>& a, const std::vector<Lin
     EXPECT_EQ(a[i].header.time, b[i].header.time) << i;
     EXPECT_EQ(PayloadBytes(a[i].payload), PayloadBytes(b[i].payload)) << i;
   }
+}
+
+// docs/protocol.md "Telemetry", "TelemetryResume" and docs/session-format.md
+// "Recorder events", byte by byte.
+TEST(LinkProtocolTest, TelemetryFlagsAndTelemetryResumeLayoutByHand) {
+  Telemetry t{uint8_t(LinkDevice::kImu), TimeFromNanoseconds(0x0102030405060708), {0xAB},
+              kTelemetryLate | kTelemetryBreak};
+  EXPECT_EQ(PayloadBytes(t), (Bytes{0x02, 0x03, 0x00, 0x00, 0x08, 0x07, 0x06, 0x05, 0x04, 0x03,
+                                    0x02, 0x01, 0xAB}));
+  TelemetryResume r;
+  r.devices[1] = {true, TimeFromNanoseconds(0x1122334455667788), 0x01020304};
+  const Bytes b = PayloadBytes(r);
+  ASSERT_EQ(b.size(), 48u);
+  EXPECT_EQ(Bytes(b.begin(), b.begin() + 16), Bytes(16, 0)) << "no lidar position: all zero";
+  EXPECT_EQ(Bytes(b.begin() + 16, b.begin() + 32),
+            (Bytes{0x01, 0, 0, 0, 0x88, 0x77, 0x66, 0x55, 0x44, 0x33, 0x22, 0x11, 0x04, 0x03, 0x02,
+                   0x01}));
+  LinkPayload parsed;
+  std::string error;
+  ASSERT_TRUE(ParseLinkPayload(0x16, b.data(), b.size(), &parsed, &error)) << error;
+  const auto& back = std::get<TelemetryResume>(parsed);
+  EXPECT_FALSE(back.devices[0].have);
+  EXPECT_TRUE(back.devices[1].have);
+  EXPECT_EQ(back.devices[1].bytes_at_time, 0x01020304u);
+  Bytes bad = b;
+  bad[0] = 2;  // "have" is 0 or 1.
+  EXPECT_FALSE(ParseLinkPayload(0x16, bad.data(), bad.size(), &parsed, &error));
+  EXPECT_FALSE(ParseLinkPayload(0x16, b.data(), 47, &parsed, &error));
+}
+
+TEST(LinkProtocolTest, RecorderEventLayoutByHand) {
+  RecorderEvent e;
+  e.kind = RecorderEventKind::kLinkRestored;
+  e.resumed = true;
+  e.outage = std::chrono::seconds(3);
+  e.tie_uncertainty = std::chrono::microseconds(300);
+  e.attempts = 2;
+  e.workstation_time = TimeFromNanoseconds(0x1111);
+  e.robot_time = TimeFromNanoseconds(0x2222);
+  const Bytes b = PayloadBytes(e);
+  ASSERT_EQ(b.size(), 53u);
+  EXPECT_EQ(Bytes(b.begin(), b.begin() + 8), (Bytes{0x02, 0x02, 0, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(Bytes(b.begin() + 24, b.begin() + 32),
+            (Bytes{0x00, 0x5E, 0xD0, 0xB2, 0, 0, 0, 0}));  // 3e9 ns, as in session-format.md
+  EXPECT_EQ(Bytes(b.begin() + 40, b.begin() + 53),
+            (Bytes{0xE0, 0x93, 0x04, 0, 0, 0, 0, 0, 0x02, 0, 0, 0, 0x00}));
+  // In a session: a client frame of type 0x40 with a 53-byte payload.
+  Bytes frame;
+  ASSERT_TRUE(AppendLinkFrame(LinkSender::kClient, 0, kT0, e, &frame));
+  EXPECT_EQ(frame[3], 0x40);
+  EXPECT_EQ(frame[4], 0x02);
+  EXPECT_EQ(frame[20], 53);  // payload_size, header offset 20
+  LinkMessage m;
+  ASSERT_TRUE(ParseLinkFrame(frame.data(), frame.size(), &m).ok());
+  const auto& back = std::get<RecorderEvent>(m.payload);
+  EXPECT_EQ(back.outage, e.outage);
+  EXPECT_EQ(back.attempts, 2u);
+  EXPECT_TRUE(back.resumed);
+  EXPECT_FALSE(back.new_clock_epoch);
+  Bytes bad = b;
+  bad[0] = 3;  // kind 1 or 2
+  LinkPayload parsed;
+  std::string error;
+  EXPECT_FALSE(ParseLinkPayload(0x40, bad.data(), bad.size(), &parsed, &error));
+  EXPECT_FALSE(ParseLinkPayload(0x40, b.data(), 52, &parsed, &error));
 }
 
 TEST(Crc32cTest, CheckValueOfTheCatalogue) {

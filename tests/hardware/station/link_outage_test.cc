@@ -437,6 +437,66 @@ TEST(LinkOutageTest, ARobotRebootDuringAnOutageStartsANewClockEpoch) {
   EXPECT_LT(longest, ToSeconds(std::chrono::milliseconds(down.elapsed())) + 5.0);
 }
 
+// The figures of docs/robot-agent.md ("Outages and reconnection"), not a
+// check: scripts/link-outage-figures.sh runs it (about 3 minutes). 50 cuts of
+// 1 s (reconnects refused meanwhile): how long after the link returns the
+// workstation is authenticated again; then outages of 5 to 15 s: the lidar
+// data lost; and the agent's buffer memory.
+TEST(LinkOutageTest, DISABLED_Figures) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  QTemporaryDir tmp;
+  const QString dir = tmp.path() + "/figures.sweepscan";
+  RobotConnection client(Client(proxy.port(), dir));
+  QElapsedTimer clock;
+  clock.start();
+  qint64 restored_ms = -1;
+  QObject::connect(&client, &RobotConnection::linkRestored,
+                   [&](double, const QString&) { restored_ms = clock.elapsed(); });
+  QString error;
+  ASSERT_TRUE(client.Start(&error));
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  client.SetLidarMotor(true);
+  Pump(2000);
+  std::vector<double> after_return_ms;
+  for (int i = 0; i < 50; ++i) {
+    restored_ms = -1;
+    const qint64 cut = clock.elapsed();
+    proxy.CutFor(1000, FaultProxy::RefuseMode::kClosed);
+    ASSERT_TRUE(WaitFor([&] { return restored_ms >= 0; }, 10000));
+    after_return_ms.push_back(static_cast<double>(restored_ms - cut - 1000));
+    Pump(300 + 37 * (i % 7));  // Cuts at varying phases of the backoff.
+  }
+  std::sort(after_return_ms.begin(), after_return_ms.end());
+  std::printf("figure: reconnection after the link returns, 50 outages of 1 s: median %.0f ms, "
+              "max %.0f ms\n",
+              after_return_ms[after_return_ms.size() / 2], after_return_ms.back());
+  for (int outage_s : {5, 8, 11, 15}) {
+    proxy.CutFor(outage_s * 1000, FaultProxy::RefuseMode::kClosed);
+    Pump(outage_s * 1000);
+    ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+    Pump(1500);
+  }
+  client.Shutdown();
+  const TelemetryBuffer& buffer = robot.agent->core().telemetry_buffer();
+  std::printf("figure: agent buffer: peak %zu bytes, bound %zu bytes (keep %.0f s)\n",
+              buffer.peak_bytes(), buffer.max_bytes(), ToSeconds(buffer.keep()));
+  SensorLog log;
+  SessionDecodeInfo info;
+  ASSERT_TRUE(DecodeSession(dir.toStdString(), &log, &info).ok());
+  for (size_t k = 50; k < info.gaps.size(); ++k) {
+    const SessionLinkGap& g = info.gaps[k];
+    std::printf("figure: outage %.1f s: lidar data lost %.2f s, IMU %.2f s, motor %.2f s, "
+                "%llu bytes resent\n",
+                g.outage_s, g.data_lost_s[0], g.data_lost_s[1], g.data_lost_s[2],
+                static_cast<unsigned long long>(g.late_bytes));
+  }
+  double lost_in_short = 0.0;
+  for (size_t k = 0; k < 50 && k < info.gaps.size(); ++k) lost_in_short += info.gaps[k].data_lost_s[0];
+  std::printf("figure: 50 outages of 1 s: %.2f s of lidar data lost in all\n", lost_in_short);
+}
+
 }  // namespace
 }  // namespace hardware
 }  // namespace sweepscan
