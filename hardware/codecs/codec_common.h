@@ -100,6 +100,29 @@ inline void AppendU16Be(uint16_t v, std::vector<uint8_t>* out) {
   out->push_back(static_cast<uint8_t>(v & 0xFF));
 }
 void AppendF32Le(float v, std::vector<uint8_t>* out);
+inline void AppendU64Le(uint64_t v, std::vector<uint8_t>* out) {
+  for (int i = 0; i < 8; ++i) out->push_back(static_cast<uint8_t>((v >> (8 * i)) & 0xFF));
+}
+inline uint64_t ReadU64Le(const uint8_t* p) {
+  return static_cast<uint64_t>(ReadU32Le(p)) | (static_cast<uint64_t>(ReadU32Le(p + 4)) << 32);
+}
+inline void AppendI64Le(int64_t v, std::vector<uint8_t>* out) {
+  AppendU64Le(static_cast<uint64_t>(v), out);
+}
+inline int64_t ReadI64Le(const uint8_t* p) { return static_cast<int64_t>(ReadU64Le(p)); }
+// IEEE 754 binary64, little-endian; memcpy is the defined way to reinterpret.
+inline void AppendF64Le(double v, std::vector<uint8_t>* out) {
+  static_assert(sizeof(double) == 8, "double must be IEEE 754 binary64");
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof(bits));
+  AppendU64Le(bits, out);
+}
+inline double ReadF64Le(const uint8_t* p) {
+  const uint64_t bits = ReadU64Le(p);
+  double v;
+  std::memcpy(&v, &bits, sizeof(v));
+  return v;
+}
 
 // Rounds to nearest (halves away from zero) and saturates to the integer
 // type's range; NaN becomes 0. Used by every encoder so out-of-range inputs

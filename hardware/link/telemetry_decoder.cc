@@ -225,7 +225,7 @@ std::string SessionLinkGap::ToString() const {
   std::ostringstream s;
   s.setf(std::ios::fixed);
   s.precision(1);
-  s << "link lost at " << lost_at_s << " s (" << reason << ")";
+  s << "link lost " << lost_at_s << " s into the recording (" << reason << ")";
   if (!restored) {
     s << "; the recording ended before it came back";
     return s.str();
@@ -234,8 +234,9 @@ std::string SessionLinkGap::ToString() const {
     << (attempts == 1 ? "" : "s") << ")";
   if (new_clock_epoch) {
     s.precision(3);
-    s << "; robot clock reset: epoch " << epoch << ", shifted " << robot_time_shift_s
-      << " s +-" << tie_uncertainty_s << " s";
+    s << "; robot clock reset: epoch " << epoch << ", shifted " << robot_time_shift_s << " s +-";
+    s.precision(1);
+    s << tie_uncertainty_s * 1e3 << " ms";
     s.precision(1);
   }
   if (late_messages > 0) s << "; " << late_bytes << " bytes resent from the robot's buffer";
@@ -311,6 +312,8 @@ bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
   }
   decoder.TakeInto(log);
   info->gaps = decoder.gaps();
+  // Said in seconds into the recording (the robot clock's origin is its boot).
+  for (SessionLinkGap& gap : info->gaps) gap.lost_at_s -= ToSeconds(info->first_robot_time);
   for (int k = 0; k < 2; ++k) info->link.sequence[k] = trackers[k].stats();
   info->link.codec.frames_ok = records.size() - info->frames_refused;
   info->link.codec.payload_errors = info->frames_refused;

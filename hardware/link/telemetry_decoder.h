@@ -74,7 +74,8 @@ struct TelemetryDecoderStats {
 // events (docs/session-format.md, "Recorder events") and the telemetry
 // around them.
 struct SessionLinkGap {
-  double lost_at_s = 0.0;      // Robot time of the last frame before, on the session's timeline.
+  double lost_at_s = 0.0;      // Last frame before it, seconds after the recording's first
+                               // agent frame (DecodeSession; the decoder alone: robot time).
   std::string reason;          // "no frame for 2.0 s", "connection reset", ...
   bool restored = false;       // False: the recording ended during the outage.
   double outage_s = 0.0;       // Link down (workstation clock).

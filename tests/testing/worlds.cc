@@ -18,6 +18,14 @@ sim::SimConfig LabConfig(uint64_t seed) {
   return c;
 }
 
+sim::SimConfig GapDriveConfig(uint64_t seed) {
+  sim::SimConfig c = LabConfig(seed);
+  c.start = {2.0, 2.5, 0.0};
+  c.path = {{0.0, 0.0, 2.0}, {0.3, 0.0, 6.0}, {0.3, 0.3, 2.0},
+            {0.0, 0.0, 10.0}, {0.3, 0.0, 5.0}, {0.2, -0.3, 3.0}};
+  return c;
+}
+
 sim::SimConfig CircleConfig(uint64_t seed) {
   sim::SimConfig c;
   c.name = "lab-circle";

@@ -20,6 +20,10 @@ sim::SimConfig CircleConfig(uint64_t seed = 1);
 // operator put the robot down: the truth a project's registration is
 // checked against (a session's own frame is its start pose).
 sim::SimConfig BuildingConfig(char drive, uint64_t seed = 1);
+// A drive with a pause in the middle, for holes cut into its records (a link
+// outage): straight, then an arc (0.3 m/s, 0.3 rad/s) from 8 s to 10 s,
+// standing still from 10 s to 20 s, then on again.
+sim::SimConfig GapDriveConfig(uint64_t seed = 1);
 // Every sensor perfect (no noise, no dropouts, no scale error, no bias).
 void MakeNoiseFree(sim::SimConfig* config);
 

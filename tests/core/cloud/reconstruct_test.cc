@@ -67,15 +67,7 @@ TEST(ReconstructTest, IsDeterministic) {
 // pose_estimator_test's GapInTheDataIsAGapNotAMotion): on an arc at 0.3
 // m/s when the data stops at 9.6 s, standing still from 10 s to 20 s, the
 // data back at 19.6 s. The lidar's own buffer held 5 ms more at each end
-// (CutHole): those samples fall in the gap.
-sim::SimConfig GapDrive(uint64_t seed) {
-  sim::SimConfig c = testing::LabConfig(seed);
-  c.start = {2.0, 2.5, 0.0};
-  c.path = {{0.0, 0.0, 2.0}, {0.3, 0.0, 6.0}, {0.3, 0.3, 2.0},
-            {0.0, 0.0, 10.0}, {0.3, 0.0, 5.0}, {0.2, -0.3, 3.0}};
-  return c;
-}
-
+// (CutHole): those samples fall in the gap. The drive: testing::GapDriveConfig.
 SensorLog CutHole(SensorLog log, double t0, double t1) {
   const Time a = TimeFromSeconds(sim::SimWorld::kStartTimeS + t0);
   const Time b = TimeFromSeconds(sim::SimWorld::kStartTimeS + t1);
@@ -100,7 +92,7 @@ SensorLog CutHole(SensorLog log, double t0, double t1) {
 // outside the poses altogether, and places every sample before the gap as
 // the same drive without the hole does, bit for bit.
 TEST(ReconstructTest, GapIsReportedAndOnlyItsSamplesDropped) {
-  const sim::SimConfig c = GapDrive(1);
+  const sim::SimConfig c = testing::GapDriveConfig(1);
   sim::SimWorld world(c);
   const SensorLog whole = world.RunAll();
   const SensorLog log = CutHole(whole, 9.6, 19.6);

@@ -233,13 +233,6 @@ TEST(PoseEstimatorTest, PoseSourceNames) {
 // stands still until 20 s, after the data is back at 19.6 s. Truth: 0.12 m
 // and 0.12 rad of motion inside the gap. `cut` removes the records in
 // (t0, t1) from every stream (times from the simulation's start).
-sim::SimConfig GapDrive(uint64_t seed) {
-  sim::SimConfig c = testing::LabConfig(seed);
-  c.start = {2.0, 2.5, 0.0};
-  c.path = {{0.0, 0.0, 2.0}, {0.3, 0.0, 6.0}, {0.3, 0.3, 2.0},
-            {0.0, 0.0, 10.0}, {0.3, 0.0, 5.0}, {0.2, -0.3, 3.0}};
-  return c;
-}
 constexpr double kGapFrom = 9.6, kGapTo = 19.6;
 
 SensorLog CutHole(SensorLog log, double t0, double t1) {
@@ -264,7 +257,7 @@ Pose2d Pose2dOf(const Rigid3d& p) {
 
 TEST(PoseEstimatorTest, GapInTheDataIsAGapNotAMotion) {
   for (uint64_t seed : {1, 2, 3}) {
-    const sim::SimConfig c = GapDrive(seed);
+    const sim::SimConfig c = testing::GapDriveConfig(seed);
     sim::SimWorld world(c);
     const SensorLog log = CutHole(world.RunAll(), kGapFrom, kGapTo);
     const auto truth = [&](Time t) { return world.trajectory().PoseAt(ToSeconds(t) - sim::SimWorld::kStartTimeS); };
@@ -338,7 +331,7 @@ TEST(PoseEstimatorTest, GapInTheDataIsAGapNotAMotion) {
 
 // Wheel odometry alone holds its pose over a gap too (it has no IMU yaw).
 TEST(PoseEstimatorTest, OdometryHoldsItsPoseOverAGap) {
-  sim::SimConfig c = GapDrive(1);
+  sim::SimConfig c = testing::GapDriveConfig(1);
   testing::MakeNoiseFree(&c);
   sim::SimWorld world(c);
   const SensorLog log = CutHole(world.RunAll(), kGapFrom, kGapTo);

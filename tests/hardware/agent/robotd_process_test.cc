@@ -33,6 +33,7 @@
 #include "hardware/emulation/device_ptys.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
@@ -103,6 +104,7 @@ class Robotd {
         timeout_ms);
   }
   QString Address() const { return QStringLiteral("tcp:127.0.0.1:%1").arg(port_); }
+  quint16 port() const { return port_; }
   qint64 pid() const { return process_.processId(); }
   QString Stderr() { return QString::fromUtf8(process_.readAllStandardError()); }
   int Terminate() {
@@ -311,6 +313,69 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
   std::printf("figure: %s robotd: watchdog stop %.0f ms after the last command (watchdog 500 ms)\n",
               GetParam().name.c_str(), reaction_ms);
   client.Shutdown();
+}
+
+// Issue 31: robotd restarted (systemd's Restart=on-failure, an update)
+// while the workstation records through a relay. Unlike a reboot, the robot
+// clock (CLOCK_MONOTONIC) runs on: the same clock epoch. The recording goes
+// on in the same session, the gap is listed, the bytes the stopped robotd
+// never read are the data lost (marked as a break: the new robotd's buffer
+// starts at its start), and every stream stays in time order.
+TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  auto robotd = std::make_unique<Robotd>(GetParam(), ptys.SlavePaths(0), key_file_);
+  ASSERT_TRUE(robotd->WaitListening(60000)) << robotd->Stderr().toStdString();
+  sweepscan::testing::FaultProxy proxy(robotd->port());
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("restart.sweepscan");
+  RobotConnection client(Client(QStringLiteral("tcp:127.0.0.1:%1").arg(proxy.port()), session));
+  double outage_s = -1.0;
+  QObject::connect(&client, &RobotConnection::linkRestored,
+                   [&](double s, const QString&) { outage_s = s; });
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  client.SetLidarMotor(true);
+  sweepscan::testing::Pump(3000);
+  QElapsedTimer down;
+  down.start();
+  EXPECT_EQ(robotd->Terminate(), 0);
+  robotd = std::make_unique<Robotd>(GetParam(), ptys.SlavePaths(0), key_file_);
+  ASSERT_TRUE(robotd->WaitListening(60000)) << robotd->Stderr().toStdString();
+  proxy.SetTarget(robotd->port());
+  ASSERT_TRUE(WaitFor([&] { return outage_s >= 0.0; }, 30000)) << client.health().ToString();
+  const double down_s = down.elapsed() * 1e-3;
+  client.SetLidarMotor(true);  // The new robotd stopped the X4 when it opened it.
+  sweepscan::testing::Pump(3000);
+  client.Shutdown();
+  ASSERT_TRUE(client.session_status().ok()) << client.session_status().message();
+  EXPECT_EQ(client.health().clock_epoch, 0u) << "robotd restarted, the clock did not";
+
+  FramesLoadOptions strict;
+  strict.skip_corrupt_records = false;
+  SensorLog log;
+  SessionDecodeInfo info;
+  ASSERT_TRUE(DecodeSession(session.toStdString(), strict, &log, &info).ok());
+  std::fprintf(stderr, "%s\n", info.ToString().c_str());
+  ASSERT_EQ(info.gaps.size(), 1u);
+  const SessionLinkGap& gap = info.gaps[0];
+  EXPECT_TRUE(gap.restored);
+  EXPECT_FALSE(gap.new_clock_epoch);
+  EXPECT_NEAR(gap.outage_s, down_s, 1.5);
+  // What the devices sent while no robotd read them (a pty keeps a few kB,
+  // read by the new robotd at its start) is lost, and said to be.
+  EXPECT_GT(gap.data_lost_s[1], 0.0);
+  EXPECT_LT(gap.data_lost_s[1], down_s + 2.0);
+  std::printf("figure: %s robotd restarted: link down %.2f s, IMU data lost %.2f s\n",
+              GetParam().name.c_str(), gap.outage_s, gap.data_lost_s[1]);
+  ASSERT_FALSE(log.imu.empty());
+  for (size_t i = 1; i < log.imu.size(); ++i) ASSERT_GE(log.imu[i].time, log.imu[i - 1].time) << i;
+  EXPECT_GT(ToSeconds(log.imu.back().time - log.imu.front().time), 5.0);
+  ASSERT_FALSE(log.scans.empty()) << "the lidar scans again after the restart";
+  EXPECT_GT(ToSeconds(log.scans.back().end_time() - log.imu.front().time), 5.0);
 }
 
 // As the packaged service runs it: options from a config file (the command

@@ -35,6 +35,7 @@
 #include "hardware/station/robot_connection.h"
 #include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
+#include "tests/testing/scenario_file.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -49,13 +50,7 @@ const char kKey[] = "link outage test key";
 
 std::vector<uint8_t> KeyBytes() { return std::vector<uint8_t>(kKey, kKey + sizeof(kKey) - 1); }
 
-sim::SimConfig LabWorld() {
-  sim::SimConfig config;
-  const Status status =
-      LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config);
-  EXPECT_TRUE(status.ok()) << status.message();
-  return config;
-}
+sim::SimConfig LabWorld() { return sweepscan::testing::ScenarioFile("lab.json"); }
 
 // A simulated robot on loopback TCP (any free port).
 struct Robot {

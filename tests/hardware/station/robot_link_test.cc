@@ -44,6 +44,7 @@
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
 #include "tests/testing/qt_wait.h"
+#include "tests/testing/scenario_file.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -60,13 +61,7 @@ std::vector<uint8_t> KeyBytes(const std::string& s = kKey) {
 using testing::WaitFor;
 using testing::Pump;
 
-sim::SimConfig LabWorld() {
-  sim::SimConfig config;
-  const Status status =
-      LoadScenario(std::string(SWEEPSCAN_SOURCE_DIR) + "/resources/scenarios/lab.json", &config);
-  EXPECT_TRUE(status.ok()) << status.message();
-  return config;
-}
+sim::SimConfig LabWorld() { return sweepscan::testing::ScenarioFile("lab.json"); }
 
 // The simulated robot of sweepscan-sim, in-process.
 struct SimRobot {
