@@ -160,8 +160,9 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   connect(workspace_, &Workspace::linkOutage, this,
           [this](bool open, double seconds, const QString& text) {
             if (open) {
+              // The gist first: a narrow window shows only the start.
               statusBar()->showMessage(
-                  tr("Link lost (%1): reconnecting… The robot is stopped; Disconnect stops "
+                  tr("Link lost, reconnecting… (%1). The robot is stopped; Disconnect stops "
                      "trying.")
                       .arg(text));
             } else {

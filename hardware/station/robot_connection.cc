@@ -528,6 +528,7 @@ void RobotConnection::NoteLinkLost(const QString& reason) {
 
 void RobotConnection::OnAuthenticated() {
   authenticated_ = true;
+  health_.last_error.clear();  // Connected now; the outage keeps its reason.
   backoff_ms_ = options_.reconnect_initial_ms;
   const bool after_outage = ever_authenticated_ && health_.outage_open;
   ever_authenticated_ = true;

@@ -7,6 +7,7 @@
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
 
+#include <QCoreApplication>
 #include <QElapsedTimer>
 #include <QFile>
 #include <QProcess>
@@ -82,10 +83,15 @@ TEST_F(LinkOutageUiTest, TheStatusBarSaysReconnectingThenReconnectedAfterAndTheR
       << window_->statusBar()->currentMessage().toStdString();
   EXPECT_FALSE(workspace_->authenticated());
   EXPECT_TRUE(workspace_->recording()) << "a recording survives the outage";
+  // What the operator sees (looked at; not compared).
+  QTest::qWait(1200);  // The link label's once-a-second update.
+  window_->grab().save(QCoreApplication::applicationDirPath() + "/link_outage_reconnecting.png");
   ASSERT_TRUE(WaitFor(
       [&] { return window_->statusBar()->currentMessage().contains("reconnected after"); }, 15000))
       << window_->statusBar()->currentMessage().toStdString();
   const QString message = window_->statusBar()->currentMessage();
+  QTest::qWait(1100);
+  window_->grab().save(QCoreApplication::applicationDirPath() + "/link_outage_reconnected.png");
   std::fprintf(stderr, "status bar: %s\n", qPrintable(message));
   const QRegularExpressionMatch m =
       QRegularExpression(QStringLiteral("reconnected after ([0-9.]+) s")).match(message);

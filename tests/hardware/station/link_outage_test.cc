@@ -380,6 +380,50 @@ TEST(LinkOutageTest, CutsOfHalfASecondThreeAndTwentySecondsStopTheRobotAndLoseOn
   EXPECT_EQ(info.telemetry.breaks, 3u) << "the 20 s outage breaks each device's stream once";
 }
 
+// A stall and a half-open link, with the robot driving: nothing closes, so
+// the agent's watchdog must stop the robot on its own, 500 ms after the
+// client's last frame; the workstation drops the link at 2 s and the robot
+// stays stopped after the reconnection.
+TEST(LinkOutageTest, AStallOrAHalfOpenLinkStopsTheRobotByTheWatchdog) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  RobotConnection client(Client(proxy.port(), QString()));
+  int restored = 0;
+  QObject::connect(&client, &RobotConnection::linkRestored,
+                   [&](double, const QString&) { ++restored; });
+  QString error;
+  ASSERT_TRUE(client.Start(&error));
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  for (const char* fault : {"stall", "half-open"}) {
+    client.Drive(0.2, 0.0);
+    ASSERT_TRUE(WaitFor([&] { return robot.Speed() > 0.15; }, 5000));
+    const Time last_frame = robot.agent->core().last_client_frame_time();
+    Pump(50);
+    const Time faulted = robot.agent->Now();
+    if (std::string(fault) == "stall") {
+      proxy.Stall(3000);
+    } else {
+      proxy.Vanish();
+      QTimer::singleShot(3000, &proxy, [&proxy] { proxy.Restore(); });
+    }
+    ASSERT_TRUE(WaitFor(
+        [&] { return robot.agent->core().watchdog_state() == WatchdogState::kTripped; }, 5000));
+    const Time tripped = robot.agent->core().last_watchdog_trip_time();
+    const Time last = std::max(robot.agent->core().last_client_frame_time(), last_frame);
+    std::printf("figure: %s: watchdog stop %.0f ms after the client's last frame (%.0f ms after "
+                "the fault)\n",
+                fault, ToSeconds(tripped - last) * 1e3, ToSeconds(tripped - faulted) * 1e3);
+    EXPECT_LE(tripped - last, std::chrono::milliseconds(560));
+    EXPECT_TRUE(WaitFor([&] { return robot.Speed() < 1e-3; }, 3000));
+    const int before = restored;
+    ASSERT_TRUE(WaitFor([&] { return restored > before; }, 15000)) << client.health().ToString();
+    Pump(500);
+    EXPECT_LT(robot.Speed(), 1e-3) << "a reconnection never drives";
+  }
+  client.Shutdown();
+}
+
 // A robot reboot during an outage: the agent comes back with its clock
 // started again. The recording goes on in the same session, the gap is a
 // new clock epoch, and the decoded streams stay in time order on the first
