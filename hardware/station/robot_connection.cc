@@ -223,6 +223,7 @@ void RobotConnection::Connect() {
   encoder_ = LinkEncoder(LinkSender::kClient);  // Each connection numbers from 0.
   decoder_link_.Reset();
   first_robot_ns_ = -1;
+  connection_last_robot_ns_ = 0;
   resume_sent_ = false;
   last_rx_.start();
   if (health_.outage_open) ++health_.reconnect_attempts;
@@ -495,6 +496,7 @@ void RobotConnection::TrackAgentFrame(const LinkMessage& message) {
   if (message.header.sender != LinkSender::kAgent) return;
   const int64_t t = ToNanoseconds(message.header.time);
   if (first_robot_ns_ < 0) first_robot_ns_ = t;
+  connection_last_robot_ns_ = std::max(connection_last_robot_ns_, t);
   last_robot_ns_ = std::max(last_robot_ns_, t);
 }
 
@@ -516,6 +518,7 @@ void RobotConnection::NoteLinkLost(const QString& reason) {
   outage_before_ms_ = last_rx_.isValid() ? last_rx_.elapsed() : 0;
   outage_clock_.start();
   tie_before_ = health_.clock_tie;
+  robot_before_ns_ = last_robot_ns_;
   RecorderEvent event;
   event.kind = RecorderEventKind::kLinkLost;
   event.epoch = health_.clock_epoch;
@@ -537,12 +540,7 @@ void RobotConnection::OnAuthenticated() {
     health_.outage_open = false;
     health_.outage_s = (outage_clock_.elapsed() + outage_before_ms_) * 1e-3;
     const ClockTie& tie = health_.clock_tie;
-    // last_robot_ns_ already includes this connection's frames; the robot
-    // time before the outage is where the tie before it was measured, or
-    // later: compare with the first frame of this connection.
-    const bool new_epoch =
-        NewClockEpoch(tie_before_, tie_before_.valid ? tie_before_.measured_at_ns - tie_before_.offset_ns : 0,
-                      tie, first_robot_ns_);
+    const bool new_epoch = NewClockEpoch(tie_before_, robot_before_ns_, tie, first_robot_ns_);
     RecorderEvent event;
     event.kind = RecorderEventKind::kLinkRestored;
     if (new_epoch) {
@@ -551,6 +549,7 @@ void RobotConnection::OnAuthenticated() {
       // workstation's clock: t_prev = t + (offset_new - offset_prev).
       if (tie.valid && tie_before_.valid) time_shift_ns_ += tie.offset_ns - tie_before_.offset_ns;
       positions_ = {};  // Nothing of the new clock is held.
+      last_robot_ns_ = connection_last_robot_ns_;  // The old clock's times are no reference now.
       decoder_.SetTimeShift(Duration(time_shift_ns_));
       event.new_clock_epoch = true;
     }

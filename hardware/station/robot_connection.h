@@ -241,6 +241,8 @@ class RobotConnection : public QObject {
   QElapsedTimer outage_clock_;
   qint64 outage_before_ms_ = 0;  // Silence before the loss was noticed.
   int64_t last_robot_ns_ = 0;       // Latest agent header time seen (this epoch).
+  int64_t connection_last_robot_ns_ = 0;  // The same, on this connection.
+  int64_t robot_before_ns_ = 0;     // last_robot_ns_ when the link was lost.
   ClockTie tie_before_;             // The tie when the link was lost.
   int64_t time_shift_ns_ = 0;       // This epoch's robot time -> the first epoch's.
   int64_t handshake_sent_ns_ = 0;   // Workstation time we sent our last handshake frame.

@@ -450,13 +450,21 @@ TEST(LinkOutageTest, ARobotRebootDuringAnOutageStartsANewClockEpoch) {
   ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 15000)) << client.health().ToString();
   client.SetLidarMotor(true);
   Pump(2500);
+  // A second outage in the new epoch is not another reboot.
+  proxy.CutFor(1000, FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor([&] { return client.health().outages == 2 && client.authenticated(); }, 15000))
+      << client.health().ToString();
+  Pump(1000);
   client.Shutdown();
   EXPECT_EQ(client.health().clock_epoch, 1u);
   SensorLog log;
   SessionDecodeInfo info;
   ASSERT_TRUE(DecodeSession(dir.toStdString(), &log, &info).ok());
   std::fprintf(stderr, "%s\n", info.ToString().c_str());
-  ASSERT_EQ(info.gaps.size(), 1u);
+  ASSERT_EQ(info.gaps.size(), 2u);
+  EXPECT_FALSE(info.gaps[1].new_clock_epoch);
+  EXPECT_EQ(info.gaps[1].epoch, 1u);
+  for (double lost : info.gaps[1].data_lost_s) EXPECT_EQ(lost, 0.0);
   const SessionLinkGap& gap = info.gaps[0];
   EXPECT_TRUE(gap.new_clock_epoch);
   EXPECT_EQ(gap.epoch, 1u);
