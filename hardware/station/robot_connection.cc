@@ -191,6 +191,10 @@ bool RobotConnection::StartRecording(const QString& session_dir, const SessionMe
   // decoder also starts with empty buffers at that frame).
   decoder_ = TelemetryDecoder(options_.decoder);
   log_ = SensorLog();
+  // The session's timeline is the robot clock it starts in (epoch 0 of the
+  // session; docs/session-format.md, "Recorder events").
+  time_shift_ns_ = 0;
+  session_epoch_base_ = health_.clock_epoch;
   if (flush_timer_ == nullptr) {
     flush_timer_ = new QTimer(this);
     connect(flush_timer_, &QTimer::timeout, this, &RobotConnection::OnFlushTimer);
@@ -521,7 +525,7 @@ void RobotConnection::NoteLinkLost(const QString& reason) {
   robot_before_ns_ = last_robot_ns_;
   RecorderEvent event;
   event.kind = RecorderEventKind::kLinkLost;
-  event.epoch = health_.clock_epoch;
+  event.epoch = health_.clock_epoch - session_epoch_base_;
   event.workstation_time = WorkstationNow();
   event.robot_time = TimeFromNanoseconds(last_robot_ns_);
   event.reason = reason.toStdString();
@@ -553,7 +557,7 @@ void RobotConnection::OnAuthenticated() {
       decoder_.SetTimeShift(Duration(time_shift_ns_));
       event.new_clock_epoch = true;
     }
-    event.epoch = health_.clock_epoch;
+    event.epoch = health_.clock_epoch - session_epoch_base_;
     event.workstation_time = WorkstationNow();
     event.robot_time = TimeFromNanoseconds(std::max<int64_t>(first_robot_ns_, 0));
     event.outage = std::chrono::duration_cast<Duration>(

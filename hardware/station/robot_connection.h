@@ -244,7 +244,8 @@ class RobotConnection : public QObject {
   int64_t connection_last_robot_ns_ = 0;  // The same, on this connection.
   int64_t robot_before_ns_ = 0;     // last_robot_ns_ when the link was lost.
   ClockTie tie_before_;             // The tie when the link was lost.
-  int64_t time_shift_ns_ = 0;       // This epoch's robot time -> the first epoch's.
+  int64_t time_shift_ns_ = 0;       // This epoch's robot time -> the recording's first epoch's.
+  uint32_t session_epoch_base_ = 0;  // health_.clock_epoch when the recording began.
   int64_t handshake_sent_ns_ = 0;   // Workstation time we sent our last handshake frame.
   int64_t first_robot_ns_ = -1;     // First agent header time on this connection.
   std::array<TelemetryResumePosition, 3> positions_{};  // What we hold of each device.
