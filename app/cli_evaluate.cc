@@ -39,7 +39,10 @@ const char* const kEvaluateUsage =
     "  --neighbours batched|kdtree|grid|flann   the shared neighbour structure (for measurements;\n"
     "                the same result with each): batched Morton kd-tree (default), nanoflann,\n"
     "                voxel hash grid, PCL KdTreeFLANN\n"
-    "On a terminal (and without --json) the progress is shown on stderr.\n";
+    "On a terminal (and without --json) the progress is shown on stderr.\n"
+    "Memory: a SESSION is read record by record and only the cloud's positions are kept\n"
+    "(12 B a point); the evaluation adds under 60 B a point while it measures (about 13 GB\n"
+    "for the 180 M points of a 10-hour drive). A cloud file is read whole.\n";
 
 namespace {
 
@@ -193,6 +196,31 @@ int RunEvaluate(int argc, char** argv) {
       return kExitFailure;
     }
     results.emplace_back("cloud", e);
+  } else if (!args.Has("scenario") && !(args.Has("pose-source") && args.Get("pose-source") == "truth")) {
+    // A session: streamed (hardware/station/session_stream.h), only the
+    // positions kept, so memory is the evaluation's own.
+    const std::string& dir = args.positional()[0];
+    ReconstructionOptions ro;
+    if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &ro.pose.source) ||
+                                    ro.pose.source == PoseSource::kSfm)) {
+      PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
+      return kExitBadInput;
+    }
+    std::vector<std::pair<std::string, MountingError>> runs = {{"uncalibrated", MountingError{}}};
+    if (args.Has("calibration")) runs.emplace_back("calibrated", calibration);
+    for (const auto& [title, c] : runs) {
+      std::vector<Eigen::Vector3f> pts;
+      ro.calibration = c;
+      const int code = StreamPositions(args, dir, ro, &pts);
+      if (code != kExitOk) return code;
+      CloudEvaluation e;
+      const Status es = evaluate(title, pts, &e);
+      if (!es.ok()) {
+        PrintError(es.message());
+        return kExitFailure;
+      }
+      results.emplace_back(title, e);
+    }
   } else {
     RecordingInput in;
     int code = LoadRecording(args, &in);

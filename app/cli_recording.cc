@@ -25,6 +25,16 @@ void WarnAboutDamage(const std::string& session_dir, const FramesLoadReport& fra
             << "session; `sweepscan-cli repair " << session_dir << " --out NEW` writes a clean copy)\n";
 }
 
+int DecodeOrFail(const Args& args, const std::string& dir, Decoded* d, bool quiet) {
+  const Status s = hardware::DecodeSession(dir, SessionFramesOptions(args), &d->log, &d->info);
+  if (!s.ok()) {
+    PrintSessionError(args, dir, s);
+    return kExitBadInput;
+  }
+  if (!quiet) WarnAboutDamage(dir, d->info.frames);
+  return kExitOk;
+}
+
 void PrintSessionError(const Args& args, const std::string& session_dir, const Status& status) {
   std::string message = status.message();
   if (args.Flag("strict") && message.find(": record ") != std::string::npos) {
@@ -116,6 +126,53 @@ int SessionReconstructionOptions(const Args& args, const SessionMeta& meta, Reco
       PrintError(s.message());
       return kExitBadInput;
     }
+  }
+  return kExitOk;
+}
+
+int OpenSessionStream(const Args& args, const std::string& dir, bool session_calibration,
+                      ReconstructionOptions* options, hardware::SessionCloudStream* stream) {
+  SessionMeta meta;
+  Status s = ReadSessionMeta(dir + "/" + kSessionMetaFile, &meta);
+  if (!s.ok()) {
+    PrintSessionError(args, dir, s);
+    return kExitBadInput;
+  }
+  if (session_calibration) {
+    const int code = SessionReconstructionOptions(args, meta, options);
+    if (code != kExitOk) return code;
+  } else {
+    options->pose.initial_pose = SessionStartPose(meta);
+  }
+  s = stream->EstimatePoses(dir, SessionFramesOptions(args), *options);
+  if (!s.ok() && !stream->decoded()) {
+    PrintSessionError(args, dir, s);
+    return kExitBadInput;
+  }
+  if (!s.ok()) {  // the session read, but no poses from it (no odometry, say)
+    PrintError(dir + ": " + s.message());
+    return kExitFailure;
+  }
+  WarnAboutDamage(dir, stream->decode().frames);
+  for (const PoseGap& gap : stream->result().gaps) {
+    std::cerr << "sweepscan-cli: " << FormatPoseGap(gap, stream->decode().first_robot_time) << "\n";
+  }
+  return kExitOk;
+}
+
+int StreamPositions(const Args& args, const std::string& dir, ReconstructionOptions options,
+                    std::vector<Eigen::Vector3f>* points) {
+  hardware::SessionCloudStream stream;
+  const int code = OpenSessionStream(args, dir, /*session_calibration=*/false, &options, &stream);
+  if (code != kExitOk) return code;
+  points->clear();
+  const Status s = stream.PlacePoints([points](const CloudPoint* p, size_t n) {
+    for (size_t i = 0; i < n; ++i) points->emplace_back(p[i].x, p[i].y, p[i].z);
+    return Status::Ok();
+  });
+  if (!s.ok()) {
+    PrintError(dir + ": " + s.message());
+    return kExitFailure;
   }
   return kExitOk;
 }

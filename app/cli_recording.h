@@ -4,10 +4,15 @@
 #ifndef SWEEPSCAN_APP_CLI_RECORDING_H_
 #define SWEEPSCAN_APP_CLI_RECORDING_H_
 
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
 #include "app/cli_args.h"
 #include "core/cloud/reconstruct.h"
 #include "core/robot/robot_model.h"
 #include "hardware/station/recording.h"
+#include "hardware/station/session_stream.h"
 
 namespace sweepscan::app {
 
@@ -22,6 +27,32 @@ void WarnAboutDamage(const std::string& session_dir, const FramesLoadReport& fra
 // The error line for a session that could not be opened (with --strict, a
 // damaged record's error says how to go on).
 void PrintSessionError(const Args& args, const std::string& session_dir, const Status& status);
+
+// A session decoded whole (info, export, and the cloud exports that need
+// every scan at once: --pose-source sfm, --loop-closure).
+struct Decoded {
+  SensorLog log;
+  hardware::SessionDecodeInfo info;
+};
+// Decodes SESSION (damaged records skipped unless --strict); warns about
+// damage unless `quiet` (info reports it in its own output). Returns an exit code.
+int DecodeOrFail(const Args& args, const std::string& dir, Decoded* d, bool quiet = false);
+
+// Pass 1 of a streamed session (hardware/station/session_stream.h): reads
+// meta.json, completes *options (the start pose; with session_calibration
+// also meta.json's calibration or --calibration FILE's), estimates the
+// poses, warns about damage and prints the pose gaps on stderr. Returns an
+// exit code; prints one error line otherwise.
+int OpenSessionStream(const Args& args, const std::string& dir, bool session_calibration,
+                      ReconstructionOptions* options, hardware::SessionCloudStream* stream);
+// The positions of a session's cloud, streamed (evaluate).
+int StreamPositions(const Args& args, const std::string& dir, ReconstructionOptions options,
+                    std::vector<Eigen::Vector3f>* points);
+
+// `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`
+// (cli_reconstruct.cc); IsCloudFile: CLOUD ends in .las, .ply or .pcd.
+int ReconstructToFile(const Args& args);
+bool IsCloudFile(const std::string& path);
 
 // What `reconstruct` and `export --format rosbag` make a session's cloud
 // with: meta.json's calibration (or --calibration FILE's), its start pose.

@@ -1,6 +1,7 @@
-// sweepscan-cli session commands: info, reconstruct, export. A session is
-// the folder the workstation (or `simulate`) records: raw link frames plus
-// meta.json (docs/session-format.md). Everything here re-decodes the raw
+// sweepscan-cli session commands: info, export (CSV and rosbag; cloud files
+// are cli_reconstruct.cc's) and repair. A session is the folder the
+// workstation (or `simulate`) records: raw link frames plus meta.json
+// (docs/session-format.md). Everything here re-decodes the raw
 // bytes, so a better decoder or calibration always applies to old sessions.
 #include <dirent.h>
 #include <sys/stat.h>
@@ -21,11 +22,8 @@
 #include "core/common/crc32c.h"
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
-#include "core/cloud/las_writer.h"
 #include "core/cloud/reconstruct.h"
-#include "core/registration/loop_closure.h"
 #include "core/io/ros/ros_bag.h"
-#include "core/sfm/wheeled.h"
 #include "hardware/link/telemetry_decoder.h"
 
 namespace sweepscan::app {
@@ -50,26 +48,6 @@ const char* const kRepairUsage =
     "files of the folder. The damaged session is not touched. NEW must not exist\n"
     "or be an empty folder.\n";
 
-const char* const kReconstructUsage =
-    "usage: sweepscan-cli reconstruct SESSION --out CLOUD.las|CLOUD.ply|CLOUD.pcd [options]\n"
-    "\n"
-    "Decodes the session's raw frames and builds the cloud. The suffix chooses the\n"
-    "format: LAS 1.4 (point format 6, GPS time from the session's start, range, scan\n"
-    "and beam as extra bytes; docs/las-format.md), or PLY / PCD (docs/cloud-format.md).\n"
-    "\n"
-    "Options:\n"
-    "  --calibration FILE     mounting error to undo (calibration JSON); default: meta.json's\n"
-    "  --pose-source S        ekf (default), odometry, or sfm: the EKF corrected by the planes the\n"
-    "                         scans cross (lidar-only structure from motion, docs/sfm.md; the\n"
-    "                         position along the walls stays the EKF's)\n"
-    "  --no-ekf               same as --pose-source odometry\n"
-    "  --no-deskew            place each whole scan at its first sample's pose\n"
-    "  --loop-closure         the drive ends in the room it started in: register what it saw\n"
-    "                         at the end to what it saw at the start and spread the correction\n"
-    "                         over the loop (docs/registration.md, \"Loop closure\")\n"
-    "  --strict               refuse a session with damaged records (default: skip them, with a warning)\n"
-    "  --json                 print the report as JSON\n";
-
 const char* const kExportUsage =
     "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
     "       sweepscan-cli export SESSION --out FILE.las|FILE.ply|FILE.pcd [--calibration FILE]\n"
@@ -93,23 +71,6 @@ const char* const kExportUsage =
     "  DIR/wheels.csv  robot_time_s,left_mps,right_mps\n";
 
 namespace {
-
-struct Decoded {
-  SensorLog log;
-  hardware::SessionDecodeInfo info;
-};
-
-// Decodes SESSION (damaged records skipped unless --strict); warns about
-// damage unless `quiet` (info reports it in its own output).
-int DecodeOrFail(const Args& args, const std::string& dir, Decoded* d, bool quiet = false) {
-  const Status s = hardware::DecodeSession(dir, SessionFramesOptions(args), &d->log, &d->info);
-  if (!s.ok()) {
-    PrintSessionError(args, dir, s);
-    return kExitBadInput;
-  }
-  if (!quiet) WarnAboutDamage(dir, d->info.frames);
-  return kExitOk;
-}
 
 nlohmann::json DamageJson(const FramesLoadReport& f) {
   nlohmann::json places = nlohmann::json::array();
@@ -173,10 +134,42 @@ nlohmann::json GapsJson(const std::vector<hardware::SessionLinkGap>& gaps) {
   return out;
 }
 
-nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
-  const SessionMeta& m = d.info.meta;
+// What `info` reports of the records: counted as they stream by, so a
+// 10-hour session is described in the memory of its motion records.
+struct Counted {
+  hardware::SessionDecodeInfo info;
+  size_t scans = 0;
   size_t samples = 0;
-  for (const auto& s : d.log.scans) samples += s.samples.size();
+  size_t imu = 0;
+  size_t wheels = 0;
+};
+
+int CountOrFail(const Args& args, const std::string& dir, Counted* c) {
+  SensorLog motion;
+  hardware::SessionStreamSinks sinks;
+  sinks.motion = &motion;
+  sinks.scan = [c, &motion](LidarScan&& scan) {
+    ++c->scans;
+    c->samples += scan.samples.size();
+    c->imu += motion.imu.size();
+    c->wheels += motion.wheels.size();
+    motion.imu.clear();
+    motion.wheels.clear();
+    return true;
+  };
+  const Status s = hardware::DecodeSessionStreaming(dir, SessionFramesOptions(args), sinks, &c->info);
+  if (!s.ok()) {
+    PrintSessionError(args, dir, s);
+    return kExitBadInput;
+  }
+  c->imu += motion.imu.size();
+  c->wheels += motion.wheels.size();
+  return kExitOk;
+}
+
+nlohmann::json InfoJson(const std::string& dir, const Counted& d) {
+  const SessionMeta& m = d.info.meta;
+  const size_t samples = d.samples;
   const auto& t = d.info.telemetry;
   return {
       {"session", dir},
@@ -202,10 +195,10 @@ nlohmann::json InfoJson(const std::string& dir, const Decoded& d) {
       {"gaps", GapsJson(d.info.gaps)},
       {"robot_time_s", {ToSeconds(d.info.first_robot_time), ToSeconds(d.info.last_robot_time)}},
       {"duration_s", ToSeconds(d.info.last_robot_time - d.info.first_robot_time)},
-      {"scans", d.log.scans.size()},
+      {"scans", d.scans},
       {"lidar_samples", samples},
-      {"imu_records", d.log.imu.size()},
-      {"wheel_records", d.log.wheels.size()},
+      {"imu_records", d.imu},
+      {"wheel_records", d.wheels},
       {"decoder_errors",
        {{"lidar_checksum", t.x4.checksum_errors},
         {"lidar_skipped_bytes", t.x4.bytes_skipped},
@@ -226,8 +219,8 @@ int RunInfo(int argc, char** argv) {
   Args args({"json", "help", "strict"}, {});
   int code;
   if (!ParseCommon(&args, argc, argv, kInfoUsage, &code)) return code;
-  Decoded d;
-  if ((code = DecodeOrFail(args, args.positional()[0], &d, true)) != kExitOk) return code;
+  Counted d;
+  if ((code = CountOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
   const nlohmann::json j = InfoJson(args.positional()[0], d);
   if (args.Flag("json")) {
     std::cout << j.dump(2) << "\n";
@@ -245,213 +238,11 @@ int RunInfo(int argc, char** argv) {
   }
   if (d.info.gaps.empty()) std::printf("no link outages\n");
   std::printf("%.1f s of robot time: %zu scans (%zu samples), %zu IMU records, %zu wheel records\n",
-              j["duration_s"].get<double>(), d.log.scans.size(), j["lidar_samples"].get<size_t>(),
-              d.log.imu.size(), d.log.wheels.size());
+              j["duration_s"].get<double>(), d.scans, d.samples, d.imu, d.wheels);
   std::printf("calibration in use: alpha %.5f, beta %.5f, gamma %.5f rad\n", d.info.meta.calibration.alpha,
               d.info.meta.calibration.beta, d.info.meta.calibration.gamma);
   return kExitOk;
 }
-
-namespace {
-
-bool HasSuffix(const std::string& path, const std::string& suffix) {
-  return path.size() >= suffix.size() &&
-         std::equal(suffix.rbegin(), suffix.rend(), path.rbegin(),
-                    [](char s, char p) { return std::tolower(static_cast<unsigned char>(p)) == s; });
-}
-bool IsCloudFile(const std::string& path) {
-  return HasSuffix(path, ".las") || HasSuffix(path, ".ply") || HasSuffix(path, ".pcd");
-}
-
-// LAS System Identifier (spec §2.4): the hardware for a robot's recording,
-// the operation otherwise (a simulation, an imported bag of unknown sensors).
-std::string LasSystemIdentifier(const SessionMeta& meta) {
-  if (meta.content == kSessionContentMeasurements) return "OTHER";
-  if (meta.link.rfind("sim", 0) == 0) return "sweepscan simulation";
-  return "sweepscan YDLIDAR X4";
-}
-
-// The cloud as LAS 1.4 (docs/las-format.md), appended in chunks as a
-// streamed project will be; *report describes the file.
-Status WriteLas(const std::string& session, const std::string& path, const std::vector<CloudPoint>& points,
-                const SessionMeta& meta, nlohmann::json* report) {
-  LasExtent extent;
-  extent.Add(points.data(), points.size());
-  LasWriterOptions o;
-  o.extent = extent;
-  const Status time = SetLasTimeFromSession(meta.created_utc, extent, &o);
-  if (!time.ok()) std::cerr << "sweepscan-cli: warning: " << session << "/" << kSessionMetaFile << ": " << time.message() << "\n";
-  o.system_identifier = LasSystemIdentifier(meta);
-  o.generating_software = "sweepscan 0.1.0";
-  LasWriter writer;
-  Status s = writer.Open(path, o);
-  constexpr size_t kChunk = 1 << 16;
-  for (size_t i = 0; s.ok() && i < points.size(); i += kChunk) {
-    s = writer.Append(points.data() + i, std::min(kChunk, points.size() - i));
-  }
-  if (s.ok()) s = writer.Finish();
-  if (!s.ok()) return s;
-  const LasWriteStats& w = writer.stats();
-  const LasQuantisation& q = w.quantisation;
-  *report = {{"version", "1.4"},
-             {"point_format", kLasPointFormat},
-             {"points", w.points},
-             {"non_finite_skipped", w.non_finite},
-             {"bytes", w.bytes},
-             {"scale_m", q.scale},
-             {"offset_m", {q.offset[0], q.offset[1], q.offset[2]}},
-             {"min_m", {w.min[0], w.min[1], w.min[2]}},
-             {"max_m", {w.max[0], w.max[1], w.max[2]}},
-             {"gps_time", o.adjusted_gps_time ? "adjusted standard GPS time" : "robot seconds"},
-             {"gps_time_of_first_point_s", o.gps_time_at_origin_s}};
-  return Status::Ok();
-}
-
-// --loop-closure (core/registration/loop_closure.h): the loop measured on
-// the cloud just built, its poses corrected and the cloud built again from
-// them. The report says what was found (or that the drive never left).
-int CloseLoop(const std::string& session, const Decoded& d, ReconstructionOptions* options,
-              ReconstructionResult* result, nlohmann::json* report) {
-  LoopClosure loop;
-  LoopClosureOptions lo;
-  if (options->pose.source == PoseSource::kOdometry) lo.max_drift_fraction = 0.5;  // the wheels alone
-  Status s = FindLoop(result->points, result->poses, lo, &loop);
-  if (!s.ok()) {
-    PrintError(session + ": " + s.message());
-    return kExitFailure;
-  }
-  if (!loop.found) {
-    *report = {{"found", false}, {"summary", "loop closure: the drive never left its start; nothing to close"}};
-    return kExitOk;
-  }
-  const PoseBuffer corrected = CorrectPoses(result->poses, loop);
-  const double t0 = ToSeconds(result->poses.earliest());
-  const Eigen::Vector3d t = loop.correction.translation();
-  const double angle = Eigen::AngleAxisd(loop.correction.rotation()).angle() * 180.0 / M_PI;
-  char summary[320];
-  std::snprintf(summary, sizeof(summary),
-                "loop closure (%s): the end (%.0f-%.0f s) against the start (%.0f-%.0f s): the drift over the loop "
-                "was %.1f mm and %.3f deg; rms %.1f mm, overlap %.0f %%",
-                loop.method.c_str(), ToSeconds(loop.late_begin) - t0, ToSeconds(loop.late_end) - t0,
-                ToSeconds(loop.early_begin) - t0, ToSeconds(loop.early_end) - t0, t.norm() * 1000, angle,
-                loop.registration.rms_m * 1000, loop.registration.overlap * 100);
-  *report = {{"found", true},
-             {"method", loop.method},
-             {"early_s", {ToSeconds(loop.early_begin) - t0, ToSeconds(loop.early_end) - t0}},
-             {"late_s", {ToSeconds(loop.late_begin) - t0, ToSeconds(loop.late_end) - t0}},
-             {"correction_translation_m", {t.x(), t.y(), t.z()}},
-             {"correction_rotation_deg", angle},
-             {"rms_m", loop.registration.rms_m},
-             {"overlap", loop.registration.overlap},
-             {"summary", summary}};
-  const PoseSource source = options->pose.source;
-  options->pose.source = PoseSource::kSfm;  // given poses: the corrected ones
-  s = Reconstruct(d.log, d.info.meta.geometry, *options, &corrected, result);
-  options->pose.source = source;
-  if (!s.ok()) {
-    PrintError(session + ": " + s.message());
-    return kExitFailure;
-  }
-  return kExitOk;
-}
-
-// `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`.
-int ReconstructToFile(const Args& args) {
-  int code;
-  ReconstructionOptions options;
-  if (args.Has("pose-source")) {
-    if (!ParsePoseSource(args.Get("pose-source"), &options.pose.source) ||
-        options.pose.source == PoseSource::kTruth) {
-      PrintError("--pose-source must be ekf, odometry or sfm for a session, got '" + args.Get("pose-source") + "'");
-      return kExitBadInput;
-    }
-  }
-  if (args.Flag("no-ekf")) {
-    if (options.pose.source == PoseSource::kSfm) {
-      PrintError("--no-ekf contradicts --pose-source sfm (it corrects the EKF's poses)");
-      return kExitBadInput;
-    }
-    options.pose.source = PoseSource::kOdometry;
-  }
-  options.assembly.deskew = !args.Flag("no-deskew");
-  Decoded d;
-  if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
-  if ((code = SessionReconstructionOptions(args, d.info.meta, &options)) != kExitOk) return code;
-  ReconstructionResult result;
-  // sfm: the EKF's poses corrected by the planes (core/sfm/wheeled.h), then
-  // given to the reconstruction like any poses.
-  sfm::WheeledSfmResult sfm_result;
-  if (options.pose.source == PoseSource::kSfm) {
-    const Status s = sfm::WheeledSfmFromLog(d.log, d.info.meta.geometry, options.calibration, options.pose.initial_pose,
-                                            PoseSource::kEkf, sfm::SequenceInit(), sfm::WheeledSfmOptions(),
-                                            &sfm_result);
-    if (!s.ok()) {
-      PrintError(args.positional()[0] + ": sfm: " + s.message());
-      return kExitFailure;
-    }
-  }
-  Status s = Reconstruct(d.log, d.info.meta.geometry, options,
-                         options.pose.source == PoseSource::kSfm ? &sfm_result.poses : nullptr, &result);
-  if (!s.ok()) {
-    PrintError(args.positional()[0] + ": " + s.message());
-    return kExitFailure;
-  }
-  nlohmann::json loop_report;
-  if (args.Flag("loop-closure") && (code = CloseLoop(args.positional()[0], d, &options, &result, &loop_report)) != kExitOk) {
-    return code;
-  }
-  nlohmann::json las;
-  s = HasSuffix(args.Get("out"), ".las") ? WriteLas(args.positional()[0], args.Get("out"), result.points, d.info.meta, &las)
-                                         : SaveCloud(args.Get("out"), result.points);
-  if (!s.ok()) {
-    PrintError(s.message());
-    return kExitFailure;
-  }
-  nlohmann::json report = {
-      {"session", args.positional()[0]},
-      {"out", args.Get("out")},
-      {"pose_source", PoseSourceName(options.pose.source)},
-      {"deskew", options.assembly.deskew},
-      {"calibration_rad",
-       {{"alpha", options.calibration.alpha}, {"beta", options.calibration.beta}, {"gamma", options.calibration.gamma}}},
-      {"scans", d.log.scans.size()},
-      {"samples", result.stats.samples_in},
-      {"points", result.stats.points_out},
-      {"invalid_samples", result.stats.invalid_range},
-      {"samples_without_pose", result.stats.no_pose},
-      {"ekf_rejected", result.ekf_counters.rejected},
-  };
-  if (!las.is_null()) report["las"] = las;
-  if (!loop_report.is_null()) report["loop_closure"] = loop_report;
-  if (options.pose.source == PoseSource::kSfm && loop_report.is_null()) {
-    const sfm::SequenceResult& seq = sfm_result.sequence;
-    report["sfm"] = {{"scans", seq.poses.size()},
-                     {"lines", seq.lines_total},
-                     {"lines_assigned", seq.lines_assigned},
-                     {"planes", seq.planes.size()}};
-  }
-  if (args.Flag("json")) {
-    std::cout << report.dump(2) << "\n";
-  } else {
-    if (!loop_report.is_null()) std::printf("%s\n", loop_report["summary"].get<std::string>().c_str());
-    if (options.pose.source == PoseSource::kSfm && loop_report.is_null()) {
-      const sfm::SequenceResult& seq = sfm_result.sequence;
-      std::printf("sfm: %zu scans placed, %d lines (%d on %zu planes)\n", seq.poses.size(), seq.lines_total,
-                  seq.lines_assigned, seq.planes.size());
-    }
-    std::printf("%zu scans, %zu samples -> %zu points in %s (poses: %s, deskew %s)\n", d.log.scans.size(),
-                result.stats.samples_in, result.stats.points_out, args.Get("out").c_str(),
-                PoseSourceName(options.pose.source), options.assembly.deskew ? "on" : "off");
-    if (!las.is_null()) {
-      std::printf("LAS 1.4, point format 6: scale %g m, offset (%g, %g, %g) m, GPS time: %s\n",
-                  las["scale_m"].get<double>(), las["offset_m"][0].get<double>(), las["offset_m"][1].get<double>(),
-                  las["offset_m"][2].get<double>(), las["gps_time"].get<std::string>().c_str());
-    }
-  }
-  return kExitOk;
-}
-
-}  // namespace
 
 int RunReconstruct(int argc, char** argv) {
   Args args({"json", "help", "no-ekf", "no-deskew", "strict", "loop-closure"}, {"out", "calibration", "pose-source"});

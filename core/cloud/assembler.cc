@@ -12,7 +12,8 @@ bool AssemblyOptions::IsValid(std::string* error) const {
   return true;
 }
 
-void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChunks* out) {
+template <typename Emit>
+void Assembler::Place(const LidarScan& scan, const PoseBuffer& poses, Emit&& emit) {
   const Eigen::Matrix3f r_bl = body_from_lidar_.rotation().toRotationMatrix().cast<float>();
   const Eigen::Vector3f t_bl = body_from_lidar_.translation().cast<float>();
   // p_L = (0, rho sin theta, rho cos theta), so R_bl p_L only needs columns 1 and 2.
@@ -87,9 +88,17 @@ void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChu
     p.beam = s.beam;
     p.pose_source = static_cast<uint8_t>(source_);
     p.flags = flags;
-    out->Append(p);
+    emit(p);
     ++stats_.points_out;
   }
+}
+
+void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChunks* out) {
+  Place(scan, poses, [out](const CloudPoint& p) { out->Append(p); });
+}
+
+void Assembler::AddScan(const LidarScan& scan, const PoseBuffer& poses, CloudChunk* out) {
+  Place(scan, poses, [out](const CloudPoint& p) { out->push_back(p); });
 }
 
 }  // namespace sweepscan

@@ -45,10 +45,16 @@ class Assembler {
   // does not cover are counted and skipped; a live caller waits until
   // poses.latest() >= scan.end_time() before calling.
   void AddScan(const LidarScan& scan, const PoseBuffer& poses, PointChunks* out);
+  // The same appended to a plain vector (a streaming reader that hands the
+  // points on and clears it).
+  void AddScan(const LidarScan& scan, const PoseBuffer& poses, CloudChunk* out);
 
   const AssemblyStats& stats() const { return stats_; }
 
  private:
+  template <typename Emit>
+  void Place(const LidarScan& scan, const PoseBuffer& poses, Emit&& emit);
+
   AssemblyOptions options_;
   Rigid3d body_from_lidar_;
   PoseSource source_;

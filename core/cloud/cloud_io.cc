@@ -91,6 +91,21 @@ std::string PcdHeader(size_t n) {
          "\nDATA binary\n";
 }
 
+// A streamed file's header: the count is known only at the end, so the
+// header has a fixed length whatever it is, a comment line padding the
+// count's digits to 20 (the most a uint64 has).
+std::string StreamedHeader(bool ply, uint64_t n) {
+  const size_t digits = std::to_string(n).size();
+  if (ply) {
+    std::string h = PlyHeader(n);
+    const std::string pad = "comment " + std::string(20 - digits, ' ') + "\n";
+    return h.insert(h.find("element vertex"), pad);
+  }
+  std::string h = PcdHeader(n);
+  const std::string pad = "# " + std::string(2 * (20 - digits), ' ') + "\n";
+  return h.insert(h.find("VERSION"), pad);
+}
+
 // ---------------------------------------------------------------------------
 // Header validation before PCL allocates anything: the counts a header
 // declares must fit the bytes that follow it.
@@ -342,6 +357,39 @@ Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points)
   }
   if (!s.ok()) return s;  // The writer removes its temporary.
   return out.Commit();
+}
+
+Status CloudFileWriter::Open(const std::string& path) {
+  ply_ = EndsWith(path, ".ply");
+  if (!ply_ && !EndsWith(path, ".pcd")) {
+    return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
+  }
+  points_ = 0;
+  Status s = out_.Open(path);
+  if (s.ok()) s = out_.Write(StreamedHeader(ply_, 0));
+  return s;
+}
+
+Status CloudFileWriter::Append(const CloudPoint* points, size_t n) {
+  Status s;
+  for (size_t i = 0; i < n && s.ok(); ++i) {
+    AppendRecord(points[i], &chunk_);
+    if (chunk_.size() >= 4096 * kRecordSize) {
+      s = out_.Write(chunk_);
+      chunk_.clear();
+    }
+  }
+  points_ += n;
+  return s;
+}
+
+Status CloudFileWriter::Finish() {
+  Status s = out_.Write(chunk_);
+  chunk_.clear();
+  const std::string header = StreamedHeader(ply_, points_);
+  if (s.ok()) s = out_.Overwrite(0, header.data(), header.size());
+  if (!s.ok()) return s;  // The writer removes its temporary.
+  return out_.Commit();
 }
 
 Status ValidateCloudFile(const std::string& path) {

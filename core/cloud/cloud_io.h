@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/cloud/cloud.h"
+#include "core/common/checked_file.h"
 #include "core/common/status.h"
 
 namespace sweepscan {
@@ -20,6 +21,26 @@ namespace sweepscan {
 // checked writer (core/common/checked_file.h): every write checked, fsync,
 // rename only when complete; a failure names the file and the OS error.
 Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points);
+// SaveCloud for a cloud that arrives in pieces (a streamed reconstruction):
+// the header is written first with room for any count and completed by
+// Finish(), so the file is SaveCloud's byte for byte after its header, and
+// the header differs only by a padding comment line (docs/cloud-format.md,
+// "Streamed files"). Memory: one 128 KiB buffer. Like SaveCloud, the file
+// exists under its name only when Finish() succeeded.
+class CloudFileWriter {
+ public:
+  Status Open(const std::string& path);  // .ply or .pcd
+  Status Append(const CloudPoint* points, size_t n);
+  Status Finish();
+  uint64_t points() const { return points_; }
+
+ private:
+  CheckedFileWriter out_;
+  bool ply_ = true;
+  uint64_t points_ = 0;
+  std::string chunk_;
+};
+
 // Checks that PATH is a regular file whose PLY / PCD header is sane and
 // declares exactly as many bytes as follow it (binary) or no more rows than
 // the bytes could hold (ASCII), before anything is allocated.

@@ -28,9 +28,9 @@ void CountSamplesInGaps(const LidarScan& scan, const PoseBuffer& poses, const As
   }
 }
 
-Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
-                   const ReconstructionOptions& options, const PoseBuffer* truth,
-                   ReconstructionResult* result) {
+Status EstimateReconstructionPoses(const SensorLog& log, const RobotGeometry& geometry,
+                                   const ReconstructionOptions& options, const PoseBuffer* truth,
+                                   ReconstructionResult* result) {
   std::string error;
   if (!geometry.IsValid(&error) || !options.pose.ekf.IsValid(&error) ||
       !options.assembly.IsValid(&error)) {
@@ -53,6 +53,22 @@ Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
     result->poses = std::move(*estimator.mutable_poses());
     result->gaps = estimator.gaps();
   }
+  return Status::Ok();
+}
+
+void FinishGapCounts(const std::vector<size_t>& dropped, ReconstructionResult* result) {
+  for (size_t k = 0; k < result->gaps.size(); ++k) {
+    result->gaps[k].samples_dropped = dropped[k];
+    result->gap_seconds += result->gaps[k].length_s;
+    result->gap_samples_dropped += dropped[k];
+  }
+}
+
+Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
+                   const ReconstructionOptions& options, const PoseBuffer* truth,
+                   ReconstructionResult* result) {
+  const Status s = EstimateReconstructionPoses(log, geometry, options, truth, result);
+  if (!s.ok()) return s;
   Assembler assembler(options.assembly, BodyFromLidar(geometry, options.calibration),
                       options.pose.source);
   PointChunks chunks;
@@ -61,11 +77,7 @@ Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
     CountSamplesInGaps(scan, result->poses, options.assembly, result->gaps, &dropped);
     assembler.AddScan(scan, result->poses, &chunks);
   }
-  for (size_t k = 0; k < result->gaps.size(); ++k) {
-    result->gaps[k].samples_dropped = dropped[k];
-    result->gap_seconds += result->gaps[k].length_s;
-    result->gap_samples_dropped += dropped[k];
-  }
+  FinishGapCounts(dropped, result);
   chunks.Seal();
   result->points = chunks.Flatten();
   result->stats = assembler.stats();

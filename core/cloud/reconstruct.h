@@ -51,6 +51,16 @@ Status Reconstruct(const SensorLog& log, const RobotGeometry& geometry,
                    const ReconstructionOptions& options, const PoseBuffer* truth,
                    ReconstructionResult* result);
 
+// Reconstruct's first half, for a reader that places the scans itself as
+// they stream in (hardware/station/session_stream.h): validates the options
+// and fills result->poses, ekf_counters and gaps; log.scans is not read.
+Status EstimateReconstructionPoses(const SensorLog& log, const RobotGeometry& geometry,
+                                   const ReconstructionOptions& options, const PoseBuffer* truth,
+                                   ReconstructionResult* result);
+// Its last step: each gap's samples_dropped (CountSamplesInGaps summed over
+// the scans) and the sums.
+void FinishGapCounts(const std::vector<size_t>& dropped, ReconstructionResult* result);
+
 }  // namespace sweepscan
 
 #endif  // SWEEPSCAN_CORE_CLOUD_RECONSTRUCT_H_

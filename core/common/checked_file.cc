@@ -145,6 +145,25 @@ Status CheckedFileWriter::Write(const void* data, size_t n) {
   return Status::Ok();
 }
 
+Status CheckedFileWriter::Overwrite(uint64_t offset, const void* data, size_t n) {
+  if (!failed_.empty()) return Status::Error(failed_);
+  if (fd_ < 0) return Fail("not open", 0);
+  if (offset + n > bytes_) return Fail("overwrite past the end", EINVAL);
+  const Status s = FlushBuffer();
+  if (!s.ok()) return s;
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t k = ::pwrite(fd_, p, n, static_cast<off_t>(offset));
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) return Fail("write failed", errno);
+    if (k == 0) return Fail("write failed", ENOSPC);
+    p += k;
+    offset += static_cast<uint64_t>(k);
+    n -= static_cast<size_t>(k);
+  }
+  return Status::Ok();
+}
+
 Status CheckedFileWriter::Commit() {
   if (!failed_.empty()) {
     const Status s = Status::Error(failed_);

@@ -38,6 +38,9 @@ class CheckedFileWriter {
   // Buffered; a failure is sticky (later calls return it, Commit() fails).
   Status Write(const void* data, size_t n);
   Status Write(const std::string& s) { return Write(s.data(), s.size()); }
+  // Replaces n bytes already written at `offset` (a header whose counts are
+  // known only at the end); writing continues at the end.
+  Status Overwrite(uint64_t offset, const void* data, size_t n);
   // Flushes, fsyncs, closes, renames over PATH, fsyncs the folder.
   Status Commit();
   // Closes and removes the temporary (nothing happens to PATH).

@@ -2,6 +2,7 @@
 
 #include <dirent.h>
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <unistd.h>
@@ -349,12 +350,11 @@ uint64_t RecordsIn(const uint8_t* data, size_t pos, size_t end) {
 
 }  // namespace
 
-Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& source,
-                            const FramesLoadOptions& options, std::vector<SessionRecord>* records,
-                            FramesLoadReport* report) {
+Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& source,
+                           const FramesLoadOptions& options, const FrameVisitor& visit,
+                           FramesLoadReport* report) {
   FramesLoadReport rep;
   rep.file_bytes = n;
-  records->clear();
   if (n > 0 && data == nullptr) return Status::Error(source + ": no data");
   if (n < kSessionFramesHeaderSize) {
     // A session whose header never reached the disk is indistinguishable
@@ -452,45 +452,102 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
       skip_damage("CRC mismatch");
       continue;
     }
-    SessionRecord r;
+    SessionRecordView r;
+    r.ordinal = rep.records;
     r.receive_time_ns = GetI64(data + pos + 4);
-    r.bytes.assign(data + pos + 12, data + pos + 12 + length);
+    r.bytes = data + pos + 12;
+    r.size = length;
+    r.offset = pos;
+    r.file_bytes = n;
     rep.record_bytes += length;
     if (!have_good) rep.first_time_ns = r.receive_time_ns;
     rep.last_time_ns = r.receive_time_ns;
     have_good = true;
     last_good_time = r.receive_time_ns;
-    records->push_back(std::move(r));
+    ++rep.records;
+    if (!visit(r)) return Status::Error(source + ": cancelled");
     pos += total;
     ++index;
   }
-  rep.records = records->size();
   rep.valid_bytes = rep.truncated_tail ? n - rep.tail_bytes_dropped : n;
   if (report != nullptr) *report = rep;
   return Status::Ok();
 }
 
-Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
-                      std::vector<SessionRecord>* records, FramesLoadReport* report) {
+namespace {
+// The loaders' visitor: a copy of each record.
+FrameVisitor CollectRecords(std::vector<SessionRecord>* records) {
+  return [records](const SessionRecordView& v) {
+    SessionRecord r;
+    r.receive_time_ns = v.receive_time_ns;
+    r.bytes.assign(v.bytes, v.bytes + v.size);
+    records->push_back(std::move(r));
+    return true;
+  };
+}
+}  // namespace
+
+Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& source,
+                            const FramesLoadOptions& options, std::vector<SessionRecord>* records,
+                            FramesLoadReport* report) {
+  records->clear();
+  return VisitFramesInMemory(data, n, source, options,
+                             CollectRecords(records),
+                             report);
+}
+
+Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options,
+                       const FrameVisitor& visit, FramesLoadReport* report) {
   const Status regular = CheckRegularFile(path);  // A folder named frames.bin is a clear error.
   if (!regular.ok()) return regular;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::Error(Errno(path + ": cannot open for reading"));
-  std::vector<uint8_t> data;
-  uint8_t chunk[1 << 16];
-  for (;;) {
-    const ssize_t k = ::read(fd, chunk, sizeof(chunk));
-    if (k < 0 && errno == EINTR) continue;
-    if (k < 0) {
-      const Status s = Status::Error(Errno(path + ": read error"));
-      ::close(fd);
-      return s;
-    }
-    if (k == 0) break;
-    data.insert(data.end(), chunk, chunk + k);
+  struct stat st;
+  if (::fstat(fd, &st) != 0) {
+    const Status s = Status::Error(Errno(path + ": cannot stat"));
+    ::close(fd);
+    return s;
   }
+  const size_t n = static_cast<size_t>(st.st_size);
+  if (n == 0) {
+    ::close(fd);
+    return VisitFramesInMemory(nullptr, 0, path, options, visit, report);
+  }
+  // Mapped, not read: the file is visited once, front to back, and the
+  // pages behind the reader are dropped every 64 MiB, so a 10-hour
+  // session (1.4 GB) costs a few tens of MB resident, not its size.
+  void* map = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE, fd, 0);
+  const int map_errno = errno;
   ::close(fd);
-  return LoadFramesFromMemory(data.data(), data.size(), path, options, records, report);
+  if (map == MAP_FAILED) {
+    errno = map_errno;
+    return Status::Error(Errno(path + ": cannot map for reading"));
+  }
+  const uint8_t* data = static_cast<const uint8_t*>(map);
+  ::madvise(map, n, MADV_SEQUENTIAL);
+  constexpr size_t kDropEvery = size_t{64} << 20;
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  size_t dropped = 0;
+  const Status s = VisitFramesInMemory(data, n, path, options,
+                                       [&](const SessionRecordView& r) {
+                                         if (r.offset >= dropped + kDropEvery) {
+                                           const size_t upto = r.offset / page * page;
+                                           ::madvise(map, upto, MADV_DONTNEED);
+                                           dropped = upto;
+                                         }
+                                         return visit(r);
+                                       },
+                                       report);
+  ::munmap(map, n);
+  return s;
+}
+
+Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
+                      std::vector<SessionRecord>* records, FramesLoadReport* report) {
+  records->clear();
+  return VisitFramesFile(path, options,
+                         CollectRecords(records),
+                         report);
 }
 
 Status LoadSession(const std::string& dir, const FramesLoadOptions& options, Session* session) {

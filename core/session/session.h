@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -143,6 +144,19 @@ struct FramesLoadReport {
   std::string ToString() const;
 };
 
+// One intact record of frames.bin as a reader visits it: the bytes point
+// into the file's mapping and are valid only during the call.
+struct SessionRecordView {
+  uint64_t ordinal = 0;  // Among the intact records (what LoadFramesFile's vector index would be).
+  int64_t receive_time_ns = 0;
+  const uint8_t* bytes = nullptr;
+  size_t size = 0;
+  uint64_t offset = 0;      // Of the record in the file (progress: offset / file_bytes).
+  uint64_t file_bytes = 0;
+};
+// Returns false to stop (the visit then fails with "SOURCE: cancelled").
+using FrameVisitor = std::function<bool(const SessionRecordView& record)>;
+
 // Parses frames.bin content. `source` names it in messages
 // ("lab.sweepscan/frames.bin"). Error messages look like
 //   lab.sweepscan/frames.bin: record 1234 at byte 5678901: CRC mismatch
@@ -153,6 +167,14 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
                             FramesLoadReport* report);
 Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
                       std::vector<SessionRecord>* records, FramesLoadReport* report);
+// The same checks and report, visiting each intact record in file order
+// instead of keeping them: memory stays bounded whatever the file's size
+// (the streaming readers of a long session, hardware/link/telemetry_decoder.h).
+Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& source,
+                           const FramesLoadOptions& options, const FrameVisitor& visit,
+                           FramesLoadReport* report);
+Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options,
+                       const FrameVisitor& visit, FramesLoadReport* report);
 
 struct Session {
   std::string dir;

@@ -278,47 +278,160 @@ std::string SessionDecodeInfo::ToString() const {
   return s.str();
 }
 
+namespace {
+
+// Decodes a session's records one at a time (each parsed strictly on its
+// own, so a bad record cannot swallow the next one), handing what is
+// decoded to the sinks every 256 records.
+class SessionRecordDecoder {
+ public:
+  SessionRecordDecoder(const TelemetryDecoderOptions& options, const SessionStreamSinks& sinks,
+                       SessionDecodeInfo* info)
+      : decoder_(options), sinks_(sinks), info_(info) {}
+
+  // False when the scan sink stopped the decode.
+  bool Add(uint64_t ordinal, const uint8_t* bytes, size_t n) {
+    LinkMessage m;
+    const Status s = ParseLinkFrame(bytes, n, &m);
+    if (!s.ok()) {
+      if (info_->frames_refused++ == 0)
+        info_->first_refusal = "record " + std::to_string(ordinal) + ": " + s.message();
+      ++records_;
+      return true;
+    }
+    // The link decoder only keeps the sequence accounting.
+    const int k = m.header.sender == LinkSender::kAgent ? 0 : 1;
+    trackers_[k].Observe(m.header.sequence);
+    decoder_.Add(m);
+    if (k == 0) {
+      // On the first clock epoch's timeline (a reboot's epoch is shifted).
+      const Time t = m.header.time + decoder_.time_shift();
+      if (!have_time_) info_->first_robot_time = t;
+      info_->last_robot_time = have_time_ ? std::max(info_->last_robot_time, t) : t;
+      have_time_ = true;
+    }
+    return (records_++ & 255) != 0 || Hand();
+  }
+
+  bool Finish() {
+    if (!Hand()) return false;
+    info_->gaps = decoder_.gaps();
+    // Said in seconds into the recording (the robot clock's origin is its boot).
+    for (SessionLinkGap& gap : info_->gaps) gap.lost_at_s -= ToSeconds(info_->first_robot_time);
+    for (int k = 0; k < 2; ++k) info_->link.sequence[k] = trackers_[k].stats();
+    info_->link.codec.frames_ok = records_ - info_->frames_refused;
+    info_->link.codec.payload_errors = info_->frames_refused;
+    info_->telemetry = decoder_.stats();
+    return true;
+  }
+
+ private:
+  bool Hand() {
+    decoder_.TakeInto(&taken_);
+    if (sinks_.motion != nullptr) {
+      SensorLog* m = sinks_.motion;
+      m->wheels.insert(m->wheels.end(), taken_.wheels.begin(), taken_.wheels.end());
+      m->imu.insert(m->imu.end(), taken_.imu.begin(), taken_.imu.end());
+    }
+    bool go = true;
+    for (LidarScan& scan : taken_.scans) {
+      if (go && sinks_.scan) go = sinks_.scan(std::move(scan));
+    }
+    taken_.wheels.clear();
+    taken_.imu.clear();
+    taken_.scans.clear();
+    return go;
+  }
+
+  TelemetryDecoder decoder_;
+  const SessionStreamSinks& sinks_;
+  SessionDecodeInfo* info_;
+  std::array<SequenceTracker, 2> trackers_;
+  bool have_time_ = false;
+  uint64_t records_ = 0;
+  SensorLog taken_;
+};
+
+// Sinks that keep everything in *log (DecodeSession).
+SessionStreamSinks KeepAll(SensorLog* log) {
+  SessionStreamSinks sinks;
+  sinks.motion = log;
+  sinks.scan = [log](LidarScan&& scan) {
+    log->scans.push_back(std::move(scan));
+    return true;
+  };
+  return sinks;
+}
+
+}  // namespace
+
 bool DecodeSessionRecords(const std::vector<SessionRecord>& records,
                           const TelemetryDecoderOptions& options, SensorLog* log,
                           SessionDecodeInfo* info, const DecodeProgress& progress) {
-  TelemetryDecoder decoder(options);
-  // The link decoder only keeps the sequence accounting; each record is
-  // parsed strictly on its own so a bad record cannot swallow the next one.
-  std::array<SequenceTracker, 2> trackers;
-  bool have_time = false;
+  const SessionStreamSinks sinks = KeepAll(log);
+  SessionRecordDecoder decoder(options, sinks, info);
   for (size_t i = 0; i < records.size(); ++i) {
     if (progress && (i & 4095) == 0 && !progress(static_cast<double>(i) / records.size())) {
       return false;
     }
-    const SessionRecord& r = records[i];
-    LinkMessage m;
-    const Status s = ParseLinkFrame(r.bytes.data(), r.bytes.size(), &m);
-    if (!s.ok()) {
-      if (info->frames_refused++ == 0)
-        info->first_refusal = "record " + std::to_string(i) + ": " + s.message();
-      continue;
-    }
-    const int k = m.header.sender == LinkSender::kAgent ? 0 : 1;
-    trackers[k].Observe(m.header.sequence);
-    decoder.Add(m);
-    if (k == 0) {
-      // On the first clock epoch's timeline (a reboot's epoch is shifted).
-      const Time t = m.header.time + decoder.time_shift();
-      if (!have_time) info->first_robot_time = t;
-      info->last_robot_time = have_time ? std::max(info->last_robot_time, t) : t;
-      have_time = true;
-    }
-    if ((i & 255) == 0) decoder.TakeInto(log);
+    decoder.Add(i, records[i].bytes.data(), records[i].bytes.size());
   }
-  decoder.TakeInto(log);
-  info->gaps = decoder.gaps();
-  // Said in seconds into the recording (the robot clock's origin is its boot).
-  for (SessionLinkGap& gap : info->gaps) gap.lost_at_s -= ToSeconds(info->first_robot_time);
-  for (int k = 0; k < 2; ++k) info->link.sequence[k] = trackers[k].stats();
-  info->link.codec.frames_ok = records.size() - info->frames_refused;
-  info->link.codec.payload_errors = info->frames_refused;
-  info->telemetry = decoder.stats();
-  return true;
+  return decoder.Finish();
+}
+
+Status DecodeSessionStreaming(const std::string& session_dir, const TelemetryDecoderOptions& options,
+                              const FramesLoadOptions& frames_options, const SessionStreamSinks& sinks,
+                              SessionDecodeInfo* info, const DecodeProgress& progress) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error(session_dir + ": decoder options: " + error);
+  if (progress && !progress(0.0)) return Status::Error(session_dir + ": cancelled");
+  const std::string sep = session_dir.empty() || session_dir.back() == '/' ? "" : "/";
+  SessionDecodeInfo result;
+  Status s = ReadSessionMeta(session_dir + sep + kSessionMetaFile, &result.meta);
+  if (!s.ok()) return s;
+  if (result.meta.content == kSessionContentMeasurements) {
+    // An imported recording: the records are measurements, decoded together
+    // (docs/ros-bags.md), so the whole session is loaded; bags are imported
+    // in pieces an operator chose, not 10-hour drives.
+    Session session;
+    s = LoadSession(session_dir, frames_options, &session);
+    if (!s.ok()) return s;
+    result.frames = session.frames;
+    SensorLog decoded;
+    DecodeMeasurementRecords(session.records, session.meta.geometry, &decoded, &result.measurement_stats);
+    session.records.clear();
+    result.measurements = true;
+    result.frames_refused = result.measurement_stats.refused;
+    result.first_refusal = result.measurement_stats.first_refusal;
+    result.first_robot_time = result.measurement_stats.first_time;
+    result.last_robot_time = result.measurement_stats.last_time;
+    if (sinks.motion != nullptr) {
+      sinks.motion->wheels = std::move(decoded.wheels);
+      sinks.motion->imu = std::move(decoded.imu);
+    }
+    for (LidarScan& scan : decoded.scans) {
+      if (sinks.scan && !sinks.scan(std::move(scan))) return Status::Error(session_dir + ": cancelled");
+    }
+    if (progress) progress(1.0);
+    if (info != nullptr) *info = std::move(result);
+    return Status::Ok();
+  }
+  SessionRecordDecoder decoder(options, sinks, &result);
+  bool cancelled = false;  // by the progress callback or the scan sink
+  s = VisitFramesFile(session_dir + sep + kSessionFramesFile, frames_options,
+                      [&](const SessionRecordView& r) {
+                        cancelled = (progress && (r.ordinal & 4095) == 0 &&
+                                     !progress(static_cast<double>(r.offset) / static_cast<double>(r.file_bytes))) ||
+                                    !decoder.Add(r.ordinal, r.bytes, r.size);
+                        return !cancelled;
+                      },
+                      &result.frames);
+  if (cancelled) return Status::Error(session_dir + ": cancelled");
+  if (!s.ok()) return s;
+  if (!decoder.Finish()) return Status::Error(session_dir + ": cancelled");
+  if (progress) progress(1.0);
+  if (info != nullptr) *info = std::move(result);
+  return Status::Ok();
 }
 
 namespace {
@@ -327,56 +440,32 @@ Status DecodeSessionWithProgress(const std::string& session_dir,
                                  const TelemetryDecoderOptions& options,
                                  const FramesLoadOptions& frames_options, SensorLog* log,
                                  SessionDecodeInfo* info, const DecodeProgress& progress) {
-  std::string error;
-  if (!options.IsValid(&error)) return Status::Error(session_dir + ": decoder options: " + error);
-  // Reading the file is the first tenth of the work, decoding the rest.
-  if (progress && !progress(0.0)) return Status::Error(session_dir + ": cancelled");
-  Session session;
-  const Status s = LoadSession(session_dir, frames_options, &session);
-  if (!s.ok()) return s;
-  SessionDecodeInfo result;
-  result.meta = session.meta;
-  result.frames = session.frames;
   SensorLog decoded;
-  if (session.meta.content == kSessionContentMeasurements) {
-    // An imported recording: the records are measurements, not link frames.
-    DecodeMeasurementRecords(session.records, session.meta.geometry, &decoded,
-                             &result.measurement_stats);
-    result.measurements = true;
-    result.frames_refused = result.measurement_stats.refused;
-    result.first_refusal = result.measurement_stats.first_refusal;
-    result.first_robot_time = result.measurement_stats.first_time;
-    result.last_robot_time = result.measurement_stats.last_time;
-    if (progress) progress(1.0);
-    *log = std::move(decoded);
-    if (info != nullptr) *info = std::move(result);
-    return Status::Ok();
-  }
-  DecodeProgress decode_progress;
-  if (progress) decode_progress = [&](double f) { return progress(0.1 + 0.9 * f); };
-  if (!DecodeSessionRecords(session.records, options, &decoded, &result, decode_progress)) {
-    return Status::Error(session_dir + ": cancelled");
-  }
-  if (progress) progress(1.0);
+  const Status s = DecodeSessionStreaming(session_dir, options, frames_options, KeepAll(&decoded), info, progress);
+  if (!s.ok()) return s;
   *log = std::move(decoded);
-  if (info != nullptr) *info = std::move(result);
   return Status::Ok();
 }
 
-Status DecodeSessionWithMeta(const std::string& session_dir,
-                             const FramesLoadOptions& frames_options, SensorLog* log,
-                             SessionDecodeInfo* info, const DecodeProgress& progress) {
+// The decoder options a session's meta.json implies.
+Status DecoderOptionsFromMeta(const std::string& session_dir, TelemetryDecoderOptions* options) {
   SessionMeta meta;
   const std::string meta_path = session_dir +
                                 (session_dir.empty() || session_dir.back() == '/' ? "" : "/") +
                                 kSessionMetaFile;
   const Status s = ReadSessionMeta(meta_path, &meta);
   if (!s.ok()) return s;
+  options->wheel_distance_m = meta.geometry.wheel_distance_m;
+  options->lidar_angle_convention = meta.lidar_angle_convention;
+  return SerialSettingsFromMeta(meta, meta_path, options);
+}
+
+Status DecodeSessionWithMeta(const std::string& session_dir,
+                             const FramesLoadOptions& frames_options, SensorLog* log,
+                             SessionDecodeInfo* info, const DecodeProgress& progress) {
   TelemetryDecoderOptions options;
-  options.wheel_distance_m = meta.geometry.wheel_distance_m;
-  options.lidar_angle_convention = meta.lidar_angle_convention;
-  const Status serial = SerialSettingsFromMeta(meta, meta_path, &options);
-  if (!serial.ok()) return serial;
+  const Status s = DecoderOptionsFromMeta(session_dir, &options);
+  if (!s.ok()) return s;
   return DecodeSessionWithProgress(session_dir, options, frames_options, log, info, progress);
 }
 
@@ -406,6 +495,15 @@ Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDeco
 Status DecodeSession(const std::string& session_dir, const FramesLoadOptions& frames_options,
                      SensorLog* log, SessionDecodeInfo* info, const DecodeProgress& progress) {
   return DecodeSessionWithMeta(session_dir, frames_options, log, info, progress);
+}
+
+Status DecodeSessionStreaming(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                              const SessionStreamSinks& sinks, SessionDecodeInfo* info,
+                              const DecodeProgress& progress) {
+  TelemetryDecoderOptions options;
+  const Status s = DecoderOptionsFromMeta(session_dir, &options);
+  if (!s.ok()) return s;
+  return DecodeSessionStreaming(session_dir, options, frames_options, sinks, info, progress);
 }
 
 }  // namespace hardware

@@ -188,6 +188,27 @@ Status DecodeSession(const std::string& session_dir, SensorLog* log, SessionDeco
 // serial settings are taken from the options, not from meta.json).
 Status DecodeSession(const std::string& session_dir, const TelemetryDecoderOptions& options,
                      SensorLog* log, SessionDecodeInfo* info);
+// Where a streaming decode hands what it decodes, as it goes (every 256
+// records, each stream in time order). `scan` returning false stops the
+// decode (it then fails with "cancelled"); a null `scan` drops the scans,
+// a null `motion` the IMU and wheel records.
+struct SessionStreamSinks {
+  std::function<bool(LidarScan&& scan)> scan;
+  SensorLog* motion = nullptr;  // wheels and imu appended; scans untouched
+};
+// DecodeSession without holding the session: frames.bin is visited record
+// by record through a mapping whose pages are dropped behind the reader
+// (core/session/session.h VisitFramesFile), and the decoded records go to
+// the sinks. Memory is what the sinks keep. The records decoded, their
+// order and *info are exactly DecodeSession's. Measurement sessions (an
+// imported bag) are loaded whole, then handed out.
+Status DecodeSessionStreaming(const std::string& session_dir, const TelemetryDecoderOptions& options,
+                              const FramesLoadOptions& frames_options, const SessionStreamSinks& sinks,
+                              SessionDecodeInfo* info, const DecodeProgress& progress = nullptr);
+// The same with the decoder options of the session's meta.json (as DecodeSession).
+Status DecodeSessionStreaming(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                              const SessionStreamSinks& sinks, SessionDecodeInfo* info,
+                              const DecodeProgress& progress = nullptr);
 // The decoding part alone, on records already loaded; *info must not be null
 // (its frames_refused, link, telemetry and robot times are filled).
 // With `progress`, returns false if it cancelled (the log is then partial).

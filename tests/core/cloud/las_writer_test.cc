@@ -394,7 +394,15 @@ TEST(LasExportTest, SessionExportIsReadByIndependentReadersAsItsPly) {
   EXPECT_EQ(gl["intensity_max"], 0);
   for (int k = 0; k < 3; ++k) {
     EXPECT_EQ(gl["scale"][k].get<double>(), 0.0001);
-    EXPECT_EQ(gl["offset"][k].get<double>(), std::round(0.5 * (extent.min[k] + extent.max[k]))) << k;
+    // The offset is the centre of the box the export chose before the first
+    // point (streamed: the trajectory widened by the lidar's reach), which
+    // holds the cloud and reaches at most 10.5 m beyond it.
+    const nlohmann::json& box = report["las"]["box_m"];
+    EXPECT_EQ(gl["offset"][k].get<double>(), std::round(0.5 * (box[0][k].get<double>() + box[1][k].get<double>()))) << k;
+    EXPECT_LE(box[0][k].get<double>(), extent.min[k]) << k;
+    EXPECT_GE(box[1][k].get<double>(), extent.max[k]) << k;
+    EXPECT_GT(box[0][k].get<double>(), extent.min[k] - 10.5) << k;
+    EXPECT_LT(box[1][k].get<double>(), extent.max[k] + 10.5) << k;
     EXPECT_NEAR(gl["mins"][k].get<double>(), extent.min[k], half) << k;
     EXPECT_NEAR(gl["maxs"][k].get<double>(), extent.max[k], half) << k;
     // The header's bounds are exactly the bounds of what loaders.gl decoded.

@@ -1,0 +1,76 @@
+// A session's cloud in memory that does not grow with the session: two
+// passes over frames.bin, each visiting it record by record
+// (DecodeSessionStreaming).
+//
+//   pass 1  decode; keep the wheel and IMU records (the scans are dropped as
+//           they are decoded); estimate the poses (EKF, odometry, or given).
+//   pass 2  decode again; place each scan as it comes (Assembler, the same
+//           per-sample deskew as Reconstruct) and hand its points to a sink.
+//
+// The points, their order and every count are Reconstruct's, bit for bit.
+// What stays in memory is the motion records (about 6 kB a second of drive
+// at the HI219's 100 Hz and the motor board's 50 Hz) and the poses (one a
+// filter step), plus one scan and one chunk of points: for a 10-hour drive
+// about 0.4 GB, where holding it decoded takes 24 B a lidar sample plus
+// 32 B a point (docs/performance.md, "The CLI on long sessions").
+// The decode runs twice: about 2 x 0.3 s a minute of drive on this
+// project's 2-core machine.
+//
+// Pure, no Qt; one thread.
+#ifndef SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_
+#define SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_
+
+#include <functional>
+#include <string>
+
+#include "core/cloud/reconstruct.h"
+#include "core/common/status.h"
+#include "hardware/link/telemetry_decoder.h"
+
+namespace sweepscan::hardware {
+
+class SessionCloudStream {
+ public:
+  // Points in time order, at most 65 536 a call; an error stops pass 2
+  // and is returned by PlacePoints.
+  using PointSink = std::function<Status(const CloudPoint* points, size_t n)>;
+
+  // Pass 1. `options` as for Reconstruct (calibration, initial pose, pose
+  // source); `given` the poses for kTruth / kSfm. Damage in frames.bin is
+  // skipped or refused as `frames_options` say (decode().frames).
+  Status EstimatePoses(const std::string& session_dir, const FramesLoadOptions& frames_options,
+                       const ReconstructionOptions& options, const PoseBuffer* given = nullptr,
+                       const DecodeProgress& progress = nullptr);
+
+  // After pass 1: what the decode found, and the poses, EKF counters and
+  // gaps (result().points stays empty; stats and gap counts come with pass 2).
+  const SessionDecodeInfo& decode() const { return decode_; }
+  const ReconstructionResult& result() const { return result_; }
+  size_t scans() const { return scans_; }  // decoded in pass 1
+  // Pass 1 read the session (a failure after it is the poses': options, or
+  // a session without odometry).
+  bool decoded() const { return decoded_; }
+  // A box that holds every point pass 2 can place: the poses' positions
+  // widened by the longest range plus the lidar's offset from the body
+  // (and 1 mm for float rounding). The LAS writer needs its extent first.
+  void PointBounds(double min[3], double max[3]) const;
+  // Motion records and poses held, bytes (what pass 1 keeps for pass 2).
+  size_t held_bytes() const;
+
+  // Pass 2. Fills result().stats and the gaps' dropped-sample counts.
+  Status PlacePoints(const PointSink& sink, const DecodeProgress& progress = nullptr);
+
+ private:
+  std::string dir_;
+  FramesLoadOptions frames_options_;
+  ReconstructionOptions options_;
+  SessionDecodeInfo decode_;
+  SensorLog motion_;
+  ReconstructionResult result_;
+  size_t scans_ = 0;
+  bool decoded_ = false;
+};
+
+}  // namespace sweepscan::hardware
+
+#endif  // SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_

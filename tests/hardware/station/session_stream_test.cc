@@ -1,0 +1,194 @@
+// The streamed reconstruction (two passes over frames.bin, record by record)
+// gives Reconstruct's cloud on the whole decoded session, bit for bit: on a
+// clean session, with odometry and without deskew, and on a damaged one
+// whose hole is a gap in the poses. Its decode hands over exactly what
+// DecodeSession keeps.
+#include "hardware/station/session_stream.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "core/cloud/reconstruct.h"
+#include "hardware/emulation/simulate_session.h"
+#include "tests/testing/run_command.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan::hardware {
+namespace {
+
+// A 40 s drive of the lab (turns and straights: every pose component moves).
+const std::string& Session() {
+  static const std::string dir = [] {
+    const std::string d = ::testing::TempDir() + "/sweepscan_stream_" + std::to_string(::getpid()) + ".sweepscan";
+    sweepscan::testing::ShellOrFail("rm -rf '" + d + "'");
+    sim::SimConfig config = testing::LabConfig(3);
+    config.path = {{0.2, 0.0, 12.0}, {0.0, 0.3, 8.0}, {0.15, 0.1, 10.0}, {0.2, -0.05, 10.0}};
+    SimulateSessionReport report;
+    const Status s = SimulateSession(config, d, SimulateSessionOptions(), &report);
+    EXPECT_TRUE(s.ok()) << s.message();
+    return d;
+  }();
+  return dir;
+}
+
+// A copy of the session with `bytes` bytes overwritten from the middle of
+// frames.bin: about 1.5 s of records lost, a gap in the wheel and IMU data.
+std::string DamagedCopy(size_t bytes) {
+  const std::string d = Session() + ".damaged";
+  sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && cp -r '" + Session() + "' '" + d + "'");
+  std::fstream f(d + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
+  f.seekg(0, std::ios::end);
+  const std::streamoff size = f.tellg();
+  f.seekp(size / 2);
+  for (size_t i = 0; i < bytes; ++i) f.put(static_cast<char>(0xA5 ^ (i * 131)));
+  return d;
+}
+
+struct Streamed {
+  std::vector<CloudPoint> points;
+  size_t calls = 0;
+  size_t largest_call = 0;
+  ReconstructionResult result;
+  size_t scans = 0;
+  double min[3], max[3];
+};
+
+Streamed Stream(const std::string& dir, const ReconstructionOptions& options) {
+  Streamed out;
+  SessionCloudStream stream;
+  Status s = stream.EstimatePoses(dir, DefaultSessionFramesOptions(), options);
+  EXPECT_TRUE(s.ok()) << s.message();
+  stream.PointBounds(out.min, out.max);
+  s = stream.PlacePoints([&out](const CloudPoint* p, size_t n) {
+    out.points.insert(out.points.end(), p, p + n);
+    ++out.calls;
+    out.largest_call = std::max(out.largest_call, n);
+    return Status::Ok();
+  });
+  EXPECT_TRUE(s.ok()) << s.message();
+  out.result = stream.result();
+  out.scans = stream.scans();
+  return out;
+}
+
+ReconstructionResult Whole(const std::string& dir, const ReconstructionOptions& options, size_t* scans) {
+  SensorLog log;
+  SessionDecodeInfo info;
+  Status s = DecodeSession(dir, &log, &info);
+  EXPECT_TRUE(s.ok()) << s.message();
+  ReconstructionResult r;
+  s = Reconstruct(log, info.meta.geometry, options, nullptr, &r);
+  EXPECT_TRUE(s.ok()) << s.message();
+  *scans = log.scans.size();
+  return r;
+}
+
+void ExpectSameCloud(const std::string& dir, const ReconstructionOptions& options) {
+  size_t scans = 0;
+  const ReconstructionResult whole = Whole(dir, options, &scans);
+  const Streamed streamed = Stream(dir, options);
+  ASSERT_GT(whole.points.size(), 100000u);
+  ASSERT_EQ(streamed.points.size(), whole.points.size());
+  EXPECT_EQ(std::memcmp(streamed.points.data(), whole.points.data(), whole.points.size() * sizeof(CloudPoint)), 0);
+  EXPECT_EQ(streamed.scans, scans);
+  EXPECT_EQ(streamed.result.stats.samples_in, whole.stats.samples_in);
+  EXPECT_EQ(streamed.result.stats.points_out, whole.stats.points_out);
+  EXPECT_EQ(streamed.result.stats.invalid_range, whole.stats.invalid_range);
+  EXPECT_EQ(streamed.result.stats.no_pose, whole.stats.no_pose);
+  EXPECT_EQ(streamed.result.ekf_counters.rejected, whole.ekf_counters.rejected);
+  ASSERT_EQ(streamed.result.gaps.size(), whole.gaps.size());
+  for (size_t k = 0; k < whole.gaps.size(); ++k) {
+    EXPECT_EQ(streamed.result.gaps[k].samples_dropped, whole.gaps[k].samples_dropped);
+  }
+  EXPECT_EQ(streamed.result.gap_samples_dropped, whole.gap_samples_dropped);
+  // In chunks of at most 65 536, and inside the box given beforehand.
+  EXPECT_LE(streamed.largest_call, 65536u);
+  EXPECT_GE(streamed.calls, whole.points.size() / 65536);
+  for (const CloudPoint& p : whole.points) {
+    const double v[3] = {p.x, p.y, p.z};
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_GE(v[k], streamed.min[k]);
+      ASSERT_LE(v[k], streamed.max[k]);
+    }
+  }
+}
+
+TEST(SessionStreamTest, EkfCloudIsReconstructsBitForBit) {
+  ReconstructionOptions options;
+  ExpectSameCloud(Session(), options);
+}
+
+TEST(SessionStreamTest, OdometryWithoutDeskewAndACalibrationToo) {
+  ReconstructionOptions options;
+  options.pose.source = PoseSource::kOdometry;
+  options.assembly.deskew = false;
+  options.calibration = {0.01, -0.02, 0.015};
+  ExpectSameCloud(Session(), options);
+}
+
+TEST(SessionStreamTest, ADamagedSessionHasTheSameGapAndDropsTheSameSamples) {
+  const std::string dir = DamagedCopy(60000);  // about 1.5 s of frames
+  size_t scans = 0;
+  const ReconstructionResult whole = Whole(dir, ReconstructionOptions(), &scans);
+  ASSERT_EQ(whole.gaps.size(), 1u);
+  EXPECT_GT(whole.gap_samples_dropped, 0u);
+  ExpectSameCloud(dir, ReconstructionOptions());
+}
+
+TEST(SessionStreamTest, StreamingDecodeHandsOverWhatDecodeSessionKeeps) {
+  const std::string dir = DamagedCopy(5000);
+  SensorLog log;
+  SessionDecodeInfo info;
+  ASSERT_TRUE(DecodeSession(dir, &log, &info).ok());
+  SensorLog motion;
+  std::vector<LidarScan> scans;
+  SessionStreamSinks sinks;
+  sinks.motion = &motion;
+  sinks.scan = [&scans](LidarScan&& scan) {
+    scans.push_back(std::move(scan));
+    return true;
+  };
+  SessionDecodeInfo streamed;
+  ASSERT_TRUE(DecodeSessionStreaming(dir, DefaultSessionFramesOptions(), sinks, &streamed).ok());
+  EXPECT_TRUE(streamed.frames.damaged());
+  EXPECT_EQ(streamed.ToString(), info.ToString());
+  EXPECT_EQ(streamed.frames.DamageSummary(), info.frames.DamageSummary());
+  ASSERT_EQ(motion.imu.size(), log.imu.size());
+  ASSERT_EQ(motion.wheels.size(), log.wheels.size());
+  ASSERT_EQ(scans.size(), log.scans.size());
+  for (size_t i = 0; i < scans.size(); ++i) {
+    ASSERT_EQ(scans[i].index, log.scans[i].index);
+    ASSERT_EQ(scans[i].samples.size(), log.scans[i].samples.size());
+    for (size_t j = 0; j < scans[i].samples.size(); ++j) {
+      ASSERT_EQ(scans[i].samples[j].time, log.scans[i].samples[j].time);
+      ASSERT_EQ(scans[i].samples[j].range_m, log.scans[i].samples[j].range_m);
+    }
+  }
+  for (size_t i = 0; i < log.imu.size(); ++i) ASSERT_EQ(motion.imu[i].time, log.imu[i].time);
+  // --strict: the damage is refused with its place, as DecodeSession does.
+  FramesLoadOptions strict;
+  SessionDecodeInfo refused;
+  const Status s = DecodeSessionStreaming(dir, strict, sinks, &refused);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("frames.bin: record"), std::string::npos) << s.message();
+}
+
+TEST(SessionStreamTest, AWriterErrorStopsThePassAndIsReturned) {
+  SessionCloudStream stream;
+  ASSERT_TRUE(stream.EstimatePoses(Session(), DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
+  size_t calls = 0;
+  const Status s = stream.PlacePoints([&calls](const CloudPoint*, size_t) {
+    return ++calls == 2 ? Status::Error("out.las: write failed: No space left on device") : Status::Ok();
+  });
+  EXPECT_EQ(s.message(), "out.las: write failed: No space left on device");
+  EXPECT_EQ(calls, 2u);
+  // A cancel from the progress callback.
+  const Status c = stream.PlacePoints([](const CloudPoint*, size_t) { return Status::Ok(); },
+                                      [](double f) { return f < 0.3; });
+  EXPECT_NE(c.message().find("cancelled"), std::string::npos) << c.message();
+}
+
+}  // namespace
+}  // namespace sweepscan::hardware
