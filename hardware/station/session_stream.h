@@ -8,13 +8,13 @@
 //           per-sample deskew as Reconstruct) and hand its points to a sink.
 //
 // The points, their order and every count are Reconstruct's, bit for bit.
-// What stays in memory is the motion records (about 6 kB a second of drive
-// at the HI219's 100 Hz and the motor board's 50 Hz) and the poses (one a
-// filter step), plus one scan and one chunk of points: for a 10-hour drive
-// about 0.4 GB, where holding it decoded takes 24 B a lidar sample plus
-// 32 B a point (docs/performance.md, "The CLI on long sessions").
-// The decode runs twice: about 2 x 0.3 s a minute of drive on this
-// project's 2-core machine.
+// What stays in memory is the motion records (pass 1 only: about 6 kB a
+// second of drive at the HI219's 100 Hz and the motor board's 50 Hz) and
+// the poses (one a filter step, 7 kB a second), plus one scan and one chunk
+// of points: 0.63 GB peak for a 10-hour drive of 175 M points, where
+// holding it decoded takes 24 B a lidar sample plus 32 B a point, 14 GB
+// (docs/performance.md, "The CLI on long sessions"). The decode runs
+// twice; even so a session streams 3 times faster than it decoded whole.
 //
 // Pure, no Qt; one thread.
 #ifndef SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_
