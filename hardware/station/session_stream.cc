@@ -14,9 +14,9 @@ Status SessionCloudStream::EstimatePoses(const std::string& session_dir, const F
   frames_options_ = frames_options;
   options_ = options;
   result_ = ReconstructionResult();
-  SensorLog motion;
+  motion_ = SensorLog();
   SessionStreamSinks sinks;
-  sinks.motion = &motion;
+  sinks.motion = &motion_;
   scans_ = 0;
   sinks.scan = [this](LidarScan&&) {
     ++scans_;
@@ -28,7 +28,9 @@ Status SessionCloudStream::EstimatePoses(const std::string& session_dir, const F
   decoded_ = true;
   // EstimatePoses reads the wheel and IMU records only; the motion records
   // go once the poses exist (pass 2 needs the poses alone).
-  return EstimateReconstructionPoses(motion, decode_.meta.geometry, options_, given, &result_);
+  s = EstimateReconstructionPoses(motion_, decode_.meta.geometry, options_, given, &result_);
+  if (!keep_motion_) motion_ = SensorLog();
+  return s;
 }
 
 void SessionCloudStream::PointBounds(double min[3], double max[3]) const {

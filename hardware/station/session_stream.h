@@ -57,6 +57,11 @@ class SessionCloudStream {
   // Motion records and poses held, bytes (what pass 1 keeps for pass 2).
   size_t held_bytes() const;
 
+  // The wheel and IMU records of pass 1, kept when set before it (the app
+  // keeps them with an opened session; the CLI does not need them).
+  void set_keep_motion(bool keep) { keep_motion_ = keep; }
+  SensorLog TakeMotion() { return std::move(motion_); }
+
   // Pass 2. Fills result().stats and the gaps' dropped-sample counts.
   Status PlacePoints(const PointSink& sink, const DecodeProgress& progress = nullptr);
 
@@ -69,6 +74,7 @@ class SessionCloudStream {
   ReconstructionResult result_;
   size_t scans_ = 0;
   bool decoded_ = false;
+  bool keep_motion_ = false;
 };
 
 }  // namespace sweepscan::hardware

@@ -4,7 +4,8 @@
 // cloud points; a cloud larger than the memory budget opens paged to disk,
 // equals `sweepscan-cli reconstruct` point for point and picks the true
 // point under the cursor (not a drawn representative); an opened room is
-// shown looking into it with its ceiling hidden.
+// shown looking into it with its ceiling hidden; a large session is
+// streamed and opens as its replay would.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -156,6 +157,57 @@ TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoin
   // Representatives alone would never give an undrawn point.
   EXPECT_GE(undrawn, picks / 2);
   EXPECT_GT(pager.page_ins(), page_ins_before);
+}
+
+// A large session at full speed is streamed (workspace_stream.cc): two
+// passes over frames.bin, the samples never held. The cloud is the CLI's
+// point for point and in its order, the view draws all of it, the opened
+// session keeps only its wheel and IMU records, and another pose source
+// (which needs the samples) opens them again and gives the CLI's cloud.
+// The threshold is lowered to 0 so that the lab drive counts as large.
+TEST_F(CloudStoreUiTest, ALargeSessionIsStreamedAndOpensAsItsReplayWould) {
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  workspace_->set_stream_open_above_bytes(0);
+  const QString session = tmp_.path() + "/lab.sweepscan";
+  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(session));
+  const hardware::Recording* opened = workspace_->recording_opened();
+  ASSERT_NE(opened, nullptr);
+  EXPECT_TRUE(opened->log.scans.empty());  // streamed: no samples held
+  EXPECT_GT(opened->log.imu.size(), 1000u);
+  EXPECT_GT(opened->log.wheels.size(), 500u);
+  EXPECT_EQ(workspace_->session_dir(), session);
+
+  const std::string dir = tmp_.path().toStdString();
+  auto cli = [&](const std::string& source) {
+    const auto rec = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " reconstruct " + dir +
+                                         "/lab.sweepscan --pose-source " + source + " --out " + dir + "/cli.ply");
+    EXPECT_EQ(rec.code, 0) << rec.out;
+    std::vector<CloudPoint> cloud;
+    EXPECT_TRUE(LoadCloud(dir + "/cli.ply", &cloud).ok());
+    return cloud;
+  };
+  auto same = [](const std::vector<CloudPoint>& got, const std::vector<CloudPoint>& expected) {
+    if (got.size() != expected.size()) return false;
+    for (size_t i = 0; i < got.size(); ++i) {
+      if (got[i].x != expected[i].x || got[i].y != expected[i].y || got[i].z != expected[i].z ||
+          got[i].time_ns != expected[i].time_ns || got[i].pose_source != expected[i].pose_source) {
+        return false;
+      }
+    }
+    return true;
+  };
+  const std::vector<CloudPoint> ekf = cli("ekf");
+  ASSERT_GT(ekf.size(), 100000u);
+  EXPECT_TRUE(same(workspace_->CloudSnapshot(), ekf));
+  ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == ekf.size(); }, 10000));
+
+  // The wheels alone: the samples are read again (a job), then replayed.
+  bool replayed = false;
+  const auto c = QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  workspace_->SetPoseSource(PoseSource::kOdometry);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  QObject::disconnect(c);
+  EXPECT_TRUE(same(workspace_->CloudSnapshot(), cli("odometry")));
 }
 
 TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {

@@ -335,6 +335,16 @@ void CloudView::Clear() {
 
 void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks) {
   if (chunks.empty()) return;
+  // A large batch (an opened session's whole cloud at once) is drawn at
+  // the level it will have: the motion stride for the final count and no
+  // full-resolution rest level per chunk, which for 10 M points would
+  // build 10 M drawn points only to drop them after the loop.
+  size_t incoming = 0;
+  for (const auto& packed : chunks) incoming += packed->size();
+  if (point_count_ + incoming > lod_budget_) {
+    UpdateMotionStride(point_count_ + incoming);
+    SetLodActive(true);
+  }
   for (const auto& packed : chunks) {
     if (packed->size() == 0) continue;
     if (!have_origin_) {

@@ -277,7 +277,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void RefilterVerts(const Chunk& chunk, Drawn* drawn);
   float ValueOf(const Chunk& chunk, int mode, size_t i) const;
   bool Passes(const Chunk& chunk, size_t i) const;
-  void UpdateMotionStride();
+  void UpdateMotionStride() { UpdateMotionStride(point_count_); }
+  // The stride for a cloud of `count` points (AppendSealed: before a large batch).
+  void UpdateMotionStride(size_t count);
   void ShowLevels();  // The batches' visibility from lod_active_.
   void PlanRest();
   bool RefineSlice(int max_ms);  // True when the queue is empty.

@@ -167,9 +167,9 @@ void CloudView::RefilterVerts(const Chunk& chunk, Drawn* d) {
   d->poly->Modified();
 }
 
-void CloudView::UpdateMotionStride() {
+void CloudView::UpdateMotionStride(size_t count) {
   int stride = 1;
-  while (point_count_ / stride > lod_budget_) stride *= 2;
+  while (count / stride > lod_budget_) stride *= 2;
   if (stride == motion_stride_) return;
   const bool coarser = stride > motion_stride_;
   motion_stride_ = stride;

@@ -157,6 +157,10 @@ void LiveProcessor::Publish(bool reset) {
       }
     }
   }
+  if (!adopted_trajectory_.empty()) {
+    batch.trajectory.insert(batch.trajectory.begin(), adopted_trajectory_.begin(), adopted_trajectory_.end());
+    adopted_trajectory_.clear();
+  }
   batch.robot_time_s = ToSeconds(latest_time_);
   batch.total_points = total_points_;
   batch.scans = scans_;
@@ -191,6 +195,41 @@ void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recor
   }
   replay_clock_.start();
   replay_timer_->start(speed > 0 ? kReplayTickMs : 0);
+}
+
+void LiveProcessor::AdoptCloud(std::shared_ptr<std::unique_ptr<PointChunks>> cloud,
+                               std::shared_ptr<const PoseBuffer> poses, const ReconstructionOptions& options,
+                               const RobotGeometry& geometry, size_t scans) {
+  StopReplay();
+  options_ = options;
+  geometry_ = geometry;
+  pipeline_.reset();
+  given_assembler_.reset();
+  given_poses_ = std::move(poses);
+  given_chunks_ = std::move(*cloud);
+  if (given_chunks_ == nullptr) given_chunks_ = std::make_unique<PointChunks>();
+  given_chunks_->Seal();
+  published_chunk_ = 0;
+  published_offset_ = 0;
+  total_points_ = 0;
+  scans_ = scans;
+  const PoseBuffer& p = *given_poses_;
+  latest_time_ = p.empty() ? Time() : p.latest();
+  // The path as a replay draws it, a pose every kTrajectoryStepS.
+  adopted_trajectory_.clear();
+  Time last = Time::min();
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (last != Time::min() && ToSeconds(p.time(i) - last) < kTrajectoryStepS) continue;
+    last = p.time(i);
+    const Rigid3d& pose = p.pose(i);
+    adopted_trajectory_.push_back(
+        {pose.translation().x(), pose.translation().y(), YawFromQuaternion(pose.rotation())});
+  }
+  last_trajectory_time_ = latest_time_;
+  Publish(true);
+  const double length = p.empty() ? 0.0 : ToSeconds(p.latest() - p.earliest());
+  emit replayProgress(length, length);
+  emit replayFinished();
 }
 
 void LiveProcessor::SetReplaySpeed(double speed) {

@@ -55,6 +55,13 @@ class LiveProcessor : public QObject {
   void StartReplay(std::shared_ptr<const hardware::Recording> recording,
                    const ReconstructionOptions& options, double speed,
                    std::shared_ptr<const PoseBuffer> given_poses = nullptr);
+  // A session's cloud built elsewhere (the workspace's streamed open,
+  // hardware/station/session_stream.h: the same points as a replay at full
+  // speed) becomes the cloud shown, placed with `poses`; published at once
+  // with the whole trajectory, then replayProgress(length, length) and
+  // replayFinished as a replay's end.
+  void AdoptCloud(std::shared_ptr<std::unique_ptr<PointChunks>> cloud, std::shared_ptr<const PoseBuffer> poses,
+                  const ReconstructionOptions& options, const RobotGeometry& geometry, size_t scans);
   void SetReplaySpeed(double speed);  // 0 = as fast as possible.
   void SetReplayPaused(bool paused);
   void SeekReplay(double robot_time_s);
@@ -96,6 +103,7 @@ class LiveProcessor : public QObject {
   Time latest_time_;
   Time last_trajectory_time_;
   bool reset_pending_ = false;
+  std::vector<Pose2d> adopted_trajectory_;  // For the next Publish (AdoptCloud).
 
   // Replay state.
   std::shared_ptr<const hardware::Recording> replay_;

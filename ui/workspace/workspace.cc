@@ -484,6 +484,10 @@ void Workspace::NewSession() {
 }
 
 void Workspace::OpenSession(const QString& dir, double speed) {
+  if (WillStreamOpen(dir, speed, pose_source_)) {
+    OpenSessionStreamed(dir);
+    return;
+  }
   PageBeside(dir);
   auto recording = std::make_shared<hardware::Recording>();
   auto circle = std::make_shared<OpenedCircle>();
@@ -508,19 +512,7 @@ void Workspace::OpenSession(const QString& dir, double speed) {
           return !*cancel;
         });
         if (!s.ok()) return QString::fromStdString(s.message());
-        // Is it a calibration drive? The EKF poses (a few ms per minute of
-        // drive; Calibrate smooths them, which moves the circle by mm) and
-        // the circle through them.
-        PoseEstimatorOptions pose;
-        pose.initial_pose = recording->start;
-        auto poses = std::make_shared<PoseBuffer>(
-            EstimatePoses(recording->log, pose, recording->geometry).poses());
-        std::string why;
-        circle->ok = FitCircleDrive(*poses, &circle->circle, &why);
-        circle->note = circle->ok ? tr("a circle drive: radius %1 m")
-                                        .arg(circle->circle.radius_m, 0, 'f', 2)
-                                  : QString::fromStdString(why);
-        circle->poses = poses;
+        *circle = FindCircle(*recording);
         if (source == PoseSource::kSfm && !*cancel) {
           // The batch over the whole log, now that it is loaded (a cancel
           // stops it within a frame or a refinement iteration).
@@ -534,25 +526,7 @@ void Workspace::OpenSession(const QString& dir, double speed) {
         return QString();
       },
       [this, recording, circle, dir, speed, source, sfm_poses, sfm_summary, sfm_error] {
-        if (recording_) {
-          QString ignored;
-          StopRecording(&ignored);
-        }
-        // A damaged recording opens without its damaged records; say what
-        // was lost (how many records and seconds, where).
-        if (recording->decode.frames.damaged()) {
-          emit message(tr("%1: %2")
-                           .arg(dir)
-                           .arg(QString::fromStdString(recording->decode.frames.DamageSummary())));
-        }
-        opened_ = recording;
-        opened_samples_released_ = false;
-        opened_circle_ = *circle;
-        pass_labels_.clear();
-        deviation_map_.clear();
-        session_dir_ = dir;
-        unsaved_ = false;
-        calibration_.reset();
+        TakeOpened(recording, *circle, dir, /*samples_released=*/false);
         PoseSource shown = source;
         if (source == PoseSource::kSfm && !sfm_error->isEmpty()) {
           // The session is fine; only SfM cannot place it (too few planes,
@@ -570,6 +544,43 @@ void Workspace::OpenSession(const QString& dir, double speed) {
                      shown == PoseSource::kSfm ? sfm_poses : nullptr, speed);
         emit sessionChanged(dir);
       });
+}
+
+Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recording) {
+  // Is it a calibration drive? The EKF poses (a few ms per minute of
+  // drive; Calibrate smooths them, which moves the circle by mm) and the
+  // circle through them.
+  OpenedCircle circle;
+  PoseEstimatorOptions pose;
+  pose.initial_pose = recording.start;
+  auto poses = std::make_shared<PoseBuffer>(EstimatePoses(recording.log, pose, recording.geometry).poses());
+  std::string why;
+  circle.ok = FitCircleDrive(*poses, &circle.circle, &why);
+  circle.note = circle.ok ? tr("a circle drive: radius %1 m").arg(circle.circle.radius_m, 0, 'f', 2)
+                          : QString::fromStdString(why);
+  circle.poses = poses;
+  return circle;
+}
+
+void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
+                           const QString& dir, bool samples_released) {
+  if (recording_) {
+    QString ignored;
+    StopRecording(&ignored);
+  }
+  // A damaged recording opens without its damaged records; say what was
+  // lost (how many records and seconds, where).
+  if (recording->decode.frames.damaged()) {
+    emit message(tr("%1: %2").arg(dir).arg(QString::fromStdString(recording->decode.frames.DamageSummary())));
+  }
+  opened_ = std::move(recording);
+  opened_samples_released_ = samples_released;
+  opened_circle_ = circle;
+  pass_labels_.clear();
+  deviation_map_.clear();
+  session_dir_ = dir;
+  unsaved_ = false;
+  calibration_.reset();
 }
 
 void Workspace::SetPoseSource(PoseSource source) {

@@ -132,7 +132,14 @@ class Workspace : public QObject {
   // Opens a session folder on a job thread (progress, cancel), then replays
   // it at `speed` (0 = as fast as possible). A corrupt session is refused:
   // jobFinished(false, "where and why").
+  // At full speed with the EKF's or the wheels' poses, a session whose
+  // frames.bin is above stream_open_above_bytes() (default 32 MiB, about 4 M
+  // lidar samples) is streamed instead (workspace_stream.cc): its cloud is
+  // built in two passes over the file, the samples never held, and it opens
+  // as a replayed large session is left (its samples released).
   void OpenSession(const QString& dir, double speed = 0.0);
+  void set_stream_open_above_bytes(qint64 bytes) { stream_open_above_bytes_ = bytes; }
+  qint64 stream_open_above_bytes() const { return stream_open_above_bytes_; }
   const hardware::Recording* recording_opened() const { return opened_.get(); }
   // Replay of the opened session.
   void SetReplaySpeed(double speed);
@@ -306,6 +313,9 @@ class Workspace : public QObject {
   // in a job first, then calls `then`.
   static constexpr size_t kKeepSamplesAtMost = 4'000'000;
   void ReleaseOpenedSamples();
+  // The streamed open (OpenSession); WillStreamOpen says whether it applies.
+  bool WillStreamOpen(const QString& dir, double speed, PoseSource source) const;
+  void OpenSessionStreamed(const QString& dir);
   void WithOpenedSamples(std::function<void()> then);
   // The cloud store pages beside `folder` (a session, the sessions folder).
   void PageBeside(const QString& folder);
@@ -360,6 +370,12 @@ class Workspace : public QObject {
     std::shared_ptr<const PoseBuffer> poses;
   };
   OpenedCircle opened_circle_;
+  qint64 stream_open_above_bytes_ = qint64{32} << 20;
+  // The circle of an opened session's EKF poses (is it a calibration drive?).
+  static OpenedCircle FindCircle(const hardware::Recording& recording);
+  // What opening a session sets, whichever way it was opened.
+  void TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
+                  const QString& dir, bool samples_released);
   std::vector<float> pass_labels_;
   std::vector<float> deviation_map_;
   std::shared_ptr<CloudEvaluation> evaluation_, previous_evaluation_;
