@@ -104,6 +104,12 @@ class LiveProcessor : public QObject {
   Time last_trajectory_time_;
   bool reset_pending_ = false;
   std::vector<Pose2d> adopted_trajectory_;  // For the next Publish (AdoptCloud).
+  // An adopted cloud is published kAdoptChunks chunks a tick, so that the
+  // GUI takes it in slices (a 100 M-point cloud is 1 519 chunks).
+  size_t publish_cap_ = static_cast<size_t>(-1);  // Sealed chunks publishable.
+  QTimer* adopt_timer_ = nullptr;
+  double adopt_length_s_ = 0.0;
+  void OnAdoptTick();
 
   // Replay state.
   std::shared_ptr<const hardware::Recording> replay_;
