@@ -196,53 +196,54 @@ int RunEvaluate(int argc, char** argv) {
       return kExitFailure;
     }
     results.emplace_back("cloud", e);
-  } else if (!args.Has("scenario") && !(args.Has("pose-source") && args.Get("pose-source") == "truth")) {
-    // A session: streamed (hardware/station/session_stream.h), only the
-    // positions kept, so memory is the evaluation's own.
-    const std::string& dir = args.positional()[0];
-    ReconstructionOptions ro;
-    if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &ro.pose.source) ||
-                                    ro.pose.source == PoseSource::kSfm)) {
-      PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
-      return kExitBadInput;
-    }
-    std::vector<std::pair<std::string, MountingError>> runs = {{"uncalibrated", MountingError{}}};
-    if (args.Has("calibration")) runs.emplace_back("calibrated", calibration);
-    for (const auto& [title, c] : runs) {
-      std::vector<Eigen::Vector3f> pts;
-      ro.calibration = c;
-      const int code = StreamPositions(args, dir, ro, &pts);
-      if (code != kExitOk) return code;
-      CloudEvaluation e;
-      const Status es = evaluate(title, pts, &e);
-      if (!es.ok()) {
-        PrintError(es.message());
-        return kExitFailure;
-      }
-      results.emplace_back(title, e);
-    }
   } else {
-    RecordingInput in;
-    int code = LoadRecording(args, &in);
-    if (code != kExitOk) return code;
+    // Uncalibrated, and with --calibration calibrated: each run's positions
+    // from `positions`, then evaluated.
     std::vector<std::pair<std::string, MountingError>> runs = {{"uncalibrated", MountingError{}}};
     if (args.Has("calibration")) runs.emplace_back("calibrated", calibration);
-    for (const auto& [title, c] : runs) {
-      ReconstructionResult r;
-      code = RecordingPoses(args, in, c, /*smooth=*/false, &r);  // the cloud `reconstruct` makes
-      if (code != kExitOk) return code;
-      std::vector<Eigen::Vector3f> pts;
-      pts.reserve(r.points.size());
-      for (const auto& p : r.points) pts.emplace_back(p.x, p.y, p.z);
-      r = ReconstructionResult();  // only the positions are evaluated
-      CloudEvaluation e;
-      const Status es = evaluate(title, pts, &e);
-      if (!es.ok()) {
-        PrintError(es.message());
-        return kExitFailure;
+    auto evaluate_runs = [&](auto&& positions) {
+      for (const auto& [title, c] : runs) {
+        std::vector<Eigen::Vector3f> pts;
+        const int code = positions(c, &pts);
+        if (code != kExitOk) return code;
+        CloudEvaluation e;
+        const Status es = evaluate(title, pts, &e);
+        if (!es.ok()) {
+          PrintError(es.message());
+          return kExitFailure;
+        }
+        results.emplace_back(title, e);
       }
-      results.emplace_back(title, e);
+      return kExitOk;
+    };
+    int code;
+    if (!args.Has("scenario") && !(args.Has("pose-source") && args.Get("pose-source") == "truth")) {
+      // A session: streamed (hardware/station/session_stream.h), only the
+      // positions kept, so memory is the evaluation's own.
+      ReconstructionOptions ro;
+      if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &ro.pose.source) ||
+                                      ro.pose.source == PoseSource::kSfm)) {
+        PrintError("--pose-source must be ekf, odometry or truth, got '" + args.Get("pose-source") + "'");
+        return kExitBadInput;
+      }
+      code = evaluate_runs([&](const MountingError& c, std::vector<Eigen::Vector3f>* pts) {
+        ro.calibration = c;
+        return StreamPositions(args, args.positional()[0], ro, pts);
+      });
+    } else {
+      // A scenario (simulated in-process, with its truth) or truth poses.
+      RecordingInput in;
+      if ((code = LoadRecording(args, &in)) != kExitOk) return code;
+      code = evaluate_runs([&](const MountingError& c, std::vector<Eigen::Vector3f>* pts) {
+        ReconstructionResult r;
+        const int rc = RecordingPoses(args, in, c, /*smooth=*/false, &r);  // the cloud `reconstruct` makes
+        if (rc != kExitOk) return rc;
+        pts->reserve(r.points.size());
+        for (const auto& p : r.points) pts->emplace_back(p.x, p.y, p.z);
+        return kExitOk;
+      });
     }
+    if (code != kExitOk) return code;
   }
   if (args.Flag("json")) {
     nlohmann::json report;

@@ -16,20 +16,7 @@ mkdir -p "$work"
 
 # Back-and-forth drives along the lab, as scripts/gui-bench.sh makes them.
 make_scenario() {  # seconds out
-  python3 - "$1" "$2" <<'PY'
-import json, math, sys
-seconds, out = float(sys.argv[1]), sys.argv[2]
-d = json.load(open("resources/scenarios/lab.json"))
-turn = {"v_mps": 0.0, "w_radps": 0.3, "duration_s": math.pi / 0.3}
-leg = {"v_mps": 0.2, "w_radps": 0.0, "duration_s": 35.0}
-segs, t = [], 0.0
-while t < seconds:
-    segs += [leg, turn]
-    t += leg["duration_s"] + turn["duration_s"]
-d["path"]["segments"] = segs
-d["name"] = "lab back and forth %.0f s" % seconds
-json.dump(d, open(out, "w"), indent=1)
-PY
+  python3 scripts/lab-drive.py "$1" "$2"
 }
 
 for s in 1950 36000; do

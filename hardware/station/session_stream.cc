@@ -1,7 +1,11 @@
 #include "hardware/station/session_stream.h"
 
 #include <algorithm>
+#include <condition_variable>
+#include <deque>
 #include <limits>
+#include <mutex>
+#include <thread>
 
 #include "core/cloud/assembler.h"
 
@@ -65,27 +69,69 @@ Status SessionCloudStream::PlacePoints(const PointSink& sink, const DecodeProgre
   const ReconstructionOptions& o = options_;
   Assembler assembler(o.assembly, BodyFromLidar(decode_.meta.geometry, o.calibration), o.pose.source);
   std::vector<size_t> dropped(result_.gaps.size(), 0);
-  constexpr size_t kChunk = 65536;
-  CloudChunk points;
-  points.reserve(kChunk + 4096);
-  Status failed;
-  auto hand = [&](size_t n) {
-    if (failed.ok() && n > 0) failed = sink(points.data(), n);
-    points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(n));
-  };
+  // Decoding is sequential (the codecs carry state from byte to byte);
+  // placing the points and the sink's work (a file, the cloud store) run
+  // beside it on a second thread, fed whole scans through a bounded queue
+  // in the decoder's order, so the points and their order are the same.
+  std::mutex mutex;
+  std::condition_variable queued, taken;
+  std::deque<LidarScan> queue;
+  constexpr size_t kQueuedScans = 32;  // about 4.5 s of X4 revolutions
+  bool decoded = false;
+  Status failed;  // the sink's first error; guarded by mutex
+  std::thread placer([&] {
+    constexpr size_t kChunk = 65536;
+    CloudChunk points;
+    points.reserve(kChunk + 4096);
+    auto hand = [&](size_t n) {
+      if (n == 0) return true;
+      const Status s = sink(points.data(), n);
+      points.erase(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(n));
+      if (s.ok()) return true;
+      std::lock_guard<std::mutex> lock(mutex);
+      failed = s;
+      taken.notify_all();
+      return false;
+    };
+    for (;;) {
+      LidarScan scan;
+      {
+        std::unique_lock<std::mutex> lock(mutex);
+        queued.wait(lock, [&] { return !queue.empty() || decoded; });
+        if (queue.empty()) break;
+        scan = std::move(queue.front());
+        queue.pop_front();
+      }
+      taken.notify_one();
+      CountSamplesInGaps(scan, result_.poses, o.assembly, result_.gaps, &dropped);
+      assembler.AddScan(scan, result_.poses, &points);
+      bool ok = true;
+      while (ok && points.size() >= kChunk) ok = hand(kChunk);
+      if (!ok) return;
+    }
+    hand(points.size());
+  });
   SessionStreamSinks sinks;
   sinks.scan = [&](LidarScan&& scan) {
-    CountSamplesInGaps(scan, result_.poses, o.assembly, result_.gaps, &dropped);
-    assembler.AddScan(scan, result_.poses, &points);
-    while (points.size() >= kChunk) hand(kChunk);
-    return failed.ok();
+    std::unique_lock<std::mutex> lock(mutex);
+    taken.wait(lock, [&] { return queue.size() < kQueuedScans || !failed.ok(); });
+    if (!failed.ok()) return false;
+    queue.push_back(std::move(scan));
+    lock.unlock();
+    queued.notify_one();
+    return true;
   };
   SessionDecodeInfo again;
-  Status s = DecodeSessionStreaming(dir_, frames_options_, sinks, &again, progress);
+  const Status s = DecodeSessionStreaming(dir_, frames_options_, sinks, &again, progress);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    decoded = true;
+    if (!s.ok()) queue.clear();  // cancelled or unreadable: nothing more to place
+  }
+  queued.notify_all();
+  placer.join();
   if (!failed.ok()) return failed;
   if (!s.ok()) return s;
-  hand(points.size());
-  if (!failed.ok()) return failed;
   FinishGapCounts(dropped, &result_);
   result_.stats = assembler.stats();
   return Status::Ok();

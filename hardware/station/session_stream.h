@@ -16,7 +16,9 @@
 // (docs/performance.md, "The CLI on long sessions"). The decode runs
 // twice; even so a session streams 3 times faster than it decoded whole.
 //
-// Pure, no Qt; one thread.
+// Pure, no Qt. Pass 2 places the points on a second thread of its own
+// while the calling thread decodes; the sink is called on that thread, one
+// call at a time, and PlacePoints returns after its last call.
 #ifndef SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_
 #define SWEEPSCAN_HARDWARE_STATION_SESSION_STREAM_H_
 
@@ -62,7 +64,8 @@ class SessionCloudStream {
   void set_keep_motion(bool keep) { keep_motion_ = keep; }
   SensorLog TakeMotion() { return std::move(motion_); }
 
-  // Pass 2. Fills result().stats and the gaps' dropped-sample counts.
+  // Pass 2. Fills result().stats and the gaps' dropped-sample counts. The
+  // sink runs on a thread of PlacePoints' own (header comment).
   Status PlacePoints(const PointSink& sink, const DecodeProgress& progress = nullptr);
 
  private:

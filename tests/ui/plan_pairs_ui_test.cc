@@ -112,7 +112,12 @@ class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
     OpenAndLoad(MakeProject(name, "project align --session b --to a"));
     PlanPanel* panel = window_->plan_panel();
     window_->findChild<QDockWidget*>("planDock")->toggleViewAction()->trigger();
-    EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000), 500);
+    // The plan is built on a job; the GUI thread's longest turn is a frame
+    // of the project's clouds under llvmpipe, which with ctest -j2 beside it
+    // reached 507 ms in a fresh-clone CI run (project_ui_test's align phase
+    // has the same 800 ms bound for the same frames). A plan built on the
+    // GUI thread would hold it for seconds.
+    EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000), 800);
     return panel;
   }
 
