@@ -2,6 +2,7 @@
 
 #include <QTimer>
 #include <algorithm>
+#include <cmath>
 
 #include "core/cloud/packed_chunk.h"
 #include "core/geometry/transform.h"
@@ -20,6 +21,9 @@ constexpr double kTrajectoryStepS = 0.1;
 // GUI builds their motion levels in a tick of ~10-20 ms, and 100 M points
 // appear in 1.2 s.
 constexpr size_t kAdoptChunks = 32;
+// An adopted cloud's path: a pose every 0.25 m or 15 degrees.
+constexpr double kAdoptStepM = 0.25;
+constexpr double kAdoptStepRad = 15.0 * M_PI / 180.0;
 constexpr int kAdoptTickMs = 25;
 
 Time FirstTime(const SensorLog& log) {
@@ -222,15 +226,19 @@ void LiveProcessor::AdoptCloud(std::shared_ptr<std::unique_ptr<PointChunks>> clo
   scans_ = scans;
   const PoseBuffer& p = *given_poses_;
   latest_time_ = p.empty() ? Time() : p.latest();
-  // The path as a replay draws it, a pose every kTrajectoryStepS.
+  // The path, a pose every kAdoptStepM moved or kAdoptStepRad turned: a
+  // 5.7-hour drive at a pose every 0.1 s would be a 200 000-vertex wide line,
+  // which alone halved the frame rate under llvmpipe.
   adopted_trajectory_.clear();
-  Time last = Time::min();
   for (size_t i = 0; i < p.size(); ++i) {
-    if (last != Time::min() && ToSeconds(p.time(i) - last) < kTrajectoryStepS) continue;
-    last = p.time(i);
     const Rigid3d& pose = p.pose(i);
-    adopted_trajectory_.push_back(
-        {pose.translation().x(), pose.translation().y(), YawFromQuaternion(pose.rotation())});
+    const Pose2d now{pose.translation().x(), pose.translation().y(), YawFromQuaternion(pose.rotation())};
+    if (!adopted_trajectory_.empty() && i + 1 < p.size()) {
+      const Pose2d& last = adopted_trajectory_.back();
+      const double turned = std::abs(std::remainder(now.yaw - last.yaw, 2.0 * M_PI));
+      if (std::hypot(now.x - last.x, now.y - last.y) < kAdoptStepM && turned < kAdoptStepRad) continue;
+    }
+    adopted_trajectory_.push_back(now);
   }
   last_trajectory_time_ = latest_time_;
   adopt_length_s_ = p.empty() ? 0.0 : ToSeconds(p.latest() - p.earliest());
