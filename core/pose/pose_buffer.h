@@ -49,6 +49,14 @@ class PoseBuffer {
     return true;
   }
 
+  // Room for n poses: a long drive's buffer (hundreds of MB) is then not
+  // copied as it doubles, and its pages are touched once.
+  void reserve(size_t n) {
+    times_.reserve(n);
+    poses_.reserve(n);
+    after_gap_.reserve(n);
+  }
+
   bool empty() const { return times_.empty(); }
   size_t size() const { return times_.size(); }
   Time earliest() const { return TimeFromNanoseconds(times_.front()); }

@@ -305,6 +305,8 @@ Pose2d PoseEstimator::LatestPose2d() const {
 PoseEstimator EstimatePoses(const SensorLog& log, const PoseEstimatorOptions& options,
                             const RobotGeometry& geometry) {
   PoseEstimator estimator(options, geometry);
+  // At most a pose a record (pages never written cost nothing).
+  estimator.mutable_poses()->reserve(log.wheels.size() + log.imu.size() + 1);
   size_t i = 0, j = 0;
   while (i < log.wheels.size() || j < log.imu.size()) {
     // On equal times the IMU goes first: the gyro is the better yaw-rate
