@@ -142,6 +142,7 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& telemetry_in) {
   switch (static_cast<LinkDevice>(t.device)) {
     case LinkDevice::kLidar: {
       stats_.device_bytes[0] += t.bytes.size();
+      if (!options_.decode_lidar) break;
       x4_.Feed(t.bytes, t.receive_time);
       for (X4Scan& scan : x4_.TakeScans()) {
         LidarScan out;
@@ -163,6 +164,7 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& telemetry_in) {
     }
     case LinkDevice::kImu: {
       stats_.device_bytes[1] += t.bytes.size();
+      if (!options_.decode_motion) break;
       hi219_.Feed(t.bytes, t.receive_time);
       for (const ImuSample& s : hi219_.TakeSamples()) {
         ImuMeasurement m;
@@ -184,6 +186,7 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& telemetry_in) {
     }
     case LinkDevice::kMotorBoard: {
       stats_.device_bytes[2] += t.bytes.size();
+      if (!options_.decode_motion) break;
       motor_.Feed(t.bytes, t.receive_time);
       for (const MotorFeedback& f : motor_.TakeRecords()) {
         WheelSpeedMeasurement w;
@@ -287,7 +290,7 @@ class SessionRecordDecoder {
  public:
   SessionRecordDecoder(const TelemetryDecoderOptions& options, const SessionStreamSinks& sinks,
                        SessionDecodeInfo* info)
-      : decoder_(options), sinks_(sinks), info_(info) {}
+      : decoder_(OnlyWhatIsTaken(options, sinks)), sinks_(sinks), info_(info) {}
 
   // False when the scan sink stopped the decode.
   bool Add(uint64_t ordinal, const uint8_t* bytes, size_t n) {
@@ -326,6 +329,14 @@ class SessionRecordDecoder {
   }
 
  private:
+  // A device nobody takes records of is not decoded.
+  static TelemetryDecoderOptions OnlyWhatIsTaken(TelemetryDecoderOptions options,
+                                                 const SessionStreamSinks& sinks) {
+    if (!sinks.scan) options.decode_lidar = false;
+    if (sinks.motion == nullptr) options.decode_motion = false;
+    return options;
+  }
+
   bool Hand() {
     decoder_.TakeInto(&taken_);
     if (sinks_.motion != nullptr) {

@@ -50,6 +50,12 @@ struct TelemetryDecoderOptions {
   double motor_baud = 115200.0;
   Duration imu_latency{0};
   Duration motor_latency{0};
+  // False: that device's bytes are counted but not decoded (no records,
+  // no codec stats). A pass that needs only the wheel and IMU records (the
+  // poses) saves the X4 decode, about a third of reading a session; one
+  // that needs only the scans saves the HI219's and motor board's.
+  bool decode_lidar = true;
+  bool decode_motion = true;  // the IMU and the motor board
 
   bool IsValid(std::string* error) const;
 };
@@ -200,8 +206,11 @@ struct SessionStreamSinks {
 // by record through a mapping whose pages are dropped behind the reader
 // (core/session/session.h VisitFramesFile), and the decoded records go to
 // the sinks. Memory is what the sinks keep. The records decoded, their
-// order and *info are exactly DecodeSession's. Measurement sessions (an
-// imported bag) are loaded whole, then handed out.
+// order and *info are exactly DecodeSession's, except that a device
+// without a sink is not decoded (no scan sink: decode_lidar off, and
+// info->telemetry.x4 stays zero; no motion sink: decode_motion off, and
+// .hi219, .motor and .imu_samples_without_data stay zero). Measurement
+// sessions (an imported bag) are loaded whole, then handed out.
 Status DecodeSessionStreaming(const std::string& session_dir, const TelemetryDecoderOptions& options,
                               const FramesLoadOptions& frames_options, const SessionStreamSinks& sinks,
                               SessionDecodeInfo* info, const DecodeProgress& progress = nullptr);

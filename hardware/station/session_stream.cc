@@ -19,13 +19,11 @@ Status SessionCloudStream::EstimatePoses(const std::string& session_dir, const F
   options_ = options;
   result_ = ReconstructionResult();
   motion_ = SensorLog();
+  // No scan sink: the lidar's bytes are not decoded in this pass (pass 2
+  // decodes them, and not the motion records).
   SessionStreamSinks sinks;
   sinks.motion = &motion_;
   scans_ = 0;
-  sinks.scan = [this](LidarScan&&) {
-    ++scans_;
-    return true;
-  };
   decoded_ = false;
   Status s = DecodeSessionStreaming(session_dir, frames_options, sinks, &decode_, progress);
   if (!s.ok()) return s;
@@ -103,6 +101,7 @@ Status SessionCloudStream::PlacePoints(const PointSink& sink, const DecodeProgre
         queue.pop_front();
       }
       taken.notify_one();
+      ++scans_;
       CountSamplesInGaps(scan, result_.poses, o.assembly, result_.gaps, &dropped);
       assembler.AddScan(scan, result_.poses, &points);
       bool ok = true;
@@ -134,6 +133,9 @@ Status SessionCloudStream::PlacePoints(const PointSink& sink, const DecodeProgre
   if (!s.ok()) return s;
   FinishGapCounts(dropped, &result_);
   result_.stats = assembler.stats();
+  // Pass 1 decoded the wheels and IMU, pass 2 the lidar: together the
+  // counts of one whole decode (every other count is the same in both).
+  decode_.telemetry.x4 = again.telemetry.x4;
   return Status::Ok();
 }
 

@@ -2,10 +2,12 @@
 // passes over frames.bin, each visiting it record by record
 // (DecodeSessionStreaming).
 //
-//   pass 1  decode; keep the wheel and IMU records (the scans are dropped as
-//           they are decoded); estimate the poses (EKF, odometry, or given).
-//   pass 2  decode again; place each scan as it comes (Assembler, the same
-//           per-sample deskew as Reconstruct) and hand its points to a sink.
+//   pass 1  decode the wheel and IMU records and keep them (the lidar's
+//           bytes are skipped undecoded); estimate the poses (EKF,
+//           odometry, or given).
+//   pass 2  decode the lidar's bytes; place each scan as it comes
+//           (Assembler, the same per-sample deskew as Reconstruct) and hand
+//           its points to a sink.
 //
 // The points, their order and every count are Reconstruct's, bit for bit.
 // What stays in memory is the motion records (pass 1 only: about 6 kB a
@@ -44,11 +46,13 @@ class SessionCloudStream {
                        const ReconstructionOptions& options, const PoseBuffer* given = nullptr,
                        const DecodeProgress& progress = nullptr);
 
-  // After pass 1: what the decode found, and the poses, EKF counters and
-  // gaps (result().points stays empty; stats and gap counts come with pass 2).
+  // After pass 1: what the decode found (the frames' damage, meta, link;
+  // the lidar's codec counts, telemetry.x4, come with pass 2),
+  // and the poses, EKF counters and gaps (result().points stays empty;
+  // stats and gap counts come with pass 2).
   const SessionDecodeInfo& decode() const { return decode_; }
   const ReconstructionResult& result() const { return result_; }
-  size_t scans() const { return scans_; }  // decoded in pass 1
+  size_t scans() const { return scans_; }  // placed in pass 2
   // Pass 1 read the session (a failure after it is the poses': options, or
   // a session without odometry).
   bool decoded() const { return decoded_; }
@@ -56,6 +60,8 @@ class SessionCloudStream {
   // widened by the longest range plus the lidar's offset from the body
   // (and 1 mm for float rounding). The LAS writer needs its extent first.
   void PointBounds(double min[3], double max[3]) const;
+  // After pass 2: the poses, moved out (result().poses is then empty).
+  PoseBuffer TakePoses() { return std::move(result_.poses); }
   // Motion records and poses held, bytes (what pass 1 keeps for pass 2).
   size_t held_bytes() const;
 

@@ -167,6 +167,16 @@ TEST(SessionStreamTest, StreamingDecodeHandsOverWhatDecodeSessionKeeps) {
     }
   }
   for (size_t i = 0; i < log.imu.size(); ++i) ASSERT_EQ(motion.imu[i].time, log.imu[i].time);
+  // The two passes of SessionCloudStream decode one device each (the
+  // wheels and IMU, then the lidar); their counts together are one whole
+  // decode's.
+  SessionCloudStream stream;
+  ASSERT_TRUE(stream.EstimatePoses(dir, DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
+  EXPECT_EQ(stream.decode().telemetry.x4.frames_ok, 0u);
+  EXPECT_EQ(stream.decode().telemetry.hi219.frames_ok, info.telemetry.hi219.frames_ok);
+  ASSERT_TRUE(stream.PlacePoints([](const CloudPoint*, size_t) { return Status::Ok(); }).ok());
+  EXPECT_EQ(stream.decode().ToString(), info.ToString());
+  EXPECT_GT(info.telemetry.x4.frames_ok, 1000u);
   // --strict: the damage is refused with its place, as DecodeSession does.
   FramesLoadOptions strict;
   SessionDecodeInfo refused;
