@@ -546,14 +546,18 @@ void Workspace::OpenSession(const QString& dir, double speed) {
       });
 }
 
-Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recording) {
+Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recording,
+                                              std::shared_ptr<const PoseBuffer> ekf_poses) {
   // Is it a calibration drive? The EKF poses (a few ms per minute of
   // drive; Calibrate smooths them, which moves the circle by mm) and the
   // circle through them.
   OpenedCircle circle;
-  PoseEstimatorOptions pose;
-  pose.initial_pose = recording.start;
-  auto poses = std::make_shared<PoseBuffer>(EstimatePoses(recording.log, pose, recording.geometry).poses());
+  std::shared_ptr<const PoseBuffer> poses = std::move(ekf_poses);
+  if (!poses) {
+    PoseEstimatorOptions pose;
+    pose.initial_pose = recording.start;
+    poses = std::make_shared<const PoseBuffer>(EstimatePoses(recording.log, pose, recording.geometry).poses());
+  }
   std::string why;
   circle.ok = FitCircleDrive(*poses, &circle.circle, &why);
   circle.note = circle.ok ? tr("a circle drive: radius %1 m").arg(circle.circle.radius_m, 0, 'f', 2)

@@ -372,7 +372,9 @@ class Workspace : public QObject {
   OpenedCircle opened_circle_;
   qint64 stream_open_above_bytes_ = qint64{32} << 20;
   // The circle of an opened session's EKF poses (is it a calibration drive?).
-  static OpenedCircle FindCircle(const hardware::Recording& recording);
+  // `ekf_poses`: the recording's EKF poses when already estimated.
+  static OpenedCircle FindCircle(const hardware::Recording& recording,
+                                 std::shared_ptr<const PoseBuffer> ekf_poses = nullptr);
   // What opening a session sets, whichever way it was opened.
   void TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
                   const QString& dir, bool samples_released);

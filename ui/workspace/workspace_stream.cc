@@ -42,15 +42,18 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
   auto circle = std::make_shared<OpenedCircle>();
   auto cloud = std::make_shared<std::unique_ptr<PointChunks>>();
   auto options = std::make_shared<ReconstructionOptions>();
+  auto poses = std::make_shared<std::shared_ptr<const PoseBuffer>>();
   RunJob(
       QStringLiteral("Opening %1").arg(dir),
-      [this, stream, light, circle, cloud, options, source, path](std::atomic<bool>* cancel) -> QString {
+      [this, stream, light, circle, cloud, options, poses, source, path](std::atomic<bool>* cancel) -> QString {
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
-        // The first pass is about half the work (one decode), the second the rest.
-        auto progress = [this, what, cancel](double from) {
+        // The first pass (the wheels and IMU decoded, the EKF) is about a
+        // third of the work, the second (the lidar decoded, the points
+        // placed) the rest.
+        auto progress = [this, what, cancel](double from, double share) {
           auto last = std::make_shared<double>(-1.0);
-          return [this, what, cancel, from, last](double f) {
-            const double at = from + 0.5 * f;
+          return [this, what, cancel, from, share, last](double f) {
+            const double at = from + share * f;
             if (at - *last >= 0.02 || f >= 1.0) {
               *last = at;
               QMetaObject::invokeMethod(this, [this, what, at] { emit jobProgress(what, at); });
@@ -65,40 +68,43 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         options->calibration = meta.calibration;
         options->pose.initial_pose = SessionStartPose(meta);
         stream->set_keep_motion(true);
-        s = stream->EstimatePoses(path, hardware::DefaultSessionFramesOptions(), *options, nullptr, progress(0.0));
+        s = stream->EstimatePoses(path, hardware::DefaultSessionFramesOptions(), *options, nullptr, progress(0.0, 0.35));
         if (!s.ok()) return QString::fromStdString(s.message());
         // What the opened session keeps: its wheel and IMU records (a few
         // MB an hour), as ReleaseOpenedSamples leaves a replayed one.
         light->log = stream->TakeMotion();
-        light->decode = stream->decode();
         light->session_dir = path;
-        light->geometry = light->decode.meta.geometry;
+        light->geometry = stream->decode().meta.geometry;
         light->start = options->pose.initial_pose;
         light->name = "session " + path;
-        *circle = FindCircle(*light);
         auto chunks = std::make_unique<PointChunks>();
         s = stream->PlacePoints(
             [&chunks](const CloudPoint* p, size_t n) {
               for (size_t i = 0; i < n; ++i) chunks->Append(p[i]);
               return Status::Ok();
             },
-            progress(0.5));
+            progress(0.35, 0.65));
         if (!s.ok()) return QString::fromStdString(s.message());
+        light->decode = stream->decode();  // with pass 2's lidar counts
         *cloud = std::move(chunks);
+        // The poses, moved (hundreds of MB on a long drive), not copied.
+        *poses = std::make_shared<const PoseBuffer>(stream->TakePoses());
+        // With the EKF, they are the ones FindCircle would estimate again
+        // (the same log, options and start).
+        *circle = FindCircle(*light, source == PoseSource::kEkf ? *poses : nullptr);
         return QString();
       },
-      [this, stream, light, circle, cloud, options, dir] {
+      [this, stream, light, circle, cloud, options, poses, dir] {
         TakeOpened(light, *circle, dir, /*samples_released=*/true);
         shown_calibration_ = options->calibration;
         shown_given_ = nullptr;
         sfm_summary_.clear();
         replaying_ = true;  // until the processor's replayFinished
         LiveProcessor* p = processor_;
-        auto poses = std::make_shared<const PoseBuffer>(stream->result().poses);
         const RobotGeometry geometry = light->geometry;
         const size_t scans = stream->scans();
         const ReconstructionOptions o = *options;
-        QMetaObject::invokeMethod(p, [p, cloud, poses, o, geometry, scans] {
+        QMetaObject::invokeMethod(p, [p, cloud, poses = *poses, o, geometry, scans] {
           p->AdoptCloud(cloud, poses, o, geometry, scans);
         });
         SetShownPoseSource(options->pose.source);
