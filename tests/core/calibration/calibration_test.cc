@@ -14,29 +14,12 @@
 #include "core/pose/pose_estimator.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/world.h"
+#include "tests/core/calibration/lab_board.h"
 #include "tests/testing/worlds.h"
 
 namespace sweepscan {
 namespace {
 
-// The lab's target board (core/sim/scene.cc), front face y = 0.16 facing the
-// circle. Upright: x 4.7..5.3, z 0.9..1.5; corners in FitBoardCorners' order
-// top-left, top-right, bottom-right, bottom-left. Diamond: the same 0.6 m
-// board turned 45 deg about its centre (5, 1.35); corners top, right,
-// bottom, left.
-constexpr double kHalfDiagonal = 0.3 * M_SQRT2;
-const Eigen::Vector3d kSquareCorners[4] = {
-    {4.7, 0.16, 1.5}, {5.3, 0.16, 1.5}, {5.3, 0.16, 0.9}, {4.7, 0.16, 0.9}};
-const Eigen::Vector3d kDiamondCorners[4] = {{5.0, 0.16, 1.35 + kHalfDiagonal},
-                                            {5.0 + kHalfDiagonal, 0.16, 1.35},
-                                            {5.0, 0.16, 1.35 - kHalfDiagonal},
-                                            {5.0 - kHalfDiagonal, 0.16, 1.35}};
-// Around the board, generous enough for the uncalibrated ghosts (a few cm),
-// clear of the wall (y = 0) behind it; the sill's top (0.85 m) may be inside.
-const Eigen::AlignedBox3d kSquareRegion(Eigen::Vector3d(4.55, 0.06, 0.75),
-                                        Eigen::Vector3d(5.45, 0.30, 1.65));
-const Eigen::AlignedBox3d kDiamondRegion(Eigen::Vector3d(4.45, 0.06, 0.80),
-                                         Eigen::Vector3d(5.55, 0.30, 1.90));
 
 struct Case {
   uint64_t seed;
@@ -52,7 +35,6 @@ struct Case {
 };
 
 const MountingError kPaper{-0.0058, 0.0126, 0.0355};
-const MountingError kSetB{0.0150, -0.0100, -0.0200};
 const MountingError kSetC{-0.0200, 0.0200, 0.0100};
 // 0-3: the paper's upright board, one turn at 0.2 m/s; 4-12: the diamond on
 // the calibration drive (two turns at 0.05 m/s), 3 seeds per angle set.
@@ -146,11 +128,6 @@ double CornerDistance(const Drive& d, const MountingError& c) {
   EXPECT_TRUE(FitBoardCorners(d.board[0], d.config.geometry, c, Thickness(d), &a).ok());
   EXPECT_TRUE(FitBoardCorners(d.board[1], d.config.geometry, c, Thickness(d), &b).ok());
   return CornerRms(a, b);
-}
-
-Eigen::Vector3d ErrorMrad(const MountingError& got, const MountingError& truth) {
-  return 1e3 *
-         Eigen::Vector3d(got.alpha - truth.alpha, got.beta - truth.beta, got.gamma - truth.gamma);
 }
 
 // The ceiling's fitted normal under a calibration (points above 2.3 m, away
@@ -715,85 +692,6 @@ TEST(RefinedCornersTest, TooFewSamplesFails) {
   const Status st = SolveRefinedCorners({}, {}, RobotGeometry(), {}, CalibrationOptions(), &s);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.message().find("pass 1"), std::string::npos) << st.message();
-}
-
-// The diamond drive (three turns at 0.05 m/s, truth poses) with what real
-// edges do (issue 32): half of the beams straddling the board's edges report
-// a mixed range (half of those a blend of the two surfaces', half the other
-// surface's), every range reads 0.5 % long plus 6 mm. The refined corners
-// must still land within the aims (2 mrad) and inside 3 sigma, and count the
-// lines they rejected and the mixed returns they recognised; the same drive
-// without mixed returns rejects far fewer.
-struct EdgeDrive {
-  sim::SimConfig config;
-  std::vector<LidarObservation> board[2];
-};
-
-EdgeDrive SimulateEdgeDrive(double mixed_share) {
-  EdgeDrive d;
-  d.config = testing::CircleConfig(21);
-  d.config.scene = sim::LabScene(sim::LabTarget::kDiamond);
-  d.config.path = {CircleSegment(0.83, 0.05, 3.0, /*left=*/true)};
-  d.config.mounting_error = kSetB;
-  d.config.lidar.mixed_return_share = mixed_share;
-  d.config.lidar.mixed_blend_share = 0.5;
-  d.config.lidar.range_offset_m = 0.006;
-  d.config.lidar.range_scale_error = 0.005;
-  sim::SimWorld world(d.config);
-  const SensorLog log = world.RunAll();
-  const SampleStore store(log, world.TruthPoses(1000.0));
-  TargetSightings t = CollectTargetSightings(store, d.config.geometry, {}, kDiamondRegion, 1.0, 50);
-  d.board[0] = std::move(t.passes[0]);
-  d.board[1] = std::move(t.passes[1]);
-  return d;
-}
-
-// Both drives solved once, shared by the tests below.
-const CalibrationSummary& EdgeDriveSolve(bool mixed) {
-  static std::map<bool, CalibrationSummary> cache;
-  auto it = cache.find(mixed);
-  if (it != cache.end()) return it->second;
-  CalibrationOptions o;
-  o.board_thickness_m = sim::LabTargetThickness(sim::LabTarget::kDiamond);
-  const EdgeDrive d = SimulateEdgeDrive(mixed ? 0.5 : 0.0);
-  CalibrationSummary s;
-  const Status st = SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, o, &s);
-  EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
-  const Eigen::Vector3d e = ErrorMrad(s.angles, kSetB);
-  std::printf("[calib] mixed edges %s: err(mrad) alpha %+7.3f beta %+7.3f gamma %+7.3f  "
-              "sigma(mrad) %.3f %.3f %.3f  edge points %d kept, %d rejected, %d mixed\n",
-              mixed ? "0.5 " : "none", e[0], e[1], e[2], 1e3 * s.sigma_rad[0],
-              1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2], s.edge_points, s.rejected_edge_points,
-              s.mixed_edge_samples);
-  return cache[mixed] = s;
-}
-
-TEST(RefinedCornersTest, MixedEdgeReturnsAreCountedAndSigmaCoversThem) {
-  const CalibrationSummary& clean = EdgeDriveSolve(false);
-  const CalibrationSummary& mixed = EdgeDriveSolve(true);
-  for (const CalibrationSummary* s : {&clean, &mixed}) {
-    ASSERT_TRUE(s->converged) << s->FullReport();
-    const Eigen::Vector3d e = ErrorMrad(s->angles, kSetB);
-    for (int k = 0; k < 3; ++k) {
-      EXPECT_LT(std::abs(e[k]), 3.0 * 1e3 * s->sigma_rad[k]) << k << "\n" << s->FullReport();
-    }
-  }
-  EXPECT_GT(mixed.mixed_edge_samples, 20);
-  EXPECT_GT(mixed.rejected_edge_points, 2 * clean.rejected_edge_points + 10);
-  EXPECT_GE(clean.mixed_edge_samples, 0);
-  EXPECT_LT(clean.mixed_edge_samples, 5);  // a clean drive has (nearly) none
-}
-
-// The issue's aim on the same drives: every angle within 2 mrad. Not met
-// today (2026-11-26): the range offset and scale alone leave alpha, beta
-// +3.2 and gamma +1.75 mrad on truth poses, and the mixed returns take alpha
-// and beta to +8.5 / +7.6 (docs/calibration.md, "Mixed returns and range
-// errors"). Run with --gtest_also_run_disabled_tests.
-TEST(RefinedCornersTest, DISABLED_MixedEdgeReturnsAndARangeOffsetStayWithinTwoMrad) {
-  for (bool mixed : {false, true}) {
-    const Eigen::Vector3d e = ErrorMrad(EdgeDriveSolve(mixed).angles, kSetB);
-    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(e[k]), 2.0) << k << " mixed " << mixed;
-  }
 }
 
 }  // namespace
