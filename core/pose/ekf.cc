@@ -89,18 +89,15 @@ void PoseEkf::PredictState(const EkfOptions& options, const State& s, const Cova
   // product: the EKF was 18 % of a CLI reconstruct. Products of fixed
   // small sizes here and below are coefficient-based (lazyProduct).
   constexpr int kMoved[] = {kX, kY, kPsi};
+  Eigen::Matrix<double, 3, kStateSize> d;  // D's non-zero rows
+  for (int k = 0; k < 3; ++k) {
+    d.row(k) = f.row(kMoved[k]);
+    d(k, kMoved[k]) -= 1.0;
+  }
   Covariance fp = p;
-  for (int i : kMoved) {
-    Eigen::Matrix<double, 1, kStateSize> d = f.row(i);
-    d[i] -= 1.0;
-    fp.row(i) += d.lazyProduct(p);
-  }
+  for (int k = 0; k < 3; ++k) fp.row(kMoved[k]) += d.row(k).lazyProduct(p);
   *p_pred = fp;
-  for (int i : kMoved) {
-    Eigen::Matrix<double, 1, kStateSize> d = f.row(i);
-    d[i] -= 1.0;
-    p_pred->col(i) += fp.lazyProduct(d.transpose());
-  }
+  for (int k = 0; k < 3; ++k) p_pred->col(kMoved[k]) += fp.lazyProduct(d.row(k).transpose());
   p_pred->diagonal() += q * dt;
 }
 
