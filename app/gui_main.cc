@@ -151,7 +151,8 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "10000000 on a GPU).",
       "N");
   const QCommandLineOption lod_budget(
-      "lod-budget", "Points drawn at most while the camera moves or points stream in (default 120000).",
+      "lod-budget", "Points drawn at most while the camera moves or points stream in (default 60000 under a "
+      "software renderer, 1000000 on a GPU).",
       "N");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
@@ -437,6 +438,21 @@ bool HasDisplay() {
          !qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM");
 }
 
+// Keeps freed heap memory for reuse instead of handing it back after every
+// free. Mesa's llvmpipe allocates its vertex and binning buffers for each
+// draw and frees them after it (megabytes a frame); glibc's defaults (the
+// heap trimmed once 128 KiB-32 MiB is free at its top, larger blocks mapped
+// and unmapped each time) made each frame fault those pages in afresh,
+// which on a virtual machine cost up to four fifths of a frame: a 221 000-
+// point view drew 3.6 frames/s, 20 with these settings (docs/performance.md,
+// "Desktop app"). Memory is still given back where it matters: the pager
+// and the workspace call malloc_trim after dropping chunks or a session.
+void KeepFreedMemoryForReuse() {
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap.
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  mallopt(M_TOP_PAD, 64 << 20);
+}
+
 int Main(int argc, char** argv) {
   // --help and --version need no window: answered without a display (an
   // operator asking over ssh), as QCommandLineParser prints them and exits.
@@ -452,6 +468,7 @@ int Main(int argc, char** argv) {
                  "xvfb-run; sweepscan-cli does the processing without one\n");
     return 2;
   }
+  KeepFreedMemoryForReuse();
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   SetApplicationNames();
