@@ -43,6 +43,7 @@
 
 #include "core/cloud/cloud.h"
 #include "core/cloud/packed_chunk.h"
+#include "core/geometry/polyline.h"
 #include "core/pose/odometry.h"
 
 class QMouseEvent;
@@ -262,6 +263,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   struct Drawn;
   struct Batch;
   static constexpr size_t kBatchChunks = 16;
+  // The motion level, a few hundred points a chunk, is drawn through every
+  // kMotionBatches-th batch's actor for kMotionBatches * kBatchChunks chunks.
+  static constexpr size_t kMotionBatches = 8;
   void SyncBatches();  // Before every frame (cloud_view_batches.cc).
   void ClearBatches();
   void InstallBatchObserver();
@@ -314,6 +318,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkBillboardTextActor3D> measure_label_;
   vtkSmartPointer<vtkPoints> trajectory_points_;
   vtkSmartPointer<vtkPolyData> trajectory_poly_;
+  // The path as drawn: within 5 mm of every pose given (core/geometry/polyline.h).
+  PolylineSimplifier trajectory_path_{0.005};
   vtkSmartPointer<vtkAxesActor> axes_;
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
@@ -341,13 +347,16 @@ class CloudView : public QVTKOpenGLNativeWidget {
   double deviation_max_mm_ = 30.0;
   int pass_filter_ = -1;
   bool have_points_ = false;
-  // Measured under llvmpipe on 2 cores: a frame costs ~30 ms plus ~0.17 us a
-  // point, so 120 000 points keep camera motion above 20 frames/s; at rest
-  // 1 M points are a ~0.16 s frame (docs/performance.md, "Desktop app").
-  // The rest budget's default is set at the first frame from the renderer
-  // (1 M in software, 10 M on a GPU) unless SetRestBudget() chose one.
-  size_t lod_budget_ = 120'000;
+  // Measured under llvmpipe on 2 cores (docs/performance.md, "Desktop
+  // app"): a frame costs ~16 ms plus ~0.4 us a point drawn while the
+  // camera moves (the draw module's vertex work on the GUI thread and the
+  // binning), so 60 000 points keep camera motion at about 30 frames/s; at
+  // rest 1 M points are a ~0.2 s frame. Both defaults are set at the first
+  // frame from the renderer (60 000 and 1 M in software, 1 M and 10 M on a
+  // GPU) unless SetLodBudget() / SetRestBudget() chose them.
+  size_t lod_budget_ = 60'000;
   size_t rest_budget_ = 1'000'000;
+  bool lod_budget_set_ = false;
   bool rest_budget_set_ = false;
   bool renderer_known_ = false;
   bool software_renderer_ = false;

@@ -291,6 +291,7 @@ void CloudView::SetLodActive(bool active) {
 
 void CloudView::SetLodBudget(size_t points) {
   lod_budget_ = std::max<size_t>(points, 1000);
+  lod_budget_set_ = true;
   UpdateMotionStride();
   RequestRender();
 }

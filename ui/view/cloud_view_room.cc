@@ -50,10 +50,15 @@ double CloudView::FindCeiling() const {
   // A room is at least 1.8 m high; a scan of a ceiling-less yard or a lone
   // object has no ceiling to hide.
   if (hi - lo < 1.8) return kNone;
+  // Bins on whole multiples of kBin, not from the sample's lowest point, so
+  // that the height found does not move with the sample (the LOD budget).
   constexpr double kBin = 0.05;
-  const int bins = static_cast<int>((hi - lo) / kBin) + 1;
+  const double base = std::floor(lo / kBin);
+  const int bins = static_cast<int>(std::floor(hi / kBin) - base) + 1;
   std::vector<size_t> count(bins, 0);
-  for (float v : z) ++count[std::min(bins - 1, static_cast<int>((v - lo) / kBin))];
+  for (float v : z) {
+    ++count[std::clamp(static_cast<int>(std::floor(v / kBin) - base), 0, bins - 1)];
+  }
   // Walls give each bin of height about the same count; a ceiling is a
   // horizontal layer that puts many times that into a few bins near the top.
   std::vector<size_t> middle(count.begin() + bins / 4, count.begin() + 3 * bins / 4);
@@ -65,7 +70,7 @@ double CloudView::FindCeiling() const {
       // The layer's lower edge: the lowest of its dense bins.
       int first = b;
       while (first > 0 && count[first - 1] >= 3.0 * wall) --first;
-      return lo + first * kBin;
+      return (base + first) * kBin;
     }
   }
   return kNone;
