@@ -188,9 +188,10 @@ void CloudView::ShowLevels() {
   // Sealed chunks show through their batches (the growing chunk's own actor
   // is always shown, in full): the motion level while active, else the
   // rest level (each chunk's where it has one, cloud_view_batches.cc).
-  for (auto& b : batches_) {
-    b->level[0].drawn.actor->SetVisibility(lod_active_);
-    b->level[1].drawn.actor->SetVisibility(!lod_active_);
+  for (size_t i = 0; i < batches_.size(); ++i) {
+    // The motion level's actors are every kMotionBatches-th batch's (cloud_view_batches.cc).
+    batches_[i]->level[0].drawn.actor->SetVisibility(lod_active_ && i % kMotionBatches == 0);
+    batches_[i]->level[1].drawn.actor->SetVisibility(!lod_active_);
   }
 }
 
