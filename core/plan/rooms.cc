@@ -10,6 +10,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "core/geometry/polyline.h"
+
 namespace sweepscan::plan {
 namespace {
 
@@ -404,13 +406,6 @@ double SignedArea(const std::vector<Eigen::Vector2d>& poly) {
 constexpr double kLabelClear = 0.5;
 constexpr double kLabelDepthShare = 0.5;
 
-double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  const Eigen::Vector2d d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * d - p).norm();
-}
-
 Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const std::vector<Dimension>& dimensions) {
   std::unordered_map<uint64_t, int> depth;
   const auto key = [](int i, int j) { return (static_cast<uint64_t>(static_cast<uint32_t>(i)) << 32) | static_cast<uint32_t>(j); };
@@ -446,7 +441,7 @@ Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const 
   const double clearance = std::min(kLabelClear, 0.3 * deepest * r.cell());
   const auto clear = [&](const Eigen::Vector2d& p) {
     for (const Dimension& dim : dimensions) {
-      if (SegmentDistance(p, dim.a, dim.b) < clearance) return false;
+      if (DistanceToSegment(p, dim.a, dim.b) < clearance) return false;
     }
     return true;
   };
