@@ -79,9 +79,9 @@ void Assembler::Place(const LidarScan& scan, const PoseBuffer& poses, Emit&& emi
     const Eigen::Vector3f p_b = s.range_m * (std::sin(s.theta) * c1 + std::cos(s.theta) * c2) + t_bl;
     const Eigen::Vector3f p_w = r_wb * p_b + t_wb;
     CloudPoint p;
-    p.x = p_w.x();
-    p.y = p_w.y();
-    p.z = p_w.z();
+    p.x = options_.snap_to_grid ? SnapToGrid(p_w.x()) : p_w.x();
+    p.y = options_.snap_to_grid ? SnapToGrid(p_w.y()) : p_w.y();
+    p.z = options_.snap_to_grid ? SnapToGrid(p_w.z()) : p_w.z();
     p.range_m = s.range_m;
     p.time_ns = ToNanoseconds(s.time);
     p.scan = scan.index;

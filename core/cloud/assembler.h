@@ -25,6 +25,10 @@ struct AssemblyOptions {
   bool deskew = true;
   double min_range_m = 0.12;  // X4 specification
   double max_range_m = 10.0;
+  // Round positions to the cloud's 1 mm grid (cloud.h), as every cloud the
+  // app and the CLI show or write is. Off only for scan matching's own
+  // points (core/sfm), which never leave it.
+  bool snap_to_grid = true;
 
   bool IsValid(std::string* error) const;
 };

@@ -234,12 +234,14 @@ bool CloudPager::WriteLocked(const PackedChunk* chunk, const ChunkPayload& p, in
       return false;
     }
   }
-  // Layout: xyz, range (uint16 or float), dt_ns, beam, back to back.
+  // Layout: xyz (int16 grid steps or float), range (uint16 or float), dt_ns,
+  // beam, back to back.
   int64_t at = file_end_;
   const struct {
     const void* data;
     size_t bytes;
-  } parts[] = {{p.xyz.data(), p.xyz.size() * 4},
+  } parts[] = {{p.xyz_mm.empty() ? static_cast<const void*>(p.xyz.data()) : p.xyz_mm.data(),
+                p.xyz_mm.empty() ? p.xyz.size() * 4 : p.xyz_mm.size() * 2},
                {p.range_q.empty() ? static_cast<const void*>(p.range_f.data()) : p.range_q.data(),
                 p.range_q.empty() ? p.range_f.size() * 4 : p.range_q.size() * 2},
                {p.dt_ns.data(), p.dt_ns.size() * 4},
@@ -261,17 +263,15 @@ bool CloudPager::WriteLocked(const PackedChunk* chunk, const ChunkPayload& p, in
 std::shared_ptr<ChunkPayload> CloudPager::ReadLocked(const PackedChunk* chunk, int64_t offset) {
   auto p = std::make_shared<ChunkPayload>();
   const size_t n = chunk->size();
-  const bool quantised = chunk->payload_bytes() == n * 20;
-  p->xyz.resize(3 * n);
-  if (quantised) {
-    p->range_q.resize(n);
-  } else {
-    p->range_f.resize(n);
-  }
+  const bool grid = chunk->positions_on_grid();
+  const bool quantised = chunk->ranges_quantised();
+  (grid ? p->xyz_mm.resize(3 * n) : p->xyz.resize(3 * n));
+  (quantised ? p->range_q.resize(n) : p->range_f.resize(n));
   p->dt_ns.resize(n);
   p->beam.resize(n);
-  bool ok = ReadAll(fd_, p->xyz.data(), 12 * n, offset);
-  offset += static_cast<int64_t>(12 * n);
+  bool ok = grid ? ReadAll(fd_, p->xyz_mm.data(), 6 * n, offset)
+                 : ReadAll(fd_, p->xyz.data(), 12 * n, offset);
+  offset += static_cast<int64_t>((grid ? 6 : 12) * n);
   ok = ok && (quantised ? ReadAll(fd_, p->range_q.data(), 2 * n, offset)
                         : ReadAll(fd_, p->range_f.data(), 4 * n, offset));
   offset += static_cast<int64_t>((quantised ? 2 : 4) * n);

@@ -16,13 +16,50 @@ bool QuantiseRange(float range_m, uint16_t* q) {
   return static_cast<float>(*q * PackedChunk::kRangeStepM) == range_m;
 }
 
+// Positions as int16 grid steps after the chunk's origin (the middle of its
+// bounds, in whole steps), if every point is on the grid (its float comes
+// back bit for bit) and the chunk spans at most 65 534 steps an axis.
+bool PackedChunk::PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* chunk,
+                             ChunkPayload* payload) {
+  const auto& b = chunk->bounds_;
+  for (int k = 0; k < 3; ++k) {
+    if (!(std::abs(b[2 * k]) < 8e3 && std::abs(b[2 * k + 1]) < 8e3)) return false;
+    const int64_t lo = GridIndex(static_cast<float>(b[2 * k]));
+    const int64_t hi = GridIndex(static_cast<float>(b[2 * k + 1]));
+    if (hi - lo > 2 * int64_t{std::numeric_limits<int16_t>::max()}) return false;
+    chunk->origin_mm_[k] = lo + (hi - lo) / 2;
+  }
+  payload->xyz_mm.resize(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const float v[3] = {points[i].x, points[i].y, points[i].z};
+    for (int k = 0; k < 3; ++k) {
+      const int64_t g = GridIndex(v[k]);
+      const int64_t q = g - chunk->origin_mm_[k];
+      if (GridPosition(g) != v[k] || q < std::numeric_limits<int16_t>::min() ||
+          q > std::numeric_limits<int16_t>::max()) {
+        payload->xyz_mm.clear();
+        payload->xyz_mm.shrink_to_fit();
+        return false;
+      }
+      payload->xyz_mm[3 * i + k] = static_cast<int16_t>(q);
+    }
+  }
+  return true;
+}
+
+const float* PackedChunk::Positions(const ChunkPayload& payload, std::vector<float>* scratch) const {
+  if (payload.xyz_mm.empty()) return payload.xyz.data();
+  scratch->resize(3 * size_);
+  for (size_t i = 0; i < size_; ++i) PositionOf(payload, i, &(*scratch)[3 * i]);
+  return scratch->data();
+}
+
 std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, size_t n,
                                                      CloudPager* pager) {
   std::shared_ptr<PackedChunk> chunk(new PackedChunk());
   auto payload = std::make_shared<ChunkPayload>();
   chunk->size_ = n;
   chunk->last_time_ns_ = n > 0 ? points[0].time_ns : 0;
-  payload->xyz.resize(3 * n);
   payload->dt_ns.resize(n);
   payload->beam.resize(n);
   payload->range_q.resize(n);
@@ -31,9 +68,6 @@ std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, s
   b = EmptyBounds();
   for (size_t i = 0; i < n; ++i) {
     const CloudPoint& p = points[i];
-    payload->xyz[3 * i] = p.x;
-    payload->xyz[3 * i + 1] = p.y;
-    payload->xyz[3 * i + 2] = p.z;
     ExtendBounds(&b, p);
     payload->beam[i] = p.beam;
     chunk->max_range_m_ = std::max(chunk->max_range_m_, p.range_m);
@@ -56,6 +90,16 @@ std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, s
     payload->range_q.shrink_to_fit();
     payload->range_f.resize(n);
     for (size_t i = 0; i < n; ++i) payload->range_f[i] = points[i].range_m;
+  }
+  chunk->ranges_quantised_ = quantised;
+  chunk->positions_on_grid_ = n > 0 && PackOnGrid(points, n, chunk.get(), payload.get());
+  if (!chunk->positions_on_grid_) {
+    payload->xyz.resize(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      payload->xyz[3 * i] = points[i].x;
+      payload->xyz[3 * i + 1] = points[i].y;
+      payload->xyz[3 * i + 2] = points[i].z;
+    }
   }
   chunk->runs_.shrink_to_fit();
   chunk->first_time_ns_ = n > 0 ? points[0].time_ns : 0;
@@ -100,9 +144,11 @@ void PackedChunk::DecodeFrom(const PackedChunk& chunk, const ChunkPayload& paylo
   for (size_t i = begin; i < end; ++i) {
     while (r + 1 < runs.size() && runs[r + 1].first <= i) ++r;
     CloudPoint p;
-    p.x = payload.xyz[3 * i];
-    p.y = payload.xyz[3 * i + 1];
-    p.z = payload.xyz[3 * i + 2];
+    float xyz[3];
+    chunk.PositionOf(payload, i, xyz);
+    p.x = xyz[0];
+    p.y = xyz[1];
+    p.z = xyz[2];
     p.range_m = chunk.RangeOf(payload, i);
     p.time_ns = chunk.TimeOf(payload, i, r);
     p.scan = runs[r].scan;

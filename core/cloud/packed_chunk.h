@@ -1,9 +1,13 @@
 // The compact cloud store's unit: a sealed chunk of up to 65 536 points in
-// 20 bytes a point (an X4's; 22 for a lidar whose ranges are not whole
-// quarter millimetres), every CloudPoint attribute recoverable bit for bit.
+// 14 bytes a point (an X4's; up to 22 for points off the 1 mm grid or a lidar
+// whose ranges are not whole quarter millimetres), every CloudPoint attribute
+// recoverable bit for bit.
 //
 // Why these bytes (docs/cloud-store.md has the layout):
-//   x, y, z   float32 each          12 B  exact (the view draws floats anyway)
+//   x, y, z   int16 mm after the     6 B  exact for points on the cloud's 1 mm
+//             chunk's origin              grid (cloud.h: every assembled point
+//                                         is); a chunk with a point off it, or
+//                                         wider than 65.5 m, keeps float32 (12 B)
 //   range     uint16 quarter mm      2 B  the X4's own unit (raw / 4 mm), so
 //                                         exact for it; a chunk whose ranges
 //                                         are not whole steps keeps float32 (4 B)
@@ -48,13 +52,14 @@ struct ScanRun {
 
 // The per-point arrays (structure of arrays, in the order points were given).
 struct ChunkPayload {
-  std::vector<float> xyz;          // 3 per point
+  std::vector<int16_t> xyz_mm;     // 3 per point, grid steps after the chunk's origin, or empty ...
+  std::vector<float> xyz;          // ... and these instead (3 per point)
   std::vector<uint16_t> range_q;   // quarter millimetres, or empty ...
   std::vector<float> range_f;      // ... and these instead
   std::vector<uint32_t> dt_ns;     // after the run's time0_ns
   std::vector<uint16_t> beam;
   size_t bytes() const {
-    return xyz.size() * 4 + range_q.size() * 2 + range_f.size() * 4 + dt_ns.size() * 4 +
+    return xyz_mm.size() * 2 + xyz.size() * 4 + range_q.size() * 2 + range_f.size() * 4 + dt_ns.size() * 4 +
            beam.size() * 2;
   }
 };
@@ -77,6 +82,11 @@ class PackedChunk {
   int64_t last_time_ns() const { return last_time_ns_; }
   float max_range_m() const { return max_range_m_; }
   const std::vector<ScanRun>& runs() const { return runs_; }
+  // How the payload is stored: positions as grid steps after origin_mm()
+  // (else float32), ranges as quarter millimetres (else float32).
+  bool positions_on_grid() const { return positions_on_grid_; }
+  bool ranges_quantised() const { return ranges_quantised_; }
+  const std::array<int64_t, 3>& origin_mm() const { return origin_mm_; }
 
   // The payload, read back from the cache file if it was paged out. Holding
   // the pointer keeps it in memory. Never null (a failed read is fatal: the
@@ -89,6 +99,17 @@ class PackedChunk {
   void Decode(std::vector<CloudPoint>* out) const;
   static void DecodeFrom(const PackedChunk& chunk, const ChunkPayload& payload, size_t begin,
                          size_t end, std::vector<CloudPoint>* out);
+  // Position of point i, from a pinned payload.
+  void PositionOf(const ChunkPayload& payload, size_t i, float out[3]) const {
+    if (payload.xyz_mm.empty()) {
+      std::copy_n(&payload.xyz[3 * i], 3, out);
+      return;
+    }
+    for (int k = 0; k < 3; ++k) out[k] = GridPosition(origin_mm_[k] + payload.xyz_mm[3 * i + k]);
+  }
+  // Every position of the chunk as x, y, z floats: the payload's own array
+  // when it holds floats, else decoded into `scratch`.
+  const float* Positions(const ChunkPayload& payload, std::vector<float>* scratch) const;
   // Range and time of point i (the view's colours), from a pinned payload.
   float RangeOf(const ChunkPayload& payload, size_t i) const {
     return payload.range_q.empty() ? payload.range_f[i]
@@ -101,11 +122,15 @@ class PackedChunk {
  private:
   friend class CloudPager;
   PackedChunk() = default;
+  static bool PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* chunk,
+                         ChunkPayload* payload);
 
   size_t size_ = 0;
   std::array<double, 6> bounds_{};
   int64_t first_time_ns_ = 0, last_time_ns_ = 0;
   float max_range_m_ = 0.0f;
+  bool positions_on_grid_ = false, ranges_quantised_ = false;
+  std::array<int64_t, 3> origin_mm_{};
   std::vector<ScanRun> runs_;
   size_t payload_bytes_ = 0;
   CloudPager* pager_ = nullptr;

@@ -34,7 +34,9 @@ bool DeskewScan(const LidarScan& scan, const PoseBuffer& prior, Time mid, const 
   for (size_t i = first; i <= std::min(last + 1, prior.size() - 1); ++i) {
     relative.Add(prior.time(i), mid_from_world * prior.pose(i));
   }
-  Assembler assembler(assembly, body_from_lidar, PoseSource::kSfm);
+  AssemblyOptions local = assembly;
+  local.snap_to_grid = false;  // Points for scan matching, not the cloud.
+  Assembler assembler(local, body_from_lidar, PoseSource::kSfm);
   PointChunks chunks(1024);
   assembler.AddScan(scan, relative, &chunks);
   chunks.Seal();

@@ -100,7 +100,7 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {
-  // 1 MiB holds 52 428 points of the store (20 B each): the lab drive's
+  // 1 MiB holds 74 898 points of the store (14 B each): the lab drive's
   // ~270 000 go mostly to the cache file (as --memory-budget 1 would).
   CloudPager& pager = CloudPager::Default();
   pager.SetBudget(size_t{1} << 20);

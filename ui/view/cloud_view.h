@@ -2,7 +2,7 @@
 // grid, axes and a colour bar, in a QVTKOpenGLNativeWidget.
 //
 // Memory (docs/cloud-store.md): the points themselves live once, in the
-// cloud store's packed chunks (20 bytes a point, shared with the processing
+// cloud store's packed chunks (14 bytes a point, shared with the processing
 // thread, paged to disk above the memory budget); VTK holds only what is
 // drawn. Points arrive in order and fill the growing chunk (drawn in full);
 // the store seals it and the view swaps it for the packed chunk.

@@ -4,7 +4,7 @@
 // drawn of it. Not for use outside ui/view/.
 //
 // A chunk's points live in one place: the shared packed chunk of the cloud
-// store (core/cloud/packed_chunk.h, 20 bytes a point, pageable), or, for the
+// store (core/cloud/packed_chunk.h, 14 bytes a point, pageable), or, for the
 // one growing chunk, a short vector of CloudPoints. VTK holds only what is
 // drawn: every motion_stride-th point (the motion level, a few hundred per
 // chunk) and, at rest, every rest-stride-th point of the chunks in view up

@@ -48,7 +48,7 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
   for (size_t k = 0, i = 0; k < n; ++k, i += stride) {
     if (chunk->sealed()) {
       while (run + 1 < runs->size() && (*runs)[run + 1].first <= i) ++run;
-      std::copy_n(&payload->xyz[3 * i], 3, xyz + 3 * k);
+      chunk->packed->PositionOf(*payload, i, xyz + 3 * k);
       time_s[k] = static_cast<float>((chunk->packed->TimeOf(*payload, i, run) - time_origin_ns_) * 1e-9);
       range_m[k] = chunk->packed->RangeOf(*payload, i);
     } else {

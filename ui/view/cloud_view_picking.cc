@@ -121,35 +121,63 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   double best_t = std::numeric_limits<double>::infinity();
   bool found = false;
   const float clip_z = static_cast<float>(ray.clip_z);
+  // A point v (relative to the ray's origin) under the cursor and nearer
+  // than the best so far becomes the pick.
+  auto consider = [&](double vx, double vy, double vz) {
+    const double t = vx * d.x() + vy * d.y() + vz * d.z();
+    if (t <= 0 || t >= best_t) return false;
+    const double off2 = vx * vx + vy * vy + vz * vz - t * t;
+    const double tol = ray.tolerance_per_t * t;
+    if (off2 > tol * tol) return false;
+    best_t = t;
+    return true;
+  };
   for (const auto& c : chunks_) {
     if (c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin)) continue;
     // Every point of the chunk, not only those drawn: the pick is the true
     // point under the cursor, whatever the level of detail.
+    size_t best = c->size;
     std::shared_ptr<const ChunkPayload> payload;
-    const float* p;
-    if (c->sealed()) {
-      payload = c->packed->Pin();
-      p = payload->xyz.data();
+    if (c->sealed()) payload = c->packed->Pin();
+    if (c->sealed() && c->packed->positions_on_grid()) {
+      // Whole millimetres after the chunk's origin (docs/cloud-store.md):
+      // the ray's origin moved there, the points are not decoded. The clip
+      // is a whole step too: the highest k whose float is at or below it.
+      const std::array<int64_t, 3>& origin = c->packed->origin_mm();
+      const double ox = o.x() - origin[0] * kGridStepM, oy = o.y() - origin[1] * kGridStepM,
+                   oz = o.z() - origin[2] * kGridStepM;
+      int64_t top = std::numeric_limits<int64_t>::max();
+      if (std::isfinite(clip_z)) {
+        top = GridIndex(clip_z);
+        while (GridPosition(top) > clip_z) --top;
+        while (GridPosition(top + 1) <= clip_z) ++top;
+        top -= origin[2];
+      }
+      const int16_t* q = payload->xyz_mm.data();
+      for (size_t i = 0; i < c->size; ++i, q += 3) {
+        if (q[2] > top || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
+        if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
+      }
     } else {
-      p = &c->growing.front().x;
-    }
-    const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
-    for (size_t i = 0; i < c->size; ++i, p += step) {
-      if (!Passes(*c, i)) continue;  // Not drawn: not pickable.
-      if (p[2] > clip_z) continue;   // Clipped: not pickable.
-      const Eigen::Vector3d v(p[0] - o.x(), p[1] - o.y(), p[2] - o.z());
-      const double t = v.dot(d);
-      if (t <= 0 || t >= best_t) continue;
-      const double off2 = v.squaredNorm() - t * t;
-      const double tol = ray.tolerance_per_t * t;
-      if (off2 <= tol * tol) {
-        best_t = t;
-        hit->world = Eigen::Vector3d(p[0], p[1], p[2]);
-        hit->local = hit->world;
-        hit->layer.clear();
-        found = true;
+      const float* p = c->sealed() ? payload->xyz.data() : &c->growing.front().x;
+      const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
+      for (size_t i = 0; i < c->size; ++i, p += step) {
+        if (p[2] > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
+        if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
       }
     }
+    if (best == c->size) continue;
+    float xyz[3];
+    if (c->sealed()) {
+      c->packed->PositionOf(*payload, best, xyz);
+    } else {
+      const CloudPoint& g = c->growing[best];
+      xyz[0] = g.x, xyz[1] = g.y, xyz[2] = g.z;
+    }
+    hit->world = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+    hit->local = hit->world;
+    hit->layer.clear();
+    found = true;
   }
   // The layers' points compete with the cloud's: the nearest to the camera wins.
   if (layer_picker_ && !layers_.empty() && layer_picker_(ray, &best_t, hit)) found = true;

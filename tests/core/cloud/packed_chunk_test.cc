@@ -1,5 +1,6 @@
 // The compact cloud store: packed chunks give back every point they were
-// given, bit for bit, in memory and after being paged out to the cache file
+// given, bit for bit (positions on the 1 mm grid in 16 bits, others as
+// floats), in memory and after being paged out to the cache file
 // and read back; the pager keeps the resident bytes within its budget and
 // leaves no file behind.
 #include "core/cloud/packed_chunk.h"
@@ -9,6 +10,7 @@
 #include <stdlib.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <random>
@@ -32,11 +34,12 @@ struct ScratchDir {
   std::string path;
 };
 
-// Points as the assembler makes them from an X4 (ranges in the X4's quarter
-// millimetres) or, with `any_range`, from a lidar with float ranges; scans
+// Points as the assembler makes them from an X4 (positions on the cloud's
+// 1 mm grid, ranges in the X4's quarter millimetres) or, with `any_range`,
+// from a lidar with float ranges, or with `off_grid` from elsewhere; scans
 // of ~700 samples, 0.2 ms apart, with the odd long gap (a paused drive),
 // a pose source change and a time that goes back (a new recording).
-std::vector<CloudPoint> MakePoints(size_t n, uint32_t seed, bool any_range) {
+std::vector<CloudPoint> MakePoints(size_t n, uint32_t seed, bool any_range, bool off_grid = false) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> coord(-30.0f, 30.0f);
   std::uniform_int_distribution<int> raw(480, 40000);  // 0.12 .. 10 m in quarter mm
@@ -50,6 +53,11 @@ std::vector<CloudPoint> MakePoints(size_t n, uint32_t seed, bool any_range) {
     p.x = coord(rng);
     p.y = coord(rng);
     p.z = coord(rng) * 0.1f;
+    if (!off_grid) {
+      p.x = SnapToGrid(p.x);
+      p.y = SnapToGrid(p.y);
+      p.z = SnapToGrid(p.z);
+    }
     p.range_m = any_range ? any(rng) : static_cast<float>(raw(rng) * PackedChunk::kRangeStepM);
     t += 200'000 + (rng() % 1000);
     if (i % 5000 == 4999) t += 9'000'000'000;  // A 9 s gap: beyond 32 bits of ns.
@@ -81,13 +89,17 @@ std::vector<CloudPoint> MakePoints(size_t n, uint32_t seed, bool any_range) {
   return ::testing::AssertionSuccess();
 }
 
-TEST(PackedChunkTest, GivesBackEveryPointBitForBitInTwentyBytes) {
+TEST(PackedChunkTest, GivesBackEveryPointBitForBitInFourteenBytes) {
   const auto points = MakePoints(65536, 1, false);
   const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
   std::vector<CloudPoint> back;
   chunk->Decode(&back);
   EXPECT_TRUE(SamePoints(back, points));
-  EXPECT_EQ(chunk->payload_bytes(), 20u * points.size());
+  // Positions as 16-bit millimetres after the chunk's origin (the points
+  // span 60 m: up to +-30 000 steps), ranges as 16-bit quarter millimetres.
+  EXPECT_TRUE(chunk->positions_on_grid());
+  EXPECT_TRUE(chunk->ranges_quantised());
+  EXPECT_EQ(chunk->payload_bytes(), 14u * points.size());
   // The runs: a scan lasts 0.14 s, so ~1 run per 700 points (plus the gaps,
   // the source and flag changes); 24 bytes each are well under a byte a point.
   EXPECT_LT(chunk->runs().size() * sizeof(ScanRun), points.size() / 8);
@@ -99,6 +111,77 @@ TEST(PackedChunkTest, GivesBackEveryPointBitForBitInTwentyBytes) {
     EXPECT_GE(p.z, chunk->bounds()[4]);
     EXPECT_LE(p.z, chunk->bounds()[5]);
   }
+  // Positions() decodes them all as the view and the picks read them.
+  const auto payload = chunk->Pin();
+  std::vector<float> scratch;
+  const float* xyz = chunk->Positions(*payload, &scratch);
+  for (size_t i = 0; i < points.size(); i += 997) {
+    EXPECT_EQ(xyz[3 * i], points[i].x);
+    EXPECT_EQ(xyz[3 * i + 2], points[i].z);
+  }
+}
+
+TEST(PackedChunkTest, TheGridStepsComeBackExactlyWithinEightKilometres) {
+  // Every whole millimetre within +-8.192 km: the float of k * 0.001 is
+  // k / 1000's and its grid index is k again (the store's exactness rests
+  // on it; cloud.h).
+  size_t bad = 0;
+  for (int64_t k = -8'192'000; k <= 8'192'000; ++k) {
+    const float v = GridPosition(k);
+    if (GridIndex(v) != k || v != static_cast<float>(static_cast<double>(k) / 1000.0)) ++bad;
+  }
+  EXPECT_EQ(bad, 0u);
+  EXPECT_EQ(SnapToGrid(1.23449f), GridPosition(1234));
+  EXPECT_EQ(SnapToGrid(-0.0005001f), GridPosition(-1));
+  EXPECT_EQ(SnapToGrid(SnapToGrid(3.14159f)), SnapToGrid(3.14159f));
+  EXPECT_TRUE(std::isnan(SnapToGrid(std::nanf(""))));
+}
+
+TEST(PackedChunkTest, PositionsOffTheGridOrWiderThan65MetresStayFloats) {
+  // Points from elsewhere (a PLY opened, a transformed session).
+  auto points = MakePoints(10000, 7, false, true);
+  auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  std::vector<CloudPoint> back;
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+  EXPECT_FALSE(chunk->positions_on_grid());
+  EXPECT_EQ(chunk->payload_bytes(), 20u * points.size());
+
+  // One point off the grid among thousands on it.
+  points = MakePoints(10000, 8, false);
+  points[5000].y = std::nextafter(points[5000].y, 100.0f);
+  chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  back.clear();
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+  EXPECT_FALSE(chunk->positions_on_grid());
+
+  // On the grid but 65.535 m wide: 65 535 steps do not fit 16 bits about
+  // any origin; 65.534 m do.
+  points = MakePoints(1000, 9, false);
+  points[10].x = GridPosition(-32767);
+  points[20].x = GridPosition(32767);
+  chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  EXPECT_TRUE(chunk->positions_on_grid());
+  back.clear();
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+  points[20].x = GridPosition(32768);
+  chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  EXPECT_FALSE(chunk->positions_on_grid());
+  back.clear();
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
+
+  // Far from the origin (a building's georeferenced frame, 5 km out): the
+  // origin moves with the chunk.
+  points = MakePoints(1000, 10, false);
+  for (CloudPoint& p : points) p.x = SnapToGrid(p.x + 5000.0f);
+  chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+  EXPECT_TRUE(chunk->positions_on_grid());
+  back.clear();
+  chunk->Decode(&back);
+  EXPECT_TRUE(SamePoints(back, points));
 }
 
 TEST(PackedChunkTest, RangesThatAreNotQuarterMillimetresStayFloats) {
@@ -107,7 +190,7 @@ TEST(PackedChunkTest, RangesThatAreNotQuarterMillimetresStayFloats) {
   std::vector<CloudPoint> back;
   chunk->Decode(&back);
   EXPECT_TRUE(SamePoints(back, points));
-  EXPECT_EQ(chunk->payload_bytes(), 22u * points.size());
+  EXPECT_EQ(chunk->payload_bytes(), 16u * points.size());
   uint16_t q = 0;
   EXPECT_TRUE(QuantiseRange(2.5f, &q));
   EXPECT_EQ(q, 10000);
@@ -126,7 +209,7 @@ TEST(PackedChunkTest, PointChunksPackWhatTheySealAndFlattenExactly) {
 
 TEST(CloudPagerTest, PagesOutAboveTheBudgetAndReadsBackExactly) {
   ScratchDir dir;
-  const size_t per_chunk = 20 * 4096;
+  const size_t per_chunk = 14 * 4096;
   CloudPager pager(3 * per_chunk, dir.path);
   const auto points = MakePoints(20 * 4096, 4, false);
   PointChunks chunks(4096, &pager);
@@ -156,11 +239,35 @@ TEST(CloudPagerTest, PagesOutAboveTheBudgetAndReadsBackExactly) {
   EXPECT_EQ(pager.resident_bytes(), 20 * per_chunk);
 }
 
+TEST(CloudPagerTest, GridAndFloatChunksPageOutAndBackAlike) {
+  // Chunks of either layout (positions in 16-bit steps or floats, ranges in
+  // quarter millimetres or floats) share one cache file.
+  ScratchDir dir;
+  CloudPager pager(1, dir.path);  // Everything but the newest goes out.
+  std::vector<CloudPoint> points;
+  for (int k = 0; k < 4; ++k) {
+    const auto part = MakePoints(3000, 20 + k, k % 2 == 1, k >= 2);
+    points.insert(points.end(), part.begin(), part.end());
+  }
+  PointChunks chunks(3000, &pager);
+  for (const CloudPoint& p : points) chunks.Append(p);
+  const auto sealed = chunks.SealedChunks();
+  ASSERT_EQ(sealed.size(), 4u);
+  EXPECT_EQ(sealed[0]->payload_bytes(), 14u * 3000);
+  EXPECT_EQ(sealed[1]->payload_bytes(), 16u * 3000);
+  EXPECT_EQ(sealed[2]->payload_bytes(), 20u * 3000);
+  EXPECT_EQ(sealed[3]->payload_bytes(), 22u * 3000);
+  EXPECT_EQ(pager.file_bytes(), (14u + 16u + 20u) * 3000);
+  EXPECT_FALSE(sealed[0]->resident());
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_GE(pager.page_ins(), 3u);
+}
+
 TEST(CloudPagerTest, TheCacheFileIsEmptiedWhenItsCloudGoes) {
   // The app opens one session after another in one process: a cloud's file
   // space comes back when the cloud is cleared, not at exit.
   ScratchDir dir;
-  const size_t per_chunk = 20 * 1024;
+  const size_t per_chunk = 14 * 1024;
   CloudPager pager(2 * per_chunk, dir.path);
   const auto points = MakePoints(10 * 1024, 6, false);
   for (int round = 0; round < 2; ++round) {
@@ -179,7 +286,7 @@ TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   // The view (GUI thread) and an export (a job thread) read sealed chunks
   // while the processing thread appends and the pager evicts.
   ScratchDir dir;
-  CloudPager pager(2 * 20 * 1024, dir.path);
+  CloudPager pager(2 * 14 * 1024, dir.path);
   const auto points = MakePoints(64 * 1024, 5, false);
   PointChunks chunks(1024, &pager);
   std::atomic<bool> done{false};
