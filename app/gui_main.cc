@@ -207,13 +207,18 @@ double StatusMiB(const char* field) {
 double ResidentMiB() { return StatusMiB("VmRSS"); }
 
 // Where the memory is: the cloud store's resident payloads, the points in
-// VTK's arrays (both levels) and the C++ heap in use.
+// VTK's arrays (both levels), the C++ heap in use and free (kept by malloc
+// for reuse), and the resident set's anonymous and file-backed parts (the
+// libraries, mapped files).
 nlohmann::json MemoryBreakdown(MainWindow* window) {
   const struct mallinfo2 heap = mallinfo2();
   return {{"store_mib", CloudPager::Default().resident_bytes() / 1048576.0},
           {"store_paged_out_chunks", CloudPager::Default().paged_out_chunks()},
           {"vtk_points", window->view()->vtk_point_count()},
           {"heap_in_use_mib", (heap.uordblks + heap.hblkhd) / 1048576.0},
+          {"heap_free_mib", heap.fordblks / 1048576.0},
+          {"rss_anon_mib", StatusMiB("RssAnon")},
+          {"rss_file_mib", StatusMiB("RssFile")},
           {"peak_rss_mib", StatusMiB("VmHWM")}};
 }
 
