@@ -306,9 +306,10 @@ class Workspace : public QObject {
   // (another calibration only), so the pass labels stay.
   void Reprocess(const MountingError& calibration, PoseSource source, bool same_points);
   void SetShownPoseSource(PoseSource source);
-  // Memory: a replayed session above kKeepSamplesAtMost lidar samples keeps
-  // only its wheel and IMU records (the samples take 24 bytes each, more
-  // than the cloud store's 20 a point); what needs them again (another pose
+  // Memory: a replayed session above kKeepSamplesAtMost lidar samples, or a
+  // streamed one, keeps none of its records (the samples take 24 bytes
+  // each, more than the cloud store's 14 a point; the wheel and IMU records
+  // ~20 MB an hour of drive); what needs them again (another pose
   // source or calibration, a calibration, a seek) opens the session again
   // in a job first, then calls `then`.
   static constexpr size_t kKeepSamplesAtMost = 4'000'000;

@@ -24,13 +24,13 @@ void Workspace::ReleaseOpenedSamples() {
   size_t samples = 0;
   for (const LidarScan& scan : opened_->log.scans) samples += scan.samples.size();
   if (samples <= kKeepSamplesAtMost) return;
-  // A copy without the scans (the wheels and IMU are a few MB an hour);
-  // the processor's replay lets go of the full one.
+  // A copy without the records (the scans, and the wheels and IMU, ~20 MB
+  // an hour): everything that reads them (a calibration, another pose
+  // source, a seek) goes through WithOpenedSamples, which opens the
+  // session again first. The processor's replay lets go of the full one.
   auto light = std::make_shared<hardware::Recording>();
   light->name = opened_->name;
   light->session_dir = opened_->session_dir;
-  light->log.wheels = opened_->log.wheels;
-  light->log.imu = opened_->log.imu;
   light->geometry = opened_->geometry;
   light->start = opened_->start;
   light->decode = opened_->decode;

@@ -70,8 +70,8 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         stream->set_keep_motion(true);
         s = stream->EstimatePoses(path, hardware::DefaultSessionFramesOptions(), *options, nullptr, progress(0.0, 0.35));
         if (!s.ok()) return QString::fromStdString(s.message());
-        // What the opened session keeps: its wheel and IMU records (a few
-        // MB an hour), as ReleaseOpenedSamples leaves a replayed one.
+        // The wheel and IMU records, for the calibration circle's check
+        // below (with the wheels' poses it runs the EKF on them).
         light->log = stream->TakeMotion();
         light->session_dir = path;
         light->geometry = stream->decode().meta.geometry;
@@ -92,6 +92,11 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         // With the EKF, they are the ones FindCircle would estimate again
         // (the same log, options and start).
         *circle = FindCircle(*light, source == PoseSource::kEkf ? *poses : nullptr);
+        // Then they go as ReleaseOpenedSamples lets a replayed session's
+        // samples go (~20 MB an hour of drive: 115 MB for the 5.7-hour
+        // drive of docs/performance.md): what needs them again opens the
+        // session again first (WithOpenedSamples).
+        light->log = SensorLog();
         return QString();
       },
       [this, stream, light, circle, cloud, options, poses, dir] {
