@@ -117,6 +117,19 @@ class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
   }
   double worst_cpu_ms_ = 0.0;
 
+  // The plan and section jobs built on the GUI thread would be one turn of
+  // hundreds of ms of CPU (~570 for the rebuild of both); the turns are
+  // frames and the panel's updates, single-digit ms. So the bound is on the
+  // GUI thread's CPU time in its longest turn; wall time (580 and 624 ms
+  // gaps in CI runs under ctest -j2, 37-106 ms alone) only guards against a
+  // blocking wait.
+  void ExpectResponsive(const char* what, qint64 worst_gap_ms) {
+    std::printf("%s: longest event-loop gap %lld ms, longest turn %.0f ms of CPU\n", what,
+                static_cast<long long>(worst_gap_ms), worst_cpu_ms_);
+    EXPECT_LT(worst_cpu_ms_, 250.0) << what;
+    EXPECT_LT(worst_gap_ms, 2000) << what;
+  }
+
   void OpenAndLoad(const QString& file) {
     ASSERT_TRUE(project()->OpenProject(file));
     WorstGapUntil([&] { return !project()->busy(); }, 60000);
@@ -152,9 +165,8 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   EXPECT_DOUBLE_EQ(panel->height_box()->value(), 1.0);
   EXPECT_DOUBLE_EQ(panel->band_box()->value(), 0.05);
   const qint64 worst = WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000);
-  EXPECT_LT(worst, 500);
-  std::printf("plan: longest event-loop gap %lld ms\n%s\n", static_cast<long long>(worst),
-              panel->summary_label()->text().toStdString().c_str());
+  ExpectResponsive("plan", worst);
+  std::printf("%s\n", panel->summary_label()->text().toStdString().c_str());
 
   ASSERT_TRUE(panel->canvas()->plan().has_value());
   const plan::FloorPlan& p = *panel->canvas()->plan();
@@ -288,9 +300,8 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   EXPECT_LT((canvas->section_line()->a - a).norm(), 1.5 / canvas->scale());
   EXPECT_LT((canvas->section_line()->b - b).norm(), 1.5 / canvas->scale());
   const qint64 worst = WorstGapUntil([&] { return panel->sections_built() == 1 && !panel->busy(); }, 60000);
-  EXPECT_LT(worst, 500);
-  std::printf("section: longest event-loop gap %lld ms\n%s\n", static_cast<long long>(worst),
-              panel->section_summary_label()->text().toStdString().c_str());
+  ExpectResponsive("section", worst);
+  std::printf("%s\n", panel->section_summary_label()->text().toStdString().c_str());
   EXPECT_TRUE(panel->section_pane()->isVisible());
   EXPECT_EQ(QSettings().value("plan/section_line").toList().size(), 4);
   ASSERT_TRUE(panel->section_canvas()->section().has_value());
@@ -336,15 +347,8 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   rebuild.start();
   const qint64 rebuild_gap = WorstGapUntil(
       [&] { return panel->plans_built() == 2 && panel->sections_built() == 2 && !panel->busy(); }, 60000);
-  std::printf("rebuild at 1.5 m: %lld ms, longest event-loop gap %lld ms, longest turn %.0f ms of CPU\n",
-              static_cast<long long>(rebuild.elapsed()), static_cast<long long>(rebuild_gap),
-              worst_cpu_ms_);
-  // The plan and section built on the GUI thread would be one turn of
-  // ~570 ms of CPU (the job's wall time alone); the turns are frames and
-  // the panel's updates, tens of ms. Wall time only guards against a
-  // blocking wait.
-  EXPECT_LT(worst_cpu_ms_, 250.0);
-  EXPECT_LT(rebuild_gap, 2000);
+  std::printf("rebuild at 1.5 m: %lld ms\n", static_cast<long long>(rebuild.elapsed()));
+  ExpectResponsive("rebuild", rebuild_gap);
   EXPECT_DOUBLE_EQ(canvas->plan()->height_m, 1.5);
   EXPECT_EQ(panel->section_canvas()->section()->options.a, canvas->section_line()->a);
 
