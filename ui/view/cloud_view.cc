@@ -452,8 +452,8 @@ void CloudView::SetPointSize(double pixels) {
       if (d->actor) d->actor->GetProperty()->SetPointSize(pixels);
     }
   }
-  for (auto& b : batches_) {
-    for (Batch::Level& l : b->level) l.drawn.actor->GetProperty()->SetPointSize(pixels);
+  for (const auto* level : {&motion_batches_, &rest_batches_}) {
+    for (const auto& b : *level) b->drawn.actor->GetProperty()->SetPointSize(pixels);
   }
   for (auto& layer : layers_) layer->GetProperty()->SetPointSize(pixels);
   RequestRender();
@@ -519,8 +519,8 @@ void CloudView::SetClipHeight(double z) {
       if (d->mapper) ApplyClip(d->mapper);
     }
   }
-  for (auto& b : batches_) {
-    for (Batch::Level& l : b->level) ApplyClip(l.drawn.mapper);
+  for (const auto* level : {&motion_batches_, &rest_batches_}) {
+    for (const auto& b : *level) ApplyClip(b->drawn.mapper);
   }
   for (auto& layer : layers_) ApplyClip(static_cast<vtkPolyDataMapper*>(layer->GetMapper()));
   // The planes too: a hidden ceiling must not tint the view from above.
@@ -585,13 +585,21 @@ void CloudView::Orbit(double degrees) {
 }
 
 bool CloudView::RenderIfDirty() {
-  if (!dirty_) return false;
-  RenderNow();
+  if (dirty_ && WantPasses()) {
+    StartPasses();
+  } else if (dirty_) {
+    RenderNow();
+  } else if (progress_.active) {
+    NextPass();
+  } else {
+    return false;
+  }
   return true;
 }
 
 void CloudView::RenderNow() {
   dirty_ = false;
+  progress_.active = false;
   QElapsedTimer clock;
   clock.start();
   SyncBatches();  // Their bounds for the clipping range.

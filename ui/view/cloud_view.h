@@ -15,7 +15,11 @@
 //   chunks in the view frustum get finer strides, nearest first, up to
 //   rest_budget() points, built in slices of at most kRefineSliceMs on the
 //   GUI thread; at full resolution (the cloud within the budget) the view
-//   draws exactly the cloud.
+//   draws exactly the cloud. A rest level larger than the LOD budget is
+//   drawn in progressive passes (cloud_view_progressive.cc): the motion
+//   level first, then about a LOD budget of rest points a pass, nearest
+//   first, over the same image, so no frame at rest holds the GUI thread
+//   longer than a frame in motion.
 // Colours: one float scalar per drawn point (the colour mode's), mapped by
 // the shared lookup table; never three colour arrays.
 //
@@ -84,6 +88,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   enum class ColorMode { kHeight = 0, kTime = 1, kRange = 2, kPass = 3, kDeviation = 4, kIntensity = 5 };
   static constexpr int kColorModes = 6;
   static constexpr size_t kChunkPoints = 65536;
+  // At most this many rest points (or one chunk's) in one draw batch.
+  static constexpr size_t kRestBatchPoints = 32768;
   static constexpr int kSettleMs = 400;
   static constexpr int kRefineSliceMs = 25;
 
@@ -247,8 +253,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
-  bool RenderIfDirty();  // True if it rendered.
+  // The owner's timer: renders what changed, or the next progressive pass
+  // at rest (one a call). True if it rendered.
+  bool RenderIfDirty();
+  // The whole frame now, all passes at once (screenshots, benchmarks).
   void RenderNow();
+  bool drawing_passes() const { return progress_.active; }  // Progressive passes still to draw.
+  size_t last_pass_points() const { return progress_.last_points; }  // Rest points of the last pass.
   uint64_t frames_rendered() const { return frames_rendered_; }
   double last_render_ms() const { return last_render_ms_; }
   // The rendered image (the framebuffer, as the operator sees it).
@@ -263,10 +274,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   struct Drawn;
   struct Batch;
   static constexpr size_t kBatchChunks = 16;
-  // The motion level, a few hundred points a chunk, is drawn through every
-  // kMotionBatches-th batch's actor for kMotionBatches * kBatchChunks chunks.
+  // The motion level, a few hundred points a chunk, is drawn in batches of
+  // kMotionBatches * kBatchChunks chunks.
   static constexpr size_t kMotionBatches = 8;
   void SyncBatches();  // Before every frame (cloud_view_batches.cc).
+  // True if it added batches.
+  bool SyncLevel(const std::vector<std::pair<size_t, size_t>>& ranges, bool rest,
+                 std::vector<std::unique_ptr<Batch>>* batches);
+  static const Drawn& RestSource(const Chunk& chunk);  // Its rest level, else its motion level.
   void ClearBatches();
   void InstallBatchObserver();
   Chunk* GrowingChunk();
@@ -287,6 +302,16 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ShowLevels();  // The batches' visibility from lod_active_.
   void PlanRest();
   bool RefineSlice(int max_ms);  // True when the queue is empty.
+  // Progressive rest passes (cloud_view_progressive.cc).
+  struct Progress {
+    bool active = false;
+    std::vector<Batch*> order;  // The rest batches to draw, nearest first.
+    size_t next = 0;            // The next pass's first batch in `order`.
+    size_t last_points = 0;
+  };
+  bool WantPasses();  // Syncs the batches first.
+  void StartPasses();  // Pass 0: the scene with the motion level for the rest level.
+  void NextPass();
   void UpdateRanges(float z, float t, float r);
   void ApplyLookupTable();
   void BuildGrid();
@@ -323,7 +348,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkAxesActor> axes_;
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
-  std::vector<std::unique_ptr<Batch>> batches_;
+  std::vector<std::unique_ptr<Batch>> motion_batches_, rest_batches_;
   std::vector<vtkSmartPointer<vtkActor>> layers_;
 
   ColorMode color_mode_ = ColorMode::kHeight;
@@ -364,6 +389,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool lod_active_ = false;
   std::vector<Chunk*> refine_queue_;  // Nearest first.
   QTimer* refine_timer_ = nullptr;
+  Progress progress_;
   bool interacting_ = false;
   uint64_t camera_generation_ = 0;
   QTimer* settle_ = nullptr;

@@ -72,15 +72,13 @@ struct CloudView::Chunk {
   bool sealed() const { return packed != nullptr; }
 };
 
-// kBatchChunks consecutive sealed chunks drawn as one actor a level
-// (cloud_view_batches.cc).
+// Consecutive sealed chunks' levels drawn as one actor
+// (cloud_view_batches.cc): the concatenation of their drawn arrays.
 struct CloudView::Batch {
-  struct Level {
-    Drawn drawn;  // poly, mapper and actor only
-    std::vector<vtkPolyData*> sources;  // The chunks' levels it was built from.
-    vtkMTimeType built = 0;
-  };
-  Level level[2];  // motion, rest
+  Drawn drawn;  // poly, mapper and actor only
+  std::vector<vtkPolyData*> sources;  // The chunks' levels it was built from.
+  vtkMTimeType built = 0;
+  size_t points() const { return drawn.poly ? static_cast<size_t>(drawn.poly->GetNumberOfPoints()) : 0; }
 };
 
 }  // namespace sweepscan::ui

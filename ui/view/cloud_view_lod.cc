@@ -188,11 +188,8 @@ void CloudView::ShowLevels() {
   // Sealed chunks show through their batches (the growing chunk's own actor
   // is always shown, in full): the motion level while active, else the
   // rest level (each chunk's where it has one, cloud_view_batches.cc).
-  for (size_t i = 0; i < batches_.size(); ++i) {
-    // The motion level's actors are every kMotionBatches-th batch's (cloud_view_batches.cc).
-    batches_[i]->level[0].drawn.actor->SetVisibility(lod_active_ && i % kMotionBatches == 0);
-    batches_[i]->level[1].drawn.actor->SetVisibility(!lod_active_);
-  }
+  for (const auto& b : motion_batches_) b->drawn.actor->SetVisibility(lod_active_);
+  for (const auto& b : rest_batches_) b->drawn.actor->SetVisibility(!lod_active_);
 }
 
 void CloudView::PlanRest() {
@@ -274,6 +271,7 @@ bool CloudView::RefineSlice(int max_ms) {
 }
 
 void CloudView::SetLodActive(bool active) {
+  progress_.active = false;  // Whatever is drawn next is drawn whole.
   if (active) {
     refine_queue_.clear();
     refine_timer_->stop();
@@ -306,8 +304,8 @@ void CloudView::SetRestBudget(size_t points) {
 size_t CloudView::vtk_point_count() const {
   size_t n = 0;
   for (const auto& c : chunks_) n += c->motion.size() + c->rest.size();
-  for (const auto& b : batches_) {
-    for (const Batch::Level& l : b->level) n += l.drawn.poly ? l.drawn.poly->GetNumberOfPoints() : 0;
+  for (const auto* level : {&motion_batches_, &rest_batches_}) {
+    for (const auto& b : *level) n += b->points();
   }
   return n;
 }
