@@ -480,7 +480,8 @@ bool HasDisplay() {
 // which on a virtual machine cost up to four fifths of a frame: a 221 000-
 // point view drew 3.6 frames/s, 20 with these settings (docs/performance.md,
 // "Desktop app"). Memory is still given back where it matters: the pager
-// and the workspace call malloc_trim after dropping chunks or a session.
+// and the workspace call malloc_trim after dropping chunks or a session, the
+// view when it has drawn its last pass at rest.
 void KeepFreedMemoryForReuse() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap.
   mallopt(M_TRIM_THRESHOLD, 512 << 20);

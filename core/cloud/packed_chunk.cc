@@ -102,6 +102,19 @@ std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, s
     }
   }
   chunk->runs_.shrink_to_fit();
+  chunk->block_bounds_.resize((n + kBlockPoints - 1) / kBlockPoints);
+  for (size_t k = 0; k < chunk->block_bounds_.size(); ++k) {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    std::array<float, 6> box = {kInf, -kInf, kInf, -kInf, kInf, -kInf};
+    for (size_t i = k * kBlockPoints; i < std::min(n, (k + 1) * kBlockPoints); ++i) {
+      const float v[3] = {points[i].x, points[i].y, points[i].z};
+      for (int a = 0; a < 3; ++a) {
+        box[2 * a] = std::min(box[2 * a], v[a]);
+        box[2 * a + 1] = std::max(box[2 * a + 1], v[a]);
+      }
+    }
+    chunk->block_bounds_[k] = box;
+  }
   chunk->first_time_ns_ = n > 0 ? points[0].time_ns : 0;
   if (n == 0) chunk->last_time_ns_ = 0;
   chunk->payload_bytes_ = payload->bytes();

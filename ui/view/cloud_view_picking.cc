@@ -25,6 +25,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
@@ -135,7 +137,30 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   for (const auto& c : chunks_) {
     if (c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin)) continue;
     // Every point of the chunk, not only those drawn: the pick is the true
-    // point under the cursor, whatever the level of detail.
+    // point under the cursor, whatever the level of detail. A sealed
+    // chunk's points are tested only in the blocks the ray passes near
+    // (PackedChunk::block_bounds(): a ray through a room revisited for hours
+    // meets nearly every chunk's box, but few of each chunk's blocks); the
+    // payload is read (or paged in) only if one is.
+    std::vector<std::pair<size_t, size_t>> spans;  // [begin, end) of points to test
+    if (c->sealed()) {
+      const auto& blocks = c->packed->block_bounds();
+      for (size_t k = 0; k < blocks.size(); ++k) {
+        const double box[6] = {blocks[k][0], blocks[k][1], blocks[k][2],
+                               blocks[k][3], blocks[k][4], blocks[k][5]};
+        if (box[4] > clip_z || !RayHitsBox(o, d, box, margin)) continue;
+        const size_t begin = k * PackedChunk::kBlockPoints;
+        const size_t end = std::min(c->size, begin + PackedChunk::kBlockPoints);
+        if (!spans.empty() && spans.back().second == begin) {
+          spans.back().second = end;
+        } else {
+          spans.emplace_back(begin, end);
+        }
+      }
+      if (spans.empty()) continue;
+    } else {
+      spans.emplace_back(0, c->size);
+    }
     size_t best = c->size;
     std::shared_ptr<const ChunkPayload> payload;
     if (c->sealed()) payload = c->packed->Pin();
@@ -153,17 +178,22 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
         while (GridPosition(top + 1) <= clip_z) ++top;
         top -= origin[2];
       }
-      const int16_t* q = payload->xyz_mm.data();
-      for (size_t i = 0; i < c->size; ++i, q += 3) {
-        if (q[2] > top || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-        if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
+      for (const auto& [begin, end] : spans) {
+        const int16_t* q = payload->xyz_mm.data() + 3 * begin;
+        for (size_t i = begin; i < end; ++i, q += 3) {
+          if (q[2] > top || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
+          if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
+        }
       }
     } else {
-      const float* p = c->sealed() ? payload->xyz.data() : &c->growing.front().x;
+      const float* p0 = c->sealed() ? payload->xyz.data() : &c->growing.front().x;
       const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
-      for (size_t i = 0; i < c->size; ++i, p += step) {
-        if (p[2] > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-        if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
+      for (const auto& [begin, end] : spans) {
+        const float* p = p0 + step * begin;
+        for (size_t i = begin; i < end; ++i, p += step) {
+          if (p[2] > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
+          if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
+        }
       }
     }
     if (best == c->size) continue;

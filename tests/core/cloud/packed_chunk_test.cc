@@ -9,6 +9,8 @@
 
 #include <stdlib.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -118,6 +120,30 @@ TEST(PackedChunkTest, GivesBackEveryPointBitForBitInFourteenBytes) {
   for (size_t i = 0; i < points.size(); i += 997) {
     EXPECT_EQ(xyz[3 * i], points[i].x);
     EXPECT_EQ(xyz[3 * i + 2], points[i].z);
+  }
+}
+
+TEST(PackedChunkTest, BlockBoundsHoldTheirPointsAndAreAttained) {
+  // A last block of 100 points; one chunk on the grid, one off it.
+  for (const bool off_grid : {false, true}) {
+    const auto points = MakePoints(3 * PackedChunk::kBlockPoints + 100, 5, false, off_grid);
+    const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+    const auto& blocks = chunk->block_bounds();
+    ASSERT_EQ(blocks.size(), 4u);
+    for (size_t k = 0; k < blocks.size(); ++k) {
+      std::array<bool, 6> attained{};
+      for (size_t i = k * PackedChunk::kBlockPoints;
+           i < std::min(points.size(), (k + 1) * PackedChunk::kBlockPoints); ++i) {
+        const float v[3] = {points[i].x, points[i].y, points[i].z};
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_GE(v[a], blocks[k][2 * a]) << "block " << k << " point " << i;
+          EXPECT_LE(v[a], blocks[k][2 * a + 1]) << "block " << k << " point " << i;
+          attained[2 * a] = attained[2 * a] || v[a] == blocks[k][2 * a];
+          attained[2 * a + 1] = attained[2 * a + 1] || v[a] == blocks[k][2 * a + 1];
+        }
+      }
+      for (int a = 0; a < 6; ++a) EXPECT_TRUE(attained[a]) << "block " << k << " side " << a;
+    }
   }
 }
 
