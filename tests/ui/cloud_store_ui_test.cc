@@ -5,7 +5,8 @@
 // of about that budget to the one-frame image; a cloud larger than the
 // memory budget opens paged to disk,
 // equals `sweepscan-cli reconstruct` point for point and picks the true
-// point under the cursor (not a drawn representative); an opened room is
+// point under the cursor (not a drawn representative); a pick is the cloud
+// point nearest the camera under the cursor, checked against every point; an opened room is
 // shown looking into it with its ceiling hidden; a large session is
 // streamed and opens as its replay would.
 #include <gtest/gtest.h>
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <random>
 #include <set>
 #include <vector>
@@ -102,6 +104,56 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   drawn = Positions(view->DrawnPoints());
   EXPECT_LE(drawn.size(), 20000 + CloudView::kChunkPoints);
   EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+}
+
+TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
+  // Against every point of the cloud: the pick reads only the blocks its ray
+  // passes near (PackedChunk::block_bounds()), and no point within 5 pixels
+  // of the cursor may be nearer the camera than the pick (its tolerance is
+  // 6). An oblique camera over the room: rays pass over floor, walls and
+  // furniture, through many chunks' boxes.
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  Eigen::Vector3d lo(1e9, 1e9, 1e9), hi = -lo;
+  for (const CloudPoint& p : snapshot) {
+    lo = lo.cwiseMin(Eigen::Vector3d(p.x, p.y, p.z));
+    hi = hi.cwiseMax(Eigen::Vector3d(p.x, p.y, p.z));
+  }
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
+  const Eigen::Vector3d eye = centre + Eigen::Vector3d(-0.4, -0.7, 0.5) * (hi - lo).norm();
+  view->LookAt(centre, eye);
+  view->RenderNow();
+  const double clip = view->clip_height();
+  std::vector<QPointF> at(snapshot.size());
+  for (size_t i = 0; i < snapshot.size(); ++i) {
+    at[i] = view->WorldToWidget(Eigen::Vector3d(snapshot[i].x, snapshot[i].y, snapshot[i].z));
+  }
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<size_t> any(0, snapshot.size() - 1);
+  int picks = 0;
+  for (int tries = 0; picks < 30 && tries < 1000; ++tries) {
+    const size_t k = any(rng);
+    if (!std::isnan(clip) && snapshot[k].z > clip) continue;
+    const QPoint cursor = at[k].toPoint();
+    if (cursor.x() < 10 || cursor.y() < 10 || cursor.x() > view->width() - 10 ||
+        cursor.y() > view->height() - 10) {
+      continue;
+    }
+    Eigen::Vector3d got;
+    ASSERT_TRUE(view->PickPoint(cursor, &got));
+    double nearest = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < snapshot.size(); ++i) {
+      const CloudPoint& p = snapshot[i];
+      if ((!std::isnan(clip) && p.z > clip) || std::hypot(at[i].x() - cursor.x(), at[i].y() - cursor.y()) > 5.0) {
+        continue;
+      }
+      nearest = std::min(nearest, (Eigen::Vector3d(p.x, p.y, p.z) - eye).norm());
+    }
+    EXPECT_LE((got - eye).norm(), nearest + 1e-3) << "pick " << picks << " at " << cursor.x() << ", " << cursor.y();
+    ++picks;
+  }
+  EXPECT_EQ(picks, 30);
 }
 
 // Pixels that differ by more than a grey level or two in some channel.
