@@ -222,6 +222,20 @@ TEST_F(CloudStoreUiTest, TheRestLevelIsDrawnInPassesOfTheLodBudgetToTheOneFrameI
   EXPECT_TRUE(view->drawing_passes());
   view->SetLodActive(true);
   EXPECT_FALSE(view->drawing_passes());
+
+  // A robot standing still asks for no new frame (at rest, one every tick
+  // would keep the passes at pass 0); one that moves a centimetre does.
+  Pose2d pose;
+  pose.x = 1.0;
+  pose.y = 2.0;
+  pose.yaw = 0.3;
+  view->SetRobotPose(pose);
+  EXPECT_TRUE(view->RenderIfDirty());
+  view->SetRobotPose(pose);
+  EXPECT_FALSE(view->RenderIfDirty());
+  pose.x += 0.01;
+  view->SetRobotPose(pose);
+  EXPECT_TRUE(view->RenderIfDirty());
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {

@@ -418,6 +418,14 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
 }
 
 void CloudView::SetRobotPose(const Pose2d& pose) {
+  // A robot standing still asks for no frame: at rest a frame is drawn in
+  // progressive passes, which a new frame every tick would keep at pass 0.
+  const double* at = robot_->GetPosition();
+  const double yaw_deg = pose.yaw * 180.0 / M_PI;
+  if (robot_->GetVisibility() && std::abs(at[0] - pose.x) < 1e-3 && std::abs(at[1] - pose.y) < 1e-3 &&
+      std::abs(std::remainder(robot_->GetOrientation()[2] - yaw_deg, 360.0)) < 0.1) {
+    return;
+  }
   robot_->SetPosition(pose.x, pose.y, 0.1);
   robot_->SetOrientation(0.0, 0.0, pose.yaw * 180.0 / M_PI);
   robot_->VisibilityOn();

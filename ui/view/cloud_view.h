@@ -260,6 +260,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void RenderNow();
   bool drawing_passes() const { return progress_.active; }  // Progressive passes still to draw.
   size_t last_pass_points() const { return progress_.last_points; }  // Rest points of the last pass.
+  uint64_t passes_drawn() const { return progress_.drawn; }  // Every pass so far, pass 0 included.
   uint64_t frames_rendered() const { return frames_rendered_; }
   double last_render_ms() const { return last_render_ms_; }
   // The rendered image (the framebuffer, as the operator sees it).
@@ -308,6 +309,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
     std::vector<Batch*> order;  // The rest batches to draw, nearest first.
     size_t next = 0;            // The next pass's first batch in `order`.
     size_t last_points = 0;
+    uint64_t drawn = 0;
   };
   bool WantPasses();  // Syncs the batches first.
   void StartPasses();  // Pass 0: the scene with the motion level for the rest level.

@@ -119,6 +119,7 @@ void CloudView::StartPasses() {
   for (const auto& [d2, b] : by_distance) progress_.order.push_back(b);
   progress_.next = 0;
   progress_.last_points = 0;
+  ++progress_.drawn;
   progress_.active = !progress_.order.empty();
 
   {
@@ -192,6 +193,7 @@ void CloudView::NextPass() {
   }
   progress_.next = end;
   progress_.last_points = points;
+  ++progress_.drawn;
   progress_.active = !last;
   // The view at rest: the heap glibc keeps for reuse (the app keeps freed
   // memory, app/gui_main.cc: llvmpipe's per-draw buffers) goes back to the
