@@ -47,13 +47,6 @@ bool PackedChunk::PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* ch
   return true;
 }
 
-const float* PackedChunk::Positions(const ChunkPayload& payload, std::vector<float>* scratch) const {
-  if (payload.xyz_mm.empty()) return payload.xyz.data();
-  scratch->resize(3 * size_);
-  for (size_t i = 0; i < size_; ++i) PositionOf(payload, i, &(*scratch)[3 * i]);
-  return scratch->data();
-}
-
 std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, size_t n,
                                                      CloudPager* pager) {
   std::shared_ptr<PackedChunk> chunk(new PackedChunk());

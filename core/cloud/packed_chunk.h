@@ -113,9 +113,6 @@ class PackedChunk {
     }
     for (int k = 0; k < 3; ++k) out[k] = GridPosition(origin_mm_[k] + payload.xyz_mm[3 * i + k]);
   }
-  // Every position of the chunk as x, y, z floats: the payload's own array
-  // when it holds floats, else decoded into `scratch`.
-  const float* Positions(const ChunkPayload& payload, std::vector<float>* scratch) const;
   // Range and time of point i (the view's colours), from a pinned payload.
   float RangeOf(const ChunkPayload& payload, size_t i) const {
     return payload.range_q.empty() ? payload.range_f[i]

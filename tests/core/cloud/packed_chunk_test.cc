@@ -113,13 +113,14 @@ TEST(PackedChunkTest, GivesBackEveryPointBitForBitInFourteenBytes) {
     EXPECT_GE(p.z, chunk->bounds()[4]);
     EXPECT_LE(p.z, chunk->bounds()[5]);
   }
-  // Positions() decodes them all as the view and the picks read them.
+  // PositionOf() decodes them as the view reads them.
   const auto payload = chunk->Pin();
-  std::vector<float> scratch;
-  const float* xyz = chunk->Positions(*payload, &scratch);
   for (size_t i = 0; i < points.size(); i += 997) {
-    EXPECT_EQ(xyz[3 * i], points[i].x);
-    EXPECT_EQ(xyz[3 * i + 2], points[i].z);
+    float xyz[3];
+    chunk->PositionOf(*payload, i, xyz);
+    EXPECT_EQ(xyz[0], points[i].x);
+    EXPECT_EQ(xyz[1], points[i].y);
+    EXPECT_EQ(xyz[2], points[i].z);
   }
 }
 
