@@ -141,11 +141,11 @@ class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
     PlanPanel* panel = window_->plan_panel();
     window_->findChild<QDockWidget*>("planDock")->toggleViewAction()->trigger();
     // The plan is built on a job; the GUI thread's longest turn is a frame
-    // of the project's clouds under llvmpipe, which with ctest -j2 beside it
-    // reached 507 ms in a fresh-clone CI run (project_ui_test's align phase
-    // has the same 800 ms bound for the same frames). A plan built on the
-    // GUI thread would hold it for seconds.
-    EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000), 800);
+    // of the project's clouds under llvmpipe, whose wall time with ctest -j2
+    // beside it reached 507 and 802 ms in fresh-clone CI runs (117-123 ms of
+    // CPU). A plan built on the GUI thread would hold it for seconds.
+    ExpectResponsive("first plan",
+                     WorstGapUntil([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000));
     return panel;
   }
 
@@ -185,7 +185,7 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
 
   // A new cut height: built again (after the edits settle), the view kept.
   panel->height_box()->setValue(1.5);
-  EXPECT_LT(WorstGapUntil([&] { return panel->plans_built() == 2 && !panel->busy(); }, 60000), 500);
+  ExpectResponsive("second plan", WorstGapUntil([&] { return panel->plans_built() == 2 && !panel->busy(); }, 60000));
   EXPECT_DOUBLE_EQ(panel->canvas()->plan()->height_m, 1.5);
 
   // Cancelled: the plan shown stays the last one built.
