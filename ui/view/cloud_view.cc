@@ -427,7 +427,7 @@ void CloudView::SetRobotPose(const Pose2d& pose) {
     return;
   }
   robot_->SetPosition(pose.x, pose.y, 0.1);
-  robot_->SetOrientation(0.0, 0.0, pose.yaw * 180.0 / M_PI);
+  robot_->SetOrientation(0.0, 0.0, yaw_deg);
   robot_->VisibilityOn();
   RequestRender();
 }
