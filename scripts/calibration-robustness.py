@@ -24,7 +24,7 @@ usage: scripts/calibration-robustness.py [--cli build/app/sweepscan-cli]
            [--drives 30] [--first-seed 1] [--workdir out/robustness] [--csv FILE]
            [--drive lab_circle_two_turns.json] [--turns N] [--mode auto|refined]
            [--pose-source ekf|truth|odometry] [--no-smooth] [--default-sensors]
-           [--edge-effects default|on|off]
+           [--edge-effects default|on|off] [--board-size 0.6]
 """
 import argparse
 import json
@@ -90,20 +90,57 @@ def scenario(base, seed, angles, errors):
     return d
 
 
-def diamond_pairs():
-    """The lab-diamond board's four corners as world picks in both passes.
+LAB_BOARD_M = 0.6  # the lab-diamond preset's board (core/sim/scene.cc, LabScene)
+LAB_BOARD_CENTRE_Z = 1.35
+LAB_BOARD_BOTTOM_Z = LAB_BOARD_CENTRE_Z - LAB_BOARD_M / math.sqrt(2.0)
+
+
+def board_centre_z(size):
+    """A larger board keeps the lab board's bottom corner height, 0.93 m (so that
+    it stays clear of the window sill behind it) and grows upwards."""
+    return LAB_BOARD_BOTTOM_Z + size / math.sqrt(2.0)
+
+
+def diamond_pairs(size=LAB_BOARD_M):
+    """The diamond board's four corners as world picks in both passes.
 
     The board (core/sim/scene.cc, LabScene): 0.6 m square at x 4.7-5.3,
-    z 1.05-1.65, its face at y = 0.16, turned 45 deg in its plane. With
-    --refine the picks only mark the target: the region around them, grown
-    by 25 cm, gives the sightings, and the board's corners are fitted to
-    all of each pass's samples (docs/calibration.md, "Refined corners").
+    z 1.05-1.65, its face at y = 0.16, turned 45 deg in its plane (--board-size
+    makes it larger, board_centre_z). With --refine the picks only mark the
+    target: the region around them, grown by 25 cm, gives the sightings, and
+    the board's corners are fitted to all of each pass's samples
+    (docs/calibration.md, "Refined corners").
     """
-    h = 0.3 * math.sqrt(2.0)
-    corners = [(5.0, 0.16, 1.35 + h), (5.0 + h, 0.16, 1.35), (5.0, 0.16, 1.35 - h),
-               (5.0 - h, 0.16, 1.35)]
+    h = 0.5 * size * math.sqrt(2.0)
+    zc = board_centre_z(size)
+    corners = [(5.0, 0.16, zc + h), (5.0 + h, 0.16, zc), (5.0, 0.16, zc - h),
+               (5.0 - h, 0.16, zc)]
     return {"format": "sweepscan-pairs", "version": 1,
             "pairs": [{"pass1": {"world": list(c)}, "pass2": {"world": list(c)}} for c in corners]}
+
+
+def lab_with_board(cli, workdir, size):
+    """The lab-diamond preset's boxes (as the simulator expands them, read from a
+    ground-truth file of a one-second drive) with the target board `size` m square."""
+    probe = {"format": "sweepscan-scenario", "version": 1, "name": "scene probe", "seed": 1,
+             "scene": {"preset": "lab-diamond"},
+             "path": {"start": {"x_m": 4.17, "y_m": 1.7, "yaw_rad": 0.0},
+                      "segments": [{"v_mps": 0.0, "w_radps": 0.0, "duration_s": 1.0}]}}
+    path = os.path.join(workdir, "scene_probe.json")
+    with open(path, "w") as f:
+        json.dump(probe, f)
+    truth = os.path.join(workdir, "scene_probe_truth.json")
+    subprocess.run([cli, "simulate", "--scenario", path, "--direct", "--overwrite",
+                    "--out", os.path.join(workdir, "scene_probe.ply"), "--truth", truth],
+                   check=True, capture_output=True)
+    with open(truth) as f:
+        boxes = json.load(f)["scenario"]["scene"]["boxes"]
+    target = [b for b in boxes if b.get("label") == "target"]
+    if len(target) != 1:
+        sys.exit("the lab-diamond scene has %d target boxes, expected 1" % len(target))
+    target[0]["size"] = [size, target[0]["size"][1], size]
+    target[0]["center"][2] = board_centre_z(size)
+    return {"boxes": boxes}
 
 
 def calibrate(cli, args):
@@ -136,6 +173,9 @@ def main():
                     help="auto: calibrate --auto; refined: the diamond board drive "
                          "(lab_circle_diamond.json: two turns at 0.05 m/s), four world picks at "
                          "the board's corners, calibrate --pairs --refine")
+    ap.add_argument("--board-size", type=float, default=LAB_BOARD_M,
+                    help="refined mode: the diamond board's side in metres (default 0.6, the lab's); "
+                         "a larger board keeps the lab board's bottom corner height and grows upwards")
     ap.add_argument("--pose-source", choices=["ekf", "truth", "odometry"], default="ekf",
                     help="the poses the calibration uses (truth: the simulator's, to separate the "
                          "method's own error from the poses')")
@@ -150,6 +190,7 @@ def main():
                          "only the mixed returns / only the scale error, to tell their effects apart)")
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
+    scene = lab_with_board(a.cli, a.workdir, a.board_size) if a.board_size != LAB_BOARD_M else None
     modes = [a.mode]
     errors = {m: [[], [], []] for m in modes}
     inside = {m: 0 for m in modes}
@@ -178,13 +219,15 @@ def main():
             if a.turns is not None:
                 for segment in drive["path"]["segments"]:
                     segment["turns"] = a.turns
+            if mode == "refined" and scene is not None:
+                drive["scene"] = scene
             with open(path, "w") as f:
                 json.dump(drive, f, indent=1)
             extra = ["--auto"]
             if mode == "refined":
                 pairs = os.path.join(a.workdir, "pairs_%03d.json" % seed)
                 with open(pairs, "w") as f:
-                    json.dump(diamond_pairs(), f, indent=1)
+                    json.dump(diamond_pairs(a.board_size), f, indent=1)
                 extra = ["--pairs", pairs, "--refine"]
             if a.no_smooth:
                 extra.append("--no-smooth")
@@ -204,16 +247,20 @@ def main():
                 errors[mode][i].append(e)
                 counted[mode] += 1
                 inside[mode] += abs(e) <= 3.0 * s
-                rows.append((seed, mode, n, angles[i], got[n], e, s))
+                lidar = drive.get("lidar", {})
+                rows.append((seed, mode, n, angles[i], got[n], e, s,
+                             lidar.get("mixed_return_share", 0.0), lidar.get("mixed_blend_share", 0.0),
+                             lidar.get("range_scale_error", 0.0)))
                 line.append("%s %+.3f (%.3f)" % (n, 1e3 * e, 1e3 * s))
             if rejected is not None:
                 line.append("rejected edge points %s, mixed %s" % (rejected, mixed))
             print("seed %3d %-7s error mrad (sigma): %s" % (seed, mode, ", ".join(line)), flush=True)
     if a.csv:
         with open(a.csv, "w") as f:
-            f.write("seed,mode,angle,truth_rad,estimate_rad,error_rad,sigma_rad\n")
+            f.write("seed,mode,angle,truth_rad,estimate_rad,error_rad,sigma_rad,"
+                    "mixed_return_share,mixed_blend_share,range_scale_error\n")
             for r in rows:
-                f.write("%d,%s,%s,%.9f,%.9f,%.9f,%.9f\n" % r)
+                f.write("%d,%s,%s,%.9f,%.9f,%.9f,%.9f,%.4f,%.4f,%.5f\n" % r)
     print()
     print("| mode | drives solved | alpha RMS / max (mrad) | beta RMS / max | gamma RMS / max | inside 3 sigma | refused |")
     print("|---|---|---|---|---|---|---|")
