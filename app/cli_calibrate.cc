@@ -241,6 +241,7 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
     report["board_thickness_m"] = summary.board_thickness_m;
     report["edge_points"] = summary.edge_points;
     report["rejected_edge_points"] = summary.rejected_edge_points;
+    report["shifted_edge_points"] = summary.shifted_edge_points;
     report["mixed_edge_samples"] = summary.mixed_edge_samples;
     report["range_offsets_m"] = {summary.range_offsets_m[0], summary.range_offsets_m[1]};
     report["sigma_range_rad"] = {{"alpha", summary.sigma_range_rad[0]},

@@ -340,11 +340,10 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples,
   }
   const double dtheta = Median(dthetas);
   // Range noise in the board plane (X4 data sheet scale) adds to the
-  // quantisation of each end point in its weight, and a point further than
-  // s/2 + kRejectNoise from its edge is rejected (FitRectangle): a line that
-  // ends a spacing short or long. (Tighter, 4 mm, and rejecting until the
-  // set held, made the angles worse on drives with mixed returns: with most
-  // edge beams mixed, the clean points are the minority.)
+  // quantisation of each end point in its weight. A point further than
+  // s/2 + kRejectNoise from its edge is a line that ended a spacing short or
+  // long (a mixed return: kept, counted, in the sigma); one further than
+  // s + kRejectNoise is rejected (FitRectangle).
   constexpr double kInPlaneNoise = 0.003;
   constexpr double kRejectNoise = 2.0 * kInPlaneNoise;
   std::vector<EdgePoint>& edge_points = *edge_points_out;
@@ -403,7 +402,7 @@ Status LineEndPoints(const std::vector<LidarObservation>& samples,
       EdgePoint p{mixed ? miss_uv : Eigen::Vector2d(0.5 * (hit_uv + miss_uv)),
                   end == 0 ? EdgeSide::kUpper : EdgeSide::kLower,
                   1.0 / (s * s / 12.0 + kInPlaneNoise * kInPlaneNoise),
-                  0.5 * s + kRejectNoise};
+                  0.5 * s + kRejectNoise, s + kRejectNoise};
       // The board's thickness T. A beam that crosses the front plane just
       // beyond an edge can still hit that edge's face, T deep, if going
       // deeper carries it back over the edge: per unit of depth the beam d
@@ -554,18 +553,22 @@ Status FitBoardCorners(const std::vector<LidarObservation>& samples, const Robot
   // The corner model and its solve.
   std::vector<int> edge;
   double cost = 0.0;
-  std::vector<bool> rejected;
-  s = FitRectangle(edge_points, &rect, &edge, &cost, &rejected);
+  std::vector<bool> rejected, off_a_sample;
+  s = FitRectangle(edge_points, &rect, &edge, &cost, &rejected, &off_a_sample);
   if (!s.ok()) return s;
+  std::vector<bool> shifted(edge_points.size());
+  for (size_t j = 0; j < shifted.size(); ++j) shifted[j] = rejected[j] || off_a_sample[j];
   s = CornersFromRect(rect,
                       RectCovariance(rect, edge_points, edge) +
-                          EdgeShiftCovariance(rect, edge_points, edge, rejected),
+                          EdgeShiftCovariance(rect, edge_points, edge, shifted),
                       frame, pts, keep, out);
   if (!s.ok()) return s;
   size_t used = 0;
   for (int e : edge) used += e >= 0;
   out->edge_points = used;
   out->rejected_edge_points = static_cast<size_t>(std::count(rejected.begin(), rejected.end(), true));
+  out->shifted_edge_points =
+      static_cast<size_t>(std::count(off_a_sample.begin(), off_a_sample.end(), true));
   out->mixed_edge_samples = mixed;
   double wsum = 0.0;
   for (size_t j = 0; j < edge_points.size(); ++j) wsum += edge[j] >= 0 ? edge_points[j].weight : 0;

@@ -53,9 +53,13 @@ struct BoardCorners {
   size_t points = 0;          // inliers used
   size_t scans = 0;
   size_t edge_points = 0;  // scan-line end points (and side points) in the rectangle fit
-  // End points rejected as further from their edge than half a spacing plus
-  // noise: lines that lost or gained a sample at the edge (dropouts, mixed
-  // returns at the board's depth edges).
+  // End points kept though further from their edge than half a spacing
+  // plus noise: lines a sample short or long at the edge (mixed returns at
+  // the board's depth edges). Their share per edge widens the covariance.
+  size_t shifted_edge_points = 0;
+  // End points rejected as further from their edge than a whole spacing
+  // plus noise, which one mixed return does not make (dropouts beside the
+  // edge, foreign returns).
   size_t rejected_edge_points = 0;
   // Samples beyond a line's end found to be mixed returns (a blend of the
   // board's and the background's ranges, LineEndPoints): not board samples,
@@ -94,9 +98,11 @@ struct BoardCorners {
 //     the scan lines is crossed by none: it is then placed half a line
 //     spacing beyond the outermost line (the upright board's side edges,
 //     located only to the scan spacing; mount the target as a diamond).
-//     End points further than s/2 + 6 mm from their edge are rejected once
-//     (rejected_edge_points), and each edge's rejected share enters the
-//     covariance as a possible one-sided shift of that edge.
+//     End points further than s/2 + 6 mm from their edge (a line a sample
+//     short or long: a mixed return) are kept and counted
+//     (shifted_edge_points), and each edge's share of them enters the
+//     covariance as a possible one-sided shift of that edge; those further
+//     than s + 6 mm are rejected once (rejected_edge_points).
 Status FitBoardCorners(const std::vector<LidarObservation>& samples, const RobotGeometry& geometry,
                        const MountingError& calibration, double board_thickness_m,
                        BoardCorners* corners);

@@ -164,17 +164,25 @@ bool SolveRectangle(const std::vector<EdgePoint>& edge_points, const std::vector
 // The rectangle through the edge points: assign points to edges, solve,
 // repeat until the assignment holds. Then reject the implausible points
 // (further from their edge than EdgePoint::limit) and fit again, until the
-// rejected set holds or after kRejectRounds fits (2: reject once). A clean end point lies within s/2 (plus
-// noise) of its edge; a line that lost its outermost sample (noise, a
-// dropout, a mixed return reported at the far surface's range or between
-// the two) ends one spacing short, and a line that gained a mixed return at
-// the board's range one spacing long: their points sit s/2 to 3s/2 off, on
-// one side of the edge, and would move it (docs/calibration.md, "Mixed
-// returns"). `edge[j]`: the edge of point j, -1 if none (or an outlier);
-// `rejected`: how many points the final fit rejected.
+// rejected set holds or after kRejectRounds fits (2: reject once). A clean
+// end point lies within s/2 (plus noise) of its edge. At a depth edge
+// exactly one beam straddles the edge, and a triangulation lidar may report
+// it mixed: a blend or the far surface's range (the line ends a spacing
+// short), or the board's range for a beam whose centre missed it (a spacing
+// long); its end then lies s/2 to s off, on either side (docs/calibration.md,
+// "Mixed returns"). Those ends are kept: rejecting them at s/2 + noise
+// (until 2026-11-27) cut the far side of the scatter around the first fit's
+// edge and pulled the edge further that way (seeds 1-30 of the refined
+// sweep: alpha 3.25 -> 2.33 mrad RMS, 9.29 -> 4.91 worst, kept). They are
+// counted in `off_a_sample`, whose share per edge widens the sigma
+// (EdgeShiftCovariance). Only a line more than a spacing off, which no
+// single straddling beam makes (a dropout beside the edge, a foreign
+// return), is rejected. `edge[j]`: the edge of point j, -1 if none (or an
+// outlier); `rejected`: the points the final fit rejected.
 constexpr int kRejectRounds = 2;
 Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
-                    std::vector<int>* edge_io, double* cost_io, std::vector<bool>* rejected) {
+                    std::vector<int>* edge_io, double* cost_io, std::vector<bool>* rejected,
+                    std::vector<bool>* off_a_sample) {
   Rect& rect = *rect_io;
   std::vector<int>& edge = *edge_io;
   double& cost = *cost_io;
@@ -218,6 +226,11 @@ Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io,
     outlier = next;
   }
   *rejected = outlier;
+  off_a_sample->assign(edge_points.size(), false);
+  for (size_t j = 0; j < edge_points.size(); ++j) {
+    (*off_a_sample)[j] =
+        edge[j] >= 0 && std::abs(Residual(rect, edge_points[j], edge[j])) > edge_points[j].clean_limit;
+  }
   return Status::Ok();
 }
 
@@ -256,12 +269,12 @@ Eigen::Matrix<double, 5, 5> RectCovariance(const Rect& rect, const std::vector<E
   return scale * lu.inverse();
 }
 
-// The edges' own systematic shifts. The rejected points (FitRectangle) are
-// lines that ended a spacing short or long: dropouts, and on a triangulation
-// lidar mixed returns at the board's depth edges. As many again may remain
-// inside the rejection limit, and they need not balance: a blended return
-// only ever shortens a line. So each edge k may sit off by up to its
-// rejected share rho_k times its mean spacing s_k, taken as a 1-sigma shift
+// The edges' own systematic shifts. The ends a sample off (FitRectangle),
+// rejected or kept, are lines that ended a spacing short or long: mixed
+// returns at the board's depth edges, dropouts. They need not balance: a
+// blended return only ever shortens a line, and as many again may sit
+// within the clean limit. So each edge k may sit off by up to its share
+// rho_k of such ends times its mean spacing s_k, taken as a 1-sigma shift
 // sigma_k = rho_k s_k / 2 along its normal, independent between edges. Edge
 // k moved by d with the others fixed moves the centre by d/2 N_k and its
 // half size h_k by d/2, so cov += sum_k sigma_k^2 g_k g_k^T with
@@ -271,19 +284,19 @@ Eigen::Matrix<double, 5, 5> RectCovariance(const Rect& rect, const std::vector<E
 Eigen::Matrix<double, 5, 5> EdgeShiftCovariance(const Rect& rect,
                                                  const std::vector<EdgePoint>& pts,
                                                  const std::vector<int>& edge,
-                                                 const std::vector<bool>& rejected) {
-  double kept[4] = {0, 0, 0, 0}, dropped[4] = {0, 0, 0, 0}, spacing[4] = {0, 0, 0, 0};
+                                                 const std::vector<bool>& shifted) {
+  double kept[4] = {0, 0, 0, 0}, off[4] = {0, 0, 0, 0}, spacing[4] = {0, 0, 0, 0};
   for (size_t j = 0; j < pts.size(); ++j) {
-    const int k = edge[j] >= 0 ? edge[j] : (rejected[j] ? AssignEdge(rect, pts[j]) : -1);
+    const int k = edge[j] >= 0 ? edge[j] : (shifted[j] ? AssignEdge(rect, pts[j]) : -1);
     if (k < 0) continue;
-    (rejected[j] ? dropped : kept)[k] += 1.0;
+    (shifted[j] ? off : kept)[k] += 1.0;
     spacing[k] += pts[j].spacing;
   }
   Eigen::Matrix<double, 5, 5> cov = Eigen::Matrix<double, 5, 5>::Zero();
   for (int k = 0; k < 4; ++k) {
-    const double n = kept[k] + dropped[k];
+    const double n = kept[k] + off[k];
     if (n <= 0.0) continue;
-    const double sigma = 0.5 * dropped[k] / n * spacing[k] / n;
+    const double sigma = 0.5 * off[k] / n * spacing[k] / n;
     Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
     g.head<2>() = 0.5 * EdgeNormal(rect.phi, k);
     g[(k % 2 == 0) ? 3 : 2] = 0.5;

@@ -24,11 +24,13 @@ struct EdgePoint {
   Eigen::Vector2d uv;
   EdgeSide side;
   double weight;  // 1 / sigma^2
-  // Largest plausible offset from the true edge: half the spacing plus the
-  // noise of a crossing (LineEndPoints). A line whose outermost sample fell
-  // out of the band (noise, dropout, a mixed return) ends a whole spacing
-  // short and is dropped by this test, and one that gained a mixed return
-  // at the board's range, a spacing long.
+  // Largest offset from the true edge of a clean end: half the spacing
+  // plus the noise of a crossing (LineEndPoints). A line whose outermost
+  // straddling beam reported a mixed return ends up to a whole spacing short
+  // or long (`off_a_sample` in FitRectangle: kept, and in the sigma);
+  // beyond `limit`, a spacing more, the end is rejected (a dropout, a
+  // foreign return).
+  double clean_limit = std::numeric_limits<double>::infinity();
   double limit = std::numeric_limits<double>::infinity();
   // The board's thickness seen along this beam (LineEndPoints): an edge
   // whose outward normal N has N . shift > 0 faces the beam, which can hit
@@ -58,18 +60,20 @@ int AssignEdge(const Rect& r, const EdgePoint& p);
 // Smallest-area bounding rectangle of the points: the start of the fit.
 Rect BoundingRect(const std::vector<EdgePoint>& pts);
 // The rectangle through the edge points (assignments, rejection of the
-// implausible points); `edge_io[j]` the edge of point j or -1.
+// implausible points); `edge_io[j]` the edge of point j or -1. `off_a_sample`:
+// the kept points further than their clean limit from their edge.
 Status FitRectangle(const std::vector<EdgePoint>& edge_points, Rect* rect_io, std::vector<int>* edge_io,
-                    double* cost_io, std::vector<bool>* rejected);
+                    double* cost_io, std::vector<bool>* rejected, std::vector<bool>* off_a_sample);
 // r with its parameter q of (c_u, c_v, a, b, phi) moved by delta.
 Rect Perturbed(const Rect& r, int q, double delta);
 inline constexpr double kRectStep = 1e-6;  // central differences: metres, radians
 // Covariance of (c_u, c_v, a, b, phi) at the solution.
 Eigen::Matrix<double, 5, 5> RectCovariance(const Rect& rect, const std::vector<EdgePoint>& pts,
                                            const std::vector<int>& edge);
-// The edges' own systematic shifts (rejected shares) as a covariance.
+// The edges' own systematic shifts (the shares of their ends a sample
+// off, `shifted`) as a covariance.
 Eigen::Matrix<double, 5, 5> EdgeShiftCovariance(const Rect& rect, const std::vector<EdgePoint>& pts,
-                                                const std::vector<int>& edge, const std::vector<bool>& rejected);
+                                                const std::vector<int>& edge, const std::vector<bool>& shifted);
 
 }  // namespace sweepscan::board_rect
 

@@ -549,7 +549,8 @@ std::string CalibrationSummary::FullReport() const {
   s << "  condition number: " << condition_number << "\n";
   if (rejected_edge_points >= 0) {
     s << "  edge points:      " << edge_points << " kept, " << rejected_edge_points
-      << " rejected (lines a sample short or long at the board's edges), " << mixed_edge_samples
+      << " rejected (lines more than a sample off at the board's edges), " << shifted_edge_points
+      << " a sample off (mixed returns at the edges: kept, in the sigma), " << mixed_edge_samples
       << " mixed returns beyond the lines' ends\n";
     s << "  range offsets:    " << range_offsets_m[0] << " " << range_offsets_m[1]
       << " m (pass 1, pass 2; estimated beside the angles)\n";

@@ -108,11 +108,13 @@ struct CalibrationSummary {
   double path_scale = 1.0;
   Eigen::Vector3d path_centre = Eigen::Vector3d::Zero();  // the scale's centre
   double board_thickness_m = 0.0;  // refined corners: the target's, as the board fit took it
-  // Refined corners: the end points both passes' final board fits rejected
-  // as further from their edge than half a spacing plus noise (lines that
-  // lost or gained a sample at the edge: mixed returns, dropouts), and the
-  // points kept; -1 for the other methods.
+  // Refined corners, both passes' final board fits: the end points used
+  // (edge_points), those of them a sample off (further from their edge than
+  // half a spacing plus noise: lines a sample short or long, mixed returns
+  // at the edges; they widen the sigma) and those rejected (further than a
+  // whole spacing: dropouts, foreign returns); -1 for the other methods.
   int rejected_edge_points = -1;
+  int shifted_edge_points = -1;
   int edge_points = -1;
   // Refined corners: samples beyond the lines' ends recognised as mixed
   // returns (BoardCorners::mixed_edge_samples), both passes; -1 otherwise.

@@ -303,6 +303,7 @@ Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
   }
   summary->sigma_rad = inner.sigma_rad.cwiseMax(corner_sigma);
   summary->rejected_edge_points = static_cast<int>(k1.rejected_edge_points + k2.rejected_edge_points);
+  summary->shifted_edge_points = static_cast<int>(k1.shifted_edge_points + k2.shifted_edge_points);
   summary->edge_points = static_cast<int>(k1.edge_points + k2.edge_points);
   summary->mixed_edge_samples = static_cast<int>(k1.mixed_edge_samples + k2.mixed_edge_samples);
   summary->condition_number = inner.condition_number;

@@ -371,11 +371,14 @@ TEST(CliCalibrateTest, RefinedCornersHoldOnANoisierLidar) {
   ASSERT_FALSE(j.is_null());
   EXPECT_LT(j["rms_after_m"].get<double>(), 0.003) << j.dump();
   EXPECT_EQ(j["board_thickness_m"].get<double>(), 0.005) << j.dump();
-  // The board fit's count of end points it rejected (lines a sample short or
-  // long; issue 32), and of mixed returns it recognised (none simulated).
+  // The board fit's counts of end points a sample off (lines a sample short
+  // or long: mixed returns, kept) and rejected (further off; issue 32), and
+  // of mixed returns it recognised: a drive without mixed returns has few.
   EXPECT_GT(j["edge_points"].get<int>(), 200) << j.dump();
   EXPECT_GE(j["rejected_edge_points"].get<int>(), 0) << j.dump();
   EXPECT_LT(j["rejected_edge_points"].get<int>(), j["edge_points"].get<int>() / 10) << j.dump();
+  EXPECT_GE(j["shifted_edge_points"].get<int>(), 0) << j.dump();
+  EXPECT_LT(j["shifted_edge_points"].get<int>(), j["edge_points"].get<int>() / 10) << j.dump();
   EXPECT_LT(j["mixed_edge_samples"].get<int>(), 5) << j.dump();
   for (const char* k : {"alpha", "beta", "gamma"}) {
     const double e = std::abs(j["error_rad"][k].get<double>());

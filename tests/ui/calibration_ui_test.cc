@@ -270,9 +270,11 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   // How the board's edges held: the refined fit's counts, as the summary has them.
   EXPECT_GT(r->summary.edge_points, 0);
   EXPECT_GE(r->summary.rejected_edge_points, 0);
-  EXPECT_NE(panel->result_text().indexOf(QStringLiteral("%1 edge points kept, %2 rejected")
+  EXPECT_GE(r->summary.shifted_edge_points, 0);
+  EXPECT_NE(panel->result_text().indexOf(QStringLiteral("%1 edge points kept, %2 rejected, %3 a sample off")
                                              .arg(r->summary.edge_points)
-                                             .arg(r->summary.rejected_edge_points)),
+                                             .arg(r->summary.rejected_edge_points)
+                                             .arg(r->summary.shifted_edge_points)),
             -1)
       << panel->result_text().toStdString();
   // Each pair's gap before and after, and the fitted corners of both passes

@@ -518,12 +518,15 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
   // shows the forward filter's cloud: say which the angles rest on.
   if (s.method != "file") text += tr("<br>poses: the EKF's, smoothed over the drive");
   // Refined picks: how the board's edges held (docs/calibration.md, "Mixed
-  // returns"): lines a sample short or long at an edge are rejected, and
-  // their share widens the sigma above.
+  // returns"): lines a sample short or long at an edge (mixed returns) are
+  // kept and their share widens the sigma above; lines further off are
+  // rejected.
   if (s.rejected_edge_points >= 0) {
-    text += tr("<br>board edges: %1 edge points kept, %2 rejected, %3 mixed returns recognised")
+    text += tr("<br>board edges: %1 edge points kept, %2 rejected, %3 a sample off (mixed returns), "
+               "%4 mixed returns recognised beyond the lines")
                 .arg(s.edge_points)
                 .arg(s.rejected_edge_points)
+                .arg(s.shifted_edge_points)
                 .arg(s.mixed_edge_samples);
   }
   if (r->has_baseline) {

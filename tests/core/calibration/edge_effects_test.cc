@@ -54,16 +54,23 @@ const CalibrationSummary& EdgeDriveSolve(bool mixed) {
   if (it != cache.end()) return it->second;
   CalibrationOptions o;
   o.board_thickness_m = sim::LabTargetThickness(sim::LabTarget::kDiamond);
+  // Truth poses carry no path scale from the room's planes to take up the
+  // range errors (docs/calibration.md, "Range errors do not cancel"), so
+  // the solve is told their size, as an operator with a measured lidar
+  // would: the drive's +6 mm and +0.5 %.
+  o.range_offset_sigma_m = 0.006;
+  o.range_scale_sigma = 0.005;
   const EdgeDrive d = SimulateEdgeDrive(mixed ? 0.5 : 0.0);
   CalibrationSummary s;
   const Status st = SolveRefinedCorners(d.board[0], d.board[1], d.config.geometry, {}, o, &s);
   EXPECT_TRUE(st.ok()) << st.message() << "\n" << s.FullReport();
   const Eigen::Vector3d e = ErrorMrad(s.angles, kSetB);
   std::printf("[calib] mixed edges %s: err(mrad) alpha %+7.3f beta %+7.3f gamma %+7.3f  "
-              "sigma(mrad) %.3f %.3f %.3f  edge points %d kept, %d rejected, %d mixed\n",
+              "sigma(mrad) %.3f %.3f %.3f  edge points %d kept, %d rejected, %d a sample off, "
+              "%d mixed\n",
               mixed ? "0.5 " : "none", e[0], e[1], e[2], 1e3 * s.sigma_rad[0],
               1e3 * s.sigma_rad[1], 1e3 * s.sigma_rad[2], s.edge_points, s.rejected_edge_points,
-              s.mixed_edge_samples);
+              s.shifted_edge_points, s.mixed_edge_samples);
   return cache[mixed] = s;
 }
 
@@ -78,16 +85,20 @@ TEST(RefinedCornersTest, MixedEdgeReturnsAreCountedAndSigmaCoversThem) {
     }
   }
   EXPECT_GT(mixed.mixed_edge_samples, 20);
-  EXPECT_GT(mixed.rejected_edge_points, 2 * clean.rejected_edge_points + 10);
+  // Lines a sample short or long: kept and counted (they widen the sigma);
+  // the few rejected are lines further off (dropouts beside the edge).
+  EXPECT_GT(mixed.shifted_edge_points, 2 * clean.shifted_edge_points + 10);
+  EXPECT_LT(mixed.rejected_edge_points, mixed.shifted_edge_points / 4);
   EXPECT_GE(clean.mixed_edge_samples, 0);
   EXPECT_LT(clean.mixed_edge_samples, 5);  // a clean drive has (nearly) none
 }
 
 // The issue's aim on the same drives: every angle within 2 mrad. Not met
-// today (2026-11-26): the range offset and scale alone leave alpha, beta
-// +3.2 and gamma +1.75 mrad on truth poses, and the mixed returns take alpha
-// and beta to +8.5 / +7.6 (docs/calibration.md, "Mixed returns and range
-// errors"). Run with --gtest_also_run_disabled_tests.
+// (2026-11-27): the range offset and scale alone leave alpha, beta +3.0 and
+// gamma +1.7 mrad on truth poses, and the mixed returns take alpha and beta
+// to +6.8 / +5.7 (+8.5 / +7.6 while the ends a sample off were rejected;
+// docs/calibration.md, "Mixed returns and range errors"). Run with
+// --gtest_also_run_disabled_tests.
 TEST(RefinedCornersTest, DISABLED_MixedEdgeReturnsAndARangeOffsetStayWithinTwoMrad) {
   for (bool mixed : {false, true}) {
     const Eigen::Vector3d e = ErrorMrad(EdgeDriveSolve(mixed).angles, kSetB);
