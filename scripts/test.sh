@@ -42,5 +42,8 @@ if [ "${SWEEPSCAN_SKIP_PACKAGES:-0}" != "1" ]; then
     echo "test: not root: skipping scripts/package-smoke.sh (run it with sudo)"
   fi
 fi
-# The main suite last, so its summary closes the output.
-(cd build && xvfb-run -a ctest --output-on-failure -j"$jobs" --timeout 600)
+# The main suite last, so its summary closes the output. One Xvfb serves every
+# GUI test; -noreset keeps it from resetting when its last client leaves, as
+# it does by default: a test connecting during that reset is refused ("could
+# not connect to display"), which two loops of xdpyinfo show ~5 % of the time.
+(cd build && xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" ctest --output-on-failure -j"$jobs" --timeout 600)
