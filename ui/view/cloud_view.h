@@ -279,6 +279,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // kMotionBatches * kBatchChunks chunks.
   static constexpr size_t kMotionBatches = 8;
   void SyncBatches();  // Before every frame (cloud_view_batches.cc).
+  // Bumped by whatever changes a chunk's drawn levels (or the chunks): the
+  // batches are checked again only when it moved (SyncBatches).
+  void DrawnChanged() { ++drawn_generation_; }
   // True if it added batches.
   bool SyncLevel(const std::vector<std::pair<size_t, size_t>>& ranges, bool rest,
                  std::vector<std::unique_ptr<Batch>>* batches);
@@ -394,6 +397,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   Progress progress_;
   bool interacting_ = false;
   uint64_t camera_generation_ = 0;
+  uint64_t drawn_generation_ = 0;
+  uint64_t synced_generation_ = ~uint64_t{0};  // drawn_generation_ at the last SyncBatches
   QTimer* settle_ = nullptr;
   bool dirty_ = true;
   uint64_t frames_rendered_ = 0;

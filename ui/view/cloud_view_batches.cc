@@ -39,6 +39,11 @@
 namespace sweepscan::ui {
 
 void CloudView::SyncBatches() {
+  // Nothing drawn changed since the last check: the batches hold. Asking
+  // each chunk's poly data (vtkPolyData::GetMTime walks its points, cells
+  // and arrays) cost ~3 ms a frame at 100 M points (3 000 levels, twice).
+  if (drawn_generation_ == synced_generation_) return;
+  synced_generation_ = drawn_generation_;
   size_t sealed = chunks_.size();
   if (sealed > 0 && !chunks_.back()->sealed()) --sealed;
   std::vector<std::pair<size_t, size_t>> motion, rest;  // [first, end) chunk ranges

@@ -32,6 +32,7 @@ bool CloudView::Passes(const Chunk& chunk, size_t i) const {
 }
 
 void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
+  DrawnChanged();
   // Every stride-th point: representative of the chunk, as a chunk's points
   // are consecutive samples along the scan lines (each line thinned evenly).
   const size_t n = (chunk->size + stride - 1) / stride;
@@ -87,6 +88,7 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
 }
 
 void CloudView::ThinMotion(Chunk* chunk, int stride) {
+  DrawnChanged();
   Drawn& d = chunk->motion;
   if (d.stride == 0 || stride % d.stride != 0) {
     BuildDrawn(chunk, stride, &d);
@@ -123,6 +125,7 @@ void CloudView::ThinMotion(Chunk* chunk, int stride) {
 }
 
 void CloudView::Recolor(Chunk* chunk, Drawn* d) {
+  DrawnChanged();
   if (!d->scalar) return;
   const int m = static_cast<int>(color_mode_);
   const size_t n = d->size();
@@ -153,6 +156,7 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
 }
 
 void CloudView::RefilterVerts(const Chunk& chunk, Drawn* d) {
+  DrawnChanged();
   const size_t n = d->size();
   auto verts = vtkSmartPointer<vtkCellArray>::New();
   verts->Use32BitStorage();  // 8 bytes a point instead of 16.
@@ -225,6 +229,7 @@ void CloudView::PlanRest() {
       c->rest_target = 0;
       if (c->rest.actor) renderer_->RemoveActor(c->rest.actor);
       c->rest = Drawn();  // Out of view: its memory back.
+      DrawnChanged();
       continue;
     }
     double d2 = 0.0;
