@@ -444,19 +444,25 @@ void CloudView::SetRobotPose(const Pose2d& pose) {
 
 void CloudView::AppendTrajectory(const std::vector<Pose2d>& poses) {
   if (poses.empty()) return;
-  // Simplified as it grows: a 5.7-hour drive's 205 000 poses drawn as a
-  // 3-pixel line cost a quarter of each frame under llvmpipe; within 5 mm
-  // of every pose they are a few thousand vertices.
+  // Simplified as it grows and ground driven again drawn once: a 5.7-hour
+  // back-and-forth drive's 205 000 poses drawn as a 3-pixel line cost a
+  // quarter of each frame under llvmpipe, and its passes simplified still
+  // about 9 ms (docs/performance.md).
   for (const Pose2d& p : poses) trajectory_path_.Add({p.x, p.y});
-  const std::vector<Eigen::Vector2d>& kept = trajectory_path_.vertices();
-  const vtkIdType n = static_cast<vtkIdType>(kept.size());
+  const std::vector<std::vector<Eigen::Vector2d>> lines = trajectory_path_.Polylines();
+  vtkIdType n = 0;
+  for (const auto& l : lines) n += static_cast<vtkIdType>(l.size());
   trajectory_points_->SetNumberOfPoints(n);
-  // Above the floor's points (their noise is ~1-2 cm), so the path shows.
-  for (vtkIdType i = 0; i < n; ++i) trajectory_points_->SetPoint(i, kept[i].x(), kept[i].y(), 0.08);
   auto line = vtkSmartPointer<vtkCellArray>::New();
-  if (n >= 2) {
-    line->InsertNextCell(n);
-    for (vtkIdType i = 0; i < n; ++i) line->InsertCellPoint(i);
+  vtkIdType i = 0;
+  for (const auto& l : lines) {
+    if (l.size() >= 2) line->InsertNextCell(static_cast<vtkIdType>(l.size()));
+    for (const Eigen::Vector2d& v : l) {
+      // Above the floor's points (their noise is ~1-2 cm), so the path shows.
+      trajectory_points_->SetPoint(i, v.x(), v.y(), 0.08);
+      if (l.size() >= 2) line->InsertCellPoint(i);
+      ++i;
+    }
   }
   trajectory_points_->Modified();
   trajectory_poly_->SetLines(line);
