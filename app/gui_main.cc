@@ -154,7 +154,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "10000000 on a GPU).",
       "N");
   const QCommandLineOption lod_budget(
-      "lod-budget", "Points drawn at most while the camera moves or points stream in (default 60000 under a "
+      "lod-budget", "Points drawn at most while the camera moves or points stream in (default 30000 under a "
       "software renderer, 1000000 on a GPU).",
       "N");
   const QCommandLineOption floor_plan(

@@ -645,7 +645,7 @@ void CloudView::RenderNow() {
                          caps.find("swrast") != std::string::npos;
     if (!rest_budget_set_) rest_budget_ = software_renderer_ ? 1'000'000 : 10'000'000;
     if (!lod_budget_set_) {
-      lod_budget_ = software_renderer_ ? 60'000 : 1'000'000;
+      lod_budget_ = software_renderer_ ? 30'000 : 1'000'000;
       UpdateMotionStride();
     }
   }

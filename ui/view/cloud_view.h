@@ -381,13 +381,15 @@ class CloudView : public QVTKOpenGLNativeWidget {
   int pass_filter_ = -1;
   bool have_points_ = false;
   // Measured under llvmpipe on 2 cores (docs/performance.md, "Desktop
-  // app"): a frame costs ~16 ms plus ~0.4 us a point drawn while the
-  // camera moves (the draw module's vertex work on the GUI thread and the
-  // binning), so 60 000 points keep camera motion at about 30 frames/s; at
-  // rest 1 M points are a ~0.2 s frame. Both defaults are set at the first
-  // frame from the renderer (60 000 and 1 M in software, 1 M and 10 M on a
-  // GPU) unless SetLodBudget() / SetRestBudget() chose them.
-  size_t lod_budget_ = 60'000;
+  // app"): a frame in motion costs ~25 ms plus ~0.4 us a point drawn (the
+  // draw module's vertex work and the binning, the points' shading), so a
+  // budget of 30 000 (15 000-30 000 drawn, the strides being powers of two)
+  // keeps camera motion at about 30 frames/s, and a progressive pass of as
+  // many rest points within about 30 ms; at rest 1 M points are a ~0.4 s
+  // frame. Both defaults are set at the first frame from the renderer
+  // (30 000 and 1 M in software, 1 M and 10 M on a GPU) unless
+  // SetLodBudget() / SetRestBudget() chose them.
+  size_t lod_budget_ = 30'000;
   size_t rest_budget_ = 1'000'000;
   bool lod_budget_set_ = false;
   bool rest_budget_set_ = false;
