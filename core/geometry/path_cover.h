@@ -13,10 +13,11 @@
 // sampled every c/2 along its length; a sample is "covered" when its cell
 // was reached by a drawn sample at least 4 c of path earlier (a straight
 // pass stays in one cell for at most c sqrt(2) of its length, so the
-// samples of one pass do not cover each other). The drawn runs are the stretches of uncovered
-// samples, each widened by one sample at either end so that a run meets the
-// line it rejoins rather than stopping a cell short of it. Drawn samples
-// mark their cells with the path length at which they were drawn.
+// samples of one pass do not cover each other). The drawn runs are the
+// stretches of uncovered samples, each widened by one sample at either end
+// so that a run meets the line it rejoins rather than stopping a cell short
+// of it. Drawn samples, and the midpoints between neighbouring ones, mark
+// their cells with the path length at which they were drawn.
 //
 // The bound (checked by brute force in tests/core/geometry): a covered
 // sample's cell holds a drawn sample, within c sqrt(2); every point of a
