@@ -294,6 +294,7 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
     const double lod = fps(true);
     const double lod_render_ms = render_ms, lod_present_ms = present_ms;
     const int lod_level = window->view()->lod_level();
+    const size_t lod_points = window->view()->motion_point_count();
     // Back at rest: the rest level planned and built for the new camera.
     QElapsedTimer rest_clock;
     rest_clock.start();
@@ -355,6 +356,7 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
                         {"fps_full", full},
                         {"fps_lod", lod},
                         {"lod_level", lod_level},
+                        {"lod_points", lod_points},
                         {"lod_frame_ms", {{"render", lod_render_ms}, {"present", lod_present_ms}}},
                         {"to_rest_s", rest_s},
                         {"rest_points", rest_points},

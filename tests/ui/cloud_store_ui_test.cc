@@ -97,13 +97,29 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   EXPECT_GT(drawn.size(), budget / 2);
   EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
 
-  // The motion level within its budget, likewise.
+  // The motion level within its budget, likewise, one point a cell of the
+  // view's even sample (core/geometry/voxel_sample.h), every one a cloud
+  // point; and the rest level (now every second point or sparser) draws each
+  // of them too, so that the progressive passes draw over pass 0's points.
   view->SetLodBudget(20000);
   view->SetLodActive(true);
-  EXPECT_GE(view->lod_level(), 4);
+  EXPECT_GT(view->lod_level(), 10);  // The cell's longest side (mm).
+  EXPECT_LE(Positions(view->DrawnPoints()).size(), 20000 + CloudView::kChunkPoints);
+  const std::vector<Xyz> motion = Positions(view->MotionPoints());
+  EXPECT_EQ(motion.size(), view->motion_point_count());
+  EXPECT_LE(motion.size(), 20000u);
+  EXPECT_GT(motion.size(), 20000u / 4);
+  EXPECT_TRUE(std::all_of(motion.begin(), motion.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  const std::array<double, 3> cell = view->motion_cell();
+  std::set<std::array<int64_t, 3>> cells;
+  for (const Xyz& p : motion) {
+    std::array<int64_t, 3> c;
+    for (int a = 0; a < 3; ++a) c[a] = static_cast<int64_t>(std::floor(static_cast<double>(p[a]) * (1.0 / cell[a])));
+    EXPECT_TRUE(cells.insert(c).second) << "two motion points in one cell";
+  }
+  view->SetLodActive(false);
   drawn = Positions(view->DrawnPoints());
-  EXPECT_LE(drawn.size(), 20000 + CloudView::kChunkPoints);
-  EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  EXPECT_TRUE(std::includes(drawn.begin(), drawn.end(), motion.begin(), motion.end()));
 }
 
 TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
@@ -269,8 +285,8 @@ TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoin
   view->SetLodBudget(30000);
   view->SetLodActive(true);
   view->RenderNow();
-  ASSERT_GE(view->lod_level(), 8);
   const std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  ASSERT_LE(drawn.size() * 8, snapshot.size());
   const uint64_t page_ins_before = pager.page_ins();
   std::mt19937 rng(7);
   std::uniform_int_distribution<size_t> any(0, snapshot.size() - 1);

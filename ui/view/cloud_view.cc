@@ -303,7 +303,9 @@ void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed) {
   Chunk* c = chunk.get();
   chunks_.push_back(std::move(chunk));
   point_count_ += c->size - known;
-  BuildDrawn(c, motion_stride_, &c->motion);
+  c->serial = next_serial_++;
+  BuildMotion(c);
+  FitMotion();
   // A chunk sealed at rest is drawn in full until the next plan.
   if (!lod_active_) BuildDrawn(c, 1, &c->rest);
   ShowLevels();
@@ -322,7 +324,8 @@ void CloudView::Clear() {
   ClearBatches();
   refine_queue_.clear();
   point_count_ = 0;
-  motion_stride_ = 1;
+  motion_sample_.Clear();
+  next_serial_ = 0;
   lod_active_ = false;
   have_origin_ = false;
   have_points_ = false;
@@ -347,15 +350,13 @@ void CloudView::Clear() {
 void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks) {
   if (chunks.empty()) return;
   // A large batch (an opened session's whole cloud at once) is drawn at
-  // the level it will have: the motion stride for the final count and no
-  // full-resolution rest level per chunk, which for 10 M points would
-  // build 10 M drawn points only to drop them after the loop.
+  // the level it will have: the motion sample's candidates for the final
+  // count and no full-resolution rest level per chunk, which for 10 M
+  // points would build 10 M drawn points only to drop them after the loop.
   size_t incoming = 0;
   for (const auto& packed : chunks) incoming += packed->size();
-  if (point_count_ + incoming > lod_budget_) {
-    UpdateMotionStride(point_count_ + incoming);
-    SetLodActive(true);
-  }
+  count_hint_ = point_count_ + incoming;
+  if (point_count_ + incoming > lod_budget_) SetLodActive(true);
   for (const auto& packed : chunks) {
     if (packed->size() == 0) continue;
     if (!have_origin_) {
@@ -368,7 +369,7 @@ void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk
     UpdateRanges(static_cast<float>(b[4]), t_hi, packed->max_range_m());
     UpdateRanges(static_cast<float>(b[5]), t_hi, packed->max_range_m());
   }
-  UpdateMotionStride();
+  count_hint_ = 0;
   if (point_count_ > lod_budget_) {
     SetLodActive(true);
     settle_->start();
@@ -414,7 +415,6 @@ void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
   d.verts->Modified();
   d.scalar->Modified();
   d.poly->Modified();
-  UpdateMotionStride();
   // While points stream in, sealed chunks are drawn at the motion level
   // (renders stay short and the GUI responsive); the rest level returns when
   // the data pauses.
@@ -646,7 +646,7 @@ void CloudView::RenderNow() {
     if (!rest_budget_set_) rest_budget_ = software_renderer_ ? 1'000'000 : 10'000'000;
     if (!lod_budget_set_) {
       lod_budget_ = software_renderer_ ? 30'000 : 1'000'000;
-      UpdateMotionStride();
+      ApplyLodBudget();
     }
   }
 }

@@ -8,9 +8,9 @@
 // the store seals it and the view swaps it for the packed chunk.
 //
 // Level of detail with point budgets (cloud_view_lod.cc):
-// * motion: while the camera moves or points stream in, every
-//   motion_stride-th point of each sealed chunk, the stride the smallest
-//   power of two that keeps the cloud within lod_budget();
+// * motion: while the camera moves or points stream in, a spatially even
+//   sample of the sealed chunks, one point a grid cell, the cells doubled
+//   until it holds at most lod_budget() points (core/geometry/voxel_sample.h);
 // * rest: once the camera and the data have been still for kSettleMs, the
 //   chunks in the view frustum get finer strides, nearest first, up to
 //   rest_budget() points, built in slices of at most kRefineSliceMs on the
@@ -38,7 +38,9 @@
 #include <QImage>
 #include <QPoint>
 #include <QString>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -48,6 +50,7 @@
 #include "core/cloud/cloud.h"
 #include "core/cloud/packed_chunk.h"
 #include "core/geometry/path_cover.h"
+#include "core/geometry/voxel_sample.h"
 #include "core/pose/odometry.h"
 
 class QMouseEvent;
@@ -163,9 +166,18 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t rest_budget() const { return rest_budget_; }
   // Whether the first frame found a software renderer (Mesa llvmpipe).
   bool software_renderer() const { return software_renderer_; }
-  // While active: every lod_level()-th point of sealed chunks; -1 when the
-  // rest level is drawn.
-  int lod_level() const { return lod_active_ ? motion_stride_ : -1; }
+  // While active: the motion level's cell, its longest side in mm (the
+  // sealed chunks drawn one point a cell); -1 when the rest level is drawn.
+  int lod_level() const {
+    return lod_active_ ? static_cast<int>(std::lround(
+                             1000.0 * std::max({motion_sample_.cell()[0], motion_sample_.cell()[1],
+                                                motion_sample_.cell()[2]})))
+                       : -1;
+  }
+  size_t motion_point_count() const { return motion_sample_.size(); }
+  const std::array<double, 3>& motion_cell() const { return motion_sample_.cell(); }
+  // The sealed chunks' motion level (the sample's points), whether drawn now or not.
+  std::vector<Eigen::Vector3f> MotionPoints() const;
   // The motion level on (automatic while the camera moves; benchmarks force
   // it), or off: the rest level, planned and built at once (screenshots,
   // benchmarks; the settle timer builds it in slices instead).
@@ -294,15 +306,22 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void RemoveChunkActors(Chunk* chunk);
   void NewDrawnActor(Drawn* drawn);
   // (Re)builds `drawn` as every stride-th point of the chunk.
+  // The rest level: every stride-th point and the motion level's.
   void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn);
-  void ThinMotion(Chunk* chunk, int stride);  // Keeps every (stride / old)-th.
+  // Reads the points `index` (ascending) of the chunk into *drawn.
+  void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn);
+  // The motion level (cloud_view_lod.cc): a new sealed chunk's candidates
+  // offered to the sample, the representatives it took drawn; after the
+  // sample merged cells, each chunk's level keeps those still held.
+  void BuildMotion(Chunk* chunk);
+  void FilterMotion(Chunk* chunk);
+  void FitMotion();
+  void RebuildMotion();  // Every sealed chunk offered again (a larger budget).
   void Recolor(Chunk* chunk, Drawn* drawn);   // The colour mode's scalar.
   void RefilterVerts(const Chunk& chunk, Drawn* drawn);
   float ValueOf(const Chunk& chunk, int mode, size_t i) const;
   bool Passes(const Chunk& chunk, size_t i) const;
-  void UpdateMotionStride() { UpdateMotionStride(point_count_); }
-  // The stride for a cloud of `count` points (AppendSealed: before a large batch).
-  void UpdateMotionStride(size_t count);
+  void ApplyLodBudget();  // lod_budget_ to the sample: merged, or rebuilt if larger.
   void ShowLevels();  // The batches' visibility from lod_active_.
   void PlanRest();
   bool RefineSlice(int max_ms);  // True when the queue is empty.
@@ -395,7 +414,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool rest_budget_set_ = false;
   bool renderer_known_ = false;
   bool software_renderer_ = false;
-  int motion_stride_ = 1;
+  VoxelSample motion_sample_{30'000};
+  uint32_t next_serial_ = 0;
+  size_t count_hint_ = 0;  // The cloud's size once a batch being added is in.
   bool lod_active_ = false;
   std::vector<Chunk*> refine_queue_;  // Nearest first.
   QTimer* refine_timer_ = nullptr;

@@ -6,9 +6,10 @@
 // A chunk's points live in one place: the shared packed chunk of the cloud
 // store (core/cloud/packed_chunk.h, 14 bytes a point, pageable), or, for the
 // one growing chunk, a short vector of CloudPoints. VTK holds only what is
-// drawn: every motion_stride-th point (the motion level, a few hundred per
-// chunk) and, at rest, every rest-stride-th point of the chunks in view up
-// to the rest budget. Each drawn level carries one scalar array, the
+// drawn: the chunk's points in the view's spatially even sample (the motion
+// level, core/geometry/voxel_sample.h; a few to a few hundred a chunk) and,
+// at rest, every rest-stride-th point of the chunks in view up to the rest
+// budget, with the motion level's among them. Each drawn level carries one scalar array, the
 // colour mode's, mapped through the shared lookup table on the GPU side.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
@@ -38,13 +39,19 @@ inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 inline constexpr uint16_t kNoValue = 0xFFFF;
 }  // namespace cloud_view_internal
 
-// One drawn level of a chunk: the points i = 0, stride, 2 stride, ... of the
-// chunk (all of them, whatever the pass filter), the vertex cells of those
-// the filter shows, and the colour mode's scalar. Only the growing chunk and
-// the batches have a mapper and an actor; sealed chunks' levels are drawn
-// through their batch.
+// One drawn level of a chunk: its points index[0], index[1], ... (all of
+// them, whatever the pass filter), the vertex cells of those the filter
+// shows, and the colour mode's scalar. The rest level's indices are
+// i = 0, stride, 2 stride, ... and the motion level's among them (so that
+// the progressive passes draw over pass 0's points, never beside them); the
+// motion level's are the chunk's representatives. Only the growing chunk
+// and the batches have a mapper and an actor; sealed chunks' levels are
+// drawn through their batch.
 struct CloudView::Drawn {
-  int stride = 0;  // 0: nothing built.
+  int stride = 0;  // 0: nothing built. The motion level: its candidates' stride.
+  // Sealed chunks: the chunk's index of each drawn point, ascending. Empty
+  // for the growing chunk, drawn whole (point k is its k-th).
+  std::vector<uint32_t> index;
   vtkSmartPointer<vtkPoints> points;
   vtkSmartPointer<vtkFloatArray> scalar;
   vtkSmartPointer<vtkCellArray> verts;
@@ -55,10 +62,12 @@ struct CloudView::Drawn {
   // points, so that a new colour mode never reads the (maybe paged) chunk.
   std::vector<float> time_s, range_m;
   size_t size() const { return points ? static_cast<size_t>(points->GetNumberOfPoints()) : 0; }
+  size_t At(size_t k) const { return index.empty() ? k : index[k]; }  // The chunk's index.
 };
 
 struct CloudView::Chunk {
   std::shared_ptr<const PackedChunk> packed;  // Sealed chunks.
+  uint32_t serial = 0;  // Sealed chunks: its source number in the motion sample, in order.
   std::vector<CloudPoint> growing;            // The growing chunk's points.
   size_t size = 0;
   std::array<double, 6> bounds{};  // x min, x max, y min, y max, z min, z max

@@ -32,10 +32,26 @@ bool CloudView::Passes(const Chunk& chunk, size_t i) const {
 }
 
 void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
-  DrawnChanged();
   // Every stride-th point: representative of the chunk, as a chunk's points
-  // are consecutive samples along the scan lines (each line thinned evenly).
-  const size_t n = (chunk->size + stride - 1) / stride;
+  // are consecutive samples along the scan lines (each line thinned evenly);
+  // and the motion level's points, which the progressive passes' pass 0
+  // drew, so that the finished image holds no point the rest level lacks.
+  std::vector<uint32_t> index;
+  index.reserve((chunk->size + stride - 1) / stride + chunk->motion.index.size());
+  const std::vector<uint32_t>& motion = chunk->motion.index;
+  size_t m = 0;
+  for (size_t i = 0; i < chunk->size; i += stride) {
+    for (; m < motion.size() && motion[m] < i; ++m) index.push_back(motion[m]);
+    if (m < motion.size() && motion[m] == i) ++m;
+    index.push_back(static_cast<uint32_t>(i));
+  }
+  index.insert(index.end(), motion.begin() + static_cast<std::ptrdiff_t>(m), motion.end());
+  FillDrawn(chunk, std::move(index), stride, d);
+}
+
+void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* d) {
+  DrawnChanged();
+  const size_t n = index.size();
   const bool motion = d == &chunk->motion;
   std::shared_ptr<const ChunkPayload> payload;
   if (chunk->sealed()) payload = chunk->packed->Pin();
@@ -46,7 +62,8 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
   std::vector<float> time_s(n), range_m(n);
   const std::vector<ScanRun>* runs = chunk->sealed() ? &chunk->packed->runs() : nullptr;
   size_t run = 0;
-  for (size_t k = 0, i = 0; k < n; ++k, i += stride) {
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = index[k];
     if (chunk->sealed()) {
       while (run + 1 < runs->size() && (*runs)[run + 1].first <= i) ++run;
       chunk->packed->PositionOf(*payload, i, xyz + 3 * k);
@@ -62,6 +79,7 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
     }
   }
   d->stride = stride;
+  d->index = std::move(index);
   d->points = points;
   d->scalar = vtkSmartPointer<vtkFloatArray>::New();
   d->scalar->SetName(kScalarName);
@@ -80,39 +98,70 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
     float* s = d->scalar->GetPointer(0);
     for (size_t k = 0; k < n; ++k) {
       s[k] = m == 0 ? xyz[3 * k + 2] : m == 1 ? time_s[k] : m == 2 ? range_m[k]
-                                                           : ValueOf(*chunk, m, k * stride);
+                                                           : ValueOf(*chunk, m, d->At(k));
     }
   }
   RefilterVerts(*chunk, d);
   // Drawn through its batch (cloud_view_batches.cc), no actor of its own.
 }
 
-void CloudView::ThinMotion(Chunk* chunk, int stride) {
-  DrawnChanged();
-  Drawn& d = chunk->motion;
-  if (d.stride == 0 || stride % d.stride != 0) {
-    BuildDrawn(chunk, stride, &d);
-    return;
+void CloudView::BuildMotion(Chunk* chunk) {
+  // The candidates: every c-th point of the chunk, c a power of two that
+  // gives the chunk its share of 8 lod budgets over the cloud (at least
+  // 2 048 a chunk): a few times more candidates than representatives, so
+  // that each cell's first candidate stands for it, and a bounded cost on
+  // the GUI thread (one hash lookup a candidate; at 100 M points and a
+  // budget of 30 000, 2 048 a chunk, 3 M in all).
+  const size_t count = std::max({count_hint_, point_count_, chunk->size});
+  const double total = static_cast<double>(std::min<size_t>(8 * lod_budget_, 2'000'000));
+  const size_t want = std::clamp<size_t>(static_cast<size_t>(total * chunk->size / count), 2048, kChunkPoints);
+  int c = 1;
+  while (chunk->size / c > want) c *= 2;
+  std::shared_ptr<const ChunkPayload> payload = chunk->packed->Pin();
+  const size_t n = (chunk->size + c - 1) / c;
+  std::vector<float> xyz(3 * n);
+  std::vector<uint32_t> index(n);
+  for (size_t k = 0; k < n; ++k) {
+    index[k] = static_cast<uint32_t>(k * c);
+    chunk->packed->PositionOf(*payload, index[k], xyz.data() + 3 * k);
   }
-  // Every stride-th point is every (stride / old)-th of the old level: no
-  // need to read the (maybe paged) chunk.
-  const size_t f = static_cast<size_t>(stride / d.stride);
-  const size_t n = (chunk->size + stride - 1) / stride;
+  std::vector<uint32_t> taken;
+  motion_sample_.Offer(chunk->serial, xyz.data(), index.data(), n, &taken);
+  for (uint32_t& k : taken) k = index[k];
+  FillDrawn(chunk, std::move(taken), c, &chunk->motion);
+}
+
+void CloudView::FilterMotion(Chunk* chunk) {
+  Drawn& d = chunk->motion;
+  if (d.stride == 0) return;
+  // The representatives the sample still holds (it merged cells): a subset
+  // of the level, so the (maybe paged) chunk is not read.
+  const size_t n0 = d.size();
+  const float* src = static_cast<const float*>(d.points->GetVoidPointer(0));
+  std::vector<size_t> keep;
+  for (size_t k = 0; k < n0; ++k) {
+    if (motion_sample_.Holds(chunk->serial, d.index[k], src + 3 * k)) keep.push_back(k);
+  }
+  if (keep.size() == n0) return;
+  DrawnChanged();
+  const size_t n = keep.size();
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToFloat();
   points->SetNumberOfPoints(static_cast<vtkIdType>(n));
-  const float* src = static_cast<const float*>(d.points->GetVoidPointer(0));
   float* dst = static_cast<float*>(points->GetVoidPointer(0));
-  for (size_t k = 0; k < n; ++k) {
-    std::copy_n(src + 3 * k * f, 3, dst + 3 * k);
-    d.time_s[k] = d.time_s[k * f];
-    d.range_m[k] = d.range_m[k * f];
+  for (size_t j = 0; j < n; ++j) {
+    const size_t k = keep[j];
+    std::copy_n(src + 3 * k, 3, dst + 3 * j);
+    d.index[j] = d.index[k];
+    d.time_s[j] = d.time_s[k];
+    d.range_m[j] = d.range_m[k];
   }
-  d.time_s.resize(n);
-  d.time_s.shrink_to_fit();
-  d.range_m.resize(n);
-  d.range_m.shrink_to_fit();
-  d.stride = stride;
+  for (auto* v : {&d.time_s, &d.range_m}) {
+    v->resize(n);
+    v->shrink_to_fit();
+  }
+  d.index.resize(n);
+  d.index.shrink_to_fit();
   d.points = points;
   d.scalar = vtkSmartPointer<vtkFloatArray>::New();
   d.scalar->SetName(kScalarName);
@@ -122,6 +171,43 @@ void CloudView::ThinMotion(Chunk* chunk, int stride) {
   d.poly->GetPointData()->AddArray(d.scalar);
   Recolor(chunk, &d);
   RefilterVerts(*chunk, &d);
+}
+
+void CloudView::FitMotion() {
+  if (!motion_sample_.Fit()) return;
+  for (auto& c : chunks_) {
+    if (c->sealed()) FilterMotion(c.get());
+  }
+}
+
+void CloudView::RebuildMotion() {
+  // A larger budget: cells cannot split without the points they were not
+  // given, so every chunk offers its candidates again, in order. The rest
+  // levels were built around the old representatives: planned again.
+  motion_sample_.Clear();
+  motion_sample_.SetBudget(lod_budget_);
+  for (auto& c : chunks_) {
+    if (!c->sealed()) continue;
+    c->rest_target = 0;
+    c->rest = Drawn();
+    BuildMotion(c.get());
+    FitMotion();
+  }
+  DrawnChanged();
+  if (!lod_active_) SetLodActive(false);
+  ShowLevels();
+}
+
+void CloudView::ApplyLodBudget() {
+  if (lod_budget_ > motion_sample_.budget()) {
+    RebuildMotion();
+  } else {
+    motion_sample_.SetBudget(lod_budget_);  // Merges at once.
+    for (auto& c : chunks_) {
+      if (c->sealed()) FilterMotion(c.get());
+    }
+    ShowLevels();
+  }
 }
 
 void CloudView::Recolor(Chunk* chunk, Drawn* d) {
@@ -134,7 +220,7 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
   if (d == &chunk->motion) {
     for (size_t k = 0; k < n; ++k) {
       s[k] = m == 0 ? xyz[3 * k + 2] : m == 1 ? d->time_s[k] : m == 2 ? d->range_m[k]
-                                                             : ValueOf(*chunk, m, k * d->stride);
+                                                             : ValueOf(*chunk, m, d->At(k));
     }
   } else if (!chunk->sealed()) {
     for (size_t k = 0; k < n; ++k) {
@@ -147,7 +233,7 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
   } else if (m == 0) {
     for (size_t k = 0; k < n; ++k) s[k] = xyz[3 * k + 2];
   } else if (m >= 3) {
-    for (size_t k = 0; k < n; ++k) s[k] = ValueOf(*chunk, m, k * d->stride);
+    for (size_t k = 0; k < n; ++k) s[k] = ValueOf(*chunk, m, d->At(k));
   } else {
     BuildDrawn(chunk, d->stride, d);  // Time and range: read the chunk again.
     return;
@@ -162,30 +248,13 @@ void CloudView::RefilterVerts(const Chunk& chunk, Drawn* d) {
   verts->Use32BitStorage();  // 8 bytes a point instead of 16.
   verts->AllocateEstimate(static_cast<vtkIdType>(n), 1);
   for (size_t k = 0; k < n; ++k) {
-    if (!Passes(chunk, k * d->stride)) continue;
+    if (!Passes(chunk, d->At(k))) continue;
     const vtkIdType id = static_cast<vtkIdType>(k);
     verts->InsertNextCell(1, &id);
   }
   d->verts = verts;
   d->poly->SetVerts(verts);
   d->poly->Modified();
-}
-
-void CloudView::UpdateMotionStride(size_t count) {
-  int stride = 1;
-  while (count / stride > lod_budget_) stride *= 2;
-  if (stride == motion_stride_) return;
-  const bool coarser = stride > motion_stride_;
-  motion_stride_ = stride;
-  for (auto& c : chunks_) {
-    if (!c->sealed()) continue;
-    if (coarser) {
-      ThinMotion(c.get(), stride);
-    } else {
-      BuildDrawn(c.get(), stride, &c->motion);
-    }
-  }
-  ShowLevels();
 }
 
 void CloudView::ShowLevels() {
@@ -296,7 +365,7 @@ void CloudView::SetLodActive(bool active) {
 void CloudView::SetLodBudget(size_t points) {
   lod_budget_ = std::max<size_t>(points, 1000);
   lod_budget_set_ = true;
-  UpdateMotionStride();
+  ApplyLodBudget();
   RequestRender();
 }
 
@@ -313,6 +382,17 @@ size_t CloudView::vtk_point_count() const {
     for (const auto& b : *level) n += b->points();
   }
   return n;
+}
+
+std::vector<Eigen::Vector3f> CloudView::MotionPoints() const {
+  std::vector<Eigen::Vector3f> out;
+  for (const auto& c : chunks_) {
+    const Drawn& d = c->motion;
+    if (!c->sealed() || !d.points) continue;
+    const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
+    for (size_t k = 0; k < d.size(); ++k) out.emplace_back(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+  }
+  return out;
 }
 
 std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {

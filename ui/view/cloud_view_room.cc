@@ -20,7 +20,7 @@ namespace sweepscan::ui {
 
 double CloudView::FindCeiling() const {
   // Heights of a representative sample: the motion level of sealed chunks
-  // (every motion_stride-th point) and the growing chunk.
+  // (one point a cell, spread per volume) and the growing chunk.
   std::vector<float> z;
   for (const auto& c : chunks_) {
     const Drawn& d = c->sealed() ? c->motion : c->rest;

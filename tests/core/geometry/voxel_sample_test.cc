@@ -68,9 +68,11 @@ void OfferAll(VoxelSample* sample, const std::vector<Offered>& points, size_t fr
 }
 
 using Cell = std::tuple<int64_t, int64_t, int64_t>;
+// As the sample computes it (times the inverse, which may round unlike a
+// division at a cell's border).
 Cell CellOf(const float* p, const std::array<double, 3>& h) {
-  return {static_cast<int64_t>(std::floor(p[0] / h[0])), static_cast<int64_t>(std::floor(p[1] / h[1])),
-          static_cast<int64_t>(std::floor(p[2] / h[2]))};
+  const auto at = [&](int a) { return static_cast<int64_t>(std::floor(static_cast<double>(p[a]) * (1.0 / h[a]))); };
+  return {at(0), at(1), at(2)};
 }
 
 std::set<size_t> Held(const VoxelSample& sample, const std::vector<Offered>& points, size_t to) {
