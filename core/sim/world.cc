@@ -262,6 +262,11 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
     double theta = convention.ThetaFromX4Degrees(encoder_deg);
     Eigen::Vector3d dir = world_from_lidar.rotation() * LidarPoint(1.0, theta);
     bool found = false;
+    // The laser line's first surface (angle correction only), whether the
+    // centre sees it or not.
+    RayHit laser;
+    Eigen::Vector3d laser_point;
+    bool laser_found = false;
     if (!spec.model_angle_correction) {
       found = config_.scene.Cast(world_from_lidar.translation(), dir, 1e-6, spec.max_range_m, &hit);
     } else {
@@ -281,16 +286,10 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
       // guess hits: the far one at one end of a board and the near one at
       // the other, which shifted fitted target edges by half a beam step
       // (docs/calibration.md, "Refined corners").
-      const auto at = [&](double d_m) {
-        return world_from_lidar *
-               LidarPoint(d_m, convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(d_m * 1e3)));
-      };
-      const Eigen::Vector3d near = at(std::max(spec.min_range_m, 0.05));
-      const Eigen::Vector3d chord = at(spec.max_range_m) - near;
-      RayHit first;
-      if (config_.scene.Cast(near, chord.normalized(), 1e-6, chord.norm(), &first)) {
+      if (CastLaserLine(encoder_deg, world_from_lidar, &laser, &laser_point)) {
+        laser_found = true;
         const Eigen::Vector3d centre = world_from_lidar.translation();
-        const double first_range = (near + first.range * chord.normalized() - centre).norm();
+        const double first_range = laser.range;
         double previous = first_range;
         for (int k = 0; k < 5; ++k) {
           theta = convention.ThetaFromX4Degrees(encoder_deg + X4AngleCorrectionDeg(previous * 1e3));
@@ -307,7 +306,15 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
         }
       }
     }
-    if (found) {
+    // With mixed returns, a beam whose own return is lost to the centre's
+    // shadow may still straddle the edge that casts the shadow (MixedRange,
+    // "Shadowed laser returns"): it reports only if drawn as mixed.
+    const bool shadowed = !found && laser_found && spec.mixed_return_share > 0.0;
+    if (shadowed) {
+      hit = laser;
+      dir = (laser_point - world_from_lidar.translation()).normalized();
+    }
+    if (found || shadowed) {
       truth.primitive = hit.primitive;
       truth.face = hit.face;
       truth.true_range = hit.range;
@@ -319,15 +326,24 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
         p_keep *= std::clamp(1.0 - (inc - start_rad) / span_rad, 0.0, 1.0);
       }
       double measured = hit.range;
-      if (spec.mixed_return_share > 0.0) measured = MixedRange(hit, theta, world_from_lidar, &truth);
-      const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * measured);
-      const double noisy = measured * (1.0 + spec.range_scale_error) + spec.range_offset_m +
-                           sigma * lidar_gauss_(lidar_rng_);
-      const bool kept = lidar_uniform_(lidar_rng_) < p_keep;
-      if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
-        range = spec.range_quantum_m > 0.0
-                    ? std::round(noisy / spec.range_quantum_m) * spec.range_quantum_m
-                    : noisy;
+      if (spec.mixed_return_share > 0.0) {
+        measured = MixedRange(hit, world_from_lidar.translation() + hit.range * dir, encoder_deg,
+                              world_from_lidar, &truth);
+      }
+      if (shadowed && !truth.mixed) {
+        // Lost, as without mixed returns; the truth keeps the straddle only.
+        truth.primitive = truth.face = -1;
+        truth.true_range = 0.0;
+      } else {
+        const double sigma = std::hypot(spec.range_noise_m, spec.range_noise_fraction * measured);
+        const double noisy = measured * (1.0 + spec.range_scale_error) + spec.range_offset_m +
+                             sigma * lidar_gauss_(lidar_rng_);
+        const bool kept = lidar_uniform_(lidar_rng_) < p_keep;
+        if (kept && noisy >= spec.min_range_m && noisy <= spec.max_range_m) {
+          range = spec.range_quantum_m > 0.0
+                      ? std::round(noisy / spec.range_quantum_m) * spec.range_quantum_m
+                      : noisy;
+        }
       }
     }
     if (keep_truth_) sample_truth_.push_back(truth);
@@ -346,26 +362,116 @@ void SimWorld::EmitLidar(Time until, SensorSink* sink) {
   }
 }
 
-double SimWorld::MixedRange(const RayHit& hit, double theta, const Rigid3d& world_from_lidar,
-                            SampleTruth* truth) {
+bool SimWorld::CastLaserLine(double encoder_deg, const Rigid3d& world_from_lidar, RayHit* hit,
+                             Eigen::Vector3d* point) const {
+  const LidarSpec& spec = config_.lidar;
+  const auto at = [&](double d_m) {
+    return world_from_lidar *
+           LidarPoint(d_m, spec.angle_convention.ThetaFromX4Degrees(
+                               encoder_deg + X4AngleCorrectionDeg(d_m * 1e3)));
+  };
+  const Eigen::Vector3d near = at(std::max(spec.min_range_m, 0.05));
+  const Eigen::Vector3d chord = at(spec.max_range_m) - near;
+  const Eigen::Vector3d u = chord.normalized();
+  if (!config_.scene.Cast(near, u, 1e-6, chord.norm(), hit)) return false;
+  *point = near + hit->range * u;
+  hit->range = (*point - world_from_lidar.translation()).norm();
+  return true;
+}
+
+// The spot, and what the device reports for the part of it on the other
+// surface (issue 32).
+//
+// Geometry. At encoder angle phi the X4's laser is the line
+//   L(phi) = { the point at distance d from the centre o, at angle phi + c(d) },
+//   tan c(d) = 21.8/d - 21.8/155.3 (mm),
+// 21.6 mm beside o (EmitLidar). The camera turns with the laser and images
+// the spot; the device turns the image's position into the distance d of
+// the point of L(phi) it would come from, and a decoder puts a return of
+// range d at phi + c(d) seen from o: the point of L(phi) at distance d.
+//
+// The spot's sides. The footprint f (mixed_footprint_rad, by default one
+// beam step, 0.504 deg) is what the head turns during one sample: over the
+// exposure the laser sweeps L(phi - f/2) .. L(phi + f/2), the line turned
+// about o; turned about its own emitter instead, 21.6 mm from o, the lines
+// differ by at most 21.6 mm * f/2 = 0.1 mm. So the sides are the laser's
+// lines L(phi +- f/2), cast like the beam itself (CastLaserLine). Until
+// 2026-11-27 they were rays from o at +-f/2 about the centre's ray through
+// the beam's hit. At a depth edge that ray is the wrong line: from the wall
+// 16 cm behind the lab's board at 0.7 m, o's ray crosses the board's plane
+// where the laser of encoder phi + c(d_wall) - c(d_board) does, and
+// c(d_board) - c(d_wall) ~ 21.8 mm (1/d_board - 1/d_wall) = 5.8 mrad, about
+// 2/3 of f: the straddle window sat off the spot by that, and on the near
+// pass of the lab's diamond (p = 1, one turn) half the lines' ends had no
+// straddling beam and a fifth or less were long
+// (EdgeEffectsSimTest.OtherSurfaceReturnsStraddleBothEndsOfALine).
+//
+// The range reported. While the laser is at L(phi + a) (|a| <= f/2) the
+// camera, turning with it, sees the spot on that line and ranges it
+// exactly: a part q of the spot on the other surface reads d_q = |q - o|.
+// (A spot part beside the laser's line with the camera held still would
+// instead read about d (1 + delta / b), delta its lateral offset, b ~ 22 mm
+// the baseline: 10 cm at 0.7 m for delta = d f/2. That is a spot's width
+// from the laser's divergence, which this model does not draw.) The decoder
+// puts d_q on L(phi): at q' = q turned about o by -a (the same distance
+// from o, on the line turned back), so
+//   |q' - q| = 2 d_q sin(|a| / 2) ~ d_q |a|, along t, the tangent of the
+//   scan plane at q (perpendicular to o's ray),
+//   off the other surface's plane (normal n) by  d_q |a| |n . t|.
+// The simulator reports the side's range (|a| = f/2): on the lab diamond the
+// board and the scan plane are vertical and n is horizontal, so
+// |n . t| = sin(e) |n . h| (e the ray's elevation, h its horizontal heading),
+// and a long return lies d_q f/2 sin(e) |n . h| off the board's plane.
+// Measured (noise-free, the test above): 4.2-5.6 mm near and 4.4-5.8 mm far
+// on the upper edges, as modelled to 0.1 mm (d f/2 is 4-7 mm near, 11-12 mm
+// far; sin(e) is larger near); 2.5-7.2 mm on the lower edges, whose sides
+// can hit the board's 5 mm edge face. Within the board fit's band (2.5 sigma:
+// ~5.5 mm near, ~13 mm far) the far ones all; the near ones lie at its edge,
+// so with the range noise some fall out of their line. The same holds for a
+// short return off the background's plane. (An earlier try along the laser's
+// line, not kept, put its long returns 3-9 mm off near, which is this plus
+// the range noise, but up to 33 mm off far, which nothing here explains.)
+//
+// Shadowed laser returns. The camera sees from o (EmitLidar's fixed point):
+// a beam whose laser passes just beyond a board's edge can hit a background
+// that the board hides from o (within c(d_board) - c(d_wall), 2/3 of a
+// step, beyond one end of each near line), and EmitLidar loses it. Its spot's
+// side on the board is in view, so with mixed returns on such a beam is an
+// edge beam like any other, reporting only if drawn as mixed. Without this,
+// the near pass's upper ends had 7 long lines of 46 instead of 30, the far
+// pass's lower ends 20 of 45 instead of 25 (the test above). Whether o
+// sees a side's other surface is not asked, so that the shares
+// mixed_return_share and mixed_blend_share hold at both ends of a line alike;
+// a camera that cannot see the background part beyond one edge would make
+// the short returns at that end rarer. Likewise a shadowed beam drawn as a
+// blend blends the hidden range in.
+double SimWorld::MixedRange(const RayHit& hit, const Eigen::Vector3d& p, double encoder_deg,
+                            const Rigid3d& world_from_lidar, SampleTruth* truth) {
   const LidarSpec& spec = config_.lidar;
   const double range = hit.range;
-  // The spot's two sides, cast from the centre like the beam itself (at the
-  // beam's own, corrected, angle theta). A side is across a depth edge when
-  // its hit lies off the beam's surface by more than mixed_min_jump_m: a
-  // floor seen at grazing incidence changes range fast with angle but stays
-  // on its plane, and a room's concave corner is off it by millimetres; and
-  // its range differs by more than that too (a board's convex corner,
-  // front face beside edge face, is continuous in range).
+  // A side is across a depth edge when its hit lies off the beam's surface
+  // by more than mixed_min_jump_m: a floor seen at grazing incidence changes
+  // range fast with angle but stays on its plane, and a room's concave
+  // corner is off it by millimetres; and its range differs by more than that
+  // too (a board's convex corner, front face beside edge face, is continuous
+  // in range). Without the angle correction the laser passes through o, and
+  // its lines are o's rays.
   const Eigen::Vector3d o = world_from_lidar.translation();
-  const Eigen::Vector3d p = o + range * (world_from_lidar.rotation() * LidarPoint(1.0, theta));
+  const double half_deg = 0.5 * spec.mixed_footprint_rad * 180.0 / M_PI;
   double other = range, jump = spec.mixed_min_jump_m;
-  for (double side : {-0.5, 0.5}) {
-    const Eigen::Vector3d d =
-        world_from_lidar.rotation() * LidarPoint(1.0, theta + side * spec.mixed_footprint_rad);
+  for (double side : {-1.0, 1.0}) {
     RayHit h;
-    if (!config_.scene.Cast(o, d, 1e-6, spec.max_range_m, &h)) continue;
-    const double off = std::abs(hit.normal.dot(o + h.range * d - p));
+    Eigen::Vector3d q;
+    if (spec.model_angle_correction) {
+      if (!CastLaserLine(encoder_deg + side * half_deg, world_from_lidar, &h, &q)) continue;
+    } else {
+      const Eigen::Vector3d d =
+          world_from_lidar.rotation() *
+          LidarPoint(1.0, spec.angle_convention.ThetaFromX4Degrees(encoder_deg + side * half_deg));
+      if (!config_.scene.Cast(o, d, 1e-6, spec.max_range_m, &h)) continue;
+      q = o + h.range * d;
+    }
+    const double off = std::abs(hit.normal.dot(q - p));
     if (off > jump && std::abs(h.range - range) > spec.mixed_min_jump_m) jump = off, other = h.range;
   }
   if (other == range) return range;

@@ -58,10 +58,13 @@ struct LidarSpec {
   // Mixed returns at depth edges. A triangulation lidar's spot has a width;
   // where it straddles a depth edge the sensor sees light from both
   // surfaces and reports a blend of their ranges, or the other surface's
-  // range at this beam's angle. A beam is an edge beam when the rays at
-  // +-mixed_footprint_rad / 2 about it (the spot's extent; default one beam
-  // step, 0.504 deg at 5 kHz / 7 Hz, so about one beam per edge crossing)
-  // hit a surface more than mixed_min_jump_m off the beam's own surface
+  // range at this beam's angle. A beam is an edge beam when its laser at
+  // encoder angles +-mixed_footprint_rad / 2 about its own (the spot's
+  // extent, swept by the head during the sample; default one beam step,
+  // 0.504 deg at 5 kHz / 7 Hz, so about one beam per edge crossing; with
+  // model_angle_correction the laser's line, 21.6 mm off the centre, else
+  // the centre's ray) hits a surface more than mixed_min_jump_m off the
+  // beam's own surface
   // (its plane: a floor at grazing incidence is no edge) and differ in
   // range by more than that. A share `mixed_return_share` of the edge beams report
   // a mixed range: of those, `mixed_blend_share` a blend r + w (r_other - r)
@@ -181,7 +184,9 @@ struct SampleTruth {
   double true_range = 0.0;
   // Mixed returns (LidarSpec::mixed_return_share > 0 only): whether the
   // beam straddles a depth edge, the other surface's range there, and
-  // whether this sample reports a mixed range.
+  // whether this sample reports a mixed range. A beam whose laser return
+  // the centre cannot see (lost, primitive -1) may still straddle; if it
+  // reports a mixed range, primitive and true_range are its laser's hit.
   bool edge = false;
   bool mixed = false;
   double other_range = 0.0;
@@ -242,11 +247,18 @@ class SimWorld {
   void EmitLidar(Time until, SensorSink* sink);
   void EmitWheels(Time until, SensorSink* sink);
   void EmitImu(Time until, SensorSink* sink);
+  // The first surface along the X4's laser line at `encoder_deg`
+  // (LidarSpec::model_angle_correction): `hit` with its range measured from
+  // the lidar's centre, `point` in the world. Whether the centre sees it is
+  // not asked (EmitLidar's fixed point does that).
+  bool CastLaserLine(double encoder_deg, const Rigid3d& world_from_lidar, RayHit* hit,
+                     Eigen::Vector3d* point) const;
   // The range an edge beam reports (LidarSpec's mixed returns): hit.range
-  // if the beam at `theta` does not straddle a depth edge or is not drawn
-  // as mixed; fills the truth's edge fields.
-  double MixedRange(const RayHit& hit, double theta, const Rigid3d& world_from_lidar,
-                    SampleTruth* truth);
+  // if the spot of the beam at `encoder_deg` (its laser's surface `hit`, at
+  // `point`) does not straddle a depth edge or is not drawn as mixed; fills
+  // the truth's edge fields.
+  double MixedRange(const RayHit& hit, const Eigen::Vector3d& point, double encoder_deg,
+                    const Rigid3d& world_from_lidar, SampleTruth* truth);
   // Mean left/right wheel speeds over [t0, t1] (true, before encoder errors).
   void TrueWheelSpeeds(double t0_s, double t1_s, double* left, double* right) const;
 

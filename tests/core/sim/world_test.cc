@@ -127,7 +127,8 @@ SimConfig BoardBeforeAWall(double seconds) {
 }
 
 struct EdgeCounts {
-  size_t scans = 0, valid = 0, edge = 0, mixed = 0, off_surface = 0, blended = 0;
+  size_t scans = 0, valid = 0, edge = 0, mixed = 0, off_surface = 0, blended = 0,
+         blended_off_surface = 0, other = 0, other_near_surface = 0;
 };
 
 // Counts the edge beams and mixed returns of a run, and checks each
@@ -157,8 +158,18 @@ EdgeCounts CountEdges(const SimConfig& c) {
       EXPECT_GT(std::abs(t.other_range - t.true_range), c.lidar.mixed_min_jump_m);
       EXPECT_GE(s.range_m, std::min(t.true_range, t.other_range) - 1e-4);
       EXPECT_LE(s.range_m, std::max(t.true_range, t.other_range) + 1e-4);
-      n.blended += std::abs(s.range_m - t.true_range) > 1e-3 &&
-                   std::abs(s.range_m - t.other_range) > 1e-3;
+      const bool blend = std::abs(s.range_m - t.true_range) > 1e-3 &&
+                         std::abs(s.range_m - t.other_range) > 1e-3;
+      n.blended += blend;
+      n.blended_off_surface += blend && c.scene.DistanceToSurface(p) > 0.01;
+      if (std::abs(s.range_m - t.other_range) <= 1e-3) {
+        ++n.other;
+        // The other surface's part of the spot, decoded on the beam's own
+        // laser line at its range: that part turned about the centre by
+        // half the footprint, so within range x footprint / 2 of it.
+        n.other_near_surface +=
+            c.scene.DistanceToSurface(p) < 0.5 * c.lidar.mixed_footprint_rad * t.other_range + 1e-3;
+      }
     }
   }
   return n;
@@ -178,19 +189,31 @@ TEST(WorldTest, MixedReturnsAtDepthEdges) {
   c.lidar.mixed_blend_share = 0.5;
   const EdgeCounts n = CountEdges(c);
   // About one beam per edge crossing straddles it (the footprint is one
-  // beam step): two per scan.
+  // beam step): two per scan on the board, and one where the scan meets the
+  // floor at the far wall 5 m off (the floor's range recedes ~0.2 m over
+  // half a step at that grazing incidence, so the rule takes the concave
+  // corner for an edge). Until 2026-11-27 there were 2.4 a scan in all:
+  // the spot's sides were the centre's rays, skewed by half a step against
+  // the laser's line, and a straddling beam whose own return was shadowed
+  // from the centre was lost unlooked-at (docs/calibration.md, "The
+  // simulator's \"other surface\" returns").
   const double per_scan = static_cast<double>(n.edge) / n.scans;
-  EXPECT_GT(per_scan, 1.5);
-  EXPECT_LT(per_scan, 3.0);
-  // The drawn share of them is mixed (binomial, ~140 edge beams: sd 0.04).
+  EXPECT_GT(per_scan, 2.5);
+  EXPECT_LT(per_scan, 3.5);
+  // The drawn share of them is mixed (binomial, ~220 edge beams: sd 0.03).
   const double share = static_cast<double>(n.mixed) / n.edge;
   EXPECT_NEAR(share, 0.4, 0.13) << n.mixed << " of " << n.edge;
   // About half of those blend (strictly between the two ranges, sd 0.07).
   EXPECT_NEAR(static_cast<double>(n.blended) / n.mixed, 0.5, 0.22) << n.blended;
-  // A mixed return lands in the air between the surfaces (or beyond the
-  // board's edge): nearly all of them off every surface, none of the rest.
+  // Only mixed returns land off every surface: a blend in the air between
+  // the surfaces (nearly all of them more than 1 cm off); one at the other
+  // surface's range beside that surface, within half a footprint of it
+  // (beyond the board's edge by up to a beam, or on the wall in the
+  // board's shadow).
   EXPECT_LE(n.off_surface, n.mixed);
-  EXPECT_GE(n.off_surface, n.mixed * 8 / 10);
+  EXPECT_GE(n.blended_off_surface, n.blended * 8 / 10);
+  EXPECT_GT(n.other, 10u);
+  EXPECT_EQ(n.other_near_surface, n.other);
 }
 
 TEST(WorldTest, EveryEdgeBeamMixedWithoutBlending) {
