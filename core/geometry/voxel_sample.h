@@ -39,7 +39,6 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 namespace sweepscan {
@@ -83,15 +82,29 @@ class VoxelSample {
     float xyz[3];
   };
   uint64_t Key(const float* xyz) const;
-  void Merge();  // Doubles the cells along the next axis.
+  // The slot of `key` in the open-addressed table: its own, or the empty
+  // one where it would go (linear probing; the table at most half full).
+  size_t Slot(uint64_t key) const;
+  void Rehash(size_t capacity);  // The table for reps_ as they are.
+  void Merge();                  // Doubles the cells along the next axis.
 
+  static constexpr uint64_t kEmpty = ~uint64_t{0};
   size_t budget_;
   double first_cell_;
   std::array<double, 3> cell_;
   std::array<double, 3> inv_cell_;
   int next_axis_ = 0;
   uint64_t generation_ = 0;
-  std::unordered_map<uint64_t, Rep> reps_;
+  // The representatives in the order they were taken, and a hash table of
+  // their cells' keys (slot -> key, and the representative's position in
+  // reps_): a lookup is a probe or two in one array, where a node-based map
+  // missed the cache on every candidate (the GUI thread offers every new
+  // chunk's candidates: docs/cloud-store.md).
+  std::vector<Rep> reps_;
+  std::vector<uint64_t> keys_;
+  std::vector<uint32_t> slots_;
+  size_t mask_ = 0;
+  int shift_ = 54;
 };
 
 }  // namespace sweepscan

@@ -213,8 +213,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px = 6.0);
   // The same, the layers' points included (through the layer picker).
   bool PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px = 6.0);
-  // A click's viewing ray in the view's frame: a point at distance t along
-  // it (t = (p - origin) . direction) is under the cursor within
+  // A click's viewing ray in the view's frame, from the eye: a point at
+  // distance t along it (t = (p - origin) . direction) is under the cursor within
   // tolerance_per_t * t of the ray; points above clip_z are hidden.
   struct PickRay {
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();

@@ -107,14 +107,15 @@ void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride,
 
 void CloudView::BuildMotion(Chunk* chunk) {
   // The candidates: every c-th point of the chunk, c a power of two that
-  // gives the chunk its share of 8 lod budgets over the cloud (at least
-  // 2 048 a chunk): a few times more candidates than representatives, so
-  // that each cell's first candidate stands for it, and a bounded cost on
-  // the GUI thread (one hash lookup a candidate; at 100 M points and a
-  // budget of 30 000, 2 048 a chunk, 3 M in all).
+  // gives the chunk its share of 8 lod budgets over the cloud, between
+  // 2 048 and 16 384 a chunk: several times more candidates than
+  // representatives, so that each cell's first candidate stands for it, at
+  // a bounded cost on the GUI thread (at most a hash lookup a candidate; at
+  // 100 M points and a budget of 30 000, 2 048 a chunk, 3 M in all; live,
+  // 16 384 for each of the first chunks).
   const size_t count = std::max({count_hint_, point_count_, chunk->size});
   const double total = static_cast<double>(std::min<size_t>(8 * lod_budget_, 2'000'000));
-  const size_t want = std::clamp<size_t>(static_cast<size_t>(total * chunk->size / count), 2048, kChunkPoints);
+  const size_t want = std::clamp<size_t>(static_cast<size_t>(total * chunk->size / count), 2048, 16384);
   int c = 1;
   while (chunk->size / c > want) c *= 2;
   std::shared_ptr<const ChunkPayload> payload = chunk->packed->Pin();

@@ -107,11 +107,19 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   renderer_->DisplayToWorld();
   renderer_->GetWorldPoint(far_w);
   PickRay ray;
-  ray.origin = Eigen::Vector3d(near_w[0] / near_w[3], near_w[1] / near_w[3], near_w[2] / near_w[3]);
+  const Eigen::Vector3d n(near_w[0] / near_w[3], near_w[1] / near_w[3], near_w[2] / near_w[3]);
   const Eigen::Vector3d f(far_w[0] / far_w[3], far_w[1] / far_w[3], far_w[2] / far_w[3]);
-  ray.direction = (f - ray.origin).normalized();
-  // World size of one pixel at distance t along the ray (perspective).
+  ray.direction = (f - n).normalized();
+  // The ray starts at the eye, not at the near plane: a pixel's world size
+  // grows with the distance from the eye, and the near plane (fitted to the
+  // props in view) may lie tens of metres from it, where a tolerance taken
+  // from the near plane was a fraction of a pixel. Nothing drawn lies
+  // between the eye and the near plane.
   vtkCamera* camera = renderer_->GetActiveCamera();
+  double eye[3];
+  camera->GetPosition(eye);
+  ray.origin = Eigen::Vector3d(eye[0], eye[1], eye[2]);
+  // World size of one pixel at distance t along the ray (perspective).
   const double pixel_per_t =
       2.0 * std::tan(0.5 * camera->GetViewAngle() * M_PI / 180.0) / std::max(1.0, height() * ratio);
   ray.tolerance_per_t = tolerance_px * pixel_per_t;
