@@ -120,6 +120,18 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   view->SetLodActive(false);
   drawn = Positions(view->DrawnPoints());
   EXPECT_TRUE(std::includes(drawn.begin(), drawn.end(), motion.begin(), motion.end()));
+
+  // A larger budget cannot split cells without the points they were not
+  // given: every chunk is offered again, the rest level planned again
+  // around the new sample, still holding it.
+  view->SetLodBudget(60000);
+  const std::vector<Xyz> finer = Positions(view->MotionPoints());
+  EXPECT_GT(finer.size(), motion.size());
+  EXPECT_LE(finer.size(), 60000u);
+  EXPECT_LT(view->motion_cell()[0] * view->motion_cell()[1] * view->motion_cell()[2],
+            cell[0] * cell[1] * cell[2]);
+  drawn = Positions(view->DrawnPoints());
+  EXPECT_TRUE(std::includes(drawn.begin(), drawn.end(), finer.begin(), finer.end()));
 }
 
 TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
