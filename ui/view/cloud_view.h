@@ -305,8 +305,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void AddSealed(std::shared_ptr<const PackedChunk> packed);
   void RemoveChunkActors(Chunk* chunk);
   void NewDrawnActor(Drawn* drawn);
-  // (Re)builds `drawn` as every stride-th point of the chunk.
-  // The rest level: every stride-th point and the motion level's.
+  // (Re)builds `drawn` as the rest level: every stride-th point of the
+  // chunk and its motion level's points.
   void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn);
   // Reads the points `index` (ascending) of the chunk into *drawn.
   void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn);

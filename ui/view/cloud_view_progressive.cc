@@ -17,9 +17,9 @@
 //   first, about a LOD budget of points (the points a frame in motion
 //   draws), with the renderer's colour and depth buffers preserved: each
 //   point lands where a one-frame render would put it. The motion level's
-//   points are a subset of the rest level's (their strides are powers of
-//   two, the rest's the finer), drawn again at the same depth in the same
-//   colour;
+//   points are among the rest level's (each chunk's rest level holds its
+//   motion level's points: CloudView::BuildDrawn), drawn again at the same
+//   depth in the same colour;
 // * the last pass also draws the translucent props (drawn once, over every
 //   point, as a one-frame render blends them), the 2D overlays (the colour
 //   bar, drawn in pass 0 too) and the other renderers (the axes marker).
