@@ -19,6 +19,24 @@ using cloud_view_internal::kNaN;
 using cloud_view_internal::kNoValue;
 using cloud_view_internal::kScalarName;
 
+namespace {
+
+// A drawn level's points, with a fresh colour scalar (filled by the caller)
+// and the polydata that carries both; its vertex cells come after. (A
+// template: CloudView::Drawn is private to the view.)
+template <typename Drawn>
+void SetPoints(Drawn* d, vtkSmartPointer<vtkPoints> points) {
+  d->points = points;
+  d->scalar = vtkSmartPointer<vtkFloatArray>::New();
+  d->scalar->SetName(kScalarName);
+  d->scalar->SetNumberOfValues(points->GetNumberOfPoints());
+  d->poly = vtkSmartPointer<vtkPolyData>::New();
+  d->poly->SetPoints(points);
+  d->poly->GetPointData()->AddArray(d->scalar);
+}
+
+}  // namespace
+
 float CloudView::ValueOf(const Chunk& chunk, int mode, size_t i) const {
   const std::vector<uint16_t>& v = chunk.values[mode - 3];
   if (i >= v.size() || v[i] == kNoValue) return kNaN;
@@ -80,13 +98,7 @@ void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride,
   }
   d->stride = stride;
   d->index = std::move(index);
-  d->points = points;
-  d->scalar = vtkSmartPointer<vtkFloatArray>::New();
-  d->scalar->SetName(kScalarName);
-  d->scalar->SetNumberOfValues(static_cast<vtkIdType>(n));
-  d->poly = vtkSmartPointer<vtkPolyData>::New();
-  d->poly->SetPoints(points);
-  d->poly->GetPointData()->AddArray(d->scalar);
+  SetPoints(d, points);
   if (motion) {
     d->time_s = std::move(time_s);
     d->range_m = std::move(range_m);
@@ -163,13 +175,7 @@ void CloudView::FilterMotion(Chunk* chunk) {
   }
   d.index.resize(n);
   d.index.shrink_to_fit();
-  d.points = points;
-  d.scalar = vtkSmartPointer<vtkFloatArray>::New();
-  d.scalar->SetName(kScalarName);
-  d.scalar->SetNumberOfValues(static_cast<vtkIdType>(n));
-  d.poly = vtkSmartPointer<vtkPolyData>::New();
-  d.poly->SetPoints(points);
-  d.poly->GetPointData()->AddArray(d.scalar);
+  SetPoints(&d, points);
   Recolor(chunk, &d);
   RefilterVerts(*chunk, &d);
 }
