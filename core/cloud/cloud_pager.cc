@@ -5,6 +5,7 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "core/cloud/packed_chunk.h"
+#include "core/cloud/payload_codec.h"
 
 namespace sweepscan {
 namespace {
@@ -107,14 +109,42 @@ size_t CloudPager::file_bytes() const {
   return static_cast<size_t>(file_end_);
 }
 
+void CloudPager::SetUnpackedBudget(size_t bytes) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  unpacked_budget_ = bytes;
+  EvictLocked();
+}
+
+size_t CloudPager::unpacked_budget() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return unpacked_budget_;
+}
+
 size_t CloudPager::resident_bytes() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return resident_;
+  return unpacked_ + packed_;
+}
+
+size_t CloudPager::unpacked_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return unpacked_;
+}
+
+size_t CloudPager::packed_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return packed_;
 }
 
 size_t CloudPager::paged_out_chunks() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return paged_out_;
+  size_t n = 0;
+  for (const auto& [chunk, w] : where_) n += !w.is_unpacked && !w.is_packed;
+  return n;
+}
+
+size_t CloudPager::packed_chunks() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return packed_chunks_;
 }
 
 uint64_t CloudPager::page_outs() const {
@@ -127,10 +157,17 @@ uint64_t CloudPager::page_ins() const {
   return page_ins_;
 }
 
+uint64_t CloudPager::unpacks() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return unpacks_;
+}
+
 void CloudPager::Add(const PackedChunk* chunk) {
   std::lock_guard<std::mutex> lock(mutex_);
-  where_[chunk] = lru_.insert(lru_.end(), chunk);
-  resident_ += chunk->payload_bytes();
+  Where& w = where_[chunk];
+  w.unpacked = lru_unpacked_.insert(lru_unpacked_.end(), chunk);
+  w.is_unpacked = true;
+  unpacked_ += chunk->payload_bytes();
   EvictLocked();
 }
 
@@ -138,13 +175,19 @@ void CloudPager::Remove(const PackedChunk* chunk) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = where_.find(chunk);
   if (it != where_.end()) {
-    lru_.erase(it->second);
+    if (it->second.is_unpacked) {
+      lru_unpacked_.erase(it->second.unpacked);
+      unpacked_ -= chunk->payload_bytes();
+      unreturned_ += chunk->payload_bytes();
+    }
+    if (it->second.is_packed) {
+      lru_packed_.erase(it->second.packed);
+      packed_ -= chunk->packed_bytes_;
+      unreturned_ += chunk->packed_bytes_;
+    }
     where_.erase(it);
-    resident_ -= chunk->payload_bytes();
-    unreturned_ += chunk->payload_bytes();
-  } else {
-    --paged_out_;
   }
+  if (chunk->packed_bytes_ > 0) --packed_chunks_;
   // The file space of a dropped chunk is not reused one by one (a cache
   // lives as long as the cloud it pages, one session in the app); when the
   // last chunk in the file goes (the cloud cleared), the file is emptied.
@@ -157,48 +200,112 @@ void CloudPager::Remove(const PackedChunk* chunk) {
 void CloudPager::Touch(const PackedChunk* chunk) {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = where_.find(chunk);
-  if (it != where_.end()) lru_.splice(lru_.end(), lru_, it->second);
+  if (it == where_.end()) return;
+  if (it->second.is_unpacked) lru_unpacked_.splice(lru_unpacked_.end(), lru_unpacked_, it->second.unpacked);
+  if (it->second.is_packed) lru_packed_.splice(lru_packed_.end(), lru_packed_, it->second.packed);
 }
 
-std::shared_ptr<const ChunkPayload> CloudPager::PageIn(const PackedChunk* chunk) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::shared_ptr<const ChunkPayload> payload;
+std::shared_ptr<const std::vector<uint8_t>> CloudPager::PinPackedLocked(const PackedChunk* chunk) {
+  Where& w = where_.at(chunk);
+  std::shared_ptr<const std::vector<uint8_t>> bytes;
   {
     std::lock_guard<std::mutex> chunk_lock(chunk->mutex_);
-    if (chunk->payload_ != nullptr) return chunk->payload_;  // Another thread was first.
-    payload = ReadLocked(chunk, chunk->file_offset_);
-    chunk->payload_ = payload;
+    if (chunk->payload_ != nullptr) return nullptr;  // Another thread unpacked it.
+    bytes = chunk->packed_;
+  }
+  if (bytes != nullptr) {
+    lru_packed_.splice(lru_packed_.end(), lru_packed_, w.packed);
+    return bytes;
+  }
+  bytes = ReadLocked(chunk);
+  {
+    std::lock_guard<std::mutex> chunk_lock(chunk->mutex_);
+    chunk->packed_ = bytes;
   }
   ++page_ins_;
-  --paged_out_;
-  where_[chunk] = lru_.insert(lru_.end(), chunk);
-  resident_ += chunk->payload_bytes();
-  EvictLocked();
-  return payload;
+  w.packed = lru_packed_.insert(lru_packed_.end(), chunk);
+  w.is_packed = true;
+  packed_ += chunk->packed_bytes_;
+  return bytes;
+}
+
+std::shared_ptr<const std::vector<uint8_t>> CloudPager::PinPacked(const PackedChunk* chunk) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto bytes = PinPackedLocked(chunk);
+  EvictLocked();  // The pin keeps these bytes even if they go out again.
+  return bytes;
+}
+
+std::shared_ptr<const ChunkPayload> CloudPager::Unpack(const PackedChunk* chunk) {
+  std::shared_ptr<const std::vector<uint8_t>> bytes;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    bytes = PinPackedLocked(chunk);
+    if (bytes == nullptr) {
+      std::lock_guard<std::mutex> chunk_lock(chunk->mutex_);
+      return chunk->payload_;
+    }
+    ++unpacks_;
+    EvictLocked();  // The compressed bytes may have been read back from the file.
+  }
+  // Decoded outside the locks (about 2 ms for 65 536 points), for this
+  // caller only: not kept among the unpacked. The readers of a large cloud
+  // (the view's levels, an export) read each chunk once a pass, in an
+  // order no cache smaller than the cloud would serve; keeping what they
+  // unpack only evicted (and compressed, on their thread) the most
+  // recently sealed chunks, which the live view reads next.
+  return chunk->Unpack(*bytes, 0, (chunk->size() + kCodecSegmentPoints - 1) / kCodecSegmentPoints,
+                       false);
 }
 
 void CloudPager::EvictLocked() {
-  // The most recently used chunk stays whatever the budget: it is the one
-  // being read.
-  while (resident_ > budget_ && lru_.size() > 1) {
-    const PackedChunk* victim = lru_.front();
+  // Unpacked payloads beyond their budget are compressed (the first time)
+  // and dropped; the most recently used stays whatever the budget: it is
+  // the one being read.
+  const size_t unpacked_cap = std::min(unpacked_budget_, budget_ / 2);
+  while (unpacked_ > unpacked_cap && lru_unpacked_.size() > 1) {
+    const PackedChunk* victim = lru_unpacked_.front();
+    Where& w = where_.at(victim);
     {
       std::lock_guard<std::mutex> chunk_lock(victim->mutex_);
-      if (victim->file_offset_ < 0) {
-        int64_t offset = 0;
-        if (!WriteLocked(victim, *victim->payload_, &offset)) return;  // Stays resident.
-        victim->file_offset_ = offset;
-        ++in_file_;
+      if (victim->packed_ == nullptr && victim->file_offset_ < 0) {
+        auto bytes = std::make_shared<std::vector<uint8_t>>();
+        EncodePayload(*victim->payload_, victim->size(), bytes.get(), &victim->segment_ends_);
+        victim->packed_bytes_ = bytes->size();
+        victim->packed_ = std::move(bytes);
+        w.packed = lru_packed_.insert(lru_packed_.end(), victim);
+        w.is_packed = true;
+        packed_ += victim->packed_bytes_;
+        if (victim->packed_bytes_ > 0) ++packed_chunks_;
       }
       // A reader holding a pin keeps its copy until it lets go.
       victim->payload_.reset();
     }
-    lru_.pop_front();
-    where_.erase(victim);
-    resident_ -= victim->payload_bytes();
-    ++paged_out_;
-    ++page_outs_;
+    lru_unpacked_.pop_front();
+    w.is_unpacked = false;
+    unpacked_ -= victim->payload_bytes();
     unreturned_ += victim->payload_bytes();
+  }
+  // Above the memory budget, compressed payloads go to the cache file,
+  // least recently used first.
+  while (unpacked_ + packed_ > budget_ && !lru_packed_.empty()) {
+    const PackedChunk* victim = lru_packed_.front();
+    Where& w = where_.at(victim);
+    {
+      std::lock_guard<std::mutex> chunk_lock(victim->mutex_);
+      if (victim->file_offset_ < 0) {
+        int64_t offset = 0;
+        if (!WriteLocked(*victim->packed_, &offset)) return;  // Stays in memory.
+        victim->file_offset_ = offset;
+        ++in_file_;
+      }
+      victim->packed_.reset();
+    }
+    lru_packed_.pop_front();
+    w.is_packed = false;
+    packed_ -= victim->packed_bytes_;
+    ++page_outs_;
+    unreturned_ += victim->packed_bytes_;
   }
   MaybeTrimLocked();
 }
@@ -218,8 +325,7 @@ void CloudPager::MaybeTrimLocked() {
   }
 }
 
-bool CloudPager::WriteLocked(const PackedChunk* chunk, const ChunkPayload& p, int64_t* offset) {
-  (void)chunk;
+bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset) {
   if (fd_ < 0) {
     // The cache directory, else (read-only, full, gone) the temporary one.
     const char* tmp = std::getenv("TMPDIR");
@@ -234,58 +340,29 @@ bool CloudPager::WriteLocked(const PackedChunk* chunk, const ChunkPayload& p, in
       return false;
     }
   }
-  // Layout: xyz (int16 grid steps or float), range (uint16 or float), dt_ns,
-  // beam, back to back.
-  int64_t at = file_end_;
-  const struct {
-    const void* data;
-    size_t bytes;
-  } parts[] = {{p.xyz_mm.empty() ? static_cast<const void*>(p.xyz.data()) : p.xyz_mm.data(),
-                p.xyz_mm.empty() ? p.xyz.size() * 4 : p.xyz_mm.size() * 2},
-               {p.range_q.empty() ? static_cast<const void*>(p.range_f.data()) : p.range_q.data(),
-                p.range_q.empty() ? p.range_f.size() * 4 : p.range_q.size() * 2},
-               {p.dt_ns.data(), p.dt_ns.size() * 4},
-               {p.beam.data(), p.beam.size() * 2}};
-  for (const auto& part : parts) {
-    if (!WriteAll(fd_, part.data, part.bytes, at)) {
-      std::fprintf(stderr, "sweepscan: cannot write the cloud cache file: %s; keeping the cloud "
-                   "in memory\n", std::strerror(errno));
-      budget_ = static_cast<size_t>(-1);
-      return false;
-    }
-    at += static_cast<int64_t>(part.bytes);
+  // The compressed frames as they are in memory (payload_codec.h), back to
+  // back with the other chunks'; their offsets stay in the chunks' headers.
+  if (!WriteAll(fd_, bytes.data(), bytes.size(), file_end_)) {
+    std::fprintf(stderr, "sweepscan: cannot write the cloud cache file: %s; keeping the cloud "
+                 "in memory\n", std::strerror(errno));
+    budget_ = static_cast<size_t>(-1);
+    return false;
   }
   *offset = file_end_;
-  file_end_ = at;
+  file_end_ += static_cast<int64_t>(bytes.size());
   return true;
 }
 
-std::shared_ptr<ChunkPayload> CloudPager::ReadLocked(const PackedChunk* chunk, int64_t offset) {
-  auto p = std::make_shared<ChunkPayload>();
-  const size_t n = chunk->size();
-  const bool grid = chunk->positions_on_grid();
-  const bool quantised = chunk->ranges_quantised();
-  (grid ? p->xyz_mm.resize(3 * n) : p->xyz.resize(3 * n));
-  (quantised ? p->range_q.resize(n) : p->range_f.resize(n));
-  p->dt_ns.resize(n);
-  p->beam.resize(n);
-  bool ok = grid ? ReadAll(fd_, p->xyz_mm.data(), 6 * n, offset)
-                 : ReadAll(fd_, p->xyz.data(), 12 * n, offset);
-  offset += static_cast<int64_t>((grid ? 6 : 12) * n);
-  ok = ok && (quantised ? ReadAll(fd_, p->range_q.data(), 2 * n, offset)
-                        : ReadAll(fd_, p->range_f.data(), 4 * n, offset));
-  offset += static_cast<int64_t>((quantised ? 2 : 4) * n);
-  ok = ok && ReadAll(fd_, p->dt_ns.data(), 4 * n, offset);
-  offset += static_cast<int64_t>(4 * n);
-  ok = ok && ReadAll(fd_, p->beam.data(), 2 * n, offset);
-  if (!ok) {
+std::shared_ptr<const std::vector<uint8_t>> CloudPager::ReadLocked(const PackedChunk* chunk) {
+  auto bytes = std::make_shared<std::vector<uint8_t>>(chunk->packed_bytes_);
+  if (!ReadAll(fd_, bytes->data(), bytes->size(), chunk->file_offset_)) {
     // Our own unnamed file, written by us: a failed read is an I/O error of
     // the machine, and a cloud with holes would be worse than stopping.
     std::fprintf(stderr, "sweepscan: cannot read back the cloud cache file: %s\n",
                  std::strerror(errno));
     std::abort();
   }
-  return p;
+  return bytes;
 }
 
 }  // namespace sweepscan

@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <limits>
 
 #include "core/cloud/cloud_pager.h"
+#include "core/cloud/payload_codec.h"
 
 namespace sweepscan {
 
@@ -132,12 +136,57 @@ std::shared_ptr<const ChunkPayload> PackedChunk::Pin() const {
     if (pager_ != nullptr) pager_->Touch(this);
     return p;
   }
-  return pager_->PageIn(this);
+  return pager_->Unpack(this);
+}
+
+std::shared_ptr<const ChunkPayload> PackedChunk::PinPositions(size_t s, size_t* first) const {
+  std::shared_ptr<const ChunkPayload> p;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    p = payload_;
+  }
+  if (p != nullptr) {  // Always so without a pager.
+    if (pager_ != nullptr) pager_->Touch(this);
+    *first = 0;
+    return p;
+  }
+  const auto bytes = pager_->PinPacked(this);
+  if (bytes == nullptr) {  // Unpacked meanwhile by another thread.
+    *first = 0;
+    return Pin();
+  }
+  *first = s * kCodecSegmentPoints;
+  return Unpack(*bytes, s, s + 1, true);
+}
+
+std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t s0,
+                                                  size_t s1, bool positions_only) const {
+  auto p = std::make_shared<ChunkPayload>();
+  std::string error;
+  if (!DecodeSegments(bytes, segment_ends_, size_, positions_on_grid_, ranges_quantised_, s0,
+                      s1, positions_only, p.get(), &error)) {
+    // Bytes this process compressed (and maybe wrote to and read back from
+    // its own unnamed file): a failure is a fault of the machine or ours,
+    // and a cloud with holes would be worse than stopping.
+    std::fprintf(stderr, "sweepscan: a compressed cloud chunk does not decode: %s\n", error.c_str());
+    std::abort();
+  }
+  return p;
 }
 
 bool PackedChunk::resident() const {
   std::lock_guard<std::mutex> lock(mutex_);
+  return payload_ != nullptr || packed_ != nullptr;
+}
+
+bool PackedChunk::unpacked() const {
+  std::lock_guard<std::mutex> lock(mutex_);
   return payload_ != nullptr;
+}
+
+size_t PackedChunk::packed_bytes() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return packed_bytes_;
 }
 
 void PackedChunk::DecodeFrom(const PackedChunk& chunk, const ChunkPayload& payload, size_t begin,

@@ -18,11 +18,16 @@
 // and a time origin: ~700 points of an X4 share 24 bytes.
 // CloudPoint is 32 bytes; the view's old per-point arrays were ~300.
 //
-// Paging (docs/cloud-store.md, "Out of core"): the header (size, bounds,
-// time span, runs) stays in memory; the per-point payload may be written to
-// the pager's cache file and dropped when the process is over its memory
-// budget, and is read back on the next Pin(). A sealed chunk never changes,
-// so a payload is written at most once.
+// Three forms of the payload (docs/cloud-store.md, "Compressed payloads"
+// and "Out of core"); the header (size, bounds, time span, runs) always
+// stays in memory:
+//   unpacked    the arrays below, what readers use; the pager keeps the
+//               most recently sealed ones up to its unpacked budget;
+//   compressed  payload_codec.h, under 3 bytes a point, made once, when the
+//               unpacked payload is evicted; Pin() unpacks it for its caller;
+//   paged out   the compressed bytes in the pager's cache file, when the
+//               process is over its memory budget; read back on demand.
+// A sealed chunk never changes, so it is compressed and written at most once.
 //
 // Threading: immutable after Pack(); Pin() may be called from any thread.
 #ifndef SWEEPSCAN_CORE_CLOUD_PACKED_CHUNK_H_
@@ -94,12 +99,23 @@ class PackedChunk {
   bool ranges_quantised() const { return ranges_quantised_; }
   const std::array<int64_t, 3>& origin_mm() const { return origin_mm_; }
 
-  // The payload, read back from the cache file if it was paged out. Holding
-  // the pointer keeps it in memory. Never null (a failed read is fatal: the
-  // cache file is ours and open; see docs/cloud-store.md).
+  // The payload, unpacked (decoded for this caller if the chunk is
+  // compressed, read back from the cache file first if it was paged out).
+  // Holding the pointer keeps it in memory. Never null (a
+  // failed read is fatal: the cache file and the compressed bytes are ours;
+  // see docs/cloud-store.md).
   std::shared_ptr<const ChunkPayload> Pin() const;
-  bool resident() const;
-  size_t payload_bytes() const { return payload_bytes_; }
+  // The positions of segment s's points (payload_codec.h: points
+  // [s * kCodecSegmentPoints, ...)) without unpacking the chunk: a payload
+  // whose point j is the chunk's point *first + j. The whole unpacked
+  // payload (*first = 0) when it is in memory, else that segment's
+  // positions alone, decoded for this caller and not kept (a pick meets a
+  // few blocks of each of many chunks).
+  std::shared_ptr<const ChunkPayload> PinPositions(size_t s, size_t* first) const;
+  bool resident() const;  // In memory, unpacked or compressed (not only in the cache file).
+  bool unpacked() const;  // Unpacked in memory.
+  size_t payload_bytes() const { return payload_bytes_; }  // Unpacked.
+  size_t packed_bytes() const;  // Compressed; 0 until it first was.
 
   // Appends the chunk's points, decoded exactly, to `out`.
   void Decode(std::vector<CloudPoint>* out) const;
@@ -127,6 +143,9 @@ class PackedChunk {
   PackedChunk() = default;
   static bool PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* chunk,
                          ChunkPayload* payload);
+  // The whole payload from the compressed bytes; fatal if they do not decode.
+  std::shared_ptr<ChunkPayload> Unpack(const std::vector<uint8_t>& bytes, size_t s0, size_t s1,
+                                       bool positions_only) const;
 
   size_t size_ = 0;
   std::array<double, 6> bounds_{};
@@ -140,9 +159,11 @@ class PackedChunk {
   CloudPager* pager_ = nullptr;
   // Paging state, under mutex_.
   mutable std::mutex mutex_;
-  mutable std::shared_ptr<const ChunkPayload> payload_;
-  mutable int64_t file_offset_ = -1;  // Where the payload is in the cache file, once written.
-  mutable uint64_t last_use_ = 0;     // The pager's clock at the last Pin().
+  mutable std::shared_ptr<const ChunkPayload> payload_;         // Unpacked, or null.
+  mutable std::shared_ptr<const std::vector<uint8_t>> packed_;  // Compressed, or null.
+  mutable std::vector<uint32_t> segment_ends_;  // Of the compressed frames, set with the first packed_.
+  mutable size_t packed_bytes_ = 0;             // Size of the compressed form, once made.
+  mutable int64_t file_offset_ = -1;  // Where the compressed form is in the cache file, once written.
 };
 
 // Axis-aligned bounds in VTK's order (x min, x max, y min, y max, z min,

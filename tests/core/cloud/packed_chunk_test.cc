@@ -1,8 +1,9 @@
 // The compact cloud store: packed chunks give back every point they were
 // given, bit for bit (positions on the 1 mm grid in 16 bits, others as
 // floats), in memory and after being paged out to the cache file
-// and read back; the pager keeps the resident bytes within its budget and
-// leaves no file behind.
+// and read back; compressed above the unpacked budget and unpacked again;
+// the pager keeps the resident bytes within its budget and leaves no file
+// behind.
 #include "core/cloud/packed_chunk.h"
 
 #include <gtest/gtest.h>
@@ -234,36 +235,106 @@ TEST(PackedChunkTest, PointChunksPackWhatTheySealAndFlattenExactly) {
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
 }
 
+TEST(CloudPagerTest, SmallCloudsStayUnpacked) {
+  // Under the unpacked budget (128 MiB by default: ~9.5 M points) nothing is
+  // compressed: a small cloud costs no encoding and no decoding.
+  CloudPager pager(size_t{1} << 30);
+  const auto points = MakePoints(20 * 4096, 8, false);
+  PointChunks chunks(4096, &pager);
+  for (const CloudPoint& p : points) chunks.Append(p);
+  EXPECT_EQ(pager.packed_chunks(), 0u);
+  EXPECT_EQ(pager.unpacked_bytes(), 20u * 14 * 4096);
+  EXPECT_EQ(pager.resident_bytes(), pager.unpacked_bytes());
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_EQ(pager.unpacks(), 0u);
+}
+
+TEST(CloudPagerTest, CompressesAboveTheUnpackedBudgetAndUnpacksExactly) {
+  CloudPager pager(size_t{1} << 30);
+  const size_t per_chunk = 14 * 4096;
+  pager.SetUnpackedBudget(3 * per_chunk);
+  const auto points = MakePoints(20 * 4096, 9, false);
+  PointChunks chunks(4096, &pager);
+  for (const CloudPoint& p : points) {
+    chunks.Append(p);
+    ASSERT_LE(pager.unpacked_bytes(), 3 * per_chunk);
+  }
+  EXPECT_EQ(pager.packed_chunks(), 17u);  // Each compressed once, on eviction.
+  const auto sealed = chunks.SealedChunks();
+  EXPECT_FALSE(sealed.front()->unpacked());
+  EXPECT_TRUE(sealed.front()->resident());  // Compressed, in memory.
+  EXPECT_GT(sealed.front()->packed_bytes(), 0u);
+  EXPECT_TRUE(sealed.back()->unpacked());
+  EXPECT_EQ(pager.paged_out_chunks(), 0u);
+  EXPECT_EQ(pager.page_outs(), 0u);
+
+  // Unpacked for each reader, twice over, and not kept: the chunks kept
+  // unpacked are still the newest, and nothing is compressed again.
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+  EXPECT_EQ(pager.unpacks(), 34u);
+  EXPECT_EQ(pager.packed_chunks(), 17u);
+  EXPECT_TRUE(sealed.back()->unpacked());
+  EXPECT_FALSE(sealed.front()->unpacked());
+
+  // A segment's positions of a compressed chunk, decoded alone, the chunk
+  // left compressed.
+  const uint64_t unpacks = pager.unpacks();
+  const auto& c = sealed[2];
+  ASSERT_FALSE(c->unpacked());
+  size_t first = 0;
+  const auto part = c->PinPositions(1, &first);
+  EXPECT_EQ(first, 1024u);  // Segments of kCodecSegmentPoints.
+  EXPECT_EQ(part->xyz_mm.size(), 3u * 1024);
+  EXPECT_TRUE(part->dt_ns.empty());
+  for (size_t i = 1500; i < 1600; ++i) {
+    float xyz[3];
+    c->PositionOf(*part, i - first, xyz);
+    EXPECT_EQ(xyz[0], points[2 * 4096 + i].x);
+    EXPECT_EQ(xyz[2], points[2 * 4096 + i].z);
+    EXPECT_EQ(xyz[1], points[2 * 4096 + i].y);
+  }
+  EXPECT_EQ(pager.unpacks(), unpacks);
+  EXPECT_FALSE(c->unpacked());
+}
+
 TEST(CloudPagerTest, PagesOutAboveTheBudgetAndReadsBackExactly) {
   ScratchDir dir;
   const size_t per_chunk = 14 * 4096;
-  CloudPager pager(3 * per_chunk, dir.path);
+  CloudPager pager(3 * per_chunk, dir.path);  // Half of it for unpacked payloads: one chunk.
   const auto points = MakePoints(20 * 4096, 4, false);
   PointChunks chunks(4096, &pager);
   for (const CloudPoint& p : points) {
     chunks.Append(p);
-    ASSERT_LE(pager.resident_bytes(), 3 * per_chunk);
+    // The most recently used chunk stays unpacked whatever the budget.
+    ASSERT_LE(pager.resident_bytes(), 3 * per_chunk + per_chunk);
   }
-  EXPECT_EQ(pager.page_outs(), 17u);
-  EXPECT_EQ(pager.paged_out_chunks(), 17u);
+  EXPECT_GT(pager.page_outs(), 0u);
+  EXPECT_GT(pager.paged_out_chunks(), 0u);
+  EXPECT_EQ(pager.page_outs(), pager.paged_out_chunks());  // Each written once, not yet read.
   const auto sealed = chunks.SealedChunks();
   EXPECT_FALSE(sealed.front()->resident());
-  EXPECT_TRUE(sealed.back()->resident());
+  EXPECT_TRUE(sealed.back()->unpacked());
+  size_t in_file = 0;
+  for (const auto& c : sealed) in_file += c->resident() ? 0 : c->packed_bytes();
+  EXPECT_EQ(pager.file_bytes(), in_file);  // The compressed bytes, nothing else.
   // The cache file has no name: nothing in the directory, during or after.
   EXPECT_TRUE(dir.empty());
 
   // Everything comes back, twice over (the second time from pages read in
   // again after they were dropped once more; a payload is written once).
+  const size_t file_bytes = pager.file_bytes();
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
-  EXPECT_GE(pager.page_ins(), 34u);
-  EXPECT_LE(pager.resident_bytes(), 3 * per_chunk);
+  EXPECT_GT(pager.page_ins(), 0u);
+  EXPECT_LE(pager.resident_bytes(), 3 * per_chunk + per_chunk);
+  EXPECT_GE(pager.file_bytes(), file_bytes);
 
-  // A bigger budget keeps what is read back.
+  // A bigger budget keeps what is read back, compressed, in memory.
   pager.SetBudget(100 * per_chunk);
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
   EXPECT_EQ(pager.paged_out_chunks(), 0u);
-  EXPECT_EQ(pager.resident_bytes(), 20 * per_chunk);
+  for (const auto& c : sealed) EXPECT_TRUE(c->resident());
 }
 
 TEST(CloudPagerTest, GridAndFloatChunksPageOutAndBackAlike) {
@@ -284,8 +355,9 @@ TEST(CloudPagerTest, GridAndFloatChunksPageOutAndBackAlike) {
   EXPECT_EQ(sealed[1]->payload_bytes(), 16u * 3000);
   EXPECT_EQ(sealed[2]->payload_bytes(), 20u * 3000);
   EXPECT_EQ(sealed[3]->payload_bytes(), 22u * 3000);
-  EXPECT_EQ(pager.file_bytes(), (14u + 16u + 20u) * 3000);
-  EXPECT_FALSE(sealed[0]->resident());
+  EXPECT_EQ(pager.file_bytes(), sealed[0]->packed_bytes() + sealed[1]->packed_bytes() +
+                                    sealed[2]->packed_bytes());
+  for (int k = 0; k < 3; ++k) EXPECT_FALSE(sealed[k]->resident()) << k;
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
   EXPECT_GE(pager.page_ins(), 3u);
 }
@@ -294,24 +366,30 @@ TEST(CloudPagerTest, TheCacheFileIsEmptiedWhenItsCloudGoes) {
   // The app opens one session after another in one process: a cloud's file
   // space comes back when the cloud is cleared, not at exit.
   ScratchDir dir;
-  const size_t per_chunk = 14 * 1024;
-  CloudPager pager(2 * per_chunk, dir.path);
+  CloudPager pager(1, dir.path);
   const auto points = MakePoints(10 * 1024, 6, false);
   for (int round = 0; round < 2; ++round) {
     auto chunks = std::make_unique<PointChunks>(1024, &pager);
     for (const CloudPoint& p : points) chunks->Append(p);
-    EXPECT_EQ(pager.file_bytes(), 8 * per_chunk) << round;  // Each written once.
+    size_t packed = 0;
+    {
+      const auto sealed = chunks->SealedChunks();  // Holding them keeps them.
+      for (size_t k = 0; k + 1 < sealed.size(); ++k) packed += sealed[k]->packed_bytes();
+    }
+    EXPECT_EQ(pager.file_bytes(), packed) << round;  // All but the newest, each written once.
     EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
     chunks.reset();
     EXPECT_EQ(pager.file_bytes(), 0u) << round;
     EXPECT_EQ(pager.resident_bytes(), 0u);
     EXPECT_EQ(pager.paged_out_chunks(), 0u);
+    EXPECT_EQ(pager.packed_chunks(), 0u);
   }
 }
 
 TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   // The view (GUI thread) and an export (a job thread) read sealed chunks
   // while the processing thread appends and the pager evicts.
+  // A budget of two chunks: one unpacked, the rest compressed and paged.
   ScratchDir dir;
   CloudPager pager(2 * 14 * 1024, dir.path);
   const auto points = MakePoints(64 * 1024, 5, false);
@@ -346,6 +424,7 @@ TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   EXPECT_EQ(bad.load(), 0u);
   EXPECT_GT(checked.load(), 0u);
   EXPECT_GT(pager.page_outs(), 0u);
+  EXPECT_GT(pager.unpacks(), 0u);
   EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
 }
 
