@@ -213,6 +213,7 @@ double ResidentMiB() { return StatusMiB("VmRSS"); }
 nlohmann::json MemoryBreakdown(MainWindow* window) {
   const struct mallinfo2 heap = mallinfo2();
   return {{"store_mib", CloudPager::Default().resident_bytes() / 1048576.0},
+          {"store_unpacked_mib", CloudPager::Default().unpacked_bytes() / 1048576.0},
           {"store_paged_out_chunks", CloudPager::Default().paged_out_chunks()},
           {"vtk_points", window->view()->vtk_point_count()},
           {"heap_in_use_mib", (heap.uordblks + heap.hblkhd) / 1048576.0},

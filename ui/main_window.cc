@@ -399,7 +399,7 @@ void MainWindow::OnTick() {
     if (b.reset) view_->Clear();
     QElapsedTimer insertion;
     insertion.start();
-    view_->AppendSealed(b.sealed);
+    view_->AppendSealed(b.sealed, b.unpacked);
     view_->AppendPoints(b.points);
     insertion_ms_ += insertion.nsecsElapsed() * 1e-6;
     view_->AppendTrajectory(b.trajectory);

@@ -267,15 +267,16 @@ TEST_F(CloudStoreUiTest, TheRestLevelIsDrawnInPassesOfTheLodBudgetToTheOneFrameI
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {
-  // 1 MiB holds 74 898 points of the store (14 B each): the lab drive's
-  // ~270 000 go mostly to the cache file (as --memory-budget 1 would).
+  // 192 KiB hold the newest chunk unpacked (up to half of it) and about
+  // one chunk compressed (2-3 bytes a point): the lab drive's ~270 000
+  // points go mostly to the cache file (as --memory-budget 0.19 would).
   CloudPager& pager = CloudPager::Default();
-  pager.SetBudget(size_t{1} << 20);
+  pager.SetBudget(size_t{192} << 10);
   const uint64_t page_outs_before = pager.page_outs();
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   EXPECT_GT(pager.page_outs(), page_outs_before);
   EXPECT_GE(pager.paged_out_chunks(), 2u);
-  EXPECT_LE(pager.resident_bytes(), (size_t{1} << 20) + 20 * CloudView::kChunkPoints);
+  EXPECT_LE(pager.resident_bytes(), (size_t{192} << 10) + 20 * CloudView::kChunkPoints);
 
   // Paged out and read back, the cloud is the CLI's point for point.
   const std::string dir = tmp_.path().toStdString();

@@ -277,7 +277,8 @@ void CloudView::RemoveChunkActors(Chunk* chunk) {
   }
 }
 
-void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed) {
+void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed,
+                          std::shared_ptr<const ChunkPayload> payload) {
   // The growing chunk's points are the packed chunk's first points: the
   // sealed chunk takes its place (and its values given so far).
   std::vector<uint16_t> values[3];
@@ -304,10 +305,11 @@ void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed) {
   chunks_.push_back(std::move(chunk));
   point_count_ += c->size - known;
   c->serial = next_serial_++;
-  BuildMotion(c);
+  if (payload == nullptr && !lod_active_) payload = c->packed->Pin();  // Read twice below.
+  BuildMotion(c, payload);
   FitMotion();
   // A chunk sealed at rest is drawn in full until the next plan.
-  if (!lod_active_) BuildDrawn(c, 1, &c->rest);
+  if (!lod_active_) BuildDrawn(c, 1, &c->rest, payload);
   ShowLevels();
 }
 
@@ -347,7 +349,8 @@ void CloudView::Clear() {
   RequestRender();
 }
 
-void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks) {
+void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks,
+                             const std::vector<std::shared_ptr<const ChunkPayload>>& unpacked) {
   if (chunks.empty()) return;
   // A large batch (an opened session's whole cloud at once) is drawn at
   // the level it will have: the motion sample's candidates for the final
@@ -357,7 +360,8 @@ void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk
   for (const auto& packed : chunks) incoming += packed->size();
   count_hint_ = point_count_ + incoming;
   if (point_count_ + incoming > lod_budget_) SetLodActive(true);
-  for (const auto& packed : chunks) {
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    const auto& packed = chunks[k];
     if (packed->size() == 0) continue;
     if (!have_origin_) {
       time_origin_ns_ = packed->first_time_ns();
@@ -365,7 +369,7 @@ void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk
     }
     const auto& b = packed->bounds();
     const float t_hi = static_cast<float>((packed->last_time_ns() - time_origin_ns_) * 1e-9);
-    AddSealed(packed);
+    AddSealed(packed, k < unpacked.size() ? unpacked[k] : nullptr);
     UpdateRanges(static_cast<float>(b[4]), t_hi, packed->max_range_m());
     UpdateRanges(static_cast<float>(b[5]), t_hi, packed->max_range_m());
   }

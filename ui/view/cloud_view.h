@@ -111,7 +111,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void AppendPoints(const std::vector<CloudPoint>& points);
   // Chunks sealed by the cloud store, in order. The growing chunk's points
   // are the first points of the first one (the store seals what it grew).
-  void AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks);
+  // `unpacked[i]`, if given and not null, is chunks[i]'s payload, unpacked
+  // by the caller off the GUI thread (the chunk is compressed).
+  void AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks,
+                    const std::vector<std::shared_ptr<const ChunkPayload>>& unpacked = {});
   void SetRobotPose(const Pose2d& pose);
   void AppendTrajectory(const std::vector<Pose2d>& poses);
   size_t point_count() const { return point_count_; }
@@ -302,18 +305,23 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void InstallBatchObserver();
   Chunk* GrowingChunk();
   void SealGrowing();  // The view's own packing of a full growing chunk.
-  void AddSealed(std::shared_ptr<const PackedChunk> packed);
+  // `payload`: the chunk's, if the caller has it unpacked (else pinned here).
+  void AddSealed(std::shared_ptr<const PackedChunk> packed,
+                 std::shared_ptr<const ChunkPayload> payload = nullptr);
   void RemoveChunkActors(Chunk* chunk);
   void NewDrawnActor(Drawn* drawn);
   // (Re)builds `drawn` as the rest level: every stride-th point of the
   // chunk and its motion level's points.
-  void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn);
-  // Reads the points `index` (ascending) of the chunk into *drawn.
-  void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn);
+  void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn,
+                  std::shared_ptr<const ChunkPayload> payload = nullptr);
+  // Reads the points `index` (ascending) of the chunk into *drawn (from
+  // `payload` if given, else the chunk pinned).
+  void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn,
+                 std::shared_ptr<const ChunkPayload> payload = nullptr);
   // The motion level (cloud_view_lod.cc): a new sealed chunk's candidates
   // offered to the sample, the representatives it took drawn; after the
   // sample merged cells, each chunk's level keeps those still held.
-  void BuildMotion(Chunk* chunk);
+  void BuildMotion(Chunk* chunk, std::shared_ptr<const ChunkPayload> payload = nullptr);
   void FilterMotion(Chunk* chunk);
   void FitMotion();
   void RebuildMotion();  // Every sealed chunk offered again (a larger budget).

@@ -49,7 +49,8 @@ bool CloudView::Passes(const Chunk& chunk, size_t i) const {
   return !std::isnan(pass) && std::abs(pass - pass_filter_) < 0.5f;
 }
 
-void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
+void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
+                           std::shared_ptr<const ChunkPayload> payload) {
   // Every stride-th point: representative of the chunk, as a chunk's points
   // are consecutive samples along the scan lines (each line thinned evenly);
   // and the motion level's points, which the progressive passes' pass 0
@@ -64,15 +65,15 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d) {
     index.push_back(static_cast<uint32_t>(i));
   }
   index.insert(index.end(), motion.begin() + static_cast<std::ptrdiff_t>(m), motion.end());
-  FillDrawn(chunk, std::move(index), stride, d);
+  FillDrawn(chunk, std::move(index), stride, d, std::move(payload));
 }
 
-void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* d) {
+void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* d,
+                          std::shared_ptr<const ChunkPayload> payload) {
   DrawnChanged();
   const size_t n = index.size();
   const bool motion = d == &chunk->motion;
-  std::shared_ptr<const ChunkPayload> payload;
-  if (chunk->sealed()) payload = chunk->packed->Pin();
+  if (chunk->sealed() && payload == nullptr) payload = chunk->packed->Pin();
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToFloat();
   points->SetNumberOfPoints(static_cast<vtkIdType>(n));
@@ -117,7 +118,7 @@ void CloudView::FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride,
   // Drawn through its batch (cloud_view_batches.cc), no actor of its own.
 }
 
-void CloudView::BuildMotion(Chunk* chunk) {
+void CloudView::BuildMotion(Chunk* chunk, std::shared_ptr<const ChunkPayload> payload) {
   // The candidates: every c-th point of the chunk, c a power of two that
   // gives the chunk its share of 8 lod budgets over the cloud, between
   // 2 048 and 16 384 a chunk: several times more candidates than
@@ -130,7 +131,7 @@ void CloudView::BuildMotion(Chunk* chunk) {
   const size_t want = std::clamp<size_t>(static_cast<size_t>(total * chunk->size / count), 2048, 16384);
   int c = 1;
   while (chunk->size / c > want) c *= 2;
-  std::shared_ptr<const ChunkPayload> payload = chunk->packed->Pin();
+  if (payload == nullptr) payload = chunk->packed->Pin();
   const size_t n = (chunk->size + c - 1) / c;
   std::vector<float> xyz(3 * n);
   std::vector<uint32_t> index(n);
@@ -141,7 +142,7 @@ void CloudView::BuildMotion(Chunk* chunk) {
   std::vector<uint32_t> taken;
   motion_sample_.Offer(chunk->serial, xyz.data(), index.data(), n, &taken);
   for (uint32_t& k : taken) k = index[k];
-  FillDrawn(chunk, std::move(taken), c, &chunk->motion);
+  FillDrawn(chunk, std::move(taken), c, &chunk->motion, std::move(payload));
 }
 
 void CloudView::FilterMotion(Chunk* chunk) {

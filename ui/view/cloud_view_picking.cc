@@ -25,9 +25,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <utility>
 #include <vector>
 
+#include "core/cloud/payload_codec.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
 
@@ -63,9 +65,10 @@ void CloudView::mousePressEvent(QMouseEvent* event) {
 
 namespace {
 
-// Ray / axis-aligned box test (slab method), the box grown by `margin`.
+// Ray / axis-aligned box test (slab method), the box grown by `margin`;
+// `enter`, if given, is where the ray enters it (0 if it starts inside).
 bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double b[6],
-                double margin) {
+                double margin, double* enter = nullptr) {
   double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
   for (int k = 0; k < 3; ++k) {
     const double lo = b[2 * k] - margin, hi = b[2 * k + 1] + margin;
@@ -79,6 +82,7 @@ bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double
     t1 = std::min(t1, c);
     if (t0 > t1) return false;
   }
+  if (enter != nullptr) *enter = t0;
   return true;
 }
 
@@ -126,8 +130,13 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   ray.clip_z = std::isnan(clip_height_) ? std::numeric_limits<double>::infinity() : clip_height_;
   const Eigen::Vector3d& o = ray.origin;
   const Eigen::Vector3d& d = ray.direction;
-  const double cam_dist = camera->GetDistance();
-  const double margin = tolerance_px * pixel_per_t * (cam_dist * 2.0 + 10.0);
+  // A box is met if the ray comes within the tolerance at the box's far
+  // side: every point p of the box has t <= |p - o| <= |centre - o| + half
+  // its diagonal, so tol(t) is at most that times tolerance_per_t.
+  auto margin = [&](const double b[6]) {
+    const Eigen::Vector3d lo(b[0], b[2], b[4]), hi(b[1], b[3], b[5]);
+    return ray.tolerance_per_t * ((0.5 * (lo + hi) - o).norm() + 0.5 * (hi - lo).norm());
+  };
   double best_t = std::numeric_limits<double>::infinity();
   bool found = false;
   const float clip_z = static_cast<float>(ray.clip_z);
@@ -142,41 +151,78 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     best_t = t;
     return true;
   };
+  auto take = [&](const float xyz[3]) {
+    hit->world = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+    hit->local = hit->world;
+    hit->layer.clear();
+    found = true;
+  };
+  // Every point of the cloud, not only those drawn: the pick is the true
+  // point under the cursor, whatever the level of detail.
+  //
+  // The growing chunk (at most 65 536 points): every point.
   for (const auto& c : chunks_) {
-    if (c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin)) continue;
-    // Every point of the chunk, not only those drawn: the pick is the true
-    // point under the cursor, whatever the level of detail. A sealed
-    // chunk's points are tested only in the blocks the ray passes near
-    // (PackedChunk::block_bounds(): a ray through a room revisited for hours
-    // meets nearly every chunk's box, but few of each chunk's blocks); the
-    // payload is read (or paged in) only if one is.
-    std::vector<std::pair<size_t, size_t>> spans;  // [begin, end) of points to test
-    if (c->sealed()) {
-      const auto& blocks = c->packed->block_bounds();
-      for (size_t k = 0; k < blocks.size(); ++k) {
-        const double box[6] = {blocks[k][0], blocks[k][1], blocks[k][2],
-                               blocks[k][3], blocks[k][4], blocks[k][5]};
-        if (box[4] > clip_z || !RayHitsBox(o, d, box, margin)) continue;
-        const size_t begin = k * PackedChunk::kBlockPoints;
-        const size_t end = std::min(c->size, begin + PackedChunk::kBlockPoints);
-        if (!spans.empty() && spans.back().second == begin) {
-          spans.back().second = end;
-        } else {
-          spans.emplace_back(begin, end);
-        }
-      }
-      if (spans.empty()) continue;
-    } else {
-      spans.emplace_back(0, c->size);
-    }
+    if (c->sealed() || c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin(c->bounds.data()))) continue;
     size_t best = c->size;
+    for (size_t i = 0; i < c->size; ++i) {
+      const CloudPoint& p = c->growing[i];
+      if (p.z > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
+      if (consider(p.x - o.x(), p.y - o.y(), p.z - o.z())) best = i;
+    }
+    if (best < c->size) take(&c->growing[best].x);
+  }
+  // Sealed chunks: only the blocks the ray passes near
+  // (PackedChunk::block_bounds(); a ray through a room revisited for hours
+  // meets nearly every chunk's box, and a block, a third of a scan line, is
+  // a tall slab that many rays cross), nearest entry first, until a block's
+  // entry lies beyond the best point so far. A point within the tolerance
+  // of the ray at t lies within margin(box) of the ray's point at t, so the ray
+  // is inside the grown box there: no point of a block entered beyond the
+  // best can be nearer. A compressed chunk's positions are decoded a codec
+  // segment (four blocks) at a time, only where a block is tested
+  // (PackedChunk::PinPositions).
+  struct Candidate {
+    double enter;
+    const Chunk* chunk;
+    uint32_t block;
+  };
+  std::vector<Candidate> candidates;
+  for (const auto& c : chunks_) {
+    double enter = 0.0;
+    if (!c->sealed() || c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin(c->bounds.data()), &enter) ||
+        enter >= best_t) {
+      continue;
+    }
+    const auto& blocks = c->packed->block_bounds();
+    for (size_t k = 0; k < blocks.size(); ++k) {
+      const double box[6] = {blocks[k][0], blocks[k][1], blocks[k][2],
+                             blocks[k][3], blocks[k][4], blocks[k][5]};
+      if (box[4] > clip_z || !RayHitsBox(o, d, box, margin(box), &enter) || enter >= best_t) continue;
+      candidates.push_back({enter, c.get(), static_cast<uint32_t>(k)});
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.enter < b.enter; });
+  struct Decoded {
     std::shared_ptr<const ChunkPayload> payload;
-    if (c->sealed()) payload = c->packed->Pin();
-    if (c->sealed() && c->packed->positions_on_grid()) {
+    size_t first = 0;  // The chunk's point i is the payload's i - first.
+  };
+  std::map<std::pair<const Chunk*, size_t>, Decoded> decoded;  // By chunk and segment.
+  for (const Candidate& candidate : candidates) {
+    if (candidate.enter >= best_t) break;
+    const Chunk& c = *candidate.chunk;
+    const PackedChunk& packed = *c.packed;
+    const size_t begin = candidate.block * PackedChunk::kBlockPoints;
+    const size_t end = std::min(c.size, begin + PackedChunk::kBlockPoints);
+    auto [at, fresh] = decoded.try_emplace({&c, begin / kCodecSegmentPoints});
+    Decoded& seg = at->second;
+    if (fresh) seg.payload = packed.PinPositions(begin / kCodecSegmentPoints, &seg.first);
+    size_t best = c.size;
+    if (packed.positions_on_grid()) {
       // Whole millimetres after the chunk's origin (docs/cloud-store.md):
       // the ray's origin moved there, the points are not decoded. The clip
       // is a whole step too: the highest k whose float is at or below it.
-      const std::array<int64_t, 3>& origin = c->packed->origin_mm();
+      const std::array<int64_t, 3>& origin = packed.origin_mm();
       const double ox = o.x() - origin[0] * kGridStepM, oy = o.y() - origin[1] * kGridStepM,
                    oz = o.z() - origin[2] * kGridStepM;
       int64_t top = std::numeric_limits<int64_t>::max();
@@ -186,36 +232,22 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
         while (GridPosition(top + 1) <= clip_z) ++top;
         top -= origin[2];
       }
-      for (const auto& [begin, end] : spans) {
-        const int16_t* q = payload->xyz_mm.data() + 3 * begin;
-        for (size_t i = begin; i < end; ++i, q += 3) {
-          if (q[2] > top || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-          if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
-        }
+      const int16_t* q = seg.payload->xyz_mm.data() + 3 * (begin - seg.first);
+      for (size_t i = begin; i < end; ++i, q += 3) {
+        if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
+        if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
       }
     } else {
-      const float* p0 = c->sealed() ? payload->xyz.data() : &c->growing.front().x;
-      const size_t step = c->sealed() ? 3 : sizeof(CloudPoint) / sizeof(float);
-      for (const auto& [begin, end] : spans) {
-        const float* p = p0 + step * begin;
-        for (size_t i = begin; i < end; ++i, p += step) {
-          if (p[2] > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-          if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
-        }
+      const float* p = seg.payload->xyz.data() + 3 * (begin - seg.first);
+      for (size_t i = begin; i < end; ++i, p += 3) {
+        if (p[2] > clip_z || !Passes(c, i)) continue;
+        if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
       }
     }
-    if (best == c->size) continue;
+    if (best == c.size) continue;
     float xyz[3];
-    if (c->sealed()) {
-      c->packed->PositionOf(*payload, best, xyz);
-    } else {
-      const CloudPoint& g = c->growing[best];
-      xyz[0] = g.x, xyz[1] = g.y, xyz[2] = g.z;
-    }
-    hit->world = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
-    hit->local = hit->world;
-    hit->layer.clear();
-    found = true;
+    packed.PositionOf(*seg.payload, best - seg.first, xyz);
+    take(xyz);
   }
   // The layers' points compete with the cloud's: the nearest to the camera wins.
   if (layer_picker_ && !layers_.empty() && layer_picker_(ray, &best_t, hit)) found = true;

@@ -1,5 +1,7 @@
 #include "ui/workspace/live_processor.h"
 
+#include <malloc.h>
+
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
@@ -149,7 +151,9 @@ void LiveProcessor::Publish(bool reset) {
     // The first new sealed chunk holds the open chunk published before.
     const auto sealed = c->SealedChunks();
     for (; published_chunk_ < std::min(sealed.size(), publish_cap_); ++published_chunk_) {
-      batch.sealed.push_back(sealed[published_chunk_]);
+      const auto& chunk = sealed[published_chunk_];
+      batch.sealed.push_back(chunk);
+      batch.unpacked.push_back(chunk->unpacked() ? nullptr : chunk->Pin());
       total_points_ += sealed[published_chunk_]->size() - published_offset_;
       published_offset_ = 0;
     }
@@ -242,6 +246,15 @@ void LiveProcessor::AdoptCloud(std::shared_ptr<std::unique_ptr<PointChunks>> clo
   }
   last_trajectory_time_ = latest_time_;
   adopt_length_s_ = p.empty() ? 0.0 : ToSeconds(p.latest() - p.earliest());
+  // From here on only the last pose is looked up (LatestPose, at
+  // latest_time_; nothing is placed any more: a replay or a seek opens the
+  // session again), so the rest goes: a pose a wheel or IMU record, ~200 MB
+  // for the 5.7-hour drive of docs/performance.md.
+  auto tail = std::make_shared<PoseBuffer>();
+  for (size_t i = p.size() >= 2 ? p.size() - 2 : 0; i < p.size(); ++i) {
+    tail->Add(p.time(i), p.pose(i), i > 0 && p.AfterGap(i));
+  }
+  given_poses_ = std::move(tail);
   publish_cap_ = kAdoptChunks;
   Publish(true);
   if (adopt_timer_ == nullptr) {
@@ -261,6 +274,11 @@ void LiveProcessor::OnAdoptTick() {
   }
   adopt_timer_->stop();
   publish_cap_ = static_cast<size_t>(-1);
+  // The open's transient memory (the poses, the chunks unpacked for the
+  // view, the decoders' buffers: hundreds of MB for 100 M points) back to
+  // the system: glibc returns a freed block inside its heaps only when
+  // trimmed, and the app keeps up to 512 MiB free otherwise (gui_main.cc).
+  malloc_trim(0);
   emit replayProgress(adopt_length_s_, adopt_length_s_);
   emit replayFinished();
 }

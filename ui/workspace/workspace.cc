@@ -562,7 +562,10 @@ Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recordi
   circle.ok = FitCircleDrive(*poses, &circle.circle, &why);
   circle.note = circle.ok ? tr("a circle drive: radius %1 m").arg(circle.circle.radius_m, 0, 'f', 2)
                           : QString::fromStdString(why);
-  circle.poses = poses;
+  // Kept for splitting a circle drive's passes (SplitPasses); any other
+  // drive's poses go (a pose a wheel or IMU record: ~200 MB for the
+  // 5.7-hour drive of docs/performance.md).
+  if (circle.ok) circle.poses = poses;
   return circle;
 }
 
