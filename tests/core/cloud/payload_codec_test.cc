@@ -114,12 +114,19 @@ ChunkPayload Slice(const ChunkPayload& p, size_t first, size_t count) {
 
 size_t Segments(size_t n) { return (n + kCodecSegmentPoints - 1) / kCodecSegmentPoints; }
 
+// A payload's compressed form: its bytes and where each frame ends.
+struct Encoded {
+  Encoded(const ChunkPayload& p, size_t n) { EncodePayload(p, n, &bytes, &ends); }
+  std::vector<uint8_t> bytes;
+  std::vector<uint32_t> ends;
+};
+
 TEST(PayloadCodecTest, ARoomScanComesBackBitForBitInAboutThreeBytesAPoint) {
   const size_t n = 65536;
   const ChunkPayload scan = RoomScan(n, 1);
-  std::vector<uint8_t> bytes;
-  std::vector<uint32_t> ends;
-  EncodePayload(scan, n, &bytes, &ends);
+  const Encoded encoded(scan, n);
+  const std::vector<uint8_t>& bytes = encoded.bytes;
+  const std::vector<uint32_t>& ends = encoded.ends;
   ASSERT_EQ(ends.size(), n > 0 ? Segments(n) + 1 : 0);  // Positions, then the rest.
   EXPECT_EQ(ends.back(), bytes.size());
   const double per_point = static_cast<double>(bytes.size()) / n;
@@ -137,9 +144,9 @@ TEST(PayloadCodecTest, AnyBitsComeBackInEitherLayoutAndAnySize) {
     for (size_t n : {size_t{0}, size_t{1}, size_t{1023}, size_t{1024}, size_t{1025}, size_t{5000}}) {
       const bool grid = layout & 1, quantised = layout & 2;
       const ChunkPayload p = Noise(n, 7 + layout, grid, quantised);
-      std::vector<uint8_t> bytes;
-      std::vector<uint32_t> ends;
-      EncodePayload(p, n, &bytes, &ends);
+      const Encoded encoded(p, n);
+      const std::vector<uint8_t>& bytes = encoded.bytes;
+      const std::vector<uint32_t>& ends = encoded.ends;
       ASSERT_EQ(ends.size(), n > 0 ? Segments(n) + 1 : 0);  // Positions, then the rest.
       ChunkPayload back;
       std::string error;
@@ -153,9 +160,9 @@ TEST(PayloadCodecTest, AnyBitsComeBackInEitherLayoutAndAnySize) {
 TEST(PayloadCodecTest, SegmentsDecodeAlone) {
   const size_t n = 5000;  // Segments of 1024: the last holds 904.
   const ChunkPayload scan = RoomScan(n, 2);
-  std::vector<uint8_t> bytes;
-  std::vector<uint32_t> ends;
-  EncodePayload(scan, n, &bytes, &ends);
+  const Encoded encoded(scan, n);
+  const std::vector<uint8_t>& bytes = encoded.bytes;
+  const std::vector<uint32_t>& ends = encoded.ends;
   for (size_t s0 = 0; s0 < Segments(n); ++s0) {
     for (size_t s1 = s0 + 1; s1 <= Segments(n); ++s1) {
       ChunkPayload part;
@@ -184,9 +191,9 @@ TEST(PayloadCodecTest, DamagedFramesAreRefusedWithTheSegment) {
   // size), never a crash or a read past the end.
   const size_t n = 4096;
   const ChunkPayload scan = RoomScan(n, 3);
-  std::vector<uint8_t> bytes;
-  std::vector<uint32_t> ends;
-  EncodePayload(scan, n, &bytes, &ends);
+  const Encoded encoded(scan, n);
+  const std::vector<uint8_t>& bytes = encoded.bytes;
+  const std::vector<uint32_t>& ends = encoded.ends;
   std::mt19937 rng(4);
   size_t refused = 0;
   for (int trial = 0; trial < 2000; ++trial) {
