@@ -259,58 +259,51 @@ bool DecodeSegments(const std::vector<uint8_t>& bytes, const std::vector<uint32_
   (grid ? p->xyz_mm.resize(3 * count) : p->xyz.resize(3 * count));
   thread_local std::vector<uint8_t> plain;
   thread_local std::vector<uint32_t> scratch;
-  // Frame f into `plain`, expecting `size` bytes.
+  // Frame f's bytes [*begin, *end) within `bytes`, or why not.
+  auto span = [&](size_t f, size_t min_size, size_t* begin, size_t* end, std::string* why) {
+    *begin = f == 0 ? 0 : ends[f - 1];
+    *end = ends[f];
+    if (*end >= *begin + min_size && *end <= bytes.size()) return true;
+    *why = "its frame [" + std::to_string(*begin) + ", " + std::to_string(*end) +
+           ") is not within the " + std::to_string(bytes.size()) + " bytes";
+    return false;
+  };
+  // False, with `error` saying which frame and why.
+  auto refuse = [&](size_t f, const std::string& why) {
+    *error = (f < segments ? "segment " + std::to_string(f) + "'s positions"
+                           : std::string("the ranges, times and beams")) +
+             " in the compressed chunk: " + why;
+    return false;
+  };
+  // Frame f (zstd) into `plain`, expecting `size` bytes.
   auto decompress = [&](size_t f, size_t size) {
-    const size_t begin = f == 0 ? 0 : ends[f - 1];
+    size_t begin = 0, end = 0;
     std::string why;
     if (plain.size() < size) plain.resize(size);
-    if (ends[f] < begin || ends[f] > bytes.size()) {
-      why = "its frame [" + std::to_string(begin) + ", " + std::to_string(ends[f]) +
-            ") is outside the " + std::to_string(bytes.size()) + " bytes";
-    } else {
-      const size_t got = ZSTD_decompressDCtx(DecompressContext(), plain.data(), size,
-                                             bytes.data() + begin, ends[f] - begin);
-      if (ZSTD_isError(got)) {
-        why = ZSTD_getErrorName(got);
-      } else if (got != size) {
-        why = std::to_string(got) + " bytes, expected " + std::to_string(size);
-      }
-    }
-    if (!why.empty()) {
-      *error = (f < segments ? "segment " + std::to_string(f) + "'s positions"
-                             : std::string("the ranges, times and beams")) +
-               " in the compressed chunk: " + why;
-    }
-    return why.empty();
+    if (!span(f, 0, &begin, &end, &why)) return refuse(f, why);
+    const size_t got =
+        ZSTD_decompressDCtx(DecompressContext(), plain.data(), size, bytes.data() + begin, end - begin);
+    if (ZSTD_isError(got)) return refuse(f, ZSTD_getErrorName(got));
+    if (got != size) return refuse(f, std::to_string(got) + " bytes, expected " + std::to_string(size));
+    return true;
   };
   if (!grid) scratch.resize(3 * kCodecSegmentPoints);
   for (size_t s = s0; s < s1; ++s) {
     const size_t m = std::min(kCodecSegmentPoints, n - s * kCodecSegmentPoints);
     const size_t at = s * kCodecSegmentPoints - first;  // First point of the segment in `p`.
-    if (grid) {
-      const size_t begin = s == 0 ? 0 : ends[s - 1];
+    if (grid) {  // Bit-packed, then the CRC-32C of the bytes before it.
+      size_t begin = 0, end = 0;
       std::string why;
-      if (ends[s] < begin + 4 || ends[s] > bytes.size()) {
-        why = "its bytes [" + std::to_string(begin) + ", " + std::to_string(ends[s]) +
-              ") are not within the " + std::to_string(bytes.size());
-      } else {
-        const uint8_t* in = bytes.data() + begin;
-        const uint8_t* end = bytes.data() + ends[s] - 4;
-        uint32_t crc = 0;
-        for (int b = 0; b < 4; ++b) crc |= uint32_t{end[b]} << (8 * b);
-        if (Crc32c(in, static_cast<size_t>(end - in)) != crc) {
-          why = "CRC-32C mismatch";
-        } else {
-          for (int a = 0; a < 3 && in != nullptr; ++a) {
-            in = UnpackAxis(in, end, m, 3, reinterpret_cast<uint16_t*>(p->xyz_mm.data()) + 3 * at + a);
-          }
-          if (in != end) why = "its groups do not fill its bytes";
-        }
+      if (!span(s, 4, &begin, &end, &why)) return refuse(s, why);
+      const uint8_t* in = bytes.data() + begin;
+      const uint8_t* crc_at = bytes.data() + end - 4;
+      uint32_t crc = 0;
+      for (int b = 0; b < 4; ++b) crc |= uint32_t{crc_at[b]} << (8 * b);
+      if (Crc32c(in, static_cast<size_t>(crc_at - in)) != crc) return refuse(s, "CRC-32C mismatch");
+      for (int a = 0; a < 3 && in != nullptr; ++a) {
+        in = UnpackAxis(in, crc_at, m, 3, reinterpret_cast<uint16_t*>(p->xyz_mm.data()) + 3 * at + a);
       }
-      if (!why.empty()) {
-        *error = "segment " + std::to_string(s) + "'s positions in the compressed chunk: " + why;
-        return false;
-      }
+      if (in != crc_at) return refuse(s, "its groups do not fill its bytes");
       continue;
     }
     if (!decompress(s, 12 * m)) return false;
