@@ -154,7 +154,7 @@ void LiveProcessor::Publish(bool reset) {
       const auto& chunk = sealed[published_chunk_];
       batch.sealed.push_back(chunk);
       batch.unpacked.push_back(chunk->unpacked() ? nullptr : chunk->Pin());
-      total_points_ += sealed[published_chunk_]->size() - published_offset_;
+      total_points_ += chunk->size() - published_offset_;
       published_offset_ = 0;
     }
     const CloudChunk& open = c->open_chunk();
