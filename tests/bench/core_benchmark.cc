@@ -11,6 +11,8 @@
 #include "core/cloud/assembler.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
+#include "core/cloud/packed_chunk.h"
+#include "core/cloud/payload_codec.h"
 #include "core/pose/pose_estimator.h"
 #include "core/sim/world.h"
 #include "tests/testing/worlds.h"
@@ -87,6 +89,80 @@ void BM_SimulateLab(benchmark::State& state) {
   state.counters["x_real_time"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_SimulateLab)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The store's compressed payloads (core/cloud/payload_codec.h) on the lab's
+// own cloud: its sealed chunks' payloads, as the pager compresses them.
+struct LabPayloads {
+  std::vector<std::shared_ptr<const ChunkPayload>> payloads;
+  std::vector<size_t> sizes;
+  std::vector<bool> grid, quantised;
+  std::vector<std::vector<uint8_t>> bytes;
+  std::vector<std::vector<uint32_t>> ends;
+  size_t points = 0;
+  LabPayloads() {
+    const LabData& lab = Lab();
+    Assembler assembler(AssemblyOptions(), BodyFromLidar(lab.config.geometry, {}), PoseSource::kEkf);
+    PointChunks chunks;
+    for (const LidarScan& scan : lab.log.scans) assembler.AddScan(scan, lab.poses, &chunks);
+    chunks.Seal();
+    for (const auto& c : chunks.SealedChunks()) {
+      payloads.push_back(c->Pin());
+      sizes.push_back(c->size());
+      grid.push_back(c->positions_on_grid());
+      quantised.push_back(c->ranges_quantised());
+      bytes.emplace_back();
+      ends.emplace_back();
+      EncodePayload(*payloads.back(), c->size(), &bytes.back(), &ends.back());
+      points += c->size();
+    }
+  }
+};
+const LabPayloads& Payloads() {
+  static const LabPayloads* data = new LabPayloads();
+  return *data;
+}
+
+// Compressing every sealed chunk of the lab (items/s = points).
+void BM_PayloadEncode(benchmark::State& state) {
+  const LabPayloads& lab = Payloads();
+  std::vector<uint8_t> bytes;
+  std::vector<uint32_t> ends;
+  for (auto _ : state) {
+    for (size_t c = 0; c < lab.payloads.size(); ++c) EncodePayload(*lab.payloads[c], lab.sizes[c], &bytes, &ends);
+    benchmark::DoNotOptimize(bytes.data());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * lab.points));
+  size_t packed = 0;
+  for (const auto& b : lab.bytes) packed += b.size();
+  state.counters["bytes_a_point"] = static_cast<double>(packed) / static_cast<double>(lab.points);
+}
+BENCHMARK(BM_PayloadEncode)->Unit(benchmark::kMillisecond);
+
+// Arg(0): every chunk unpacked whole (what Pin() does). Arg(1): one
+// segment's positions at a time, every segment in turn (what a pick does).
+// items/s = points decoded.
+void BM_PayloadDecode(benchmark::State& state) {
+  const LabPayloads& lab = Payloads();
+  const bool segments = state.range(0) != 0;
+  ChunkPayload out;
+  std::string error;
+  for (auto _ : state) {
+    for (size_t c = 0; c < lab.payloads.size(); ++c) {
+      const size_t n = lab.sizes[c];
+      if (!segments) {
+        DecodeSegments(lab.bytes[c], lab.ends[c], n, lab.grid[c], lab.quantised[c], 0, lab.ends[c].size(), false,
+                       &out, &error);
+        continue;
+      }
+      for (size_t s = 0; s * kCodecSegmentPoints < n; ++s) {
+        DecodeSegments(lab.bytes[c], lab.ends[c], n, lab.grid[c], lab.quantised[c], s, s + 1, true, &out, &error);
+        benchmark::DoNotOptimize(out.xyz_mm.data());
+      }
+    }
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * lab.points));
+}
+BENCHMARK(BM_PayloadDecode)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // 10 M points of a 10 x 5 x 2.5 m room (a 1 M-point source, 32 MB, appended
 // ten times in 64 Ki-point chunks, as a project streams its sessions).
