@@ -254,8 +254,7 @@ std::shared_ptr<const ChunkPayload> CloudPager::Unpack(const PackedChunk* chunk)
   // order no cache smaller than the cloud would serve; keeping what they
   // unpack only evicted (and compressed, on their thread) the most
   // recently sealed chunks, which the live view reads next.
-  return chunk->Unpack(*bytes, 0, (chunk->size() + kCodecSegmentPoints - 1) / kCodecSegmentPoints,
-                       false);
+  return chunk->Unpack(*bytes, PackedChunk::kWholeChunk);
 }
 
 void CloudPager::EvictLocked() {

@@ -12,6 +12,8 @@
 
 namespace sweepscan {
 
+static_assert(PackedChunk::kBlockPoints == kCodecBlockPoints, "a pick decodes the blocks it tests");
+
 bool QuantiseRange(float range_m, uint16_t* q) {
   if (!(range_m >= 0.0f)) return false;
   const double steps = std::round(range_m / PackedChunk::kRangeStepM);
@@ -139,7 +141,7 @@ std::shared_ptr<const ChunkPayload> PackedChunk::Pin() const {
   return pager_->Unpack(this);
 }
 
-std::shared_ptr<const ChunkPayload> PackedChunk::PinPositions(size_t s, size_t* first) const {
+std::shared_ptr<const ChunkPayload> PackedChunk::PinBlockPositions(size_t block, size_t* first) const {
   std::shared_ptr<const ChunkPayload> p;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -155,16 +157,19 @@ std::shared_ptr<const ChunkPayload> PackedChunk::PinPositions(size_t s, size_t* 
     *first = 0;
     return Pin();
   }
-  *first = s * kCodecSegmentPoints;
-  return Unpack(*bytes, s, s + 1, true);
+  *first = block * kBlockPoints;
+  return Unpack(*bytes, block);
 }
 
-std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t s0,
-                                                  size_t s1, bool positions_only) const {
+std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t block) const {
   auto p = std::make_shared<ChunkPayload>();
   std::string error;
-  if (!DecodeSegments(bytes, segment_ends_, size_, positions_on_grid_, ranges_quantised_, s0,
-                      s1, positions_only, p.get(), &error)) {
+  const bool ok =
+      block == kWholeChunk
+          ? DecodeSegments(bytes, segment_ends_, size_, positions_on_grid_, ranges_quantised_, 0,
+                           (size_ + kCodecSegmentPoints - 1) / kCodecSegmentPoints, false, p.get(), &error)
+          : DecodeBlockPositions(bytes, segment_ends_, size_, positions_on_grid_, block, p.get(), &error);
+  if (!ok) {
     // Bytes this process compressed (and maybe wrote to and read back from
     // its own unnamed file): a failure is a fault of the machine or ours,
     // and a cloud with holes would be worse than stopping.

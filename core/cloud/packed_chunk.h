@@ -105,13 +105,12 @@ class PackedChunk {
   // failed read is fatal: the cache file and the compressed bytes are ours;
   // see docs/cloud-store.md).
   std::shared_ptr<const ChunkPayload> Pin() const;
-  // The positions of segment s's points (payload_codec.h: points
-  // [s * kCodecSegmentPoints, ...)) without unpacking the chunk: a payload
-  // whose point j is the chunk's point *first + j. The whole unpacked
-  // payload (*first = 0) when it is in memory, else that segment's
-  // positions alone, decoded for this caller and not kept (a pick meets a
-  // few blocks of each of many chunks).
-  std::shared_ptr<const ChunkPayload> PinPositions(size_t s, size_t* first) const;
+  // The positions of block `block`'s points (points [block * kBlockPoints,
+  // ...)) without unpacking the chunk: a payload whose point j is the
+  // chunk's point *first + j. The whole unpacked payload (*first = 0) when
+  // it is in memory, else that block's positions alone, decoded for this
+  // caller and not kept (a pick meets a few blocks of each of many chunks).
+  std::shared_ptr<const ChunkPayload> PinBlockPositions(size_t block, size_t* first) const;
   bool resident() const;  // In memory, unpacked or compressed (not only in the cache file).
   bool unpacked() const;  // Unpacked in memory.
   size_t payload_bytes() const { return payload_bytes_; }  // Unpacked.
@@ -143,9 +142,10 @@ class PackedChunk {
   PackedChunk() = default;
   static bool PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* chunk,
                          ChunkPayload* payload);
-  // The whole payload from the compressed bytes; fatal if they do not decode.
-  std::shared_ptr<ChunkPayload> Unpack(const std::vector<uint8_t>& bytes, size_t s0, size_t s1,
-                                       bool positions_only) const;
+  // From the compressed bytes, the whole payload (kWholeChunk) or one
+  // block's positions; fatal if they do not decode.
+  static constexpr size_t kWholeChunk = ~size_t{0};
+  std::shared_ptr<ChunkPayload> Unpack(const std::vector<uint8_t>& bytes, size_t block) const;
 
   size_t size_ = 0;
   std::array<double, 6> bounds_{};

@@ -94,22 +94,42 @@ const uint8_t* GetPlanes(const uint8_t* in, size_t n, size_t stride, bool order2
 // first differences in groups of 8 values, each group at the width of its
 // largest, so that one long jump (a depth edge) costs only its group. A
 // group of 8 values at w bits is exactly w bytes (value k at bits
-// [k w, k w + w), little-endian). First every group's width as a 4-bit
-// code (0-14: that many bits, 15: 16 bits), two a byte, low nibble first;
-// then the groups. On the lab's drives 1.7 bytes a point for x, y and z
-// together, as small as zstd makes them, and a pick decodes a segment in a
+// [k w, k w + w), little-endian). First, for each block of
+// kCodecBlockPoints after the first, the value before it (uint16,
+// little-endian): where that block's differences start, so that a pick
+// decodes the one block its ray meets (a quarter of the segment) and not
+// the blocks before it; 0.02 bytes a point. Then every group's width as a
+// 4-bit code (0-14: that many bits, 15: 16 bits), two a byte, low nibble
+// first; then the groups. On the lab's drives 1.7 bytes a point for x, y
+// and z together, as small as zstd makes them, and a segment decodes in a
 // few microseconds instead of zstd's ten.
 constexpr size_t kGroup = 8;
+constexpr size_t kBlockGroups = kCodecBlockPoints / kGroup;
+static_assert(kCodecSegmentPoints % kCodecBlockPoints == 0 && kCodecBlockPoints % kGroup == 0);
 
-void PackAxis(const uint16_t* v, size_t m, size_t stride, std::vector<uint8_t>* out) {
+size_t Blocks(size_t m) { return (m + kCodecBlockPoints - 1) / kCodecBlockPoints; }
+
+// The most bytes PackAxis writes for m values, with the 16 it may write
+// past its end.
+size_t PackAxisBound(size_t m) { return 2 * Blocks(m) + (m + kGroup) / kGroup / 2 + 1 + 2 * m + 16 + 16; }
+
+// Writes one axis at `out` (PackAxisBound(m) bytes there), returns its end.
+uint8_t* PackAxis(const uint16_t* v, size_t m, size_t stride, uint8_t* out) {
+  for (size_t b = 1; b < Blocks(m); ++b) {
+    const uint16_t start = v[(b * kCodecBlockPoints - 1) * stride];
+    *out++ = static_cast<uint8_t>(start);
+    *out++ = static_cast<uint8_t>(start >> 8);
+  }
   const size_t groups = (m + kGroup - 1) / kGroup;
-  const size_t codes = out->size();
-  out->resize(out->size() + (groups + 1) / 2, 0);
+  uint8_t* codes = out;
+  std::memset(codes, 0, (groups + 1) / 2);
+  out += (groups + 1) / 2;
   uint16_t prev = 0;
   for (size_t g = 0; g < groups; ++g) {
     uint16_t z[kGroup] = {};
     unsigned all = 0;
-    for (size_t k = 0; k < kGroup && g * kGroup + k < m; ++k) {
+    const size_t count = std::min(kGroup, m - g * kGroup);
+    for (size_t k = 0; k < count; ++k) {
       const uint16_t x = v[(g * kGroup + k) * stride];
       z[k] = Zig(static_cast<uint16_t>(x - prev));
       prev = x;
@@ -118,11 +138,19 @@ void PackAxis(const uint16_t* v, size_t m, size_t stride, std::vector<uint8_t>* 
     const int width = all == 0 ? 0 : 32 - __builtin_clz(all);
     const int code = std::min(width, 15);
     const int bits = code == 15 ? 16 : code;
-    (*out)[codes + g / 2] |= static_cast<uint8_t>(code << (4 * (g % 2)));
-    unsigned __int128 acc = 0;
-    for (size_t k = 0; k < kGroup; ++k) acc |= static_cast<unsigned __int128>(z[k]) << (k * bits);
-    for (int b = 0; b < bits; ++b) out->push_back(static_cast<uint8_t>(acc >> (8 * b)));
+    codes[g / 2] |= static_cast<uint8_t>(code << (4 * (g % 2)));
+    // Values 0-3 in the low 4 w bits, 4-7 above them: 8 w bits, w bytes
+    // (16 bytes stored, the group's w kept).
+    uint64_t lo = 0, hi = 0;
+    for (size_t k = 0; k < 4; ++k) {
+      lo |= uint64_t{z[k]} << (k * bits);
+      hi |= uint64_t{z[k + 4]} << (k * bits);
+    }
+    const unsigned __int128 group = lo | static_cast<unsigned __int128>(hi) << (4 * bits);
+    std::memcpy(out, &group, 16);  // Little-endian, as UnpackGroup reads it.
+    out += bits;
   }
+  return out;
 }
 
 // One group of 8 values at `bits` bits, added to `prev` in turn: values
@@ -149,32 +177,55 @@ inline void UnpackGroup(const uint8_t* in, int bits, uint16_t* prev, uint16_t* o
   *prev = p;
 }
 
-// The inverse of PackAxis; null if the groups run past `end` (a damaged
-// segment).
-const uint8_t* UnpackAxis(const uint8_t* in, const uint8_t* end, size_t m, size_t stride, uint16_t* v) {
+// Bytes of a group by its width code, and of the two groups whose codes
+// share a byte.
+constexpr size_t CodeBytes(int code) { return code == 15 ? 16 : static_cast<size_t>(code); }
+constexpr auto kPairBytes = [] {
+  std::array<uint8_t, 256> t{};
+  for (int b = 0; b < 256; ++b) t[b] = static_cast<uint8_t>(CodeBytes(b & 15) + CodeBytes(b >> 4));
+  return t;
+}();
+
+// Bytes of the groups [0, g) (a byte of codes at a time: this runs for
+// every block a pick decodes).
+size_t GroupBytes(const uint8_t* codes, size_t g) {
+  size_t sum = 0;
+  for (size_t i = 0; i < g / 2; ++i) sum += kPairBytes[codes[i]];
+  if (g % 2 != 0) sum += CodeBytes(codes[g / 2] & 15);
+  return sum;
+}
+
+// The inverse of PackAxis for the points of blocks [b0, b1) of the
+// segment's m, into v (the block b0's first point at v[0]); returns where
+// the axis ends, or null if its bytes run past `end` (a damaged segment).
+const uint8_t* UnpackAxis(const uint8_t* in, const uint8_t* end, size_t m, size_t b0, size_t b1,
+                          size_t stride, uint16_t* v) {
   const size_t groups = (m + kGroup - 1) / kGroup;
-  const uint8_t* codes = in;
-  if (static_cast<size_t>(end - in) < (groups + 1) / 2) return nullptr;
-  in += (groups + 1) / 2;
-  uint16_t prev = 0;
-  for (size_t g = 0; g < groups; ++g) {
+  const uint8_t* starts = in;
+  const uint8_t* codes = starts + 2 * (Blocks(m) - 1);
+  const uint8_t* data = codes + (groups + 1) / 2;
+  if (data > end) return nullptr;
+  const size_t g0 = b0 * kBlockGroups, g1 = std::min(groups, b1 * kBlockGroups);
+  const size_t total = GroupBytes(codes, groups);
+  if (static_cast<size_t>(end - data) < total) return nullptr;
+  in = data + GroupBytes(codes, g0);
+  uint16_t prev = b0 == 0 ? 0 : static_cast<uint16_t>(starts[2 * (b0 - 1)] | starts[2 * (b0 - 1) + 1] << 8);
+  for (size_t g = g0; g < g1; ++g, v += kGroup * stride) {
     const int code = (codes[g / 2] >> (4 * (g % 2))) & 15;
     const int bits = code == 15 ? 16 : code;
-    if (end - in < bits) return nullptr;
     const size_t count = std::min(kGroup, m - g * kGroup);
     if (end - in >= 16 && count == kGroup) {
-      UnpackGroup(in, bits, &prev, v + g * kGroup * stride, stride);
+      UnpackGroup(in, bits, &prev, v, stride);
     } else {  // The last groups: from a copy padded to 16 bytes, into a full group.
       uint8_t padded[16] = {};
       uint16_t group[kGroup];
       std::memcpy(padded, in, static_cast<size_t>(bits));
       UnpackGroup(padded, bits, &prev, group, 1);
-      // The padding decodes as zero differences: prev is the count-th value.
-      for (size_t k = 0; k < count; ++k) v[(g * kGroup + k) * stride] = group[k];
+      for (size_t k = 0; k < count; ++k) v[k * stride] = group[k];
     }
     in += bits;
   }
-  return in;
+  return data + total;
 }
 
 void PutCrc(std::vector<uint8_t>* out, size_t from) {
@@ -211,9 +262,12 @@ void EncodePayload(const ChunkPayload& p, size_t n, std::vector<uint8_t>* bytes,
     const size_t m = std::min(kCodecSegmentPoints, n - s0);
     if (grid) {  // Bit-packed (above), with a CRC-32C of the segment's bytes.
       const size_t from = bytes->size();
+      bytes->resize(from + 3 * PackAxisBound(m));
+      uint8_t* out = bytes->data() + from;
       for (int a = 0; a < 3; ++a) {
-        PackAxis(reinterpret_cast<const uint16_t*>(p.xyz_mm.data()) + 3 * s0 + a, m, 3, bytes);
+        out = PackAxis(reinterpret_cast<const uint16_t*>(p.xyz_mm.data()) + 3 * s0 + a, m, 3, out);
       }
+      bytes->resize(static_cast<size_t>(out - bytes->data()));
       PutCrc(bytes, from);
       ends->push_back(static_cast<uint32_t>(bytes->size()));
       continue;
@@ -240,117 +294,155 @@ void EncodePayload(const ChunkPayload& p, size_t n, std::vector<uint8_t>* bytes,
   ends->shrink_to_fit();
 }
 
+namespace {
+
+// Reads the frames of one compressed chunk of n points; every refusal says
+// which frame and why.
+class FrameReader {
+ public:
+  FrameReader(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
+              std::string* error)
+      : bytes_(bytes), ends_(ends), n_(n), segments_((n + kCodecSegmentPoints - 1) / kCodecSegmentPoints),
+        error_(error) {}
+
+  size_t segments() const { return segments_; }
+
+  bool CheckFrames() {
+    const size_t expected = segments_ > 0 ? segments_ + 1 : 0;
+    if (ends_.size() == expected) return true;
+    *error_ = std::to_string(ends_.size()) + " frames for " + std::to_string(n_) + " points, expected " +
+              std::to_string(expected);
+    return false;
+  }
+
+  // Blocks [b0, b1) of segment s's positions (b1 clipped to the segment's
+  // blocks), the block b0's first point at out[0] (3 int16 or 3 floats a
+  // point, by `grid`).
+  bool Positions(size_t s, bool grid, size_t b0, size_t b1, void* out) {
+    const size_t m = std::min(kCodecSegmentPoints, n_ - s * kCodecSegmentPoints);
+    b1 = std::min(b1, Blocks(m));
+    size_t begin = 0, end = 0;
+    if (grid) {  // Bit-packed, then the CRC-32C of the bytes before it.
+      if (!Span(s, 4, &begin, &end)) return false;
+      const uint8_t* in = bytes_.data() + begin;
+      const uint8_t* crc_at = bytes_.data() + end - 4;
+      uint32_t crc = 0;
+      for (int b = 0; b < 4; ++b) crc |= uint32_t{crc_at[b]} << (8 * b);
+      if (Crc32c(in, static_cast<size_t>(crc_at - in)) != crc) return Refuse(s, "CRC-32C mismatch");
+      for (int a = 0; a < 3 && in != nullptr; ++a) {
+        in = UnpackAxis(in, crc_at, m, b0, b1, 3, static_cast<uint16_t*>(out) + a);
+      }
+      if (in != crc_at) return Refuse(s, "its groups do not fill its bytes");
+      return true;
+    }
+    if (!Decompress(s, 12 * m)) return false;  // Floats: the whole segment, the blocks kept.
+    scratch_.resize(3 * m);
+    const uint8_t* in = plain_.data();
+    for (int a = 0; a < 3; ++a) in = GetPlanes(in, m, 3, false, scratch_.data() + a);
+    const size_t first = b0 * kCodecBlockPoints, count = std::min(m, b1 * kCodecBlockPoints) - first;
+    std::memcpy(out, scratch_.data() + 3 * first, 3 * count * sizeof(float));
+    return true;
+  }
+
+  // The ranges, times and beams of every point into `plain()`.
+  bool Attributes(bool quantised) { return Decompress(segments_, ((quantised ? 2 : 4) + 4 + 2) * n_); }
+  const uint8_t* plain() const { return plain_.data(); }
+
+ private:
+  // Frame f's bytes [*begin, *end) within the bytes, at least min_size long.
+  bool Span(size_t f, size_t min_size, size_t* begin, size_t* end) {
+    *begin = f == 0 ? 0 : ends_[f - 1];
+    *end = ends_[f];
+    if (*end >= *begin + min_size && *end <= bytes_.size()) return true;
+    return Refuse(f, "its frame [" + std::to_string(*begin) + ", " + std::to_string(*end) +
+                         ") is not within the " + std::to_string(bytes_.size()) + " bytes");
+  }
+  bool Refuse(size_t f, const std::string& why) {
+    *error_ = (f < segments_ ? "segment " + std::to_string(f) + "'s positions"
+                             : std::string("the ranges, times and beams")) +
+              " in the compressed chunk: " + why;
+    return false;
+  }
+  // Frame f (zstd) into plain_, expecting `size` bytes.
+  bool Decompress(size_t f, size_t size) {
+    size_t begin = 0, end = 0;
+    if (plain_.size() < size) plain_.resize(size);
+    if (!Span(f, 0, &begin, &end)) return false;
+    const size_t got = ZSTD_decompressDCtx(DecompressContext(), plain_.data(), size, bytes_.data() + begin,
+                                           end - begin);
+    if (ZSTD_isError(got)) return Refuse(f, ZSTD_getErrorName(got));
+    if (got != size) return Refuse(f, std::to_string(got) + " bytes, expected " + std::to_string(size));
+    return true;
+  }
+
+  const std::vector<uint8_t>& bytes_;
+  const std::vector<uint32_t>& ends_;
+  const size_t n_, segments_;
+  std::string* error_;
+  // Reused by the thread's next chunk.
+  static thread_local std::vector<uint8_t> plain_;
+  static thread_local std::vector<uint32_t> scratch_;
+};
+thread_local std::vector<uint8_t> FrameReader::plain_;
+thread_local std::vector<uint32_t> FrameReader::scratch_;
+
+}  // namespace
+
 bool DecodeSegments(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
                     bool grid, bool quantised, size_t s0, size_t s1, bool positions_only,
                     ChunkPayload* p, std::string* error) {
-  const size_t segments = (n + kCodecSegmentPoints - 1) / kCodecSegmentPoints;
-  if (ends.size() != (segments > 0 ? segments + 1 : 0)) {
-    *error = std::to_string(ends.size()) + " frames for " + std::to_string(n) + " points, expected " +
-             std::to_string(segments > 0 ? segments + 1 : 0);
-    return false;
-  }
-  s1 = std::min(s1, segments);
+  FrameReader reader(bytes, ends, n, error);
+  if (!reader.CheckFrames()) return false;
+  s1 = std::min(s1, reader.segments());
   const size_t first = s0 * kCodecSegmentPoints;
   const size_t count = s1 > s0 ? std::min(n, s1 * kCodecSegmentPoints) - first : 0;
   *p = ChunkPayload();
   (grid ? p->xyz_mm.resize(3 * count) : p->xyz.resize(3 * count));
-  thread_local std::vector<uint8_t> plain;
-  thread_local std::vector<uint32_t> scratch;
-  // Frame f's bytes [*begin, *end) within `bytes`, or why not.
-  auto span = [&](size_t f, size_t min_size, size_t* begin, size_t* end, std::string* why) {
-    *begin = f == 0 ? 0 : ends[f - 1];
-    *end = ends[f];
-    if (*end >= *begin + min_size && *end <= bytes.size()) return true;
-    *why = "its frame [" + std::to_string(*begin) + ", " + std::to_string(*end) +
-           ") is not within the " + std::to_string(bytes.size()) + " bytes";
-    return false;
-  };
-  // False, with `error` saying which frame and why.
-  auto refuse = [&](size_t f, const std::string& why) {
-    *error = (f < segments ? "segment " + std::to_string(f) + "'s positions"
-                           : std::string("the ranges, times and beams")) +
-             " in the compressed chunk: " + why;
-    return false;
-  };
-  // Frame f (zstd) into `plain`, expecting `size` bytes.
-  auto decompress = [&](size_t f, size_t size) {
-    size_t begin = 0, end = 0;
-    std::string why;
-    if (plain.size() < size) plain.resize(size);
-    if (!span(f, 0, &begin, &end, &why)) return refuse(f, why);
-    const size_t got =
-        ZSTD_decompressDCtx(DecompressContext(), plain.data(), size, bytes.data() + begin, end - begin);
-    if (ZSTD_isError(got)) return refuse(f, ZSTD_getErrorName(got));
-    if (got != size) return refuse(f, std::to_string(got) + " bytes, expected " + std::to_string(size));
-    return true;
-  };
-  if (!grid) scratch.resize(3 * kCodecSegmentPoints);
   for (size_t s = s0; s < s1; ++s) {
-    const size_t m = std::min(kCodecSegmentPoints, n - s * kCodecSegmentPoints);
-    const size_t at = s * kCodecSegmentPoints - first;  // First point of the segment in `p`.
-    if (grid) {  // Bit-packed, then the CRC-32C of the bytes before it.
-      size_t begin = 0, end = 0;
-      std::string why;
-      if (!span(s, 4, &begin, &end, &why)) return refuse(s, why);
-      const uint8_t* in = bytes.data() + begin;
-      const uint8_t* crc_at = bytes.data() + end - 4;
-      uint32_t crc = 0;
-      for (int b = 0; b < 4; ++b) crc |= uint32_t{crc_at[b]} << (8 * b);
-      if (Crc32c(in, static_cast<size_t>(crc_at - in)) != crc) return refuse(s, "CRC-32C mismatch");
-      for (int a = 0; a < 3 && in != nullptr; ++a) {
-        in = UnpackAxis(in, crc_at, m, 3, reinterpret_cast<uint16_t*>(p->xyz_mm.data()) + 3 * at + a);
-      }
-      if (in != crc_at) return refuse(s, "its groups do not fill its bytes");
-      continue;
-    }
-    if (!decompress(s, 12 * m)) return false;
-    const uint8_t* in = plain.data();
-    for (int a = 0; a < 3; ++a) in = GetPlanes(in, m, 3, false, scratch.data() + a);
-    std::memcpy(p->xyz.data() + 3 * at, scratch.data(), 3 * m * sizeof(float));
+    const size_t at = 3 * (s * kCodecSegmentPoints - first);  // The segment's first value in `p`.
+    void* out = grid ? static_cast<void*>(p->xyz_mm.data() + at) : static_cast<void*>(p->xyz.data() + at);
+    if (!reader.Positions(s, grid, 0, kCodecSegmentPoints / kCodecBlockPoints, out)) return false;
   }
   if (positions_only || count == 0) return true;
   // The attributes' frame holds every point of the chunk: decoded whole,
   // the segments' part kept.
-  if (!decompress(segments, ((quantised ? 2 : 4) + 4 + 2) * n)) return false;
-  const uint8_t* in = plain.data();
-  if (first == 0 && count == n) {  // The whole chunk: straight into place.
-    if (quantised) {
-      p->range_q.resize(n);
-      in = GetPlanes(in, n, 1, false, p->range_q.data());
-    } else {
-      scratch.resize(n);
-      in = GetPlanes(in, n, 1, false, scratch.data());
-      p->range_f.resize(n);
-      std::memcpy(p->range_f.data(), scratch.data(), n * sizeof(float));
-    }
-    p->dt_ns.resize(n);
-    in = GetPlanes(in, n, 1, true, p->dt_ns.data());
-    p->beam.resize(n);
-    GetPlanes(in, n, 1, false, p->beam.data());
-    return true;
-  }
-  std::vector<uint16_t> range_q;
-  std::vector<uint32_t> dt(n), bits;
-  std::vector<uint16_t> beam(n);
-  if (quantised) {
-    range_q.resize(n);
-    in = GetPlanes(in, n, 1, false, range_q.data());
-  } else {
-    bits.resize(n);
-    in = GetPlanes(in, n, 1, false, bits.data());
-  }
-  in = GetPlanes(in, n, 1, true, dt.data());
-  GetPlanes(in, n, 1, false, beam.data());
-  const auto from = static_cast<std::ptrdiff_t>(first), to = static_cast<std::ptrdiff_t>(first + count);
-  if (quantised) {
-    p->range_q.assign(range_q.begin() + from, range_q.begin() + to);
-  } else {
+  if (!reader.Attributes(quantised)) return false;
+  const uint8_t* in = reader.plain();
+  const bool whole = first == 0 && count == n;  // Straight into place.
+  std::vector<uint16_t> range_q(quantised && !whole ? n : 0);
+  std::vector<uint32_t> dt(whole ? 0 : n), bits(quantised ? 0 : n);
+  std::vector<uint16_t> beam(whole ? 0 : n);
+  uint16_t* range_q_at = whole && quantised ? (p->range_q.resize(n), p->range_q.data()) : range_q.data();
+  uint32_t* dt_at = whole ? (p->dt_ns.resize(n), p->dt_ns.data()) : dt.data();
+  uint16_t* beam_at = whole ? (p->beam.resize(n), p->beam.data()) : beam.data();
+  in = quantised ? GetPlanes(in, n, 1, false, range_q_at) : GetPlanes(in, n, 1, false, bits.data());
+  in = GetPlanes(in, n, 1, true, dt_at);
+  GetPlanes(in, n, 1, false, beam_at);
+  if (!quantised) {
     p->range_f.resize(count);
     std::memcpy(p->range_f.data(), bits.data() + first, count * sizeof(float));
   }
+  if (whole) return true;
+  const auto from = static_cast<std::ptrdiff_t>(first), to = static_cast<std::ptrdiff_t>(first + count);
+  if (quantised) p->range_q.assign(range_q.begin() + from, range_q.begin() + to);
   p->dt_ns.assign(dt.begin() + from, dt.begin() + to);
   p->beam.assign(beam.begin() + from, beam.begin() + to);
   return true;
+}
+
+bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
+                          bool grid, size_t block, ChunkPayload* p, std::string* error) {
+  FrameReader reader(bytes, ends, n, error);
+  if (!reader.CheckFrames()) return false;
+  const size_t first = block * kCodecBlockPoints;
+  *p = ChunkPayload();
+  if (first >= n) return true;
+  const size_t count = std::min(n - first, kCodecBlockPoints);
+  (grid ? p->xyz_mm.resize(3 * count) : p->xyz.resize(3 * count));
+  void* out = grid ? static_cast<void*>(p->xyz_mm.data()) : static_cast<void*>(p->xyz.data());
+  constexpr size_t kBlocksASegment = kCodecSegmentPoints / kCodecBlockPoints;
+  return reader.Positions(block / kBlocksASegment, grid, block % kBlocksASegment, block % kBlocksASegment + 1,
+                          out);
 }
 
 }  // namespace sweepscan

@@ -20,9 +20,9 @@
 // does not compress, comes back bit for bit.
 //
 // Positions in independently decodable segments of kCodecSegmentPoints
-// points (four of the chunk's 256-point blocks), the other fields in one
-// frame: a pick decodes only the positions of the segments that hold the
-// blocks its ray meets, not the chunk.
+// points (four of the chunk's 256-point blocks, each decodable alone on the
+// grid), the other fields in one frame: a pick decodes only the positions of
+// the blocks its ray meets, not the chunk.
 #ifndef SWEEPSCAN_CORE_CLOUD_PAYLOAD_CODEC_H_
 #define SWEEPSCAN_CORE_CLOUD_PAYLOAD_CODEC_H_
 
@@ -36,6 +36,9 @@ namespace sweepscan {
 struct ChunkPayload;
 
 constexpr size_t kCodecSegmentPoints = 1024;
+// A segment's grid positions decode a block at a time (a pick's unit: the
+// store's PackedChunk::kBlockPoints).
+constexpr size_t kCodecBlockPoints = 256;
 
 // Bytes a point before compression, by layout: positions on the grid
 // (int16 x 3) or floats, ranges quantised (uint16) or floats, then dt
@@ -61,6 +64,14 @@ void EncodePayload(const ChunkPayload& payload, size_t n, std::vector<uint8_t>* 
 bool DecodeSegments(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
                     bool grid, bool quantised, size_t s0, size_t s1, bool positions_only,
                     ChunkPayload* out, std::string* error);
+
+// The positions of block `block` of a chunk of n points (points
+// [block * kCodecBlockPoints, ...), at most kCodecBlockPoints of them) as a
+// payload of those points' positions alone. Grid positions decode that
+// block only (its segment's CRC is checked whole); floats decode its
+// segment. False, with `error`, as DecodeSegments.
+bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
+                          bool grid, size_t block, ChunkPayload* out, std::string* error);
 
 }  // namespace sweepscan
 

@@ -139,30 +139,34 @@ void BM_PayloadEncode(benchmark::State& state) {
 BENCHMARK(BM_PayloadEncode)->Unit(benchmark::kMillisecond);
 
 // Arg(0): every chunk unpacked whole (what Pin() does). Arg(1): one
-// segment's positions at a time, every segment in turn (what a pick does).
-// items/s = points decoded.
+// segment's positions at a time, every segment in turn. Arg(2): one
+// block's positions at a time (what a pick does). items/s = points decoded.
 void BM_PayloadDecode(benchmark::State& state) {
   const LabPayloads& lab = Payloads();
-  const bool segments = state.range(0) != 0;
+  const int64_t mode = state.range(0);
   ChunkPayload out;
   std::string error;
   for (auto _ : state) {
     for (size_t c = 0; c < lab.payloads.size(); ++c) {
       const size_t n = lab.sizes[c];
-      if (!segments) {
+      if (mode == 0) {
         DecodeSegments(lab.bytes[c], lab.ends[c], n, lab.grid[c], lab.quantised[c], 0, lab.ends[c].size(), false,
                        &out, &error);
         continue;
       }
-      for (size_t s = 0; s * kCodecSegmentPoints < n; ++s) {
+      for (size_t s = 0; mode == 1 && s * kCodecSegmentPoints < n; ++s) {
         DecodeSegments(lab.bytes[c], lab.ends[c], n, lab.grid[c], lab.quantised[c], s, s + 1, true, &out, &error);
+        benchmark::DoNotOptimize(out.xyz_mm.data());
+      }
+      for (size_t b = 0; mode == 2 && b * kCodecBlockPoints < n; ++b) {
+        DecodeBlockPositions(lab.bytes[c], lab.ends[c], n, lab.grid[c], b, &out, &error);
         benchmark::DoNotOptimize(out.xyz_mm.data());
       }
     }
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * lab.points));
 }
-BENCHMARK(BM_PayloadDecode)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PayloadDecode)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // 10 M points of a 10 x 5 x 2.5 m room (a 1 M-point source, 32 MB, appended
 // ten times in 64 Ki-point chunks, as a project streams its sessions).

@@ -25,7 +25,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <utility>
 #include <vector>
 
@@ -178,9 +177,8 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // entry lies beyond the best point so far. A point within the tolerance
   // of the ray at t lies within margin(box) of the ray's point at t, so the ray
   // is inside the grown box there: no point of a block entered beyond the
-  // best can be nearer. A compressed chunk's positions are decoded a codec
-  // segment (four blocks) at a time, only where a block is tested
-  // (PackedChunk::PinPositions).
+  // best can be nearer. A compressed chunk has only the blocks it tests
+  // decoded (PackedChunk::PinBlockPositions).
   struct Candidate {
     double enter;
     const Chunk* chunk;
@@ -203,20 +201,14 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   }
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.enter < b.enter; });
-  struct Decoded {
-    std::shared_ptr<const ChunkPayload> payload;
-    size_t first = 0;  // The chunk's point i is the payload's i - first.
-  };
-  std::map<std::pair<const Chunk*, size_t>, Decoded> decoded;  // By chunk and segment.
   for (const Candidate& candidate : candidates) {
     if (candidate.enter >= best_t) break;
     const Chunk& c = *candidate.chunk;
     const PackedChunk& packed = *c.packed;
     const size_t begin = candidate.block * PackedChunk::kBlockPoints;
     const size_t end = std::min(c.size, begin + PackedChunk::kBlockPoints);
-    auto [at, fresh] = decoded.try_emplace({&c, begin / kCodecSegmentPoints});
-    Decoded& seg = at->second;
-    if (fresh) seg.payload = packed.PinPositions(begin / kCodecSegmentPoints, &seg.first);
+    size_t first = 0;  // The chunk's point i is the payload's i - first.
+    const std::shared_ptr<const ChunkPayload> payload = packed.PinBlockPositions(candidate.block, &first);
     size_t best = c.size;
     if (packed.positions_on_grid()) {
       // Whole millimetres after the chunk's origin (docs/cloud-store.md):
@@ -232,13 +224,13 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
         while (GridPosition(top + 1) <= clip_z) ++top;
         top -= origin[2];
       }
-      const int16_t* q = seg.payload->xyz_mm.data() + 3 * (begin - seg.first);
+      const int16_t* q = payload->xyz_mm.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, q += 3) {
         if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
         if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
       }
     } else {
-      const float* p = seg.payload->xyz.data() + 3 * (begin - seg.first);
+      const float* p = payload->xyz.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, p += 3) {
         if (p[2] > clip_z || !Passes(c, i)) continue;
         if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
@@ -246,7 +238,7 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     }
     if (best == c.size) continue;
     float xyz[3];
-    packed.PositionOf(*seg.payload, best - seg.first, xyz);
+    packed.PositionOf(*payload, best - first, xyz);
     take(xyz);
   }
   // The layers' points compete with the cloud's: the nearest to the camera wins.

@@ -277,17 +277,17 @@ TEST(CloudPagerTest, CompressesAboveTheUnpackedBudgetAndUnpacksExactly) {
   EXPECT_TRUE(sealed.back()->unpacked());
   EXPECT_FALSE(sealed.front()->unpacked());
 
-  // A segment's positions of a compressed chunk, decoded alone, the chunk
+  // A block's positions of a compressed chunk, decoded alone, the chunk
   // left compressed.
   const uint64_t unpacks = pager.unpacks();
   const auto& c = sealed[2];
   ASSERT_FALSE(c->unpacked());
   size_t first = 0;
-  const auto part = c->PinPositions(1, &first);
-  EXPECT_EQ(first, 1024u);  // Segments of kCodecSegmentPoints.
-  EXPECT_EQ(part->xyz_mm.size(), 3u * 1024);
+  const auto part = c->PinBlockPositions(5, &first);
+  EXPECT_EQ(first, 1280u);  // Blocks of kBlockPoints, the second of segment 1.
+  EXPECT_EQ(part->xyz_mm.size(), 3u * 256);
   EXPECT_TRUE(part->dt_ns.empty());
-  for (size_t i = 1500; i < 1600; ++i) {
+  for (size_t i = 1280; i < 1536; ++i) {
     float xyz[3];
     c->PositionOf(*part, i - first, xyz);
     EXPECT_EQ(xyz[0], points[2 * 4096 + i].x);

@@ -1,7 +1,8 @@
 // The store's compressed payloads (core/cloud/payload_codec.h): every field
 // of every point comes back bit for bit, in either layout and for data that
 // does not compress; a scan of a room as an X4 makes it takes about 3 bytes
-// a point; segments decode alone; damaged frames are refused, not misread.
+// a point; segments, and a segment's blocks, decode alone; damaged frames
+// are refused, not misread.
 #include "core/cloud/payload_codec.h"
 
 #include <gtest/gtest.h>
@@ -180,6 +181,42 @@ TEST(PayloadCodecTest, SegmentsDecodeAlone) {
       EXPECT_TRUE(SameBits(part, want)) << s0 << ".." << s1 << ", positions";
     }
   }
+}
+
+// A pick's read: one block's positions, in either position layout, for
+// every block of chunks whose last segment and last block are short, and
+// of noise (every group 16 bits wide) as well as of a room.
+TEST(PayloadCodecTest, BlocksDecodeAlone) {
+  for (int layout = 0; layout < 3; ++layout) {
+    for (size_t n : {size_t{1}, size_t{256}, size_t{1024}, size_t{1300}, size_t{5000}}) {
+      const bool grid = layout != 1;
+      const ChunkPayload p = layout == 2 ? RoomScan(n, 5) : Noise(n, 11 + layout, grid, true);
+      const Encoded encoded(p, n);
+      const size_t blocks = (n + kCodecBlockPoints - 1) / kCodecBlockPoints;
+      for (size_t b = 0; b <= blocks; ++b) {  // The one past the end: no points.
+        ChunkPayload part;
+        std::string error;
+        ASSERT_TRUE(DecodeBlockPositions(encoded.bytes, encoded.ends, n, grid, b, &part, &error)) << error;
+        const size_t first = std::min(n, b * kCodecBlockPoints);
+        ChunkPayload want = Slice(p, first, std::min(n - first, kCodecBlockPoints));
+        want.range_q.clear();
+        want.dt_ns.clear();
+        want.beam.clear();
+        EXPECT_TRUE(SameBits(part, want)) << "layout " << layout << ", " << n << " points, block " << b;
+      }
+    }
+  }
+  // A block of a damaged segment is refused, though the damage lies in
+  // another block: the segment's CRC covers all four.
+  const size_t n = 2048;
+  const ChunkPayload scan = RoomScan(n, 6);
+  Encoded encoded(scan, n);
+  encoded.bytes[encoded.ends[0] - 8] ^= 0x10;  // Segment 0's last block.
+  ChunkPayload part;
+  std::string error;
+  EXPECT_FALSE(DecodeBlockPositions(encoded.bytes, encoded.ends, n, true, 0, &part, &error));
+  EXPECT_NE(error.find("segment 0's positions"), std::string::npos) << error;
+  EXPECT_TRUE(DecodeBlockPositions(encoded.bytes, encoded.ends, n, true, 4, &part, &error)) << error;
 }
 
 TEST(PayloadCodecTest, DamagedFramesAreRefusedWithTheSegment) {
