@@ -62,6 +62,7 @@ class CloudStoreUiTest : public testing::AppFixture {
   void TearDown() override {
     AppFixture::TearDown();
     CloudPager::Default().SetBudget(CloudPager::DefaultBudgetBytes());
+    CloudPager::Default().SetUnpackedBudget(CloudPager::kDefaultUnpackedBudget);
   }
   // The lab drive opened and replayed; the view holds all of it.
   void OpenLab() {
@@ -71,6 +72,7 @@ class CloudStoreUiTest : public testing::AppFixture {
     ASSERT_GT(n, 100000u);
     ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == n; }, 10000));
   }
+  void PicksAreTheNearestPointsUnderTheCursor();
 };
 
 TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
@@ -134,12 +136,12 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   EXPECT_TRUE(std::includes(drawn.begin(), drawn.end(), finer.begin(), finer.end()));
 }
 
-TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
-  // Against every point of the cloud: the pick reads only the blocks its ray
-  // passes near (PackedChunk::block_bounds()), and no point within 5 pixels
-  // of the cursor may be nearer the camera than the pick (its tolerance is
-  // 6). An oblique camera over the room: rays pass over floor, walls and
-  // furniture, through many chunks' boxes.
+// Against every point of the cloud: the pick reads only the blocks its ray
+// passes near (PackedChunk::block_bounds()), and no point within 5 pixels
+// of the cursor may be nearer the camera than the pick (its tolerance is
+// 6). An oblique camera over the room: rays pass over floor, walls and
+// furniture, through many chunks' boxes.
+void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
   const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
@@ -182,6 +184,20 @@ TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
     ++picks;
   }
   EXPECT_EQ(picks, 30);
+}
+
+TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
+  PicksAreTheNearestPointsUnderTheCursor();
+}
+
+// The same with every sealed chunk compressed (an unpacked budget of one
+// byte keeps only the newest unpacked): each block a pick tests is decoded
+// alone, on every core, in waves of blocks (cloud_view_picking.cc).
+TEST_F(CloudStoreUiTest, APickOnCompressedChunksIsTheNearestPointUnderTheCursor) {
+  CloudPager& pager = CloudPager::Default();
+  pager.SetUnpackedBudget(1);
+  PicksAreTheNearestPointsUnderTheCursor();
+  EXPECT_GE(pager.packed_chunks(), 3u);
 }
 
 // Pixels that differ by more than a grey level or two in some channel.

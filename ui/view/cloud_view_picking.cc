@@ -20,6 +20,9 @@
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <QMouseEvent>
 #include <QTimer>
 #include <algorithm>
@@ -201,15 +204,29 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   }
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.enter < b.enter; });
-  for (const Candidate& candidate : candidates) {
-    if (candidate.enter >= best_t) break;
+  // A block's point nearest the camera under the cursor and before
+  // `bound`, the first such in the block's order; t infinite if none.
+  struct BlockHit {
+    double t = std::numeric_limits<double>::infinity();
+    float xyz[3] = {};
+  };
+  auto test_block = [&](const Candidate& candidate, double bound, BlockHit* out) {
     const Chunk& c = *candidate.chunk;
     const PackedChunk& packed = *c.packed;
     const size_t begin = candidate.block * PackedChunk::kBlockPoints;
     const size_t end = std::min(c.size, begin + PackedChunk::kBlockPoints);
     size_t first = 0;  // The chunk's point i is the payload's i - first.
     const std::shared_ptr<const ChunkPayload> payload = packed.PinBlockPositions(candidate.block, &first);
-    size_t best = c.size;
+    double best = bound;
+    size_t best_i = c.size;
+    auto near = [&](double vx, double vy, double vz, size_t i) {
+      const double t = vx * d.x() + vy * d.y() + vz * d.z();
+      if (t <= 0 || t >= best) return;
+      const double tol = ray.tolerance_per_t * t;
+      if (vx * vx + vy * vy + vz * vz - t * t > tol * tol) return;
+      best = t;
+      best_i = i;
+    };
     if (packed.positions_on_grid()) {
       // Whole millimetres after the chunk's origin (docs/cloud-store.md):
       // the ray's origin moved there, the points are not decoded. The clip
@@ -227,19 +244,44 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
       const int16_t* q = payload->xyz_mm.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, q += 3) {
         if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
-        if (consider(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz)) best = i;
+        near(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, i);
       }
     } else {
       const float* p = payload->xyz.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, p += 3) {
         if (p[2] > clip_z || !Passes(c, i)) continue;
-        if (consider(p[0] - o.x(), p[1] - o.y(), p[2] - o.z())) best = i;
+        near(p[0] - o.x(), p[1] - o.y(), p[2] - o.z(), i);
       }
     }
-    if (best == c.size) continue;
-    float xyz[3];
-    packed.PositionOf(*payload, best - first, xyz);
-    take(xyz);
+    if (best_i == c.size) return;
+    out->t = best;
+    packed.PositionOf(*payload, best_i - first, out->xyz);
+  };
+  // The blocks in waves, in entry order, each wave's blocks tested on every
+  // core (a pick on a floor driven a hundred times decodes tens of
+  // thousands of blocks), then taken in that order: a point replaces the
+  // best only if strictly nearer, so the pick is the one a single thread
+  // finds, whatever the threads. The next wave starts only if its first
+  // block's entry lies before the best point. Waves double from 32 blocks
+  // to 1 024: the first, where the best is usually found, stay short, and
+  // the long searches pay for a few dozen parallel loops, not hundreds.
+  std::vector<BlockHit> hits;
+  size_t wave = 32;
+  for (size_t w0 = 0, w1 = 0; w0 < candidates.size() && candidates[w0].enter < best_t;
+       w0 = w1, wave = std::min<size_t>(2 * wave, 1024)) {
+    w1 = std::min(candidates.size(), w0 + wave);
+    hits.assign(w1 - w0, BlockHit());
+    const double bound = best_t;
+    tbb::parallel_for(tbb::blocked_range<size_t>(w0, w1, 8), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        if (candidates[k].enter < bound) test_block(candidates[k], bound, &hits[k - w0]);
+      }
+    });
+    for (const BlockHit& h : hits) {
+      if (h.t >= best_t) continue;
+      best_t = h.t;
+      take(h.xyz);
+    }
   }
   // The layers' points compete with the cloud's: the nearest to the camera wins.
   if (layer_picker_ && !layers_.empty() && layer_picker_(ray, &best_t, hit)) found = true;
