@@ -13,6 +13,7 @@
 #include <mutex>
 #include <vector>
 
+#include "core/common/rounding.h"
 #include "core/common/time.h"
 
 namespace sweepscan {
@@ -29,7 +30,7 @@ namespace sweepscan {
 // GridIndex gives k back from it: checked for every one of them.)
 constexpr double kGridStepM = 0.001;
 // The grid step nearest to `v` (finite, |v| < 9e15 mm).
-inline int64_t GridIndex(float v) { return std::llround(static_cast<double>(v) * 1000.0); }
+inline int64_t GridIndex(float v) { return RoundHalfAway(static_cast<double>(v) * 1000.0); }
 // Grid step `k` in metres: (float)((double)k * 0.001).
 inline float GridPosition(int64_t k) { return static_cast<float>(static_cast<double>(k) * kGridStepM); }
 inline float SnapToGrid(float v) {

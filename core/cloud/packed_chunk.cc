@@ -9,14 +9,16 @@
 
 #include "core/cloud/cloud_pager.h"
 #include "core/cloud/payload_codec.h"
+#include "core/common/rounding.h"
 
 namespace sweepscan {
 
 static_assert(PackedChunk::kBlockPoints == kCodecBlockPoints, "a pick decodes the blocks it tests");
 
 bool QuantiseRange(float range_m, uint16_t* q) {
-  if (!(range_m >= 0.0f)) return false;
-  const double steps = std::round(range_m / PackedChunk::kRangeStepM);
+  // 65 535 steps are 16.38 m: anything longer (or NaN) keeps its float.
+  if (!(range_m >= 0.0f && range_m < 17.0f)) return false;
+  const int64_t steps = RoundHalfAway(range_m / PackedChunk::kRangeStepM);
   if (steps > std::numeric_limits<uint16_t>::max()) return false;
   *q = static_cast<uint16_t>(steps);
   return static_cast<float>(*q * PackedChunk::kRangeStepM) == range_m;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include "core/common/rounding.h"
+
 namespace sweepscan {
 namespace hardware {
 namespace {
@@ -14,7 +16,7 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr size_t kMaxSamplesPerScan = 20000;
 
 Duration SecondsToDuration(double seconds) {
-  return Duration(static_cast<int64_t>(std::llround(seconds * 1e9)));
+  return Duration(RoundHalfAway(seconds * 1e9));
 }
 
 }  // namespace
