@@ -201,10 +201,11 @@ size_t GroupBytes(const uint8_t* codes, size_t g) {
 const uint8_t* UnpackAxis(const uint8_t* in, const uint8_t* end, size_t m, size_t b0, size_t b1,
                           size_t stride, uint16_t* v) {
   const size_t groups = (m + kGroup - 1) / kGroup;
+  const size_t head = 2 * (Blocks(m) - 1) + (groups + 1) / 2;  // Block starts and width codes.
+  if (static_cast<size_t>(end - in) < head) return nullptr;
   const uint8_t* starts = in;
   const uint8_t* codes = starts + 2 * (Blocks(m) - 1);
-  const uint8_t* data = codes + (groups + 1) / 2;
-  if (data > end) return nullptr;
+  const uint8_t* data = in + head;
   const size_t g0 = b0 * kBlockGroups, g1 = std::min(groups, b1 * kBlockGroups);
   const size_t total = GroupBytes(codes, groups);
   if (static_cast<size_t>(end - data) < total) return nullptr;
