@@ -143,16 +143,22 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   bool found = false;
   const float clip_z = static_cast<float>(ray.clip_z);
   // A point v (relative to the ray's origin) under the cursor and nearer
-  // than the best so far becomes the pick.
-  auto consider = [&](double vx, double vy, double vz) {
+  // than `*best` becomes the best: its distance along the ray in *best.
+  auto nearer = [&](double vx, double vy, double vz, double* best) {
     const double t = vx * d.x() + vy * d.y() + vz * d.z();
-    if (t <= 0 || t >= best_t) return false;
-    const double off2 = vx * vx + vy * vy + vz * vz - t * t;
+    if (t <= 0 || t >= *best) return false;
     const double tol = ray.tolerance_per_t * t;
-    if (off2 > tol * tol) return false;
-    best_t = t;
+    if (vx * vx + vy * vy + vz * vz - t * t > tol * tol) return false;
+    *best = t;
     return true;
   };
+  // The clip as a whole grid step: the highest k whose float is at or below it.
+  int64_t clip_k = std::numeric_limits<int64_t>::max();
+  if (std::isfinite(clip_z)) {
+    clip_k = GridIndex(clip_z);
+    while (GridPosition(clip_k) > clip_z) --clip_k;
+    while (GridPosition(clip_k + 1) <= clip_z) ++clip_k;
+  }
   auto take = [&](const float xyz[3]) {
     hit->world = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
     hit->local = hit->world;
@@ -169,7 +175,7 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     for (size_t i = 0; i < c->size; ++i) {
       const CloudPoint& p = c->growing[i];
       if (p.z > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-      if (consider(p.x - o.x(), p.y - o.y(), p.z - o.z())) best = i;
+      if (nearer(p.x - o.x(), p.y - o.y(), p.z - o.z(), &best_t)) best = i;
     }
     if (best < c->size) take(&c->growing[best].x);
   }
@@ -219,38 +225,23 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     const std::shared_ptr<const ChunkPayload> payload = packed.PinBlockPositions(candidate.block, &first);
     double best = bound;
     size_t best_i = c.size;
-    auto near = [&](double vx, double vy, double vz, size_t i) {
-      const double t = vx * d.x() + vy * d.y() + vz * d.z();
-      if (t <= 0 || t >= best) return;
-      const double tol = ray.tolerance_per_t * t;
-      if (vx * vx + vy * vy + vz * vz - t * t > tol * tol) return;
-      best = t;
-      best_i = i;
-    };
     if (packed.positions_on_grid()) {
       // Whole millimetres after the chunk's origin (docs/cloud-store.md):
-      // the ray's origin moved there, the points are not decoded. The clip
-      // is a whole step too: the highest k whose float is at or below it.
+      // the ray's origin and the clip moved there, the points are not decoded.
       const std::array<int64_t, 3>& origin = packed.origin_mm();
       const double ox = o.x() - origin[0] * kGridStepM, oy = o.y() - origin[1] * kGridStepM,
                    oz = o.z() - origin[2] * kGridStepM;
-      int64_t top = std::numeric_limits<int64_t>::max();
-      if (std::isfinite(clip_z)) {
-        top = GridIndex(clip_z);
-        while (GridPosition(top) > clip_z) --top;
-        while (GridPosition(top + 1) <= clip_z) ++top;
-        top -= origin[2];
-      }
+      const int64_t top = std::isfinite(clip_z) ? clip_k - origin[2] : clip_k;
       const int16_t* q = payload->xyz_mm.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, q += 3) {
         if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
-        near(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, i);
+        if (nearer(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, &best)) best_i = i;
       }
     } else {
       const float* p = payload->xyz.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, p += 3) {
         if (p[2] > clip_z || !Passes(c, i)) continue;
-        near(p[0] - o.x(), p[1] - o.y(), p[2] - o.z(), i);
+        if (nearer(p[0] - o.x(), p[1] - o.y(), p[2] - o.z(), &best)) best_i = i;
       }
     }
     if (best_i == c.size) return;
