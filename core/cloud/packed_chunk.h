@@ -93,6 +93,41 @@ class PackedChunk {
   // it passes near none. 0.09 bytes a point, kept with the header.
   static constexpr size_t kBlockPoints = 256;
   const std::vector<std::array<float, 6>>& block_bounds() const { return block_bounds_; }
+  // The chunk's points counted in the cubes of a kCellM grid of the world
+  // frame (a census): the cubes' keys (CellKey) ascending, and their counts.
+  // A chunk is 13 s of sweeps across the room and a block a third of a scan
+  // line, so both boxes meet nearly any view from inside the room; the
+  // census is what tells the view how many points lie in its frustum
+  // (CloudView's rest plan; docs/cloud-store.md). About 0.1 bytes a point.
+  static constexpr float kCellM = 0.5f;
+  const std::vector<uint64_t>& cell_keys() const { return cell_keys_; }
+  const std::vector<uint32_t>& cell_counts() const { return cell_counts_; }
+  // A position's cube: floor(v / kCellM) an axis, each clamped to int16 and
+  // offset by 2^15 into 16 bits, x in bits 32-47, y 16-31, z 0-15.
+  static uint64_t CellKey(const float v[3]) {
+    return static_cast<uint64_t>(CellIndex(v[0]) + 32768) << 32 |
+           static_cast<uint64_t>(CellIndex(v[1]) + 32768) << 16 |
+           static_cast<uint64_t>(CellIndex(v[2]) + 32768);
+  }
+  // floor(v / kCellM) clamped to [-32768, 32767] (NaN to the low end), by
+  // truncation and a step down for negative fractions: std::floor is a libm
+  // call here, and this runs for every point a chunk seals.
+  static int32_t CellIndex(float v) {
+    float c = v * (1.0f / kCellM);  // exact: kCellM is a power of two
+    c = c >= -32768.0f ? std::min(c, 32767.0f) : -32768.0f;
+    const int32_t i = static_cast<int32_t>(c);
+    return i - (static_cast<float>(i) > c ? 1 : 0);
+  }
+  // The cube of a key, as bounds() orders a box.
+  static std::array<float, 6> CellBox(uint64_t key) {
+    std::array<float, 6> box;
+    for (int a = 2; a >= 0; --a, key >>= 16) {
+      const float lo = static_cast<float>(static_cast<int64_t>(key & 0xFFFF) - 32768) * kCellM;
+      box[2 * a] = lo;
+      box[2 * a + 1] = lo + kCellM;
+    }
+    return box;
+  }
   // How the payload is stored: positions as grid steps after origin_mm()
   // (else float32), ranges as quarter millimetres (else float32).
   bool positions_on_grid() const { return positions_on_grid_; }
@@ -142,6 +177,7 @@ class PackedChunk {
   PackedChunk() = default;
   static bool PackOnGrid(const CloudPoint* points, size_t n, PackedChunk* chunk,
                          ChunkPayload* payload);
+  static void TakeCensus(const CloudPoint* points, size_t n, PackedChunk* chunk);
   // From the compressed bytes, the whole payload (kWholeChunk) or one
   // block's positions; fatal if they do not decode.
   static constexpr size_t kWholeChunk = ~size_t{0};
@@ -155,6 +191,8 @@ class PackedChunk {
   std::array<int64_t, 3> origin_mm_{};
   std::vector<ScanRun> runs_;
   std::vector<std::array<float, 6>> block_bounds_;
+  std::vector<uint64_t> cell_keys_;
+  std::vector<uint32_t> cell_counts_;
   size_t payload_bytes_ = 0;
   CloudPager* pager_ = nullptr;
   // Paging state, under mutex_.

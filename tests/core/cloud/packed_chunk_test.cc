@@ -3,11 +3,10 @@
 // floats), in memory and after being paged out to the cache file
 // and read back; compressed above the unpacked budget and unpacked again;
 // the pager keeps the resident bytes within its budget and leaves no file
-// behind.
+// behind; the census counts every point in its 0.5 m cube.
 #include "core/cloud/packed_chunk.h"
 
 #include <gtest/gtest.h>
-
 #include <stdlib.h>
 
 #include <algorithm>
@@ -16,9 +15,10 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <random>
 #include <string>
-#include <memory>
 #include <thread>
 
 #include "core/cloud/cloud_pager.h"
@@ -145,6 +145,57 @@ TEST(PackedChunkTest, BlockBoundsHoldTheirPointsAndAreAttained) {
         }
       }
       for (int a = 0; a < 6; ++a) EXPECT_TRUE(attained[a]) << "block " << k << " side " << a;
+    }
+  }
+}
+
+TEST(PackedChunkTest, TheCensusCountsEveryPointInItsCube) {
+  // Scattered points, a scan line's worth of neighbours and points on cube
+  // faces, at both signs; and a chunk spanning more cubes than the dense
+  // count takes (2^18: here 1.5 km x 60 m x 6 m), counted the other way.
+  auto room = MakePoints(20000, 9, false);
+  for (size_t i = 0; i < 5000; ++i) {
+    CloudPoint& p = room[i];
+    p.x = SnapToGrid(-3.0f + 0.002f * static_cast<float>(i));
+    p.y = SnapToGrid(1.25f);
+    p.z = SnapToGrid(0.5f * std::sin(0.01f * static_cast<float>(i)));
+  }
+  const float faces[] = {0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 29.5f};
+  for (size_t i = 0; i < 6; ++i) room[6000 + i].x = room[6000 + i].y = room[6000 + i].z = faces[i];
+  auto wide = MakePoints(3000, 10, false);
+  for (size_t i = 0; i < wide.size(); ++i)
+    wide[i].x = SnapToGrid(-750.0f + 0.5f * static_cast<float>(i));
+  for (const auto* points : {&room, &wide}) {
+    const auto chunk = PackedChunk::Pack(points->data(), points->size(), nullptr);
+    // The cubes found independently: floor(v / 0.5) in double, offset by 2^15.
+    std::map<uint64_t, uint32_t> expected;
+    for (const CloudPoint& p : *points) {
+      uint64_t key = 0;
+      for (const float v : {p.x, p.y, p.z}) {
+        key = key << 16 |
+              static_cast<uint64_t>(static_cast<int64_t>(std::floor(static_cast<double>(v) / 0.5)) +
+                                    32768);
+      }
+      ++expected[key];
+    }
+    const auto& keys = chunk->cell_keys();
+    const auto& counts = chunk->cell_counts();
+    ASSERT_EQ(keys.size(), expected.size());
+    ASSERT_EQ(counts.size(), expected.size());
+    size_t k = 0;
+    for (const auto& [key, count] : expected) {
+      EXPECT_EQ(keys[k], key) << "cube " << k;  // ascending, as the map
+      EXPECT_EQ(counts[k], count) << "cube " << k;
+      ++k;
+    }
+    // Each point lies in the box of its own key: lo <= v < hi an axis.
+    for (const CloudPoint& p : *points) {
+      const float v[3] = {p.x, p.y, p.z};
+      const std::array<float, 6> box = PackedChunk::CellBox(PackedChunk::CellKey(v));
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_LE(box[2 * a], v[a]);
+        EXPECT_LT(v[a], box[2 * a + 1]);
+      }
     }
   }
 }
