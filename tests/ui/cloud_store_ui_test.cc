@@ -8,7 +8,8 @@
 // point under the cursor (not a drawn representative); a pick is the cloud
 // point nearest the camera under the cursor, checked against every point; an opened room is
 // shown looking into it with its ceiling hidden; a large session is
-// streamed and opens as its replay would.
+// streamed and opens as its replay would; zoomed in at rest, every point in
+// view is drawn.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -21,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 #include <random>
 #include <set>
 #include <vector>
@@ -134,6 +136,78 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
             cell[0] * cell[1] * cell[2]);
   drawn = Positions(view->DrawnPoints());
   EXPECT_TRUE(std::includes(drawn.begin(), drawn.end(), finer.begin(), finer.end()));
+}
+
+// Zoomed into one spot of the room at rest, with a rest budget far below
+// the cloud: every cloud point in view is drawn. A chunk is 13 s of sweeps
+// across the room, so its box meets nearly any view from inside it; the
+// plan counts only its 256-point blocks in the frustum, so the spot is drawn
+// whole and not every n-th point of the room's chunks.
+TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot());
+  if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
+  const size_t budget = cloud.size() / 16;
+  view->SetRestBudget(budget);
+
+  // The densest 0.3 m cube between 0.5 and 1.5 m above the floor (a wall
+  // along the robot's lane), looked at from 2 m towards the room's middle:
+  // a sphere of 0.3 m about it is well inside the 30-degree view (2 sin 15
+  // deg = 0.52 m).
+  float lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<float>::max();
+    hi[a] = -lo[a];
+  }
+  for (const Xyz& p : cloud) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  }
+  std::map<std::array<int, 3>, std::vector<Xyz>> cubes;
+  for (const Xyz& p : cloud) {
+    if (p[2] < lo[2] + 0.5f || p[2] > lo[2] + 1.5f) continue;
+    cubes[{static_cast<int>(std::floor(p[0] / 0.3f)), static_cast<int>(std::floor(p[1] / 0.3f)),
+           static_cast<int>(std::floor(p[2] / 0.3f))}]
+        .push_back(p);
+  }
+  const auto densest = std::max_element(
+      cubes.begin(), cubes.end(),
+      [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
+  ASSERT_NE(densest, cubes.end());
+  const Xyz& f = densest->second[densest->second.size() / 2];
+  const Eigen::Vector3f focal(f[0], f[1], f[2]);
+  Eigen::Vector3f inward(0.5f * (lo[0] + hi[0]) - focal.x(), 0.5f * (lo[1] + hi[1]) - focal.y(),
+                         0.0f);
+  inward.normalize();
+  std::vector<Xyz> spot;
+  for (const Xyz& p : cloud) {
+    if ((Eigen::Vector3f(p[0], p[1], p[2]) - focal).norm() < 0.3f) spot.push_back(p);
+  }
+  ASSERT_GT(spot.size(), 500u) << "of " << cloud.size();
+  view->LookAt(focal.cast<double>(),
+               (focal + 2.0f * inward + Eigen::Vector3f(0.0f, 0.0f, 0.2f)).cast<double>());
+  view->RenderNow();  // The clipping range fitted to the new view.
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  const std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
+  const size_t missing = static_cast<size_t>(
+      std::count_if(spot.begin(), spot.end(), [&](const Xyz& p) { return !Contains(drawn, p); }));
+  EXPECT_EQ(missing, 0u) << "of " << spot.size() << " points about the spot looked at";
+
+  // Back to the whole room: within the budget again, every one a cloud point.
+  view->ViewOblique();
+  view->RenderNow();
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  const std::vector<Xyz> room = Positions(view->DrawnPoints());
+  EXPECT_LE(room.size(), budget + CloudView::kChunkPoints);
+  EXPECT_GT(room.size(), budget / 2);
+  EXPECT_TRUE(
+      std::all_of(room.begin(), room.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
 }
 
 // Against every point of the cloud: the pick reads only the blocks its ray

@@ -12,10 +12,12 @@
 //   sample of the sealed chunks, one point a grid cell, the cells doubled
 //   until it holds at most lod_budget() points (core/geometry/voxel_sample.h);
 // * rest: once the camera and the data have been still for kSettleMs, the
-//   chunks in the view frustum get finer strides, nearest first, up to
-//   rest_budget() points, built in slices of at most kRefineSliceMs on the
-//   GUI thread; at full resolution (the cloud within the budget) the view
-//   draws exactly the cloud. A rest level larger than the LOD budget is
+//   points in the view frustum (counted by the chunks' census of 0.5 m
+//   cubes, PackedChunk::cell_keys()) get finer strides, nearest chunks
+//   first, up to rest_budget() points, built in slices of at most
+//   kRefineSliceMs on the GUI thread; when the points in view fit the budget
+//   the view draws every one of them (the whole cloud, or a corner of a
+//   100 M-point cloud zoomed into). A rest level larger than the LOD budget is
 //   drawn in progressive passes (cloud_view_progressive.cc): the motion
 //   level first, then about a LOD budget of rest points a pass, nearest
 //   first, over the same image, so no frame at rest holds the GUI thread
@@ -311,9 +313,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void RemoveChunkActors(Chunk* chunk);
   void NewDrawnActor(Drawn* drawn);
   // (Re)builds `drawn` as the rest level: every stride-th point of the
-  // chunk and its motion level's points.
+  // chunk (of its census cubes in `cells`, a bit a cube, if not empty) and
+  // its motion level's points.
   void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn,
-                  std::shared_ptr<const ChunkPayload> payload = nullptr);
+                  std::shared_ptr<const ChunkPayload> payload = nullptr,
+                  std::vector<uint64_t> cells = {});
   // Reads the points `index` (ascending) of the chunk into *drawn (from
   // `payload` if given, else the chunk pinned).
   void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn,

@@ -8,9 +8,9 @@
 // one growing chunk, a short vector of CloudPoints. VTK holds only what is
 // drawn: the chunk's points in the view's spatially even sample (the motion
 // level, core/geometry/voxel_sample.h; a few to a few hundred a chunk) and,
-// at rest, every rest-stride-th point of the chunks in view up to the rest
-// budget, with the motion level's among them. Each drawn level carries one scalar array, the
-// colour mode's, mapped through the shared lookup table on the GPU side.
+// at rest, every rest-stride-th point of the chunks' census cubes in view
+// up to the rest budget, with the motion level's among them. Each drawn level carries one scalar
+// array, the colour mode's, mapped through the shared lookup table on the GPU side.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 
@@ -49,6 +49,9 @@ inline constexpr uint16_t kNoValue = 0xFFFF;
 // drawn through their batch.
 struct CloudView::Drawn {
   int stride = 0;  // 0: nothing built. The motion level: its candidates' stride.
+  // The rest level: the census cubes it was built of (PackedChunk::cell_keys(),
+  // a bit a cube); empty: the whole chunk.
+  std::vector<uint64_t> cells;
   // Sealed chunks: the chunk's index of each drawn point, ascending. Empty
   // for the growing chunk, drawn whole (point k is its k-th).
   std::vector<uint32_t> index;
@@ -78,6 +81,7 @@ struct CloudView::Chunk {
   Drawn motion;  // Sealed chunks: the level drawn while the camera moves.
   Drawn rest;    // The growing chunk: every point; sealed: the rest level.
   int rest_target = 0;  // The rest stride the last plan asked for (0: none).
+  std::vector<uint64_t> rest_cells;  // ... and its cubes in view (as Drawn::cells).
   bool sealed() const { return packed != nullptr; }
 };
 

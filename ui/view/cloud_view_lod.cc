@@ -10,6 +10,8 @@
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <limits>
 
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
@@ -50,21 +52,45 @@ bool CloudView::Passes(const Chunk& chunk, size_t i) const {
 }
 
 void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
-                           std::shared_ptr<const ChunkPayload> payload) {
-  // Every stride-th point: representative of the chunk, as a chunk's points
-  // are consecutive samples along the scan lines (each line thinned evenly);
-  // and the motion level's points, which the progressive passes' pass 0
-  // drew, so that the finished image holds no point the rest level lacks.
-  std::vector<uint32_t> index;
-  index.reserve((chunk->size + stride - 1) / stride + chunk->motion.index.size());
-  const std::vector<uint32_t>& motion = chunk->motion.index;
-  size_t m = 0;
-  for (size_t i = 0; i < chunk->size; i += stride) {
-    for (; m < motion.size() && motion[m] < i; ++m) index.push_back(motion[m]);
-    if (m < motion.size() && motion[m] == i) ++m;
-    index.push_back(static_cast<uint32_t>(i));
+                           std::shared_ptr<const ChunkPayload> payload,
+                           std::vector<uint64_t> cells) {
+  // Every stride-th point (counted from the chunk's first; of the census
+  // cubes asked for, if any): representative of the chunk, as a chunk's
+  // points are consecutive samples along the scan lines (each line thinned
+  // evenly); and the motion level's points, which the progressive passes'
+  // pass 0 drew, so that the finished image holds no point the rest level
+  // lacks.
+  const size_t step = static_cast<size_t>(stride);
+  std::vector<uint32_t> strided;
+  strided.reserve((chunk->size + step - 1) / step);
+  if (cells.empty() || !chunk->sealed()) {
+    for (size_t i = 0; i < chunk->size; i += step) strided.push_back(static_cast<uint32_t>(i));
+  } else {
+    if (payload == nullptr) payload = chunk->packed->Pin();
+    const std::vector<uint64_t>& keys = chunk->packed->cell_keys();
+    // The cube looked up again only when it changes (every second point or
+    // so along a scan line).
+    uint64_t last_key = ~uint64_t{0};
+    bool last_in = false;
+    for (size_t i = 0; i < chunk->size; i += step) {
+      float v[3];
+      chunk->packed->PositionOf(*payload, i, v);
+      const uint64_t key = PackedChunk::CellKey(v);
+      if (key != last_key) {
+        const size_t k =
+            static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+        last_key = key;
+        last_in = k < keys.size() && keys[k] == key && (cells[k / 64] >> (k % 64) & 1) != 0;
+      }
+      if (last_in) strided.push_back(static_cast<uint32_t>(i));
+    }
   }
-  index.insert(index.end(), motion.begin() + static_cast<std::ptrdiff_t>(m), motion.end());
+  const std::vector<uint32_t>& motion = chunk->motion.index;
+  std::vector<uint32_t> index;
+  index.reserve(strided.size() + motion.size());
+  std::set_union(strided.begin(), strided.end(), motion.begin(), motion.end(),
+                 std::back_inserter(index));
+  d->cells = std::move(cells);
   FillDrawn(chunk, std::move(index), stride, d, std::move(payload));
 }
 
@@ -243,7 +269,7 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
   } else if (m >= 3) {
     for (size_t k = 0; k < n; ++k) s[k] = ValueOf(*chunk, m, d->At(k));
   } else {
-    BuildDrawn(chunk, d->stride, d);  // Time and range: read the chunk again.
+    BuildDrawn(chunk, d->stride, d, nullptr, d->cells);  // Time and range: read the chunk again.
     return;
   }
   d->scalar->Modified();
@@ -273,12 +299,76 @@ void CloudView::ShowLevels() {
   for (const auto& b : rest_batches_) b->drawn.actor->SetVisibility(!lod_active_);
 }
 
+namespace {
+
+// Where an axis-aligned box (x min, x max, y min, y max, z min, z max) lies
+// against the view frustum's six inward planes and the clip height.
+enum class InView { kOut, kPartly, kWhole };
+
+template <typename T>
+InView BoxInView(const T* b, const double planes[24], double clip_height) {
+  if (!std::isnan(clip_height) && b[4] > clip_height) return InView::kOut;
+  bool whole = std::isnan(clip_height) || b[5] <= clip_height;
+  for (int p = 0; p < 6; ++p) {
+    // The box's corners farthest and nearest along the plane's inward
+    // normal: out if the farthest is behind the plane, whole while every
+    // nearest is in front of its plane.
+    const double* n = planes + 4 * p;
+    const double far = n[0] * (n[0] >= 0 ? b[1] : b[0]) + n[1] * (n[1] >= 0 ? b[3] : b[2]) +
+                       n[2] * (n[2] >= 0 ? b[5] : b[4]) + n[3];
+    if (far < 0) return InView::kOut;
+    const double near = n[0] * (n[0] >= 0 ? b[0] : b[1]) + n[1] * (n[1] >= 0 ? b[2] : b[3]) +
+                        n[2] * (n[2] >= 0 ? b[4] : b[5]) + n[3];
+    whole = whole && near >= 0;
+  }
+  return whole ? InView::kWhole : InView::kPartly;
+}
+
+template <typename T>
+double SquaredDistanceToBox(const double eye[3], const T* b) {
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double q = std::clamp<double>(eye[k], b[2 * k], b[2 * k + 1]);
+    d2 += (eye[k] - q) * (eye[k] - q);
+  }
+  return d2;
+}
+
+// Points in a set of census cubes (a bit a cube; empty: all of them).
+size_t CensusPoints(const PackedChunk& chunk, const std::vector<uint64_t>& cells) {
+  if (cells.empty()) return chunk.size();
+  size_t n = 0;
+  for (size_t k = 0; k < chunk.cell_counts().size(); ++k) {
+    if ((cells[k / 64] >> (k % 64) & 1) != 0) n += chunk.cell_counts()[k];
+  }
+  return n;
+}
+
+// Whether the cubes a rest level was built of hold every cube the plan
+// wants and not more than twice its points: a small turn of the camera
+// does not read the chunk again.
+bool StillFits(const PackedChunk& chunk, const std::vector<uint64_t>& built,
+               const std::vector<uint64_t>& want) {
+  if (!built.empty()) {
+    if (want.empty()) return false;
+    for (size_t k = 0; k < want.size(); ++k) {
+      if ((want[k] & ~built[k]) != 0) return false;
+    }
+  }
+  return CensusPoints(chunk, built) <= 2 * CensusPoints(chunk, want);
+}
+
+}  // namespace
+
 void CloudView::PlanRest() {
-  // The chunks in the view frustum (and under the clip height), nearest
-  // first: a uniform stride that fits them in the rest budget, then the
-  // budget left over spent on the nearest (finer strides, down to every
-  // point), as Potree spends its point budget on the nodes nearest and
-  // largest on screen.
+  // The points in the view frustum (and under the clip height), chunks
+  // nearest first: a uniform stride that fits them in the rest budget, then
+  // the budget left over spent on the nearest chunks (finer strides, down to
+  // every point), as Potree spends its point budget on the nodes nearest
+  // and largest on screen. A chunk is 13 s of sweeps across the room, so
+  // from inside the room nearly every chunk's box meets the view; its census
+  // of 0.5 m cubes counts the points that do, and its rest level is built
+  // of those cubes alone.
   refine_queue_.clear();
   vtkCamera* camera = renderer_->GetActiveCamera();
   double planes[24];
@@ -288,34 +378,39 @@ void CloudView::PlanRest() {
   struct Candidate {
     Chunk* chunk;
     double distance;
+    size_t points;  // in the cubes in view
   };
   std::vector<Candidate> visible;
   size_t total = 0;
   for (auto& c : chunks_) {
     if (!c->sealed()) continue;
-    const auto& b = c->bounds;
-    bool inside = std::isnan(clip_height_) || b[4] <= clip_height_;
-    for (int p = 0; p < 6 && inside; ++p) {
-      // The box corner farthest along the plane's inward normal.
-      const double* n = planes + 4 * p;
-      const double x = n[0] >= 0 ? b[1] : b[0], y = n[1] >= 0 ? b[3] : b[2],
-                   z = n[2] >= 0 ? b[5] : b[4];
-      if (n[0] * x + n[1] * y + n[2] * z + n[3] < 0) inside = false;
+    const InView where = BoxInView(c->bounds.data(), planes, clip_height_);
+    c->rest_cells.clear();
+    size_t points = where == InView::kOut ? 0 : c->size;
+    double d2 = SquaredDistanceToBox(eye, c->bounds.data());
+    if (where == InView::kPartly) {
+      const std::vector<uint64_t>& keys = c->packed->cell_keys();
+      c->rest_cells.assign((keys.size() + 63) / 64, 0);
+      points = 0;
+      d2 = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < keys.size(); ++k) {
+        const std::array<float, 6> box = PackedChunk::CellBox(keys[k]);
+        if (BoxInView(box.data(), planes, clip_height_) == InView::kOut) continue;
+        c->rest_cells[k / 64] |= uint64_t{1} << (k % 64);
+        points += c->packed->cell_counts()[k];
+        d2 = std::min(d2, SquaredDistanceToBox(eye, box.data()));
+      }
     }
-    if (!inside) {
+    if (points == 0) {
       c->rest_target = 0;
+      c->rest_cells.clear();
       if (c->rest.actor) renderer_->RemoveActor(c->rest.actor);
       c->rest = Drawn();  // Out of view: its memory back.
       DrawnChanged();
       continue;
     }
-    double d2 = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double q = std::clamp(eye[k], b[2 * k], b[2 * k + 1]);
-      d2 += (eye[k] - q) * (eye[k] - q);
-    }
-    visible.push_back({c.get(), d2});
-    total += c->size;
+    visible.push_back({c.get(), d2, points});
+    total += points;
   }
   std::stable_sort(visible.begin(), visible.end(),
                    [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
@@ -324,19 +419,22 @@ void CloudView::PlanRest() {
   size_t used = 0;
   for (const Candidate& v : visible) {
     v.chunk->rest_target = static_cast<int>(stride);
-    used += (v.chunk->size + stride - 1) / stride;
+    used += (v.points + stride - 1) / stride;
   }
   for (const Candidate& v : visible) {
     int& t = v.chunk->rest_target;
     while (t > 1) {
-      const size_t now = (v.chunk->size + t - 1) / t, finer = (v.chunk->size + t / 2 - 1) / (t / 2);
+      const size_t now = (v.points + t - 1) / t, finer = (v.points + t / 2 - 1) / (t / 2);
       if (used + finer - now > rest_budget_) break;
       used += finer - now;
       t /= 2;
     }
   }
   for (const Candidate& v : visible) {
-    if (v.chunk->rest.stride != v.chunk->rest_target) refine_queue_.push_back(v.chunk);
+    Chunk* c = v.chunk;
+    if (c->rest.stride != c->rest_target || !StillFits(*c->packed, c->rest.cells, c->rest_cells)) {
+      refine_queue_.push_back(c);
+    }
   }
 }
 
@@ -346,7 +444,7 @@ bool CloudView::RefineSlice(int max_ms) {
   size_t done = 0;
   while (done < refine_queue_.size() && clock.elapsed() < max_ms) {
     Chunk* c = refine_queue_[done++];
-    BuildDrawn(c, c->rest_target, &c->rest);
+    BuildDrawn(c, c->rest_target, &c->rest, nullptr, c->rest_cells);
   }
   refine_queue_.erase(refine_queue_.begin(), refine_queue_.begin() + done);
   return refine_queue_.empty();
