@@ -71,14 +71,21 @@ void PackedChunk::TakeCensus(const CloudPoint* points, size_t n, PackedChunk* ch
     dim[a] = static_cast<size_t>(CellIndex(static_cast<float>(b[2 * a + 1])) - lo[a]) + 1;
     volume *= dim[a];
   }
-  if (volume <= (size_t{1} << 18)) {
-    std::vector<uint32_t> counts(volume, 0);
-    for (size_t i = 0; i < n; ++i) {
+  // A NaN coordinate (which the bounds skip) falls outside them: then the
+  // sorted copy, where it has a key like any other.
+  std::vector<uint32_t> counts;
+  bool dense = volume <= (size_t{1} << 18);
+  if (dense) {
+    counts.assign(volume, 0);
+    for (size_t i = 0; i < n && dense; ++i) {
       const size_t x = static_cast<size_t>(CellIndex(points[i].x) - lo[0]);
       const size_t y = static_cast<size_t>(CellIndex(points[i].y) - lo[1]);
       const size_t z = static_cast<size_t>(CellIndex(points[i].z) - lo[2]);
-      ++counts[(x * dim[1] + y) * dim[2] + z];
+      dense = x < dim[0] && y < dim[1] && z < dim[2];
+      if (dense) ++counts[(x * dim[1] + y) * dim[2] + z];
     }
+  }
+  if (dense) {
     for (size_t k = 0; k < volume; ++k) {
       if (counts[k] == 0) continue;
       const size_t z = k % dim[2], y = k / dim[2] % dim[1], x = k / dim[2] / dim[1];
