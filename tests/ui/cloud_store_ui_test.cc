@@ -141,8 +141,8 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
 // Zoomed into one spot of the room at rest, with a rest budget far below
 // the cloud: every cloud point in view is drawn. A chunk is 13 s of sweeps
 // across the room, so its box meets nearly any view from inside it; the
-// plan counts only its 256-point blocks in the frustum, so the spot is drawn
-// whole and not every n-th point of the room's chunks.
+// plan counts only the points of its census cubes (0.5 m) in the frustum,
+// so the spot is drawn whole and not every n-th point of the room's chunks.
 TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();

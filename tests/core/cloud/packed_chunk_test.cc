@@ -164,8 +164,9 @@ TEST(PackedChunkTest, TheCensusCountsEveryPointInItsCube) {
   const float faces[] = {0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 29.5f};
   for (size_t i = 0; i < 6; ++i) room[6000 + i].x = room[6000 + i].y = room[6000 + i].z = faces[i];
   auto wide = MakePoints(3000, 10, false);
-  for (size_t i = 0; i < wide.size(); ++i)
+  for (size_t i = 0; i < wide.size(); ++i) {
     wide[i].x = SnapToGrid(-750.0f + 0.5f * static_cast<float>(i));
+  }
   // And a point with a NaN coordinate, which the bounds do not hold.
   auto with_nan = MakePoints(1000, 11, false, /*off_grid=*/true);
   with_nan[500].y = std::numeric_limits<float>::quiet_NaN();
