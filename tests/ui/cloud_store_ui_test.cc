@@ -9,7 +9,7 @@
 // point nearest the camera under the cursor, checked against every point; an opened room is
 // shown looking into it with its ceiling hidden; a large session is
 // streamed and opens as its replay would; zoomed in at rest, every point in
-// view is drawn.
+// view is drawn; looking along the room, the near cubes denser than the far.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -208,6 +208,69 @@ TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
   EXPECT_GT(room.size(), budget / 2);
   EXPECT_TRUE(
       std::all_of(room.begin(), room.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+}
+
+// Standing in the robot's lane looking along it, with a rest budget far
+// below the points in view: the budget goes to what is near, as on screen
+// (core/cloud/cube_budget.h). The floor within 2.6 m is drawn several times
+// denser than the floor and wall beyond 5 m, which are still drawn; within
+// the budget, every one a cloud point. (With one stride a chunk, every chunk
+// spanning the room, both were thinned alike.)
+TEST_F(CloudStoreUiTest, AtRestTheNearestCubesAreDrawnDenserThanTheFarOnes) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  const std::vector<Xyz> cloud = Positions(snapshot);
+  if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
+  const size_t budget = cloud.size() / 16;
+  view->SetRestBudget(budget);
+  Eigen::Vector3d lo(1e9, 1e9, 1e9), hi = -lo;
+  for (const CloudPoint& p : snapshot) {
+    lo = lo.cwiseMin(Eigen::Vector3d(p.x, p.y, p.z));
+    hi = hi.cwiseMax(Eigen::Vector3d(p.x, p.y, p.z));
+  }
+  const Eigen::Vector3d eye(lo.x() + 2.3, 0.5 * (lo.y() + hi.y()), lo.z() + 1.0);
+  // Looking down at the floor 3.5 m ahead from 1 m above it: the
+  // 30-degree view spans the floor from 1.7 m on and the far end's wall.
+  const Eigen::Vector3d focal(eye.x() + 3.5, eye.y(), lo.z());
+  ASSERT_GT(hi.x() - eye.x(), 6.0) << "the room is too short to look along";
+  view->LookAt(focal, eye);
+  view->RenderNow();
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  const std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
+  EXPECT_GT(drawn.size(), budget / 2);
+  EXPECT_TRUE(
+      std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  // The cloud's points on screen, by their distance from the eye.
+  const Eigen::Vector3d ahead = (focal - eye).normalized();
+  size_t near = 0, near_drawn = 0, far = 0, far_drawn = 0;
+  for (const CloudPoint& p : snapshot) {
+    const Eigen::Vector3d q(p.x, p.y, p.z);
+    if ((q - eye).dot(ahead) < 0.3) continue;
+    const QPointF at = view->WorldToWidget(q);
+    if (at.x() < 0 || at.y() < 0 || at.x() > view->width() || at.y() > view->height()) continue;
+    const double d = (q - eye).norm();
+    const bool shown = Contains(drawn, {p.x, p.y, p.z});
+    if (d < 2.6) {
+      ++near;
+      near_drawn += shown;
+    } else if (d > 5.0) {
+      ++far;
+      far_drawn += shown;
+    }
+  }
+  ASSERT_GT(near, 2000u);
+  ASSERT_GT(far, 2000u);
+  const double near_share = static_cast<double>(near_drawn) / near;
+  const double far_share = static_cast<double>(far_drawn) / far;
+  std::printf(
+      "[lod] %zu drawn of %zu (budget %zu): within 2.6 m %zu of %zu (%.3f), beyond 5 m %zu of "
+      "%zu (%.3f)\n",
+      drawn.size(), cloud.size(), budget, near_drawn, near, near_share, far_drawn, far, far_share);
+  EXPECT_GT(near_share, 4.0 * far_share);
+  EXPECT_GT(far_drawn, 0u);
 }
 
 // Against every point of the cloud: the pick reads only the blocks its ray

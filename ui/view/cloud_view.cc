@@ -322,6 +322,9 @@ void CloudView::SealGrowing() {
 void CloudView::Clear() {
   for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
+  cube_index_.clear();
+  cube_keys_.clear();
+  cube_counts_.clear();
   DrawnChanged();
   ClearBatches();
   refine_queue_.clear();

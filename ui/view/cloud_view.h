@@ -12,9 +12,10 @@
 //   sample of the sealed chunks, one point a grid cell, the cells doubled
 //   until it holds at most lod_budget() points (core/geometry/voxel_sample.h);
 // * rest: once the camera and the data have been still for kSettleMs, the
-//   points in the view frustum (counted by the chunks' census of 0.5 m
-//   cubes, PackedChunk::cell_keys()) get finer strides, nearest chunks
-//   first, up to rest_budget() points, built in slices of at most
+//   points in the view frustum, counted in the 0.5 m cubes of the chunks'
+//   census (PackedChunk::cell_keys()) summed over the cloud, get strides a
+//   cube, evenly dense on screen: nearer cubes finer, up to rest_budget()
+//   points (core/cloud/cube_budget.h), built in slices of at most
 //   kRefineSliceMs on the GUI thread; when the points in view fit the budget
 //   the view draws every one of them (the whole cloud, or a corner of a
 //   100 M-point cloud zoomed into). A rest level larger than the LOD budget is
@@ -47,6 +48,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include "core/cloud/cloud.h"
@@ -313,11 +315,12 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void RemoveChunkActors(Chunk* chunk);
   void NewDrawnActor(Drawn* drawn);
   // (Re)builds `drawn` as the rest level: every stride-th point of the
-  // chunk (of its census cubes in `cells`, a bit a cube, if not empty) and
-  // its motion level's points.
+  // chunk, or if `shifts` is given (a byte a census cube) every
+  // (1 << shift)-th of each cube's, none of a cube at kNoCube, stride the
+  // finest; and its motion level's points.
   void BuildDrawn(Chunk* chunk, int stride, Drawn* drawn,
                   std::shared_ptr<const ChunkPayload> payload = nullptr,
-                  std::vector<uint64_t> cells = {});
+                  std::vector<uint8_t> shifts = {});
   // Reads the points `index` (ascending) of the chunk into *drawn (from
   // `payload` if given, else the chunk pinned).
   void FillDrawn(Chunk* chunk, std::vector<uint32_t> index, int stride, Drawn* drawn,
@@ -336,6 +339,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ApplyLodBudget();  // lod_budget_ to the sample: merged, or rebuilt if larger.
   void ShowLevels();  // The batches' visibility from lod_active_.
   void PlanRest();
+  void MergeCensus();            // New sealed chunks' census cubes into the cloud's.
   bool RefineSlice(int max_ms);  // True when the queue is empty.
   // Progressive rest passes (cloud_view_progressive.cc).
   struct Progress {
@@ -387,6 +391,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkAxesActor> axes_;
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
+  // The cloud's census: every chunk's 0.5 m cubes (PackedChunk::CellKey)
+  // summed, the rest plan's unit.
+  std::unordered_map<uint64_t, uint32_t> cube_index_;  // key -> index below
+  std::vector<uint64_t> cube_keys_;
+  std::vector<uint32_t> cube_counts_;
   std::vector<std::unique_ptr<Batch>> motion_batches_, rest_batches_;
   std::vector<vtkSmartPointer<vtkActor>> layers_;
 

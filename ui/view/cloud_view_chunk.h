@@ -8,9 +8,10 @@
 // one growing chunk, a short vector of CloudPoints. VTK holds only what is
 // drawn: the chunk's points in the view's spatially even sample (the motion
 // level, core/geometry/voxel_sample.h; a few to a few hundred a chunk) and,
-// at rest, every rest-stride-th point of the chunks' census cubes in view
-// up to the rest budget, with the motion level's among them. Each drawn level carries one scalar
-// array, the colour mode's, mapped through the shared lookup table on the GPU side.
+// at rest, every stride-th point of each census cube in view, the strides
+// spending the rest budget evenly on screen, with the motion level's among
+// them. Each drawn level carries one scalar array, the colour mode's, mapped
+// through the shared lookup table on the GPU side.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 
@@ -37,21 +38,24 @@ namespace cloud_view_internal {
 inline const char* const kScalarName = "scalar";
 inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 inline constexpr uint16_t kNoValue = 0xFFFF;
+inline constexpr uint8_t kNoCube = 0xFF;  // A census cube not drawn (Drawn::shifts).
 }  // namespace cloud_view_internal
 
 // One drawn level of a chunk: its points index[0], index[1], ... (all of
 // them, whatever the pass filter), the vertex cells of those the filter
-// shows, and the colour mode's scalar. The rest level's indices are
-// i = 0, stride, 2 stride, ... and the motion level's among them (so that
+// shows, and the colour mode's scalar. The rest level's indices are the
+// multiples of each census cube's stride among its points (of `stride`
+// throughout if `shifts` is empty) and the motion level's (so that
 // the progressive passes draw over pass 0's points, never beside them); the
 // motion level's are the chunk's representatives. Only the growing chunk
 // and the batches have a mapper and an actor; sealed chunks' levels are
 // drawn through their batch.
 struct CloudView::Drawn {
   int stride = 0;  // 0: nothing built. The motion level: its candidates' stride.
-  // The rest level: the census cubes it was built of (PackedChunk::cell_keys(),
-  // a bit a cube); empty: the whole chunk.
-  std::vector<uint64_t> cells;
+  // The rest level: each census cube's stride as a shift (PackedChunk::
+  // cell_keys() order; kNoCube: none of its points), `stride` the finest;
+  // empty: the whole chunk at `stride`.
+  std::vector<uint8_t> shifts;
   // Sealed chunks: the chunk's index of each drawn point, ascending. Empty
   // for the growing chunk, drawn whole (point k is its k-th).
   std::vector<uint32_t> index;
@@ -80,8 +84,10 @@ struct CloudView::Chunk {
   std::vector<uint16_t> values[3];
   Drawn motion;  // Sealed chunks: the level drawn while the camera moves.
   Drawn rest;    // The growing chunk: every point; sealed: the rest level.
-  int rest_target = 0;  // The rest stride the last plan asked for (0: none).
-  std::vector<uint64_t> rest_cells;  // ... and its cubes in view (as Drawn::cells).
+  int rest_target = 0;               // The finest rest stride the last plan asked for (0: none).
+  std::vector<uint8_t> rest_shifts;  // ... and each cube's (as Drawn::shifts).
+  std::vector<uint32_t> cubes;       // Its census cubes' places in the cloud's census.
+  bool merged = false;               // ... once counted there.
   bool sealed() const { return packed != nullptr; }
 };
 

@@ -9,15 +9,18 @@
 #include <QElapsedTimer>
 #include <QTimer>
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <iterator>
 #include <limits>
 
+#include "core/cloud/cube_budget.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
 
 namespace sweepscan::ui {
 using cloud_view_internal::kNaN;
+using cloud_view_internal::kNoCube;
 using cloud_view_internal::kNoValue;
 using cloud_view_internal::kScalarName;
 
@@ -37,6 +40,68 @@ void SetPoints(Drawn* d, vtkSmartPointer<vtkPoints> points) {
   d->poly->GetPointData()->AddArray(d->scalar);
 }
 
+// Each point's census cube's shift (Drawn::shifts; kNoCube: not drawn):
+// from a dense grid over the census's cubes (a room's chunk spans a few
+// thousand), else by binary search in the census, looked up again only when
+// the cube changes (every second point or so along a scan line).
+class CubeShiftOf {
+ public:
+  CubeShiftOf(const std::vector<uint64_t>& keys, const std::vector<uint8_t>& shifts)
+      : keys_(keys), shifts_(shifts) {
+    if (keys.empty()) return;
+    int32_t hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+    for (uint64_t key : keys) {
+      for (int a = 0; a < 3; ++a) {
+        lo_[a] = std::min(lo_[a], Axis(key, a));
+        hi[a] = std::max(hi[a], Axis(key, a));
+      }
+    }
+    for (int a = 0; a < 3; ++a) dim_[a] = static_cast<size_t>(hi[a] - lo_[a]) + 1;
+    if (dim_[0] * dim_[1] * dim_[2] > (size_t{1} << 18)) return;
+    grid_.assign(dim_[0] * dim_[1] * dim_[2], kNoCube);
+    for (size_t k = 0; k < keys.size(); ++k) {
+      size_t at = 0;
+      for (int a = 0; a < 3; ++a) {
+        at = at * dim_[a] + static_cast<size_t>(Axis(keys[k], a) - lo_[a]);
+      }
+      grid_[at] = shifts[k];
+    }
+  }
+
+  uint8_t operator()(const float v[3]) {
+    if (!grid_.empty()) {
+      size_t at = 0;
+      for (int a = 0; a < 3; ++a) {
+        const size_t c = static_cast<size_t>(PackedChunk::CellIndex(v[a]) - lo_[a]);
+        if (c >= dim_[a]) return kNoCube;
+        at = at * dim_[a] + c;
+      }
+      return grid_[at];
+    }
+    const uint64_t key = PackedChunk::CellKey(v);
+    if (key != last_key_) {
+      const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
+      last_key_ = key;
+      last_shift_ = it != keys_.end() && *it == key
+                        ? shifts_[static_cast<size_t>(it - keys_.begin())]
+                        : kNoCube;
+    }
+    return last_shift_;
+  }
+
+ private:
+  static int32_t Axis(uint64_t key, int a) {  // PackedChunk::CellKey's cube index on axis a
+    return static_cast<int32_t>((key >> (32 - 16 * a)) & 0xFFFF) - 32768;
+  }
+  const std::vector<uint64_t>& keys_;
+  const std::vector<uint8_t>& shifts_;
+  int32_t lo_[3] = {INT32_MAX, INT32_MAX, INT32_MAX};
+  size_t dim_[3] = {0, 0, 0};
+  std::vector<uint8_t> grid_;
+  uint64_t last_key_ = ~uint64_t{0};
+  uint8_t last_shift_ = kNoCube;
+};
+
 }  // namespace
 
 float CloudView::ValueOf(const Chunk& chunk, int mode, size_t i) const {
@@ -53,36 +118,30 @@ bool CloudView::Passes(const Chunk& chunk, size_t i) const {
 
 void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
                            std::shared_ptr<const ChunkPayload> payload,
-                           std::vector<uint64_t> cells) {
-  // Every stride-th point (counted from the chunk's first; of the census
-  // cubes asked for, if any): representative of the chunk, as a chunk's
-  // points are consecutive samples along the scan lines (each line thinned
-  // evenly); and the motion level's points, which the progressive passes'
-  // pass 0 drew, so that the finished image holds no point the rest level
-  // lacks.
+                           std::vector<uint8_t> shifts) {
+  // Every stride-th point (counted from the chunk's first; of each census
+  // cube, its own stride if `shifts` are given): representative of the
+  // chunk, as a chunk's points are consecutive samples along the scan lines
+  // (each line thinned evenly); and the motion level's points, which the
+  // progressive passes' pass 0 drew, so that the finished image holds no
+  // point the rest level lacks. The strides are powers of two, the finest
+  // `stride`, so every cube's points are among the multiples of it.
   const size_t step = static_cast<size_t>(stride);
   std::vector<uint32_t> strided;
   strided.reserve((chunk->size + step - 1) / step);
-  if (cells.empty() || !chunk->sealed()) {
+  if (shifts.empty() || !chunk->sealed()) {
     for (size_t i = 0; i < chunk->size; i += step) strided.push_back(static_cast<uint32_t>(i));
   } else {
     if (payload == nullptr) payload = chunk->packed->Pin();
     const std::vector<uint64_t>& keys = chunk->packed->cell_keys();
-    // The cube looked up again only when it changes (every second point or
-    // so along a scan line).
-    uint64_t last_key = ~uint64_t{0};
-    bool last_in = false;
+    CubeShiftOf shift_of(keys, shifts);
     for (size_t i = 0; i < chunk->size; i += step) {
       float v[3];
       chunk->packed->PositionOf(*payload, i, v);
-      const uint64_t key = PackedChunk::CellKey(v);
-      if (key != last_key) {
-        const size_t k =
-            static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
-        last_key = key;
-        last_in = k < keys.size() && keys[k] == key && (cells[k / 64] >> (k % 64) & 1) != 0;
+      const uint8_t shift = shift_of(v);
+      if (shift != kNoCube && (i & ((size_t{1} << shift) - 1)) == 0) {
+        strided.push_back(static_cast<uint32_t>(i));
       }
-      if (last_in) strided.push_back(static_cast<uint32_t>(i));
     }
   }
   const std::vector<uint32_t>& motion = chunk->motion.index;
@@ -90,7 +149,7 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
   index.reserve(strided.size() + motion.size());
   std::set_union(strided.begin(), strided.end(), motion.begin(), motion.end(),
                  std::back_inserter(index));
-  d->cells = std::move(cells);
+  d->shifts = std::move(shifts);
   FillDrawn(chunk, std::move(index), stride, d, std::move(payload));
 }
 
@@ -269,7 +328,7 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
   } else if (m >= 3) {
     for (size_t k = 0; k < n; ++k) s[k] = ValueOf(*chunk, m, d->At(k));
   } else {
-    BuildDrawn(chunk, d->stride, d, nullptr, d->cells);  // Time and range: read the chunk again.
+    BuildDrawn(chunk, d->stride, d, nullptr, d->shifts);  // Time and range: read the chunk again.
     return;
   }
   d->scalar->Modified();
@@ -334,108 +393,140 @@ double SquaredDistanceToBox(const double eye[3], const T* b) {
   return d2;
 }
 
-// Points in a set of census cubes (a bit a cube; empty: all of them).
-size_t CensusPoints(const PackedChunk& chunk, const std::vector<uint64_t>& cells) {
-  if (cells.empty()) return chunk.size();
-  size_t n = 0;
-  for (size_t k = 0; k < chunk.cell_counts().size(); ++k) {
-    if ((cells[k / 64] >> (k % 64) & 1) != 0) n += chunk.cell_counts()[k];
-  }
-  return n;
+int Log2(int stride) {
+  int shift = 0;
+  while ((1 << shift) < stride) ++shift;
+  return shift;
 }
 
-// Whether the cubes a rest level was built of hold every cube the plan
-// wants and not more than twice its points: a small turn of the camera
-// does not read the chunk again.
-bool StillFits(const PackedChunk& chunk, const std::vector<uint64_t>& built,
-               const std::vector<uint64_t>& want) {
-  if (!built.empty()) {
-    if (want.empty()) return false;
-    for (size_t k = 0; k < want.size(); ++k) {
-      if ((want[k] & ~built[k]) != 0) return false;
+// Whether a rest level built with strides `built` (as Drawn::shifts; empty:
+// `built_stride` throughout) may stay for the strides the plan wants: every
+// cube it wants is in it, at most one halving coarser (none where every
+// point is wanted), and it holds at most twice the points wanted (*excess:
+// those beyond, summed by the caller against the budget). The strides are
+// powers of two with distance from the camera squared in them, so a small
+// move of the camera tips cubes all over the room across a power of two:
+// without the halving's margin every chunk (each spans the room) would be
+// read again after an orbit back to the same camera (0.95 s at 99.5 M
+// points, against 0.2 s).
+bool StillFits(const PackedChunk& chunk, const std::vector<uint8_t>& built, int built_stride,
+               const std::vector<uint8_t>& want, int want_stride, double* excess) {
+  const std::vector<uint32_t>& counts = chunk.cell_counts();
+  const int b0 = Log2(built_stride), w0 = Log2(want_stride);
+  double have = 0.0, need = 0.0;
+  for (size_t k = 0; k < counts.size(); ++k) {
+    const int b = built.empty() ? b0 : built[k];
+    const int w = want.empty() ? w0 : want[k];
+    if (w != kNoCube) {
+      if (b == kNoCube || b > w + (w > 0 ? 1 : 0)) return false;
+      need += std::ldexp(counts[k], -w);
     }
+    if (b != kNoCube) have += std::ldexp(counts[k], -b);
   }
-  return CensusPoints(chunk, built) <= 2 * CensusPoints(chunk, want);
+  *excess = have - need;
+  return have <= 2.0 * need;
 }
 
 }  // namespace
 
+void CloudView::MergeCensus() {
+  for (auto& c : chunks_) {
+    if (!c->sealed() || c->merged) continue;
+    const std::vector<uint64_t>& keys = c->packed->cell_keys();
+    const std::vector<uint32_t>& counts = c->packed->cell_counts();
+    c->cubes.resize(keys.size());
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const auto [it, fresh] =
+          cube_index_.try_emplace(keys[k], static_cast<uint32_t>(cube_keys_.size()));
+      if (fresh) {
+        cube_keys_.push_back(keys[k]);
+        cube_counts_.push_back(0);
+      }
+      cube_counts_[it->second] += counts[k];
+      c->cubes[k] = it->second;
+    }
+    c->merged = true;
+  }
+}
+
 void CloudView::PlanRest() {
-  // The points in the view frustum (and under the clip height), chunks
-  // nearest first: a uniform stride that fits them in the rest budget, then
-  // the budget left over spent on the nearest chunks (finer strides, down to
-  // every point), as Potree spends its point budget on the nodes nearest
-  // and largest on screen. A chunk is 13 s of sweeps across the room, so
-  // from inside the room nearly every chunk's box meets the view; its census
-  // of 0.5 m cubes counts the points that do, and its rest level is built
-  // of those cubes alone.
+  // The cloud's census cubes in the view frustum (and under the clip
+  // height) get strides that spend the rest budget evenly on screen, nearer
+  // cubes finer (core/cloud/cube_budget.h: Potree spends its point budget on
+  // the nodes nearest and largest on screen); each chunk draws its share of
+  // each cube. A chunk is 13 s of sweeps across the room, so a cube's points
+  // lie in many chunks, and from inside the room nearly every chunk meets
+  // the view; each is read again only when the plan wants a cube finer than
+  // it holds, or less than half of what it holds.
   refine_queue_.clear();
+  MergeCensus();
   vtkCamera* camera = renderer_->GetActiveCamera();
   double planes[24];
   camera->GetFrustumPlanes(renderer_->GetTiledAspectRatio(), planes);
   double eye[3];
   camera->GetPosition(eye);
-  struct Candidate {
-    Chunk* chunk;
-    double distance;
-    size_t points;  // in the cubes in view
-  };
-  std::vector<Candidate> visible;
-  size_t total = 0;
+  std::vector<CubeDemand> demand;
+  std::vector<uint32_t> demanded;
+  for (size_t w = 0; w < cube_keys_.size(); ++w) {
+    const std::array<float, 6> box = PackedChunk::CellBox(cube_keys_[w]);
+    if (BoxInView(box.data(), planes, clip_height_) == InView::kOut) continue;
+    demand.push_back({SquaredDistanceToBox(eye, box.data()), cube_counts_[w]});
+    demanded.push_back(static_cast<uint32_t>(w));
+  }
+  // Unless every point in view fits, an eighth of the budget is kept for
+  // the levels that stay a little finer than planned (StillFits).
+  size_t in_view = 0;
+  for (const CubeDemand& q : demand) in_view += q.count;
+  const double slack = in_view <= rest_budget_ ? 0.0 : static_cast<double>(rest_budget_) / 8.0;
+  const std::vector<uint8_t> shifts = CubeShifts(demand, rest_budget_ - static_cast<size_t>(slack));
+  std::vector<uint8_t> cube_shift(cube_keys_.size(), kNoCube);
+  std::vector<float> cube_distance2(cube_keys_.size(), 0.0f);
+  for (size_t j = 0; j < demanded.size(); ++j) {
+    cube_shift[demanded[j]] = shifts[j];
+    cube_distance2[demanded[j]] = static_cast<float>(demand[j].distance2);
+  }
+  std::vector<std::pair<float, Chunk*>> queue;
+  double excess = 0.0;
   for (auto& c : chunks_) {
     if (!c->sealed()) continue;
-    const InView where = BoxInView(c->bounds.data(), planes, clip_height_);
-    c->rest_cells.clear();
-    size_t points = where == InView::kOut ? 0 : c->size;
-    double d2 = SquaredDistanceToBox(eye, c->bounds.data());
-    if (where == InView::kPartly) {
-      const std::vector<uint64_t>& keys = c->packed->cell_keys();
-      c->rest_cells.assign((keys.size() + 63) / 64, 0);
-      points = 0;
-      d2 = std::numeric_limits<double>::infinity();
-      for (size_t k = 0; k < keys.size(); ++k) {
-        const std::array<float, 6> box = PackedChunk::CellBox(keys[k]);
-        if (BoxInView(box.data(), planes, clip_height_) == InView::kOut) continue;
-        c->rest_cells[k / 64] |= uint64_t{1} << (k % 64);
-        points += c->packed->cell_counts()[k];
-        d2 = std::min(d2, SquaredDistanceToBox(eye, box.data()));
+    std::vector<uint8_t> want(c->cubes.size(), kNoCube);
+    int finest = kNoCube, coarsest = 0;
+    bool whole = true;
+    float d2 = std::numeric_limits<float>::infinity();
+    if (BoxInView(c->bounds.data(), planes, clip_height_) != InView::kOut) {
+      for (size_t k = 0; k < want.size(); ++k) {
+        want[k] = cube_shift[c->cubes[k]];
+        whole = whole && want[k] != kNoCube;
+        if (want[k] == kNoCube) continue;
+        finest = std::min<int>(finest, want[k]);
+        coarsest = std::max<int>(coarsest, want[k]);
+        d2 = std::min(d2, cube_distance2[c->cubes[k]]);
       }
     }
-    if (points == 0) {
+    if (finest == kNoCube) {
       c->rest_target = 0;
-      c->rest_cells.clear();
+      c->rest_shifts.clear();
       if (c->rest.actor) renderer_->RemoveActor(c->rest.actor);
       c->rest = Drawn();  // Out of view: its memory back.
       DrawnChanged();
       continue;
     }
-    visible.push_back({c.get(), d2, points});
-    total += points;
-  }
-  std::stable_sort(visible.begin(), visible.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.distance < b.distance; });
-  size_t stride = 1;
-  while (total / stride > rest_budget_) stride *= 2;
-  size_t used = 0;
-  for (const Candidate& v : visible) {
-    v.chunk->rest_target = static_cast<int>(stride);
-    used += (v.points + stride - 1) / stride;
-  }
-  for (const Candidate& v : visible) {
-    int& t = v.chunk->rest_target;
-    while (t > 1) {
-      const size_t now = (v.points + t - 1) / t, finer = (v.points + t / 2 - 1) / (t / 2);
-      if (used + finer - now > rest_budget_) break;
-      used += finer - now;
-      t /= 2;
+    c->rest_target = 1 << finest;
+    if (whole && finest == coarsest) want.clear();  // One stride throughout.
+    c->rest_shifts = std::move(want);
+    double more = 0.0;
+    if (c->rest.stride == 0 ||
+        !StillFits(*c->packed, c->rest.shifts, c->rest.stride, c->rest_shifts, c->rest_target,
+                   &more) ||
+        excess + more > slack) {
+      queue.emplace_back(d2, c.get());
+    } else {
+      excess += more;
     }
   }
-  for (const Candidate& v : visible) {
-    Chunk* c = v.chunk;
-    if (c->rest.stride != c->rest_target || !StillFits(*c->packed, c->rest.cells, c->rest_cells)) {
-      refine_queue_.push_back(c);
-    }
-  }
+  std::stable_sort(queue.begin(), queue.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& q : queue) refine_queue_.push_back(q.second);
 }
 
 bool CloudView::RefineSlice(int max_ms) {
@@ -444,7 +535,7 @@ bool CloudView::RefineSlice(int max_ms) {
   size_t done = 0;
   while (done < refine_queue_.size() && clock.elapsed() < max_ms) {
     Chunk* c = refine_queue_[done++];
-    BuildDrawn(c, c->rest_target, &c->rest, nullptr, c->rest_cells);
+    BuildDrawn(c, c->rest_target, &c->rest, nullptr, c->rest_shifts);
   }
   refine_queue_.erase(refine_queue_.begin(), refine_queue_.begin() + done);
   return refine_queue_.empty();
