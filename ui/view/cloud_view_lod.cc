@@ -48,6 +48,7 @@ class CubeShiftOf {
  public:
   CubeShiftOf(const std::vector<uint64_t>& keys, const std::vector<uint8_t>& shifts)
       : keys_(keys), shifts_(shifts) {
+    for (uint8_t shift : shifts) finest_ = std::min(finest_, shift);
     if (keys.empty()) return;
     int32_t hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
     for (uint64_t key : keys) {
@@ -66,6 +67,30 @@ class CubeShiftOf {
       }
       grid_[at] = shifts[k];
     }
+  }
+
+  // The finest shift of the cubes a box (x min, x max, y min, y max, z min,
+  // z max) meets: every point in the box lies in one of them. Without the
+  // grid, or for a box over more than 64 cubes, the finest of the chunk's.
+  uint8_t FinestIn(const float* box) const {
+    if (grid_.empty()) return finest_;
+    size_t lo[3], n[3];
+    for (int a = 0; a < 3; ++a) {
+      const int32_t c0 = PackedChunk::CellIndex(box[2 * a]) - lo_[a];
+      const int32_t c1 = PackedChunk::CellIndex(box[2 * a + 1]) - lo_[a];
+      if (c0 < 0 || c1 < c0 || static_cast<size_t>(c1) >= dim_[a]) return finest_;
+      lo[a] = static_cast<size_t>(c0);
+      n[a] = static_cast<size_t>(c1 - c0) + 1;
+    }
+    if (n[0] * n[1] * n[2] > 64) return finest_;
+    uint8_t finest = kNoCube;
+    for (size_t x = lo[0]; x < lo[0] + n[0]; ++x) {
+      for (size_t y = lo[1]; y < lo[1] + n[1]; ++y) {
+        const uint8_t* row = &grid_[(x * dim_[1] + y) * dim_[2] + lo[2]];
+        for (size_t z = 0; z < n[2]; ++z) finest = std::min(finest, row[z]);
+      }
+    }
+    return finest;
   }
 
   uint8_t operator()(const float v[3]) {
@@ -95,6 +120,7 @@ class CubeShiftOf {
   }
   const std::vector<uint64_t>& keys_;
   const std::vector<uint8_t>& shifts_;
+  uint8_t finest_ = kNoCube;
   int32_t lo_[3] = {INT32_MAX, INT32_MAX, INT32_MAX};
   size_t dim_[3] = {0, 0, 0};
   std::vector<uint8_t> grid_;
@@ -135,12 +161,24 @@ void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
     if (payload == nullptr) payload = chunk->packed->Pin();
     const std::vector<uint64_t>& keys = chunk->packed->cell_keys();
     CubeShiftOf shift_of(keys, shifts);
-    for (size_t i = 0; i < chunk->size; i += step) {
-      float v[3];
-      chunk->packed->PositionOf(*payload, i, v);
-      const uint8_t shift = shift_of(v);
-      if (shift != kNoCube && (i & ((size_t{1} << shift) - 1)) == 0) {
-        strided.push_back(static_cast<uint32_t>(i));
+    // Block by block (PackedChunk::block_bounds()), at the finest stride of
+    // the cubes its box meets: a chunk's finest stride is mostly that of a
+    // few sparse cubes drawn whole, and passing every point at it cost the
+    // first plan of the 99.5 M-point drive 1.8 s against 0.85.
+    const std::vector<std::array<float, 6>>& blocks = chunk->packed->block_bounds();
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      const uint8_t block_shift = shift_of.FinestIn(blocks[b].data());
+      if (block_shift == kNoCube) continue;  // none of its cubes drawn
+      const size_t block_step = std::max(step, size_t{1} << block_shift);
+      const size_t first = b * PackedChunk::kBlockPoints;
+      const size_t end = std::min(chunk->size, first + PackedChunk::kBlockPoints);
+      for (size_t i = (first + block_step - 1) / block_step * block_step; i < end; i += block_step) {
+        float v[3];
+        chunk->packed->PositionOf(*payload, i, v);
+        const uint8_t shift = shift_of(v);
+        if (shift != kNoCube && (i & ((size_t{1} << shift) - 1)) == 0) {
+          strided.push_back(static_cast<uint32_t>(i));
+        }
       }
     }
   }
