@@ -59,6 +59,21 @@ bool Contains(const std::vector<Xyz>& sorted, const Xyz& p) {
   return std::binary_search(sorted.begin(), sorted.end(), p);
 }
 
+// The rest level planned afresh for the view's camera: at most the budget
+// (and the growing chunk), more than half of it, every point a cloud point.
+std::vector<Xyz> RestLevelWithinBudget(CloudView* view, const std::vector<Xyz>& cloud,
+                                       size_t budget) {
+  view->RenderNow();  // The clipping range fitted to the camera.
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  std::vector<Xyz> drawn = Positions(view->DrawnPoints());
+  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
+  EXPECT_GT(drawn.size(), budget / 2);
+  EXPECT_TRUE(
+      std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  return drawn;
+}
+
 class CloudStoreUiTest : public testing::AppFixture {
  protected:
   void TearDown() override {
@@ -94,12 +109,7 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   // every one a cloud point.
   const size_t budget = cloud.size() / 4;
   view->SetRestBudget(budget);
-  view->SetLodActive(true);
-  view->SetLodActive(false);
-  std::vector<Xyz> drawn = Positions(view->DrawnPoints());
-  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
-  EXPECT_GT(drawn.size(), budget / 2);
-  EXPECT_TRUE(std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  std::vector<Xyz> drawn = RestLevelWithinBudget(view, cloud, budget);
 
   // The motion level within its budget, likewise, one point a cell of the
   // view's even sample (core/geometry/voxel_sample.h), every one a cloud
@@ -200,14 +210,7 @@ TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
 
   // Back to the whole room: within the budget again, every one a cloud point.
   view->ViewOblique();
-  view->RenderNow();
-  view->SetLodActive(true);
-  view->SetLodActive(false);
-  const std::vector<Xyz> room = Positions(view->DrawnPoints());
-  EXPECT_LE(room.size(), budget + CloudView::kChunkPoints);
-  EXPECT_GT(room.size(), budget / 2);
-  EXPECT_TRUE(
-      std::all_of(room.begin(), room.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  RestLevelWithinBudget(view, cloud, budget);
 }
 
 // Standing in the robot's lane looking along it, with a rest budget far
@@ -235,14 +238,7 @@ TEST_F(CloudStoreUiTest, AtRestTheNearestCubesAreDrawnDenserThanTheFarOnes) {
   const Eigen::Vector3d focal(eye.x() + 3.5, eye.y(), lo.z());
   ASSERT_GT(hi.x() - eye.x(), 6.0) << "the room is too short to look along";
   view->LookAt(focal, eye);
-  view->RenderNow();
-  view->SetLodActive(true);
-  view->SetLodActive(false);
-  const std::vector<Xyz> drawn = Positions(view->DrawnPoints());
-  EXPECT_LE(drawn.size(), budget + CloudView::kChunkPoints);
-  EXPECT_GT(drawn.size(), budget / 2);
-  EXPECT_TRUE(
-      std::all_of(drawn.begin(), drawn.end(), [&](const Xyz& p) { return Contains(cloud, p); }));
+  const std::vector<Xyz> drawn = RestLevelWithinBudget(view, cloud, budget);
   // The cloud's points on screen, by their distance from the eye.
   const Eigen::Vector3d ahead = (focal - eye).normalized();
   size_t near = 0, near_drawn = 0, far = 0, far_drawn = 0;
