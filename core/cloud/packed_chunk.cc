@@ -89,10 +89,9 @@ void PackedChunk::TakeCensus(const CloudPoint* points, size_t n, PackedChunk* ch
     for (size_t k = 0; k < volume; ++k) {
       if (counts[k] == 0) continue;
       const size_t z = k % dim[2], y = k / dim[2] % dim[1], x = k / dim[2] / dim[1];
-      chunk->cell_keys_.push_back(
-          static_cast<uint64_t>(lo[0] + static_cast<int32_t>(x) + 32768) << 32 |
-          static_cast<uint64_t>(lo[1] + static_cast<int32_t>(y) + 32768) << 16 |
-          static_cast<uint64_t>(lo[2] + static_cast<int32_t>(z) + 32768));
+      chunk->cell_keys_.push_back(CellKeyOf(lo[0] + static_cast<int32_t>(x),
+                                            lo[1] + static_cast<int32_t>(y),
+                                            lo[2] + static_cast<int32_t>(z)));
       chunk->cell_counts_.push_back(counts[k]);
     }
   } else {

@@ -105,9 +105,15 @@ class PackedChunk {
   // A position's cube: floor(v / kCellM) an axis, each clamped to int16 and
   // offset by 2^15 into 16 bits, x in bits 32-47, y 16-31, z 0-15.
   static uint64_t CellKey(const float v[3]) {
-    return static_cast<uint64_t>(CellIndex(v[0]) + 32768) << 32 |
-           static_cast<uint64_t>(CellIndex(v[1]) + 32768) << 16 |
-           static_cast<uint64_t>(CellIndex(v[2]) + 32768);
+    return CellKeyOf(CellIndex(v[0]), CellIndex(v[1]), CellIndex(v[2]));
+  }
+  // The key of the cube (cx, cy, cz), each in [-32768, 32767], and back.
+  static uint64_t CellKeyOf(int32_t cx, int32_t cy, int32_t cz) {
+    return static_cast<uint64_t>(cx + 32768) << 32 | static_cast<uint64_t>(cy + 32768) << 16 |
+           static_cast<uint64_t>(cz + 32768);
+  }
+  static int32_t CellOfKey(uint64_t key, int axis) {
+    return static_cast<int32_t>((key >> (32 - 16 * axis)) & 0xFFFF) - 32768;
   }
   // floor(v / kCellM) clamped to [-32768, 32767] (NaN to the low end), by
   // truncation and a step down for negative fractions: std::floor is a libm
@@ -121,8 +127,8 @@ class PackedChunk {
   // The cube of a key, as bounds() orders a box.
   static std::array<float, 6> CellBox(uint64_t key) {
     std::array<float, 6> box;
-    for (int a = 2; a >= 0; --a, key >>= 16) {
-      const float lo = static_cast<float>(static_cast<int64_t>(key & 0xFFFF) - 32768) * kCellM;
+    for (int a = 0; a < 3; ++a) {
+      const float lo = static_cast<float>(CellOfKey(key, a)) * kCellM;
       box[2 * a] = lo;
       box[2 * a + 1] = lo + kCellM;
     }

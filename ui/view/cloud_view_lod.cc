@@ -48,13 +48,12 @@ class CubeShiftOf {
  public:
   CubeShiftOf(const std::vector<uint64_t>& keys, const std::vector<uint8_t>& shifts)
       : keys_(keys), shifts_(shifts) {
-    for (uint8_t shift : shifts) finest_ = std::min(finest_, shift);
     if (keys.empty()) return;
     int32_t hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
     for (uint64_t key : keys) {
       for (int a = 0; a < 3; ++a) {
-        lo_[a] = std::min(lo_[a], Axis(key, a));
-        hi[a] = std::max(hi[a], Axis(key, a));
+        lo_[a] = std::min(lo_[a], PackedChunk::CellOfKey(key, a));
+        hi[a] = std::max(hi[a], PackedChunk::CellOfKey(key, a));
       }
     }
     for (int a = 0; a < 3; ++a) dim_[a] = static_cast<size_t>(hi[a] - lo_[a]) + 1;
@@ -63,7 +62,7 @@ class CubeShiftOf {
     for (size_t k = 0; k < keys.size(); ++k) {
       size_t at = 0;
       for (int a = 0; a < 3; ++a) {
-        at = at * dim_[a] + static_cast<size_t>(Axis(keys[k], a) - lo_[a]);
+        at = at * dim_[a] + static_cast<size_t>(PackedChunk::CellOfKey(keys[k], a) - lo_[a]);
       }
       grid_[at] = shifts[k];
     }
@@ -71,18 +70,19 @@ class CubeShiftOf {
 
   // The finest shift of the cubes a box (x min, x max, y min, y max, z min,
   // z max) meets: every point in the box lies in one of them. Without the
-  // grid, or for a box over more than 64 cubes, the finest of the chunk's.
+  // grid, or for a box over more than 64 cubes, 0 (the caller's finest
+  // stride, the chunk's, stands).
   uint8_t FinestIn(const float* box) const {
-    if (grid_.empty()) return finest_;
+    if (grid_.empty()) return 0;
     size_t lo[3], n[3];
     for (int a = 0; a < 3; ++a) {
       const int32_t c0 = PackedChunk::CellIndex(box[2 * a]) - lo_[a];
       const int32_t c1 = PackedChunk::CellIndex(box[2 * a + 1]) - lo_[a];
-      if (c0 < 0 || c1 < c0 || static_cast<size_t>(c1) >= dim_[a]) return finest_;
+      if (c0 < 0 || c1 < c0 || static_cast<size_t>(c1) >= dim_[a]) return 0;
       lo[a] = static_cast<size_t>(c0);
       n[a] = static_cast<size_t>(c1 - c0) + 1;
     }
-    if (n[0] * n[1] * n[2] > 64) return finest_;
+    if (n[0] * n[1] * n[2] > 64) return 0;
     uint8_t finest = kNoCube;
     for (size_t x = lo[0]; x < lo[0] + n[0]; ++x) {
       for (size_t y = lo[1]; y < lo[1] + n[1]; ++y) {
@@ -115,12 +115,8 @@ class CubeShiftOf {
   }
 
  private:
-  static int32_t Axis(uint64_t key, int a) {  // PackedChunk::CellKey's cube index on axis a
-    return static_cast<int32_t>((key >> (32 - 16 * a)) & 0xFFFF) - 32768;
-  }
   const std::vector<uint64_t>& keys_;
   const std::vector<uint8_t>& shifts_;
-  uint8_t finest_ = kNoCube;
   int32_t lo_[3] = {INT32_MAX, INT32_MAX, INT32_MAX};
   size_t dim_[3] = {0, 0, 0};
   std::vector<uint8_t> grid_;
