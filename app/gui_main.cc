@@ -5,7 +5,7 @@
 //             [--export-cloud PATH] [--quit-after S] [--orbit-benchmark N]
 //             [--pairs FILE [--calibration-tour DIR]]
 //             [--pose-source ekf|odometry|sfm] [--pose-source-tour PNG]
-//             [--memory-budget MIB] [--rest-budget N] [--lod-budget N]
+//             [--memory-budget MIB] [--rest-budget N] [--lod-budget N] [--draw-pace N]
 //             [--project FILE] [--floor-plan [--plan-height M]]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
@@ -72,6 +72,7 @@ struct Options {
   QString pose_source_tour;    // With --replay: the pose source screenshot.
   double memory_budget_mib = -1.0;  // The cloud store's; < 0: the default (a quarter of RAM).
   long long rest_budget = -1;       // Points drawn at rest; < 0: the view's default.
+  long long draw_pace = -1;         // Points between the driver's finishes; < 0: the default.
   long long lod_budget = -1;        // Points drawn while the camera moves.
 };
 
@@ -157,10 +158,15 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "lod-budget", "Points drawn at most while the camera moves or points stream in (default 30000 under a "
       "software renderer, 1000000 on a GPU).",
       "N");
+  const QCommandLineOption draw_pace(
+      "draw-pace",
+      "Under a software renderer, let the driver finish its work every N points drawn, so that "
+      "its memory for a frame stays bounded (default 262144; 0: never).",
+      "N");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
   const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m).", "M");
-  parser.addOptions({floor_plan, plan_height});
+  parser.addOptions({floor_plan, plan_height, draw_pace});
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
                      export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
                      sessions, memory_budget, rest_budget, lod_budget, project});
@@ -189,6 +195,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   if (parser.isSet(memory_budget)) o.memory_budget_mib = parser.value(memory_budget).toDouble();
   if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
   if (parser.isSet(lod_budget)) o.lod_budget = parser.value(lod_budget).toLongLong();
+  if (parser.isSet(draw_pace)) o.draw_pace = parser.value(draw_pace).toLongLong();
   return o;
 }
 
@@ -208,8 +215,9 @@ double ResidentMiB() { return StatusMiB("VmRSS"); }
 
 // Where the memory is: the cloud store's resident payloads, the points in
 // VTK's arrays (both levels), the C++ heap in use and free (kept by malloc
-// for reuse), and the resident set's anonymous and file-backed parts (the
-// libraries, mapped files).
+// for reuse), the resident set's anonymous and file-backed parts (the
+// libraries, mapped files), and how often the view waited for the driver
+// (--draw-pace).
 nlohmann::json MemoryBreakdown(MainWindow* window) {
   const struct mallinfo2 heap = mallinfo2();
   return {{"store_mib", CloudPager::Default().resident_bytes() / 1048576.0},
@@ -220,7 +228,8 @@ nlohmann::json MemoryBreakdown(MainWindow* window) {
           {"heap_free_mib", heap.fordblks / 1048576.0},
           {"rss_anon_mib", StatusMiB("RssAnon")},
           {"rss_file_mib", StatusMiB("RssFile")},
-          {"peak_rss_mib", StatusMiB("VmHWM")}};
+          {"peak_rss_mib", StatusMiB("VmHWM")},
+          {"draw_waits", window->view()->draw_waits()}};
 }
 
 double Percentile(std::vector<double> v, double p) {
@@ -602,6 +611,7 @@ int Main(int argc, char** argv) {
   Workspace workspace;
   MainWindow window(&workspace, resources);
   if (o.rest_budget > 0) window.view()->SetRestBudget(static_cast<size_t>(o.rest_budget));
+  if (o.draw_pace >= 0) window.view()->SetDrawPace(static_cast<size_t>(o.draw_pace));
   if (o.lod_budget > 0) window.view()->SetLodBudget(static_cast<size_t>(o.lod_budget));
   // After the window has restored its settings (which hold the folder the
   // operator chose last), so that the command line wins.

@@ -9,7 +9,9 @@
 // point nearest the camera under the cursor, checked against every point; an opened room is
 // shown looking into it with its ceiling hidden; a large session is
 // streamed and opens as its replay would; zoomed in at rest, every point in
-// view is drawn; looking along the room, the near cubes denser than the far.
+// view is drawn; looking along the room, the near cubes denser than the far;
+// under a software renderer the driver is waited for every draw pace of
+// points, to the same image.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -413,6 +415,38 @@ TEST_F(CloudStoreUiTest, TheRestLevelIsDrawnInPassesOfTheLodBudgetToTheOneFrameI
   pose.x += 0.01;
   view->SetRobotPose(pose);
   EXPECT_TRUE(view->RenderIfDirty());
+}
+
+// Under a software renderer the view waits for the driver every "draw pace"
+// of points (ui/view/paced_mapper.h: Mesa's llvmpipe otherwise holds a
+// large frame's binned points after it), and waiting changes no pixel.
+TEST_F(CloudStoreUiTest, ASoftwareRendererIsWaitedForEveryPaceOfPointsAndDrawsTheSameImage) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  view->ViewOblique();
+  view->SetRestBudget(view->point_count());  // Every point at rest, in one frame.
+  view->SetLodActive(false);
+  const size_t rest = view->DrawnPoints().size();
+  view->RenderNow();
+  if (!view->software_renderer()) GTEST_SKIP() << "a GPU: the view never waits";
+  EXPECT_EQ(view->draw_pace(), CloudView::kSoftwareDrawPace);
+
+  view->SetDrawPace(0);
+  size_t waits = view->draw_waits();
+  const QImage unpaced = view->GrabImage();
+  EXPECT_EQ(view->draw_waits(), waits);
+
+  // An eighth of the frame a pace: a wait once a pace's worth of batches
+  // is drawn (a batch is at most a chunk), never sooner.
+  const size_t pace = rest / 8;
+  view->SetDrawPace(pace);
+  waits = view->draw_waits();
+  const QImage paced = view->GrabImage();
+  const size_t frame_waits = view->draw_waits() - waits;
+  std::printf("%zu points a frame, paced every %zu: %zu waits\n", rest, pace, frame_waits);
+  EXPECT_GE(frame_waits, rest / (pace + CloudView::kChunkPoints));
+  EXPECT_LE(frame_waits, rest / pace + 1);
+  EXPECT_EQ(DifferingPixels(paced, unpaced), 0u);
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {

@@ -229,7 +229,9 @@ void CloudView::BuildGrid() {
 void CloudView::NewDrawnActor(Drawn* d) {
   // Every cloud actor (either level of any chunk) shares the lookup table,
   // the point size and the clip; its one scalar array is the colour mode's.
-  d->mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  auto mapper = vtkSmartPointer<PacedMapper>::New();
+  mapper->SetPacer(&pacer_);
+  d->mapper = mapper;
   d->mapper->SetLookupTable(lut_);
   d->mapper->UseLookupTableScalarRangeOn();
   d->mapper->SetScalarModeToUsePointFieldData();
@@ -642,15 +644,17 @@ void CloudView::RenderNow() {
   last_render_ms_ = clock.nsecsElapsed() * 1e-6;
   if (!renderer_known_) {
     // The rest budget's default from the renderer: a software one (Mesa's
-    // llvmpipe) draws ~6 M points a second and keeps ~200 bytes of working
-    // memory per point drawn in a frame (measured: docs/performance.md), a
-    // GPU draws hundreds of millions from its own memory.
+    // llvmpipe) draws ~6 M points a second and keeps ~250 bytes of working
+    // memory per point drawn in a frame, held after it unless paced
+    // (paced_mapper.h; measured: docs/performance.md), a GPU draws hundreds
+    // of millions from its own memory.
     renderer_known_ = true;
     const std::string caps = window_->ReportCapabilities();
     software_renderer_ = caps.find("llvmpipe") != std::string::npos ||
                          caps.find("softpipe") != std::string::npos ||
                          caps.find("swrast") != std::string::npos;
     if (!rest_budget_set_) rest_budget_ = software_renderer_ ? 1'000'000 : 10'000'000;
+    if (!draw_pace_set_) pacer_.limit = software_renderer_ ? kSoftwareDrawPace : 0;
     if (!lod_budget_set_) {
       lod_budget_ = software_renderer_ ? 30'000 : 1'000'000;
       ApplyLodBudget();

@@ -56,6 +56,7 @@
 #include "core/geometry/path_cover.h"
 #include "core/geometry/voxel_sample.h"
 #include "core/pose/odometry.h"
+#include "ui/view/paced_mapper.h"
 
 class QMouseEvent;
 class QTimer;
@@ -171,6 +172,19 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Points drawn at most at rest (the finest detail the view reaches).
   void SetRestBudget(size_t points);
   size_t rest_budget() const { return rest_budget_; }
+  // Under a software renderer, the driver finishes its queued work every
+  // `points` points drawn (paced_mapper.h; default kSoftwareDrawPace; 0:
+  // never, as on a GPU).
+  void SetDrawPace(size_t points) {
+    pacer_.limit = points;
+    draw_pace_set_ = true;
+  }
+  size_t draw_pace() const { return pacer_.limit; }
+  size_t draw_waits() const { return pacer_.waits; }
+  // Measured at 9.5 M points (docs/performance.md, "The driver's scenes"):
+  // 262 144 holds ~65 MiB of the driver's scenes at most and costs no
+  // frame rate; 65 536 cost a fifth of the rest level's.
+  static constexpr size_t kSoftwareDrawPace = 262'144;
   // Whether the first frame found a software renderer (Mesa llvmpipe).
   bool software_renderer() const { return software_renderer_; }
   // While active: the motion level's cell, its longest side in mm (the
@@ -367,6 +381,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkGenericOpenGLRenderWindow> window_;
   vtkSmartPointer<vtkRenderer> renderer_;
   vtkSmartPointer<vtkLookupTable> lut_;
+  DrawPacer pacer_;  // Shared by the cloud's mappers (NewDrawnActor).
   vtkSmartPointer<vtkScalarBarActor> color_bar_;
   vtkSmartPointer<vtkActor> grid_;
   vtkSmartPointer<vtkActor> robot_;
@@ -433,6 +448,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t rest_budget_ = 1'000'000;
   bool lod_budget_set_ = false;
   bool rest_budget_set_ = false;
+  bool draw_pace_set_ = false;
   bool renderer_known_ = false;
   bool software_renderer_ = false;
   VoxelSample motion_sample_{30'000};
