@@ -160,8 +160,9 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "N");
   const QCommandLineOption draw_pace(
       "draw-pace",
-      "Under a software renderer, let the driver finish its work every N points drawn, so that "
-      "its memory for a frame stays bounded (default 262144; 0: never).",
+      "Let the OpenGL driver finish its work every N points drawn, so that a software "
+      "renderer's memory for a frame stays bounded (default 262144 under a software renderer, "
+      "0 on a GPU; 0: never).",
       "N");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");

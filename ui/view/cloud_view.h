@@ -172,9 +172,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Points drawn at most at rest (the finest detail the view reaches).
   void SetRestBudget(size_t points);
   size_t rest_budget() const { return rest_budget_; }
-  // Under a software renderer, the driver finishes its queued work every
-  // `points` points drawn (paced_mapper.h; default kSoftwareDrawPace; 0:
-  // never, as on a GPU).
+  // The driver finishes its queued work every `points` points drawn
+  // (paced_mapper.h; 0: never). Unless set, chosen at the first frame:
+  // kSoftwareDrawPace under a software renderer, 0 on a GPU.
   void SetDrawPace(size_t points) {
     pacer_.limit = points;
     draw_pace_set_ = true;
