@@ -60,8 +60,8 @@ void AppendCells(const Id* offsets, const Id* ids, vtkIdType cells, int32_t base
 // vertex cells one after another. By hand rather than through
 // vtkAppendPolyData, whose cells come out with 64-bit ids: 16 bytes a drawn
 // point instead of 8, 7 MiB at the 0.9 M points of a 9.5 M-point cloud at
-// rest (a batch holds at most kRestBatchPoints or one chunk's, far below
-// 2^31).
+// rest. (A batch holds at most a few hundred thousand points: 32-bit ids
+// hold them.)
 vtkSmartPointer<vtkPolyData> Concatenate(const std::vector<vtkPolyData*>& levels) {
   vtkIdType n = 0, cells = 0, ids = 0;
   for (vtkPolyData* level : levels) {
@@ -87,11 +87,15 @@ vtkSmartPointer<vtkPolyData> Concatenate(const std::vector<vtkPolyData*>& levels
   vtkIdType base = 0;
   for (vtkPolyData* level : levels) {
     const vtkIdType m = level->GetNumberOfPoints();
-    // Every drawn level's points are float and carry the float scalar.
+    // Every drawn level's points are float (FillDrawn, FilterMotion, GrowingChunk).
     const float* from = static_cast<const float*>(level->GetPoints()->GetVoidPointer(0));
     std::copy_n(from, 3 * m, xyz + 3 * base);
     auto* level_scalar = vtkFloatArray::SafeDownCast(level->GetPointData()->GetArray(kScalarName));
-    std::copy_n(level_scalar->GetPointer(0), m, s + base);
+    if (level_scalar != nullptr && level_scalar->GetNumberOfValues() == m) {
+      std::copy_n(level_scalar->GetPointer(0), m, s + base);
+    } else {
+      std::fill_n(s + base, m, cloud_view_internal::kNaN);  // drawn in the lookup table's NaN colour
+    }
     vtkCellArray* verts = level->GetVerts();
     const vtkIdType c = verts->GetNumberOfCells();
     if (c == 0) {
