@@ -1,7 +1,8 @@
 // The cloud store and the view's level of detail through the real app
 // (docs/cloud-store.md), under a real display (xvfb-run in CI): the rest
-// level at full resolution draws exactly the cloud and within a budget only
-// cloud points; a rest level larger than the LOD budget is drawn in passes
+// level at full resolution draws exactly the cloud (what VTK is given
+// through the draw batches too, with and without a pass filter) and within a
+// budget only cloud points; a rest level larger than the LOD budget is drawn in passes
 // of about that budget to the one-frame image; a cloud larger than the
 // memory budget opens paged to disk,
 // equals `sweepscan-cli reconstruct` point for point and picks the true
@@ -106,6 +107,27 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   view->SetRestBudget(cloud.size());
   view->SetLodActive(false);
   EXPECT_EQ(Positions(view->DrawnPoints()), cloud);
+  // ... and VTK is given exactly those: the batches' concatenated arrays
+  // (built before a frame) and the growing chunk's.
+  view->RenderNow();
+  EXPECT_EQ(Positions(view->BatchedPoints()), cloud);
+  // With a pass filter the batches' cells are the pass's points alone.
+  {
+    const std::vector<CloudPoint> appended = workspace_->CloudSnapshot();
+    std::vector<float> pass(appended.size());
+    std::vector<CloudPoint> pass_b;
+    for (size_t i = 0; i < pass.size(); ++i) {
+      pass[i] = i % 3 == 0 ? 0.0f : i % 3 == 1 ? 1.0f : std::numeric_limits<float>::quiet_NaN();
+      if (i % 3 == 1) pass_b.push_back(appended[i]);
+    }
+    view->SetPointValues(CloudView::ColorMode::kPass, pass);
+    view->SetPassFilter(1);
+    view->RenderNow();
+    EXPECT_EQ(Positions(view->BatchedPoints()), Positions(pass_b));
+    view->SetPassFilter(-1);
+    view->RenderNow();
+    EXPECT_EQ(Positions(view->BatchedPoints()), cloud);
+  }
 
   // Within a quarter of it: at most the budget (and the growing chunk),
   // every one a cloud point.

@@ -209,6 +209,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // The positions of the points drawn now (the level shown of every chunk;
   // the pass filter and the clip are not applied), for tests and figures.
   std::vector<Eigen::Vector3f> DrawnPoints() const;
+  // The positions VTK is given to draw now: the shown batches' and the
+  // growing chunk's vertex cells (the pass filter applied, the clip not; the
+  // batches as the last frame built them), for tests.
+  std::vector<Eigen::Vector3f> BatchedPoints() const;
   // Whether the rest level is being built (slices still to come).
   bool refining() const { return !refine_queue_.empty(); }
 

@@ -94,7 +94,8 @@ vtkSmartPointer<vtkPolyData> Concatenate(const std::vector<vtkPolyData*>& levels
     if (level_scalar != nullptr && level_scalar->GetNumberOfValues() == m) {
       std::copy_n(level_scalar->GetPointer(0), m, s + base);
     } else {
-      std::fill_n(s + base, m, cloud_view_internal::kNaN);  // drawn in the lookup table's NaN colour
+      // Drawn in the lookup table's NaN colour.
+      std::fill_n(s + base, m, cloud_view_internal::kNaN);
     }
     vtkCellArray* verts = level->GetVerts();
     const vtkIdType c = verts->GetNumberOfCells();

@@ -2,6 +2,7 @@
 // rest levels), the rest plan under the point budget, and its building in
 // slices. See cloud_view.h for the scheme and docs/cloud-store.md for why.
 #include <vtkCamera.h>
+#include <vtkIdList.h>
 #include <vtkPointData.h>
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
@@ -635,6 +636,29 @@ std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {
     if (!d.points) continue;
     const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
     for (size_t k = 0; k < d.size(); ++k) out.emplace_back(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3f> CloudView::BatchedPoints() const {
+  std::vector<Eigen::Vector3f> out;
+  const auto add = [&](vtkPolyData* poly) {
+    if (poly == nullptr || poly->GetPoints() == nullptr) return;
+    vtkCellArray* verts = poly->GetVerts();
+    auto cell = vtkSmartPointer<vtkIdList>::New();
+    for (vtkIdType c = 0; c < verts->GetNumberOfCells(); ++c) {
+      verts->GetCellAtId(c, cell);
+      for (vtkIdType k = 0; k < cell->GetNumberOfIds(); ++k) {
+        double p[3];
+        poly->GetPoint(cell->GetId(k), p);
+        out.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]),
+                         static_cast<float>(p[2]));
+      }
+    }
+  };
+  for (const auto& b : lod_active_ ? motion_batches_ : rest_batches_) add(b->drawn.poly);
+  for (const auto& c : chunks_) {
+    if (!c->sealed()) add(c->rest.poly);
   }
   return out;
 }
