@@ -51,8 +51,8 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   connect(w_max_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, apply_limits);
   teleop_form->addRow(tr("Speed limit"), v_max_);
   teleop_form->addRow(tr("Turn-rate limit"), w_max_);
-  auto* hint = new QLabel(tr("Arrows or W A S D drive while held; releasing stops."));
-  hint->setWordWrap(true);
+  // One short line: a word-wrapped label in a form row is clipped when the dock is squeezed.
+  auto* hint = new QLabel(tr("Hold arrows or W A S D to drive."));
   teleop_form->addRow(hint);
   command_ = new QLabel;
   command_->setObjectName(QStringLiteral("driveCommand"));
