@@ -31,11 +31,13 @@
 #include "ui/panels/device_check_dialog.h"
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
+#include "ui/panels/fit_height_to_width.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/panels/ros_import_dialog.h"
 #include "ui/plan/plan_panel.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
+#include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
 #include "ui/view/cloud_view.h"
 
@@ -81,6 +83,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     auto* dock = new QDockWidget(title, this);
     dock->setObjectName(name);
     dock->setWidget(w);
+    FitHeightToWidth::Install(w);
     addDockWidget(area, dock);
     return dock;
   };
@@ -451,7 +454,13 @@ void MainWindow::OnTick() {
   }
   const Twist2d c = workspace_->commanded();
   speed_label_->setText(tr("v %1 m/s  w %2 rad/s").arg(c.v, 0, 'f', 2).arg(c.w, 0, 'f', 2));
-  points_label_->setText(tr("%L1 points").arg(view_->point_count()));
+  QString points = tr("%L1 points").arg(view_->point_count());
+  const size_t project_points = project_->layer()->shown_points();
+  if (project_points > 0) {
+    points = view_->point_count() == 0 ? tr("project %L1 points").arg(project_points)
+                                       : points + tr(" · project %L1").arg(project_points);
+  }
+  points_label_->setText(points);
   drive_panel_->ShowCommand(c);
 }
 

@@ -12,9 +12,10 @@
 #include <QAction>
 #include <QComboBox>
 #include <QDir>
+#include <QElapsedTimer>
 #include <QFileInfo>
 #include <QLabel>
-#include <QElapsedTimer>
+#include <QLocale>
 #include <QMenu>
 #include <QMenuBar>
 #include <QPushButton>
@@ -83,6 +84,15 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   const ProjectLayer* layer = project()->layer();
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});  // b, c are not placed.
   EXPECT_GT(layer->drawn_points(), 50000u);
+  // The status bar counts every point of the sessions shown, not the thinned
+  // ones drawn, and not only the session cloud's (none here).
+  const size_t a_points = project()->clouds().at("a")->positions.size();
+  EXPECT_EQ(layer->shown_points(), a_points);
+  const auto* status = window_->findChild<QLabel*>(QStringLiteral("statusPoints"));
+  ASSERT_NE(status, nullptr);
+  const QString shown = QLocale().toString(qulonglong(a_points));
+  EXPECT_TRUE(WaitFor([&] { return status->text().contains("project " + shown); }, 3000))
+      << status->text().toStdString() << " (a has " << a_points << " points)";
   EXPECT_NE(window_->windowTitle().indexOf("toggle.sweepscan-project"), -1)
       << window_->windowTitle().toStdString();
   EXPECT_FALSE(window_->isWindowModified());

@@ -232,6 +232,14 @@ size_t ProjectLayer::drawn_points() const {
   return n;
 }
 
+size_t ProjectLayer::shown_points() const {
+  size_t n = 0;
+  for (const auto& [id, e] : entries_) {
+    if (e.visible && !e.pieces.empty()) n += e.cloud->positions.size();
+  }
+  return n;
+}
+
 bool ProjectLayer::drawn_pose(const std::string& id, Rigid3d* project_from_session) const {
   const auto it = entries_.find(id);
   if (it == entries_.end() || !it->second.visible || it->second.pieces.empty()) return false;

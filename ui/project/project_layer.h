@@ -62,9 +62,11 @@ class ProjectLayer {
   static constexpr size_t kPiecePoints = 65536;
   static constexpr int kPiecesPerPump = 2;
 
-  // For tests and the status bar: sessions drawn now and their points drawn.
+  // For tests and the status bar: sessions drawn now, their points drawn
+  // (every k-th above the budget) and all their points (what is shown).
   std::vector<std::string> drawn_sessions() const;
   size_t drawn_points() const;
+  size_t shown_points() const;
   // The colour the lookup table gives a drawn session's points (invalid if
   // it is not drawn).
   QColor drawn_color(const std::string& id) const;
