@@ -593,6 +593,10 @@ void AgentCore::SetDevicePortError(LinkDevice device, bool error, Time now, Agen
   if (client_authenticated()) SendStatus(now, out);
 }
 
+void AgentCore::OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out) {
+  if (device == LinkDevice::kMotorBoard && started_) SendMotorCommand(now, out);
+}
+
 void AgentCore::Tick(Time now, AgentOutput* out) {
   // Start-up requests to the lidar, one at a time.
   if (started_ && lidar_requests_sent_ < 2 &&

@@ -253,6 +253,14 @@ class AgentCore {
   void OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, Time now, AgentOutput* out);
   // A device port failed (or recovered): Status fault bit 5.
   void SetDevicePortError(LinkDevice device, bool error, Time now, AgentOutput* out);
+  // A device port was opened (at start or again after it was lost): the
+  // motor board gets the command in force at once (zero at rest), so that a
+  // board that kept a crashed agent's last velocity, or was plugged in
+  // again, stops without waiting for a drive command. Start() queues its
+  // zero before the ports are open, so this is the one that reaches it.
+  void OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out);
+  // The agent is going away: zero to the motors, whatever was commanded.
+  void StopForShutdown(Time now, AgentOutput* out) { HardStop(now, out); }
   // Call often (every <= 10-20 ms): watchdog, ramps, motor and Status cadence,
   // start-up requests, auth timeout. The watchdog reacts within one tick.
   void Tick(Time now, AgentOutput* out);

@@ -114,6 +114,10 @@ bool RobotAgent::Start(QString* error) {
         delete stream;
         return false;
       }
+      // A radio modem that glitches or is plugged in again: its port is
+      // opened again (DropClient starts this), as the devices' are.
+      link_reopen_timer_ = new QTimer(this);
+      connect(link_reopen_timer_, &QTimer::timeout, this, &RobotAgent::OpenSerialLink);
       AttachClient(stream);
       break;
     }
@@ -151,15 +155,40 @@ bool RobotAgent::Start(QString* error) {
 }
 
 void RobotAgent::Shutdown() {
+  shutting_down_ = true;
   if (tick_timer_ != nullptr) tick_timer_->stop();
   if (sim_timer_ != nullptr) sim_timer_->stop();
   if (reopen_timer_ != nullptr) reopen_timer_->stop();
+  if (link_reopen_timer_ != nullptr) link_reopen_timer_->stop();
   if (client_ != nullptr) DropClient(QStringLiteral("agent shutting down"));
   while (!pending_.empty()) ClosePending(0, QString());
   if (server_ != nullptr) server_->close();
+  // Zero to the motors whatever was commanded, and wait until it has left
+  // the port: the event loop that would send a queued write has ended, and
+  // a board that holds its last command would keep driving.
+  core_->StopForShutdown(Now(), &out_);
+  Dispatch(&out_);
   for (SerialStream*& device : devices_) {
-    if (device != nullptr) device->Close();
+    if (device != nullptr && device->IsOpen()) {
+      device->Drain(kShutdownDrainMs);
+      device->Close();
+    }
   }
+}
+
+void RobotAgent::OpenSerialLink() {
+  auto* stream = new SerialStream(this);
+  QString error;
+  if (!stream->Open(config_.link_serial_port, config_.link_baud, &error)) {
+    delete stream;
+    if (!link_failed_) emit logMessage(error);  // Once, not every retry.
+    link_failed_ = true;
+    return;
+  }
+  if (link_failed_) emit logMessage(QStringLiteral("%1 reopened").arg(config_.link_serial_port));
+  link_failed_ = false;
+  link_reopen_timer_->stop();
+  AttachClient(stream);
 }
 
 quint16 RobotAgent::tcp_port() const { return server_ != nullptr ? server_->serverPort() : 0; }
@@ -193,6 +222,7 @@ void RobotAgent::OpenDevice(int index) {
   if (ok && device_failed_[index]) emit logMessage(QStringLiteral("%1 reopened").arg(*port[index]));
   device_failed_[index] = !ok;
   core_->SetDevicePortError(kDevices[index], !ok, Now(), &out_);
+  if (ok) core_->OnDevicePortOpened(kDevices[index], Now(), &out_);
   Dispatch(&out_);
 }
 
@@ -401,6 +431,7 @@ void RobotAgent::DropClient(const QString& reason) {
   if (stream != pty_.get()) stream->deleteLater();
   emit clientDisconnected(peer, reason);
   Dispatch(&out_);
+  if (link_reopen_timer_ != nullptr && !shutting_down_) link_reopen_timer_->start(config_.device_reopen_ms);
 }
 
 void RobotAgent::OnClientBytes(const QByteArray& bytes) {

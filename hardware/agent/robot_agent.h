@@ -184,7 +184,11 @@ class RobotAgent : public QObject {
   void OnTick();
   void OnSimStep();
   void OpenDevice(int index);
+  // kSerial: opens the link's port again after it was lost (retried every
+  // device_reopen_ms until it opens).
+  void OpenSerialLink();
   void Dispatch(AgentOutput* out);
+  static constexpr int kShutdownDrainMs = 200;
 
   RobotAgentConfig config_;
   std::unique_ptr<VirtualDevices> sim_;
@@ -197,6 +201,9 @@ class RobotAgent : public QObject {
   std::array<SerialStream*, 3> devices_{};
   std::array<bool, 3> device_failed_{};  // Open failed or port lost (logged once).
   QTimer* tick_timer_ = nullptr;
+  QTimer* link_reopen_timer_ = nullptr;  // kSerial.
+  bool link_failed_ = false;             // Reopening the serial link failed (logged once).
+  bool shutting_down_ = false;
   QTimer* sim_timer_ = nullptr;
   QTimer* reopen_timer_ = nullptr;
   QHash<QString, qint64> last_auth_failure_ms_;  // Peer address -> clock_ ms.

@@ -12,6 +12,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <QElapsedTimer>
 #include <QFile>
 #include <QHostAddress>
 #include <QSerialPort>
@@ -105,6 +106,18 @@ bool SerialStream::Write(const uint8_t* data, size_t n) {
 
 void SerialStream::Close() {
   if (port_->isOpen()) port_->close();
+}
+
+bool SerialStream::Drain(int timeout_ms) {
+  if (!port_->isOpen()) return false;
+  QElapsedTimer clock;
+  clock.start();
+  while (port_->bytesToWrite() > 0) {
+    const qint64 left = timeout_ms - clock.elapsed();
+    if (left <= 0 || !port_->waitForBytesWritten(static_cast<int>(left))) break;
+  }
+  // Written to the driver is not yet sent: wait for the UART too.
+  return port_->bytesToWrite() == 0 && ::tcdrain(static_cast<int>(port_->handle())) == 0;
 }
 
 QString SerialStream::Describe() const {

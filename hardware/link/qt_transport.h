@@ -73,6 +73,10 @@ class SerialStream : public ByteStream {
   bool IsOpen() const override;
   bool Write(const uint8_t* data, size_t n) override;
   void Close() override;
+  // Blocks until every byte written so far has left the port (at most
+  // timeout_ms): QSerialPort only buffers a write, and its event loop sends
+  // it, so a port closed without this loses what was last written.
+  bool Drain(int timeout_ms);
   QString Describe() const override;
   // DTR drives the X4's motor enable on its USB adapter.
   void SetDataTerminalReady(bool on);

@@ -17,6 +17,8 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <fcntl.h>
+#include <pty.h>
 #include <unistd.h>
 
 #include <QCoreApplication>
@@ -428,6 +430,68 @@ TEST(RobotdOptionsTest, UnsafeKeyFilesAndWatchdogPeriodsAreRefused) {
     EXPECT_EQ(r.code, 2) << ms << ": " << r.err;
     EXPECT_NE(r.err.find("100..5000"), std::string::npos) << ms << ": " << r.err;
   }
+}
+
+// Bytes waiting on a non-blocking fd, appended to *into; the count read.
+size_t ReadAvailable(int fd, std::string* into) {
+  char buffer[4096];
+  size_t total = 0;
+  ssize_t n;
+  while ((n = ::read(fd, buffer, sizeof(buffer))) > 0) {
+    into->append(buffer, static_cast<size_t>(n));
+    total += static_cast<size_t>(n);
+  }
+  return total;
+}
+
+// A serial link (a radio modem on USB) that is lost is opened again when its
+// port comes back, as the device ports are: the agent does not sit alive
+// with no link, where systemd would never restart it. The port is a name
+// (as udev gives one) that points at a pseudo-terminal, then at a new one.
+TEST(RobotAgentSerialLinkTest, ALostSerialLinkIsOpenedAgainWhenItsPortReturns) {
+  char dir_template[] = "/tmp/sweepscan-link-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir_template), nullptr);
+  const std::string link = std::string(dir_template) + "/modem";
+  int master = -1, slave = -1;
+  char name[128];
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  ASSERT_EQ(::symlink(name, link.c_str()), 0);
+
+  RobotAgentConfig config;
+  config.link = RobotAgentConfig::LinkKind::kSerial;
+  config.link_serial_port = QString::fromStdString(link);
+  config.link_baud = 115200;
+  config.device_reopen_ms = 100;
+  config.agent.require_auth = false;
+  config.agent.name = "serial link test agent";
+  RobotAgent agent(config);
+  QString error;
+  ASSERT_TRUE(agent.Start(&error)) << error.toStdString();
+  std::string first;
+  ASSERT_TRUE(WaitFor([&] { return ReadAvailable(master, &first) > 0; }, 3000)) << "no Hello on the link";
+
+  ::close(slave);
+  ::close(master);  // The modem is gone: the agent's port reads EIO.
+  ASSERT_TRUE(WaitFor([&] { return !agent.has_client(); }, 3000)) << "the lost link was not noticed";
+  Pump(300);  // A few retries against a port that is not there.
+  EXPECT_FALSE(agent.has_client());
+
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  ASSERT_EQ(::unlink(link.c_str()), 0);
+  ASSERT_EQ(::symlink(name, link.c_str()), 0);
+  ASSERT_TRUE(WaitFor([&] { return agent.has_client(); }, 3000)) << "the link's port was not opened again";
+  std::string second;
+  EXPECT_TRUE(WaitFor([&] { return ReadAvailable(master, &second) > 0; }, 3000))
+      << "no Hello on the port that came back";
+  // The same greeting as at the start (a new connection's first frame).
+  EXPECT_EQ(second.substr(0, 4), first.substr(0, 4));
+  agent.Shutdown();
+  ::close(slave);
+  ::close(master);
+  ::unlink(link.c_str());
+  ::rmdir(dir_template);
 }
 
 }  // namespace

@@ -315,6 +315,45 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
   client.Shutdown();
 }
 
+// The motor board hears a zero from robotd as it starts (a board that kept a
+// crashed agent's last velocity stops: systemd restarts robotd after its
+// watchdog killed it mid-drive) and as robotd's last word on SIGTERM while a
+// client drives (`systemctl stop`, a package upgrade, Ctrl+C).
+TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsAndOnSigtermMidDrive) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  MotorCommandDecoder board;
+  std::vector<MotorCommand> heard;
+  QObject::connect(&ptys, &DevicePtys::hostBytes, [&](int, int device, const QByteArray& bytes) {
+    if (device != static_cast<int>(LinkDevice::kMotorBoard)) return;
+    board.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), static_cast<size_t>(bytes.size()), Time());
+    for (const MotorCommand& c : board.TakeRecords()) heard.push_back(c);
+  });
+  Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return !heard.empty(); }, 5000))
+      << "no command reached the motor board as robotd started";
+  EXPECT_EQ(heard.front().vx_mps, 0.0);
+  EXPECT_EQ(heard.front().wz_radps, 0.0);
+
+  RobotConnection client(Client(robotd.Address()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  for (int i = 0; i < 20; ++i) {  // 2 s at 10 Hz: the ramp reaches 0.3 m/s.
+    client.Drive(0.3, 0.0);
+    sweepscan::testing::Pump(100);
+  }
+  ASSERT_GT(heard.back().vx_mps, 0.2) << "the board never got the drive command";
+  EXPECT_EQ(robotd.Terminate(), 0) << "SIGTERM ends robotd cleanly";
+  sweepscan::testing::Pump(300);  // The pty's last bytes.
+  EXPECT_EQ(heard.back().vx_mps, 0.0) << "robotd's last word to the board was not a stop";
+  EXPECT_EQ(heard.back().wz_radps, 0.0);
+  client.Shutdown();
+}
+
 // Issue 31: robotd restarted (systemd's Restart=on-failure, an update)
 // while the workstation records through a relay. Unlike a reboot, the robot
 // clock (CLOCK_MONOTONIC) runs on: the same clock epoch. The recording goes
