@@ -10,7 +10,6 @@
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
-
 #include <malloc.h>
 #include <unistd.h>
 
@@ -26,16 +25,17 @@
 #include <QThread>
 #include <QTimer>
 #include <algorithm>
+#include <clocale>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <string>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <string>
 
+#include "app/gui_tour.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/cloud_pager.h"
-#include "app/gui_tour.h"
 #include "core/scenario/scenario.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
@@ -600,6 +600,10 @@ int Main(int argc, char** argv) {
   KeepFreedMemoryForReuse();
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
+  // QApplication set every category to the user's locale; numbers in files
+  // and in what printf / strtod read and write stay C's (Qt's advice). The
+  // panels show numbers through QLocale, which this does not change.
+  std::setlocale(LC_NUMERIC, "C");
   SetApplicationNames();
   // Wayland desktops match the window to packaging/sweepscan.desktop by this.
   QGuiApplication::setDesktopFileName(QStringLiteral("sweepscan"));

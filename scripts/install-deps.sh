@@ -25,6 +25,9 @@ packages=(
   # Floor plans (docs/plan-formats.md): the DXF read by ezdxf and printed by
   # LibreCAD, its PDF rasterised by pdftoppm.
   python3-ezdxf librecad poppler-utils
+  # A comma-decimal locale made by localedef in the tests (the drawings must
+  # not follow the desktop's LC_NUMERIC).
+  locales
 )
 
 missing=()

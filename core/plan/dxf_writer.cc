@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/common/checked_file.h"
+#include "core/common/format_number.h"
 #include "core/plan/plan_writers.h"
 
 namespace sweepscan::plan {
@@ -16,13 +17,7 @@ namespace {
 
 // "3" for a whole number of metres (the axes' labels), else "%.3f".
 std::string FormatNumber(double v) {
-  char buf[32];
-  if (std::abs(v - std::round(v)) < 1e-9) {
-    std::snprintf(buf, sizeof(buf), "%.0f", v);
-  } else {
-    std::snprintf(buf, sizeof(buf), "%.3f", v);
-  }
-  return buf;
+  return FormatFixed(v, std::abs(v - std::round(v)) < 1e-9 ? 0 : 3);
 }
 
 constexpr double kPi = 3.14159265358979323846;
@@ -38,11 +33,7 @@ class Dxf {
     s_ += '\n';
   }
   void Int(int code, int v) { Code(code, std::to_string(v)); }
-  void Real(int code, double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof(buf), "%.6f", std::abs(v) < 5e-7 ? 0.0 : v);
-    Code(code, buf);
-  }
+  void Real(int code, double v) { Code(code, FormatFixed(std::abs(v) < 5e-7 ? 0.0 : v, 6)); }
   // A 2D point in the plane z = 0: codes base, base + 10, base + 20.
   void Point(int base, const Eigen::Vector2d& p) {
     Real(base, p.x());

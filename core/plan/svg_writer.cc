@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "core/common/checked_file.h"
+#include "core/common/format_number.h"
 #include "core/plan/plan_writers.h"
 
 namespace sweepscan::plan {
@@ -14,11 +15,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string Num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.2f", std::abs(v) < 5e-3 ? 0.0 : v);
-  return buf;
-}
+std::string Num(double v) { return FormatFixed(std::abs(v) < 5e-3 ? 0.0 : v, 2); }
 
 std::string Escape(const std::string& s) {
   std::string out;
@@ -99,19 +96,11 @@ bool SvgOptions::IsValid(std::string* error) const {
   return true;
 }
 
-std::string FormatMetres(double m) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3f", m);
-  return buf;
-}
+std::string FormatMetres(double m) { return FormatFixed(m, 3); }
 
 std::string RoomName(size_t index) { return "Room " + std::to_string(index + 1); }
 
-std::string FormatArea(double m2) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.2f m2", m2);
-  return buf;
-}
+std::string FormatArea(double m2) { return FormatFixed(m2, 2) + " m2"; }
 
 Status PlanSvg(const FloorPlan& plan, const SvgOptions& o, std::string* svg) {
   std::string error;
@@ -128,9 +117,9 @@ Status PlanSvg(const FloorPlan& plan, const SvgOptions& o, std::string* svg) {
   p.k = 1000.0 / o.scale;
   p.margin = o.margin_mm;
   p.extra_bottom = o.title.empty() ? 0.0 : 2.0 * o.text_height_mm;
-  char desc[200];
-  std::snprintf(desc, sizeof(desc), "sweepscan floor plan: section at z = %.3f m +- %.3f m, scale 1:%g, paper mm",
-                plan.height_m, plan.band_m, o.scale);
+  const std::string desc = "sweepscan floor plan: section at z = " + FormatFixed(plan.height_m, 3) +
+                           " m +- " + FormatFixed(plan.band_m, 3) +
+                           " m, scale 1:" + FormatGeneral(o.scale) + ", paper mm";
   std::string s = Header(p, desc);
   const double t = o.text_height_mm;
   // Rooms: each outline filled pale under everything else, its name and
@@ -222,9 +211,9 @@ Status SectionSvg(const std::vector<Eigen::Vector2d>& s_z, const SvgOptions& o, 
   p.k = 1000.0 / o.scale;
   p.margin = o.margin_mm;
   p.extra_bottom = o.title.empty() ? 0.0 : 2.0 * o.text_height_mm;
-  char desc[120];
-  std::snprintf(desc, sizeof(desc), "sweepscan vertical section: s along the line, z up, scale 1:%g, paper mm",
-                o.scale);
+  const std::string desc =
+      "sweepscan vertical section: s along the line, z up, scale 1:" + FormatGeneral(o.scale) +
+      ", paper mm";
   std::string s = Header(p, desc);
   s += "<g id=\"points\" fill=\"#404040\">\n";
   for (const Eigen::Vector2d& q : s_z) {

@@ -10,12 +10,13 @@
 
 #include <QApplication>
 #include <QCoreApplication>
-#include <QSurfaceFormat>
 #include <QElapsedTimer>
 #include <QSettings>
+#include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTest>
 #include <QThread>
+#include <clocale>
 #include <functional>
 #include <memory>
 
@@ -131,6 +132,7 @@ inline int RunUiTests(int argc, char** argv) {
   if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
+  std::setlocale(LC_NUMERIC, "C");  // As the app does (app/gui_main.cc).
   return RUN_ALL_TESTS();
 }
 

@@ -4,16 +4,19 @@
 // pdftoppm), the SVG rendered by rsvg-convert; the PNGs must hold ink
 // (tests/tools/png_ink.py). The tools are found at configure time
 // (tests/core/plan/CMakeLists.txt).
+#include "core/plan/plan_writers.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <clocale>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/plan/floor_plan.h"
-#include "core/plan/plan_writers.h"
-
 #include "tests/testing/run_command.h"
 #include "tests/testing/worlds.h"
 
@@ -193,6 +196,55 @@ TEST_F(PlanWritersTest, SectionDxfReadByEzdxf) {
   std::string out;
   EXPECT_FALSE(SectionDxf({}, DxfOptions(), &out).ok());
   EXPECT_FALSE(SectionDxf({{0.0, NAN}}, DxfOptions(), &out).ok());
+}
+
+// Switches LC_NUMERIC to German (decimal comma) for its lifetime, made with
+// localedef in a folder of its own when the system has not generated it
+// (the desktop app runs under the user's locale: QApplication calls
+// setlocale(LC_ALL, "")).
+class CommaLocale {
+ public:
+  CommaLocale() {
+    if (std::setlocale(LC_NUMERIC, "de_DE.UTF-8") == nullptr) {
+      const testing::CommandRun made =
+          RunCommand("mkdir -p '" + kDir + "/locale' && localedef -i de_DE -f UTF-8 '" + kDir +
+                     "/locale/de_DE.UTF-8' 2>&1");
+      EXPECT_EQ(made.code, 0) << "localedef (package locales): " << made.out;
+      ::setenv("LOCPATH", (kDir + "/locale").c_str(), 1);
+      std::setlocale(LC_NUMERIC, "de_DE.UTF-8");
+    }
+  }
+  ~CommaLocale() { std::setlocale(LC_NUMERIC, "C"); }
+  static bool Active() { return std::string(std::localeconv()->decimal_point) == ","; }
+};
+
+// The same drawings whatever the C locale: "1.500000", never "1,500000"
+// (which makes a DXF unreadable and an SVG invalid).
+TEST_F(PlanWritersTest, DrawingsDoNotFollowTheLocalesDecimalComma) {
+  const std::vector<Eigen::Vector2d> s_z = {{0.25, 0.5}, {1.75, 2.125}, {3.5, 0.0625}};
+  auto draw = [&](std::string* svg, std::string* dxf, std::string* section_svg,
+                  std::string* section_dxf) {
+    ASSERT_TRUE(PlanSvg(*plan_, SvgOptions(), svg).ok());
+    ASSERT_TRUE(PlanDxf(*plan_, DxfOptions(), dxf).ok());
+    ASSERT_TRUE(SectionSvg(s_z, SvgOptions(), section_svg).ok());
+    ASSERT_TRUE(SectionDxf(s_z, DxfOptions(), section_dxf).ok());
+  };
+  std::string svg, dxf, section_svg, section_dxf;
+  draw(&svg, &dxf, &section_svg, &section_dxf);
+  ASSERT_NE(dxf.find(".000000\n"), std::string::npos);
+  std::string svg_de, dxf_de, section_svg_de, section_dxf_de;
+  {
+    CommaLocale german;
+    ASSERT_TRUE(CommaLocale::Active()) << "no comma-decimal locale to test with";
+    char printed[16];
+    std::snprintf(printed, sizeof(printed), "%.1f", 1.5);
+    ASSERT_STREQ(printed, "1,5");  // What printf now writes.
+    draw(&svg_de, &dxf_de, &section_svg_de, &section_dxf_de);
+  }
+  EXPECT_EQ(svg_de, svg);
+  EXPECT_EQ(dxf_de, dxf);
+  EXPECT_EQ(section_svg_de, section_svg);
+  EXPECT_EQ(section_dxf_de, section_dxf);
 }
 
 TEST(PlanWritersRefusalTest, BadOptionsAndEmptySections) {
