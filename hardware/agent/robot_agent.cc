@@ -431,7 +431,9 @@ void RobotAgent::DropClient(const QString& reason) {
   if (stream != pty_.get()) stream->deleteLater();
   emit clientDisconnected(peer, reason);
   Dispatch(&out_);
-  if (link_reopen_timer_ != nullptr && !shutting_down_) link_reopen_timer_->start(config_.device_reopen_ms);
+  if (link_reopen_timer_ != nullptr && !shutting_down_) {
+    link_reopen_timer_->start(config_.device_reopen_ms);
+  }
 }
 
 void RobotAgent::OnClientBytes(const QByteArray& bytes) {
