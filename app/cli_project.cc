@@ -154,8 +154,8 @@ int RunProjectInfo(const Args& args) {
     }
     const RegistrationEvidence& e = ps.registration;
     const Rigid3d& t = *ps.project_from_session;
-    const Eigen::Vector3d ypr = t.rotation().toRotationMatrix().eulerAngles(2, 1, 0);
-    const double yaw_deg = std::atan2(std::sin(ypr[0]), std::cos(ypr[0])) * 180.0 / M_PI;
+    // Eigen's eulerAngles keeps its first angle in [0, pi]: -90 deg came out as 90.
+    const double yaw_deg = YawFromQuaternion(t.rotation()) * 180.0 / M_PI;
     text << "\n      at x " << Fixed(t.translation().x(), 3) << " y " << Fixed(t.translation().y(), 3) << " z "
          << Fixed(t.translation().z(), 3) << " m, yaw " << Fixed(yaw_deg, 2) << " deg; " << e.method;
     if (!e.reference.empty()) text << " against '" << e.reference << "'";

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -126,12 +127,19 @@ int RunProjectAlign(const Args& args) {
 
   // Which sessions to place and against which.
   std::vector<std::string> todo;
+  std::string realigned;  // --session
+  std::optional<Rigid3d> previous_pose;
+  RegistrationEvidence previous_evidence;
   if (args.Has("session")) {
     const int i = project.Find(args.Get("session"));
     if (i < 0) return (PrintError("no session '" + args.Get("session") + "' in " + file), kExitBadInput);
     if (i == project.Anchor()) return (PrintError("'" + args.Get("session") + "' is the anchor: it defines the frame"), kExitBadInput);
-    project.sessions[i].project_from_session.reset();  // placed again
-    todo.push_back(args.Get("session"));
+    // Placed again; if every attempt is refused it keeps what it had.
+    realigned = args.Get("session");
+    previous_pose = project.sessions[i].project_from_session;
+    previous_evidence = project.sessions[i].registration;
+    project.sessions[i].project_from_session.reset();
+    todo.push_back(realigned);
   } else {
     for (const ProjectSession& ps : project.sessions) {
       if (!ps.project_from_session) todo.push_back(ps.id);
@@ -216,12 +224,28 @@ int RunProjectAlign(const Args& args) {
       progress = true;
     }
   }
+  std::vector<std::string> moved;
+  if (!realigned.empty()) {
+    ProjectSession& ps = project.sessions[project.Find(realigned)];
+    if (!ps.project_from_session) {
+      ps.project_from_session = previous_pose;
+      ps.registration = previous_evidence;
+      if (previous_pose) text << "'" << realigned << "' keeps its placement\n";
+    } else if (previous_pose) {
+      moved =
+          project.MoveDependants(realigned, *ps.project_from_session * previous_pose->inverse());
+      for (const std::string& id : moved) {
+        text << "moved '" << id << "' with '" << realigned << "' (placed against it)\n";
+      }
+    }
+  }
   s = SaveProject(file, project);
   if (!s.ok()) return (PrintError(s.message()), kExitFailure);
   if (args.Flag("json")) {
     nlohmann::json refused = nlohmann::json::object();
     for (const auto& [id, why] : refusals) refused[id] = why.substr(1);
-    std::cout << nlohmann::json{{"placed", report}, {"refused", refused}}.dump(2) << "\n";
+    std::cout << nlohmann::json{{"placed", report}, {"refused", refused}, {"moved", moved}}.dump(2)
+              << "\n";
   }
   if (!todo.empty()) {
     std::string message = "could not place:";

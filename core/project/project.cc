@@ -224,8 +224,41 @@ Status Project::RemoveSession(const std::string& id) {
       }
     }
   }
+  // A session placed against this one names it as its reference (the
+  // evidence of its pose); the file would then refer to a session it no
+  // longer holds, which the loader refuses.
+  std::string dependants;
+  for (const ProjectSession& s : sessions) {
+    if (s.id != id && s.registration.reference == id) {
+      dependants += (dependants.empty() ? "'" : ", '") + s.id + "'";
+    }
+  }
+  if (!dependants.empty()) {
+    return Status::Error(dependants + " placed against '" + id +
+                         "': align them to another session (or remove them) first");
+  }
   sessions.erase(sessions.begin() + i);
   return Status::Ok();
+}
+
+std::vector<std::string> Project::MoveDependants(const std::string& id, const Rigid3d& delta) {
+  std::vector<std::string> moved;
+  std::vector<std::string> frontier = {id};
+  std::set<std::string> seen = {id};
+  while (!frontier.empty()) {
+    const std::string reference = frontier.back();
+    frontier.pop_back();
+    for (ProjectSession& s : sessions) {
+      if (s.registration.reference != reference || !s.project_from_session ||
+          !seen.insert(s.id).second) {
+        continue;
+      }
+      s.project_from_session = delta * *s.project_from_session;
+      moved.push_back(s.id);
+      frontier.push_back(s.id);
+    }
+  }
+  return moved;
 }
 
 std::string ProjectDirectory(const std::string& project_file) {

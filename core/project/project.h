@@ -99,8 +99,14 @@ struct Project {
   // ".sweepscan", made unique with a suffix; the first session becomes the
   // anchor. Refuses a path already in the project.
   Status AddSession(const std::string& path, ProjectSession** added);
-  // Removes it; refuses the anchor while other sessions are placed.
+  // Removes it; refuses the anchor while other sessions are placed, and a
+  // session others are placed against (their reference).
   Status RemoveSession(const std::string& id);
+  // Session `id` was placed again and moved by `delta` (its new pose times
+  // the old one's inverse). The sessions placed against it, and those placed
+  // against them, were measured relative to it: they move by `delta` too.
+  // Returns their ids.
+  std::vector<std::string> MoveDependants(const std::string& id, const Rigid3d& delta);
 };
 
 // The distinct colours new sessions get in turn (Tableau 10).

@@ -434,11 +434,22 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
           emit alignFinished(false, tr("the project changed meanwhile"));
           return;
         }
+        const std::optional<Rigid3d> before = after.sessions[i].project_from_session;
         after.sessions[i].project_from_session =
             *after.sessions[r].project_from_session * out->attempt.fine.target_from_source;
         after.sessions[i].registration = hardware::EvidenceOf(out->attempt, options.pairs);
+        // Sessions placed against it move with it (one undoable edit).
+        const size_t moved = before
+                                 ? after
+                                       .MoveDependants(id, *after.sessions[i].project_from_session *
+                                                               before->inverse())
+                                       .size()
+                                 : 0;
         // The clouds just built, shown at the new pose.
         QString text = PlacedText(id, out->attempt);
+        if (moved > 0)
+          text +=
+              tr("; %n session(s) placed against it moved with it", "", static_cast<int>(moved));
         if (out->source->has_truth && out->target->has_truth) {
           // The simulation knows where each drive started: a check, never a placement.
           const Rigid3d truth = out->target->world_from_session_truth.inverse() *

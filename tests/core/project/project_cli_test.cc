@@ -247,6 +247,66 @@ TEST_F(ProjectCliTest, PickedPairsPlaceASessionAndIcpRefinesIt) {
   EXPECT_LT(RotationErrorDeg(*p.sessions[1].project_from_session, truth), 0.2);
 }
 
+// Placing a session again: a refused attempt keeps the placement it had;
+// a new one moves the sessions placed against it along, since they were
+// measured relative to it. A session others are placed against is not
+// removed, and info gives a yaw below zero as such.
+TEST_F(ProjectCliTest, PlacingASessionAgainKeepsOrMovesWhatDependsOnIt) {
+  const std::string project = NewProject("again.sweepscan-project", "abc");
+  WritePairs('b', 'a', {{5.1, 2.1, 1.0}, {10.6, 2.1, 1.0}, {10.6, 8.0, 1.0}, {5.1, 8.0, 1.5}},
+             "again-ba.json");
+  WritePairs('c', 'b', {{2.0, 2.0, 1.0}, {2.9, 2.0, 1.2}, {7.0, 2.0, 1.0}, {5.0, 0.0, 1.8}},
+             "again-cb.json");
+  WritePairs('b', 'a', {{5.0, 2.0, 1.0}, {6.0, 3.0, 1.0}, {7.0, 4.0, 1.0}}, "again-collinear.json");
+  CommandRun r =
+      Cli("project align " + project + " --session building_b --to building_a --no-icp --pairs " +
+          P("again-ba.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("project align " + project + " --session building_c --to building_b --no-icp --pairs " +
+          P("again-cb.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  Project before;
+  ASSERT_TRUE(LoadProject(project, &before).ok());
+  const Rigid3d b0 = *before.sessions[1].project_from_session;
+  const Rigid3d c0 = *before.sessions[2].project_from_session;
+  ASSERT_EQ(before.sessions[2].registration.reference, "building_b");
+
+  // Collinear picks are refused: b keeps its pose and evidence.
+  r = Cli("project align " + project + " --session building_b --to building_a --no-icp --pairs " +
+          P("again-collinear.json"));
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("'building_b' keeps its placement"), std::string::npos) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_TRUE(p.sessions[1].project_from_session.has_value());
+  EXPECT_TRUE(p.sessions[1].project_from_session->translation().isApprox(b0.translation(), 1e-12));
+  EXPECT_EQ(p.sessions[1].registration.method, "pairs");
+  EXPECT_EQ(p.sessions[1].registration.pairs.size(), 4u);
+
+  // ICP moves b by a few mm; c moves with it, its pose relative to b unchanged.
+  r = Cli("project align " + project + " --session building_b --to building_a --pairs " +
+          P("again-ba.json"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("moved 'building_c' with 'building_b'"), std::string::npos) << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  const Rigid3d b1 = *p.sessions[1].project_from_session;
+  const Rigid3d c1 = *p.sessions[2].project_from_session;
+  EXPECT_GT(TranslationError(b1, b0), 1e-4) << "ICP left b where the picks put it";
+  EXPECT_LT(TranslationError(b1.inverse() * c1, b0.inverse() * c0), 1e-9);
+  EXPECT_LT(RotationErrorDeg(b1.inverse() * c1, b0.inverse() * c0), 1e-7);
+
+  r = Cli("project remove " + project + " building_b");
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("'building_c' placed against 'building_b'"), std::string::npos) << r.out;
+
+  p.sessions[1].project_from_session =
+      Rigid3d::FromPose(1.0, 2.0, 0.0, 0.0, 0.0, -30.0 * M_PI / 180.0);
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  r = Cli("project info " + project + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["sessions"][1]["yaw_deg"].get<double>(), -30.0, 1e-9);
+}
+
 TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   const std::string project = NewProject("bad.sweepscan-project", "a");
   // Exists already.

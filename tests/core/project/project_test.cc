@@ -91,6 +91,26 @@ TEST(ProjectTest, TheAnchorStaysWhileOthersArePlacedOnIt) {
   EXPECT_FALSE(p.RemoveSession("nothing").ok());
 }
 
+// A session others are placed against cannot go: the file would name a
+// reference it no longer holds, and could not be opened again.
+TEST(ProjectTest, ASessionOthersArePlacedAgainstStays) {
+  Project p = TwoSessions();
+  ProjectSession* c = nullptr;
+  ASSERT_TRUE(p.AddSession("scans/room_c.sweepscan", &c).ok());
+  c->project_from_session = Rigid3d::FromPose(9.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+  c->registration.method = "pairs";
+  c->registration.reference = "room_b";
+  const Status refused = p.RemoveSession("room_b");
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("'room_c' placed against 'room_b'"), std::string::npos)
+      << refused.message();
+  ASSERT_EQ(p.sessions.size(), 3u);
+  Project again;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(p), "p.sweepscan-project", &again).ok());
+  EXPECT_TRUE(p.RemoveSession("room_c").ok());
+  EXPECT_TRUE(p.RemoveSession("room_b").ok());
+}
+
 // Each edit breaks one rule; the message names the JSON path.
 TEST(ProjectTest, StrictLoadingNamesThePlace) {
   const std::string good = ProjectToJson(TwoSessions());
