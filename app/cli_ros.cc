@@ -59,10 +59,21 @@ std::string Seconds(int64_t ns) {
   return buf;
 }
 
+// Messages a second over the topic's own span; NaN when the bag does not
+// give the span (an MCAP summary counts a channel's messages, not its times).
 double Rate(const io::RosTopicInfo& t) {
   return t.message_count > 1 && t.last_ns > t.first_ns
-             ? static_cast<double>(t.message_count - 1) / (static_cast<double>(t.last_ns - t.first_ns) * 1e-9)
-             : 0.0;
+             ? static_cast<double>(t.message_count - 1) /
+                   (static_cast<double>(t.last_ns - t.first_ns) * 1e-9)
+             : std::nan("");
+}
+
+std::string RateText(const io::RosTopicInfo& t) {
+  const double hz = Rate(t);
+  if (std::isnan(hz)) return "       ? Hz";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%8.2f Hz", hz);
+  return text;
 }
 
 bool ParseMount(const std::string& text, Rigid3d* mount) {
@@ -117,11 +128,13 @@ int RunBagInfo(int argc, char** argv) {
   }
   const std::string bag = args.positional()[0];
   io::RosBagSummary summary;
-  Status s = io::SummarizeRosBag(bag, &summary);
+  std::vector<std::string> warnings;
+  Status s = io::SummarizeRosBag(bag, &summary, &warnings);
   if (!s.ok()) {
     PrintError(s.message());
     return kExitBadInput;
   }
+  for (const std::string& w : warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
   TfSink tf;
   io::RosReadOptions read;
   for (const io::RosTopicInfo& t : summary.topics) {
@@ -146,7 +159,7 @@ int RunBagInfo(int argc, char** argv) {
                       {"type", t.type},
                       {"serialization", t.serialization},
                       {"messages", t.message_count},
-                      {"rate_hz", Rate(t)},
+                      {"rate_hz", std::isnan(Rate(t)) ? nlohmann::json() : nlohmann::json(Rate(t))},
                       {"sweepscan_reads", t.kind() != io::RosMessageKind::kOther}});
   }
   if (args.Flag("json")) {
@@ -172,8 +185,8 @@ int RunBagInfo(int argc, char** argv) {
               Seconds(summary.end_ns).c_str());
   std::printf("topics:\n");
   for (const io::RosTopicInfo& t : summary.topics) {
-    std::printf("  %-28s %-30s %8llu msgs %8.2f Hz%s\n", t.topic.c_str(), t.type.c_str(),
-                static_cast<unsigned long long>(t.message_count), Rate(t),
+    std::printf("  %-28s %-30s %8llu msgs %s%s\n", t.topic.c_str(), t.type.c_str(),
+                static_cast<unsigned long long>(t.message_count), RateText(t).c_str(),
                 t.kind() != io::RosMessageKind::kOther ? "" : "  (not used)");
   }
   std::printf("tf:%s\n", tf.edges.empty() ? " none" : "");

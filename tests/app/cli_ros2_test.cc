@@ -159,6 +159,57 @@ TEST_F(CliRos2Test, InfoDescribesTheMcap) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["compression"], "lz4");
 }
 
+// A recording cut short (the robot lost power): import keeps what the file
+// holds and says, in its report, where the file ended and what was lost;
+// info says it too. A folder without metadata.yaml holding one .mcap (a
+// bag copied without its metadata) is a bag, as docs/ros-bags.md says.
+TEST_F(CliRos2Test, ACutMcapSaysWhatWasLostAndAFolderWithOneMcapIsABag) {
+  const std::string full = ReadFile(Bag("lab", kStorages[1]));
+  const std::string cut = Tmp("lab_cut.mcap");
+  std::ofstream(cut, std::ios::binary)
+      .write(full.data(), static_cast<std::streamsize>(full.size() * 6 / 10));
+  CommandRun r = Import(cut, Tmp("cut.sweepscan"), "--json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  std::string said;
+  for (const auto& w : report["warnings"]) said += w.get<std::string>() + "\n";
+  EXPECT_NE(said.find(cut + ": file ends at byte " + std::to_string(full.size() * 6 / 10)),
+            std::string::npos)
+      << said;
+  // Once, though the import reads the bag in four passes.
+  EXPECT_EQ(said.find("file ends at byte"), said.rfind("file ends at byte")) << said;
+  EXPECT_GT(report["scans"].get<int>(), 100);
+  r = Cli("info " + cut);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: " + cut + ": file ends at byte"), std::string::npos) << r.out;
+
+  const std::string folder = Tmp("copied_bag");
+  RunCommand("rm -rf " + folder + " && mkdir -p " + folder + " && cp " + Bag("lab", kStorages[1]) +
+             " " + folder);
+  r = Import(folder, Tmp("copied.sweepscan"), "--json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["format"], "mcap");
+
+  // Rates: a bag without a summary section is scanned, which gives each
+  // topic's span; a summary counts a channel's messages but gives no times:
+  // no rate rather than 0 Hz.
+  r = Cli("info " + Source("tests/data/ros2/ros2_lz4_nosummary.mcap") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  int rated = 0;
+  const nlohmann::json scanned = nlohmann::json::parse(r.out);
+  for (const auto& t : scanned["topics"]) {
+    if (t["messages"].get<int>() < 2) continue;
+    ASSERT_TRUE(t["rate_hz"].is_number()) << t;
+    EXPECT_GT(t["rate_hz"].get<double>(), 0.0) << t;
+    ++rated;
+  }
+  EXPECT_GT(rated, 0) << r.out;
+  r = Cli("info " + Bag("lab", kStorages[0]) + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json summarized = nlohmann::json::parse(r.out);
+  for (const auto& t : summarized["topics"]) EXPECT_TRUE(t["rate_hz"].is_null()) << t;
+}
+
 class CliRos2CalibrationTest : public ::testing::Test {
  protected:
   static void TearDownTestSuite() { RunCommand("rm -rf " + Tmp("")); }

@@ -146,8 +146,19 @@ def two_scans(path):
             b.write(topic, scan(t(0.0), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=0.001), t(0.0))
 
 
+def bad_times(path):
+    """Beams that cannot be timed: NaN, a 20 s span, an infinite scan_time."""
+    with rosbag.Bag(path, "w") as b:
+        static_tf(b, t(0.0))
+        b.write("/scan", scan(t(0.0), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=0.001), t(0.0))
+        b.write("/scan", scan(t(0.1), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=float("nan")), t(0.1))
+        b.write("/scan", scan(t(0.2), "laser", 0.0, 0.1, 20, [1.0] * 20, ti=1.0), t(0.2))
+        b.write("/scan", scan(t(0.3), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=0.0,
+                              scan_time=float("inf")), t(0.3))
+
+
 if __name__ == "__main__":
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
-    for f in (rules, clock_jump, no_sensor, no_tf_path, pose_only_odom, two_scans):
+    for f in (rules, clock_jump, no_sensor, no_tf_path, pose_only_odom, two_scans, bad_times):
         f(os.path.join(out, f.__name__ + ".bag"))

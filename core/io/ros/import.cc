@@ -23,6 +23,7 @@ namespace sweepscan::io {
 namespace {
 
 constexpr int64_t kNsPerS = 1000000000;
+constexpr double kMaxScanSpanS = 10.0;  // a LaserScan's beams, first to last
 
 // L = Ry(-pi/2) S: the ROS scan frame's x (angle 0) becomes Eq. 1's z_L
 // (theta 0) and y (angle +pi/2) stays y_L, so theta = angle.
@@ -255,6 +256,17 @@ class WritingSink : public RosMessageSink {
       *why = std::to_string(n) + " ranges (at most 65535)";
       return false;
     }
+    // The beams' times must be numbers, and the scan's span within 10 s (a
+    // turn of any scanning lidar): NaN or a huge value would give times
+    // near -9.2e18 ns, and the checks after this compare false with NaN.
+    if (!std::isfinite(m.time_increment) || !std::isfinite(m.scan_time) ||
+        std::abs(static_cast<double>(m.time_increment)) * static_cast<double>(n) > kMaxScanSpanS ||
+        std::abs(static_cast<double>(m.scan_time)) > kMaxScanSpanS) {
+      *why = "time_increment " + std::to_string(m.time_increment) + " s / scan_time " +
+             std::to_string(m.scan_time) + " s cannot time the beams (span over " +
+             std::to_string(static_cast<int>(kMaxScanSpanS)) + " s or not a number)";
+      return false;
+    }
     double dt = m.time_increment;
     std::string rule = "time_increment";
     if (dt == 0.0 && m.scan_time > 0.0f) {
@@ -419,7 +431,8 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   r.bag = bag;
   r.session = session_dir;
   RosBagSummary summary;
-  Status s = SummarizeRosBag(bag, &summary);
+  std::vector<std::string> summary_warnings;
+  Status s = SummarizeRosBag(bag, &summary, &summary_warnings);
   if (!s.ok()) return s;
   r.format = summary.format;
   for (auto [kind, requested, required, topic] :
@@ -567,6 +580,12 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   }
   if (s.ok()) s = writer->Close();
   if (s.ok()) {
+    // What the readers read past (a file cut short, a damaged summary).
+    for (const std::string& w : summary_warnings) r.warnings.push_back(w);
+    for (const std::string& w : stats.warnings) {
+      if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end())
+        r.warnings.push_back(w);
+    }
     if (r.scans_refused > 0) {
       r.warnings.push_back(std::to_string(r.scans_refused) + " scans refused (first: " +
                            r.first_scan_refusal + ")");

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 
@@ -26,21 +27,43 @@ bool IsRos2File(const std::string& path) {
   return StartsWith(path, "\x89MCAP0\r\n", 8) || StartsWith(path, "SQLite format 3\0", 16);
 }
 
+// Appends each of `from` not in *to yet (a bag read in several passes
+// meets the same torn tail each time).
+void AddOnce(const std::vector<std::string>& from, std::vector<std::string>* to) {
+  for (const std::string& w : from) {
+    if (std::find(to->begin(), to->end(), w) == to->end()) to->push_back(w);
+  }
+}
+
 }  // namespace
 
 bool LooksLikeRosBag(const std::string& path) {
   if (IsDirectory(path)) {
+    // A rosbag2 folder, or (as FindRos2Bag takes it) a folder without
+    // metadata.yaml holding exactly one .db3 or .mcap and no sweepscan
+    // session's meta.json.
     struct stat st;
-    return stat((path + "/metadata.yaml").c_str(), &st) == 0;
+    if (stat((path + "/metadata.yaml").c_str(), &st) == 0) return true;
+    if (stat((path + "/meta.json").c_str(), &st) == 0) return false;
+    std::string storage;
+    std::vector<std::string> files;
+    return FindRos2Bag(path, &storage, &files).ok();
   }
   return LooksLikeRosbag1(path) || IsRos2File(path);
 }
 
-Status SummarizeRosBag(const std::string& path, RosBagSummary* summary) {
+Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
+                       std::vector<std::string>* warnings) {
   if (!IsDirectory(path) && LooksLikeRosbag1(path)) return SummarizeRosbag1(path, summary);
-  if (LooksLikeRosBag(path)) return SummarizeRos2Bag(path, summary);
-  return Status::Error(path + ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
-                              "nor a ROS 2 bag folder with metadata.yaml)");
+  if (LooksLikeRosBag(path)) {
+    Ros2ReadReport report;
+    const Status s = SummarizeRos2Bag(path, summary, &report);
+    if (warnings != nullptr) AddOnce(report.warnings, warnings);
+    return s;
+  }
+  return Status::Error(path +
+                       ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
+                       "nor a ROS 2 bag folder)");
 }
 
 Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
@@ -48,10 +71,14 @@ Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMes
   if (!IsDirectory(path) && LooksLikeRosbag1(path)) return ReadRosbag1(path, options, sink, stats);
   if (LooksLikeRosBag(path)) {
     RosBagSummary ignored;
-    return ReadRos2Bag(path, options, sink, &ignored, stats);
+    Ros2ReadReport report;
+    const Status s = ReadRos2Bag(path, options, sink, &ignored, stats, &report);
+    if (stats != nullptr) AddOnce(report.warnings, &stats->warnings);
+    return s;
   }
-  return Status::Error(path + ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
-                              "nor a ROS 2 bag folder with metadata.yaml)");
+  return Status::Error(path +
+                       ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
+                       "nor a ROS 2 bag folder)");
 }
 
 void ReleaseRosBags() { ReleaseRosbag1Cache(); }

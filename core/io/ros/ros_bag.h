@@ -8,6 +8,7 @@
 #define SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_
 
 #include <string>
+#include <vector>
 
 #include "core/common/status.h"
 #include "core/io/ros/ros_messages.h"
@@ -19,7 +20,10 @@ namespace sweepscan::io {
 // bag from a sweepscan session folder).
 bool LooksLikeRosBag(const std::string& path);
 
-Status SummarizeRosBag(const std::string& path, RosBagSummary* summary);
+// `warnings` (optional) gets what the summary read past (ROS 2: a damaged
+// summary section, a file cut short).
+Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
+                       std::vector<std::string>* warnings = nullptr);
 Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
                   RosReadStats* stats);
 // Closes what the readers keep open between calls (the last ROS 1 bag).

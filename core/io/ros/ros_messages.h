@@ -148,6 +148,9 @@ struct RosReadStats {
   uint64_t messages_skipped = 0;      // other topics or types
   uint64_t messages_undecodable = 0;  // decodable type, bad bytes (sink told)
   uint64_t bytes_read = 0;
+  // What the reader noticed and read past (a file cut short, a damaged
+  // summary, messages back in time), each once however often it was read.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace sweepscan::io

@@ -35,6 +35,7 @@ constexpr uint64_t kFooterBytes = 29;  // prefix + summary_start, summary_offset
 // A chunk holds at least one message; rosbag2 closes chunks at ~1 MB. This
 // cap only refuses absurd sizes before anything is allocated.
 constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
+constexpr uint64_t kMaxRecordBytes = uint64_t{16} << 20;  // a Schema or Channel record
 constexpr uint64_t kProgressStep = uint64_t{1} << 20;
 
 std::string At(const std::string& what, uint64_t pos) {
@@ -128,6 +129,19 @@ Status Reader::Scan() {
       memcmp(prefix, kMagic, 8) != 0) {
     return Error("not an MCAP file (no MCAP magic \\x89MCAP0\\r\\n at byte 0)");
   }
+  // A file that ends in a Footer and the closing magic was written whole: a
+  // record that overruns it is corrupt (a damaged length), not cut short by
+  // a crash, and is refused rather than read as a torn tail.
+  uint64_t footer_at = 0;
+  if (size >= 2 * sizeof(kMagic) + kFooterBytes) {
+    uint8_t tail[kFooterBytes + sizeof(kMagic)];
+    const uint64_t at = size - sizeof(tail);
+    uint64_t footer_len = 0;
+    if (src_->ReadAt(at, sizeof(tail), tail).ok()) memcpy(&footer_len, tail + 1, 8);
+    if (tail[0] == kFooter && footer_len == 20 && memcmp(tail + kFooterBytes, kMagic, 8) == 0) {
+      footer_at = at;
+    }
+  }
   uint64_t pos = sizeof(kMagic);
   for (bool first = true;; first = false) {
     const uint64_t left = size - pos;
@@ -143,6 +157,22 @@ Status Reader::Scan() {
       return Error(At("record", pos) + " is " + OpName(op) + ", not the Header record");
     }
     if (op == 0) return Error(At("record", pos) + " has opcode 0x00, which is invalid");
+    if (footer_at != 0 && op != kFooter && (pos >= footer_at || len > footer_at - pos - kPrefix)) {
+      return Error(
+          At(OpName(op), pos) + " claims " + std::to_string(len) +
+          " bytes, past the Footer at byte " + std::to_string(footer_at) +
+          ": the file is complete, so the record's length is corrupt (not a file cut short)");
+    }
+    // Schemas and channels are a few kB, a message at most a chunk: a larger
+    // length is damage, and reading it would allocate it.
+    if ((op == kSchema || op == kChannel) && len > kMaxRecordBytes && len <= left - kPrefix) {
+      return Error(At(OpName(op), pos) + " claims " + std::to_string(len) +
+                   " bytes, more than the " + std::to_string(kMaxRecordBytes) + " accepted");
+    }
+    if (op == kMessage && len > kMaxChunkBytes && len <= left - kPrefix) {
+      return Error(At(OpName(op), pos) + " claims " + std::to_string(len) +
+                   " bytes, more than the " + std::to_string(kMaxChunkBytes) + " accepted");
+    }
     if (len > left - kPrefix) {
       return TornTail(pos, std::string("inside the ") + OpName(op) + " record at byte " +
                                std::to_string(pos) + " (it needs " + std::to_string(kPrefix + len) +
@@ -318,9 +348,17 @@ Status Reader::Chunk(uint64_t pos, uint64_t len) {
                    " bytes says uncompressed_size " + std::to_string(uncompressed_size));
     }
     s = ReadContent(records_at, records_len, &chunk_);
-  } else if (uncompressed_size == 0) {
+  } else if (uncompressed_size == 0 && records_len == 0) {
     chunk_.clear();  // an empty chunk: nothing to decompress into
   } else {
+    // A compressed chunk with bytes but uncompressed_size 0 is damage: the
+    // decompression says so ("decompresses to more than 0 bytes") instead of
+    // its messages vanishing unread.
+    if (records_len > kMaxChunkBytes) {
+      return Error(where + ": records: " + std::to_string(records_len) +
+                   " compressed bytes, more than the " + std::to_string(kMaxChunkBytes) +
+                   " accepted");
+    }
     s = ReadContent(records_at, records_len, &compressed_);
     if (s.ok()) s = Decompress(compression, compressed_, uncompressed_size, where);
   }

@@ -32,6 +32,14 @@ sensor_msgs::PointField Field(const char* name, uint32_t offset, uint8_t type) {
 
 Status WriteRosbag1Export(const std::string& path, const RosExport& data) {
   if (data.points.empty() && data.poses.empty()) return Status::Error(path + ": nothing to write");
+  // One PointCloud2 holds them all; its row_step is a uint32 (and a ROS 1
+  // record's length too): 24 bytes a point reach 4 GiB at 178 956 971.
+  constexpr size_t kMaxPoints = (size_t{1} << 32) / 24 - 1;
+  if (data.points.size() > kMaxPoints) {
+    return Status::Error(path + ": " + std::to_string(data.points.size()) +
+                         " points do not fit one ROS 1 PointCloud2 (at most " +
+                         std::to_string(kMaxPoints) + ")");
+  }
   int64_t last = 0;
   for (const RosExportPoint& p : data.points) last = std::max(last, p.time_ns);
   for (const RosExportPose& p : data.poses) last = std::max(last, p.time_ns);

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -272,7 +273,8 @@ TEST_F(ImportTest, ExistingSessionIsNotOverwritten) {
   EXPECT_TRUE(Exists(Out("twice") + "/frames.bin"));  // the first import is intact
 }
 
-TEST_F(ImportTest, TruncatedBagIsRefusedWithTheReindexAdvice) {
+// A bag cut in half is refused with where it broke.
+TEST_F(ImportTest, TruncatedBagIsRefused) {
   std::ifstream in(Bag("rules"), std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string cut = dir_ + "/cut.bag";
@@ -281,6 +283,39 @@ TEST_F(ImportTest, TruncatedBagIsRefusedWithTheReindexAdvice) {
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find(cut + ":"), std::string::npos) << s.message();
   EXPECT_FALSE(Exists(Out("cut")));
+}
+
+// What `rosbag record` leaves when it is killed: the chunks, and a bag
+// header whose index_pos is still 0 (the index is written at the end).
+TEST_F(ImportTest, UnindexedBagIsRefusedWithTheReindexAdvice) {
+  std::ifstream in(Bag("rules"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = bytes.find("index_pos=");
+  ASSERT_NE(at, std::string::npos);
+  std::fill_n(bytes.begin() + static_cast<std::ptrdiff_t>(at + 10), 8, '\0');
+  const std::string unindexed = dir_ + "/unindexed.bag";
+  std::ofstream(unindexed, std::ios::binary).write(bytes.data(), bytes.size());
+  const Status s = ImportRosBag(unindexed, Out("unindexed"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("run `rosbag reindex " + unindexed + "`"), std::string::npos)
+      << s.message();
+  EXPECT_FALSE(Exists(Out("unindexed")));
+}
+
+// Beams that cannot be timed (time_increment NaN, a span of 20 s, scan_time
+// infinite) refuse their scan instead of placing beams at -9.2e18 ns.
+TEST_F(ImportTest, ScansWhoseBeamsCannotBeTimedAreRefused) {
+  RosImportReport r;
+  SessionMeta meta;
+  SensorLog log;
+  ImportAndLoad("bad_times", RosImportOptions(), &r, &meta, &log);
+  EXPECT_EQ(r.scans, 1u);
+  EXPECT_EQ(r.scans_refused, 3u);
+  EXPECT_NE(r.first_scan_refusal.find("/scan message 1: time_increment nan"), std::string::npos)
+      << r.first_scan_refusal;
+  ASSERT_EQ(log.scans.size(), 1u);
+  ASSERT_EQ(log.scans[0].samples.size(), 2u);
+  EXPECT_NEAR(ToSeconds(log.scans[0].samples[1].time.time_since_epoch()), 1.001, kTimeTol);
 }
 
 TEST_F(ImportTest, UnknownChunkCompressionIsRefused) {

@@ -326,6 +326,59 @@ TEST(McapTest, AbsurdChunkSizesAreRefusedBeforeAllocating) {
                              ": lz4: decompresses to more than the 100 bytes the chunk says");
 }
 
+// A file that ends in its Footer and closing magic was written whole: a
+// record whose length overruns it is damage, refused with where, not a
+// torn tail whose later messages would vanish without a word.
+TEST(McapTest, ACorruptLengthInACompleteFileIsRefusedNotReadAsATornTail) {
+  for (const char* name : {"ros2_zstd.mcap", "ros2_lz4_nosummary.mcap"}) {
+    SCOPED_TRACE(name);
+    std::vector<uint8_t> b = ReadBytes(Ros2Data(name));
+    const size_t chunk = First(b, 0x06);
+    uint64_t len;
+    memcpy(&len, b.data() + chunk + 1, 8);
+    len += uint64_t{1} << 40;
+    memcpy(b.data() + chunk + 1, &len, 8);
+    RecordingSink sink;
+    Ros2ReadReport report;
+    const Status s = ReadMemory(b, &sink, nullptr, &report);
+    EXPECT_EQ(s.message().rfind("<memory>: Chunk at byte " + std::to_string(chunk) + " claims", 0),
+              0u)
+        << s.message();
+    EXPECT_NE(s.message().find("the record's length is corrupt (not a file cut short)"),
+              std::string::npos)
+        << s.message();
+    EXPECT_FALSE(report.torn_tail);
+  }
+}
+
+// A compressed chunk that holds bytes but says it decompresses to none
+// (uncompressed_size and CRC zeroed) is refused, not taken as empty.
+TEST(McapTest, ACompressedChunkSayingItIsEmptyIsRefused) {
+  std::vector<uint8_t> b = ReadBytes(Ros2Data("ros2_lz4_nosummary.mcap"));
+  const size_t chunk = First(b, 0x06);
+  memset(b.data() + chunk + 9 + 16, 0, 12);  // uncompressed_size u64, uncompressed_crc u32
+  RecordingSink sink;
+  const Status s = ReadMemory(b, &sink, nullptr, nullptr);
+  EXPECT_EQ(s.message(), "<memory>: chunk at byte " + std::to_string(chunk) +
+                             ": lz4: decompresses to more than the 0 bytes the chunk says");
+}
+
+// A Schema whose length says 17 MiB (inside a file that has them) is
+// refused before it is read into memory.
+TEST(McapTest, AnAbsurdSchemaLengthIsRefusedBeforeAllocating) {
+  std::vector<uint8_t> b = ReadBytes(Ros2Data("ros2_unchunked.mcap"));
+  const size_t schema = First(b, 0x03);
+  std::vector<uint8_t> big(b.begin(), b.begin() + static_cast<std::ptrdiff_t>(schema));
+  const uint64_t len = uint64_t{17} << 20;
+  big.push_back(0x03);
+  big.insert(big.end(), reinterpret_cast<const uint8_t*>(&len),
+             reinterpret_cast<const uint8_t*>(&len) + 8);
+  big.resize(big.size() + len + 64, 0);  // no Footer: a torn file, the length fits in it
+  const Status s = ReadMemory(big, nullptr, nullptr, nullptr);
+  EXPECT_EQ(s.message(), "<memory>: Schema at byte " + std::to_string(schema) +
+                             " claims 17825792 bytes, more than the 16777216 accepted");
+}
+
 TEST(McapTest, BrokenSummaryFallsBackToAScan) {
   std::vector<uint8_t> b = ReadBytes(Ros2Data("ros2_zstd.mcap"));
   size_t statistics = 0;
