@@ -86,13 +86,26 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
   e.reference = o.String("reference", "");
   e.rms_m = o.NonNegative("rms_m", 0.0);
   e.overlap = o.InRange("overlap", 0.0, 1.0, 0.0);
-  e.correspondences = static_cast<uint64_t>(o.Has("correspondences") ? o.Integer("correspondences") : 0);
-  e.iterations = static_cast<int>(o.Has("iterations") ? o.Integer("iterations") : 0);
+  const int64_t correspondences = o.Has("correspondences") ? o.Integer("correspondences") : 0;
+  if (correspondences < 0)
+    o.Fail("correspondences", "must be >= 0, got " + std::to_string(correspondences));
+  e.correspondences = static_cast<uint64_t>(correspondences);
+  const int64_t iterations = o.Has("iterations") ? o.Integer("iterations") : 0;
+  if (iterations < 0 || iterations > 1000000) {
+    o.Fail("iterations", "must be within 0..1000000, got " + std::to_string(iterations));
+  }
+  e.iterations = static_cast<int>(iterations);
   if (o.Has("covariance")) {
     const Eigen::Matrix<double, 36, 1> c = Numbers<36>(o, "covariance");
     for (int i = 0; i < 36; ++i) e.covariance[i] = c[i];
   }
-  if (o.Has("free_direction")) e.free_direction = Numbers<3>(o, "free_direction");
+  if (o.Has("free_direction")) {
+    e.free_direction = Numbers<3>(o, "free_direction");
+    if (std::abs(e.free_direction.norm() - 1.0) > 1e-6) {
+      o.Fail("free_direction",
+             "must be a unit vector, |d| = " + std::to_string(e.free_direction.norm()));
+    }
+  }
   if (o.Has("pairs")) {
     const json& pairs = o.Array("pairs");
     for (size_t i = 0; i < pairs.size(); ++i) {
@@ -129,6 +142,18 @@ ProjectSession ReadSession(const JsonObject& o) {
   }
   if (!s.project_from_session && !s.registration.method.empty()) {
     o.Fail("project_from_session", "missing: the registration has no pose");
+  }
+  if (s.registration.method == "anchor") {
+    // The anchor's frame is the project's: its pose is the identity, and it
+    // was aligned to nothing.
+    const Rigid3d& t = *s.project_from_session;
+    if (t.translation().norm() > 1e-9 ||
+        t.rotation().angularDistance(Eigen::Quaterniond::Identity()) > 1e-9) {
+      o.Fail("project_from_session",
+             "the anchor defines the project's frame: its pose must be the identity");
+    }
+    if (!s.registration.reference.empty())
+      o.Fail("registration.reference", "the anchor is aligned to nothing");
   }
   s.visible = o.Bool("visible", true);
   s.color = o.String("color", s.color);
@@ -296,6 +321,11 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
       const std::string path = "sessions[" + std::to_string(i) + "]";
       ProjectSession ps = ReadSession(JsonObject(sessions[i], path));
       if (p.Find(ps.id) >= 0) throw JsonError(path + ".id: '" + ps.id + "' appears twice");
+      for (const ProjectSession& other : p.sessions) {
+        if (fs::path(other.path).lexically_normal() == fs::path(ps.path).lexically_normal()) {
+          throw JsonError(path + ".path: '" + ps.path + "' is also session '" + other.id + "'");
+        }
+      }
       p.sessions.push_back(std::move(ps));
     }
     int anchors = 0;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 namespace sweepscan {
@@ -148,6 +149,34 @@ TEST(ProjectTest, StrictLoadingNamesThePlace) {
             std::string::npos)
       << s.message();
   EXPECT_FALSE(ProjectFromJson("{\"format\": \"sweepscan-project\", \"version\": 1, \"sessions\": [}", "x", &p).ok());
+
+  // Values the format's rules exclude, each named at its place.
+  struct Edit {
+    std::function<void(nlohmann::json*)> apply;
+    std::string expect;
+  };
+  const Edit edits[] = {
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"]["correspondences"] = -5; },
+       "sessions[1].registration.correspondences: must be >= 0, got -5"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"]["iterations"] = 99999999999LL; },
+       "sessions[1].registration.iterations: must be within 0..1000000"},
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][1]["registration"]["free_direction"] = {2.0, 0.0, 0.0};
+       },
+       "sessions[1].registration.free_direction: must be a unit vector"},
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][0]["project_from_session"]["translation_m"][0] = 1.0;
+       },
+       "sessions[0].project_from_session: the anchor defines the project's frame"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["path"] = "scans/./room_a.sweepscan"; },
+       "sessions[1].path: 'scans/./room_a.sweepscan' is also session 'room_a'"},
+  };
+  for (const Edit& edit : edits) {
+    nlohmann::json e = nlohmann::json::parse(good);
+    edit.apply(&e);
+    const Status refused = ProjectFromJson(e.dump(), "x", &p);
+    EXPECT_NE(refused.message().find(edit.expect), std::string::npos) << refused.message();
+  }
 }
 
 TEST(ProjectTest, SavesAtomicallyAndResolvesPathsAgainstItsFolder) {
