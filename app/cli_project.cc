@@ -168,8 +168,16 @@ int RunProjectInfo(const Args& args) {
            << " %, 1-sigma " << Fixed(e.SigmaTranslation() * 1000, 2) << " mm / "
            << Fixed(e.SigmaRotation() * 180 / M_PI, 4) << " deg";
       if (!e.free_direction.isZero()) {
-        text << "; FREE along (" << Fixed(e.free_direction.x(), 2) << ", " << Fixed(e.free_direction.y(), 2)
-             << ", " << Fixed(e.free_direction.z(), 2) << ")";
+        // Stored in the reference's frame; shown in the project's.
+        const int r = project.Find(e.reference);
+        const Eigen::Vector3d d =
+            r >= 0 && project.sessions[r].project_from_session
+                ? Eigen::Vector3d(project.sessions[r].project_from_session->rotation() *
+                                  e.free_direction)
+                : e.free_direction;
+        text << "; FREE along (" << Fixed(d.x(), 2) << ", " << Fixed(d.y(), 2) << ", "
+             << Fixed(d.z(), 2) << ") in the project's frame";
+        j["free_direction"] = {d.x(), d.y(), d.z()};
       }
       j["rms_m"] = e.rms_m;
       j["overlap"] = e.overlap;

@@ -34,14 +34,22 @@ const char* RegistrationStageName(RegistrationStage stage) {
   return "?";
 }
 
+namespace {
+// The 1-sigma along the block's worst direction (its largest eigenvalue), as
+// the project file's evidence reports it (RegistrationEvidence), so that
+// `project align` and `project info` give the same figure.
+double WorstSigma(const Eigen::Matrix3d& block) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (block + block.transpose()));
+  return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
+}  // namespace
+
 double RegistrationResult::RotationSigmaDeg() const {
-  const double v = covariance.topLeftCorner<3, 3>().diagonal().maxCoeff();
-  return std::sqrt(std::max(0.0, v)) * 180.0 / M_PI;
+  return WorstSigma(covariance.topLeftCorner<3, 3>()) * 180.0 / M_PI;
 }
 
 double RegistrationResult::TranslationSigmaM() const {
-  const double v = covariance.bottomRightCorner<3, 3>().diagonal().maxCoeff();
-  return std::sqrt(std::max(0.0, v));
+  return WorstSigma(covariance.bottomRightCorner<3, 3>());
 }
 
 std::string RegistrationResult::Report() const {

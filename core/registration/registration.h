@@ -79,8 +79,8 @@ struct RegistrationResult {
   // IcpOptions::degeneracy_threshold).
   Eigen::Matrix<double, 6, 1> eigenvalues = Eigen::Matrix<double, 6, 1>::Zero();
 
-  // 1-sigma of the rotation (deg, largest axis) and translation (m, largest
-  // axis) from the covariance.
+  // 1-sigma of the rotation (deg) and translation (m) along their worst
+  // directions (the covariance blocks' largest eigenvalues).
   double RotationSigmaDeg() const;
   double TranslationSigmaM() const;
   // Several lines for a log or a report.

@@ -122,6 +122,11 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   const nlohmann::json info = nlohmann::json::parse(r.out);
   EXPECT_TRUE(info["sessions"][1]["placed"].get<bool>());
   EXPECT_EQ(info["sessions"][1]["method"], "planes+icp");
+  // The same 1-sigma as align reported (the worst direction's, both).
+  EXPECT_NEAR(info["sessions"][1]["sigma_translation_m"].get<double>(),
+              report["placed"][0]["sigma_translation_m"].get<double>(), 1e-12);
+  EXPECT_NEAR(info["sessions"][1]["sigma_rotation_deg"].get<double>(),
+              report["placed"][0]["sigma_rotation_deg"].get<double>(), 1e-9);
 
   // One LAS of both, read by loaders.gl and copc.js, is the PLY export of
   // the same project (same points, same order) to half a 0.1 mm step, and
