@@ -55,7 +55,7 @@ using CloudChunk = std::vector<CloudPoint>;
 class PackedChunk;
 class CloudPager;
 
-// Sealed chunks are packed (core/cloud/packed_chunk.h: 20 bytes a point
+// Sealed chunks are packed (core/cloud/packed_chunk.h: 14 bytes a point
 // instead of CloudPoint's 32, every attribute exact) and may be paged out
 // to disk under the pager's memory budget (core/cloud/cloud_pager.h).
 class PointChunks {

@@ -234,6 +234,12 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
   for (const Element& e : elements) {
     const uint64_t row = e.fixed_bytes + e.min_list_bytes;
     if (e.min_list_bytes > 0) exact = false;
+    if (row == 0 && e.count > 0) {
+      // Rows of no bytes: any count fits, and the reader would loop (or
+      // allocate) once per declared row.
+      return bad("element " + e.name + " declares " + std::to_string(e.count) +
+                 " rows but no properties");
+    }
     if (row > 0 && e.count > data_size / row) {
       return bad("element " + e.name + " declares " + std::to_string(e.count) + " rows of " +
                  std::to_string(row) + " bytes but only " + declared);
@@ -307,8 +313,13 @@ Status ValidatePcd(const std::string& path, uint64_t file_size) {
   const uint64_t data_size = file_size - data_offset;
   const std::string declared = std::to_string(data_size) + " bytes follow the header";
   if (data == "ascii") {
-    if (points > data_size / 2) {
-      return bad("POINTS " + std::to_string(points) + " but only " + declared);
+    // Every value needs at least one character and a separator (PCL
+    // allocates points x point_size before it parses a line).
+    uint64_t values = 0;
+    for (const uint64_t c : counts) values += c;
+    if (values == 0 || points > data_size / (2 * values)) {
+      return bad("POINTS " + std::to_string(points) + " of " + std::to_string(values) +
+                 " values but only " + declared);
     }
     return Status::Ok();
   }

@@ -101,7 +101,13 @@ void CloudPager::SetCacheDirectory(const std::string& dir) {
     ::close(fd_);
     fd_ = -1;
     file_end_ = 0;
+    file_dir_.clear();
   }
+}
+
+std::string CloudPager::file_directory() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return file_dir_;
 }
 
 size_t CloudPager::file_bytes() const {
@@ -190,9 +196,14 @@ void CloudPager::Remove(const PackedChunk* chunk) {
   if (chunk->packed_bytes_ > 0) --packed_chunks_;
   // The file space of a dropped chunk is not reused one by one (a cache
   // lives as long as the cloud it pages, one session in the app); when the
-  // last chunk in the file goes (the cloud cleared), the file is emptied.
+  // last chunk in the file goes (the cloud cleared), the file is closed (it
+  // has no name: its space comes back), and the next cloud's file opens
+  // where its session is (SetCacheDirectory), not on the last one's disk.
   if (chunk->file_offset_ >= 0 && --in_file_ == 0 && fd_ >= 0) {
-    if (::ftruncate(fd_, 0) == 0) file_end_ = 0;
+    ::close(fd_);
+    fd_ = -1;
+    file_end_ = 0;
+    file_dir_.clear();
   }
   MaybeTrimLocked();
 }
@@ -338,6 +349,7 @@ bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset)
       budget_ = static_cast<size_t>(-1);  // Stay in memory: say it once.
       return false;
     }
+    file_dir_ = dir;
   }
   // The compressed frames as they are in memory (payload_codec.h), back to
   // back with the other chunks'; their offsets stay in the chunks' headers.

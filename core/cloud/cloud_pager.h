@@ -61,6 +61,8 @@ class CloudPager {
   // effect at once if no live chunk is in the file, else for the next file.
   void SetCacheDirectory(const std::string& dir);
   size_t file_bytes() const;  // The cache file's size now.
+  // The directory the cache file is open in ("" while there is none).
+  std::string file_directory() const;
 
   static constexpr size_t kDefaultUnpackedBudget = size_t{128} << 20;
   // The unpacked payloads' share; the pager uses at most half the memory budget.
@@ -104,6 +106,7 @@ class CloudPager {
   size_t budget_;
   size_t unpacked_budget_ = kDefaultUnpackedBudget;
   std::string cache_dir_;
+  std::string file_dir_;  // where fd_ was opened
   int fd_ = -1;
   int64_t file_end_ = 0;
   size_t unpacked_ = 0, packed_ = 0;  // Bytes in memory.

@@ -48,7 +48,10 @@ CloudReadResult ReadRecords(std::FILE* f, size_t count, const Layout& layout, co
   points->clear();
   points->reserve(count);
   constexpr size_t kChunkRecords = 1 << 16;
-  std::vector<unsigned char> buffer(kChunkRecords * layout.record);
+  // At most what the file holds (count * record was checked against its
+  // size): a header of one point of 2^20 doubles would otherwise cost 64k
+  // records of 8 MiB.
+  std::vector<unsigned char> buffer(std::min(count, kChunkRecords) * layout.record);
   size_t left = count;
   while (left > 0) {
     const size_t want = std::min(left, kChunkRecords);

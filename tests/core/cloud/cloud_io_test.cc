@@ -178,6 +178,41 @@ TEST(CloudHeaderTest, ForgedOrOversizedCountsAreRefusedWithoutAllocating) {
   EXPECT_NE(s.message().find("POINTS 2000000000"), std::string::npos) << s.message();
 }
 
+// Counts that no data can hold are refused before PCL loops or allocates:
+// rows of no bytes (a PLY element without properties: 300 M vertices took
+// 4.7 GB, 10^12 junk rows ran for days) and an ASCII PCD whose points have
+// more values than the file has characters (PCL allocated 2.5 GB for 296
+// bytes).
+TEST(CloudHeaderTest, RowsOfNoBytesAndAsciiValuesBeyondTheFileAreRefused) {
+  std::vector<Eigen::Vector3f> xyz;
+  const std::string empty_rows = TempPath("empty_rows.ply");
+  WriteText(empty_rows,
+            "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+            "property float y\nproperty float z\nelement junk 999999999999\nend_header\n" +
+                std::string(24, '\0'));
+  Status s = LoadCloudPositions(empty_rows, &xyz);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("element junk declares 999999999999 rows but no properties"),
+            std::string::npos)
+      << s.message();
+  const std::string no_properties = TempPath("no_properties.ply");
+  WriteText(no_properties, "ply\nformat binary_little_endian 1.0\nelement vertex 300000000\nend_header\n");
+  s = LoadCloudPositions(no_properties, &xyz);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("element vertex declares 300000000 rows but no properties"),
+            std::string::npos)
+      << s.message();
+  const std::string wide = TempPath("wide.pcd");
+  WriteText(wide,
+            "VERSION 0.7\nFIELDS a b c d e\nSIZE 4 4 4 4 4\nTYPE F F F F F\n"
+            "COUNT 1048576 1048576 1048576 1048576 1048576\nWIDTH 60\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 60\nDATA ascii\n" +
+                std::string(60, '1'));
+  s = LoadCloudPositions(wide, &xyz);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("POINTS 60 of 5242880 values"), std::string::npos) << s.message();
+}
+
 TEST(CloudHeaderTest, TrailingJunkAndShortDataAreRefused) {
   std::vector<Eigen::Vector3f> xyz;
   const std::string junk = TempPath("junk.ply");

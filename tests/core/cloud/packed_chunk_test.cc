@@ -447,6 +447,26 @@ TEST(CloudPagerTest, TheCacheFileIsEmptiedWhenItsCloudGoes) {
   }
 }
 
+// One session after another from different disks: once the first cloud is
+// gone, the next one's cache file opens beside the next session (a USB disk
+// is not kept busy, a RAM-backed fallback is not kept for good).
+TEST(CloudPagerTest, TheNextCloudsCacheFileOpensWhereItsSessionIs) {
+  ScratchDir first, second;
+  CloudPager pager(1, first.path);
+  const auto points = MakePoints(4 * 1024, 7, false);
+  auto chunks = std::make_unique<PointChunks>(1024, &pager);
+  for (const CloudPoint& p : points) chunks->Append(p);
+  EXPECT_EQ(pager.file_directory(), first.path);
+  pager.SetCacheDirectory(second.path);  // Opened while the first cloud lives.
+  EXPECT_EQ(pager.file_directory(), first.path);  // Its chunks are in the file.
+  chunks.reset();
+  EXPECT_EQ(pager.file_directory(), "");
+  chunks = std::make_unique<PointChunks>(1024, &pager);
+  for (const CloudPoint& p : points) chunks->Append(p);
+  EXPECT_EQ(pager.file_directory(), second.path);
+  EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
+}
+
 TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   // The view (GUI thread) and an export (a job thread) read sealed chunks
   // while the processing thread appends and the pager evicts.
