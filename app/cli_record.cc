@@ -272,6 +272,15 @@ int RunRecord(int argc, char** argv) {
                        app.quit();
                      });
                    });
+  // The session cannot be written any more (disk full, a pulled drive):
+  // said at once, and the recorder stops (the robot with it) rather than
+  // drive on recording nothing; StopRecording() then returns the error.
+  QObject::connect(&connection, &hardware::RobotConnection::recordingFailed, &app,
+                   [&](const QString& error) {
+                     std::fprintf(stderr, "sweepscan-cli: recording failed at %.1f s: %s\n",
+                                  clock.elapsed() * 1e-3, qPrintable(error));
+                     app.quit();
+                   });
   // Outages: said on stderr as they happen. A drive script stops at the
   // first one: the agent's watchdog stopped the robot, and a reconnection
   // must not set it moving again without the operator.

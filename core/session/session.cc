@@ -639,6 +639,7 @@ Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
   }
   SyncDir(dir);
   out->reset(new SessionWriter(dir, fd, header.size(), options));
+  (*out)->created_utc_ = m.created_utc;
   return Status::Ok();
 }
 
@@ -660,6 +661,7 @@ Status SessionWriter::Open(const std::string& dir, const SessionWriterOptions& o
   }
   if (report != nullptr) *report = session.frames;
   out->reset(new SessionWriter(dir, fd, session.frames.valid_bytes, options));
+  (*out)->created_utc_ = session.meta.created_utc;
   return Status::Ok();
 }
 
@@ -726,6 +728,10 @@ Status SessionWriter::Close() {
 Status SessionWriter::UpdateMeta(const SessionMeta& meta) {
   SessionMeta m = meta;
   m.format_version = kSessionFormatVersion;
+  // When the recording began stays what Create() wrote: a caller that
+  // rewrites the meta it started from (a reconnection naming the agent) had
+  // it empty, and the LAS export's GPS time needs it.
+  if (m.created_utc.empty()) m.created_utc = created_utc_;
   const Status s = WriteSessionMeta(Join(dir_, kSessionMetaFile), m);
   if (s.ok()) SyncDir(dir_);
   return s;

@@ -246,6 +246,7 @@ class SessionWriter {
   bool dirty_ = false;  // Appended or written since the last fsync.
   std::chrono::steady_clock::time_point last_sync_;
   std::string failed_;  // Sticky I/O error.
+  std::string created_utc_;  // meta.json's, kept by UpdateMeta
 };
 
 // Current UTC time as ISO 8601 ("2026-11-22T10:15:00Z").

@@ -279,7 +279,7 @@ void RobotConnection::OnBytes(const QByteArray& bytes) {
   for (const LinkMessage& message : messages) {
     ++health_.frames_received;
     if (session_ != nullptr && session_status_.ok()) {
-      session_status_ = session_->Append(message.raw, receive_ns);
+      NoteSessionStatus(session_->Append(message.raw, receive_ns));
     }
     TrackAgentFrame(message);
     if (std::holds_alternative<Telemetry>(message.payload)) {
@@ -401,6 +401,12 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
 
 void RobotConnection::OnClosed(const QString& reason) { ScheduleReconnect(reason); }
 
+void RobotConnection::NoteSessionStatus(const Status& status) {
+  const bool was_ok = session_status_.ok();
+  session_status_ = status;
+  if (was_ok && !status.ok()) emit recordingFailed(QString::fromStdString(status.message()));
+}
+
 void RobotConnection::Fail(const QString& reason) {
   health_.last_error = reason;
   emit authenticationFailed(reason);
@@ -463,7 +469,7 @@ void RobotConnection::OnHeartbeat() {
 
 void RobotConnection::OnFlushTimer() {
   if (session_ == nullptr || !session_status_.ok()) return;
-  session_status_ = session_->FlushIfDue(std::chrono::steady_clock::now());
+  NoteSessionStatus(session_->FlushIfDue(std::chrono::steady_clock::now()));
   health_.session_records = session_->records_appended();
 }
 
@@ -508,7 +514,7 @@ void RobotConnection::AppendRecorderEvent(const RecorderEvent& event) {
   if (session_ == nullptr || !session_status_.ok()) return;
   std::vector<uint8_t> frame;
   AppendLinkFrame(LinkSender::kClient, 0, WorkstationNow(), event, &frame);
-  session_status_ = session_->Append(frame, RealtimeNs());
+  NoteSessionStatus(session_->Append(frame, RealtimeNs()));
 }
 
 void RobotConnection::NoteLinkLost(const QString& reason) {

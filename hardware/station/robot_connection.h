@@ -186,6 +186,10 @@ class RobotConnection : public QObject {
   // was resent, lost, and how the clock tie moved (for the status bar / log).
   void linkRestored(double outage_s, const QString& details);
   void statusReceived();  // health().agent_status updated.
+  // Writing the session failed (disk full, a pulled drive, a file size
+  // limit): nothing more is recorded. Once per recording; StopRecording()
+  // returns the same error.
+  void recordingFailed(const QString& error);
   void telemetryDecoded();
 
  private:
@@ -201,6 +205,8 @@ class RobotConnection : public QObject {
   bool SendMessage(const LinkPayload& payload, bool require_auth);
   void OnHeartbeat();
   void OnFlushTimer();
+  // Keeps a session write's status; the first failure emits recordingFailed.
+  void NoteSessionStatus(const Status& status);
   void OnRateTimer();
   void OnStallCheck();
   Time WorkstationNow() const;

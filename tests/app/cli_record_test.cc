@@ -211,6 +211,25 @@ TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
   EXPECT_FALSE(survived.scans.empty());
 }
 
+// The disk fills (here a file size limit of 100 KiB, SIGXFSZ ignored as a
+// full disk raises none): the recorder says so at once and stops, instead of
+// driving on recording nothing and telling only at the end; what was
+// written before stays readable.
+TEST_F(CliRecordTest, AFailedWriteStopsTheRecorderAtOnceAndKeepsWhatWasWritten) {
+  const QString session = dir_.filePath("full.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral("bash"),
+               {"-c", QStringLiteral("trap '' XFSZ; ulimit -f 100; exec '%1' record --connect %2 "
+                                     "--key-file '%3' --out '%4'")
+                          .arg(QStringLiteral(SWEEPSCAN_CLI), address_, key_, session)});
+  ASSERT_TRUE(record.waitForFinished(40000)) << "still recording after the file could not grow";
+  const std::string err = record.readAllStandardError().toStdString();
+  EXPECT_EQ(record.exitCode(), 1) << err;
+  EXPECT_NE(err.find("sweepscan-cli: recording failed at"), std::string::npos) << err;
+  SensorLog log;
+  EXPECT_GT(RecordedSeconds(session, &log), 0.5);
+}
+
 TEST_F(CliRecordTest, AWrongKeyIsRefusedWithTheAppsMessageAndLeavesNoSession) {
   const QString session = dir_.filePath("refused.sweepscan");
   QProcess record;

@@ -54,5 +54,18 @@ TEST(JsonReaderTest, AtomicWriteReplacesWholeFile) {
   std::remove(path.c_str());
 }
 
+// A meta.json nested 200 000 deep under "settings" crashed every reader
+// (copying it recursed once a level); it is refused, and a file nested as
+// deep as ours are is not.
+TEST(JsonReaderTest, ValuesNestedBeyondAnyFileOfOursAreRefused) {
+  nlohmann::json j;
+  std::string deep = "{\"settings\": " + std::string(200000, '[') + std::string(200000, ']') + "}";
+  Status s = ParseJson(deep, "meta.json", &j);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(s.message(), "meta.json: not a file of ours (values nested more than 64 deep)");
+  const std::string fine = "{\"a\": " + std::string(60, '[') + std::string(60, ']') + "}";
+  EXPECT_TRUE(ParseJson(fine, "x.json", &j).ok());
+}
+
 }  // namespace
 }  // namespace sweepscan

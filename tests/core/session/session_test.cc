@@ -140,6 +140,35 @@ TEST(SessionTest, WriteAndReloadEqual) {
   EXPECT_EQ(s.meta.created_utc, m.created_utc);
 }
 
+// A recorder rewrites meta.json from the meta it started from (a
+// reconnection names the agent); that meta's created_utc was empty, and
+// the time Create() wrote must stay (the LAS export's GPS time needs it).
+TEST(SessionTest, UpdateMetaKeepsWhenTheRecordingBegan) {
+  TempDir tmp;
+  const std::string dir = tmp.Sub("again.sweepscan");
+  SessionMeta meta = TestMeta();
+  meta.created_utc.clear();
+  std::unique_ptr<SessionWriter> w;
+  ASSERT_TRUE(SessionWriter::Create(dir, meta, SessionWriterOptions(), &w).ok());
+  SessionMeta written;
+  ASSERT_TRUE(ReadSessionMeta(dir + "/meta.json", &written).ok());
+  ASSERT_EQ(written.created_utc.size(), 20u) << written.created_utc;  // 2026-11-28T16:00:00Z
+  meta.agent = "robot-2";
+  ASSERT_TRUE(w->UpdateMeta(meta).ok());
+  ASSERT_TRUE(w->Close().ok());
+  SessionMeta updated;
+  ASSERT_TRUE(ReadSessionMeta(dir + "/meta.json", &updated).ok());
+  EXPECT_EQ(updated.agent, "robot-2");
+  EXPECT_EQ(updated.created_utc, written.created_utc);
+  // So does a writer that reopened the session.
+  ASSERT_TRUE(SessionWriter::Open(dir, SessionWriterOptions(), &w).ok());
+  meta.agent = "robot-3";
+  ASSERT_TRUE(w->UpdateMeta(meta).ok());
+  ASSERT_TRUE(w->Close().ok());
+  ASSERT_TRUE(ReadSessionMeta(dir + "/meta.json", &updated).ok());
+  EXPECT_EQ(updated.created_utc, written.created_utc);
+}
+
 TEST(SessionTest, FileHeaderAndRecordLayoutByHand) {
   TempDir tmp;
   const std::string dir = tmp.Sub("a.sweepscan");
