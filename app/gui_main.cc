@@ -21,6 +21,8 @@
 #include <QFile>
 #include <QFileInfo>
 #include <QMouseEvent>
+#include <QScreen>
+#include <QSettings>
 #include <QSurfaceFormat>
 #include <QThread>
 #include <QTimer>
@@ -633,7 +635,16 @@ int Main(int argc, char** argv) {
   const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty() ||
                         !o.pose_source_tour.isEmpty();
   window.SetInteractive(!scripted);
-  window.resize(1400, 860);
+  // The size the operator left it at (MainWindow restored it), else 1400 x
+  // 860 within the screen; scripted runs (benchmarks, screenshots) always
+  // get the same size.
+  if (scripted || !QSettings().contains(QStringLiteral("window/geometry"))) {
+    QSize size(1400, 860);
+    if (!scripted && window.screen() != nullptr) {
+      size = size.boundedTo(window.screen()->availableGeometry().size());
+    }
+    window.resize(size);
+  }
   window.show();
 
   if (o.simulate || o.drive_demo) {

@@ -17,6 +17,7 @@
 #include <QMessageBox>
 #include <QProgressBar>
 #include <QScrollArea>
+#include <QScrollBar>
 #include <QSettings>
 #include <QStatusBar>
 #include <QTimer>
@@ -26,6 +27,7 @@
 #include <cmath>
 #include <limits>
 
+#include "ui/own_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
@@ -83,14 +85,30 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     auto* dock = new QDockWidget(title, this);
     dock->setObjectName(name);
     dock->setWidget(w);
-    FitHeightToWidth::Install(w);
     addDockWidget(area, dock);
     return dock;
   };
-  add_dock(connection_panel_, tr("Connection"), QStringLiteral("connectionDock"),
-           Qt::LeftDockWidgetArea);
-  add_dock(drive_panel_, tr("Drive"), QStringLiteral("driveDock"), Qt::LeftDockWidgetArea);
-  add_dock(replay_panel_, tr("Session and replay"), QStringLiteral("replayDock"),
+  // A panel of short rows in a scroll area: the dock column can then be
+  // shorter than its panels' sum (a laptop's screen), and a panel keeps the
+  // height its wrapped labels need at the width it gets (FitHeightToWidth)
+  // instead of clipping their last line.
+  auto scrolled = [](QWidget* panel) {
+    auto* scroll = new QScrollArea;
+    scroll->setWidget(panel);
+    scroll->setWidgetResizable(true);
+    scroll->setFrameShape(QFrame::NoFrame);
+    scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);  // Labels wrap instead.
+    scroll->setSizePolicy(panel->sizePolicy());
+    scroll->setMinimumWidth(panel->minimumSizeHint().width() +
+                            scroll->verticalScrollBar()->sizeHint().width());
+    FitHeightToWidth::Install(panel);
+    return scroll;
+  };
+  QDockWidget* connection_dock = add_dock(scrolled(connection_panel_), tr("Connection"),
+                                          QStringLiteral("connectionDock"), Qt::LeftDockWidgetArea);
+  QDockWidget* drive_dock = add_dock(scrolled(drive_panel_), tr("Drive"),
+                                     QStringLiteral("driveDock"), Qt::LeftDockWidgetArea);
+  add_dock(scrolled(replay_panel_), tr("Session and replay"), QStringLiteral("replayDock"),
            Qt::RightDockWidgetArea);
   // The calibration steps scroll when the window is short.
   auto* calibration_scroll = new QScrollArea;
@@ -114,7 +132,16 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   project_ = std::make_unique<ProjectController>(
       this, view_, undo_, [this](const QString& t, const QString& m) { ShowError(t, m); },
       [this] { return interactive_; });
-  add_dock(project_->panel(), tr("Project"), QStringLiteral("projectDock"), Qt::LeftDockWidgetArea);
+  // A tab beside Connection: the left column then fits a laptop's screen
+  // with the Drive panel whole; it comes to the front with a project.
+  QDockWidget* project_dock = add_dock(project_->panel(), tr("Project"),
+                                       QStringLiteral("projectDock"), Qt::LeftDockWidgetArea);
+  tabifyDockWidget(connection_dock, project_dock);
+  connection_dock->raise();
+  // The Drive panel whole (its calibration circle too); the connection's
+  // health text scrolls instead. A saved layout overrides this.
+  resizeDocks({drive_dock}, {drive_panel_->sizeHint().height() + 8}, Qt::Vertical);
+  connect(project_.get(), &ProjectController::shown, project_dock, &QDockWidget::raise);
   connect(project_.get(), &ProjectController::titleChanged, this, &MainWindow::UpdateTitle);
   connect(project_.get(), &ProjectController::message, this,
           [this](const QString& m) { statusBar()->showMessage(m, 10000); });
@@ -177,9 +204,22 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                   20000);
             }
           });
+  connect(workspace_, &Workspace::recordingFailed, this,
+          [this](const QString& message) { ShowError(tr("Recording"), message); });
+  // Keys held before an emergency stop do not drive off again once it is
+  // cleared: they must be pressed anew.
+  connect(workspace_, &Workspace::emergencyStopped, this, [this] { keys_held_.clear(); });
   connect(workspace_, &Workspace::authenticationFailed, this, [this](const QString& reason) {
+    // "busy" and "retry later" are retried by the connection: said in the
+    // status bar, not a box each retry.
+    if (reason.contains(QLatin1String("busy")) || reason.contains(QLatin1String("retry later"))) {
+      statusBar()->showMessage(tr("The robot answered: %1 (trying again)").arg(reason), 10000);
+      return;
+    }
+    const QString key = connection_panel_->options().key_file;
     ShowError(tr("Connection refused"),
-              tr("The robot refused this workstation: %1\n\nCheck the key file.").arg(reason));
+              tr("The robot refused this workstation: %1\n\nCheck the key file%2.")
+                  .arg(reason, key.isEmpty() ? QString() : QStringLiteral(" ") + key));
   });
   connect(workspace_, &Workspace::jobProgress, this, [this](const QString& what, double f) {
     progress_->setVisible(true);
@@ -207,8 +247,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   });
   connect(workspace_, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
-            progress_->setVisible(false);
-            cancel_->setVisible(false);
+            // A job whose success starts the next one (a session re-opened
+            // for SfM or a calibration) keeps the bar and Cancel for it.
+            if (!workspace_->job_running()) {
+              progress_->setVisible(false);
+              cancel_->setVisible(false);
+            }
             if (!ok) ShowError(what, message);
           });
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
@@ -466,35 +510,49 @@ void MainWindow::OnTick() {
 
 bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
   const QEvent::Type type = event->type();
+  // The window lost the keyboard (Alt+Tab, a message box, a click into a
+  // floating dock): the releases of held drive keys will not come here, so
+  // the robot stops now rather than drive on at the keys' speed.
+  if (type == QEvent::WindowDeactivate && watched == this) ReleaseDriveKeys();
   if (type != QEvent::KeyPress && type != QEvent::KeyRelease && type != QEvent::ShortcutOverride) {
     return QMainWindow::eventFilter(watched, event);
   }
   auto* key = static_cast<QKeyEvent*>(event);
-  // Only keys meant for this window (not for a modal dialog on top of it).
+  // Only keys meant for this window or its floating docks (not for a modal
+  // dialog on top of it).
   QWidget* w = qobject_cast<QWidget*>(watched);
-  if (w == nullptr || w->window() != this) return QMainWindow::eventFilter(watched, event);
+  if (w == nullptr || !InWindowOf(w, this)) return QMainWindow::eventFilter(watched, event);
   if (key->key() == Qt::Key_Space && key->modifiers() == Qt::NoModifier) {
     // The emergency stop wins over whatever widget has focus.
     if (type == QEvent::KeyPress && !key->isAutoRepeat()) workspace_->EmergencyStop();
     event->accept();
     return true;
   }
+  const bool text_field = qobject_cast<QLineEdit*>(w) != nullptr ||
+                          w->inherits("QAbstractSpinBox") || w->inherits("QComboBox");
+  // A held drive key's release always counts, whatever the modifiers held
+  // with it (W, then Shift for a Shift+click) and wherever the focus went.
+  if (type == QEvent::KeyRelease && IsDriveKey(key->key()) && !key->isAutoRepeat() &&
+      keys_held_.remove(key->key())) {
+    UpdateTeleop();
+    return text_field ? QMainWindow::eventFilter(watched, event) : true;
+  }
   if (IsDriveKey(key->key()) && key->modifiers() == Qt::NoModifier &&
       (type == QEvent::KeyPress || type == QEvent::KeyRelease)) {
     // Text fields keep their letters; the arrows and WASD drive elsewhere.
-    if (qobject_cast<QLineEdit*>(w) != nullptr || w->inherits("QAbstractSpinBox") ||
-        w->inherits("QComboBox")) {
-      return QMainWindow::eventFilter(watched, event);
-    }
-    if (key->isAutoRepeat()) return true;
-    if (type == QEvent::KeyPress)
-      keys_held_.insert(key->key());
-    else
-      keys_held_.remove(key->key());
+    if (text_field) return QMainWindow::eventFilter(watched, event);
+    if (key->isAutoRepeat() || type == QEvent::KeyRelease) return true;
+    keys_held_.insert(key->key());
     UpdateTeleop();
     return true;
   }
   return QMainWindow::eventFilter(watched, event);
+}
+
+void MainWindow::ReleaseDriveKeys() {
+  if (keys_held_.isEmpty()) return;
+  keys_held_.clear();
+  UpdateTeleop();
 }
 
 void MainWindow::UpdateTeleop() {

@@ -168,6 +168,8 @@ class MainWindow : public QMainWindow {
   bool interactive_ = true;
   QString last_error_;
   QSet<int> keys_held_;
+  // Forgets the held drive keys and stops the keyboard's motion.
+  void ReleaseDriveKeys();
   QElapsedTimer tick_clock_;
   QElapsedTimer fps_clock_;
   uint64_t fps_frames_ = 0;

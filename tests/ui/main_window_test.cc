@@ -9,20 +9,20 @@
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
 
-#include <fstream>
-
 #include <QAction>
 #include <QApplication>
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDir>
+#include <QDockWidget>
+#include <QDoubleSpinBox>
 #include <QElapsedTimer>
-#include <QFileInfo>
 #include <QFile>
+#include <QFileInfo>
 #include <QImage>
 #include <QLineEdit>
 #include <QProcess>
 #include <QPushButton>
-#include <QDoubleSpinBox>
 #include <QSettings>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
@@ -32,6 +32,7 @@
 #include <QUndoStack>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 
@@ -41,8 +42,8 @@
 #include "core/session/session.h"
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/link/qt_transport.h"
-#include "tests/testing/run_command.h"
 #include "tests/testing/event_loop_turns.h"
+#include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
@@ -129,6 +130,41 @@ TEST_F(AppTest, SpaceStopsTheSimulatedRobotWithin200msWhateverHasFocus) {
   workspace_->ClearEmergencyStop();
   workspace_->Drive(0.2, 0.0);
   EXPECT_TRUE(WaitFor([&] { return workspace_->sim_robot()->TrueTwist().v > 0.1; }, 3000));
+}
+
+// A held drive key never leaves the robot driving on its own: its release
+// counts with a modifier held by then (W, then Shift for a Shift+click), the
+// window losing the keyboard stops it, and Space stops the robot from a
+// floating dock (a window of its own) instead of clicking its button.
+TEST_F(AppTest, HeldDriveKeysStopOnAnyReleaseOrFocusLossAndSpaceWorksInAFloatingDock) {
+  ConnectToSimulator();
+  auto moving = [&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) > 0.05; };
+  auto halted = [&] { return std::abs(workspace_->sim_robot()->TrueTwist().v) < 1e-6; };
+  QTest::keyPress(window_->view(), Qt::Key_W);
+  ASSERT_TRUE(WaitFor(moving, 5000));
+  QTest::keyRelease(window_->view(), Qt::Key_W, Qt::ShiftModifier);
+  EXPECT_TRUE(WaitFor(halted, 3000)) << "released with Shift held: still driving";
+
+  QTest::keyPress(window_->view(), Qt::Key_W);
+  ASSERT_TRUE(WaitFor(moving, 5000));
+  QEvent deactivate(QEvent::WindowDeactivate);
+  QApplication::sendEvent(window_.get(), &deactivate);
+  EXPECT_TRUE(WaitFor(halted, 3000)) << "the window lost the keyboard: still driving";
+  QTest::keyRelease(window_->view(), Qt::Key_W);
+
+  auto* dock = window_->findChild<QDockWidget*>(QStringLiteral("driveDock"));
+  ASSERT_NE(dock, nullptr);
+  dock->setFloating(true);
+  workspace_->Drive(0.3, 0.0);
+  ASSERT_TRUE(WaitFor(moving, 5000));
+  auto* lidar = dock->findChild<QCheckBox*>();
+  ASSERT_NE(lidar, nullptr);
+  const bool lidar_on = lidar->isChecked();
+  QTest::keyClick(lidar, Qt::Key_Space);
+  EXPECT_TRUE(WaitFor(halted, 2000)) << "Space in a floating dock did not stop the robot";
+  EXPECT_EQ(lidar->isChecked(), lidar_on) << "Space toggled the check box instead";
+  dock->setFloating(false);
+  workspace_->ClearEmergencyStop();
 }
 
 TEST_F(AppTest, WrongKeyAgainstASimProcessIsRefusedWithAClearMessage) {

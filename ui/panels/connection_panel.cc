@@ -87,6 +87,17 @@ ConnectionPanel::ConnectionPanel(Workspace* workspace, const QString& scenarios_
   layout->addWidget(pages_);
   connect(kind_, QOverload<int>::of(&QComboBox::currentIndexChanged), pages_,
           &QStackedWidget::setCurrentIndex);
+  // The stack as tall as the page shown (a QStackedWidget takes its tallest
+  // page's height: the TCP page left a blank gap under the simulator's).
+  auto fit_pages = [this](int shown) {
+    for (int i = 0; i < pages_->count(); ++i) {
+      pages_->widget(i)->setSizePolicy(QSizePolicy::Preferred,
+                                       i == shown ? QSizePolicy::Preferred : QSizePolicy::Ignored);
+    }
+    pages_->adjustSize();
+  };
+  connect(pages_, &QStackedWidget::currentChanged, this, fit_pages);
+  fit_pages(pages_->currentIndex());
   RefreshSerialPorts();
 
   auto* buttons = new QHBoxLayout;

@@ -5,6 +5,7 @@
 #include <QUndoCommand>
 #include <QWidget>
 
+#include "ui/own_window.h"
 #include "ui/project/project_controller.h"
 
 namespace sweepscan::ui {
@@ -197,7 +198,7 @@ bool PairPicking::eventFilter(QObject* watched, QEvent* event) {
   }
   // Only keys meant for this window (not for a dialog on top of it).
   auto* w = qobject_cast<QWidget*>(watched);
-  if (w == nullptr || w->window() != window_) return QObject::eventFilter(watched, event);
+  if (w == nullptr || !InWindowOf(w, window_)) return QObject::eventFilter(watched, event);
   auto* key = static_cast<QKeyEvent*>(event);
   const bool esc = key->key() == Qt::Key_Escape && key->modifiers() == Qt::NoModifier;
   const bool undo = key->matches(QKeySequence::Undo);

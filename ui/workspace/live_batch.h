@@ -54,7 +54,12 @@ class BatchMailbox {
     if (!batch.sealed.empty()) {
       // The open chunk whose tail `last` carries is the first sealed one.
       last.points.clear();
+      // The payloads unpacked for them come along, index for index (else the
+      // GUI thread would unpack them again).
+      last.unpacked.resize(last.sealed.size());
+      batch.unpacked.resize(batch.sealed.size());
       last.sealed.insert(last.sealed.end(), batch.sealed.begin(), batch.sealed.end());
+      last.unpacked.insert(last.unpacked.end(), batch.unpacked.begin(), batch.unpacked.end());
     }
     last.points.insert(last.points.end(), batch.points.begin(), batch.points.end());
     last.trajectory.insert(last.trajectory.end(), batch.trajectory.begin(), batch.trajectory.end());

@@ -128,9 +128,11 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
           [this](const QString& what, bool ok, const QString& message) {
             if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
             if (what == tr("Evaluating") && !ok) emit evaluationFinished(false, message);
-            // SfM failed, was cancelled or refused: the cloud keeps its
-            // poses, and the choice shows them again.
-            if (what == SfmJobName() && !ok && pose_source_ != shown_pose_source_) {
+            // SfM (or the re-opening of a let-go session's samples that comes
+            // before it) failed, was cancelled or refused: the cloud keeps
+            // its poses, and the choice shows them again. A pose source
+            // differs from the shown one only while such a chain runs.
+            if (!ok && !job_running() && pose_source_ != shown_pose_source_) {
               pose_source_ = shown_pose_source_;
               emit poseSourceChanged(static_cast<int>(pose_source_));
             }
@@ -294,6 +296,18 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
         },
         Qt::QueuedConnection);
     QObject::connect(
+        connection, &hardware::RobotConnection::recordingFailed, this,
+        [this](const QString& error) {
+          if (!recording_) return;
+          QString closed;
+          StopRecording(&closed);
+          emit recordingFailed(
+              tr("Writing the session failed: %1\n\nRecording has stopped; what was recorded "
+                 "before is kept in %2.")
+                  .arg(error, session_dir_));
+        },
+        Qt::QueuedConnection);
+    QObject::connect(
         connection, &hardware::RobotConnection::authenticationFailed, this,
         [this](const QString& reason) {
           emit authenticationFailed(reason);
@@ -317,8 +331,8 @@ void Workspace::Disconnect() {
   AbortScriptedDrive();
   if (connection_ != nullptr) {
     if (recording_) {
-      QString ignored;
-      StopRecording(&ignored);
+      QString error;
+      if (!StopRecording(&error)) emit recordingFailed(error);
     }
     hardware::RobotConnection* connection = connection_;
     connection_ = nullptr;
@@ -471,8 +485,8 @@ bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
 
 void Workspace::NewSession() {
   if (recording_) {
-    QString ignored;
-    StopRecording(&ignored);
+    QString error;
+    if (!StopRecording(&error)) emit recordingFailed(error);
   }
   session_dir_.clear();
   unsaved_ = false;
@@ -572,8 +586,8 @@ Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recordi
 void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
                            const QString& dir, bool samples_released) {
   if (recording_) {
-    QString ignored;
-    StopRecording(&ignored);
+    QString error;
+    if (!StopRecording(&error)) emit recordingFailed(error);
   }
   // A damaged recording opens without its damaged records; say what was
   // lost (how many records and seconds, where).

@@ -282,6 +282,10 @@ class Workspace : public QObject {
   void jobProgress(const QString& what, double fraction);
   void jobFinished(const QString& what, bool ok, const QString& message);
   void message(const QString& text);  // For the status bar.
+  void emergencyStopped();            // EmergencyStop() was called (any control).
+  // Writing the recording failed (disk full, a pulled drive) or closing it
+  // did: recording has stopped; `message` says why and what is kept.
+  void recordingFailed(const QString& message);
   void deviceCheckFinished(bool ok, const QString& report);
   void calibrationIteration(int iteration, double cost);
   void calibrationFinished(bool ok, const QString& message);

@@ -111,6 +111,7 @@ void Workspace::EmergencyStop() {
   commanded_ = Twist2d();
   InvokeOnConnection([](hardware::RobotConnection* c) { c->EmergencyStop(); });
   emit message(QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it."));
+  emit emergencyStopped();
 }
 
 void Workspace::ClearEmergencyStop() {

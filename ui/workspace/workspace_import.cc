@@ -23,14 +23,22 @@ void Workspace::InspectRosBag(const QString& bag) {
                       disconnect(*failed);
                       if (!ok) emit rosBagInspected(bag, false, message);
                     });
+  auto warnings = std::make_shared<std::vector<std::string>>();
   RunJob(
       what,
-      [summary, path](std::atomic<bool>*) -> QString {
-        const Status s = io::SummarizeRosBag(path, summary.get());
+      [this, summary, warnings, path, what](std::atomic<bool>*) -> QString {
+        // A bag's summary comes from its index or summary section, or (an
+        // MCAP without one) from a scan of the file that reports no
+        // fraction: the bar shows it is busy, and a Cancel drops the result.
+        QMetaObject::invokeMethod(this, [this, what] { emit jobProgress(what, -1.0); });
+        const Status s = io::SummarizeRosBag(path, summary.get(), warnings.get());
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, summary, bag] {
+      [this, summary, warnings, bag] {
         ros_bag_summary_ = *summary;
+        for (const std::string& w : *warnings) {
+          emit message(tr("%1: %2").arg(bag, QString::fromStdString(w)));
+        }
         emit rosBagInspected(bag, true, QString());
       });
 }
