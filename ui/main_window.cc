@@ -608,7 +608,11 @@ void MainWindow::OpenSessionPath(const QString& dir) {
   workspace_->OpenSession(dir, replay_panel_->speed());
 }
 
-bool MainWindow::SaveSessionTo(const QString& dir) {
+bool MainWindow::SaveSessionTo(const QString& chosen) {
+  // A session is a NAME.sweepscan folder, whichever dialog named it.
+  const QString dir = chosen.endsWith(QStringLiteral(".sweepscan"))
+                          ? chosen
+                          : chosen + QStringLiteral(".sweepscan");
   QString error;
   if (workspace_->recording() && !workspace_->StopRecording(&error)) {
     ShowError(tr("Recording"), error);

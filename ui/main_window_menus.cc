@@ -108,8 +108,7 @@ void MainWindow::BuildFileMenu() {
     const QString dir = QFileDialog::getSaveFileName(
         this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
     if (dir.isEmpty()) return;
-    SaveSessionTo(dir.endsWith(QStringLiteral(".sweepscan")) ? dir
-                                                             : dir + QStringLiteral(".sweepscan"));
+    SaveSessionTo(dir);
   });
   save_as->setShortcut(QKeySequence::SaveAs);
   file->addSeparator();

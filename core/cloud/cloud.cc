@@ -21,14 +21,26 @@ void PointChunks::Seal() {
   sealed_.push_back(std::move(chunk));
 }
 
-std::vector<CloudPoint> PointChunks::Flatten() const {
-  const auto sealed = SealedChunks();
-  std::vector<CloudPoint> all;
-  size_t n = open_.size();
+std::vector<CloudPoint> PointChunks::Flatten() const { return Snapshot().Flatten(); }
+
+CloudSnapshotRef PointChunks::Snapshot() const {
+  CloudSnapshotRef s;
+  s.sealed = SealedChunks();
+  s.open.assign(open_.begin(), open_.end());
+  return s;
+}
+
+size_t CloudSnapshotRef::size() const {
+  size_t n = open.size();
   for (const auto& c : sealed) n += c->size();
-  all.reserve(n);
+  return n;
+}
+
+std::vector<CloudPoint> CloudSnapshotRef::Flatten() const {
+  std::vector<CloudPoint> all;
+  all.reserve(size());
   for (const auto& c : sealed) c->Decode(&all);
-  all.insert(all.end(), open_.begin(), open_.end());
+  all.insert(all.end(), open.begin(), open.end());
   return all;
 }
 

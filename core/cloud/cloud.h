@@ -55,6 +55,18 @@ using CloudChunk = std::vector<CloudPoint>;
 class PackedChunk;
 class CloudPager;
 
+// What a cloud holds at one moment, cheap to take (shared pointers to the
+// sealed chunks and a copy of the open chunk's points, at most a chunk) and
+// decoded later on any thread: a job exports or evaluates millions of points
+// without the GUI waiting while they are unpacked or read back from disk.
+struct CloudSnapshotRef {
+  std::vector<std::shared_ptr<const PackedChunk>> sealed;
+  std::vector<CloudPoint> open;
+  size_t size() const;
+  // Any thread: every point, sealed then open, decoded.
+  std::vector<CloudPoint> Flatten() const;
+};
+
 // Sealed chunks are packed (core/cloud/packed_chunk.h: 14 bytes a point
 // instead of CloudPoint's 32, every attribute exact) and may be paged out
 // to disk under the pager's memory budget (core/cloud/cloud_pager.h).
@@ -89,6 +101,8 @@ class PointChunks {
   const CloudChunk& open_chunk() const { return open_; }
   // Processing thread only: everything, sealed and open, decoded.
   std::vector<CloudPoint> Flatten() const;
+  // Processing thread only: the same, to be decoded later (CloudSnapshotRef).
+  CloudSnapshotRef Snapshot() const;
 
  private:
   size_t chunk_capacity_;

@@ -145,7 +145,7 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   OpenDiamond();
   CalibrationPanel* panel = window_->calibration_panel();
   CloudView* view = window_->view();
-  const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> before = workspace_->CloudSnapshot().Flatten();
   ASSERT_TRUE(WaitFor([&] { return view->point_count() == before.size(); }, 10000));
 
   // The split: every point labelled, both passes substantial, and a pass
@@ -298,7 +298,7 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
   panel->ShowAfter(true);
   ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
-  const std::vector<CloudPoint> after = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> after = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(after.size(), before.size());
   double moved = 0.0;
   for (size_t i = 0; i < after.size(); i += 97)

@@ -98,7 +98,7 @@ class CloudStoreUiTest : public testing::AppFixture {
 TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
-  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot());
+  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot().Flatten());
   if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
   ASSERT_TRUE(std::isnan(view->clip_height()));
   view->ViewOblique();  // The whole cloud in the frustum.
@@ -113,7 +113,7 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
   EXPECT_EQ(Positions(view->BatchedPoints()), cloud);
   // With a pass filter the batches' cells are the pass's points alone.
   {
-    const std::vector<CloudPoint> appended = workspace_->CloudSnapshot();
+    const std::vector<CloudPoint> appended = workspace_->CloudSnapshot().Flatten();
     std::vector<float> pass(appended.size());
     std::vector<CloudPoint> pass_b;
     for (size_t i = 0; i < pass.size(); ++i) {
@@ -180,7 +180,7 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
 TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
-  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot());
+  const std::vector<Xyz> cloud = Positions(workspace_->CloudSnapshot().Flatten());
   if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
   const size_t budget = cloud.size() / 16;
   view->SetRestBudget(budget);
@@ -246,7 +246,7 @@ TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
 TEST_F(CloudStoreUiTest, AtRestTheNearestCubesAreDrawnDenserThanTheFarOnes) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
-  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot().Flatten();
   const std::vector<Xyz> cloud = Positions(snapshot);
   if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
   const size_t budget = cloud.size() / 16;
@@ -301,7 +301,7 @@ TEST_F(CloudStoreUiTest, AtRestTheNearestCubesAreDrawnDenserThanTheFarOnes) {
 void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
-  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot().Flatten();
   Eigen::Vector3d lo(1e9, 1e9, 1e9), hi = -lo;
   for (const CloudPoint& p : snapshot) {
     lo = lo.cwiseMin(Eigen::Vector3d(p.x, p.y, p.z));
@@ -490,7 +490,7 @@ TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoin
   ASSERT_EQ(rec.code, 0) << rec.out;
   std::vector<CloudPoint> expected;
   ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
-  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> snapshot = workspace_->CloudSnapshot().Flatten();
   const std::vector<Xyz> cloud = Positions(snapshot);
   ASSERT_EQ(cloud, Positions(expected));
 
@@ -575,7 +575,7 @@ TEST_F(CloudStoreUiTest, ALargeSessionIsStreamedAndOpensAsItsReplayWould) {
   };
   const std::vector<CloudPoint> ekf = cli("ekf");
   ASSERT_GT(ekf.size(), 100000u);
-  EXPECT_TRUE(same(workspace_->CloudSnapshot(), ekf));
+  EXPECT_TRUE(same(workspace_->CloudSnapshot().Flatten(), ekf));
   ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == ekf.size(); }, 10000));
 
   // The wheels alone: the samples are read again (a job), then replayed.
@@ -584,7 +584,7 @@ TEST_F(CloudStoreUiTest, ALargeSessionIsStreamedAndOpensAsItsReplayWould) {
   workspace_->SetPoseSource(PoseSource::kOdometry);
   ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
   QObject::disconnect(c);
-  EXPECT_TRUE(same(workspace_->CloudSnapshot(), cli("odometry")));
+  EXPECT_TRUE(same(workspace_->CloudSnapshot().Flatten(), cli("odometry")));
 }
 
 TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {
@@ -603,7 +603,7 @@ TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {
 
   // The middle of the floor, where the robot drove (y = 2.5 m): seen, not
   // hidden behind the ceiling.
-  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot().Flatten();
   const CloudPoint* floor = nullptr;
   for (const CloudPoint& p : cloud) {
     if (p.z < 0.02 && std::abs(p.x - 4.0) < 0.05 && std::abs(p.y - 2.0) < 0.05) floor = &p;

@@ -222,7 +222,7 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
   ASSERT_TRUE(window_->SaveSessionTo(saved)) << window_->last_error().toStdString();
   workspace_->Disconnect();
   QTest::qWait(300);
-  const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> before = workspace_->CloudSnapshot().Flatten();
   ASSERT_GT(before.size(), 30000u);
 
   // Close the window and start a fresh one (the app reopened next week).
@@ -235,7 +235,7 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
   window_->OpenSessionPath(saved);
   ASSERT_TRUE(WaitFor([&] { return finished; }, 60000)) << window_->last_error().toStdString();
-  const std::vector<CloudPoint> after = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> after = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(after.size(), before.size());
   for (size_t i = 0; i < before.size(); ++i) {
     ASSERT_EQ(after[i].x, before[i].x) << i;
@@ -322,7 +322,7 @@ TEST_F(AppTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
   workspace_->OpenSession(QString::fromStdString(dir + "/c.sweepscan"), 0.0);
   ASSERT_TRUE(WaitFor([&] { return finished; }, 120000));
-  const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(replayed.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) {
     ASSERT_EQ(replayed[i].x, expected[i].x) << i;
@@ -390,7 +390,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
       << window_->pose_source_status().toStdString();
   window_->OpenSessionPath(QString::fromStdString(session));
   ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), ekf));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), ekf));
   EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
 
   // SfM from the menu. The view settles first, so that what is measured is
@@ -414,7 +414,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
       100.0);
   ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
   EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kSfm);
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), sfm));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), sfm));
   ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == sfm.size(); }, 10000));
   EXPECT_EQ(window_->pose_source_status(), "Poses: SfM");
   QComboBox* box = window_->replay_panel()->pose_source_box();
@@ -449,7 +449,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
   emit box->activated(box->currentIndex());
   EXPECT_TRUE(window_->pose_source_action(PoseSource::kEkf)->isChecked());
   ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), ekf));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), ekf));
   EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
   EXPECT_NE(window_->view()->color_mode(), CloudView::ColorMode::kDeviation);
   EXPECT_TRUE(workspace_->deviation_map().empty());
@@ -458,7 +458,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
   replays = 0;
   window_->pose_source_action(PoseSource::kOdometry)->trigger();
   ASSERT_TRUE(WaitFor([&] { return replays == 1; }, 120000)) << failed.toStdString();
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), odometry));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), odometry));
   EXPECT_EQ(QSettings().value("session/pose_source").toString(), "odometry");
   EXPECT_TRUE(failed.isEmpty()) << failed.toStdString();
 
@@ -482,7 +482,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
   window_->OpenSessionPath(QString::fromStdString(session));
   ASSERT_TRUE(WaitFor([&] { return reopened; }, 120000)) << window_->last_error().toStdString();
   EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kSfm);
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), sfm));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), sfm));
 }
 
 // A cancelled SfM leaves the cloud as it was and gives the choice back to
@@ -490,7 +490,7 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
 TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
   ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
   ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
-  const std::vector<CloudPoint> before = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> before = workspace_->CloudSnapshot().Flatten();
   QString message;
   bool finished = false;
   QObject::connect(workspace_.get(), &Workspace::jobFinished,
@@ -509,7 +509,7 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
   EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kEkf);
   WaitFor([] { return false; }, 300);
   EXPECT_FALSE(replayed);  // Nothing re-processed.
-  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot(), before));
+  EXPECT_TRUE(SameCloud(workspace_->CloudSnapshot().Flatten(), before));
 
   // SfM chosen, then a live recording: the EKF places the scans.
   window_->pose_source_action(PoseSource::kSfm)->trigger();
@@ -609,7 +609,7 @@ TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
   // The deviation map: a value for every point; on the floor (the first
   // plane's inliers, at the floor's height) they match its RMS.
   const std::vector<float>& dev = workspace_->deviation_map();
-  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(dev.size(), cloud.size());
   const EvaluatedPlane* floor = nullptr;
   for (const EvaluatedPlane& p : e->planes) {
@@ -667,7 +667,7 @@ TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
 TEST_F(AppTest, MeasureDistanceBetweenTwoClickedPoints) {
   ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
   ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
-  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot().Flatten();
   CloudView* view = window_->view();
   ASSERT_TRUE(WaitFor([&] { return view->point_count() == cloud.size(); }, 10000));
   // Seen from above with everything over 10 cm hidden: the floor.

@@ -81,7 +81,7 @@ TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
   ASSERT_EQ(cli.code, 0) << cli.out;
   std::vector<CloudPoint> expected;
   ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
-  const std::vector<CloudPoint> shown = workspace_->CloudSnapshot();
+  const std::vector<CloudPoint> shown = workspace_->CloudSnapshot().Flatten();
   ASSERT_GT(expected.size(), 100u);
   ASSERT_EQ(shown.size(), expected.size());
   for (size_t i = 0; i < expected.size(); ++i) {

@@ -74,6 +74,11 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     position_->setText(QStringLiteral("%1 / %2 s").arg(pos, 0, 'f', 1).arg(len, 0, 'f', 1));
   });
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
+    // A new replay starts unpaused (the processor resets it): so does the button.
+    {
+      const QSignalBlocker block(pause_);
+      pause_->setChecked(false);
+    }
     session_->setText(dir.isEmpty() ? tr("No session") : QFileInfo(dir).fileName());
     session_->setToolTip(dir);
     if (!workspace_->replaying()) slider_->setEnabled(false);

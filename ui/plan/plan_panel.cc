@@ -32,7 +32,7 @@ const QString kSectionKey = QStringLiteral("plan/section_line");  // x0, y0, x1,
 // copied) and their poses, or the session's points to convert on the job.
 struct PlanSource {
   std::vector<PlanInput> inputs;
-  std::shared_ptr<const std::vector<CloudPoint>> session;
+  std::shared_ptr<const CloudSnapshotRef> session;  // decoded on the job
   QString what;  // "the project floor (a, b)", "the session lab.sweepscan"
 };
 
@@ -65,8 +65,8 @@ std::shared_ptr<PlanSource> TakeSource(ProjectController* project, Workspace* wo
     source->what =
         PlanPanel::tr("project %1 (%2)").arg(QString::fromStdString(doc->project().name), ids.join(", "));
   } else if (workspace->point_count() > 0) {
-    // A copy on the processing thread (the GUI waits for its current batch).
-    source->session = std::make_shared<const std::vector<CloudPoint>>(workspace->CloudSnapshot());
+    // The chunks as they are now (cheap); decoded on the job.
+    source->session = std::make_shared<const CloudSnapshotRef>(workspace->CloudSnapshot());
     const QString dir = workspace->session_dir();
     source->what =
         dir.isEmpty() ? PlanPanel::tr("the live cloud") : PlanPanel::tr("session %1").arg(QFileInfo(dir).fileName());
@@ -82,8 +82,9 @@ std::vector<PlanInput> InputsOf(const PlanSource& source) {
   std::vector<PlanInput> inputs = source.inputs;
   if (source.session) {
     auto xyz = std::make_shared<std::vector<Eigen::Vector3f>>();
-    xyz->reserve(source.session->size());
-    for (const CloudPoint& p : *source.session) xyz->emplace_back(p.x, p.y, p.z);
+    const std::vector<CloudPoint> points = source.session->Flatten();
+    xyz->reserve(points.size());
+    for (const CloudPoint& p : points) xyz->emplace_back(p.x, p.y, p.z);
     inputs.push_back({xyz, Rigid3d()});
   }
   return inputs;

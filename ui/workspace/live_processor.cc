@@ -137,6 +137,11 @@ std::vector<CloudPoint> LiveProcessor::Flatten() const {
   return c != nullptr ? c->Flatten() : std::vector<CloudPoint>();
 }
 
+CloudSnapshotRef LiveProcessor::Snapshot() const {
+  const PointChunks* c = chunks();
+  return c != nullptr ? c->Snapshot() : CloudSnapshotRef();
+}
+
 size_t LiveProcessor::CloudSize() const {
   const PointChunks* c = chunks();
   return c != nullptr ? c->sealed_point_count() + c->open_chunk().size() : 0;

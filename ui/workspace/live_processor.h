@@ -70,6 +70,7 @@ class LiveProcessor : public QObject {
   // The whole cloud assembled since the last reset (processing thread; the
   // workspace reads it through a blocking queued call for save/export).
   std::vector<CloudPoint> Flatten() const;
+  CloudSnapshotRef Snapshot() const;  // To decode on another thread.
   size_t CloudSize() const;
 
  signals:

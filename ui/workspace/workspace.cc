@@ -716,26 +716,28 @@ void Workspace::SeekReplay(double position_s) {
   QMetaObject::invokeMethod(p, [p, position_s] { p->SeekReplay(position_s); });
 }
 
-std::vector<CloudPoint> Workspace::CloudSnapshot() const {
-  std::vector<CloudPoint> points;
+CloudSnapshotRef Workspace::CloudSnapshot() const {
+  CloudSnapshotRef snapshot;
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(
-      p, [p, &points] { points = p->Flatten(); }, Qt::BlockingQueuedConnection);
-  return points;
+      p, [p, &snapshot] { snapshot = p->Snapshot(); }, Qt::BlockingQueuedConnection);
+  return snapshot;
 }
 
 void Workspace::ExportCloud(const QString& path) {
-  auto points = std::make_shared<std::vector<CloudPoint>>(CloudSnapshot());
+  auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
+  const size_t count = snapshot->size();
   const std::string file = path.toStdString();
   RunJob(
       QStringLiteral("Exporting %1").arg(path),
-      [points, file](std::atomic<bool>*) -> QString {
-        if (points->empty()) return QStringLiteral("The cloud is empty: nothing to export.");
-        const Status s = SaveCloud(file, *points);
+      [snapshot, file](std::atomic<bool>*) -> QString {
+        const std::vector<CloudPoint> points = snapshot->Flatten();
+        if (points.empty()) return QStringLiteral("The cloud is empty: nothing to export.");
+        const Status s = SaveCloud(file, points);
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, path, points] {
-        emit message(QStringLiteral("Exported %1 points to %2").arg(points->size()).arg(path));
+      [this, path, count] {
+        emit message(QStringLiteral("Exported %1 points to %2").arg(count).arg(path));
       });
 }
 

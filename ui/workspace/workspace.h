@@ -254,9 +254,11 @@ class Workspace : public QObject {
 
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
-  // Every point assembled since the last reset, copied on the processing
-  // thread (blocks until it has finished its current batch).
-  std::vector<CloudPoint> CloudSnapshot() const;
+  // Every point assembled since the last reset, as chunks to decode later
+  // (CloudSnapshotRef::Flatten, on a job): taken on the processing thread,
+  // which costs the GUI only the wait for its current batch and a copy of
+  // the open chunk, not the unpacking or page-in of millions of points.
+  CloudSnapshotRef CloudSnapshot() const;
   // Its number of points (without decoding them).
   size_t CloudSize() const;
   // Points and scans assembled, as of the last batch the view took.

@@ -153,13 +153,14 @@ void Workspace::SplitPasses() {
                                                      .arg(opened_circle_.note));
     return;
   }
-  auto points = std::make_shared<std::vector<CloudPoint>>(CloudSnapshot());
+  auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
   auto labels = std::make_shared<std::vector<float>>();
   const OpenedCircle circle = opened_circle_;
   RunJob(
       tr("Splitting the passes"),
-      [points, labels, circle](std::atomic<bool>*) -> QString {
-        const std::vector<uint8_t> pass = LabelCirclePasses(*points, *circle.poses, circle.circle);
+      [snapshot, labels, circle](std::atomic<bool>*) -> QString {
+        const std::vector<CloudPoint> points = snapshot->Flatten();
+        const std::vector<uint8_t> pass = LabelCirclePasses(points, *circle.poses, circle.circle);
         labels->resize(pass.size());
         for (size_t i = 0; i < pass.size(); ++i) {
           (*labels)[i] = pass[i] == kNoPass ? std::numeric_limits<float>::quiet_NaN()
@@ -180,12 +181,8 @@ void Workspace::SplitPasses() {
 
 void Workspace::Evaluate() {
   auto points = std::make_shared<std::vector<Eigen::Vector3f>>();
-  {
-    const std::vector<CloudPoint> cloud = CloudSnapshot();
-    points->reserve(cloud.size());
-    for (const CloudPoint& p : cloud) points->emplace_back(p.x, p.y, p.z);
-  }
-  if (points->empty()) {
+  auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
+  if (snapshot->size() == 0) {
     emit evaluationFinished(false, tr("The cloud is empty: open or record a session first."));
     return;
   }
@@ -194,7 +191,12 @@ void Workspace::Evaluate() {
   const MountingError shown = shown_calibration_;
   RunJob(
       tr("Evaluating"),
-      [this, points, result, deviations](std::atomic<bool>* cancel) -> QString {
+      [this, snapshot, points, result, deviations](std::atomic<bool>* cancel) -> QString {
+        {
+          const std::vector<CloudPoint> cloud = snapshot->Flatten();
+          points->reserve(cloud.size());
+          for (const CloudPoint& p : cloud) points->emplace_back(p.x, p.y, p.z);
+        }
         // Stage and fraction to the status bar (at most ~50 calls a second,
         // from the evaluation's threads); Cancel stops it within 100 ms.
         EvaluationControl control;

@@ -84,7 +84,7 @@ std::vector<float> Workspace::IntensityValues() const {
     for (const LidarSample& s : scan.samples) any = any || s.intensity != 0.0f;
   }
   if (!any) return {};
-  const std::vector<CloudPoint> points = CloudSnapshot();
+  const std::vector<CloudPoint> points = CloudSnapshot().Flatten();
   std::vector<float> values(points.size(), std::numeric_limits<float>::quiet_NaN());
   // Points come scan by scan: one beam table a scan.
   std::vector<float> beam(65536, 0.0f);

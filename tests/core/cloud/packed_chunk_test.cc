@@ -467,6 +467,26 @@ TEST(CloudPagerTest, TheNextCloudsCacheFileOpensWhereItsSessionIs) {
   EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
 }
 
+// A snapshot is the cloud as it was when taken, decoded later on another
+// thread while the cloud grows and pages out (an export or an evaluation on
+// a job while the recording goes on).
+TEST(CloudPagerTest, ASnapshotDecodedOnAnotherThreadIsTheCloudWhenItWasTaken) {
+  ScratchDir dir;
+  CloudPager pager(1, dir.path);  // Everything but the newest pages out.
+  const auto points = MakePoints(10 * 1024 + 300, 9, false);
+  PointChunks chunks(1024, &pager);
+  for (size_t i = 0; i < 5 * 1024 + 300; ++i) chunks.Append(points[i]);
+  const CloudSnapshotRef snapshot = chunks.Snapshot();
+  EXPECT_EQ(snapshot.size(), 5u * 1024 + 300);
+  std::vector<CloudPoint> decoded;
+  std::thread job([&] { decoded = snapshot.Flatten(); });
+  for (size_t i = 5 * 1024 + 300; i < points.size(); ++i) chunks.Append(points[i]);
+  job.join();
+  EXPECT_TRUE(SamePoints(decoded,
+                         std::vector<CloudPoint>(points.begin(), points.begin() + 5 * 1024 + 300)));
+  EXPECT_TRUE(SamePoints(chunks.Flatten(), points));
+}
+
 TEST(CloudPagerTest, ConcurrentReadersWhileTheWriterPagesOut) {
   // The view (GUI thread) and an export (a job thread) read sealed chunks
   // while the processing thread appends and the pager evicts.
