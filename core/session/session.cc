@@ -326,12 +326,16 @@ bool IntactRecordAt(const uint8_t* data, size_t n, size_t pos) {
   return Crc32c(data + pos, kRecordHeader + length) == GetU32(data + pos + kRecordHeader + length);
 }
 
-// The next position after `pos` where an intact record starts; n if none.
-size_t NextIntactRecord(const uint8_t* data, size_t n, size_t pos) {
-  for (size_t q = pos + 1; q + kSessionRecordOverhead <= n; ++q) {
+// The next position after `pos`, before `limit`, where an intact record
+// starts; `limit` if none.
+size_t NextIntactRecord(const uint8_t* data, size_t n, size_t pos, size_t limit) {
+  for (size_t q = pos + 1; q < limit && q + kSessionRecordOverhead <= n; ++q) {
     if (IntactRecordAt(data, n, q)) return q;
   }
-  return n;
+  return limit;
+}
+size_t NextIntactRecord(const uint8_t* data, size_t n, size_t pos) {
+  return NextIntactRecord(data, n, pos, n);
 }
 
 // How many records the damaged bytes [pos, end) held, from their length
@@ -376,16 +380,18 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
   bool have_good = false;
   int64_t last_good_time = 0;
   // Skips damage starting at `pos` up to the next intact record (or the
-  // end): the record's own length when it leads to an intact record (a
-  // flipped byte in the payload or CRC), else a search byte by byte (a
-  // damaged length field).
+  // end): the first intact record after `pos`, searched byte by byte. The
+  // record's own length, when it leads to an intact record, bounds the
+  // search (a flipped byte in the payload or CRC: nothing intact inside),
+  // but is not trusted alone: a damaged length can also land on an intact
+  // record further on, and the records between were intact too.
   auto skip_damage = [&](const std::string& why) {
     size_t next = n;
     const uint32_t length = GetU32(data + pos);
     const size_t by_length = pos + kSessionRecordOverhead + length;
     if (length <= kSessionMaxRecordBytes && by_length <= n &&
         (by_length == n || IntactRecordAt(data, n, by_length))) {
-      next = by_length;
+      next = NextIntactRecord(data, n, pos, by_length);
     } else {
       next = NextIntactRecord(data, n, pos);
     }
@@ -431,8 +437,17 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
     if (left < total) {
       // Either a torn tail or a damaged length field in the middle: with
       // skipping on, an intact record further on tells them apart.
-      if (options.skip_corrupt_records && NextIntactRecord(data, n, pos) < n) {
-        skip_damage("length " + std::to_string(length) + " runs past the end of the file");
+      const size_t intact = NextIntactRecord(data, n, pos);
+      if (intact < n) {
+        // Intact records after it: a damaged length, not a crash's tail.
+        const std::string why = "length " + std::to_string(length) +
+                                " runs past the end of the file, but an intact record follows at "
+                                "byte " +
+                                std::to_string(intact);
+        if (!options.skip_corrupt_records) {
+          return Status::Error(source + ": " + RecordAt(index, pos) + ": " + why);
+        }
+        skip_damage(why);
         continue;
       }
       torn("needs " + std::to_string(total) + " bytes, " + std::to_string(left) + " left");
