@@ -39,7 +39,10 @@ class Args {
         set_flags_.insert(key);
       } else if (options_.count(key)) {
         if (!has_value) {
-          if (i + 1 >= argc) {
+          // A missing value must not take the next option for it (`--out
+          // --strict` wrote into a folder named --strict); a value that
+          // starts with "--" can still be given as --key=--value.
+          if (i + 1 >= argc || std::string(argv[i + 1]).rfind("--", 0) == 0) {
             *error = "option --" + key + " needs a value";
             return false;
           }

@@ -2,6 +2,9 @@
 #ifndef SWEEPSCAN_APP_CLI_COMMON_H_
 #define SWEEPSCAN_APP_CLI_COMMON_H_
 
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -20,6 +23,18 @@ constexpr int kExitBadInput = 2;  // usage errors, invalid or corrupt input file
 
 inline void PrintError(const std::string& message) {
   std::cerr << "sweepscan-cli: error: " << message << "\n";
+}
+
+// --seed's value: a decimal integer that fits 64 bits (strtoull saturates
+// an overflow at 2^64 - 1 and says so only through errno).
+inline bool ParseSeed(const std::string& text, uint64_t* seed) {
+  if (text.empty() || text[0] < '0' || text[0] > '9') return false;
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (*end != '\0' || errno == ERANGE) return false;
+  *seed = v;
+  return true;
 }
 
 // Runs a command so that nothing escapes it: an exception (out of memory,

@@ -217,6 +217,16 @@ int RunEvaluate(int argc, char** argv) {
       return kExitOk;
     };
     int code;
+    // One input: a SESSION, a cloud file or --scenario (not both, not two).
+    if (args.positional().size() + (args.Has("scenario") ? 1 : 0) != 1) {
+      PrintError(args.positional().size() > 1
+                     ? "evaluate takes one SESSION or cloud file, got " +
+                           std::to_string(args.positional().size())
+                     : std::string(args.positional().empty()
+                                       ? "expected a SESSION, a cloud file or --scenario"
+                                       : "give a SESSION or --scenario, not both"));
+      return kExitBadInput;
+    }
     if (!args.Has("scenario") && !(args.Has("pose-source") && args.Get("pose-source") == "truth")) {
       // A session: streamed (hardware/station/session_stream.h), only the
       // positions kept, so memory is the evaluation's own.

@@ -25,7 +25,7 @@ const char* const kProjectUsage =
     "first session added is the anchor: the project's frame is its start pose.\n"
     "\n"
     "Subcommands:\n"
-    "  new PROJECT [SESSION...] [--name N] [--description D]\n"
+    "  new PROJECT [SESSION...] [--name N] [--description D] [--calibration FILE]\n"
     "                     create a project file (refuses to overwrite one)\n"
     "  add PROJECT SESSION... [--calibration FILE]\n"
     "                     add session folders (unplaced until aligned)\n"
@@ -74,9 +74,25 @@ int RunNew(const Args& args) {
   Project project;
   project.name = args.Get("name", fs::path(file).stem().string());
   project.description = args.Get("description");
+  // As `add`: the sessions must be there, and take --calibration.
+  std::optional<MountingError> calibration;
+  if (args.Has("calibration")) {
+    MountingError m;
+    const Status c = LoadCalibrationFile(args.Get("calibration"), &m);
+    if (!c.ok()) return Fail(kExitBadInput, c.message());
+    calibration = m;
+  }
   for (size_t i = 1; i < pos.size(); ++i) {
-    const Status s = project.AddSession(pos[i], nullptr);
+    ProjectSession probe;
+    probe.path = pos[i];
+    if (!fs::is_directory(ResolveSessionPath(file, probe))) {
+      return Fail(kExitBadInput,
+                  pos[i] + ": not a session folder (paths are relative to the project's folder)");
+    }
+    ProjectSession* added = nullptr;
+    const Status s = project.AddSession(pos[i], &added);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
+    added->calibration = calibration;
   }
   const Status s = SaveProject(file, project);
   if (!s.ok()) return Fail(kExitFailure, s.message());

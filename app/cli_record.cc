@@ -76,8 +76,9 @@ bool ParsePositive(const Args& args, const std::string& key, double* out) {
   const std::string v = args.Get(key);
   char* end = nullptr;
   const double d = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0' || !(d > 0.0) || !(d < 1e7)) {
-    PrintError("--" + key + " expects a positive number of seconds, got '" + v + "'");
+  // Below 2e6 s (23 days): Qt's timers count milliseconds in an int.
+  if (v.empty() || *end != '\0' || !(d > 0.0) || !(d < 2e6)) {
+    PrintError("--" + key + " expects a positive number of seconds below 2000000, got '" + v + "'");
     return false;
   }
   *out = d;

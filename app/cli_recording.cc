@@ -65,10 +65,9 @@ int LoadRecording(const Args& args, RecordingInput* in) {
     }
     if (args.Has("seed")) {
       const std::string v = args.Get("seed");
-      char* end = nullptr;
-      const unsigned long long seed = std::strtoull(v.c_str(), &end, 10);
-      if (v.empty() || *end != '\0' || v[0] == '-') {
-        PrintError("--seed expects a non-negative integer, got '" + v + "'");
+      uint64_t seed = 0;
+      if (!ParseSeed(v, &seed)) {
+        PrintError("--seed expects an integer from 0 to 2^64 - 1, got '" + v + "'");
         return kExitBadInput;
       }
       scenario.seed = seed;

@@ -248,8 +248,12 @@ int RunReconstruct(int argc, char** argv) {
   Args args({"json", "help", "no-ekf", "no-deskew", "strict", "loop-closure"}, {"out", "calibration", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
-  if (!args.Has("out")) {
-    PrintError("reconstruct needs --out CLOUD.las|CLOUD.ply|CLOUD.pcd (see sweepscan-cli help reconstruct)");
+  if (!args.Has("out") || !IsCloudFile(args.Get("out"))) {
+    // Said before the session is read, not after.
+    PrintError(args.Has("out")
+                   ? "--out " + args.Get("out") + ": not a cloud file (.las, .ply or .pcd)"
+                   : "reconstruct needs --out CLOUD.las|CLOUD.ply|CLOUD.pcd (see "
+                     "sweepscan-cli help reconstruct)");
     return kExitBadInput;
   }
   return ReconstructToFile(args);

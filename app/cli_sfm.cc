@@ -280,6 +280,10 @@ int RunSfmWheeled(const Args& args) {
     PrintError("sfm needs --out CLOUD.ply (see sweepscan-cli help sfm)");
     return kExitBadInput;
   }
+  if (!IsCloudFile(args.Get("out"))) {
+    PrintError("--out " + args.Get("out") + ": not a cloud file (.las, .ply or .pcd)");
+    return kExitBadInput;
+  }
   const std::string prior_name = args.Get("motion-prior", "ekf");
   if (prior_name != "ekf" && prior_name != "odometry" && prior_name != "none" && prior_name != "truth") {
     PrintError("--motion-prior must be ekf, odometry, none or truth, got '" + prior_name + "'");

@@ -84,10 +84,9 @@ int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
   }
   if (args.Has("seed")) {
     const std::string s = args.Get("seed");
-    char* end = nullptr;
-    const unsigned long long seed = std::strtoull(s.c_str(), &end, 10);
-    if (s.empty() || *end != '\0' || s[0] == '-') {
-      PrintError("--seed expects a non-negative integer, got '" + s + "'");
+    uint64_t seed = 0;
+    if (!ParseSeed(s, &seed)) {
+      PrintError("--seed expects an integer from 0 to 2^64 - 1, got '" + s + "'");
       return kExitBadInput;
     }
     config.seed = seed;
@@ -125,7 +124,15 @@ int RecordAndDecode(const Args& args, const SimulateRequest& request, sim::SimWo
   if (!status.ok()) {
     // --overwrite only helps when the session folder already holds a session.
     const bool exists = status.message().find("not empty") != std::string::npos;
-    PrintError(status.message() + (exists && !args.Flag("overwrite") ? " (use --overwrite to replace it)" : ""));
+    // The writer's "(ask for overwrite explicitly)" becomes this command's option.
+    std::string message = status.message();
+    const std::string generic = " (ask for overwrite explicitly)";
+    if (exists && !args.Flag("overwrite") && message.size() >= generic.size() &&
+        message.compare(message.size() - generic.size(), generic.size(), generic) == 0) {
+      message.replace(message.size() - generic.size(), generic.size(),
+                      " (use --overwrite to replace it)");
+    }
+    PrintError(message);
     return kExitFailure;
   }
   hardware::SessionDecodeInfo info;

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -117,6 +118,44 @@ TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     ExpectOneErrorLine(r, "missing");
   }
+}
+
+// Usage that used to be taken the wrong way: no input (evaluate segfaulted),
+// an option's missing value taking the next option (export wrote into a
+// folder named --strict), an output the command cannot write (found only
+// after the whole session was read), numbers out of range (a seed saturated
+// at 2^64 - 1, a duration past Qt's int milliseconds), a project of a folder
+// that is not there. Each is one error line and exit 2, before any work.
+TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
+  const std::string key = Tmp("robot.key");
+  WriteText(key, "a robot's key, long enough to be one");
+  ::chmod(key.c_str(), 0600);
+  const std::string strict_dir = Tmp("--strict");
+  sweepscan::testing::RunCommand("rm -rf -- '" + strict_dir + "'");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"evaluate", "expected a SESSION, a cloud file or --scenario"},
+      {"evaluate " + Session() + " " + Session(),
+       "evaluate takes one SESSION or cloud file, got 2"},
+      {"export " + Session() + " --out --strict", "option --out needs a value"},
+      {"reconstruct " + Session() + " --out " + Tmp("cloud.txt"),
+       "not a cloud file (.las, .ply or .pcd)"},
+      {"simulate --scenario " + Scenario("lab") + " --out " + Tmp("s.ply") +
+           " --seed 99999999999999999999999",
+       "--seed expects an integer from 0 to 2^64 - 1"},
+      {"record --connect 127.0.0.1:1 --key-file " + key + " --out " + Tmp("r.sweepscan") +
+           " --duration 3000000",
+       "--duration expects a positive number of seconds below 2000000"},
+      {"project new " + Tmp("p.sweepscan-project") + " " + Tmp("missing.sweepscan"),
+       "not a session folder"},
+  };
+  for (const auto& [args, expect] : cases) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    EXPECT_NE(r.out.find(expect), std::string::npos) << args << ": " << r.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(strict_dir));
+  EXPECT_FALSE(std::filesystem::exists(Tmp("p.sweepscan-project")));
+  EXPECT_FALSE(std::filesystem::exists(Tmp("cloud.txt")));
 }
 
 TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
