@@ -76,6 +76,12 @@ class Args {
     return true;
   }
   const std::vector<std::string>& positional() const { return positional_; }
+  // Every option given, flags and valued, by name.
+  std::set<std::string> given() const {
+    std::set<std::string> keys = set_flags_;
+    for (const auto& [key, value] : values_) keys.insert(key);
+    return keys;
+  }
 
  private:
   std::set<std::string> flags_, options_, set_flags_;

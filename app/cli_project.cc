@@ -2,16 +2,19 @@
 // (core/project/project.h, docs/project-format.md). This file parses the
 // subcommands and edits the project file; cli_project_align.cc registers
 // sessions and cli_project_export.cc writes the project's cloud.
+#include "app/cli_project.h"
+
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <string>
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
-#include "app/cli_project.h"
 #include "core/calibration/calibration_file.h"
 #include "core/project/project.h"
 
@@ -229,6 +232,23 @@ int RunProject(int argc, char** argv) {
     return kExitOk;
   }
   if (args.positional().empty()) return Fail(kExitBadInput, "project " + sub + " needs a PROJECT file");
+  // The subcommands share one parser; an option another subcommand takes is
+  // refused, not ignored (`project new ... --out x.las` did nothing).
+  static const std::map<std::string, std::set<std::string>> kTakes = {
+      {"new", {"name", "description", "calibration", "json"}},
+      {"add", {"calibration", "json"}},
+      {"remove", {"json"}},
+      {"info", {"json"}},
+      {"align", {"session", "to", "pairs", "no-icp", "hold-free", "pose-source", "strict", "json"}},
+      {"export", {"out", "sessions", "pose-source", "strict", "json"}},
+  };
+  if (const auto takes = kTakes.find(sub); takes != kTakes.end()) {
+    for (const std::string& key : args.given()) {
+      if (takes->second.count(key) == 0) {
+        return Fail(kExitBadInput, "option --" + key + " does not apply to `project " + sub + "`");
+      }
+    }
+  }
   if (sub == "new") return RunNew(args);
   if (sub == "add") return RunAdd(args);
   if (sub == "remove") return RunRemove(args);

@@ -147,6 +147,10 @@ TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
        "--duration expects a positive number of seconds below 2000000"},
       {"project new " + Tmp("p.sweepscan-project") + " " + Tmp("missing.sweepscan"),
        "not a session folder"},
+      {"project new " + Tmp("p.sweepscan-project") + " " + Session() + " --out " + Tmp("y.las"),
+       "option --out does not apply to `project new`"},
+      {"project info " + Tmp("p.sweepscan-project") + " --no-icp",
+       "option --no-icp does not apply to `project info`"},
   };
   for (const auto& [args, expect] : cases) {
     const CommandRun r = Cli(args);
