@@ -126,7 +126,7 @@ int RunProjectAlign(const Args& args) {
   if (project.Anchor() < 0) return (PrintError(file + ": no anchor session (add a session first)"), kExitBadInput);
 
   // Which sessions to place and against which.
-  std::vector<std::string> todo;
+  std::vector<std::string> unplaced;
   std::string realigned;  // --session
   std::optional<Rigid3d> previous_pose;
   RegistrationEvidence previous_evidence;
@@ -139,10 +139,10 @@ int RunProjectAlign(const Args& args) {
     previous_pose = project.sessions[i].project_from_session;
     previous_evidence = project.sessions[i].registration;
     project.sessions[i].project_from_session.reset();
-    todo.push_back(realigned);
+    unplaced.push_back(realigned);
   } else {
     for (const ProjectSession& ps : project.sessions) {
-      if (!ps.project_from_session) todo.push_back(ps.id);
+      if (!ps.project_from_session) unplaced.push_back(ps.id);
     }
   }
   if (args.Has("to") && project.Find(args.Get("to")) < 0) {
@@ -150,7 +150,7 @@ int RunProjectAlign(const Args& args) {
   }
   std::vector<PointPair> pairs;
   if (args.Has("pairs")) {
-    if (!args.Has("to") || todo.size() != 1) {
+    if (!args.Has("to") || unplaced.size() != 1) {
       PrintError("--pairs needs --session ID and --to ID: the picks belong to one pair of sessions");
       return kExitBadInput;
     }
@@ -163,9 +163,9 @@ int RunProjectAlign(const Args& args) {
   nlohmann::json report = nlohmann::json::array();
   std::map<std::string, std::string> refusals;
   bool progress = true;
-  while (progress && !todo.empty()) {
+  while (progress && !unplaced.empty()) {
     progress = false;
-    for (auto it = todo.begin(); it != todo.end();) {
+    for (auto it = unplaced.begin(); it != unplaced.end();) {
       ProjectSession& ps = project.sessions[project.Find(*it)];
       std::string error;
       const hardware::SessionCloud* src = clouds.Get(ps, &error);
@@ -220,7 +220,7 @@ int RunProjectAlign(const Args& args) {
         j["truth_error_deg"] = dr * 180.0 / M_PI;
       }
       report.push_back(j);
-      it = todo.erase(it);
+      it = unplaced.erase(it);
       progress = true;
     }
   }
@@ -247,7 +247,7 @@ int RunProjectAlign(const Args& args) {
     std::cout << nlohmann::json{{"placed", report}, {"refused", refused}, {"moved", moved}}.dump(2)
               << "\n";
   }
-  if (!todo.empty()) {
+  if (!unplaced.empty()) {
     std::string message = "could not place:";
     for (const auto& [id, why] : refusals) message += "\n'" + id + "':" + why;
     PrintError(message);

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -71,6 +72,19 @@ double CpuSeconds(qint64 pid) {
   const QList<QByteArray> fields = line.mid(line.lastIndexOf(')') + 2).split(' ');
   // After the command: state is field 3, utime 14 and stime 15 (proc(5)).
   return (fields.value(11).toDouble() + fields.value(12).toDouble()) / ::sysconf(_SC_CLK_TCK);
+}
+
+// Calls `each` with every command robotd writes to the motor board's pty
+// (decoded as the board would), in order.
+void OnMotorCommands(DevicePtys* ptys, std::function<void(const MotorCommand&)> each) {
+  auto board = std::make_shared<MotorCommandDecoder>();
+  QObject::connect(ptys, &DevicePtys::hostBytes,
+                   [board, each](int, int device, const QByteArray& bytes) {
+                     if (device != static_cast<int>(LinkDevice::kMotorBoard)) return;
+                     board->Feed(reinterpret_cast<const uint8_t*>(bytes.constData()),
+                                 static_cast<size_t>(bytes.size()), Time());
+                     for (const MotorCommand& c : board->TakeRecords()) each(c);
+                   });
 }
 
 // One robotd process on one set of device ptys, serving TCP on a free port.
@@ -283,15 +297,10 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
 
   QElapsedTimer wall;
   wall.start();
-  MotorCommandDecoder board;
   double last_moving_ms = -1, zero_ms = -1;
-  QObject::connect(&ptys, &DevicePtys::hostBytes, [&](int, int device, const QByteArray& bytes) {
-    if (device != static_cast<int>(LinkDevice::kMotorBoard)) return;
-    board.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), static_cast<size_t>(bytes.size()), Time());
-    for (const MotorCommand& c : board.TakeRecords()) {
-      if (c.vx_mps > 0.2) last_moving_ms = wall.elapsed();
-      if (c.vx_mps == 0.0 && last_moving_ms >= 0 && zero_ms < 0) zero_ms = wall.elapsed();
-    }
+  OnMotorCommands(&ptys, [&](const MotorCommand& c) {
+    if (c.vx_mps > 0.2) last_moving_ms = wall.elapsed();
+    if (c.vx_mps == 0.0 && last_moving_ms >= 0 && zero_ms < 0) zero_ms = wall.elapsed();
   });
   RobotConnection client(Client(robotd.Address()));
   ASSERT_TRUE(client.Start(&error)) << error.toStdString();
@@ -325,13 +334,8 @@ TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsAndOnSigtermMidDrive) {
   DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
   QString error;
   ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
-  MotorCommandDecoder board;
   std::vector<MotorCommand> heard;
-  QObject::connect(&ptys, &DevicePtys::hostBytes, [&](int, int device, const QByteArray& bytes) {
-    if (device != static_cast<int>(LinkDevice::kMotorBoard)) return;
-    board.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), static_cast<size_t>(bytes.size()), Time());
-    for (const MotorCommand& c : board.TakeRecords()) heard.push_back(c);
-  });
+  OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
   Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
   ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
   ASSERT_TRUE(WaitFor([&] { return !heard.empty(); }, 5000))
