@@ -229,13 +229,15 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     if (f >= 0) progress_->setValue(static_cast<int>(1000 * f));
   });
   // An opened session whose lidar reports intensities (an imported bag):
-  // View > Colour by > Intensity has values once the replay is complete and
-  // the view holds every point (OnTick: the replay's last batches, and the
-  // reset that starts it, may still be in the mailbox when it finishes).
-  connect(workspace_, &Workspace::replayFinished, this,
-          [this] { pending_intensity_ = workspace_->IntensityValues(); });
+  // View > Colour by > Intensity has values once the replay is complete,
+  // they are mapped (a worker thread's) and the view holds every point
+  // (OnTick: the replay's last batches may still be in the mailbox).
+  connect(workspace_, &Workspace::intensitiesMapped, this,
+          [this](std::shared_ptr<const QuantizedValues> values) {
+            pending_intensity_ = std::move(values);
+          });
   connect(workspace_, &Workspace::sessionChanged, this, [this] {
-    pending_intensity_.clear();
+    pending_intensity_.reset();
     room_view_pending_ = true;
     room_view_ready_ = false;
     room_view_camera_ = view_->camera_generation();
@@ -467,9 +469,9 @@ void MainWindow::OnTick() {
       room_view_pending_ = room_view_ready_ = false;
     }
   }
-  if (!pending_intensity_.empty() && view_->point_count() == pending_intensity_.size()) {
-    view_->SetPointValues(CloudView::ColorMode::kIntensity, pending_intensity_);
-    pending_intensity_.clear();
+  if (pending_intensity_ != nullptr && view_->point_count() == pending_intensity_->q.size()) {
+    view_->SetPointValues(CloudView::ColorMode::kIntensity, *pending_intensity_);
+    pending_intensity_.reset();
   }
   if (!keys_held_.isEmpty())
     UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).

@@ -176,7 +176,8 @@ class MainWindow : public QMainWindow {
   double fps_ = 0.0;
   std::vector<double> latencies_ms_;
   double insertion_ms_ = 0.0;
-  std::vector<float> pending_intensity_;  // for the view, once it holds every point
+  std::shared_ptr<const QuantizedValues>
+      pending_intensity_;  // for the view, once it holds every point
 };
 
 }  // namespace sweepscan::ui

@@ -119,11 +119,22 @@ TEST_F(RosImportUiTest, MissingMountIsRefusedThenGiven) {
   ASSERT_TRUE(WaitFor([&] { return replayed; }, 60000)) << window_->last_error().toStdString();
   EXPECT_GT(workspace_->CloudSnapshot().size(), 37000u);
   // The RPLIDAR's intensities (0 or 47) reach View > Colour by > Intensity.
-  const std::vector<float> intensity = workspace_->IntensityValues();
-  ASSERT_EQ(intensity.size(), workspace_->CloudSnapshot().size());
-  EXPECT_TRUE(std::all_of(intensity.begin(), intensity.end(), [](float v) { return v == 0.0f || v == 47.0f; }));
-  EXPECT_GT(std::count(intensity.begin(), intensity.end(), 47.0f), 30000);
+  // Mapped on a worker thread as the replay ends; the view takes them.
   ASSERT_TRUE(WaitFor([&] { return window_->view()->has_point_values(CloudView::ColorMode::kIntensity); }, 5000));
+  QuantizedValues intensity;
+  ASSERT_TRUE(Workspace::MapIntensities(workspace_->recording_opened()->log,
+                                        workspace_->CloudSnapshot(), std::atomic<bool>(false),
+                                        &intensity));
+  ASSERT_EQ(intensity.q.size(), workspace_->CloudSnapshot().size());
+  std::vector<double> values;
+  for (uint16_t q : intensity.q)
+    values.push_back(q == QuantizedValues::kNone ? -1.0 : intensity.Value(q));
+  EXPECT_TRUE(
+      std::all_of(values.begin(), values.end(), [](double v) { return v == 0.0 || v == 47.0; }));
+  EXPECT_GT(std::count(values.begin(), values.end(), 47.0), 30000);
+  EXPECT_FALSE(Workspace::MapIntensities(workspace_->recording_opened()->log,
+                                         workspace_->CloudSnapshot(), std::atomic<bool>(true),
+                                         &intensity));  // cancelled
   window_->view()->SetColorMode(CloudView::ColorMode::kIntensity);
 }
 

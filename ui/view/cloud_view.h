@@ -57,6 +57,7 @@
 #include "core/geometry/voxel_sample.h"
 #include "core/pose/odometry.h"
 #include "ui/view/paced_mapper.h"
+#include "ui/view/point_values.h"
 
 class QMouseEvent;
 class QTimer;
@@ -132,7 +133,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // kDeviation (mm from the fitted plane, NaN off every plane), one per point
   // in the order the points were appended; points beyond `values` (or
   // appended later) get NaN. Cleared with the cloud.
-  void SetPointValues(ColorMode mode, const std::vector<float>& values);
+  void SetPointValues(ColorMode mode, const std::vector<float>& values) {
+    SetPointValues(mode, Quantize(values));
+  }
+  // The same, quantised already (on a worker thread, for large clouds).
+  void SetPointValues(ColorMode mode, const QuantizedValues& values);
   bool has_point_values(ColorMode mode) const {
     return has_values_[static_cast<int>(mode)];
   }

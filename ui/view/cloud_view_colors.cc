@@ -115,30 +115,19 @@ void CloudView::ApplyLookupTable() {
   color_bar_->SetLabelFormat("%.1f");
 }
 
-void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values) {
+void CloudView::SetPointValues(ColorMode mode, const QuantizedValues& values) {
   const int m = static_cast<int>(mode);
   if (m < 3) return;  // Height, time and range come with the points.
-  // Kept in 16 bits over the values' range (65 535 steps: far finer than the
-  // 256 colours of the lookup table, and 2 bytes a point instead of 4).
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (float v : values) {
-    if (std::isfinite(v)) {
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
-  }
-  if (!std::isfinite(lo)) lo = hi = 0.0f;
-  value_lo_[m - 3] = lo;
-  value_step_[m - 3] = hi > lo ? (static_cast<double>(hi) - lo) / (kNoValue - 1) : 1.0;
+  static_assert(QuantizedValues::kNone == kNoValue);
+  value_lo_[m - 3] = values.lo;
+  value_step_[m - 3] = values.step;
   size_t offset = 0;
   for (auto& c : chunks_) {
     std::vector<uint16_t>& q = c->values[m - 3];
     q.assign(c->size, kNoValue);
-    for (size_t i = 0; i < c->size && offset + i < values.size(); ++i) {
-      const float v = values[offset + i];
-      if (std::isfinite(v)) {
-        q[i] = static_cast<uint16_t>(std::lround((v - value_lo_[m - 3]) / value_step_[m - 3]));
-      }
+    if (offset < values.q.size()) {
+      const size_t n = std::min(c->size, values.q.size() - offset);
+      std::copy_n(values.q.begin() + offset, n, q.begin());
     }
     offset += c->size;
     if (mode == color_mode_) {
@@ -149,8 +138,8 @@ void CloudView::SetPointValues(ColorMode mode, const std::vector<float>& values)
   has_values_[m] = true;
   if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
   if (mode == ColorMode::kIntensity) {
-    intensity_lo_ = lo;
-    intensity_hi_ = hi > lo ? hi : intensity_lo_ + 1.0;
+    intensity_lo_ = values.lo;
+    intensity_hi_ = values.hi > values.lo ? values.hi : intensity_lo_ + 1.0;
     if (color_mode_ == ColorMode::kIntensity) ApplyLookupTable();
   }
   RequestRender();

@@ -118,12 +118,13 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
       [this] {
         replaying_ = false;
         emit replayFinished();
-        // After every slot of replayFinished (the intensities read the samples).
+        StartIntensityMapping();  // keeps the samples it reads
         ReleaseOpenedSamples();
       },
       Qt::QueuedConnection);
   // A calibration's failures (bad picks, solver) and cancels arrive as a
   // failed job; the calibration panel listens to calibrationFinished only.
+  connect(this, &Workspace::sessionChanged, this, [this] { StopIntensityMapping(); });
   connect(this, &Workspace::jobFinished, this,
           [this](const QString& what, bool ok, const QString& message) {
             if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
@@ -142,6 +143,7 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
 }
 
 Workspace::~Workspace() {
+  StopIntensityMapping();
   CancelJob();
   if (job_thread_ != nullptr) job_thread_->join();
   Disconnect();

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "core/io/ros/ros_bag.h"
+#include "ui/workspace/background_priority.h"
 #include "ui/workspace/workspace.h"
 
 namespace sweepscan::ui {
@@ -73,9 +74,8 @@ void Workspace::ImportRosRecording(const QString& bag, const QString& session_di
       });
 }
 
-std::vector<float> Workspace::IntensityValues() const {
-  if (opened_ == nullptr) return {};
-  const SensorLog& log = opened_->log;
+bool Workspace::MapIntensities(const SensorLog& log, const CloudSnapshotRef& cloud,
+                               const std::atomic<bool>& cancel, QuantizedValues* out) {
   bool any = false;
   std::vector<const LidarScan*> scans;
   for (const LidarScan& scan : log.scans) {
@@ -83,22 +83,61 @@ std::vector<float> Workspace::IntensityValues() const {
     scans[scan.index] = &scan;
     for (const LidarSample& s : scan.samples) any = any || s.intensity != 0.0f;
   }
-  if (!any) return {};
-  const std::vector<CloudPoint> points = CloudSnapshot().Flatten();
-  std::vector<float> values(points.size(), std::numeric_limits<float>::quiet_NaN());
+  if (!any) return false;
+  // Chunk by chunk (a 10 M-point cloud decoded whole would be 320 MB more).
   // Points come scan by scan: one beam table a scan.
+  std::vector<float> values;
+  values.reserve(cloud.size());
   std::vector<float> beam(65536, 0.0f);
   uint32_t table = std::numeric_limits<uint32_t>::max();
-  for (size_t i = 0; i < points.size(); ++i) {
-    const CloudPoint& p = points[i];
-    if (p.scan >= scans.size() || scans[p.scan] == nullptr) continue;
+  const auto map = [&](const CloudPoint& p) {
+    if (p.scan >= scans.size() || scans[p.scan] == nullptr) {
+      values.push_back(std::numeric_limits<float>::quiet_NaN());
+      return;
+    }
     if (p.scan != table) {
       table = p.scan;
       for (const LidarSample& s : scans[p.scan]->samples) beam[s.beam] = s.intensity;
     }
-    values[i] = beam[p.beam];
+    values.push_back(beam[p.beam]);
+  };
+  std::vector<CloudPoint> points;
+  for (const auto& chunk : cloud.sealed) {
+    if (cancel) return false;
+    points.clear();
+    chunk->Decode(&points);
+    for (const CloudPoint& p : points) map(p);
   }
-  return values;
+  for (const CloudPoint& p : cloud.open) map(p);
+  *out = Quantize(values);
+  return !cancel;
+}
+
+void Workspace::StartIntensityMapping() {
+  StopIntensityMapping();
+  if (opened_ == nullptr || opened_samples_released_) return;
+  // The recording and the snapshot are shared: the samples outlive their
+  // release (ReleaseOpenedSamples swaps in a copy without them) until done.
+  std::shared_ptr<const hardware::Recording> recording = opened_;
+  const CloudSnapshotRef cloud = CloudSnapshot();
+  const uint64_t generation = intensity_generation_;
+  intensity_thread_ = std::make_unique<std::thread>([this, recording, cloud, generation] {
+    LowerThisThreadsPriority();
+    auto values = std::make_shared<QuantizedValues>();
+    if (!MapIntensities(recording->log, cloud, intensity_cancel_, values.get())) return;
+    QMetaObject::invokeMethod(this, [this, values, generation] {
+      if (generation == intensity_generation_) emit intensitiesMapped(values);
+    });
+  });
+}
+
+void Workspace::StopIntensityMapping() {
+  ++intensity_generation_;
+  if (intensity_thread_ == nullptr) return;
+  intensity_cancel_ = true;  // seen between chunks: the join is short
+  intensity_thread_->join();
+  intensity_thread_.reset();
+  intensity_cancel_ = false;
 }
 
 }  // namespace sweepscan::ui
