@@ -90,6 +90,21 @@ TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
   }
 }
 
+// An MCAP without a summary section is read whole for the chooser: the bar
+// follows the read, and the topics are the file's.
+TEST_F(RosImportUiTest, AnMcapReadWholeShowsHowFarItIs) {
+  std::vector<double> fractions;
+  QObject::connect(workspace_.get(), &Workspace::jobProgress, [&](const QString& what, double f) {
+    if (what.startsWith("Reading")) fractions.push_back(f);
+  });
+  QPointer<RosImportDialog> dialog = OpenChooser(kData + "/ros2/ros2_lz4_nosummary.mcap");
+  ASSERT_TRUE(dialog && dialog->isVisible());
+  EXPECT_TRUE(dialog->scan_topic()->currentText().startsWith("/scan  (20 messages"));
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_EQ(fractions.back(), 1.0);  // not only the busy bar (-1)
+  dialog->reject();
+}
+
 // A real car's bag with no tf to its laser: the import is refused with the
 // reason (and leaves nothing); with the mount given it imports.
 TEST_F(RosImportUiTest, MissingMountIsRefusedThenGiven) {

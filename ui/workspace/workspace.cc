@@ -517,16 +517,9 @@ void Workspace::OpenSession(const QString& dir, double speed) {
       QStringLiteral("Opening %1").arg(dir),
       [this, recording, circle, path, source, sfm_poses, sfm_summary,
        sfm_error](std::atomic<bool>* cancel) -> QString {
-        // Progress to the status bar at most every 2 %; a cancel stops the decoder.
-        auto last = std::make_shared<double>(-1.0);
+        // A cancel stops the decoder.
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
-        const Status s = hardware::OpenRecording(path, recording.get(), [&, last](double f) {
-          if (f - *last >= 0.02 || f >= 1.0) {
-            *last = f;
-            QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
-          }
-          return !*cancel;
-        });
+        const Status s = hardware::OpenRecording(path, recording.get(), JobProgress(what, cancel));
         if (!s.ok()) return QString::fromStdString(s.message());
         *circle = FindCircle(*recording);
         if (source == PoseSource::kSfm && !*cancel) {
@@ -773,6 +766,17 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
       }
     });
   });
+}
+
+std::function<bool(double)> Workspace::JobProgress(const QString& what, std::atomic<bool>* cancel) {
+  auto last = std::make_shared<double>(-1.0);
+  return [this, what, cancel, last](double f) {
+    if (f - *last >= 0.02 || (f >= 1.0 && *last < 1.0)) {
+      *last = f;
+      QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
+    }
+    return !*cancel;
+  };
 }
 
 void Workspace::CancelJob() {

@@ -336,6 +336,9 @@ class Workspace : public QObject {
   void PageBeside(const QString& folder);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success);
+  // A job's progress callback (any thread): the fraction to the status bar
+  // at most every 2 % and at the end; false once the job is cancelled.
+  std::function<bool(double)> JobProgress(const QString& what, std::atomic<bool>* cancel);
   void OnScriptTick();
   void InvokeOnConnection(std::function<void(hardware::RobotConnection*)> call);
 

@@ -27,12 +27,13 @@ void Workspace::InspectRosBag(const QString& bag) {
   auto warnings = std::make_shared<std::vector<std::string>>();
   RunJob(
       what,
-      [this, summary, warnings, path, what](std::atomic<bool>*) -> QString {
-        // A bag's summary comes from its index or summary section, or (an
-        // MCAP without one) from a scan of the file that reports no
-        // fraction: the bar shows it is busy, and a Cancel drops the result.
+      [this, summary, warnings, path, what](std::atomic<bool>* cancel) -> QString {
+        // A bag's summary comes from its index or summary section (the bar
+        // shows it is busy), or (an MCAP without one) from a scan of the
+        // file, which shows how far it is and stops at a Cancel.
         QMetaObject::invokeMethod(this, [this, what] { emit jobProgress(what, -1.0); });
-        const Status s = io::SummarizeRosBag(path, summary.get(), warnings.get());
+        const Status s =
+            io::SummarizeRosBag(path, summary.get(), warnings.get(), JobProgress(what, cancel));
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
       [this, summary, warnings, bag] {
@@ -53,16 +54,9 @@ void Workspace::ImportRosRecording(const QString& bag, const QString& session_di
       what,
       [this, report, bag_path, out, options, what](std::atomic<bool>* cancel) -> QString {
         io::RosImportOptions o = options;
-        // Progress to the status bar at most every 2 %; a cancel stops the
-        // reader within a thousand messages and removes the session.
-        auto last = std::make_shared<double>(-1.0);
-        o.progress = [this, cancel, last, what](double f) {
-          if (f - *last >= 0.02 || f >= 1.0) {
-            *last = f;
-            QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
-          }
-          return !*cancel;
-        };
+        // A cancel stops the reader within a thousand messages and removes
+        // the session.
+        o.progress = JobProgress(what, cancel);
         const Status s = io::ImportRosBag(bag_path, out, o, report.get());
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },

@@ -57,10 +57,7 @@ void Workspace::WithOpenedSamples(std::function<void()> then) {
       tr("Opening %1").arg(session_dir_),
       [this, recording, path](std::atomic<bool>* cancel) -> QString {
         const QString what = tr("Opening %1").arg(QString::fromStdString(path));
-        const Status s = hardware::OpenRecording(path, recording.get(), [&](double f) {
-          QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
-          return !*cancel;
-        });
+        const Status s = hardware::OpenRecording(path, recording.get(), JobProgress(what, cancel));
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
       [this, recording, light, then] {

@@ -53,11 +53,12 @@ bool LooksLikeRosBag(const std::string& path) {
 }
 
 Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
-                       std::vector<std::string>* warnings) {
+                       std::vector<std::string>* warnings,
+                       const std::function<bool(double)>& progress) {
   if (!IsDirectory(path) && LooksLikeRosbag1(path)) return SummarizeRosbag1(path, summary);
   if (LooksLikeRosBag(path)) {
     Ros2ReadReport report;
-    const Status s = SummarizeRos2Bag(path, summary, &report);
+    const Status s = SummarizeRos2Bag(path, summary, &report, progress);
     if (warnings != nullptr) AddOnce(report.warnings, warnings);
     return s;
   }

@@ -7,6 +7,7 @@
 #ifndef SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_
 #define SWEEPSCAN_CORE_IO_ROS_ROS_BAG_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,9 +22,13 @@ namespace sweepscan::io {
 bool LooksLikeRosBag(const std::string& path);
 
 // `warnings` (optional) gets what the summary read past (ROS 2: a damaged
-// summary section, a file cut short).
+// summary section, a file cut short). `progress` (optional) hears the
+// fraction read of a bag that must be read whole for its summary (an MCAP
+// without a summary section; the others are summarised from their index)
+// and cancels it by returning false.
 Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
-                       std::vector<std::string>* warnings = nullptr);
+                       std::vector<std::string>* warnings = nullptr,
+                       const std::function<bool(double)>& progress = nullptr);
 Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
                   RosReadStats* stats);
 // Closes what the readers keep open between calls (the last ROS 1 bag).

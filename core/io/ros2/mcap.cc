@@ -551,7 +551,8 @@ void Reader::Fill(RosBagSummary* s) const {
   for (auto& [name, t] : topics) s->topics.push_back(std::move(t));
 }
 
-Status Summarize(ByteSource* src, RosBagSummary* s, Ros2ReadReport* report) {
+Status Summarize(ByteSource* src, RosBagSummary* s, Ros2ReadReport* report,
+                 const std::function<bool(double)>& progress = nullptr) {
   Ros2ReadReport local;
   if (report == nullptr) report = &local;
   {
@@ -564,7 +565,10 @@ Status Summarize(ByteSource* src, RosBagSummary* s, Ros2ReadReport* report) {
       return Status::Ok();
     }
   }
-  Reader scan(src, nullptr, nullptr, nullptr, report);
+  // No summary: the whole file is read, which a caller may follow and cancel.
+  RosReadOptions opt;
+  opt.progress = progress;
+  Reader scan(src, progress ? &opt : nullptr, nullptr, nullptr, report);
   Status st = scan.Scan();
   if (st.ok()) scan.Fill(s);
   return st;
@@ -589,10 +593,11 @@ Status Read(ByteSource* src, const RosReadOptions& opt, RosMessageSink* sink,
 
 }  // namespace
 
-Status SummarizeMcap(const std::string& path, RosBagSummary* s, Ros2ReadReport* report) {
+Status SummarizeMcap(const std::string& path, RosBagSummary* s, Ros2ReadReport* report,
+                     const std::function<bool(double)>& progress) {
   std::unique_ptr<ByteSource> src;
   Status st = mcap_internal::OpenFileSource(path, &src);
-  return st.ok() ? Summarize(src.get(), s, report) : st;
+  return st.ok() ? Summarize(src.get(), s, report, progress) : st;
 }
 
 Status ReadMcap(const std::string& path, const RosReadOptions& opt, RosMessageSink* sink,

@@ -33,6 +33,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -46,8 +47,10 @@ namespace sweepscan::io {
 // counts and its CRC matches; then topics' first_ns/last_ns are 0 (unknown).
 // Otherwise scans the whole file (streaming) and fills them. A summary
 // section that cannot be used is a warning in *report (if given), then the
-// file is scanned.
-Status SummarizeMcap(const std::string& path, RosBagSummary* s, Ros2ReadReport* report = nullptr);
+// file is scanned; `progress` (if given) then hears the fraction of bytes
+// scanned and cancels the scan by returning false (an error "cancelled").
+Status SummarizeMcap(const std::string& path, RosBagSummary* s, Ros2ReadReport* report = nullptr,
+                     const std::function<bool(double)>& progress = nullptr);
 
 // Decodes the messages of opt.topics (all decodable ones if empty) and hands
 // them to the sink in file order. Fills *summary (if given) from what was read.

@@ -225,13 +225,45 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
   return Status::Ok();
 }
 
-Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s, Ros2ReadReport* report) {
+namespace {
+
+// A bag's files' shares of its bytes: a file's progress 0..1 as the whole
+// bag's (the files are read in order).
+class ByteShares {
+ public:
+  explicit ByteShares(const std::vector<std::string>& files) : before_(files.size() + 1, 0) {
+    for (size_t i = 0; i < files.size(); ++i) {
+      uint64_t size = 0;
+      CheckRegularFile(files[i], &size);
+      before_[i + 1] = before_[i] + size;
+    }
+  }
+  std::function<bool(double)> Of(size_t i, const std::function<bool(double)>& whole) const {
+    if (!whole) return nullptr;
+    const double total = static_cast<double>(before_.back());
+    const double before = static_cast<double>(before_[i]),
+                 size = static_cast<double>(before_[i + 1]) - before;
+    return [whole, total, before, size](double f) {
+      return whole(total > 0 ? (before + f * size) / total : 1.0);
+    };
+  }
+
+ private:
+  std::vector<uint64_t> before_;  // bytes before file i; the total last
+};
+
+}  // namespace
+
+Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s, Ros2ReadReport* report,
+                        const std::function<bool(double)>& progress) {
   std::string storage;
   std::vector<std::string> files;
   Status st = FindRos2Bag(path, &storage, &files);
+  if (!st.ok()) return st;
+  const ByteShares shares(files);
   for (size_t i = 0; st.ok() && i < files.size(); ++i) {
     RosBagSummary part;
-    st = storage == "mcap" ? SummarizeMcap(files[i], &part, report)
+    st = storage == "mcap" ? SummarizeMcap(files[i], &part, report, shares.Of(i, progress))
                            : SummarizeRos2Sqlite(files[i], &part);
     if (st.ok()) Merge(part, i == 0, s);
   }
@@ -244,27 +276,16 @@ Status ReadRos2Bag(const std::string& path, const RosReadOptions& opt, RosMessag
   std::vector<std::string> files;
   Status st = FindRos2Bag(path, &storage, &files);
   if (!st.ok()) return st;
-  std::vector<uint64_t> sizes(files.size(), 0);
-  uint64_t total = 0;
-  for (size_t i = 0; i < files.size(); ++i) {
-    CheckRegularFile(files[i], &sizes[i]);
-    total += sizes[i];
-  }
-  uint64_t before = 0;
+  const ByteShares shares(files);
   for (size_t i = 0; i < files.size(); ++i) {
     RosReadOptions file_opt;
     file_opt.topics = opt.topics;
-    if (opt.progress) {
-      file_opt.progress = [&opt, before, size = sizes[i], total](double f) {
-        return opt.progress(total ? (before + f * size) / total : 1.0);
-      };
-    }
+    file_opt.progress = shares.Of(i, opt.progress);
     RosBagSummary part;
     st = storage == "mcap" ? ReadMcap(files[i], file_opt, sink, &part, stats, report)
                            : ReadRos2Sqlite(files[i], file_opt, sink, &part, stats, report);
     if (!st.ok()) return st;
     if (summary != nullptr) Merge(part, i == 0, summary);
-    before += sizes[i];
   }
   return Status::Ok();
 }

@@ -12,6 +12,7 @@
 #ifndef SWEEPSCAN_CORE_IO_ROS2_ROS2_BAG_H_
 #define SWEEPSCAN_CORE_IO_ROS2_ROS2_BAG_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,9 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
 // Summary over all files: topics merged by name (counts added, first/last
 // widened), file_bytes added, compression the union. format is
 // "rosbag2-sqlite3" or "mcap".
-Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s,
-                        Ros2ReadReport* report = nullptr);
+// `progress` as SummarizeMcap's, over the whole bag (by file bytes).
+Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s, Ros2ReadReport* report = nullptr,
+                        const std::function<bool(double)>& progress = nullptr);
 
 // Reads every file in order; progress runs 0..1 over the whole bag (by file
 // bytes). Stops at the first file that fails; a torn tail of one file is a

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -143,6 +144,33 @@ TEST(McapTest, TopicFilterCancelAndProgress) {
   opt.progress = [](double) { return false; };
   s = ReadMcap(Ros2Data("ros2_zstd.mcap"), opt, &sink, nullptr, nullptr);
   EXPECT_EQ(s.message(), Ros2Data("ros2_zstd.mcap") + ": cancelled");
+}
+
+// The desktop app's Cancel of a bag's summary: a file read whole for it
+// (no summary section) reports its progress and stops when told; one with a
+// summary section is summarised from it, without a scan to follow.
+TEST(McapTest, ASummaryScanReportsProgressAndCancels) {
+  const std::string scanned = Ros2Data("ros2_lz4_nosummary.mcap");
+  std::vector<double> fractions;
+  const auto follow = [&](double f) {
+    fractions.push_back(f);
+    return true;
+  };
+  RosBagSummary s;
+  ASSERT_TRUE(SummarizeMcap(scanned, &s, nullptr, follow).ok());
+  EXPECT_EQ(s.message_count, uint64_t{testing::kMessages});
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_EQ(fractions.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+
+  size_t calls = 0;
+  const Status st = SummarizeMcap(scanned, &s, nullptr, [&](double) { return ++calls, false; });
+  EXPECT_EQ(st.message(), scanned + ": cancelled");
+  EXPECT_EQ(calls, 1u);
+
+  fractions.clear();
+  ASSERT_TRUE(SummarizeMcap(Ros2Data("ros2_zstd.mcap"), &s, nullptr, follow).ok());
+  EXPECT_TRUE(fractions.empty());
 }
 
 // A recording killed mid-write: whatever was complete is read, the tear is a
