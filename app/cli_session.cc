@@ -5,6 +5,7 @@
 // bytes, so a better decoder or calibration always applies to old sessions.
 #include <dirent.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -18,11 +19,11 @@
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "app/cli_recording.h"
-#include "core/common/checked_file.h"
-#include "core/common/crc32c.h"
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
+#include "core/common/checked_file.h"
+#include "core/common/crc32c.h"
 #include "core/io/ros/ros_bag.h"
 #include "hardware/link/telemetry_decoder.h"
 
@@ -385,8 +386,17 @@ int RunRepair(int argc, char** argv) {
   }
   const std::string in = args.positional()[0];
   const std::string out = args.Get("out");
-  Session session;
-  Status s = LoadSession(in, hardware::DefaultSessionFramesOptions(), &session);
+  // Streamed: each intact record is written as it is read, so a session of
+  // hours repairs in the memory of one record (the whole session, ~2 GB for
+  // ten hours, was held before). meta.json is checked before anything is
+  // created; frames.bin's damage is only known once it has been read.
+  struct stat st;
+  if (::stat(in.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    PrintError(in + ": not a session folder (does not exist or is not a folder)");
+    return kExitBadInput;
+  }
+  SessionMeta meta;
+  Status s = ReadSessionMeta(in + "/" + kSessionMetaFile, &meta);
   if (!s.ok()) {
     PrintError(s.message());
     return kExitBadInput;
@@ -401,7 +411,7 @@ int RunRepair(int argc, char** argv) {
     }
     ::closedir(dp);
   }
-  struct stat st;
+  bool created = false;
   if (::stat(out.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) {
       PrintError(out + ": exists and is not a folder");
@@ -422,50 +432,52 @@ int RunRepair(int argc, char** argv) {
   } else if (::mkdir(out.c_str(), 0755) != 0) {
     PrintError(out + ": cannot create folder: " + std::strerror(errno));
     return kExitFailure;
+  } else {
+    created = true;
   }
-  // frames.bin: the header, then every intact record, through the checked writer.
+  // frames.bin: the header, then every intact record, through the checked
+  // writer (docs/session-format.md: length, receive time, bytes, CRC-32C of
+  // the three).
   CheckedFileWriter frames;
   s = frames.Open(out + "/" + kSessionFramesFile);
   std::string bytes(reinterpret_cast<const char*>(kSessionFramesMagic), sizeof(kSessionFramesMagic));
-  auto put32 = [&bytes](uint32_t v) {
-    for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+  const auto put = [&bytes](uint64_t v, int n) {
+    for (int i = 0; i < n; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
   };
-  put32(kSessionFormatVersion);
-  put32(0);
-  for (const SessionRecord& r : session.records) {
-    if (!s.ok()) break;
-    std::string rec;
-    const uint32_t n = static_cast<uint32_t>(r.bytes.size());
-    for (int i = 0; i < 4; ++i) rec.push_back(static_cast<char>((n >> (8 * i)) & 0xFF));
-    const uint64_t t = static_cast<uint64_t>(r.receive_time_ns);
-    for (int i = 0; i < 8; ++i) rec.push_back(static_cast<char>((t >> (8 * i)) & 0xFF));
-    rec.append(reinterpret_cast<const char*>(r.bytes.data()), r.bytes.size());
-    const uint32_t crc = Crc32c(reinterpret_cast<const uint8_t*>(rec.data()), rec.size());
-    for (int i = 0; i < 4; ++i) rec.push_back(static_cast<char>((crc >> (8 * i)) & 0xFF));
-    bytes += rec;
-    if (bytes.size() > (1u << 20)) {
-      s = frames.Write(bytes);
-      bytes.clear();
-    }
-  }
+  put(kSessionFormatVersion, 4);
+  put(0, 4);
   if (s.ok()) s = frames.Write(bytes);
+  FramesLoadReport f;
+  Status read = Status::Ok();
+  if (s.ok()) {
+    read = VisitFramesFile(
+        in + "/" + kSessionFramesFile, hardware::DefaultSessionFramesOptions(),
+        [&](const SessionRecordView& r) {
+          bytes.clear();
+          put(r.size, 4);
+          put(static_cast<uint64_t>(r.receive_time_ns), 8);
+          bytes.append(reinterpret_cast<const char*>(r.bytes), r.size);
+          put(Crc32c(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()), 4);
+          s = frames.Write(bytes);
+          return s.ok();  // a write that failed stops the read
+        },
+        &f);
+  }
+  if (s.ok() && !read.ok()) {  // frames.bin refused: nothing is left behind
+    frames.Abort();
+    if (created) ::rmdir(out.c_str());
+    PrintError(read.message());
+    return kExitBadInput;
+  }
   if (s.ok()) s = frames.Commit();
   for (const std::string& name : extra_files) {
     if (!s.ok()) break;
-    std::ifstream f(in + "/" + name, std::ios::binary);
-    std::stringstream buffer;
-    buffer << f.rdbuf();
-    if (!f.good() && !f.eof()) {
-      s = Status::Error(in + "/" + name + ": read error");
-      break;
-    }
-    s = WriteFileChecked(out + "/" + name, buffer.str());
+    s = CopyFileChecked(in + "/" + name, out + "/" + name);
   }
   if (!s.ok()) {
     PrintError(s.message());
     return kExitFailure;
   }
-  const FramesLoadReport& f = session.frames;
   const nlohmann::json report = {{"session", in},
                                  {"out", out},
                                  {"records_kept", f.records},

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The CLI on long sessions (docs/performance.md, "The CLI on long sessions"):
-# wall time and peak resident memory of `info`, `reconstruct` (LAS and PLY)
-# and `evaluate` on back-and-forth lab drives of 32.5 minutes and 10 hours
+# wall time and peak resident memory of `info`, `reconstruct` (LAS and PLY),
+# `repair` and `evaluate` on back-and-forth lab drives of 32.5 minutes and 10 hours
 # (9.5 M and about 175 M points). Before the streaming readers the same
 # commands held the decoded session and the cloud (docs/performance.md has
 # those figures).
@@ -46,5 +46,8 @@ import json, sys
 r = json.load(sys.stdin)
 print("  %d scans, %d samples -> %d points; poses held %.1f MiB" % (r["scans"], r["samples"], r["points"], r["memory"]["poses_mib"]))'
   rm -f "$work/out_$s.las" "$work/out_$s.ply"
+  rm -rf "$work/repaired_$s.sweepscan"
+  measure "  repair --out NEW" $cli repair "$session" --out "$work/repaired_$s.sweepscan"
+  rm -rf "$work/repaired_$s.sweepscan"
 done
 measure "lab_1950 evaluate (streamed, positions only)" $cli evaluate "$work/lab_1950.sweepscan"

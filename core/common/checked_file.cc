@@ -215,4 +215,23 @@ Status WriteFileChecked(const std::string& path, const std::string& contents) {
   return w.Commit();
 }
 
+Status CopyFileChecked(const std::string& from, const std::string& to) {
+  Status s = CheckRegularFile(from);
+  if (!s.ok()) return s;
+  const int fd = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::Error(from + ": cannot open for reading: " + std::strerror(errno));
+  CheckedFileWriter w;
+  s = w.Open(to);
+  std::vector<char> buffer(size_t{1} << 20);
+  while (s.ok()) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) s = Status::Error(from + ": read error: " + std::strerror(errno));
+    if (n <= 0) break;
+    s = w.Write(buffer.data(), static_cast<size_t>(n));
+  }
+  ::close(fd);
+  return s.ok() ? w.Commit() : s;
+}
+
 }  // namespace sweepscan

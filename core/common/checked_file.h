@@ -65,6 +65,10 @@ class CheckedFileWriter {
 // Writes `contents` to `path` through a CheckedFileWriter.
 Status WriteFileChecked(const std::string& path, const std::string& contents);
 
+// Copies the file `from` to `to` through a CheckedFileWriter, a megabyte at
+// a time (any size, in bounded memory). Errors name the file and the reason.
+Status CopyFileChecked(const std::string& from, const std::string& to);
+
 // "PATH: is a folder" / "PATH: cannot open for reading: No such file or
 // directory" when PATH is not a readable regular file; Ok otherwise, with its
 // size in *size (if not null).

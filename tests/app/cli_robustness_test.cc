@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/testing/cli_files.h"
 #include "tests/testing/run_command.h"
 
 namespace {
@@ -289,11 +290,37 @@ TEST_F(CliRobustnessTest, RepairWritesACleanCopyThatPassesStrict) {
   EXPECT_EQ(nlohmann::json::parse(r.out)["frames"]["records"].get<long>(),
             report["records_kept"].get<long>());
   EXPECT_TRUE(Exists(fixed + "/meta.json"));
+  // The copy holds exactly the intact records: the same cloud as the
+  // damaged session read past its damage.
+  const auto points = [](const CommandRun& run) {
+    return nlohmann::json::parse(run.out.substr(run.out.find('{')))["points"].get<long>();
+  };
+  const CommandRun fixed_cloud =
+      Cli("reconstruct " + fixed + " --out " + Tmp("fixed.ply") + " --json");
+  const CommandRun damaged_cloud =
+      Cli("reconstruct " + dir + " --out " + Tmp("rot2.ply") + " --json");
+  ASSERT_EQ(fixed_cloud.code, 0) << fixed_cloud.out;
+  EXPECT_EQ(points(fixed_cloud), points(damaged_cloud));
+  // An intact session repairs to the same bytes.
+  const std::string same = Tmp("same.sweepscan");
+  sweepscan::testing::ShellOrFail("rm -rf '" + same + "'");
+  ASSERT_EQ(Cli("repair " + Session() + " --out " + same).code, 0);
+  EXPECT_EQ(sweepscan::testing::ReadWholeFile(same + "/frames.bin"),
+            sweepscan::testing::ReadWholeFile(Session() + "/frames.bin"));
   // The damaged session is untouched; NEW must be new.
   EXPECT_EQ(Cli("info " + dir + " --strict").code, 2);
   r = Cli("repair " + dir + " --out " + fixed);
   EXPECT_EQ(r.code, 2) << r.out;
   ExpectOneErrorLine(r, "not empty");
+  // frames.bin that is not one (its magic gone) is refused, and the new
+  // folder it would have gone into is not left behind.
+  const std::string unframed = DamagedCopy("unframed.sweepscan", 0);
+  const std::string nowhere = Tmp("nowhere.sweepscan");
+  sweepscan::testing::ShellOrFail("rm -rf '" + nowhere + "'");
+  r = Cli("repair " + unframed + " --out " + nowhere);
+  EXPECT_EQ(r.code, 2) << r.out;
+  ExpectOneErrorLine(r, "frames.bin");
+  EXPECT_FALSE(Exists(nowhere));
 }
 
 TEST_F(CliRobustnessTest, CalibrateAndEvaluateAcceptStrictAndWarn) {
