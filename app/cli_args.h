@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "app/cli_common.h"
+
 namespace sweepscan::app {
 
 class Args {
@@ -76,6 +78,13 @@ class Args {
     return true;
   }
   const std::vector<std::string>& positional() const { return positional_; }
+  // The first of `keys` that was given, "" if none.
+  std::string FirstGiven(const std::set<std::string>& keys) const {
+    for (const std::string& key : keys) {
+      if (Flag(key) || Has(key)) return key;
+    }
+    return std::string();
+  }
   // Every option given, flags and valued, by name.
   std::set<std::string> given() const {
     std::set<std::string> keys = set_flags_;
@@ -88,6 +97,18 @@ class Args {
   std::map<std::string, std::string> values_;
   std::vector<std::string> positional_;
 };
+
+// An option the command takes, but not for this input or mode, is refused
+// rather than ignored (`plan cloud.ply --calibration c.json` drew the cloud
+// as it was): one error line, "option --K does not apply to WHAT", and
+// kExitBadInput; kExitOk if none of `keys` was given.
+inline int RefuseOptions(const Args& args, const std::set<std::string>& keys,
+                         const std::string& what) {
+  const std::string key = args.FirstGiven(keys);
+  if (key.empty()) return kExitOk;
+  PrintError("option --" + key + " does not apply to " + what);
+  return kExitBadInput;
+}
 
 }  // namespace sweepscan::app
 

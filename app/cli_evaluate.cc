@@ -183,6 +183,9 @@ int RunEvaluate(int argc, char** argv) {
                  "not the raw samples a calibration re-projects");
       return kExitBadInput;
     }
+    const int refused = RefuseOptions(args, {"pose-source", "strict", "seed"},
+                                      "a cloud file (it holds placed points)");
+    if (refused != kExitOk) return refused;
     std::vector<Eigen::Vector3f> pts;
     const Status s = LoadPositions(args.positional()[0], &pts);
     if (!s.ok()) {
@@ -230,6 +233,8 @@ int RunEvaluate(int argc, char** argv) {
     if (!args.Has("scenario") && !(args.Has("pose-source") && args.Get("pose-source") == "truth")) {
       // A session: streamed (hardware/station/session_stream.h), only the
       // positions kept, so memory is the evaluation's own.
+      if ((code = RefuseOptions(args, {"seed"}, "a session (it is for --scenario)")) != kExitOk)
+        return code;
       ReconstructionOptions ro;
       if (args.Has("pose-source") && (!ParsePoseSource(args.Get("pose-source"), &ro.pose.source) ||
                                       ro.pose.source == PoseSource::kSfm)) {

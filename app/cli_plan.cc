@@ -12,6 +12,7 @@
 #include "app/cli_common.h"
 #include "app/cli_project.h"
 #include "app/cli_recording.h"
+#include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
 #include "core/plan/floor_plan.h"
 #include "core/plan/plan_writers.h"
@@ -140,9 +141,15 @@ int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
   const std::string suffix = kProjectSuffix;
   if (!args.Has("scenario") && args.positional().size() == 1 && args.positional()[0].size() > suffix.size() &&
       args.positional()[0].compare(args.positional()[0].size() - suffix.size(), suffix.size(), suffix) == 0) {
-    return ProjectPositions(args, args.positional()[0], cloud);
+    const int refused = RefuseOptions(args, {"calibration", "seed"},
+                                      "a project (each session keeps its own calibration)");
+    return refused != kExitOk ? refused : ProjectPositions(args, args.positional()[0], cloud);
   }
   if (!args.Has("scenario") && args.positional().size() == 1 && is_cloud(args.positional()[0])) {
+    const int refused =
+        RefuseOptions(args, {"calibration", "pose-source", "strict", "seed", "sessions"},
+                      "a cloud file (it holds placed points)");
+    if (refused != kExitOk) return refused;
     const Status s = LoadCloudPositions(args.positional()[0], cloud);
     if (!s.ok()) {
       PrintError(s.message());
@@ -150,14 +157,20 @@ int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
     }
     return kExitOk;
   }
-  RecordingInput in;
-  int code = LoadRecording(args, &in);
+  int code =
+      RefuseOptions(args, {"sessions"}, "a session or a scenario (it picks a project's sessions)");
   if (code != kExitOk) return code;
+  RecordingInput in;
+  if ((code = LoadRecording(args, &in)) != kExitOk) return code;
   ReconstructionOptions options;
-  if (!in.session_dir.empty() &&
-      (code = SessionReconstructionOptions(args, in.decode.meta, &options)) != kExitOk) {
-    return code;
+  if (!in.session_dir.empty()) {
+    code = SessionReconstructionOptions(args, in.decode.meta, &options);
+  } else if (args.Has("calibration")) {  // a scenario's cloud, corrected as evaluate corrects it
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &options.calibration);
+    if (!s.ok()) PrintError(s.message());
+    code = s.ok() ? kExitOk : kExitBadInput;
   }
+  if (code != kExitOk) return code;
   ReconstructionResult r;
   if ((code = RecordingPoses(args, in, options.calibration, /*smooth=*/false, &r)) != kExitOk) return code;
   cloud->reserve(r.points.size());

@@ -102,7 +102,7 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
   o->out = QString::fromStdString(args.Get("out"));
   if (QFileInfo::exists(o->out)) {
     PrintError(args.Get("out") + ": exists; record writes a new session folder");
-    return kExitBadInput;
+    return kExitFailure;  // an output in the way, as for every command (README)
   }
   QString error;
   hardware::LinkAddress address;
@@ -114,6 +114,11 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
   }
   o->link.address = text;
   o->link.client_name = "sweepscan-cli 0.1.0 record";
+  if (args.Has("serial")) {
+    const int refused = RefuseOptions(
+        args, {"key-file"}, "--serial (a serial link is not authenticated: physical access)");
+    if (refused != kExitOk) return refused;
+  }
   if (args.Has("connect")) {
     if (!args.Has("key-file")) {
       PrintError("--connect needs --key-file K (the robot's key; robotd's --key-file)");

@@ -56,6 +56,12 @@ int LoadRecording(const Args& args, RecordingInput* in) {
     PrintError("unexpected argument '" + args.positional()[1] + "'");
     return kExitBadInput;
   }
+  if (const int code = has_scenario
+                           ? RefuseOptions(args, {"strict"}, "--scenario (it is for sessions)")
+                           : RefuseOptions(args, {"seed"}, "a session (it is for --scenario)");
+      code != kExitOk) {
+    return code;
+  }
   if (has_scenario) {
     sim::SimConfig scenario;
     Status s = LoadScenario(args.Get("scenario"), &scenario);

@@ -287,6 +287,12 @@ int RunExport(int argc, char** argv) {
     PrintError(format == "csv" ? "export needs --out DIR" : "export --format rosbag needs --out FILE.bag");
     return kExitBadInput;
   }
+  if (format == "csv" &&
+      (code = RefuseOptions(
+           args, {"calibration", "no-ekf", "frame"},
+           "a CSV export of the sensor records (it is for cloud and rosbag exports)")) != kExitOk) {
+    return code;
+  }
   Decoded d;
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
   if (format == "rosbag") return ExportRosbag(args, d.log, d.info.meta);
@@ -415,7 +421,7 @@ int RunRepair(int argc, char** argv) {
   if (::stat(out.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) {
       PrintError(out + ": exists and is not a folder");
-      return kExitBadInput;
+      return kExitFailure;  // an output in the way, as for every command (README)
     }
     DIR* dp = ::opendir(out.c_str());
     bool empty = true;
@@ -427,7 +433,7 @@ int RunRepair(int argc, char** argv) {
     }
     if (!empty) {
       PrintError(out + ": exists and is not empty; repair writes a new session folder");
-      return kExitBadInput;
+      return kExitFailure;
     }
   } else if (::mkdir(out.c_str(), 0755) != 0) {
     PrintError(out + ": cannot create folder: " + std::strerror(errno));

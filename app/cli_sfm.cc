@@ -270,12 +270,9 @@ Status WriteWheeledPosesCsv(const std::string& path, const sfm::WheeledSfmResult
 
 // `sfm SESSION` / `sfm --scenario FILE`: the wheeled scanner (wheeled.h).
 int RunSfmWheeled(const Args& args) {
-  for (const char* key : {"frames", "write-init"}) {
-    if (args.Has(key)) {
-      PrintError(std::string("sfm: --") + key + " is for --rig-scenario");
-      return kExitBadInput;
-    }
-  }
+  const int refused = RefuseOptions(args, {"frames", "write-init"},
+                                    "the wheeled scanner (it is for --rig-scenario)");
+  if (refused != kExitOk) return refused;
   if (!args.Has("out")) {
     PrintError("sfm needs --out CLOUD.ply (see sweepscan-cli help sfm)");
     return kExitBadInput;
@@ -451,12 +448,10 @@ int RunSfm(int argc, char** argv) {
     PrintError("sfm needs SESSION, --scenario FILE or --rig-scenario (room, stairwell)\n" + std::string(kSfmUsage));
     return kExitBadInput;
   }
-  for (const char* key : {"motion-prior", "calibration"}) {
-    if (args.Has(key)) {
-      PrintError(std::string("sfm: --") + key + " is for the wheeled scanner (SESSION or --scenario)");
-      return kExitBadInput;
-    }
-  }
+  const int refused =
+      RefuseOptions(args, {"motion-prior", "calibration", "strict"},
+                    "--rig-scenario (it is for the wheeled scanner: SESSION or --scenario)");
+  if (refused != kExitOk) return refused;
   sim::RigSimConfig config;
   Status s = sfm::RigScenarioByName(args.Get("rig-scenario"), &config);
   if (!s.ok()) {

@@ -280,6 +280,11 @@ int RunSimulate(int argc, char** argv) {
     PrintError(error + " (see sweepscan-cli help simulate)");
     return kExitBadInput;
   }
+  if (args.Flag("direct")) {
+    const int refused =
+        RefuseOptions(args, {"session", "overwrite"}, "--direct (it records no session)");
+    if (refused != kExitOk) return refused;
+  }
   SimulateRequest request;
   int code = ParseSimulateArgs(args, &request);
   if (code != kExitOk || request.out.empty()) return code;

@@ -196,13 +196,57 @@ TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {
         "simulate --scenario " + Scenario("lab") + " --out " + folder + " --session " +
             Tmp("u.sweepscan") + " --overwrite",
         "export " + Session() + " --out " + folder,  // A cloud (.ply) where a folder is.
-        "export " + Session() + " --out " + Session() + "/meta.json",  // CSV folder where a file is.
+        "export " + Session() + " --out " + Session() +
+            "/meta.json",  // CSV folder where a file is.
         "repair " + Session() + " --out " + Tmp("lab.ply/x"),
+        "repair " + Session() + " --out " + Session(),  // a folder that is not empty
+        "record --serial /dev/null --out " + folder,    // record writes a new session folder
         "calibrate --scenario " + Scenario("lab_circle") + " --auto --out " + folder}) {
     const CommandRun r = Cli(args);
     EXPECT_EQ(r.code, 1) << args << ": " << r.out;
     ExpectOneErrorLine(r, "");
   }
+}
+
+// An option a command takes but that has no use for the input or mode
+// given is refused with exit 2, not ignored (before, each of these ran to
+// exit 0 without it: the plan drawn uncorrected, the CSV in no frame, the
+// scenario's seed applied to nothing).
+TEST_F(CliRobustnessTest, AnOptionThatDoesNotApplyIsRefusedNotIgnored) {
+  const std::string cloud = Tmp("lab.ply");  // written by the fixture
+  const std::string calibration = Tmp("zero-calibration.json");
+  WriteText(calibration, R"({"alpha_rad": 0, "beta_rad": 0, "gamma_rad": 0})");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"plan " + cloud + " --calibration " + calibration,
+       "--calibration does not apply to a cloud file"},
+      {"plan " + cloud + " --pose-source odometry", "--pose-source does not apply to a cloud file"},
+      {"plan " + Session() + " --sessions a,b", "--sessions does not apply to a session"},
+      {"plan " + Session() + " --seed 3", "--seed does not apply to a session"},
+      {"evaluate " + cloud + " --strict", "--strict does not apply to a cloud file"},
+      {"evaluate " + Session() + " --seed 3", "--seed does not apply to a session"},
+      {"calibrate " + Session() + " --auto --seed 3", "--seed does not apply to a session"},
+      {"calibrate --scenario " + Scenario("lab_circle") + " --auto --strict",
+       "--strict does not apply to --scenario"},
+      {"export " + Session() + " --out " + Tmp("csv-frame") + " --frame map",
+       "--frame does not apply to a CSV export"},
+      {"export " + Session() + " --out " + Tmp("csv-cal") + " --calibration " + calibration,
+       "--calibration does not apply to a CSV export"},
+      {"simulate --scenario " + Scenario("lab") + " --out " + Tmp("d.ply") +
+           " --direct --session " + Tmp("d.sweepscan"),
+       "--session does not apply to --direct"},
+      {"sfm --rig-scenario room --strict", "--strict does not apply to --rig-scenario"},
+      {"sfm " + Session() + " --out " + Tmp("s.ply") + " --frames 3",
+       "--frames does not apply to the wheeled scanner"},
+      {"record --serial /dev/null --key-file " + calibration + " --out " + Tmp("never.sweepscan"),
+       "--key-file does not apply to --serial"},
+  };
+  for (const auto& [args, why] : cases) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    ExpectOneErrorLine(r, "option " + why);
+  }
+  EXPECT_FALSE(Exists(Tmp("csv-frame")));
+  EXPECT_FALSE(Exists(Tmp("d.ply")));
 }
 
 TEST_F(CliRobustnessTest, ForgedPlyHeadersAreExitTwoNotAnAbort) {
@@ -310,7 +354,7 @@ TEST_F(CliRobustnessTest, RepairWritesACleanCopyThatPassesStrict) {
   // The damaged session is untouched; NEW must be new.
   EXPECT_EQ(Cli("info " + dir + " --strict").code, 2);
   r = Cli("repair " + dir + " --out " + fixed);
-  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_EQ(r.code, 1) << r.out;  // an output in the way, as for every command
   ExpectOneErrorLine(r, "not empty");
   // frames.bin that is not one (its magic gone) is refused, and the new
   // folder it would have gone into is not left behind.
