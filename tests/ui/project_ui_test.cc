@@ -131,9 +131,14 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   window_->undo_stack()->undo();
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
 
-  // Closed, then opened again from File > Open Recent Project.
+  // Closed, then opened again from File > Open Recent Project. The closed
+  // project's edits go with it: they would undo nothing.
+  project()->SetColor("a", "#00ff00");
+  EXPECT_TRUE(window_->undo_stack()->canUndo());
   ASSERT_TRUE(project()->CloseProject());
   EXPECT_TRUE(layer->drawn_sessions().empty());
+  EXPECT_EQ(window_->undo_stack()->count(), 0);
+  EXPECT_FALSE(window_->undo_stack()->canUndo());
   EXPECT_EQ(window_->windowTitle().indexOf("toggle"), -1);
   QAction* recent = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {

@@ -70,10 +70,12 @@ ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStac
     emit cloudsChanged();
     shown_pending_ = document_.is_open();
     UpdateActions();
+    ForgetStaleEdits();
   });
   connect(&document_, &ProjectDocument::changed, this, &ProjectController::OnChanged);
   connect(&document_, &ProjectDocument::modifiedChanged, this, &ProjectController::titleChanged);
   connect(&document_, &ProjectDocument::renamed, this, &ProjectController::titleChanged);
+  connect(&document_, &ProjectDocument::renamed, this, &ProjectController::ForgetStaleEdits);
   connect(&jobs_, &ProjectJobs::progress, panel_, &ProjectPanel::ShowProgress);
   connect(&jobs_, &ProjectJobs::finished, panel_, [this] {
     panel_->ShowProgress(QString(), -2.0);
@@ -212,6 +214,19 @@ bool ProjectController::ConfirmClose() {
 bool ProjectController::CloseProject() {
   document_.Close();
   return true;
+}
+
+// An older generation's edits (another project, or this one before Save
+// As) would undo nothing. When every command on the window's stack is such
+// an edit, the usual case while working on a project, the history goes with
+// the project (Edit > Undo offered "Undo hide session a" and did nothing).
+// Mixed with the calibration panel's picks the stack stays as it is, and
+// each stale edit drops itself when it is reached (ProjectEditCommand).
+void ProjectController::ForgetStaleEdits() {
+  for (int i = 0; i < undo_->count(); ++i) {
+    if (dynamic_cast<const ProjectEditCommand*>(undo_->command(i)) == nullptr) return;
+  }
+  undo_->clear();
 }
 
 void ProjectController::Push(const Project& after, const QString& text) {

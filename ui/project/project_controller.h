@@ -113,6 +113,7 @@ class ProjectController : public QObject {
 
  private:
   void Push(const Project& after, const QString& text);
+  void ForgetStaleEdits();
   void OnChanged();
   void Show();  // The layer from the project and the clouds; pumps what is new.
   // Builds the clouds of placed, visible sessions not built yet (one job).
