@@ -362,13 +362,13 @@ void CalibrationPanel::OnPassesSplit(bool ok, const QString& message) {
 }
 
 void CalibrationPanel::ApplyPassLabels(int attempts_left) {
-  const std::vector<float>& labels = workspace_->pass_labels();
-  if (labels.empty()) return;
-  if (view_->point_count() < labels.size() && attempts_left > 0) {
+  const std::shared_ptr<const QuantizedValues> labels = workspace_->pass_values();
+  if (labels == nullptr || labels->q.empty()) return;
+  if (view_->point_count() < labels->q.size() && attempts_left > 0) {
     QTimer::singleShot(50, this, [this, attempts_left] { ApplyPassLabels(attempts_left - 1); });
     return;
   }
-  view_->SetPointValues(CloudView::ColorMode::kPass, labels);
+  view_->SetPointValues(CloudView::ColorMode::kPass, *labels);
   view_->SetColorMode(CloudView::ColorMode::kPass);
   view_->SetPassFilter(pass_shown_);
   Refresh();

@@ -282,7 +282,9 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
   }
   view_->SetPlanes(patches);
   view_->SetPlanesVisible(planes_shown_->isChecked());
-  view_->SetPointValues(CloudView::ColorMode::kDeviation, workspace_->deviation_map());
+  if (workspace_->deviation_values() != nullptr) {
+    view_->SetPointValues(CloudView::ColorMode::kDeviation, *workspace_->deviation_values());
+  }
   view_->SetDeviationRange(deviation_range_->value());
   if (deviations_shown_->isChecked()) view_->SetColorMode(CloudView::ColorMode::kDeviation);
   export_->setEnabled(true);

@@ -594,6 +594,8 @@ void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const
   opened_circle_ = circle;
   pass_labels_.clear();
   deviation_map_.clear();
+  pass_values_.reset();
+  deviation_values_.reset();
   session_dir_ = dir;
   unsaved_ = false;
   calibration_.reset();
@@ -637,8 +639,12 @@ void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
   // the points in their order; both go when the new cloud comes (a failed
   // SfM keeps the cloud and them).
   auto forget = [this, same_points] {
-    if (!same_points) pass_labels_.clear();
+    if (!same_points) {
+      pass_labels_.clear();
+      pass_values_.reset();
+    }
     deviation_map_.clear();
+    deviation_values_.reset();
   };
   if (source != PoseSource::kSfm) {
     forget();

@@ -230,6 +230,9 @@ class Workspace : public QObject {
   // calibration (the same points in the same order).
   void SplitPasses();
   const std::vector<float>& pass_labels() const { return pass_labels_; }
+  // The same quantised for the view (CloudView::SetPointValues), on the job
+  // thread: null when there are none.
+  std::shared_ptr<const QuantizedValues> pass_values() const { return pass_values_; }
   // Replays the opened session under `calibration` (as fast as possible):
   // the before / after view.
   void ShowCalibrated(const MountingError& calibration);
@@ -253,6 +256,9 @@ class Workspace : public QObject {
   // (in order) in mm from its fitted plane, NaN off every plane
   // (DeviationMapMm with a 5 cm band), computed with the evaluation.
   const std::vector<float>& deviation_map() const { return deviation_map_; }
+  std::shared_ptr<const QuantizedValues> deviation_values() const {
+    return deviation_values_;
+  }  // for the view
   // The report of the last evaluation (and the one before) as JSON
   // (docs/evaluation-report.md), written atomically to `path`.
   bool SaveEvaluationReport(const QString& path, const QString& image_name, QString* error) const;
@@ -398,6 +404,7 @@ class Workspace : public QObject {
                   const QString& dir, bool samples_released);
   std::vector<float> pass_labels_;
   std::vector<float> deviation_map_;
+  std::shared_ptr<const QuantizedValues> pass_values_, deviation_values_;
   std::shared_ptr<CloudEvaluation> evaluation_, previous_evaluation_;
   MountingError evaluated_calibration_, previous_calibration_;
   size_t point_count_ = 0;

@@ -155,10 +155,11 @@ void Workspace::SplitPasses() {
   }
   auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
   auto labels = std::make_shared<std::vector<float>>();
+  auto quantized = std::make_shared<QuantizedValues>();
   const OpenedCircle circle = opened_circle_;
   RunJob(
       tr("Splitting the passes"),
-      [snapshot, labels, circle](std::atomic<bool>*) -> QString {
+      [snapshot, labels, quantized, circle](std::atomic<bool>*) -> QString {
         const std::vector<CloudPoint> points = snapshot->Flatten();
         const std::vector<uint8_t> pass = LabelCirclePasses(points, *circle.poses, circle.circle);
         labels->resize(pass.size());
@@ -166,10 +167,12 @@ void Workspace::SplitPasses() {
           (*labels)[i] = pass[i] == kNoPass ? std::numeric_limits<float>::quiet_NaN()
                                             : static_cast<float>(pass[i]);
         }
+        *quantized = Quantize(*labels);  // as the view keeps them, off the GUI thread
         return QString();
       },
-      [this, labels] {
+      [this, labels, quantized] {
         pass_labels_ = std::move(*labels);
+        pass_values_ = quantized;
         size_t a = 0, b = 0;
         for (float v : pass_labels_) (v == 0.0f ? a : b) += (v == 0.0f || v == 1.0f) ? 1 : 0;
         emit passesSplit(true, tr("pass A (near side) %L1 points, pass B (far side) %L2 points")
@@ -188,10 +191,12 @@ void Workspace::Evaluate() {
   }
   auto result = std::make_shared<CloudEvaluation>();
   auto deviations = std::make_shared<std::vector<float>>();
+  auto quantized = std::make_shared<QuantizedValues>();
   const MountingError shown = shown_calibration_;
   RunJob(
       tr("Evaluating"),
-      [this, snapshot, points, result, deviations](std::atomic<bool>* cancel) -> QString {
+      [this, snapshot, points, result, deviations,
+       quantized](std::atomic<bool>* cancel) -> QString {
         {
           const std::vector<CloudPoint> cloud = snapshot->Flatten();
           points->reserve(cloud.size());
@@ -213,13 +218,15 @@ void Workspace::Evaluate() {
         // The deviation map over every point shown (outliers included: the
         // operator sees them grey or far off white).
         *deviations = DeviationMapMm(*points, result->planes, kDeviationBandM);
+        *quantized = Quantize(*deviations);  // as the view keeps them, off the GUI thread
         return QString();
       },
-      [this, result, shown, deviations] {
+      [this, result, shown, deviations, quantized] {
         previous_evaluation_ = evaluation_;
         previous_calibration_ = evaluated_calibration_;
         evaluation_ = result;
         deviation_map_ = std::move(*deviations);
+        deviation_values_ = quantized;
         evaluated_calibration_ = shown;
         emit evaluationFinished(true, QString());
       });
