@@ -288,9 +288,9 @@ int RunExport(int argc, char** argv) {
     return kExitBadInput;
   }
   if (format == "csv" &&
-      (code = RefuseOptions(
-           args, {"calibration", "no-ekf", "frame"},
-           "a CSV export of the sensor records (it is for cloud and rosbag exports)")) != kExitOk) {
+      (code = RefuseOptions(args, {"calibration", "no-ekf", "frame"},
+                            "a CSV export (it writes the sensor records as recorded)")) !=
+          kExitOk) {
     return code;
   }
   Decoded d;

@@ -281,8 +281,8 @@ int RunSimulate(int argc, char** argv) {
     return kExitBadInput;
   }
   if (args.Flag("direct")) {
-    const int refused =
-        RefuseOptions(args, {"session", "overwrite"}, "--direct (it records no session)");
+    // --overwrite stays harmless: scripts repeat a command with it.
+    const int refused = RefuseOptions(args, {"session"}, "--direct (it records no session)");
     if (refused != kExitOk) return refused;
   }
   SimulateRequest request;

@@ -263,6 +263,10 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     UpdateActions();
     ShowPoseSource();
   });
+  connect(workspace_, &Workspace::sessionRenamed, this, [this] {
+    UpdateTitle();
+    UpdateActions();
+  });
   connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::UpdateActions);
   // The choice (menu, replay panel) follows the workspace, which may give it
   // back to the cloud shown when SfM fails; it is kept for the next start.

@@ -219,7 +219,18 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
   ASSERT_TRUE(WaitFor([&] { return workspace_->point_count() > 30000; }, 30000));
   workspace_->StopMotion();
   const QString saved = tmp_.path() + "/saved.sweepscan";
+  // Saved under a new name, the session and its cloud are the same: what was
+  // measured on the cloud stays (nothing listening to sessionChanged forgets).
+  int changed = 0;
+  QString renamed;
+  QObject::connect(workspace_.get(), &Workspace::sessionChanged, [&] { ++changed; });
+  QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
+                   [&](const QString& dir) { renamed = dir; });
   ASSERT_TRUE(window_->SaveSessionTo(saved)) << window_->last_error().toStdString();
+  EXPECT_EQ(changed, 0);
+  EXPECT_EQ(renamed, saved);
+  EXPECT_TRUE(window_->windowTitle().contains("saved.sweepscan"))
+      << window_->windowTitle().toStdString();
   workspace_->Disconnect();
   QTest::qWait(300);
   const std::vector<CloudPoint> before = workspace_->CloudSnapshot().Flatten();

@@ -73,6 +73,10 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     if (!dragging_ && len > 0) slider_->setValue(static_cast<int>(1000.0 * pos / len));
     position_->setText(QStringLiteral("%1 / %2 s").arg(pos, 0, 'f', 1).arg(len, 0, 'f', 1));
   });
+  connect(workspace_, &Workspace::sessionRenamed, this, [this](const QString& dir) {
+    session_->setText(QFileInfo(dir).fileName());
+    session_->setToolTip(dir);
+  });
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
     // A new replay starts unpaused (the processor resets it): so does the button.
     {

@@ -41,8 +41,10 @@ inline QuantizedValues Quantize(const std::vector<float>& values) {
   out.step = hi > lo ? (static_cast<double>(hi) - lo) / (QuantizedValues::kNone - 1) : 1.0;
   out.q.resize(values.size(), QuantizedValues::kNone);
   for (size_t i = 0; i < values.size(); ++i) {
-    if (std::isfinite(values[i]))
-      out.q[i] = static_cast<uint16_t>(std::lround((values[i] - lo) / out.step));
+    if (std::isfinite(values[i])) {
+      out.q[i] =
+          static_cast<uint16_t>(std::lround((static_cast<double>(values[i]) - lo) / out.step));
+    }
   }
   return out;
 }

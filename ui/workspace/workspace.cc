@@ -481,7 +481,7 @@ bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
   if (!CopyFolder(session_dir_, dir, error)) return false;
   session_dir_ = dir;
   unsaved_ = false;
-  emit sessionChanged(dir);
+  emit sessionRenamed(dir);
   return true;
 }
 

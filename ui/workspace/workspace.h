@@ -290,6 +290,9 @@ class Workspace : public QObject {
   void linkOutage(bool open, double seconds, const QString& text);
   void recordingChanged(bool recording);
   void sessionChanged(const QString& dir);
+  // Save Session As: the same session and cloud, now in `dir`. What was
+  // measured on the cloud (planes, passes, intensities, the camera) stays.
+  void sessionRenamed(const QString& dir);
   void replayProgress(double position_s, double length_s);
   void replayFinished();
   // The opened session's intensities (MapIntensities), for View > Colour by

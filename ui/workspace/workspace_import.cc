@@ -2,6 +2,8 @@
 // inspected and imported on the job thread, exactly as `sweepscan-cli info
 // BAG` and `import` do it (core/io/ros/import.h), and the imported session
 // then opens like any other.
+#include <malloc.h>
+
 #include <QMetaObject>
 #include <limits>
 #include <memory>
@@ -73,9 +75,11 @@ bool Workspace::MapIntensities(const SensorLog& log, const CloudSnapshotRef& clo
   bool any = false;
   std::vector<const LidarScan*> scans;
   for (const LidarScan& scan : log.scans) {
+    if (cancel) return false;  // a session change waits for this thread
     if (scan.index >= scans.size()) scans.resize(scan.index + 1, nullptr);
     scans[scan.index] = &scan;
-    for (const LidarSample& s : scan.samples) any = any || s.intensity != 0.0f;
+    for (size_t i = 0; !any && i < scan.samples.size(); ++i)
+      any = scan.samples[i].intensity != 0.0f;
   }
   if (!any) return false;
   // Chunk by chunk (a 10 M-point cloud decoded whole would be 320 MB more).
@@ -113,12 +117,19 @@ void Workspace::StartIntensityMapping() {
   // The recording and the snapshot are shared: the samples outlive their
   // release (ReleaseOpenedSamples swaps in a copy without them) until done.
   std::shared_ptr<const hardware::Recording> recording = opened_;
-  const CloudSnapshotRef cloud = CloudSnapshot();
+  CloudSnapshotRef cloud = CloudSnapshot();
   const uint64_t generation = intensity_generation_;
-  intensity_thread_ = std::make_unique<std::thread>([this, recording, cloud, generation] {
+  intensity_thread_ = std::make_unique<std::thread>([this, recording, cloud, generation]() mutable {
     LowerThisThreadsPriority();
     auto values = std::make_shared<QuantizedValues>();
-    if (!MapIntensities(recording->log, cloud, intensity_cancel_, values.get())) return;
+    const bool mapped = MapIntensities(recording->log, cloud, intensity_cancel_, values.get());
+    // This may be the last hold on the samples (the replay's let go as it
+    // ended): gigabytes for hours, which glibc keeps unless trimmed after
+    // they are freed (ReleaseOpenedSamples' trim may have run already).
+    recording.reset();
+    cloud = CloudSnapshotRef();
+    malloc_trim(0);
+    if (!mapped) return;
     QMetaObject::invokeMethod(this, [this, values, generation] {
       if (generation == intensity_generation_) emit intensitiesMapped(values);
     });
