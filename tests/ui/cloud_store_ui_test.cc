@@ -177,6 +177,41 @@ TEST_F(CloudStoreUiTest, FullResolutionAtRestDrawsExactlyTheCloud) {
 // across the room, so its box meets nearly any view from inside it; the
 // plan counts only the points of its census cubes (0.5 m) in the frustum,
 // so the spot is drawn whole and not every n-th point of the room's chunks.
+// Colour by time or range reads every sealed chunk's rest level again (a
+// compressed chunk unpacked): not at once on the GUI thread (seconds at
+// 100 M points) but as after a camera move, the motion level drawn while
+// the rest level is rebuilt in slices. At rest again, every point is drawn
+// with its own range.
+TEST_F(CloudStoreUiTest, ColourByRangeRebuildsTheRestLevelInSlicesWithEachPointsRange) {
+  ASSERT_NO_FATAL_FAILURE(OpenLab());
+  CloudView* view = window_->view();
+  const std::vector<CloudPoint> points = workspace_->CloudSnapshot().Flatten();
+  if (window_->ceiling_action()->isChecked()) window_->ceiling_action()->trigger();
+  view->ViewOblique();
+  view->SetRestBudget(points.size());
+  view->SetLodActive(false);
+  ASSERT_FALSE(view->lod_active());
+
+  view->SetColorMode(CloudView::ColorMode::kRange);
+  EXPECT_TRUE(view->lod_active());  // the motion level, recoloured, meanwhile
+  EXPECT_TRUE(view->refining());
+  ASSERT_TRUE(WaitFor([&] { return !view->refining() && !view->lod_active(); }, 30000));
+  // A few points share a position (the store keeps whole millimetres).
+  std::map<Xyz, std::vector<float>> range;
+  for (const CloudPoint& p : points) range[{p.x, p.y, p.z}].push_back(p.range_m);
+  std::vector<float> scalars;
+  const std::vector<Eigen::Vector3f> drawn = view->DrawnPoints(&scalars);
+  ASSERT_EQ(drawn.size(), points.size());
+  ASSERT_EQ(scalars.size(), drawn.size());
+  size_t wrong = 0;
+  for (size_t i = 0; i < drawn.size(); ++i) {
+    const auto it = range.find({drawn[i].x(), drawn[i].y(), drawn[i].z()});
+    wrong += it == range.end() ||
+             std::find(it->second.begin(), it->second.end(), scalars[i]) == it->second.end();
+  }
+  EXPECT_EQ(wrong, 0u);
+}
+
 TEST_F(CloudStoreUiTest, ZoomedInAtRestEveryPointInViewIsDrawn) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();

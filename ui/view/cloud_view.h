@@ -213,7 +213,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t vtk_point_count() const;
   // The positions of the points drawn now (the level shown of every chunk;
   // the pass filter and the clip are not applied), for tests and figures.
-  std::vector<Eigen::Vector3f> DrawnPoints() const;
+  // `scalars` (if given): each point's value in the colour mode, as drawn.
+  std::vector<Eigen::Vector3f> DrawnPoints(std::vector<float>* scalars = nullptr) const;
   // The positions VTK is given to draw now: the shown batches' and the
   // growing chunk's vertex cells (the pass filter applied, the clip not; the
   // batches as the last frame built them), for tests.

@@ -4,9 +4,11 @@
 // (SetPointValues), and the pass filter that draws one pass of a circle drive.
 #include <vtkLookupTable.h>
 #include <vtkPointData.h>
+#include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
 #include <vtkVariant.h>
 
+#include <QTimer>
 #include <algorithm>
 #include <cmath>
 
@@ -183,9 +185,33 @@ size_t CloudView::drawn_point_count() const {
 
 void CloudView::SetColorMode(ColorMode mode) {
   color_mode_ = mode;
+  // Height and the values given after the fact are recoloured in place. Time
+  // and range of a sealed chunk's rest level must read the chunk again (and
+  // unpack it if compressed, ~2 ms a chunk: seconds at 100 M points), so
+  // those levels are dropped and built again as after a camera move: the
+  // motion level (recoloured at once) drawn meanwhile, then the rest level
+  // nearest first, kRefineSliceMs of the GUI thread at a time.
+  const bool reread = mode == ColorMode::kTime || mode == ColorMode::kRange;
+  bool dropped = false;
   for (auto& c : chunks_) {
     Recolor(c.get(), &c->motion);
-    Recolor(c.get(), &c->rest);
+    if (reread && c->sealed() && c->rest.stride > 0) {
+      if (c->rest.actor) renderer_->RemoveActor(c->rest.actor);
+      c->rest = Drawn();
+      DrawnChanged();
+      dropped = true;
+    } else {
+      Recolor(c.get(), &c->rest);
+    }
+  }
+  if (dropped) {
+    progress_.active = false;
+    lod_active_ = true;
+    ShowLevels();
+    if (!interacting_) {  // otherwise the settle after the interaction plans them
+      PlanRest();
+      refine_timer_->start();
+    }
   }
   ApplyLookupTable();
   RequestRender();

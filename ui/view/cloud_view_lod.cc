@@ -627,8 +627,9 @@ std::vector<Eigen::Vector3f> CloudView::MotionPoints() const {
   return out;
 }
 
-std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {
+std::vector<Eigen::Vector3f> CloudView::DrawnPoints(std::vector<float>* scalars) const {
   std::vector<Eigen::Vector3f> out;
+  if (scalars != nullptr) scalars->clear();
   for (const auto& c : chunks_) {
     // The level drawn now (ShowLevels(), the batches).
     const bool rest = !c->sealed() || (!lod_active_ && c->rest.stride > 0);
@@ -636,6 +637,9 @@ std::vector<Eigen::Vector3f> CloudView::DrawnPoints() const {
     if (!d.points) continue;
     const float* p = static_cast<const float*>(d.points->GetVoidPointer(0));
     for (size_t k = 0; k < d.size(); ++k) out.emplace_back(p[3 * k], p[3 * k + 1], p[3 * k + 2]);
+    if (scalars != nullptr && d.scalar) {
+      scalars->insert(scalars->end(), d.scalar->GetPointer(0), d.scalar->GetPointer(0) + d.size());
+    }
   }
   return out;
 }
