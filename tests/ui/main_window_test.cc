@@ -226,7 +226,10 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
   QObject::connect(workspace_.get(), &Workspace::sessionChanged, [&] { ++changed; });
   QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
                    [&](const QString& dir) { renamed = dir; });
+  const QString recorded = workspace_->session_dir();
   ASSERT_TRUE(window_->SaveSessionTo(saved)) << window_->last_error().toStdString();
+  EXPECT_FALSE(QFileInfo::exists(recorded));  // a new recording is moved, not copied
+  EXPECT_EQ(workspace_->session_dir(), saved);
   EXPECT_EQ(changed, 0);
   EXPECT_EQ(renamed, saved);
   EXPECT_TRUE(window_->windowTitle().contains("saved.sweepscan"))

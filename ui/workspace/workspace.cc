@@ -478,7 +478,12 @@ bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
     *error = QStringLiteral("There is no session to save: record or open one first.");
     return false;
   }
-  if (!CopyFolder(session_dir_, dir, error)) return false;
+  // A new recording (in the folder it was recorded to, not yet saved) is
+  // moved: instant on the same disk, where copying its frames took seconds
+  // on the GUI thread for an hour of scanning. A saved session is copied,
+  // as is a recording on another disk.
+  const bool moved = unsaved_ && !QFileInfo::exists(dir) && QDir().rename(session_dir_, dir);
+  if (!moved && !CopyFolder(session_dir_, dir, error)) return false;
   session_dir_ = dir;
   unsaved_ = false;
   emit sessionRenamed(dir);
