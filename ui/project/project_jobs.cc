@@ -36,6 +36,11 @@ Status BuildProjectCloud(const std::string& project_file, const ProjectSession& 
   out->key = CloudKey(project_file, session);
   out->positions = hardware::Positions(built.points);
   for (const Eigen::Vector3f& p : out->positions) out->bounds.extend(p);
+  out->block_bounds.resize((out->positions.size() + ProjectCloud::kPickBlock - 1) /
+                           ProjectCloud::kPickBlock);
+  for (size_t i = 0; i < out->positions.size(); ++i) {
+    out->block_bounds[i / ProjectCloud::kPickBlock].extend(out->positions[i]);
+  }
   out->damage = built.damage;
   out->has_truth = built.has_true_start;
   out->world_from_session_truth = built.world_from_session_truth;

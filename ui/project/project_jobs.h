@@ -35,6 +35,10 @@ struct ProjectCloud {
   std::string key;  // CloudKey() it was built for
   std::vector<Eigen::Vector3f> positions;
   Eigen::AlignedBox3f bounds;  // of the positions (empty if none)
+  // The bounds of each kPickBlock positions in order (a second of scanning,
+  // a compact slab): a pick tests only the blocks its ray passes near.
+  static constexpr size_t kPickBlock = 4096;
+  std::vector<Eigen::AlignedBox3f> block_bounds;
   std::string damage;  // frames.bin's damage, "" if none
   bool has_truth = false;  // a simulated session: where the robot was put down
   Rigid3d world_from_session_truth;

@@ -247,6 +247,36 @@ bool ProjectLayer::drawn_pose(const std::string& id, Rigid3d* project_from_sessi
   return true;
 }
 
+namespace {
+
+// Whether a point of `box` can lie within the pick's tolerance of the ray
+// o + t d (|d| = 1), 0 < t < max_t: the box grown by the tolerance at its
+// far side (tolerance_per_t times the farthest t it can have), met by the
+// ray within (0, max_t) (slabs).
+bool RayNearBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::AlignedBox3f& box,
+                double tolerance_per_t, double max_t) {
+  if (box.isEmpty()) return false;
+  const Eigen::Vector3d lo = box.min().cast<double>(), hi = box.max().cast<double>();
+  const double far = (0.5 * (lo + hi) - o).norm() + 0.5 * (hi - lo).norm();
+  const double margin = tolerance_per_t * std::min(far, max_t);
+  double t0 = 0.0, t1 = max_t;
+  for (int k = 0; k < 3; ++k) {
+    const double a = lo[k] - margin, b = hi[k] + margin;
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < a || o[k] > b) return false;
+      continue;
+    }
+    double ta = (a - o[k]) / d[k], tb = (b - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* hit) const {
   bool found = false;
   for (const auto& [id, e] : entries_) {
@@ -259,8 +289,15 @@ bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* 
     const Eigen::Vector3d d = r.transpose() * ray.direction;
     const Eigen::Vector3d z_row = r.row(2).transpose();
     const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
+    const std::vector<Eigen::AlignedBox3f>& blocks = e.cloud->block_bounds;
     // Every point uploaded so far (the pieces hold every k-th of them).
     for (size_t i = 0; i < e.next; ++i) {
+      const size_t block = i / ProjectCloud::kPickBlock;
+      if (i % ProjectCloud::kPickBlock == 0 && block < blocks.size() &&
+          !RayNearBox(o, d, blocks[block], ray.tolerance_per_t, *best_t)) {
+        i += ProjectCloud::kPickBlock - 1;  // none of its points can be hit
+        continue;
+      }
       const Eigen::Vector3d p = all[i].cast<double>();
       if (z_row.dot(p) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
       const Eigen::Vector3d v = p - o;
