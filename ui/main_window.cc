@@ -263,9 +263,11 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     UpdateActions();
     ShowPoseSource();
   });
-  connect(workspace_, &Workspace::sessionRenamed, this, [this] {
+  connect(workspace_, &Workspace::sessionRenamed, this, [this](const QString& dir) {
     UpdateTitle();
     UpdateActions();
+    AddRecent(dir);
+    statusBar()->showMessage(tr("Saved %1").arg(dir), 6000);
   });
   connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::UpdateActions);
   // The choice (menu, replay panel) follows the workspace, which may give it
@@ -628,9 +630,7 @@ bool MainWindow::SaveSessionTo(const QString& chosen) {
     ShowError(tr("Cannot save the session"), error);
     return false;
   }
-  AddRecent(dir);
-  statusBar()->showMessage(tr("Saved %1").arg(dir), 6000);
-  return true;
+  return true;  // saved (sessionRenamed), or being copied on the job thread
 }
 
 void MainWindow::AddRecent(const QString& dir) {

@@ -215,7 +215,8 @@ Status WriteFileChecked(const std::string& path, const std::string& contents) {
   return w.Commit();
 }
 
-Status CopyFileChecked(const std::string& from, const std::string& to) {
+Status CopyFileChecked(const std::string& from, const std::string& to,
+                       const std::function<bool(uint64_t bytes)>& progress) {
   Status s = CheckRegularFile(from);
   if (!s.ok()) return s;
   const int fd = ::open(from.c_str(), O_RDONLY | O_CLOEXEC);
@@ -223,12 +224,15 @@ Status CopyFileChecked(const std::string& from, const std::string& to) {
   CheckedFileWriter w;
   s = w.Open(to);
   std::vector<char> buffer(size_t{1} << 20);
+  uint64_t copied = 0;
   while (s.ok()) {
     const ssize_t n = ::read(fd, buffer.data(), buffer.size());
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) s = Status::Error(from + ": read error: " + std::strerror(errno));
     if (n <= 0) break;
     s = w.Write(buffer.data(), static_cast<size_t>(n));
+    copied += static_cast<uint64_t>(n);
+    if (s.ok() && progress && !progress(copied)) s = Status::Error(to + ": cancelled");
   }
   ::close(fd);
   return s.ok() ? w.Commit() : s;

@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -67,7 +68,10 @@ Status WriteFileChecked(const std::string& path, const std::string& contents);
 
 // Copies the file `from` to `to` through a CheckedFileWriter, a megabyte at
 // a time (any size, in bounded memory). Errors name the file and the reason.
-Status CopyFileChecked(const std::string& from, const std::string& to);
+// `progress` (optional) hears the bytes copied after each megabyte and
+// cancels by returning false ("cancelled"; `to` is left as it was).
+Status CopyFileChecked(const std::string& from, const std::string& to,
+                       const std::function<bool(uint64_t bytes)>& progress = nullptr);
 
 // "PATH: is a folder" / "PATH: cannot open for reading: No such file or
 // directory" when PATH is not a readable regular file; Ok otherwise, with its

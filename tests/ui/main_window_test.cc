@@ -258,6 +258,24 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
     ASSERT_EQ(after[i].time_ns, before[i].time_ns) << i;
   }
   ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == before.size(); }, 5000));
+
+  // Saved again under another name: an opened session is copied on the job
+  // thread, then it is the session shown; the original stays.
+  const QString copy = tmp_.path() + "/copy.sweepscan";
+  QString copied_to;
+  QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
+                   [&](const QString& dir) { copied_to = dir; });
+  ASSERT_TRUE(window_->SaveSessionTo(copy)) << window_->last_error().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return copied_to == copy; }, 30000))
+      << window_->last_error().toStdString();
+  EXPECT_EQ(workspace_->session_dir(), copy);
+  QFile original(saved + "/frames.bin"), copied(copy + "/frames.bin");
+  ASSERT_TRUE(original.open(QIODevice::ReadOnly) && copied.open(QIODevice::ReadOnly));
+  EXPECT_EQ(original.readAll(), copied.readAll());
+  EXPECT_TRUE(QFileInfo::exists(copy + "/meta.json"));
+  // A name that is taken is refused before anything is copied.
+  EXPECT_FALSE(workspace_->SaveSessionAs(saved, &error));
+  EXPECT_TRUE(error.contains("exists already")) << error.toStdString();
 }
 
 TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {

@@ -35,30 +35,6 @@ namespace {
 
 constexpr int kHealthMs = 250;
 
-// Copies a session folder file by file (frames.bin, meta.json, ...).
-bool CopyFolder(const QString& from, const QString& to, QString* error) {
-  QDir source(from);
-  if (!source.exists()) {
-    *error = QStringLiteral("%1: no such session folder").arg(from);
-    return false;
-  }
-  if (QFileInfo::exists(to)) {
-    *error = QStringLiteral("%1 exists already; choose a new name").arg(to);
-    return false;
-  }
-  if (!QDir().mkpath(to)) {
-    *error = QStringLiteral("%1: cannot create the folder").arg(to);
-    return false;
-  }
-  for (const QFileInfo& f : source.entryInfoList(QDir::Files)) {
-    if (!QFile::copy(f.absoluteFilePath(), to + QLatin1Char('/') + f.fileName())) {
-      *error = QStringLiteral("%1: cannot copy %2").arg(to, f.fileName());
-      return false;
-    }
-  }
-  return true;
-}
-
 // The job that computes SfM poses for the opened session (its failures
 // give the pose source choice back to the cloud shown).
 QString SfmJobName() { return QObject::tr("Structure from motion"); }
@@ -466,27 +442,6 @@ bool Workspace::StopRecording(QString* error) {
     return false;
   }
   emit message(QStringLiteral("Recording stopped: %1").arg(session_dir_));
-  return true;
-}
-
-bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
-  if (recording_) {
-    *error = QStringLiteral("Stop the recording before saving it.");
-    return false;
-  }
-  if (session_dir_.isEmpty()) {
-    *error = QStringLiteral("There is no session to save: record or open one first.");
-    return false;
-  }
-  // A new recording (in the folder it was recorded to, not yet saved) is
-  // moved: instant on the same disk, where copying its frames took seconds
-  // on the GUI thread for an hour of scanning. A saved session is copied,
-  // as is a recording on another disk.
-  const bool moved = unsaved_ && !QFileInfo::exists(dir) && QDir().rename(session_dir_, dir);
-  if (!moved && !CopyFolder(session_dir_, dir, error)) return false;
-  session_dir_ = dir;
-  unsaved_ = false;
-  emit sessionRenamed(dir);
   return true;
 }
 

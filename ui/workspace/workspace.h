@@ -125,8 +125,11 @@ class Workspace : public QObject {
   // The session shown: being recorded, recorded and not saved yet, or opened.
   QString session_dir() const { return session_dir_; }
   bool unsaved() const { return unsaved_; }  // A new recording not saved elsewhere yet.
-  // Copies the current session folder to `dir` (must not exist) and makes it
-  // the current session. Only when not recording.
+  // Saves the current session as `dir` (must not exist), which becomes the
+  // current session (sessionRenamed). A new recording's folder is moved
+  // (copied if `dir` is on another disk) before this returns; an opened
+  // session's is copied on the job thread (progress, Cancel; a failure is a
+  // failed job). Not while recording. workspace_save.cc.
   bool SaveSessionAs(const QString& dir, QString* error);
   // Forgets the current session and cloud (the recording folder stays on disk).
   void NewSession();
