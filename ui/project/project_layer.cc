@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <set>
 
+#include "core/geometry/ray_box.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -259,20 +260,7 @@ bool RayNearBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen:
   const Eigen::Vector3d lo = box.min().cast<double>(), hi = box.max().cast<double>();
   const double far = (0.5 * (lo + hi) - o).norm() + 0.5 * (hi - lo).norm();
   const double margin = tolerance_per_t * std::min(far, max_t);
-  double t0 = 0.0, t1 = max_t;
-  for (int k = 0; k < 3; ++k) {
-    const double a = lo[k] - margin, b = hi[k] + margin;
-    if (std::abs(d[k]) < 1e-12) {
-      if (o[k] < a || o[k] > b) return false;
-      continue;
-    }
-    double ta = (a - o[k]) / d[k], tb = (b - o[k]) / d[k];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-    if (t0 > t1) return false;
-  }
-  return true;
+  return RayHitsBox(o, d, lo, hi, margin, max_t);
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 // detail: the operator clicks what is on screen and gets the true sample
 // under the cursor, whatever the budget thinned. Points the clip hides (the
 // ceiling) or the pass filter leaves out are not pickable.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <vtkActor.h>
 #include <vtkBillboardTextActor3D.h>
 #include <vtkCamera.h>
@@ -20,9 +22,6 @@
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <QMouseEvent>
 #include <QTimer>
 #include <algorithm>
@@ -32,6 +31,7 @@
 #include <vector>
 
 #include "core/cloud/payload_codec.h"
+#include "core/geometry/ray_box.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
 
@@ -67,25 +67,12 @@ void CloudView::mousePressEvent(QMouseEvent* event) {
 
 namespace {
 
-// Ray / axis-aligned box test (slab method), the box grown by `margin`;
-// `enter`, if given, is where the ray enters it (0 if it starts inside).
+// The box b (VTK's order: x min, x max, y min, ...) grown by `margin`.
 bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double b[6],
                 double margin, double* enter = nullptr) {
-  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 3; ++k) {
-    const double lo = b[2 * k] - margin, hi = b[2 * k + 1] + margin;
-    if (std::abs(d[k]) < 1e-12) {
-      if (o[k] < lo || o[k] > hi) return false;
-      continue;
-    }
-    double a = (lo - o[k]) / d[k], c = (hi - o[k]) / d[k];
-    if (a > c) std::swap(a, c);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, c);
-    if (t0 > t1) return false;
-  }
-  if (enter != nullptr) *enter = t0;
-  return true;
+  return sweepscan::RayHitsBox(o, d, Eigen::Vector3d(b[0], b[2], b[4]),
+                               Eigen::Vector3d(b[1], b[3], b[5]), margin,
+                               std::numeric_limits<double>::infinity(), enter);
 }
 
 }  // namespace
