@@ -23,7 +23,6 @@
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
 #include "core/common/checked_file.h"
-#include "core/common/crc32c.h"
 #include "core/io/ros/ros_bag.h"
 #include "hardware/link/telemetry_decoder.h"
 
@@ -446,13 +445,8 @@ int RunRepair(int argc, char** argv) {
   // the three).
   CheckedFileWriter frames;
   s = frames.Open(out + "/" + kSessionFramesFile);
-  std::string bytes(reinterpret_cast<const char*>(kSessionFramesMagic), sizeof(kSessionFramesMagic));
-  const auto put = [&bytes](uint64_t v, int n) {
-    for (int i = 0; i < n; ++i) bytes.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
-  };
-  put(kSessionFormatVersion, 4);
-  put(0, 4);
-  if (s.ok()) s = frames.Write(bytes);
+  std::vector<uint8_t> bytes = SessionFramesHeader();
+  if (s.ok()) s = frames.Write(bytes.data(), bytes.size());
   FramesLoadReport f;
   Status read = Status::Ok();
   if (s.ok()) {
@@ -460,11 +454,8 @@ int RunRepair(int argc, char** argv) {
         in + "/" + kSessionFramesFile, hardware::DefaultSessionFramesOptions(),
         [&](const SessionRecordView& r) {
           bytes.clear();
-          put(r.size, 4);
-          put(static_cast<uint64_t>(r.receive_time_ns), 8);
-          bytes.append(reinterpret_cast<const char*>(r.bytes), r.size);
-          put(Crc32c(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()), 4);
-          s = frames.Write(bytes);
+          AppendSessionRecord(r.bytes, r.size, r.receive_time_ns, &bytes);
+          s = frames.Write(bytes.data(), bytes.size());
           return s.ok();  // a write that failed stops the read
         },
         &f);

@@ -42,13 +42,6 @@ int64_t GetI64(const uint8_t* p) {
                               static_cast<uint64_t>(GetU32(p + 4)) << 32);
 }
 
-std::vector<uint8_t> FramesFileHeader() {
-  std::vector<uint8_t> h(kSessionFramesMagic, kSessionFramesMagic + 8);
-  PutU32(kSessionFormatVersion, &h);
-  PutU32(0, &h);  // reserved
-  return h;
-}
-
 std::string Join(const std::string& dir, const char* file) {
   return dir.empty() || dir.back() == '/' ? dir + file : dir + "/" + file;
 }
@@ -677,7 +670,7 @@ Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
   const std::string frames = Join(dir, kSessionFramesFile);
   const int fd = ::open(frames.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) return Status::Error(Errno(frames + ": cannot create"));
-  const std::vector<uint8_t> header = FramesFileHeader();
+  const std::vector<uint8_t> header = SessionFramesHeader();
   if (!WriteAll(fd, header.data(), header.size()) || ::fsync(fd) != 0) {
     ::close(fd);
     return Status::Error(Errno(frames + ": cannot write the file header"));
@@ -710,6 +703,22 @@ Status SessionWriter::Open(const std::string& dir, const SessionWriterOptions& o
   return Status::Ok();
 }
 
+std::vector<uint8_t> SessionFramesHeader() {
+  std::vector<uint8_t> h(kSessionFramesMagic, kSessionFramesMagic + 8);
+  PutU32(kSessionFormatVersion, &h);
+  PutU32(0, &h);  // reserved
+  return h;
+}
+
+void AppendSessionRecord(const uint8_t* bytes, size_t n, int64_t receive_time_ns,
+                         std::vector<uint8_t>* out) {
+  const size_t start = out->size();
+  PutU32(static_cast<uint32_t>(n), out);
+  PutI64(receive_time_ns, out);
+  if (n > 0) out->insert(out->end(), bytes, bytes + n);
+  PutU32(Crc32c(out->data() + start, 12 + n), out);
+}
+
 Status SessionWriter::Append(const uint8_t* bytes, size_t n, int64_t receive_time_ns) {
   if (!failed_.empty()) return Status::Error(failed_);
   if (fd_ < 0) return Status::Error(dir_ + ": session is closed");
@@ -717,11 +726,7 @@ Status SessionWriter::Append(const uint8_t* bytes, size_t n, int64_t receive_tim
     return Status::Error(dir_ + ": record of " + std::to_string(n) + " bytes refused (limit " +
                          std::to_string(kSessionMaxRecordBytes) + ")");
   }
-  const size_t start = buffer_.size();
-  PutU32(static_cast<uint32_t>(n), &buffer_);
-  PutI64(receive_time_ns, &buffer_);
-  if (n > 0) buffer_.insert(buffer_.end(), bytes, bytes + n);
-  PutU32(Crc32c(buffer_.data() + start, 12 + n), &buffer_);
+  AppendSessionRecord(bytes, n, receive_time_ns, &buffer_);
   ++records_appended_;
   dirty_ = true;
   if (buffer_.size() >= options_.max_buffered_bytes) return WriteBuffer();

@@ -48,6 +48,14 @@ inline constexpr size_t kSessionRecordOverhead = 16;  // u32 length + i64 time +
 // Records longer than this are corrupt (a link frame is at most 64 KiB + 32).
 inline constexpr uint32_t kSessionMaxRecordBytes = 1u << 20;
 inline constexpr char kSessionFramesFile[] = "frames.bin";
+
+// The bytes of frames.bin as SessionWriter writes them (docs/session-format.md):
+// the 16-byte header, and one record appended to `out` (u32 length, i64
+// receive time, the bytes, CRC-32C of the three; little-endian). For a
+// writer of its own kind (`sweepscan-cli repair`).
+std::vector<uint8_t> SessionFramesHeader();
+void AppendSessionRecord(const uint8_t* bytes, size_t n, int64_t receive_time_ns,
+                         std::vector<uint8_t>* out);
 inline constexpr char kSessionMetaFile[] = "meta.json";
 
 // Everything meta.json holds (docs/session-format.md, "meta.json").
