@@ -243,11 +243,12 @@ int RunProject(int argc, char** argv) {
       {"export", {"out", "sessions", "pose-source", "strict", "json"}},
   };
   if (const auto takes = kTakes.find(sub); takes != kTakes.end()) {
+    std::set<std::string> others;
     for (const std::string& key : args.given()) {
-      if (takes->second.count(key) == 0) {
-        return Fail(kExitBadInput, "option --" + key + " does not apply to `project " + sub + "`");
-      }
+      if (takes->second.count(key) == 0) others.insert(key);
     }
+    if (const int code = RefuseOptions(args, others, "`project " + sub + "`"); code != kExitOk)
+      return code;
   }
   if (sub == "new") return RunNew(args);
   if (sub == "add") return RunAdd(args);

@@ -308,10 +308,7 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
 void Workspace::Disconnect() {
   AbortScriptedDrive();
   if (connection_ != nullptr) {
-    if (recording_) {
-      QString error;
-      if (!StopRecording(&error)) emit recordingFailed(error);
-    }
+    StopRecordingOrSay();
     hardware::RobotConnection* connection = connection_;
     connection_ = nullptr;
     connection->disconnect(this);
@@ -445,11 +442,14 @@ bool Workspace::StopRecording(QString* error) {
   return true;
 }
 
+void Workspace::StopRecordingOrSay() {
+  if (!recording_) return;
+  QString error;
+  if (!StopRecording(&error)) emit recordingFailed(error);
+}
+
 void Workspace::NewSession() {
-  if (recording_) {
-    QString error;
-    if (!StopRecording(&error)) emit recordingFailed(error);
-  }
+  StopRecordingOrSay();
   session_dir_.clear();
   unsaved_ = false;
   opened_.reset();
@@ -540,10 +540,7 @@ Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recordi
 
 void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
                            const QString& dir, bool samples_released) {
-  if (recording_) {
-    QString error;
-    if (!StopRecording(&error)) emit recordingFailed(error);
-  }
+  StopRecordingOrSay();
   // A damaged recording opens without its damaged records; say what was
   // lost (how many records and seconds, where).
   if (recording->decode.frames.damaged()) {

@@ -340,6 +340,9 @@ class Workspace : public QObject {
   // in a job first, then calls `then`.
   static constexpr size_t kKeepSamplesAtMost = 4'000'000;
   void ReleaseOpenedSamples();
+  // Stops a recording that another action ends (disconnect, a new or opened
+  // session); a failure to close it is said (recordingFailed).
+  void StopRecordingOrSay();
   // The streamed open (OpenSession); WillStreamOpen says whether it applies.
   bool WillStreamOpen(const QString& dir, double speed, PoseSource source) const;
   void OpenSessionStreamed(const QString& dir);
