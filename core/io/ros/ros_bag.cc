@@ -35,6 +35,12 @@ void AddOnce(const std::vector<std::string>& from, std::vector<std::string>* to)
   }
 }
 
+Status NotABag(const std::string& path) {
+  return Status::Error(path +
+                       ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
+                       "nor a ROS 2 bag folder)");
+}
+
 }  // namespace
 
 bool LooksLikeRosBag(const std::string& path) {
@@ -62,9 +68,7 @@ Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
     if (warnings != nullptr) AddOnce(report.warnings, warnings);
     return s;
   }
-  return Status::Error(path +
-                       ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
-                       "nor a ROS 2 bag folder)");
+  return NotABag(path);
 }
 
 Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
@@ -77,9 +81,7 @@ Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMes
     if (stats != nullptr) AddOnce(report.warnings, &stats->warnings);
     return s;
   }
-  return Status::Error(path +
-                       ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
-                       "nor a ROS 2 bag folder)");
+  return NotABag(path);
 }
 
 void ReleaseRosBags() { ReleaseRosbag1Cache(); }
