@@ -76,6 +76,7 @@ struct Options {
   long long rest_budget = -1;       // Points drawn at rest; < 0: the view's default.
   long long draw_pace = -1;         // Points between the driver's finishes; < 0: the default.
   long long lod_budget = -1;        // Points drawn while the camera moves.
+  double seek_s = -1.0;             // With --replay: seek there once shown (< 0: no).
 };
 
 // The scenarios' folder's parent: PREFIX/share/sweepscan when installed
@@ -166,10 +167,16 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "renderer's memory for a frame stays bounded (default 262144 under a software renderer, "
       "0 on a GPU; 0: never).",
       "N");
+  const QCommandLineOption seek(
+      "seek",
+      "With --replay: once the session is shown, seek its replay to S seconds from its start "
+      "and replay on at 1x (a benchmark: the JSON line's seek_ms and event-loop latency are then "
+      "the seek's alone).",
+      "S");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
   const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m).", "M");
-  parser.addOptions({floor_plan, plan_height, draw_pace});
+  parser.addOptions({floor_plan, plan_height, draw_pace, seek});
   parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
                      export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
                      sessions, memory_budget, rest_budget, lod_budget, project});
@@ -199,6 +206,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
   if (parser.isSet(lod_budget)) o.lod_budget = parser.value(lod_budget).toLongLong();
   if (parser.isSet(draw_pace)) o.draw_pace = parser.value(draw_pace).toLongLong();
+  if (parser.isSet(seek)) o.seek_s = std::max(0.0, parser.value(seek).toDouble());
   return o;
 }
 
@@ -457,7 +465,15 @@ void StartCalibrationDemo(const QString& pairs, Workspace* workspace, MainWindow
 
 // --quit-after: stop recording, let the last scans arrive, write what was
 // asked for, print the summary line and close. Returns 1 if a file failed.
-int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* window) {
+// The --seek benchmark: from the seek's request until the replay stands at
+// its target (< 0: not there, or no seek).
+struct SeekClock {
+  QElapsedTimer clock;
+  double ms = -1.0;
+};
+
+int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* window,
+                       const SeekClock& seek) {
   int exit_code = 0;
   if (workspace->recording()) {
     QString error;
@@ -500,8 +516,11 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
       {"session", workspace->session_dir().toStdString()},
       {"frames_rendered", window->view()->frames_rendered()},
       {"event_loop_latency_ms",
-       {{"p50", Percentile(latency, 0.5)}, {"p99", Percentile(latency, 0.99)}}},
+       {{"p50", Percentile(latency, 0.5)},
+        {"p99", Percentile(latency, 0.99)},
+        {"max", latency.empty() ? 0.0 : *std::max_element(latency.begin(), latency.end())}}},
       {"insertion_ms", window->insertion_ms()},
+      {"seek_ms", seek.ms},
       {"rss_mib", ResidentMiB()},
       {"memory", MemoryBreakdown(window)},
       {"last_error", window->last_error().toStdString()}};
@@ -667,9 +686,33 @@ int Main(int argc, char** argv) {
     if (o.plan_height_m > 0) window.plan_panel()->height_box()->setValue(o.plan_height_m);
     window.RaiseDock(QStringLiteral("planDock"));
   }
+  SeekClock seek;
   if (!o.replay.isEmpty()) {
     window.replay_panel()->SetSpeed(o.speed);
     if (o.orbit_frames > 0) StartOrbitBenchmark(o.orbit_frames, &workspace, &window);
+    if (o.seek_s >= 0) {
+      // The seek's time: until the replay stands at the target.
+      QObject::connect(&workspace, &Workspace::replayProgress, &window,
+                       [&](double position_s, double length_s) {
+                         if (seek.clock.isValid() && seek.ms < 0 &&
+                             position_s >= std::min(o.seek_s, length_s) - 1e-6) {
+                           seek.ms = seek.clock.nsecsElapsed() * 1e-6;
+                         }
+                       });
+      // Once, after the open's own replayFinished slots have run.
+      auto sought = std::make_shared<bool>(false);
+      QObject::connect(&workspace, &Workspace::replayFinished, &window, [&, sought] {
+        if (*sought) return;
+        *sought = true;
+        QTimer::singleShot(0, &window, [&] {
+          window.ClearTickLatencies();
+          window.replay_panel()->SetSpeed(
+              1.0);  // After the target: on at 1x, not flooding the view.
+          seek.clock.start();
+          workspace.SeekReplay(o.seek_s);
+        });
+      });
+    }
     if (!o.pose_source_tour.isEmpty()) {
       StartPoseSourceTour(o.pose_source_tour, &workspace, &window);
     } else if (!o.tour.isEmpty() && !o.pairs.isEmpty()) {
@@ -688,7 +731,7 @@ int Main(int argc, char** argv) {
   int exit_code = 0;
   if (o.quit_after_s >= 0) {
     QTimer::singleShot(static_cast<int>(o.quit_after_s * 1000.0), &window,
-                       [&] { exit_code = FinishAndSummarize(o, &workspace, &window); });
+                       [&] { exit_code = FinishAndSummarize(o, &workspace, &window, seek); });
   }
   const int rc = app.exec();
   return exit_code != 0 ? exit_code : rc;

@@ -1,9 +1,9 @@
 // The desktop app driven through its real widgets (QTest) and its workspace,
 // under a real display (xvfb-run in CI): the built-in simulator over loopback
 // TCP, the VTK view's rendered image, the emergency stop on Space, a wrong
-// key against a sweepscan-sim process, save / open, corrupt sessions,
-// replay against `sweepscan-cli reconstruct`, and the pose source of opened
-// sessions (EKF, odometry, SfM) against `reconstruct --pose-source`.
+// key against a sweepscan-sim process, save / open, corrupt sessions, and
+// the pose source of opened sessions (EKF, odometry, SfM) against
+// `reconstruct --pose-source`. Replay and seeking: replay_ui_test.cc.
 #include "ui/main_window.h"
 
 #include <QVTKOpenGLNativeWidget.h>
@@ -335,32 +335,6 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
 
   // The app still works: the simulator connects and streams.
   ConnectToSimulator();
-}
-
-TEST_F(AppTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
-  const std::string dir = tmp_.path().toStdString();
-  const std::string cli = SWEEPSCAN_CLI;
-  const auto sim = testing::RunCommand(cli + " simulate --scenario " + kResources.toStdString() +
-                                       "/scenarios/lab_circle.json --out " + dir + "/c.ply");
-  ASSERT_EQ(sim.code, 0) << sim.out;
-  const auto rec =
-      testing::RunCommand(cli + " reconstruct " + dir + "/c.sweepscan --out " + dir + "/cli.ply");
-  ASSERT_EQ(rec.code, 0) << rec.out;
-  std::vector<CloudPoint> expected;
-  ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
-  ASSERT_GT(expected.size(), 10000u);
-
-  bool finished = false;
-  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
-  workspace_->OpenSession(QString::fromStdString(dir + "/c.sweepscan"), 0.0);
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 120000));
-  const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot().Flatten();
-  ASSERT_EQ(replayed.size(), expected.size());
-  for (size_t i = 0; i < expected.size(); ++i) {
-    ASSERT_EQ(replayed[i].x, expected[i].x) << i;
-    ASSERT_EQ(replayed[i].y, expected[i].y) << i;
-    ASSERT_EQ(replayed[i].z, expected[i].z) << i;
-  }
 }
 
 // The cloud `sweepscan-cli reconstruct SESSION --pose-source SOURCE` writes.

@@ -214,7 +214,7 @@ void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recor
     connect(replay_timer_, &QTimer::timeout, this, &LiveProcessor::OnReplayTick);
   }
   replay_clock_.start();
-  replay_timer_->start(speed > 0 ? kReplayTickMs : 0);
+  replay_timer_->start(ReplayTickMs());
 }
 
 void LiveProcessor::AdoptCloud(std::shared_ptr<std::unique_ptr<PointChunks>> cloud,
@@ -288,24 +288,27 @@ void LiveProcessor::OnAdoptTick() {
   emit replayFinished();
 }
 
+int LiveProcessor::ReplayTickMs() const {
+  return seeking_ || replay_speed_ <= 0 ? 0 : kReplayTickMs;
+}
+
 void LiveProcessor::SetReplaySpeed(double speed) {
   replay_speed_ = speed;
   replay_anchor_ = replay_position_;
   replay_clock_.restart();
-  if (replay_timer_ != nullptr && replay_timer_->isActive()) {
-    replay_timer_->start(speed > 0 ? kReplayTickMs : 0);
-  }
+  if (replay_timer_ != nullptr && replay_timer_->isActive()) replay_timer_->start(ReplayTickMs());
 }
 
 void LiveProcessor::SetReplayPaused(bool paused) {
   if (replay_ == nullptr || replay_timer_ == nullptr) return;
   replay_paused_ = paused;
+  if (seeking_) return;  // The seek finishes first, then honours the pause.
   if (paused) {
     replay_timer_->stop();
   } else if (replay_position_ <= replay_end_) {
     replay_anchor_ = replay_position_;
     replay_clock_.restart();
-    replay_timer_->start(replay_speed_ > 0 ? kReplayTickMs : 0);
+    replay_timer_->start(ReplayTickMs());
   }
 }
 
@@ -318,22 +321,41 @@ void LiveProcessor::SeekReplay(double robot_time_s) {
     replay_position_ = replay_start_;
     next_wheel_ = next_imu_ = next_scan_ = 0;
   }
-  FeedReplayUntil(std::min(target, replay_end_ + FromSeconds(1e-9)));
-  replay_anchor_ = replay_position_;
-  replay_clock_.restart();
+  seek_target_ = std::min(target, replay_end_ + FromSeconds(1e-9));
+  seeking_ = true;
+  replay_timer_->start(ReplayTickMs());
+  SeekTick();  // A seek a few seconds ahead ends here.
+}
+
+void LiveProcessor::SeekTick() {
+  FeedReplayUntil(std::min(seek_target_, replay_position_ + FromSeconds(kFastSliceS)));
   emit replayProgress(ToSeconds(replay_position_ - replay_start_),
                       ToSeconds(replay_end_ - replay_start_));
+  if (replay_position_ < seek_target_) return;
+  seeking_ = false;
+  replay_anchor_ = replay_position_;
+  replay_clock_.restart();
+  if (replay_paused_) {
+    replay_timer_->stop();
+  } else {
+    replay_timer_->start(ReplayTickMs());
+  }
 }
 
 void LiveProcessor::StopReplay() {
   if (replay_timer_ != nullptr) replay_timer_->stop();
   if (adopt_timer_ != nullptr) adopt_timer_->stop();
   publish_cap_ = static_cast<size_t>(-1);
+  seeking_ = false;
   replay_.reset();
 }
 
 void LiveProcessor::OnReplayTick() {
   if (replay_ == nullptr) return;
+  if (seeking_) {
+    SeekTick();
+    return;
+  }
   Time until;
   if (replay_speed_ > 0) {
     until = replay_anchor_ + FromSeconds(replay_speed_ * replay_clock_.elapsed() * 1e-3);

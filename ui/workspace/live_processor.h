@@ -5,9 +5,13 @@
 //
 // Replay feeds a recording's records in robot-time order at a speed factor
 // (1x..20x, or 0 = as fast as possible, in slices that keep the thread
-// responsive); seeking restarts the pipeline and feeds up to the target time
-// at full speed. For the same records the replayed cloud equals the offline
-// Reconstruct (LivePipeline's guarantee), hence `sweepscan-cli reconstruct`.
+// responsive). Seeking backwards restarts the pipeline; either way the
+// records up to the target are then fed at full speed in the same slices, so
+// that a seek across hours of recording keeps the thread answering (pause,
+// another seek, stop) and the view takes the cloud as it grows, instead of
+// one event that feeds it all and one batch of every chunk at its end. The
+// replay then goes on as it was: paused, or at its speed. For the same records the replayed cloud
+// equals the offline Reconstruct (LivePipeline's guarantee), hence `sweepscan-cli reconstruct`.
 //
 // A replay may also be given its poses, computed beforehand over the whole
 // log (SfM, core/sfm/wheeled.h: a batch method): then no estimator runs and
@@ -86,6 +90,10 @@ class LiveProcessor : public QObject {
   bool LatestPose(Pose2d* pose, Time* time) const;
   void Publish(bool reset);
   void OnReplayTick();
+  // One slice of a seek; at the target, the replay goes on as it was.
+  void SeekTick();
+  // The replay timer's period for the current state (0: as fast as possible).
+  int ReplayTickMs() const;
   // Feeds every record with time < until (robot time) not fed yet.
   void FeedReplayUntil(Time until);
 
@@ -122,6 +130,8 @@ class LiveProcessor : public QObject {
   Time replay_end_;       // ... and of its last.
   Time replay_position_;  // Everything before this has been fed.
   Time replay_anchor_;    // replay_position_ when replay_clock_ was restarted.
+  bool seeking_ = false;  // Feeding up to seek_target_ at full speed.
+  Time seek_target_;
   size_t next_wheel_ = 0, next_imu_ = 0, next_scan_ = 0;
 };
 
