@@ -26,9 +26,10 @@ int64_t RealtimeNs() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
-LinkDecoderOptions RecordingDecoderOptions() {
+LinkDecoderOptions RecordingDecoderOptions(size_t max_work) {
   LinkDecoderOptions options;
   options.keep_raw_frames = true;  // The session stores each frame's exact bytes.
+  options.max_work_per_feed = max_work;
   return options;
 }
 
@@ -54,6 +55,10 @@ bool RobotConnectionOptions::IsValid(QString* error) const {
   }
   if (flush_check_ms <= 0 || flush_check_ms > 250) {
     return fail(QStringLiteral("flush check period must be 1..250 ms (durability within 1 s)"));
+  }
+  if (max_undecoded_bytes < 2 * kLinkMaxFrameSize) {
+    return fail(QStringLiteral("max undecoded bytes must hold two frames (%1 B)")
+                    .arg(2 * kLinkMaxFrameSize));
   }
   std::string message;
   if (!session_writer.IsValid(&message)) return fail(QString::fromStdString(message));
@@ -91,8 +96,9 @@ std::string LinkHealth::ToString() const {
   }
   s << "; gaps " << sequence_gaps << " (" << frames_missing << " frames), crc " << crc_errors
     << ", length " << length_errors << ", framing " << framing_errors << ", payload "
-    << payload_errors << "; latency last " << latency_last_ms << " ms mean " << latency_mean_ms
-    << " ms max " << latency_max_ms << " ms (" << latency_samples << ")";
+    << payload_errors << ", floods " << input_floods << "; latency last " << latency_last_ms
+    << " ms mean " << latency_mean_ms << " ms max " << latency_max_ms << " ms (" << latency_samples
+    << ")";
   if (have_status) {
     s << "; agent watchdog " << static_cast<int>(agent_status.watchdog) << " faults 0x" << std::hex
       << agent_status.fault_bits << std::dec << " battery " << agent_status.battery_voltage_v
@@ -111,7 +117,7 @@ std::string LinkHealth::ToString() const {
 RobotConnection::RobotConnection(const RobotConnectionOptions& options, QObject* parent)
     : QObject(parent),
       options_(options),
-      decoder_link_(RecordingDecoderOptions()),
+      decoder_link_(RecordingDecoderOptions(options.max_decode_work_per_read)),
       decoder_(options.decoder) {}
 
 RobotConnection::~RobotConnection() { Shutdown(); }
@@ -269,12 +275,17 @@ void RobotConnection::OnConnected() {
 }
 
 void RobotConnection::OnBytes(const QByteArray& bytes) {
-  const int64_t receive_ns = RealtimeNs();
   last_rx_.start();
   health_.bytes_received += static_cast<uint64_t>(bytes.size());
+  Decode(reinterpret_cast<const uint8_t*>(bytes.constData()), static_cast<size_t>(bytes.size()));
+}
+
+void RobotConnection::Decode(const uint8_t* data, size_t n) {
+  // A frame decoded in a later slice carries the time it was decoded: the
+  // workstation had not seen it before.
+  const int64_t receive_ns = RealtimeNs();
   std::vector<LinkMessage> messages;
-  decoder_link_.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()),
-                     static_cast<size_t>(bytes.size()), &messages);
+  decoder_link_.Feed(data, n, &messages);
   bool decoded_telemetry = false;
   for (const LinkMessage& message : messages) {
     ++health_.frames_received;
@@ -313,6 +324,23 @@ void RobotConnection::OnBytes(const QByteArray& bytes) {
   if (decoded_telemetry) {
     decoder_.TakeInto(&log_);
     emit telemetryDecoded();
+  }
+  if (stream_ == nullptr) return;
+  if (decoder_link_.BufferedBytes() > options_.max_undecoded_bytes) {
+    ++health_.input_floods;
+    const QString reason =
+        QStringLiteral("%1 MiB from the link wait to be decoded: not frames (forged or corrupt)")
+            .arg(decoder_link_.BufferedBytes() / 1048576.0, 0, 'f', 1);
+    if (auto* tcp = dynamic_cast<TcpStream*>(stream_.get())) tcp->Abort();
+    ScheduleReconnect(reason);  // The next Connect() forgets the bytes.
+    return;
+  }
+  if (decoder_link_.work_pending() && !decode_scheduled_) {
+    decode_scheduled_ = true;
+    QTimer::singleShot(0, this, [this] {
+      decode_scheduled_ = false;
+      if (stream_ != nullptr) Decode(nullptr, 0);
+    });
   }
 }
 

@@ -71,6 +71,16 @@ struct RobotConnectionOptions {
                              // everything older than 1 s is on disk).
   TelemetryDecoderOptions decoder;
   bool decode_telemetry = true;
+  // What bytes that are not frames may cost the I/O thread: a flood of
+  // forged frame candidates (from someone on the Wi-Fi's path, or a broken
+  // robot) each announce up to 64 KiB and fail their CRC only once it has
+  // all been read, so 28 bytes of input can cost 64 KiB of CRC work and a
+  // megabyte of them seconds. At most this much CRC work a read; the rest
+  // is decoded after the thread's other events (the heartbeat, the drive
+  // the robot's watchdog waits for). More bytes waiting than
+  // max_undecoded_bytes: the link is dropped and reconnected.
+  size_t max_decode_work_per_read = 4u << 20;
+  size_t max_undecoded_bytes = 64u << 20;
 
   bool IsValid(QString* error) const;
 };
@@ -107,6 +117,7 @@ struct LinkHealth {
   uint64_t framing_errors = 0;
   uint64_t payload_errors = 0;
   uint64_t bytes_skipped = 0;
+  uint64_t input_floods = 0;  // Links dropped for more than max_undecoded_bytes waiting.
   // Round trip (CommandAck echo time -> now), milliseconds.
   uint64_t latency_samples = 0;
   double latency_last_ms = 0.0;
@@ -196,6 +207,9 @@ class RobotConnection : public QObject {
   void Connect();
   void OnConnected();
   void OnBytes(const QByteArray& bytes);
+  // Decodes what the link decoder holds with these bytes added (none: the
+  // rest of a read cut short by max_decode_work_per_read).
+  void Decode(const uint8_t* data, size_t n);
   void OnClosed(const QString& reason);
   void HandleMessage(const LinkMessage& message);
   // A final failure (old agent): state failed, no retry.
@@ -232,6 +246,7 @@ class RobotConnection : public QObject {
   bool auth_required_ = false;
   bool answered_challenge_ = false;
   bool heartbeat_enabled_ = true;
+  bool decode_scheduled_ = false;  // A Decode(nullptr, 0) is queued.
   bool stopping_ = false;
   int backoff_ms_ = 0;
   double latency_sum_ms_ = 0.0;

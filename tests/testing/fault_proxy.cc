@@ -189,6 +189,15 @@ void FaultProxy::Flush(Link* link, int d) {
   }
 }
 
+void FaultProxy::Inject(Direction d, const QByteArray& bytes) {
+  const std::vector<Link*> links = links_;  // Flush may remove links.
+  for (Link* link : links) {
+    if (link->dead || link->black_hole) continue;
+    link->held[d].append(bytes);
+    if (!Holding()) Flush(link, d);
+  }
+}
+
 void FaultProxy::FlushAll() {
   const std::vector<Link*> links = links_;  // Flush may remove links.
   for (Link* link : links) {

@@ -133,6 +133,11 @@ class FaultProxy : public QObject {
   void SetBursts(int period_ms);
   int burstPeriod() const { return burst_period_ms_; }
 
+  // Bytes of our own into direction d of every current connection, as
+  // someone on the path would put them there: behind what that direction
+  // holds, delivered now unless bytes are held. Counted as relayed.
+  void Inject(Direction d, const QByteArray& bytes);
+
   // Counters.
   qint64 BytesRelayed(Direction d) const { return relayed_[d]; }
   qint64 BytesDropped(Direction d) const { return dropped_[d]; }

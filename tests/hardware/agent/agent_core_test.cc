@@ -14,6 +14,7 @@
 #include "hardware/codecs/x4_codec.h"
 #include "hardware/link/hmac_sha256.h"
 #include "tests/hardware/agent/agent_harness.h"
+#include "tests/testing/forged_link_frames.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -505,29 +506,11 @@ TEST_F(SignedFramesTest, RefusedFramesDoNotFeedTheWatchdog) {
   EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
 }
 
-// Frame candidates with a good header CRC and a bad frame CRC: each costs a
-// CRC over the largest payload the agent accepts. The work per call is
-// bounded, so the caller's timers (the watchdog tick) run in between.
-std::vector<uint8_t> ForgedCandidates(size_t count, size_t payload_size) {
-  std::vector<uint8_t> bytes;
-  for (size_t i = 0; i < count; ++i) {
-    std::vector<uint8_t> frame;
-    std::vector<uint8_t> payload(payload_size, 0xA5);
-    AppendRawLinkFrame(LinkSender::kClient, static_cast<uint32_t>(i), Time(), 0x14, payload.data(),
-                       payload.size(), &frame);
-    frame.back() ^= 0xFF;  // Bad frame CRC.
-    // Only the 28 header bytes are sent: the next candidate starts inside
-    // the payload this one announced, so every candidate waits for a CRC
-    // over bytes that are mostly other candidates.
-    bytes.insert(bytes.end(), frame.begin(), frame.begin() + kLinkHeaderSize);
-  }
-  return bytes;
-}
-
 TEST_F(SignedFramesTest, ForgedCandidateFloodIsWorkedOffInBoundedSlices) {
   const AgentOptions options = TestOptions();
   h_.Send(Ms(0), DriveCommand{0.2, 0.0});
-  const std::vector<uint8_t> flood = ForgedCandidates(20000, options.max_client_payload - 32);
+  const std::vector<uint8_t> flood = sweepscan::testing::ForgedLinkCandidates(
+      LinkSender::kClient, 20000, options.max_client_payload - 32);
   h_.agent.OnClientBytes(flood.data(), flood.size(), Ms(0), &h_.out);
   h_.Collect();
   EXPECT_TRUE(h_.agent.client_work_pending());
@@ -553,7 +536,8 @@ TEST_F(SignedFramesTest, ForgedCandidateFloodIsWorkedOffInBoundedSlices) {
 TEST_F(SignedFramesTest, AnUndecodedBacklogBeyondTheLimitDropsTheConnection) {
   const AgentOptions options = TestOptions();
   h_.Send(Ms(0), DriveCommand{0.2, 0.0});
-  const std::vector<uint8_t> flood = ForgedCandidates(60000, options.max_client_payload - 32);
+  const std::vector<uint8_t> flood = sweepscan::testing::ForgedLinkCandidates(
+      LinkSender::kClient, 60000, options.max_client_payload - 32);
   ASSERT_GT(flood.size(), options.max_client_backlog);
   h_.SendBytes(Ms(1), flood);
   EXPECT_TRUE(h_.closed);

@@ -11,14 +11,14 @@
 // WaitFor); attackers are plain blocking POSIX sockets on their own threads.
 // Figures are printed (docs/robot-agent.md, "Measured").
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <pty.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-#include <fcntl.h>
-#include <pty.h>
 #include <unistd.h>
 
 #include <QCoreApplication>
@@ -38,6 +38,7 @@
 #include "hardware/link/hmac_sha256.h"
 #include "hardware/link/qt_transport.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/forged_link_frames.h"
 #include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
@@ -153,21 +154,6 @@ class RawClient {
   LinkDecoder decoder_;
   std::vector<LinkMessage> pending_;
 };
-
-// 28-byte headers announcing `payload` bytes with a good header CRC: every
-// candidate costs the agent a CRC over bytes that are mostly the next ones,
-// and is then rejected (bad frame CRC).
-std::vector<uint8_t> ForgedCandidates(size_t count, size_t payload) {
-  std::vector<uint8_t> bytes;
-  std::vector<uint8_t> body(payload, 0x5A);
-  for (size_t i = 0; i < count; ++i) {
-    std::vector<uint8_t> frame;
-    AppendRawLinkFrame(LinkSender::kClient, static_cast<uint32_t>(i), Time(), 0x14, body.data(),
-                       body.size(), &frame);
-    bytes.insert(bytes.end(), frame.begin(), frame.begin() + kLinkHeaderSize);
-  }
-  return bytes;
-}
 
 TEST(RobotAgentHardeningTest, KeylessConnectionsNeverHoldTheClientSlot) {
   // Before: two keyless clients that connected and waited kept the keyed
@@ -286,7 +272,8 @@ double WatchdogLatencyUnderFlood(double bytes_per_s, bool* dropped, double* mega
   EXPECT_TRUE(a.started);
   std::atomic<bool> authenticated{false}, stop{false}, done{false};
   std::atomic<long> flood_bytes{0};
-  const std::vector<uint8_t> flood = ForgedCandidates(1024, 256);  // 28 kB.
+  const std::vector<uint8_t> flood =
+      sweepscan::testing::ForgedLinkCandidates(LinkSender::kClient, 1024, 256);  // 28 kB.
   std::thread attacker([&] {
     RawClient c(a.agent->tcp_port());
     if (!c.Authenticate()) {

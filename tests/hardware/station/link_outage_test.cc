@@ -33,7 +33,9 @@
 #include "hardware/emulation/simulate_session.h"
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
+#include "tests/testing/event_loop_turns.h"
 #include "tests/testing/fault_proxy.h"
+#include "tests/testing/forged_link_frames.h"
 #include "tests/testing/qt_wait.h"
 #include "tests/testing/scenario_file.h"
 
@@ -482,6 +484,80 @@ TEST(LinkOutageTest, ARobotRebootDuringAnOutageStartsANewClockEpoch) {
   }
   EXPECT_GT(longest, 1.0);  // The robot was off.
   EXPECT_LT(longest, ToSeconds(std::chrono::milliseconds(down.elapsed())) + 5.0);
+}
+
+// Someone on the Wi-Fi's path (or a broken robot) floods the workstation
+// with forged frame candidates: 28 bytes each, announcing 60 000 bytes whose
+// CRC fails once they are all read, 4.2 MB in all (about 9 GB of CRC work).
+// Each read's CRC work is bounded and the rest decoded after the thread's
+// other events: no turn of the event loop takes long, the link stays up
+// without a reconnect, the drive the workstation re-sends at 10 Hz keeps the
+// robot's watchdog fed, and the agent's frames decode again after it.
+TEST(LinkOutageTest, AForgedFrameFloodIsDecodedInSlicesAndTheLinkAndTheDriveGoOn) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  QTemporaryDir tmp;
+  RobotConnection client(Client(proxy.port(), tmp.path() + "/flood.sweepscan"));
+  QString error;
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  client.SetLidarMotor(true);
+  QTimer drive;
+  QObject::connect(&drive, &QTimer::timeout, [&] { client.Drive(0.1, 0.0); });
+  drive.start(100);
+  ASSERT_TRUE(WaitFor([&] { return robot.Speed() > 0.05; }, 5000));
+
+  const size_t count = 150000;
+  const uint64_t crc_before = client.health().crc_errors;
+  const std::vector<uint8_t> flood =
+      sweepscan::testing::ForgedLinkCandidates(LinkSender::kAgent, count, 60000);
+  proxy.Inject(FaultProxy::kDown, QByteArray(reinterpret_cast<const char*>(flood.data()),
+                                             static_cast<int>(flood.size())));
+  // All but the last candidates' 60 000 bytes (they wait for the agent's
+  // next frames to fill them) are rejected by their CRC.
+  const auto turns = sweepscan::testing::MeasureTurnsUntil(
+      [&] { return client.health().crc_errors >= crc_before + count - 60000 / kLinkHeaderSize; },
+      120000);
+  ASSERT_TRUE(turns.done) << client.health().ToString();
+  sweepscan::testing::ExpectResponsive("forged frame flood", turns, 200.0);
+  const uint64_t frames = client.health().frames_received;
+  ASSERT_TRUE(WaitFor([&] { return client.health().frames_received > frames + 20; }, 20000))
+      << client.health().ToString();
+  EXPECT_GT(robot.Speed(), 0.05) << "the robot's watchdog stopped it";
+  EXPECT_TRUE(client.authenticated());
+  EXPECT_EQ(client.health().outages, 0u) << client.health().ToString();
+  EXPECT_EQ(client.health().input_floods, 0u);
+  std::fprintf(stderr, "%s\n", client.health().ToString().c_str());
+  client.Shutdown();
+}
+
+// A flood faster than it can be decoded: beyond max_undecoded_bytes waiting,
+// the link is dropped with the reason, counted, and comes back.
+TEST(LinkOutageTest, AFloodBeyondTheUndecodedBoundDropsTheLinkWhichComesBack) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  QTemporaryDir tmp;
+  RobotConnectionOptions options = Client(proxy.port(), tmp.path() + "/flood.sweepscan");
+  options.max_decode_work_per_read = 256 * 1024;
+  options.max_undecoded_bytes = 1 << 20;
+  RobotConnection client(options);
+  QString lost_reason;
+  QObject::connect(&client, &RobotConnection::linkLost,
+                   [&](const QString& reason) { lost_reason = reason; });
+  QString error;
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  const std::vector<uint8_t> flood =
+      sweepscan::testing::ForgedLinkCandidates(LinkSender::kAgent, 150000, 60000);
+  proxy.Inject(FaultProxy::kDown, QByteArray(reinterpret_cast<const char*>(flood.data()),
+                                             static_cast<int>(flood.size())));
+  ASSERT_TRUE(WaitFor([&] { return !lost_reason.isEmpty(); }, 30000)) << client.health().ToString();
+  EXPECT_TRUE(lost_reason.contains(QStringLiteral("not frames"))) << lost_reason.toStdString();
+  EXPECT_EQ(client.health().input_floods, 1u);
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000)) << client.health().ToString();
+  client.Shutdown();
 }
 
 // The figures of docs/robot-agent.md ("Outages and reconnection"), not a
