@@ -475,6 +475,8 @@ struct SeekClock {
 int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* window,
                        const SeekClock& seek) {
   int exit_code = 0;
+  // The run's event-loop latencies, not the waits below (three turns 70-90 ms late).
+  const std::vector<double> latency = window->tick_latencies_ms();
   if (workspace->recording()) {
     QString error;
     workspace->StopRecording(&error);
@@ -505,7 +507,6 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
       exit_code = 1;
     }
   }
-  const auto& latency = window->tick_latencies_ms();
   const nlohmann::json j = {
       {"points", workspace->CloudSize()},
       {"points_shown", window->view()->point_count()},
