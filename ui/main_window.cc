@@ -579,7 +579,7 @@ void MainWindow::UpdateTeleop() {
   }
 }
 
-bool MainWindow::ConfirmDiscard() {
+bool MainWindow::ConfirmDiscard(const std::function<void()>& retry) {
   if (!workspace_->unsaved() && !workspace_->recording()) return true;
   if (!interactive_) return true;  // The recording stays in its folder either way.
   const auto answer = QMessageBox::question(
@@ -597,14 +597,23 @@ bool MainWindow::ConfirmDiscard() {
     }
     const QString dir = QFileDialog::getSaveFileName(
         this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
-    if (dir.isEmpty()) return false;
-    return SaveSessionTo(dir);
+    if (dir.isEmpty() || !SaveSessionTo(dir)) return false;
+    if (!workspace_->unsaved()) return true;       // moved at once
+    if (!workspace_->job_running()) return false;  // the copy could not start (said why)
+    // Being copied onto another disk: the action goes on once it is saved
+    // (after the job's own slots), not if the copy fails or is cancelled.
+    // A successful copy renames the session before its job finishes.
+    auto* once = new QObject(this);
+    connect(workspace_, &Workspace::sessionRenamed, once,
+            [this, retry] { QTimer::singleShot(0, this, retry); });
+    connect(workspace_, &Workspace::jobFinished, once, [once] { once->deleteLater(); });
+    return false;
   }
   return true;
 }
 
 RosImportDialog* MainWindow::ImportRosRecordingPath(const QString& path) {
-  if (!ConfirmDiscard()) return nullptr;
+  if (!ConfirmDiscard([this, path] { ImportRosRecordingPath(path); })) return nullptr;
   // A ROS 2 bag is its folder; its metadata.yaml is what a file chooser picks.
   const QFileInfo f(path);
   const QString bag = f.fileName() == QStringLiteral("metadata.yaml") ? f.absolutePath() : path;
@@ -612,7 +621,7 @@ RosImportDialog* MainWindow::ImportRosRecordingPath(const QString& path) {
 }
 
 void MainWindow::OpenSessionPath(const QString& dir) {
-  if (!ConfirmDiscard()) return;
+  if (!ConfirmDiscard([this, dir] { OpenSessionPath(dir); })) return;
   workspace_->OpenSession(dir, replay_panel_->speed());
 }
 
@@ -665,7 +674,7 @@ void MainWindow::ShowError(const QString& title, const QString& message) {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (!ConfirmDiscard() || !project_->ConfirmClose()) {
+  if (!ConfirmDiscard([this] { close(); }) || !project_->ConfirmClose()) {
     event->ignore();
     return;
   }

@@ -13,8 +13,9 @@
 
 #include <QElapsedTimer>
 #include <QMainWindow>
-#include <limits>
 #include <QSet>
+#include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -121,7 +122,10 @@ class MainWindow : public QMainWindow {
   void SaveSettings();
   void OnTick();
   void UpdateTeleop();
-  bool ConfirmDiscard();
+  // Whether an unsaved recording may be left (asking to save it first).
+  // False while it is being copied onto another disk: `retry` (the action
+  // that asked) then runs again once it is saved.
+  bool ConfirmDiscard(const std::function<void()>& retry);
   void AddRecent(const QString& dir);
   void RebuildRecentMenu();
   void UpdateActions();

@@ -83,7 +83,8 @@ void MainWindow::BuildMenus() {
 void MainWindow::BuildFileMenu() {
   QMenu* file = menuBar()->addMenu(tr("&File"));
   QAction* new_session = file->addAction(tr("&New Session"), this, [this] {
-    if (ConfirmDiscard()) workspace_->NewSession();
+    const auto fresh = [this] { workspace_->NewSession(); };
+    if (ConfirmDiscard(fresh)) fresh();
   });
   new_session->setShortcut(QKeySequence::New);
   QAction* open = file->addAction(tr("&Open Session…"), this, [this] {

@@ -1,9 +1,10 @@
 // The desktop app driven through its real widgets (QTest) and its workspace,
 // under a real display (xvfb-run in CI): the built-in simulator over loopback
 // TCP, the VTK view's rendered image, the emergency stop on Space, a wrong
-// key against a sweepscan-sim process, save / open, corrupt sessions, and
-// the pose source of opened sessions (EKF, odometry, SfM) against
-// `reconstruct --pose-source`. Replay and seeking: replay_ui_test.cc.
+// key against a sweepscan-sim process, the pose source of opened sessions
+// (EKF, odometry, SfM) against `reconstruct --pose-source`, the evaluation
+// panel, measuring and the device check. Saving and opening sessions:
+// session_ui_test.cc; replay and seeking: replay_ui_test.cc.
 #include "ui/main_window.h"
 
 #include <QVTKOpenGLNativeWidget.h>
@@ -211,132 +212,6 @@ TEST_F(AppTest, WrongKeyAgainstASimProcessIsRefusedWithAClearMessage) {
   sim.waitForFinished(5000);
 }
 
-TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
-  ConnectToSimulator();
-  QString error;
-  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
-  workspace_->Drive(0.25, 0.2);
-  ASSERT_TRUE(WaitFor([&] { return workspace_->point_count() > 30000; }, 30000));
-  workspace_->StopMotion();
-  const QString saved = tmp_.path() + "/saved.sweepscan";
-  // Saved under a new name, the session and its cloud are the same: what was
-  // measured on the cloud stays (nothing listening to sessionChanged forgets).
-  int changed = 0;
-  QString renamed;
-  QObject::connect(workspace_.get(), &Workspace::sessionChanged, [&] { ++changed; });
-  QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
-                   [&](const QString& dir) { renamed = dir; });
-  const QString recorded = workspace_->session_dir();
-  ASSERT_TRUE(window_->SaveSessionTo(saved)) << window_->last_error().toStdString();
-  EXPECT_FALSE(QFileInfo::exists(recorded));  // a new recording is moved, not copied
-  EXPECT_EQ(workspace_->session_dir(), saved);
-  EXPECT_EQ(changed, 0);
-  EXPECT_EQ(renamed, saved);
-  EXPECT_TRUE(window_->windowTitle().contains("saved.sweepscan"))
-      << window_->windowTitle().toStdString();
-  workspace_->Disconnect();
-  QTest::qWait(300);
-  const std::vector<CloudPoint> before = workspace_->CloudSnapshot().Flatten();
-  ASSERT_GT(before.size(), 30000u);
-
-  // Close the window and start a fresh one (the app reopened next week).
-  window_.reset();
-  workspace_ = std::make_unique<Workspace>();
-  window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
-  window_->SetInteractive(false);
-  window_->show();
-  bool finished = false;
-  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
-  window_->OpenSessionPath(saved);
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000)) << window_->last_error().toStdString();
-  const std::vector<CloudPoint> after = workspace_->CloudSnapshot().Flatten();
-  ASSERT_EQ(after.size(), before.size());
-  for (size_t i = 0; i < before.size(); ++i) {
-    ASSERT_EQ(after[i].x, before[i].x) << i;
-    ASSERT_EQ(after[i].y, before[i].y) << i;
-    ASSERT_EQ(after[i].z, before[i].z) << i;
-    ASSERT_EQ(after[i].time_ns, before[i].time_ns) << i;
-  }
-  ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == before.size(); }, 5000));
-
-  // Saved again under another name: an opened session is copied on the job
-  // thread, then it is the session shown; the original stays.
-  const QString copy = tmp_.path() + "/copy.sweepscan";
-  QString copied_to;
-  QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
-                   [&](const QString& dir) { copied_to = dir; });
-  ASSERT_TRUE(window_->SaveSessionTo(copy)) << window_->last_error().toStdString();
-  ASSERT_TRUE(WaitFor([&] { return copied_to == copy; }, 30000))
-      << window_->last_error().toStdString();
-  EXPECT_EQ(workspace_->session_dir(), copy);
-  QFile original(saved + "/frames.bin"), copied(copy + "/frames.bin");
-  ASSERT_TRUE(original.open(QIODevice::ReadOnly) && copied.open(QIODevice::ReadOnly));
-  EXPECT_EQ(original.readAll(), copied.readAll());
-  EXPECT_TRUE(QFileInfo::exists(copy + "/meta.json"));
-  // A name that is taken is refused before anything is copied.
-  EXPECT_FALSE(workspace_->SaveSessionAs(saved, &error));
-  EXPECT_TRUE(error.contains("exists already")) << error.toStdString();
-}
-
-TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
-  // Record a short session through the real bytes with the CLI.
-  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
-  const QString good = tmp_.path() + "/lab.sweepscan";
-  ASSERT_TRUE(QFileInfo::exists(good + "/meta.json"));
-
-  // 1. A meta.json that is not JSON.
-  const QString bad_meta = tmp_.path() + "/bad_meta.sweepscan";
-  QDir().mkpath(bad_meta);
-  QFile::copy(good + "/frames.bin", bad_meta + "/frames.bin");
-  {
-    QFile f(bad_meta + "/meta.json");
-    ASSERT_TRUE(f.open(QIODevice::WriteOnly));
-    f.write("{\"format_version\": 1, \"geometry\": ");
-  }
-  QString failed;
-  QObject::connect(workspace_.get(), &Workspace::jobFinished,
-                   [&](const QString&, bool ok, const QString& m) { failed = ok ? "" : m; });
-  window_->OpenSessionPath(bad_meta);
-  ASSERT_TRUE(WaitFor([&] { return !failed.isEmpty(); }, 20000));
-  EXPECT_NE(failed.indexOf("meta.json"), -1) << failed.toStdString();
-  EXPECT_EQ(window_->last_error(), failed);
-
-  // 2. A frames.bin with a broken header.
-  const QString bad_frames = tmp_.path() + "/bad_frames.sweepscan";
-  QDir().mkpath(bad_frames);
-  QFile::copy(good + "/meta.json", bad_frames + "/meta.json");
-  {
-    QFile f(bad_frames + "/frames.bin");
-    ASSERT_TRUE(f.open(QIODevice::WriteOnly));
-    f.write("not a session");
-  }
-  failed.clear();
-  window_->OpenSessionPath(bad_frames);
-  ASSERT_TRUE(WaitFor([&] { return !failed.isEmpty(); }, 20000));
-  EXPECT_NE(failed.indexOf("frames.bin"), -1) << failed.toStdString();
-
-  // 3. A truncated frames.bin (a crash mid-write) opens with what was recorded.
-  const QString truncated = tmp_.path() + "/truncated.sweepscan";
-  QDir().mkpath(truncated);
-  QFile::copy(good + "/meta.json", truncated + "/meta.json");
-  QFile::copy(good + "/frames.bin", truncated + "/frames.bin");
-  {
-    QFile f(truncated + "/frames.bin");
-    ASSERT_TRUE(f.open(QIODevice::ReadWrite));
-    ASSERT_TRUE(f.resize(f.size() / 2 + 7));
-  }
-  bool finished = false;
-  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
-  failed.clear();
-  window_->OpenSessionPath(truncated);
-  ASSERT_TRUE(WaitFor([&] { return finished || !failed.isEmpty(); }, 60000));
-  EXPECT_TRUE(finished) << failed.toStdString();
-  EXPECT_GT(workspace_->CloudSnapshot().size(), 1000u);
-
-  // The app still works: the simulator connects and streams.
-  ConnectToSimulator();
-}
-
 // The cloud `sweepscan-cli reconstruct SESSION --pose-source SOURCE` writes.
 std::vector<CloudPoint> CliCloud(const std::string& session, const std::string& source,
                                  const std::string& out) {
@@ -531,40 +406,6 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
       << window_->pose_source_status().toStdString();
   EXPECT_NE(window_->replay_panel()->pose_source_text().indexOf("live"), -1);
   ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
-}
-
-TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
-  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
-  const QString session = tmp_.path() + "/lab.sweepscan";
-  std::vector<double> fractions;
-  QString finished_message;
-  bool finished = false, finished_ok = false;
-  QObject::connect(workspace_.get(), &Workspace::jobProgress,
-                   [&](const QString&, double f) { fractions.push_back(f); });
-  QObject::connect(workspace_.get(), &Workspace::jobFinished,
-                   [&](const QString&, bool ok, const QString& m) {
-                     finished = true;
-                     finished_ok = ok;
-                     finished_message = m;
-                   });
-  // Cancelled at once: the job ends without a session and says so.
-  workspace_->OpenSession(session);
-  workspace_->CancelJob();
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
-  EXPECT_FALSE(finished_ok);
-  EXPECT_NE(finished_message.indexOf("ancel"), -1) << finished_message.toStdString();
-  EXPECT_TRUE(workspace_->session_dir().isEmpty());
-  // Opened in full: progress is monotone and ends at 1.
-  fractions.clear();
-  finished = false;
-  workspace_->OpenSession(session);
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
-  EXPECT_TRUE(finished_ok) << finished_message.toStdString();
-  ASSERT_GE(fractions.size(), 3u);
-  EXPECT_EQ(fractions.front(), -1.0);  // The job starts indeterminate...
-  for (size_t i = 2; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1]) << i;
-  EXPECT_EQ(fractions.back(), 1.0);  // ...and reports its end.
-  EXPECT_EQ(workspace_->session_dir(), session);
 }
 
 // The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for

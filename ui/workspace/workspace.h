@@ -127,9 +127,10 @@ class Workspace : public QObject {
   bool unsaved() const { return unsaved_; }  // A new recording not saved elsewhere yet.
   // Saves the current session as `dir` (must not exist), which becomes the
   // current session (sessionRenamed). A new recording's folder is moved
-  // (copied if `dir` is on another disk) before this returns; an opened
-  // session's is copied on the job thread (progress, Cancel; a failure is a
-  // failed job). Not while recording. workspace_save.cc.
+  // before this returns when `dir` is on the same disk; otherwise, and for
+  // an opened session, the folder is copied on the job thread (progress,
+  // Cancel; a failure is a failed job) and unsaved() holds until it is done.
+  // Not while recording. workspace_save.cc.
   bool SaveSessionAs(const QString& dir, QString* error);
   // Forgets the current session and cloud (the recording folder stays on disk).
   void NewSession();

@@ -1,6 +1,7 @@
 // Workspace, by concern: Save Session As. A new recording is given its name
-// by moving its folder; an opened session's folder is copied on the job
-// thread (an hour of scanning is about 0.5 GB of frames).
+// by moving its folder; an opened session's folder, or a new recording's
+// onto another disk, is copied on the job thread (an hour of scanning is
+// about 0.5 GB of frames).
 #include <QDir>
 #include <QFileInfo>
 #include <QMetaObject>
@@ -68,23 +69,16 @@ bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
     unsaved_ = false;
     emit sessionRenamed(dir);
   };
-  if (unsaved_) {
-    // A new recording: moved, at once on the same disk (copying it took
-    // seconds on the GUI thread for an hour of scanning). On another disk
-    // it is copied here: the caller (closing, opening another session)
-    // goes on only once it is saved.
-    if (!QDir().rename(session_dir_, dir)) {
-      const QString failed = CopySession(session_dir_, dir, nullptr);
-      if (!failed.isEmpty()) {
-        *error = failed;
-        return false;
-      }
-    }
+  // A new recording is moved: at once on the same disk (copying it took
+  // seconds on the GUI thread for an hour of scanning).
+  if (unsaved_ && QDir().rename(session_dir_, dir)) {
     renamed();
     return true;
   }
-  // An opened session: copied on the job thread (progress; Cancel removes
-  // the copy). The session shown stays the original until it is done.
+  // An opened session, or a new recording saved onto another disk: copied
+  // on the job thread (progress; Cancel removes the copy). The session shown
+  // stays the original until it is done; a new recording's original folder
+  // stays where it was recorded.
   const QString from = session_dir_;
   const QString what = tr("Saving %1").arg(dir);
   RunJob(
