@@ -170,8 +170,8 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   const QCommandLineOption seek(
       "seek",
       "With --replay: once the session is shown, seek its replay to S seconds from its start "
-      "and replay on at 1x (a benchmark: the JSON line's seek_ms and event-loop latency are then "
-      "the seek's alone).",
+      "and replay on at 1x (a benchmark: the JSON line's seek_ms is the seek's time, and its "
+      "event-loop latency counts from the seek on).",
       "S");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
@@ -206,7 +206,11 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
   if (parser.isSet(lod_budget)) o.lod_budget = parser.value(lod_budget).toLongLong();
   if (parser.isSet(draw_pace)) o.draw_pace = parser.value(draw_pace).toLongLong();
-  if (parser.isSet(seek)) o.seek_s = std::max(0.0, parser.value(seek).toDouble());
+  if (parser.isSet(seek)) {
+    bool ok = false;
+    o.seek_s = parser.value(seek).toDouble(&ok);
+    if (!ok || !(o.seek_s >= 0.0)) o.seek_s = -2.0;  // Refused in Main.
+  }
   return o;
 }
 
@@ -463,14 +467,15 @@ void StartCalibrationDemo(const QString& pairs, Workspace* workspace, MainWindow
   });
 }
 
-// --quit-after: stop recording, let the last scans arrive, write what was
-// asked for, print the summary line and close. Returns 1 if a file failed.
 // The --seek benchmark: from the seek's request until the replay stands at
 // its target (< 0: not there, or no seek).
 struct SeekClock {
   QElapsedTimer clock;
   double ms = -1.0;
 };
+
+// --quit-after: stop recording, let the last scans arrive, write what was
+// asked for, print the summary line and close. Returns 1 if a file failed.
 
 int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* window,
                        const SeekClock& seek) {
@@ -643,6 +648,11 @@ int Main(int argc, char** argv) {
   // After the window has restored its settings (which hold the folder the
   // operator chose last), so that the command line wins.
   if (!o.sessions_dir.isEmpty()) workspace.set_sessions_root(o.sessions_dir);
+  if (o.seek_s < -1.5) {
+    std::fprintf(stderr,
+                 "sweepscan: --seek takes seconds from the session's start (a number >= 0)\n");
+    return 2;
+  }
   if (!o.pose_source.isEmpty()) {
     PoseSource source;
     if (!ParsePoseSource(o.pose_source.toStdString(), &source) || source == PoseSource::kTruth) {

@@ -26,6 +26,7 @@
 #include <QUndoStack>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "ui/own_window.h"
 #include "ui/panels/calibration_panel.h"
@@ -581,6 +582,12 @@ void MainWindow::UpdateTeleop() {
 
 bool MainWindow::ConfirmDiscard(const std::function<void()>& retry) {
   if (!workspace_->unsaved() && !workspace_->recording()) return true;
+  if (workspace_->saving()) {
+    ShowError(tr("Unsaved session"),
+              tr("The recording is being saved (%1): wait for the copy, or cancel it.")
+                  .arg(workspace_->job_name()));
+    return false;
+  }
   if (!interactive_) return true;  // The recording stays in its folder either way.
   const auto answer = QMessageBox::question(
       this, tr("Unsaved session"),
@@ -598,15 +605,23 @@ bool MainWindow::ConfirmDiscard(const std::function<void()>& retry) {
     const QString dir = QFileDialog::getSaveFileName(
         this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
     if (dir.isEmpty() || !SaveSessionTo(dir)) return false;
-    if (!workspace_->unsaved()) return true;       // moved at once
-    if (!workspace_->job_running()) return false;  // the copy could not start (said why)
-    // Being copied onto another disk: the action goes on once it is saved
-    // (after the job's own slots), not if the copy fails or is cancelled.
-    // A successful copy renames the session before its job finishes.
+    if (!workspace_->unsaved()) return true;  // moved at once
+    // Being copied onto another disk (SaveSessionAs refuses while another
+    // job runs): the action goes on once it is saved, after the job's own
+    // slots; not if the copy fails or is cancelled. A successful copy
+    // renames the session before its job finishes.
+    const QString job = workspace_->job_name();
     auto* once = new QObject(this);
-    connect(workspace_, &Workspace::sessionRenamed, once,
-            [this, retry] { QTimer::singleShot(0, this, retry); });
-    connect(workspace_, &Workspace::jobFinished, once, [once] { once->deleteLater(); });
+    auto fired = std::make_shared<bool>(false);
+    connect(workspace_, &Workspace::sessionRenamed, once, [this, once, retry, fired] {
+      if (*fired) return;
+      *fired = true;
+      once->deleteLater();
+      QTimer::singleShot(0, this, retry);
+    });
+    connect(workspace_, &Workspace::jobFinished, once, [once, job](const QString& what) {
+      if (what == job) once->deleteLater();
+    });
     return false;
   }
   return true;

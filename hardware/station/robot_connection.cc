@@ -331,8 +331,9 @@ void RobotConnection::Decode(const uint8_t* data, size_t n) {
     const QString reason =
         QStringLiteral("%1 MiB from the link wait to be decoded: not frames (forged or corrupt)")
             .arg(decoder_link_.BufferedBytes() / 1048576.0, 0, 'f', 1);
+    decoder_link_.Reset();  // The flood's bytes go now, not at the next Connect().
     if (auto* tcp = dynamic_cast<TcpStream*>(stream_.get())) tcp->Abort();
-    ScheduleReconnect(reason);  // The next Connect() forgets the bytes.
+    ScheduleReconnect(reason);
     return;
   }
   if (decoder_link_.work_pending() && !decode_scheduled_) {

@@ -132,6 +132,45 @@ TEST_F(ReplayTest, SeekingFeedsInSlicesKeepsThePauseAndEndsWithTheCliCloud) {
   const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(replayed.size(), expected.size());
   EXPECT_TRUE(IsAPrefix(replayed, expected));
+
+  // After the end, a seek replays on from the target and ends again.
+  finished = false;
+  positions.clear();
+  workspace_->SeekReplay(0.5 * length);
+  EXPECT_TRUE(workspace_->replaying());
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  ASSERT_FALSE(positions.empty());
+  EXPECT_NEAR(positions.back(), length, 1e-6);
+  const std::vector<CloudPoint> again = workspace_->CloudSnapshot().Flatten();
+  ASSERT_EQ(again.size(), expected.size());
+  EXPECT_TRUE(IsAPrefix(again, expected));
+  EXPECT_FALSE(workspace_->replaying());
+}
+
+// A paused replay sought to its very end (the slider at its right edge)
+// finishes when it is unpaused.
+TEST_F(ReplayTest, APausedSeekToTheEndFinishesWhenUnpaused) {
+  const std::string dir = tmp_.path().toStdString();
+  const std::vector<CloudPoint> expected = CircleSessionAndItsCliCloud(dir);
+  double length = 0.0, position = 0.0;
+  bool finished = false;
+  QObject::connect(workspace_.get(), &Workspace::replayProgress, [&](double p, double len) {
+    position = p;
+    length = len;
+  });
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
+  workspace_->OpenSession(QString::fromStdString(dir + "/c.sweepscan"), 1.0);
+  ASSERT_TRUE(WaitFor([&] { return length > 0.0; }, 60000));
+  workspace_->SetReplayPaused(true);
+  workspace_->SeekReplay(length + 5.0);  // beyond: rounding, or --seek past the end
+  ASSERT_TRUE(WaitFor([&] { return position >= length - 1e-6; }, 60000));
+  RunEventsFor(300);
+  EXPECT_FALSE(finished);  // paused
+  workspace_->SetReplayPaused(false);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 10000));
+  const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot().Flatten();
+  ASSERT_EQ(replayed.size(), expected.size());
+  EXPECT_TRUE(IsAPrefix(replayed, expected));
 }
 
 }  // namespace

@@ -134,7 +134,8 @@ TEST_F(AppTest, ANewRecordingSavedOntoAnotherDiskIsCopiedOnTheJobThreadThenTheOp
   }, there{};
   ASSERT_EQ(stat(qPrintable(tmp_.path()), &here), 0);
   ASSERT_EQ(stat(qPrintable(other_disk.path()), &there), 0);
-  ASSERT_NE(here.st_dev, there.st_dev) << "/dev/shm is on the same file system here";
+  if (here.st_dev == there.st_dev)
+    GTEST_SKIP() << "/dev/shm is on the same file system as " << qPrintable(tmp_.path());
   ASSERT_NO_FATAL_FAILURE(SimulateLabSession());  // tmp/lab.sweepscan, the session to open next
   ConnectToSimulator();
   QString error;

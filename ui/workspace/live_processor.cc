@@ -207,6 +207,7 @@ void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recor
   replay_position_ = replay_start_;
   replay_anchor_ = replay_start_;
   next_wheel_ = next_imu_ = next_scan_ = 0;
+  replay_finished_ = false;
   replay_speed_ = speed;
   replay_paused_ = false;
   if (replay_timer_ == nullptr) {
@@ -285,7 +286,7 @@ void LiveProcessor::OnAdoptTick() {
   // trimmed, and the app keeps up to 512 MiB free otherwise (gui_main.cc).
   malloc_trim(0);
   emit replayProgress(adopt_length_s_, adopt_length_s_);
-  emit replayFinished();
+  emit replayFinished(seeks_);
 }
 
 int LiveProcessor::ReplayTickMs() const {
@@ -305,7 +306,7 @@ void LiveProcessor::SetReplayPaused(bool paused) {
   if (seeking_) return;  // The seek finishes first, then honours the pause.
   if (paused) {
     replay_timer_->stop();
-  } else if (replay_position_ <= replay_end_) {
+  } else if (!replay_finished_) {  // Also when every record is fed: the next tick finishes.
     replay_anchor_ = replay_position_;
     replay_clock_.restart();
     replay_timer_->start(ReplayTickMs());
@@ -313,6 +314,7 @@ void LiveProcessor::SetReplayPaused(bool paused) {
 }
 
 void LiveProcessor::SeekReplay(double robot_time_s) {
+  ++seeks_;
   if (replay_ == nullptr) return;
   const Time target = replay_start_ + FromSeconds(std::max(0.0, robot_time_s));
   if (target < replay_position_) {
@@ -320,6 +322,7 @@ void LiveProcessor::SeekReplay(double robot_time_s) {
     ResetPipeline();
     replay_position_ = replay_start_;
     next_wheel_ = next_imu_ = next_scan_ = 0;
+    replay_finished_ = false;
   }
   seek_target_ = std::min(target, replay_end_ + FromSeconds(1e-9));
   seeking_ = true;
@@ -368,8 +371,9 @@ void LiveProcessor::OnReplayTick() {
                       ToSeconds(replay_end_ - replay_start_));
   if (done) {
     replay_timer_->stop();
+    replay_finished_ = true;
     Finish();
-    emit replayFinished();
+    emit replayFinished(seeks_);
   }
 }
 

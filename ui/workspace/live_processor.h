@@ -80,7 +80,9 @@ class LiveProcessor : public QObject {
  signals:
   // Replay position (robot seconds from the recording's start) and length.
   void replayProgress(double position_s, double length_s);
-  void replayFinished();
+  // `seeks`: the SeekReplay calls handled so far, so that the workspace can
+  // tell a finish that a seek it has sent since overtook (the replay goes on).
+  void replayFinished(quint64 seeks);
 
  private:
   // A new pipeline (or assembler, with given poses) under options_ / geometry_.
@@ -132,6 +134,8 @@ class LiveProcessor : public QObject {
   Time replay_anchor_;    // replay_position_ when replay_clock_ was restarted.
   bool seeking_ = false;  // Feeding up to seek_target_ at full speed.
   Time seek_target_;
+  quint64 seeks_ = 0;             // SeekReplay calls handled.
+  bool replay_finished_ = false;  // Finish() ran for the records fed.
   size_t next_wheel_ = 0, next_imu_ = 0, next_scan_ = 0;
 };
 

@@ -91,7 +91,11 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
           Qt::QueuedConnection);
   connect(
       processor_, &LiveProcessor::replayFinished, this,
-      [this] {
+      [this](quint64 seeks) {
+        // A seek sent since (the slider dropped as the replay ended) goes
+        // on: its own finish comes later. Letting the samples go now would
+        // stop it halfway.
+        if (seeks < seeks_sent_) return;
         replaying_ = false;
         emit replayFinished();
         StartIntensityMapping();  // keeps the samples it reads
@@ -670,6 +674,9 @@ void Workspace::SeekReplay(double position_s) {
     });
     return;
   }
+  if (opened_ != nullptr && !recording_)
+    replaying_ = true;  // After the end: replays on from the target.
+  ++seeks_sent_;
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(p, [p, position_s] { p->SeekReplay(position_s); });
 }

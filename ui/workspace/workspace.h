@@ -132,6 +132,9 @@ class Workspace : public QObject {
   // Cancel; a failure is a failed job) and unsaved() holds until it is done.
   // Not while recording. workspace_save.cc.
   bool SaveSessionAs(const QString& dir, QString* error);
+  // A Save Session As copy is running (job_name() names it).
+  bool saving() const { return job_running() && job_what_ == save_job_; }
+  QString job_name() const { return job_running() ? job_what_ : QString(); }
   // Forgets the current session and cloud (the recording folder stays on disk).
   void NewSession();
   // Opens a session folder on a job thread (progress, cancel), then replays
@@ -391,6 +394,7 @@ class Workspace : public QObject {
   std::shared_ptr<const PoseBuffer> shown_given_;  // SfM's poses of the cloud shown.
   double replay_speed_ = 0.0;
   bool replaying_ = false;
+  quint64 seeks_sent_ = 0;  // SeekReplay calls sent to the processor.
   std::shared_ptr<PickCalibrationResult> calibration_;
   MountingError shown_calibration_;
   PoseSource pose_source_ = PoseSource::kEkf;
@@ -430,6 +434,7 @@ class Workspace : public QObject {
   uint64_t intensity_generation_ = 0;
 
   std::unique_ptr<std::thread> job_thread_;
+  QString save_job_;  // The last Save Session As copy's job name.
   QString job_what_;  // the running (or last) job's name, as its progress shows it
   std::atomic<bool> job_cancel_{false};
 };

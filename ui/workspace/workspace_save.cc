@@ -52,6 +52,12 @@ QString CopySession(const QString& from, const QString& to,
 }  // namespace
 
 bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
+  if (saving()) {  // Its folder is being read: neither moved nor copied twice.
+    *error =
+        QStringLiteral("The session is being saved already: wait for %1 to finish, or cancel it.")
+            .arg(job_what_);
+    return false;
+  }
   if (recording_) {
     *error = QStringLiteral("Stop the recording before saving it.");
     return false;
@@ -79,8 +85,14 @@ bool Workspace::SaveSessionAs(const QString& dir, QString* error) {
   // on the job thread (progress; Cancel removes the copy). The session shown
   // stays the original until it is done; a new recording's original folder
   // stays where it was recorded.
+  if (job_running()) {  // Said here, not as a failed job the caller cannot tell from the copy's.
+    *error = QStringLiteral("%1 is still running: let it finish (or cancel it), then save.")
+                 .arg(job_what_);
+    return false;
+  }
   const QString from = session_dir_;
   const QString what = tr("Saving %1").arg(dir);
+  save_job_ = what;
   RunJob(
       what,
       [this, from, dir, what](std::atomic<bool>* cancel) -> QString {
