@@ -171,7 +171,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "seek",
       "With --replay: once the session is shown, seek its replay to S seconds from its start "
       "and replay on at 1x (a benchmark: the JSON line's seek_ms is the seek's time, and its "
-      "event-loop latency counts from the seek on).",
+      "event-loop latency and insertion_ms count from the seek on).",
       "S");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
@@ -716,7 +716,7 @@ int Main(int argc, char** argv) {
         if (*sought) return;
         *sought = true;
         QTimer::singleShot(0, &window, [&] {
-          window.ClearTickLatencies();
+          window.ClearTickFigures();
           window.replay_panel()->SetSpeed(
               1.0);  // After the target: on at 1x, not flooding the view.
           seek.clock.start();

@@ -11,14 +11,16 @@
 #   4. the 100 M session replayed at 20x for 580 s (to ~54 M points,
 #      issue 28's "into 50 M"): event-loop latency while the cloud grows;
 #   5. CloudCompare (Debian's `cloudcompare`) opening the same clouds as
-#      PLY, `-SILENT -O`: its wall time and peak resident memory.
+#      PLY, `-SILENT -O`: its wall time and peak resident memory;
+#   6. seeking the 10 M and 100 M sessions' replays to near their ends
+#      (`--seek`): the seek's time, event-loop latency, peak memory.
 # Usage: scripts/gui-bench.sh [WORKDIR] [SECTIONS]   (after scripts/build.sh)
-#   SECTIONS: any of 1..5 (default all), e.g. "2 5". The sessions take
+#   SECTIONS: any of 1..6 (default all), e.g. "2 5". The sessions take
 #   ~20 GB of disk in WORKDIR, made once (simulate: ~4 minutes for 100 M).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-/tmp/sweepscan-gui-bench}
-sections=${2:-1 2 3 4 5}
+sections=${2:-1 2 3 4 5 6}
 want() { [[ " $sections " == *" $1 "* ]]; }
 mkdir -p "$work"
 cli=build/app/sweepscan-cli
@@ -68,4 +70,10 @@ if want 5; then
     ( cd "$work" && QT_QPA_PLATFORM=offscreen /usr/bin/time -f "wall %e s, peak resident %M KiB" \
         CloudCompare -SILENT -NO_TIMESTAMP -O "lab_$s.ply" 2>&1 | tail -1 )
   done
+fi
+if want 6; then
+  echo "## lab_1950 seeking to 1 900 s, then 1x"
+  gui --replay "$work/lab_1950.sweepscan" --speed 0 --seek 1900 --quit-after 30
+  echo "## lab_20400 seeking to 20 000 s, then 1x"
+  gui --replay "$work/lab_20400.sweepscan" --speed 0 --seek 20000 --quit-after 100
 fi
