@@ -717,8 +717,8 @@ int Main(int argc, char** argv) {
         *sought = true;
         QTimer::singleShot(0, &window, [&] {
           window.ClearTickFigures();
-          window.replay_panel()->SetSpeed(
-              1.0);  // After the target: on at 1x, not flooding the view.
+          // After the target: on at 1x, not flooding the view.
+          window.replay_panel()->SetSpeed(1.0);
           seek.clock.start();
           workspace.SeekReplay(o.seek_s);
         });

@@ -10,8 +10,9 @@
 // that a seek across hours of recording keeps the thread answering (pause,
 // another seek, stop) and the view takes the cloud as it grows, instead of
 // one event that feeds it all and one batch of every chunk at its end. The
-// replay then goes on as it was: paused, or at its speed. For the same records the replayed cloud
-// equals the offline Reconstruct (LivePipeline's guarantee), hence `sweepscan-cli reconstruct`.
+// replay then goes on as it was: paused, or at its speed. For the same
+// records the replayed cloud equals the offline Reconstruct (LivePipeline's
+// guarantee), hence `sweepscan-cli reconstruct`.
 //
 // A replay may also be given its poses, computed beforehand over the whole
 // log (SfM, core/sfm/wheeled.h: a batch method): then no estimator runs and
