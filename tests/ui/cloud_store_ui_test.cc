@@ -572,8 +572,8 @@ TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoin
 // A large session at full speed is streamed (workspace_stream.cc): two
 // passes over frames.bin, the samples never held. The cloud is the CLI's
 // point for point and in its order, the view draws all of it, the opened
-// session keeps none of its records, and another pose source (which needs
-// them) opens them again and gives the CLI's cloud.
+// session keeps none of its records, and another pose source replays it as
+// it reads it and gives the CLI's cloud.
 // The threshold is lowered to 0 so that the lab drive counts as large.
 TEST_F(CloudStoreUiTest, ALargeSessionIsStreamedAndOpensAsItsReplayWould) {
   ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
@@ -613,13 +613,18 @@ TEST_F(CloudStoreUiTest, ALargeSessionIsStreamedAndOpensAsItsReplayWould) {
   EXPECT_TRUE(same(workspace_->CloudSnapshot().Flatten(), ekf));
   ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == ekf.size(); }, 10000));
 
-  // The wheels alone: the samples are read again (a job), then replayed.
+  // The wheels alone: the session is replayed as it is read (its wheel and
+  // IMU records loaded in a job, its scans decoded as the replay reaches
+  // them), still holding no samples.
   bool replayed = false;
   const auto c = QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
   workspace_->SetPoseSource(PoseSource::kOdometry);
   ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
   QObject::disconnect(c);
   EXPECT_TRUE(same(workspace_->CloudSnapshot().Flatten(), cli("odometry")));
+  opened = workspace_->recording_opened();
+  ASSERT_NE(opened, nullptr);
+  EXPECT_TRUE(opened->log.scans.empty());
 }
 
 TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {

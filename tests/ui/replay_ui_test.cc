@@ -18,7 +18,20 @@ namespace {
 using testing::kResources;
 using testing::WaitFor;
 
-using ReplayTest = testing::AppFixture;
+class ReplayTest : public testing::AppFixture {
+ protected:
+  // The seek scenario below, on the session decoded whole (a small one) or
+  // read as it replays (`read_as_it_goes`: the threshold of a large session
+  // lowered to 0, hardware/station/replay_source.h).
+  void SeeksInSlicesKeepThePauseAndEndWithTheCliCloud(bool read_as_it_goes);
+  void APausedSeekToTheEndFinishesWhenUnpaused(bool read_as_it_goes);
+  // No samples held: the session is read as it replays.
+  void ExpectNoSamplesHeld() {
+    const hardware::Recording* opened = workspace_->recording_opened();
+    ASSERT_NE(opened, nullptr);
+    EXPECT_TRUE(opened->log.scans.empty());
+  }
+};
 
 void RunEventsFor(int ms) {
   WaitFor([] { return false; }, ms);
@@ -76,8 +89,9 @@ TEST_F(ReplayTest, ReplayGivesTheCloudThatTheCliReconstructionGives) {
 // and held a copy of every record on a 5.7-hour session). A paused replay
 // stays paused at the target; forwards or backwards, the replay then ends
 // with exactly the cloud `reconstruct` gives.
-TEST_F(ReplayTest, SeekingFeedsInSlicesKeepsThePauseAndEndsWithTheCliCloud) {
+void ReplayTest::SeeksInSlicesKeepThePauseAndEndWithTheCliCloud(bool read_as_it_goes) {
   const std::string dir = tmp_.path().toStdString();
+  if (read_as_it_goes) workspace_->set_stream_open_above_bytes(0);
   const std::vector<CloudPoint> expected = CircleSessionAndItsCliCloud(dir);
   ASSERT_GT(expected.size(), 10000u);
 
@@ -89,10 +103,11 @@ TEST_F(ReplayTest, SeekingFeedsInSlicesKeepsThePauseAndEndsWithTheCliCloud) {
     length = len;
   });
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
-  workspace_->OpenSession(QString::fromStdString(dir + "/c.sweepscan"), 1.0);  // 1x: not streamed
+  workspace_->OpenSession(QString::fromStdString(dir + "/c.sweepscan"), 1.0);  // 1x: a replay
   ASSERT_TRUE(WaitFor([&] { return length > 0.0; }, 60000));
   workspace_->SetReplayPaused(true);
   ASSERT_GT(length, 20.0);  // One turn of a 0.83 m circle at 0.2 m/s: 26 s.
+  if (read_as_it_goes) ExpectNoSamplesHeld();
 
   // Forwards to 90 %, paused.
   const double ahead = 0.9 * length;
@@ -145,12 +160,25 @@ TEST_F(ReplayTest, SeekingFeedsInSlicesKeepsThePauseAndEndsWithTheCliCloud) {
   ASSERT_EQ(again.size(), expected.size());
   EXPECT_TRUE(IsAPrefix(again, expected));
   EXPECT_FALSE(workspace_->replaying());
+  if (read_as_it_goes) ExpectNoSamplesHeld();
+}
+
+TEST_F(ReplayTest, SeekingFeedsInSlicesKeepsThePauseAndEndsWithTheCliCloud) {
+  SeeksInSlicesKeepThePauseAndEndWithTheCliCloud(false);
+}
+
+// The same on a session read as it replays: its scans decoded from
+// frames.bin as the replay reaches them, from the start again after a seek
+// backwards, and none of its samples held.
+TEST_F(ReplayTest, ASessionReadAsItReplaysSeeksAndEndsWithTheCliCloudHoldingNoSamples) {
+  SeeksInSlicesKeepThePauseAndEndWithTheCliCloud(true);
 }
 
 // A paused replay sought to its very end (the slider at its right edge)
 // finishes when it is unpaused.
-TEST_F(ReplayTest, APausedSeekToTheEndFinishesWhenUnpaused) {
+void ReplayTest::APausedSeekToTheEndFinishesWhenUnpaused(bool read_as_it_goes) {
   const std::string dir = tmp_.path().toStdString();
+  if (read_as_it_goes) workspace_->set_stream_open_above_bytes(0);
   const std::vector<CloudPoint> expected = CircleSessionAndItsCliCloud(dir);
   double length = 0.0, position = 0.0;
   bool finished = false;
@@ -171,6 +199,16 @@ TEST_F(ReplayTest, APausedSeekToTheEndFinishesWhenUnpaused) {
   const std::vector<CloudPoint> replayed = workspace_->CloudSnapshot().Flatten();
   ASSERT_EQ(replayed.size(), expected.size());
   EXPECT_TRUE(IsAPrefix(replayed, expected));
+  EXPECT_NEAR(position, length, 1e-6);
+}
+
+TEST_F(ReplayTest, APausedSeekToTheEndFinishesWhenUnpaused) {
+  APausedSeekToTheEndFinishesWhenUnpaused(false);
+}
+
+// Read as it replays, the end is known once the last scan is read.
+TEST_F(ReplayTest, APausedSeekToTheEndOfASessionReadAsItReplaysFinishesWhenUnpaused) {
+  APausedSeekToTheEndFinishesWhenUnpaused(true);
 }
 
 }  // namespace

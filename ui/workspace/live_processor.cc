@@ -28,14 +28,6 @@ constexpr double kAdoptStepM = 0.25;
 constexpr double kAdoptStepRad = 15.0 * M_PI / 180.0;
 constexpr int kAdoptTickMs = 25;
 
-Time FirstTime(const SensorLog& log) {
-  Time t = Time::max();
-  if (!log.wheels.empty()) t = std::min(t, log.wheels.front().time);
-  if (!log.imu.empty()) t = std::min(t, log.imu.front().time);
-  if (!log.scans.empty()) t = std::min(t, log.scans.front().start_time());
-  return t == Time::max() ? Time() : t;
-}
-
 Time LastTime(const SensorLog& log) {
   Time t = Time::min();
   if (!log.wheels.empty()) t = std::max(t, log.wheels.back().time);
@@ -188,25 +180,24 @@ void LiveProcessor::Publish(bool reset) {
   mailbox_->Push(std::move(batch));
 }
 
-void LiveProcessor::StartReplay(std::shared_ptr<const hardware::Recording> recording,
+void LiveProcessor::StartReplay(std::shared_ptr<hardware::ReplaySource> source,
                                 const ReconstructionOptions& options, double speed,
                                 std::shared_ptr<const PoseBuffer> given_poses) {
   StopReplay();
-  replay_ = std::move(recording);
+  replay_ = std::move(source);
+  replay_->Rewind();  // A source kept from an earlier replay starts over.
   options_ = options;
-  options_.pose.initial_pose = replay_->start;
-  geometry_ = replay_->geometry;
+  options_.pose.initial_pose = replay_->start_pose();
+  geometry_ = replay_->geometry();
   const bool given =
       options.pose.source == PoseSource::kSfm || options.pose.source == PoseSource::kTruth;
   given_poses_ = given ? std::move(given_poses) : nullptr;
   // Given nothing, nothing is placed (the assembler counts the samples).
   if (given && given_poses_ == nullptr) given_poses_ = std::make_shared<PoseBuffer>();
   ResetPipeline();
-  replay_start_ = FirstTime(replay_->log);
-  replay_end_ = LastTime(replay_->log);
+  replay_start_ = replay_->start();
   replay_position_ = replay_start_;
   replay_anchor_ = replay_start_;
-  next_wheel_ = next_imu_ = next_scan_ = 0;
   replay_finished_ = false;
   replay_speed_ = speed;
   replay_paused_ = false;
@@ -320,11 +311,11 @@ void LiveProcessor::SeekReplay(double robot_time_s) {
   if (target < replay_position_) {
     // Backwards: the EKF cannot un-see records; start over from the beginning.
     ResetPipeline();
+    replay_->Rewind();
     replay_position_ = replay_start_;
-    next_wheel_ = next_imu_ = next_scan_ = 0;
     replay_finished_ = false;
   }
-  seek_target_ = std::min(target, replay_end_ + FromSeconds(1e-9));
+  seek_target_ = std::min(target, replay_->end() + FromSeconds(1e-9));
   seeking_ = true;
   replay_timer_->start(ReplayTickMs());
   SeekTick();  // A seek a few seconds ahead ends here.
@@ -332,8 +323,7 @@ void LiveProcessor::SeekReplay(double robot_time_s) {
 
 void LiveProcessor::SeekTick() {
   FeedReplayUntil(std::min(seek_target_, replay_position_ + FromSeconds(kFastSliceS)));
-  emit replayProgress(ToSeconds(replay_position_ - replay_start_),
-                      ToSeconds(replay_end_ - replay_start_));
+  EmitReplayProgress();
   if (replay_position_ < seek_target_) return;
   seeking_ = false;
   replay_anchor_ = replay_position_;
@@ -365,32 +355,37 @@ void LiveProcessor::OnReplayTick() {
   } else {
     until = replay_position_ + FromSeconds(kFastSliceS);
   }
-  const bool done = until > replay_end_;
-  FeedReplayUntil(done ? replay_end_ + FromSeconds(1e-9) : until);
-  emit replayProgress(ToSeconds(replay_position_ - replay_start_),
-                      ToSeconds(replay_end_ - replay_start_));
+  FeedReplayUntil(until);
+  const bool done = replay_->done();
+  // At the end the position is the last record's (a seek to the end then
+  // does not start over).
+  if (done) replay_position_ = std::min(replay_position_, replay_->end() + FromSeconds(1e-9));
+  EmitReplayProgress();
   if (done) {
     replay_timer_->stop();
     replay_finished_ = true;
     Finish();
+    const Status status = replay_->status();
+    if (!status.ok()) {
+      emit replayFailed(tr("The replay of %1 ended at %2 s: %3")
+                            .arg(QString::fromStdString(replay_->name()))
+                            .arg(ToSeconds(replay_position_ - replay_start_), 0, 'f', 1)
+                            .arg(QString::fromStdString(status.message())));
+    }
     emit replayFinished(seeks_);
   }
 }
 
+void LiveProcessor::EmitReplayProgress() {
+  const double length = ToSeconds(replay_->end() - replay_start_);
+  emit replayProgress(std::min(ToSeconds(replay_position_ - replay_start_), length), length);
+}
+
 void LiveProcessor::FeedReplayUntil(Time until) {
-  const SensorLog& log = replay_->log;
-  SensorLog batch;
-  while (next_wheel_ < log.wheels.size() && log.wheels[next_wheel_].time < until) {
-    batch.wheels.push_back(log.wheels[next_wheel_++]);
-  }
-  while (next_imu_ < log.imu.size() && log.imu[next_imu_].time < until) {
-    batch.imu.push_back(log.imu[next_imu_++]);
-  }
   // A scan is released once its last sample is due (a live link delivers a
-  // revolution when it is complete).
-  while (next_scan_ < log.scans.size() && log.scans[next_scan_].end_time() < until) {
-    batch.scans.push_back(log.scans[next_scan_++]);
-  }
+  // revolution when it is complete): ReplaySource::Take.
+  SensorLog batch;
+  replay_->Take(until, &batch);
   replay_position_ = until;
   if (!batch.wheels.empty() || !batch.imu.empty() || !batch.scans.empty()) AddRecords(batch);
 }

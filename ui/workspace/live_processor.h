@@ -3,7 +3,9 @@
 // session, and posts the new points as LiveBatches to the mailbox the GUI
 // drains (docs/architecture.md, "Threads").
 //
-// Replay feeds a recording's records in robot-time order at a speed factor
+// Replay feeds a recording's records (a ReplaySource: the log decoded whole,
+// or a session's scans decoded as the replay goes) in robot-time order at a
+// speed factor
 // (1x..20x, or 0 = as fast as possible, in slices that keep the thread
 // responsive). Seeking backwards restarts the pipeline; either way the
 // records up to the target are then fed at full speed in the same slices, so
@@ -32,7 +34,7 @@
 #include "core/cloud/assembler.h"
 #include "core/cloud/live_pipeline.h"
 #include "core/cloud/reconstruct.h"
-#include "hardware/station/recording.h"
+#include "hardware/station/replay_source.h"
 #include "ui/workspace/live_batch.h"
 
 class QTimer;
@@ -57,7 +59,8 @@ class LiveProcessor : public QObject {
   // `given_poses`: world_from_body over the whole recording, required when
   // options.pose.source is kSfm or kTruth (poses computed elsewhere) and
   // ignored otherwise.
-  void StartReplay(std::shared_ptr<const hardware::Recording> recording,
+  // The source's start pose and geometry replace options' and the reset's.
+  void StartReplay(std::shared_ptr<hardware::ReplaySource> source,
                    const ReconstructionOptions& options, double speed,
                    std::shared_ptr<const PoseBuffer> given_poses = nullptr);
   // A session's cloud built elsewhere (the workspace's streamed open,
@@ -84,6 +87,9 @@ class LiveProcessor : public QObject {
   // `seeks`: the SeekReplay calls handled so far, so that the workspace can
   // tell a finish that a seek it has sent since overtook (the replay goes on).
   void replayFinished(quint64 seeks);
+  // The source's records ended early (frames.bin unreadable mid-replay):
+  // the replay finished with what it had read.
+  void replayFailed(const QString& message);
 
  private:
   // A new pipeline (or assembler, with given poses) under options_ / geometry_.
@@ -99,6 +105,7 @@ class LiveProcessor : public QObject {
   int ReplayTickMs() const;
   // Feeds every record with time < until (robot time) not fed yet.
   void FeedReplayUntil(Time until);
+  void EmitReplayProgress();
 
   BatchMailbox* mailbox_;
   std::unique_ptr<LivePipeline> pipeline_;  // Null while replaying with given poses.
@@ -124,20 +131,18 @@ class LiveProcessor : public QObject {
   void OnAdoptTick();
 
   // Replay state.
-  std::shared_ptr<const hardware::Recording> replay_;
+  std::shared_ptr<hardware::ReplaySource> replay_;
   QTimer* replay_timer_ = nullptr;
   QElapsedTimer replay_clock_;
   double replay_speed_ = 1.0;
   bool replay_paused_ = false;
   Time replay_start_;     // Robot time of the recording's first record.
-  Time replay_end_;       // ... and of its last.
   Time replay_position_;  // Everything before this has been fed.
   Time replay_anchor_;    // replay_position_ when replay_clock_ was restarted.
   bool seeking_ = false;  // Feeding up to seek_target_ at full speed.
   Time seek_target_;
   quint64 seeks_ = 0;             // SeekReplay calls handled.
   bool replay_finished_ = false;  // Finish() ran for the records fed.
-  size_t next_wheel_ = 0, next_imu_ = 0, next_scan_ = 0;
 };
 
 }  // namespace sweepscan::ui

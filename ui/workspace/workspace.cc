@@ -89,6 +89,8 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
   connect(&processing_thread_, &QThread::finished, processor_, &QObject::deleteLater);
   connect(processor_, &LiveProcessor::replayProgress, this, &Workspace::replayProgress,
           Qt::QueuedConnection);
+  connect(processor_, &LiveProcessor::replayFailed, this, &Workspace::message,
+          Qt::QueuedConnection);
   connect(
       processor_, &LiveProcessor::replayFinished, this,
       [this](quint64 seeks) {
@@ -203,6 +205,8 @@ bool Workspace::Connect(const ConnectOptions& options, QString* error) {
   ResetCloud(live_start_, live_geometry_);
   opened_.reset();
   opened_samples_released_ = false;
+  opened_source_.reset();
+  replay_loaded_ = false;
   replaying_ = false;
   health_ = hardware::LinkHealth();
   authenticated_ = false;
@@ -356,6 +360,7 @@ void Workspace::ResetCloud(const Pose2d& start, const RobotGeometry& geometry) {
     p->StopReplay();
     p->Reset(options, geometry);
   });
+  replay_loaded_ = false;
   point_count_ = 0;
   scan_count_ = 0;
   SetShownPoseSource(PoseSource::kEkf);
@@ -412,6 +417,8 @@ bool Workspace::StartRecording(QString* error) {
   session_dir_ = dir;
   opened_.reset();
   opened_samples_released_ = false;
+  opened_source_.reset();
+  replay_loaded_ = false;
   SetShownPoseSource(PoseSource::kEkf);  // Live: always the EKF.
   emit recordingChanged(true);
   emit sessionChanged(dir);
@@ -458,14 +465,20 @@ void Workspace::NewSession() {
   unsaved_ = false;
   opened_.reset();
   opened_samples_released_ = false;
+  opened_source_.reset();
+  replay_loaded_ = false;
   replaying_ = false;
   ResetCloud(live_start_, live_geometry_);
   emit sessionChanged(QString());
 }
 
 void Workspace::OpenSession(const QString& dir, double speed) {
-  if (WillStreamOpen(dir, speed, pose_source_)) {
-    OpenSessionStreamed(dir);
+  if (StreamsSession(dir, pose_source_)) {
+    if (speed == 0.0) {
+      OpenSessionStreamed(dir);
+    } else {
+      OpenSessionForReplay(dir, speed);
+    }
     return;
   }
   PageBeside(dir);
@@ -552,6 +565,8 @@ void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const
   }
   opened_ = std::move(recording);
   opened_samples_released_ = samples_released;
+  opened_source_.reset();
+  replay_loaded_ = false;
   opened_circle_ = circle;
   pass_labels_.clear();
   deviation_map_.clear();
@@ -591,10 +606,19 @@ void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
                           bool same_points) {
   if (opened_ == nullptr) return;
   if (opened_samples_released_) {
-    WithOpenedSamples([this, calibration, source, same_points] {
+    // SfM needs every scan at once; the EKF and the wheels replay the
+    // session as it is read.
+    auto again = [this, calibration, source, same_points] {
       Reprocess(calibration, source, same_points);
-    });
-    return;
+    };
+    if (source == PoseSource::kSfm) {
+      WithOpenedSamples(again);
+      return;
+    }
+    if (opened_source_ == nullptr) {
+      WithReplaySource(again);
+      return;
+    }
   }
   // Deviations belong to the points they were measured on, pass labels to
   // the points in their order; both go when the new cloud comes (a failed
@@ -632,53 +656,10 @@ void Workspace::Reprocess(const MountingError& calibration, PoseSource source,
       });
 }
 
-void Workspace::ReplayOpened(const MountingError& calibration, PoseSource source,
-                             std::shared_ptr<const PoseBuffer> given, double speed) {
-  if (opened_ == nullptr) return;
-  ReconstructionOptions options;
-  options.calibration = calibration;
-  options.pose.source = source;
-  shown_calibration_ = calibration;
-  shown_given_ = given;
-  replaying_ = true;
-  LiveProcessor* p = processor_;
-  std::shared_ptr<const hardware::Recording> r = opened_;
-  QMetaObject::invokeMethod(
-      p, [p, r, options, speed, given] { p->StartReplay(r, options, speed, given); });
-  SetShownPoseSource(source);
-}
-
 void Workspace::SetShownPoseSource(PoseSource source) {
   if (source != PoseSource::kSfm) sfm_summary_.clear();
   shown_pose_source_ = source;
   emit shownPoseSourceChanged(static_cast<int>(source));
-}
-
-void Workspace::SetReplaySpeed(double speed) {
-  replay_speed_ = speed;
-  LiveProcessor* p = processor_;
-  QMetaObject::invokeMethod(p, [p, speed] { p->SetReplaySpeed(speed); });
-}
-
-void Workspace::SetReplayPaused(bool paused) {
-  LiveProcessor* p = processor_;
-  QMetaObject::invokeMethod(p, [p, paused] { p->SetReplayPaused(paused); });
-}
-
-void Workspace::SeekReplay(double position_s) {
-  if (opened_samples_released_ && !recording_) {
-    // The replay let its samples go when it finished: replay again, then seek.
-    WithOpenedSamples([this, position_s] {
-      ReplayOpened(shown_calibration_, shown_pose_source_, shown_given_, replay_speed_);
-      SeekReplay(position_s);
-    });
-    return;
-  }
-  if (opened_ != nullptr && !recording_)
-    replaying_ = true;  // After the end: replays on from the target.
-  ++seeks_sent_;
-  LiveProcessor* p = processor_;
-  QMetaObject::invokeMethod(p, [p, position_s] { p->SeekReplay(position_s); });
 }
 
 CloudSnapshotRef Workspace::CloudSnapshot() const {

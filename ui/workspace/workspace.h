@@ -37,6 +37,7 @@
 #include "core/sim/world.h"
 #include "hardware/station/direct_device.h"
 #include "hardware/station/recording.h"
+#include "hardware/station/replay_source.h"
 #include "hardware/station/robot_connection.h"
 #include "ui/view/point_values.h"
 #include "ui/workspace/live_batch.h"
@@ -144,7 +145,8 @@ class Workspace : public QObject {
   // frames.bin is above stream_open_above_bytes() (default 32 MiB, about 4 M
   // lidar samples) is streamed instead (workspace_stream.cc): its cloud is
   // built in two passes over the file, the samples never held, and it opens
-  // as a replayed large session is left (its samples released).
+  // as a replayed large session is left (its samples released). At a replay
+  // speed such a session is replayed as it is read (workspace_replay.cc).
   void OpenSession(const QString& dir, double speed = 0.0);
   void set_stream_open_above_bytes(qint64 bytes) { stream_open_above_bytes_ = bytes; }
   qint64 stream_open_above_bytes() const { return stream_open_above_bytes_; }
@@ -339,18 +341,26 @@ class Workspace : public QObject {
   // Memory: a replayed session above kKeepSamplesAtMost lidar samples, or a
   // streamed one, keeps none of its records (the samples take 24 bytes
   // each, more than the cloud store's 14 a point; the wheel and IMU records
-  // ~20 MB an hour of drive); what needs them again (another pose
-  // source or calibration, a calibration, a seek) opens the session again
-  // in a job first, then calls `then`.
+  // ~20 MB an hour of drive). A replay then reads the session as it goes
+  // (WithReplaySource); what needs every scan (SfM, a calibration) opens
+  // the session whole in a job first, then calls `then`.
   static constexpr size_t kKeepSamplesAtMost = 4'000'000;
   void ReleaseOpenedSamples();
   // Stops a recording that another action ends (disconnect, a new or opened
   // session); a failure to close it is said (recordingFailed).
   void StopRecordingOrSay();
-  // The streamed open (OpenSession); WillStreamOpen says whether it applies.
-  bool WillStreamOpen(const QString& dir, double speed, PoseSource source) const;
+  // Large sessions opened with the EKF's or the wheels' poses are read as
+  // they are processed (StreamsSession): at full speed by the streamed open
+  // (workspace_stream.cc), at a replay speed by OpenSessionForReplay
+  // (workspace_replay.cc); either way the samples are never held whole.
+  bool StreamsSession(const QString& dir, PoseSource source) const;
   void OpenSessionStreamed(const QString& dir);
+  void OpenSessionForReplay(const QString& dir, double speed);
   void WithOpenedSamples(std::function<void()> then);
+  // Calls `then` once the opened session can be replayed: at once when its
+  // samples are held or its SessionReplaySource is loaded, otherwise after
+  // a job that loads the source (its wheel and IMU records).
+  void WithReplaySource(std::function<void()> then);
   // The cloud store pages beside `folder` (a session, the sessions folder).
   void PageBeside(const QString& folder);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
@@ -391,6 +401,12 @@ class Workspace : public QObject {
   QString sessions_root_;
   std::shared_ptr<hardware::Recording> opened_;
   bool opened_samples_released_ = false;
+  // The opened session's records read as it replays, once a replay of it
+  // without its samples needed them (kept for the next replay or seek).
+  std::shared_ptr<hardware::SessionReplaySource> opened_source_;
+  // The processor holds a replay of the opened session (a seek goes on in
+  // it): false after a streamed open, or once the replay let go.
+  bool replay_loaded_ = false;
   std::shared_ptr<const PoseBuffer> shown_given_;  // SfM's poses of the cloud shown.
   double replay_speed_ = 0.0;
   bool replaying_ = false;

@@ -25,9 +25,9 @@ void Workspace::ReleaseOpenedSamples() {
   for (const LidarScan& scan : opened_->log.scans) samples += scan.samples.size();
   if (samples <= kKeepSamplesAtMost) return;
   // A copy without the records (the scans, and the wheels and IMU, ~20 MB
-  // an hour): everything that reads them (a calibration, another pose
-  // source, a seek) goes through WithOpenedSamples, which opens the
-  // session again first. The processor's replay lets go of the full one.
+  // an hour): a replay (a seek, another calibration) reads the session as
+  // it goes (WithReplaySource), what needs every scan opens it whole again
+  // (WithOpenedSamples). The processor's replay lets go of the full one.
   auto light = std::make_shared<hardware::Recording>();
   light->name = opened_->name;
   light->session_dir = opened_->session_dir;
@@ -36,6 +36,7 @@ void Workspace::ReleaseOpenedSamples() {
   light->decode = opened_->decode;
   opened_ = light;
   opened_samples_released_ = true;
+  replay_loaded_ = false;
   LiveProcessor* p = processor_;
   QMetaObject::invokeMethod(p, [p] {
     p->StopReplay();

@@ -8,9 +8,9 @@
 // compete with the view for the processing thread.
 //
 // The session then is as a replayed large session is left: its samples
-// released (ReleaseOpenedSamples), re-read by what needs them (a seek,
-// another calibration or pose source, a calibration) through
-// WithOpenedSamples.
+// released (ReleaseOpenedSamples). A seek or another calibration replays it
+// as it reads it (workspace_replay.cc, WithReplaySource); what needs every
+// scan (SfM, a calibration) opens it whole first (WithOpenedSamples).
 #include <QFileInfo>
 #include <QMetaObject>
 
@@ -22,10 +22,10 @@
 
 namespace sweepscan::ui {
 
-bool Workspace::WillStreamOpen(const QString& dir, double speed, PoseSource source) const {
+bool Workspace::StreamsSession(const QString& dir, PoseSource source) const {
   // SfM needs every scan at once; an imported bag (its records decoded
   // together, docs/ros-bags.md) keeps its intensities from the samples.
-  if (speed != 0.0 || (source != PoseSource::kEkf && source != PoseSource::kOdometry)) return false;
+  if (source != PoseSource::kEkf && source != PoseSource::kOdometry) return false;
   const QFileInfo frames(dir + QStringLiteral("/") + QString::fromLatin1(kSessionFramesFile));
   if (!frames.isFile() || frames.size() <= stream_open_above_bytes_) return false;
   SessionMeta meta;
@@ -94,8 +94,8 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         *circle = FindCircle(*light, source == PoseSource::kEkf ? *poses : nullptr);
         // Then they go as ReleaseOpenedSamples lets a replayed session's
         // samples go (~20 MB an hour of drive: 115 MB for the 5.7-hour
-        // drive of docs/performance.md): what needs them again opens the
-        // session again first (WithOpenedSamples).
+        // drive of docs/performance.md): a replay reads them again
+        // (WithReplaySource).
         light->log = SensorLog();
         return QString();
       },

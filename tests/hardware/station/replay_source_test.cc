@@ -1,0 +1,223 @@
+// A replay's records: a session read as it replays (SessionReplaySource: its
+// wheel and IMU records decoded up front, its scans decoded on a thread of
+// its own a bounded stretch ahead) hands out exactly the records, in the same
+// slices, as the session decoded whole (LogReplaySource over OpenRecording),
+// on a clean and on a damaged session, after a rewind, with its queue at its
+// bound; a frames.bin that goes away mid-replay ends it with the reason.
+#include "hardware/station/replay_source.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "hardware/emulation/simulate_session.h"
+#include "tests/testing/run_command.h"
+#include "tests/testing/worlds.h"
+
+namespace sweepscan::hardware {
+namespace {
+
+// A 40 s drive of the lab (turns and straights).
+const std::string& Session() {
+  static const std::string dir = [] {
+    const std::string d =
+        ::testing::TempDir() + "/sweepscan_replay_" + std::to_string(::getpid()) + ".sweepscan";
+    sweepscan::testing::ShellOrFail("rm -rf '" + d + "'");
+    sim::SimConfig config = testing::LabConfig(5);
+    config.path = {{0.2, 0.0, 12.0}, {0.0, 0.3, 8.0}, {0.15, 0.1, 10.0}, {0.2, -0.05, 10.0}};
+    SimulateSessionReport report;
+    const Status s = SimulateSession(config, d, SimulateSessionOptions(), &report);
+    EXPECT_TRUE(s.ok()) << s.message();
+    return d;
+  }();
+  return dir;
+}
+
+// A copy of the session with `bytes` bytes overwritten from the middle of
+// frames.bin: records lost, a gap in every stream.
+std::string DamagedCopy(size_t bytes) {
+  const std::string d = Session() + ".damaged";
+  sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && cp -r '" + Session() + "' '" + d + "'");
+  std::fstream f(d + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
+  f.seekg(0, std::ios::end);
+  const std::streamoff size = f.tellg();
+  f.seekp(size / 2);
+  for (size_t i = 0; i < bytes; ++i) f.put(static_cast<char>(0xA5 ^ (i * 131)));
+  return d;
+}
+
+// Everything a source hands out from where it is, in slices of `step`,
+// each slice's records checked to be due (time < until) and the source's
+// start and end kept.
+struct Taken {
+  std::vector<SensorLog> slices;
+  Time start, end;
+};
+
+Taken TakeAll(ReplaySource* source, double step_s) {
+  Taken out;
+  out.start = source->start();
+  Time until = source->start();
+  for (int guard = 0; !source->done() && guard < 100000; ++guard) {
+    until = until + FromSeconds(step_s);
+    SensorLog slice;
+    source->Take(until, &slice);
+    for (const auto& w : slice.wheels) EXPECT_LT(w.time, until);
+    for (const auto& m : slice.imu) EXPECT_LT(m.time, until);
+    for (const auto& scan : slice.scans) EXPECT_LT(scan.end_time(), until);
+    out.slices.push_back(std::move(slice));
+  }
+  EXPECT_TRUE(source->done());
+  out.end = source->end();
+  return out;
+}
+
+::testing::AssertionResult SameRecords(const Taken& a, const Taken& b) {
+  if (a.start != b.start) return ::testing::AssertionFailure() << "the starts differ";
+  if (a.end != b.end) return ::testing::AssertionFailure() << "the ends differ";
+  if (a.slices.size() != b.slices.size()) {
+    return ::testing::AssertionFailure()
+           << a.slices.size() << " slices against " << b.slices.size();
+  }
+  for (size_t k = 0; k < a.slices.size(); ++k) {
+    const SensorLog& x = a.slices[k];
+    const SensorLog& y = b.slices[k];
+    if (x.wheels.size() != y.wheels.size() || x.imu.size() != y.imu.size() ||
+        x.scans.size() != y.scans.size()) {
+      return ::testing::AssertionFailure() << "slice " << k << " holds other counts";
+    }
+    for (size_t i = 0; i < x.wheels.size(); ++i) {
+      if (x.wheels[i].time != y.wheels[i].time || x.wheels[i].left_mps != y.wheels[i].left_mps ||
+          x.wheels[i].right_mps != y.wheels[i].right_mps) {
+        return ::testing::AssertionFailure() << "slice " << k << " wheel " << i << " differs";
+      }
+    }
+    for (size_t i = 0; i < x.imu.size(); ++i) {
+      if (x.imu[i].time != y.imu[i].time || x.imu[i].gyro_z != y.imu[i].gyro_z ||
+          x.imu[i].yaw != y.imu[i].yaw) {
+        return ::testing::AssertionFailure() << "slice " << k << " IMU record " << i << " differs";
+      }
+    }
+    for (size_t i = 0; i < x.scans.size(); ++i) {
+      const auto& p = x.scans[i].samples;
+      const auto& q = y.scans[i].samples;
+      if (x.scans[i].index != y.scans[i].index || p.size() != q.size()) {
+        return ::testing::AssertionFailure() << "slice " << k << " scan " << i << " differs";
+      }
+      for (size_t j = 0; j < p.size(); ++j) {
+        if (p[j].time != q[j].time || p[j].range_m != q[j].range_m || p[j].theta != q[j].theta ||
+            p[j].beam != q[j].beam) {
+          return ::testing::AssertionFailure()
+                 << "slice " << k << " scan " << i << " sample " << j << " differs";
+        }
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+Taken Whole(const std::string& dir, double step_s, size_t* scans = nullptr) {
+  auto recording = std::make_shared<Recording>();
+  const Status s = OpenRecording(dir, recording.get());
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (scans != nullptr) *scans = recording->log.scans.size();
+  LogReplaySource source(recording);
+  return TakeAll(&source, step_s);
+}
+
+std::unique_ptr<SessionReplaySource> Open(const std::string& dir,
+                                          size_t ahead = SessionReplaySource::kAheadSamples) {
+  std::unique_ptr<SessionReplaySource> source;
+  const Status s = SessionReplaySource::Open(dir, nullptr, &source, ahead);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return source;
+}
+
+TEST(SessionReplaySourceTest, HandsOutTheRecordsOfTheWholeDecodeSliceForSlice) {
+  size_t scans = 0;
+  const Taken whole = Whole(Session(), 0.5, &scans);
+  ASSERT_GT(scans, 200u);
+  std::unique_ptr<SessionReplaySource> source = Open(Session());
+  ASSERT_NE(source, nullptr);
+  EXPECT_EQ(source->geometry().lidar_height_m, testing::LabConfig(5).geometry.lidar_height_m);
+  EXPECT_EQ(source->decode().telemetry.x4.frames_ok, 0u);  // the lidar's bytes skipped up front
+  EXPECT_GT(source->motion().imu.size(), 3000u);
+  EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.5), whole));
+  EXPECT_TRUE(source->status().ok());
+  // As a 20x replay at 50 Hz would take them: other slices, the same records.
+  source->Rewind();
+  EXPECT_FALSE(source->done());
+  EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.4), Whole(Session(), 0.4)));
+}
+
+TEST(SessionReplaySourceTest, ARewindHalfWayStartsOverWithTheSameRecords) {
+  const Taken whole = Whole(Session(), 2.0);
+  std::unique_ptr<SessionReplaySource> source = Open(Session());
+  SensorLog half;
+  source->Take(source->start() + FromSeconds(20.0), &half);
+  ASSERT_GT(half.scans.size(), 50u);
+  source->Rewind();
+  EXPECT_TRUE(SameRecords(TakeAll(source.get(), 2.0), whole));
+}
+
+// The decoder runs at most `ahead` samples ahead of the replay: it waits for
+// room (the records are still all there), and the queue never holds more
+// than the bound and one scan.
+TEST(SessionReplaySourceTest, TheDecoderWaitsAtItsBoundAndLosesNothing) {
+  const size_t ahead = 4000;  // under a second of the X4
+  std::unique_ptr<SessionReplaySource> source = Open(Session(), ahead);
+  // Nothing taken yet: the decoder fills its queue and waits (it must: the
+  // session holds 50 times the bound).
+  for (int i = 0; i < 10000 && source->decoder_waits() == 0; ++i) usleep(1000);
+  ASSERT_GE(source->decoder_waits(), 1u);
+  EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.25), Whole(Session(), 0.25)));
+  EXPECT_LE(source->peak_queued_samples(), ahead + 1000);  // an X4 scan: ~700 samples
+  // Rewound and dropped while its decoder waits: no hang.
+  source->Rewind();
+  SensorLog first;
+  source->Take(source->start() + FromSeconds(1.0), &first);
+  source.reset();
+}
+
+// A damaged stretch is skipped as OpenRecording skips it: the same records.
+TEST(SessionReplaySourceTest, ADamagedSessionGivesTheRecordsOfItsWholeDecode) {
+  const std::string damaged = DamagedCopy(40000);
+  std::unique_ptr<SessionReplaySource> source = Open(damaged);
+  ASSERT_NE(source, nullptr);
+  EXPECT_TRUE(source->decode().frames.damaged());
+  EXPECT_TRUE(SameRecords(TakeAll(source.get(), 1.0), Whole(damaged, 1.0)));
+}
+
+// frames.bin gone between two replays (a disk pulled): the replay ends at
+// once and says why; the wheel and IMU records it holds are still handed out.
+TEST(SessionReplaySourceTest, AFramesFileGoneMidReplayEndsItWithTheReason) {
+  const std::string copy = Session() + ".gone";
+  sweepscan::testing::ShellOrFail("rm -rf '" + copy + "' && cp -r '" + Session() + "' '" + copy +
+                                  "'");
+  std::unique_ptr<SessionReplaySource> source = Open(copy);
+  sweepscan::testing::ShellOrFail("rm '" + copy + "/frames.bin'");
+  source->Rewind();
+  const Taken taken = TakeAll(source.get(), 5.0);
+  ASSERT_FALSE(source->status().ok());
+  EXPECT_NE(source->status().message().find("frames.bin"), std::string::npos)
+      << source->status().message();
+  size_t scans = 0, imu = 0;
+  for (const SensorLog& slice : taken.slices) {
+    scans += slice.scans.size();
+    imu += slice.imu.size();
+  }
+  EXPECT_EQ(scans, 0u);
+  EXPECT_EQ(imu, source->motion().imu.size());
+}
+
+TEST(SessionReplaySourceTest, AMissingSessionIsRefusedWithItsPlace) {
+  std::unique_ptr<SessionReplaySource> source;
+  const Status s = SessionReplaySource::Open("/nonexistent/x.sweepscan", nullptr, &source);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("/nonexistent/x.sweepscan"), std::string::npos) << s.message();
+  EXPECT_EQ(source, nullptr);
+}
+
+}  // namespace
+}  // namespace sweepscan::hardware
