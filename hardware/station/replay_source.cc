@@ -86,7 +86,12 @@ Status SessionReplaySource::Open(const std::string& session_dir, const DecodePro
     }
   }
   s->start_ = OrZero(first);
-  s->end_ = OrZero(last);
+  s->motion_end_ = OrZero(last);
+  // The last scan is known once read: until then the end is the last agent
+  // frame's time, which no record of it passes (the replay's slider spans
+  // the drive from the start); the first Take that finds every record
+  // handed out sets the end to the last one's.
+  s->end_ = std::max(s->motion_end_, s->decode_.last_robot_time);
   *source = std::move(s);
   return Status::Ok();
 }
@@ -177,12 +182,19 @@ void SessionReplaySource::Take(Time until, SensorLog* batch) {
     if (scans_done) status_ = decoder_status_;
   }
   cv_.notify_all();
-  done_ = scans_done && next_wheel_ == motion_.wheels.size() && next_imu_ == motion_.imu.size();
+  if (!batch->scans.empty())
+    last_scan_end_ = std::max(last_scan_end_, batch->scans.back().end_time());
+  // A decoder that failed (frames.bin unreadable) ends the replay at once,
+  // not after hours of wheel and IMU records without scans.
+  done_ = scans_done && (!status_.ok() ||
+                         (next_wheel_ == motion_.wheels.size() && next_imu_ == motion_.imu.size()));
+  if (done_ && status_.ok()) end_ = std::max(motion_end_, last_scan_end_);
 }
 
 void SessionReplaySource::Rewind() {
   StopDecoder();
   next_wheel_ = next_imu_ = 0;
+  last_scan_end_ = Time();
   done_ = false;
   status_ = Status::Ok();
   StartDecoder();

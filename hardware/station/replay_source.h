@@ -45,8 +45,9 @@ class ReplaySource {
   const Pose2d& start_pose() const { return start_pose_; }  // the robot at the first record
 
   // Robot time of the first record (a wheel or IMU record, or a scan's
-  // first sample), and of the last one known so far: a session read as it
-  // is replayed knows its last scan only once it has read it.
+  // first sample), and of the last one: a session read as it is replayed
+  // knows its last scan only once it has read it, and until then gives the
+  // last agent frame's time, at or after every record's.
   virtual Time start() const = 0;
   virtual Time end() const = 0;
 
@@ -59,8 +60,9 @@ class ReplaySource {
   virtual bool done() const = 0;
   // Hands out from the first record again (a seek backwards).
   virtual void Rewind() = 0;
-  // Why the records ended before the recording's end (frames.bin became
-  // unreadable during the replay); Ok otherwise.
+  // Why the records ended before the recording's end (frames.bin could not
+  // be read when the replay started over); done() is then true at once.
+  // Ok otherwise.
   virtual Status status() const { return Status::Ok(); }
 
  protected:
@@ -136,6 +138,8 @@ class SessionReplaySource final : public ReplaySource {
   SensorLog motion_;
   size_t next_wheel_ = 0, next_imu_ = 0;
   Time start_, end_;
+  Time motion_end_;     // the last wheel or IMU record's time
+  Time last_scan_end_;  // of the scans handed out since the last rewind
   bool done_ = false;
   Status status_;
 

@@ -111,8 +111,9 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
           [this](const QString& what, bool ok, const QString& message) {
             if (what == tr("Calibrating") && !ok) emit calibrationFinished(false, message);
             if (what == tr("Evaluating") && !ok) emit evaluationFinished(false, message);
-            // SfM (or the re-opening of a let-go session's samples that comes
-            // before it) failed, was cancelled or refused: the cloud keeps
+            // SfM (or the re-opening of a let-go session's samples or
+            // replay source that comes before a re-processing) failed, was
+            // cancelled or refused: the cloud keeps
             // its poses, and the choice shows them again. A pose source
             // differs from the shown one only while such a chain runs.
             if (!ok && !job_running() && pose_source_ != shown_pose_source_) {
@@ -498,7 +499,7 @@ void Workspace::OpenSession(const QString& dir, double speed) {
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
         const Status s = hardware::OpenRecording(path, recording.get(), JobProgress(what, cancel));
         if (!s.ok()) return QString::fromStdString(s.message());
-        *circle = FindCircle(*recording);
+        *circle = FindCircle(recording->log, recording->start, recording->geometry);
         if (source == PoseSource::kSfm && !*cancel) {
           // The batch over the whole log, now that it is loaded (a cancel
           // stops it within a frame or a refinement iteration).
@@ -532,7 +533,8 @@ void Workspace::OpenSession(const QString& dir, double speed) {
       });
 }
 
-Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recording,
+Workspace::OpenedCircle Workspace::FindCircle(const SensorLog& log, const Pose2d& start,
+                                              const RobotGeometry& geometry,
                                               std::shared_ptr<const PoseBuffer> ekf_poses) {
   // Is it a calibration drive? The EKF poses (a few ms per minute of
   // drive; Calibrate smooths them, which moves the circle by mm) and the
@@ -541,8 +543,8 @@ Workspace::OpenedCircle Workspace::FindCircle(const hardware::Recording& recordi
   std::shared_ptr<const PoseBuffer> poses = std::move(ekf_poses);
   if (!poses) {
     PoseEstimatorOptions pose;
-    pose.initial_pose = recording.start;
-    poses = std::make_shared<const PoseBuffer>(EstimatePoses(recording.log, pose, recording.geometry).poses());
+    pose.initial_pose = start;
+    poses = std::make_shared<const PoseBuffer>(EstimatePoses(log, pose, geometry).poses());
   }
   std::string why;
   circle.ok = FitCircleDrive(*poses, &circle.circle, &why);

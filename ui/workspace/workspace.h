@@ -427,7 +427,8 @@ class Workspace : public QObject {
   qint64 stream_open_above_bytes_ = qint64{32} << 20;
   // The circle of an opened session's EKF poses (is it a calibration drive?).
   // `ekf_poses`: the recording's EKF poses when already estimated.
-  static OpenedCircle FindCircle(const hardware::Recording& recording,
+  static OpenedCircle FindCircle(const SensorLog& log, const Pose2d& start,
+                                 const RobotGeometry& geometry,
                                  std::shared_ptr<const PoseBuffer> ekf_poses = nullptr);
   // What opening a session sets, whichever way it was opened.
   void TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,

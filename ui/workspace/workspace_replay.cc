@@ -49,6 +49,12 @@ void Workspace::WithReplaySource(std::function<void()> then) {
     then();
     return;
   }
+  if (opened_->decode.measurements) {
+    // An imported bag is decoded in one piece (docs/ros-bags.md), and its
+    // intensities are mapped from the samples once it has replayed: whole.
+    WithOpenedSamples(std::move(then));
+    return;
+  }
   auto source = std::make_shared<std::unique_ptr<hardware::SessionReplaySource>>();
   const std::string path = session_dir_.toStdString();
   const std::shared_ptr<hardware::Recording> light = opened_;
@@ -88,11 +94,8 @@ void Workspace::OpenSessionForReplay(const QString& dir, double speed) {
         light->start = r.start_pose();
         light->decode = r.decode();
         // Is it a calibration drive? The circle of the EKF over the wheel
-        // and IMU records (a copy, dropped after).
-        light->log.wheels = r.motion().wheels;
-        light->log.imu = r.motion().imu;
-        *circle = FindCircle(*light);
-        light->log = SensorLog();
+        // and IMU records.
+        *circle = FindCircle(r.motion(), r.start_pose(), r.geometry());
         return QString();
       },
       [this, replay, light, circle, dir, source, speed] {

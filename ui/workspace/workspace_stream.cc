@@ -91,7 +91,8 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         *poses = std::make_shared<const PoseBuffer>(stream->TakePoses());
         // With the EKF, they are the ones FindCircle would estimate again
         // (the same log, options and start).
-        *circle = FindCircle(*light, source == PoseSource::kEkf ? *poses : nullptr);
+        *circle = FindCircle(light->log, light->start, light->geometry,
+                             source == PoseSource::kEkf ? *poses : nullptr);
         // Then they go as ReleaseOpenedSamples lets a replayed session's
         // samples go (~20 MB an hour of drive: 115 MB for the 5.7-hour
         // drive of docs/performance.md): a replay reads them again
