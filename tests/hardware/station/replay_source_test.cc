@@ -9,43 +9,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <fstream>
-
-#include "hardware/emulation/simulate_session.h"
+#include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
-#include "tests/testing/worlds.h"
 
 namespace sweepscan::hardware {
 namespace {
 
-// A 40 s drive of the lab (turns and straights).
-const std::string& Session() {
-  static const std::string dir = [] {
-    const std::string d =
-        ::testing::TempDir() + "/sweepscan_replay_" + std::to_string(::getpid()) + ".sweepscan";
-    sweepscan::testing::ShellOrFail("rm -rf '" + d + "'");
-    sim::SimConfig config = testing::LabConfig(5);
-    config.path = {{0.2, 0.0, 12.0}, {0.0, 0.3, 8.0}, {0.15, 0.1, 10.0}, {0.2, -0.05, 10.0}};
-    SimulateSessionReport report;
-    const Status s = SimulateSession(config, d, SimulateSessionOptions(), &report);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return d;
-  }();
-  return dir;
-}
-
-// A copy of the session with `bytes` bytes overwritten from the middle of
-// frames.bin: records lost, a gap in every stream.
-std::string DamagedCopy(size_t bytes) {
-  const std::string d = Session() + ".damaged";
-  sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && cp -r '" + Session() + "' '" + d + "'");
-  std::fstream f(d + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
-  f.seekg(0, std::ios::end);
-  const std::streamoff size = f.tellg();
-  f.seekp(size / 2);
-  for (size_t i = 0; i < bytes; ++i) f.put(static_cast<char>(0xA5 ^ (i * 131)));
-  return d;
-}
+const std::string& Session() { return testing::LabDriveSession(); }
+std::string DamagedCopy(size_t bytes) { return testing::DamagedCopy(Session(), bytes); }
 
 // Everything a source hands out from where it is, in slices of `step`,
 // each slice's records checked to be due (time < until) and the source's
@@ -140,7 +111,7 @@ TEST(SessionReplaySourceTest, HandsOutTheRecordsOfTheWholeDecodeSliceForSlice) {
   ASSERT_GT(scans, 200u);
   std::unique_ptr<SessionReplaySource> source = Open(Session());
   ASSERT_NE(source, nullptr);
-  EXPECT_EQ(source->geometry().lidar_height_m, testing::LabConfig(5).geometry.lidar_height_m);
+  EXPECT_EQ(source->geometry().lidar_height_m, testing::LabConfig(3).geometry.lidar_height_m);
   EXPECT_EQ(source->decode().telemetry.x4.frames_ok, 0u);  // the lidar's bytes skipped up front
   EXPECT_GT(source->motion().imu.size(), 3000u);
   // Before its last scan is read, the end is the last agent frame's time:

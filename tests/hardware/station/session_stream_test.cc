@@ -8,43 +8,16 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <fstream>
 
 #include "core/cloud/reconstruct.h"
-#include "hardware/emulation/simulate_session.h"
+#include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
-#include "tests/testing/worlds.h"
 
 namespace sweepscan::hardware {
 namespace {
 
-// A 40 s drive of the lab (turns and straights: every pose component moves).
-const std::string& Session() {
-  static const std::string dir = [] {
-    const std::string d = ::testing::TempDir() + "/sweepscan_stream_" + std::to_string(::getpid()) + ".sweepscan";
-    sweepscan::testing::ShellOrFail("rm -rf '" + d + "'");
-    sim::SimConfig config = testing::LabConfig(3);
-    config.path = {{0.2, 0.0, 12.0}, {0.0, 0.3, 8.0}, {0.15, 0.1, 10.0}, {0.2, -0.05, 10.0}};
-    SimulateSessionReport report;
-    const Status s = SimulateSession(config, d, SimulateSessionOptions(), &report);
-    EXPECT_TRUE(s.ok()) << s.message();
-    return d;
-  }();
-  return dir;
-}
-
-// A copy of the session with `bytes` bytes overwritten from the middle of
-// frames.bin: about 1.5 s of records lost, a gap in the wheel and IMU data.
-std::string DamagedCopy(size_t bytes) {
-  const std::string d = Session() + ".damaged";
-  sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && cp -r '" + Session() + "' '" + d + "'");
-  std::fstream f(d + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
-  f.seekg(0, std::ios::end);
-  const std::streamoff size = f.tellg();
-  f.seekp(size / 2);
-  for (size_t i = 0; i < bytes; ++i) f.put(static_cast<char>(0xA5 ^ (i * 131)));
-  return d;
-}
+const std::string& Session() { return testing::LabDriveSession(); }
+std::string DamagedCopy(size_t bytes) { return testing::DamagedCopy(Session(), bytes); }
 
 struct Streamed {
   std::vector<CloudPoint> points;
