@@ -7,6 +7,7 @@
 #include "hardware/station/replay_source.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "tests/testing/lab_session.h"
@@ -183,6 +184,41 @@ TEST(SessionReplaySourceTest, AFramesFileGoneBeforeAReplayStartsOverEndsItWithTh
       << source->status().message();
   EXPECT_TRUE(first.scans.empty());
   EXPECT_LT(first.imu.size(), source->motion().imu.size() / 4);
+}
+
+// frames.bin cut short by another program while the decoder reads it (its
+// mapping then faults, SIGBUS, for the pages past the new end): the replay
+// hands out the scans before the cut, exactly the whole decode's, then ends
+// and says where; the process lives.
+TEST(SessionReplaySourceTest, AFramesFileCutWhileReadEndsTheReplayWithThePlace) {
+  const std::string copy = Session() + ".cut";
+  sweepscan::testing::ShellOrFail("rm -rf '" + copy + "' && cp -r '" + Session() + "' '" + copy +
+                                  "'");
+  size_t total_scans = 0;
+  const Taken whole = Whole(copy, 0.5, &total_scans);
+  std::unique_ptr<SessionReplaySource> source =
+      Open(copy, 4000);  // the decoder waits near the start
+  struct stat st;
+  ASSERT_EQ(::stat((copy + "/frames.bin").c_str(), &st), 0);
+  ASSERT_EQ(::truncate((copy + "/frames.bin").c_str(), st.st_size * 2 / 5), 0);
+  const Taken cut = TakeAll(source.get(), 0.5);
+  ASSERT_FALSE(source->status().ok());
+  EXPECT_NE(source->status().message().find("frames.bin: the file shrank from "), std::string::npos)
+      << source->status().message();
+  std::vector<const LidarScan*> expected, got;
+  for (const SensorLog& slice : whole.slices) {
+    for (const LidarScan& scan : slice.scans) expected.push_back(&scan);
+  }
+  for (const SensorLog& slice : cut.slices) {
+    for (const LidarScan& scan : slice.scans) got.push_back(&scan);
+  }
+  EXPECT_GT(got.size(), total_scans / 4);
+  EXPECT_LT(got.size(), total_scans / 2);
+  for (size_t i = 0; i < got.size(); ++i) {
+    ASSERT_EQ(got[i]->index, expected[i]->index) << i;
+    ASSERT_EQ(got[i]->samples.size(), expected[i]->samples.size()) << i;
+    ASSERT_EQ(got[i]->end_time(), expected[i]->end_time()) << i;
+  }
 }
 
 TEST(SessionReplaySourceTest, AMissingSessionIsRefusedWithItsPlace) {
