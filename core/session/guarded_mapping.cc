@@ -24,13 +24,14 @@ struct Slot {
 Slot g_slots[GuardedMapping::kMaxMappings];
 struct sigaction g_previous;
 std::once_flag g_installed;
+uintptr_t g_page = 4096;  // set before the handler is installed
 
 void OnSigbus(int signal, siginfo_t* info, void* context) {
   const uintptr_t at = reinterpret_cast<uintptr_t>(info->si_addr);
   for (Slot& slot : g_slots) {
     const uintptr_t begin = slot.begin.load(std::memory_order_acquire);
     if (begin == 0 || at < begin || at >= slot.end.load(std::memory_order_acquire)) continue;
-    const uintptr_t page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
+    const uintptr_t page = g_page;
     void* base = reinterpret_cast<void*>(at / page * page);
     // Zeros over the failed page; the faulting read is then re-executed.
     if (mmap(base, page, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_FIXED, -1, 0) == MAP_FAILED)
@@ -60,6 +61,7 @@ void OnSigbus(int signal, siginfo_t* info, void* context) {
 }
 
 void Install() {
+  g_page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
   struct sigaction action;
   std::memset(&action, 0, sizeof(action));
   action.sa_sigaction = OnSigbus;
@@ -104,9 +106,8 @@ bool GuardedMapping::failed() const {
 
 size_t GuardedMapping::failed_offset() const {
   if (!failed()) return size_;
-  const uintptr_t page = static_cast<uintptr_t>(sysconf(_SC_PAGESIZE));
   const uintptr_t at = g_slots[slot_].failed.load(std::memory_order_acquire) - 1;
-  return (at / page * page) - reinterpret_cast<uintptr_t>(data_);
+  return (at / g_page * g_page) - reinterpret_cast<uintptr_t>(data_);
 }
 
 std::string GuardedMapping::FailureMessage() const {
