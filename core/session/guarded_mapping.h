@@ -15,8 +15,10 @@
 // should.
 //
 // The handler uses only lock-free atomics and mmap(2), a system call that
-// is safe in a signal handler on Linux. At most kMaxMappings mappings are
-// guarded at once; more are mapped unguarded (guarded() is then false).
+// is safe in a signal handler on Linux; it keeps errno. At most
+// kMaxMappings mappings are guarded at once; more are mapped unguarded
+// (guarded() is then false). A SIGBUS handler installed after the first
+// mapping (nothing in this program does) would take the faults instead.
 #ifndef SWEEPSCAN_CORE_SESSION_GUARDED_MAPPING_H_
 #define SWEEPSCAN_CORE_SESSION_GUARDED_MAPPING_H_
 

@@ -20,7 +20,6 @@
 #include "core/common/checked_file.h"
 #include "core/common/crc32c.h"
 #include "core/common/json_reader.h"
-#include "core/session/guarded_mapping.h"
 
 namespace sweepscan {
 namespace {
@@ -533,54 +532,6 @@ Status LoadFramesFromMemory(const uint8_t* data, size_t n, const std::string& so
   return VisitFramesInMemory(data, n, source, options,
                              CollectRecords(records),
                              report);
-}
-
-Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options,
-                       const FrameVisitor& visit, FramesLoadReport* report) {
-  const Status regular = CheckRegularFile(path);  // A folder named frames.bin is a clear error.
-  if (!regular.ok()) return regular;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Status::Error(Errno(path + ": cannot open for reading"));
-  // Mapped, not read: the file is visited once, front to back, and the
-  // pages behind the reader are dropped every 64 MiB, so a 10-hour
-  // session (1.4 GB) costs a few tens of MB resident, not its size. The
-  // mapping is guarded: a file cut short or a disk failing under the reader
-  // (a USB disk pulled mid-replay) is an error with its place, not SIGBUS.
-  GuardedMapping map;
-  const Status mapped = map.Map(fd, path);
-  ::close(fd);
-  if (!mapped.ok()) return mapped;
-  const size_t n = map.size();
-  if (n == 0) return VisitFramesInMemory(nullptr, 0, path, options, visit, report);
-  uint8_t* const base = const_cast<uint8_t*>(map.data());
-  ::madvise(base, n, MADV_SEQUENTIAL);
-  constexpr size_t kDropEvery = size_t{64} << 20;
-  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
-  size_t dropped = 0;
-  const Status s = VisitFramesInMemory(
-      map.data(), n, path, options,
-      [&](const SessionRecordView& r) {
-        // What follows a failed page is zeros, not the file.
-        if (map.failed()) return false;
-        if (r.offset >= dropped + kDropEvery) {
-          const size_t upto = r.offset / page * page;
-          ::madvise(base, upto, MADV_DONTNEED);
-          dropped = upto;
-        }
-        return visit(r);
-      },
-      report);
-  // Cut short under the reader: the pages past the new end faulted (and
-  // read as zeros), or the record the cut runs through failed its CRC (the
-  // rest of its page reads as zeros). Either way, say what happened.
-  struct stat now;
-  if ((map.failed() || !s.ok()) && ::stat(path.c_str(), &now) == 0 &&
-      static_cast<size_t>(now.st_size) < n) {
-    return Status::Error(path + ": the file shrank from " + std::to_string(n) + " to " +
-                         std::to_string(now.st_size) + " bytes while it was read");
-  }
-  if (map.failed()) return Status::Error(map.FailureMessage());
-  return s;
 }
 
 Status LoadFramesFile(const std::string& path, const FramesLoadOptions& options,
