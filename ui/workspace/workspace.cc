@@ -113,9 +113,9 @@ Workspace::Workspace(QObject* parent) : QObject(parent) {
             if (what == tr("Evaluating") && !ok) emit evaluationFinished(false, message);
             // SfM (or the re-opening of a let-go session's samples or
             // replay source that comes before a re-processing) failed, was
-            // cancelled or refused: the cloud keeps
-            // its poses, and the choice shows them again. A pose source
-            // differs from the shown one only while such a chain runs.
+            // cancelled or refused: the cloud keeps its poses, and the
+            // choice shows them again. A pose source differs from the shown
+            // one only while such a chain runs.
             if (!ok && !job_running() && pose_source_ != shown_pose_source_) {
               pose_source_ = shown_pose_source_;
               emit poseSourceChanged(static_cast<int>(pose_source_));
