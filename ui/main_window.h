@@ -68,7 +68,8 @@ class MainWindow : public QMainWindow {
   // then errors go to lastError() and unsaved recordings stay where they are.
   void SetInteractive(bool interactive) { interactive_ = interactive; }
   QString last_error() const { return last_error_; }
-  // Event-loop latency samples (ms) measured by the GUI tick, for figures.
+  // Event-loop latency samples (ms) measured by the GUI tick, for figures,
+  // from the view's first frame on (that frame loads the GL driver).
   const std::vector<double>& tick_latencies_ms() const { return latencies_ms_; }
   // Counted from here on (a benchmark's phase: --seek).
   void ClearTickFigures() {
@@ -184,6 +185,7 @@ class MainWindow : public QMainWindow {
   uint64_t fps_frames_ = 0;
   double fps_ = 0.0;
   std::vector<double> latencies_ms_;
+  uint64_t frames_at_last_tick_ = 0;  // the view's frames when the last tick began
   double insertion_ms_ = 0.0;
   std::shared_ptr<const QuantizedValues>
       pending_intensity_;  // for the view, once it holds every point
