@@ -160,6 +160,7 @@ void SessionReplaySource::WaitForFront(std::unique_lock<std::mutex>* lock) {
 }
 
 void SessionReplaySource::Take(Time until, SensorLog* batch) {
+  taken_ = true;
   TakeUntil(motion_.wheels, until, &next_wheel_, &batch->wheels);
   TakeUntil(motion_.imu, until, &next_imu_, &batch->imu);
   bool scans_done = false;
@@ -196,6 +197,7 @@ void SessionReplaySource::Rewind() {
   next_wheel_ = next_imu_ = 0;
   last_scan_end_ = Time();
   done_ = false;
+  taken_ = false;
   status_ = Status::Ok();
   StartDecoder();
 }

@@ -60,6 +60,9 @@ class ReplaySource {
   virtual bool done() const = 0;
   // Hands out from the first record again (a seek backwards).
   virtual void Rewind() = 0;
+  // Nothing handed out since it was made or rewound (a replay starting on
+  // it need not rewind: a session's decoder would start over for nothing).
+  virtual bool at_start() const = 0;
   // Why the records ended before the recording's end (frames.bin could not
   // be read when the replay started over); done() is then true at once.
   // Ok otherwise.
@@ -80,6 +83,7 @@ class LogReplaySource final : public ReplaySource {
   void Take(Time until, SensorLog* batch) override;
   bool done() const override;
   void Rewind() override { next_wheel_ = next_imu_ = next_scan_ = 0; }
+  bool at_start() const override { return next_wheel_ == 0 && next_imu_ == 0 && next_scan_ == 0; }
 
  private:
   std::shared_ptr<const Recording> recording_;
@@ -110,6 +114,7 @@ class SessionReplaySource final : public ReplaySource {
   void Take(Time until, SensorLog* batch) override;
   bool done() const override { return done_; }
   void Rewind() override;
+  bool at_start() const override { return !taken_; }
   Status status() const override { return status_; }
 
   // What Open's pass found: meta.json, frames.bin's damage, the link (the
@@ -141,6 +146,7 @@ class SessionReplaySource final : public ReplaySource {
   Time motion_end_;     // the last wheel or IMU record's time
   Time last_scan_end_;  // of the scans handed out since the last rewind
   bool done_ = false;
+  bool taken_ = false;  // a Take since the last rewind
   Status status_;
 
   std::thread decoder_;

@@ -185,7 +185,7 @@ void LiveProcessor::StartReplay(std::shared_ptr<hardware::ReplaySource> source,
                                 std::shared_ptr<const PoseBuffer> given_poses) {
   StopReplay();
   replay_ = std::move(source);
-  replay_->Rewind();  // A source kept from an earlier replay starts over.
+  if (!replay_->at_start()) replay_->Rewind();  // One kept from an earlier replay starts over.
   options_ = options;
   options_.pose.initial_pose = replay_->start_pose();
   geometry_ = replay_->geometry();

@@ -120,10 +120,13 @@ TEST(SessionReplaySourceTest, HandsOutTheRecordsOfTheWholeDecodeSliceForSlice) {
   // frames carry no record).
   EXPECT_GE(source->end(), whole.end);
   EXPECT_LT(ToSeconds(source->end() - whole.end), 1.0);
+  EXPECT_TRUE(source->at_start());
   EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.5), whole));
   EXPECT_TRUE(source->status().ok());
+  EXPECT_FALSE(source->at_start());
   // As a 20x replay at 50 Hz would take them: other slices, the same records.
   source->Rewind();
+  EXPECT_TRUE(source->at_start());
   EXPECT_FALSE(source->done());
   EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.4), Whole(Session(), 0.4)));
 }
