@@ -42,6 +42,7 @@
 #include "ui/project/project_controller.h"
 #include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
+#include "ui/undo_router.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -75,12 +76,14 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   setObjectName(QStringLiteral("MainWindow"));
   view_ = new CloudView(this);
   setCentralWidget(view_);
-  undo_ = new QUndoStack(this);
+  undo_ = new UndoRouter(this);
+  session_undo_ = new QUndoStack(this);
+  undo_->AddStack(session_undo_);
 
   connection_panel_ = new ConnectionPanel(workspace_, resources_dir + QStringLiteral("/scenarios"));
   drive_panel_ = new DrivePanel(workspace_);
   replay_panel_ = new ReplayPanel(workspace_);
-  calibration_panel_ = new CalibrationPanel(workspace_, view_, undo_);
+  calibration_panel_ = new CalibrationPanel(workspace_, view_, session_undo_);
   auto add_dock = [this](QWidget* w, const QString& title, const QString& name,
                          Qt::DockWidgetArea area) {
     auto* dock = new QDockWidget(title, this);
@@ -131,7 +134,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   tabifyDockWidget(calibration_dock, evaluation_dock);
   calibration_dock->raise();
   project_ = std::make_unique<ProjectController>(
-      this, view_, undo_, [this](const QString& t, const QString& m) { ShowError(t, m); },
+      this, view_, [this](const QString& t, const QString& m) { ShowError(t, m); },
       [this] { return interactive_; });
   // A tab beside Connection: the left column then fits a laptop's screen
   // with the Drive panel whole; it comes to the front with a project.
@@ -149,6 +152,15 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   // A project opened: into the building, its ceilings hidden, once its
   // first sessions are drawn.
   connect(project_.get(), &ProjectController::shown, this, &MainWindow::ApplyRoomView);
+  undo_->AddStack(project_->undo_stack());
+  undo_->AddStack(project_->pair_picking()->undo_stack());
+  // Pair picking's history is the one Edit > Undo offers while it runs.
+  connect(project_->pair_picking(), &PairPicking::changed, this, [this] {
+    PairPicking* picking = project_->pair_picking();
+    if (picking->active() && undo_->active() != picking->undo_stack()) {
+      undo_->Activate(picking->undo_stack());
+    }
+  });
   connect(project_->pair_picking(), &PairPicking::message, this,
           [this](const QString& m) { statusBar()->showMessage(m, 10000); });
   // The floor plan: a dock shown from View > Floor Plan (built only while
@@ -296,6 +308,8 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 }
 
 MainWindow::~MainWindow() { qApp->removeEventFilter(this); }
+
+QUndoGroup* MainWindow::undo_group() const { return undo_->group(); }
 
 void MainWindow::UpdateTitle() {
   QStringList parts;

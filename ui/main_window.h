@@ -27,6 +27,7 @@ class QLabel;
 class QMenu;
 class QProgressBar;
 class QToolButton;
+class QUndoGroup;
 class QUndoStack;
 
 namespace sweepscan::ui {
@@ -40,6 +41,7 @@ class EvaluationPanel;
 class PlanPanel;
 class ProjectController;
 class RosImportDialog;
+class UndoRouter;
 struct PickHit;
 
 class MainWindow : public QMainWindow {
@@ -54,7 +56,11 @@ class MainWindow : public QMainWindow {
   ReplayPanel* replay_panel() const { return replay_panel_; }
   CalibrationPanel* calibration_panel() const { return calibration_panel_; }
   EvaluationPanel* evaluation_panel() const { return evaluation_panel_; }
-  QUndoStack* undo_stack() const { return undo_; }
+  // Edit > Undo / Redo act on the active one of the window's histories
+  // (UndoRouter): the opened session's (calibration picks), the project's
+  // (project()->undo_stack()) or pair picking's, whichever was edited last.
+  QUndoGroup* undo_group() const;
+  QUndoStack* session_undo_stack() const { return session_undo_; }
   // Projects (ui/project/): File menu actions, the Project panel, the
   // project's sessions in the view.
   ProjectController* project() const { return project_.get(); }
@@ -143,7 +149,8 @@ class MainWindow : public QMainWindow {
   ReplayPanel* replay_panel_;
   CalibrationPanel* calibration_panel_;
   EvaluationPanel* evaluation_panel_;
-  QUndoStack* undo_;
+  UndoRouter* undo_;
+  QUndoStack* session_undo_;
   // Destroyed before the view it draws into (a member, not a child).
   std::unique_ptr<ProjectController> project_;
   PlanPanel* plan_panel_ = nullptr;

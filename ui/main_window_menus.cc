@@ -2,17 +2,18 @@
 // source, Help): their actions, shortcuts and the undoable view edits.
 #include <QAction>
 #include <QActionGroup>
-#include <QDockWidget>
-#include <QLabel>
-#include <QStatusBar>
 #include <QApplication>
+#include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QLabel>
 #include <QMenu>
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QSettings>
+#include <QStatusBar>
 #include <QUndoCommand>
+#include <QUndoGroup>
 #include <QUndoStack>
 #include <algorithm>
 #include <functional>
@@ -26,6 +27,7 @@
 #include "ui/panels/replay_panel.h"
 #include "ui/plan/plan_panel.h"
 #include "ui/project/project_controller.h"
+#include "ui/undo_router.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -34,7 +36,8 @@ namespace {
 // The pose sources an opened session can be made with, in menu order.
 constexpr PoseSource kPoseSources[] = {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm};
 
-// View appearance changes are edits: undoable (Ctrl+Z / Ctrl+Shift+Z).
+// View appearance changes are edits: undoable (Ctrl+Z / Ctrl+Shift+Z), on
+// the active history (UndoRouter).
 class ColorModeCommand : public QUndoCommand {
  public:
   ColorModeCommand(CloudView* view, CloudView::ColorMode to, std::function<void()> sync)
@@ -136,9 +139,9 @@ void MainWindow::BuildFileMenu() {
 
 void MainWindow::BuildEditMenu() {
   QMenu* edit = menuBar()->addMenu(tr("&Edit"));
-  QAction* undo = undo_->createUndoAction(this, tr("&Undo"));
+  QAction* undo = undo_->group()->createUndoAction(this, tr("&Undo"));
   undo->setShortcut(QKeySequence::Undo);
-  QAction* redo = undo_->createRedoAction(this, tr("&Redo"));
+  QAction* redo = undo_->group()->createRedoAction(this, tr("&Redo"));
   redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence::Redo});
   edit->addAction(undo);
   edit->addAction(redo);
@@ -166,7 +169,7 @@ void MainWindow::BuildViewMenu() {
     color_group_->addAction(a);
     connect(a, &QAction::triggered, this, [this, i] {
       if (static_cast<int>(view_->color_mode()) == i) return;
-      undo_->push(new ColorModeCommand(view_, static_cast<CloudView::ColorMode>(i), [this] {
+      undo_->Push(new ColorModeCommand(view_, static_cast<CloudView::ColorMode>(i), [this] {
         color_group_->actions()[static_cast<int>(view_->color_mode())]->setChecked(true);
       }));
     });
@@ -175,13 +178,13 @@ void MainWindow::BuildViewMenu() {
   view->addAction(
           tr("Larger Points"), this,
           [this] {
-            undo_->push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
+            undo_->Push(new PointSizeCommand(view_, std::min(10.0, view_->point_size() + 1)));
           })
       ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Plus));
   view->addAction(
           tr("Smaller Points"), this,
           [this] {
-            undo_->push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
+            undo_->Push(new PointSizeCommand(view_, std::max(1.0, view_->point_size() - 1)));
           })
       ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_Minus));
   view->addSeparator();

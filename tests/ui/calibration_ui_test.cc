@@ -3,34 +3,32 @@
 // diamond drive, undo / redo, the pairs file, the refined solve against the
 // truth, cancelling, the automatic mode against the CLI, and a noisy IMU
 // refused.
-#include "ui/main_window.h"
-
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
-
-#include <fstream>
 
 #include <QAction>
 #include <QApplication>
 #include <QComboBox>
 #include <QDir>
+#include <QDoubleSpinBox>
 #include <QElapsedTimer>
-#include <QFileInfo>
 #include <QFile>
+#include <QFileInfo>
 #include <QImage>
 #include <QLineEdit>
 #include <QProcess>
 #include <QPushButton>
-#include <QDoubleSpinBox>
 #include <QSettings>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTest>
 #include <QThread>
 #include <QTimer>
+#include <QUndoGroup>
 #include <QUndoStack>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 
@@ -40,9 +38,10 @@
 #include "core/session/session.h"
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/link/qt_transport.h"
-#include "tests/testing/run_command.h"
 #include "tests/testing/event_loop_turns.h"
+#include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
+#include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
@@ -222,14 +221,14 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   }
   // Undo takes back the last pick, redo restores it; delete is undoable.
   const auto picked = panel->pair_points();
-  window_->undo_stack()->undo();
+  window_->undo_group()->undo();
   EXPECT_EQ(panel->pairs().size(), 3u);
   EXPECT_EQ(panel->pair_count(), 4);  // The last pair is waiting for its B again.
-  window_->undo_stack()->redo();
+  window_->undo_group()->redo();
   ASSERT_EQ(panel->pairs().size(), 4u);
   panel->DeletePair(1);
   EXPECT_EQ(panel->pairs().size(), 3u);
-  window_->undo_stack()->undo();
+  window_->undo_group()->undo();
   ASSERT_EQ(panel->pairs().size(), 4u);
   EXPECT_EQ(panel->pair_points()[1].b, picked[1].b);
   QString error;

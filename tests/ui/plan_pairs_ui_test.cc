@@ -39,12 +39,12 @@
 #include <QTest>
 #include <QToolButton>
 #include <QTreeWidget>
+#include <QUndoGroup>
 #include <QUndoStack>
 #include <QXmlStreamReader>
 #include <algorithm>
 #include <cmath>
 #include <random>
-
 
 #include "core/project/project.h"
 #include "core/scenario/scenario.h"
@@ -473,7 +473,7 @@ TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
   OpenAndLoad(MakeProject("pairs"));
   ProjectPanel* panel = project()->panel();
   PairPicking* picking = project()->pair_picking();
-  const int window_commands = window_->undo_stack()->count();
+  const int window_commands = project()->undo_stack()->count();
   panel->SelectSession("c");
   ASSERT_EQ(panel->reference_box()->currentText(), "a");
   ASSERT_TRUE(panel->pick_button()->isEnabled());
@@ -526,12 +526,15 @@ TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
     EXPECT_EQ(panel->pair_box()->align_button()->isEnabled(), k + 1 >= 3);
   }
   EXPECT_EQ(panel->pair_box()->list()->topLevelItemCount(), 4);
-  // A fifth pick in c, undone by Ctrl+Z (the picks' own undo, not the window's).
+  // A fifth pick in c, undone by Ctrl+Z (the picks' own undo, not the
+  // project's), which is what Edit > Undo offers while picking.
   window_->PointPicked(truth.in_c[0]);
   ASSERT_EQ(picking->picks().size(), 5u);
+  EXPECT_EQ(window_->undo_group()->activeStack(), picking->undo_stack());
+  EXPECT_EQ(window_->undo_group()->undoText(), "pick 5 in 'c'");
   QTest::keyClick(window_->view(), Qt::Key_Z, Qt::ControlModifier);
   EXPECT_EQ(picking->picks().size(), 4u);
-  EXPECT_EQ(window_->undo_stack()->count(), window_commands);
+  EXPECT_EQ(project()->undo_stack()->count(), window_commands);
   // And by the button.
   window_->PointPicked(truth.in_c[1]);
   QTest::mouseClick(panel->pair_box()->undo_button(), Qt::LeftButton);
@@ -566,11 +569,13 @@ TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
   EXPECT_EQ(c.registration.reference, "a");
   EXPECT_EQ(c.registration.pairs.size(), 4u);
   EXPECT_NE(panel->item("c")->text(1).indexOf("pairs+icp to a"), -1);
-  // One undoable edit: undone, c is unplaced again; redone, placed.
-  EXPECT_EQ(window_->undo_stack()->count(), window_commands + 1);
-  window_->undo_stack()->undo();
+  // One undoable edit: undone, c is unplaced again; redone, placed. The
+  // mode's picks are gone from Edit > Undo.
+  EXPECT_EQ(project()->undo_stack()->count(), window_commands + 1);
+  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
+  window_->undo_group()->undo();
   EXPECT_FALSE(project()->document()->project().sessions[2].project_from_session.has_value());
-  window_->undo_stack()->redo();
+  window_->undo_group()->redo();
   EXPECT_TRUE(project()->document()->project().sessions[2].project_from_session.has_value());
   WaitFor([&] { return !project()->busy(); }, 60000);
   EXPECT_EQ(layer->drawn_sessions(), (std::vector<std::string>{"a", "c"}));
@@ -579,7 +584,7 @@ TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
 TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
   OpenAndLoad(MakeProject("escape"));
   const std::string before = ProjectToJson(project()->document()->project());
-  const int commands = window_->undo_stack()->count();
+  const int commands = project()->undo_stack()->count();
   PairPicking* picking = project()->pair_picking();
   ASSERT_TRUE(picking->Start("c", "a"));
   Turns([&] { return !project()->busy(); }, 60000);
@@ -594,7 +599,7 @@ TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
   EXPECT_FALSE(picking->active());
   EXPECT_TRUE(picking->picks().empty());
   EXPECT_EQ(ProjectToJson(project()->document()->project()), before);
-  EXPECT_EQ(window_->undo_stack()->count(), commands);
+  EXPECT_EQ(project()->undo_stack()->count(), commands);
   EXPECT_FALSE(window_->isWindowModified());
   EXPECT_EQ(project()->layer()->drawn_sessions(), std::vector<std::string>{"a"});  // The preview is gone.
   EXPECT_FALSE(project()->panel()->pair_box()->isVisible());

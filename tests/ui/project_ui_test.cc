@@ -21,6 +21,7 @@
 #include <QPushButton>
 #include <QTest>
 #include <QTreeWidget>
+#include <QUndoGroup>
 #include <QUndoStack>
 #include <algorithm>
 #include <cmath>
@@ -34,6 +35,7 @@
 #include "ui/project/project_controller.h"
 #include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
+#include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -107,13 +109,13 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   EXPECT_EQ(panel->item("c")->text(1), "not placed");
 
   // Hide a by its check box: an undoable edit that marks the project modified.
-  const int commands = window_->undo_stack()->count();
+  const int commands = project()->undo_stack()->count();
   panel->item("a")->setCheckState(0, Qt::Unchecked);
   EXPECT_TRUE(layer->drawn_sessions().empty());
   EXPECT_FALSE(project()->document()->project().sessions[0].visible);
   EXPECT_TRUE(window_->isWindowModified());
-  EXPECT_EQ(window_->undo_stack()->count(), commands + 1);
-  window_->undo_stack()->undo();
+  EXPECT_EQ(project()->undo_stack()->count(), commands + 1);
+  window_->undo_group()->undo();
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
   EXPECT_EQ(panel->item("a")->checkState(0), Qt::Checked);
   EXPECT_FALSE(window_->isWindowModified());  // Back to what the file holds.
@@ -121,7 +123,7 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   // A colour: the lookup table's entry for a's points, undone too.
   project()->SetColor("a", "#ff0000");
   EXPECT_EQ(layer->drawn_color("a"), QColor(255, 0, 0));
-  window_->undo_stack()->undo();
+  window_->undo_group()->undo();
   EXPECT_EQ(layer->drawn_color("a"), QColor(QString::fromStdString(project()->document()->project().sessions[0].color)));
 
   // Show only c (unplaced: nothing drawn), then undo.
@@ -130,17 +132,17 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
     if (a->text() == "Show Only This") a->trigger();
   }
   EXPECT_TRUE(layer->drawn_sessions().empty());
-  window_->undo_stack()->undo();
+  window_->undo_group()->undo();
   EXPECT_EQ(layer->drawn_sessions(), std::vector<std::string>{"a"});
 
   // Closed, then opened again from File > Open Recent Project. The closed
   // project's edits go with it: they would undo nothing.
   project()->SetColor("a", "#00ff00");
-  EXPECT_TRUE(window_->undo_stack()->canUndo());
+  EXPECT_TRUE(window_->undo_group()->canUndo());
   ASSERT_TRUE(project()->CloseProject());
   EXPECT_TRUE(layer->drawn_sessions().empty());
-  EXPECT_EQ(window_->undo_stack()->count(), 0);
-  EXPECT_FALSE(window_->undo_stack()->canUndo());
+  EXPECT_EQ(project()->undo_stack()->count(), 0);
+  EXPECT_FALSE(window_->undo_group()->canUndo());
   EXPECT_EQ(window_->windowTitle().indexOf("toggle"), -1);
   QAction* recent = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {
@@ -240,10 +242,10 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   EXPECT_TRUE(window_->isWindowModified());
 
   // Undone: b is not placed (nor drawn); redone: placed again; then saved.
-  window_->undo_stack()->undo();
+  window_->undo_group()->undo();
   EXPECT_FALSE(project()->document()->project().sessions[1].project_from_session.has_value());
   EXPECT_EQ(project()->layer()->drawn_sessions(), std::vector<std::string>{"a"});
-  window_->undo_stack()->redo();
+  window_->undo_group()->redo();
   ASSERT_TRUE(project()->document()->project().sessions[1].project_from_session.has_value());
   ASSERT_TRUE(project()->SaveProject());
   EXPECT_FALSE(window_->isWindowModified());
@@ -254,12 +256,59 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
             1e-9);
 }
 
+// Edit > Undo acts on the history edited last: the session's (a view edit
+// made before the project), the project's while it is edited, and the
+// session's again once the project is closed, whose edits go with it.
+// With one stack for both, the closed project's edits sat on top and the
+// first Undo after closing did nothing visible.
+TEST_F(ProjectUiTest, EditUndoFollowsTheHistoryEditedLastAndOutlivesAClosedProject) {
+  QAction* undo = nullptr;
+  QAction* time = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->menu() == nullptr) continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->shortcut() == QKeySequence(QKeySequence::Undo)) undo = b;
+      if (b->menu() == nullptr) continue;
+      for (QAction* c : b->menu()->actions()) {
+        if (c->text() == "&Time") time = c;
+      }
+    }
+  }
+  ASSERT_NE(undo, nullptr);
+  ASSERT_NE(time, nullptr);
+  EXPECT_FALSE(undo->isEnabled());
+  time->trigger();  // View > Colour by > Time: the session's history.
+  EXPECT_EQ(window_->view()->color_mode(), CloudView::ColorMode::kTime);
+  EXPECT_EQ(undo->text(), "&Undo colour mode");
+
+  ASSERT_TRUE(project()->OpenProject(MakeProject("histories")));
+  TurnsWhileBusy(60000);
+  const std::string colour = project()->document()->project().sessions[0].color;
+  project()->SetColor("a", "#ff0000");
+  EXPECT_EQ(undo->text(), "&Undo colour of 'a'");
+  undo->trigger();
+  EXPECT_EQ(project()->document()->project().sessions[0].color, colour);
+  EXPECT_EQ(window_->view()->color_mode(), CloudView::ColorMode::kTime);  // Not the session's edit.
+  EXPECT_FALSE(undo->isEnabled());  // The project's history is at its start.
+  project()->SetVisible("a", false);
+  EXPECT_EQ(undo->text(), "&Undo hide 'a'");
+
+  // Closed: its history is gone, and Undo is the session's edit again.
+  ASSERT_TRUE(project()->CloseProject());
+  EXPECT_EQ(project()->undo_stack()->count(), 0);
+  ASSERT_TRUE(undo->isEnabled());
+  EXPECT_EQ(undo->text(), "&Undo colour mode");
+  undo->trigger();
+  EXPECT_EQ(window_->view()->color_mode(), CloudView::ColorMode::kHeight);
+  EXPECT_FALSE(undo->isEnabled());
+}
+
 TEST_F(ProjectUiTest, RefusalShowsTheReasonAndChangesNothing) {
   const QString file = MakeProject("refuse");
   ASSERT_TRUE(project()->OpenProject(file));
   TurnsWhileBusy(60000);
   const std::string before = ProjectToJson(project()->document()->project());
-  const int commands = window_->undo_stack()->count();
+  const int commands = project()->undo_stack()->count();
   ProjectPanel* panel = project()->panel();
   // c drives the bare corridor: the walls leave the translation along it free.
   bool finished = false, placed = true;
@@ -281,7 +330,7 @@ TEST_F(ProjectUiTest, RefusalShowsTheReasonAndChangesNothing) {
   EXPECT_NE(window_->last_error().indexOf("corridor"), -1) << window_->last_error().toStdString();
   EXPECT_NE(panel->status_label()->text().indexOf("corridor"), -1);
   EXPECT_EQ(ProjectToJson(project()->document()->project()), before);
-  EXPECT_EQ(window_->undo_stack()->count(), commands);
+  EXPECT_EQ(project()->undo_stack()->count(), commands);
   EXPECT_FALSE(window_->isWindowModified());
   EXPECT_EQ(panel->item("c")->text(1), "not placed");
 }

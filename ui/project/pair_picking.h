@@ -11,12 +11,13 @@
 //   Align(hold)   the controller's Align with the pairs (coarse by pairs,
 //                 then ICP; `hold` keeps a corridor's free direction at the
 //                 pairs' pose instead of refusing). A placement is one
-//                 undoable edit on the window's stack and ends the mode; a
+//                 undoable edit on the project's stack and ends the mode; a
 //                 refusal keeps the picks to mend.
 //
-// The picks have their own QUndoStack: Ctrl+Z / Ctrl+Shift+Z undo and redo
-// a pick while the mode is on (the keys are taken before the Edit menu's
-// shortcuts), and the window's stack never holds picks of a mode that has
+// The picks have their own QUndoStack, the window's active history while
+// the mode is on (UndoRouter): Ctrl+Z / Ctrl+Shift+Z undo and redo a pick
+// (the keys are taken before the Edit menu's shortcuts, which could act on
+// another history by then), and no history holds picks of a mode that has
 // ended. Esc cancels the mode and leaves the project as it was. The view
 // shows each pair's two points numbered: in the session yellow, in the
 // reference cyan, the pick waiting for its partner larger.

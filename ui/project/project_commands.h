@@ -1,8 +1,9 @@
 // Undoable project edits (visibility, colour, adding and removing a
-// session, a placement by alignment) on the main window's QUndoStack:
-// each holds the project before and after, which are small (no points).
-// A command of a project closed since (another generation) becomes
-// obsolete instead of editing the project open now.
+// session, a placement by alignment) on the project's QUndoStack: each
+// holds the project before and after, which are small (no points). The
+// stack is cleared whenever the document's generation changes; should a
+// command of an older generation still be reached, it becomes obsolete
+// instead of editing the project open now.
 //
 // GUI thread only.
 #ifndef SWEEPSCAN_UI_PROJECT_PROJECT_COMMANDS_H_

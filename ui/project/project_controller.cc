@@ -41,12 +41,11 @@ QString PlacedText(const std::string& id, const hardware::RegistrationAttempt& a
 
 }  // namespace
 
-ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStack* undo,
+ProjectController::ProjectController(QWidget* window, CloudView* view,
                                      std::function<void(const QString&, const QString&)> show_error,
                                      std::function<bool()> interactive)
     : window_(window),
       view_(view),
-      undo_(undo),
       show_error_(std::move(show_error)),
       interactive_(std::move(interactive)),
       layer_(std::make_unique<ProjectLayer>(view)) {
@@ -70,12 +69,12 @@ ProjectController::ProjectController(QWidget* window, CloudView* view, QUndoStac
     emit cloudsChanged();
     shown_pending_ = document_.is_open();
     UpdateActions();
-    ForgetStaleEdits();
+    undo_.clear();
   });
   connect(&document_, &ProjectDocument::changed, this, &ProjectController::OnChanged);
   connect(&document_, &ProjectDocument::modifiedChanged, this, &ProjectController::titleChanged);
   connect(&document_, &ProjectDocument::renamed, this, &ProjectController::titleChanged);
-  connect(&document_, &ProjectDocument::renamed, this, &ProjectController::ForgetStaleEdits);
+  connect(&document_, &ProjectDocument::renamed, &undo_, &QUndoStack::clear);
   connect(&jobs_, &ProjectJobs::progress, panel_, &ProjectPanel::ShowProgress);
   connect(&jobs_, &ProjectJobs::finished, panel_, [this] {
     panel_->ShowProgress(QString(), -2.0);
@@ -216,21 +215,8 @@ bool ProjectController::CloseProject() {
   return true;
 }
 
-// An older generation's edits (another project, or this one before Save
-// As) would undo nothing. When every command on the window's stack is such
-// an edit, the usual case while working on a project, the history goes with
-// the project (Edit > Undo offered "Undo hide session a" and did nothing).
-// Mixed with the calibration panel's picks the stack stays as it is, and
-// each stale edit drops itself when it is reached (ProjectEditCommand).
-void ProjectController::ForgetStaleEdits() {
-  for (int i = 0; i < undo_->count(); ++i) {
-    if (dynamic_cast<const ProjectEditCommand*>(undo_->command(i)) == nullptr) return;
-  }
-  undo_->clear();
-}
-
 void ProjectController::Push(const Project& after, const QString& text) {
-  undo_->push(new ProjectEditCommand(&document_, after, text));
+  undo_.push(new ProjectEditCommand(&document_, after, text));
 }
 
 void ProjectController::SetVisible(const std::string& id, bool visible) {

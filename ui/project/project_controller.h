@@ -3,8 +3,10 @@
 // Project panel, the project's sessions in the cloud view, and alignment.
 //
 // * Edits (visibility, colour, adding, removing, a placement) are
-//   ProjectEditCommands on the main window's QUndoStack; the document says
-//   whether the project differs from its file (the window's [*]).
+//   ProjectEditCommands on the project's own QUndoStack, one of the
+//   window's histories (UndoRouter) and cleared with the project it belongs
+//   to; the document says whether the project differs from its file (the
+//   window's [*]).
 // * Clouds are built on a job thread (ProjectJobs: progress and cancel in
 //   the panel), each session once per folder and calibration, and kept
 //   while the project is open; the view draws the placed, visible ones
@@ -24,6 +26,7 @@
 
 #include <QObject>
 #include <QString>
+#include <QUndoStack>
 #include <functional>
 #include <map>
 #include <memory>
@@ -37,7 +40,6 @@
 class QAction;
 class QMenu;
 class QTimer;
-class QUndoStack;
 class QWidget;
 
 namespace sweepscan::ui {
@@ -52,7 +54,7 @@ class ProjectController : public QObject {
  public:
   // `show_error(title, message)` reports failures (a message box when the
   // window is interactive); `interactive()` says whether dialogs may open.
-  ProjectController(QWidget* window, CloudView* view, QUndoStack* undo,
+  ProjectController(QWidget* window, CloudView* view,
                     std::function<void(const QString&, const QString&)> show_error,
                     std::function<bool()> interactive);
   ~ProjectController() override;
@@ -61,6 +63,9 @@ class ProjectController : public QObject {
   ProjectPanel* panel() const { return panel_; }
   const ProjectLayer* layer() const { return layer_.get(); }
   ProjectJobs* jobs() { return &jobs_; }
+  // The project's edits; empty after Open, New, Close and Save As (older
+  // edits would hold another project, or the old file's relative paths).
+  QUndoStack* undo_stack() { return &undo_; }
   // File menu: New Project…, Open Project…, Open Recent Project, Save
   // Project, Save Project As…, Add Session to Project…, Close Project.
   void AddFileMenuActions(QMenu* file);
@@ -113,7 +118,6 @@ class ProjectController : public QObject {
 
  private:
   void Push(const Project& after, const QString& text);
-  void ForgetStaleEdits();
   void OnChanged();
   void Show();  // The layer from the project and the clouds; pumps what is new.
   // Builds the clouds of placed, visible sessions not built yet (one job).
@@ -128,7 +132,7 @@ class ProjectController : public QObject {
 
   QWidget* window_;
   CloudView* view_;
-  QUndoStack* undo_;
+  QUndoStack undo_;
   std::function<void(const QString&, const QString&)> show_error_;
   std::function<bool()> interactive_;
   ProjectDocument document_;
