@@ -544,7 +544,9 @@ Workspace::OpenedCircle Workspace::FindCircle(const SensorLog& log, const Pose2d
   if (!poses) {
     PoseEstimatorOptions pose;
     pose.initial_pose = start;
-    poses = std::make_shared<const PoseBuffer>(EstimatePoses(log, pose, geometry).poses());
+    PoseEstimator estimated = EstimatePoses(log, pose, geometry);
+    poses =
+        std::make_shared<const PoseBuffer>(std::move(*estimated.mutable_poses()));  // not copied
   }
   std::string why;
   circle.ok = FitCircleDrive(*poses, &circle.circle, &why);
