@@ -17,14 +17,11 @@
 #include "app/cli_project.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
+#include "core/common/file_suffix.h"
 #include "core/session/session.h"
 
 namespace sweepscan::app {
 namespace {
-
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // The sessions to write: placed and visible, or those --sessions names.
 int SelectSessions(const Args& args, const Project& project, std::vector<size_t>* chosen) {
@@ -96,7 +93,7 @@ int ProjectPositions(const Args& args, const std::string& file, std::vector<Eige
 int RunProjectExport(const Args& args) {
   const std::string file = args.positional()[0];
   const std::string out = args.Get("out");
-  if (!EndsWith(out, ".las") && !EndsWith(out, ".ply") && !EndsWith(out, ".pcd")) {
+  if (!HasFileSuffix(out, ".las") && !HasFileSuffix(out, ".ply") && !HasFileSuffix(out, ".pcd")) {
     PrintError("project export needs --out FILE.las|FILE.ply|FILE.pcd");
     return kExitBadInput;
   }
@@ -109,7 +106,7 @@ int RunProjectExport(const Args& args) {
   if (const int code = SelectSessions(args, project, &chosen); code != kExitOk) return code;
   nlohmann::json report = {{"project", file}, {"out", out}, {"sessions", nlohmann::json::array()}};
 
-  if (!EndsWith(out, ".las")) {
+  if (!HasFileSuffix(out, ".las")) {
     std::vector<CloudPoint> all;
     for (size_t i : chosen) {
       hardware::SessionCloud cloud;

@@ -18,6 +18,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
 #include "core/cloud/reconstruct.h"
+#include "core/common/file_suffix.h"
 #include "core/registration/loop_closure.h"
 #include "core/sfm/wheeled.h"
 #include "hardware/station/session_stream.h"
@@ -53,12 +54,6 @@ const char* const kReconstructUsage =
 
 namespace {
 
-bool HasSuffix(const std::string& path, const std::string& suffix) {
-  return path.size() >= suffix.size() &&
-         std::equal(suffix.rbegin(), suffix.rend(), path.rbegin(),
-                    [](char s, char p) { return std::tolower(static_cast<unsigned char>(p)) == s; });
-}
-
 // LAS System Identifier (spec §2.4): the hardware for a robot's recording,
 // the operation otherwise (a simulation, an imported bag of unknown sensors).
 std::string LasSystemIdentifier(const SessionMeta& meta) {
@@ -75,7 +70,10 @@ std::string LasSystemIdentifier(const SessionMeta& meta) {
 class CloudOutput {
  public:
   CloudOutput(std::string session, std::string path, const SessionMeta& meta)
-      : session_(std::move(session)), path_(std::move(path)), meta_(meta), las_(HasSuffix(path_, ".las")) {}
+      : session_(std::move(session)),
+        path_(std::move(path)),
+        meta_(meta),
+        las_(HasFileSuffix(path_, ".las")) {}
 
   // The box for LAS (ignored for PLY / PCD); before the first Append.
   void SetBox(const double min[3], const double max[3]) {
@@ -153,7 +151,7 @@ class CloudOutput {
 // and PCD by SaveCloud (their header without the streamed padding line).
 Status WriteCloud(const std::string& session, const std::string& path, const std::vector<CloudPoint>& points,
                   const SessionMeta& meta, nlohmann::json* las) {
-  if (!HasSuffix(path, ".las")) return SaveCloud(path, points);
+  if (!HasFileSuffix(path, ".las")) return SaveCloud(path, points);
   CloudOutput out(session, path, meta);
   LasExtent extent;
   extent.Add(points.data(), points.size());
@@ -279,7 +277,7 @@ int StreamToFile(const Args& args, ReconstructionOptions options) {
 }  // namespace
 
 bool IsCloudFile(const std::string& path) {
-  return HasSuffix(path, ".las") || HasSuffix(path, ".ply") || HasSuffix(path, ".pcd");
+  return HasFileSuffix(path, ".las") || HasFileSuffix(path, ".ply") || HasFileSuffix(path, ".pcd");
 }
 
 int ReconstructToFile(const Args& args) {

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "core/common/checked_file.h"
+#include "core/common/file_suffix.h"
 
 namespace sweepscan {
 struct EIGEN_ALIGN16 PclSweepPoint {
@@ -38,12 +39,6 @@ POINT_CLOUD_REGISTER_POINT_STRUCT(sweepscan::PclSweepPoint,
 
 namespace sweepscan {
 namespace {
-
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         std::equal(suffix.rbegin(), suffix.rend(), s.rbegin(),
-                    [](char a, char b) { return std::tolower(a) == b; });
-}
 
 // PCL's PLY reader warns on stderr about the "camera" element its own writer
 // adds; errors are reported through our Status instead.
@@ -346,8 +341,8 @@ Status ValidatePcd(const std::string& path, uint64_t file_size) {
 }  // namespace
 
 Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points) {
-  const bool ply = EndsWith(path, ".ply");
-  if (!ply && !EndsWith(path, ".pcd")) {
+  const bool ply = HasFileSuffix(path, ".ply");
+  if (!ply && !HasFileSuffix(path, ".pcd")) {
     return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
   }
   // Written by hand through the checked writer: PCL's PLY writer reports
@@ -371,8 +366,8 @@ Status SaveCloud(const std::string& path, const std::vector<CloudPoint>& points)
 }
 
 Status CloudFileWriter::Open(const std::string& path) {
-  ply_ = EndsWith(path, ".ply");
-  if (!ply_ && !EndsWith(path, ".pcd")) {
+  ply_ = HasFileSuffix(path, ".ply");
+  if (!ply_ && !HasFileSuffix(path, ".pcd")) {
     return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
   }
   points_ = 0;
@@ -407,8 +402,8 @@ Status ValidateCloudFile(const std::string& path) {
   uint64_t size = 0;
   const Status regular = CheckRegularFile(path, &size);
   if (!regular.ok()) return regular;
-  if (EndsWith(path, ".ply")) return ValidatePly(path, size);
-  if (EndsWith(path, ".pcd")) return ValidatePcd(path, size);
+  if (HasFileSuffix(path, ".ply")) return ValidatePly(path, size);
+  if (HasFileSuffix(path, ".pcd")) return ValidatePcd(path, size);
   return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
 }
 
@@ -420,7 +415,7 @@ Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
   QuietPcl();
   int rc = -1;
   try {
-    if (EndsWith(path, ".ply")) {
+    if (HasFileSuffix(path, ".ply")) {
       rc = pcl::io::loadPLYFile(path, *cloud);
     } else {
       rc = pcl::io::loadPCDFile(path, *cloud);

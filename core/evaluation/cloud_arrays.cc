@@ -6,6 +6,8 @@
 #include <memory>
 #include <sstream>
 
+#include "core/common/file_suffix.h"
+
 namespace sweepscan {
 namespace {
 
@@ -186,21 +188,12 @@ CloudReadResult ReadPcd(std::FILE* f, const std::string& path, std::vector<Eigen
   return CloudReadResult::kUnsupported;
 }
 
-bool EndsWith(const std::string& s, const char* suffix) {
-  const size_t n = std::strlen(suffix);
-  if (s.size() < n) return false;
-  for (size_t i = 0; i < n; ++i) {
-    if (std::tolower(static_cast<unsigned char>(s[s.size() - n + i])) != suffix[i]) return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 CloudReadResult ReadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points,
                                    std::string* error) {
-  const bool ply = EndsWith(path, ".ply");
-  if (!ply && !EndsWith(path, ".pcd")) return CloudReadResult::kUnsupported;
+  const bool ply = HasFileSuffix(path, ".ply");
+  if (!ply && !HasFileSuffix(path, ".pcd")) return CloudReadResult::kUnsupported;
   File f(std::fopen(path.c_str(), "rb"));
   if (!f) {
     *error = path + ": cannot open for reading";

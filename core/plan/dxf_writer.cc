@@ -2,14 +2,15 @@
 // reference: pairs of lines "group code" / "value". The subset (HEADER,
 // TABLES with LTYPE, STYLE and LAYER, ENTITIES with LINE, POINT, TEXT and
 // POLYLINE / VERTEX / SEQEND, EOF) is specified field by field in docs/plan-formats.md, "DXF".
-// No handles ($HANDLING 0, R12 allows it), no BLOCKS, no subclass markers
-// (those are R13's).
+// No handles (no $HANDLING variable: R12 then has none), no BLOCKS, no
+// subclass markers (those are R13's).
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "core/common/checked_file.h"
 #include "core/common/format_number.h"
+#include "core/plan/axis_ticks.h"
 #include "core/plan/plan_writers.h"
 
 namespace sweepscan::plan {
@@ -247,15 +248,16 @@ Status SectionDxf(const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& o, 
   lo.y() = std::min(lo.y(), 0.0);
   Dxf d;
   Begin(&d, lo, hi, {{"0", 7}, {kDxfLayerSection, 8}, {kDxfLayerAxes, 1}}, o.text_height_m);
-  // The axes: the ground line z = 0, a tick and a label every metre along s
-  // and up z (at s = lo.x), as the SVG draws them.
+  // The axes: the ground line z = 0, a tick and a label every metre (or
+  // AxisTicks' coarser step) along s and up z (at s = lo.x), as the SVG
+  // draws them.
   d.Line(kDxfLayerAxes, {lo.x(), 0.0}, {hi.x(), 0.0});
   const double tick = 0.075;
-  for (double m = std::ceil(lo.x()); m <= hi.x(); m += 1.0) {
+  for (const double m : AxisTicks(lo.x(), hi.x())) {
     d.Line(kDxfLayerAxes, {m, -tick}, {m, tick});
     d.Text(kDxfLayerAxes, {m, -tick - 1.2 * o.text_height_m}, o.text_height_m, 0.0, FormatNumber(m));
   }
-  for (double z = std::ceil(lo.y()); z <= hi.y(); z += 1.0) {
+  for (const double z : AxisTicks(lo.y(), hi.y())) {
     d.Line(kDxfLayerAxes, {lo.x() - tick, z}, {lo.x() + tick, z});
     d.Text(kDxfLayerAxes, {lo.x() - tick - 1.5 * o.text_height_m, z - 0.4 * o.text_height_m}, o.text_height_m, 0.0,
            FormatNumber(z));

@@ -41,7 +41,8 @@ Status PlanSvg(const FloorPlan& plan, const SvgOptions& options, std::string* sv
 Status WritePlanSvg(const std::string& path, const FloorPlan& plan, const SvgOptions& options);
 
 // A vertical section's points (s along the line, z), drawn at the same
-// scale with z up, a ground line at z = 0 and s, z ticks every metre.
+// scale with z up, a ground line at z = 0 and s, z ticks every metre (a
+// coarser step over a long extent: axis_ticks.h).
 Status SectionSvg(const std::vector<Eigen::Vector2d>& s_z, const SvgOptions& options, std::string* svg);
 Status WriteSectionSvg(const std::string& path, const std::vector<Eigen::Vector2d>& s_z, const SvgOptions& options);
 
@@ -64,7 +65,8 @@ Status WritePlanDxf(const std::string& path, const FloorPlan& plan, const DxfOpt
 
 // A vertical section's points (s along the line, z) as DXF R12 in metres
 // (x = s, y = z): layers SECTION (a POINT per point) and AXES (the ground
-// line z = 0, a tick and a label every metre along s and up z).
+// line z = 0, a tick and a label every metre along s and up z, or
+// axis_ticks.h's coarser step).
 Status SectionDxf(const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& options, std::string* dxf);
 Status WriteSectionDxf(const std::string& path, const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& options);
 

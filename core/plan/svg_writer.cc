@@ -8,6 +8,7 @@
 
 #include "core/common/checked_file.h"
 #include "core/common/format_number.h"
+#include "core/plan/axis_ticks.h"
 #include "core/plan/plan_writers.h"
 
 namespace sweepscan::plan {
@@ -28,6 +29,8 @@ std::string Escape(const std::string& s) {
       out += "&gt;";
     } else if (c == '"') {
       out += "&quot;";
+    } else if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n' && c != '\r') {
+      out += '?';  // XML 1.0 has no way to write these (a folder name may hold one).
     } else {
       out += c;
     }
@@ -222,11 +225,11 @@ Status SectionSvg(const std::vector<Eigen::Vector2d>& s_z, const SvgOptions& o, 
   s += "</g>\n<g id=\"axes\" stroke=\"#c02020\" stroke-width=\"0.18\" fill=\"#c02020\" font-family=\"sans-serif\">\n";
   s += p.Line({p.min.x(), 0.0}, {p.max.x(), 0.0});
   const Eigen::Vector2d tick(0.0, 1.5 / p.k);
-  for (double m = std::ceil(p.min.x()); m <= p.max.x(); m += 1.0) {
+  for (const double m : AxisTicks(p.min.x(), p.max.x())) {
     s += p.Line(Eigen::Vector2d(m, 0.0) - tick, Eigen::Vector2d(m, 0.0) + tick);
     s += Label(p, {m - 0.5, 0.0}, {m + 0.5, 0.0}, Num(m), o.text_height_mm, -2.0 - o.text_height_mm);
   }
-  for (double z = std::ceil(p.min.y()); z <= p.max.y(); z += 1.0) {
+  for (const double z : AxisTicks(p.min.y(), p.max.y())) {
     const Eigen::Vector2d at(p.min.x(), z), side(1.5 / p.k, 0.0);
     s += p.Line(at - side, at + side);
     s += "<text x=\"" + Num(p.X(p.min.x()) - 2.5) + "\" y=\"" + Num(p.Y(z) + 0.35 * o.text_height_mm) +

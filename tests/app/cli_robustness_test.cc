@@ -185,6 +185,20 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
   ExpectOneErrorLine(r, out + "/csv/lidar.csv: write failed: File too large");
   EXPECT_EQ(LsA(out), "csv\n");  // No cloud, no temporary.
   EXPECT_EQ(LsA(out + "/csv"), "");
+  // The floor plan's drawings (60-70 kB of the lab) over older ones: those
+  // stay as they were.
+  for (const char* drawing : {"--svg plan.svg", "--dxf plan.dxf"}) {
+    const std::string name = std::string(drawing).substr(6);
+    sweepscan::testing::ShellOrFail("cd '" + out + "' && echo older > " + name);
+    const CommandRun p = CliWithFullDisk("plan --scenario " + Scenario("lab") + " " +
+                                             std::string(drawing).substr(0, 6) + out + "/" + name,
+                                         16);
+    EXPECT_EQ(p.code, 1) << p.out;
+    ExpectOneErrorLine(p, out + "/" + name + ": write failed: File too large");
+    EXPECT_EQ(sweepscan::testing::RunCommand("cat '" + out + "/" + name + "'").out, "older\n");
+    sweepscan::testing::ShellOrFail("rm '" + out + "/" + name + "'");
+  }
+  EXPECT_EQ(LsA(out), "csv\n");  // No temporary either.
 }
 
 TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/plan/axis_ticks.h"
 #include "core/plan/floor_plan.h"
 #include "tests/testing/run_command.h"
 #include "tests/testing/worlds.h"
@@ -260,9 +261,76 @@ TEST(PlanWritersRefusalTest, BadOptionsAndEmptySections) {
   plan.faces.push_back(WallFace());
   plan.faces.back().b = {NAN, 0.0};
   EXPECT_FALSE(PlanDxf(plan, DxfOptions(), &out).ok());
-  // A failed write leaves nothing under the name.
+  // A file that cannot be opened is an error (a write failing half-way:
+  // CliRobustnessTest.FullDiskIsExitOneAndLeavesNoFileBehind).
   const std::string missing = kDir + "/no/such/folder/plan.dxf";
   EXPECT_FALSE(WritePlanDxf(missing, FloorPlan(), DxfOptions()).ok());
+}
+
+TEST(AxisTicksTest, EveryMetreOrACoarserStepNeverMinusZero) {
+  // A floor just below zero: its tick is 0, not -0 (the DXF labelled it "-0").
+  const std::vector<double> room = AxisTicks(-0.004, 2.6);
+  ASSERT_EQ(room, (std::vector<double>{0.0, 1.0, 2.0}));
+  EXPECT_FALSE(std::signbit(room[0]));
+  EXPECT_EQ(AxisTicks(-2.5, -0.5), (std::vector<double>{-2.0, -1.0}));
+  EXPECT_EQ(AxisTicks(0.2, 0.8), std::vector<double>{});
+  EXPECT_EQ(AxisTicks(0.0, 49.0).size(), 50u);             // 50 ticks: still every metre
+  const std::vector<double> fifty = AxisTicks(0.0, 50.0);  // 51 would be too many
+  EXPECT_EQ(fifty, (std::vector<double>{0.0,  2.0,  4.0,  6.0,  8.0,  10.0, 12.0, 14.0, 16.0,
+                                        18.0, 20.0, 22.0, 24.0, 26.0, 28.0, 30.0, 32.0, 34.0,
+                                        36.0, 38.0, 40.0, 42.0, 44.0, 46.0, 48.0, 50.0}));
+  // A stray point 100 km up: every 5 km (2 km would be 51 ticks).
+  const std::vector<double> stray = AxisTicks(0.0, 1e5);
+  ASSERT_EQ(stray.size(), 21u);
+  EXPECT_EQ(stray[1], 5000.0);
+  EXPECT_EQ(stray.back(), 1e5);
+  // Where a metre is below the doubles' spacing: bounded, and it ends.
+  EXPECT_LE(AxisTicks(1e17, 1e17 + 64).size(), static_cast<size_t>(kMaxAxisTicks));
+  EXPECT_LE(AxisTicks(-1e300, 1e300).size(), static_cast<size_t>(kMaxAxisTicks));
+  EXPECT_TRUE(AxisTicks(1.0, 0.0).empty());
+  EXPECT_TRUE(AxisTicks(0.0, INFINITY).empty());
+}
+
+// The scales' labels, from the DXF's TEXT entities (code 1 after TEXT).
+std::vector<std::string> DxfTexts(const std::string& dxf) {
+  std::vector<std::string> texts;
+  size_t at = 0;
+  while ((at = dxf.find("\n  0\nTEXT\n", at)) != std::string::npos) {
+    at += 10;
+    const size_t code = dxf.find("\n  1\n", at);
+    const size_t end = dxf.find('\n', code + 5);
+    texts.push_back(dxf.substr(code + 5, end - code - 5));
+  }
+  return texts;
+}
+
+TEST(PlanWritersRefusalTest, ASectionWithAStrayPointKeepsItsScalesShort) {
+  std::vector<Eigen::Vector2d> s_z;
+  for (int i = 0; i <= 400; ++i) s_z.emplace_back(0.01 * i, -0.004);  // floor noise below zero
+  for (int i = 0; i <= 250; ++i) s_z.emplace_back(4.0, 0.01 * i);     // a wall
+  std::string dxf, svg;
+  ASSERT_TRUE(SectionDxf(s_z, DxfOptions(), &dxf).ok());
+  EXPECT_EQ(DxfTexts(dxf), (std::vector<std::string>{"0", "1", "2", "3", "4", "0", "1", "2"}));
+  // One point 100 km up: a tick every 5 km up z, not one a metre (a 25 MB DXF).
+  s_z.emplace_back(2.0, 1e5);
+  ASSERT_TRUE(SectionDxf(s_z, DxfOptions(), &dxf).ok());
+  const std::vector<std::string> texts = DxfTexts(dxf);
+  EXPECT_EQ(texts.size(), 5u + 21u);
+  EXPECT_EQ(texts[6], "5000");
+  EXPECT_LT(dxf.size(), 200000u);
+  SvgOptions options;
+  options.scale = 1e6;  // a paper of sensible size for 100 km
+  ASSERT_TRUE(SectionSvg(s_z, options, &svg).ok());
+  EXPECT_LT(svg.size(), 200000u);
+}
+
+TEST(PlanWritersRefusalTest, AControlCharacterInATitleKeepsTheSvgWellFormed) {
+  SvgOptions options;
+  options.title = std::string("run\x01 <3> & \"more\"\tend");
+  std::string svg;
+  ASSERT_TRUE(SectionSvg({{0.0, 0.0}, {1.0, 1.0}}, options, &svg).ok());
+  EXPECT_EQ(svg.find('\x01'), std::string::npos);
+  EXPECT_NE(svg.find("run? &lt;3&gt; &amp; &quot;more&quot;\tend"), std::string::npos);
 }
 
 }  // namespace

@@ -164,6 +164,10 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   // the corridor is 2.0 m wide; the doors are 0.9 m.
   r = Cli("project export " + project + " --out " + P("unused.txt"));
   EXPECT_EQ(r.code, 2) << r.out;  // an unknown suffix is refused, nothing written
+  // A suffix in capitals is the same format, as for a session's export
+  // (it was refused with exit 2).
+  ASSERT_EQ(Cli("project export " + project + " --out " + P("FLOOR.LAS")).code, 0);
+  EXPECT_EQ(RunCommand("cmp " + P("floor.las") + " " + P("FLOOR.LAS")).code, 0);
   r = Cli("plan " + project + " --json --svg " + P("floor.svg") + " --dxf " + P("floor.dxf"));
   ASSERT_EQ(r.code, 0) << r.out;
   const nlohmann::json plan = nlohmann::json::parse(r.out);
