@@ -398,8 +398,14 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
       Deny(now, OldVersionReason(static_cast<uint8_t>(hello->protocol_version)), out);
       return;
     }
-    // Serial: the client may have opened the port after our Hello; say it again.
-    if (options_.hello_on_client_hello) SendGreeting(now, out);
+    // Serial: the client may have opened the port after our Hello; say it
+    // again. A Hello on a serial line is a client (re)starting: what was
+    // sent while it was away (a radio link down) went nowhere, so hold
+    // telemetry for its TelemetryResume as a new connection does.
+    if (options_.hello_on_client_hello) {
+      SendGreeting(now, out);
+      if (authenticated_) HoldTelemetry(now);
+    }
     return;
   }
   if (const auto* response = std::get_if<AuthResponse>(&payload)) {
@@ -547,8 +553,16 @@ void AgentCore::SendTelemetryPiece(Time now, const TelemetryBuffer::Piece& piece
   ++counters_.telemetry_frames_sent;
 }
 
+// A new client (a connection, or a serial client's Hello) gets each
+// device's first chunk marked as a break unless its TelemetryResume joins
+// what it is sent to what it holds (ReleaseTelemetry). Without a resume
+// (no buffer, an older client, or a resume that came after resume_wait)
+// the bytes read while the link was down never reach it, and the break is
+// what tells its decoder to restart and its recording that they are lost:
+// unmarked, a late resume lost the outage's data and the session said
+// "no data lost". On a fresh client's first bytes a break costs nothing.
 void AgentCore::HoldTelemetry(Time now) {
-  pending_break_.fill(false);
+  pending_break_.fill(true);
   if (!buffer_.enabled()) return;  // No buffer: live from the start, as before.
   telemetry_held_ = true;
   held_from_serial_ = buffer_.next_serial();
@@ -570,6 +584,8 @@ void AgentCore::ReleaseTelemetry(const TelemetryResume* resume, Time now, AgentO
       ++counters_.resume_breaks;
     }
   }
+  // The resume says what the client holds: the breaks are CollectAfter's.
+  pending_break_.fill(false);
   std::array<bool, 3> breaks{};
   buffer_.CollectAfter(*resume, held_from_serial_,
                        [&](const TelemetryBuffer::Piece& piece) {
@@ -611,9 +627,10 @@ void AgentCore::Tick(Time now, AgentOutput* out) {
   if (client_connected_ && !closing_ && handshake_ != nullptr) {
     HandleHandshakeState(handshake_->Tick(now, &out->to_client), now, out);
   }
-  // A client that never asks (an older workstation): live after resume_wait.
+  // A client that never asks (an older workstation): live after resume_wait,
+  // or half the buffer's time if shorter (held bytes wait in the buffer).
   if (telemetry_held_ && client_authenticated() && !closing_ &&
-      now - held_since_ >= options_.resume_wait) {
+      now - held_since_ >= std::min(options_.resume_wait, options_.telemetry_buffer / 2)) {
     ReleaseTelemetry(nullptr, now, out);
   }
 

@@ -104,13 +104,16 @@ struct AgentOptions {
   // Buffering across outages (docs/robot-agent.md): the last
   // `telemetry_buffer` of device bytes are kept (0 = none; at most 60 s) in
   // at most telemetry_buffer_max_bytes (0 = the default bound of
-  // telemetry_buffer.h, about 1.0 MB for 10 s), and a client that sends
-  // TelemetryResume gets what it missed. After a client is adopted its
-  // telemetry waits for its first command frame (at most resume_wait), so
-  // what it asks to be resent goes out before the live bytes.
+  // telemetry_buffer.h, at most 1.31 MB + 64 KiB for 10 s), and a client
+  // that sends TelemetryResume gets what it missed. After a client is
+  // adopted (or a serial client says Hello) its telemetry waits for its
+  // first command frame (at most resume_wait), so what it asks to be resent
+  // goes out before the live bytes. The wait only delays (the held bytes
+  // follow), so it is long enough for a round trip over a poor Wi-Fi link
+  // right after the handshake; a 1 s wait lost whole outages there.
   Duration telemetry_buffer = std::chrono::seconds(10);
   size_t telemetry_buffer_max_bytes = 0;
-  Duration resume_wait = std::chrono::seconds(1);
+  Duration resume_wait = std::chrono::seconds(5);
   // Nonce source; null = FillRandomBytes (/dev/urandom). Tests may inject one.
   std::function<bool(uint8_t*, size_t)> random_source;
 

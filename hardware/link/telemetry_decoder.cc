@@ -125,14 +125,16 @@ void TelemetryDecoder::AddTelemetry(const Telemetry& telemetry_in) {
         gaps_.back().late_bytes += t.bytes.size();
       }
     }
-    if (t.flags & kTelemetryBreak) {
+    if ((t.flags & kTelemetryBreak) && have_time_[d]) {
       // The agent says bytes of this device before these were lost: a frame
-      // cut there must not be spliced onto these bytes.
+      // cut there must not be spliced onto these bytes. (A break before the
+      // device's first bytes, as an agent marks a new client's first chunk
+      // when nothing joins it to bytes the client had, breaks nothing.)
       ++stats_.breaks;
       if (d == 0) x4_.Reset();
       if (d == 1) hi219_.Reset();
       if (d == 2) motor_.Reset();
-      if (!gaps_.empty() && have_time_[d]) {
+      if (!gaps_.empty()) {
         gaps_.back().data_lost_s[d] += std::max(0.0, ToSeconds(t.receive_time - last_time_[d]));
       }
     }

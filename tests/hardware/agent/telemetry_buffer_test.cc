@@ -74,16 +74,92 @@ TEST_F(BufferingAgentTest, TelemetryWaitsForTheClientsFirstCommandThenFlowsInOrd
   for (int i = 0; i < 8; ++i) {
     EXPECT_EQ(ChunkIndex(t[i]), i + 1);
     EXPECT_EQ(t[i].receive_time, Ms(10 * (i + 1)));
-    EXPECT_EQ(t[i].flags, 0) << "read after the client was adopted: neither late nor a break";
+    // Read after the client was adopted: not late. The first is a break: the
+    // client did not say what it holds (no TelemetryResume), so nothing
+    // joins these bytes to any it had.
+    EXPECT_EQ(t[i].flags, i == 0 ? kTelemetryBreak : 0) << i;
   }
 }
 
 TEST_F(BufferingAgentTest, AClientThatNeverAsksGetsLiveTelemetryAfterTheResumeWait) {
   ConnectAndAuthenticate(Ms(1));
-  ReadChunks(1, 99);  // 990 ms: still held (resume_wait 1 s from 1 ms).
+  ReadChunks(1, 499);  // 4 990 ms: still held (resume_wait 5 s from 1 ms).
   EXPECT_TRUE(h_.All<Telemetry>().empty());
-  ReadChunks(100, 101);
-  EXPECT_EQ(h_.All<Telemetry>().size(), 101u);
+  ReadChunks(500, 501);
+  EXPECT_EQ(h_.All<Telemetry>().size(), 501u);  // Held, not lost.
+}
+
+// A resume that comes after the wait (a round trip over a poor Wi-Fi link
+// right after the handshake) is refused: the agent has already sent the
+// live bytes, and the outage's could only follow them out of order. The
+// first live chunk says they are lost; it was unmarked, and the session
+// said "no data lost".
+TEST_F(BufferingAgentTest, AResumeAfterTheWaitIsRefusedAndTheOutageIsMarkedLost) {
+  ConnectAndAuthenticate(Ms(1));
+  h_.Send(Ms(2), Heartbeat{});
+  ReadChunks(1, 100);
+  h_.agent.OnClientDisconnected(Ms(1001), &h_.out);
+  h_.Collect();
+  ReadChunks(101, 400);  // 3 s away.
+  ConnectAndAuthenticate(Ms(4005));
+  const size_t mark = h_.received.size();
+  ReadChunks(401, 910);  // The wait ends at 9 005 ms.
+  TelemetryResume resume;
+  resume.devices[0] = {true, Ms(1000), 4};
+  h_.Send(Ms(9200), resume);
+  const auto t = TelemetrySince(mark);
+  ASSERT_EQ(t.size(), 510u);  // 401 .. 910: the live bytes since the connection.
+  EXPECT_EQ(ChunkIndex(t.front()), 401);
+  EXPECT_NE(t.front().flags & kTelemetryBreak, 0) << "101 .. 400 were lost";
+  for (size_t k = 1; k < t.size(); ++k) EXPECT_EQ(t[k].flags, 0) << k;
+  const auto acks = h_.All<CommandAck>();
+  ASSERT_FALSE(acks.empty());
+  EXPECT_EQ(acks.back().acked_type, static_cast<uint8_t>(LinkMessageType::kTelemetryResume));
+  EXPECT_EQ(acks.back().result, AckResult::kUnsupported);
+  EXPECT_EQ(h_.agent.counters().resumes, 0u);
+}
+
+// A serial line never disconnects: a radio link that drops and returns
+// shows as the client's Hello again. What was sent meanwhile went nowhere,
+// so the Hello holds telemetry for the client's resume as a connection
+// does; the resume was refused before ("unsupported") and the outage lost.
+TEST(SerialBufferingAgentTest, AHelloAfterARadioOutageIsResumedFromTheClientsPosition) {
+  AgentOptions o = TestOptions();
+  o.require_auth = false;
+  o.hello_on_client_hello = true;
+  AgentHarness h(o);
+  h.Start(Ms(0));
+  h.client = LinkEncoder(LinkSender::kClient);
+  h.Connect(Ms(1));  // The port is open.
+  h.Send(Ms(2), Heartbeat{});
+  auto read = [&](int from, int to) {
+    for (int i = from; i <= to; ++i) {
+      const auto bytes = Chunk(i);
+      h.agent.OnDeviceBytes(LinkDevice::kLidar, bytes.data(), bytes.size(), Ms(10 * i), &h.out);
+      h.Tick(Ms(10 * i));
+    }
+  };
+  read(1, 100);
+  read(101, 300);  // Sent while the radio was down: never received.
+  const size_t mark = h.received.size();
+  Hello hello;
+  hello.name = "workstation";
+  h.Send(Ms(3005), hello);
+  TelemetryResume resume;
+  resume.devices[0] = {true, Ms(1000), 4};  // Holds chunk 100.
+  h.Send(Ms(3006), resume);
+  read(301, 302);
+  std::vector<Telemetry> t;
+  for (size_t k = mark; k < h.received.size(); ++k) {
+    if (const auto* m = std::get_if<Telemetry>(&h.received[k].payload)) t.push_back(*m);
+  }
+  ASSERT_EQ(t.size(), 202u);  // 101 .. 302, nothing twice, nothing missing.
+  for (size_t k = 0; k < t.size(); ++k) {
+    EXPECT_EQ(ChunkIndex(t[k]), 101 + static_cast<int>(k));
+    EXPECT_EQ(t[k].flags & kTelemetryBreak, 0) << k;
+  }
+  EXPECT_EQ(h.agent.counters().resumes, 1u);
+  EXPECT_EQ(h.agent.counters().chunks_resent, 200u);
 }
 
 TEST_F(BufferingAgentTest, ResumeResendsEverythingAfterTheClientsPositionMarkedLate) {
