@@ -272,6 +272,7 @@ class AgentCore {
   // State, as it would go out in the next Status.
   LinkStatus status(Time now) const;
   bool client_connected() const { return client_connected_; }
+  bool emergency_stop_latched() const { return estop_latched_; }
   bool client_authenticated() const { return client_connected_ && authenticated_; }
   WatchdogState watchdog_state() const { return watchdog_; }
   double applied_v_mps() const { return applied_v_; }

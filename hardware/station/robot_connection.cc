@@ -421,7 +421,10 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     health_.latency_mean_ms = latency_sum_ms_ / static_cast<double>(health_.latency_samples);
     health_.latency_max_ms = std::max(health_.latency_max_ms, latency_ms);
     if (ack->result != AckResult::kAccepted) ++health_.acks_refused;
+    if (ack->acked_type == static_cast<uint8_t>(LinkMessageType::kEmergencyStop))
+      estop_owed_ = false;
   } else if (const auto* status = std::get_if<LinkStatus>(&payload)) {
+    if (status->emergency_stop_latched) estop_owed_ = false;
     health_.have_status = true;
     health_.agent_status = *status;
     emit statusReceived();
@@ -486,8 +489,19 @@ bool RobotConnection::Drive(double v_mps, double w_radps) {
   return SendMessage(DriveCommand{v_mps, w_radps}, true);
 }
 bool RobotConnection::StopMotion() { return SendMessage(Stop{}, true); }
-bool RobotConnection::EmergencyStop() { return SendMessage(hardware::EmergencyStop{}, false); }
+// An emergency stop is owed to the robot until the agent says it holds it
+// (its CommandAck, or a LinkStatus with the latch set): written into a link
+// that has died but is not yet known dead (Wi-Fi gone, TCP still open for
+// the 2 s of silence), or pressed while the link is down, it never arrives.
+// The watchdog stops the robot during the outage, but after the
+// reconnection nothing was latched and the next Drive moved it. So an owed
+// stop is sent again right after each authentication.
+bool RobotConnection::EmergencyStop() {
+  estop_owed_ = true;
+  return SendMessage(hardware::EmergencyStop{}, false);
+}
 bool RobotConnection::ClearEmergencyStop() {
+  estop_owed_ = false;  // The operator's choice now, whether or not it arrives.
   return SendMessage(hardware::ClearEmergencyStop{}, true);
 }
 bool RobotConnection::SetLidarMotor(bool on) { return SendMessage(LidarMotor{on}, true); }
@@ -619,6 +633,9 @@ void RobotConnection::OnAuthenticated() {
     resume.devices = positions_;
     resume_sent_ = SendMessage(resume, true);
   }
+  // After the resume: the agent's first command frame releases its
+  // telemetry, and the resume must be that frame.
+  if (estop_owed_) SendMessage(hardware::EmergencyStop{}, true);
   emit authenticatedChanged(true);
   if (after_outage) emit linkRestored(health_.outage_s, details);
 }

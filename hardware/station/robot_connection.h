@@ -161,8 +161,12 @@ class RobotConnection : public QObject {
   // Commands (sent only when authenticated; false otherwise).
   bool Drive(double v_mps, double w_radps);
   bool StopMotion();
-  bool EmergencyStop();  // Also sent before authentication: stopping is always allowed.
+  // Also sent before authentication: stopping is always allowed. Owed until
+  // the agent says it holds it, and sent again after each reconnection
+  // until then (a stop pressed during an outage is latched when it ends).
+  bool EmergencyStop();
   bool ClearEmergencyStop();
+  bool emergency_stop_owed() const { return estop_owed_; }
   bool SetLidarMotor(bool on);
   // Stops sending Heartbeats (tests: a client that goes quiet).
   void SetHeartbeatEnabled(bool enabled) { heartbeat_enabled_ = enabled; }
@@ -271,6 +275,7 @@ class RobotConnection : public QObject {
   int64_t first_robot_ns_ = -1;     // First agent header time on this connection.
   std::array<TelemetryResumePosition, 3> positions_{};  // What we hold of each device.
   bool resume_sent_ = false;
+  bool estop_owed_ = false;  // EmergencyStop() not yet acknowledged by the agent
   // Counters at the last rate sample, for per-second rates.
   std::array<DeviceRate, 3> rate_base_{};
   uint64_t frames_base_ = 0;

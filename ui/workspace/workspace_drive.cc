@@ -110,7 +110,12 @@ void Workspace::EmergencyStop() {
   AbortScriptedDrive();
   commanded_ = Twist2d();
   InvokeOnConnection([](hardware::RobotConnection* c) { c->EmergencyStop(); });
-  emit message(QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it."));
+  emit message(
+      connection_ != nullptr && !authenticated_
+          ? QStringLiteral(
+                "EMERGENCY STOP while the link is down: the robot's watchdog stopped it when "
+                "the link was lost; the stop is sent and latched as soon as the link returns.")
+          : QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it."));
   emit emergencyStopped();
 }
 

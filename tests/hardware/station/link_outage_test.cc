@@ -426,6 +426,53 @@ TEST(LinkOutageTest, AStallOrAHalfOpenLinkStopsTheRobotByTheWatchdog) {
   client.Shutdown();
 }
 
+// An emergency stop pressed while the link is down, or written into a link
+// that has died unnoticed (the host vanished: the bytes go nowhere), is
+// latched when the link returns, and the next Drive is refused. It was
+// dropped: the watchdog stopped the robot, but after the reconnection
+// nothing was latched and the next Drive moved it.
+TEST(LinkOutageTest, AnEmergencyStopDuringAnOutageIsLatchedWhenTheLinkReturns) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  RobotConnection client(Client(proxy.port(), QString()));
+  int restored = 0;
+  QObject::connect(&client, &RobotConnection::linkRestored,
+                   [&](double, const QString&) { ++restored; });
+  QString error;
+  ASSERT_TRUE(client.Start(&error));
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  const AgentCore& core = robot.agent->core();
+
+  // Into a vanished host's link: written, never delivered.
+  client.Drive(0.2, 0.0);
+  ASSERT_TRUE(WaitFor([&] { return robot.Speed() > 0.15; }, 5000));
+  proxy.Vanish();
+  Pump(100);
+  client.EmergencyStop();
+  EXPECT_TRUE(client.emergency_stop_owed());
+  ASSERT_TRUE(WaitFor([&] { return core.watchdog_state() == WatchdogState::kTripped; }, 5000));
+  EXPECT_FALSE(core.emergency_stop_latched()) << "the stop went nowhere";
+  proxy.Restore();
+  ASSERT_TRUE(WaitFor([&] { return restored == 1; }, 15000)) << client.health().ToString();
+  ASSERT_TRUE(WaitFor([&] { return core.emergency_stop_latched(); }, 3000));
+  EXPECT_TRUE(WaitFor([&] { return !client.emergency_stop_owed(); }, 3000));
+  client.Drive(0.2, 0.0);
+  Pump(500);
+  EXPECT_LT(robot.Speed(), 1e-3) << "latched: the Drive is refused";
+
+  // Pressed while the link is down (closed, reconnects refused).
+  client.ClearEmergencyStop();
+  ASSERT_TRUE(WaitFor([&] { return !core.emergency_stop_latched(); }, 3000));
+  proxy.CutFor(2000, FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor([&] { return !client.authenticated(); }, 3000));
+  client.EmergencyStop();
+  ASSERT_TRUE(WaitFor([&] { return restored == 2; }, 15000)) << client.health().ToString();
+  EXPECT_TRUE(WaitFor([&] { return core.emergency_stop_latched(); }, 3000));
+  EXPECT_TRUE(WaitFor([&] { return !client.emergency_stop_owed(); }, 3000));
+  client.Shutdown();
+}
+
 // A robot reboot during an outage: the agent comes back with its clock
 // started again. The recording goes on in the same session, the gap is a
 // new clock epoch, and the decoded streams stay in time order on the first
