@@ -374,6 +374,14 @@ uint64_t RecordsIn(const uint8_t* data, size_t pos, size_t end) {
   return std::max<uint64_t>(count, 1);
 }
 
+// True if data[from, n) is all zeros.
+bool ZerosFrom(const uint8_t* data, size_t from, size_t n) {
+  for (size_t i = from; i < n; ++i) {
+    if (data[i] != 0) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& source,
@@ -482,6 +490,16 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
         // The final record of the file: a write torn by a crash (its last
         // page never reached the disk) looks exactly like this.
         torn("CRC mismatch in the final record");
+        break;
+      }
+      // After a power loss the file's size can have reached the disk ahead
+      // of its last blocks' data (delayed allocation), which then read as
+      // zeros: the records end in a run of zeros to the end of the file. No
+      // record is zeros (its CRC covers a length and a time: never 0), so
+      // this is a torn tail too, not damage.
+      if (ZerosFrom(data, pos + total, n)) {
+        torn("CRC mismatch in the last record, then " + std::to_string(n - pos - total) +
+             " zero bytes to the end of the file (a power loss's unwritten blocks)");
         break;
       }
       if (!options.skip_corrupt_records) {
