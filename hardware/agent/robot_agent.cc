@@ -300,7 +300,7 @@ void RobotAgent::HandlePending(size_t index, AgentHandshake::State state,
   if (state == AgentHandshake::State::kDenied) {
     const QString reason = QString::fromStdString(p.handshake->denial());
     core_->NoteDeniedHandshake(*p.handshake);
-    if (p.handshake->auth_failure()) last_auth_failure_ms_.insert(p.peer, clock_.elapsed());
+    if (p.handshake->auth_failure()) NoteAuthFailure(p.peer);
     // Let the denial reach the peer, then close.
     TcpStream* stream = p.stream;
     const QString peer = p.peer;
@@ -419,6 +419,18 @@ void RobotAgent::AttachClient(ByteStream* stream) {
   Dispatch(&out_);
 }
 
+// The lockout table keeps only failures inside the delay: an agent listening
+// on a network with many addresses (IPv6) would otherwise keep one entry
+// per address that ever failed, for as long as it runs.
+void RobotAgent::NoteAuthFailure(const QString& peer) {
+  const qint64 now_ms = clock_.elapsed();
+  for (auto it = last_auth_failure_ms_.begin(); it != last_auth_failure_ms_.end();) {
+    it = now_ms - it.value() >= config_.auth_failure_delay_ms ? last_auth_failure_ms_.erase(it)
+                                                              : std::next(it);
+  }
+  last_auth_failure_ms_.insert(peer, now_ms);
+}
+
 void RobotAgent::DropClient(const QString& reason) {
   if (client_ == nullptr) return;
   ByteStream* stream = client_;
@@ -488,7 +500,7 @@ void RobotAgent::Dispatch(AgentOutput* out) {
   }
   if (close && client_ != nullptr) {
     if (config_.link == RobotAgentConfig::LinkKind::kTcp) {
-      if (auth_failure) last_auth_failure_ms_.insert(client_peer_, clock_.elapsed());
+      if (auth_failure) NoteAuthFailure(client_peer_);
       DropClient(close_reason.isEmpty() ? QStringLiteral("denied") : close_reason);
     } else {
       // A serial line cannot be closed: start the session over.

@@ -155,6 +155,9 @@ class RobotAgent : public QObject {
   Time Now() const;          // The robot clock.
   const AgentCore& core() const { return *core_; }
   VirtualDevices* virtual_devices() const { return sim_.get(); }  // Null for real devices.
+  // Addresses whose last failed authentication is within the delay (the
+  // lockout table; pruned as failures come).
+  int auth_failures_remembered() const { return last_auth_failure_ms_.size(); }
   bool has_client() const { return client_ != nullptr; }
   int pending_connections() const { return static_cast<int>(pending_.size()); }
 
@@ -180,6 +183,7 @@ class RobotAgent : public QObject {
   bool ClientSilent() const;
   void AttachClient(ByteStream* stream);
   void DropClient(const QString& reason);
+  void NoteAuthFailure(const QString& peer);
   void OnClientBytes(const QByteArray& bytes);
   void OnTick();
   void OnSimStep();
@@ -206,7 +210,9 @@ class RobotAgent : public QObject {
   bool shutting_down_ = false;
   QTimer* sim_timer_ = nullptr;
   QTimer* reopen_timer_ = nullptr;
-  QHash<QString, qint64> last_auth_failure_ms_;  // Peer address -> clock_ ms.
+  // Peer address -> clock_ ms of its last failed authentication, within
+  // auth_failure_delay_ms (NoteAuthFailure prunes the older ones).
+  QHash<QString, qint64> last_auth_failure_ms_;
   std::vector<Pending> pending_;                // Connections still authenticating.
   bool continue_scheduled_ = false;             // Decode work left by the per-call bound.
   AgentOutput out_;

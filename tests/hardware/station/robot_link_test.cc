@@ -21,6 +21,7 @@
 #include <QDir>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QHostAddress>
 #include <QProcess>
 #include <QTcpSocket>
 #include <QTemporaryDir>
@@ -339,6 +340,48 @@ TEST(RobotLinkTcpTest, WrongKeyIsRefusedAndTheRobotDoesNotMove) {
   EXPECT_EQ(robot.agent->core().counters().auth_denied, 1u);
   EXPECT_FALSE(robot.agent->has_client());
   EXPECT_EQ(robot.agent->core().applied_v_mps(), 0.0);
+}
+
+// The lockout table of failed authentications keeps only the addresses
+// inside the delay: one entry per address that ever failed grew without
+// bound (an agent listening where an attacker has many addresses, IPv6).
+// Wrong keys from four loopback addresses, then one more after the delay.
+TEST(RobotLinkTcpTest, TheFailedAuthenticationLockoutForgetsAddressesAfterItsDelay) {
+  SimRobot robot(RobotAgentConfig::LinkKind::kTcp);
+  ASSERT_TRUE(robot.started);
+  const auto fail_from = [&](const QString& address) {
+    QTcpSocket socket;
+    ASSERT_TRUE(socket.bind(QHostAddress(address)));
+    socket.connectToHost(QStringLiteral("127.0.0.1"), robot.agent->tcp_port());
+    LinkDecoder decoder;
+    std::vector<LinkMessage> received;
+    const AuthChallenge* challenge = nullptr;
+    ASSERT_TRUE(WaitFor(
+        [&] {
+          const QByteArray bytes = socket.readAll();
+          decoder.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), bytes.size(),
+                       &received);
+          for (const LinkMessage& m : received) {
+            if (const auto* c = std::get_if<AuthChallenge>(&m.payload)) challenge = c;
+          }
+          return challenge != nullptr;
+        },
+        5000));
+    AuthResponse response;
+    LinkSessionKey session;
+    ASSERT_TRUE(MakeLinkAuthResponse(KeyBytes("not the key"), *challenge, &response, &session));
+    LinkEncoder encoder(LinkSender::kClient);
+    const std::vector<uint8_t> frame = encoder.Encode(Time(), response);
+    socket.write(reinterpret_cast<const char*>(frame.data()), frame.size());
+    ASSERT_TRUE(WaitFor([&] { return socket.state() == QAbstractSocket::UnconnectedState; }, 5000));
+  };
+  for (const char* address : {"127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5"})
+    fail_from(address);
+  EXPECT_EQ(robot.agent->auth_failures_remembered(), 4);
+  Pump(1100);  // auth_failure_delay_ms: 1 s
+  fail_from(QStringLiteral("127.0.0.6"));
+  EXPECT_EQ(robot.agent->auth_failures_remembered(), 1);
+  EXPECT_EQ(robot.agent->core().counters().auth_denied, 5u);
 }
 
 TEST(RobotLinkTcpTest, UnauthenticatedRawClientCannotDrive) {
