@@ -396,12 +396,19 @@ void RobotAgent::ScheduleContinue() {
   });
 }
 
+// A peer that stopped reading lets the queue grow past max_send_queue_bytes.
+// A release of held telemetry (a resume's resend, or the live bytes held
+// for it) is one write of up to the whole buffer, which Qt queues at once:
+// that burst, as written, is allowed on top until the queue drains below
+// the limit again. The allowance was the buffer's size in memory, but on
+// the link each chunk costs more than its 22 bytes in the buffer (the
+// frame, its tag, the telemetry header): a full 60 s buffer of short reads
+// went over it, the client was dropped before a byte left, and each
+// reconnection asked for the same bytes again.
 bool RobotAgent::SendQueueFull(ByteStream* stream) const {
   const auto* tcp = qobject_cast<const TcpStream*>(stream);
   return tcp != nullptr && tcp->socket() != nullptr &&
-         tcp->socket()->bytesToWrite() >
-             config_.max_send_queue_bytes +
-                 static_cast<qint64>(core_->telemetry_buffer().max_bytes());
+         tcp->socket()->bytesToWrite() > config_.max_send_queue_bytes + burst_allowance_;
 }
 
 bool RobotAgent::ClientSilent() const {
@@ -432,6 +439,7 @@ void RobotAgent::NoteAuthFailure(const QString& peer) {
 }
 
 void RobotAgent::DropClient(const QString& reason) {
+  burst_allowance_ = 0;
   if (client_ == nullptr) return;
   ByteStream* stream = client_;
   client_ = nullptr;
@@ -487,6 +495,13 @@ void RobotAgent::Dispatch(AgentOutput* out) {
   const bool auth_failure = out->auth_failure;
   const QString close_reason = QString::fromStdString(out->close_reason);
   if (client_ != nullptr && !out->to_client.empty()) {
+    const auto* tcp = qobject_cast<const TcpStream*>(client_);
+    if (tcp != nullptr && tcp->socket() != nullptr &&
+        tcp->socket()->bytesToWrite() <= config_.max_send_queue_bytes) {
+      burst_allowance_ = 0;  // What a burst queued has drained.
+    }
+    const auto size = static_cast<qint64>(out->to_client.size());
+    if (size > config_.max_send_queue_bytes) burst_allowance_ = std::max(burst_allowance_, size);
     client_->Write(out->to_client.data(), out->to_client.size());
   }
   out->Clear();

@@ -122,7 +122,8 @@ struct RobotAgentConfig {
   int max_pending_connections = 16;
   // Bytes queued for a peer that does not read them: beyond this the peer is
   // dropped (and the robot stopped if it was driving). ~30 s of telemetry.
-  // A resume after an outage adds up to the telemetry buffer's bound on top.
+  // A release of held telemetry (a resume's resend) adds what it wrote on
+  // top, until the queue drains below this again.
   qint64 max_send_queue_bytes = 1 << 20;
   // A client that has sent nothing for this long while another connection
   // authenticates with the key is taken to be gone (a half-open link: its
@@ -213,6 +214,9 @@ class RobotAgent : public QObject {
   // Peer address -> clock_ ms of its last failed authentication, within
   // auth_failure_delay_ms (NoteAuthFailure prunes the older ones).
   QHash<QString, qint64> last_auth_failure_ms_;
+  // A burst of released telemetry queued at once, allowed on top of
+  // max_send_queue_bytes until the queue drains below it (SendQueueFull).
+  qint64 burst_allowance_ = 0;
   std::vector<Pending> pending_;                // Connections still authenticating.
   bool continue_scheduled_ = false;             // Decode work left by the per-call bound.
   AgentOutput out_;

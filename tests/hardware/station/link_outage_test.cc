@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <vector>
@@ -56,12 +57,14 @@ sim::SimConfig LabWorld() { return sweepscan::testing::ScenarioFile("lab.json");
 
 // A simulated robot on loopback TCP (any free port).
 struct Robot {
-  Robot(const sim::SimConfig& world, SimDevices::Mode mode) {
+  Robot(const sim::SimConfig& world, SimDevices::Mode mode,
+        const std::function<void(RobotAgentConfig*)>& tweak = nullptr) {
     RobotAgentConfig config;
     config.link = RobotAgentConfig::LinkKind::kTcp;
     config.listen_port = 0;
     config.agent.key = KeyBytes();
     config.agent.name = "sweepscan-sim outage test";
+    if (tweak) tweak(&config);
     auto adapter = std::make_unique<Adapter>(std::make_unique<SimDevices>(world, mode));
     adapter_ = adapter.get();
     agent = std::make_unique<RobotAgent>(config, std::move(adapter));
@@ -470,6 +473,38 @@ TEST(LinkOutageTest, AnEmergencyStopDuringAnOutageIsLatchedWhenTheLinkReturns) {
   ASSERT_TRUE(WaitFor([&] { return restored == 2; }, 15000)) << client.health().ToString();
   EXPECT_TRUE(WaitFor([&] { return core.emergency_stop_latched(); }, 3000));
   EXPECT_TRUE(WaitFor([&] { return !client.emergency_stop_owed(); }, 3000));
+  client.Shutdown();
+}
+
+// A resend larger than the send queue's limit is one burst, not a peer that
+// stopped reading. The allowance on top of the limit was the buffer's size
+// in memory, but the resend costs more on the link (each chunk's frame, tag
+// and header): the client was dropped before a byte left, and each
+// reconnection asked for the same bytes again. A 1 KiB limit and a 16 KiB
+// buffer bound make that happen after a 3 s outage of the lidar alone.
+TEST(LinkOutageTest, AResendLargerThanTheSendQueueLimitIsDeliveredNotDropped) {
+  Robot robot(LabWorld(), SimDevices::Mode::kCommanded, [](RobotAgentConfig* c) {
+    c->max_send_queue_bytes = 1024;
+    c->agent.telemetry_buffer_max_bytes = 16384;
+  });
+  ASSERT_TRUE(robot.started);
+  FaultProxy proxy(robot.agent->tcp_port());
+  RobotConnection client(Client(proxy.port(), QString()));
+  int restored = 0;
+  QObject::connect(&client, &RobotConnection::linkRestored,
+                   [&](double, const QString&) { ++restored; });
+  QString error;
+  ASSERT_TRUE(client.Start(&error));
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  client.SetLidarMotor(true);
+  Pump(2000);
+  proxy.CutFor(3000, FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor([&] { return restored == 1; }, 15000)) << client.health().ToString();
+  Pump(2000);
+  EXPECT_EQ(restored, 1) << "dropped again after the reconnection: " << client.health().ToString();
+  EXPECT_TRUE(client.authenticated());
+  EXPECT_EQ(robot.agent->core().counters().resumes, 1u);
+  EXPECT_GT(robot.agent->core().counters().bytes_resent, 8000u);
   client.Shutdown();
 }
 
