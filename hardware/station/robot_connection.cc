@@ -14,10 +14,16 @@ namespace sweepscan {
 namespace hardware {
 namespace {
 
+// The workstation's side of the clock tie: CLOCK_BOOTTIME, which counts a
+// suspend. The robot's clock runs on while a laptop sleeps; on
+// CLOCK_MONOTONIC (steady_clock) the tie then moved by the sleep's length,
+// which beyond 0.5 s passed for a robot reboot (a new clock epoch): the
+// positions were dropped, the agent resent its whole buffer as duplicates,
+// and later data was shifted by the sleep.
 int64_t SteadyNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  timespec ts{};
+  clock_gettime(CLOCK_BOOTTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
 int64_t RealtimeNs() {
@@ -123,9 +129,8 @@ RobotConnection::RobotConnection(const RobotConnectionOptions& options, QObject*
 RobotConnection::~RobotConnection() { Shutdown(); }
 
 Time RobotConnection::WorkstationNow() const {
-  // The client's header time: its own monotonic clock, only ever echoed back.
-  return Time(
-      std::chrono::duration_cast<Duration>(std::chrono::steady_clock::now().time_since_epoch()));
+  // The client's header time: its own clock (SteadyNs), only ever echoed back.
+  return TimeFromNanoseconds(SteadyNs());
 }
 
 bool RobotConnection::Start(QString* error) {
