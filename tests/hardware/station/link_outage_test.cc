@@ -226,23 +226,36 @@ void RecordScriptedDriveThrough(const std::function<void(FaultProxy&)>& fault,
   std::map<int64_t, const CloudPoint*> by_time;
   for (const CloudPoint& p : b.points) by_time[p.time_ns] = &p;
   std::vector<double> d;
-  size_t shared = 0;
-  for (const CloudPoint& p : b.points) {
-    if (p.time_ns >= ToNanoseconds(first) && p.time_ns <= ToNanoseconds(last)) ++shared;
-  }
+  const auto in_window = [&](const CloudPoint& p) {
+    return p.time_ns >= ToNanoseconds(first) && p.time_ns <= ToNanoseconds(last);
+  };
+  size_t shared = 0, matched_in_window = 0;
+  for (const CloudPoint& p : b.points) shared += in_window(p) ? 1 : 0;
   for (const CloudPoint& p : a.points) {
     const auto it = by_time.find(p.time_ns);
     if (it != by_time.end()) {
       d.push_back(std::hypot(p.x - it->second->x, p.y - it->second->y, p.z - it->second->z));
+      matched_in_window += in_window(p) ? 1 : 0;
     }
   }
+  // Each point once: a resend that delivered bytes twice would add points
+  // at times the fault-free cloud has once (or not at all).
+  const auto repeated_times = [](const std::vector<CloudPoint>& points) {
+    std::map<int64_t, int> count;
+    for (const CloudPoint& p : points) ++count[p.time_ns];
+    size_t repeats = 0;
+    for (const auto& [t, n] : count) repeats += static_cast<size_t>(n - 1);
+    return repeats;
+  };
+  EXPECT_EQ(repeated_times(a.points), repeated_times(b.points)) << "points delivered twice";
   ASSERT_GT(d.size(), 0u);
   std::sort(d.begin(), d.end());
   std::fprintf(stderr,
                "flaky vs fault-free: %zu of %zu points over the shared time matched; median %.4f mm, "
                "max %.4f mm; loop p99 %.1f ms\n",
                d.size(), shared, 1e3 * d[d.size() / 2], 1e3 * d.back(), *loop_p99_ms);
-  EXPECT_GE(d.size(), shared) << "points of the fault-free cloud missing from the flaky one";
+  EXPECT_EQ(matched_in_window, shared)
+      << "points of the fault-free cloud missing from the flaky one";
   EXPECT_LT(d[d.size() / 2], 1e-4);
   EXPECT_LT(d.back(), 2e-3);
   EXPECT_GE(lost, 1);
