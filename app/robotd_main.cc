@@ -12,6 +12,7 @@
 #include "app/robotd_config.h"
 #include "app/service_notify.h"
 #include "hardware/agent/robot_agent.h"
+#include "hardware/codecs/motor_board_codec.h"
 #include "hardware/link/qt_transport.h"
 
 namespace {
@@ -23,6 +24,35 @@ using sweepscan::hardware::RobotAgentConfig;
 int Fail(const QString& message) {
   std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(message));
   return 2;
+}
+
+// --stop-motors: a zero command to the motor board, and exit. The service
+// runs it after the agent has exited, however it exited (ExecStopPost): a
+// crashed agent sends nothing, and the board keeps driving at its last
+// command until the next agent has started (RestartSec, then its start-up:
+// 2 s or more) unless it has a command timeout of its own.
+int StopMotors(const QString& port, qint32 baud) {
+  sweepscan::hardware::SerialStream serial;
+  QString error;
+  if (!serial.Open(port, baud, &error)) {
+    std::fprintf(stderr, "sweepscan-robotd: --stop-motors: %s\n", qPrintable(error));
+    return 1;
+  }
+  const std::vector<uint8_t> zero =
+      sweepscan::hardware::EncodeMotorCommand(sweepscan::hardware::MotorCommand{});
+  // Three times: the board may have been mid-frame when the agent died
+  // (its decoder resynchronises on the next frame's header).
+  for (int i = 0; i < 3; ++i) serial.Write(zero.data(), zero.size());
+  const bool drained = serial.Drain(1000);
+  serial.Close();
+  if (!drained) {
+    std::fprintf(stderr,
+                 "sweepscan-robotd: --stop-motors: %s: the zero command did not leave the port\n",
+                 qPrintable(port));
+    return 1;
+  }
+  std::printf("zero command sent to the motor board on %s\n", qPrintable(port));
+  return 0;
 }
 
 }  // namespace
@@ -51,6 +81,10 @@ int AgentMain(int argc, char** argv) {
       "PORT");
   const QCommandLineOption name(QStringLiteral("name"),
                                 "Robot name in the Hello (default robot-1).", "NAME");
+  const QCommandLineOption stop_motors(
+      QStringLiteral("stop-motors"),
+      "Send the motor board a zero command and exit (the service runs this after the agent "
+      "exits, a crash included: docs/deployment.md).");
   const QCommandLineOption config_file(
       QStringLiteral("config"),
       "Read options from FILE: lines 'key = value', a key being a long option without its "
@@ -59,7 +93,7 @@ int AgentMain(int argc, char** argv) {
       "FILE");
   const sweepscan::app::AgentCommandLine common;
   common.Add(&parser);
-  parser.addOptions({lidar, imu, motor, serial, name, config_file});
+  parser.addOptions({lidar, imu, motor, serial, name, config_file, stop_motors});
   QStringList arguments = QCoreApplication::arguments();
   if (!parser.parse(arguments)) return Fail(parser.errorText());
   if (parser.isSet(config_file) && !parser.isSet(QStringLiteral("help")) &&
@@ -114,6 +148,11 @@ int AgentMain(int argc, char** argv) {
   describe(2, config.imu_port, config.imu_baud, "HiPNUC HI219");
   describe(3, config.motor_port, config.motor_baud, "motor board");
 
+  if (parser.isSet(stop_motors)) {
+    if (config.motor_port.isEmpty())
+      return Fail(QStringLiteral("--stop-motors: no motor board port (--motor)"));
+    return StopMotors(config.motor_port, config.motor_baud);
+  }
   if (parser.isSet(serial) && parser.isSet(common.listen)) {
     return Fail(QStringLiteral("--listen and --serial exclude each other"));
   }

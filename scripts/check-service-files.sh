@@ -42,7 +42,8 @@ if ! command -v systemd-analyze >/dev/null; then
 elif [ ! -x "$robotd" ]; then
   problem "$robotd is not built: systemd-analyze verify needs it"
 else
-  sed "s|^ExecStart=/usr/bin/sweepscan-robotd |ExecStart=$robotd |" "$unit" >"$work/sweepscan-robotd.service"
+  sed "s|^ExecStart=/usr/bin/sweepscan-robotd |ExecStart=$robotd |; s|^ExecStopPost=-/usr/bin/sweepscan-robotd |ExecStopPost=-$robotd |" \
+    "$unit" >"$work/sweepscan-robotd.service"
   grep -q "^ExecStart=$robotd " "$work/sweepscan-robotd.service" || problem "$unit: no ExecStart=/usr/bin/sweepscan-robotd line"
   # --man=no: the man page of Documentation= is not installed yet.
   systemd-analyze verify --man=no "$work/sweepscan-robotd.service" >"$work/verify.out" 2>&1

@@ -195,6 +195,19 @@ run_as_service() {
 }
 run_as_service sweepscan-robotd sweepscan-robotd
 
+# The unit's ExecStopPost, as the service user with the installed
+# configuration: no motor board here, so exit 1 with the reason (the "-"
+# of the unit's line makes that no failure of the service).
+setpriv --reuid=sweepscan --regid=sweepscan --init-groups --inh-caps=-all \
+  sweepscan-robotd --config /etc/sweepscan/robotd.conf --stop-motors >"$work/stop.out" 2>"$work/stop.err"
+rc=$?
+if [ "$rc" -eq 1 ] && grep -q -- "--stop-motors" "$work/stop.err"; then
+  ok "sweepscan-robotd --stop-motors without a board: exit 1, $(head -n1 "$work/stop.err")"
+else
+  cat "$work/stop.out" "$work/stop.err"
+  fail "sweepscan-robotd --stop-motors without a board exited $rc"
+fi
+
 # --- the arm64 package, from the outside (installed and run at the end) -------
 if [ -n "$arm64_deb" ]; then
   a=$(dpkg-deb -f "$arm64_deb" Architecture)

@@ -9,6 +9,7 @@
 // Lines "figure: ..." are the figures docs/performance.md quotes
 // (scripts/arm64-e2e.sh collects them).
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -355,6 +356,52 @@ TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsAndOnSigtermMidDrive) {
   sweepscan::testing::Pump(300);  // The pty's last bytes.
   EXPECT_EQ(heard.back().vx_mps, 0.0) << "robotd's last word to the board was not a stop";
   EXPECT_EQ(heard.back().wz_radps, 0.0);
+  client.Shutdown();
+}
+
+// A crashed robotd (SIGKILL here) says nothing to the board, which drives on
+// at its last command. `--stop-motors`, which the service runs after the
+// agent exits however it exits (ExecStopPost), sends the zero command.
+TEST_P(RobotdProcessTest, AfterACrashStopMotorsSendsTheBoardAZeroCommand) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  std::vector<MotorCommand> heard;
+  OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
+  Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  RobotConnection client(Client(robotd.Address()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  for (int i = 0; i < 20; ++i) {
+    client.Drive(0.3, 0.0);
+    sweepscan::testing::Pump(100);
+  }
+  ASSERT_EQ(::kill(static_cast<pid_t>(robotd.pid()), SIGKILL), 0);
+  sweepscan::testing::Pump(300);
+  ASSERT_GT(heard.back().vx_mps, 0.2) << "the crash left the board driving";
+  const size_t before = heard.size();
+
+  QProcess stop;
+  QStringList args = GetParam().command.mid(1);
+  args << "--motor" << ptys.SlavePaths(0)[2] << "--stop-motors";
+  stop.start(GetParam().command.first(), args);
+  ASSERT_TRUE(stop.waitForFinished(60000));
+  EXPECT_EQ(stop.exitCode(), 0) << stop.readAllStandardError().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return heard.size() > before; }, 5000)) << "nothing reached the board";
+  EXPECT_EQ(heard.back().vx_mps, 0.0);
+  EXPECT_EQ(heard.back().wz_radps, 0.0);
+
+  // A port that is not there: exit 1 with the reason, as the service's log shows.
+  stop.start(GetParam().command.first(), QStringList(args.mid(0, args.size() - 3))
+                                             << "--motor"
+                                             << "/nonexistent/tty"
+                                             << "--stop-motors");
+  ASSERT_TRUE(stop.waitForFinished(60000));
+  EXPECT_EQ(stop.exitCode(), 1);
+  EXPECT_NE(stop.readAllStandardError().indexOf("--stop-motors"), -1);
   client.Shutdown();
 }
 
