@@ -159,6 +159,8 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     PairPicking* picking = project_->pair_picking();
     if (picking->active() && undo_->active() != picking->undo_stack()) {
       undo_->Activate(picking->undo_stack());
+    } else if (!picking->active()) {
+      undo_->Leave(picking->undo_stack());
     }
   });
   connect(project_->pair_picking(), &PairPicking::message, this,

@@ -42,13 +42,21 @@ void UndoRouter::OnIndexChanged(QUndoStack* stack) {
     Activate(stack);
     return;
   }
+  Leave(stack);
+}
+
+void UndoRouter::Leave(QUndoStack* stack) {
   if (group_.activeStack() != stack) return;
+  QUndoStack* next = nullptr;
   for (QUndoStack* other : recency_) {
-    if (other != stack && other->count() > 0) {
-      Activate(other);
-      return;
+    if (other == stack) continue;
+    if (other->count() > 0) {
+      next = other;
+      break;
     }
+    if (next == nullptr) next = other;  // none holds commands: the most recent
   }
+  if (next != nullptr) Activate(next);
 }
 
 void UndoRouter::Touch(QUndoStack* stack) {

@@ -39,6 +39,10 @@ class UndoRouter : public QObject {
   // for view edits when none is active. Not owned.
   void AddStack(QUndoStack* stack);
   void Activate(QUndoStack* stack);
+  // `stack` is done for now (pair picking ended, even with no pick made,
+  // when QUndoStack::clear() says nothing): if it is the active one, the
+  // most recently edited history that holds commands takes over.
+  void Leave(QUndoStack* stack);
   QUndoStack* active() const { return group_.activeStack(); }
   // Onto the active history (else the first one added).
   void Push(QUndoCommand* command);

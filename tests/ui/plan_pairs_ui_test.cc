@@ -606,6 +606,18 @@ TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
   // Picks after the mode are the calibration's again, not pairs.
   window_->PointPicked(truth.in_c[0]);
   EXPECT_TRUE(picking->picks().empty());
+
+  // Started and left without a pick: Edit > Undo is the project's again.
+  // (Clearing an empty stack says nothing, and the mode's empty history
+  // stayed the active one: Undo greyed out over the project's edits.)
+  project()->SetColor("a", "#00ff00");
+  Turns([&] { return !project()->busy(); }, 60000);
+  ASSERT_TRUE(picking->Start("c", "a"));
+  EXPECT_EQ(window_->undo_group()->activeStack(), picking->undo_stack());
+  QTest::keyClick(window_->view(), Qt::Key_Escape);
+  EXPECT_FALSE(picking->active());
+  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
+  EXPECT_TRUE(window_->undo_group()->canUndo());
 }
 
 }  // namespace

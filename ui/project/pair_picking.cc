@@ -58,7 +58,13 @@ PairPicking::PairPicking(ProjectController* controller, CloudView* view, QWidget
   });
 }
 
-PairPicking::~PairPicking() { qApp->removeEventFilter(this); }
+// The picks' stack clears itself as it is destroyed, which would tell the
+// pick box (PairPickBox::Refresh -> can_align -> the controller's jobs) after
+// the controller's members are gone: it says nothing now.
+PairPicking::~PairPicking() {
+  qApp->removeEventFilter(this);
+  undo_.blockSignals(true);
+}
 
 bool PairPicking::Start(const std::string& id, const std::string& reference) {
   const Project& p = controller_->document()->project();

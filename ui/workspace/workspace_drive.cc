@@ -110,12 +110,18 @@ void Workspace::EmergencyStop() {
   AbortScriptedDrive();
   commanded_ = Twist2d();
   InvokeOnConnection([](hardware::RobotConnection* c) { c->EmergencyStop(); });
-  emit message(
-      connection_ != nullptr && !authenticated_
-          ? QStringLiteral(
-                "EMERGENCY STOP while the link is down: the robot's watchdog stopped it when "
-                "the link was lost; the stop is sent and latched as soon as the link returns.")
-          : QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it."));
+  QString said = QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it.");
+  if (connection_ != nullptr && health_.state == hardware::LinkHealth::State::kFailed) {
+    said = QStringLiteral(
+               "EMERGENCY STOP, but the link has failed (%1): the stop cannot reach the robot. Its "
+               "watchdog stopped it when the link was lost; stop it at the robot.")
+               .arg(health_.last_error);
+  } else if (connection_ != nullptr && !authenticated_) {
+    said = QStringLiteral(
+        "EMERGENCY STOP while the link is down: the robot's watchdog stopped it when the link was "
+        "lost; the stop is sent and latched as soon as the link returns.");
+  }
+  emit message(said);
   emit emergencyStopped();
 }
 
