@@ -15,6 +15,7 @@
 #include "app/cli_recording.h"
 #include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
+#include "core/common/file_suffix.h"
 #include "core/evaluation/cloud_arrays.h"
 #include "core/evaluation/evaluation.h"
 #include "core/evaluation/report.h"
@@ -139,7 +140,7 @@ int RunEvaluate(int argc, char** argv) {
     }
   }
   const auto is_cloud = [](const std::string& p) {
-    return p.size() > 4 && (p.substr(p.size() - 4) == ".ply" || p.substr(p.size() - 4) == ".pcd");
+    return p.size() > 4 && (HasFileSuffix(p, ".ply") || HasFileSuffix(p, ".pcd"));
   };
   EvaluationOptions options;
   if (args.Has("threads")) {

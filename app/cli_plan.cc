@@ -14,6 +14,7 @@
 #include "app/cli_recording.h"
 #include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
+#include "core/common/file_suffix.h"
 #include "core/plan/floor_plan.h"
 #include "core/plan/plan_writers.h"
 
@@ -136,7 +137,7 @@ void PrintPlan(const plan::FloorPlan& p) {
 // `reconstruct` / `evaluate` build it (cli_recording.h).
 int LoadInput(const Args& args, std::vector<Eigen::Vector3f>* cloud) {
   const auto is_cloud = [](const std::string& p) {
-    return p.size() > 4 && (p.substr(p.size() - 4) == ".ply" || p.substr(p.size() - 4) == ".pcd");
+    return p.size() > 4 && (HasFileSuffix(p, ".ply") || HasFileSuffix(p, ".pcd"));
   };
   const std::string suffix = kProjectSuffix;
   if (!args.Has("scenario") && args.positional().size() == 1 && args.positional()[0].size() > suffix.size() &&

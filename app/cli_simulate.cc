@@ -12,6 +12,7 @@
 #include "app/cli_common.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
+#include "core/common/file_suffix.h"
 #include "core/common/json_reader.h"
 #include "core/scenario/scenario.h"
 #include "core/sim/truth_eval.h"
@@ -72,7 +73,7 @@ int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
     return kExitBadInput;
   }
   const std::string out = args.Get("out");
-  if (out.size() < 4 || (out.substr(out.size() - 4) != ".ply" && out.substr(out.size() - 4) != ".pcd")) {
+  if (!HasFileSuffix(out, ".ply") && !HasFileSuffix(out, ".pcd")) {
     PrintError("--out must end in .ply or .pcd, got '" + out + "'");
     return kExitBadInput;
   }

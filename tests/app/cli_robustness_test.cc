@@ -201,6 +201,22 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
   EXPECT_EQ(LsA(out), "csv\n");  // No temporary either.
 }
 
+// A cloud's suffix in capitals is the same format in every command
+// (simulate refused --out X.PLY, and plan and evaluate took X.PLY for a
+// session folder, while reconstruct and export accepted it).
+TEST_F(CliRobustnessTest, CloudSuffixesInCapitalsAreTheSameFormatsEverywhere) {
+  const std::string cloud = Tmp("CAPS.PLY");
+  CommandRun r = Cli("simulate --scenario " + Scenario("lab") + " --out " + cloud + " --session " +
+                     Tmp("caps.sweepscan") + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("plan " + cloud + " --json");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"walls\""), std::string::npos) << r.out;
+  r = Cli("evaluate " + cloud + " --json");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"planes\""), std::string::npos) << r.out.substr(0, 400);
+}
+
 TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {
   // Before: exit 1 in reconstruct but exit 2 in simulate.
   const std::string folder = Tmp("a-folder.ply");
