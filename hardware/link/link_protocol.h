@@ -158,7 +158,7 @@ struct RecorderEvent {
   bool new_clock_epoch = false;  // Restored: the robot clock was reset (reboot) during the outage.
   bool resumed = false;          // Restored: the agent was asked for what it buffered.
   uint32_t epoch = 0;            // Robot clock epoch from now on (0 = the session's first).
-  Time workstation_time;         // Workstation steady clock at the event.
+  Time workstation_time;         // Workstation clock (CLOCK_BOOTTIME) at the event.
   Time robot_time;               // Lost: last robot time received; restored: first of the new link.
   Duration outage{};             // Restored: link down (lost event -> authenticated again).
   Duration robot_time_shift{};   // Restored: add to this epoch's robot times to place them on

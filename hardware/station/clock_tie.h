@@ -3,7 +3,8 @@
 //
 // Geometry uses robot times only, but a session that spans a robot reboot
 // has two robot clocks (CLOCK_MONOTONIC restarts at boot), and the
-// workstation's steady clock is what places the second on the first's
+// workstation's clock (CLOCK_BOOTTIME: it counts a suspend, during which
+// the robot's runs on) is what places the second on the first's
 // timeline. Each round trip brackets the agent's time stamp: a frame the
 // agent stamped r (robot clock) in answer to one we sent at workstation time
 // a, received at b, was stamped somewhere in [a, b], so
@@ -29,7 +30,7 @@ struct ClockTie {
   int64_t measured_at_ns = 0;   // Workstation time of the bracket's end.
 
   // A frame stamped `robot` by the agent, answering one we sent at `sent`,
-  // received at `received` (workstation steady clock, ns). Kept when it is
+  // received at `received` (workstation clock, CLOCK_BOOTTIME, ns). Kept when it is
   // narrower than the current one, or the current one is over `max_age_ns`
   // old, so a slow round trip never replaces a fast one for long.
   void AddBracket(int64_t sent_ns, int64_t received_ns, int64_t robot_ns,

@@ -128,6 +128,9 @@ RobotConnection::RobotConnection(const RobotConnectionOptions& options, QObject*
 
 RobotConnection::~RobotConnection() { Shutdown(); }
 
+// Since the loss was noticed, on the tie's clock: a suspend counts.
+qint64 RobotConnection::OutageMs() const { return (SteadyNs() - outage_start_ns_) / 1000000; }
+
 Time RobotConnection::WorkstationNow() const {
   // The client's header time: its own clock (SteadyNs), only ever echoed back.
   return TimeFromNanoseconds(SteadyNs());
@@ -316,7 +319,11 @@ void RobotConnection::Decode(const uint8_t* data, size_t n) {
         ++health_.late_chunks;
         health_.late_bytes += telemetry.bytes.size();
       }
-      if (telemetry.flags & kTelemetryBreak) ++health_.breaks;
+      // A break before the device's first bytes (the agent marks a new
+      // client's first chunks when no resume joins them) loses nothing.
+      if ((telemetry.flags & kTelemetryBreak) && health_.devices[telemetry.device - 1].frames > 1) {
+        ++health_.breaks;
+      }
       if (options_.decode_telemetry) {
         decoder_.AddTelemetry(telemetry);
         decoded_telemetry = true;
@@ -574,7 +581,7 @@ void RobotConnection::NoteLinkLost(const QString& reason) {
   // The outage began with the last byte received (a stall is noticed only
   // stall_ms later).
   outage_before_ms_ = last_rx_.isValid() ? last_rx_.elapsed() : 0;
-  outage_clock_.start();
+  outage_start_ns_ = SteadyNs();
   tie_before_ = health_.clock_tie;
   robot_before_ns_ = last_robot_ns_;
   RecorderEvent event;
@@ -596,7 +603,7 @@ void RobotConnection::OnAuthenticated() {
   QString details;
   if (after_outage) {
     health_.outage_open = false;
-    health_.outage_s = (outage_clock_.elapsed() + outage_before_ms_) * 1e-3;
+    health_.outage_s = (OutageMs() + outage_before_ms_) * 1e-3;
     const ClockTie& tie = health_.clock_tie;
     const bool new_epoch = NewClockEpoch(tie_before_, robot_before_ns_, tie, first_robot_ns_);
     RecorderEvent event;
@@ -615,7 +622,7 @@ void RobotConnection::OnAuthenticated() {
     event.workstation_time = WorkstationNow();
     event.robot_time = TimeFromNanoseconds(std::max<int64_t>(first_robot_ns_, 0));
     event.outage = std::chrono::duration_cast<Duration>(
-        std::chrono::milliseconds(outage_clock_.elapsed() + outage_before_ms_));
+        std::chrono::milliseconds(OutageMs() + outage_before_ms_));
     event.robot_time_shift = Duration(time_shift_ns_);
     event.tie_uncertainty = Duration(tie.valid ? tie.uncertainty_ns : 0);
     event.attempts = health_.reconnect_attempts;
@@ -647,7 +654,7 @@ void RobotConnection::OnAuthenticated() {
 
 LinkHealth RobotConnection::health() const {
   LinkHealth h = health_;
-  if (h.outage_open) h.outage_s = (outage_clock_.elapsed() + outage_before_ms_) * 1e-3;
+  if (h.outage_open) h.outage_s = (OutageMs() + outage_before_ms_) * 1e-3;
   const LinkDecoderStats& stats = decoder_link_.stats();
   h.sequence_gaps = stats.sequence[0].gaps;
   h.frames_missing = stats.sequence[0].frames_missing;

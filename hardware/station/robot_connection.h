@@ -228,6 +228,8 @@ class RobotConnection : public QObject {
   void OnRateTimer();
   void OnStallCheck();
   Time WorkstationNow() const;
+  qint64 OutageMs() const;
+  bool SendOwedEmergencyStop(bool require_auth);
   // The authenticated link came up (first time or after an outage).
   void OnAuthenticated();
   // The authenticated link went down: outage bookkeeping and the session's event.
@@ -263,7 +265,7 @@ class RobotConnection : public QObject {
   QElapsedTimer last_rx_;  // Since the last byte received on this connection.
   // Outage bookkeeping.
   bool ever_authenticated_ = false;
-  QElapsedTimer outage_clock_;
+  int64_t outage_start_ns_ = 0;  // SteadyNs() when the loss was noticed (OutageMs).
   qint64 outage_before_ms_ = 0;  // Silence before the loss was noticed.
   int64_t last_robot_ns_ = 0;       // Latest agent header time seen (this epoch).
   int64_t connection_last_robot_ns_ = 0;  // The same, on this connection.
@@ -275,7 +277,8 @@ class RobotConnection : public QObject {
   int64_t first_robot_ns_ = -1;     // First agent header time on this connection.
   std::array<TelemetryResumePosition, 3> positions_{};  // What we hold of each device.
   bool resume_sent_ = false;
-  bool estop_owed_ = false;  // EmergencyStop() not yet acknowledged by the agent
+  bool estop_owed_ = false;      // EmergencyStop() not yet acknowledged by the agent
+  uint32_t estop_sequence_ = 0;  // the latest EmergencyStop frame's sequence
   // Counters at the last rate sample, for per-second rates.
   std::array<DeviceRate, 3> rate_base_{};
   uint64_t frames_base_ = 0;
