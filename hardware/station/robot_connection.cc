@@ -544,6 +544,20 @@ void RobotConnection::OnRateTimer() {
 
 void RobotConnection::OnStallCheck() {
   if (stream_ == nullptr || options_.stall_ms <= 0) return;
+  // A serial line (a radio link) never disconnects, and our Hello may have
+  // gone out while the radio was still down. The agent then never greets
+  // us again, though its telemetry arrives (so no stall either), and this
+  // link stayed unauthenticated, recording the live bytes straight after
+  // the outage's with no resume and no break. Say Hello again each second
+  // until the agent answers.
+  if (health_.state == LinkHealth::State::kAuthenticating && !authenticated_ &&
+      dynamic_cast<SerialStream*>(stream_.get()) != nullptr &&
+      SteadyNs() - handshake_sent_ns_ >= 1000000000) {
+    Hello hello;
+    hello.name = options_.client_name;
+    handshake_sent_ns_ = SteadyNs();
+    SendMessage(hello, false);
+  }
   if (health_.state != LinkHealth::State::kConnected &&
       health_.state != LinkHealth::State::kAuthenticating) {
     return;

@@ -384,6 +384,54 @@ TEST(RobotLinkTcpTest, TheFailedAuthenticationLockoutForgetsAddressesAfterItsDel
   EXPECT_EQ(robot.agent->core().counters().auth_denied, 5u);
 }
 
+// On a serial (radio) link nothing tells the workstation that its Hello was
+// lost: the agent, which never heard it, never greets again, though its
+// telemetry may flow. The workstation says Hello again each second until
+// the agent answers. Here the test plays the agent on a pty and ignores
+// the first two Hellos.
+TEST(RobotLinkSerialTest, AHelloLostOnTheRadioIsSaidAgainUntilTheAgentAnswers) {
+  PtyMasterStream agent_end;
+  QString error;
+  ASSERT_TRUE(agent_end.Open(&error)) << error.toStdString();
+  LinkDecoder decoder;
+  std::vector<QElapsedTimer> hellos;
+  QObject::connect(&agent_end, &ByteStream::bytesReceived, [&](const QByteArray& bytes) {
+    std::vector<LinkMessage> received;
+    decoder.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), bytes.size(), &received);
+    for (const LinkMessage& m : received) {
+      if (std::holds_alternative<Hello>(m.payload)) hellos.emplace_back().start();
+    }
+  });
+  RobotConnection client(ClientOptions("serial:" + agent_end.SlavePath()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  // The agent's telemetry flows meanwhile: no stall, no reconnection.
+  LinkEncoder encoder(LinkSender::kAgent);
+  QElapsedTimer clock;
+  clock.start();
+  while (hellos.size() < 3 && clock.elapsed() < 6000) {
+    Telemetry t;
+    t.device = 1;
+    t.receive_time = TimeFromNanoseconds(clock.nsecsElapsed());
+    t.bytes = {0xA5, 0x5A};
+    const std::vector<uint8_t> frame = encoder.Encode(t.receive_time, t);
+    agent_end.Write(frame.data(), frame.size());
+    Pump(100);
+  }
+  ASSERT_EQ(hellos.size(), 3u) << "the workstation said Hello only " << hellos.size() << " times";
+  EXPECT_FALSE(client.authenticated());
+  Hello hello;
+  hello.name = "fake agent";
+  hello.auth_required = false;
+  const std::vector<uint8_t> frame =
+      encoder.Encode(TimeFromNanoseconds(clock.nsecsElapsed()), hello);
+  agent_end.Write(frame.data(), frame.size());
+  EXPECT_TRUE(WaitFor([&] { return client.authenticated(); }, 3000));
+  const size_t said = hellos.size();
+  Pump(1500);
+  EXPECT_EQ(hellos.size(), said) << "no more Hellos once the agent has answered";
+  client.Shutdown();
+}
+
 TEST(RobotLinkTcpTest, UnauthenticatedRawClientCannotDrive) {
   // A client that skips the handshake and just sends Drive frames.
   SimRobot robot(RobotAgentConfig::LinkKind::kTcp);
