@@ -66,12 +66,13 @@ sim::SimConfig LabWorld() { return sweepscan::testing::ScenarioFile("lab.json");
 
 // The simulated robot of sweepscan-sim, in-process.
 struct SimRobot {
-  explicit SimRobot(RobotAgentConfig::LinkKind link) {
+  explicit SimRobot(RobotAgentConfig::LinkKind link, int auth_failure_delay_ms = 1000) {
     RobotAgentConfig config;
     config.link = link;
     config.listen_port = 0;  // Any free port: tests run in parallel.
     config.agent.key = KeyBytes();
     config.agent.name = "sweepscan-sim test";
+    config.auth_failure_delay_ms = auth_failure_delay_ms;
     auto sim = std::make_unique<SimDevices>(LabWorld(), SimDevices::Mode::kCommanded);
     auto adapter = std::make_unique<Adapter>(std::move(sim));
     adapter_ = adapter.get();
@@ -347,7 +348,8 @@ TEST(RobotLinkTcpTest, WrongKeyIsRefusedAndTheRobotDoesNotMove) {
 // bound (an agent listening where an attacker has many addresses, IPv6).
 // Wrong keys from four loopback addresses, then one more after the delay.
 TEST(RobotLinkTcpTest, TheFailedAuthenticationLockoutForgetsAddressesAfterItsDelay) {
-  SimRobot robot(RobotAgentConfig::LinkKind::kTcp);
+  // A 5 s delay: the four handshakes fit in it on a loaded machine.
+  SimRobot robot(RobotAgentConfig::LinkKind::kTcp, 5000);
   ASSERT_TRUE(robot.started);
   const auto fail_from = [&](const QString& address) {
     QTcpSocket socket;
@@ -378,7 +380,7 @@ TEST(RobotLinkTcpTest, TheFailedAuthenticationLockoutForgetsAddressesAfterItsDel
   for (const char* address : {"127.0.0.2", "127.0.0.3", "127.0.0.4", "127.0.0.5"})
     fail_from(address);
   EXPECT_EQ(robot.agent->auth_failures_remembered(), 4);
-  Pump(1100);  // auth_failure_delay_ms: 1 s
+  Pump(5100);  // auth_failure_delay_ms
   fail_from(QStringLiteral("127.0.0.6"));
   EXPECT_EQ(robot.agent->auth_failures_remembered(), 1);
   EXPECT_EQ(robot.agent->core().counters().auth_denied, 5u);
