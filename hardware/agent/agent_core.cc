@@ -441,7 +441,12 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
     Ack(now, message, AckResult::kAccepted, out);
     return;
   }
-  if (telemetry_held_) ReleaseTelemetry(nullptr, now, out);
+  // An emergency stop does not end the wait for the resume: one pressed as
+  // the link came back (while authenticating) would otherwise take the
+  // resume's place, and the outage's bytes be lost.
+  if (telemetry_held_ && !std::holds_alternative<EmergencyStop>(payload)) {
+    ReleaseTelemetry(nullptr, now, out);
+  }
 
   if (const auto* drive = std::get_if<DriveCommand>(&payload)) {
     if (estop_latched_) {

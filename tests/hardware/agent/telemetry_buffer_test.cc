@@ -119,6 +119,29 @@ TEST_F(BufferingAgentTest, AResumeAfterTheWaitIsRefusedAndTheOutageIsMarkedLost)
   EXPECT_EQ(h_.agent.counters().resumes, 0u);
 }
 
+// An emergency stop as the link comes back (pressed while authenticating)
+// is obeyed at once and does not end the wait for the resume.
+TEST_F(BufferingAgentTest, AnEmergencyStopBeforeTheResumeLeavesTheResumeItsPlace) {
+  ConnectAndAuthenticate(Ms(1));
+  h_.Send(Ms(2), Heartbeat{});
+  ReadChunks(1, 100);
+  h_.agent.OnClientDisconnected(Ms(1001), &h_.out);
+  h_.Collect();
+  ReadChunks(101, 200);
+  ConnectAndAuthenticate(Ms(2005));
+  const size_t mark = h_.received.size();
+  h_.Send(Ms(2006), EmergencyStop{});
+  EXPECT_TRUE(h_.agent.emergency_stop_latched());
+  TelemetryResume resume;
+  resume.devices[0] = {true, Ms(1000), 4};
+  h_.Send(Ms(2007), resume);
+  const auto t = TelemetrySince(mark);
+  ASSERT_EQ(t.size(), 100u);  // 101 .. 200: resent, nothing lost.
+  EXPECT_EQ(ChunkIndex(t.front()), 101);
+  for (const Telemetry& c : t) EXPECT_EQ(c.flags & kTelemetryBreak, 0);
+  EXPECT_EQ(h_.agent.counters().resumes, 1u);
+}
+
 // A serial line never disconnects: a radio link that drops and returns
 // shows as the client's Hello again. What was sent meanwhile went nowhere,
 // so the Hello holds telemetry for the client's resume as a connection
