@@ -327,9 +327,10 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
 
 // The motor board hears a zero from robotd as it starts (a board that kept a
 // crashed agent's last velocity stops: systemd restarts robotd after its
-// watchdog killed it mid-drive) and as robotd's last word on SIGTERM while a
-// client drives (`systemctl stop`, a package upgrade, Ctrl+C).
-TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsAndOnSigtermMidDrive) {
+// watchdog killed it mid-drive), as robotd's last word on SIGTERM while a
+// client drives (`systemctl stop`, a package upgrade, Ctrl+C), and from
+// `--stop-motors` after a crash.
+TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsOnSigtermMidDriveAndAfterACrash) {
   sim::SimConfig world;
   ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
   DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
@@ -337,80 +338,62 @@ TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsAndOnSigtermMidDrive) {
   ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   std::vector<MotorCommand> heard;
   OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
+  // A client of `robotd` driving at 0.3 m/s for 2 s (10 Hz: the ramp gets there).
+  const auto drive = [&](const Robotd& robotd) {
+    auto client = std::make_unique<RobotConnection>(Client(robotd.Address()));
+    EXPECT_TRUE(client->Start(&error)) << error.toStdString();
+    EXPECT_TRUE(WaitFor([&] { return client->authenticated(); }, 30000));
+    for (int i = 0; i < 20; ++i) {
+      client->Drive(0.3, 0.0);
+      sweepscan::testing::Pump(100);
+    }
+    return client;
+  };
+  {
+    Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
+    ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+    ASSERT_TRUE(WaitFor([&] { return !heard.empty(); }, 5000))
+        << "no command reached the motor board as robotd started";
+    EXPECT_EQ(heard.front().vx_mps, 0.0);
+    EXPECT_EQ(heard.front().wz_radps, 0.0);
+    const auto client = drive(robotd);
+    ASSERT_GT(heard.back().vx_mps, 0.2) << "the board never got the drive command";
+    EXPECT_EQ(robotd.Terminate(), 0) << "SIGTERM ends robotd cleanly";
+    sweepscan::testing::Pump(300);  // The pty's last bytes.
+    EXPECT_EQ(heard.back().vx_mps, 0.0) << "robotd's last word to the board was not a stop";
+    EXPECT_EQ(heard.back().wz_radps, 0.0);
+    client->Shutdown();
+  }
+
+  // A crashed robotd (SIGKILL here) says nothing to the board, which drives
+  // on at its last command. `--stop-motors`, which the service runs after
+  // the agent exits however it exits (ExecStopPost), sends the zero command.
   Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
   ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
-  ASSERT_TRUE(WaitFor([&] { return !heard.empty(); }, 5000))
-      << "no command reached the motor board as robotd started";
-  EXPECT_EQ(heard.front().vx_mps, 0.0);
-  EXPECT_EQ(heard.front().wz_radps, 0.0);
-
-  RobotConnection client(Client(robotd.Address()));
-  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
-  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
-  for (int i = 0; i < 20; ++i) {  // 2 s at 10 Hz: the ramp reaches 0.3 m/s.
-    client.Drive(0.3, 0.0);
-    sweepscan::testing::Pump(100);
-  }
-  ASSERT_GT(heard.back().vx_mps, 0.2) << "the board never got the drive command";
-  EXPECT_EQ(robotd.Terminate(), 0) << "SIGTERM ends robotd cleanly";
-  sweepscan::testing::Pump(300);  // The pty's last bytes.
-  EXPECT_EQ(heard.back().vx_mps, 0.0) << "robotd's last word to the board was not a stop";
-  EXPECT_EQ(heard.back().wz_radps, 0.0);
-  client.Shutdown();
-}
-
-// A crashed robotd (SIGKILL here) says nothing to the board, which drives on
-// at its last command. `--stop-motors`, which the service runs after the
-// agent exits however it exits (ExecStopPost), sends the zero command.
-TEST_P(RobotdProcessTest, AfterACrashStopMotorsSendsTheBoardAZeroCommand) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
-  QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
-  std::vector<MotorCommand> heard;
-  OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
-  Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
-  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
-  RobotConnection client(Client(robotd.Address()));
-  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
-  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
-  for (int i = 0; i < 20; ++i) {
-    client.Drive(0.3, 0.0);
-    sweepscan::testing::Pump(100);
-  }
+  const auto client = drive(robotd);
   ASSERT_EQ(::kill(static_cast<pid_t>(robotd.pid()), SIGKILL), 0);
   sweepscan::testing::Pump(300);
   ASSERT_GT(heard.back().vx_mps, 0.2) << "the crash left the board driving";
   const size_t before = heard.size();
-
   QProcess stop;
-  QStringList args = GetParam().command.mid(1);
-  args << "--motor" << ptys.SlavePaths(0)[2] << "--stop-motors";
-  stop.start(GetParam().command.first(), args);
+  const QStringList command = GetParam().command.mid(1);
+  stop.start(GetParam().command.first(),
+             QStringList(command) << "--motor" << ptys.SlavePaths(0)[2] << "--stop-motors");
   ASSERT_TRUE(stop.waitForFinished(60000));
   EXPECT_EQ(stop.exitCode(), 0) << stop.readAllStandardError().toStdString();
   ASSERT_TRUE(WaitFor([&] { return heard.size() > before; }, 5000)) << "nothing reached the board";
   EXPECT_EQ(heard.back().vx_mps, 0.0);
   EXPECT_EQ(heard.back().wz_radps, 0.0);
-
   // A port that is not there: exit 1 with the reason, as the service's log shows.
-  stop.start(GetParam().command.first(), QStringList(args.mid(0, args.size() - 3))
-                                             << "--motor"
-                                             << "/nonexistent/tty"
-                                             << "--stop-motors");
+  stop.start(GetParam().command.first(), QStringList(command) << "--motor"
+                                                              << "/nonexistent/tty"
+                                                              << "--stop-motors");
   ASSERT_TRUE(stop.waitForFinished(60000));
   EXPECT_EQ(stop.exitCode(), 1);
   EXPECT_NE(stop.readAllStandardError().indexOf("--stop-motors"), -1);
-  client.Shutdown();
+  client->Shutdown();
 }
 
-// Issue 31: robotd restarted (systemd's Restart=on-failure, an update)
-// while the workstation records through a relay. Unlike a reboot, the robot
-// clock (CLOCK_MONOTONIC) runs on: the same clock epoch. The recording goes
-// on in the same session, the gap is listed, the bytes the stopped robotd
-// never read are the data lost (marked as a break: the new robotd's buffer
-// starts at its start), and every stream stays in time order.
 TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
   sim::SimConfig world;
   ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());

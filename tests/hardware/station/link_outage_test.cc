@@ -93,6 +93,23 @@ RobotConnectionOptions Client(quint16 port, const QString& session_dir) {
   return options;
 }
 
+// A client of `robot` through a fault proxy, authenticated; `restored`
+// counts its reconnections.
+struct ProxiedClient {
+  explicit ProxiedClient(const Robot& robot)
+      : proxy(robot.agent->tcp_port()), client(Client(proxy.port(), QString())) {
+    QObject::connect(&client, &RobotConnection::linkRestored,
+                     [this](double, const QString&) { ++restored; });
+    QString error;
+    authenticated =
+        client.Start(&error) && WaitFor([this] { return client.authenticated(); }, 10000);
+  }
+  FaultProxy proxy;
+  RobotConnection client;
+  int restored = 0;
+  bool authenticated = false;
+};
+
 // The longest gap between the turns of a 10 ms timer: how long the event
 // loop was blocked (the app's GUI thread would freeze as long).
 class LoopWatch {
@@ -405,14 +422,11 @@ TEST(LinkOutageTest, CutsOfHalfASecondThreeAndTwentySecondsStopTheRobotAndLoseOn
 TEST(LinkOutageTest, AStallOrAHalfOpenLinkStopsTheRobotByTheWatchdog) {
   Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
   ASSERT_TRUE(robot.started);
-  FaultProxy proxy(robot.agent->tcp_port());
-  RobotConnection client(Client(proxy.port(), QString()));
-  int restored = 0;
-  QObject::connect(&client, &RobotConnection::linkRestored,
-                   [&](double, const QString&) { ++restored; });
-  QString error;
-  ASSERT_TRUE(client.Start(&error));
-  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  ProxiedClient link(robot);
+  ASSERT_TRUE(link.authenticated);
+  FaultProxy& proxy = link.proxy;
+  RobotConnection& client = link.client;
+  const int& restored = link.restored;
   for (const char* fault : {"stall", "half-open"}) {
     client.Drive(0.2, 0.0);
     ASSERT_TRUE(WaitFor([&] { return robot.Speed() > 0.15; }, 5000));
@@ -450,14 +464,11 @@ TEST(LinkOutageTest, AStallOrAHalfOpenLinkStopsTheRobotByTheWatchdog) {
 TEST(LinkOutageTest, AnEmergencyStopDuringAnOutageIsLatchedWhenTheLinkReturns) {
   Robot robot(LabWorld(), SimDevices::Mode::kCommanded);
   ASSERT_TRUE(robot.started);
-  FaultProxy proxy(robot.agent->tcp_port());
-  RobotConnection client(Client(proxy.port(), QString()));
-  int restored = 0;
-  QObject::connect(&client, &RobotConnection::linkRestored,
-                   [&](double, const QString&) { ++restored; });
-  QString error;
-  ASSERT_TRUE(client.Start(&error));
-  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  ProxiedClient link(robot);
+  ASSERT_TRUE(link.authenticated);
+  FaultProxy& proxy = link.proxy;
+  RobotConnection& client = link.client;
+  const int& restored = link.restored;
   const AgentCore& core = robot.agent->core();
 
   // Into a vanished host's link: written, never delivered.
@@ -501,14 +512,11 @@ TEST(LinkOutageTest, AResendLargerThanTheSendQueueLimitIsDeliveredNotDropped) {
     c->agent.telemetry_buffer_max_bytes = 16384;
   });
   ASSERT_TRUE(robot.started);
-  FaultProxy proxy(robot.agent->tcp_port());
-  RobotConnection client(Client(proxy.port(), QString()));
-  int restored = 0;
-  QObject::connect(&client, &RobotConnection::linkRestored,
-                   [&](double, const QString&) { ++restored; });
-  QString error;
-  ASSERT_TRUE(client.Start(&error));
-  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 10000));
+  ProxiedClient link(robot);
+  ASSERT_TRUE(link.authenticated);
+  FaultProxy& proxy = link.proxy;
+  RobotConnection& client = link.client;
+  const int& restored = link.restored;
   client.SetLidarMotor(true);
   Pump(2000);
   proxy.CutFor(3000, FaultProxy::RefuseMode::kClosed);
