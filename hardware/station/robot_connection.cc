@@ -433,10 +433,11 @@ void RobotConnection::HandleMessage(const LinkMessage& message) {
     health_.latency_mean_ms = latency_sum_ms_ / static_cast<double>(health_.latency_samples);
     health_.latency_max_ms = std::max(health_.latency_max_ms, latency_ms);
     if (ack->result != AckResult::kAccepted) ++health_.acks_refused;
-    if (ack->acked_type == static_cast<uint8_t>(LinkMessageType::kEmergencyStop))
+    if (ack->acked_type == static_cast<uint8_t>(LinkMessageType::kEmergencyStop) &&
+        ack->acked_sequence == estop_sequence_) {
       estop_owed_ = false;
+    }
   } else if (const auto* status = std::get_if<LinkStatus>(&payload)) {
-    if (status->emergency_stop_latched) estop_owed_ = false;
     health_.have_status = true;
     health_.agent_status = *status;
     emit statusReceived();
@@ -502,7 +503,7 @@ bool RobotConnection::Drive(double v_mps, double w_radps) {
 }
 bool RobotConnection::StopMotion() { return SendMessage(Stop{}, true); }
 // An emergency stop is owed to the robot until the agent says it holds it
-// (its CommandAck, or a LinkStatus with the latch set): written into a link
+// (its CommandAck of the latest stop sent): written into a link
 // that has died but is not yet known dead (Wi-Fi gone, TCP still open for
 // the 2 s of silence), or pressed while the link is down, it never arrives.
 // The watchdog stops the robot during the outage, but after the
@@ -510,7 +511,15 @@ bool RobotConnection::StopMotion() { return SendMessage(Stop{}, true); }
 // stop is sent again right after each authentication.
 bool RobotConnection::EmergencyStop() {
   estop_owed_ = true;
-  return SendMessage(hardware::EmergencyStop{}, false);
+  return SendOwedEmergencyStop(false);
+}
+
+// Only the agent's answer to the latest stop pays it: a late ack of an
+// earlier one (stop, clear, stop on a dying link) must not, and neither
+// must a Status sent before a Clear arrived.
+bool RobotConnection::SendOwedEmergencyStop(bool require_auth) {
+  estop_sequence_ = encoder_.next_sequence();
+  return SendMessage(hardware::EmergencyStop{}, require_auth);
 }
 bool RobotConnection::ClearEmergencyStop() {
   estop_owed_ = false;  // The operator's choice now, whether or not it arrives.
@@ -661,7 +670,7 @@ void RobotConnection::OnAuthenticated() {
   }
   // After the resume: the agent's first command frame releases its
   // telemetry, and the resume must be that frame.
-  if (estop_owed_) SendMessage(hardware::EmergencyStop{}, true);
+  if (estop_owed_) SendOwedEmergencyStop(true);
   emit authenticatedChanged(true);
   if (after_outage) emit linkRestored(health_.outage_s, details);
 }

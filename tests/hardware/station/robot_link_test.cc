@@ -434,6 +434,52 @@ TEST(RobotLinkSerialTest, AHelloLostOnTheRadioIsSaidAgainUntilTheAgentAnswers) {
   client.Shutdown();
 }
 
+// The emergency stop owed to the robot is paid only by the agent's ack of
+// the latest stop: stop, clear, stop on a dying link, and the first stop's
+// late ack must not cancel the second. The test plays the agent on a pty.
+TEST(RobotLinkSerialTest, OnlyTheLatestEmergencyStopsAckPaysWhatIsOwed) {
+  PtyMasterStream agent_end;
+  QString error;
+  ASSERT_TRUE(agent_end.Open(&error)) << error.toStdString();
+  LinkDecoder decoder;
+  std::vector<uint32_t> stops;  // the sequences of the client's EmergencyStop frames
+  QObject::connect(&agent_end, &ByteStream::bytesReceived, [&](const QByteArray& bytes) {
+    std::vector<LinkMessage> received;
+    decoder.Feed(reinterpret_cast<const uint8_t*>(bytes.constData()), bytes.size(), &received);
+    for (const LinkMessage& m : received) {
+      if (std::holds_alternative<EmergencyStop>(m.payload)) stops.push_back(m.header.sequence);
+    }
+  });
+  RobotConnection client(ClientOptions("serial:" + agent_end.SlavePath()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  LinkEncoder encoder(LinkSender::kAgent);
+  const auto say = [&](const LinkPayload& payload) {
+    const std::vector<uint8_t> frame = encoder.Encode(Time(), payload);
+    agent_end.Write(frame.data(), frame.size());
+  };
+  Hello hello;
+  hello.name = "fake agent";
+  say(hello);
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 3000));
+  client.EmergencyStop();
+  client.ClearEmergencyStop();
+  client.EmergencyStop();
+  ASSERT_TRUE(WaitFor([&] { return stops.size() == 2; }, 3000));
+  EXPECT_TRUE(client.emergency_stop_owed());
+  const auto ack = [&](uint32_t sequence) {
+    CommandAck a;
+    a.acked_sequence = sequence;
+    a.acked_type = static_cast<uint8_t>(LinkMessageType::kEmergencyStop);
+    say(a);
+    Pump(200);
+  };
+  ack(stops[0]);  // late: the first stop's
+  EXPECT_TRUE(client.emergency_stop_owed()) << "an earlier stop's ack cancelled the latest";
+  ack(stops[1]);
+  EXPECT_FALSE(client.emergency_stop_owed());
+  client.Shutdown();
+}
+
 TEST(RobotLinkTcpTest, UnauthenticatedRawClientCannotDrive) {
   // A client that skips the handshake and just sends Drive frames.
   SimRobot robot(RobotAgentConfig::LinkKind::kTcp);
