@@ -156,6 +156,10 @@ void SessionReplaySource::Decode() {
 }
 
 void SessionReplaySource::WaitForFront(std::unique_lock<std::mutex>* lock) {
+  // The decoder may be waiting for room that this Take has just made (a
+  // slice that took the whole queue, fewer than 16 scans): wake it before
+  // waiting for it, or both wait on each other.
+  if (queue_.empty() && !decoder_done_) cv_.notify_all();
   cv_.wait(*lock, [this] { return !queue_.empty() || decoder_done_; });
 }
 

@@ -153,10 +153,18 @@ TEST(SessionReplaySourceTest, TheDecoderWaitsAtItsBoundAndLosesNothing) {
   ASSERT_GE(source->decoder_waits(), 1u);
   EXPECT_TRUE(SameRecords(TakeAll(source.get(), 0.25), Whole(Session(), 0.25)));
   EXPECT_LE(source->peak_queued_samples(), ahead + 1000);  // an X4 scan: ~700 samples
-  // Rewound and dropped while its decoder waits: no hang.
+  // Rewound, and once its decoder waits at the bound, one slice that takes
+  // the whole queue (fewer than 16 scans, so no wake-up on the way): it
+  // must wake the decoder before waiting for more. It hung there, now and
+  // then, when the decoder had filled the queue before the slice.
+  const size_t waits = source->decoder_waits();
   source->Rewind();
+  for (int i = 0; i < 10000 && source->decoder_waits() == waits; ++i) usleep(1000);
+  ASSERT_GT(source->decoder_waits(), waits);
   SensorLog first;
-  source->Take(source->start() + FromSeconds(1.0), &first);
+  source->Take(source->start() + FromSeconds(3.0), &first);
+  EXPECT_GT(first.scans.size(), 6u);  // more than the bound's ~6 scans: the decoder went on
+  // Dropped while its decoder waits: no hang.
   source.reset();
 }
 
