@@ -387,6 +387,40 @@ TEST_F(CalibrationTest, SolveCanBeCancelledAndTheAppStaysResponsive) {
   EXPECT_FALSE(workspace_->job_running());
 }
 
+// Picks are points of the session they were picked in: the same session
+// opened again keeps them and their undo history; another one clears both,
+// and the panel says what went.
+TEST_F(CalibrationTest, PairsStayWithTheirSessionAndGoWhenAnotherOpens) {
+  OpenDiamond();
+  CalibrationPanel* panel = window_->calibration_panel();
+  for (int i = 0; i < 2; ++i) {
+    panel->AddPick(kDiamondCorners[i]);
+    panel->AddPick(kDiamondCorners[i]);
+  }
+  panel->AddPick(kDiamondCorners[2]);
+  ASSERT_EQ(panel->pair_points().size(), 3u);
+  QUndoStack* history = window_->session_undo_stack();
+  const int commands = history->count();
+  ASSERT_EQ(commands, 5);
+
+  OpenDiamond();
+  EXPECT_EQ(panel->pair_points().size(), 3u);
+  EXPECT_EQ(history->count(), commands);
+  EXPECT_EQ(panel->pick_prompt().indexOf("cleared"), -1) << panel->pick_prompt().toStdString();
+
+  workspace_->NewSession();
+  EXPECT_TRUE(panel->pair_points().empty());
+  EXPECT_EQ(history->count(), 0);
+  EXPECT_FALSE(window_->undo_group()->canUndo());
+  EXPECT_NE(panel->pick_prompt().indexOf("the 3 pairs picked in diamond.sweepscan were cleared"),
+            -1)
+      << panel->pick_prompt().toStdString();
+  // Picking again: the note has been read.
+  panel->AddPick(kDiamondCorners[0]);
+  EXPECT_EQ(panel->pick_prompt().indexOf("cleared"), -1) << panel->pick_prompt().toStdString();
+  EXPECT_EQ(history->count(), 1);
+}
+
 // The automatic mode, one button beside Solve, gives what
 // `sweepscan-cli calibrate SESSION --auto` gives.
 TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {

@@ -3,6 +3,7 @@
 #include <QCheckBox>
 #include <QDoubleSpinBox>
 #include <QFileDialog>
+#include <QFileInfo>
 #include <QGridLayout>
 #include <QGroupBox>
 #include <QHBoxLayout>
@@ -128,15 +129,38 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
           [this](int i, double cost) { plot_->Add(i, cost); });
   connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
   connect(workspace_, &Workspace::passesSplit, this, &CalibrationPanel::OnPassesSplit);
-  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+  connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
     after_->setChecked(false);
     pass_shown_ = -1;
+    // Picks are points of one session's cloud: another session's pairs (and
+    // their undo history) would pair points of a cloud no longer shown. The
+    // same session opened again keeps them.
+    if (dir != pairs_session_) {
+      if (!pairs_.empty()) {
+        const QString where =
+            pairs_session_.isEmpty() ? tr("the live cloud") : QFileInfo(pairs_session_).fileName();
+        dropped_note_ =
+            pairs_.size() == 1
+                ? tr("Another session opened: the pair picked in %1 was cleared (the pairs' "
+                     "Save… keeps pairs in a file).")
+                      .arg(where)
+                : tr("Another session opened: the %1 pairs picked in %2 were cleared (the "
+                     "pairs' Save… keeps pairs in a file).")
+                      .arg(pairs_.size())
+                      .arg(where);
+      }
+      pairs_.clear();
+      undo_->clear();
+      pairs_session_ = dir;
+    }
     passes_->setText(workspace_->circle_drive()
                          ? tr("Opened %1; splitting the passes when it has replayed.")
                                .arg(workspace_->circle_drive_note())
                          : tr("Not a calibration drive: %1").arg(workspace_->circle_drive_note()));
     Refresh();
   });
+  connect(workspace_, &Workspace::sessionRenamed, this,
+          [this](const QString& dir) { pairs_session_ = dir; });
   // The passes are split once the opened circle drive has replayed; after a
   // before / after replay the same labels are given to the new cloud.
   connect(workspace_, &Workspace::replayFinished, this, [this] {
@@ -586,6 +610,8 @@ void CalibrationPanel::UseForRobot() {
 
 QString CalibrationPanel::result_text() const { return result_->text(); }
 
+QString CalibrationPanel::pick_prompt() const { return next_pick_->text(); }
+
 void CalibrationPanel::Refresh() {
   const PickCalibrationResult* result = workspace_->calibration_result();
   // Per-pair distances belong to the picks they were solved from.
@@ -630,11 +656,14 @@ void CalibrationPanel::Refresh() {
   view_->SetMarkers(markers);
 
   const bool open_b = !pairs_.empty() && !pairs_.back().has_b;
+  if (!pairs_.empty()) dropped_note_.clear();  // Picking again: the note has been read.
   next_pick_->setText(
-      open_b ? tr("Shift + click the <b style='color:#ff3cc8'>same corner in pass B</b>.")
-             : tr("Shift + click a target corner in <b style='color:#00b4e6'>pass A</b> "
-                  "(%1 complete pairs; at least 4).")
-                   .arg(pairs().size()));
+      (open_b ? tr("Shift + click the <b style='color:#ff3cc8'>same corner in pass B</b>.")
+              : tr("Shift + click a target corner in <b style='color:#00b4e6'>pass A</b> "
+                   "(%1 complete pairs; at least 4).")
+                    .arg(pairs().size())) +
+      (dropped_note_.isEmpty() ? QString()
+                               : QStringLiteral("<br>") + dropped_note_.toHtmlEscaped()));
   const bool opened = workspace_->recording_opened() != nullptr;
   solve_->setEnabled(!solving_ && pairs().size() >= 4 && opened);
   auto_->setEnabled(!solving_ && opened);

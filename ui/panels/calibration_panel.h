@@ -70,6 +70,8 @@ class CalibrationPanel : public QWidget {
   // Makes the result the robot's calibration for live scans and new recordings.
   void UseForRobot();
   QString result_text() const;
+  // Step 3's prompt: what to pick next, and what opening another session cleared.
+  QString pick_prompt() const;
 
   // The pairs as the panel holds them (B may be missing on the last one).
   struct PairPoints {
@@ -119,6 +121,8 @@ class CalibrationPanel : public QWidget {
   QLabel* next_pick_;
   QLabel* result_;
   CostPlot* plot_;
+  QString pairs_session_;  // the session the pairs were picked in
+  QString dropped_note_;   // what opening another session cleared
 };
 
 }  // namespace sweepscan::ui
