@@ -41,7 +41,10 @@ const char* const kProjectUsage =
     "                     point-to-plane ICP. Overlap that leaves a direction free\n"
     "                     (a bare corridor) is refused; pick pairs across it and\n"
     "                     add --hold-free: ICP then keeps the pairs' position along\n"
-    "                     that direction and the project records it as free\n"
+    "                     that direction and the project records it as free.\n"
+    "                     A session whose cloud cannot be built is reported and the\n"
+    "                     others are still placed and saved (exit 1); a session is\n"
+    "                     never placed against one placed against it\n"
     "  export PROJECT --out FILE.las|FILE.ply|FILE.pcd [--sessions ID,ID]\n"
     "                     the placed, visible sessions' clouds in the project frame;\n"
     "                     LAS is streamed one session at a time, each its own\n"
@@ -93,7 +96,7 @@ int RunNew(const Args& args) {
                   pos[i] + ": not a session folder (paths are relative to the project's folder)");
     }
     ProjectSession* added = nullptr;
-    const Status s = project.AddSession(pos[i], &added);
+    const Status s = project.AddSession(pos[i], &added, file);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
     added->calibration = calibration;
   }
@@ -127,7 +130,7 @@ int RunAdd(const Args& args) {
       return Fail(kExitBadInput, pos[i] + ": not a session folder (paths are relative to the project's folder)");
     }
     ProjectSession* added = nullptr;
-    s = project.AddSession(pos[i], &added);
+    s = project.AddSession(pos[i], &added, pos[0]);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
     added->calibration = calibration;
     std::cerr << "added '" << added->id << "'"

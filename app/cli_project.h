@@ -30,6 +30,7 @@ class SessionClouds {
   std::string file_;
   hardware::SessionCloudOptions options_;
   std::map<std::string, hardware::SessionCloud> clouds_;
+  std::map<std::string, std::string> failed_;  // id -> why its cloud could not be built
 };
 
 // The placed, visible sessions' points (or --sessions ID,ID's) in the

@@ -42,11 +42,16 @@ int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions*
 const hardware::SessionCloud* SessionClouds::Get(const ProjectSession& session, std::string* error) {
   auto it = clouds_.find(session.id);
   if (it != clouds_.end()) return &it->second;
+  // A session that failed is not built again (align asks for each pair).
+  if (auto f = failed_.find(session.id); f != failed_.end()) {
+    *error = f->second;
+    return nullptr;
+  }
   hardware::SessionCloud cloud;
   std::cerr << "building the cloud of '" << session.id << "'...\n";
   const Status s = hardware::LoadSessionCloud(file_, session, options_, &cloud);
   if (!s.ok()) {
-    *error = s.message();
+    *error = failed_[session.id] = s.message();
     return nullptr;
   }
   if (!cloud.damage.empty()) {
@@ -148,6 +153,13 @@ int RunProjectAlign(const Args& args) {
   if (args.Has("to") && project.Find(args.Get("to")) < 0) {
     return (PrintError("no session '" + args.Get("to") + "' in " + file), kExitBadInput);
   }
+  if (args.Has("to") && !realigned.empty() && project.PlacedThrough(args.Get("to"), realigned)) {
+    return (PrintError("'" + args.Get("to") + "' is placed against '" + realigned +
+                       "' (or against a session placed against it): placing '" + realigned +
+                       "' against it would move it along; align '" + args.Get("to") +
+                       "' to another session first"),
+            kExitBadInput);
+  }
   std::vector<PointPair> pairs;
   if (args.Has("pairs")) {
     if (!args.Has("to") || unplaced.size() != 1) {
@@ -169,15 +181,27 @@ int RunProjectAlign(const Args& args) {
       ProjectSession& ps = project.sessions[project.Find(*it)];
       std::string error;
       const hardware::SessionCloud* src = clouds.Get(ps, &error);
-      if (src == nullptr) return (PrintError(error), kExitBadInput);
+      if (src == nullptr) {
+        // One unreadable session costs its own placement, not the others'
+        // (each of which may have taken minutes).
+        refusals[ps.id] = "\n  its cloud cannot be built: " + error;
+        ++it;
+        continue;
+      }
       const std::vector<Eigen::Vector3f> source = hardware::Positions(src->points);
       std::optional<hardware::RegistrationAttempt> best;
       std::string reasons;
       for (const ProjectSession& ref : project.sessions) {
         if (!ref.project_from_session || ref.id == ps.id) continue;
         if (args.Has("to") && ref.id != args.Get("to")) continue;
+        // A session placed against this one would move with it
+        // (MoveDependants) and the two would refer to each other.
+        if (project.PlacedThrough(ref.id, ps.id)) continue;
         const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
-        if (tgt == nullptr) return (PrintError(error), kExitBadInput);
+        if (tgt == nullptr) {
+          reasons += "\n  against '" + ref.id + "': its cloud cannot be built: " + error;
+          continue;
+        }
         std::cerr << "aligning '" << ps.id << "' to '" << ref.id << "'...\n";
         hardware::RegistrationAttempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
         if (!a.status.ok()) {

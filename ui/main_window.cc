@@ -705,6 +705,7 @@ void MainWindow::UpdateActions() {
 
 void MainWindow::ShowError(const QString& title, const QString& message) {
   last_error_ = message;
+  ++errors_shown_;
   statusBar()->showMessage(title + QStringLiteral(": ") + message, 10000);
   if (interactive_) QMessageBox::warning(this, title, message);
 }

@@ -74,6 +74,7 @@ class MainWindow : public QMainWindow {
   // then errors go to lastError() and unsaved recordings stay where they are.
   void SetInteractive(bool interactive) { interactive_ = interactive; }
   QString last_error() const { return last_error_; }
+  int errors_shown() const { return errors_shown_; }  // ShowError calls so far
   // Event-loop latency samples (ms) measured by the GUI tick, for figures,
   // from the view's first frame on (that frame loads the GL driver).
   const std::vector<double>& tick_latencies_ms() const { return latencies_ms_; }
@@ -184,6 +185,7 @@ class MainWindow : public QMainWindow {
 
   bool interactive_ = true;
   QString last_error_;
+  int errors_shown_ = 0;
   QSet<int> keys_held_;
   // Forgets the held drive keys and stops the keyboard's motion.
   void ReleaseDriveKeys();

@@ -86,6 +86,13 @@ int64_t JsonObject::Integer(const std::string& key) const {
   return v.get<int64_t>();
 }
 
+uint64_t JsonObject::Count(const std::string& key) const {
+  const nlohmann::json& v = Get(key);
+  if (v.is_number_unsigned()) return v.get<uint64_t>();
+  if (!v.is_number_integer()) Fail(key, "expected a whole number >= 0, got " + JsonTypeName(v));
+  Fail(key, "must be >= 0, got " + std::to_string(v.get<int64_t>()));
+}
+
 bool JsonObject::Bool(const std::string& key, bool fallback) const {
   if (!Has(key)) return fallback;
   const nlohmann::json& v = Get(key);

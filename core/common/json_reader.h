@@ -42,6 +42,9 @@ class JsonObject {
   double NonNegative(const std::string& key, double fallback) const;
   double InRange(const std::string& key, double lo, double hi, double fallback) const;
   int64_t Integer(const std::string& key) const;
+  // A whole number >= 0 up to 2^64 - 1 (an int64 read of one above 2^63 would
+  // wrap negative).
+  uint64_t Count(const std::string& key) const;
   bool Bool(const std::string& key, bool fallback) const;
   std::string String(const std::string& key) const;
   std::string String(const std::string& key, const std::string& fallback) const {

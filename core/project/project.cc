@@ -72,9 +72,27 @@ Rigid3d ReadPose(const JsonObject& o) {
   return Rigid3d(t, Eigen::Quaterniond(q[0], q[1], q[2], q[3]));
 }
 
+// The covariance a registration reported: finite, symmetric and positive
+// semi-definite, or it is not a covariance (a hand edit gone wrong) and its
+// square roots, the sigmas shown, would mean nothing.
+void CheckCovariance(const JsonObject& o, const std::array<double, 36>& c) {
+  Eigen::Matrix<double, 6, 6> m;
+  for (int i = 0; i < 36; ++i) {
+    if (!std::isfinite(c[i])) o.Fail("covariance", "entry " + std::to_string(i) + " is not finite");
+    m(i / 6, i % 6) = c[i];
+  }
+  const double scale = m.cwiseAbs().maxCoeff();
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
+    o.Fail("covariance", "must be symmetric (row-major 6 x 6)");
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(m);
+  if (es.eigenvalues().minCoeff() < -1e-9 * scale) {
+    o.Fail("covariance", "must be positive semi-definite, smallest eigenvalue " +
+                             std::to_string(es.eigenvalues().minCoeff()));
+  }
+}
+
 RegistrationEvidence ReadEvidence(const JsonObject& o) {
-  o.AllowOnly({"method", "reference", "rms_m", "overlap", "correspondences", "iterations",
-               "covariance", "free_direction", "pairs", "time_utc"});
   static const std::set<std::string> kMethods = {"anchor", "manual", "pairs", "planes",
                                                  "planes+icp", "pairs+icp", "icp"};
   RegistrationEvidence e;
@@ -83,13 +101,18 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
     o.Fail("method", "unknown method '" + e.method +
                          "' (anchor, manual, pairs, planes, planes+icp, pairs+icp, icp)");
   }
+  // The anchor was measured against nothing: any evidence beside its method
+  // would be dropped on the next save without a word.
+  if (e.method == "anchor") {
+    o.AllowOnly({"method", "reference"});
+  } else {
+    o.AllowOnly({"method", "reference", "rms_m", "overlap", "correspondences", "iterations",
+                 "covariance", "free_direction", "pairs", "time_utc"});
+  }
   e.reference = o.String("reference", "");
   e.rms_m = o.NonNegative("rms_m", 0.0);
   e.overlap = o.InRange("overlap", 0.0, 1.0, 0.0);
-  const int64_t correspondences = o.Has("correspondences") ? o.Integer("correspondences") : 0;
-  if (correspondences < 0)
-    o.Fail("correspondences", "must be >= 0, got " + std::to_string(correspondences));
-  e.correspondences = static_cast<uint64_t>(correspondences);
+  e.correspondences = o.Has("correspondences") ? o.Count("correspondences") : 0;
   const int64_t iterations = o.Has("iterations") ? o.Integer("iterations") : 0;
   if (iterations < 0 || iterations > 1000000) {
     o.Fail("iterations", "must be within 0..1000000, got " + std::to_string(iterations));
@@ -98,6 +121,7 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
   if (o.Has("covariance")) {
     const Eigen::Matrix<double, 36, 1> c = Numbers<36>(o, "covariance");
     for (int i = 0; i < 36; ++i) e.covariance[i] = c[i];
+    CheckCovariance(o, e.covariance);
   }
   if (o.Has("free_direction")) {
     e.free_direction = Numbers<3>(o, "free_direction");
@@ -161,6 +185,48 @@ ProjectSession ReadSession(const JsonObject& o) {
   return s;
 }
 
+// The path as the file compares it: normal form, no trailing separator
+// ("room.sweepscan/" is "room.sweepscan", what tab completion gives).
+fs::path PathKey(const std::string& path) {
+  fs::path p = fs::path(path).lexically_normal();
+  if (p.filename().empty() && p.has_parent_path()) p = p.parent_path();
+  return p;
+}
+
+// JSON strings are UTF-8 (RFC 8259 section 8.1); a folder name in another
+// encoding could not be saved.
+bool IsUtf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int n = 0;
+    uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c & 0xe0) == 0xc0) {
+      n = 1, cp = c & 0x1f;
+    } else if ((c & 0xf0) == 0xe0) {
+      n = 2, cp = c & 0x0f;
+    } else if ((c & 0xf8) == 0xf0) {
+      n = 3, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    for (int k = 1; k <= n; ++k) {
+      if (i + k >= s.size()) return false;
+      const auto d = static_cast<unsigned char>(s[i + k]);
+      if ((d & 0xc0) != 0x80) return false;
+      cp = (cp << 6) | (d & 0x3f);
+    }
+    // Overlong forms, surrogates and beyond U+10FFFF are not UTF-8.
+    static const uint32_t kMin[4] = {0, 0x80, 0x800, 0x10000};
+    if (cp < kMin[n] || (cp >= 0xd800 && cp <= 0xdfff) || cp > 0x10ffff) return false;
+    i += n + 1;
+  }
+  return true;
+}
+
 json EvidenceJson(const RegistrationEvidence& e) {
   json j = {{"method", e.method}};
   if (!e.reference.empty()) j["reference"] = e.reference;
@@ -207,12 +273,26 @@ std::string SessionColor(size_t index) {
   return kTableau10[index % 10];
 }
 
-Status Project::AddSession(const std::string& path, ProjectSession** added) {
-  const auto normal = [](const std::string& p) {
-    return fs::path(p).lexically_normal().string();
+Status Project::AddSession(const std::string& path, ProjectSession** added,
+                           const std::string& project_file) {
+  if (!IsUtf8(path)) {
+    return Status::Error(json(path).dump(-1, ' ', true, json::error_handler_t::replace) +
+                         ": the folder's name is not UTF-8, which a project file (JSON) cannot "
+                         "hold; rename the folder");
+  }
+  // The same folder however it is written: relative or absolute, with or
+  // without a trailing separator, through "..".
+  const auto where = [&](const std::string& p) {
+    ProjectSession probe;
+    probe.path = p;
+    std::error_code error;
+    const fs::path resolved = PathKey(ResolveSessionPath(project_file, probe));
+    const fs::path canonical = fs::weakly_canonical(resolved, error);
+    return error ? resolved : PathKey(canonical.string());
   };
+  const fs::path key = where(path);
   for (const ProjectSession& s : sessions) {
-    if (normal(s.path) == normal(path)) {
+    if (PathKey(s.path) == PathKey(path) || where(s.path) == key) {
       return Status::Error(path + ": already in the project as '" + s.id + "'");
     }
   }
@@ -264,6 +344,17 @@ Status Project::RemoveSession(const std::string& id) {
   }
   sessions.erase(sessions.begin() + i);
   return Status::Ok();
+}
+
+bool Project::PlacedThrough(const std::string& id, const std::string& on) const {
+  std::set<std::string> seen;
+  for (int i = Find(id); i >= 0 && seen.insert(sessions[i].id).second;) {
+    const std::string& reference = sessions[i].registration.reference;
+    if (reference.empty()) return false;
+    if (reference == on) return true;
+    i = Find(reference);
+  }
+  return false;
 }
 
 std::vector<std::string> Project::MoveDependants(const std::string& id, const Rigid3d& delta) {
@@ -322,7 +413,7 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
       ProjectSession ps = ReadSession(JsonObject(sessions[i], path));
       if (p.Find(ps.id) >= 0) throw JsonError(path + ".id: '" + ps.id + "' appears twice");
       for (const ProjectSession& other : p.sessions) {
-        if (fs::path(other.path).lexically_normal() == fs::path(ps.path).lexically_normal()) {
+        if (PathKey(other.path) == PathKey(ps.path)) {
           throw JsonError(path + ".path: '" + ps.path + "' is also session '" + other.id + "'");
         }
       }
@@ -332,9 +423,28 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
     for (const ProjectSession& ps : p.sessions) anchors += ps.registration.method == "anchor";
     if (anchors > 1) throw JsonError("sessions: more than one anchor");
     for (const ProjectSession& ps : p.sessions) {
-      if (!ps.registration.reference.empty() && p.Find(ps.registration.reference) < 0) {
-        throw JsonError("sessions: '" + ps.id + "' refers to an unknown session '" +
-                        ps.registration.reference + "'");
+      const std::string& reference = ps.registration.reference;
+      if (reference.empty()) continue;
+      const int r = p.Find(reference);
+      if (r < 0) {
+        throw JsonError("sessions: '" + ps.id + "' refers to an unknown session '" + reference +
+                        "'");
+      }
+      if (reference == ps.id) throw JsonError("sessions: '" + ps.id + "' is placed against itself");
+      if (!p.sessions[r].project_from_session) {
+        throw JsonError("sessions: '" + ps.id + "' is placed against '" + reference +
+                        "', which is not placed");
+      }
+      // A loop of references places its sessions against each other and
+      // nothing else: none of them can be removed, and placing one again
+      // would move the others with it.
+      if (p.PlacedThrough(reference, ps.id)) {
+        std::string chain = ps.id;
+        for (int i = r; i >= 0 && p.sessions[i].id != ps.id;
+             i = p.Find(p.sessions[i].registration.reference)) {
+          chain += " -> " + p.sessions[i].id;
+        }
+        throw JsonError("sessions: the references form a loop: " + chain + " -> " + ps.id);
       }
     }
     *project = std::move(p);

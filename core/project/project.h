@@ -97,8 +97,11 @@ struct Project {
   // Adds a session folder (path as given; relative paths are relative to
   // the project's folder). The id is the folder's name without
   // ".sweepscan", made unique with a suffix; the first session becomes the
-  // anchor. Refuses a path already in the project.
-  Status AddSession(const std::string& path, ProjectSession** added);
+  // anchor. Refuses a path already in the project, however written (relative
+  // or absolute, a trailing separator; resolved against `project_file`'s
+  // folder when given), and a name that is not UTF-8.
+  Status AddSession(const std::string& path, ProjectSession** added,
+                    const std::string& project_file = "");
   // Removes it; refuses the anchor while other sessions are placed, and a
   // session others are placed against (their reference).
   Status RemoveSession(const std::string& id);
@@ -107,6 +110,11 @@ struct Project {
   // against them, were measured relative to it: they move by `delta` too.
   // Returns their ids.
   std::vector<std::string> MoveDependants(const std::string& id, const Rigid3d& delta);
+  // Whether `id`'s pose rests on `on`'s: `on` is its reference, or its
+  // reference's, and so on. Such a session cannot be what `on` is placed
+  // against: MoveDependants would move it with `on`, and the two would
+  // refer to each other.
+  bool PlacedThrough(const std::string& id, const std::string& on) const;
 };
 
 // The distinct colours new sessions get in turn (Tableau 10).

@@ -21,6 +21,7 @@
 #include <QPushButton>
 #include <QTest>
 #include <QTreeWidget>
+#include <QTreeWidgetItem>
 #include <QUndoGroup>
 #include <QUndoStack>
 #include <algorithm>
@@ -216,6 +217,11 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   });
   QTest::mouseClick(panel->align_button(), Qt::LeftButton);
   ASSERT_TRUE(project()->busy());
+  // Saved under another name meanwhile: the same project and sessions, so
+  // the alignment's result still applies (it was dropped, unannounced).
+  const QString renamed = QString::fromStdString(Dir()) + "/align-renamed.sweepscan-project";
+  ASSERT_TRUE(project()->SaveProjectAs(renamed));
+  ASSERT_TRUE(project()->busy());
   // A frame of session a, as above; a registration on the GUI thread
   // would hold it for seconds.
   testing::ExpectResponsive("aligning", TurnsWhileBusy(120000), kFrameCpuBoundMs);
@@ -250,10 +256,71 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   ASSERT_TRUE(project()->SaveProject());
   EXPECT_FALSE(window_->isWindowModified());
   Project saved;
-  ASSERT_TRUE(LoadProject(file.toStdString(), &saved).ok());
+  ASSERT_TRUE(LoadProject(renamed.toStdString(), &saved).ok());
   ASSERT_TRUE(saved.sessions[1].project_from_session.has_value());
   EXPECT_LT((saved.sessions[1].project_from_session->translation() - s.project_from_session->translation()).norm(),
             1e-9);
+}
+
+// A project as a file can hold it: a the anchor, `second` placed by hand
+// against a and `third` against `second` (identity poses: the test is
+// about what loads and what may be aligned to what, not where).
+QString HandPlacedProject(const std::string& dir, const std::string& name,
+                          const std::string& second, const std::string& third) {
+  Project p;
+  p.name = name;
+  EXPECT_TRUE(p.AddSession("a.sweepscan", nullptr).ok());
+  const std::string ids[2] = {second, third};
+  for (int k = 0; k < 2; ++k) {
+    ProjectSession* s = nullptr;
+    EXPECT_TRUE(p.AddSession(ids[k] + ".sweepscan", &s).ok());
+    s->project_from_session = Rigid3d::Identity();
+    s->registration.method = "manual";
+    s->registration.reference = k == 0 ? "a" : second;
+  }
+  const std::string file = dir + "/" + name + ".sweepscan-project";
+  EXPECT_TRUE(SaveProject(file, p).ok());
+  return QString::fromStdString(file);
+}
+
+// One session whose folder cannot be read costs its own cloud, not the
+// others': they are drawn, the panel says which failed and why, and the
+// error is shown once, not again at every edit.
+TEST_F(ProjectUiTest, AnUnreadableSessionIsMarkedAndTheOthersAreDrawn) {
+  ASSERT_TRUE(QDir().mkpath(QString::fromStdString(Dir()) + "/broken.sweepscan"));
+  const QString file = HandPlacedProject(Dir(), "unreadable", "broken", "b");
+  const int errors = window_->errors_shown();
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  WaitFor([&] { return project()->layer()->drawn_sessions().size() >= 2; }, 20000);
+  EXPECT_EQ(project()->layer()->drawn_sessions(), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+  EXPECT_NE(window_->last_error().indexOf("broken.sweepscan"), -1)
+      << window_->last_error().toStdString();
+  QTreeWidgetItem* broken = project()->panel()->item("broken");
+  ASSERT_NE(broken, nullptr);
+  EXPECT_TRUE(broken->text(1).startsWith("cannot load: ")) << broken->text(1).toStdString();
+  EXPECT_NE(project()->load_failure("broken"), QString());
+  // An edit does not try (and fail, and say so) again.
+  project()->SetColor("b", "#00ff00");
+  QCoreApplication::processEvents();
+  TurnsWhileBusy(60000);
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+}
+
+// A session is never aligned to one placed against it (directly or through
+// others): it would move along, and the two would refer to each other.
+TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
+  const QString file = HandPlacedProject(Dir(), "chain", "b", "c");
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  ProjectPanel* panel = project()->panel();
+  panel->SelectSession("b");
+  ASSERT_EQ(panel->reference_box()->count(), 1);
+  EXPECT_EQ(panel->reference_box()->itemText(0), "a");
+  EXPECT_FALSE(project()->Align("b", "c"));
+  panel->SelectSession("c");
+  EXPECT_EQ(panel->reference_box()->count(), 2);  // a and b
 }
 
 // Edit > Undo acts on the history edited last: the session's (a view edit

@@ -65,6 +65,7 @@ ProjectController::ProjectController(QWidget* window, CloudView* view,
     picking_->Cancel();
     preview_.clear();
     clouds_.clear();
+    load_failures_.clear();
     layer_->Clear();
     emit cloudsChanged();
     shown_pending_ = document_.is_open();
@@ -190,7 +191,8 @@ bool ProjectController::AddSession(const QString& dir) {
   }
   Project after = document_.project();
   ProjectSession* added = nullptr;
-  const Status s = after.AddSession(document_.StoredPath(dir), &added);
+  const Status s =
+      after.AddSession(document_.StoredPath(dir), &added, document_.path().toStdString());
   if (!s.ok()) {
     show_error_(tr("Cannot add the session"), QString::fromStdString(s.message()));
     return false;
@@ -299,13 +301,26 @@ void ProjectController::OnChanged() {
   LoadMissing();
 }
 
+QString ProjectController::load_failure(const std::string& id) const {
+  const auto f = load_failures_.find(id);
+  if (f == load_failures_.end()) return QString();
+  const int i = document_.project().Find(id);
+  if (i < 0 ||
+      CloudKey(document_.path().toStdString(), document_.project().sessions[i]) != f->second.key) {
+    return QString();  // Changed since: it will be tried again.
+  }
+  return f->second.why;
+}
+
 void ProjectController::LoadMissing() {
   if (jobs_.running() || !document_.is_open()) return;
   std::vector<ProjectSession> todo;
   for (const ProjectSession& s : ShownProject().sessions) {
+    const std::string key = CloudKey(document_.path().toStdString(), s);
     const auto c = clouds_.find(s.id);
-    if (s.project_from_session && s.visible &&
-        (c == clouds_.end() || c->second->key != CloudKey(document_.path().toStdString(), s))) {
+    const auto failed = load_failures_.find(s.id);
+    if (s.project_from_session && s.visible && (c == clouds_.end() || c->second->key != key) &&
+        (failed == load_failures_.end() || failed->second.key != key)) {
       todo.push_back(s);
     }
   }
@@ -317,10 +332,12 @@ void ProjectController::LoadMissing() {
     return;
   }
   const std::string file = document_.path().toStdString();
-  const uint64_t generation = document_.generation();
+  const uint64_t generation = document_.opened_count();
   jobs_.Run(
       tr("Loading the project"),
-      [this, todo, file, generation](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
+      [this, todo, file, generation](std::atomic<bool>* cancel,
+                                     const ProjectJobs::Progress& progress) {
+        QString failures;
         for (size_t k = 0; k < todo.size() && !*cancel; ++k) {
           const QString what = tr("Loading '%1' (%2 of %3)").arg(Id(todo[k].id)).arg(k + 1).arg(todo.size());
           ProjectCloudPtr cloud;
@@ -329,10 +346,21 @@ void ProjectController::LoadMissing() {
             return !*cancel;
           }, &cloud);
           if (*cancel) return tr("cancelled");
-          if (!s.ok()) return QString::fromStdString(s.message());
+          if (!s.ok()) {
+            // One unreadable session costs its own cloud, not the others'.
+            const QString why = QString::fromStdString(s.message());
+            failures += (failures.isEmpty() ? QString() : QStringLiteral("\n")) + why;
+            QMetaObject::invokeMethod(
+                this, [this, id = todo[k].id, key = CloudKey(file, todo[k]), why, generation] {
+                  if (document_.opened_count() != generation) return;
+                  load_failures_[id] = {key, why};
+                  panel_->Refresh();
+                });
+            continue;
+          }
           // Drawn as soon as built, not after the last one.
           QMetaObject::invokeMethod(this, [this, cloud, generation] {
-            if (document_.generation() != generation) return;
+            if (document_.opened_count() != generation) return;
             clouds_[cloud->id] = cloud;
             if (!cloud->damage.empty()) {
               emit message(tr("%1: %2").arg(Id(cloud->id), QString::fromStdString(cloud->damage)));
@@ -342,13 +370,15 @@ void ProjectController::LoadMissing() {
             emit cloudsChanged();
           });
         }
-        return QString();
+        return failures;
       },
       [this, generation](const QString& error) {
-        const bool stale = document_.generation() != generation;
+        const bool stale = document_.opened_count() != generation;
         if (!error.isEmpty() && !jobs_.cancelled() && !stale) {
-          show_error_(tr("Cannot load the project's sessions"), error);
-          return;  // Not again and again: the next edit tries again.
+          // Once: a failed session is not tried again until its folder or
+          // calibration changes (load_failures_); the others are drawn.
+          show_error_(tr("Cannot load the project's sessions"),
+                      error + tr("\n\nThe other sessions are shown."));
         }
         if (jobs_.cancelled() && !stale) {
           emit message(tr("Loading cancelled"));
@@ -363,8 +393,8 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
   const Project& p = document_.project();
   const int i = p.Find(id), r = p.Find(reference);
   if (jobs_.running() || i < 0 || r < 0 || i == r || i == p.Anchor() ||
-      !p.sessions[r].project_from_session) {
-    return false;
+      !p.sessions[r].project_from_session || p.PlacedThrough(reference, id)) {
+    return false;  // A session placed against `id` would move with it.
   }
   const ProjectSession source = p.sessions[i], target = p.sessions[r];
   auto cached = [this](const ProjectSession& s) -> ProjectCloudPtr {
@@ -381,7 +411,7 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
   out->source = cached(source);
   out->target = cached(target);
   const std::string file = document_.path().toStdString();
-  const uint64_t generation = document_.generation();
+  const uint64_t generation = document_.opened_count();
   const QString what = tr("Aligning '%1' to '%2'").arg(Id(id), Id(reference));
   return jobs_.Run(
       what,
@@ -408,7 +438,11 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
         return QString();  // A refusal is an outcome, not a failed job.
       },
       [this, out, id, generation, options](const QString& error) {
-        if (document_.generation() != generation) return;
+        if (document_.opened_count() != generation) {
+          // Another project: the result is not this one's to apply.
+          emit alignFinished(false, tr("the project was closed"));
+          return;
+        }
         for (const ProjectCloudPtr& c : {out->source, out->target}) {
           if (c) clouds_[c->id] = c;
         }
@@ -431,7 +465,8 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
         // The project as it is now (the reference may have moved meanwhile).
         Project after = document_.project();
         const int i = after.Find(id), r = after.Find(out->attempt.reference);
-        if (i < 0 || r < 0 || !after.sessions[r].project_from_session) {
+        if (i < 0 || r < 0 || !after.sessions[r].project_from_session ||
+            after.PlacedThrough(out->attempt.reference, id)) {
           emit alignFinished(false, tr("the project changed meanwhile"));
           return;
         }

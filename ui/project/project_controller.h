@@ -90,7 +90,8 @@ class ProjectController : public QObject {
   void ShowOnly(const std::string& id);
   // Registers session `id` against the placed `reference` on the job
   // thread (loading either cloud first if needed). False if it cannot start
-  // (a job runs, unknown ids, the reference unplaced, `id` the anchor).
+  // (a job runs, unknown ids, the reference unplaced or placed against
+  // `id`, `id` the anchor).
   // `options` as the CLI's (pairs: coarse by them, kept as the evidence).
   bool Align(const std::string& id, const std::string& reference,
              const hardware::SessionRegistrationOptions& options = {});
@@ -105,6 +106,9 @@ class ProjectController : public QObject {
   bool busy() const;
   // The clouds built so far, by id.
   const std::map<std::string, ProjectCloudPtr>& clouds() const { return clouds_; }
+  // Why session `id`'s cloud could not be built ("" if it was, or was not
+  // tried). Not tried again until its folder or calibration changes.
+  QString load_failure(const std::string& id) const;
 
  signals:
   void titleChanged();
@@ -140,6 +144,11 @@ class ProjectController : public QObject {
   std::unique_ptr<ProjectLayer> layer_;
   ProjectPanel* panel_;
   std::map<std::string, ProjectCloudPtr> clouds_;
+  struct LoadFailure {
+    std::string key;  // CloudKey() of the failed build
+    QString why;
+  };
+  std::map<std::string, LoadFailure> load_failures_;
   std::vector<std::string> preview_;
   PairPicking* picking_ = nullptr;
   QTimer* pump_ = nullptr;

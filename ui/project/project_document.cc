@@ -12,6 +12,7 @@ void ProjectDocument::New(const QString& path) {
   project_.name = QFileInfo(path).completeBaseName().toStdString();
   saved_json_.clear();  // Not on disk yet: modified until saved.
   ++generation_;
+  ++opened_count_;
   emit opened();
   Changed(was);
 }
@@ -56,6 +57,7 @@ void ProjectDocument::Adopt(const QString& path, Project project, void (ProjectD
   project_ = std::move(project);
   saved_json_ = ProjectToJson(project_);
   ++generation_;
+  if (what == &ProjectDocument::opened) ++opened_count_;
   emit(this->*what)();
   Changed(was);
 }
@@ -66,6 +68,7 @@ void ProjectDocument::Close() {
   project_ = Project();
   saved_json_.clear();
   ++generation_;
+  ++opened_count_;
   emit opened();
   Changed(was);
 }

@@ -32,6 +32,10 @@ class ProjectDocument : public QObject {
   // Changes on every Open / New / Close: undo commands of an older project
   // become obsolete instead of editing this one.
   uint64_t generation() const { return generation_; }
+  // Changes on every Open / New / Close, not on Save As: the result of a
+  // job on this project (an alignment, a session's cloud) still applies
+  // after Save As, whose sessions are the same folders under the same ids.
+  uint64_t opened_count() const { return opened_count_; }
 
   // A new, empty project to be saved at `path` (nothing written yet).
   void New(const QString& path);
@@ -69,6 +73,7 @@ class ProjectDocument : public QObject {
   Project project_;
   std::string saved_json_;
   uint64_t generation_ = 0;
+  uint64_t opened_count_ = 0;
 };
 
 }  // namespace sweepscan::ui

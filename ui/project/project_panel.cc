@@ -191,6 +191,12 @@ void ProjectPanel::Refresh() {
     it->setToolTip(1, it->text(1));
     // Not placed, not drawn: said in the list, greyed.
     it->setForeground(1, placed ? tree_->palette().color(QPalette::Text) : QColor(150, 150, 150));
+    const QString failure = controller_->load_failure(s.id);
+    if (!failure.isEmpty()) {
+      it->setText(1, tr("cannot load: %1").arg(failure));
+      it->setToolTip(1, failure);
+      it->setForeground(1, QColor(200, 40, 40));
+    }
   }
   refreshing_ = false;
   if (!keep.empty()) SelectSession(keep);
@@ -213,8 +219,10 @@ void ProjectPanel::UpdateAlign() {
   const std::string id = selected();
   const QString current = reference_->currentData().toString();
   reference_->clear();
+  // Not a session placed against this one (directly or through others):
+  // it would move along with it.
   for (const ProjectSession& s : p.sessions) {
-    if (s.id != id && s.project_from_session) {
+    if (s.id != id && s.project_from_session && !p.PlacedThrough(s.id, id)) {
       reference_->addItem(QString::fromStdString(s.id), QString::fromStdString(s.id));
     }
   }
@@ -260,7 +268,7 @@ QMenu* ProjectPanel::ContextMenu(const std::string& id) {
   const int i = p.Find(id);
   QMenu* align = menu->addMenu(tr("Align to"));
   for (const ProjectSession& s : p.sessions) {
-    if (s.id == id || !s.project_from_session) continue;
+    if (s.id == id || !s.project_from_session || p.PlacedThrough(s.id, id)) continue;
     const std::string reference = s.id;
     align->addAction(QString::fromStdString(reference), this,
                      [this, id, reference] { controller_->Align(id, reference); });

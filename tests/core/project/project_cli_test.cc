@@ -280,6 +280,18 @@ TEST_F(ProjectCliTest, PlacingASessionAgainKeepsOrMovesWhatDependsOnIt) {
   const Rigid3d c0 = *before.sessions[2].project_from_session;
   ASSERT_EQ(before.sessions[2].registration.reference, "building_b");
 
+  // b cannot be placed against c, which rests on b: c would move with b,
+  // by an amount nothing measured, and the two would refer to each other.
+  r = Cli("project align " + project + " --session building_b --to building_c --no-icp --pairs " +
+          P("again-cb.json"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("'building_c' is placed against 'building_b'"), std::string::npos) << r.out;
+  {
+    Project same;
+    ASSERT_TRUE(LoadProject(project, &same).ok());
+    EXPECT_EQ(ProjectToJson(same), ProjectToJson(before));
+  }
+
   // Collinear picks are refused: b keeps its pose and evidence.
   r = Cli("project align " + project + " --session building_b --to building_a --no-icp --pairs " +
           P("again-collinear.json"));
@@ -316,6 +328,27 @@ TEST_F(ProjectCliTest, PlacingASessionAgainKeepsOrMovesWhatDependsOnIt) {
   EXPECT_NEAR(nlohmann::json::parse(r.out)["sessions"][1]["yaw_deg"].get<double>(), -30.0, 1e-9);
 }
 
+// One unreadable session costs only its own placement: the others are
+// placed and saved (each may take minutes), and the report says which
+// failed and why.
+TEST_F(ProjectCliTest, AnUnreadableSessionCostsOnlyItsOwnPlacement) {
+  const std::string project = NewProject("unreadable.sweepscan-project", "ab");
+  std::filesystem::create_directories(P("empty.sweepscan"));
+  ASSERT_EQ(RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
+                       " project add unreadable.sweepscan-project empty.sweepscan")
+                .code,
+            0);
+  const CommandRun r = Cli("project align " + project + " --json");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("placed 'building_b' against 'building_a'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("'empty':\n  its cloud cannot be built: "), std::string::npos) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 3u);
+  EXPECT_TRUE(p.sessions[1].project_from_session.has_value()) << "b's placement was not saved";
+  EXPECT_FALSE(p.sessions[2].project_from_session.has_value());
+}
+
 TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   const std::string project = NewProject("bad.sweepscan-project", "a");
   // Exists already.
@@ -326,6 +359,14 @@ TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   r = Cli("project add " + project + " " + P("nowhere.sweepscan"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("not a session folder"), std::string::npos) << r.out;
+  // The same folder again, however written: refused, named.
+  for (const std::string& same :
+       {std::string("building_a.sweepscan/"), P("building_a.sweepscan")}) {
+    r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI + " project add bad.sweepscan-project " +
+                   same);
+    EXPECT_EQ(r.code, 2) << same;
+    EXPECT_NE(r.out.find("already in the project as 'building_a'"), std::string::npos) << r.out;
+  }
   // Pairs without the two sessions they belong to.
   r = Cli("project align " + project + " --pairs " + P("pairs.json"));
   EXPECT_EQ(r.code, 2);

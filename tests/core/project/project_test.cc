@@ -82,6 +82,107 @@ TEST(ProjectTest, IdsAreUniqueAndPathsAreNotAddedTwice) {
   const Status again = p.AddSession("a/./room.sweepscan", nullptr);
   EXPECT_FALSE(again.ok());
   EXPECT_NE(again.message().find("already in the project"), std::string::npos) << again.message();
+  // The same folder however it is written: a trailing separator (what tab
+  // completion gives), absolute, or through "..", against the project's folder.
+  const std::string file = "/srv/scans/floor3/office.sweepscan-project";
+  for (const std::string same :
+       {"a/room.sweepscan/", "/srv/scans/floor3/a/room.sweepscan", "../floor3/a/room.sweepscan",
+        "/srv/scans/floor3/a/room.sweepscan/"}) {
+    const Status twice = p.AddSession(same, nullptr, file);
+    EXPECT_FALSE(twice.ok()) << same;
+    EXPECT_NE(twice.message().find("already in the project as 'room'"), std::string::npos)
+        << twice.message();
+  }
+  EXPECT_TRUE(p.AddSession("/srv/scans/floor2/a/room.sweepscan", nullptr, file).ok());
+  // A JSON string is UTF-8: a folder named in Latin-1 is refused, named.
+  const Status latin1 = p.AddSession("b\xe2t.sweepscan", nullptr, file);
+  ASSERT_FALSE(latin1.ok());
+  EXPECT_NE(latin1.message().find("not UTF-8"), std::string::npos) << latin1.message();
+  EXPECT_NE(latin1.message().find("t.sweepscan"), std::string::npos) << latin1.message();
+  EXPECT_TRUE(p.AddSession("b\xc3\xa9t\xe2\x82\xac.sweepscan", nullptr, file).ok());  // "bét€"
+  for (const char* bad : {"\xc0\xaf", "\xed\xa0\x80", "\xf4\x90\x80\x80", "x\xe2\x82"}) {
+    EXPECT_FALSE(p.AddSession(bad, nullptr, file).ok())
+        << bad;  // overlong, surrogate, > U+10FFFF, cut
+  }
+}
+
+// References are a tree rooted at the anchor: a session placed against
+// itself, against an unplaced one or in a loop is refused by the loader, and
+// PlacedThrough says which sessions rest on which.
+TEST(ProjectTest, ReferencesFormATreeRootedAtTheAnchor) {
+  Project p = TwoSessions();
+  ProjectSession* c = nullptr;
+  ASSERT_TRUE(p.AddSession("scans/room_c.sweepscan", &c).ok());
+  c->project_from_session = Rigid3d::FromPose(9.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+  c->registration.method = "pairs";
+  c->registration.reference = "room_b";
+  EXPECT_TRUE(p.PlacedThrough("room_c", "room_b"));
+  EXPECT_TRUE(p.PlacedThrough("room_c", "room_a"));
+  EXPECT_TRUE(p.PlacedThrough("room_b", "room_a"));
+  EXPECT_FALSE(p.PlacedThrough("room_b", "room_c"));
+  EXPECT_FALSE(p.PlacedThrough("room_a", "room_b"));
+  Project q;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(p), "p", &q).ok());
+
+  const auto refused = [](Project edited, const std::string& expect) {
+    Project r;
+    const Status s = ProjectFromJson(ProjectToJson(edited), "floor.sweepscan-project", &r);
+    EXPECT_FALSE(s.ok()) << expect;
+    EXPECT_NE(s.message().find(expect), std::string::npos) << s.message();
+  };
+  Project self = p;
+  self.sessions[1].registration.reference = "room_b";
+  refused(self, "'room_b' is placed against itself");
+  Project loop = p;
+  loop.sessions[1].registration.reference = "room_c";
+  refused(loop, "the references form a loop: room_b -> room_c -> room_b");
+  EXPECT_TRUE(loop.PlacedThrough("room_b", "room_b"));  // ends, in a loop too
+  Project unplaced = p;
+  unplaced.sessions[1].project_from_session.reset();
+  unplaced.sessions[1].registration = RegistrationEvidence();
+  refused(unplaced, "'room_c' is placed against 'room_b', which is not placed");
+}
+
+// The evidence is what a registration reported: a covariance that is not
+// one, a count beyond int64 and an anchor with measurements are handled.
+TEST(ProjectTest, EvidenceIsCheckedAsWhatARegistrationReports) {
+  const auto load = [](const Project& p, Project* out) {
+    return ProjectFromJson(ProjectToJson(p), "floor.sweepscan-project", out);
+  };
+  Project p = TwoSessions();
+  Project q;
+  p.sessions[1].registration.covariance[1] = 1e-9;  // (0, 1) without (1, 0)
+  Status s = load(p, &q);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("sessions[1].registration.covariance: must be symmetric"),
+            std::string::npos)
+      << s.message();
+  p.sessions[1].registration.covariance[1] = 0.0;
+  p.sessions[1].registration.covariance[7] = -4e-8;  // a negative variance
+  s = load(p, &q);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("must be positive semi-definite"), std::string::npos) << s.message();
+  p.sessions[1].registration.covariance[7] = 2e-8;
+  p.sessions[1].registration.correspondences = 18446744073709551615u;
+  ASSERT_TRUE(load(p, &q).ok());
+  EXPECT_EQ(q.sessions[1].registration.correspondences, 18446744073709551615u);
+
+  std::string text = ProjectToJson(TwoSessions());
+  const std::string count = "\"correspondences\": 123456";
+  text.replace(text.find(count), count.size(), "\"correspondences\": -1");
+  s = ProjectFromJson(text, "floor.sweepscan-project", &q);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("correspondences: must be >= 0, got -1"), std::string::npos)
+      << s.message();
+  // The anchor was measured against nothing: evidence beside its method
+  // would be dropped on the next save, so it is refused.
+  text = ProjectToJson(TwoSessions());
+  const std::string anchor = "\"method\": \"anchor\"";
+  text.replace(text.find(anchor), anchor.size(), anchor + ", \"rms_m\": 0.01");
+  s = ProjectFromJson(text, "floor.sweepscan-project", &q);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("sessions[0].registration"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("rms_m"), std::string::npos) << s.message();
 }
 
 TEST(ProjectTest, TheAnchorStaysWhileOthersArePlacedOnIt) {
