@@ -29,3 +29,24 @@ foreach(name mcap cdr)
     COMMAND ${target} -runs=20000 -seed=1 ${scratch_corpus}
             ${CMAKE_CURRENT_LIST_DIR}/corpus/${name})
 endforeach()
+
+# The ROS 1 bag checks (core/io/rosbag1/rosbag1_check.h: the bounds walked
+# before rosbag_storage reads a bag) on a bag image and on message bodies.
+# bz2 and roslz4 stay uninstrumented. Seeds: tests/fuzz/corpus/rosbag1
+# (ROS's own Python writer: none, bz2 and lz4 chunks).
+find_package(BZip2 REQUIRED)
+add_library(sweepscan_rosbag1_check_fuzz STATIC
+  ${PROJECT_SOURCE_DIR}/core/io/rosbag1/rosbag1_check.cc
+  ${PROJECT_SOURCE_DIR}/core/io/ros/ros_messages.cc)
+target_link_libraries(sweepscan_rosbag1_check_fuzz PUBLIC sweepscan_base BZip2::BZip2 ${ROSLZ4_LIBRARY})
+target_compile_options(sweepscan_rosbag1_check_fuzz PRIVATE
+  -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
+  -fno-omit-frame-pointer -g)
+add_executable(rosbag1_fuzz ${CMAKE_CURRENT_LIST_DIR}/rosbag1_fuzz.cc)
+target_link_libraries(rosbag1_fuzz PRIVATE sweepscan_rosbag1_check_fuzz)
+target_compile_options(rosbag1_fuzz PRIVATE ${SWEEPSCAN_FUZZ_FLAGS})
+target_link_options(rosbag1_fuzz PRIVATE ${SWEEPSCAN_FUZZ_FLAGS})
+file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/corpus_rosbag1)
+add_test(NAME rosbag1_fuzz_smoke
+  COMMAND rosbag1_fuzz -runs=20000 -seed=1 ${CMAKE_CURRENT_BINARY_DIR}/corpus_rosbag1
+          ${CMAKE_CURRENT_LIST_DIR}/corpus/rosbag1)

@@ -1,5 +1,14 @@
 #include "core/io/rosbag1/rosbag1.h"
 
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sys/stat.h>
+#include <tf2_msgs/TFMessage.h>
+
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -7,15 +16,7 @@
 #include <memory>
 #include <mutex>
 
-#include <sys/stat.h>
-
-#include <nav_msgs/Odometry.h>
-#include <rosbag/bag.h>
-#include <rosbag/exceptions.h>
-#include <rosbag/view.h>
-#include <sensor_msgs/Imu.h>
-#include <sensor_msgs/LaserScan.h>
-#include <tf2_msgs/TFMessage.h>
+#include "core/io/rosbag1/rosbag1_check.h"
 
 namespace sweepscan::io {
 namespace {
@@ -124,17 +125,29 @@ std::string FirstChunkCompression(const std::string& path) {
   return std::string();
 }
 
-// Deserialises a message as Msg and hands it on; throws (counted as
+// Deserialises a message's bytes as Msg and hands it on; throws (counted as
 // undecodable by the caller) when the bag's definition of the type differs
-// from the one sweepscan was built with (their MD5 sums disagree).
+// from the one sweepscan was built with (their MD5 sums disagree, as
+// MessageInstance::instantiate checks) or the bytes do not hold the
+// definition's fields (CheckRos1Message, before anything is allocated: roscpp
+// resizes an array to whatever count the bytes say).
 template <typename Msg, typename Fn>
-bool Deliver(const rosbag::MessageInstance& m, Fn&& fn) {
-  const boost::shared_ptr<Msg> p = m.instantiate<Msg>();
-  if (!p) {
+bool Deliver(const rosbag::MessageInstance& m, RosMessageKind kind, std::vector<uint8_t>* bytes,
+             Fn&& fn) {
+  const std::string& md5 = m.getMD5Sum();
+  if (md5 != "*" && md5 != ros::message_traits::MD5Sum<Msg>::value()) {
     throw std::runtime_error(std::string("message definition differs from ") +
-                             ros::message_traits::DataType<Msg>::value() + "'s (MD5 " + m.getMD5Sum() + ")");
+                             ros::message_traits::DataType<Msg>::value() + "'s (MD5 " + md5 + ")");
   }
-  return fn(*p);
+  bytes->resize(m.size());
+  ros::serialization::OStream out(bytes->data(), static_cast<uint32_t>(bytes->size()));
+  m.write(out);
+  const Status s = CheckRos1Message(kind, bytes->data(), bytes->size());
+  if (!s.ok()) throw std::runtime_error(s.message());
+  Msg msg;
+  ros::serialization::IStream in(bytes->data(), static_cast<uint32_t>(bytes->size()));
+  ros::serialization::deserialize(in, msg);
+  return fn(msg);
 }
 
 // Opens the bag; the library's exceptions become a Status with the advice an
@@ -145,6 +158,10 @@ Status Open(const std::string& path, rosbag::Bag* bag) {
     if (!f) return Status::Error(path + ": cannot open: " + std::strerror(errno));
     return Status::Error(path + ": not a ROS 1 bag (it does not start with \"#ROSBAG V2.0\")");
   }
+  // rosbag trusts the bag's lengths and offsets (a bad one reads out of
+  // bounds): every one is checked first, and a damaged bag refused here.
+  const Status checked = CheckRosbag1File(path);
+  if (!checked.ok()) return checked;
   try {
     bag->open(path, rosbag::bagmode::Read);
   } catch (const rosbag::BagUnindexedException&) {
@@ -275,6 +292,7 @@ Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMe
     rosbag::View view(bag, rosbag::TopicQuery(topics));
     const uint32_t total = view.size();
     uint64_t done = 0;
+    std::vector<uint8_t> bytes;  // one message's, reused
     for (const rosbag::MessageInstance& m : view) {
       if (options.progress && (done & 1023) == 0 &&
           !options.progress(total == 0 ? 0.0 : static_cast<double>(done) / total)) {
@@ -290,16 +308,21 @@ Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMe
       try {
         switch (kind) {
           case RosMessageKind::kLaserScan:
-            go_on = Deliver<sensor_msgs::LaserScan>(m, [&](const auto& p) { return sink->OnLaserScan(info, Convert(p)); });
+            go_on = Deliver<sensor_msgs::LaserScan>(m, kind, &bytes, [&](const auto& p) {
+              return sink->OnLaserScan(info, Convert(p));
+            });
             break;
           case RosMessageKind::kOdometry:
-            go_on = Deliver<nav_msgs::Odometry>(m, [&](const auto& p) { return sink->OnOdometry(info, Convert(p)); });
+            go_on = Deliver<nav_msgs::Odometry>(
+                m, kind, &bytes, [&](const auto& p) { return sink->OnOdometry(info, Convert(p)); });
             break;
           case RosMessageKind::kImu:
-            go_on = Deliver<sensor_msgs::Imu>(m, [&](const auto& p) { return sink->OnImu(info, Convert(p)); });
+            go_on = Deliver<sensor_msgs::Imu>(
+                m, kind, &bytes, [&](const auto& p) { return sink->OnImu(info, Convert(p)); });
             break;
           case RosMessageKind::kTf:
-            go_on = Deliver<tf2_msgs::TFMessage>(m, [&](const auto& p) { return sink->OnTf(info, Convert(p)); });
+            go_on = Deliver<tf2_msgs::TFMessage>(
+                m, kind, &bytes, [&](const auto& p) { return sink->OnTf(info, Convert(p)); });
             break;
           case RosMessageKind::kOther:
             ++st.messages_skipped;

@@ -12,11 +12,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <string>
 
+#include "core/io/ros/ros_bag.h"
 #include "core/session/measurements.h"
 #include "core/session/session.h"
 #include "tests/testing/run_command.h"
@@ -330,6 +333,116 @@ TEST_F(ImportTest, UnknownChunkCompressionIsRefused) {
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find(odd + ":"), std::string::npos) << s.message();
   EXPECT_FALSE(Exists(Out("odd")));
+}
+
+// The records of a ROS 1 bag image from `at` to `end`: where each starts,
+// its header's fields and where its data start (the format's framing,
+// docs/ros-bags.md).
+struct BagRecord {
+  size_t at, data_at;
+  uint32_t data_len;
+  std::map<std::string, std::string> fields;
+};
+std::vector<BagRecord> Records(const std::string& bag, size_t at, size_t end) {
+  std::vector<BagRecord> out;
+  while (at + 4 <= end) {
+    uint32_t header_len, data_len, len;
+    std::memcpy(&header_len, bag.data() + at, 4);
+    BagRecord r{at, at + 8 + header_len, 0, {}};
+    for (size_t i = at + 4; i < at + 4 + header_len; i += 4 + len) {
+      std::memcpy(&len, bag.data() + i, 4);
+      const std::string field = bag.substr(i + 4, len);
+      r.fields[field.substr(0, field.find('='))] = field.substr(field.find('=') + 1);
+    }
+    std::memcpy(&data_len, bag.data() + at + 4 + header_len, 4);
+    r.data_len = data_len;
+    out.push_back(r);
+    at = r.data_at + data_len;
+  }
+  return out;
+}
+
+// rosbag_storage trusts a bag's lengths and offsets: each damage below made
+// it read out of bounds (a crash, of the app too) or allocate what a flipped
+// count said (17 GB). Each is now refused with the byte and why, before a
+// session exists, or (a damaged message) skipped and counted.
+TEST_F(ImportTest, DamagedLengthsAndOffsetsAreRefusedNotTrusted) {
+  std::ifstream in(Bag("rules"), std::ios::binary);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<BagRecord> records = Records(good, 13, good.size());
+  const auto op = [](const BagRecord& r, char c) { return r.fields.at("op") == std::string(1, c); };
+  const auto index =
+      std::find_if(records.begin(), records.end(), [&](const BagRecord& r) { return op(r, 4); });
+  const auto chunk =
+      std::find_if(records.begin(), records.end(), [&](const BagRecord& r) { return op(r, 5); });
+  ASSERT_NE(index, records.end());
+  ASSERT_NE(chunk, records.end());
+  ASSERT_EQ(chunk->fields.at("compression"), "none");
+  const auto damaged = [&](const std::string& name, const std::string& bytes,
+                           const std::string& expect) {
+    const std::string path = dir_ + "/" + name + ".bag";
+    std::ofstream(path, std::ios::binary)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    const Status s = ImportRosBag(path, Out(name), RosImportOptions(), nullptr);
+    ASSERT_FALSE(s.ok()) << name;
+    EXPECT_NE(s.message().find(path + ": "), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find(expect), std::string::npos) << s.message();
+    EXPECT_FALSE(Exists(Out(name))) << name;
+    RosBagSummary summary;
+    EXPECT_FALSE(SummarizeRosBag(path, &summary).ok()) << name;  // `info`, the app's Inspect
+  };
+  // An index entry pointing past its chunk (rosbag read the message's
+  // header from beyond its buffer).
+  std::string bytes = good;
+  const uint32_t far = 0x00f50000;
+  std::memcpy(&bytes[index->data_at + 8], &far, 4);
+  damaged("index_offset", bytes,
+          "index entry 0 points at byte 16056320 of its chunk, where no message record starts");
+  // An index record's header field longer than its header (ros::Header::parse
+  // read beyond it).
+  bytes = good;
+  const uint32_t huge = 0x00ffffff;
+  std::memcpy(&bytes[index->at + 4], &huge, 4);
+  damaged("index_header", bytes, "overruns its header");
+  // The index said to start beyond the end: a copy cut short.
+  bytes = good;
+  const uint64_t beyond = good.size() + 100;
+  std::memcpy(&bytes[good.find("index_pos=") + 10], &beyond, 8);
+  damaged("index_beyond", bytes, "beyond the end of the file");
+  EXPECT_EQ(bytes.size(), good.size());
+
+  // One LaserScan's ranges count flipped (in the uncompressed chunk): that
+  // message is skipped and counted, the rest imported, nothing allocated
+  // for 4 G floats.
+  bytes = good;
+  std::string scan_conn;
+  size_t count_at = 0;
+  for (const BagRecord& r : Records(good, chunk->data_at, chunk->data_at + chunk->data_len)) {
+    if (op(r, 7) && r.fields.at("topic") == "/scan") scan_conn = r.fields.at("conn");
+    if (op(r, 2) && !scan_conn.empty() && r.fields.at("conn") == scan_conn) {
+      // header: seq, stamp, frame_id (u32 length + bytes); then 7 floats.
+      uint32_t frame_len;
+      std::memcpy(&frame_len, good.data() + r.data_at + 12, 4);
+      count_at = r.data_at + 16 + frame_len + 7 * 4;
+      break;
+    }
+  }
+  ASSERT_NE(count_at, 0u);
+  const uint32_t count = 0xff000000;
+  std::memcpy(&bytes[count_at], &count, 4);
+  const std::string path = dir_ + "/ranges_count.bag";
+  std::ofstream(path, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  RosImportReport clean, report;
+  ASSERT_TRUE(ImportRosBag(Bag("rules"), Out("rules_again"), RosImportOptions(), &clean).ok());
+  const Status s = ImportRosBag(path, Out("ranges_count"), RosImportOptions(), &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(report.undecodable, clean.undecodable + 1);
+  EXPECT_EQ(report.scans + report.scans_refused + 1, clean.scans + clean.scans_refused);
+  bool said = false;
+  for (const std::string& w : report.warnings)
+    said |= w.find("ranges: 4278190080 elements") != std::string::npos;
+  EXPECT_TRUE(said) << ::testing::PrintToString(report.warnings);
 }
 
 TEST_F(ImportTest, NotABagIsRefused) {
