@@ -28,6 +28,7 @@
 #include <QTimer>
 #include <algorithm>
 #include <clocale>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -77,6 +78,7 @@ struct Options {
   long long draw_pace = -1;         // Points between the driver's finishes; < 0: the default.
   long long lod_budget = -1;        // Points drawn while the camera moves.
   double seek_s = -1.0;             // With --replay: seek there once shown (< 0: no).
+  QString bad_number;               // "--option 'value'" that is not a number it takes
 };
 
 // The scenarios' folder's parent: PREFIX/share/sweepscan when installed
@@ -193,19 +195,36 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   o.window_screenshot = parser.value(window_shot);
   o.export_cloud = parser.value(export_cloud);
   o.sessions_dir = parser.value(sessions);
-  if (parser.isSet(quit_after)) o.quit_after_s = parser.value(quit_after).toDouble();
+  // A number the option takes, or the option named in o.bad_number (refused
+  // in Main): "2G" read as 0 would have been a zero-byte memory budget.
+  const auto number = [&](const QCommandLineOption& option, double lo, double* out) {
+    if (!parser.isSet(option)) return;
+    bool ok = false;
+    const double v = parser.value(option).toDouble(&ok);
+    if (ok && v >= lo && std::isfinite(v)) {
+      *out = v;
+    } else if (o.bad_number.isEmpty()) {
+      o.bad_number = QStringLiteral("--%1 '%2'").arg(option.names().front(), parser.value(option));
+    }
+  };
+  const auto count = [&](const QCommandLineOption& option, long long* out) {
+    double v = -1.0;
+    number(option, 0.0, &v);
+    if (v >= 0.0) *out = static_cast<long long>(v);
+  };
+  number(quit_after, 0.0, &o.quit_after_s);
   if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
   o.pairs = parser.value(pairs);
   o.tour = parser.value(tour);
   o.pose_source = parser.value(pose_source);
   o.project = parser.value(project);
   o.floor_plan = parser.isSet(floor_plan);
-  if (parser.isSet(plan_height)) o.plan_height_m = parser.value(plan_height).toDouble();
+  number(plan_height, -1e6, &o.plan_height_m);
   o.pose_source_tour = parser.value(pose_source_tour);
-  if (parser.isSet(memory_budget)) o.memory_budget_mib = parser.value(memory_budget).toDouble();
-  if (parser.isSet(rest_budget)) o.rest_budget = parser.value(rest_budget).toLongLong();
-  if (parser.isSet(lod_budget)) o.lod_budget = parser.value(lod_budget).toLongLong();
-  if (parser.isSet(draw_pace)) o.draw_pace = parser.value(draw_pace).toLongLong();
+  number(memory_budget, 0.0, &o.memory_budget_mib);
+  count(rest_budget, &o.rest_budget);
+  count(lod_budget, &o.lod_budget);
+  count(draw_pace, &o.draw_pace);
   if (parser.isSet(seek)) {
     bool ok = false;
     o.seek_s = parser.value(seek).toDouble(&ok);
@@ -637,6 +656,11 @@ int Main(int argc, char** argv) {
   const QString resources = ResourcesDir();
   const Options o = ParseOptions(app, resources);
 
+  if (!o.bad_number.isEmpty()) {
+    std::fprintf(stderr, "sweepscan: %s is not a number the option takes (see --help)\n",
+                 qPrintable(o.bad_number));
+    return 2;
+  }
   if (o.memory_budget_mib >= 0) {
     CloudPager::Default().SetBudget(static_cast<size_t>(o.memory_budget_mib * 1048576.0));
   }

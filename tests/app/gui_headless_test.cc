@@ -3,6 +3,7 @@
 // abort. Runs the real binary with the display variables removed.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <string>
 
 #include "tests/testing/run_command.h"
@@ -30,6 +31,26 @@ TEST(GuiHeadlessTest, StartingWithoutADisplaySaysSoInOneLine) {
   EXPECT_EQ(r.out,
             "sweepscan: no display (DISPLAY is not set): run it on a desktop, over ssh -X, or under "
             "xvfb-run; sweepscan-cli does the processing without one\n");
+}
+
+// A number option that is not a number is refused by name, before anything
+// starts: "--memory-budget 2G" was read as a zero-byte budget (every chunk
+// paged out). Needs a display (QApplication parses the options).
+TEST(GuiHeadlessTest, ANumberOptionThatIsNotANumberIsRefusedByName) {
+  if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
+  const std::string gui = SWEEPSCAN_GUI;
+  for (const std::string& bad :
+       {std::string("--memory-budget 2G"), std::string("--rest-budget lots"),
+        std::string("--quit-after -3")}) {
+    const auto r = sweepscan::testing::RunCommand(gui + " " + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
+    const std::string option = bad.substr(0, bad.find(' '));
+    const std::string value = bad.substr(bad.find(' ') + 1);
+    EXPECT_NE(
+        r.out.find("sweepscan: " + option + " '" + value + "' is not a number the option takes"),
+        std::string::npos)
+        << r.out;
+  }
 }
 
 }  // namespace

@@ -668,6 +668,47 @@ TEST_F(CloudStoreUiTest, ARoomOpensLookingIntoItWithTheCeilingHidden) {
 }
 
 // FindCeiling on its own: a room's ceiling layer, and none in the open.
+// A point with a NaN coordinate (a chunk may hold one) is never picked: it
+// compared as nearer than anything, and a block without a hit then gave its
+// unset (0, 0, 0). Two sealed chunks and a growing one over a 2 m plane,
+// a NaN in a sealed chunk and one in the growing chunk.
+TEST(CloudViewPickTest, APointWithANanCoordinateIsNeverPicked) {
+  std::vector<CloudPoint> points;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 2.0f);
+  for (int i = 0; i < 140000; ++i) {
+    CloudPoint p{};
+    p.x = 5.0f + u(rng), p.y = 5.0f + u(rng), p.z = 0.0f;
+    p.range_m = 2.0f;
+    p.scan = static_cast<uint32_t>(i / 1000);
+    p.time_ns = int64_t{i} * 200000;
+    points.push_back(p);
+  }
+  points[1023].z = std::numeric_limits<float>::quiet_NaN();
+  points[139995].x = std::numeric_limits<float>::quiet_NaN();
+  CloudView view;
+  view.resize(400, 300);
+  view.show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(&view));
+  view.AppendPoints(points);
+  view.LookAt(Eigen::Vector3d(6, 6, 0), Eigen::Vector3d(6, 5.999, 4));
+  view.RenderNow();
+  int picks = 0;
+  for (int x = 60; x < 360; x += 30) {
+    for (int y = 40; y < 280; y += 30) {
+      Eigen::Vector3d got;
+      if (!view.PickPoint(QPoint(x, y), &got)) continue;
+      ++picks;
+      ASSERT_TRUE(got.allFinite()) << x << ", " << y;
+      EXPECT_GE(got.x(), 5.0) << x << ", " << y << ": " << got.transpose();
+      EXPECT_LE(got.x(), 7.0) << x << ", " << y << ": " << got.transpose();
+      EXPECT_GE(got.y(), 5.0) << x << ", " << y << ": " << got.transpose();
+      EXPECT_EQ(got.z(), 0.0) << x << ", " << y << ": " << got.transpose();
+    }
+  }
+  EXPECT_GE(picks, 20);
+}
+
 TEST(CloudViewRoomTest, FindsTheCeilingOfARoomAndNoneWithoutOne) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);

@@ -593,6 +593,9 @@ void CloudView::ViewSide() {
 }
 
 void CloudView::FitToCloud() {
+  // The batches are rebuilt at render time: chunks appended this tick would
+  // not be in the bounds ResetCamera fits (up to 32 chunks at a drive's end).
+  SyncBatches();
   // Fit to the cloud (and the robot), not to the 40 m grid.
   const bool grid = grid_->GetVisibility();
   grid_->SetVisibility(point_count_ == 0 && layers_.empty());

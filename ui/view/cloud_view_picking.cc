@@ -131,11 +131,13 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   const float clip_z = static_cast<float>(ray.clip_z);
   // A point v (relative to the ray's origin) under the cursor and nearer
   // than `*best` becomes the best: its distance along the ray in *best.
+  // Written so that NaN fails every test: a point with a NaN coordinate
+  // (a chunk may hold one) is never under the cursor.
   auto nearer = [&](double vx, double vy, double vz, double* best) {
     const double t = vx * d.x() + vy * d.y() + vz * d.z();
-    if (t <= 0 || t >= *best) return false;
+    if (!(t > 0 && t < *best)) return false;
     const double tol = ray.tolerance_per_t * t;
-    if (vx * vx + vy * vy + vz * vz - t * t > tol * tol) return false;
+    if (!(vx * vx + vy * vy + vz * vz - t * t <= tol * tol)) return false;
     *best = t;
     return true;
   };
@@ -256,7 +258,7 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
       }
     });
     for (const BlockHit& h : hits) {
-      if (h.t >= best_t) continue;
+      if (!(h.t < best_t)) continue;  // a block without a hit keeps t = inf
       best_t = h.t;
       take(h.xyz);
     }
