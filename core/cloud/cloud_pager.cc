@@ -97,17 +97,23 @@ void CloudPager::SetCacheDirectory(const std::string& dir) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (dir == cache_dir_) return;
   cache_dir_ = dir;
-  if (fd_ >= 0 && in_file_ == 0) {
-    ::close(fd_);
+  if (in_file_ == 0) {
+    if (fd_ >= 0) ::close(fd_);
     fd_ = -1;
     file_end_ = 0;
     file_dir_.clear();
+    cache_failed_ = false;  // Another disk: try again.
   }
 }
 
 std::string CloudPager::file_directory() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return file_dir_;
+}
+
+bool CloudPager::cache_failed() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return cache_failed_;
 }
 
 size_t CloudPager::file_bytes() const {
@@ -193,6 +199,7 @@ void CloudPager::Remove(const PackedChunk* chunk) {
     }
     where_.erase(it);
   }
+  if (where_.empty()) cache_failed_ = false;  // The cloud is gone: the next one tries again.
   if (chunk->packed_bytes_ > 0) --packed_chunks_;
   // The file space of a dropped chunk is not reused one by one (a cache
   // lives as long as the cloud it pages, one session in the app); when the
@@ -298,7 +305,7 @@ void CloudPager::EvictLocked() {
   }
   // Above the memory budget, compressed payloads go to the cache file,
   // least recently used first.
-  while (unpacked_ + packed_ > budget_ && !lru_packed_.empty()) {
+  while (!cache_failed_ && unpacked_ + packed_ > budget_ && !lru_packed_.empty()) {
     const PackedChunk* victim = lru_packed_.front();
     Where& w = where_.at(victim);
     {
@@ -346,7 +353,7 @@ bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset)
     if (fd_ < 0) {
       std::fprintf(stderr, "sweepscan: cannot create the cloud cache file in %s: %s\n",
                    dir.c_str(), std::strerror(errno));
-      budget_ = static_cast<size_t>(-1);  // Stay in memory: say it once.
+      cache_failed_ = true;  // Stay in memory: say it once.
       return false;
     }
     file_dir_ = dir;
@@ -354,9 +361,13 @@ bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset)
   // The compressed frames as they are in memory (payload_codec.h), back to
   // back with the other chunks'; their offsets stay in the chunks' headers.
   if (!WriteAll(fd_, bytes.data(), bytes.size(), file_end_)) {
-    std::fprintf(stderr, "sweepscan: cannot write the cloud cache file: %s; keeping the cloud "
-                 "in memory\n", std::strerror(errno));
-    budget_ = static_cast<size_t>(-1);
+    std::fprintf(stderr,
+                 "sweepscan: cannot write the cloud cache file in %s: %s; keeping the cloud "
+                 "in memory\n",
+                 file_dir_.c_str(), std::strerror(errno));
+    // Until this cloud is gone (Remove), not for good: the budget stays
+    // the operator's for the next cloud, on another disk perhaps.
+    cache_failed_ = true;
     return false;
   }
   *offset = file_end_;

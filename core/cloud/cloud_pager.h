@@ -61,6 +61,10 @@ class CloudPager {
   // effect at once if no live chunk is in the file, else for the next file.
   void SetCacheDirectory(const std::string& dir);
   size_t file_bytes() const;  // The cache file's size now.
+  // The cache file could not be created or written: the cloud stays in
+  // memory (whatever the budget, which is kept) until its chunks are gone,
+  // and the next cloud tries again.
+  bool cache_failed() const;
   // The directory the cache file is open in ("" while there is none).
   std::string file_directory() const;
 
@@ -109,6 +113,7 @@ class CloudPager {
   std::string file_dir_;  // where fd_ was opened
   int fd_ = -1;
   int64_t file_end_ = 0;
+  bool cache_failed_ = false;
   size_t unpacked_ = 0, packed_ = 0;  // Bytes in memory.
   size_t packed_chunks_ = 0;
   size_t in_file_ = 0;  // Live chunks with a copy in the cache file.

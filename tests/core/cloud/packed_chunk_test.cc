@@ -8,11 +8,13 @@
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -464,6 +466,38 @@ TEST(CloudPagerTest, TheNextCloudsCacheFileOpensWhereItsSessionIs) {
   chunks = std::make_unique<PointChunks>(1024, &pager);
   for (const CloudPoint& p : points) chunks->Append(p);
   EXPECT_EQ(pager.file_directory(), second.path);
+  EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
+}
+
+// A cache file that cannot be written (a full disk: the file opens, the
+// write fails) keeps that cloud in memory, whole, and the budget the
+// operator set: the next cloud pages out again. The budget was lifted for
+// the rest of the process. The file size limit stands in for the full disk
+// (SIGXFSZ ignored: the write fails with EFBIG instead).
+TEST(CloudPagerTest, AFailedCacheWriteKeepsTheCloudAndTheBudgetForTheNext) {
+  ScratchDir dir;
+  CloudPager pager(1, dir.path);
+  const auto points = MakePoints(6 * 1024, 8, false);
+  struct rlimit old_limit;
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit tiny = old_limit;
+  tiny.rlim_cur = 512;  // below one chunk's compressed bytes
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &tiny), 0);
+  auto chunks = std::make_unique<PointChunks>(1024, &pager);
+  for (const CloudPoint& p : points) chunks->Append(p);
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_TRUE(pager.cache_failed());
+  EXPECT_EQ(pager.paged_out_chunks(), 0u);
+  EXPECT_EQ(pager.budget(), 1u);
+  EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
+  chunks.reset();
+  EXPECT_FALSE(pager.cache_failed());
+  chunks = std::make_unique<PointChunks>(1024, &pager);
+  for (const CloudPoint& p : points) chunks->Append(p);
+  EXPECT_GT(pager.paged_out_chunks(), 0u);
+  EXPECT_GT(pager.file_bytes(), 0u);
   EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
 }
 
