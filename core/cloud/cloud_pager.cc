@@ -25,6 +25,7 @@ bool WriteAll(int fd, const void* data, size_t n, int64_t offset) {
   while (n > 0) {
     const ssize_t w = ::pwrite(fd, p, n, offset);
     if (w < 0 && errno == EINTR) continue;
+    if (w == 0) errno = ENOSPC;  // No progress without an error: say why.
     if (w <= 0) return false;
     p += w;
     n -= static_cast<size_t>(w);
@@ -38,6 +39,7 @@ bool ReadAll(int fd, void* data, size_t n, int64_t offset) {
   while (n > 0) {
     const ssize_t r = ::pread(fd, p, n, offset);
     if (r < 0 && errno == EINTR) continue;
+    if (r == 0) errno = EIO;  // Short: the file ends before what we wrote.
     if (r <= 0) return false;
     p += r;
     n -= static_cast<size_t>(r);
@@ -380,8 +382,11 @@ std::shared_ptr<const std::vector<uint8_t>> CloudPager::ReadLocked(const PackedC
   if (!ReadAll(fd_, bytes->data(), bytes->size(), chunk->file_offset_)) {
     // Our own unnamed file, written by us: a failed read is an I/O error of
     // the machine, and a cloud with holes would be worse than stopping.
-    std::fprintf(stderr, "sweepscan: cannot read back the cloud cache file: %s\n",
-                 std::strerror(errno));
+    std::fprintf(
+        stderr,
+        "sweepscan: cannot read back the cloud cache file in %s (%zu bytes at byte %lld): %s\n",
+        file_dir_.c_str(), chunk->packed_bytes_, static_cast<long long>(chunk->file_offset_),
+        std::strerror(errno));
     std::abort();
   }
   return bytes;
