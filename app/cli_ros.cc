@@ -187,7 +187,10 @@ int RunBagInfo(int argc, char** argv) {
   for (const io::RosTopicInfo& t : summary.topics) {
     std::printf("  %-28s %-30s %8llu msgs %s%s\n", t.topic.c_str(), t.type.c_str(),
                 static_cast<unsigned long long>(t.message_count), RateText(t).c_str(),
-                t.kind() != io::RosMessageKind::kOther ? "" : "  (not used)");
+                summary.Decodable(t) ? ""
+                : t.kind() == io::RosMessageKind::kOther
+                    ? "  (not used)"
+                    : ("  (not used: encoding " + t.serialization + ")").c_str());
   }
   std::printf("tf:%s\n", tf.edges.empty() ? " none" : "");
   for (const std::string& e : tf.edges) std::printf("  %s\n", e.c_str());

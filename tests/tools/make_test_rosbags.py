@@ -99,8 +99,10 @@ def rules(path):
         b.write("/scan", scan(t(0.4), "laser", 0.0, 0.01, 20, [1.0] * 10, ti=0.001), t(0.41))
         # Scan 3: negative time_increment: beam 2 first in time.
         b.write("/scan", scan(t(0.6), "laser", 0.0, 0.1, 3, [1.0, 2.0, 3.0], ti=-0.001), t(0.61))
-        # Scan 4: stamped before scan 3 (out of order by 0.1 s, not a clock jump).
-        b.write("/scan", scan(t(0.5), "laser", 0.0, 0.1, 2, [5.0, 6.0], ti=0.001), t(0.62))
+        # Scan 4: stamped before scan 3 (out of order by 0.1 s, not a clock jump);
+        # one intensity for two ranges: dropped, counted.
+        b.write("/scan", scan(t(0.5), "laser", 0.0, 0.1, 2, [5.0, 6.0], ti=0.001, intensities=[7.0]),
+                t(0.62))
         b.write("/odom", odom(t(0.0), 1.0, 2.0, 0.5, 0.25, 0.1), t(0.0))
         b.write("/odom", odom(t(0.1), 1.02, 2.01, 0.51, 0.3, -0.2), t(0.1))
         b.write("/imu", imu(t(0.05), "imu_link", quat_axis((0, 0, 1), 1.0), (0.2, 0.0, 0.3)), t(0.05))
@@ -147,7 +149,8 @@ def two_scans(path):
 
 
 def bad_times(path):
-    """Beams that cannot be timed: NaN, a 20 s span, an infinite scan_time."""
+    """Beams that cannot be timed: NaN, a 20 s span, an infinite scan_time, a
+    4 s span (more than a session's scan record holds)."""
     with rosbag.Bag(path, "w") as b:
         static_tf(b, t(0.0))
         b.write("/scan", scan(t(0.0), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=0.001), t(0.0))
@@ -155,10 +158,19 @@ def bad_times(path):
         b.write("/scan", scan(t(0.2), "laser", 0.0, 0.1, 20, [1.0] * 20, ti=1.0), t(0.2))
         b.write("/scan", scan(t(0.3), "laser", 0.0, 0.1, 2, [1.0, 2.0], ti=0.0,
                               scan_time=float("inf")), t(0.3))
+        b.write("/scan", scan(t(0.4), "laser", 0.0, 0.01, 40, [1.0] * 40, ti=0.1), t(0.4))
+
+
+def long_span(path):
+    """Only scans whose beams span 4 s: each refused by the import's rule."""
+    with rosbag.Bag(path, "w") as b:
+        static_tf(b, t(0.0))
+        for k in range(3):
+            b.write("/scan", scan(t(5.0 * k), "laser", 0.0, 0.01, 40, [1.0] * 40, ti=0.1), t(5.0 * k))
 
 
 if __name__ == "__main__":
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
-    for f in (rules, clock_jump, no_sensor, no_tf_path, pose_only_odom, two_scans, bad_times):
+    for f in (rules, clock_jump, no_sensor, no_tf_path, pose_only_odom, two_scans, bad_times, long_span):
         f(os.path.join(out, f.__name__ + ".bag"))

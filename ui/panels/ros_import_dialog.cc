@@ -141,8 +141,14 @@ void RosImportDialog::Fill(const io::RosBagSummary& s) {
       {scan_, io::RosMessageKind::kLaserScan}, {odom_, io::RosMessageKind::kOdometry}, {imu_, io::RosMessageKind::kImu}};
   for (const auto& [combo, kind] : choosers) {
     combo->clear();
+    // What the import can read: the kind's topics with messages, in an
+    // encoding read here; the one the CLI would choose first.
+    std::string chosen;
+    io::ChooseTopic(s, kind, std::string(), false, &chosen);
     for (const io::RosTopicInfo& t : s.topics) {
-      if (t.kind() == kind) combo->addItem(TopicLabel(t), QString::fromStdString(t.topic));
+      if (t.kind() != kind || t.message_count == 0 || !s.Decodable(t)) continue;
+      const int at = t.topic == chosen ? 0 : combo->count();
+      combo->insertItem(at, TopicLabel(t), QString::fromStdString(t.topic));
     }
     // Scans are what a cloud is made of: "none" only offered when the bag has none.
     if (kind != io::RosMessageKind::kLaserScan || combo->count() == 0) {

@@ -36,6 +36,9 @@ void Workspace::InspectRosBag(const QString& bag) {
         QMetaObject::invokeMethod(this, [this, what] { emit jobProgress(what, -1.0); });
         const Status s =
             io::SummarizeRosBag(path, summary.get(), warnings.get(), JobProgress(what, cancel));
+        // Not kept open while the operator chooses (or cancels and
+        // unplugs the drive): the import opens it again.
+        io::ReleaseRosBags();
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
       [this, summary, warnings, bag] {

@@ -23,7 +23,10 @@ namespace sweepscan::io {
 namespace {
 
 constexpr int64_t kNsPerS = 1000000000;
-constexpr double kMaxScanSpanS = 10.0;  // a LaserScan's beams, first to last
+// A LaserScan's beams, first to last: a session's scan record holds each
+// beam's time after the first in int32 ns (docs/session-format.md), 2.147 s;
+// any scanning lidar turns in less.
+constexpr double kMaxScanSpanS = 2.1;
 
 // L = Ry(-pi/2) S: the ROS scan frame's x (angle 0) becomes Eq. 1's z_L
 // (theta 0) and y (angle +pi/2) stays y_L, so theta = angle.
@@ -263,8 +266,8 @@ class WritingSink : public RosMessageSink {
         std::abs(static_cast<double>(m.time_increment)) * static_cast<double>(n) > kMaxScanSpanS ||
         std::abs(static_cast<double>(m.scan_time)) > kMaxScanSpanS) {
       *why = "time_increment " + std::to_string(m.time_increment) + " s / scan_time " +
-             std::to_string(m.scan_time) + " s cannot time the beams (span over " +
-             std::to_string(static_cast<int>(kMaxScanSpanS)) + " s or not a number)";
+             std::to_string(m.scan_time) +
+             " s cannot time the beams (span over 2.1 s or not a number)";
       return false;
     }
     double dt = m.time_increment;
@@ -281,6 +284,7 @@ class WritingSink : public RosMessageSink {
       report_->time_rule += "; " + rule;
     }
     const bool has_intensity = m.intensities.size() == n;
+    if (!has_intensity && !m.intensities.empty()) ++report_->intensities_dropped;
     const int64_t stamp = m.header.stamp_ns - setup_.time_origin_ns;
     scan->index = static_cast<uint32_t>(report_->scans);
     scan->samples.reserve(n);
@@ -389,19 +393,29 @@ Status ResolveMount(const RosImportOptions& options, const FirstPassSink& first,
 }  // namespace
 
 Status ChooseTopic(const RosBagSummary& summary, RosMessageKind kind, const std::string& requested,
-                   bool required, std::string* topic) {
+                   bool required, std::string* topic, std::vector<std::string>* warnings) {
   topic->clear();
   if (requested == "none" && !required) return Status::Ok();
+  const auto encoding = [&](const RosTopicInfo& t) {
+    return t.topic + " is in encoding '" + t.serialization + "': sweepscan reads " +
+           (summary.format == "rosbag1" ? "ros1" : "cdr") + " from " + summary.format + " bags";
+  };
   std::vector<std::string> candidates;
   for (const RosTopicInfo& t : summary.topics) {
     if (!requested.empty() && t.topic == requested) {
       if (t.kind() != kind) {
         return Status::Error(requested + " is " + t.type + ", not " + RosMessageKindName(kind));
       }
+      if (!summary.Decodable(t)) return Status::Error(encoding(t));
       *topic = requested;
       return Status::Ok();
     }
-    if (t.kind() == kind && t.message_count > 0) candidates.push_back(t.topic);
+    if (t.kind() != kind || t.message_count == 0) continue;
+    if (summary.Decodable(t)) {
+      candidates.push_back(t.topic);
+    } else if (warnings != nullptr) {
+      warnings->push_back(encoding(t) + ": not used");
+    }
   }
   if (!requested.empty()) return Status::Error("the bag has no topic " + requested);
   if (candidates.size() == 1) {
@@ -439,13 +453,17 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
        {std::tuple{RosMessageKind::kLaserScan, options.scan_topic, false, &r.scan_topic},
         std::tuple{RosMessageKind::kOdometry, options.odom_topic, false, &r.odom_topic},
         std::tuple{RosMessageKind::kImu, options.imu_topic, false, &r.imu_topic}}) {
-    s = ChooseTopic(summary, kind, requested, required, topic);
+    s = ChooseTopic(summary, kind, requested, required, topic, &r.warnings);
     if (!s.ok()) return Status::Error(bag + ": " + s.message());
   }
 
   if (r.scan_topic.empty() && r.odom_topic.empty() && r.imu_topic.empty()) {
-    return Status::Error(bag + ": no sensor_msgs/LaserScan, nav_msgs/Odometry or sensor_msgs/Imu "
-                               "topic: nothing sweepscan reads");
+    std::string why;
+    for (const std::string& w : r.warnings) why += "; " + w;
+    return Status::Error(bag +
+                         ": no sensor_msgs/LaserScan, nav_msgs/Odometry or sensor_msgs/Imu "
+                         "topic: nothing sweepscan reads" +
+                         why);
   }
 
   // Pass 1: tf, and the first message of each sensor topic.
@@ -597,6 +615,10 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     if (r.time_gaps > 0) {
       r.warnings.push_back(std::to_string(r.time_gaps) + " gaps of more than 1 s within a topic");
     }
+    if (r.intensities_dropped > 0) {
+      r.warnings.push_back(std::to_string(r.intensities_dropped) +
+                           " scans with their intensities dropped: not one for each range");
+    }
     const Status h = hash.get();
     nlohmann::json provenance = r.ToJson();
     provenance["sha256"] = h.ok() ? sha : "";
@@ -626,9 +648,14 @@ nlohmann::json RosImportReport::ToJson() const {
           {"topics", {{"scan", scan_topic}, {"odometry", odom_topic}, {"imu", imu_topic}}},
           {"base_frame", base_frame},
           {"scan_frame", scan_frame},
-          {"mount", {{"source", mount_source},
-                     {"x_m", t.x()}, {"y_m", t.y()}, {"z_m", t.z()},
-                     {"roll_rad", rpy[0]}, {"pitch_rad", rpy[1]}, {"yaw_rad", rpy[2]}}},
+          {"mount",
+           {{"source", mount_source},
+            {"x_m", t.x()},
+            {"y_m", t.y()},
+            {"z_m", t.z()},
+            {"roll_rad", rpy[0]},
+            {"pitch_rad", rpy[1]},
+            {"yaw_rad", rpy[2]}}},
           {"imu_mount", imu_mount_source},
           {"time_rule", time_rule},
           {"time_origin_ns", time_origin_ns},
@@ -644,6 +671,7 @@ nlohmann::json RosImportReport::ToJson() const {
           {"imu_without_gyro", imu_without_gyro},
           {"out_of_order", out_of_order},
           {"time_gaps", time_gaps},
+          {"intensities_dropped", intensities_dropped},
           {"undecodable", undecodable},
           {"warnings", warnings}};
 }

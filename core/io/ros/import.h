@@ -86,6 +86,8 @@ struct RosImportReport {
   uint64_t out_of_range = 0;        // finite but outside [range_min, range_max] (dropped)
   uint64_t scans_refused = 0;       // ranges' length disagrees with the angles, bad angles
   std::string first_scan_refusal;   // where and why
+  // Scans whose intensities were dropped: neither none nor one per range.
+  uint64_t intensities_dropped = 0;
   uint64_t odometry = 0, imu = 0;
   bool twist_from_poses = false;    // odometry twists differentiated from poses
   // The first odometry pose (x, y, yaw in the odometry's frame): where the
@@ -107,11 +109,14 @@ struct RosImportReport {
 Status ImportRosBag(const std::string& bag, const std::string& session_dir,
                     const RosImportOptions& options, RosImportReport* report);
 
-// Picks the topic of `kind`: `requested` if given (it must exist and be of
-// that type), else the only one; *topic stays empty when there is none and
-// the kind is optional. Exposed for `info` and the app's topic chooser.
+// Picks the topic of `kind`: `requested` if given (it must exist, be of
+// that type and in an encoding read here), else the only one with messages
+// that can be decoded (RosBagSummary::Decodable); *topic stays empty when
+// there is none and the kind is optional. Topics of the kind passed over
+// for their encoding are said in `warnings` (optional). Exposed for `info`
+// and the app's topic chooser.
 Status ChooseTopic(const RosBagSummary& summary, RosMessageKind kind, const std::string& requested,
-                   bool required, std::string* topic);
+                   bool required, std::string* topic, std::vector<std::string>* warnings = nullptr);
 
 }  // namespace sweepscan::io
 

@@ -126,6 +126,13 @@ struct RosTopicInfo {
 
 // What a bag holds, without decoding its messages.
 struct RosBagSummary {
+  // Whether `t`'s messages can be decoded here: a decodable type in the
+  // encoding this format's reader reads (ROS 1 serialisation in a ROS 1 bag,
+  // CDR in MCAP and sqlite3; an MCAP converted from a ROS 1 bag keeps "ros1").
+  bool Decodable(const RosTopicInfo& t) const {
+    return t.kind() != RosMessageKind::kOther &&
+           t.serialization == (format == "rosbag1" ? "ros1" : "cdr");
+  }
   std::string format;       // "rosbag1", "rosbag2-sqlite3", "mcap"
   std::string compression;  // "none", "bz2", "lz4", "zstd", or a list "lz4,zstd"
   uint64_t file_bytes = 0;

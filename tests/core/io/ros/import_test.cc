@@ -90,6 +90,10 @@ TEST_F(ImportTest, ScansFollowTheMessageRules) {
   EXPECT_EQ(r.no_returns, 3u);         // NaN, inf, -inf
   EXPECT_EQ(r.out_of_range, 2u);       // 0.05 < range_min, 12 > range_max
   EXPECT_EQ(r.out_of_order, 1u);       // scan 4 stamped before scan 3
+  EXPECT_EQ(r.intensities_dropped, 1u);  // scan 4: one intensity for two ranges
+  EXPECT_NE(std::find(r.warnings.begin(), r.warnings.end(),
+                      "1 scans with their intensities dropped: not one for each range"),
+            r.warnings.end());
   EXPECT_EQ(r.time_origin_ns, (1700000100LL - 1) * 1000000000LL);
   ASSERT_EQ(log.scans.size(), 4u);
 
@@ -306,19 +310,27 @@ TEST_F(ImportTest, UnindexedBagIsRefusedWithTheReindexAdvice) {
 }
 
 // Beams that cannot be timed (time_increment NaN, a span of 20 s, scan_time
-// infinite) refuse their scan instead of placing beams at -9.2e18 ns.
+// infinite) refuse their scan instead of placing beams at -9.2e18 ns; a
+// span of 4 s too, which a session's scan record cannot hold (it passed the
+// import's check and was refused by the session writer).
 TEST_F(ImportTest, ScansWhoseBeamsCannotBeTimedAreRefused) {
   RosImportReport r;
   SessionMeta meta;
   SensorLog log;
   ImportAndLoad("bad_times", RosImportOptions(), &r, &meta, &log);
   EXPECT_EQ(r.scans, 1u);
-  EXPECT_EQ(r.scans_refused, 3u);
+  EXPECT_EQ(r.scans_refused, 4u);
   EXPECT_NE(r.first_scan_refusal.find("/scan message 1: time_increment nan"), std::string::npos)
       << r.first_scan_refusal;
   ASSERT_EQ(log.scans.size(), 1u);
   ASSERT_EQ(log.scans[0].samples.size(), 2u);
   EXPECT_NEAR(ToSeconds(log.scans[0].samples[1].time.time_since_epoch()), 1.001, kTimeTol);
+  // Only such scans: the import's own rule says why, before a session is written.
+  const Status s = ImportRosBag(Bag("long_span"), Out("long_span"), RosImportOptions(), nullptr);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("cannot time the beams (span over 2.1 s"), std::string::npos)
+      << s.message();
+  EXPECT_FALSE(Exists(Out("long_span")));
 }
 
 TEST_F(ImportTest, UnknownChunkCompressionIsRefused) {
@@ -443,6 +455,34 @@ TEST_F(ImportTest, DamagedLengthsAndOffsetsAreRefusedNotTrusted) {
   for (const std::string& w : report.warnings)
     said |= w.find("ranges: 4278190080 elements") != std::string::npos;
   EXPECT_TRUE(said) << ::testing::PrintToString(report.warnings);
+}
+
+// A topic is chosen only if its messages can be decoded here: an MCAP
+// converted from a ROS 1 bag keeps the "ros1" encoding, which the MCAP reader
+// does not read; it was chosen, read whole, and refused as "holds no message".
+// An empty topic is passed over too (rosbag2 lists every subscribed topic).
+TEST(ChooseTopicTest, OnlyTopicsWithMessagesInAnEncodingReadHereAreChosen) {
+  RosBagSummary s;
+  s.format = "mcap";
+  s.topics = {{"/imu", "sensor_msgs/msg/Imu", "cdr", 0, 0, 0},
+              {"/imu/data", "sensor_msgs/msg/Imu", "cdr", 20, 0, 0},
+              {"/scan", "sensor_msgs/LaserScan", "ros1", 50, 0, 0}};
+  std::string topic;
+  std::vector<std::string> warnings;
+  ASSERT_TRUE(ChooseTopic(s, RosMessageKind::kImu, "", false, &topic, &warnings).ok());
+  EXPECT_EQ(topic, "/imu/data");
+  ASSERT_TRUE(ChooseTopic(s, RosMessageKind::kLaserScan, "", false, &topic, &warnings).ok());
+  EXPECT_EQ(topic, "");
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0],
+            "/scan is in encoding 'ros1': sweepscan reads cdr from mcap bags: not used");
+  const Status asked = ChooseTopic(s, RosMessageKind::kLaserScan, "/scan", false, &topic);
+  ASSERT_FALSE(asked.ok());
+  EXPECT_EQ(asked.message(), "/scan is in encoding 'ros1': sweepscan reads cdr from mcap bags");
+  s.format = "rosbag1";
+  s.topics[2].serialization = "ros1";
+  ASSERT_TRUE(ChooseTopic(s, RosMessageKind::kLaserScan, "", true, &topic).ok());
+  EXPECT_EQ(topic, "/scan");
 }
 
 TEST_F(ImportTest, NotABagIsRefused) {
