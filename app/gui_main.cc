@@ -525,7 +525,7 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
     }
   }
   if (!o.export_cloud.isEmpty()) {
-    const Status s = SaveCloud(o.export_cloud.toStdString(), workspace->CloudSnapshot().Flatten());
+    const Status s = SaveCloud(o.export_cloud.toStdString(), workspace->CloudSnapshot());
     if (!s.ok()) {
       std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
       exit_code = 1;

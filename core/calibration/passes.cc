@@ -167,18 +167,24 @@ double MaxHeadingDeparture(const PoseBuffer& poses, const PoseBuffer& reference)
   return worst;
 }
 
+void LabelCirclePasses(const CloudPoint* points, size_t n, const PoseBuffer& poses,
+                       const CircleDrive& circle, size_t* hint, uint8_t* labels) {
+  for (size_t i = 0; i < n; ++i) {
+    const CloudPoint& p = points[i];
+    Rigid3d world_from_body;
+    labels[i] = kNoPass;
+    // Points come in time order, so the hint makes each lookup O(1).
+    if (!poses.LookupWithHint(TimeFromNanoseconds(p.time_ns), hint, &world_from_body)) continue;
+    labels[i] = static_cast<uint8_t>(
+        circle.PassOf(world_from_body.translation().head<2>(), Eigen::Vector2d(p.x, p.y)));
+  }
+}
+
 std::vector<uint8_t> LabelCirclePasses(const std::vector<CloudPoint>& points,
                                        const PoseBuffer& poses, const CircleDrive& circle) {
   std::vector<uint8_t> labels(points.size(), kNoPass);
   size_t hint = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const CloudPoint& p = points[i];
-    Rigid3d world_from_body;
-    // Points come in time order, so the hint makes each lookup O(1).
-    if (!poses.LookupWithHint(TimeFromNanoseconds(p.time_ns), &hint, &world_from_body)) continue;
-    labels[i] = static_cast<uint8_t>(
-        circle.PassOf(world_from_body.translation().head<2>(), Eigen::Vector2d(p.x, p.y)));
-  }
+  LabelCirclePasses(points.data(), points.size(), poses, circle, &hint, labels.data());
   return labels;
 }
 

@@ -100,6 +100,10 @@ double MaxHeadingDeparture(const PoseBuffer& poses, const PoseBuffer& reference)
 constexpr uint8_t kNoPass = 255;
 std::vector<uint8_t> LabelCirclePasses(const std::vector<CloudPoint>& points,
                                        const PoseBuffer& poses, const CircleDrive& circle);
+// The same for points[0, n) into labels[0, n), a chunk at a time: `hint`
+// (start at 0) carries the pose lookup across chunks in time order.
+void LabelCirclePasses(const CloudPoint* points, size_t n, const PoseBuffer& poses,
+                       const CircleDrive& circle, size_t* hint, uint8_t* labels);
 
 }  // namespace sweepscan
 

@@ -36,6 +36,17 @@ size_t CloudSnapshotRef::size() const {
   return n;
 }
 
+bool CloudSnapshotRef::ForEachChunk(
+    const std::function<bool(const CloudPoint*, size_t)>& fn) const {
+  std::vector<CloudPoint> points;
+  for (const auto& c : sealed) {
+    points.clear();
+    c->Decode(&points);
+    if (!fn(points.data(), points.size())) return false;
+  }
+  return open.empty() || fn(open.data(), open.size());
+}
+
 std::vector<CloudPoint> CloudSnapshotRef::Flatten() const {
   std::vector<CloudPoint> all;
   all.reserve(size());

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -63,8 +64,13 @@ struct CloudSnapshotRef {
   std::vector<std::shared_ptr<const PackedChunk>> sealed;
   std::vector<CloudPoint> open;
   size_t size() const;
-  // Any thread: every point, sealed then open, decoded.
+  // Any thread: every point, sealed then open, decoded. 32 bytes a point:
+  // readers of a whole cloud (export, evaluation, pass split, plan) use
+  // ForEachChunk, which holds one chunk's points at a time.
   std::vector<CloudPoint> Flatten() const;
+  // Any thread: every point in order, a chunk at a time (at most a chunk
+  // decoded at once); `fn` returns false to stop. False if it stopped.
+  bool ForEachChunk(const std::function<bool(const CloudPoint* points, size_t n)>& fn) const;
 };
 
 // Sealed chunks are packed (core/cloud/packed_chunk.h: 14 bytes a point

@@ -398,6 +398,19 @@ Status CloudFileWriter::Finish() {
   return out_.Commit();
 }
 
+Status SaveCloud(const std::string& path, const CloudSnapshotRef& cloud,
+                 const std::atomic<bool>* cancel) {
+  CloudFileWriter out;
+  Status s = out.Open(path);
+  const bool all = s.ok() && cloud.ForEachChunk([&](const CloudPoint* p, size_t n) {
+    s = out.Append(p, n);
+    return s.ok() && !(cancel != nullptr && *cancel);
+  });
+  if (!s.ok()) return s;  // The writer removes its temporary.
+  if (!all) return Status::Error(path + ": cancelled");
+  return out.Finish();
+}
+
 Status ValidateCloudFile(const std::string& path) {
   uint64_t size = 0;
   const Status regular = CheckRegularFile(path, &size);

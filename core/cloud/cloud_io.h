@@ -8,6 +8,7 @@
 #define SWEEPSCAN_CORE_CLOUD_CLOUD_IO_H_
 
 #include <Eigen/Core>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,12 @@ class CloudFileWriter {
   uint64_t points_ = 0;
   std::string chunk_;
 };
+
+// A cloud snapshot through CloudFileWriter, a chunk decoded at a time (the
+// cloud is never held whole: 32 bytes a point); stops (no file) when
+// `cancel` becomes true, with the message "cancelled".
+Status SaveCloud(const std::string& path, const CloudSnapshotRef& cloud,
+                 const std::atomic<bool>* cancel = nullptr);
 
 // Checks that PATH is a regular file whose PLY / PCD header is sane and
 // declares exactly as many bytes as follow it (binary) or no more rows than

@@ -477,6 +477,33 @@ TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
   EXPECT_GT(on_planes, cloud.size() / 2);
   ASSERT_GT(n, floor->plane.count / 2);
   EXPECT_NEAR(std::sqrt(sum2 / n), floor->plane.rms * 1e3, 0.5 * floor->plane.rms * 1e3);
+  // File > Export Cloud: streamed a chunk at a time (the cloud is not
+  // decoded whole), every point as the cloud holds it.
+  {
+    bool exported = false, export_ok = false;
+    QObject context;
+    QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                     [&](const QString& what, bool r, const QString&) {
+                       if (!what.startsWith("Exporting")) return;
+                       exported = true;
+                       export_ok = r;
+                     });
+    workspace_->ExportCloud(tmp_.path() + "/export.ply");
+    ASSERT_TRUE(WaitFor([&] { return exported; }, 60000));
+    ASSERT_TRUE(export_ok) << window_->last_error().toStdString();
+    std::vector<CloudPoint> back;
+    const Status loaded = LoadCloud((tmp_.path() + "/export.ply").toStdString(), &back);
+    ASSERT_TRUE(loaded.ok()) << loaded.message();
+    ASSERT_EQ(back.size(), cloud.size());
+    size_t differing = 0;
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      differing += back[i].x != cloud[i].x || back[i].y != cloud[i].y || back[i].z != cloud[i].z ||
+                   back[i].time_ns != cloud[i].time_ns || back[i].scan != cloud[i].scan ||
+                   back[i].beam != cloud[i].beam;
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(cloud.size(), 65536u);  // more than one chunk
+  }
   panel->ShowDeviations(true);
   EXPECT_EQ(view->color_mode(), CloudView::ColorMode::kDeviation);
   EXPECT_TRUE(view->has_point_values(CloudView::ColorMode::kDeviation));

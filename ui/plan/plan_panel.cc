@@ -82,9 +82,11 @@ std::vector<PlanInput> InputsOf(const PlanSource& source) {
   std::vector<PlanInput> inputs = source.inputs;
   if (source.session) {
     auto xyz = std::make_shared<std::vector<Eigen::Vector3f>>();
-    const std::vector<CloudPoint> points = source.session->Flatten();
-    xyz->reserve(points.size());
-    for (const CloudPoint& p : points) xyz->emplace_back(p.x, p.y, p.z);
+    xyz->reserve(source.session->size());
+    source.session->ForEachChunk([&](const CloudPoint* p, size_t n) {  // not decoded whole
+      for (size_t i = 0; i < n; ++i) xyz->emplace_back(p[i].x, p[i].y, p[i].z);
+      return true;
+    });
     inputs.push_back({xyz, Rigid3d()});
   }
   return inputs;

@@ -680,10 +680,12 @@ void Workspace::ExportCloud(const QString& path) {
   const std::string file = path.toStdString();
   RunJob(
       QStringLiteral("Exporting %1").arg(path),
-      [snapshot, file](std::atomic<bool>*) -> QString {
-        const std::vector<CloudPoint> points = snapshot->Flatten();
-        if (points.empty()) return QStringLiteral("The cloud is empty: nothing to export.");
-        const Status s = SaveCloud(file, points);
+      [snapshot, file](std::atomic<bool>* cancel) -> QString {
+        if (snapshot->size() == 0) return QStringLiteral("The cloud is empty: nothing to export.");
+        // Streamed a chunk at a time (the cloud is not decoded whole; the
+        // file appears whole or not at all).
+        const Status s = SaveCloud(file, *snapshot, cancel);
+        if (*cancel) return QStringLiteral("Cancelled.");
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
       [this, path, count] {

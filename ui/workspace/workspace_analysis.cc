@@ -160,13 +160,19 @@ void Workspace::SplitPasses() {
   RunJob(
       tr("Splitting the passes"),
       [snapshot, labels, quantized, circle](std::atomic<bool>*) -> QString {
-        const std::vector<CloudPoint> points = snapshot->Flatten();
-        const std::vector<uint8_t> pass = LabelCirclePasses(points, *circle.poses, circle.circle);
-        labels->resize(pass.size());
-        for (size_t i = 0; i < pass.size(); ++i) {
-          (*labels)[i] = pass[i] == kNoPass ? std::numeric_limits<float>::quiet_NaN()
-                                            : static_cast<float>(pass[i]);
-        }
+        // A chunk at a time: the cloud is not decoded whole (32 bytes a point).
+        labels->reserve(snapshot->size());
+        size_t hint = 0;
+        std::vector<uint8_t> pass;
+        snapshot->ForEachChunk([&](const CloudPoint* points, size_t n) {
+          pass.resize(n);
+          LabelCirclePasses(points, n, *circle.poses, circle.circle, &hint, pass.data());
+          for (const uint8_t p : pass) {
+            labels->push_back(p == kNoPass ? std::numeric_limits<float>::quiet_NaN()
+                                           : static_cast<float>(p));
+          }
+          return true;
+        });
         *quantized = Quantize(*labels);  // as the view keeps them, off the GUI thread
         return QString();
       },
@@ -197,11 +203,13 @@ void Workspace::Evaluate() {
       tr("Evaluating"),
       [this, snapshot, points, result, deviations,
        quantized](std::atomic<bool>* cancel) -> QString {
-        {
-          const std::vector<CloudPoint> cloud = snapshot->Flatten();
-          points->reserve(cloud.size());
-          for (const CloudPoint& p : cloud) points->emplace_back(p.x, p.y, p.z);
-        }
+        // Positions only (12 bytes a point), a chunk decoded at a time.
+        points->reserve(snapshot->size());
+        const bool read = snapshot->ForEachChunk([&](const CloudPoint* p, size_t n) {
+          for (size_t i = 0; i < n; ++i) points->emplace_back(p[i].x, p[i].y, p[i].z);
+          return !*cancel;
+        });
+        if (!read) return tr("Cancelled.");
         // Stage and fraction to the status bar (at most ~50 calls a second,
         // from the evaluation's threads); Cancel stops it within 100 ms.
         EvaluationControl control;
