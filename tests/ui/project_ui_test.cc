@@ -323,6 +323,38 @@ TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
   EXPECT_EQ(panel->reference_box()->count(), 2);  // a and b
 }
 
+// The file changed by another program while open here (the CLI in a
+// terminal): Save does not overwrite it silently (without dialogs, it
+// refuses and says why); Save As still writes; opened again, it saves.
+TEST_F(ProjectUiTest, SaveDoesNotOverwriteWhatAnotherProgramChanged) {
+  const QString file = MakeProject("changed");
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  project()->SetColor("b", "#00ff00");
+  Project other;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &other).ok());
+  other.description = "placed by the CLI meanwhile";
+  ASSERT_TRUE(SaveProject(file.toStdString(), other).ok());
+
+  EXPECT_FALSE(project()->SaveProject());
+  EXPECT_NE(window_->last_error().indexOf("changed by another program"), -1)
+      << window_->last_error().toStdString();
+  Project on_disk;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &on_disk).ok());
+  EXPECT_EQ(on_disk.description, "placed by the CLI meanwhile");
+  EXPECT_TRUE(window_->isWindowModified());
+
+  const QString copy = QString::fromStdString(Dir()) + "/changed-copy.sweepscan-project";
+  ASSERT_TRUE(project()->SaveProjectAs(copy));
+  project()->SetColor("c", "#0000ff");
+  EXPECT_TRUE(project()->SaveProject());  // its own file, unchanged since
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  EXPECT_EQ(project()->document()->project().description, "placed by the CLI meanwhile");
+  project()->SetColor("b", "#00ff00");
+  EXPECT_TRUE(project()->SaveProject());
+}
+
 // Edit > Undo acts on the history edited last: the session's (a view edit
 // made before the project), the project's while it is edited, and the
 // session's again once the project is closed, whose edits go with it.

@@ -161,6 +161,25 @@ bool ProjectController::OpenProject(const QString& path) {
 
 bool ProjectController::SaveProject() {
   if (!document_.is_open()) return false;
+  // Another program (the CLI in a terminal) changed the file since it was
+  // opened here: saving would silently overwrite what it did.
+  if (document_.ChangedOnDisk()) {
+    const QString file = QFileInfo(document_.path()).fileName();
+    if (!interactive_()) {
+      show_error_(tr("Cannot save the project"),
+                  tr("%1 was changed by another program since it was opened here; saving would "
+                     "overwrite those changes. Save it under another name, or open it again.")
+                      .arg(document_.path()));
+      return false;
+    }
+    const auto answer = QMessageBox::warning(
+        window_, tr("Project changed on disk"),
+        tr("%1 was changed by another program (sweepscan-cli?) since it was opened here.\n\n"
+           "Overwrite those changes with the project as it is here?")
+            .arg(file),
+        QMessageBox::Save | QMessageBox::Cancel, QMessageBox::Cancel);
+    if (answer != QMessageBox::Save) return false;
+  }
   const Status s = document_.Save();
   if (!s.ok()) {
     show_error_(tr("Cannot save the project"), QString::fromStdString(s.message()));

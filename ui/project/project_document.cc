@@ -1,9 +1,20 @@
 #include "ui/project/project_document.h"
 
 #include <QDir>
+#include <QFile>
 #include <QFileInfo>
 
 namespace sweepscan::ui {
+namespace {
+
+// The file's bytes, "" if it cannot be read (or is not there).
+std::string FileText(const QString& path) {
+  QFile f(path);
+  if (!f.open(QIODevice::ReadOnly)) return std::string();
+  return f.readAll().toStdString();
+}
+
+}  // namespace
 
 void ProjectDocument::New(const QString& path) {
   const bool was = modified();
@@ -11,6 +22,7 @@ void ProjectDocument::New(const QString& path) {
   project_ = Project();
   project_.name = QFileInfo(path).completeBaseName().toStdString();
   saved_json_.clear();  // Not on disk yet: modified until saved.
+  disk_text_.clear();
   ++generation_;
   ++opened_count_;
   emit opened();
@@ -19,10 +31,17 @@ void ProjectDocument::New(const QString& path) {
 
 Status ProjectDocument::Open(const QString& path) {
   Project p;
-  const Status s = LoadProject(path.toStdString(), &p);
-  if (!s.ok()) return s;
+  const std::string text = FileText(path);
+  const Status s = ProjectFromJson(text, path.toStdString(), &p);
+  if (!s.ok()) return LoadProject(path.toStdString(), &p);  // its message (cannot open, ...)
   Adopt(path, std::move(p), &ProjectDocument::opened);
+  disk_text_ = text;
   return Status::Ok();
+}
+
+bool ProjectDocument::ChangedOnDisk() const {
+  return is_open() && (QFileInfo::exists(path_) || !disk_text_.empty()) &&
+         FileText(path_) != disk_text_;
 }
 
 Status ProjectDocument::Save() {
@@ -30,6 +49,7 @@ Status ProjectDocument::Save() {
   if (!s.ok()) return s;
   const bool was = modified();
   saved_json_ = ProjectToJson(project_);
+  disk_text_ = saved_json_;
   if (was) emit modifiedChanged(false);
   return s;
 }
@@ -48,6 +68,7 @@ Status ProjectDocument::SaveAs(const QString& path) {
   const Status s = SaveProject(path.toStdString(), p);
   if (!s.ok()) return s;
   Adopt(path, std::move(p), &ProjectDocument::renamed);
+  disk_text_ = saved_json_;
   return Status::Ok();
 }
 
@@ -67,6 +88,7 @@ void ProjectDocument::Close() {
   path_.clear();
   project_ = Project();
   saved_json_.clear();
+  disk_text_.clear();
   ++generation_;
   ++opened_count_;
   emit opened();

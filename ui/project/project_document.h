@@ -51,6 +51,11 @@ class ProjectDocument : public QObject {
   // relative paths. On failure nothing changes.
   Status SaveAs(const QString& path);
   void Close();
+  // Whether the file was changed by another program (`sweepscan-cli
+  // project align` in a terminal) since it was opened or last saved here:
+  // its bytes differ from what was read or written (a file that appeared
+  // where a new project is to go counts too).
+  bool ChangedOnDisk() const;
   // The contents (the undo commands' way in).
   void Set(const Project& project);
   // The session folder `dir` as the project stores it: relative to the
@@ -72,6 +77,7 @@ class ProjectDocument : public QObject {
   QString path_;
   Project project_;
   std::string saved_json_;
+  std::string disk_text_;  // the file's bytes as read or written here ("" if none)
   uint64_t generation_ = 0;
   uint64_t opened_count_ = 0;
 };
