@@ -58,6 +58,14 @@ const char* const kProjectUsage =
     "three or more points picked in the session (source) and in --to (target),\n"
     "each in its own session's frame (metres).\n";
 
+Status LoadProjectAndSay(const std::string& file, Project* project) {
+  std::vector<std::string> repairs;
+  const Status s = LoadProject(file, project, &repairs);
+  for (const std::string& r : repairs)
+    std::cerr << "sweepscan-cli: warning: " << file << ": " << r << "\n";
+  return s;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -114,7 +122,7 @@ int RunAdd(const Args& args) {
   const std::vector<std::string>& pos = args.positional();
   if (pos.size() < 2) return Fail(kExitBadInput, "project add needs PROJECT and at least one SESSION");
   Project project;
-  Status s = LoadProject(pos[0], &project);
+  Status s = LoadProjectAndSay(pos[0], &project);
   if (!s.ok()) return Fail(kExitBadInput, s.message());
   std::optional<MountingError> calibration;
   if (args.Has("calibration")) {
@@ -145,7 +153,7 @@ int RunRemove(const Args& args) {
   const std::vector<std::string>& pos = args.positional();
   if (pos.size() != 2) return Fail(kExitBadInput, "project remove needs PROJECT and one session ID");
   Project project;
-  Status s = LoadProject(pos[0], &project);
+  Status s = LoadProjectAndSay(pos[0], &project);
   if (!s.ok()) return Fail(kExitBadInput, s.message());
   s = project.RemoveSession(pos[1]);
   if (!s.ok()) return Fail(kExitBadInput, s.message());
@@ -157,7 +165,7 @@ int RunRemove(const Args& args) {
 int RunProjectInfo(const Args& args) {
   const std::string file = args.positional()[0];
   Project project;
-  const Status s = LoadProject(file, &project);
+  const Status s = LoadProjectAndSay(file, &project);
   if (!s.ok()) return Fail(kExitBadInput, s.message());
   nlohmann::json sessions = nlohmann::json::array();
   std::ostringstream text;

@@ -38,6 +38,10 @@ class SessionClouds {
 // `plan PROJECT` draws. kExitOk or an exit code after one error line.
 int ProjectPositions(const Args& args, const std::string& project_file, std::vector<Eigen::Vector3f>* points);
 
+// LoadProject with its repairs (a reference loop an older sweepscan saved,
+// core/project/project.h) said on stderr as warnings.
+Status LoadProjectAndSay(const std::string& file, Project* project);
+
 // --strict and --pose-source; kExitOk or an exit code after one error line.
 int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions* options);
 

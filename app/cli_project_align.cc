@@ -124,7 +124,7 @@ hardware::RegistrationAttempt Register(const Args& args, const std::vector<Point
 int RunProjectAlign(const Args& args) {
   const std::string file = args.positional()[0];
   Project project;
-  Status s = LoadProject(file, &project);
+  Status s = LoadProjectAndSay(file, &project);
   if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
   hardware::SessionCloudOptions cloud_options;
   if (const int code = SessionCloudOptionsFromArgs(args, &cloud_options); code != kExitOk) return code;

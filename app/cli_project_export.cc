@@ -75,7 +75,7 @@ int ProjectCloud(const std::string& file, const hardware::SessionCloudOptions& o
 
 int ProjectPositions(const Args& args, const std::string& file, std::vector<Eigen::Vector3f>* points) {
   Project project;
-  const Status s = LoadProject(file, &project);
+  const Status s = LoadProjectAndSay(file, &project);
   if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
   hardware::SessionCloudOptions options;
   if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;
@@ -98,7 +98,7 @@ int RunProjectExport(const Args& args) {
     return kExitBadInput;
   }
   Project project;
-  Status s = LoadProject(file, &project);
+  Status s = LoadProjectAndSay(file, &project);
   if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
   hardware::SessionCloudOptions options;
   if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;

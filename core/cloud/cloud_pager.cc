@@ -118,6 +118,12 @@ bool CloudPager::cache_failed() const {
   return cache_failed_;
 }
 
+void CloudPager::SetCacheRetryInterval(std::chrono::milliseconds interval) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  cache_retry_interval_ = interval;
+  if (cache_failed_) cache_retry_at_ = std::chrono::steady_clock::now() + interval;
+}
+
 size_t CloudPager::file_bytes() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return static_cast<size_t>(file_end_);
@@ -307,7 +313,8 @@ void CloudPager::EvictLocked() {
   }
   // Above the memory budget, compressed payloads go to the cache file,
   // least recently used first.
-  while (!cache_failed_ && unpacked_ + packed_ > budget_ && !lru_packed_.empty()) {
+  const bool paging = !cache_failed_ || std::chrono::steady_clock::now() >= cache_retry_at_;
+  while (paging && unpacked_ + packed_ > budget_ && !lru_packed_.empty()) {
     const PackedChunk* victim = lru_packed_.front();
     Where& w = where_.at(victim);
     {
@@ -353,9 +360,12 @@ bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset)
     fd_ = OpenUnnamed(dir);
     if (fd_ < 0 && dir != temporary) fd_ = OpenUnnamed(dir = temporary);
     if (fd_ < 0) {
-      std::fprintf(stderr, "sweepscan: cannot create the cloud cache file in %s: %s\n",
-                   dir.c_str(), std::strerror(errno));
-      cache_failed_ = true;  // Stay in memory: say it once.
+      if (!cache_failed_) {  // Said once a failure, not at every retry.
+        std::fprintf(stderr, "sweepscan: cannot create the cloud cache file in %s: %s\n",
+                     dir.c_str(), std::strerror(errno));
+      }
+      cache_failed_ = true;  // What is in memory stays there.
+      cache_retry_at_ = std::chrono::steady_clock::now() + cache_retry_interval_;
       return false;
     }
     file_dir_ = dir;
@@ -363,15 +373,19 @@ bool CloudPager::WriteLocked(const std::vector<uint8_t>& bytes, int64_t* offset)
   // The compressed frames as they are in memory (payload_codec.h), back to
   // back with the other chunks'; their offsets stay in the chunks' headers.
   if (!WriteAll(fd_, bytes.data(), bytes.size(), file_end_)) {
-    std::fprintf(stderr,
-                 "sweepscan: cannot write the cloud cache file in %s: %s; keeping the cloud "
-                 "in memory\n",
-                 file_dir_.c_str(), std::strerror(errno));
-    // Until this cloud is gone (Remove), not for good: the budget stays
-    // the operator's for the next cloud, on another disk perhaps.
+    if (!cache_failed_) {
+      std::fprintf(stderr,
+                   "sweepscan: cannot write the cloud cache file in %s: %s; keeping the cloud "
+                   "in memory\n",
+                   file_dir_.c_str(), std::strerror(errno));
+    }
+    // Not for good: the budget stays the operator's, and paging is tried
+    // again after the retry interval (space freed, the next cloud).
     cache_failed_ = true;
+    cache_retry_at_ = std::chrono::steady_clock::now() + cache_retry_interval_;
     return false;
   }
+  cache_failed_ = false;
   *offset = file_end_;
   file_end_ += static_cast<int64_t>(bytes.size());
   return true;

@@ -61,10 +61,12 @@ class CloudPager {
   // effect at once if no live chunk is in the file, else for the next file.
   void SetCacheDirectory(const std::string& dir);
   size_t file_bytes() const;  // The cache file's size now.
-  // The cache file could not be created or written: the cloud stays in
-  // memory (whatever the budget, which is kept) until its chunks are gone,
-  // and the next cloud tries again.
+  // The cache file could not be created or written: what is in memory
+  // stays there (the budget is kept) and paging is tried again after the
+  // retry interval (30 s; space may have been freed), at once when the
+  // cloud is gone or the cache directory changes.
   bool cache_failed() const;
+  void SetCacheRetryInterval(std::chrono::milliseconds interval);
   // The directory the cache file is open in ("" while there is none).
   std::string file_directory() const;
 
@@ -114,6 +116,8 @@ class CloudPager {
   int fd_ = -1;
   int64_t file_end_ = 0;
   bool cache_failed_ = false;
+  std::chrono::steady_clock::time_point cache_retry_at_;
+  std::chrono::milliseconds cache_retry_interval_{30000};
   size_t unpacked_ = 0, packed_ = 0;  // Bytes in memory.
   size_t packed_chunks_ = 0;
   size_t in_file_ = 0;  // Live chunks with a copy in the cache file.

@@ -81,8 +81,10 @@ void CheckCovariance(const JsonObject& o, const std::array<double, 36>& c) {
     if (!std::isfinite(c[i])) o.Fail("covariance", "entry " + std::to_string(i) + " is not finite");
     m(i / 6, i % 6) = c[i];
   }
+  // Symmetric to what a double inverse leaves (the writer symmetrises; a
+  // file written before it may differ by ~1e-8 of the largest entry).
   const double scale = m.cwiseAbs().maxCoeff();
-  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
+  if ((m - m.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale) {
     o.Fail("covariance", "must be symmetric (row-major 6 x 6)");
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(m);
@@ -235,7 +237,13 @@ json EvidenceJson(const RegistrationEvidence& e) {
   j["overlap"] = e.overlap;
   j["correspondences"] = e.correspondences;
   j["iterations"] = e.iterations;
-  j["covariance"] = Numbers(e.covariance.data(), 36);
+  // Symmetrised: a registration's (J^T J)^-1 is symmetric only to rounding.
+  std::array<double, 36> c;
+  for (int r = 0; r < 6; ++r) {
+    for (int k = 0; k < 6; ++k)
+      c[r * 6 + k] = 0.5 * (e.covariance[r * 6 + k] + e.covariance[k * 6 + r]);
+  }
+  j["covariance"] = Numbers(c.data(), 36);
   if (!e.free_direction.isZero()) j["free_direction"] = Numbers(e.free_direction.data(), 3);
   if (!e.pairs.empty()) {
     json pairs = json::array();
@@ -388,7 +396,8 @@ std::string ResolveSessionPath(const std::string& project_file, const ProjectSes
   return (fs::path(ProjectDirectory(project_file)) / p).lexically_normal().string();
 }
 
-Status ProjectFromJson(const std::string& text, const std::string& source, Project* project) {
+Status ProjectFromJson(const std::string& text, const std::string& source, Project* project,
+                       std::vector<std::string>* repairs) {
   json j;
   Status s = ParseJson(text, source, &j);
   if (!s.ok()) return s;
@@ -422,7 +431,7 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
     int anchors = 0;
     for (const ProjectSession& ps : p.sessions) anchors += ps.registration.method == "anchor";
     if (anchors > 1) throw JsonError("sessions: more than one anchor");
-    for (const ProjectSession& ps : p.sessions) {
+    for (ProjectSession& ps : p.sessions) {
       const std::string& reference = ps.registration.reference;
       if (reference.empty()) continue;
       const int r = p.Find(reference);
@@ -430,22 +439,29 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
         throw JsonError("sessions: '" + ps.id + "' refers to an unknown session '" + reference +
                         "'");
       }
-      if (reference == ps.id) throw JsonError("sessions: '" + ps.id + "' is placed against itself");
-      if (!p.sessions[r].project_from_session) {
-        throw JsonError("sessions: '" + ps.id + "' is placed against '" + reference +
-                        "', which is not placed");
-      }
-      // A loop of references places its sessions against each other and
-      // nothing else: none of them can be removed, and placing one again
-      // would move the others with it.
-      if (p.PlacedThrough(reference, ps.id)) {
+      std::string wrong;
+      if (reference == ps.id) {
+        wrong = "'" + ps.id + "' is placed against itself";
+      } else if (!p.sessions[r].project_from_session) {
+        wrong = "'" + ps.id + "' is placed against '" + reference + "', which is not placed";
+      } else if (p.PlacedThrough(reference, ps.id)) {
+        // A loop of references places its sessions against each other and
+        // nothing else: none of them can be removed, and placing one again
+        // would move the others with it.
         std::string chain = ps.id;
         for (int i = r; i >= 0 && p.sessions[i].id != ps.id;
              i = p.Find(p.sessions[i].registration.reference)) {
           chain += " -> " + p.sessions[i].id;
         }
-        throw JsonError("sessions: the references form a loop: " + chain + " -> " + ps.id);
+        wrong = "the references form a loop: " + chain + " -> " + ps.id;
       }
+      if (wrong.empty()) continue;
+      if (repairs == nullptr) throw JsonError("sessions: " + wrong);
+      repairs->push_back(wrong + ": '" + ps.id +
+                         "' keeps its pose, now held as placed by hand (manual); " +
+                         "align it again to measure it");
+      ps.registration.reference.clear();
+      ps.registration.method = "manual";
     }
     *project = std::move(p);
   } catch (const JsonError& e) {
@@ -480,14 +496,14 @@ std::string ProjectToJson(const Project& project) {
   return root.dump(2) + "\n";
 }
 
-Status LoadProject(const std::string& path, Project* project) {
+Status LoadProject(const std::string& path, Project* project, std::vector<std::string>* repairs) {
   std::string text;
   {
     std::ifstream in(path, std::ios::binary);
     if (!in) return Status::Error(path + ": cannot open: " + std::strerror(errno));
     text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
-  return ProjectFromJson(text, path, project);
+  return ProjectFromJson(text, path, project, repairs);
 }
 
 Status SaveProject(const std::string& path, const Project& project) {

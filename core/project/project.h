@@ -125,9 +125,17 @@ std::string ProjectDirectory(const std::string& project_file);
 // A session's folder as an absolute (or working-directory-relative) path.
 std::string ResolveSessionPath(const std::string& project_file, const ProjectSession& session);
 
-Status LoadProject(const std::string& path, Project* project);
+// `repairs` (optional): a reference that places a session against itself,
+// against an unplaced session or in a loop (which sweepscan before
+// 2026-11-29 could save) is refused without it; with it, the reference is
+// dropped (the session keeps its pose, now held as placed by hand: method
+// "manual") and what was done is said there, so that such a project opens
+// and can be aligned again.
+Status LoadProject(const std::string& path, Project* project,
+                   std::vector<std::string>* repairs = nullptr);
 Status SaveProject(const std::string& path, const Project& project);
-Status ProjectFromJson(const std::string& text, const std::string& source, Project* project);
+Status ProjectFromJson(const std::string& text, const std::string& source, Project* project,
+                       std::vector<std::string>* repairs = nullptr);
 std::string ProjectToJson(const Project& project);
 
 }  // namespace sweepscan

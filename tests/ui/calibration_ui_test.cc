@@ -419,6 +419,12 @@ TEST_F(CalibrationTest, PairsStayWithTheirSessionAndGoWhenAnotherOpens) {
   panel->AddPick(kDiamondCorners[0]);
   EXPECT_EQ(panel->pick_prompt().indexOf("cleared"), -1) << panel->pick_prompt().toStdString();
   EXPECT_EQ(history->count(), 1);
+  // A pick on the live cloud goes with it too: New Session starts another.
+  workspace_->NewSession();
+  EXPECT_TRUE(panel->pair_points().empty());
+  EXPECT_EQ(history->count(), 0);
+  EXPECT_NE(panel->pick_prompt().indexOf("the pair picked in the live cloud was cleared"), -1)
+      << panel->pick_prompt().toStdString();
 }
 
 // The automatic mode, one button beside Solve, gives what

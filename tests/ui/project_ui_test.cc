@@ -321,6 +321,24 @@ TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
   EXPECT_FALSE(project()->Align("b", "c"));
   panel->SelectSession("c");
   EXPECT_EQ(panel->reference_box()->count(), 2);  // a and b
+
+  // A loop an older sweepscan could save (b against c, c against b) opens
+  // repaired, says so, and is modified until saved.
+  Project loop = project()->document()->project();
+  loop.sessions[1].registration.reference = "c";
+  const std::string looped = Dir() + "/looped.sweepscan-project";
+  ASSERT_TRUE(SaveProject(looped, loop).ok());
+  const int errors = window_->errors_shown();
+  ASSERT_TRUE(project()->OpenProject(QString::fromStdString(looped)));
+  TurnsWhileBusy(60000);
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+  EXPECT_NE(window_->last_error().indexOf("the references form a loop: b -> c -> b"), -1)
+      << window_->last_error().toStdString();
+  EXPECT_EQ(project()->document()->project().sessions[1].registration.method, "manual");
+  EXPECT_TRUE(window_->isWindowModified());
+  ASSERT_TRUE(project()->SaveProject());
+  Project saved;
+  EXPECT_TRUE(LoadProject(looped, &saved).ok());  // strict: nothing left to repair
 }
 
 // The file changed by another program while open here (the CLI in a

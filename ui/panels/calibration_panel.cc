@@ -134,8 +134,9 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     pass_shown_ = -1;
     // Picks are points of one session's cloud: another session's pairs (and
     // their undo history) would pair points of a cloud no longer shown. The
-    // same session opened again keeps them.
-    if (dir != pairs_session_) {
+    // same session opened again keeps them; New Session ("") always starts
+    // a new live cloud.
+    if (dir != pairs_session_ || dir.isEmpty()) {
       if (!pairs_.empty()) {
         const QString where =
             pairs_session_.isEmpty() ? tr("the live cloud") : QFileInfo(pairs_session_).fileName();

@@ -156,6 +156,16 @@ bool ProjectController::OpenProject(const QString& path) {
   }
   AddRecent(QFileInfo(path).absoluteFilePath());
   emit message(tr("Opened %1: %2 session(s)").arg(path).arg(document_.project().sessions.size()));
+  if (!document_.repairs().empty()) {
+    QString what;
+    for (const std::string& r : document_.repairs())
+      what += QString::fromStdString(r) + QStringLiteral("\n");
+    show_error_(
+        tr("The project was repaired"),
+        tr("%1 held references no sweepscan can use (saved by an older one):\n\n%2\nSave the "
+           "project to keep the repair.")
+            .arg(path, what));
+  }
   return true;
 }
 

@@ -32,10 +32,20 @@ void ProjectDocument::New(const QString& path) {
 Status ProjectDocument::Open(const QString& path) {
   Project p;
   const std::string text = FileText(path);
-  const Status s = ProjectFromJson(text, path.toStdString(), &p);
-  if (!s.ok()) return LoadProject(path.toStdString(), &p);  // its message (cannot open, ...)
+  std::vector<std::string> repairs;
+  const Status s = ProjectFromJson(text, path.toStdString(), &p, &repairs);
+  if (!s.ok()) {
+    // An unreadable file says so (cannot open: why), else the parse error.
+    const Status read = LoadProject(path.toStdString(), &p);
+    return read.ok() ? s : read;
+  }
   Adopt(path, std::move(p), &ProjectDocument::opened);
   disk_text_ = text;
+  repairs_ = std::move(repairs);
+  if (!repairs_.empty()) {  // Not as on disk: saved on the next Save.
+    saved_json_.clear();
+    emit modifiedChanged(true);
+  }
   return Status::Ok();
 }
 

@@ -39,8 +39,12 @@ class ProjectDocument : public QObject {
 
   // A new, empty project to be saved at `path` (nothing written yet).
   void New(const QString& path);
-  // Reads `path`; on failure the open project stays.
+  // Reads `path`; on failure the open project stays. References a file
+  // may hold from before 2026-11-29 (a loop, a session against itself) are
+  // repaired as LoadProject's `repairs` says (repairs()), and the project is
+  // then modified until saved.
   Status Open(const QString& path);
+  const std::vector<std::string>& repairs() const { return repairs_; }
   // Writes the project atomically to its path.
   Status Save();
   // Writes the project atomically to `path` and makes that its file: every
@@ -78,6 +82,7 @@ class ProjectDocument : public QObject {
   Project project_;
   std::string saved_json_;
   std::string disk_text_;  // the file's bytes as read or written here ("" if none)
+  std::vector<std::string> repairs_;  // what Open repaired
   uint64_t generation_ = 0;
   uint64_t opened_count_ = 0;
 };

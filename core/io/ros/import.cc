@@ -259,8 +259,8 @@ class WritingSink : public RosMessageSink {
       *why = std::to_string(n) + " ranges (at most 65535)";
       return false;
     }
-    // The beams' times must be numbers, and the scan's span within 10 s (a
-    // turn of any scanning lidar): NaN or a huge value would give times
+    // The beams' times must be numbers, and the scan's span within 2.1 s
+    // (kMaxScanSpanS: a turn of any scanning lidar): NaN or a huge value would give times
     // near -9.2e18 ns, and the checks after this compare false with NaN.
     if (!std::isfinite(m.time_increment) || !std::isfinite(m.scan_time) ||
         std::abs(static_cast<double>(m.time_increment)) * static_cast<double>(n) > kMaxScanSpanS ||

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -159,8 +160,10 @@ Status Open(const std::string& path, rosbag::Bag* bag) {
     return Status::Error(path + ": not a ROS 1 bag (it does not start with \"#ROSBAG V2.0\")");
   }
   // rosbag trusts the bag's lengths and offsets (a bad one reads out of
-  // bounds): every one is checked first, and a damaged bag refused here.
-  const Status checked = CheckRosbag1File(path);
+  // bounds): the file's records are checked first, and a damaged bag
+  // refused here; what the chunks hold is checked before messages are read
+  // (Acquire's `messages`).
+  const Status checked = CheckRosbag1File(path, false);
   if (!checked.ok()) return checked;
   try {
     bag->open(path, rosbag::bagmode::Read);
@@ -183,6 +186,7 @@ struct CachedBag {
   std::string path;
   off_t size = 0;
   struct timespec mtime = {};
+  bool chunks_checked = false;  // CheckRosbag1File with the chunks walked
   rosbag::Bag bag;
 };
 // A plain pointer on purpose: a static unique_ptr would close the bag during
@@ -192,8 +196,10 @@ std::mutex g_cache_mutex;
 CachedBag* g_cache = nullptr;
 
 // Opens `path` (or reuses it) with g_cache_mutex held by *lock for as long
-// as the caller uses *bag: rosbag::Bag is not thread-safe.
-Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosbag::Bag** bag) {
+// as the caller uses *bag: rosbag::Bag is not thread-safe. `messages`: the
+// caller reads messages, so the chunks are checked too (once a bag).
+Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosbag::Bag** bag,
+               bool messages, const std::function<bool(double)>& progress = nullptr) {
   *lock = std::unique_lock<std::mutex>(g_cache_mutex);
   struct stat st;
   if (stat(path.c_str(), &st) != 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
@@ -208,6 +214,15 @@ Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosb
     fresh->size = st.st_size;
     fresh->mtime = st.st_mtim;
     g_cache = fresh.release();
+  }
+  if (messages && !g_cache->chunks_checked) {
+    // Cancellable (the reader's progress at its start: a large bz2 bag takes
+    // a while to decompress).
+    std::function<bool(double)> poll;
+    if (progress) poll = [&progress](double) { return progress(0.0); };
+    const Status s = CheckRosbag1File(path, true, poll);
+    if (!s.ok()) return s;
+    g_cache->chunks_checked = true;
   }
   *bag = &g_cache->bag;
   return Status::Ok();
@@ -230,7 +245,7 @@ bool LooksLikeRosbag1(const std::string& path) {
 Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary) {
   std::unique_lock<std::mutex> lock;
   rosbag::Bag* cached = nullptr;
-  Status s = Acquire(path, &lock, &cached);
+  Status s = Acquire(path, &lock, &cached, false);
   if (!s.ok()) return s;
   rosbag::Bag& bag = *cached;
   RosBagSummary out;
@@ -271,7 +286,7 @@ Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMe
                    RosReadStats* stats) {
   std::unique_lock<std::mutex> lock;
   rosbag::Bag* cached = nullptr;
-  Status s = Acquire(path, &lock, &cached);
+  Status s = Acquire(path, &lock, &cached, true, options.progress);
   if (!s.ok()) return s;
   rosbag::Bag& bag = *cached;
   RosReadStats st;

@@ -9,7 +9,9 @@
 
 #include <cerrno>
 #include <cstring>
+#include <functional>
 #include <map>
+#include <memory>
 #include <vector>
 
 namespace sweepscan::io {
@@ -17,9 +19,6 @@ namespace {
 
 constexpr char kMagic[] = "#ROSBAG V2.0\n";
 constexpr size_t kMagicSize = sizeof(kMagic) - 1;
-// A chunk's decompressed size: rosbag record's default threshold is 768 KB;
-// a chunk claiming more than this is a corrupt length, not a recording.
-constexpr uint32_t kMaxChunkBytes = 1u << 30;
 
 enum Op : uint8_t {
   kMessageData = 0x02,
@@ -193,20 +192,14 @@ void WalkChunk(const uint8_t* p, size_t size, std::map<uint32_t, uint32_t>* mess
 }
 
 // The chunk's data decompressed as its `compression` says, to exactly
-// `size` bytes.
-std::vector<uint8_t> Decompress(const std::string& compression, const uint8_t* data, uint32_t len,
-                                uint32_t size) {
-  if (size > kMaxChunkBytes) {
-    throw Bad{"the chunk claims " + std::to_string(size) + " bytes decompressed (at most " +
-              std::to_string(kMaxChunkBytes) + " read)"};
-  }
-  std::vector<uint8_t> out(size);
+// `size` bytes (any size a u32 holds: one message of a gigabyte makes a
+// chunk that big). The buffer is left uninitialised: a corrupt size costs
+// the pages the decompressor writes before it fails, not `size` of zeros.
+std::unique_ptr<uint8_t[]> Decompress(const std::string& compression, const uint8_t* data,
+                                      uint32_t len, uint32_t size) {
+  std::unique_ptr<uint8_t[]> out(new uint8_t[size == 0 ? 1 : size]);
   if (compression == "none") {
-    if (len != size) {
-      throw Bad{"an uncompressed chunk of " + std::to_string(len) + " bytes claims " +
-                std::to_string(size)};
-    }
-    std::memcpy(out.data(), data, size);
+    std::memcpy(out.get(), data, size);  // len == size, checked by the caller
     return out;
   }
   // Both libraries take non-const input they do not write.
@@ -214,15 +207,13 @@ std::vector<uint8_t> Decompress(const std::string& compression, const uint8_t* d
   unsigned int got = size;
   if (compression == "bz2") {
     const int rc =
-        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &got, in, len, 0, 0);
+        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.get()), &got, in, len, 0, 0);
     if (rc != BZ_OK)
       throw Bad{"its bz2 data do not decompress (bzip2 error " + std::to_string(rc) + ")"};
-  } else if (compression == "lz4") {
-    const int rc = roslz4_buffToBuffDecompress(in, len, reinterpret_cast<char*>(out.data()), &got);
+  } else {
+    const int rc = roslz4_buffToBuffDecompress(in, len, reinterpret_cast<char*>(out.get()), &got);
     if (rc != ROSLZ4_OK)
       throw Bad{"its lz4 data do not decompress (roslz4 error " + std::to_string(rc) + ")"};
-  } else {
-    throw Bad{"unknown chunk compression '" + compression + "' (none, bz2, lz4)"};
   }
   if (got != size) {
     throw Bad{"the chunk decompresses to " + std::to_string(got) + " bytes, its header says " +
@@ -231,7 +222,15 @@ std::vector<uint8_t> Decompress(const std::string& compression, const uint8_t* d
   return out;
 }
 
-Status CheckRosbag1(Source* source, const std::string& name) {
+// Follows rosbag_storage's own reading of a bag (format 2.0), every length
+// checked: the bag header; at index_pos, conn_count connections and
+// chunk_count chunk infos; for each chunk info, the chunk record at its
+// chunk_pos and the index data records right after it, one a connection the
+// chunk info names. Nothing else in the file is read by rosbag (a bag
+// `rosbag reindex` repaired keeps its cut old index before the new one), so
+// nothing else is judged.
+Status CheckRosbag1(Source* source, const std::string& name, bool walk_chunks,
+                    const std::function<bool(double)>& progress) {
   const size_t size = source->size();
   if (size < kMagicSize || std::memcmp(source->Read(0, kMagicSize), kMagic, kMagicSize) != 0) {
     return Status::Error(name + ": not a ROS 1 bag (it does not start with \"#ROSBAG V2.0\")");
@@ -252,115 +251,131 @@ Status CheckRosbag1(Source* source, const std::string& name) {
                            "` and import the reindexed bag");
     }
     if (index_pos < header.end) throw Bad{"the index position lies inside the bag header"};
-    // The records in order: chunks, each followed by its index data; from
-    // index_pos the connections and then the chunk infos.
-    // Each chunk's start -> its index data's entries per connection.
-    std::map<uint64_t, std::map<uint32_t, uint32_t>> chunk_index;
-    uint64_t last_chunk = 0;
-    std::map<uint32_t, uint32_t> messages;  // the last chunk's: offset -> conn
-    bool index_started = false;
-    uint32_t index_connections = 0, index_chunks = 0;
-    for (at = header.end; at < size;) {
-      const Record r = ReadRecord(source, at);
-      const auto data = [&] { return source->Read(r.data_at, r.data_len); };
-      if (at > index_pos && !index_started) {
-        throw Bad{"the index position " + std::to_string(index_pos) + " is not a record's start"};
-      }
-      if (at < index_pos) {
-        if (r.op == kChunk) {
-          const uint32_t decompressed = FieldU32(r.fields, "size");
-          const std::vector<uint8_t> chunk =
-              Decompress(Field(r.fields, "compression", 0), data(), r.data_len, decompressed);
-          messages.clear();
-          WalkChunk(chunk.data(), chunk.size(), &messages);
-          chunk_index[at];
-          last_chunk = at;
-        } else if (r.op == kIndexData) {
-          if (chunk_index.empty()) throw Bad{"index data before any chunk"};
-          if (FieldU32(r.fields, "ver") != 1) throw Bad{"index data of a version other than 1"};
-          const uint32_t conn = FieldU32(r.fields, "conn");
-          const uint32_t count = FieldU32(r.fields, "count");
-          if (static_cast<uint64_t>(count) * 12 != r.data_len) {
-            throw Bad{"index data of " + std::to_string(count) + " entries in " +
-                      std::to_string(r.data_len) + " bytes (12 an entry)"};
-          }
-          if (!chunk_index[last_chunk].emplace(conn, count).second) {
-            throw Bad{"a second index data record of connection " + std::to_string(conn) +
-                      " for one chunk"};
-          }
-          const uint8_t* entries = data();
-          for (uint32_t k = 0; k < count; ++k) {
-            const uint32_t offset = U32(entries + 12 * k + 8);
-            const auto m = messages.find(offset);
-            if (m == messages.end()) {
-              throw Bad{"index entry " + std::to_string(k) + " points at byte " +
-                        std::to_string(offset) + " of its chunk, where no message record starts"};
-            }
-            if (m->second != conn) {
-              throw Bad{"index entry " + std::to_string(k) + " of connection " +
-                        std::to_string(conn) + " points at a message of connection " +
-                        std::to_string(m->second)};
-            }
-          }
-        } else if (r.op == kConnection) {
-          // Written before the index by some writers too: checked alike.
-          FieldU32(r.fields, "conn");
-          ParseFields(data(), r.data_len);
-        } else {
-          throw Bad{"a record of type " + std::to_string(r.op) + " before the index"};
+    // The index. Damage here (or an index cut short by the end of the
+    // file) is what `rosbag reindex` repairs.
+    struct ChunkInfo {
+      uint64_t pos;
+      std::map<uint32_t, uint32_t> counts;  // connection -> messages
+    };
+    std::vector<ChunkInfo> infos;
+    at = index_pos;
+    try {
+      for (uint32_t k = 0; k < connections; ++k) {
+        const Record r = ReadRecord(source, at);
+        if (r.op != kConnection) {
+          throw Bad{"connection " + std::to_string(k) + " of " + std::to_string(connections) +
+                    " is a record of type " + std::to_string(r.op)};
         }
-      } else {
-        index_started = true;
-        if (r.op == kConnection) {
-          if (index_chunks > 0) throw Bad{"a connection after the chunk infos"};
-          FieldU32(r.fields, "conn");
-          Field(r.fields, "topic", 0);
-          ParseFields(data(), r.data_len);
-          ++index_connections;
-        } else if (r.op == kChunkInfo) {
-          if (FieldU32(r.fields, "ver") != 1) throw Bad{"chunk info of a version other than 1"};
-          const uint64_t chunk_pos = FieldU64(r.fields, "chunk_pos");
-          FieldU64(r.fields, "start_time");
-          FieldU64(r.fields, "end_time");
-          const uint32_t count = FieldU32(r.fields, "count");
-          if (static_cast<uint64_t>(count) * 8 != r.data_len) {
-            throw Bad{"chunk info of " + std::to_string(count) + " connections in " +
-                      std::to_string(r.data_len) + " bytes (8 a connection)"};
-          }
-          const auto c = chunk_index.find(chunk_pos);
-          if (c == chunk_index.end()) {
-            throw Bad{"chunk info for byte " + std::to_string(chunk_pos) +
-                      ", where no chunk starts"};
-          }
-          // rosbag reads as many index data records after the chunk as
-          // the chunk info names connections, each with its count.
-          if (c->second.size() != count) {
-            throw Bad{"chunk info for byte " + std::to_string(chunk_pos) + " names " +
-                      std::to_string(count) + " connections, the chunk has index data for " +
-                      std::to_string(c->second.size())};
-          }
-          const uint8_t* entries = data();
-          for (uint32_t k = 0; k < count; ++k) {
-            const uint32_t conn = U32(entries + 8 * k), n = U32(entries + 8 * k + 4);
-            const auto e = c->second.find(conn);
-            if (e == c->second.end() || e->second != n) {
-              throw Bad{"chunk info for byte " + std::to_string(chunk_pos) + ": connection " +
-                        std::to_string(conn) + " with " + std::to_string(n) +
-                        " messages, which its index data do not say"};
-            }
-          }
-          ++index_chunks;
-        } else {
-          throw Bad{"a record of type " + std::to_string(r.op) + " in the index"};
-        }
+        FieldU32(r.fields, "conn");
+        Field(r.fields, "topic", 0);
+        ParseFields(source->Read(r.data_at, r.data_len), r.data_len);
+        at = r.end;
       }
-      at = r.end;
+      for (uint32_t k = 0; k < chunks; ++k) {
+        const Record r = ReadRecord(source, at);
+        if (r.op != kChunkInfo) {
+          throw Bad{"chunk info " + std::to_string(k) + " of " + std::to_string(chunks) +
+                    " is a record of type " + std::to_string(r.op)};
+        }
+        if (FieldU32(r.fields, "ver") != 1) throw Bad{"chunk info of a version other than 1"};
+        ChunkInfo info;
+        info.pos = FieldU64(r.fields, "chunk_pos");
+        FieldU64(r.fields, "start_time");
+        FieldU64(r.fields, "end_time");
+        const uint32_t count = FieldU32(r.fields, "count");
+        if (static_cast<uint64_t>(count) * 8 != r.data_len) {
+          throw Bad{"chunk info of " + std::to_string(count) + " connections in " +
+                    std::to_string(r.data_len) + " bytes (8 a connection)"};
+        }
+        const uint8_t* entries = source->Read(r.data_at, r.data_len);
+        for (uint32_t e = 0; e < count; ++e) {
+          if (!info.counts.emplace(U32(entries + 8 * e), U32(entries + 8 * e + 4)).second) {
+            throw Bad{"chunk info names connection " + std::to_string(U32(entries + 8 * e)) +
+                      " twice"};
+          }
+        }
+        if (info.pos < header.end || info.pos >= size) {
+          throw Bad{"chunk info for byte " + std::to_string(info.pos) +
+                    ", outside the file's chunks"};
+        }
+        infos.push_back(std::move(info));
+        at = r.end;
+      }
+    } catch (const Bad& b) {
+      throw Bad{b.why + " (the index, from byte " + std::to_string(index_pos) +
+                "; `rosbag reindex " + name + "` rebuilds it)"};
     }
-    if (index_connections != connections || index_chunks != chunks) {
-      at = size;
-      throw Bad{"the bag header counts " + std::to_string(connections) + " connections and " +
-                std::to_string(chunks) + " chunks, the index holds " +
-                std::to_string(index_connections) + " and " + std::to_string(index_chunks)};
+    // Each chunk as rosbag reads it.
+    for (size_t c = 0; c < infos.size(); ++c) {
+      if (progress && !progress(static_cast<double>(c) / static_cast<double>(infos.size()))) {
+        return Status::Error(name + ": cancelled");
+      }
+      const ChunkInfo& info = infos[c];
+      at = info.pos;
+      const Record chunk = ReadRecord(source, at);
+      if (chunk.op != kChunk) {
+        throw Bad{"a chunk info points here, at a record of type " + std::to_string(chunk.op)};
+      }
+      const uint32_t decompressed = FieldU32(chunk.fields, "size");
+      const std::string& compression = Field(chunk.fields, "compression", 0);
+      if (compression != "none" && compression != "bz2" && compression != "lz4") {
+        throw Bad{"unknown chunk compression '" + compression + "' (none, bz2, lz4)"};
+      }
+      if (compression == "none" && chunk.data_len != decompressed) {
+        throw Bad{"an uncompressed chunk of " + std::to_string(chunk.data_len) + " bytes claims " +
+                  std::to_string(decompressed)};
+      }
+      std::map<uint32_t, uint32_t> messages;  // offset -> conn
+      if (walk_chunks) {
+        const std::unique_ptr<uint8_t[]> bytes = Decompress(
+            compression, source->Read(chunk.data_at, chunk.data_len), chunk.data_len, decompressed);
+        WalkChunk(bytes.get(), decompressed, &messages);
+      }
+      at = chunk.end;
+      for (size_t k = 0; k < info.counts.size(); ++k) {
+        const Record r = ReadRecord(source, at);
+        if (r.op != kIndexData) {
+          throw Bad{"index data " + std::to_string(k) + " of " +
+                    std::to_string(info.counts.size()) + " after the chunk at byte " +
+                    std::to_string(info.pos) + " is a record of type " + std::to_string(r.op)};
+        }
+        if (FieldU32(r.fields, "ver") != 1) throw Bad{"index data of a version other than 1"};
+        const uint32_t conn = FieldU32(r.fields, "conn");
+        const uint32_t count = FieldU32(r.fields, "count");
+        if (static_cast<uint64_t>(count) * 12 != r.data_len) {
+          throw Bad{"index data of " + std::to_string(count) + " entries in " +
+                    std::to_string(r.data_len) + " bytes (12 an entry)"};
+        }
+        const auto named = info.counts.find(conn);
+        if (named == info.counts.end() || named->second != count) {
+          throw Bad{"index data of connection " + std::to_string(conn) + " with " +
+                    std::to_string(count) + " entries, which the chunk info for byte " +
+                    std::to_string(info.pos) + " does not name"};
+        }
+        const uint8_t* entries = source->Read(r.data_at, r.data_len);
+        for (uint32_t e = 0; e < count; ++e) {
+          const uint32_t offset = U32(entries + 12 * e + 8);
+          if (!walk_chunks) {
+            if (offset >= decompressed) {
+              throw Bad{"index entry " + std::to_string(e) + " points at byte " +
+                        std::to_string(offset) + " of a chunk of " + std::to_string(decompressed) +
+                        " bytes"};
+            }
+            continue;
+          }
+          const auto m = messages.find(offset);
+          if (m == messages.end()) {
+            throw Bad{"index entry " + std::to_string(e) + " points at byte " +
+                      std::to_string(offset) + " of its chunk, where no message record starts"};
+          }
+          if (m->second != conn) {
+            throw Bad{"index entry " + std::to_string(e) + " of connection " +
+                      std::to_string(conn) + " points at a message of connection " +
+                      std::to_string(m->second)};
+          }
+        }
+        at = r.end;
+      }
     }
   } catch (const Bad& b) {
     return Status::Error(name + ": damaged ROS 1 bag at byte " + std::to_string(at) + ": " + b.why);
@@ -370,12 +385,13 @@ Status CheckRosbag1(Source* source, const std::string& name) {
 
 }  // namespace
 
-Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& name) {
+Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& name, bool chunks) {
   MemorySource source(data, size);
-  return CheckRosbag1(&source, name);
+  return CheckRosbag1(&source, name, chunks, nullptr);
 }
 
-Status CheckRosbag1File(const std::string& path) {
+Status CheckRosbag1File(const std::string& path, bool chunks,
+                        const std::function<bool(double)>& progress) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
   struct stat st;
@@ -388,7 +404,7 @@ Status CheckRosbag1File(const std::string& path) {
   FileSource source(fd, static_cast<size_t>(st.st_size));
   Status s;
   try {
-    s = CheckRosbag1(&source, path);
+    s = CheckRosbag1(&source, path, chunks, progress);
   } catch (const Bad& b) {  // a read failed outside the walk's own catch
     s = Status::Error(path + ": " + b.why);
   }

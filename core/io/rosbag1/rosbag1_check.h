@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -33,10 +34,20 @@ namespace sweepscan::io {
 // index position beyond the end (a copy cut short) says to reindex. A bag
 // without an index (index position 0) passes: rosbag refuses it with its
 // own advice.
-Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& name);
-// The same on the file at `path` (read whole, a chunk's decompressed bytes
-// at a time).
-Status CheckRosbag1File(const std::string& path);
+//
+// `chunks` false checks the file's own records only: each chunk's record,
+// not what it compresses, and index entries against the chunk's stated
+// size. That is all rosbag reads for a summary (the index: connections,
+// chunk infos, index data) and costs a read of the records' headers, where
+// the full check decompresses every chunk (minutes for a large bz2 bag):
+// the reader does the full check before it reads messages.
+Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& name,
+                         bool chunks = true);
+// The same on the file at `path` (read in pieces, a chunk's decompressed
+// bytes at a time). `progress` (optional) hears the fraction checked, a
+// chunk at a time, and cancels ("cancelled") by returning false.
+Status CheckRosbag1File(const std::string& path, bool chunks = true,
+                        const std::function<bool(double)>& progress = nullptr);
 
 // A message body in ROS 1 serialisation (little-endian, unaligned, u32
 // lengths before strings and variable arrays) walked as `kind`'s message

@@ -492,13 +492,21 @@ TEST(CloudPagerTest, AFailedCacheWriteKeepsTheCloudAndTheBudgetForTheNext) {
   EXPECT_EQ(pager.paged_out_chunks(), 0u);
   EXPECT_EQ(pager.budget(), 1u);
   EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
-  chunks.reset();
+  // The next cloud, made while this one still lives (the app builds a
+  // session's cloud before it lets the last one go): paged out once the
+  // retry interval has passed (here at once), its points all there.
+  pager.SetCacheRetryInterval(std::chrono::milliseconds(0));
+  auto next = std::make_unique<PointChunks>(1024, &pager);
+  for (const CloudPoint& p : points) next->Append(p);
   EXPECT_FALSE(pager.cache_failed());
-  chunks = std::make_unique<PointChunks>(1024, &pager);
-  for (const CloudPoint& p : points) chunks->Append(p);
   EXPECT_GT(pager.paged_out_chunks(), 0u);
   EXPECT_GT(pager.file_bytes(), 0u);
+  EXPECT_TRUE(SamePoints(next->Flatten(), points));
   EXPECT_TRUE(SamePoints(chunks->Flatten(), points));
+  chunks.reset();
+  next.reset();
+  EXPECT_FALSE(pager.cache_failed());
+  EXPECT_EQ(pager.file_bytes(), 0u);
 }
 
 // A snapshot is the cloud as it was when taken, decoded later on another

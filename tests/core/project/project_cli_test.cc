@@ -384,6 +384,20 @@ TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   EXPECT_NE(r.out.find("broken.sweepscan-project: sessions[0].path"), std::string::npos) << r.out;
   r = Cli("project frobnicate " + project);
   EXPECT_EQ(r.code, 2);
+  // A reference loop (which an older align could save) opens, repaired and said.
+  Project loop;
+  ASSERT_TRUE(LoadProject(project, &loop).ok());
+  loop.sessions[0].registration.method = "manual";  // a the anchor no more: b placed against a,
+  loop.sessions[1].project_from_session = Rigid3d::Identity();  // a against b
+  loop.sessions[1].registration.method = "manual";
+  loop.sessions[1].registration.reference = "building_a";
+  loop.sessions[0].registration.reference = "building_b";
+  ASSERT_TRUE(SaveProject(P("loop.sweepscan-project"), loop).ok());
+  r = Cli("project info " + P("loop.sweepscan-project"));
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: " + P("loop.sweepscan-project") + ": the references form a loop"),
+            std::string::npos)
+      << r.out;
 }
 
 }  // namespace

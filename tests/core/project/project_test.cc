@@ -137,6 +137,24 @@ TEST(ProjectTest, ReferencesFormATreeRootedAtTheAnchor) {
   loop.sessions[1].registration.reference = "room_c";
   refused(loop, "the references form a loop: room_b -> room_c -> room_b");
   EXPECT_TRUE(loop.PlacedThrough("room_b", "room_b"));  // ends, in a loop too
+  // Such a loop an older sweepscan could save: with `repairs`, it opens,
+  // the reference that closes it dropped, the pose kept, and said.
+  std::vector<std::string> repairs;
+  Project repaired;
+  ASSERT_TRUE(
+      ProjectFromJson(ProjectToJson(loop), "floor.sweepscan-project", &repaired, &repairs).ok());
+  ASSERT_EQ(repairs.size(), 1u);
+  EXPECT_NE(repairs[0].find(
+                "the references form a loop: room_b -> room_c -> room_b: 'room_b' keeps its pose"),
+            std::string::npos)
+      << repairs[0];
+  EXPECT_EQ(repaired.sessions[1].registration.method, "manual");
+  EXPECT_EQ(repaired.sessions[1].registration.reference, "");
+  EXPECT_TRUE(repaired.sessions[1].project_from_session->translation().isApprox(
+      loop.sessions[1].project_from_session->translation()));
+  EXPECT_EQ(repaired.sessions[2].registration.reference, "room_b");
+  Project again;
+  EXPECT_TRUE(ProjectFromJson(ProjectToJson(repaired), "floor.sweepscan-project", &again).ok());
   Project unplaced = p;
   unplaced.sessions[1].project_from_session.reset();
   unplaced.sessions[1].registration = RegistrationEvidence();
@@ -151,12 +169,19 @@ TEST(ProjectTest, EvidenceIsCheckedAsWhatARegistrationReports) {
   };
   Project p = TwoSessions();
   Project q;
-  p.sessions[1].registration.covariance[1] = 1e-9;  // (0, 1) without (1, 0)
-  Status s = load(p, &q);
+  // (0, 1) without (1, 0), in the file (the writer symmetrises what it writes).
+  nlohmann::json edited = nlohmann::json::parse(ProjectToJson(p));
+  edited["sessions"][1]["registration"]["covariance"][1] = 1e-9;
+  Status s = ProjectFromJson(edited.dump(2), "floor.sweepscan-project", &q);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("sessions[1].registration.covariance: must be symmetric"),
             std::string::npos)
       << s.message();
+  // The writer's symmetrising: a registration's inverse is symmetric only to rounding.
+  p.sessions[1].registration.covariance[1] = 1e-9;
+  ASSERT_TRUE(load(p, &q).ok());
+  EXPECT_EQ(q.sessions[1].registration.covariance[1], 0.5e-9);
+  EXPECT_EQ(q.sessions[1].registration.covariance[6], 0.5e-9);
   p.sessions[1].registration.covariance[1] = 0.0;
   p.sessions[1].registration.covariance[7] = -4e-8;  // a negative variance
   s = load(p, &q);
