@@ -36,6 +36,17 @@ Project TwoSessions() {
   return p;
 }
 
+// TwoSessions and room_c, placed against room_b.
+Project ThreeSessions() {
+  Project p = TwoSessions();
+  ProjectSession* c = nullptr;
+  EXPECT_TRUE(p.AddSession("scans/room_c.sweepscan", &c).ok());
+  c->project_from_session = Rigid3d::FromPose(9.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+  c->registration.method = "pairs";
+  c->registration.reference = "room_b";
+  return p;
+}
+
 TEST(ProjectTest, RoundTripKeepsEverything) {
   const Project p = TwoSessions();
   ASSERT_EQ(p.sessions.size(), 2u);
@@ -110,12 +121,7 @@ TEST(ProjectTest, IdsAreUniqueAndPathsAreNotAddedTwice) {
 // itself, against an unplaced one or in a loop is refused by the loader, and
 // PlacedThrough says which sessions rest on which.
 TEST(ProjectTest, ReferencesFormATreeRootedAtTheAnchor) {
-  Project p = TwoSessions();
-  ProjectSession* c = nullptr;
-  ASSERT_TRUE(p.AddSession("scans/room_c.sweepscan", &c).ok());
-  c->project_from_session = Rigid3d::FromPose(9.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-  c->registration.method = "pairs";
-  c->registration.reference = "room_b";
+  Project p = ThreeSessions();
   EXPECT_TRUE(p.PlacedThrough("room_c", "room_b"));
   EXPECT_TRUE(p.PlacedThrough("room_c", "room_a"));
   EXPECT_TRUE(p.PlacedThrough("room_b", "room_a"));
@@ -221,12 +227,7 @@ TEST(ProjectTest, TheAnchorStaysWhileOthersArePlacedOnIt) {
 // A session others are placed against cannot go: the file would name a
 // reference it no longer holds, and could not be opened again.
 TEST(ProjectTest, ASessionOthersArePlacedAgainstStays) {
-  Project p = TwoSessions();
-  ProjectSession* c = nullptr;
-  ASSERT_TRUE(p.AddSession("scans/room_c.sweepscan", &c).ok());
-  c->project_from_session = Rigid3d::FromPose(9.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-  c->registration.method = "pairs";
-  c->registration.reference = "room_b";
+  Project p = ThreeSessions();
   const Status refused = p.RemoveSession("room_b");
   ASSERT_FALSE(refused.ok());
   EXPECT_NE(refused.message().find("'room_c' placed against 'room_b'"), std::string::npos)
