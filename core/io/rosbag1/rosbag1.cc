@@ -92,40 +92,6 @@ RosTfMessage Convert(const tf2_msgs::TFMessage& m) {
   return tf;
 }
 
-// The compression of the first chunk record: the bag header record (op 3)
-// comes first, then chunks (op 5) whose header has "compression=...".
-// Record = u32 header_len, header fields (u32 len, "name=value"), u32
-// data_len, data (docs/ros-bags.md, "ROS 1 bags").
-std::string FirstChunkCompression(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  f.seekg(sizeof(kMagic) - 1);
-  for (int record = 0; record < 4 && f; ++record) {
-    uint32_t header_len = 0, data_len = 0;
-    if (!f.read(reinterpret_cast<char*>(&header_len), 4) || header_len > (1u << 20)) break;
-    std::string header(header_len, '\0');
-    if (!f.read(&header[0], header_len)) break;
-    if (!f.read(reinterpret_cast<char*>(&data_len), 4)) break;
-    std::map<std::string, std::string> fields;
-    for (size_t pos = 0; pos + 4 <= header.size();) {
-      uint32_t len = 0;
-      std::memcpy(&len, header.data() + pos, 4);
-      pos += 4;
-      if (len > header.size() - pos) break;
-      const std::string field = header.substr(pos, len);
-      pos += len;
-      const size_t eq = field.find('=');
-      if (eq != std::string::npos) fields[field.substr(0, eq)] = field.substr(eq + 1);
-    }
-    const auto op = fields.find("op");
-    if (op != fields.end() && op->second.size() == 1 && op->second[0] == 0x05) {
-      const auto c = fields.find("compression");
-      return c == fields.end() ? std::string() : c->second;
-    }
-    f.seekg(data_len, std::ios::cur);
-  }
-  return std::string();
-}
-
 // Deserialises a message's bytes as Msg and hands it on; throws (counted as
 // undecodable by the caller) when the bag's definition of the type differs
 // from the one sweepscan was built with (their MD5 sums disagree, as
@@ -153,7 +119,7 @@ bool Deliver(const rosbag::MessageInstance& m, RosMessageKind kind, std::vector<
 
 // Opens the bag; the library's exceptions become a Status with the advice an
 // operator needs.
-Status Open(const std::string& path, rosbag::Bag* bag) {
+Status Open(const std::string& path, rosbag::Bag* bag, std::string* first_compression) {
   if (!LooksLikeRosbag1(path)) {
     std::ifstream f(path, std::ios::binary);
     if (!f) return Status::Error(path + ": cannot open: " + std::strerror(errno));
@@ -163,7 +129,7 @@ Status Open(const std::string& path, rosbag::Bag* bag) {
   // bounds): the file's records are checked first, and a damaged bag
   // refused here; what the chunks hold is checked before messages are read
   // (Acquire's `messages`).
-  const Status checked = CheckRosbag1File(path, false);
+  const Status checked = CheckRosbag1File(path, false, nullptr, first_compression);
   if (!checked.ok()) return checked;
   try {
     bag->open(path, rosbag::bagmode::Read);
@@ -187,6 +153,7 @@ struct CachedBag {
   off_t size = 0;
   struct timespec mtime = {};
   bool chunks_checked = false;  // CheckRosbag1File with the chunks walked
+  std::string first_compression = "none";  // for `info`
   rosbag::Bag bag;
 };
 // A plain pointer on purpose: a static unique_ptr would close the bag during
@@ -208,7 +175,7 @@ Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosb
     delete g_cache;
     g_cache = nullptr;
     auto fresh = std::make_unique<CachedBag>();
-    const Status s = Open(path, &fresh->bag);
+    const Status s = Open(path, &fresh->bag, &fresh->first_compression);
     if (!s.ok()) return s;
     fresh->path = path;
     fresh->size = st.st_size;
@@ -276,8 +243,7 @@ Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary) {
   } catch (const std::exception& e) {
     return Status::Error(path + ": cannot read the ROS 1 bag's index: " + e.what());
   }
-  const std::string c = FirstChunkCompression(path);
-  out.compression = c.empty() ? "none" : c;
+  out.compression = g_cache->first_compression;  // read by the check (Open), lock held
   *summary = std::move(out);
   return Status::Ok();
 }

@@ -230,7 +230,8 @@ std::unique_ptr<uint8_t[]> Decompress(const std::string& compression, const uint
 // `rosbag reindex` repaired keeps its cut old index before the new one), so
 // nothing else is judged.
 Status CheckRosbag1(Source* source, const std::string& name, bool walk_chunks,
-                    const std::function<bool(double)>& progress) {
+                    const std::function<bool(double)>& progress, std::string* first_compression) {
+  uint64_t first_chunk = UINT64_MAX;
   const size_t size = source->size();
   if (size < kMagicSize || std::memcmp(source->Read(0, kMagicSize), kMagic, kMagicSize) != 0) {
     return Status::Error(name + ": not a ROS 1 bag (it does not start with \"#ROSBAG V2.0\")");
@@ -318,6 +319,10 @@ Status CheckRosbag1(Source* source, const std::string& name, bool walk_chunks,
       }
       const uint32_t decompressed = FieldU32(chunk.fields, "size");
       const std::string& compression = Field(chunk.fields, "compression", 0);
+      if (first_compression != nullptr && info.pos < first_chunk) {
+        first_chunk = info.pos;
+        *first_compression = compression;
+      }
       if (compression != "none" && compression != "bz2" && compression != "lz4") {
         throw Bad{"unknown chunk compression '" + compression + "' (none, bz2, lz4)"};
       }
@@ -387,11 +392,12 @@ Status CheckRosbag1(Source* source, const std::string& name, bool walk_chunks,
 
 Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& name, bool chunks) {
   MemorySource source(data, size);
-  return CheckRosbag1(&source, name, chunks, nullptr);
+  return CheckRosbag1(&source, name, chunks, nullptr, nullptr);
 }
 
 Status CheckRosbag1File(const std::string& path, bool chunks,
-                        const std::function<bool(double)>& progress) {
+                        const std::function<bool(double)>& progress,
+                        std::string* first_compression) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
   struct stat st;
@@ -404,7 +410,7 @@ Status CheckRosbag1File(const std::string& path, bool chunks,
   FileSource source(fd, static_cast<size_t>(st.st_size));
   Status s;
   try {
-    s = CheckRosbag1(&source, path, chunks, progress);
+    s = CheckRosbag1(&source, path, chunks, progress, first_compression);
   } catch (const Bad& b) {  // a read failed outside the walk's own catch
     s = Status::Error(path + ": " + b.why);
   }

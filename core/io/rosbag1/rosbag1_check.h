@@ -46,8 +46,11 @@ Status CheckRosbag1Image(const uint8_t* data, size_t size, const std::string& na
 // The same on the file at `path` (read in pieces, a chunk's decompressed
 // bytes at a time). `progress` (optional) hears the fraction checked, a
 // chunk at a time, and cancels ("cancelled") by returning false.
+// `first_compression` (optional) gets the compression of the bag's first
+// chunk ("none", "bz2", "lz4"; unchanged if it has none), for `info`.
 Status CheckRosbag1File(const std::string& path, bool chunks = true,
-                        const std::function<bool(double)>& progress = nullptr);
+                        const std::function<bool(double)>& progress = nullptr,
+                        std::string* first_compression = nullptr);
 
 // A message body in ROS 1 serialisation (little-endian, unaligned, u32
 // lengths before strings and variable arrays) walked as `kind`'s message
