@@ -203,6 +203,10 @@ std::shared_ptr<const ChunkPayload> PackedChunk::Pin() const {
 }
 
 std::shared_ptr<const ChunkPayload> PackedChunk::PinBlockPositions(size_t block, size_t* first) const {
+  return BlockPositions(PinPositions(), block, first);
+}
+
+PackedChunk::PositionsPin PackedChunk::PinPositions() const {
   std::shared_ptr<const ChunkPayload> p;
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -210,16 +214,21 @@ std::shared_ptr<const ChunkPayload> PackedChunk::PinBlockPositions(size_t block,
   }
   if (p != nullptr) {  // Always so without a pager.
     if (pager_ != nullptr) pager_->Touch(this);
-    *first = 0;
-    return p;
+    return {std::move(p), nullptr};
   }
-  const auto bytes = pager_->PinPacked(this);
-  if (bytes == nullptr) {  // Unpacked meanwhile by another thread.
+  auto bytes = pager_->PinPacked(this);
+  if (bytes == nullptr) return {Pin(), nullptr};  // Unpacked meanwhile by another thread.
+  return {nullptr, std::move(bytes)};
+}
+
+std::shared_ptr<const ChunkPayload> PackedChunk::BlockPositions(const PositionsPin& pin,
+                                                                size_t block, size_t* first) const {
+  if (pin.payload != nullptr) {
     *first = 0;
-    return Pin();
+    return pin.payload;
   }
   *first = block * kBlockPoints;
-  return Unpack(*bytes, block);
+  return Unpack(*pin.packed, block);
 }
 
 std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t block) const {

@@ -152,6 +152,19 @@ class PackedChunk {
   // it is in memory, else that block's positions alone, decoded for this
   // caller and not kept (a pick meets a few blocks of each of many chunks).
   std::shared_ptr<const ChunkPayload> PinBlockPositions(size_t block, size_t* first) const;
+  // The same for a reader that tests many blocks of one chunk (a pick on a
+  // floor driven over a hundred times meets a hundred blocks of each of a
+  // thousand chunks): the chunk's positions held once, the unpacked payload
+  // if it is in memory, else its compressed bytes (read back from the cache
+  // file once, not for every block), and its blocks decoded from the pin
+  // without the pager. PinBlockPositions(b) is BlockPositions(PinPositions(), b).
+  struct PositionsPin {
+    std::shared_ptr<const ChunkPayload> payload;         // unpacked, or
+    std::shared_ptr<const std::vector<uint8_t>> packed;  // compressed
+  };
+  PositionsPin PinPositions() const;
+  std::shared_ptr<const ChunkPayload> BlockPositions(const PositionsPin& pin, size_t block,
+                                                     size_t* first) const;
   bool resident() const;  // In memory, unpacked or compressed (not only in the cache file).
   bool unpacked() const;  // Unpacked in memory.
   size_t payload_bytes() const { return payload_bytes_; }  // Unpacked.

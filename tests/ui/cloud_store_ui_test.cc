@@ -354,6 +354,7 @@ void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
   std::mt19937 rng(11);
   std::uniform_int_distribution<size_t> any(0, snapshot.size() - 1);
   int picks = 0;
+  size_t by_chunk = 0;
   for (int tries = 0; picks < 30 && tries < 1000; ++tries) {
     const size_t k = any(rng);
     if (!std::isnan(clip) && snapshot[k].z > clip) continue;
@@ -374,8 +375,12 @@ void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
     }
     EXPECT_LE((got - eye).norm(), nearest + 1e-3) << "pick " << picks << " at " << cursor.x() << ", " << cursor.y();
     ++picks;
+    by_chunk += view->last_pick_counts().blocks_by_chunk;
   }
   EXPECT_EQ(picks, 30);
+  // Some picks went beyond the first waves in entry order to the rest of
+  // their blocks, tested a chunk at a time.
+  EXPECT_GT(by_chunk, 0u);
 }
 
 TEST_F(CloudStoreUiTest, APickIsTheCloudPointNearestTheCameraUnderTheCursor) {
@@ -390,6 +395,16 @@ TEST_F(CloudStoreUiTest, APickOnCompressedChunksIsTheNearestPointUnderTheCursor)
   pager.SetUnpackedBudget(1);
   PicksAreTheNearestPointsUnderTheCursor();
   EXPECT_GE(pager.packed_chunks(), 3u);
+}
+
+// The same with the cloud paged out to the cache file (a budget of 192
+// KiB): the blocks beyond the first waves are tested a chunk at a time, each
+// chunk read back once a pick, not once a block.
+TEST_F(CloudStoreUiTest, APickOnPagedChunksIsTheNearestPointUnderTheCursor) {
+  CloudPager& pager = CloudPager::Default();
+  pager.SetBudget(size_t{192} << 10);
+  PicksAreTheNearestPointsUnderTheCursor();
+  EXPECT_GE(pager.paged_out_chunks(), 2u);
 }
 
 // Pixels that differ by more than a grey level or two in some channel.

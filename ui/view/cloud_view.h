@@ -258,6 +258,12 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // points and the layers' compete: the nearest to the camera wins.
   using LayerPicker = std::function<bool(const PickRay& ray, double* best_t, PickHit* hit)>;
   void SetLayerPicker(LayerPicker picker);
+  // What the last pick tested of the sealed chunks: blocks in entry order
+  // (the nearest first), then blocks a chunk at a time, in that many chunks.
+  struct PickCounts {
+    size_t blocks_in_order = 0, blocks_by_chunk = 0, chunks = 0;
+  };
+  const PickCounts& last_pick_counts() const { return last_pick_counts_; }
   // Where a world point lands in the widget (pixels), for tests and overlays.
   QPointF WorldToWidget(const Eigen::Vector3d& world);
   struct Marker {
@@ -400,6 +406,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<Marker> shown_markers_;
   std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> marker_labels_;
   LayerPicker layer_picker_;
+  PickCounts last_pick_counts_;
   vtkSmartPointer<vtkActor> planes_;
   std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> plane_labels_;
   size_t plane_count_ = 0;

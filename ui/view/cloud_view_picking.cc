@@ -8,6 +8,7 @@
 // under the cursor, whatever the budget thinned. Points the clip hides (the
 // ceiling) or the pass filter leaves out are not pickable.
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <vtkActor.h>
 #include <vtkBillboardTextActor3D.h>
@@ -25,7 +26,9 @@
 #include <QMouseEvent>
 #include <QTimer>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -203,15 +206,18 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // `bound`, the first such in the block's order; t infinite if none.
   struct BlockHit {
     double t = std::numeric_limits<double>::infinity();
+    size_t candidate = 0;  // Ties between blocks go to the earlier entry.
     float xyz[3] = {};
   };
-  auto test_block = [&](const Candidate& candidate, double bound, BlockHit* out) {
+  auto test_block = [&](const Candidate& candidate, const PackedChunk::PositionsPin& pin,
+                        double bound, BlockHit* out) {
     const Chunk& c = *candidate.chunk;
     const PackedChunk& packed = *c.packed;
     const size_t begin = candidate.block * PackedChunk::kBlockPoints;
     const size_t end = std::min(c.size, begin + PackedChunk::kBlockPoints);
     size_t first = 0;  // The chunk's point i is the payload's i - first.
-    const std::shared_ptr<const ChunkPayload> payload = packed.PinBlockPositions(candidate.block, &first);
+    const std::shared_ptr<const ChunkPayload> payload =
+        packed.BlockPositions(pin, candidate.block, &first);
     double best = bound;
     size_t best_i = c.size;
     if (packed.positions_on_grid()) {
@@ -224,7 +230,8 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
       const int16_t* q = payload->xyz_mm.data() + 3 * (begin - first);
       for (size_t i = begin; i < end; ++i, q += 3) {
         if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
-        if (nearer(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, &best)) best_i = i;
+        if (nearer(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, &best))
+          best_i = i;
       }
     } else {
       const float* p = payload->xyz.data() + 3 * (begin - first);
@@ -235,33 +242,94 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     }
     if (best_i == c.size) return;
     out->t = best;
+    out->candidate = static_cast<size_t>(&candidate - candidates.data());
     packed.PositionOf(*payload, best_i - first, out->xyz);
   };
-  // The blocks in waves, in entry order, each wave's blocks tested on every
-  // core (a pick on a floor driven a hundred times decodes tens of
-  // thousands of blocks), then taken in that order: a point replaces the
-  // best only if strictly nearer, so the pick is the one a single thread
-  // finds, whatever the threads. The next wave starts only if its first
-  // block's entry lies before the best point. Waves double from 32 blocks
-  // to 1 024: the first, where the best is usually found, stay short, and
-  // the long searches pay for a few dozen parallel loops, not hundreds.
+  // The pick is the one a single thread finds testing the blocks in entry
+  // order and taking a point only if strictly nearer: the least (t, the
+  // block's place in that order), whatever the threads.
+  auto before = [](const BlockHit& a, const BlockHit& b) {
+    return a.t < b.t || (a.t == b.t && a.candidate < b.candidate);
+  };
+  auto take_hit = [&](const BlockHit& h) {
+    best_t = h.t;
+    take(h.xyz);
+  };
+  // First the nearest blocks, in entry order, in waves (32, 64 then 128
+  // blocks, each tested on every core, then taken in order): the best is
+  // usually found there, and the next wave starts only if its first block's
+  // entry lies before it.
+  last_pick_counts_ = PickCounts();
   std::vector<BlockHit> hits;
-  size_t wave = 32;
-  for (size_t w0 = 0, w1 = 0; w0 < candidates.size() && candidates[w0].enter < best_t;
-       w0 = w1, wave = std::min<size_t>(2 * wave, 1024)) {
+  size_t w1 = 0;
+  for (size_t w0 = 0, wave = 32;
+       wave <= 128 && w0 < candidates.size() && candidates[w0].enter < best_t; w0 = w1, wave *= 2) {
     w1 = std::min(candidates.size(), w0 + wave);
     hits.assign(w1 - w0, BlockHit());
     const double bound = best_t;
     tbb::parallel_for(tbb::blocked_range<size_t>(w0, w1, 8), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k != r.end(); ++k) {
-        if (candidates[k].enter < bound) test_block(candidates[k], bound, &hits[k - w0]);
+        if (candidates[k].enter < bound) {
+          test_block(candidates[k], candidates[k].chunk->packed->PinPositions(), bound,
+                     &hits[k - w0]);
+        }
       }
     });
     for (const BlockHit& h : hits) {
-      if (!(h.t < best_t)) continue;  // a block without a hit keeps t = inf
-      best_t = h.t;
-      take(h.xyz);
+      if (h.t < best_t) take_hit(h);  // a block without a hit keeps t = inf
     }
+    last_pick_counts_.blocks_in_order += w1 - w0;
+  }
+  // Then the rest that enter before the best, a chunk at a time (a ray
+  // along a floor driven a hundred times meets tens of thousands of blocks
+  // in a thousand chunks): each chunk's positions pinned once, not once a
+  // block (under a small memory budget the chunks' compressed bytes were
+  // read back from the cache file thousands of times a pick, 0.3-1.2 s on
+  // 100 M points under --memory-budget 64). Blocks entered beyond the best
+  // any thread has found so far are skipped; each chunk's tasks keep the
+  // least (t, place) of their own, and the least of those is the pick.
+  std::vector<uint32_t> rest;
+  for (size_t k = w1; k < candidates.size(); ++k) {
+    if (candidates[k].enter < best_t) rest.push_back(static_cast<uint32_t>(k));
+  }
+  if (!rest.empty()) {
+    std::stable_sort(rest.begin(), rest.end(), [&](uint32_t a, uint32_t b) {
+      return std::less<const Chunk*>()(candidates[a].chunk, candidates[b].chunk);
+    });
+    std::vector<size_t> groups;  // Where each chunk's run of `rest` starts.
+    for (size_t i = 0; i < rest.size(); ++i) {
+      if (i == 0 || candidates[rest[i]].chunk != candidates[rest[i - 1]].chunk) groups.push_back(i);
+    }
+    last_pick_counts_.blocks_by_chunk = rest.size();
+    last_pick_counts_.chunks = groups.size();
+    groups.push_back(rest.size());
+    std::atomic<double> shared_best{best_t};
+    tbb::enumerable_thread_specific<BlockHit> thread_best;
+    tbb::parallel_for(size_t{0}, groups.size() - 1, [&](size_t g) {
+      BlockHit& mine = thread_best.local();
+      const PackedChunk::PositionsPin pin =
+          candidates[rest[groups[g]]].chunk->packed->PinPositions();
+      for (size_t i = groups[g]; i < groups[g + 1]; ++i) {
+        const Candidate& candidate = candidates[rest[i]];
+        const double shared = shared_best.load(std::memory_order_relaxed);
+        if (candidate.enter > shared) continue;  // Its points all lie beyond the best found.
+        // Points at the best found so far are kept too (one of an earlier
+        // block wins a tie), nearer ones than this thread's own best.
+        BlockHit h;
+        test_block(candidate, pin, std::min(mine.t, std::nextafter(shared, HUGE_VAL)), &h);
+        if (!(h.t < std::numeric_limits<double>::infinity())) continue;
+        if (before(h, mine)) mine = h;
+        double seen = shared;
+        while (h.t < seen &&
+               !shared_best.compare_exchange_weak(seen, h.t, std::memory_order_relaxed)) {
+        }
+      }
+    });
+    BlockHit best_rest;
+    for (const BlockHit& h : thread_best) {
+      if (before(h, best_rest)) best_rest = h;
+    }
+    if (best_rest.t < best_t) take_hit(best_rest);
   }
   // The layers' points compete with the cloud's: the nearest to the camera wins.
   if (layer_picker_ && !layers_.empty() && layer_picker_(ray, &best_t, hit)) found = true;
