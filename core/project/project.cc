@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -63,6 +64,19 @@ bool IsColor(const std::string& c) {
 Rigid3d ReadPose(const JsonObject& o) {
   o.AllowOnly({"translation_m", "rotation_wxyz"});
   const Eigen::Vector3d t = Numbers<3>(o, "translation_m");
+  // The project's frame is the building's own (its anchor's start pose), and
+  // a cloud's positions are float: 1 mm steps hold to 8 192 m from the
+  // origin, 0.5 m at 5 000 km. A pose beyond that (coordinates typed in a
+  // map grid's, a stray digit) would be exported and drawn rounded, so it is
+  // refused rather than kept to mislead.
+  if (t.cwiseAbs().maxCoeff() > kMaxProjectOffsetM) {
+    char at[96];
+    std::snprintf(at, sizeof(at), "lies %.0f m from the project's origin", t.cwiseAbs().maxCoeff());
+    o.Fail("translation_m",
+           std::string(at) +
+               ", beyond 8000 m: sessions are placed in the building's local frame "
+               "(georeferenced coordinates are not supported)");
+  }
   const Eigen::Vector4d q = Numbers<4>(o, "rotation_wxyz");
   // A hand-edited file keeps a few digits; anything further from unit
   // length is not a rotation someone meant.

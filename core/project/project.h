@@ -37,6 +37,9 @@
 namespace sweepscan {
 
 constexpr int kProjectFormatVersion = 1;
+// The farthest a session may be placed from the project's origin, per axis:
+// a cloud's float positions keep whole millimetres within 8 192 m.
+constexpr double kMaxProjectOffsetM = 8000.0;
 // The file name suffix the app and the CLI propose for project files.
 inline constexpr const char* kProjectSuffix = ".sweepscan-project";
 

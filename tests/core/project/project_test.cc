@@ -297,6 +297,18 @@ TEST(ProjectTest, StrictLoadingNamesThePlace) {
        "sessions[0].project_from_session: the anchor defines the project's frame"},
       {[](nlohmann::json* e) { (*e)["sessions"][1]["path"] = "scans/./room_a.sweepscan"; },
        "sessions[1].path: 'scans/./room_a.sweepscan' is also session 'room_a'"},
+      // Map-grid coordinates (a UTM northing), which float positions would
+      // round to half a metre, and a number that is no place at all.
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][1]["project_from_session"]["translation_m"][1] = 5000000.4567;
+       },
+       "sessions[1].project_from_session.translation_m: lies 5000000 m from the project's origin, "
+       "beyond "
+       "8000 m"},
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][1]["project_from_session"]["translation_m"][0] = 1e308;
+       },
+       "sessions[1].project_from_session.translation_m: lies"},
   };
   for (const Edit& edit : edits) {
     nlohmann::json e = nlohmann::json::parse(good);
