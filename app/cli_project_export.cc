@@ -104,6 +104,9 @@ int RunProjectExport(const Args& args) {
   if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;
   std::vector<size_t> chosen;
   if (const int code = SelectSessions(args, project, &chosen); code != kExitOk) return code;
+  // Before the clouds are built, not after (minutes on a building).
+  s = CheckCanWrite(out);
+  if (!s.ok()) return (PrintError(s.message()), kExitFailure);
   nlohmann::json report = {{"project", file}, {"out", out}, {"sessions", nlohmann::json::array()}};
 
   if (!HasFileSuffix(out, ".las")) {
@@ -166,13 +169,25 @@ int RunProjectExport(const Args& args) {
       } else {
         writer.SetSource(source_id, 0, 0.0);
       }
+      const LasWriteStats before = writer.stats();
       s = writer.Append(cloud.points.data(), cloud.points.size());
-      report["sessions"].push_back({{"id", ps.id}, {"point_source_id", source_id}, {"points", cloud.points.size()}});
+      // What was written of the session (a point with a NaN or infinite
+      // coordinate is skipped and counted, as the session export does).
+      const uint64_t skipped = writer.stats().non_finite - before.non_finite;
+      report["sessions"].push_back({{"id", ps.id},
+                                    {"point_source_id", source_id},
+                                    {"points", cloud.points.size() - skipped},
+                                    {"non_finite_skipped", skipped}});
+      if (skipped > 0) {
+        std::cerr << "sweepscan-cli: warning: '" << ps.id << "': " << skipped
+                  << " point(s) with a NaN or infinite coordinate left out\n";
+      }
     }
     if (s.ok()) s = writer.Finish();
     if (!s.ok()) return (PrintError(s.message()), kExitFailure);
     const LasWriteStats& w = writer.stats();
     report["points"] = w.points;
+    report["non_finite_skipped"] = w.non_finite;
     report["scale_m"] = w.quantisation.scale;
     report["offset_m"] = {w.quantisation.offset[0], w.quantisation.offset[1], w.quantisation.offset[2]};
     report["gps_time"] = gps ? "adjusted standard GPS time" : "robot seconds";

@@ -298,6 +298,11 @@ int ReconstructToFile(const Args& args) {
     options.pose.source = PoseSource::kOdometry;
   }
   options.assembly.deskew = !args.Flag("no-deskew");
+  // Asked before the session is read (a long one takes minutes), not after.
+  if (const Status w = CheckCanWrite(args.Get("out")); !w.ok()) {
+    PrintError(w.message());
+    return kExitFailure;
+  }
   if (options.pose.source != PoseSource::kSfm && !args.Flag("loop-closure")) return StreamToFile(args, options);
   // sfm and loop closure work on every scan at once.
   Decoded d;

@@ -206,6 +206,13 @@ void CheckedFileWriter::Abort() {
   buffer_.clear();
 }
 
+Status CheckCanWrite(const std::string& path) {
+  CheckedFileWriter probe;
+  const Status s = probe.Open(path);
+  probe.Abort();
+  return s;
+}
+
 Status WriteFileChecked(const std::string& path, const std::string& contents) {
   CheckedFileWriter w;
   Status s = w.Open(path);

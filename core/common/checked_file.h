@@ -63,6 +63,12 @@ class CheckedFileWriter {
   std::string failed_;  // Sticky error message.
 };
 
+// Whether `path` can be written, asked before the work that makes its
+// contents (a project's clouds take minutes): its temporary is created and
+// removed, and the error is the one writing would give, e.g.
+//   out/x.las: cannot create x.las.tmp-1863 in out: No such file or directory
+Status CheckCanWrite(const std::string& path);
+
 // Writes `contents` to `path` through a CheckedFileWriter.
 Status WriteFileChecked(const std::string& path, const std::string& contents);
 

@@ -88,6 +88,27 @@ TEST(CheckedFileTest, WritesCompleteFilesAndReplacesAtomically) {
   EXPECT_EQ(CountEntries(dir), 1);  // No temporary left.
 }
 
+// Asked before the work: the answer writing would give, and nothing left
+// behind either way (the previous file untouched).
+TEST(CheckedFileTest, CheckCanWriteAnswersAsWritingWouldAndLeavesNothing) {
+  const std::string dir = TempDir("probe");
+  ASSERT_TRUE(WriteFileChecked(dir + "/old.las", "old").ok());
+  EXPECT_TRUE(CheckCanWrite(dir + "/old.las").ok());
+  EXPECT_TRUE(CheckCanWrite(dir + "/new.las").ok());
+  EXPECT_EQ(Read(dir + "/old.las"), "old");
+  EXPECT_FALSE(Exists(dir + "/new.las"));
+  EXPECT_EQ(CountEntries(dir), 1);
+  const Status missing = CheckCanWrite(dir + "/missing/x.las");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("cannot create x.las.tmp-"), std::string::npos)
+      << missing.message();
+  EXPECT_NE(missing.message().find("No such file or directory"), std::string::npos)
+      << missing.message();
+  const Status folder = CheckCanWrite(dir);
+  ASSERT_FALSE(folder.ok());
+  EXPECT_NE(folder.message().find("is a folder"), std::string::npos) << folder.message();
+}
+
 TEST(CheckedFileTest, AFailedWriteLeavesTheOldFileAndNoTemporary) {
   const std::string dir = TempDir("efbig");
   const std::string path = dir + "/out.txt";

@@ -139,6 +139,8 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   const nlohmann::json exported = nlohmann::json::parse(r.out);
   const size_t n_a = exported["sessions"][0]["points"].get<size_t>();
   ASSERT_EQ(exported["points"].get<size_t>(), ply.size());
+  EXPECT_EQ(n_a + exported["sessions"][1]["points"].get<size_t>(), ply.size());
+  EXPECT_EQ(exported["non_finite_skipped"].get<uint64_t>(), 0u);
   r = RunCommand(std::string(SWEEPSCAN_NODE) + " " + SWEEPSCAN_SOURCE_DIR + "/tests/tools/read_las.mjs " +
                  P("floor.las") + " 20 4999");
   ASSERT_EQ(r.code, 0) << r.out << "\n(tests/tools/node_modules missing? run scripts/install-test-tools.sh)";
@@ -377,6 +379,16 @@ TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("'building_b' is not placed yet"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(P("x.las")));
+  // An output that cannot be written is said before any cloud is built (a
+  // building's take minutes): here before the session's folder, moved
+  // away, is even looked for.
+  std::filesystem::rename(P("building_a.sweepscan"), P("moved.sweepscan"));
+  r = Cli("project export " + project + " --out " + P("missing/x.las") + " --sessions building_a");
+  std::filesystem::rename(P("moved.sweepscan"), P("building_a.sweepscan"));
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("cannot create x.las.tmp-"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("building_a.sweepscan"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("missing")));
   // A damaged project file: the place and the reason, and nothing else happens.
   std::ofstream(P("broken.sweepscan-project")) << "{\"format\": \"sweepscan-project\", \"version\": 1, \"sessions\": [{\"id\": \"x\"}]}";
   r = Cli("project align " + P("broken.sweepscan-project"));
