@@ -18,8 +18,9 @@ namespace sweepscan {
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "LAS writer assumes a little-endian host");
 
 const char kSweepscanSessionWkt[] =
-    "LOCAL_CS[\"sweepscan session frame (x forward and y left at the start pose, z up; metres)\","
-    "LOCAL_DATUM[\"sweepscan session start pose\",32767],UNIT[\"metre\",1],"
+    "LOCAL_CS[\"sweepscan session frame (a recording's: x forward and y left at the start pose; a "
+    "simulation's: its scenario's world; an imported bag's: its odometry frame; z up; metres)\","
+    "LOCAL_DATUM[\"sweepscan session world\",32767],UNIT[\"metre\",1],"
     "AXIS[\"X\",EAST],AXIS[\"Y\",NORTH]]";
 const char kSweepscanProjectWkt[] =
     "LOCAL_CS[\"sweepscan project frame (x forward and y left at the anchor session's start pose, z up; "
