@@ -1,6 +1,7 @@
 // All PCL templates of core's cloud I/O live in this one translation unit.
 #include "core/cloud/cloud_io.h"
 
+#include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
@@ -9,6 +10,8 @@
 #include <pcl/point_types.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -442,11 +445,147 @@ Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
   return Status::Ok();
 }
 
+// How a file stores x, y and z: PCL copies a field into a point only when
+// its type is the point's, so a PLY whose coordinates are double (what
+// CloudCompare and PDAL write for a georeferenced cloud) came back as a
+// cloud of zeros, without a word. Float (4-byte) positions are read as
+// they are; double ones through PCLPointCloud2 and converted; any other
+// type, or a missing axis, is refused by name.
+enum class PositionType { kFloat, kDouble };
+Status ReadPositionType(const std::string& path, PositionType* type) {
+  std::vector<std::string> lines;
+  uint64_t offset = 0;
+  const bool ply = HasFileSuffix(path, ".ply");
+  Status s = ReadHeaderLines(path, ply ? "end_header" : "DATA", &lines, &offset);
+  if (!s.ok()) return s;
+  std::string types[3];  // As the header names them: "float", "double", "int"...
+  const char* const kAxes[3] = {"x", "y", "z"};
+  if (ply) {
+    bool vertex = false;
+    for (const std::string& line : lines) {
+      const std::vector<std::string> w = SplitWords(line);
+      if (w.size() >= 2 && w[0] == "element") vertex = w[1] == "vertex";
+      if (!vertex || w.size() != 3 || w[0] != "property") continue;
+      for (int a = 0; a < 3; ++a) {
+        if (w[2] == kAxes[a])
+          types[a] = w[1] == "float32" ? "float" : w[1] == "float64" ? "double" : w[1];
+      }
+    }
+  } else {
+    std::vector<std::string> fields, sizes, kinds;
+    for (const std::string& line : lines) {
+      std::vector<std::string> w = SplitWords(line);
+      if (w.empty()) continue;
+      const std::string key = w[0];
+      w.erase(w.begin());
+      if (key == "FIELDS") fields = w;
+      if (key == "SIZE") sizes = w;
+      if (key == "TYPE") kinds = w;
+    }
+    for (size_t i = 0; i < fields.size() && i < sizes.size() && i < kinds.size(); ++i) {
+      for (int a = 0; a < 3; ++a) {
+        if (fields[i] != kAxes[a]) continue;
+        types[a] = kinds[i] == "F" && sizes[i] == "4"   ? "float"
+                   : kinds[i] == "F" && sizes[i] == "8" ? "double"
+                                                        : kinds[i] + sizes[i];
+      }
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (types[a].empty()) return Status::Error(path + ": has no " + kAxes[a] + " coordinate");
+    if (types[a] != "float" && types[a] != "double") {
+      return Status::Error(path + ": its " + kAxes[a] + " coordinates are of type " + types[a] +
+                           "; sweepscan reads float or double coordinates");
+    }
+  }
+  const bool all_float = types[0] == "float" && types[1] == "float" && types[2] == "float";
+  *type = all_float ? PositionType::kFloat : PositionType::kDouble;
+  return Status::Ok();
+}
+
+// The positions of a cloud whose coordinates are (some of them) double,
+// converted to the store's float. Refused if a finite one lies beyond
+// 8 000 m of the origin: float keeps whole millimetres only within 8 192 m,
+// and a georeferenced cloud (a UTM northing of 5 000 km) would come back in
+// half-metre steps, every plane and distance measured on it wrong.
+Status ReadDoublePositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
+  pcl::PCLPointCloud2 blob;
+  QuietPcl();
+  int rc = -1;
+  try {
+    rc = HasFileSuffix(path, ".ply") ? pcl::io::loadPLYFile(path, blob)
+                                     : pcl::io::loadPCDFile(path, blob);
+  } catch (const std::bad_alloc&) {
+    return Status::Error(path + ": not a readable point cloud (too large for memory)");
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": not a readable point cloud (" + e.what() + ")");
+  }
+  if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+  int offset[3] = {-1, -1, -1};
+  uint8_t type[3] = {0, 0, 0};
+  for (const pcl::PCLPointField& f : blob.fields) {
+    const int a = f.name == "x" ? 0 : f.name == "y" ? 1 : f.name == "z" ? 2 : -1;
+    if (a < 0) continue;
+    offset[a] = static_cast<int>(f.offset);
+    type[a] = f.datatype;
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (offset[a] < 0 ||
+        (type[a] != pcl::PCLPointField::FLOAT32 && type[a] != pcl::PCLPointField::FLOAT64)) {
+      return Status::Error(
+          path + ": not a readable point cloud (its coordinates are not float or double)");
+    }
+  }
+  const size_t n = static_cast<size_t>(blob.width) * blob.height;
+  if (blob.point_step == 0 || blob.data.size() < n * blob.point_step) {
+    return Status::Error(path + ": not a readable point cloud (fewer bytes than points)");
+  }
+  points->resize(n);
+  double farthest = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const uint8_t* row = blob.data.data() + i * blob.point_step;
+    for (int a = 0; a < 3; ++a) {
+      double v;
+      if (type[a] == pcl::PCLPointField::FLOAT64) {
+        std::memcpy(&v, row + offset[a], sizeof(v));
+      } else {
+        float f;
+        std::memcpy(&f, row + offset[a], sizeof(f));
+        v = f;
+      }
+      if (std::isfinite(v)) farthest = std::max(farthest, std::abs(v));
+      (*points)[i][a] = static_cast<float>(v);
+    }
+  }
+  if (farthest > 8000.0) {
+    char why[200];
+    std::snprintf(
+        why, sizeof(why),
+        ": its coordinates reach %.0f m from the origin, beyond 8000 m, where sweepscan's float "
+        "positions would round them to %.2g m; move the cloud near the origin first",
+        farthest, std::ldexp(1.0, std::ilogb(farthest) - 23));
+    return Status::Error(path + why);
+  }
+  return Status::Ok();
+}
+
 Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
-  pcl::PointCloud<pcl::PointXYZ> cloud;
-  const Status s = ReadPcl(path, &cloud);
+  Status s = ValidateCloudFile(path);
+  PositionType type = PositionType::kFloat;
+  if (s.ok()) s = ReadPositionType(path, &type);
   if (!s.ok()) return s;
   points->clear();
+  if (type == PositionType::kDouble) {
+    s = ReadDoublePositions(path, points);
+    if (!s.ok()) return s;
+    points->erase(std::remove_if(points->begin(), points->end(),
+                                 [](const Eigen::Vector3f& p) { return !p.allFinite(); }),
+                  points->end());
+    return Status::Ok();
+  }
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  s = ReadPcl(path, &cloud);
+  if (!s.ok()) return s;
   points->reserve(cloud.size());
   for (const auto& p : cloud) {
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) points->emplace_back(p.x, p.y, p.z);
@@ -455,16 +594,29 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
 }
 
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points) {
-  pcl::PointCloud<PclSweepPoint> cloud;
-  const Status s = ReadPcl(path, &cloud);
+  Status s = ValidateCloudFile(path);
+  PositionType type = PositionType::kFloat;
+  if (s.ok()) s = ReadPositionType(path, &type);
   if (!s.ok()) return s;
+  std::vector<Eigen::Vector3f> doubles;  // A double file's positions, converted.
+  if (type == PositionType::kDouble) {
+    s = ReadDoublePositions(path, &doubles);
+    if (!s.ok()) return s;
+  }
+  pcl::PointCloud<PclSweepPoint> cloud;
+  s = ReadPcl(path, &cloud);
+  if (!s.ok()) return s;
+  if (!doubles.empty() && doubles.size() != cloud.size()) {
+    return Status::Error(path +
+                         ": not a readable point cloud (its points read twice differ in number)");
+  }
   points->resize(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const PclSweepPoint& q = cloud[i];
     CloudPoint& p = (*points)[i];
-    p.x = q.x;
-    p.y = q.y;
-    p.z = q.z;
+    p.x = doubles.empty() ? q.x : doubles[i].x();
+    p.y = doubles.empty() ? q.y : doubles[i].y();
+    p.z = doubles.empty() ? q.z : doubles[i].z();
     p.range_m = q.range;
     p.time_ns = static_cast<int64_t>(std::llround(q.time * 1e9));
     p.scan = q.scan;

@@ -52,9 +52,15 @@ Status SaveCloud(const std::string& path, const CloudSnapshotRef& cloud,
 // declares exactly as many bytes as follow it (binary) or no more rows than
 // the bytes could hold (ASCII), before anything is allocated.
 Status ValidateCloudFile(const std::string& path);
-// Reads the positions of any PLY or PCD with x, y, z fields (validated first).
+// Reads the positions of any PLY or PCD with x, y, z fields (validated
+// first), float or double (converted to float); non-finite points are left
+// out. Refused: another type of x, y or z (named), a missing one, and a
+// double cloud reaching beyond 8 000 m of the origin (float would round its
+// positions to half a metre at a map grid's 5 000 km).
 Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points);
-// Reads a cloud written by SaveCloud, with all attributes.
+// Reads a cloud written by SaveCloud, with all attributes (another PLY or
+// PCD: its positions as LoadCloudPositions reads them, every point kept,
+// and the attributes it has of the same name and type).
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points);
 
 // Voxel-grid downsampling (PCL VoxelGrid, centroid per occupied voxel) for

@@ -158,6 +158,82 @@ std::string PlyHeaderFor(const std::string& count) {
          "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
 }
 
+// Double coordinates (CloudCompare's and PDAL's for a georeferenced cloud)
+// are read as such: PCL copies a field only into one of its own type, and
+// such a file came back as a cloud of zeros. Binary and ASCII PLY, and PCD.
+// Another type is refused by name, and a double cloud far from the origin
+// (a UTM northing) is refused rather than rounded to half-metre steps.
+TEST(CloudIoErrorsTest, DoubleCoordinatesAreReadAndFarOnesRefused) {
+  const std::vector<CloudPoint> pts = RandomCloud(500);
+  auto ply = [&](const std::string& name, const std::string& format, const std::string& type,
+                 double shift) {
+    const std::string path = TempPath(name);
+    std::ofstream out(path, std::ios::binary);
+    out << "ply\nformat " << format << " 1.0\ncomment written by the test\nelement vertex "
+        << pts.size() << "\nproperty " << type << " x\nproperty " << type << " y\nproperty " << type
+        << " z\nproperty uchar red\nend_header\n";
+    for (const CloudPoint& p : pts) {
+      const double v[3] = {p.x + shift, p.y + shift, p.z};
+      if (format == "ascii") {
+        char line[128];
+        std::snprintf(line, sizeof(line), "%.17g %.17g %.17g 7\n", v[0], v[1], v[2]);
+        out << line;
+      } else if (type == "double") {
+        out.write(reinterpret_cast<const char*>(v), sizeof(v));
+        out.put(7);
+      } else {
+        const int32_t iv[3] = {static_cast<int32_t>(v[0]), static_cast<int32_t>(v[1]),
+                               static_cast<int32_t>(v[2])};
+        out.write(reinterpret_cast<const char*>(iv), sizeof(iv));
+        out.put(7);
+      }
+    }
+    return path;
+  };
+  for (const std::string& format : {std::string("binary_little_endian"), std::string("ascii")}) {
+    const std::string path = ply("double_" + format + ".ply", format, "double", 1000.0);
+    std::vector<Eigen::Vector3f> xyz;
+    ASSERT_TRUE(LoadCloudPositions(path, &xyz).ok()) << format;
+    ASSERT_EQ(xyz.size(), pts.size());
+    std::vector<CloudPoint> all;
+    ASSERT_TRUE(LoadCloud(path, &all).ok()) << format;
+    ASSERT_EQ(all.size(), pts.size());
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const Eigen::Vector3f want(static_cast<float>(pts[i].x + 1000.0),
+                                 static_cast<float>(pts[i].y + 1000.0), pts[i].z);
+      EXPECT_EQ(xyz[i], want) << format << " " << i;
+      EXPECT_EQ(Eigen::Vector3f(all[i].x, all[i].y, all[i].z), want) << format << " " << i;
+    }
+  }
+  const std::string pcd = TempPath("double.pcd");
+  {
+    std::ofstream out(pcd, std::ios::binary);
+    out << "VERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << pts.size()
+        << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << pts.size() << "\nDATA binary\n";
+    for (const CloudPoint& p : pts) {
+      const double v[3] = {p.x, p.y, p.z};
+      out.write(reinterpret_cast<const char*>(v), sizeof(v));
+    }
+  }
+  std::vector<Eigen::Vector3f> xyz;
+  ASSERT_TRUE(LoadCloudPositions(pcd, &xyz).ok());
+  ASSERT_EQ(xyz.size(), pts.size());
+  EXPECT_EQ(xyz[17], Eigen::Vector3f(pts[17].x, pts[17].y, pts[17].z));
+
+  Status s = LoadCloudPositions(ply("far.ply", "binary_little_endian", "double", 5000000.0), &xyz);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(
+      s.message().find("far.ply: its coordinates reach 5000005 m from the origin, beyond 8000 m"),
+      std::string::npos)
+      << s.message();
+  s = LoadCloudPositions(ply("int.ply", "binary_little_endian", "int", 0.0), &xyz);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(
+                "int.ply: its x coordinates are of type int; sweepscan reads float or double"),
+            std::string::npos)
+      << s.message();
+}
+
 TEST(CloudHeaderTest, ForgedOrOversizedCountsAreRefusedWithoutAllocating) {
   std::vector<Eigen::Vector3f> xyz;
   for (const char* count : {"-5", "18446744073709551615", "1e9", "4000000000"}) {
