@@ -99,6 +99,7 @@ nlohmann::json PlanJson(const plan::FloorPlan& p) {
           {"cloud_points", p.section.points_in},
           {"section_points", p.section.points_out},
           {"extent", {{"min", Xy(p.min)}, {"max", Xy(p.max)}}},
+          {"stray_points", p.stray_points},
           {"faces", faces},
           {"walls", walls},
           {"openings", openings},
@@ -111,6 +112,11 @@ void PrintPlan(const plan::FloorPlan& p) {
   for (const plan::WallFace& f : p.faces) structural += f.structural;
   std::printf("section at %.3f m +- %.3f m: %zu of %zu points\n", p.height_m, p.band_m, p.section.points_out,
               p.section.points_in);
+  if (p.stray_points > 0) {
+    std::printf(
+        "%zu stray point(s) (alone in their 0.5 m cell) left outside the drawing's extent\n",
+        p.stray_points);
+  }
   std::printf("%zu faces (%zu of walls, %zu of furniture), %zu walls, %zu openings, %zu dimensions, %zu rooms\n",
               p.faces.size(), structural, p.faces.size() - structural, p.walls.size(), p.openings.size(),
               p.dimensions.size(), p.rooms.size());

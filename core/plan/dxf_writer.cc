@@ -86,8 +86,10 @@ class Dxf {
 void Label(Dxf* d, const char* layer, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double height,
            const std::string& text) {
   double angle = std::atan2(b.y() - a.y(), b.x() - a.x()) * 180.0 / kPi;
-  if (angle > 90.0) angle -= 180.0;
-  if (angle <= -90.0) angle += 180.0;
+  // y up: +90 deg reads bottom to top. A line within kUprightBandDeg of
+  // vertical counts as vertical (one 0.02 deg off plumb read top to bottom).
+  if (angle >= 90.0 + kUprightBandDeg) angle -= 180.0;
+  if (angle < -90.0 + kUprightBandDeg) angle += 180.0;
   const double r = angle * kPi / 180.0;
   const Eigen::Vector2d at = 0.5 * (a + b) + 0.4 * height * Eigen::Vector2d(-std::sin(r), std::cos(r));
   d->Text(layer, at, height, angle + 0.0, text);

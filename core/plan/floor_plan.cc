@@ -482,6 +482,59 @@ Status BuildFloorPlan(const std::vector<Eigen::Vector3f>& cloud, const FloorPlan
   return b;
 }
 
+namespace {
+
+// The drawing's extent: the section's points that have company. One stray
+// return (a reflection through a window, a glitch 200 km out) made the SVG
+// page kilometres wide, which no renderer draws; a point counts only if its
+// 0.5 m cell and the eight around it hold at least three points (a wall's
+// hold dozens, whatever the range; a room's corner may sit alone in a cell
+// beside its walls'). If none does, every point counts.
+void PlanExtent(const std::vector<Eigen::Vector2d>& section, FloorPlan* plan) {
+  constexpr double kCellM = 0.5;
+  constexpr int kMinPoints = 3;
+  using Cell = std::pair<int64_t, int64_t>;
+  auto cell_of = [](const Eigen::Vector2d& p) {
+    const auto c = [](double v) {
+      return static_cast<int64_t>(std::floor(std::clamp(v / kCellM, -1e9, 1e9)));
+    };
+    return Cell(c(p.x()), c(p.y()));
+  };
+  std::map<Cell, int> counts;
+  for (const Eigen::Vector2d& p : section) ++counts[cell_of(p)];
+  std::map<Cell, bool> company;  // By cell: its block of nine holds enough.
+  for (const auto& [c, n] : counts) {
+    int around = 0;
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = counts.find(Cell(c.first + dx, c.second + dy));
+        if (it != counts.end()) around += it->second;
+      }
+    }
+    company[c] = around >= kMinPoints;
+  }
+  bool any = false;
+  plan->stray_points = 0;
+  for (const Eigen::Vector2d& p : section) {
+    if (!company[cell_of(p)]) {
+      ++plan->stray_points;
+      continue;
+    }
+    plan->min = any ? plan->min.cwiseMin(p) : p;
+    plan->max = any ? plan->max.cwiseMax(p) : p;
+    any = true;
+  }
+  if (any) return;
+  plan->stray_points = 0;
+  plan->min = plan->max = section.front();
+  for (const Eigen::Vector2d& p : section) {
+    plan->min = plan->min.cwiseMin(p);
+    plan->max = plan->max.cwiseMax(p);
+  }
+}
+
+}  // namespace
+
 Status BuildFloorPlanFromSection(const std::vector<Eigen::Vector2d>& section, const FloorPlanOptions& options,
                                  FloorPlan* plan) {
   *plan = FloorPlan();
@@ -499,11 +552,7 @@ Status BuildFloorPlanFromSection(const std::vector<Eigen::Vector2d>& section, co
                   options.section.height_m, options.section.band_m, section.size());
     return Status::Error(buf);
   }
-  plan->min = plan->max = section.front();
-  for (const Eigen::Vector2d& p : section) {
-    plan->min = plan->min.cwiseMin(p);
-    plan->max = plan->max.cwiseMax(p);
-  }
+  PlanExtent(section, plan);
   plan->points = DecimateGrid(section, options.drawing_cell_m);
   LineDetectionOptions lo;
   lo.tolerance_m = options.line_tolerance_m;

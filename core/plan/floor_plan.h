@@ -113,7 +113,12 @@ struct FloorPlan {
   double height_m = 0.0, band_m = 0.0;
   SectionStats section;                 // the cut
   std::vector<Eigen::Vector2d> points;  // the section decimated (drawing)
-  Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();  // of the section
+  // The drawing's extent: of the section's points with at least two others
+  // in their 0.5 m cell and the eight around it (all of them if none has);
+  // the others, `stray_points`, lie anywhere (a glitch 200 km out would make
+  // a page kilometres wide).
+  Eigen::Vector2d min = Eigen::Vector2d::Zero(), max = Eigen::Vector2d::Zero();
+  size_t stray_points = 0;
   std::vector<WallFace> faces;
   std::vector<Opening> openings;
   std::vector<Wall> walls;

@@ -26,6 +26,11 @@
 
 namespace sweepscan::plan {
 
+// Labels along a line read left to right, or bottom to top for a line
+// within this many degrees of vertical (a wall a hair off plumb is vertical
+// to the reader; ISO 129-1 reads vertical dimensions from the right).
+inline constexpr double kUprightBandDeg = 5.0;
+
 struct SvgOptions {
   double scale = 50.0;          // 1:scale (paper mm = model mm / scale)
   double margin_mm = 15.0;      // paper around the drawing

@@ -67,14 +67,17 @@ std::string Label(const Paper& p, const Eigen::Vector2d& a, const Eigen::Vector2
                   double height, double offset) {
   const Eigen::Vector2d pa(p.X(a.x()), p.Y(a.y())), pb(p.X(b.x()), p.Y(b.y()));
   double angle = std::atan2(pb.y() - pa.y(), pb.x() - pa.x()) * 180.0 / kPi;
-  // Paper y points down: -90 deg reads bottom to top, +90 would read top to bottom.
-  if (angle > 90.0 - 1e-6) angle -= 180.0;
-  if (angle < -90.0 - 1e-6) angle += 180.0;
+  // Paper y points down: -90 deg reads bottom to top, +90 would read top to
+  // bottom. A line within kUprightBandDeg of vertical counts as vertical: a
+  // wall 0.02 deg off plumb had its value turned by 89.98 deg, top to bottom.
+  if (angle > 90.0 - kUprightBandDeg) angle -= 180.0;
+  if (angle <= -90.0 - kUprightBandDeg) angle += 180.0;
   const double r = angle * kPi / 180.0;
   const Eigen::Vector2d m = 0.5 * (pa + pb) + offset * Eigen::Vector2d(std::sin(r), -std::cos(r));
+  // No stroke: the group's dashed line stroke would outline the glyphs.
   return "<text x=\"" + Num(m.x()) + "\" y=\"" + Num(m.y()) + "\" font-size=\"" + Num(height) +
-         "\" text-anchor=\"middle\" transform=\"rotate(" + Num(angle) + " " + Num(m.x()) + " " + Num(m.y()) +
-         ")\">" + Escape(text) + "</text>\n";
+         "\" text-anchor=\"middle\" stroke=\"none\" transform=\"rotate(" + Num(angle) + " " +
+         Num(m.x()) + " " + Num(m.y()) + ")\">" + Escape(text) + "</text>\n";
 }
 
 std::string Title(const Paper& p, const std::string& title, double height) {

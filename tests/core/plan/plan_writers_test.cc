@@ -324,6 +324,80 @@ TEST(PlanWritersRefusalTest, ASectionWithAStrayPointKeepsItsScalesShort) {
   EXPECT_LT(svg.size(), 200000u);
 }
 
+// Labels of lines within 5 degrees of vertical read bottom to top in both
+// drawings, whichever way the line runs and however little it is off plumb
+// (0.02 deg turned a value top to bottom); others along the line, left to
+// right. The SVG's texts carry no stroke (the openings' dashed one
+// outlined the glyphs).
+TEST(PlanWritersRefusalTest, LabelsOfNearlyVerticalLinesReadBottomToTop) {
+  FloorPlan plan;
+  plan.max = Eigen::Vector2d(10.0, 10.0);
+  const double kDeg = M_PI / 180.0;
+  // World directions (y up): almost up, almost down, exactly down, 87 deg, 30 deg.
+  const double directions_deg[] = {89.98, -89.98, -90.0, 87.0, 30.0, 120.0};
+  for (const double d : directions_deg) {
+    Dimension dim;
+    dim.a = Eigen::Vector2d(5.0, 5.0);
+    dim.b = dim.a + 3.0 * Eigen::Vector2d(std::cos(d * kDeg), std::sin(d * kDeg));
+    dim.distance_m = 3.0;
+    plan.dimensions.push_back(dim);
+  }
+  std::string svg, dxf;
+  ASSERT_TRUE(PlanSvg(plan, SvgOptions(), &svg).ok());
+  ASSERT_TRUE(PlanDxf(plan, DxfOptions(), &dxf).ok());
+  // SVG (paper y down): rotate(A ...), -90 reads bottom to top.
+  std::vector<double> svg_angles;
+  for (size_t at = svg.find("<text"); at != std::string::npos; at = svg.find("<text", at + 1)) {
+    const size_t end = svg.find('>', at);
+    const std::string tag = svg.substr(at, end - at);
+    const size_t r = tag.find("rotate(");
+    if (r == std::string::npos) continue;
+    EXPECT_NE(tag.find("stroke=\"none\""), std::string::npos) << tag;
+    svg_angles.push_back(std::stod(tag.substr(r + 7)));
+  }
+  // DXF (y up): group 50 of each TEXT, +90 reads bottom to top.
+  std::vector<double> dxf_angles;
+  for (size_t at = dxf.find("\nTEXT\n"); at != std::string::npos;
+       at = dxf.find("\nTEXT\n", at + 1)) {
+    const size_t code = dxf.find("\n 50\n", at);
+    ASSERT_NE(code, std::string::npos);
+    dxf_angles.push_back(std::stod(dxf.substr(code + 5)));
+  }
+  ASSERT_EQ(svg_angles.size(), 6u) << svg;
+  ASSERT_EQ(dxf_angles.size(), 6u);
+  const double svg_want[] = {-89.98, -90.02, -90.0, -87.0, -30.0, 60.0};
+  const double dxf_want[] = {89.98, 90.02, 90.0, 87.0, 30.0, -60.0};
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(svg_angles[k], svg_want[k], 1e-3) << directions_deg[k];
+    EXPECT_NEAR(dxf_angles[k], dxf_want[k], 1e-3) << directions_deg[k];
+  }
+}
+
+// One stray return 200 km out made the page kilometres wide (rsvg-convert
+// refuses anything above 32 767 pixels): the page is the room's, the point
+// is counted.
+TEST(PlanWritersRefusalTest, AStrayPointKeepsThePageTheRoomsSize) {
+  std::vector<Eigen::Vector2d> section;  // A 4 x 3 m room's walls, a point a centimetre.
+  for (int i = 0; i <= 400; ++i) {
+    section.emplace_back(0.01 * i, 0.0);
+    section.emplace_back(0.01 * i, 3.0);
+  }
+  for (int i = 0; i <= 300; ++i) {
+    section.emplace_back(0.0, 0.01 * i);
+    section.emplace_back(4.0, 0.01 * i);
+  }
+  section.emplace_back(200000.0, 1.0);
+  FloorPlan plan;
+  ASSERT_TRUE(BuildFloorPlanFromSection(section, FloorPlanOptions(), &plan).ok());
+  EXPECT_EQ(plan.stray_points, 1u);
+  EXPECT_NEAR(plan.max.x(), 4.0, 1e-9);
+  EXPECT_NEAR(plan.max.y(), 3.0, 1e-9);
+  std::string svg;
+  ASSERT_TRUE(PlanSvg(plan, SvgOptions(), &svg).ok());
+  // 4 m at 1:50 is 80 mm, and 15 mm of margin each side.
+  EXPECT_NE(svg.find("width=\"110.00mm\""), std::string::npos) << svg.substr(0, 300);
+}
+
 TEST(PlanWritersRefusalTest, AControlCharacterInATitleKeepsTheSvgWellFormed) {
   SvgOptions options;
   options.title = std::string("run\x01 <3> & \"more\"\tend");
