@@ -401,10 +401,55 @@ double SignedArea(const std::vector<Eigen::Vector2d>& poly) {
 // Where the room's name goes: the cell nearest the region's centroid among
 // those at least half as deep inside it as its deepest (4-neighbour distance
 // from its boundary), so that it fits even in an L-shaped room whose
-// centroid is outside it, and kLabelClear (less in a narrow room) from every
-// dimension line (the dimensions are drawn through a room's middle too).
-constexpr double kLabelClear = 0.5;
+// centroid is outside it, and whose label's box (the name over the area,
+// kLabelHalfWidth x kLabelHalfHeight about the point, as drawn at the
+// default text height: 0.12 m in the DXF, 2.5 mm at 1:50 in the SVG) keeps
+// kLabelClear (less in a narrow room) from every dimension line (drawn
+// through a room's middle too, its value 0.05 m beside it and 0.125 m
+// high). The clearance was once from the point alone: "Room 2 / 32.00 m2"
+// then sat on a dimension's value.
+constexpr double kLabelClear = 0.2;
+constexpr double kLabelHalfWidth =
+    0.33;  // "32.00 m2" and "Room 12", about 0.6 text heights a glyph
+constexpr double kLabelHalfHeight = 0.2;  // name (1.2 heights) over area (1 height)
 constexpr double kLabelDepthShare = 0.5;
+
+// Distance from the segment a-b to the box |x - c.x| <= hw, |y - c.y| <= hh
+// (0 if they meet).
+double SegmentToBox(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                    double hw, double hh) {
+  const Eigen::Vector2d lo = c - Eigen::Vector2d(hw, hh), hi = c + Eigen::Vector2d(hw, hh);
+  const auto inside = [&](const Eigen::Vector2d& p) {
+    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
+  };
+  if (inside(a) || inside(b)) return 0.0;
+  // The segment crosses the box if it crosses one of its sides (Liang-Barsky clip).
+  double t0 = 0.0, t1 = 1.0;
+  const Eigen::Vector2d d = b - a;
+  bool crosses = true;
+  for (int k = 0; k < 2 && crosses; ++k) {
+    if (std::abs(d[k]) < 1e-15) {
+      crosses = a[k] >= lo[k] && a[k] <= hi[k];
+      continue;
+    }
+    double u0 = (lo[k] - a[k]) / d[k], u1 = (hi[k] - a[k]) / d[k];
+    if (u0 > u1) std::swap(u0, u1);
+    t0 = std::max(t0, u0);
+    t1 = std::min(t1, u1);
+    crosses = t0 <= t1;
+  }
+  if (crosses) return 0.0;
+  // Apart: the nearest pair is a segment end and the box, or a box corner and the segment.
+  const auto to_box = [&](const Eigen::Vector2d& p) {
+    return (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
+  };
+  double best = std::min(to_box(a), to_box(b));
+  for (const Eigen::Vector2d& corner :
+       {lo, hi, Eigen::Vector2d(lo.x(), hi.y()), Eigen::Vector2d(hi.x(), lo.y())}) {
+    best = std::min(best, DistanceToSegment(corner, a, b));
+  }
+  return best;
+}
 
 Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const std::vector<Dimension>& dimensions) {
   std::unordered_map<uint64_t, int> depth;
@@ -441,7 +486,8 @@ Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const 
   const double clearance = std::min(kLabelClear, 0.3 * deepest * r.cell());
   const auto clear = [&](const Eigen::Vector2d& p) {
     for (const Dimension& dim : dimensions) {
-      if (DistanceToSegment(p, dim.a, dim.b) < clearance) return false;
+      if (SegmentToBox(dim.a, dim.b, p, kLabelHalfWidth, kLabelHalfHeight) < clearance)
+        return false;
     }
     return true;
   };
@@ -452,11 +498,16 @@ Eigen::Vector2d LabelPoint(const Raster& r, int id, const Region& region, const 
     const Eigen::Vector2d p = r.Corner(i, j) + half;
     const int d = depth[key(i, j)];
     // Deep enough and clear of dimensions ranks above any cell that is not,
-    // and the centroid decides among those; without one, the deepest cell
+    // and the centroid decides among those; then a cell clear of them whose
+    // label still fits inside the room (a corridor's dimension runs down its
+    // middle, where its deepest cells are); without one, the deepest cell
     // (depths within two cells of the deepest are equal: the raster's
     // staircase makes one end of a corridor a cell deeper than its middle).
-    const bool preferred = d >= kLabelDepthShare * deepest && clear(p);
-    const int rank = preferred ? deepest + 1 : std::min(d, deepest - 2);
+    const bool is_clear = clear(p);
+    const bool fits = d * r.cell() >= kLabelHalfWidth;
+    const int rank = is_clear && d >= kLabelDepthShare * deepest ? deepest + 2
+                     : is_clear && fits                          ? deepest + 1
+                                                                 : std::min(d, deepest - 2);
     const double dist = (p - centroid).squaredNorm();
     if (rank > best_rank || (rank == best_rank && dist < best_dist)) {
       best_rank = rank;

@@ -257,6 +257,19 @@ TEST_F(OfficeFloorPlanTest, RoomOutlinesAreTheRoomsInnerFacesWithin5mm) {
     const sim::RoomTruth& r = truth[match];
     ++found[match];
     EXPECT_TRUE(InsidePolygon(room.outline, room.label)) << r.label;
+    // The label (name over area, about 0.66 x 0.4 m at the default text
+    // height) clear of every dimension's line and its value beside it
+    // (0.05 m off the line, 0.125 m high): once it sat on "15.999".
+    for (const Dimension& dim : plan_->dimensions) {
+      for (int k = 0; k <= 1000; ++k) {
+        const Eigen::Vector2d q = dim.a + (dim.b - dim.a) * (k / 1000.0);
+        const Eigen::Vector2d off = (q - room.label).cwiseAbs() - Eigen::Vector2d(0.33, 0.2);
+        EXPECT_GT(off.cwiseMax(0.0).norm(), 0.18)
+            << r.label << ": label at " << room.label.transpose() << ", dimension at "
+            << q.transpose();
+        if (off.cwiseMax(0.0).norm() <= 0.18) break;
+      }
+    }
     ASSERT_EQ(room.outline.size(), 4u) << r.label;
     for (const Eigen::Vector2d& corner : {Eigen::Vector2d(r.x0, r.y0), Eigen::Vector2d(r.x1, r.y0),
                                           Eigen::Vector2d(r.x1, r.y1), Eigen::Vector2d(r.x0, r.y1)}) {

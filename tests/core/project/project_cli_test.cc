@@ -191,6 +191,22 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
     if (std::abs(room["area_m2"].get<double>() - 5.5 * 5.9) < 0.2) {
       EXPECT_EQ(room["outline"].size(), 4u);
     }
+    // Each room's name and area (about 0.66 x 0.4 m at the default text
+    // height) clear of every dimension's line and value: the corridor's
+    // label sat on its 16 m dimension, which runs down its middle.
+    const Eigen::Vector2d label(room["label"][0].get<double>(), room["label"][1].get<double>());
+    for (const nlohmann::json& dim : plan["dimensions"]) {
+      const Eigen::Vector2d a(dim["a"][0].get<double>(), dim["a"][1].get<double>()),
+          b(dim["b"][0].get<double>(), dim["b"][1].get<double>());
+      double nearest = 1e9;
+      for (int k = 0; k <= 2000; ++k) {
+        const Eigen::Vector2d off =
+            (a + (b - a) * (k / 2000.0) - label).cwiseAbs() - Eigen::Vector2d(0.33, 0.2);
+        nearest = std::min(nearest, off.cwiseMax(0.0).norm());
+      }
+      EXPECT_GT(nearest, 0.18) << room["name"] << " at " << label.transpose() << ", dimension "
+                               << dim.dump();
+    }
   }
   EXPECT_GT(std::filesystem::file_size(P("floor.svg")), 1000u);
   EXPECT_GT(std::filesystem::file_size(P("floor.dxf")), 1000u);
