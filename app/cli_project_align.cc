@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "app/cli_common.h"
 #include "app/cli_project.h"
@@ -174,6 +175,11 @@ int RunProjectAlign(const Args& args) {
   std::ostream& text = args.Flag("json") ? std::cerr : std::cout;  // stdout is the JSON's
   nlohmann::json report = nlohmann::json::array();
   std::map<std::string, std::string> refusals;
+  // Registrations that failed, by (session, reference): a later pass, run
+  // because another session was placed meanwhile, would only repeat them
+  // (a registration is between the two clouds in their own frames, which
+  // placing others does not change), each possibly minutes long.
+  std::map<std::pair<std::string, std::string>, std::string> failed;
   bool progress = true;
   while (progress && !unplaced.empty()) {
     progress = false;
@@ -202,9 +208,15 @@ int RunProjectAlign(const Args& args) {
           reasons += "\n  against '" + ref.id + "': its cloud cannot be built: " + error;
           continue;
         }
+        const auto pair = std::make_pair(ps.id, ref.id);
+        if (const auto f = failed.find(pair); f != failed.end()) {
+          reasons += "\n  against '" + ref.id + "': " + f->second;
+          continue;
+        }
         std::cerr << "aligning '" << ps.id << "' to '" << ref.id << "'...\n";
         hardware::RegistrationAttempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
         if (!a.status.ok()) {
+          failed[pair] = a.status.message();
           reasons += "\n  against '" + ref.id + "': " + a.status.message();
           continue;
         }

@@ -212,6 +212,27 @@ TEST_F(ProjectCliTest, PlacesTheSecondRoomAgainstTruthAndExportsOneLas) {
   EXPECT_GT(std::filesystem::file_size(P("floor.dxf")), 1000u);
 }
 
+// Placing b starts another pass for the sessions still unplaced, which
+// tried c against a and b again with the same clouds: each registration
+// (minutes on a real building) runs once, and its reason is still given.
+TEST_F(ProjectCliTest, ARegistrationThatFailedIsNotRunAgain) {
+  const std::string project = NewProject("three.sweepscan-project", "abc");
+  const CommandRun r = Cli("project align " + project);
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("placed 'building_b' against 'building_a'"), std::string::npos) << r.out;
+  const auto count = [&](const std::string& what) {
+    size_t n = 0;
+    for (size_t at = r.out.find(what); at != std::string::npos; at = r.out.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("aligning 'building_c' to 'building_a'"), 1u) << r.out;
+  EXPECT_EQ(count("aligning 'building_c' to 'building_b'"), 1u) << r.out;
+  EXPECT_NE(r.out.find("could not place:\n'building_c':\n  against 'building_a': "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("\n  against 'building_b': "), std::string::npos) << r.out;
+}
+
 TEST_F(ProjectCliTest, ACorridorIsRefusedByThePlanesAndPlacedFromPairsAcrossIt) {
   const std::string project = NewProject("corridor.sweepscan-project", "ac");
   CommandRun r = Cli("project align " + project);
