@@ -30,16 +30,35 @@ namespace hardware {
 SerialStream::SerialStream(QObject* parent) : ByteStream(parent), port_(new QSerialPort(this)) {
   connect(port_, &QSerialPort::readyRead, this, [this] { emit bytesReceived(port_->readAll()); });
   connect(port_, &QSerialPort::errorOccurred, this, [this](QSerialPort::SerialPortError error) {
-    // Timeouts are not errors for a non-blocking reader; anything that makes
-    // the port unusable (unplugged adapter) closes the stream.
-    if (error == QSerialPort::NoError || error == QSerialPort::TimeoutError) return;
-    if (error == QSerialPort::ResourceError || error == QSerialPort::PermissionError ||
-        error == QSerialPort::DeviceNotFoundError) {
-      if (!port_->isOpen()) return;  // A failed Open() reports through its return value.
-      const QString reason = port_->errorString();
-      port_->close();
-      emit closed(reason);
+    // Anything that makes the port unusable closes the stream, so its owner
+    // notices and opens it again. An unplugged USB adapter, or a pty whose
+    // master closed, is hung up: read() returns 0 with nothing to read, which
+    // Qt reports as a ReadError (a ResourceError only if the errno an earlier
+    // call left over says so) and leaves the read notifier armed: the event
+    // loop spun a core on it with the port still "open", and nothing
+    // reopened it. Write errors and unknown ones are taken as fatal too (a
+    // port that recovers is simply reopened). Timeouts are not errors for
+    // a non-blocking reader; an operation a device does not support (DTR on
+    // a pty) and the settings errors of Open() leave the port usable.
+    switch (error) {
+      case QSerialPort::ResourceError:
+      case QSerialPort::PermissionError:
+      case QSerialPort::DeviceNotFoundError:
+      case QSerialPort::ReadError:
+      case QSerialPort::WriteError:
+      case QSerialPort::UnknownError:
+        break;
+      default:
+        return;
     }
+    // A failed Open() reports through its return value.
+    if (opening_ || !port_->isOpen()) return;
+    // A hung-up port's ReadError carries whatever errno was left over.
+    const QString reason = error == QSerialPort::ReadError
+                               ? QStringLiteral("the device hung up (unplugged?)")
+                               : port_->errorString();
+    port_->close();
+    emit closed(reason);
   });
 }
 
@@ -59,6 +78,13 @@ bool IsPseudoTerminal(const QString& port) {
 bool SerialStream::Open(const QString& port, qint32 baud, QString* error) {
   name_ = port;
   baud_ = baud;
+  opening_ = true;
+  const bool opened = OpenPort(port, baud, error);
+  opening_ = false;
+  return opened;
+}
+
+bool SerialStream::OpenPort(const QString& port, qint32 baud, QString* error) {
   port_->setPortName(port);
   if (!port_->open(QIODevice::ReadWrite)) {
     if (error != nullptr) *error = QStringLiteral("%1: %2").arg(port, port_->errorString());

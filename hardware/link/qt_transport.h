@@ -82,9 +82,12 @@ class SerialStream : public ByteStream {
   void SetDataTerminalReady(bool on);
 
  private:
+  bool OpenPort(const QString& port, qint32 baud, QString* error);
+
   QSerialPort* port_;
   QString name_;
   qint32 baud_ = 0;
+  bool opening_ = false;  // Errors are Open()'s to report, not a lost port.
 };
 
 class TcpStream : public ByteStream {

@@ -8,19 +8,24 @@
 // watchdog stopping the robot within its bound under emulation.
 // Lines "figure: ..." are the figures docs/performance.md quotes
 // (scripts/arm64-e2e.sh collects them).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <pty.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
+#include <QEventLoop>
 #include <QFile>
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QProcess>
 #include <QTemporaryDir>
+#include <QTimer>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -74,6 +79,52 @@ double CpuSeconds(qint64 pid) {
   // After the command: state is field 3, utime 14 and stime 15 (proc(5)).
   return (fields.value(11).toDouble() + fields.value(12).toDouble()) / ::sysconf(_SC_CLK_TCK);
 }
+
+// Runs the event loop for `ms` without spinning (WaitFor and Pump poll, and
+// would take a core from a robotd whose CPU time is measured meanwhile).
+void IdleFor(int ms) {
+  QEventLoop loop;
+  QTimer::singleShot(ms, &loop, &QEventLoop::quit);
+  loop.exec();
+}
+
+// Bytes waiting on a non-blocking fd, appended to *into; the count read.
+size_t ReadAvailable(int fd, std::string* into) {
+  char buffer[4096];
+  size_t total = 0;
+  ssize_t n;
+  while ((n = ::read(fd, buffer, sizeof(buffer))) > 0) {
+    into->append(buffer, static_cast<size_t>(n));
+    total += static_cast<size_t>(n);
+  }
+  return total;
+}
+
+// A pseudo-terminal standing in for a board on a USB adapter; the test
+// holds the master. Closing it is the adapter unplugged: the kernel hangs
+// the slave up (read() returns 0 with nothing to read, as for a USB serial
+// adapter pulled out) and the node goes away.
+struct BoardPty {
+  int master = -1;
+  QString slave;
+  bool Open() {
+    int slave_fd = -1;
+    char name[128];
+    termios raw{};
+    ::cfmakeraw(&raw);
+    if (::openpty(&master, &slave_fd, name, &raw, nullptr) != 0) return false;
+    ::fcntl(master, F_SETFL, O_NONBLOCK);
+    ::fcntl(master, F_SETFD, FD_CLOEXEC);  // robotd must not hold it too.
+    ::close(slave_fd);                     // The master alone keeps the pair.
+    slave = QString::fromLocal8Bit(name);
+    return true;
+  }
+  void Unplug() {
+    if (master >= 0) ::close(master);
+    master = -1;
+  }
+  ~BoardPty() { Unplug(); }
+};
 
 // Calls `each` with every command robotd writes to the motor board's pty
 // (decoded as the board would), in order.
@@ -449,6 +500,72 @@ TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
   EXPECT_GT(ToSeconds(log.imu.back().time - log.imu.front().time), 5.0);
   ASSERT_FALSE(log.scans.empty()) << "the lidar scans again after the restart";
   EXPECT_GT(ToSeconds(log.scans.back().end_time() - log.imu.front().time), 5.0);
+}
+
+// A device port that is lost (its USB adapter pulled out) is noticed, as
+// docs/robot-agent.md says: "port lost" in the log, Status fault bit 5, and
+// opened again every second until it returns behind its stable name; the
+// agent idles meanwhile. Qt reports the hung-up port's empty reads as a
+// ReadError, which robotd took for harmless: the port stayed "open", its read
+// notifier spun a core, and it was never reopened (the board plugged in
+// again got nothing, not even the zero command).
+TEST_P(RobotdProcessTest, ALostDevicePortIsNoticedAndOpenedAgainWithoutSpinning) {
+  const QString link = dir_.filePath("motor");
+  auto board = std::make_unique<BoardPty>();
+  ASSERT_TRUE(board->Open());
+  ASSERT_TRUE(QFile::link(board->slave, link));
+  Robotd robotd(GetParam(), {QString(), QString(), link}, key_file_);
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  std::string heard;
+  ASSERT_TRUE(WaitFor([&] { return ReadAvailable(board->master, &heard) >= 11; }, 10000))
+      << "no zero command as the port opened";
+  ASSERT_EQ(::write(board->master, "board", 5), 5);
+  sweepscan::testing::Pump(200);
+
+  // No client meanwhile, as on a robot waiting for its workstation (a
+  // client's socket changes which error Qt makes of the empty read).
+  QString log;
+  board->Unplug();
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        log += robotd.Stderr();
+        return log.contains("port lost");
+      },
+      10000))
+      << "the lost port was not noticed: " << log.toStdString();
+  // Retried every second against a name that points nowhere: robotd idles.
+  // Spinning on the hung-up port took a core.
+  const double cpu0 = CpuSeconds(robotd.pid());
+  IdleFor(2000);
+  const double cpu_s = CpuSeconds(robotd.pid()) - cpu0;
+  EXPECT_LT(cpu_s, 0.6) << "robotd's CPU seconds over 2 s with the port lost";
+  std::printf("figure: %s robotd: %.2f s of CPU over 2 s with the motor port lost\n",
+              GetParam().name.c_str(), cpu_s);
+  RobotConnection client(Client(robotd.Address()));
+  QString error;
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  const auto status = [&] { return client.health().agent_status; };
+  ASSERT_TRUE(WaitFor([&] { return (status().fault_bits & kFaultDevicePortError) != 0; }, 5000))
+      << "Status fault bit 5 (fault bits " << status().fault_bits << ")";
+  EXPECT_EQ(status().device_bytes[2], 5u) << "the board's bytes before the loss";
+
+  // Plugged in again: a new node behind the same name.
+  board = std::make_unique<BoardPty>();
+  ASSERT_TRUE(board->Open());
+  ASSERT_TRUE(QFile::remove(link));
+  ASSERT_TRUE(QFile::link(board->slave, link));
+  heard.clear();
+  ASSERT_TRUE(WaitFor([&] { return ReadAvailable(board->master, &heard) >= 11; }, 10000))
+      << "the port was not opened again: " << (log + robotd.Stderr()).toStdString();
+  EXPECT_EQ(static_cast<uint8_t>(heard[0]), 0x7b) << "the command in force (zero) as it reopens";
+  ASSERT_EQ(::write(board->master, "again", 5), 5);
+  EXPECT_TRUE(WaitFor([&] { return status().device_bytes[2] == 10; }, 10000))
+      << "the board's bytes after the replug: " << status().device_bytes[2];
+  EXPECT_EQ(status().fault_bits & kFaultDevicePortError, 0u) << "fault bit 5 cleared";
+  log += robotd.Stderr();
+  EXPECT_TRUE(log.contains("reopened")) << log.toStdString();
+  client.Shutdown();
 }
 
 // As the packaged service runs it: options from a config file (the command
