@@ -129,9 +129,11 @@ inline void LogAgentEvents(hardware::RobotAgent* agent) {
                    });
 }
 
-// Runs the event loop until SIGINT or SIGTERM, then shuts the agent down
-// through the loop (a self-pipe wakes it), so the motors get their zero
-// command before the process exits.
+// Runs the event loop until one of kQuitSignals (SIGINT, SIGTERM, SIGHUP,
+// SIGQUIT), then shuts the agent down through the loop (a self-pipe wakes
+// it), so the motors get their zero command before the process exits. The
+// handlers are installed here unless the caller did it earlier (robotd
+// does, before the agent starts).
 inline int RunAgentUntilSignal(QCoreApplication* app, hardware::RobotAgent* agent) {
   QuitOnSignals(app);
   const int rc = app->exec();

@@ -3,8 +3,9 @@
 // app's own RobotConnection, records a session exactly as the app does
 // (same frames, same crash-safe writer: everything older than a second is on
 // disk whatever happens to the process), prints the link's health once a
-// second, and stops cleanly on Ctrl+C, SIGTERM, --duration or the end of a
-// drive script, sending Stop first.
+// second, and stops cleanly on Ctrl+C, SIGTERM, SIGHUP (the ssh session
+// that ran it closed), SIGQUIT, --duration or the end of a drive script,
+// sending Stop first.
 #include <QCoreApplication>
 #include <QDir>
 #include <QElapsedTimer>
@@ -34,7 +35,8 @@ const char* const kRecordUsage =
     "Records a session from a robot agent (sweepscan-robotd, or sweepscan-sim) as the\n"
     "app does: every link frame, durable at least once a second, so a crash or a\n"
     "power cut keeps everything older than a second. Prints the link's health on\n"
-    "stderr once a second. Ctrl+C or SIGTERM stops the robot and closes the session.\n"
+    "stderr once a second. Ctrl+C, SIGTERM, SIGHUP (the terminal or ssh session closed)\n"
+    "or SIGQUIT stops the robot and closes the session.\n"
     "A link that drops or stays silent for --stall-s reconnects by itself with backoff;\n"
     "the session goes on in the same folder with the gap recorded (`info` lists it), and\n"
     "the robot sends what it buffered meanwhile (robotd --buffer-s). A reconnection never\n"

@@ -60,6 +60,11 @@ int StopMotors(const QString& port, qint32 baud) {
 namespace {
 int AgentMain(int argc, char** argv) {
   QCoreApplication app(argc, argv);
+  // Before anything starts: a SIGHUP or SIGTERM from here on ends the event
+  // loop (at once if it comes before the loop runs), so the agent's
+  // shutdown sends the motor board its zero; the default action would kill
+  // the process with the board driving at its last command.
+  sweepscan::app::QuitOnSignals(&app);
   QCoreApplication::setApplicationName(QStringLiteral("sweepscan-robotd"));
   QCoreApplication::setApplicationVersion(QStringLiteral("0.1.0"));
   QCommandLineParser parser;

@@ -211,6 +211,33 @@ TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
   EXPECT_FALSE(survived.scans.empty());
 }
 
+// SIGHUP (the terminal or ssh session that ran the recorder closed) and
+// SIGQUIT (Ctrl+\) stop it as SIGTERM does: the session closed with its
+// buffered records, the summary printed. Their default action killed it
+// with neither.
+TEST_F(CliRecordTest, SighupAndSigquitStopCleanlyLikeSigterm) {
+  for (const int signal : {SIGHUP, SIGQUIT}) {
+    SCOPED_TRACE(signal == SIGHUP ? "SIGHUP" : "SIGQUIT");
+    const QString session = dir_.filePath(QStringLiteral("signal-%1.sweepscan").arg(signal));
+    QProcess record;
+    StartRecord(&record, session, {"--json"});
+    QByteArray err;
+    ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+    sweepscan::testing::Pump(1500);
+    ::kill(static_cast<pid_t>(record.processId()), signal);
+    ASSERT_TRUE(record.waitForFinished(10000));
+    EXPECT_EQ(record.exitStatus(), QProcess::NormalExit);
+    EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+    const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
+    EXPECT_EQ(summary["stopped_by"].toString(), "signal");
+    SensorLog log;
+    const double seconds = RecordedSeconds(session, &log);
+    // Everything up to the signal, not just what was on disk a second before.
+    EXPECT_NEAR(seconds, summary["seconds"].toDouble(), 0.3);
+    EXPECT_GE(seconds, 1.5);
+  }
+}
+
 // The disk fills (here a file size limit of 100 KiB, SIGXFSZ ignored as a
 // full disk raises none): the recorder says so at once and stops, instead of
 // driving on recording nothing and telling only at the end; what was

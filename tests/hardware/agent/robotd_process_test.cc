@@ -173,8 +173,10 @@ class Robotd {
   quint16 port() const { return port_; }
   qint64 pid() const { return process_.processId(); }
   QString Stderr() { return QString::fromUtf8(process_.readAllStandardError()); }
-  int Terminate() {
-    process_.terminate();
+  int Terminate() { return Signal(SIGTERM); }
+  // Sends `signal` and waits; the exit code, -1 if killed by a signal.
+  int Signal(int signal) {
+    ::kill(static_cast<pid_t>(process_.processId()), signal);
     process_.waitForFinished(10000);
     return process_.exitStatus() == QProcess::NormalExit ? process_.exitCode() : -1;
   }
@@ -443,6 +445,40 @@ TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsOnSigtermMidDriveAndAfterACras
   EXPECT_EQ(stop.exitCode(), 1);
   EXPECT_NE(stop.readAllStandardError().indexOf("--stop-motors"), -1);
   client->Shutdown();
+}
+
+// SIGHUP (the terminal or ssh session that started robotd closed) and
+// SIGQUIT (Ctrl+\) mid-drive end robotd as SIGTERM does: through its event
+// loop, the zero command its last word to the board, exit 0. Their default
+// action killed it with the board driving at its last command.
+TEST_P(RobotdProcessTest, SighupAndSigquitMidDriveStopTheMotorsAndExitCleanly) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  std::vector<MotorCommand> heard;
+  OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
+  for (const int signal : {SIGHUP, SIGQUIT}) {
+    SCOPED_TRACE(signal == SIGHUP ? "SIGHUP" : "SIGQUIT");
+    Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_);
+    ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+    RobotConnection client(Client(robotd.Address()));
+    ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+    ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+    for (int i = 0; i < 20; ++i) {  // 2 s at 0.3 m/s, 10 Hz: the ramp gets there.
+      client.Drive(0.3, 0.0);
+      sweepscan::testing::Pump(100);
+    }
+    ASSERT_FALSE(heard.empty());
+    ASSERT_GT(heard.back().vx_mps, 0.2) << "the board never got the drive command";
+    EXPECT_EQ(robotd.Signal(signal), 0)
+        << "robotd did not leave cleanly: " << robotd.Stderr().toStdString();
+    sweepscan::testing::Pump(300);  // The pty's last bytes.
+    EXPECT_EQ(heard.back().vx_mps, 0.0) << "robotd's last word to the board was not a stop";
+    EXPECT_EQ(heard.back().wz_radps, 0.0);
+    client.Shutdown();
+  }
 }
 
 TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
