@@ -535,6 +535,11 @@ void AgentCore::OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, 
   const uint64_t serial = buffer_.Push(id, now, data, n, now);
   // No telemetry before auth; held ones wait in the buffer.
   if (!client_connected_ || !authenticated_ || closing_ || telemetry_held_) return;
+  if (telemetry_paused_) {
+    pending_break_[index] = true;
+    ++counters_.telemetry_chunks_dropped;
+    return;
+  }
   TelemetryBuffer::Piece piece;
   piece.serial = serial;
   piece.device = id;

@@ -161,6 +161,9 @@ struct AgentCounters {
   uint64_t frames_replayed = 0;
   uint64_t old_protocol_refused = 0;  // Peers speaking protocol version 1.
   uint64_t input_floods = 0;          // Connections dropped for a decode backlog.
+  // Live Telemetry chunks not sent while the link was congested (kept in
+  // the buffer; the device's next chunk sent carries the break flag).
+  uint64_t telemetry_chunks_dropped = 0;
 };
 
 // One connection's authentication, before it may become the client (TCP):
@@ -262,6 +265,17 @@ class AgentCore {
   // again, stops without waiting for a drive command. Start() queues its
   // zero before the ports are open, so this is the one that reaches it.
   void OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out);
+  // The link cannot take more for now (a serial line or radio slower than
+  // the telemetry, or a reader that stalled; a connection that cannot be
+  // dropped): while paused, live Telemetry is not sent, only kept in the
+  // buffer, and each device's next chunk sent carries the break flag, so
+  // the client's decoder restarts and its recording reports the hole.
+  // Everything else (Status, acks, Hello) still goes out.
+  void SetTelemetryPaused(bool paused) { telemetry_paused_ = paused; }
+  bool telemetry_paused() const { return telemetry_paused_; }
+  // Bytes already given to the link were thrown away (its queue): each
+  // device's next chunk carries the break flag.
+  void NoteTelemetryLost() { pending_break_.fill(true); }
   // The agent is going away: zero to the motors, whatever was commanded.
   void StopForShutdown(Time now, AgentOutput* out) { HardStop(now, out); }
   // Call often (every <= 10-20 ms): watchdog, ramps, motor and Status cadence,
@@ -358,6 +372,7 @@ class AgentCore {
   uint64_t held_from_serial_ = 0;
   Time held_since_;
   std::array<bool, 3> pending_break_{};  // Next chunk of the device carries kTelemetryBreak.
+  bool telemetry_paused_ = false;        // SetTelemetryPaused.
 
   // Status bookkeeping.
   bool have_status_time_ = false;

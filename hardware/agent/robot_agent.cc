@@ -4,6 +4,7 @@
 #include <QTcpServer>
 #include <QTcpSocket>
 #include <QTimer>
+#include <algorithm>
 #include <chrono>
 
 namespace sweepscan {
@@ -203,6 +204,7 @@ void RobotAgent::OpenDevice(int index) {
     devices_[index] = new SerialStream(this);
     const LinkDevice device = kDevices[index];
     connect(devices_[index], &ByteStream::bytesReceived, this, [this, device](const QByteArray& b) {
+      UpdateTelemetryPause();
       core_->OnDeviceBytes(device, reinterpret_cast<const uint8_t*>(b.constData()),
                            static_cast<size_t>(b.size()), Now(), &out_);
       Dispatch(&out_);
@@ -406,9 +408,53 @@ void RobotAgent::ScheduleContinue() {
 // went over it, the client was dropped before a byte left, and each
 // reconnection asked for the same bytes again.
 bool RobotAgent::SendQueueFull(ByteStream* stream) const {
-  const auto* tcp = qobject_cast<const TcpStream*>(stream);
-  return tcp != nullptr && tcp->socket() != nullptr &&
-         tcp->socket()->bytesToWrite() > config_.max_send_queue_bytes + burst_allowance_;
+  return stream->BytesQueued() > send_queue_limit() + burst_allowance_;
+}
+
+qint64 RobotAgent::send_queue_limit() const {
+  if (config_.link != RobotAgentConfig::LinkKind::kSerial) return config_.max_send_queue_bytes;
+  const qint64 line_bytes =
+      static_cast<qint64>(config_.link_baud) / 10 * config_.serial_send_queue_ms / 1000;
+  return std::min(config_.max_send_queue_bytes, std::max<qint64>(4096, line_bytes));
+}
+
+// QSerialPort queues whatever is written, without bound: a link slower than
+// the telemetry (a radio modem at 115200 baud against ~40 kB/s, or a reader
+// that stalls) grew it by 17-20 kB/s for as long as it lasted, and Status
+// and acks waited behind it. A serial link cannot be dropped as a TCP peer
+// is, so the telemetry gives way; the rest of the protocol keeps its time.
+void RobotAgent::UpdateTelemetryPause() {
+  if (config_.link != RobotAgentConfig::LinkKind::kSerial || client_ == nullptr) {
+    core_->SetTelemetryPaused(false);
+    return;
+  }
+  qint64 queued = client_->BytesQueued();
+  if (queued <= send_queue_limit()) burst_allowance_ = 0;  // What a burst queued has drained.
+  if (queued > 2 * send_queue_limit() + burst_allowance_) {
+    // Nothing is read at all (Status and acks alone grew it this far): what
+    // waits is stale; a reader that comes back gets the present instead.
+    const qint64 discarded = client_->DiscardQueued();
+    if (link_bytes_discarded_ == 0) {
+      emit logMessage(QStringLiteral("%1 takes nothing: %2 queued bytes thrown away")
+                          .arg(client_peer_)
+                          .arg(discarded));
+    }
+    link_bytes_discarded_ += static_cast<uint64_t>(discarded);
+    core_->NoteTelemetryLost();  // Telemetry queued before the pause went with it.
+    queued = client_->BytesQueued();
+  }
+  if (!core_->telemetry_paused() && SendQueueFull(client_)) {
+    core_->SetTelemetryPaused(true);
+    if (telemetry_pauses_++ == 0) {
+      emit logMessage(
+          QStringLiteral("%1 takes the telemetry slower than it comes (%2 bytes queued): "
+                         "telemetry dropped while the link is congested")
+              .arg(client_peer_)
+              .arg(queued));
+    }
+  } else if (core_->telemetry_paused() && queued <= send_queue_limit() / 2) {
+    core_->SetTelemetryPaused(false);
+  }
 }
 
 bool RobotAgent::ClientSilent() const {
@@ -418,6 +464,8 @@ bool RobotAgent::ClientSilent() const {
 
 void RobotAgent::AttachClient(ByteStream* stream) {
   client_ = stream;
+  burst_allowance_ = 0;
+  core_->SetTelemetryPaused(false);
   if (client_peer_.isEmpty()) client_peer_ = stream->Describe();
   connect(stream, &ByteStream::bytesReceived, this, &RobotAgent::OnClientBytes);
   connect(stream, &ByteStream::closed, this, [this](const QString& reason) { DropClient(reason); });
@@ -464,6 +512,7 @@ void RobotAgent::OnClientBytes(const QByteArray& bytes) {
 }
 
 void RobotAgent::OnTick() {
+  UpdateTelemetryPause();  // A drained queue resumes the telemetry with no output due.
   core_->Tick(Now(), &out_);
   Dispatch(&out_);
   TickPending();
@@ -472,6 +521,7 @@ void RobotAgent::OnTick() {
 void RobotAgent::OnSimStep() {
   std::vector<DeviceChunk> chunks;
   sim_->AdvanceTo(Now(), &chunks);
+  UpdateTelemetryPause();
   for (const DeviceChunk& chunk : chunks) {
     // An emulated read returns the moment its last byte arrived, so the
     // receive time is the chunk's own time (not this timer's lateness).
@@ -495,17 +545,16 @@ void RobotAgent::Dispatch(AgentOutput* out) {
   const bool auth_failure = out->auth_failure;
   const QString close_reason = QString::fromStdString(out->close_reason);
   if (client_ != nullptr && !out->to_client.empty()) {
-    const auto* tcp = qobject_cast<const TcpStream*>(client_);
-    if (tcp != nullptr && tcp->socket() != nullptr &&
-        tcp->socket()->bytesToWrite() <= config_.max_send_queue_bytes) {
-      burst_allowance_ = 0;  // What a burst queued has drained.
-    }
+    const qint64 limit = send_queue_limit();
+    if (client_->BytesQueued() <= limit) burst_allowance_ = 0;  // What a burst queued has drained.
     const auto size = static_cast<qint64>(out->to_client.size());
-    if (size > config_.max_send_queue_bytes) burst_allowance_ = std::max(burst_allowance_, size);
+    if (size > limit) burst_allowance_ = std::max(burst_allowance_, size);
     client_->Write(out->to_client.data(), out->to_client.size());
   }
   out->Clear();
-  if (!close && client_ != nullptr && SendQueueFull(client_)) {
+  UpdateTelemetryPause();
+  if (!close && client_ != nullptr && config_.link == RobotAgentConfig::LinkKind::kTcp &&
+      SendQueueFull(client_)) {
     // The peer stopped reading: drop it (the watchdog trips at once, so a
     // robot it was driving stops) instead of queueing without bound.
     if (auto* tcp = qobject_cast<TcpStream*>(client_)) tcp->Abort();

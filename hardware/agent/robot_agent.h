@@ -11,9 +11,10 @@
 //            slot. While a client is connected, new connections get
 //            AuthResult denied "busy". Or a serial port, or the master of a
 //            pseudo-terminal (sweepscan-sim --pty). Every connection has a
-//            bounded send queue (a peer that stops reading is dropped) and a
-//            bounded read buffer; decode work per event is bounded, so the
-//            tick timer (watchdog) keeps its time under any input;
+//            bounded send queue (a TCP peer that stops reading is dropped; a
+//            serial link too slow for the telemetry loses telemetry, marked
+//            as breaks, instead) and a bounded read buffer; decode work per event is bounded, so
+//            the tick timer (watchdog) keeps its time under any input;
 //   timer:   Tick() every tick_period (watchdog, ramps, motor and Status cadence).
 //
 // Robot clock: CLOCK_MONOTONIC (std::chrono::steady_clock) for real devices;
@@ -125,6 +126,17 @@ struct RobotAgentConfig {
   // A release of held telemetry (a resume's resend) adds what it wrote on
   // top, until the queue drains below this again.
   qint64 max_send_queue_bytes = 1 << 20;
+  // A serial link cannot drop a peer that reads slower than the telemetry
+  // comes (a radio modem, a low line rate): its queue is bounded instead to
+  // this many milliseconds at the link's line rate (link_baud / 10 bytes a
+  // second, 8N1; at least 4 KiB, at most max_send_queue_bytes). Beyond it
+  // (plus a release of held telemetry, as above) live telemetry is dropped,
+  // each device's next chunk marked as a break, until the queue has drained
+  // to half of it; Status and acks still go out. A reader that takes
+  // nothing at all would still let those grow (~1 kB/s): at twice the bound
+  // the queue is thrown away, so what a returning reader gets is at most
+  // about two seconds old.
+  int serial_send_queue_ms = 1000;
   // A client that has sent nothing for this long while another connection
   // authenticates with the key is taken to be gone (a half-open link: its
   // host vanished without FIN, or its Wi-Fi dropped) and is replaced,
@@ -161,6 +173,14 @@ class RobotAgent : public QObject {
   int auth_failures_remembered() const { return last_auth_failure_ms_.size(); }
   bool has_client() const { return client_ != nullptr; }
   int pending_connections() const { return static_cast<int>(pending_.size()); }
+  // Bytes written to the client's link that it has not taken yet (0 on a pty).
+  qint64 client_bytes_queued() const { return client_ != nullptr ? client_->BytesQueued() : 0; }
+  // The bound on client_bytes_queued() (before a release's burst allowance).
+  qint64 send_queue_limit() const;
+  // Times live telemetry was paused for a congested serial link, and the
+  // bytes thrown away from its queue at twice the bound.
+  uint64_t telemetry_pauses() const { return telemetry_pauses_; }
+  uint64_t link_bytes_discarded() const { return link_bytes_discarded_; }
 
  signals:
   void clientConnected(const QString& peer);
@@ -180,6 +200,9 @@ class RobotAgent : public QObject {
   void TickPending();
   void ScheduleContinue();
   bool SendQueueFull(ByteStream* stream) const;
+  // kSerial: pauses live telemetry while the link's queue is over its bound
+  // and resumes it once the queue has drained to half (AgentCore::SetTelemetryPaused).
+  void UpdateTelemetryPause();
   // The client has sent nothing for client_takeover_after_ms.
   bool ClientSilent() const;
   void AttachClient(ByteStream* stream);
@@ -217,6 +240,8 @@ class RobotAgent : public QObject {
   // A burst of released telemetry queued at once, allowed on top of
   // max_send_queue_bytes until the queue drains below it (SendQueueFull).
   qint64 burst_allowance_ = 0;
+  uint64_t telemetry_pauses_ = 0;
+  uint64_t link_bytes_discarded_ = 0;
   std::vector<Pending> pending_;                // Connections still authenticating.
   bool continue_scheduled_ = false;             // Decode work left by the per-call bound.
   AgentOutput out_;

@@ -146,6 +146,16 @@ bool SerialStream::Drain(int timeout_ms) {
   return port_->bytesToWrite() == 0 && ::tcdrain(static_cast<int>(port_->handle())) == 0;
 }
 
+qint64 SerialStream::BytesQueued() const { return port_->isOpen() ? port_->bytesToWrite() : 0; }
+
+qint64 SerialStream::DiscardQueued() {
+  if (!port_->isOpen()) return 0;
+  const qint64 queued = port_->bytesToWrite();
+  port_->clear(QSerialPort::Output);  // Qt's buffer and the driver's (tcflush).
+  bytes_dropped_ += static_cast<uint64_t>(queued);
+  return queued;
+}
+
 QString SerialStream::Describe() const {
   return QStringLiteral("serial:%1@%2").arg(name_).arg(baud_);
 }
@@ -215,6 +225,8 @@ void TcpStream::Abort() {
   closing_ = true;
   socket_->abort();
 }
+
+qint64 TcpStream::BytesQueued() const { return socket_->bytesToWrite(); }
 
 QString TcpStream::Describe() const {
   return QStringLiteral("tcp:%1:%2")

@@ -53,6 +53,12 @@ class ByteStream : public QObject {
   // "tcp:127.0.0.1:5600", "serial:/dev/ttyUSB0@115200", "pty:/dev/pts/4".
   virtual QString Describe() const = 0;
   uint64_t bytes_dropped() const { return bytes_dropped_; }
+  // Bytes written but not yet handed to the kernel (Qt's write buffer); 0
+  // for a stream that never queues (the pty, which drops instead).
+  virtual qint64 BytesQueued() const { return 0; }
+  // Throws away what is queued and not yet sent (a serial line: what the
+  // driver still holds too); returns the bytes dropped (counted).
+  virtual qint64 DiscardQueued() { return 0; }
 
  signals:
   void bytesReceived(const QByteArray& bytes);
@@ -77,6 +83,8 @@ class SerialStream : public ByteStream {
   // timeout_ms): QSerialPort only buffers a write, and its event loop sends
   // it, so a port closed without this loses what was last written.
   bool Drain(int timeout_ms);
+  qint64 BytesQueued() const override;
+  qint64 DiscardQueued() override;
   QString Describe() const override;
   // DTR drives the X4's motor enable on its USB adapter.
   void SetDataTerminalReady(bool on);
@@ -103,6 +111,7 @@ class TcpStream : public ByteStream {
   void Close() override;
   // Drops the connection at once, like a pulled cable, without closed().
   void Abort();
+  qint64 BytesQueued() const override;
   QString Describe() const override;
   QString PeerAddress() const;
   QTcpSocket* socket() const { return socket_; }

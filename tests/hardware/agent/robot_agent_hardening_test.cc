@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <QCoreApplication>
@@ -32,6 +33,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <variant>
 #include <vector>
 
 #include "hardware/agent/robot_agent.h"
@@ -479,6 +481,112 @@ TEST(RobotAgentSerialLinkTest, ALostSerialLinkIsOpenedAgainWhenItsPortReturns) {
   ::close(master);
   ::unlink(link.c_str());
   ::rmdir(dir_template);
+}
+
+// Device bytes at a steady 40 kB/s of lidar bytes (200 every 5 ms): about
+// 49 kB/s on the link with the frames' overhead, more than a 115200-baud
+// line (11.5 kB/s) carries.
+class SteadyDevices : public VirtualDevices {
+ public:
+  void WriteToDevice(LinkDevice, const uint8_t*, size_t, Time) override {}
+  void AdvanceTo(Time now, std::vector<DeviceChunk>* out) override {
+    if (!started_) {
+      last_ = now;
+      started_ = true;
+    }
+    while (now - last_ >= std::chrono::milliseconds(5)) {
+      last_ += std::chrono::milliseconds(5);
+      out->push_back({LinkDevice::kLidar, last_, std::vector<uint8_t>(200, 0xA5)});
+    }
+  }
+
+ private:
+  bool started_ = false;
+  Time last_;
+};
+
+// A serial link (a radio modem) slower than the telemetry, or a reader that
+// stalls: the agent's queue for it stays within its bound (one second at the
+// line rate) while live telemetry is dropped; Status still goes out, and
+// what it alone adds is thrown away at twice the bound. When the reader
+// catches up the telemetry resumes with the break flag, so its decoder
+// restarts and the hole is reported. QSerialPort's write buffer used to
+// grow without bound (17-20 kB/s in the review), Status and acks queued
+// behind it.
+TEST(RobotAgentSerialLinkTest, ASlowSerialLinkKeepsItsQueueBoundedAndMarksTheDroppedTelemetry) {
+  int master = -1, slave = -1;
+  char name[128];
+  termios raw{};
+  ::cfmakeraw(&raw);
+  ASSERT_EQ(::openpty(&master, &slave, name, &raw, nullptr), 0);
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  RobotAgentConfig config;
+  config.link = RobotAgentConfig::LinkKind::kSerial;
+  config.link_serial_port = QString::fromLocal8Bit(name);
+  config.link_baud = 9600;  // 960 B/s: the bound's floor, 4 KiB, which Status fills in 4 s.
+  config.agent.require_auth = false;
+  config.agent.telemetry_buffer = Duration::zero();  // Live from the start: no resume to wait for.
+  config.agent.name = "slow serial link test agent";
+  RobotAgent agent(config, std::make_unique<SteadyDevices>());
+  QString error;
+  ASSERT_TRUE(agent.Start(&error)) << error.toStdString();
+  const qint64 limit = agent.send_queue_limit();
+  EXPECT_EQ(limit, 4096);
+
+  // Nobody reads for 8 s: ~400 kB of telemetry against the pty's buffer
+  // (tens of kB, full within 2 s) and the bound.
+  qint64 most_queued = 0;
+  QElapsedTimer clock;
+  clock.start();
+  WaitFor(
+      [&] {
+        most_queued = std::max(most_queued, agent.client_bytes_queued());
+        return clock.elapsed() > 8000;
+      },
+      9000);
+  const AgentCounters& counters = agent.core().counters();
+  std::printf(
+      "figure: serial link not read for 8 s: at most %lld bytes queued (bound %lld), "
+      "%llu telemetry chunks dropped, %llu stale bytes thrown away\n",
+      static_cast<long long>(most_queued), static_cast<long long>(limit),
+      static_cast<unsigned long long>(counters.telemetry_chunks_dropped),
+      static_cast<unsigned long long>(agent.link_bytes_discarded()));
+  EXPECT_GT(most_queued, limit) << "the link was never congested: the test tests nothing";
+  // Twice the bound, plus what one write may add past it before the next check.
+  EXPECT_LE(most_queued, 2 * limit + 1024);
+  EXPECT_GT(counters.telemetry_chunks_dropped, 0u);
+  EXPECT_GE(agent.telemetry_pauses(), 1u);
+  EXPECT_GT(agent.link_bytes_discarded(), 0u) << "Status alone reached twice the bound";
+
+  // The reader catches up: Status frames, then telemetry marked as a break.
+  std::string bytes;
+  LinkDecoder decoder;
+  std::vector<LinkMessage> messages;
+  size_t status_frames = 0, breaks = 0, telemetry_after_break = 0;
+  clock.restart();
+  WaitFor(
+      [&] {
+        bytes.clear();
+        ReadAvailable(master, &bytes);
+        decoder.Feed(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), &messages);
+        for (const LinkMessage& m : messages) {
+          if (std::holds_alternative<LinkStatus>(m.payload)) ++status_frames;
+          if (const auto* t = std::get_if<Telemetry>(&m.payload)) {
+            if (breaks > 0) ++telemetry_after_break;
+            if ((t->flags & kTelemetryBreak) != 0) ++breaks;
+          }
+        }
+        messages.clear();
+        return clock.elapsed() > 2000 && breaks >= 2 && telemetry_after_break > 20;
+      },
+      6000);
+  EXPECT_GE(status_frames, 10u) << "Status at 10 Hz";
+  EXPECT_GE(breaks, 2u)
+      << "the telemetry after the first pause (the connection's first chunk is one too)";
+  EXPECT_GT(telemetry_after_break, 20u) << "live telemetry resumed";
+  agent.Shutdown();
+  ::close(slave);
+  ::close(master);
 }
 
 }  // namespace
