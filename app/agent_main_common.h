@@ -5,7 +5,11 @@
 #include <QCommandLineOption>
 #include <QCommandLineParser>
 #include <QCoreApplication>
+#include <QHostAddress>
+#include <cmath>
 #include <cstdio>
+#include <functional>
+#include <tuple>
 
 #include "app/quit_on_signal.h"
 #include "hardware/agent/robot_agent.h"
@@ -38,8 +42,27 @@ struct AgentCommandLine {
                             "resend them to a workstation that reconnects after an outage.",
                             "S"};
 
+  // Where a value that did not come from the command line came from, for
+  // its messages: e.g. "robotd.conf:7: v-max" for the option named "v-max"
+  // (robotd's configuration file); empty for the command line's own.
+  std::function<QString(const QString& name)> origin;
+
   void Add(QCommandLineParser* parser) const {
     parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha, buffer});
+  }
+
+  // The subject of a message about `option`'s value: "--v-max", or where
+  // the file set it ("robotd.conf:7: v-max").
+  QString Subject(const QCommandLineOption& option) const {
+    const QString name = option.names().first();
+    const QString where = origin ? origin(name) : QString();
+    return where.isEmpty() ? QStringLiteral("--") + name : where;
+  }
+  // `message` (which names the value itself, e.g. a key file's path),
+  // prefixed with where the file set the option; as is for the command line.
+  QString Located(const QCommandLineOption& option, const QString& message) const {
+    const QString where = origin ? origin(option.names().first()) : QString();
+    return where.isEmpty() ? message : where + QStringLiteral(": ") + message;
   }
 
   // `key_permissions`: what to do with a key file others may read
@@ -52,9 +75,16 @@ struct AgentCommandLine {
       hardware::LinkAddress address;
       const QString text =
           parser.isSet(listen) ? parser.value(listen) : QStringLiteral("127.0.0.1:5600");
-      if (!hardware::ParseLinkAddress(text, &address, error) ||
-          address.kind != hardware::LinkAddress::Kind::kTcp) {
-        if (error->isEmpty()) *error = QStringLiteral("--listen expects ADDR:PORT");
+      if (!hardware::ParseLinkAddress(text, &address, error)) {
+        *error = Located(listen, *error);
+        return false;
+      }
+      if (address.kind != hardware::LinkAddress::Kind::kTcp) {
+        *error = Subject(listen) + QStringLiteral(" expects ADDR:PORT, got '%1'").arg(text);
+        return false;
+      }
+      if (QHostAddress(address.host).isNull()) {
+        *error = Subject(listen) + QStringLiteral(": '%1' is not an IP address").arg(address.host);
         return false;
       }
       config->listen_address = address.host;
@@ -68,6 +98,7 @@ struct AgentCommandLine {
       QString warning;
       if (!hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error,
                                  key_permissions, &warning)) {
+        *error = Located(key_file, *error);
         return false;
       }
       if (!warning.isEmpty()) std::fprintf(stderr, "warning: %s\n", qPrintable(warning));
@@ -85,15 +116,32 @@ struct AgentCommandLine {
     if (parser.isSet(watchdog)) {
       // Bounded: 1e9 used to be accepted, which switched the watchdog off.
       if (!(watchdog_ms >= 100.0 && watchdog_ms <= 5000.0)) {
-        *error = QStringLiteral("--watchdog-ms must be within 100..5000, got %1")
-                     .arg(parser.value(watchdog));
+        *error = Subject(watchdog) +
+                 QStringLiteral(" must be within 100..5000, got %1").arg(parser.value(watchdog));
         return false;
       }
       config->agent.watchdog = FromSeconds(watchdog_ms * 1e-3);
     }
     if (!(buffer_s >= 0.0 && buffer_s <= 60.0)) {
-      *error = QStringLiteral("--buffer-s must be within 0..60, got %1").arg(parser.value(buffer));
+      *error = Subject(buffer) +
+               QStringLiteral(" must be within 0..60, got %1").arg(parser.value(buffer));
       return false;
+    }
+    // The limits checked here, by name (AgentOptions::IsValid would say
+    // "v_max must be ...", naming neither the option nor the file's line).
+    // The motor board's wire format saturates at 32.767 m/s and rad/s.
+    for (const auto& [option, value, max] :
+         {std::tuple{&v_max, config->agent.v_max_mps, 32.0},
+          std::tuple{&w_max, config->agent.w_max_radps, 32.0},
+          std::tuple{&accel, config->agent.accel_max_mps2, HUGE_VAL},
+          std::tuple{&alpha, config->agent.alpha_max_radps2, HUGE_VAL}}) {
+      if (!(value > 0.0 && value <= max && std::isfinite(value))) {
+        *error = Subject(*option) +
+                 (max < HUGE_VAL ? QStringLiteral(" must be within (0, %1]").arg(max)
+                                 : QStringLiteral(" must be positive and finite")) +
+                 QStringLiteral(", got %1").arg(parser.value(*option));
+        return false;
+      }
     }
     config->agent.telemetry_buffer = FromSeconds(buffer_s);
     return config->IsValid(error);
@@ -101,14 +149,14 @@ struct AgentCommandLine {
 
  private:
   // Leaves *out alone when the option is not given.
-  static bool Number(const QCommandLineParser& parser, const QCommandLineOption& option,
-                     double* out, QString* error) {
+  bool Number(const QCommandLineParser& parser, const QCommandLineOption& option, double* out,
+              QString* error) const {
     if (!parser.isSet(option)) return true;
     bool ok = false;
     const QString text = parser.value(option);
     const double value = text.toDouble(&ok);
     if (!ok) {
-      *error = QStringLiteral("--%1: '%2' is not a number").arg(option.names().first(), text);
+      *error = Subject(option) + QStringLiteral(": '%1' is not a number").arg(text);
       return false;
     }
     *out = value;

@@ -5,8 +5,25 @@
 
 namespace sweepscan::app {
 
-bool ReadAgentConfigFile(const QString& path, const QStringList& keys, QStringList* args,
-                         QString* error) {
+namespace {
+
+// Where a comment starts: a `#` at the start of the line or after a space
+// or tab, as in systemd's and most ini files' values. A `#` anywhere was
+// taken for one, so `name = robot#2` became `robot` without a word.
+int CommentStart(const QString& line) {
+  for (int i = 0; i < line.size(); ++i) {
+    if (line[i] == QLatin1Char('#') &&
+        (i == 0 || line[i - 1] == QLatin1Char(' ') || line[i - 1] == QLatin1Char('\t'))) {
+      return i;
+    }
+  }
+  return -1;
+}
+
+}  // namespace
+
+bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
+                         std::vector<AgentConfigSetting>* settings, QString* error) {
   constexpr qint64 kMaxBytes = 64 * 1024;  // A configuration, not a data file.
   QFile file(path);
   if (!file.open(QIODevice::ReadOnly)) {
@@ -26,7 +43,7 @@ bool ReadAgentConfigFile(const QString& path, const QStringList& keys, QStringLi
       return false;
     };
     QString line = QString::fromUtf8(lines[i]);
-    const int hash = line.indexOf(QLatin1Char('#'));
+    const int hash = CommentStart(line);
     if (hash >= 0) line.truncate(hash);
     line = line.trimmed();
     if (line.isEmpty()) continue;
@@ -40,7 +57,7 @@ bool ReadAgentConfigFile(const QString& path, const QStringList& keys, QStringLi
     if (value.isEmpty()) return fail(QStringLiteral("'%1' has no value").arg(key));
     if (seen.contains(key)) return fail(QStringLiteral("'%1' is set twice").arg(key));
     seen.insert(key);
-    *args << QStringLiteral("--") + key << value;
+    settings->push_back({key, value, i + 1});
   }
   return true;
 }

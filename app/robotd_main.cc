@@ -5,8 +5,11 @@
 // goes quiet. Behaviour: docs/robot-agent.md. Thin: parsing and wiring.
 #include <QCommandLineParser>
 #include <QCoreApplication>
+#include <QHash>
 #include <cstdio>
 #include <exception>
+#include <initializer_list>
+#include <vector>
 
 #include "app/agent_main_common.h"
 #include "app/robotd_config.h"
@@ -96,31 +99,49 @@ int AgentMain(int argc, char** argv) {
       "dashes (the packaged service uses /etc/sweepscan/robotd.conf). The command line "
       "overrides the file.",
       "FILE");
-  const sweepscan::app::AgentCommandLine common;
+  sweepscan::app::AgentCommandLine common;
   common.Add(&parser);
   parser.addOptions({lidar, imu, motor, serial, name, config_file, stop_motors});
   QStringList arguments = QCoreApplication::arguments();
   if (!parser.parse(arguments)) return Fail(parser.errorText());
+  QHash<QString, QString> file_origin;  // Option name -> "FILE:LINE: key", for messages.
   if (parser.isSet(config_file) && !parser.isSet(QStringLiteral("help")) &&
       !parser.isSet(QStringLiteral("version"))) {
     // Every option but the file itself, help and version may come from it.
     QStringList keys;
-    for (const QCommandLineOption* option :
-         {&lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
-          &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha,
-          &common.buffer}) {
+    for (const QCommandLineOption* option : std::initializer_list<const QCommandLineOption*>{
+             &lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
+             &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha,
+             &common.buffer}) {
       keys << option->names().first();
     }
-    QStringList from_file;
+    const QString path = parser.value(config_file);
+    std::vector<sweepscan::app::AgentConfigSetting> settings;
     QString file_error;
-    if (!sweepscan::app::ReadAgentConfigFile(parser.value(config_file), keys, &from_file,
-                                             &file_error)) {
+    if (!sweepscan::app::ReadAgentConfigFile(path, keys, &settings, &file_error)) {
       return Fail(file_error);
+    }
+    // The link is one choice: `--listen` or `--serial` on the command line
+    // replaces the file's, whichever of the two that is (the shipped file
+    // sets `listen`, and `--serial` used to be refused beside it).
+    const bool link_on_command_line = parser.isSet(serial) || parser.isSet(common.listen);
+    QStringList from_file;
+    for (const sweepscan::app::AgentConfigSetting& setting : settings) {
+      const bool link =
+          setting.key == QLatin1String("listen") || setting.key == QLatin1String("serial");
+      if (link && link_on_command_line) continue;
+      from_file << QStringLiteral("--") + setting.key << setting.value;
+      if (!parser.isSet(setting.key)) {
+        file_origin.insert(
+            setting.key, QStringLiteral("%1:%2: %3").arg(path).arg(setting.line).arg(setting.key));
+      }
     }
     // The file's options first: QCommandLineParser::value() is the last one given.
     arguments = QStringList{arguments.first()} + from_file + arguments.mid(1);
     if (!parser.parse(arguments)) return Fail(parser.errorText());
   }
+  // A bad value from the file is reported at its line, with its key as written.
+  common.origin = [&file_origin](const QString& name) { return file_origin.value(name); };
   if (parser.isSet(QStringLiteral("help"))) parser.showHelp(0);
   if (parser.isSet(QStringLiteral("version"))) parser.showVersion();
   if (!parser.positionalArguments().isEmpty()) {
@@ -130,9 +151,14 @@ int AgentMain(int argc, char** argv) {
 
   RobotAgentConfig config;
   QString error;
-  config.agent.name =
-      "sweepscan-robotd 0.1.0 (" +
-      (parser.isSet(name) ? parser.value(name) : QStringLiteral("robot-1")).toStdString() + ")";
+  const std::string robot_name =
+      (parser.isSet(name) ? parser.value(name) : QStringLiteral("robot-1")).toStdString();
+  config.agent.name = "sweepscan-robotd 0.1.0 (" + robot_name + ")";
+  if (config.agent.name.size() > sweepscan::hardware::kLinkMaxStringSize) {
+    const size_t room =
+        sweepscan::hardware::kLinkMaxStringSize - (config.agent.name.size() - robot_name.size());
+    return Fail(common.Subject(name) + QStringLiteral(" is over %1 bytes").arg(room));
+  }
   config.lidar_port = parser.value(lidar);
   config.imu_port = parser.value(imu);
   config.motor_port = parser.value(motor);
@@ -159,13 +185,15 @@ int AgentMain(int argc, char** argv) {
     return StopMotors(config.motor_port, config.motor_baud);
   }
   if (parser.isSet(serial) && parser.isSet(common.listen)) {
-    return Fail(QStringLiteral("--listen and --serial exclude each other"));
+    // Both on the command line, or both in the file.
+    return Fail(QStringLiteral("%1 and %2 exclude each other")
+                    .arg(common.Subject(common.listen), common.Subject(serial)));
   }
   if (parser.isSet(serial)) {
     LinkAddress address;
     if (!sweepscan::hardware::ParseLinkAddress("serial:" + parser.value(serial), &address,
                                                &error)) {
-      return Fail(error);
+      return Fail(common.Located(serial, error));
     }
     config.link = RobotAgentConfig::LinkKind::kSerial;
     config.link_serial_port = address.serial_port;

@@ -24,6 +24,7 @@
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
+#include <QProcess>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -431,6 +432,156 @@ size_t ReadAvailable(int fd, std::string* into) {
     total += static_cast<size_t>(n);
   }
   return total;
+}
+
+// --- sweepscan-robotd's configuration file -------------------------------
+
+// A pseudo-terminal for robotd's --serial link; the test holds the master
+// (not inherited by robotd, so closing it here is the far end going away).
+struct LinkPty {
+  int master = -1;
+  std::string slave;
+  LinkPty() {
+    int slave_fd = -1;
+    char name[128];
+    termios raw{};
+    ::cfmakeraw(&raw);
+    if (::openpty(&master, &slave_fd, name, &raw, nullptr) != 0) return;
+    ::fcntl(master, F_SETFL, O_NONBLOCK);
+    ::fcntl(master, F_SETFD, FD_CLOEXEC);
+    ::close(slave_fd);
+    slave = name;
+  }
+  ~LinkPty() {
+    if (master >= 0) ::close(master);
+  }
+};
+
+// robotd with `args` until its stdout says `serving`; returns its stdout.
+// Ends it with SIGTERM; *exit_code is its exit code (-1: killed or hung).
+std::string ServeAndStop(const QStringList& args, const char* serving, int* exit_code,
+                         const std::function<void()>& while_serving = {}) {
+  QProcess robotd;
+  robotd.start(QStringLiteral(SWEEPSCAN_ROBOTD), args);
+  QByteArray out;
+  const bool served = WaitFor(
+      [&] {
+        out += robotd.readAllStandardOutput();
+        return out.contains(serving) || robotd.state() == QProcess::NotRunning;
+      },
+      10000);
+  if (served && out.contains(serving) && while_serving) while_serving();
+  robotd.terminate();
+  robotd.waitForFinished(10000);
+  *exit_code = robotd.exitStatus() == QProcess::NormalExit ? robotd.exitCode() : -1;
+  return (out + robotd.readAllStandardError()).toStdString();
+}
+
+std::string WriteConfig(const std::string& name, const std::string& text) {
+  return WriteKey(name, text, 0600);
+}
+
+// The command line overrides the file, the link included: `--serial` with
+// the packaged file (which sets `listen`) serves the serial link, and
+// `--listen` beats a file's `serial`. Refused before: "--listen and --serial
+// exclude each other". A `#` inside a value is part of it; one after a space
+// starts a comment.
+TEST(RobotdConfigFileTest, TheCommandLinesLinkReplacesTheFilesAndHashInsideAValueIsKept) {
+  const std::string key = WriteKey("config-test.key", "the config test's key", 0600);
+  LinkPty link;
+  ASSERT_GE(link.master, 0);
+  const std::string with_listen =
+      WriteConfig("listen.conf", "imu = /nonexistent/tty\nlisten = 127.0.0.1:1\nkey-file = " + key +
+                                     "\nname = robot#2   # the second one\n");
+  std::string hello;
+  int code = -1;
+  const std::string out = ServeAndStop({"--config", QString::fromStdString(with_listen), "--serial",
+                                        QString::fromStdString(link.slave)},
+                                       "serving the link on", &code, [&] {
+                                         WaitFor(
+                                             [&] {
+                                               return ReadAvailable(link.master, &hello) > 0 &&
+                                                      hello.find("robot#2") != std::string::npos;
+                                             },
+                                             5000);
+                                       });
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("serving the link on " + link.slave), std::string::npos) << out;
+  EXPECT_NE(hello.find("sweepscan-robotd 0.1.0 (robot#2)"), std::string::npos)
+      << "the Hello's name: " << hello.size() << " bytes read";
+  EXPECT_EQ(hello.find("second one"), std::string::npos);
+
+  const std::string with_serial =
+      WriteConfig("serial.conf",
+                  "imu = /nonexistent/tty\nserial = /nonexistent/modem\nkey-file = " + key + "\n");
+  const std::string out2 =
+      ServeAndStop({"--config", QString::fromStdString(with_serial), "--listen", "127.0.0.1:0"},
+                   "listening on", &code);
+  EXPECT_EQ(code, 0) << out2;
+  EXPECT_NE(out2.find("listening on 127.0.0.1:"), std::string::npos) << out2;
+
+  // Both in the file, or both on the command line: still one or the other.
+  const std::string both = WriteConfig("both.conf",
+                                       "imu = /nonexistent/tty\nlisten = 127.0.0.1:0\n"
+                                       "serial = /nonexistent/modem\n");
+  ProcessRun r = RunRobotd({"--config", both});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(both + ":2: listen and " + both + ":3: serial exclude each other"),
+            std::string::npos)
+      << r.err;
+  r = RunRobotd(
+      {"--imu", "/nonexistent/tty", "--listen", "127.0.0.1:0", "--serial", "/nonexistent/modem"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--listen and --serial exclude each other"), std::string::npos) << r.err;
+}
+
+// A bad value from the file names the setting as it is written there and
+// its FILE:LINE (it said "v_max must be positive and finite" for
+// `v-max = nan`, naming neither); on the command line, the option.
+TEST(RobotdConfigFileTest, BadValuesFromTheFileNameTheSettingAndItsLine) {
+  const std::string key = WriteKey("config-values.key", "the config test's key", 0600);
+  const struct {
+    std::string line;  // Line 3 of the file.
+    std::string says;  // After "FILE:3: ".
+  } cases[] = {
+      {"v-max = nan", "v-max must be within (0, 32], got nan"},
+      {"w-max = 40", "w-max must be within (0, 32], got 40"},
+      {"alpha-max = -1", "alpha-max must be positive and finite, got -1"},
+      {"accel-max = fast", "accel-max: 'fast' is not a number"},
+      {"watchdog-ms = 1e9", "watchdog-ms must be within 100..5000, got 1e9"},
+      {"buffer-s = 99", "buffer-s must be within 0..60, got 99"},
+      {"listen = nowhere", "listen: link address 'nowhere': expected HOST:PORT"},
+      {"listen = robot.local:5600", "listen: 'robot.local' is not an IP address"},
+      {"serial = /dev/ttyS1@fast", "serial: link address 'serial:/dev/ttyS1@fast': bad baud rate"},
+      {"name = " + std::string(240, 'n'), "name is over 230 bytes"},
+  };
+  for (const auto& c : cases) {
+    const std::string conf = WriteConfig("values.conf", "# robotd\nimu = /nonexistent/tty\n" +
+                                                            c.line + "\nkey-file = " + key + "\n");
+    const ProcessRun r = RunRobotd({"--config", conf});
+    EXPECT_EQ(r.code, 2) << c.line << ": " << r.err;
+    EXPECT_NE(r.err.find(conf + ":3: " + c.says), std::string::npos) << c.line << ": " << r.err;
+  }
+  const std::string conf =
+      WriteConfig("key.conf", "imu = /nonexistent/tty\nkey-file = /nonexistent/robotd.key\n");
+  ProcessRun r = RunRobotd({"--config", conf});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(conf + ":2: key-file: key file /nonexistent/robotd.key"), std::string::npos)
+      << r.err;
+  // The command line's own values are named by their option.
+  r = RunRobotd({"--imu", "/nonexistent/tty", "--serial", "/nonexistent/modem", "--v-max", "nan"});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("sweepscan-robotd: --v-max must be within (0, 32], got nan"),
+            std::string::npos)
+      << r.err;
+  // A value on the command line overrides the file's bad one.
+  const std::string bad = WriteConfig("bad-v.conf", "imu = /nonexistent/tty\nv-max = nan\n");
+  int code = -1;
+  const std::string out =
+      ServeAndStop({"--config", QString::fromStdString(bad), "--v-max", "0.4", "--listen",
+                    "127.0.0.1:0", "--key-file", QString::fromStdString(key)},
+                   "listening on", &code);
+  EXPECT_EQ(code, 0) << out;
 }
 
 // A serial link (a radio modem on USB) that is lost is opened again when its
