@@ -154,11 +154,6 @@ int AgentMain(int argc, char** argv) {
   const std::string robot_name =
       (parser.isSet(name) ? parser.value(name) : QStringLiteral("robot-1")).toStdString();
   config.agent.name = "sweepscan-robotd 0.1.0 (" + robot_name + ")";
-  if (config.agent.name.size() > sweepscan::hardware::kLinkMaxStringSize) {
-    const size_t room =
-        sweepscan::hardware::kLinkMaxStringSize - (config.agent.name.size() - robot_name.size());
-    return Fail(common.Subject(name) + QStringLiteral(" is over %1 bytes").arg(room));
-  }
   config.lidar_port = parser.value(lidar);
   config.imu_port = parser.value(imu);
   config.motor_port = parser.value(motor);
@@ -183,6 +178,13 @@ int AgentMain(int argc, char** argv) {
     if (config.motor_port.isEmpty())
       return Fail(QStringLiteral("--stop-motors: no motor board port (--motor)"));
     return StopMotors(config.motor_port, config.motor_baud);
+  }
+  // Not before --stop-motors: it must stop the board whatever else the
+  // configuration gets wrong (the service runs it after any exit).
+  if (config.agent.name.size() > sweepscan::hardware::kLinkMaxStringSize) {
+    const size_t room =
+        sweepscan::hardware::kLinkMaxStringSize - (config.agent.name.size() - robot_name.size());
+    return Fail(common.Subject(name) + QStringLiteral(" is over %1 bytes").arg(room));
   }
   if (parser.isSet(serial) && parser.isSet(common.listen)) {
     // Both on the command line, or both in the file.

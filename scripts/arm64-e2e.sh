@@ -21,7 +21,23 @@ cmake -S . -B build -G Ninja -DSWEEPSCAN_BUILD_TESTS=ON \
 cmake --build build -j"$(nproc 2>/dev/null || echo 2)" --target robotd_process_test sweepscan-cli
 echo "qemu: $(qemu-aarch64-static --version | head -1)"
 echo "machine: $(nproc) cores, $(sed -n 's/^model name\s*: //p' /proc/cpuinfo | head -1)"
+# The test's exit status decides: a grep at the end of a pipe hid it (and
+# `|| true` hid a run that printed no figure), so failing runs passed.
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+failed=0
 for i in $(seq "$runs"); do
   echo "--- run $i"
-  build/tests/hardware/robotd_process_test 2>&1 | grep -E '^figure:|FAILED|^\[  PASSED' || true
+  rc=0
+  build/tests/hardware/robotd_process_test >"$log" 2>&1 || rc=$?
+  grep -E '^figure:|FAILED|^\[  PASSED' "$log" || true  # What to show; not the verdict.
+  if [ "$rc" -ne 0 ]; then
+    echo "run $i failed (exit $rc):"
+    grep -E -B2 -A6 'Failure|FAILED' "$log" | head -n 60 || tail -n 40 "$log"
+    failed=$((failed + 1))
+  fi
 done
+if [ "$failed" -ne 0 ]; then
+  echo "$failed of $runs runs failed" >&2
+  exit 1
+fi

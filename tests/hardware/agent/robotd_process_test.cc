@@ -607,7 +607,10 @@ TEST_P(RobotdProcessTest, ALostDevicePortIsNoticedAndOpenedAgainWithoutSpinning)
 // As the packaged service runs it: options from a config file (the command
 // line overriding it), and systemd's notification protocol (sd_notify) on a
 // datagram socket: READY=1 once listening, WATCHDOG=1 at half WatchdogSec,
-// STOPPING=1 on SIGTERM.
+// STOPPING=1 on SIGTERM. The ping's period is checked, not only that pings
+// come: WatchdogSec 1 s against the file's link watchdog of 300 ms, so that
+// pings at any other cadence (the link watchdog's, or WatchdogSec itself,
+// which would let systemd kill a healthy agent) fail.
 TEST_P(RobotdProcessTest, ConfigFileAndServiceNotifications) {
   DevicePtys ptys(std::make_unique<SimDevices>(sim::SimConfig(), SimDevices::Mode::kCommanded), 1);
   QString error;
@@ -630,26 +633,45 @@ TEST_P(RobotdProcessTest, ConfigFileAndServiceNotifications) {
   std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", qPrintable(socket_path));
   ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
   QStringList messages;
+  QElapsedTimer clock;
+  clock.start();
+  std::vector<qint64> watchdog_ms;  // When each WATCHDOG=1 arrived.
   auto receive = [&] {
     char buffer[512];
     ssize_t n;
-    while ((n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0) messages << QString::fromUtf8(buffer, static_cast<int>(n));
+    while ((n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0) {
+      messages << QString::fromUtf8(buffer, static_cast<int>(n));
+      if (messages.back() == "WATCHDOG=1") watchdog_ms.push_back(clock.elapsed());
+    }
   };
 
   QProcess robotd;
   QProcessEnvironment env = QProcessEnvironment::systemEnvironment();
   env.insert("NOTIFY_SOCKET", socket_path);
-  env.insert("WATCHDOG_USEC", "400000");  // systemd sets WATCHDOG_PID too; it may be omitted.
+  // WatchdogSec=1 (systemd sets WATCHDOG_PID too; it may be omitted): a ping every 500 ms.
+  env.insert("WATCHDOG_USEC", "1000000");
+  constexpr double kPingMs = 500.0;
   robotd.setProcessEnvironment(env);
   // --listen on the command line wins over the file's (port 1 needs root).
   robotd.start(GetParam().command.first(),
                GetParam().command.mid(1) + QStringList{"--config", config, "--listen", "127.0.0.1:0"});
   ASSERT_TRUE(WaitFor([&] { return robotd.readAllStandardOutput().contains("listening on 127.0.0.1:"); }, 60000))
       << robotd.readAllStandardError().toStdString();
-  ASSERT_TRUE(WaitFor([&] {
-    receive();
-    return messages.filter("WATCHDOG=1").size() >= 3;
-  }, 10000)) << messages.join('|').toStdString();
+  // Nine pings (4 s): their mean period is the configured one, whatever
+  // the load (a late ping delays only itself, the timer keeps its period).
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        receive();
+        return watchdog_ms.size() >= 9;
+      },
+      20000))
+      << messages.join('|').toStdString();
+  const double mean_ms = static_cast<double>(watchdog_ms.back() - watchdog_ms.front()) /
+                         static_cast<double>(watchdog_ms.size() - 1);
+  EXPECT_GT(mean_ms, 0.8 * kPingMs) << "WATCHDOG=1 more often than WatchdogSec / 2";
+  EXPECT_LT(mean_ms, 1.25 * kPingMs) << "WATCHDOG=1 less often than WatchdogSec / 2";
+  std::printf("figure: %s robotd: WATCHDOG=1 every %.0f ms on average (WatchdogSec 1 s)\n",
+              GetParam().name.c_str(), mean_ms);
   ASSERT_FALSE(messages.isEmpty());
   EXPECT_TRUE(messages.first().startsWith("READY=1\nSTATUS=listening on 127.0.0.1:")) << messages.first().toStdString();
   EXPECT_TRUE(ptys.started()) << "robotd opened the file's device ports";
@@ -668,6 +690,58 @@ TEST_P(RobotdProcessTest, ConfigFileAndServiceNotifications) {
   ASSERT_TRUE(robotd.waitForFinished(60000));
   EXPECT_EQ(robotd.exitCode(), 2);
   EXPECT_TRUE(robotd.readAllStandardError().contains(QStringLiteral("%1:2: unknown key 'speed'").arg(config).toUtf8()));
+}
+
+// `--stop-motors` as the service's ExecStopPost runs it, through the
+// configuration file: `sweepscan-robotd --config /etc/sweepscan/robotd.conf
+// --stop-motors`. The board's port comes from the file; nothing else in it
+// matters (a bad value elsewhere must not keep the board driving).
+TEST_P(RobotdProcessTest, StopMotorsThroughTheConfigFileAsTheServiceRunsIt) {
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  const auto ports = ptys.SlavePaths(0);
+  std::vector<MotorCommand> heard;
+  OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
+  // Driving, then killed (a crash says nothing to the board).
+  Robotd robotd(GetParam(), ports, key_file_);
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  RobotConnection client(Client(robotd.Address()));
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 30000));
+  for (int i = 0; i < 20; ++i) {
+    client.Drive(0.3, 0.0);
+    sweepscan::testing::Pump(100);
+  }
+  ASSERT_EQ(::kill(static_cast<pid_t>(robotd.pid()), SIGKILL), 0);
+  sweepscan::testing::Pump(300);
+  ASSERT_FALSE(heard.empty());
+  ASSERT_GT(heard.back().vx_mps, 0.2) << "the crash left the board driving";
+  client.Shutdown();
+
+  const QString config = dir_.filePath("robotd.conf");
+  QFile f(config);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(QStringLiteral("# as /etc/sweepscan/robotd.conf\nlidar = %1\nimu = %2\nmotor = %3\n"
+                         "listen = 127.0.0.1:5600\nkey-file = %4\nwatchdog-ms = 500\n"
+                         "v-max = nan   # a bad value: the agent would refuse to start\n"
+                         "name = %5\n")
+              .arg(ports[0], ports[1], ports[2], key_file_, QString(240, 'n'))
+              .toUtf8());
+  f.close();
+  const size_t before = heard.size();
+  QProcess stop;
+  stop.start(GetParam().command.first(),
+             GetParam().command.mid(1) + QStringList{"--config", config, "--stop-motors"});
+  ASSERT_TRUE(stop.waitForFinished(60000));
+  EXPECT_EQ(stop.exitCode(), 0) << stop.readAllStandardError().toStdString();
+  EXPECT_TRUE(stop.readAllStandardOutput().contains(
+      QStringLiteral("zero command sent to the motor board on %1").arg(ports[2]).toUtf8()));
+  ASSERT_TRUE(WaitFor([&] { return heard.size() > before; }, 5000)) << "nothing reached the board";
+  EXPECT_EQ(heard.back().vx_mps, 0.0);
+  EXPECT_EQ(heard.back().wz_radps, 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Builds, RobotdProcessTest, ::testing::ValuesIn(Builds()),
