@@ -393,8 +393,12 @@ bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
   if (bytes.size() > kMaxKeyFileBytes) {
     return fail(QStringLiteral("key file %1 is over %2 bytes; refused").arg(path).arg(kMaxKeyFileBytes));
   }
-  if (bytes.endsWith('\n')) bytes.chop(1);
-  if (bytes.endsWith('\r')) bytes.chop(1);
+  // One trailing line end, LF or CR LF, and nothing else (docs/protocol.md,
+  // "The key"): a lone CR is a key byte, which a random key may end with.
+  if (bytes.endsWith('\n')) {
+    bytes.chop(1);
+    if (bytes.endsWith('\r')) bytes.chop(1);
+  }
   if (bytes.isEmpty()) return fail(QStringLiteral("key file %1 is empty").arg(path));
   key->assign(bytes.begin(), bytes.end());
   return true;

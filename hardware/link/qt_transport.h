@@ -171,9 +171,10 @@ enum class KeyFilePermissions {
 };
 inline constexpr qint64 kMaxKeyFileBytes = 64 * 1024;
 
-// Reads a pre-shared key file: its bytes, with one trailing newline (LF or
-// CR LF) removed so `echo secret > key` works. Empty files, folders and files
-// over kMaxKeyFileBytes are refused (never cut).
+// Reads a pre-shared key file: its bytes exactly, except one trailing line
+// end (LF or CR LF), removed so `echo secret > key` works (the rule
+// docs/protocol.md gives other clients, "The key"). Empty files, folders
+// and files over kMaxKeyFileBytes are refused (never cut).
 bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
                  KeyFilePermissions permissions = KeyFilePermissions::kAny,
                  QString* warning = nullptr);

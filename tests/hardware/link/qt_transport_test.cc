@@ -66,6 +66,39 @@ TEST(KeyFileTest, StripsOneTrailingNewlineAndRefusesEmpty) {
   EXPECT_TRUE(error.contains("missing"));
 }
 
+// The rule docs/protocol.md gives third-party clients ("The key"): the key
+// file's bytes exactly, except one trailing line end, LF or CR LF. A lone
+// trailing CR is a key byte: it was dropped, so the package's 32 random
+// bytes lost their last one whenever it was 0x0D, and a client that
+// followed the rule (or the docs' "raw bytes") was refused.
+TEST(KeyFileTest, TheKeyIsTheFilesBytesExceptOneTrailingLineEnd) {
+  QTemporaryDir tmp;
+  const QString path = tmp.path() + "/key";
+  const auto key_of = [&](const QByteArray& bytes) {
+    QFile f(path);
+    EXPECT_TRUE(f.open(QIODevice::WriteOnly | QIODevice::Truncate));
+    f.write(bytes);
+    f.close();
+    std::vector<uint8_t> key;
+    QString error;
+    EXPECT_TRUE(ReadKeyFile(path, &key, &error)) << error.toStdString();
+    return QByteArray(reinterpret_cast<const char*>(key.data()), static_cast<int>(key.size()));
+  };
+  EXPECT_EQ(key_of("secret\n"), "secret");
+  EXPECT_EQ(key_of("secret\r\n"), "secret");
+  EXPECT_EQ(key_of("secret\n\n"), "secret\n") << "one line end only";
+  EXPECT_EQ(key_of("secret"), "secret");
+  EXPECT_EQ(key_of(" secret \t\n"), " secret \t") << "nothing trimmed";
+  EXPECT_EQ(key_of("secret\r"), "secret\r") << "a lone CR is a key byte";
+  EXPECT_EQ(key_of("secret\n\r"), "secret\n\r");
+  QByteArray random(32, '\0');
+  for (int i = 0; i < 32; ++i) random[i] = static_cast<char>(i * 37 + 13);
+  random[31] = '\r';
+  EXPECT_EQ(key_of(random), random) << "32 binary bytes ending in 0x0D are the key";
+  random[31] = '\n';
+  EXPECT_EQ(key_of(random), random.left(31)) << "and ending in 0x0A, 31 of them";
+}
+
 TEST(PtyStreamTest, BinaryBytesBothWaysThroughQSerialPort) {
   PtyMasterStream master;
   QString error;
