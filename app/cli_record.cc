@@ -328,11 +328,16 @@ int RunRecord(int argc, char** argv) {
 
   app.exec();
   script_timer.stop();
+  // Stop first, then close: the robot is told to stop before the session's
+  // last write and fsync, which a slow or full disk can make take seconds
+  // while a drive script's last command is still in force (until the
+  // watchdog). The session was closed first, although this said otherwise.
+  connection.StopMotion();  // Nothing when the link is down.
   const bool recorded = connection.recording();
   const double seconds = recorded ? clock.elapsed() * 1e-3 : 0.0;
   const hardware::LinkHealth health = connection.health();
   const Status closed = recorded ? connection.StopRecording() : Status::Ok();
-  connection.Shutdown();  // Sends Stop first.
+  connection.Shutdown();  // Closes the link (with one more Stop).
   if (!refused.isEmpty()) {
     PrintError("refused: " + refused.toStdString() +
                (refused == QLatin1String("authentication failed")
