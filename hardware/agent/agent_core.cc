@@ -178,6 +178,7 @@ bool AgentOptions::IsValid(std::string* error) const {
 void AgentOutput::Clear() {
   to_client.clear();
   for (auto& bytes : to_device) bytes.clear();
+  lidar_dtr.reset();
   close_client = false;
   close_reason.clear();
   auth_failure = false;
@@ -199,6 +200,7 @@ void AgentCore::Start(Time now, AgentOutput* out) {
   auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
   const auto stop = EncodeX4Command(kX4CmdStop);
   lidar.insert(lidar.end(), stop.begin(), stop.end());
+  out->lidar_dtr = false;  // And its motor off until a client asks for it.
   lidar_requests_sent_ = 0;
   // A zero command so a board that kept the last velocity of a crashed agent stops.
   SendMotorCommand(now, out);
@@ -487,9 +489,12 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
   } else if (std::holds_alternative<Heartbeat>(payload)) {
     Ack(now, message, AckResult::kAccepted, out);
   } else if (const auto* lidar = std::get_if<LidarMotor>(&payload)) {
+    // The motor (DTR) and the scan (A5 60 / A5 65) together; the DTR line
+    // is set before the bytes are written, so the motor spins up first.
     auto& bytes = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
     const auto command = EncodeX4Command(lidar->on ? kX4CmdScan : kX4CmdStop);
     bytes.insert(bytes.end(), command.begin(), command.end());
+    out->lidar_dtr = lidar->on;
     if (lidar->on && !lidar_motor_on_) lidar_motor_on_since_ = now;
     lidar_motor_on_ = lidar->on;
     Ack(now, message, AckResult::kAccepted, out);
@@ -621,6 +626,14 @@ void AgentCore::SetDevicePortError(LinkDevice device, bool error, Time now, Agen
 
 void AgentCore::OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out) {
   if (device == LinkDevice::kMotorBoard && started_) SendMotorCommand(now, out);
+  if (device == LinkDevice::kLidar) {
+    out->lidar_dtr = lidar_motor_on_;
+    if (lidar_motor_on_) {
+      auto& bytes = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
+      const auto scan = EncodeX4Command(kX4CmdScan);
+      bytes.insert(bytes.end(), scan.begin(), scan.end());
+    }
+  }
 }
 
 void AgentCore::Tick(Time now, AgentOutput* out) {

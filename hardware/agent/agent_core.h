@@ -28,8 +28,9 @@
 //    at once.
 //  - CommandAck for every command (echo time for the client's latency), Status
 //    at options.status_period and on every change of watchdog / e-stop / auth state.
-//  - LidarMotor on/off -> X4 scan start / stop (A5 60 / A5 65); Start() sends
-//    device info and health requests (A5 90, A5 92) to the lidar.
+//  - LidarMotor on/off -> the X4's motor on / off (its adapter's DTR line,
+//    AgentOutput::lidar_dtr) and scan start / stop (A5 60 / A5 65); Start()
+//    stops both, then sends device info and health requests (A5 90, A5 92).
 //
 // Deterministic: every input carries the robot time `now` (monotonic,
 // non-decreasing across calls); the only non-determinism is the nonce source
@@ -45,6 +46,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -126,13 +128,17 @@ struct AgentOptions {
 struct AgentOutput {
   std::vector<uint8_t> to_client;
   std::array<std::vector<uint8_t>, 3> to_device;  // lidar, imu, motor board.
+  // The X4's motor is powered through its USB adapter's DTR line (as the
+  // workstation's DirectDevice and the vendor's SDK drive it): when set, the
+  // lidar port's DTR is to be set to this, before to_device[0] is written.
+  std::optional<bool> lidar_dtr;
   bool close_client = false;
   std::string close_reason;     // Why, for the log ("authentication failed", "input flood").
   bool auth_failure = false;    // The close is a failed authentication (address lockout).
 
   bool empty() const {
     return to_client.empty() && to_device[0].empty() && to_device[1].empty() &&
-           to_device[2].empty() && !close_client;
+           to_device[2].empty() && !lidar_dtr.has_value() && !close_client;
   }
   void Clear();
 };
@@ -264,6 +270,9 @@ class AgentCore {
   // board that kept a crashed agent's last velocity, or was plugged in
   // again, stops without waiting for a drive command. Start() queues its
   // zero before the ports are open, so this is the one that reaches it.
+  // The lidar's DTR line gets the motor's state (opening a tty raises DTR,
+  // which would spin the X4's motor), and an X4 plugged in again while its
+  // motor is on is told to scan again.
   void OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out);
   // The link cannot take more for now (a serial line or radio slower than
   // the telemetry, or a reader that stalled; a connection that cannot be

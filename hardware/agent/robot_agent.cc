@@ -532,6 +532,16 @@ void RobotAgent::OnSimStep() {
 
 void RobotAgent::Dispatch(AgentOutput* out) {
   if (out->empty()) return;
+  if (out->lidar_dtr.has_value()) {
+    // The X4's motor, before the lidar's bytes (A5 60 wants it spinning).
+    // On a pseudo-terminal (sweepscan-sim --device-ptys) the ioctl fails
+    // with ENOTTY, which SerialStream ignores.
+    if (sim_ != nullptr) {
+      sim_->SetLidarDtr(*out->lidar_dtr, Now());
+    } else if (devices_[0] != nullptr && devices_[0]->IsOpen()) {
+      devices_[0]->SetDataTerminalReady(*out->lidar_dtr);
+    }
+  }
   for (int i = 0; i < 3; ++i) {
     std::vector<uint8_t>& bytes = out->to_device[i];
     if (bytes.empty()) continue;

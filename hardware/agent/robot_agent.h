@@ -60,6 +60,11 @@ class VirtualDevices {
  public:
   virtual ~VirtualDevices() = default;
   virtual void WriteToDevice(LinkDevice device, const uint8_t* data, size_t n, Time now) = 0;
+  // The lidar port's DTR line (the X4's motor on its USB adapter), set
+  // before the bytes written with it. Ignored by default: the simulator's
+  // X4 scans on A5 60 alone, as SimulateSession (the reference the link
+  // tests compare with) drives it.
+  virtual void SetLidarDtr(bool /*on*/, Time /*now*/) {}
   // Appends everything the devices sent up to `now`, in time order.
   virtual void AdvanceTo(Time now, std::vector<DeviceChunk>* out) = 0;
 };

@@ -379,6 +379,41 @@ TEST_F(AuthenticatedAgentTest, LidarStartUpRequestsAndMotorCommands) {
   EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65}));
 }
 
+// The X4's motor is powered through its USB adapter's DTR line, which the
+// workstation's DirectDevice sets and the vendor's SDK switches; opening a
+// tty raises DTR, so the agent left the motor spinning whenever it held the
+// port and LidarMotor off stopped the scan only. Now: off at start, on
+// with LidarMotor on (before A5 60, RobotAgent sets it first), off with
+// LidarMotor off, and the state in force again whenever the lidar's port
+// (re)opens, with A5 60 again for an X4 plugged back in while on.
+TEST_F(AuthenticatedAgentTest, LidarMotorSwitchesTheAdaptersDtrLine) {
+  RunWithHeartbeats(Ms(0), Ms(300));
+  EXPECT_EQ(h_.lidar_dtr, std::vector<bool>{false}) << "the motor off at start";
+  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(300), &h_.out);
+  h_.Collect();
+  EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{false, false})) << "and when its port opens";
+  h_.lidar_bytes.clear();
+  h_.lidar_dtr.clear();
+  h_.Send(Ms(310), LidarMotor{true});
+  EXPECT_EQ(h_.lidar_dtr, std::vector<bool>{true});
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
+  // Unplugged and plugged in again while on: DTR raised, scanning again.
+  h_.lidar_bytes.clear();
+  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(315), &h_.out);
+  h_.Collect();
+  EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{true, true}));
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
+  h_.lidar_bytes.clear();
+  h_.Send(Ms(320), LidarMotor{false});
+  EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{true, true, false}));
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65}));
+  h_.lidar_bytes.clear();
+  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(330), &h_.out);
+  h_.Collect();
+  EXPECT_EQ(h_.lidar_dtr.back(), false);
+  EXPECT_TRUE(h_.lidar_bytes.empty()) << "no scan for a port opened with the motor off";
+}
+
 TEST(AgentCoreTest, SerialLinkWithoutAuthRepeatsHelloAndAcceptsCommands) {
   AgentOptions options = TestOptions();
   options.require_auth = false;

@@ -50,6 +50,8 @@ class AgentHarness {
     for (auto& m : messages) received.push_back(std::move(m));
     motor_decoder.Feed(out.to_device[2], Time());
     for (const MotorCommand& c : motor_decoder.TakeRecords()) motor_commands.push_back(c);
+    // DTR first: RobotAgent sets it before writing the lidar's bytes.
+    if (out.lidar_dtr.has_value()) lidar_dtr.push_back(*out.lidar_dtr);
     auto& lidar = out.to_device[0];
     lidar_bytes.insert(lidar_bytes.end(), lidar.begin(), lidar.end());
     if (out.close_client) closed = true;
@@ -122,6 +124,7 @@ class AgentHarness {
   std::vector<LinkMessage> received;
   std::vector<MotorCommand> motor_commands;
   std::vector<uint8_t> lidar_bytes;
+  std::vector<bool> lidar_dtr;  // Every state the lidar's DTR line was set to.
   bool closed = false;
   LinkSessionKey session_key{};
 };

@@ -740,6 +740,60 @@ TEST(RobotAgentSerialLinkTest, ASlowSerialLinkKeepsItsQueueBoundedAndMarksTheDro
   ::close(master);
 }
 
+// Records what the agent does to the lidar: its DTR line and its bytes.
+class LidarRecorder : public VirtualDevices {
+ public:
+  explicit LidarRecorder(std::vector<std::string>* events) : events_(events) {}
+  void WriteToDevice(LinkDevice device, const uint8_t* data, size_t n, Time) override {
+    if (device != LinkDevice::kLidar) return;
+    for (size_t i = 0; i + 1 < n; i += 2) {
+      char command[8];
+      std::snprintf(command, sizeof(command), "%02X %02X", data[i], data[i + 1]);
+      events_->push_back(command);
+    }
+  }
+  void SetLidarDtr(bool on, Time) override { events_->push_back(on ? "DTR on" : "DTR off"); }
+  void AdvanceTo(Time, std::vector<DeviceChunk>*) override {}
+
+ private:
+  std::vector<std::string>* events_;
+};
+
+// The workstation's LidarMotor reaches the X4's motor (its adapter's DTR
+// line, as DirectDevice and the vendor's SDK switch it) and not only its
+// scan (A5 60 / A5 65): the agent never drove DTR, so the motor spun
+// whenever robotd held the port. Through RobotAgent's dispatch (the device
+// side recorded; a pty has no DTR to check: TIOCMBIS fails with ENOTTY).
+TEST(RobotAgentLidarMotorTest, LidarMotorSwitchesDtrBeforeTheScanCommand) {
+  std::vector<std::string> events;
+  RobotAgentConfig config;
+  config.link = RobotAgentConfig::LinkKind::kPty;
+  config.agent.require_auth = false;
+  config.agent.name = "lidar motor test agent";
+  RobotAgent agent(config, std::make_unique<LidarRecorder>(&events));
+  QString error;
+  ASSERT_TRUE(agent.Start(&error)) << error.toStdString();
+  ASSERT_GE(events.size(), 2u);
+  EXPECT_EQ(events[0], "DTR off") << "the motor off at start";
+  EXPECT_EQ(events[1], "A5 65");
+  RobotConnectionOptions options;
+  options.address = "serial:" + agent.pty_path();
+  RobotConnection client(options);
+  ASSERT_TRUE(client.Start(&error)) << error.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return client.authenticated(); }, 5000));
+  Pump(300);  // The start-up requests (A5 90, A5 92, 100 ms apart) are out.
+  events.clear();
+  client.SetLidarMotor(true);
+  ASSERT_TRUE(WaitFor([&] { return events.size() >= 2; }, 3000));
+  EXPECT_EQ(events, (std::vector<std::string>{"DTR on", "A5 60"}));
+  events.clear();
+  client.SetLidarMotor(false);
+  ASSERT_TRUE(WaitFor([&] { return events.size() >= 2; }, 3000));
+  EXPECT_EQ(events, (std::vector<std::string>{"DTR off", "A5 65"}));
+  client.Shutdown();
+  agent.Shutdown();
+}
+
 }  // namespace
 }  // namespace hardware
 }  // namespace sweepscan
