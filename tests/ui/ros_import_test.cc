@@ -90,6 +90,39 @@ TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
   }
 }
 
+// The choosers offer only what the import can read: a topic in ROS 1's
+// encoding inside an MCAP (which `mcap convert` keeps) and a topic without
+// messages are left out, and a kind with several readable topics offers
+// them all in the bag's order. (No test bag holds these, so the summary is
+// given.)
+TEST_F(RosImportUiTest, ChoosersOfferOnlyTopicsTheImportCanRead) {
+  QPointer<RosImportDialog> dialog = OpenChooser(kData + "/ros2/ros2_zstd.mcap");
+  ASSERT_TRUE(dialog && dialog->ready());
+  io::RosBagSummary s;
+  s.format = "mcap";
+  s.topics = {{"/scan_converted", "sensor_msgs/LaserScan", "ros1", 50, 0, 0},
+              {"/scan_rear", "sensor_msgs/msg/LaserScan", "cdr", 0, 0, 0},
+              {"/scan_front", "sensor_msgs/msg/LaserScan", "cdr", 40, 0, 0},
+              {"/imu", "sensor_msgs/msg/Imu", "cdr", 0, 0, 0},
+              {"/imu/data", "sensor_msgs/msg/Imu", "cdr", 20, 0, 0},
+              {"/odom_wheels", "nav_msgs/msg/Odometry", "cdr", 5, 0, 0},
+              {"/odom_fused", "nav_msgs/msg/Odometry", "cdr", 5, 0, 0}};
+  dialog->Fill(s);
+  const auto items = [](QComboBox* c) {
+    QStringList l;
+    for (int i = 0; i < c->count(); ++i) l << c->itemData(i).toString();
+    return l.join(' ').toStdString();
+  };
+  EXPECT_EQ(items(dialog->scan_topic()), "/scan_front");
+  EXPECT_EQ(items(dialog->imu_topic()), "/imu/data none");
+  EXPECT_EQ(items(dialog->odom_topic()), "/odom_wheels /odom_fused none");
+  // Only the ROS 1-encoded scan: nothing to make a cloud of, "none" alone.
+  s.topics.erase(s.topics.begin() + 1, s.topics.begin() + 3);
+  dialog->Fill(s);
+  EXPECT_EQ(items(dialog->scan_topic()), "none");
+  dialog->reject();
+}
+
 // An MCAP without a summary section is read whole for the chooser: the bar
 // follows the read, and the topics are the file's.
 TEST_F(RosImportUiTest, AnMcapReadWholeShowsHowFarItIs) {

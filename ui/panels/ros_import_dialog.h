@@ -46,12 +46,16 @@ class RosImportDialog : public QDialog {
 
   void accept() override;
 
+  // Fills the choosers from a bag's summary (the inspect job's result):
+  // each kind's topics with messages in an encoding read here, the one the
+  // CLI would choose first. Public so that a test can show it summaries no
+  // test bag has.
+  void Fill(const io::RosBagSummary& summary);
+
  signals:
   void inspected(bool ok);
 
  private:
-  void Fill(const io::RosBagSummary& summary);
-
   Workspace* workspace_;
   QString bag_;
   double speed_;
