@@ -44,6 +44,12 @@ class BatchedKdTree {
  public:
   static constexpr uint32_t kLeafSize = 16;
   static constexpr uint32_t kGroupSize = 32;
+  // Splits from the root to a leaf: 48 on the code's bits, then up to 32
+  // halvings of points whose codes are identical.
+  static constexpr int kMaxDepth = 48 + 32;
+  // A group whose radius holds more points than this (points piled at one
+  // place) is answered a query at a time by the ordinary descent.
+  static constexpr size_t kMaxCandidates = 4096;
 
   // xyz: n points, x y z interleaved, sorted by their Morton codes `keys`
   // (ascending, 48 significant bits). Both must outlive the queries; only

@@ -372,6 +372,45 @@ TEST(NeighbourIndexTest, BatchedKernelsAndFallbackAreExact) {
   }
 }
 
+// Points piled at one place (a tool that writes its no-returns as
+// (0, 0, 0)): once one leaf that every query among them scanned whole,
+// 27 s for the neighbours of 175 000 points. The pile is split into leaves
+// and its queries answered by the descent, which stops at k points at
+// distance 0; the answers stay exact (brute force) and the queries off the
+// pile keep the batched path.
+TEST(NeighbourIndexTest, PiledPointsAreAnsweredByDescentAndExact) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < 3000; ++i) pts.emplace_back(u(rng), u(rng), 0.1f * u(rng));
+  for (int i = 0; i < 20000; ++i) pts.emplace_back(0.0f, 0.0f, 0.0f);
+  for (int i = 0; i < 3000; ++i)
+    pts.emplace_back(1.0f, 1.0f + 1e-4f * (i % 7), 0.0f);  // a second, near-identical pile
+  const int k = 12;
+  NeighbourIndex index;
+  ASSERT_TRUE(index.Build(pts, NeighbourBackend::kBatched));
+  const size_t n = index.size();
+  std::vector<uint32_t> idx(n * k);
+  std::vector<float> d2(n * k);
+  const size_t fallbacks = BatchedKdTree::ThreadFallbacks();
+  for (size_t b = 0; b < n; b += 4096)
+    index.KnnRange(b, std::min(n, b + 4096), k, &idx[b * k], &d2[b * k]);
+  const size_t descents = BatchedKdTree::ThreadFallbacks() - fallbacks;
+  EXPECT_GE(descents, 20000u);  // the pile's queries
+  EXPECT_LT(descents, n);       // not every query
+  for (size_t s = 0; s < n; s += 13) {
+    const Eigen::Vector3f q(index.sorted_point(s));
+    std::vector<float> truth;
+    for (const auto& p : pts) truth.push_back((p - q).squaredNorm());
+    std::partial_sort(truth.begin(), truth.begin() + k, truth.end());
+    for (int j = 0; j < k; ++j) {
+      ASSERT_FLOAT_EQ(d2[s * k + j], truth[static_cast<size_t>(j)]) << s << " " << j;
+      const Eigen::Vector3f p(index.sorted_point(idx[s * k + j]));
+      ASSERT_FLOAT_EQ((p - q).squaredNorm(), d2[s * k + j]);
+    }
+  }
+}
+
 TEST(EvaluationProgressTest, MonotoneStagesInOrderEndsAtOne) {
   std::vector<EvaluationProgress> seen;
   EvaluationControl control;
