@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include "core/calibration/picks.h"
 #include "core/calibration/samples.h"
 #include "core/calibration/workflow.h"
+#include "core/common/checked_file.h"
 #include "core/pose/pose_estimator.h"
 
 namespace sweepscan::app {
@@ -107,6 +109,37 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
       PrintError("--board-thickness: " + args.Get("board-thickness") +
                  " is not a thickness in metres within 0-0.05");
       return kExitBadInput;
+    }
+  }
+  if (args.Has("out")) {
+    // Before the solve, and never over what it reads: `--out` once replaced
+    // the pairs file it was given, or the session's meta.json (which the
+    // session then could not be opened without).
+    namespace fs = std::filesystem;
+    const std::string out = args.Get("out");
+    std::error_code ec;
+    const fs::path target = fs::weakly_canonical(out, ec);
+    for (const char* input : {"pairs", "scenario"}) {
+      if (args.Has(input) && fs::exists(out, ec) && fs::equivalent(out, args.Get(input), ec)) {
+        PrintError("--out " + out + " is the --" + input +
+                   " file: the calibration would replace it");
+        return kExitBadInput;
+      }
+    }
+    if (!args.positional().empty()) {
+      const fs::path session = fs::weakly_canonical(args.positional()[0], ec);
+      for (fs::path p = target.parent_path(); !p.empty(); p = p.parent_path()) {
+        if (p == session) {
+          PrintError("--out " + out + " is inside the session folder " + args.positional()[0] +
+                     ", which holds the recording: write the calibration beside it");
+          return kExitBadInput;
+        }
+        if (p == p.parent_path()) break;
+      }
+    }
+    if (const Status w = CheckCanWrite(out); !w.ok()) {
+      PrintError(w.message());
+      return kExitFailure;
     }
   }
   if (args.Has("pairs")) {
@@ -202,6 +235,7 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
       break;
     case Failure::kNoValidPick:
     case Failure::kUnresolvedPicks:
+    case Failure::kImplausible:
       PrintError(args.Get("pairs") + ": " + s.message());
       return kExitBadInput;
     case Failure::kTargetNotSeenTwice:

@@ -18,6 +18,12 @@ Status SaveCalibrationFile(const std::string& path, const MountingError& c,
   if (!std::isfinite(c.alpha) || !std::isfinite(c.beta) || !std::isfinite(c.gamma)) {
     return Status::Error(path + ": refusing to save non-finite angles");
   }
+  // What the reader accepts (ParseCalibration), so that nothing written here
+  // is refused when read back.
+  if (std::abs(c.alpha) > 0.5 || std::abs(c.beta) > 0.5 || std::abs(c.gamma) > 0.5) {
+    return Status::Error(
+        path + ": refusing to save angles beyond 0.5 rad (no mounting error is that large)");
+  }
   nlohmann::json root = {
       {"format", "sweepscan-calibration"},
       {"version", 1},

@@ -76,14 +76,21 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
       return Status::Error("the target region around the picks was seen in " +
                            std::to_string(windows.size()) + " pass(es), need 2");
     }
+    // Every pick must be the recording's, as without refine: a pick of
+    // another recording only left the region (and the baseline) quietly,
+    // and three of four such gave a confident wrong result.
+    std::vector<ObservationPair> pairs;
+    s = ResolvePairs(picks, store, windows, geometry, initial, &pairs);
+    if (!s.ok()) {
+      result->failure = Failure::kUnresolvedPicks;
+      return s;
+    }
     s = SolveRefinedCorners(result->sightings.passes[0], result->sightings.passes[1], geometry,
                             initial, options.solver, &summary);
     // The paper's baseline on the same picks, reported beside the result.
-    std::vector<ObservationPair> pairs;
     CalibrationSummary raw;
     raw.method = "pairs";
-    if (ResolvePairs(picks, store, windows, geometry, initial, &pairs).ok() &&
-        SolvePairs(pairs, geometry, initial, options.solver, &raw).ok()) {
+    if (SolvePairs(pairs, geometry, initial, options.solver, &raw).ok()) {
       result->has_baseline = true;
       result->baseline = raw;
     }
@@ -100,6 +107,19 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
   if (!s.ok()) {
     result->failure = Failure::kSolveFailed;
     return s;
+  }
+  const Eigen::Vector3d angles(summary.angles.alpha, summary.angles.beta, summary.angles.gamma);
+  if (!(angles.cwiseAbs().maxCoeff() <= kMaxPickAngleRad) ||
+      !(summary.final_rms_m <= kMaxPickRmsM)) {
+    result->failure = Failure::kImplausible;
+    char text[400];
+    std::snprintf(
+        text, sizeof(text),
+        "the solve ended at alpha %.4f, beta %.4f, gamma %.4f rad with the pairs %.3f m apart "
+        "(RMS): no mounting error (at most %.2f rad, pairs within %.2f m); the picks most "
+        "likely pair different corners in the two passes (check their order)",
+        angles[0], angles[1], angles[2], summary.final_rms_m, kMaxPickAngleRad, kMaxPickRmsM);
+    return Status::Error(text);
   }
   if (!scale_warning.empty()) summary.warnings.push_back(scale_warning);
   for (CalibrationSummary* sum : {&summary, &result->baseline}) {

@@ -31,6 +31,17 @@ Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
                                           const SampleStore& store, const RobotGeometry& geometry,
                                           const MountingError& calibration);
 
+// What a picks solve may end at and still be a calibration: angles within
+// this (a mounting error is a small angle; the calibration file refuses
+// beyond 0.5 rad), and pairs this close after the solve (RMS; raw picks
+// snap to the sample nearest them, a scan line's spacing off: 8.5 cm on
+// the upright board of the lab circle, refined corners within
+// millimetres). Beyond either, the picks pair different points across the
+// passes (corners given in another order): the solve found the rotation
+// that best maps one wrong set onto the other, 0.3-0.7 m apart.
+inline constexpr double kMaxPickAngleRad = 0.45;
+inline constexpr double kMaxPickRmsM = 0.20;
+
 struct PickCalibrationOptions {
   // Replace the picks by the board corners fitted in every sighting of the
   // target (SolveRefinedCorners), and solve the raw picks too as the paper's
@@ -62,10 +73,11 @@ struct PickCalibrationResult {
   // (bad input), or the solve failed.
   enum class Failure {
     kNone,
-    kNoValidPick,        // no pick refers to a valid sample of the recording
+    kNoValidPick,         // no pick refers to a valid sample of the recording
     kTargetNotSeenTwice,  // refine: the region was seen in fewer than 2 sightings
-    kUnresolvedPicks,    // a pick could not be resolved in the pass it claims
-    kSolveFailed,        // the solver failed (summary says how far it got)
+    kUnresolvedPicks,     // a pick could not be resolved in the pass it claims
+    kSolveFailed,         // the solver failed (summary says how far it got)
+    kImplausible,         // solved, but to no mounting error: the picks pair different points
   };
   Failure failure = Failure::kNone;
   CalibrationSummary summary;  // method "pairs" or "refined-corners"

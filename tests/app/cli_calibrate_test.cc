@@ -73,6 +73,23 @@ TEST(CliCalibrateTest, BadInput) {
                  "need at least 4 pairs, got 3");
   ExpectBadInput("calibrate" + sc + " --auto --refine", "--refine needs --pairs");
   ExpectBadInput("calibrate" + sc + " --auto --bogus", "unknown option --bogus");
+  // --out never over an input: the pairs file, or the session's own files
+  // (meta.json replaced by a calibration left the session unreadable).
+  Write(Tmp("mine.json"),
+        std::string(kHead) + kPair + "," + kPair + "," + kPair + "," + kPair + "]}");
+  ExpectBadInput("calibrate" + sc + " --pairs " + Tmp("mine.json") + " --out " + Tmp("mine.json"),
+                 "is the --pairs file: the calibration would replace it");
+  ExpectBadInput(
+      "calibrate " + Tmp("s.sweepscan") + " --auto --out " + Tmp("s.sweepscan/meta.json"),
+      "is inside the session folder");
+  ExpectBadInput(
+      "calibrate " + Tmp("s.sweepscan") + " --auto --out " + Tmp("s.sweepscan") + "/sub/../x.json",
+      "is inside the session folder");
+  // An --out that cannot be written is said before the solve.
+  const CliRun unwritable = Cli("calibrate" + sc + " --auto --out /nonexistent_dir/c.json");
+  EXPECT_EQ(unwritable.code, 1) << unwritable.out;
+  EXPECT_NE(unwritable.out.find("cannot create c.json.tmp-"), std::string::npos) << unwritable.out;
+  EXPECT_EQ(unwritable.out.find("converged"), std::string::npos) << unwritable.out;
   ExpectBadInput("evaluate /nonexistent.ply", "/nonexistent.ply");
   ExpectBadInput("evaluate x.ply --calibration /nonexistent_calib.json", "/nonexistent_calib.json");
 }
@@ -292,7 +309,34 @@ TEST(CliCalibrateTest, PairsOnScenario) {
   ASSERT_EQ(r.code, 0) << r.out;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["method"], "pairs");
+  // Near the truth (raw picks on the upright board, each snapped to the
+  // sample nearest it, a scan line's spacing off: 2-21 mrad, the pairs
+  // 8.5 cm apart), not only "the solve lowered the cost", which any LM does.
+  for (const char* k : {"alpha", "beta", "gamma"})
+    EXPECT_LT(std::abs(j["error_rad"][k].get<double>()), 0.04) << k;
+  EXPECT_LT(j["rms_after_m"].get<double>(), 0.12);
   EXPECT_LT(j["rms_after_m"].get<double>(), j["rms_before_m"].get<double>());
+
+  // The same corners in another order in the second pass: each pair joins
+  // two different corners. The solve found a rotation for that too (3.66
+  // rad, 0.40 m apart on one such file) and wrote it; now it is refused,
+  // nothing written.
+  std::string shifted = kHead;
+  const char* const corners[4] = {"[4.7,0.16,1.5]", "[5.3,0.16,1.5]", "[5.3,0.16,0.9]",
+                                  "[4.7,0.16,0.9]"};
+  for (int k = 0; k < 4; ++k) {
+    shifted += std::string(k > 0 ? "," : "") + R"({"pass1":{"world":)" + corners[k] +
+               R"(},"pass2":{"world":)" + corners[(k + 1) % 4] + "}}";
+  }
+  Write(Tmp("shifted.json"), shifted + "]}");
+  std::remove(Tmp("shifted.calib.json").c_str());
+  const CliRun bad =
+      Cli("calibrate --scenario " + Scenario("lab_circle") + " --pairs " + Tmp("shifted.json") +
+          " --pose-source truth --out " + Tmp("shifted.calib.json"));
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("shifted.json: the solve ended at"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("pair different corners in the two passes"), std::string::npos) << bad.out;
+  EXPECT_FALSE(std::ifstream(Tmp("shifted.calib.json")).good());
   const CliRun h = Cli("help calibrate");
   EXPECT_EQ(h.code, 0);
   EXPECT_NE(h.out.find("--pairs"), std::string::npos);

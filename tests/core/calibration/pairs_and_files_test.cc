@@ -163,8 +163,16 @@ TEST(CalibrationFileTest, SaveLoadAndStrictness) {
   EXPECT_DOUBLE_EQ(back.beta, c.beta);
   EXPECT_DOUBLE_EQ(back.gamma, c.gamma);
   std::remove(path.c_str());
+  // Nothing is written that the reader would refuse: not a NaN, not an
+  // angle beyond its 0.5 rad (a wrong picks solve once wrote 3.66 rad).
   EXPECT_FALSE(SaveCalibrationFile(path, {std::nan(""), 0, 0}, nullptr).ok());
-  EXPECT_FALSE(LoadCalibrationFile(path, &back).ok());  // removed
+  EXPECT_FALSE(std::ifstream(path).good());
+  EXPECT_FALSE(SaveCalibrationFile(path, {0.0, 0.0, 0.5001}, nullptr).ok());
+  EXPECT_FALSE(std::ifstream(path).good());
+  ASSERT_TRUE(SaveCalibrationFile(path, {-0.5, 0.5, 0.0}, nullptr).ok());
+  ASSERT_TRUE(LoadCalibrationFile(path, &back).ok());
+  EXPECT_EQ(back.alpha, -0.5);
+  std::remove(path.c_str());
   const std::string head = R"({"format":"sweepscan-calibration","version":1,)";
   EXPECT_FALSE(
       ParseCalibration(head + R"("mounting_error_rad":{"alpha":0,"beta":0}})", "c", &back).ok());
