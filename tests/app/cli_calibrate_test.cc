@@ -379,6 +379,19 @@ TEST(CliCalibrateTest, RefinedCornersOnDiamondCalibrationDrive) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(ej["mounting_error_rad"][names[k]].get<double>(), truth[k], 3e-3) << e.out;
   }
+
+  // A pick of another recording (a time stamp this one does not have) is
+  // refused with --refine as without it: it only left the target's region
+  // before, and the result was written as if all four were there.
+  std::string foreign =
+      text.substr(0, text.rfind(",{")) + R"(,{"pass1":{"time_ns":5},"pass2":{"time_ns":7}}]})";
+  Write(Tmp("diamond_foreign.json"), foreign);
+  const CliRun f =
+      Cli("calibrate " + base + ".sweepscan --pairs " + Tmp("diamond_foreign.json") + " --refine");
+  EXPECT_EQ(f.code, 2) << f.out;
+  EXPECT_NE(f.out.find("pair 4 pass1: sample at time 5 ns is not a valid sample of the recording"),
+            std::string::npos)
+      << f.out;
 }
 
 // The diamond calibration drive with `changes` merged into its scenario,
