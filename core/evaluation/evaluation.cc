@@ -472,25 +472,33 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
     if (members != nullptr) members->emplace_back(mine.begin(), mine.end());
     remaining.swap(rest);
   }
-  // Level planes come in size order: the largest below the cloud's mean
-  // height is the floor, the largest above it the ceiling (by size, not by
-  // extreme height: an uncalibrated cloud holds tilted ghost copies of both).
+  // Level planes come in size order: the largest at or below the cloud's
+  // mean height is the floor, the largest above it and at least
+  // kMinRoomHeightM above the floor the ceiling (by size, not by extreme
+  // height: an uncalibrated cloud holds tilted ghost copies of both). A
+  // cloud of a floor alone once had it called the ceiling (its centroid is
+  // the mean), and a table 0.7 m over a floor was the ceiling of a room
+  // 0.7 m high.
+  constexpr double kMinRoomHeightM = 1.8;
   double mean_z = 0.0;
   for (const auto& p : points) mean_z += p.z();
   mean_z /= static_cast<double>(points.size());
-  bool have_floor = false, have_ceiling = false;
+  EvaluatedPlane* floor = nullptr;
+  for (EvaluatedPlane& ep : *planes) {
+    if (ep.kind == "level" && ep.plane.centroid.z() <= mean_z) {
+      ep.kind = "floor";
+      floor = &ep;
+      break;
+    }
+  }
+  bool have_ceiling = false;
   for (EvaluatedPlane& ep : *planes) {
     if (ep.kind != "level") continue;
-    const bool below = ep.plane.centroid.z() < mean_z;
-    if (below && !have_floor) {
-      ep.kind = "floor";
-      have_floor = true;
-    } else if (!below && !have_ceiling) {
-      ep.kind = "ceiling";
-      have_ceiling = true;
-    } else {
-      ep.kind = "other";
-    }
+    const double z = ep.plane.centroid.z();
+    const bool high =
+        z > mean_z && (floor == nullptr || z - floor->plane.centroid.z() >= kMinRoomHeightM);
+    ep.kind = high && !have_ceiling ? "ceiling" : "other";
+    have_ceiling = have_ceiling || ep.kind == "ceiling";
   }
   runner->Report(1.0);
   return Status::Ok();
@@ -620,7 +628,15 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
 }
 
 std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
-                                          double parallel_angle_deg, double min_dimension_m) {
+                                          double parallel_angle_deg, double min_dimension_m,
+                                          const Eigen::Vector3d& inside) {
+  // Each plane's normal turned towards `inside`: two planes face each other
+  // when those point opposite ways, the inside between them (two walls of
+  // a room, its floor and ceiling). A wall and a cabinet's front before it
+  // both face the inside the same way: no dimension of the room.
+  const auto inward = [&](const Plane& p) {
+    return (p.normal.dot(inside - p.centroid) >= 0.0 ? 1.0 : -1.0) * p.normal;
+  };
   std::vector<RoomDimension> out;
   for (size_t a = 0; a < planes.size(); ++a) {
     for (size_t b = a + 1; b < planes.size(); ++b) {
@@ -628,6 +644,14 @@ std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& pla
       const Plane& pb = planes[b].plane;
       const double angle = AngleBetweenPlanes(pa, pb) * kRadToDeg;
       if (angle > parallel_angle_deg) continue;
+      if (inward(pa).dot(inward(pb)) >= 0.0) continue;
+      // Level: the room's height, between its floor and its ceiling only
+      // (a table's top faces the floor too, 0.7 m over it).
+      const bool level_pair = std::abs(pa.normal.z()) > 0.7;
+      if (level_pair && !((planes[a].kind == "floor" && planes[b].kind == "ceiling") ||
+                          (planes[a].kind == "ceiling" && planes[b].kind == "floor"))) {
+        continue;
+      }
       const double dist = DistanceBetweenPlanes(pa, pb);
       if (dist < min_dimension_m) continue;
       const bool level = std::abs(pa.normal.z()) > 0.7;
@@ -714,8 +738,11 @@ Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const Evaluatio
   t = Clock::now();
   s = ExtractPlanesWith(clean, options, &runner, &result->planes, nullptr);
   if (!s.ok()) return s;
+  Eigen::Vector3d inside = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& p : clean) inside += p.cast<double>();
+  if (!clean.empty()) inside /= static_cast<double>(clean.size());
   result->dimensions =
-      RoomDimensions(result->planes, options.parallel_angle_deg, options.min_dimension_m);
+      RoomDimensions(result->planes, options.parallel_angle_deg, options.min_dimension_m, inside);
   result->timing.planes_s = Seconds(t);
 
   if (clean.size() < 2) {

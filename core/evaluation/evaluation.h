@@ -180,8 +180,12 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
 
 // Pairs of (nearly) parallel planes, facing each other across at least
 // min_dimension_m: the room's height (floor-ceiling) and widths (walls).
+// Facing: their normals, each turned towards `inside` (a point of the
+// room: the evaluation gives the cloud's mean), point opposite ways. Level
+// planes only as the floor and the ceiling (their kinds set).
 std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
-                                          double parallel_angle_deg, double min_dimension_m);
+                                          double parallel_angle_deg, double min_dimension_m,
+                                          const Eigen::Vector3d& inside);
 
 // Everything above: outliers, density (on the points after outlier
 // removal, from the same neighbour structure), planes, histograms,
