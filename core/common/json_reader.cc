@@ -1,14 +1,19 @@
 #include "core/common/json_reader.h"
 
-#include "core/common/checked_file.h"
-
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/common/checked_file.h"
 
 namespace sweepscan {
 
@@ -83,6 +88,11 @@ double JsonObject::InRange(const std::string& key, double lo, double hi, double 
 int64_t JsonObject::Integer(const std::string& key) const {
   const nlohmann::json& v = Get(key);
   if (!v.is_number_integer()) Fail(key, "expected an integer, got " + JsonTypeName(v));
+  // Above 2^63 - 1 the parser keeps it unsigned, and as int64 it would wrap
+  // ("unsupported version -1", "sample at time -1 ns").
+  if (v.is_number_unsigned() && v.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX)) {
+    Fail(key, "out of range, got " + std::to_string(v.get<uint64_t>()));
+  }
   return v.get<int64_t>();
 }
 
@@ -118,21 +128,36 @@ namespace {
 // overflows the stack.
 constexpr int kMaxJsonDepth = 64;
 struct TooDeep {};
+struct DuplicateKey {
+  std::string key;
+};
 }  // namespace
 
 Status ParseJson(const std::string& text, const std::string& source, nlohmann::json* out) {
+  // The keys seen in each open object: a key given twice is refused, not
+  // resolved by the parser to its last value (a hand edit that added
+  // "gamma" again would have been used silently).
+  std::vector<std::set<std::string>> keys;
   try {
-    *out = nlohmann::json::parse(text, [](int depth, nlohmann::json::parse_event_t event,
-                                          nlohmann::json&) {
-      if (depth > kMaxJsonDepth && (event == nlohmann::json::parse_event_t::object_start ||
-                                    event == nlohmann::json::parse_event_t::array_start)) {
+    using Event = nlohmann::json::parse_event_t;
+    *out = nlohmann::json::parse(text, [&keys](int depth, Event event, nlohmann::json& parsed) {
+      if (depth > kMaxJsonDepth && (event == Event::object_start || event == Event::array_start)) {
         throw TooDeep();
+      }
+      if (event == Event::object_start) keys.emplace_back();
+      if (event == Event::object_end && !keys.empty()) keys.pop_back();
+      if (event == Event::key && !keys.empty() &&
+          !keys.back().insert(parsed.get<std::string>()).second) {
+        throw DuplicateKey{parsed.get<std::string>()};
       }
       return true;
     });
   } catch (const TooDeep&) {
     return Status::Error(source + ": not a file of ours (values nested more than " +
                          std::to_string(kMaxJsonDepth) + " deep)");
+  } catch (const DuplicateKey& d) {
+    return Status::Error(source + ": not a file of ours (the key '" + d.key +
+                         "' appears twice in one object)");
   } catch (const nlohmann::json::parse_error& e) {
     // Translate the byte offset into line:column for the operator.
     size_t line = 1, col = 1;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 
@@ -32,6 +33,30 @@ TEST(JsonReaderTest, ReportsPathAndReason) {
   }
   EXPECT_EQ(a.Integer("n"), 3);
   EXPECT_THROW(a.AllowOnly({"b", "s"}), JsonError);
+}
+
+// Strict means no silent choice: a key twice in one object (the parser
+// kept the last), and an integer beyond int64 (it wrapped to -1), are
+// refused with the file and the key. The same key in two objects is fine.
+TEST(JsonReaderTest, DuplicateKeysAndIntegersBeyondInt64AreRefused) {
+  nlohmann::json j;
+  Status s = ParseJson(R"({"m": {"gamma": 0.0, "beta": 1, "gamma": 0.0355}})", "c.json", &j);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message(),
+            "c.json: not a file of ours (the key 'gamma' appears twice in one object)");
+  EXPECT_TRUE(ParseJson(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 3}, {"x": 4}], "x": 5})",
+                        "d.json", &j)
+                  .ok());
+  ASSERT_TRUE(
+      ParseJson(R"({"v": 18446744073709551615, "w": 9223372036854775807})", "e.json", &j).ok());
+  const JsonObject root(j, "");
+  EXPECT_EQ(root.Integer("w"), INT64_MAX);
+  try {
+    root.Integer("v");
+    FAIL();
+  } catch (const JsonError& e) {
+    EXPECT_STREQ(e.what(), "v: out of range, got 18446744073709551615");
+  }
 }
 
 TEST(JsonReaderTest, SyntaxErrorsGiveLineAndColumn) {
