@@ -146,8 +146,10 @@ int RunEvaluate(int argc, char** argv) {
   if (args.Has("threads")) {
     char* end = nullptr;
     const long threads = std::strtol(args.Get("threads").c_str(), &end, 10);
-    if (end == nullptr || *end != '\0' || threads < 0 || threads > 1024) {
-      PrintError("--threads needs a number >= 0 (0: every core)");
+    if (args.Get("threads").empty() || end == nullptr || *end != '\0' || threads < 0 ||
+        threads > 1024) {
+      PrintError("--threads needs a whole number within 0-1024 (0: every core), got '" +
+                 args.Get("threads") + "'");
       return kExitBadInput;
     }
     options.threads = static_cast<int>(threads);
@@ -191,6 +193,12 @@ int RunEvaluate(int argc, char** argv) {
     const Status s = LoadPositions(args.positional()[0], &pts);
     if (!s.ok()) {
       PrintError(s.message());
+      return kExitBadInput;
+    }
+    // Too few points for a plane is the file's fault, not the evaluation's.
+    if (pts.size() < 3) {
+      PrintError(args.positional()[0] + ": " + std::to_string(pts.size()) +
+                 " finite point(s): nothing to evaluate (a plane needs 3)");
       return kExitBadInput;
     }
     CloudEvaluation e;

@@ -91,6 +91,15 @@ TEST(CliCalibrateTest, BadInput) {
   EXPECT_NE(unwritable.out.find("cannot create c.json.tmp-"), std::string::npos) << unwritable.out;
   EXPECT_EQ(unwritable.out.find("converged"), std::string::npos) << unwritable.out;
   ExpectBadInput("evaluate /nonexistent.ply", "/nonexistent.ply");
+  // A cloud of two points is the file's fault (exit 2), named; --threads
+  // empty or beyond its range says the range.
+  Write(Tmp("two.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n0 0 0\n1 1 1\n");
+  ExpectBadInput("evaluate " + Tmp("two.ply"), "two.ply: 2 finite point(s): nothing to evaluate");
+  ExpectBadInput("evaluate " + Tmp("two.ply") + " --threads 2000",
+                 "within 0-1024 (0: every core), got '2000'");
+  ExpectBadInput("evaluate " + Tmp("two.ply") + " --threads=", "got ''");
   ExpectBadInput("evaluate x.ply --calibration /nonexistent_calib.json", "/nonexistent_calib.json");
 }
 
