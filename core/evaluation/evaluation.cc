@@ -473,7 +473,8 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
     remaining.swap(rest);
   }
   // Level planes come in size order: the largest at or below the cloud's
-  // mean height is the floor, the largest above it and at least
+  // mean height is the floor (the largest of all if none is), the largest
+  // above it and at least
   // kMinRoomHeightM above the floor the ceiling (by size, not by extreme
   // height: an uncalibrated cloud holds tilted ghost copies of both). A
   // cloud of a floor alone once had it called the ceiling (its centroid is
@@ -489,6 +490,15 @@ Status ExtractPlanesWith(const std::vector<Eigen::Vector3f>& points,
       ep.kind = "floor";
       floor = &ep;
       break;
+    }
+  }
+  // No level plane at or below the mean (a floor with a pit in it): the
+  // largest level plane is the floor; a ceiling alone is not scanned.
+  for (EvaluatedPlane& ep : *planes) {
+    if (floor != nullptr) break;
+    if (ep.kind == "level") {
+      ep.kind = "floor";
+      floor = &ep;
     }
   }
   bool have_ceiling = false;
@@ -628,15 +638,7 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
 }
 
 std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
-                                          double parallel_angle_deg, double min_dimension_m,
-                                          const Eigen::Vector3d& inside) {
-  // Each plane's normal turned towards `inside`: two planes face each other
-  // when those point opposite ways, the inside between them (two walls of
-  // a room, its floor and ceiling). A wall and a cabinet's front before it
-  // both face the inside the same way: no dimension of the room.
-  const auto inward = [&](const Plane& p) {
-    return (p.normal.dot(inside - p.centroid) >= 0.0 ? 1.0 : -1.0) * p.normal;
-  };
+                                          double parallel_angle_deg, double min_dimension_m) {
   std::vector<RoomDimension> out;
   for (size_t a = 0; a < planes.size(); ++a) {
     for (size_t b = a + 1; b < planes.size(); ++b) {
@@ -644,7 +646,6 @@ std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& pla
       const Plane& pb = planes[b].plane;
       const double angle = AngleBetweenPlanes(pa, pb) * kRadToDeg;
       if (angle > parallel_angle_deg) continue;
-      if (inward(pa).dot(inward(pb)) >= 0.0) continue;
       // Level: the room's height, between its floor and its ceiling only
       // (a table's top faces the floor too, 0.7 m over it).
       const bool level_pair = std::abs(pa.normal.z()) > 0.7;
@@ -738,11 +739,8 @@ Status EvaluateCloud(const std::vector<Eigen::Vector3f>& points, const Evaluatio
   t = Clock::now();
   s = ExtractPlanesWith(clean, options, &runner, &result->planes, nullptr);
   if (!s.ok()) return s;
-  Eigen::Vector3d inside = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3f& p : clean) inside += p.cast<double>();
-  if (!clean.empty()) inside /= static_cast<double>(clean.size());
   result->dimensions =
-      RoomDimensions(result->planes, options.parallel_angle_deg, options.min_dimension_m, inside);
+      RoomDimensions(result->planes, options.parallel_angle_deg, options.min_dimension_m);
   result->timing.planes_s = Seconds(t);
 
   if (clean.size() < 2) {

@@ -180,12 +180,13 @@ Status MeanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& points, 
 
 // Pairs of (nearly) parallel planes, facing each other across at least
 // min_dimension_m: the room's height (floor-ceiling) and widths (walls).
-// Facing: their normals, each turned towards `inside` (a point of the
-// room: the evaluation gives the cloud's mean), point opposite ways. Level
-// planes only as the floor and the ceiling (their kinds set).
+// Level planes only as the floor and the ceiling (their kinds set): a
+// table's top is parallel to the floor too. Walls: every parallel pair (a
+// cabinet's front and the wall behind it included: which faces face each
+// other cannot be told from one global point, and a cloud of several rooms
+// has walls on both sides of any such point).
 std::vector<RoomDimension> RoomDimensions(const std::vector<EvaluatedPlane>& planes,
-                                          double parallel_angle_deg, double min_dimension_m,
-                                          const Eigen::Vector3d& inside);
+                                          double parallel_angle_deg, double min_dimension_m);
 
 // Everything above: outliers, density (on the points after outlier
 // removal, from the same neighbour structure), planes, histograms,
