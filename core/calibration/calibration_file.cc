@@ -48,9 +48,11 @@ Status ParseCalibration(const std::string& text, const std::string& source, Moun
   if (!s.ok()) return s;
   try {
     const JsonObject root(j, "");
+    // The format first: a pairs file given as a calibration says what it
+    // is, not "pairs: unknown key".
+    CheckHeader(root, "sweepscan-calibration");
     root.AllowOnly({"format", "version", "mounting_error_rad", "method", "converged", "sigma_rad",
                     "rms_before_m", "rms_after_m", "comment"});
-    CheckHeader(root, "sweepscan-calibration");
     const JsonObject m = root.Object("mounting_error_rad");
     m.AllowOnly({"alpha", "beta", "gamma"});
     // A mounting error is a small angle; beyond 0.5 rad the file is wrong

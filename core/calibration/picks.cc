@@ -172,8 +172,10 @@ Status ParsePairs(const std::string& text, const std::string& source,
   if (!s.ok()) return s;
   try {
     const JsonObject root(j, "");
-    root.AllowOnly({"format", "version", "pairs", "comment"});
+    // The format first: a calibration file given as pairs says what it is,
+    // not "mounting_error_rad: unknown key".
     CheckHeader(root, "sweepscan-pairs");
+    root.AllowOnly({"format", "version", "pairs", "comment"});
     const nlohmann::json& list = root.Array("pairs");
     std::vector<PickPair> out;
     for (size_t k = 0; k < list.size(); ++k) {

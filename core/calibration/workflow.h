@@ -32,13 +32,14 @@ Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
                                           const MountingError& calibration);
 
 // What a picks solve may end at and still be a calibration: angles within
-// this (a mounting error is a small angle; the calibration file refuses
-// beyond 0.5 rad), and pairs this close after the solve (RMS; raw picks
-// snap to the sample nearest them, a scan line's spacing off: 8.5 cm on
-// the upright board of the lab circle, refined corners within
-// millimetres). Beyond either, the picks pair different points across the
-// passes (corners given in another order): the solve found the rotation
-// that best maps one wrong set onto the other, 0.3-0.7 m apart.
+// kMaxPickAngleRad (a mounting error is a small angle; the calibration file
+// refuses beyond 0.5 rad), else refused; and pairs within kMaxPickRmsM
+// after the solve (RMS; raw picks snap to the sample nearest them, a scan
+// line's spacing off: 8.5 cm on the upright board of the lab circle,
+// refined corners within millimetres), else a warning (drifting poses
+// leave pairs apart too). Picks that pair different points across the
+// passes (corners given in another order) make the solve find the rotation
+// that best maps one wrong set onto the other: up to 3.7 rad, 0.3-0.7 m.
 inline constexpr double kMaxPickAngleRad = 0.45;
 inline constexpr double kMaxPickRmsM = 0.20;
 

@@ -173,6 +173,26 @@ TEST(CalibrationFileTest, SaveLoadAndStrictness) {
   ASSERT_TRUE(LoadCalibrationFile(path, &back).ok());
   EXPECT_EQ(back.alpha, -0.5);
   std::remove(path.c_str());
+  // Each file given as the other says what it is.
+  {
+    MountingError unused;
+    const Status as_calibration = ParseCalibration(
+        R"({"format":"sweepscan-pairs","version":1,"pairs":[]})", "p.json", &unused);
+    ASSERT_FALSE(as_calibration.ok());
+    EXPECT_NE(as_calibration.message().find(
+                  "expected \"sweepscan-calibration\", got \"sweepscan-pairs\""),
+              std::string::npos)
+        << as_calibration.message();
+    std::vector<PickPair> pairs;
+    const Status as_pairs = ParsePairs(
+        R"({"format":"sweepscan-calibration","version":1,"mounting_error_rad":{"alpha":0,"beta":0,"gamma":0}})",
+        "c.json", &pairs);
+    ASSERT_FALSE(as_pairs.ok());
+    EXPECT_NE(
+        as_pairs.message().find("expected \"sweepscan-pairs\", got \"sweepscan-calibration\""),
+        std::string::npos)
+        << as_pairs.message();
+  }
   const std::string head = R"({"format":"sweepscan-calibration","version":1,)";
   EXPECT_FALSE(
       ParseCalibration(head + R"("mounting_error_rad":{"alpha":0,"beta":0}})", "c", &back).ok());
