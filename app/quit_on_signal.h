@@ -7,7 +7,7 @@
 // SIGHUP (the ssh session or terminal that started it closed) and SIGQUIT
 // (Ctrl+\) are taken too: their default action ends the process at once,
 // which left a robot driving at its last command and a recording without
-// its last records and summary.
+// its last records and summary. A signal already ignored (nohup) is left so.
 #ifndef SWEEPSCAN_APP_QUIT_ON_SIGNAL_H_
 #define SWEEPSCAN_APP_QUIT_ON_SIGNAL_H_
 
@@ -50,7 +50,15 @@ inline void QuitOnSignals(QCoreApplication* app) {
   action.sa_handler = internal::OnSignal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;
-  for (const int signal : kQuitSignals) ::sigaction(signal, &action, nullptr);
+  for (const int signal : kQuitSignals) {
+    // A signal the caller set to be ignored stays ignored: `nohup robotd`
+    // asks to outlive the terminal, and a handler for SIGHUP would stop it
+    // when the ssh session closes (SIGINT is ignored for `cmd &` in a
+    // non-interactive shell, alike).
+    struct sigaction old {};
+    if (::sigaction(signal, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    ::sigaction(signal, &action, nullptr);
+  }
 }
 
 // The signal that ended the loop (one of kQuitSignals), 0 if none.

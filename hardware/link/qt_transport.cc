@@ -161,7 +161,12 @@ QString SerialStream::Describe() const {
 }
 
 void SerialStream::SetDataTerminalReady(bool on) {
+  // Whatever the adapter answers (a pty has no DTR line; Qt may map an
+  // odd errno to UnknownError), the port stays usable for its bytes: taken
+  // as fatal, a reopen would set DTR again, fail again, and never settle.
+  opening_ = true;
   if (port_->isOpen()) port_->setDataTerminalReady(on);
+  opening_ = false;
 }
 
 // ---------------------------------------------------------------------------

@@ -95,7 +95,8 @@ class SerialStream : public ByteStream {
   QSerialPort* port_;
   QString name_;
   qint32 baud_ = 0;
-  bool opening_ = false;  // Errors are Open()'s to report, not a lost port.
+  // Errors are Open()'s (or a DTR change's) to report, not a lost port.
+  bool opening_ = false;
 };
 
 class TcpStream : public ByteStream {

@@ -174,6 +174,7 @@ class Robotd {
   qint64 pid() const { return process_.processId(); }
   QString Stderr() { return QString::fromUtf8(process_.readAllStandardError()); }
   int Terminate() { return Signal(SIGTERM); }
+  bool Running() const { return process_.state() != QProcess::NotRunning; }
   // Sends `signal` and waits; the exit code, -1 if killed by a signal.
   int Signal(int signal) {
     ::kill(static_cast<pid_t>(process_.processId()), signal);
@@ -479,6 +480,27 @@ TEST_P(RobotdProcessTest, SighupAndSigquitMidDriveStopTheMotorsAndExitCleanly) {
     EXPECT_EQ(heard.back().wz_radps, 0.0);
     client.Shutdown();
   }
+}
+
+// Started under nohup (SIGHUP ignored: to outlive the ssh session),
+// robotd keeps running through a SIGHUP, as it did before it took SIGHUP
+// as a stop, and still stops cleanly on SIGTERM.
+TEST_P(RobotdProcessTest, UnderNohupASighupIsIgnored) {
+  if (GetParam().name != "amd64")
+    GTEST_SKIP() << "the amd64 build shows the rule; qemu adds its own signals";
+  sim::SimConfig world;
+  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  QString error;
+  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
+  Build nohup = GetParam();
+  nohup.command.prepend(QStringLiteral("nohup"));
+  Robotd robotd(nohup, ptys.SlavePaths(0), key_file_);
+  ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
+  ::kill(static_cast<pid_t>(robotd.pid()), SIGHUP);
+  sweepscan::testing::Pump(500);
+  EXPECT_TRUE(robotd.Running()) << robotd.Stderr().toStdString();
+  EXPECT_EQ(robotd.Terminate(), 0);
 }
 
 TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
