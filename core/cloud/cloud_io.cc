@@ -478,16 +478,19 @@ Status ReadPositionType(const std::string& path, PositionType* type) {
       if (w.empty()) continue;
       const std::string key = w[0];
       w.erase(w.begin());
-      if (key == "FIELDS") fields = w;
+      if (key == "FIELDS" || key == "COLUMNS") fields = w;  // COLUMNS: PCD 0.5
       if (key == "SIZE") sizes = w;
       if (key == "TYPE") kinds = w;
     }
-    for (size_t i = 0; i < fields.size() && i < sizes.size() && i < kinds.size(); ++i) {
+    for (size_t i = 0; i < fields.size(); ++i) {
+      // PCL reads a field without a TYPE as F and without a SIZE as 4.
+      const std::string kind = i < kinds.size() ? kinds[i] : "F";
+      const std::string size = i < sizes.size() ? sizes[i] : "4";
       for (int a = 0; a < 3; ++a) {
         if (fields[i] != kAxes[a]) continue;
-        types[a] = kinds[i] == "F" && sizes[i] == "4"   ? "float"
-                   : kinds[i] == "F" && sizes[i] == "8" ? "double"
-                                                        : kinds[i] + sizes[i];
+        types[a] = kind == "F" && size == "4"   ? "float"
+                   : kind == "F" && size == "8" ? "double"
+                                                : kind + size;
       }
     }
   }

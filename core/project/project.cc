@@ -521,6 +521,14 @@ Status LoadProject(const std::string& path, Project* project, std::vector<std::s
 }
 
 Status SaveProject(const std::string& path, const Project& project) {
+  // Nothing the loader would refuse (ReadPose): a session beyond 8 000 m.
+  for (const ProjectSession& s : project.sessions) {
+    if (s.project_from_session &&
+        s.project_from_session->translation().cwiseAbs().maxCoeff() > kMaxProjectOffsetM) {
+      return Status::Error(path + ": session '" + s.id +
+                           "' is placed beyond 8000 m of the project's origin; not saved");
+    }
+  }
   return WriteFileAtomically(path, ProjectToJson(project));
 }
 

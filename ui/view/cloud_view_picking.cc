@@ -313,10 +313,11 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
         const Candidate& candidate = candidates[rest[i]];
         const double shared = shared_best.load(std::memory_order_relaxed);
         if (candidate.enter > shared) continue;  // Its points all lie beyond the best found.
-        // Points at the best found so far are kept too (one of an earlier
-        // block wins a tie), nearer ones than this thread's own best.
+        // Points at the best found so far, this thread's or any's, are kept
+        // too: `before` gives a tie to the earlier block, and this thread
+        // meets the blocks in chunk order, not entry order.
         BlockHit h;
-        test_block(candidate, pin, std::min(mine.t, std::nextafter(shared, HUGE_VAL)), &h);
+        test_block(candidate, pin, std::nextafter(std::min(mine.t, shared), HUGE_VAL), &h);
         if (!(h.t < std::numeric_limits<double>::infinity())) continue;
         if (before(h, mine)) mine = h;
         double seen = shared;

@@ -220,6 +220,19 @@ TEST(CloudIoErrorsTest, DoubleCoordinatesAreReadAndFarOnesRefused) {
   ASSERT_EQ(xyz.size(), pts.size());
   EXPECT_EQ(xyz[17], Eigen::Vector3f(pts[17].x, pts[17].y, pts[17].z));
 
+  // A PCD without a TYPE line gets PCL's answer, as before: the position
+  // check takes its fields as float (not "has no x coordinate").
+  const std::string untyped = TempPath("untyped.pcd");
+  std::ofstream(untyped)
+      << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+         "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n";
+  const Status untyped_read = LoadCloudPositions(untyped, &xyz);
+  ASSERT_FALSE(untyped_read.ok());
+  EXPECT_NE(untyped_read.message().find(
+                "untyped.pcd: not a readable point cloud (PCL could not parse it)"),
+            std::string::npos)
+      << untyped_read.message();
+
   Status s = LoadCloudPositions(ply("far.ply", "binary_little_endian", "double", 5000000.0), &xyz);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(

@@ -310,6 +310,17 @@ TEST(ProjectTest, StrictLoadingNamesThePlace) {
        },
        "sessions[1].project_from_session.translation_m: lies"},
   };
+  // Nor is such a pose saved.
+  {
+    Project far = TwoSessions();
+    far.sessions[1].project_from_session =
+        Rigid3d(Eigen::Vector3d(0, 5e6, 0), Eigen::Quaterniond::Identity());
+    const std::string path = ::testing::TempDir() + "/far.sweepscan-project";
+    const Status refused = SaveProject(path, far);
+    EXPECT_NE(refused.message().find("is placed beyond 8000 m"), std::string::npos)
+        << refused.message();
+    EXPECT_FALSE(std::ifstream(path).good());
+  }
   for (const Edit& edit : edits) {
     nlohmann::json e = nlohmann::json::parse(good);
     edit.apply(&e);
