@@ -260,6 +260,20 @@ size_t BatchedKdTree::ThreadFallbacks() { return t_fallbacks; }
 bool BatchedKdTree::UsesAvx2() { return HasAvx2() && g_allow_avx2.load(); }
 void BatchedKdTree::AllowAvx2(bool allow) { g_allow_avx2.store(allow); }
 
+int32_t BatchedKdTree::Join(int32_t id, int32_t left, int32_t right) {
+  // nodes_ may have grown while the children were built: index, not a reference.
+  Node& node = nodes_[static_cast<size_t>(id)];
+  const Node& l = nodes_[static_cast<size_t>(left)];
+  const Node& r = nodes_[static_cast<size_t>(right)];
+  node.left = left;
+  node.right = right;
+  for (int a = 0; a < 3; ++a) {
+    node.lo[a] = std::min(l.lo[a], r.lo[a]);
+    node.hi[a] = std::max(l.hi[a], r.hi[a]);
+  }
+  return id;
+}
+
 int32_t BatchedKdTree::BuildNode(const uint64_t* keys, uint32_t begin, uint32_t end, int bit) {
   const int32_t id = static_cast<int32_t>(nodes_.size());
   nodes_.push_back(Node());
@@ -275,17 +289,7 @@ int32_t BatchedKdTree::BuildNode(const uint64_t* keys, uint32_t begin, uint32_t 
         keys);
     if (split == begin || split == end) continue;
     const int32_t left = BuildNode(keys, begin, split, bit - 1);
-    const int32_t right = BuildNode(keys, split, end, bit - 1);
-    Node& node = nodes_[static_cast<size_t>(id)];
-    const Node& l = nodes_[static_cast<size_t>(left)];
-    const Node& r = nodes_[static_cast<size_t>(right)];
-    node.left = left;
-    node.right = right;
-    for (int a = 0; a < 3; ++a) {
-      node.lo[a] = std::min(l.lo[a], r.lo[a]);
-      node.hi[a] = std::max(l.hi[a], r.hi[a]);
-    }
-    return id;
+    return Join(id, left, BuildNode(keys, split, end, bit - 1));
   }
   if (end - begin > kLeafSize) {
     // Identical codes (points within one 1.5 mm cell at 100 m; thousands at
@@ -296,17 +300,7 @@ int32_t BatchedKdTree::BuildNode(const uint64_t* keys, uint32_t begin, uint32_t 
     // the neighbours of 175 000 points instead of 0.09.
     const uint32_t mid = begin + (end - begin) / 2;
     const int32_t left = BuildNode(keys, begin, mid, -1);
-    const int32_t right = BuildNode(keys, mid, end, -1);
-    Node& node = nodes_[static_cast<size_t>(id)];
-    const Node& l = nodes_[static_cast<size_t>(left)];
-    const Node& r = nodes_[static_cast<size_t>(right)];
-    node.left = left;
-    node.right = right;
-    for (int a = 0; a < 3; ++a) {
-      node.lo[a] = std::min(l.lo[a], r.lo[a]);
-      node.hi[a] = std::max(l.hi[a], r.hi[a]);
-    }
-    return id;
+    return Join(id, left, BuildNode(keys, mid, end, -1));
   }
   // A leaf.
   Node& node = nodes_[static_cast<size_t>(id)];

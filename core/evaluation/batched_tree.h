@@ -84,6 +84,8 @@ class BatchedKdTree {
     uint32_t begin, end;
     int32_t left = -1, right = -1;  // leaf: both -1
   };
+  // Makes node id the parent of left and right (its box theirs); returns id.
+  int32_t Join(int32_t id, int32_t left, int32_t right);
   int32_t BuildNode(const uint64_t* keys, uint32_t begin, uint32_t end, int bit);
   // The nearest-first descent shared by Knn and NearestWhere: visit(s, d2)
   // for every point of the leaves nearer than worst().

@@ -190,6 +190,20 @@ class Robotd {
 
 class RobotdProcessTest : public ::testing::TestWithParam<Build> {
  protected:
+  // The lab's devices on ptys, the simulated board driven by the motor
+  // commands it hears (null, with the failure reported, if the ptys fail).
+  static std::unique_ptr<DevicePtys> LabDevicePtys() {
+    sim::SimConfig world;
+    EXPECT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
+    auto ptys = std::make_unique<DevicePtys>(
+        std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+    QString error;
+    if (!ptys->Open(&error)) {
+      ADD_FAILURE() << error.toStdString();
+      return nullptr;
+    }
+    return ptys;
+  }
   void SetUp() override {
     ASSERT_TRUE(dir_.isValid());
     key_file_ = dir_.filePath("robot.key");
@@ -341,11 +355,10 @@ TEST_P(RobotdProcessTest, RecordsTheSameSensorRecordsAsTheAmd64BuildFromTheSameD
 // robotd must send the motor board its zero within 500 ms (+ a tick and the
 // serial write), measured at the board (the pty) in wall-clock time.
 TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   Robotd robotd(GetParam(), ptys.SlavePaths(0), key_file_, {"--watchdog-ms", "500"});
   ASSERT_TRUE(robotd.WaitListening(60000)) << robotd.Stderr().toStdString();
   ASSERT_TRUE(WaitFor([&] { return ptys.started(); }, 30000));
@@ -385,11 +398,10 @@ TEST_P(RobotdProcessTest, WatchdogStopsTheRobotWithinItsBound) {
 // client drives (`systemctl stop`, a package upgrade, Ctrl+C), and from
 // `--stop-motors` after a crash.
 TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsOnSigtermMidDriveAndAfterACrash) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   std::vector<MotorCommand> heard;
   OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
   // A client of `robotd` driving at 0.3 m/s for 2 s (10 Hz: the ramp gets there).
@@ -453,11 +465,10 @@ TEST_P(RobotdProcessTest, StopsTheMotorsAsItStartsOnSigtermMidDriveAndAfterACras
 // loop, the zero command its last word to the board, exit 0. Their default
 // action killed it with the board driving at its last command.
 TEST_P(RobotdProcessTest, SighupAndSigquitMidDriveStopTheMotorsAndExitCleanly) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   std::vector<MotorCommand> heard;
   OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
   for (const int signal : {SIGHUP, SIGQUIT}) {
@@ -488,11 +499,10 @@ TEST_P(RobotdProcessTest, SighupAndSigquitMidDriveStopTheMotorsAndExitCleanly) {
 TEST_P(RobotdProcessTest, UnderNohupASighupIsIgnored) {
   if (GetParam().name != "amd64")
     GTEST_SKIP() << "the amd64 build shows the rule; qemu adds its own signals";
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   Build nohup = GetParam();
   nohup.command.prepend(QStringLiteral("nohup"));
   Robotd robotd(nohup, ptys.SlavePaths(0), key_file_);
@@ -504,11 +514,10 @@ TEST_P(RobotdProcessTest, UnderNohupASighupIsIgnored) {
 }
 
 TEST_P(RobotdProcessTest, ARestartedRobotdIsTheSameClockAndTheRecordingGoesOn) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   auto robotd = std::make_unique<Robotd>(GetParam(), ptys.SlavePaths(0), key_file_);
   ASSERT_TRUE(robotd->WaitListening(60000)) << robotd->Stderr().toStdString();
   sweepscan::testing::FaultProxy proxy(robotd->port());
@@ -719,11 +728,10 @@ TEST_P(RobotdProcessTest, ConfigFileAndServiceNotifications) {
 // --stop-motors`. The board's port comes from the file; nothing else in it
 // matters (a bad value elsewhere must not keep the board driving).
 TEST_P(RobotdProcessTest, StopMotorsThroughTheConfigFileAsTheServiceRunsIt) {
-  sim::SimConfig world;
-  ASSERT_TRUE(LoadScenario(Scenario("lab.json"), &world).ok());
-  DevicePtys ptys(std::make_unique<SimDevices>(world, SimDevices::Mode::kCommanded), 1);
+  std::unique_ptr<DevicePtys> lab = LabDevicePtys();
+  ASSERT_TRUE(lab);
+  DevicePtys& ptys = *lab;
   QString error;
-  ASSERT_TRUE(ptys.Open(&error)) << error.toStdString();
   const auto ports = ptys.SlavePaths(0);
   std::vector<MotorCommand> heard;
   OnMotorCommands(&ptys, [&](const MotorCommand& c) { heard.push_back(c); });
