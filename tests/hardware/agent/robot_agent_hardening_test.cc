@@ -613,13 +613,16 @@ TEST(RobotAgentSerialLinkTest, ALostSerialLinkIsOpenedAgainWhenItsPortReturns) {
 
   ::close(slave);
   ::close(master);  // The modem is gone: the agent's port reads EIO.
+  // Its name goes with it, as udev's does: left pointing at the freed
+  // /dev/pts/N, the retries would open the next pty of that number, another
+  // test's under ctest -j (which made this test fail in CI once).
+  ASSERT_EQ(::unlink(link.c_str()), 0);
   ASSERT_TRUE(WaitFor([&] { return !agent.has_client(); }, 3000)) << "the lost link was not noticed";
   Pump(300);  // A few retries against a port that is not there.
   EXPECT_FALSE(agent.has_client());
 
   ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
   ::fcntl(master, F_SETFL, O_NONBLOCK);
-  ASSERT_EQ(::unlink(link.c_str()), 0);
   ASSERT_EQ(::symlink(name, link.c_str()), 0);
   ASSERT_TRUE(WaitFor([&] { return agent.has_client(); }, 3000)) << "the link's port was not opened again";
   std::string second;

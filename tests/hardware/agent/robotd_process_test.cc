@@ -593,6 +593,10 @@ TEST_P(RobotdProcessTest, ALostDevicePortIsNoticedAndOpenedAgainWithoutSpinning)
   // client's socket changes which error Qt makes of the empty read).
   QString log;
   board->Unplug();
+  // The name goes with the device, as udev's does: left pointing at the
+  // freed /dev/pts/N, it would lead robotd's retries to the next pty of
+  // that number, another test's under ctest -j.
+  ASSERT_TRUE(QFile::remove(link));
   ASSERT_TRUE(WaitFor(
       [&] {
         log += robotd.Stderr();
@@ -600,7 +604,7 @@ TEST_P(RobotdProcessTest, ALostDevicePortIsNoticedAndOpenedAgainWithoutSpinning)
       },
       10000))
       << "the lost port was not noticed: " << log.toStdString();
-  // Retried every second against a name that points nowhere: robotd idles.
+  // Retried every second against a name that is not there: robotd idles.
   // Spinning on the hung-up port took a core.
   const double cpu0 = CpuSeconds(robotd.pid());
   IdleFor(2000);
@@ -620,7 +624,6 @@ TEST_P(RobotdProcessTest, ALostDevicePortIsNoticedAndOpenedAgainWithoutSpinning)
   // Plugged in again: a new node behind the same name.
   board = std::make_unique<BoardPty>();
   ASSERT_TRUE(board->Open());
-  ASSERT_TRUE(QFile::remove(link));
   ASSERT_TRUE(QFile::link(board->slave, link));
   heard.clear();
   ASSERT_TRUE(WaitFor([&] { return ReadAvailable(board->master, &heard) >= 11; }, 10000))
