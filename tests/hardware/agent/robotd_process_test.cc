@@ -42,6 +42,7 @@
 #include "hardware/station/robot_connection.h"
 #include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
+#include "tests/testing/read_available.h"
 
 namespace sweepscan {
 namespace hardware {
@@ -88,17 +89,7 @@ void IdleFor(int ms) {
   loop.exec();
 }
 
-// Bytes waiting on a non-blocking fd, appended to *into; the count read.
-size_t ReadAvailable(int fd, std::string* into) {
-  char buffer[4096];
-  size_t total = 0;
-  ssize_t n;
-  while ((n = ::read(fd, buffer, sizeof(buffer))) > 0) {
-    into->append(buffer, static_cast<size_t>(n));
-    total += static_cast<size_t>(n);
-  }
-  return total;
-}
+using sweepscan::testing::ReadAvailable;
 
 // A pseudo-terminal standing in for a board on a USB adapter; the test
 // holds the master. Closing it is the adapter unplugged: the kernel hangs
