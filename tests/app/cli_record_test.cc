@@ -72,6 +72,7 @@ class CliRecordTest : public ::testing::Test {
         },
         15000);
   }
+  void StopsCleanlyOn(int signal, const QString& session, int after_ms);
   static double RecordedSeconds(const QString& session, SensorLog* log) {
     hardware::SessionDecodeInfo info;
     const Status s = hardware::DecodeSession(session.toStdString(), log, &info);
@@ -178,28 +179,35 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
   EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
 }
 
-TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
-  const QString clean = dir_.filePath("clean.sweepscan");
+// A recording of `session` running `after_ms`, then `signal`: it stops
+// through its event loop (exit 0, the summary printed, stopped by the
+// signal) with everything up to the signal on disk, not just what was
+// there a second before.
+void CliRecordTest::StopsCleanlyOn(int signal, const QString& session, int after_ms) {
   QProcess record;
-  StartRecord(&record, clean, {"--json"});
+  StartRecord(&record, session, {"--json"});
   QByteArray err;
   ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
-  sweepscan::testing::Pump(2500);
-  ::kill(static_cast<pid_t>(record.processId()), SIGTERM);
+  sweepscan::testing::Pump(after_ms);
+  ::kill(static_cast<pid_t>(record.processId()), signal);
   ASSERT_TRUE(record.waitForFinished(10000));
   EXPECT_EQ(record.exitStatus(), QProcess::NormalExit);
   EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
   const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
   EXPECT_EQ(summary["stopped_by"].toString(), "signal");
   SensorLog log;
-  const double clean_s = RecordedSeconds(clean, &log);
-  EXPECT_NEAR(clean_s, summary["seconds"].toDouble(), 0.3);
-  EXPECT_GE(clean_s, 2.5);
+  const double seconds = RecordedSeconds(session, &log);
+  EXPECT_NEAR(seconds, summary["seconds"].toDouble(), 0.3);
+  EXPECT_GE(seconds, after_ms * 1e-3);
+}
+
+TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
+  StopsCleanlyOn(SIGTERM, dir_.filePath("clean.sweepscan"), 2500);
 
   const QString killed = dir_.filePath("killed.sweepscan");
   QProcess victim;
   StartRecord(&victim, killed);
-  err.clear();
+  QByteArray err;
   ASSERT_TRUE(WaitRecording(&victim, &err)) << err.toStdString();
   sweepscan::testing::Pump(3000);
   ::kill(static_cast<pid_t>(victim.processId()), SIGKILL);
@@ -218,23 +226,7 @@ TEST_F(CliRecordTest, SigtermStopsCleanlyAndSigkillKeepsAllButTheLastSecond) {
 TEST_F(CliRecordTest, SighupAndSigquitStopCleanlyLikeSigterm) {
   for (const int signal : {SIGHUP, SIGQUIT}) {
     SCOPED_TRACE(signal == SIGHUP ? "SIGHUP" : "SIGQUIT");
-    const QString session = dir_.filePath(QStringLiteral("signal-%1.sweepscan").arg(signal));
-    QProcess record;
-    StartRecord(&record, session, {"--json"});
-    QByteArray err;
-    ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
-    sweepscan::testing::Pump(1500);
-    ::kill(static_cast<pid_t>(record.processId()), signal);
-    ASSERT_TRUE(record.waitForFinished(10000));
-    EXPECT_EQ(record.exitStatus(), QProcess::NormalExit);
-    EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
-    const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
-    EXPECT_EQ(summary["stopped_by"].toString(), "signal");
-    SensorLog log;
-    const double seconds = RecordedSeconds(session, &log);
-    // Everything up to the signal, not just what was on disk a second before.
-    EXPECT_NEAR(seconds, summary["seconds"].toDouble(), 0.3);
-    EXPECT_GE(seconds, 1.5);
+    StopsCleanlyOn(signal, dir_.filePath(QStringLiteral("signal-%1.sweepscan").arg(signal)), 1500);
   }
 }
 
