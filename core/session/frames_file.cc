@@ -22,6 +22,28 @@ Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options
   if (!regular.ok()) return regular;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::Error(path + ": cannot open for reading: " + std::strerror(errno));
+  struct stat opened;
+  if (::fstat(fd, &opened) != 0) {
+    const Status failed = Status::Error(path + ": cannot stat: " + std::strerror(errno));
+    ::close(fd);
+    return failed;
+  }
+  const auto device = static_cast<uint64_t>(opened.st_dev);
+  const auto inode = static_cast<uint64_t>(opened.st_ino);
+  if ((options.expect_device != 0 || options.expect_inode != 0) &&
+      (device != options.expect_device || inode != options.expect_inode)) {
+    ::close(fd);
+    return Status::Error(path +
+                         ": replaced since its first pass was read (a recording written over "
+                         "the session?); open the session again");
+  }
+  // Filled however the visit ends.
+  auto identify = [&] {
+    if (report != nullptr) {
+      report->file_device = device;
+      report->file_inode = inode;
+    }
+  };
   // Mapped, not read: the file is visited once, front to back, and the
   // pages behind the reader are dropped every 64 MiB, so a 10-hour
   // session (1.4 GB) costs a few tens of MB resident, not its size. The
@@ -36,7 +58,9 @@ Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options
   const size_t n = map.size();
   if (n == 0) {
     ::close(fd);
-    return VisitFramesInMemory(nullptr, 0, path, options, visit, report);
+    const Status empty = VisitFramesInMemory(nullptr, 0, path, options, visit, report);
+    identify();
+    return empty;
   }
   uint8_t* const base = const_cast<uint8_t*>(map.data());
   ::madvise(base, n, MADV_SEQUENTIAL);
@@ -66,6 +90,7 @@ Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options
         return more;
       },
       report);
+  identify();
   // Cut short under the reader: the pages past the new end faulted (and
   // read as zeros), or the record the cut runs through failed its CRC (the
   // rest of its page reads as zeros). Either way, say what happened.

@@ -157,7 +157,13 @@ bool DecodeMeasurementRecord(const uint8_t* data, size_t n, const RobotGeometry&
       }
       scan.samples.resize(count);
       for (LidarSample& s : scan.samples) {
-        s.time = TimeFromNanoseconds(start + r.Get<int32_t>());
+        int64_t t = 0;
+        // A start near the int64 limits plus an offset overflowed (undefined).
+        if (__builtin_add_overflow(start, int64_t{r.Get<int32_t>()}, &t)) {
+          *why = "scan record: a sample's time is beyond the range of nanoseconds";
+          return false;
+        }
+        s.time = TimeFromNanoseconds(t);
         s.range_m = r.Get<float>();
         s.theta = r.Get<float>();
         s.beam = r.Get<uint16_t>();

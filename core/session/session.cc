@@ -254,6 +254,7 @@ Status WriteSessionMeta(const std::string& path, const SessionMeta& meta) {
 // frames.bin reading
 
 double FramesDamage::SecondsLost() const {
+  if (to_end_of_file) return estimated_seconds_lost;
   if (!has_before || !has_after || time_after_ns < time_before_ns) return 0.0;
   return static_cast<double>(time_after_ns - time_before_ns) * 1e-9;
 }
@@ -284,7 +285,8 @@ std::string FramesLoadReport::DamageSummary() const {
     const FramesDamage& d = damage[i];
     if (i > 0) s << ", ";
     s << RecordAt(d.first_record, d.offset) << " (" << d.reason;
-    if (d.records > 1) s << ", " << d.records << " records";
+    if (d.to_end_of_file) s << ", to the end of the file";
+    if (d.records > 1) s << ", " << (d.to_end_of_file ? "about " : "") << d.records << " records";
     if (d.has_before) {
       std::snprintf(buf, sizeof(buf), ", %.2f s at %.1f s into the recording", d.SecondsLost(),
                     static_cast<double>(d.time_before_ns - first_time_ns) * 1e-9);
@@ -382,6 +384,30 @@ bool ZerosFrom(const uint8_t* data, size_t from, size_t n) {
   return true;
 }
 
+// Damage to the end of the file has no intact record after it to date it,
+// and its length fields stop being usable within a record or two (it said
+// "2 records, 0.00 s lost" for 1 578 records and 5.26 s). Its size in
+// records and seconds is estimated from the intact records' mean size and
+// data rate.
+void EstimateDamageToTheEnd(FramesLoadReport* rep) {
+  const uint64_t intact_bytes = rep->record_bytes + rep->records * kSessionRecordOverhead;
+  const double span_s = static_cast<double>(rep->last_time_ns - rep->first_time_ns) * 1e-9;
+  for (FramesDamage& d : rep->damage) {
+    if (!d.to_end_of_file || rep->records < 2 || intact_bytes == 0) continue;
+    const double mean_bytes = static_cast<double>(intact_bytes) / static_cast<double>(rep->records);
+    const auto estimate =
+        static_cast<uint64_t>(std::llround(static_cast<double>(d.bytes) / mean_bytes));
+    if (estimate > d.records) {
+      rep->corrupt_records_skipped += estimate - d.records;
+      d.records = estimate;
+    }
+    if (span_s > 0.0) {
+      d.estimated_seconds_lost =
+          static_cast<double>(d.bytes) * span_s / static_cast<double>(intact_bytes);
+    }
+  }
+}
+
 }  // namespace
 
 Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& source,
@@ -416,15 +442,25 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
   // but is not trusted alone: a damaged length can also land on an intact
   // record further on, and the records between were intact too.
   auto window = [&] { return have_good ? AfterRecordAt(last_good_time) : TimeWindow(); };
+  // The first intact record after `pos`, before `limit` (else `limit`):
+  // within the time window, and failing that at any time, still CRC-checked
+  // and within the search's budget. A wall-clock step at the damage (NTP
+  // stepping a recorder that has no real-time clock) put every record after
+  // it outside the window: one bad byte there lost the rest of the session.
+  auto next_intact = [&](size_t limit) {
+    const size_t q = NextIntactRecord(data, n, pos, limit, window());
+    if (q < limit || !have_good) return q;
+    return NextIntactRecord(data, n, pos, limit, TimeWindow());
+  };
   auto skip_damage = [&](const std::string& why) {
     size_t next = n;
     const uint32_t length = GetU32(data + pos);
     const size_t by_length = pos + kSessionRecordOverhead + length;
     if (length <= kSessionMaxRecordBytes && by_length <= n &&
         (by_length == n || IntactRecordAt(data, n, by_length, window()))) {
-      next = NextIntactRecord(data, n, pos, by_length, window());
+      next = next_intact(by_length);
     } else {
-      next = NextIntactRecord(data, n, pos, n, window());
+      next = next_intact(n);
     }
     FramesDamage d;
     d.first_record = index;
@@ -437,6 +473,8 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
     if (next < n) {
       d.has_after = true;
       d.time_after_ns = GetI64(data + next + 4);
+    } else {
+      d.to_end_of_file = true;
     }
     rep.corrupt_records_skipped += d.records;
     index += d.records;
@@ -468,7 +506,7 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
     if (left < total) {
       // Either a torn tail or a damaged length field in the middle: with
       // skipping on, an intact record further on tells them apart.
-      const size_t intact = NextIntactRecord(data, n, pos, n, window());
+      const size_t intact = next_intact(n);
       if (intact < n) {
         // Intact records after it: a damaged length, not a crash's tail.
         const std::string why = "length " + std::to_string(length) +
@@ -486,6 +524,22 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
     }
     const uint32_t crc = Crc32c(data + pos, 12 + length);
     if (crc != GetU32(data + pos + 12 + length)) {
+      // A torn last record (below) never holds an intact record: one inside
+      // its extent means its length is damaged and reaches the end of the
+      // file (or the zeros) by chance, and the records it spans are intact.
+      // Taken for a tail, they were dropped, in strict mode too, and cut by
+      // a writer that reopened the session.
+      const size_t intact =
+          left == total || ZerosFrom(data, pos + total, n) ? next_intact(pos + total) : pos + total;
+      if (intact < pos + total) {
+        const std::string why = "CRC mismatch, and its length " + std::to_string(length) +
+                                " spans an intact record at byte " + std::to_string(intact);
+        if (!options.skip_corrupt_records) {
+          return Status::Error(source + ": " + RecordAt(index, pos) + ": " + why);
+        }
+        skip_damage(why);
+        continue;
+      }
       if (left == total) {
         // The final record of the file: a write torn by a crash (its last
         // page never reached the disk) looks exactly like this.
@@ -526,6 +580,7 @@ Status VisitFramesInMemory(const uint8_t* data, size_t n, const std::string& sou
     ++index;
   }
   rep.valid_bytes = rep.truncated_tail ? n - rep.tail_bytes_dropped : n;
+  EstimateDamageToTheEnd(&rep);
   if (report != nullptr) *report = rep;
   return Status::Ok();
 }
@@ -607,6 +662,7 @@ Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
   if (!options.IsValid(&error)) return Status::Error(dir + ": " + error);
   if (!meta.geometry.IsValid(&error)) return Status::Error(dir + ": " + error);
   struct stat st;
+  bool made_dir = false;
   if (::stat(dir.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) return Status::Error(dir + ": exists and is not a folder");
     bool empty = true;
@@ -633,19 +689,29 @@ Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
   } else {
     const Status s = MakeDirs(dir);
     if (!s.ok()) return s;
+    made_dir = true;
   }
+  const std::string frames = Join(dir, kSessionFramesFile);
+  // A session that could not be begun (a full disk) leaves nothing behind:
+  // its empty folder made the next `record` refuse it as an existing one.
+  auto undo = [&](const Status& failed) {
+    ::unlink(frames.c_str());
+    ::unlink(Join(dir, kSessionMetaFile).c_str());
+    if (made_dir) ::rmdir(dir.c_str());
+    return failed;
+  };
   SessionMeta m = meta;
   m.format_version = kSessionFormatVersion;
   if (m.created_utc.empty()) m.created_utc = UtcNowIso8601();
   Status s = WriteSessionMeta(Join(dir, kSessionMetaFile), m);
-  if (!s.ok()) return s;
-  const std::string frames = Join(dir, kSessionFramesFile);
+  if (!s.ok()) return undo(s);
   const int fd = ::open(frames.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return Status::Error(Errno(frames + ": cannot create"));
+  if (fd < 0) return undo(Status::Error(Errno(frames + ": cannot create")));
   const std::vector<uint8_t> header = SessionFramesHeader();
   if (!WriteAll(fd, header.data(), header.size()) || ::fsync(fd) != 0) {
+    const Status failed = Status::Error(Errno(frames + ": cannot write the file header"));
     ::close(fd);
-    return Status::Error(Errno(frames + ": cannot write the file header"));
+    return undo(failed);
   }
   SyncDir(dir);
   out->reset(new SessionWriter(dir, fd, header.size(), options));
@@ -709,6 +775,11 @@ Status SessionWriter::WriteBuffer() {
   if (buffer_.empty()) return Status::Ok();
   if (!WriteAll(fd_, buffer_.data(), buffer_.size())) {
     failed_ = Errno(Join(dir_, kSessionFramesFile) + ": write failed");
+    // The recording ends here (disk full, a pulled disk): what was written
+    // since the last sync goes to the disk now, as a flush would have taken
+    // it, instead of waiting in the page cache for a power cut (Flush and
+    // Close return the error from here on, and synced nothing).
+    ::fdatasync(fd_);
     return Status::Error(failed_);
   }
   file_bytes_ += buffer_.size();

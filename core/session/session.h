@@ -108,6 +108,13 @@ struct FramesLoadOptions {
   // skipped up to the next intact record (found by its CRC, whatever the
   // damaged length field says) and described in FramesLoadReport::damage.
   bool skip_corrupt_records = false;
+  // A pass after the first over the same session (the streamed readers open
+  // frames.bin once a pass): the file must be the one the first pass read
+  // (FramesLoadReport's file_device and file_inode), or the read fails
+  // before any record. A session recorded over in the meantime (`record
+  // --overwrite`) mixed one file's poses with another's scans. 0, 0: any.
+  uint64_t expect_device = 0;
+  uint64_t expect_inode = 0;
 };
 
 // One damaged stretch of frames.bin that was skipped.
@@ -123,8 +130,15 @@ struct FramesDamage {
   bool has_after = false;
   int64_t time_before_ns = 0;
   int64_t time_after_ns = 0;
+  // The damage runs to the end of the file (no intact record after it):
+  // `records` and the seconds lost are then estimated from the intact
+  // records' mean size and data rate (the lengths in damaged bytes stop
+  // being usable within a record or two).
+  bool to_end_of_file = false;
+  double estimated_seconds_lost = 0.0;
 
-  // Seconds of data lost: the gap between the intact neighbours (0 if unknown).
+  // Seconds of data lost: the gap between the intact neighbours, or the
+  // estimate for damage to the end of the file (0 if unknown).
   double SecondsLost() const;
 };
 
@@ -141,6 +155,8 @@ struct FramesLoadReport {
   std::vector<FramesDamage> damage;      // Skipped damaged stretches, in file order.
   int64_t first_time_ns = 0;             // Receive times of the first and last good record.
   int64_t last_time_ns = 0;
+  uint64_t file_device = 0;  // The file read (VisitFramesFile; 0 from memory).
+  uint64_t file_inode = 0;
 
   bool damaged() const { return !damage.empty(); }
   uint64_t damaged_bytes() const;

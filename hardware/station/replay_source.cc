@@ -146,7 +146,12 @@ void SessionReplaySource::Decode() {
     return true;
   };
   SessionDecodeInfo info;
-  const Status s = DecodeSessionStreaming(dir_, DefaultSessionFramesOptions(), sinks, &info);
+  // The file Open() read the motion from (a replay decodes it again at each
+  // rewind and seek): a session recorded over since then is an error.
+  FramesLoadOptions same_file = DefaultSessionFramesOptions();
+  same_file.expect_device = decode_.frames.file_device;
+  same_file.expect_inode = decode_.frames.file_inode;
+  const Status s = DecodeSessionStreaming(dir_, same_file, sinks, &info);
   {
     std::lock_guard<std::mutex> lock(mu_);
     decoder_done_ = true;

@@ -121,7 +121,10 @@ Status SessionCloudStream::PlacePoints(const PointSink& sink, const DecodeProgre
     return true;
   };
   SessionDecodeInfo again;
-  const Status s = DecodeSessionStreaming(dir_, frames_options_, sinks, &again, progress);
+  FramesLoadOptions same_file = frames_options_;  // The file pass 1 read, not its successor.
+  same_file.expect_device = decode_.frames.file_device;
+  same_file.expect_inode = decode_.frames.file_inode;
+  const Status s = DecodeSessionStreaming(dir_, same_file, sinks, &again, progress);
   {
     std::lock_guard<std::mutex> lock(mutex);
     decoded = true;

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "core/cloud/reconstruct.h"
+#include "hardware/station/replay_source.h"
 #include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
 
@@ -171,6 +172,46 @@ TEST(SessionStreamTest, AWriterErrorStopsThePassAndIsReturned) {
   const Status c = stream.PlacePoints([](const CloudPoint*, size_t) { return Status::Ok(); },
                                       [](double f) { return f < 0.3; });
   EXPECT_NE(c.message().find("cancelled"), std::string::npos) << c.message();
+}
+
+// The second pass reads the file the first one read: a session recorded
+// over in between (`record --overwrite` makes a new frames.bin) is an error
+// before any point, not one file's poses under another's scans; so is a
+// replay's next decode (a rewind or a seek).
+TEST(SessionStreamTest, ASessionRecordedOverBetweenThePassesIsRefused) {
+  const std::string dir = Session() + ".replaced";
+  testing::ShellOrFail("rm -rf '" + dir + "' && cp -r '" + Session() + "' '" + dir + "'");
+  SessionCloudStream stream;
+  ASSERT_TRUE(
+      stream.EstimatePoses(dir, DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
+  std::unique_ptr<SessionReplaySource> replay;
+  ASSERT_TRUE(SessionReplaySource::Open(dir, nullptr, &replay).ok());
+  // Another file under the same name, as a writer's O_EXCL create makes it.
+  testing::ShellOrFail("cp '" + dir + "/frames.bin' '" + dir + "/frames.new' && mv '" + dir +
+                       "/frames.new' '" + dir + "/frames.bin'");
+  size_t points = 0;
+  const Status s = stream.PlacePoints([&points](const CloudPoint*, size_t n) {
+    points += n;
+    return Status::Ok();
+  });
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("frames.bin: replaced since its first pass was read"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(points, 0u);
+  replay->Rewind();
+  SensorLog batch;
+  while (!replay->done()) replay->Take(Time::max(), &batch);
+  EXPECT_TRUE(batch.scans.empty());
+  EXPECT_NE(replay->status().message().find("replaced since its first pass was read"),
+            std::string::npos)
+      << replay->status().message();
+  // The same file read again (no replacement): both passes as before.
+  SessionCloudStream again;
+  ASSERT_TRUE(
+      again.EstimatePoses(dir, DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
+  EXPECT_TRUE(again.PlacePoints([](const CloudPoint*, size_t) { return Status::Ok(); }).ok());
+  testing::ShellOrFail("rm -rf '" + dir + "'");
 }
 
 }  // namespace
