@@ -94,7 +94,22 @@ struct AgentCommandLine {
         return false;
       }
     }
-    if (parser.isSet(key_file)) {
+    if (parser.isSet(key_file) && !tcp) {
+      // The serial link carries no authentication (protocol.md, "Connection,
+      // authentication"): the key is not read. The packaged file's `key-file`
+      // stays when `--serial` replaces its `listen`, and a missing key
+      // file used to stop the agent there; on the command line it is a
+      // mistake, refused as `sweepscan record` refuses it.
+      const QString where = origin ? origin(key_file.names().first()) : QString();
+      if (where.isEmpty()) {
+        *error = QStringLiteral(
+            "--key-file does not apply to the serial link (it has no "
+            "authentication)");
+        return false;
+      }
+      std::fprintf(stderr, "note: %s: not used on the serial link (it has no authentication)\n",
+                   qPrintable(where));
+    } else if (parser.isSet(key_file)) {
       QString warning;
       if (!hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error,
                                  key_permissions, &warning)) {

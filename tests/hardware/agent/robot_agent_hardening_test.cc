@@ -475,14 +475,17 @@ std::string WriteConfig(const std::string& name, const std::string& text) {
 // the packaged file (which sets `listen`) serves the serial link, and
 // `--listen` beats a file's `serial`. Refused before: "--listen and --serial
 // exclude each other". A `#` inside a value is part of it; one after a space
-// starts a comment.
+// starts a comment. The serial link has no authentication: the file's
+// key file is not read there (a missing one stopped the agent), and
+// `--key-file` beside `--serial` on the command line is refused.
 TEST(RobotdConfigFileTest, TheCommandLinesLinkReplacesTheFilesAndHashInsideAValueIsKept) {
   const std::string key = WriteKey("config-test.key", "the config test's key", 0600);
   LinkPty link;
   ASSERT_GE(link.master, 0);
   const std::string with_listen =
-      WriteConfig("listen.conf", "imu = /nonexistent/tty\nlisten = 127.0.0.1:1\nkey-file = " + key +
-                                     "\nname = robot#2   # the second one\n");
+      WriteConfig("listen.conf",
+                  "imu = /nonexistent/tty\nlisten = 127.0.0.1:1\nkey-file = /nonexistent/robotd.key"
+                  "\nname = robot#2   # the second one\n");
   std::string hello;
   int code = -1;
   const std::string out = ServeAndStop({"--config", QString::fromStdString(with_listen), "--serial",
@@ -500,6 +503,10 @@ TEST(RobotdConfigFileTest, TheCommandLinesLinkReplacesTheFilesAndHashInsideAValu
   EXPECT_NE(hello.find("sweepscan-robotd 0.1.0 (robot#2)"), std::string::npos)
       << "the Hello's name: " << hello.size() << " bytes read";
   EXPECT_EQ(hello.find("second one"), std::string::npos);
+  EXPECT_NE(out.find("note: " + with_listen +
+                     ":3: key-file: not used on the serial link (it has no authentication)"),
+            std::string::npos)
+      << out;
 
   const std::string with_serial =
       WriteConfig("serial.conf",
@@ -523,6 +530,9 @@ TEST(RobotdConfigFileTest, TheCommandLinesLinkReplacesTheFilesAndHashInsideAValu
       {"--imu", "/nonexistent/tty", "--listen", "127.0.0.1:0", "--serial", "/nonexistent/modem"});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--listen and --serial exclude each other"), std::string::npos) << r.err;
+  r = RunRobotd({"--imu", "/nonexistent/tty", "--serial", link.slave, "--key-file", key});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--key-file does not apply to the serial link"), std::string::npos) << r.err;
 }
 
 // A bad value from the file names the setting as it is written there and
