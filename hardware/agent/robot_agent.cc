@@ -412,7 +412,9 @@ bool RobotAgent::SendQueueFull(ByteStream* stream) const {
 }
 
 qint64 RobotAgent::send_queue_limit() const {
-  if (config_.link != RobotAgentConfig::LinkKind::kSerial) return config_.max_send_queue_bytes;
+  // A pty (sweepscan-sim --pty) is bounded as a serial line at link_baud:
+  // it queues as one does, and its reader is the workstation's QSerialPort.
+  if (config_.link == RobotAgentConfig::LinkKind::kTcp) return config_.max_send_queue_bytes;
   const qint64 line_bytes =
       static_cast<qint64>(config_.link_baud) / 10 * config_.serial_send_queue_ms / 1000;
   return std::min(config_.max_send_queue_bytes, std::max<qint64>(4096, line_bytes));
@@ -424,7 +426,7 @@ qint64 RobotAgent::send_queue_limit() const {
 // and acks waited behind it. A serial link cannot be dropped as a TCP peer
 // is, so the telemetry gives way; the rest of the protocol keeps its time.
 void RobotAgent::UpdateTelemetryPause() {
-  if (config_.link != RobotAgentConfig::LinkKind::kSerial || client_ == nullptr) {
+  if (config_.link == RobotAgentConfig::LinkKind::kTcp || client_ == nullptr) {
     core_->SetTelemetryPaused(false);
     return;
   }

@@ -100,7 +100,7 @@ struct RobotAgentConfig {
   QString listen_address = QStringLiteral("127.0.0.1");  // kTcp.
   quint16 listen_port = 5600;                            // kTcp; 0 = any free port.
   QString link_serial_port;                              // kSerial.
-  qint32 link_baud = 921600;                             // kSerial.
+  qint32 link_baud = 921600;                             // kSerial (kPty: its queue's bound).
 
   // Device ports (ignored with a SimDevices). An empty path means "not
   // fitted": no Telemetry for it, and its silence is reported in Status.

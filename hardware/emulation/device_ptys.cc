@@ -26,7 +26,8 @@ bool DevicePtys::Open(QString* error) {
   lidar_heard_.assign(copies_, false);
   for (int copy = 0; copy < copies_; ++copy) {
     for (size_t i = 0; i < kDevices.size(); ++i) {
-      auto* pty = new PtyMasterStream(this);
+      // A device does not wait for its host (PtyMasterStream).
+      auto* pty = new PtyMasterStream(this, /*max_queued=*/0);
       if (!pty->Open(error)) return false;
       ptys_[copy][i] = pty;
       const LinkDevice device = kDevices[i];

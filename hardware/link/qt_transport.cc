@@ -1,14 +1,10 @@
 #include "hardware/link/qt_transport.h"
 
-#include <sys/stat.h>
-#include <sys/sysmacros.h>
-
-#include <cerrno>
-#include <cstring>
-
 #include <errno.h>
 #include <fcntl.h>
 #include <pty.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -18,6 +14,8 @@
 #include <QSerialPort>
 #include <QSocketNotifier>
 #include <QTcpSocket>
+#include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <vector>
 
@@ -244,7 +242,8 @@ QString TcpStream::PeerAddress() const { return socket_->peerAddress().toString(
 // ---------------------------------------------------------------------------
 // PtyMasterStream
 
-PtyMasterStream::PtyMasterStream(QObject* parent) : ByteStream(parent) {}
+PtyMasterStream::PtyMasterStream(QObject* parent, qint64 max_queued)
+    : ByteStream(parent), max_queued_(std::max<qint64>(0, max_queued)) {}
 
 PtyMasterStream::~PtyMasterStream() { Close(); }
 
@@ -270,6 +269,9 @@ bool PtyMasterStream::Open(QString* error) {
   slave_path_ = QString::fromLocal8Bit(name);
   notifier_ = new QSocketNotifier(master_fd_, QSocketNotifier::Read, this);
   connect(notifier_, &QSocketNotifier::activated, this, [this] { OnReadable(); });
+  write_notifier_ = new QSocketNotifier(master_fd_, QSocketNotifier::Write, this);
+  write_notifier_->setEnabled(false);
+  connect(write_notifier_, &QSocketNotifier::activated, this, [this] { Flush(); });
   return true;
 }
 
@@ -293,8 +295,10 @@ bool PtyMasterStream::Write(const uint8_t* data, size_t n) {
     bytes_dropped_ += n;
     return false;
   }
+  // Behind what is pending: the bytes go in order.
+  if (!pending_.isEmpty()) Flush();
   size_t done = 0;
-  while (done < n) {
+  while (pending_.isEmpty() && done < n) {
     const ssize_t put = ::write(master_fd_, data + done, n - done);
     if (put > 0) {
       done += static_cast<size_t>(put);
@@ -304,16 +308,52 @@ bool PtyMasterStream::Write(const uint8_t* data, size_t n) {
       break;  // EAGAIN: the slave side is not reading; never block the agent.
     }
   }
-  bytes_dropped_ += n - done;
-  return done == n;
+  const size_t rest = n - done;
+  if (rest == 0) return true;
+  if (done == 0 && pending_.size() + static_cast<qint64>(rest) > max_queued_) {
+    bytes_dropped_ += n;  // The whole write, never a part of it.
+    return false;
+  }
+  // A write begun is finished, even past the bound (by one write at most).
+  pending_.append(reinterpret_cast<const char*>(data + done), static_cast<int>(rest));
+  write_notifier_->setEnabled(true);
+  return true;
+}
+
+void PtyMasterStream::Flush() {
+  qsizetype done = 0;
+  while (done < pending_.size()) {
+    const ssize_t put = ::write(master_fd_, pending_.constData() + done,
+                                static_cast<size_t>(pending_.size() - done));
+    if (put > 0) {
+      done += put;
+    } else if (put < 0 && errno == EINTR) {
+      continue;
+    } else {
+      break;
+    }
+  }
+  pending_.remove(0, static_cast<int>(done));
+  if (write_notifier_ != nullptr) write_notifier_->setEnabled(!pending_.isEmpty());
+}
+
+qint64 PtyMasterStream::DiscardQueued() {
+  const qint64 queued = pending_.size();
+  pending_.clear();
+  if (write_notifier_ != nullptr) write_notifier_->setEnabled(false);
+  bytes_dropped_ += static_cast<uint64_t>(queued);
+  return queued;
 }
 
 void PtyMasterStream::Close() {
-  if (notifier_ != nullptr) {
-    notifier_->setEnabled(false);
-    delete notifier_;
-    notifier_ = nullptr;
+  for (QSocketNotifier** notifier : {&notifier_, &write_notifier_}) {
+    if (*notifier == nullptr) continue;
+    (*notifier)->setEnabled(false);
+    delete *notifier;
+    *notifier = nullptr;
   }
+  bytes_dropped_ += static_cast<uint64_t>(pending_.size());
+  pending_.clear();
   if (master_fd_ >= 0) ::close(master_fd_);
   if (slave_fd_ >= 0) ::close(slave_fd_);
   master_fd_ = slave_fd_ = -1;

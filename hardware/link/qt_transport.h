@@ -10,8 +10,11 @@
 //                    workstation opens with QSerialPort.
 //
 // Writes never block: they are queued by Qt (serial, TCP) or written with a
-// non-blocking write(2) (pty; bytes the kernel cannot take are dropped and
-// counted, as a serial line with nobody listening would lose them).
+// non-blocking write(2) (pty). What the pty's kernel buffer cannot take of a
+// write is queued and sent when it can, up to a bound; beyond it whole
+// writes are dropped and counted, as a serial line with nobody listening
+// would lose them, but a write begun is always finished: a frame is never
+// cut in the middle (the link's receiver would count it corrupt).
 //
 // Threading: every stream lives on the thread that created it (the I/O
 // thread) and is used only there; signals are emitted on that thread.
@@ -128,7 +131,14 @@ class TcpStream : public ByteStream {
 class PtyMasterStream : public ByteStream {
   Q_OBJECT
  public:
-  explicit PtyMasterStream(QObject* parent = nullptr);
+  // `max_queued`: bytes kept for the slave while its reader is behind,
+  // beyond the kernel's few KiB. The link (sweepscan-sim --pty) keeps as
+  // much as a TCP peer may have queued, and the agent bounds it further as
+  // on a serial line; an emulated device keeps none beyond the write it
+  // began (a device does not wait for its host: a stalled host loses data,
+  // and finds fresh data when it reads again).
+  static constexpr qint64 kLinkMaxQueued = 1 << 20;
+  explicit PtyMasterStream(QObject* parent = nullptr, qint64 max_queued = kLinkMaxQueued);
   ~PtyMasterStream() override;
   // openpty() with the line in raw mode; SlavePath() is then e.g. /dev/pts/7.
   bool Open(QString* error);
@@ -137,9 +147,13 @@ class PtyMasterStream : public ByteStream {
   bool Write(const uint8_t* data, size_t n) override;
   void Close() override;
   QString Describe() const override { return QStringLiteral("pty:") + slave_path_; }
+  qint64 BytesQueued() const override { return pending_.size(); }
+  qint64 DiscardQueued() override;
 
  private:
   void OnReadable();
+  // Writes what is pending until the kernel's buffer is full again.
+  void Flush();
 
   int master_fd_ = -1;
   // Kept open on purpose: while the workstation has not opened (or has
@@ -148,6 +162,9 @@ class PtyMasterStream : public ByteStream {
   int slave_fd_ = -1;
   QString slave_path_;
   QSocketNotifier* notifier_ = nullptr;
+  QSocketNotifier* write_notifier_ = nullptr;  // Enabled while pending_ is not empty.
+  QByteArray pending_;
+  qint64 max_queued_;
 };
 
 // Parsed link address: "tcp:HOST:PORT", "HOST:PORT" (TCP), or

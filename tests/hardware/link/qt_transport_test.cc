@@ -3,7 +3,9 @@
 // port, here the slave of a pty whose master plays the device).
 #include "hardware/link/qt_transport.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
@@ -11,7 +13,9 @@
 #include <QTcpServer>
 #include <QTcpSocket>
 #include <QTemporaryDir>
+#include <cstring>
 #include <functional>
+#include <vector>
 
 #include "hardware/codecs/hi219_codec.h"
 #include "hardware/codecs/x4_codec.h"
@@ -131,6 +135,69 @@ TEST(PtyStreamTest, WritesNeverBlockWhenNobodyReads) {
   for (int i = 0; i < 64; ++i) master.WriteBytes(chunk);  // 4 MiB into a few-KiB buffer.
   EXPECT_LT(timer.elapsed(), 2000);
   EXPECT_GT(master.bytes_dropped(), 0u);
+}
+
+// A reader that falls behind loses whole writes, never a part of one: the
+// simulator's --pty link used to drop what the kernel would not take in
+// the middle of a frame, which the workstation then counted as corrupt.
+// The link's stream keeps the rest queued (BytesQueued, as a serial port
+// does) and sends it when the reader catches up; a device's keeps nothing
+// beyond the write it began. Each 1000-byte write is a "frame": its index
+// then 996 copies of the index's low byte; the reader must see only whole
+// frames, in order, and every frame not seen must be counted as dropped.
+TEST(PtyStreamTest, AReaderBehindLosesWholeWritesNeverPartOfOne) {
+  for (const qint64 max_queued : {qint64{0}, PtyMasterStream::kLinkMaxQueued}) {
+    SCOPED_TRACE(max_queued);
+    PtyMasterStream master(nullptr, max_queued);
+    QString error;
+    ASSERT_TRUE(master.Open(&error)) << error.toStdString();
+    const int reader = ::open(QFile::encodeName(master.SlavePath()).constData(),
+                              O_RDONLY | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    ASSERT_GE(reader, 0);
+    constexpr int kFrames = 600;  // 600 kB: past the kernel's buffer, within the link's bound.
+    constexpr int kFrameBytes = 1000;
+    int accepted = 0;
+    for (int i = 0; i < kFrames; ++i) {
+      std::vector<uint8_t> frame(kFrameBytes, static_cast<uint8_t>(i));
+      std::memcpy(frame.data(), &i, sizeof(i));
+      if (master.Write(frame.data(), frame.size())) ++accepted;
+    }
+    if (max_queued == 0) {
+      EXPECT_LE(master.BytesQueued(), kFrameBytes) << "a device keeps at most the write it began";
+      EXPECT_LT(accepted, kFrames);
+    } else {
+      EXPECT_EQ(accepted, kFrames) << "the link's bound is 1 MiB";
+      EXPECT_GT(master.BytesQueued(), 0);
+    }
+    EXPECT_EQ(master.bytes_dropped(), static_cast<uint64_t>(kFrames - accepted) * kFrameBytes);
+    // The reader catches up; the event loop sends what was queued.
+    std::vector<uint8_t> got;
+    ASSERT_TRUE(WaitFor(
+        [&] {
+          uint8_t buffer[65536];
+          ssize_t n;
+          while ((n = ::read(reader, buffer, sizeof(buffer))) > 0)
+            got.insert(got.end(), buffer, buffer + n);
+          return got.size() >= static_cast<size_t>(accepted) * kFrameBytes &&
+                 master.BytesQueued() == 0;
+        },
+        10000))
+        << got.size() << " bytes read of " << accepted * kFrameBytes;
+    ::close(reader);
+    ASSERT_EQ(got.size(), static_cast<size_t>(accepted) * kFrameBytes);
+    int last = -1;
+    for (size_t at = 0; at < got.size(); at += kFrameBytes) {
+      int index = 0;
+      std::memcpy(&index, got.data() + at, sizeof(index));
+      ASSERT_GT(index, last) << "frames out of order at byte " << at;
+      ASSERT_LT(index, kFrames) << "not a frame's start at byte " << at;
+      for (int k = sizeof(index); k < kFrameBytes; ++k) {
+        ASSERT_EQ(got[at + static_cast<size_t>(k)], static_cast<uint8_t>(index))
+            << "frame " << index << " cut at its byte " << k;
+      }
+      last = index;
+    }
+  }
 }
 
 TEST(TcpStreamTest, ConnectsSendsAndReportsClose) {
