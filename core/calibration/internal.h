@@ -28,6 +28,12 @@ inline std::string Num(double v, int precision = 6) {
   return s.str();
 }
 
+// "pair 3 (pairs[2])": counted from 1 as the Calibration panel counts
+// them, with the pairs file's own path (counted from 0) beside it.
+inline std::string PairName(size_t k) {
+  return "pair " + std::to_string(k + 1) + " (pairs[" + std::to_string(k) + "])";
+}
+
 inline std::string RefName(const SampleRef& r) {
   return "(scan " + std::to_string(r.scan) + ", beam " + std::to_string(r.beam) + ")";
 }

@@ -564,14 +564,12 @@ std::string CalibrationSummary::FullReport() const {
 
 namespace {
 
-// The pairs themselves: finite samples and poses, the two picks of a pair
-// from different passes, no pair twice. `first`: the pass-1 picks in the
-// world under `initial`.
+// `first`: the pass-1 picks in the world under `initial`.
 Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry& geometry,
                   const MountingError& initial, std::vector<Eigen::Vector3d>* first_out) {
   std::vector<Eigen::Vector3d>& first = *first_out;
   for (size_t k = 0; k < pairs.size(); ++k) {
-    const std::string where = "pair " + std::to_string(k + 1) + ": ";
+    const std::string where = PairName(k) + ": ";
     const ObservationPair& p = pairs[k];
     for (const LidarObservation* o : {&p.pass1, &p.pass2}) {
       if (!Finite(o->p_lidar) || !Finite(o->world_from_body.translation()) ||
@@ -596,6 +594,16 @@ Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry
   }
   return Status::Ok();
 }
+
+}  // namespace
+
+Status CheckObservationPairs(const std::vector<ObservationPair>& pairs,
+                             const RobotGeometry& geometry, const MountingError& initial) {
+  std::vector<Eigen::Vector3d> first;
+  return CheckPairs(pairs, geometry, initial, &first);
+}
+
+namespace {
 
 // Pick geometry: three angles need picks spread in two directions.
 void WarnOnPickSpread(const std::vector<Eigen::Vector3d>& first, const CalibrationOptions& options,

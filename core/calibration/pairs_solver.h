@@ -149,6 +149,13 @@ struct CalibrationSummary {
   std::string FullReport() const;
 };
 
+// The pairs themselves, as SolvePairs checks them first: finite samples and
+// poses, the two picks of a pair from different passes (at least 1 s
+// apart), no pair twice. A failure is bad input (the picks), not a solve
+// that failed.
+Status CheckObservationPairs(const std::vector<ObservationPair>& pairs,
+                             const RobotGeometry& geometry, const MountingError& initial);
+
 // Eq. 15-17 on resolved pairs. Fails (Status) on bad input: fewer than
 // min_pairs pairs, non-finite values, a pair whose two samples are the same
 // or from the same moment. `summary` is filled whenever the solve ran.

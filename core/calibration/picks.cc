@@ -104,7 +104,7 @@ Status ResolvePairs(const std::vector<PickPair>& picks, const SampleStore& store
     LidarObservation* o[2] = {&pair.pass1, &pair.pass2};
     for (int side = 0; side < 2; ++side) {
       const std::string where =
-          "pair " + std::to_string(k + 1) + " pass" + std::to_string(side + 1) + ": ";
+          calibration_internal::PairName(k) + " pass" + std::to_string(side + 1) + ": ";
       Status s = p[side]->has_sample
                      ? FindPickedSample(*p[side], store, o[side])
                      : store.Nearest(windows[side], p[side]->world, geometry, calibration, o[side]);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/calibration/automatic.h"
+#include "core/calibration/internal.h"
 
 namespace sweepscan {
 
@@ -88,7 +89,7 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
         const Status found = pick->has_sample ? FindPickedSample(*pick, store, &o) : Status::Ok();
         if (!found.ok()) {
           result->failure = Failure::kUnresolvedPicks;
-          return Status::Error("pair " + std::to_string(k + 1) + " " + name + ": " +
+          return Status::Error(calibration_internal::PairName(k) + " " + name + ": " +
                                found.message());
         }
       }
@@ -107,6 +108,9 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
   } else {
     std::vector<ObservationPair> pairs;
     s = ResolvePairs(picks, store, windows, geometry, initial, &pairs);
+    // A pair given twice, or both picks of a pair in one pass, is the
+    // file's mistake (exit 2), not a solve that failed (it said exit 1).
+    if (s.ok()) s = CheckObservationPairs(pairs, geometry, initial);
     if (!s.ok()) {
       result->failure = Failure::kUnresolvedPicks;
       return s;

@@ -398,9 +398,21 @@ TEST(CliCalibrateTest, RefinedCornersOnDiamondCalibrationDrive) {
   const CliRun f =
       Cli("calibrate " + base + ".sweepscan --pairs " + Tmp("diamond_foreign.json") + " --refine");
   EXPECT_EQ(f.code, 2) << f.out;
-  EXPECT_NE(f.out.find("pair 4 pass1: sample at time 5 ns is not a valid sample of the recording"),
-            std::string::npos)
+  EXPECT_NE(
+      f.out.find(
+          "pair 4 (pairs[3]) pass1: sample at time 5 ns is not a valid sample of the recording"),
+      std::string::npos)
       << f.out;
+
+  // A pair given twice is the file's mistake too (exit 2, named by its
+  // number and its path in the file); it was "calibration failed", exit 1.
+  const size_t last = text.rfind(",{");
+  const std::string twice =
+      text.substr(0, text.rfind("]}")) + text.substr(last, text.rfind("]}") - last) + "]}";
+  Write(Tmp("diamond_twice.json"), twice);
+  const CliRun t = Cli("calibrate " + base + ".sweepscan --pairs " + Tmp("diamond_twice.json"));
+  EXPECT_EQ(t.code, 2) << t.out;
+  EXPECT_NE(t.out.find("pair 5 (pairs[4]): same samples as pair 4"), std::string::npos) << t.out;
 }
 
 // The diamond calibration drive with `changes` merged into its scenario,

@@ -354,7 +354,7 @@ TEST(ResolvePairsTest, UnknownSampleAndWrongPassAndWorldSnap) {
   picks[1].pass1.sample.time_ns += 1;
   Status st = ResolvePairs(picks, d.store, d.windows, d.config.geometry, {}, &pairs);
   ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.message().find("pair 2 pass1"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("pair 2 (pairs[1]) pass1"), std::string::npos) << st.message();
   EXPECT_NE(st.message().find("the nearest is 1e-06 ms away"), std::string::npos) << st.message();
   // The right time with another range: the recording or its timing changed.
   picks = d.corner_picks;

@@ -47,7 +47,7 @@ TEST(SolvePairsTest, PairFromOnePassOnly) {
   CalibrationSummary s;
   const Status st = SolvePairs(pairs, RobotGeometry(), {}, CalibrationOptions(), &s);
   ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.message().find("pair 3: both picks are from one pass"), std::string::npos)
+  EXPECT_NE(st.message().find("pair 3 (pairs[2]): both picks are from one pass"), std::string::npos)
       << st.message();
 }
 

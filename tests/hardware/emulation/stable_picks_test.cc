@@ -199,7 +199,7 @@ TEST(StablePicksTest, PairsFileNamesTheSameSamplesAfterOneLostPacket) {
   std::vector<ObservationPair> legacy_b;
   const Status rl = ResolvePairs(legacy_from_file, store_b, windows, geometry, {}, &legacy_b);
   ASSERT_FALSE(rl.ok());
-  EXPECT_NE(rl.message().find("pair 1 pass1"), std::string::npos) << rl.message();
+  EXPECT_NE(rl.message().find("pair 1 (pairs[0]) pass1"), std::string::npos) << rl.message();
   EXPECT_NE(rl.message().find("lost samples"), std::string::npos) << rl.message();
   EXPECT_NE(rl.message().find("pick it again"), std::string::npos) << rl.message();
   sweepscan::testing::ShellOrFail("rm -rf '" + dir + "'");
