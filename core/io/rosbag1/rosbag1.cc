@@ -195,6 +195,17 @@ Status Acquire(const std::string& path, std::unique_lock<std::mutex>* lock, rosb
   return Status::Ok();
 }
 
+// Adds one read's counters to the caller's (RosReadStats is added to, so
+// that several reads, and the caller's own warnings, share one).
+void AddStats(const RosReadStats& st, RosReadStats* stats) {
+  if (stats == nullptr) return;
+  stats->messages_read += st.messages_read;
+  stats->messages_skipped += st.messages_skipped;
+  stats->messages_undecodable += st.messages_undecodable;
+  stats->bytes_read += st.bytes_read;
+  for (const std::string& w : st.warnings) stats->warnings.push_back(w);
+}
+
 }  // namespace
 
 void ReleaseRosbag1Cache() {
@@ -316,15 +327,18 @@ Status ReadRosbag1(const std::string& path, const RosReadOptions& options, RosMe
         ++st.messages_undecodable;
         sink->OnUndecodable(info, e.what());
       }
-      if (!go_on) return Status::Error(path + ": cancelled");
+      if (!go_on) {
+        AddStats(st, stats);
+        return Status::Error(path + ": cancelled");
+      }
     }
     if (options.progress) options.progress(1.0);
   } catch (const std::exception& e) {
-    if (stats != nullptr) *stats = st;
+    AddStats(st, stats);
     return Status::Error(path + ": ROS 1 bag unreadable after " + std::to_string(st.messages_read) +
                          " messages: " + e.what());
   }
-  if (stats != nullptr) *stats = st;
+  AddStats(st, stats);
   return Status::Ok();
 }
 
