@@ -8,6 +8,7 @@
 add_library(sweepscan_ros2_fuzz STATIC
   ${PROJECT_SOURCE_DIR}/core/io/ros2/cdr.cc
   ${PROJECT_SOURCE_DIR}/core/io/ros2/mcap.cc
+  ${PROJECT_SOURCE_DIR}/core/io/ros2/mcap_summary.cc
   ${PROJECT_SOURCE_DIR}/core/io/ros2/mcap_records.cc
   ${PROJECT_SOURCE_DIR}/core/io/ros/ros_messages.cc)
 target_link_libraries(sweepscan_ros2_fuzz PUBLIC sweepscan_base PkgConfig::SWEEPSCAN_ROS2_ZSTD

@@ -95,10 +95,10 @@ struct RosMessageInfo {
   int64_t log_time_ns = 0;  // when the recorder received it (bag time)
 };
 
-// Receives decoded messages in the bag's storage order: log-time order for
-// the ROS 1 reader's View and for sqlite3 (ORDER BY timestamp); file order
-// for MCAP, which is log-time order for rosbag2 and the standard writers
-// (the MCAP reader counts messages that go back in time). Each
+// Receives decoded messages in log-time order: the ROS 1 reader's View,
+// sqlite3's ORDER BY timestamp, MCAP's chunks by their times (only
+// messages outside chunks that go back in time keep their file order; the
+// MCAP reader counts them). Each
 // callback returns false to stop reading (the reader then fails with
 // "cancelled").
 class RosMessageSink {

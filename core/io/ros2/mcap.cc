@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
 #include <set>
 #include <vector>
 
+#include "core/io/ros2/mcap_reader.h"
 #include "core/io/ros2/mcap_records.h"
 
 namespace sweepscan::io {
@@ -17,85 +19,11 @@ namespace {
 using mcap_internal::ByteSource;
 using mcap_internal::Fields;
 using mcap_internal::OpName;
+using mcap_internal::Reader;
 
-constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
-enum Op : uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kDataEnd = 0x0F,
-};
-constexpr uint64_t kPrefix = 9;        // opcode u8 + content length u64
-constexpr uint64_t kFooterBytes = 29;  // prefix + summary_start, summary_offset_start, crc
-// A chunk holds at least one message; rosbag2 closes chunks at ~1 MB. This
-// cap only refuses absurd sizes before anything is allocated.
-constexpr uint64_t kMaxChunkBytes = uint64_t{1} << 30;
-constexpr uint64_t kMaxRecordBytes = uint64_t{16} << 20;  // a Schema or Channel record
-constexpr uint64_t kProgressStep = uint64_t{1} << 20;
+}  // namespace
 
-std::string At(const std::string& what, uint64_t pos) {
-  return what + " at byte " + std::to_string(pos);
-}
-
-struct ChannelInfo {
-  std::string topic, encoding, type;
-  uint16_t schema_id = 0;
-  RosMessageKind kind = RosMessageKind::kOther;
-  bool decode = false;
-  uint64_t count = 0;
-  int64_t first_ns = 0, last_ns = 0;
-};
-
-// One pass over one file. Without a sink it only counts (SummarizeMcap).
-class Reader {
- public:
-  Reader(ByteSource* src, const RosReadOptions* opt, RosMessageSink* sink, RosReadStats* stats,
-         Ros2ReadReport* report)
-      : src_(src), opt_(opt), sink_(sink), stats_(stats), report_(report) {}
-
-  Status Scan();
-  // Summary from the summary section; *used false if there is none usable.
-  Status SummaryFromIndex(bool* used);
-  void Fill(RosBagSummary* s) const;
-  uint64_t backwards() const { return backwards_; }
-
- private:
-  Status Error(const std::string& why) const { return Status::Error(src_->name() + ": " + why); }
-  void Warn(const std::string& why) { report_->warnings.push_back(src_->name() + ": " + why); }
-  Status TornTail(uint64_t pos, const std::string& why);
-  Status ReadContent(uint64_t pos, uint64_t len, std::vector<uint8_t>* buf);
-  // Schema, Channel and Message records, at the top level or inside a chunk.
-  Status Inner(uint8_t op, const uint8_t* p, size_t n, const std::string& where);
-  Status ParseSchema(Fields* f);
-  Status ParseChannel(Fields* f);
-  Status Message(Fields* f, const std::string& where);
-  Status Chunk(uint64_t pos, uint64_t len);
-  Status Decompress(const std::string& compression, const std::vector<uint8_t>& in, uint64_t total,
-                    const std::string& where);
-  Status Progress(uint64_t pos);
-
-  ByteSource* src_;
-  const RosReadOptions* opt_;
-  RosMessageSink* sink_;
-  RosReadStats* stats_;
-  Ros2ReadReport* report_;
-  std::map<uint16_t, std::string> schemas_;  // id -> name
-  std::map<uint16_t, ChannelInfo> channels_;
-  std::set<std::string> compressions_;
-  uint64_t messages_ = 0;
-  int64_t start_ns_ = 0, end_ns_ = 0;
-  int64_t previous_log_ns_ = 0;
-  uint64_t backwards_ = 0;      // messages whose log time is before their predecessor's
-  uint64_t bytes_counted_ = 0;  // added to stats_->bytes_read so far
-  uint64_t last_progress_ = 0;  // where opt_->progress was last called
-  std::vector<uint8_t> record_, compressed_, chunk_;
-  mcap_internal::Decompressors decompressors_;
-};
+namespace mcap_internal {
 
 Status Reader::TornTail(uint64_t pos, const std::string& why) {
   report_->torn_tail = true;
@@ -117,9 +45,26 @@ Status Reader::Progress(uint64_t pos) {
   if (opt_ != nullptr && opt_->progress &&
       (pos - last_progress_ >= kProgressStep || pos == src_->size())) {
     last_progress_ = pos;
-    if (!opt_->progress(static_cast<double>(pos) / src_->size())) return Error("cancelled");
+    const double f = progress_offset_ + progress_scale_ * static_cast<double>(pos) / src_->size();
+    if (!opt_->progress(f)) {
+      cancelled_ = true;
+      return Error("cancelled");
+    }
   }
   return Status::Ok();
+}
+
+bool Reader::OnlyZerosFrom(uint64_t from) {
+  std::vector<uint8_t> block(64 * 1024);
+  for (uint64_t at = from, size = src_->size(); at < size;) {
+    const size_t k = static_cast<size_t>(std::min<uint64_t>(block.size(), size - at));
+    if (!src_->ReadAt(at, k, block.data()).ok()) return false;
+    for (size_t i = 0; i < k; ++i) {
+      if (block[i] != 0) return false;
+    }
+    at += k;
+  }
+  return true;
 }
 
 Status Reader::Scan() {
@@ -142,6 +87,27 @@ Status Reader::Scan() {
       footer_at = at;
     }
   }
+  if (sink_ == nullptr || ChunksInLogTimeOrder()) return Walk(footer_at);
+  // Chunks out of log-time order (the spec allows it; readers are to use
+  // the chunks' times): a first pass counts, checks and learns every channel
+  // (a chunk late in time may define the channels of all), the second hands
+  // the messages on in log-time order.
+  reordered_ = true;
+  RosMessageSink* sink = sink_;
+  sink_ = nullptr;
+  collect_units_ = true;
+  progress_scale_ = 0.5;
+  Status s = Walk(footer_at);
+  sink_ = sink;
+  collect_units_ = false;
+  if (!s.ok()) return s;
+  counting_ = false;
+  return DeliverInLogTimeOrder();
+}
+
+Status Reader::Walk(uint64_t footer_at) {
+  const uint64_t size = src_->size();
+  uint8_t prefix[kPrefix];
   uint64_t pos = sizeof(kMagic);
   for (bool first = true;; first = false) {
     const uint64_t left = size - pos;
@@ -155,6 +121,15 @@ Status Reader::Scan() {
     static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "MCAP reader assumes little-endian");
     if (first && op != kHeader) {
       return Error(At("record", pos) + " is " + OpName(op) + ", not the Header record");
+    }
+    if (op == 0 && footer_at == 0) {
+      // No opcode is 0: in a file without its Footer these are blocks the
+      // recorder had not written when it stopped (a power loss leaves them
+      // zero-filled). Nothing after them can be found.
+      return TornTail(pos, std::string("at opcode 0x00 at byte ") + std::to_string(pos) + " (" +
+                               (OnlyZerosFrom(pos) ? "zero bytes to the end of the file"
+                                                   : "unwritten or damaged bytes") +
+                               ")");
     }
     if (op == 0) return Error(At("record", pos) + " has opcode 0x00, which is invalid");
     if (footer_at != 0 && op != kFooter && (pos >= footer_at || len > footer_at - pos - kPrefix)) {
@@ -186,15 +161,58 @@ Status Reader::Scan() {
       // Counting only: channel_id, sequence, log_time, publish_time suffice.
       s = ReadContent(content, std::min<uint64_t>(len, 22), &record_);
       if (s.ok()) s = Inner(op, record_.data(), record_.size(), At(OpName(op), pos));
+      if (s.ok() && collect_units_) {
+        int64_t t = 0;
+        memcpy(&t, record_.data() + 6, 8);  // log_time; the record has it (Message() checked)
+        units_.push_back({pos, len, t, t, false});
+      }
     } else if (op == kSchema || op == kChannel || op == kMessage) {
       s = ReadContent(content, len, &record_);
       if (s.ok()) s = Inner(op, record_.data(), record_.size(), At(OpName(op), pos));
     }  // Other records (attachments, indexes, metadata, private ones) are skipped unread.
+    if (!s.ok() && footer_at == 0 && !cancelled_ && OnlyZerosFrom(content + len)) {
+      // An unfinished file whose last record is damaged (a chunk written in
+      // part, then zero-padded): a torn tail too. Damage followed by more
+      // data is refused as it is in a complete file.
+      std::string why = s.message();
+      if (why.rfind(src_->name() + ": ", 0) == 0) why = why.substr(src_->name().size() + 2);
+      return TornTail(pos, "without a Footer, its last record (" + std::string(OpName(op)) +
+                               " at byte " + std::to_string(pos) + ") damaged: " + why);
+    }
     if (!s.ok()) return s;
     pos = content + len;
     s = Progress(pos);
     if (!s.ok()) return s;
   }
+}
+
+bool Reader::ChunksInLogTimeOrder() {
+  const uint64_t size = src_->size();
+  int64_t latest_end = std::numeric_limits<int64_t>::min();
+  for (uint64_t pos = sizeof(kMagic); size - pos >= kPrefix;) {
+    uint8_t prefix[kPrefix];
+    if (!src_->ReadAt(pos, kPrefix, prefix).ok()) return true;
+    uint64_t len;
+    memcpy(&len, prefix + 1, 8);
+    const uint8_t op = prefix[0];
+    if (op == 0 || op == kFooter || op == kDataEnd || len > size - pos - kPrefix) return true;
+    // Messages outside chunks: an unchunked file, read in file order (and
+    // each record's prefix read here would double its reads).
+    if (op == kMessage) return true;
+    if (op == kChunk && len >= 24) {
+      uint64_t times[3];  // message_start_time, message_end_time, uncompressed_size
+      if (!src_->ReadAt(pos + kPrefix, sizeof(times), reinterpret_cast<uint8_t*>(times)).ok()) {
+        return true;
+      }
+      const int64_t start = static_cast<int64_t>(times[0]), end = static_cast<int64_t>(times[1]);
+      if (times[2] != 0) {  // an empty chunk's times are 0
+        if (start < latest_end) return false;
+        latest_end = std::max(latest_end, end);
+      }
+    }
+    pos += kPrefix + len;
+  }
+  return true;
 }
 
 Status Reader::Inner(uint8_t op, const uint8_t* p, size_t n, const std::string& where) {
@@ -253,7 +271,7 @@ Status Reader::ParseChannel(Fields* f) {
   c.kind = RosMessageKindFromType(c.type);
   const bool wanted = opt_ == nullptr || opt_->topics.empty() || opt_->topics.count(c.topic);
   c.decode = c.kind != RosMessageKind::kOther && c.encoding == "cdr" && wanted;
-  if (sink_ != nullptr && wanted && c.kind != RosMessageKind::kOther && c.encoding != "cdr") {
+  if (reading_ && wanted && c.kind != RosMessageKind::kOther && c.encoding != "cdr") {
     Warn("topic " + c.topic + " (" + c.type + ") is in message encoding '" + c.encoding +
          "', not cdr: its messages are skipped");
   }
@@ -277,14 +295,16 @@ Status Reader::Message(Fields* f, const std::string& where) {
   }
   ChannelInfo& c = it->second;
   const int64_t t = static_cast<int64_t>(log_time);
-  if (c.count == 0 || t < c.first_ns) c.first_ns = t;
-  if (c.count == 0 || t > c.last_ns) c.last_ns = t;
-  ++c.count;
-  if (messages_ == 0 || t < start_ns_) start_ns_ = t;
-  if (messages_ == 0 || t > end_ns_) end_ns_ = t;
-  if (messages_ > 0 && t < previous_log_ns_) ++backwards_;
-  previous_log_ns_ = t;
-  ++messages_;
+  if (counting_) {
+    if (c.count == 0 || t < c.first_ns) c.first_ns = t;
+    if (c.count == 0 || t > c.last_ns) c.last_ns = t;
+    ++c.count;
+    if (messages_ == 0 || t < start_ns_) start_ns_ = t;
+    if (messages_ == 0 || t > end_ns_) end_ns_ = t;
+    if (messages_ > 0 && t < previous_log_ns_) ++backwards_;
+    previous_log_ns_ = t;
+    ++messages_;
+  }
   if (sink_ == nullptr) return Status::Ok();
   if (!c.decode) {
     if (stats_ != nullptr) ++stats_->messages_skipped;
@@ -295,12 +315,39 @@ Status Reader::Message(Fields* f, const std::string& where) {
   info.type = &c.type;
   info.log_time_ns = t;
   if (!DispatchCdrMessage(c.kind, info, f->rest(), f->left(), sink_, stats_)) {
+    cancelled_ = true;
     return Error("cancelled");
   }
   return Status::Ok();
 }
 
 Status Reader::Chunk(uint64_t pos, uint64_t len) {
+  Status s = LoadChunk(pos, len);
+  if (!s.ok()) return s;
+  if (collect_units_) {
+    // The first of two passes: counted and checked now, delivered later.
+    int64_t times[2];  // message_start_time, message_end_time (LoadChunk read them)
+    s = src_->ReadAt(pos + kPrefix, sizeof(times), reinterpret_cast<uint8_t*>(times));
+    if (!s.ok()) return s;
+    if (!chunk_.empty()) units_.push_back({pos, len, times[0], times[1], true});
+  }
+  std::vector<Pending> pending;
+  s = ChunkRecords(pos, &pending);
+  // Messages before a damaged record are handed on before the error.
+  for (const Pending& m : pending) {
+    const Status d = Deliver(m);
+    if (!d.ok()) return d;
+  }
+  return s;
+}
+
+Status Reader::Deliver(const Pending& m) {
+  Fields f(m.p, m.n, "");
+  return Message(&f,
+                 At("chunk", m.chunk_pos) + ": Message record at offset " + std::to_string(m.at));
+}
+
+Status Reader::LoadChunk(uint64_t pos, uint64_t len) {
   const std::string where = At("chunk", pos);
   // Fixed fields (32 bytes), then the compression string and the records'
   // length; the records are read only once these check out.
@@ -374,26 +421,92 @@ Status Reader::Chunk(uint64_t pos, uint64_t len) {
       return Error(where + text);
     }
   }
+  return Status::Ok();
+}
+
+Status Reader::ChunkRecords(uint64_t pos, std::vector<Pending>* pending) {
+  const std::string where = At("chunk", pos);
   // The records inside: Schema, Channel, Message (others skipped).
   const uint8_t* p = chunk_.data();
   const size_t n = chunk_.size();
+  bool in_order = true;
+  Status s;
   for (size_t at = 0; at < n;) {
     if (n - at < kPrefix) {
-      return Error(where + ": record at offset " + std::to_string(at) + " of its " +
-                   std::to_string(n) + " uncompressed bytes is cut after " +
-                   std::to_string(n - at) + " bytes");
+      s = Error(where + ": record at offset " + std::to_string(at) + " of its " +
+                std::to_string(n) + " uncompressed bytes is cut after " + std::to_string(n - at) +
+                " bytes");
+      break;
     }
     uint64_t inner_len;
     memcpy(&inner_len, p + at + 1, 8);
     if (inner_len > n - at - kPrefix) {
-      return Error(where + ": " + OpName(p[at]) + " record at offset " + std::to_string(at) +
-                   " needs " + std::to_string(kPrefix + inner_len) + " bytes, " +
-                   std::to_string(n - at) + " are left in the chunk");
+      s = Error(where + ": " + OpName(p[at]) + " record at offset " + std::to_string(at) +
+                " needs " + std::to_string(kPrefix + inner_len) + " bytes, " +
+                std::to_string(n - at) + " are left in the chunk");
+      break;
     }
-    s = Inner(p[at], p + at + kPrefix, inner_len,
-              where + ": " + OpName(p[at]) + " record at offset " + std::to_string(at));
-    if (!s.ok()) return s;
+    if (p[at] == kMessage) {
+      // Read in log time order (writers may put a chunk's messages out of it).
+      int64_t log_ns = 0;
+      if (inner_len >= 14) memcpy(&log_ns, p + at + kPrefix + 6, 8);
+      if (!pending->empty() && log_ns < pending->back().log_ns) in_order = false;
+      pending->push_back({log_ns, p + at + kPrefix, static_cast<size_t>(inner_len), at, pos});
+    } else {
+      s = Inner(p[at], p + at + kPrefix, inner_len,
+                where + ": " + OpName(p[at]) + " record at offset " + std::to_string(at));
+      if (!s.ok()) break;
+    }
     at += kPrefix + inner_len;
+  }
+  if (!in_order) {
+    std::stable_sort(pending->begin(), pending->end(),
+                     [](const Pending& a, const Pending& b) { return a.log_ns < b.log_ns; });
+  }
+  return s;
+}
+
+Status Reader::DeliverInLogTimeOrder() {
+  // Units whose time spans overlap are read together and their messages
+  // merged; the others one by one, as in file order. Memory: the chunks of
+  // the largest group of overlapping ones.
+  std::stable_sort(units_.begin(), units_.end(),
+                   [](const Unit& a, const Unit& b) { return a.start < b.start; });
+  const uint64_t size = src_->size();
+  uint64_t bytes = 0;
+  for (size_t i = 0; i < units_.size();) {
+    size_t j = i + 1;
+    int64_t end = units_[i].end;
+    for (; j < units_.size() && units_[j].start <= end; ++j) end = std::max(end, units_[j].end);
+    std::vector<std::vector<uint8_t>> buffers(j - i);
+    std::vector<Pending> pending;
+    for (size_t k = i; k < j; ++k) {
+      const Unit& u = units_[k];
+      Status s;
+      if (u.chunk) {
+        s = LoadChunk(u.pos, u.len);
+        if (s.ok()) s = ChunkRecords(u.pos, &pending);
+        buffers[k - i].swap(chunk_);  // the pending messages' pointers move with the storage
+      } else {
+        s = ReadContent(u.pos + kPrefix, u.len, &buffers[k - i]);
+        if (s.ok())
+          pending.push_back({u.start, buffers[k - i].data(), buffers[k - i].size(), 0, u.pos});
+      }
+      if (!s.ok()) return s;
+      bytes += u.len;
+    }
+    std::stable_sort(pending.begin(), pending.end(),
+                     [](const Pending& a, const Pending& b) { return a.log_ns < b.log_ns; });
+    for (const Pending& m : pending) {
+      const Status s = Deliver(m);
+      if (!s.ok()) return s;
+    }
+    if (opt_ != nullptr && opt_->progress &&
+        !opt_->progress(0.5 + 0.5 * std::min(1.0, static_cast<double>(bytes) / size))) {
+      cancelled_ = true;
+      return Error("cancelled");
+    }
+    i = j;
   }
   return Status::Ok();
 }
@@ -405,152 +518,9 @@ Status Reader::Decompress(const std::string& compression, const std::vector<uint
   return Status::Ok();
 }
 
-Status Reader::SummaryFromIndex(bool* used) {
-  *used = false;
-  const uint64_t size = src_->size();
-  if (size < 2 * sizeof(kMagic) + kPrefix + kFooterBytes) return Status::Ok();
-  const uint64_t footer_at = size - sizeof(kMagic) - kFooterBytes;
-  uint8_t tail[kFooterBytes + sizeof(kMagic)];
-  Status s = src_->ReadAt(footer_at, sizeof(tail), tail);
-  if (!s.ok()) return s;
-  uint64_t footer_len, summary_start, summary_offset_start;
-  uint32_t summary_crc;
-  memcpy(&footer_len, tail + 1, 8);
-  memcpy(&summary_start, tail + 9, 8);
-  memcpy(&summary_offset_start, tail + 17, 8);
-  memcpy(&summary_crc, tail + 25, 4);
-  if (tail[0] != kFooter || footer_len != 20 || memcmp(tail + kFooterBytes, kMagic, 8) != 0) {
-    return Status::Ok();  // no footer: the scan will say why
-  }
-  if (summary_start == 0) return Status::Ok();
-  const uint64_t end = summary_offset_start != 0 ? summary_offset_start : footer_at;
-  if (summary_start < sizeof(kMagic) || summary_start > end || end > footer_at) {
-    Warn("footer: summary_start " + std::to_string(summary_start) + " / summary_offset_start " +
-         std::to_string(summary_offset_start) + " lie outside the file; scanning it instead");
-    return Status::Ok();
-  }
-  if (summary_crc != 0) {
-    // From the summary section's start through the footer's summary_offset_start.
-    uint32_t crc = 0;
-    std::vector<uint8_t> block(64 * 1024);
-    for (uint64_t at = summary_start, stop = footer_at + 25; at < stop;) {
-      const size_t k = static_cast<size_t>(std::min<uint64_t>(block.size(), stop - at));
-      s = src_->ReadAt(at, k, block.data());
-      if (!s.ok()) return s;
-      crc = McapCrc32(block.data(), k, crc);
-      at += k;
-    }
-    if (crc != summary_crc) {
-      Warn("summary section's CRC-32 does not match the footer's; scanning the file instead");
-      return Status::Ok();
-    }
-  }
-  bool have_statistics = false;
-  uint64_t message_count = 0, start = 0, finish = 0;
-  uint32_t chunk_count = 0, chunk_indexes = 0;
-  std::map<uint16_t, uint64_t> counts;
-  for (uint64_t pos = summary_start; pos < end;) {
-    uint8_t prefix[kPrefix];
-    uint64_t len;
-    if (end - pos < kPrefix || !src_->ReadAt(pos, kPrefix, prefix).ok() ||
-        (memcpy(&len, prefix + 1, 8), len > end - pos - kPrefix)) {
-      Warn(At("summary record", pos) + " overruns the summary section; scanning the file");
-      return Status::Ok();
-    }
-    const uint8_t op = prefix[0];
-    if (op == kSchema || op == kChannel || op == kStatistics || op == kChunkIndex) {
-      s = ReadContent(pos + kPrefix, len, &record_);
-      if (!s.ok()) return s;
-      Fields f(record_.data(), record_.size(), At(OpName(op), pos));
-      if (op == kSchema) s = ParseSchema(&f);
-      if (op == kChannel) s = ParseChannel(&f);
-      if (op == kStatistics) {
-        uint16_t schema_count;
-        uint32_t channel_count, attachment_count, metadata_count;
-        s = f.U64("message_count", &message_count);
-        if (s.ok()) s = f.U16("schema_count", &schema_count);
-        if (s.ok()) s = f.U32("channel_count", &channel_count);
-        if (s.ok()) s = f.U32("attachment_count", &attachment_count);
-        if (s.ok()) s = f.U32("metadata_count", &metadata_count);
-        if (s.ok()) s = f.U32("chunk_count", &chunk_count);
-        if (s.ok()) s = f.U64("message_start_time", &start);
-        if (s.ok()) s = f.U64("message_end_time", &finish);
-        if (s.ok()) s = f.MapU16U64("channel_message_counts", &counts);
-        have_statistics = s.ok();
-      }
-      if (op == kChunkIndex) {
-        uint64_t skip;
-        std::string compression;
-        for (const char* name :
-             {"message_start_time", "message_end_time", "chunk_start_offset", "chunk_length"}) {
-          if (s.ok()) s = f.U64(name, &skip);
-        }
-        if (s.ok()) s = f.Skip32("message_index_offsets");
-        if (s.ok()) s = f.U64("message_index_length", &skip);
-        if (s.ok()) s = f.String("compression", &compression);
-        if (s.ok()) compressions_.insert(compression.empty() ? "none" : compression);
-        ++chunk_indexes;
-      }
-      if (!s.ok()) {
-        // Schema/Channel errors already name the file, field errors do not.
-        const std::string& m = s.message();
-        report_->warnings.push_back(
-            (m.rfind(src_->name() + ": ", 0) == 0 ? m : src_->name() + ": " + m) +
-            "; scanning the file instead");
-        return Status::Ok();
-      }
-    }
-    pos += kPrefix + len;
-  }
-  if (!have_statistics || (message_count > 0 && counts.empty()) || chunk_indexes < chunk_count) {
-    return Status::Ok();  // not enough to summarize from: scan
-  }
-  for (const auto& [id, count] : counts) {
-    auto it = channels_.find(id);
-    if (it == channels_.end()) {
-      Warn("Statistics count messages on channel " + std::to_string(id) +
-           ", which the summary section does not define; scanning the file instead");
-      return Status::Ok();
-    }
-    it->second.count = count;
-  }
-  messages_ = message_count;
-  start_ns_ = static_cast<int64_t>(start);
-  end_ns_ = static_cast<int64_t>(finish);
-  *used = true;
-  return Status::Ok();
-}
+}  // namespace mcap_internal
 
-void Reader::Fill(RosBagSummary* s) const {
-  s->format = "mcap";
-  s->file_bytes = src_->size();
-  s->message_count = messages_;
-  s->start_ns = start_ns_;
-  s->end_ns = end_ns_;
-  std::set<std::string> names = compressions_;
-  if (names.size() > 1) names.erase("none");
-  s->compression.clear();
-  for (const std::string& c : names) s->compression += (s->compression.empty() ? "" : ",") + c;
-  if (s->compression.empty()) s->compression = "none";
-  std::map<std::string, RosTopicInfo> topics;  // sorted by name; channels of a topic merged
-  for (const auto& [id, c] : channels_) {
-    auto [it, inserted] = topics.emplace(c.topic, RosTopicInfo());
-    RosTopicInfo& t = it->second;
-    if (inserted) {
-      t.topic = c.topic;
-      t.type = c.type;
-      t.serialization = c.encoding;
-    }
-    if (c.count > 0) {
-      t.first_ns = t.message_count == 0 ? c.first_ns : std::min(t.first_ns, c.first_ns);
-      t.last_ns = t.message_count == 0 ? c.last_ns : std::max(t.last_ns, c.last_ns);
-    }
-    t.message_count += c.count;
-  }
-  s->topics.clear();
-  for (auto& [name, t] : topics) s->topics.push_back(std::move(t));
-}
-
+namespace {
 Status Summarize(ByteSource* src, RosBagSummary* s, Ros2ReadReport* report,
                  const std::function<bool(double)>& progress = nullptr) {
   Ros2ReadReport local;
@@ -582,7 +552,7 @@ Status Read(ByteSource* src, const RosReadOptions& opt, RosMessageSink* sink,
   if (stats == nullptr) stats = &local_stats;
   Reader reader(src, &opt, sink, stats, report);
   Status st = reader.Scan();
-  if (reader.backwards() > 0) {
+  if (reader.backwards() > 0 && !reader.reordered()) {
     report->warnings.push_back(src->name() + ": " + std::to_string(reader.backwards()) +
                                " messages have an earlier log time than the message before "
                                "them (delivered in file order)");

@@ -10,15 +10,22 @@
 // format); a chunk's uncompressed_crc (CRC-32 as zlib's) is checked when not
 // zero.
 //
-// Order: messages reach the sink in file order (chunk by chunk, record by
-// record). rosbag2 and the MCAP writers append messages as they arrive, which
-// is log-time order; a file whose messages are not in log-time order is still
-// read in file order, and Ros2ReadReport says how many went back in time.
+// Order: messages reach the sink in log-time order. rosbag2 and the MCAP
+// writers append messages as they arrive, and such a file is read in one
+// pass in file order. When chunks go back in time or overlap (by their
+// message_start_time / message_end_time; the spec allows it), the file is
+// read twice: counted and checked first, then its chunks are delivered by
+// start time, overlapping ones merged by log_time. Messages outside chunks
+// that go back in time are read in file order, and Ros2ReadReport says how
+// many went back.
 //
 // Bad input never crashes and always says where and why:
 //   - truncated file (a recording killed mid-write): the messages before the
 //     torn record are delivered, the Status is Ok, and report->torn_tail and a
-//     warning say at which byte the file ends and inside which record;
+//     warning say at which byte the file ends and inside which record; in a
+//     file without its Footer (unfinished), opcode 0x00 (zeros the recorder
+//     had not written) and a damaged record followed only by zeros are a
+//     torn tail too (docs/ros-bags.md, "Truncated files");
 //   - unknown compression, bad CRC, a message on an unknown channel, a record
 //     whose fields overrun it: an error naming the byte offset, e.g.
 //     "x.mcap: chunk at byte 1234: unknown compression 'brotli'".
