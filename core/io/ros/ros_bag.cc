@@ -36,6 +36,13 @@ void AddOnce(const std::vector<std::string>& from, std::vector<std::string>* to)
 }
 
 Status NotABag(const std::string& path) {
+  if (IsDirectory(path)) {
+    // FindRos2Bag says what the folder lacks (metadata.yaml, bag files).
+    std::string storage;
+    std::vector<std::string> files;
+    const Status s = FindRos2Bag(path, &storage, &files);
+    if (!s.ok()) return Status::Error(s.message() + ": not a ROS 2 bag folder");
+  }
   return Status::Error(path +
                        ": not a ROS bag (neither a ROS 1 .bag, an MCAP or sqlite3 file, "
                        "nor a ROS 2 bag folder)");
@@ -43,7 +50,16 @@ Status NotABag(const std::string& path) {
 
 }  // namespace
 
-bool LooksLikeRosBag(const std::string& path) {
+std::string RosBagPath(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  if (base != "metadata.yaml" || IsDirectory(path)) return path;
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+bool LooksLikeRosBag(const std::string& given) {
+  const std::string path = RosBagPath(given);
   if (IsDirectory(path)) {
     // A rosbag2 folder, or (as FindRos2Bag takes it) a folder without
     // metadata.yaml holding exactly one .db3 or .mcap and no sweepscan
@@ -58,9 +74,10 @@ bool LooksLikeRosBag(const std::string& path) {
   return LooksLikeRosbag1(path) || IsRos2File(path);
 }
 
-Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
+Status SummarizeRosBag(const std::string& given, RosBagSummary* summary,
                        std::vector<std::string>* warnings,
                        const std::function<bool(double)>& progress) {
+  const std::string path = RosBagPath(given);
   if (!IsDirectory(path) && LooksLikeRosbag1(path)) return SummarizeRosbag1(path, summary);
   if (LooksLikeRosBag(path)) {
     Ros2ReadReport report;
@@ -71,8 +88,9 @@ Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
   return NotABag(path);
 }
 
-Status ReadRosBag(const std::string& path, const RosReadOptions& options, RosMessageSink* sink,
+Status ReadRosBag(const std::string& given, const RosReadOptions& options, RosMessageSink* sink,
                   RosReadStats* stats) {
+  const std::string path = RosBagPath(given);
   if (!IsDirectory(path) && LooksLikeRosbag1(path)) return ReadRosbag1(path, options, sink, stats);
   if (LooksLikeRosBag(path)) {
     RosBagSummary ignored;

@@ -16,6 +16,11 @@
 
 namespace sweepscan::io {
 
+// The bag a path names: a rosbag2 folder's metadata.yaml (what a file
+// chooser picks, and what a shell completes to) stands for its folder; any
+// other path is itself. The functions below take either.
+std::string RosBagPath(const std::string& path);
+
 // True if `path` is something ReadRosBag would try: a ROS 1 bag, an MCAP or
 // sqlite3 file, or a folder with a metadata.yaml (the CLI uses it to tell a
 // bag from a sweepscan session folder).

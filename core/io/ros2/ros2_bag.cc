@@ -113,23 +113,78 @@ std::string StorageOfFile(const std::string& path) {
   return "";
 }
 
+// NAME_N.EXT -> N, or -1 when the name is not so.
+long SplitNumber(const std::string& name, const std::string& prefix, const std::string& ext) {
+  if (name.size() <= prefix.size() + ext.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      !EndsWith(name, ext)) {
+    return -1;
+  }
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - ext.size());
+  if (digits.empty() || digits.size() > 9 ||
+      digits.find_first_not_of("0123456789") != std::string::npos) {
+    return -1;
+  }
+  return std::stol(digits);
+}
+
+// rosbag2 writes metadata.yaml when a recording closes: a recording that
+// crashed or lost power leaves only its files, NAME_0.mcap, NAME_1.mcap, ...
+// (the folder's name is NAME). One file is the bag; several are read as one
+// bag in the order of N when they all are NAME_N of one storage.
 Status FolderWithoutMetadata(const std::string& dir, std::string* storage,
-                             std::vector<std::string>* files) {
+                             std::vector<std::string>* files, std::vector<std::string>* warnings) {
   std::vector<std::string> found;
   if (DIR* d = opendir(dir.c_str())) {
     while (const dirent* e = readdir(d)) {
       const std::string name = e->d_name;
-      if (EndsWith(name, ".db3") || EndsWith(name, ".mcap")) found.push_back(dir + "/" + name);
+      if (EndsWith(name, ".db3") || EndsWith(name, ".mcap")) found.push_back(name);
     }
     closedir(d);
   }
-  if (found.size() != 1) {
-    return Status::Error(dir + ": no metadata.yaml, and " + std::to_string(found.size()) +
-                         " .db3/.mcap files (without metadata.yaml the folder must hold "
-                         "exactly one)");
+  std::sort(found.begin(), found.end());
+  if (found.size() == 1) {
+    *storage = StorageOfFile(dir + "/" + found[0]);
+    files->push_back(dir + "/" + found[0]);
+    return Status::Ok();
   }
-  *storage = StorageOfFile(found[0]);
-  *files = found;
+  std::string list;
+  for (const std::string& f : found) list += (list.empty() ? " (" : ", ") + f;
+  if (!list.empty()) list += ")";
+  const auto refuse = [&](const std::string& why) {
+    return Status::Error(dir + ": no metadata.yaml, and " + std::to_string(found.size()) +
+                         " .db3/.mcap files" + list + ": " + why);
+  };
+  if (found.empty()) return refuse("not a ROS 2 bag folder");
+  const std::string ext = EndsWith(found[0], ".db3") ? ".db3" : ".mcap";
+  const size_t underscore = found[0].rfind('_');
+  const std::string prefix =
+      underscore == std::string::npos ? std::string() : found[0].substr(0, underscore + 1);
+  std::vector<std::pair<long, std::string>> numbered;
+  for (const std::string& f : found) {
+    const long n = prefix.empty() ? -1 : SplitNumber(f, prefix, ext);
+    if (n < 0) {
+      return refuse(
+          "without metadata.yaml, several files are read as one split bag only when "
+          "all are NAME_0" +
+          ext + ", NAME_1" + ext + ", ... of one storage");
+    }
+    numbered.emplace_back(n, f);
+  }
+  std::sort(numbered.begin(), numbered.end());
+  std::string missing;
+  for (size_t i = 0, expected = 0; i < numbered.size(); ++i, ++expected) {
+    for (; static_cast<long>(expected) < numbered[i].first; ++expected) {
+      missing += (missing.empty() ? "" : ", ") + prefix + std::to_string(expected) + ext;
+    }
+  }
+  for (const auto& [n, f] : numbered) files->push_back(dir + "/" + f);
+  *storage = ext == ".db3" ? "sqlite3" : "mcap";
+  if (warnings != nullptr) {
+    warnings->push_back(dir + ": no metadata.yaml (a recording that did not close?): its " +
+                        std::to_string(numbered.size()) + " files " + numbered.front().second +
+                        " .. " + numbered.back().second + " are read in that order as one bag" +
+                        (missing.empty() ? "" : "; missing: " + missing));
+  }
   return Status::Ok();
 }
 
@@ -178,7 +233,8 @@ void Merge(const RosBagSummary& part, bool first, RosBagSummary* s) {
 
 }  // namespace
 
-Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<std::string>* files) {
+Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<std::string>* files,
+                   std::vector<std::string>* warnings) {
   files->clear();
   if (!IsFolder(path)) {
     Status s = CheckRegularFile(path);
@@ -195,7 +251,7 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
   std::string dir = path;
   while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
   const std::string yaml = dir + "/metadata.yaml";
-  if (!IsFile(yaml)) return FolderWithoutMetadata(dir, storage, files);
+  if (!IsFile(yaml)) return FolderWithoutMetadata(dir, storage, files, warnings);
   std::ifstream in(yaml);
   std::stringstream text;
   text << in.rdbuf();
@@ -258,13 +314,13 @@ Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s, Ros2ReadRepor
                         const std::function<bool(double)>& progress) {
   std::string storage;
   std::vector<std::string> files;
-  Status st = FindRos2Bag(path, &storage, &files);
+  Status st = FindRos2Bag(path, &storage, &files, report != nullptr ? &report->warnings : nullptr);
   if (!st.ok()) return st;
   const ByteShares shares(files);
   for (size_t i = 0; st.ok() && i < files.size(); ++i) {
     RosBagSummary part;
     st = storage == "mcap" ? SummarizeMcap(files[i], &part, report, shares.Of(i, progress))
-                           : SummarizeRos2Sqlite(files[i], &part);
+                           : SummarizeRos2Sqlite(files[i], &part, report);
     if (st.ok()) Merge(part, i == 0, s);
   }
   return st;
@@ -274,7 +330,7 @@ Status ReadRos2Bag(const std::string& path, const RosReadOptions& opt, RosMessag
                    RosBagSummary* summary, RosReadStats* stats, Ros2ReadReport* report) {
   std::string storage;
   std::vector<std::string> files;
-  Status st = FindRos2Bag(path, &storage, &files);
+  Status st = FindRos2Bag(path, &storage, &files, report != nullptr ? &report->warnings : nullptr);
   if (!st.ok()) return st;
   const ByteShares shares(files);
   for (size_t i = 0; i < files.size(); ++i) {

@@ -3,8 +3,9 @@
 // single .db3 / .mcap file. Dispatches to the sqlite3 (ros2_sqlite.h) or MCAP
 // (mcap.h) reader and goes over all files of a split bag in order.
 //
-// Refused with a clear message: a folder without metadata.yaml holding other
-// than exactly one .db3 or .mcap file, a storage identifier other than
+// Refused with a clear message: a folder without metadata.yaml holding
+// neither one .db3 or .mcap file nor a split bag's NAME_0.mcap, NAME_1.mcap,
+// ... (or .db3), a storage identifier other than
 // sqlite3/mcap, rosbag2 compression (compression_mode FILE or MESSAGE), a
 // listed file that is missing.
 //
@@ -23,7 +24,11 @@
 namespace sweepscan::io {
 
 // *storage = "sqlite3" or "mcap"; *files = full paths in the bag's order.
-Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<std::string>* files);
+// A folder without metadata.yaml (a recording that did not close) holding
+// NAME_0.mcap, NAME_1.mcap, ... (or .db3) is those files in numeric order,
+// with a warning in *warnings (if given) that metadata.yaml is missing.
+Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<std::string>* files,
+                   std::vector<std::string>* warnings = nullptr);
 
 // Summary over all files: topics merged by name (counts added, first/last
 // widened), file_bytes added, compression the union. format is

@@ -31,19 +31,41 @@ class Bag {
   Status Open();
   Status Prepare(const char* sql, sqlite3_stmt** stmt);
   Status Error(const std::string& what) const {
+    if (Corrupt()) return Damaged(what);
     return Status::Error(path_ + ": " + what + ": " + sqlite3_errmsg(db_));
   }
-  // Counts, first and last timestamps per topic (GROUP BY over messages).
+  Status Damaged(const std::string& what) const {
+    return Status::Error(path_ + ": the database is damaged or truncated (" + what +
+                         ": sqlite: " + sqlite3_errmsg(db_) + ")");
+  }
+  // The last error was damage (a file cut short, overwritten pages).
+  bool Corrupt() const {
+    const int e = sqlite3_errcode(db_);
+    return e == SQLITE_CORRUPT || e == SQLITE_IOERR;
+  }
+  // Counts, first and last timestamps per topic (GROUP BY over messages);
+  // on a damaged file, of the messages that can be read (MarkDamaged).
   Status CountMessages();
   void Fill(RosBagSummary* s) const;
+  // What the damage cost, said once: "how many" messages could be read.
+  void MarkDamaged() {
+    if (damage_.empty()) damage_ = sqlite3_errmsg(db_);
+  }
+  std::string DamageWarning(uint64_t read, const char* what) const {
+    return path_ + ": the database is damaged or truncated (sqlite: " + damage_ +
+           "): " + std::to_string(read) + " messages " + what + ", the rest is lost";
+  }
+  bool damaged() const { return !damage_.empty(); }
 
   const std::string& path() const { return path_; }
   std::map<int64_t, Topic>& topics() { return topics_; }
 
  private:
+  Status ReadTopics();
   std::string path_;
   sqlite3* db_ = nullptr;
   std::map<int64_t, Topic> topics_;  // by topics.id
+  std::string damage_;               // sqlite's word for the damage, once seen
 };
 
 // Finalizes a statement when it goes out of scope.
@@ -59,6 +81,7 @@ std::string Text(sqlite3_stmt* stmt, int column) {
 
 Status Bag::Prepare(const char* sql, sqlite3_stmt** stmt) {
   if (sqlite3_prepare_v2(db_, sql, -1, stmt, nullptr) != SQLITE_OK) {
+    if (Corrupt()) return Damaged(sql);
     return Error(std::string("not a rosbag2 sqlite3 bag (") + sql + ")");
   }
   return Status::Ok();
@@ -70,8 +93,23 @@ Status Bag::Open() {
   if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     return Error("cannot open as sqlite3 database");
   }
+  s = ReadTopics();
+  if (s.ok() || !Corrupt()) return s;
+  // A file shorter than its header's page count (a recording cut short,
+  // a partial copy) is "malformed" to sqlite before any table is read;
+  // writable_schema lets it read the pages that are there. The connection
+  // is read-only: nothing is written.
+  MarkDamaged();
+  topics_.clear();
+  sqlite3_exec(db_, "PRAGMA writable_schema = ON", nullptr, nullptr, nullptr);
+  s = ReadTopics();
+  if (!s.ok() && Corrupt()) return Damaged("its topics table cannot be read");
+  return s;
+}
+
+Status Bag::ReadTopics() {
   Statement q;
-  s = Prepare("SELECT id, name, type, serialization_format FROM topics", &q.stmt);
+  Status s = Prepare("SELECT id, name, type, serialization_format FROM topics", &q.stmt);
   if (!s.ok()) return s;
   int rc;
   while ((rc = sqlite3_step(q.stmt)) == SQLITE_ROW) {
@@ -91,9 +129,9 @@ Status Bag::CountMessages() {
   Status s = Prepare(
       "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id",
       &q.stmt);
-  if (!s.ok()) return s;
-  int rc;
-  while ((rc = sqlite3_step(q.stmt)) == SQLITE_ROW) {
+  if (!s.ok() && !Corrupt()) return s;
+  int rc = s.ok() ? SQLITE_OK : SQLITE_CORRUPT;
+  while (s.ok() && (rc = sqlite3_step(q.stmt)) == SQLITE_ROW) {
     const int64_t id = sqlite3_column_int64(q.stmt, 0);
     auto it = topics_.find(id);
     if (it == topics_.end()) {
@@ -105,7 +143,23 @@ Status Bag::CountMessages() {
     it->second.first_ns = sqlite3_column_int64(q.stmt, 2);
     it->second.last_ns = sqlite3_column_int64(q.stmt, 3);
   }
-  if (rc != SQLITE_DONE) return Error("counting messages");
+  if (rc == SQLITE_DONE) return Status::Ok();
+  if (!Corrupt()) return Error("counting messages");
+  // Damaged: the rows that can be read, in storage order, up to the damage.
+  MarkDamaged();
+  for (auto& [id, t] : topics_) t.count = 0;
+  Statement scan;
+  s = Prepare("SELECT topic_id, timestamp FROM messages", &scan.stmt);
+  if (!s.ok()) return s;
+  while (sqlite3_step(scan.stmt) == SQLITE_ROW) {
+    auto it = topics_.find(sqlite3_column_int64(scan.stmt, 0));
+    if (it == topics_.end()) continue;  // a damaged row's, or an orphan (refused when read)
+    Topic& t = it->second;
+    const int64_t ts = sqlite3_column_int64(scan.stmt, 1);
+    t.first_ns = t.count == 0 ? ts : std::min(t.first_ns, ts);
+    t.last_ns = t.count == 0 ? ts : std::max(t.last_ns, ts);
+    ++t.count;
+  }
   return Status::Ok();
 }
 
@@ -140,11 +194,14 @@ void Bag::Fill(RosBagSummary* s) const {
 
 }  // namespace
 
-Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s) {
+Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s, Ros2ReadReport* report) {
   Bag bag(path);
   Status st = bag.Open();
   if (st.ok()) st = bag.CountMessages();
   if (st.ok()) bag.Fill(s);
+  if (st.ok() && bag.damaged() && report != nullptr) {
+    report->warnings.push_back(bag.DamageWarning(s->message_count, "can be read"));
+  }
   return st;
 }
 
@@ -170,15 +227,14 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
   }
   // Sort only the small columns; fetch each blob by its primary key.
   Statement order, blob;
-  st = bag.Prepare("SELECT id, topic_id, timestamp FROM messages ORDER BY timestamp, id",
-                   &order.stmt);
-  if (st.ok()) st = bag.Prepare("SELECT data FROM messages WHERE id = ?", &blob.stmt);
+  st = bag.Prepare("SELECT data FROM messages WHERE id = ?", &blob.stmt);
   if (!st.ok()) return st;
   uint64_t done = 0;
-  int rc;
-  while ((rc = sqlite3_step(order.stmt)) == SQLITE_ROW) {
-    const int64_t id = sqlite3_column_int64(order.stmt, 0);
-    const int64_t topic_id = sqlite3_column_int64(order.stmt, 1);
+  bool lost = false;  // a message's blob is in the damaged part
+  // One message: (id, topic_id, timestamp) in the statement's columns 0..2.
+  const auto one = [&](sqlite3_stmt* row) {
+    const int64_t id = sqlite3_column_int64(row, 0);
+    const int64_t topic_id = sqlite3_column_int64(row, 1);
     auto it = bag.topics().find(topic_id);
     if (it == bag.topics().end()) {
       return Status::Error(path + ": message " + std::to_string(id) + " has topic_id " +
@@ -191,6 +247,11 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
       sqlite3_reset(blob.stmt);
       sqlite3_bind_int64(blob.stmt, 1, id);
       if (sqlite3_step(blob.stmt) != SQLITE_ROW) {
+        if (bag.Corrupt()) {
+          bag.MarkDamaged();
+          lost = true;
+          return Status::Ok();
+        }
         return bag.Error("reading message " + std::to_string(id));
       }
       const auto* data = static_cast<const uint8_t*>(sqlite3_column_blob(blob.stmt, 0));
@@ -199,7 +260,7 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
       RosMessageInfo info;
       info.topic = &t.name;
       info.type = &t.type;
-      info.log_time_ns = sqlite3_column_int64(order.stmt, 2);
+      info.log_time_ns = sqlite3_column_int64(row, 2);
       // data is null for an empty blob: decoding then fails with "needs 4 bytes".
       static const uint8_t kEmpty = 0;
       if (!DispatchCdrMessage(t.kind, info, data != nullptr ? data : &kEmpty, n, sink, stats)) {
@@ -208,11 +269,45 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
     }
     ++done;
     if (opt.progress && (done % 256 == 0 || done == total) &&
-        !opt.progress(total ? static_cast<double>(done) / total : 1.0)) {
+        !opt.progress(total ? std::min(1.0, static_cast<double>(done) / total) : 1.0)) {
       return Status::Error(path + ": cancelled");
     }
+    return Status::Ok();
+  };
+  int rc = SQLITE_DONE;
+  bool any = false;
+  int64_t last_ts = 0, last_id = 0;  // the last message handed on, in (timestamp, id) order
+  st = bag.Prepare("SELECT id, topic_id, timestamp FROM messages ORDER BY timestamp, id",
+                   &order.stmt);
+  if (!st.ok() && !bag.Corrupt()) return st;
+  if (st.ok()) {
+    while (!lost && (rc = sqlite3_step(order.stmt)) == SQLITE_ROW) {
+      st = one(order.stmt);
+      if (!st.ok()) return st;
+      any = true;
+      last_ts = sqlite3_column_int64(order.stmt, 2);
+      last_id = sqlite3_column_int64(order.stmt, 0);
+    }
+    if (rc != SQLITE_DONE && rc != SQLITE_ROW && !bag.Corrupt())
+      return bag.Error("reading messages");
   }
-  if (rc != SQLITE_DONE) return bag.Error("reading messages");
+  if (rc != SQLITE_DONE || lost || bag.damaged()) {
+    // Damaged: the order (by timestamp) broke off at the damage. The rows
+    // not handed on yet that can still be read follow in storage order
+    // (rosbag2 inserts them as they arrive, so nearly in time order).
+    bag.MarkDamaged();
+    Statement rest;
+    if (!lost && bag.Prepare("SELECT id, topic_id, timestamp FROM messages", &rest.stmt).ok()) {
+      while (!lost && sqlite3_step(rest.stmt) == SQLITE_ROW) {
+        const int64_t ts = sqlite3_column_int64(rest.stmt, 2),
+                      id = sqlite3_column_int64(rest.stmt, 0);
+        if (any && (ts < last_ts || (ts == last_ts && id <= last_id))) continue;
+        st = one(rest.stmt);
+        if (!st.ok()) return st;
+      }
+    }
+    if (report != nullptr) report->warnings.push_back(bag.DamageWarning(done, "were read"));
+  }
   return Status::Ok();
 }
 

@@ -27,7 +27,15 @@ namespace sweepscan::io {
 
 // Fills *s (format "rosbag2-sqlite3", compression "none") from the topics
 // table and a GROUP BY over messages (counts, first and last timestamp).
-Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s);
+//
+// A damaged or truncated file (a recording cut short: sqlite calls it
+// "database disk image is malformed") is read as far as it can be: the
+// messages sqlite can still read are counted and delivered, and a warning
+// in *report says so ("the database is damaged or truncated (...): N
+// messages were read, the rest is lost"). When not even the topics table
+// can be read, the error says the file is damaged or truncated.
+Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s,
+                           Ros2ReadReport* report = nullptr);
 
 // Decodes the messages of opt.topics (all decodable ones if empty) whose
 // serialization_format is "cdr" and hands them to the sink by timestamp.

@@ -11,6 +11,8 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <set>
 
 #include "core/io/ros2/ros2_bag.h"
 #include "tests/core/io/ros2/ros2_test_bags.h"
@@ -161,6 +163,66 @@ TEST(Ros2SqliteTest, BadDatabasesAreNamed) {
             "/odom: Odometry: encapsulation header: needs 4 bytes, the message has 0");
 }
 
+// A .db3 cut short (a recording that lost power, a partial copy): sqlite
+// calls it "database disk image is malformed" before reading a row. What
+// it can still read is delivered, and a warning says the file is damaged
+// and how many messages were read; a file too short to hold its topics
+// table is refused as damaged or truncated, not as "not a rosbag2 bag".
+TEST(Ros2SqliteTest, ATruncatedDatabaseGivesWhatItStillHolds) {
+  Scratch scratch("ros2_sqlite_truncated");
+  // Bigger than one page of rows: the test bag's messages 64 times over,
+  // each copy 10 s after the one before (sqlite itself writes them).
+  const std::string big = scratch.Copy(Ros2Data(kDb), "big.db3");
+  for (int k = 0; k < 6; ++k) {
+    Exec(big, "INSERT INTO messages(topic_id, timestamp, data) SELECT topic_id, timestamp + " +
+                  std::to_string(int64_t{10000000000} << k) + ", data FROM messages");
+  }
+  RecordingSink all;
+  RosReadStats all_stats;
+  ASSERT_TRUE(ReadRos2Sqlite(big, RosReadOptions(), &all, nullptr, &all_stats).ok());
+  ASSERT_EQ(all_stats.messages_read, kDecodable * 64);
+  std::ifstream in(big, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_GT(bytes.size(), 100000u);
+
+  const std::string cut = scratch.Write("cut.db3", bytes.substr(0, bytes.size() * 6 / 10));
+  RecordingSink sink;
+  RosReadStats stats;
+  Ros2ReadReport report;
+  RosBagSummary summary;
+  Status s = ReadRos2Sqlite(cut, RosReadOptions(), &sink, &summary, &stats, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_GT(stats.messages_read, all_stats.messages_read / 3);
+  EXPECT_LT(stats.messages_read, all_stats.messages_read);
+  // Each message read is one of the bag's, once.
+  std::multiset<int64_t> known, seen;
+  for (const auto& m : all.order) known.insert(m.log_time_ns);
+  for (const auto& m : sink.order) {
+    EXPECT_EQ(seen.count(m.log_time_ns), 0u) << m.log_time_ns;
+    EXPECT_EQ(known.count(m.log_time_ns), 1u) << m.log_time_ns;
+    seen.insert(m.log_time_ns);
+  }
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_EQ(report.warnings[0].rfind(cut + ": the database is damaged or truncated (sqlite: ", 0),
+            0u)
+      << report.warnings[0];
+  EXPECT_NE(report.warnings[0].find(" messages were read, the rest is lost"), std::string::npos)
+      << report.warnings[0];
+  RosBagSummary quick;
+  Ros2ReadReport quick_report;
+  s = SummarizeRos2Sqlite(cut, &quick, &quick_report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_GE(quick.message_count, stats.messages_read);
+  ASSERT_EQ(quick_report.warnings.size(), 1u);
+  EXPECT_NE(quick_report.warnings[0].find("damaged or truncated"), std::string::npos);
+
+  // Only the first page (the schema): nothing to read.
+  const std::string stub = scratch.Write("stub.db3", bytes.substr(0, 4096));
+  s = ReadRos2Sqlite(stub, RosReadOptions(), &sink, nullptr, nullptr, nullptr);
+  EXPECT_EQ(s.message().rfind(stub + ": the database is damaged or truncated (", 0), 0u)
+      << s.message();
+}
+
 TEST(Ros2BagTest, FindsFoldersAndFiles) {
   std::string storage;
   std::vector<std::string> files;
@@ -193,8 +255,9 @@ TEST(Ros2BagTest, FindsFoldersAndFiles) {
   scratch.Copy(Ros2Data("ros2_zstd.mcap"), "second.mcap");
   EXPECT_EQ(FindRos2Bag(scratch.dir(), &storage, &files).message(),
             scratch.dir() +
-                ": no metadata.yaml, and 2 .db3/.mcap files (without metadata.yaml "
-                "the folder must hold exactly one)");
+                ": no metadata.yaml, and 2 .db3/.mcap files (only.db3, second.mcap): without "
+                "metadata.yaml, several files are read as one split bag only when all are "
+                "NAME_0.db3, NAME_1.db3, ... of one storage");
   EXPECT_EQ(FindRos2Bag(scratch.Write("notes.txt", "hello"), &storage, &files).message(),
             scratch.dir() +
                 "/notes.txt: not a ROS 2 bag (neither a rosbag2 folder, a .db3 "
@@ -232,6 +295,35 @@ TEST(Ros2BagTest, MetadataThatIsRefused) {
                    "  relative_file_paths: [ros2_bag_metadata/b_0.db3]\n  compression_mode: \"\"\n")
                   .ok());
   EXPECT_EQ(files, std::vector<std::string>{scratch.dir() + "/b_0.db3"});
+}
+
+// A split recording that crashed: rosbag2 writes metadata.yaml when it
+// closes, so only NAME_0.mcap, NAME_1.mcap, ... are there. They are read
+// in numeric order as one bag (not in name order: _10 after _9), with a
+// warning that metadata.yaml is missing.
+TEST(Ros2BagTest, ASplitBagWithoutMetadataIsReadInNumericOrder) {
+  Scratch scratch("split_without_metadata");
+  scratch.Copy(Ros2Data("mcap_bag/mcap_bag_0.mcap"), "drive_9.mcap");
+  scratch.Copy(Ros2Data("mcap_bag/mcap_bag_1.mcap"), "drive_10.mcap");
+  RecordingSink sink;
+  RosReadStats stats;
+  Ros2ReadReport report;
+  RosBagSummary summary;
+  const Status s = ReadRos2Bag(scratch.dir(), RosReadOptions(), &sink, &summary, &stats, &report);
+  ASSERT_TRUE(s.ok()) << s.message();
+  testing::ExpectAllKnownMessages(sink);
+  EXPECT_EQ(stats.messages_read, kDecodable);
+  EXPECT_EQ(summary.message_count, uint64_t{testing::kMessages});
+  ASSERT_EQ(report.warnings.size(), 1u);
+  EXPECT_EQ(report.warnings[0],
+            scratch.dir() +
+                ": no metadata.yaml (a recording that did not close?): its 2 files "
+                "drive_9.mcap .. drive_10.mcap are read in that order as one bag; "
+                "missing: drive_0.mcap, drive_1.mcap, drive_2.mcap, drive_3.mcap, "
+                "drive_4.mcap, drive_5.mcap, drive_6.mcap, drive_7.mcap, drive_8.mcap");
+  RosBagSummary quick;
+  ASSERT_TRUE(SummarizeRos2Bag(scratch.dir(), &quick).ok());
+  EXPECT_EQ(quick.message_count, uint64_t{testing::kMessages});
 }
 
 TEST(Ros2BagTest, ReadsSplitMcapBagAndSqliteBag) {
