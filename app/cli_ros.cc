@@ -242,12 +242,15 @@ int RunImport(int argc, char** argv) {
     }
   }
   io::RosImportReport report;
-  const Status s = io::ImportRosBag(args.positional()[0], args.Get("out"), options, &report);
+  io::RosImportFailure failure = io::RosImportFailure::kNone;
+  const Status s =
+      io::ImportRosBag(args.positional()[0], args.Get("out"), options, &report, &failure);
   if (!s.ok()) {
     PrintError(s.message());
-    // A session folder in the way or an unwritable output is a failure while
-    // working; everything else is about the bag.
-    return s.message().rfind(args.Get("out"), 0) == 0 ? kExitFailure : kExitBadInput;
+    // A session folder in the way or an unwritable output (a full disk
+    // while writing) is a failure while working; everything else is about
+    // the bag.
+    return failure == io::RosImportFailure::kOutput ? kExitFailure : kExitBadInput;
   }
   if (args.Flag("json")) {
     std::cout << report.ToJson().dump(2) << "\n";

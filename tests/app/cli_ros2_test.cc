@@ -210,6 +210,73 @@ TEST_F(CliRos2Test, ACutMcapSaysWhatWasLostAndAFolderWithOneMcapIsABag) {
   for (const auto& t : summarized["topics"]) EXPECT_TRUE(t["rate_hz"].is_null()) << t;
 }
 
+// A valid MCAP whose chunks are not in log-time order (the spec allows it;
+// here @mcap/core rewrote the bag with blocks of messages swapped, so
+// chunks go back in time and overlap): the messages are read in log-time
+// order, and the cloud is the in-order bag's to the byte. Before, the
+// import stopped: "the clock jumped back".
+TEST_F(CliRos2Test, ChunksOutOfLogTimeOrderGiveTheSameCloud) {
+  const std::string shuffled = Tmp("lab_shuffled.mcap");
+  CommandRun r = RunCommand("cd " + Source("tests/tools") + " && " + SWEEPSCAN_NODE +
+                            " --input-type=module - " + Bag("lab", kStorages[0]) + " " + shuffled +
+                            " 700 < " + Source("tests/core/io/ros2/mcap_out_of_order.mjs"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::string cloud[2];
+  int k = 0;
+  for (const std::string& bag : {Bag("lab", kStorages[0]), shuffled}) {
+    const std::string session = Tmp("order_" + std::to_string(k) + ".sweepscan");
+    r = Import(bag, session, "--json");
+    ASSERT_EQ(r.code, 0) << r.out;
+    const nlohmann::json report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["out_of_order"], 0);
+    EXPECT_TRUE(report["warnings"].empty()) << r.out;
+    ASSERT_EQ(Cli("reconstruct " + session + " --out " + session + ".ply").code, 0);
+    cloud[k++] = ReadFile(session + ".ply");
+  }
+  ASSERT_GT(cloud[0].size(), 1000000u);
+  EXPECT_TRUE(cloud[0] == cloud[1]);
+}
+
+// A recording torn before its first sensor message: the refusal ("no
+// LaserScan ... topic") says where the file ends, the reason there is none.
+TEST_F(CliRos2Test, AnMcapTornBeforeItsSensorsSaysWhere) {
+  const std::string full = ReadFile(Bag("lab", kStorages[1]));
+  const std::string cut = Tmp("lab_torn_early.mcap");
+  std::ofstream(cut, std::ios::binary).write(full.data(), 300);
+  const CommandRun r = Import(cut, Tmp("torn_early.sweepscan"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no sensor_msgs/LaserScan"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(cut + ": file ends at byte 300"), std::string::npos) << r.out;
+}
+
+// A .db3 cut short (sqlite: "database disk image is malformed") imports
+// the messages sqlite can still read, and says the file is damaged; the
+// bag's metadata.yaml names the bag as its folder does (as in the app).
+TEST_F(CliRos2Test, ATruncatedDb3ImportsWhatItHoldsAndMetadataYamlNamesItsBag) {
+  const std::string folder = Bag("lab", kStorages[2]);
+  CommandRun r = Import(folder + "/metadata.yaml", Tmp("by_yaml.sweepscan"), "--json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json whole = nlohmann::json::parse(r.out);
+  EXPECT_EQ(whole["format"], "rosbag2-sqlite3");
+  EXPECT_EQ(whole["bag"], folder);
+
+  const std::string cut = Tmp("lab_cut.db3");
+  r = RunCommand("cp " + folder + "/*.db3 " + cut);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::string bytes = ReadFile(cut);
+  std::ofstream(cut, std::ios::binary | std::ios::trunc)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() * 6 / 10));
+  r = Import(cut, Tmp("cut_db3.sweepscan"), "--json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  std::string said;
+  for (const auto& w : report["warnings"]) said += w.get<std::string>() + "\n";
+  EXPECT_NE(said.find(cut + ": the database is damaged or truncated (sqlite: "), std::string::npos)
+      << said;
+  EXPECT_GT(report["scans"].get<int>(), whole["scans"].get<int>() / 3);
+  EXPECT_LT(report["scans"].get<int>(), whole["scans"].get<int>());
+}
+
 class CliRos2CalibrationTest : public ::testing::Test {
  protected:
   static void TearDownTestSuite() { RunCommand("rm -rf " + Tmp("")); }

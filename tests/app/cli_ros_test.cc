@@ -138,6 +138,75 @@ TEST_F(CliRosTest, BadInputExitsTwoWithOneLine) {
   EXPECT_NE(r.out.find("import needs --out"), std::string::npos) << r.out;
 }
 
+// A driver that stamps on its own clock (from boot, or 0) while the other
+// sensors stamp on the robot's: the import compares each topic's stamps
+// with its log times, times that topic by its log time instead (moved onto
+// the others' clock) and says so. The bag's log times equal its stamps, so
+// the cloud is the well-stamped bag's to the byte; before, it came out
+// without a word and wrong (the odometry 54 years before the scans).
+TEST_F(CliRosTest, ATopicStampedOnAnotherClockIsTimedByItsLogTime) {
+  const std::string reference = Tmp("clock_reference.sweepscan");
+  CommandRun r = Import(Tmp("lab_none.bag"), reference);
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(Cli("reconstruct " + reference + " --out " + reference + ".ply").code, 0);
+  const std::string expected = ReadFile(reference + ".ply");
+  ASSERT_GT(expected.size(), 1000000u);
+  const std::pair<std::string, std::string> cases[] = {{"/odom", "boot:1234.5"},
+                                                       {"/imu/data", "zero"}};
+  for (const auto& [topic, mode] : cases) {
+    SCOPED_TRACE(topic);
+    const std::string bag = Tmp("clock_" + mode.substr(0, 4) + ".bag");
+    r = RunCommand(std::string(SWEEPSCAN_PYTHON3) + " " +
+                   Source("tests/core/io/ros/restamp_bag.py") + " " + Tmp("lab_none.bag") + " " +
+                   bag + " " + topic + " " + mode);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const std::string session = Tmp("clock_" + mode.substr(0, 4) + ".sweepscan");
+    r = Import(bag, session, "--json");
+    ASSERT_EQ(r.code, 0) << r.out;
+    const nlohmann::json report = nlohmann::json::parse(r.out);
+    EXPECT_EQ(report["stamps_from_log_time_ns"], nlohmann::json({{topic, 0}})) << r.out;
+    std::string said;
+    for (const auto& w : report["warnings"]) said += w.get<std::string>() + "\n";
+    EXPECT_NE(said.find(topic + ": header stamps are -"), std::string::npos) << said;
+    // /scan is logged at its last beam, 0.14 s after its stamp (the first
+    // beam's); the other of /odom and /imu/data at its stamp: the least
+    // latency, the offset used.
+    const std::string other = topic == "/odom" ? "/imu/data" : "/odom";
+    EXPECT_NE(
+        said.find(
+            " s from their log times, but " + other +
+            "'s are 0.000 s: stamped on another clock (from boot, or left 0?); its times are its "
+            "log times instead"),
+        std::string::npos)
+        << said;
+    ASSERT_EQ(Cli("reconstruct " + session + " --out " + session + ".ply").code, 0);
+    EXPECT_TRUE(ReadFile(session + ".ply") == expected);
+  }
+}
+
+// Exit codes: 2 for the bag, 1 for the output. A bag whose path starts with
+// the --out text is still the bag's fault; a session that cannot be written
+// while the bag is read (the file size limit standing for a full disk) is
+// the output's, and leaves nothing behind.
+TEST_F(CliRosTest, WriteFailuresExitOneBagFailuresTwo) {
+  std::ofstream(Tmp("out_named.sweepscan.bag")) << "hello\n";
+  CommandRun r = Import(Tmp("out_named.sweepscan.bag"), Tmp("out_named.sweepscan"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("not a ROS bag"), std::string::npos) << r.out;
+
+  const std::string session = Tmp("too_big.sweepscan");
+  RunCommand("rm -rf " + session);
+  // A file size limit of 1 MiB: meta.json fits, the records do not (the
+  // writer's 4 MiB buffer is written out while the bag is read).
+  r = RunCommand("sh -c \"trap '' XFSZ; ulimit -f 1024; " + std::string(SWEEPSCAN_CLI) +
+                 " import " + Tmp("lab_none.bag") + " --out " + session + "\"");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_EQ(r.out.find(Tmp("lab_none.bag") + ": "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(session), std::string::npos) << r.out;
+  struct stat st;
+  EXPECT_NE(stat(session.c_str(), &st), 0) << "the failed import left " << session;
+}
+
 // The automatic calibration on an imported three-turn circle finds the
 // scenario's hidden mounting error as it does on the native session.
 TEST(CliRosCalibrationTest, AutomaticCalibrationOnAnImportedCircle) {

@@ -5,13 +5,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <future>
-#include <cmath>
 #include <limits>
 #include <map>
 #include <memory>
 
+#include "core/io/ros/import_clocks.h"
 #include "core/io/ros/provenance.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/io/ros/tf_tree.h"
@@ -21,6 +22,9 @@
 
 namespace sweepscan::io {
 namespace {
+
+using import_internal::CheckClocks;
+using import_internal::StampCheck;
 
 constexpr int64_t kNsPerS = 1000000000;
 // A LaserScan's beams, first to last: a session's scan record holds each
@@ -67,12 +71,16 @@ class FirstPassSink : public RosMessageSink {
 
   TfTree tf_;
   std::map<std::string, RosHeader> first_;  // topic -> header of its first message
+  std::map<std::string, int64_t> first_log_;  // topic -> log time of its first message
   std::string odom_child_;
   bool stopped_early_ = false;
 
  private:
   bool First(const RosMessageInfo& info, const RosHeader& h) {
-    if (first_.count(*info.topic) == 0) first_[*info.topic] = h;
+    if (first_.count(*info.topic) == 0) {
+      first_[*info.topic] = h;
+      first_log_[*info.topic] = info.log_time_ns;
+    }
     waiting_.erase(*info.topic);
     if (waiting_.empty()) stopped_early_ = true;
     return !stopped_early_;
@@ -86,33 +94,6 @@ struct OdometrySample {
   int64_t log_ns;
 };
 
-// Per-topic stamp tracking: out-of-order messages, clock jumps and gaps.
-class StampCheck {
- public:
-  // False (with *error) on a clock that jumps back by more than a second.
-  bool Observe(const std::string& topic, int64_t stamp_ns, uint64_t index,
-               RosImportReport* report, std::string* error) {
-    auto it = last_.find(topic);
-    if (it != last_.end()) {
-      const int64_t d = stamp_ns - it->second;
-      if (d < -kNsPerS) {
-        *error = topic + ": message " + std::to_string(index) + " is stamped " +
-                 std::to_string(-d * 1e-9) +
-                 " s before the one before it: the clock jumped back (two recordings or a "
-                 "restarted simulation in one bag?); cut the bag at that point and import the parts";
-        return false;
-      }
-      if (d < 0) ++report->out_of_order;
-      if (d > kNsPerS) ++report->time_gaps;
-    }
-    last_[topic] = std::max(stamp_ns, it == last_.end() ? stamp_ns : it->second);
-    return true;
-  }
-
- private:
-  std::map<std::string, int64_t> last_;
-};
-
 // Pass 2 sink: converts and writes every sensor message.
 class WritingSink : public RosMessageSink {
  public:
@@ -122,12 +103,13 @@ class WritingSink : public RosMessageSink {
 
   bool OnLaserScan(const RosMessageInfo& info, const RosLaserScan& m) override {
     if (*info.topic != setup_.scan_topic) return true;
-    if (!stamps_.Observe(*info.topic, m.header.stamp_ns, scan_messages_++, report_, &error_)) {
+    const int64_t stamp = Stamp(info, m.header);
+    if (!stamps_.Observe(*info.topic, stamp, scan_messages_++, report_, &error_)) {
       return false;
     }
     LidarScan scan;
     std::string why;
-    if (!ConvertScan(m, &scan, &why)) {
+    if (!ConvertScan(m, stamp, &scan, &why)) {
       if (report_->scans_refused++ == 0) {
         report_->first_scan_refusal =
             *info.topic + " message " + std::to_string(scan_messages_ - 1) + ": " + why;
@@ -135,24 +117,36 @@ class WritingSink : public RosMessageSink {
       return true;
     }
     const Status s = EncodeScanRecord(scan, &buffer_);
-    if (!s.ok()) {
-      if (report_->scans_refused++ == 0) report_->first_scan_refusal = *info.topic + ": " + s.message();
+    if (!s.ok() || buffer_.size() > kSessionMaxRecordBytes) {
+      // A scan of more returns than a session record holds (about 58,000):
+      // skipped and counted, the import goes on.
+      if (s.ok()) ++report_->scans_too_large;
+      const std::string why = s.ok() ? std::to_string(scan.samples.size()) + " returns make a " +
+                                           std::to_string(buffer_.size()) +
+                                           "-byte session record, more than its " +
+                                           std::to_string(kSessionMaxRecordBytes)
+                                     : s.message();
+      if (report_->scans_refused++ == 0) {
+        report_->first_scan_refusal =
+            *info.topic + " message " + std::to_string(scan_messages_ - 1) + ": " + why;
+      }
       return true;
     }
     ++report_->scans;
     report_->samples += scan.samples.size();
-    CheckBeamTimes(m);
+    CheckBeamTimes(m, stamp);
     return Write(info.log_time_ns);
   }
 
   bool OnOdometry(const RosMessageInfo& info, const RosOdometry& m) override {
     if (*info.topic != setup_.odom_topic) return true;
-    if (!stamps_.Observe(*info.topic, m.header.stamp_ns, report_->odometry, report_, &error_)) {
+    const int64_t stamp = Stamp(info, m.header);
+    if (!stamps_.Observe(*info.topic, stamp, report_->odometry, report_, &error_)) {
       return false;
     }
     ++report_->odometry;
     const Rigid3d pose = RigidFromRos(m.position, m.orientation);
-    odometry_.push_back({m.header.stamp_ns - setup_.time_origin_ns, m.position[0], m.position[1],
+    odometry_.push_back({stamp - setup_.time_origin_ns, m.position[0], m.position[1],
                          YawFromQuaternion(pose.rotation()), m.linear_velocity[0],
                          m.angular_velocity[2], info.log_time_ns});
     return true;
@@ -160,12 +154,13 @@ class WritingSink : public RosMessageSink {
 
   bool OnImu(const RosMessageInfo& info, const RosImu& m) override {
     if (*info.topic != setup_.imu_topic) return true;
-    if (!stamps_.Observe(*info.topic, m.header.stamp_ns, report_->imu, report_, &error_)) {
+    const int64_t stamp = Stamp(info, m.header);
+    if (!stamps_.Observe(*info.topic, stamp, report_->imu, report_, &error_)) {
       return false;
     }
     ++report_->imu;
     ImuMeasurement out;
-    out.time = TimeFromNanoseconds(m.header.stamp_ns - setup_.time_origin_ns);
+    out.time = TimeFromNanoseconds(stamp - setup_.time_origin_ns);
     const auto& q = m.orientation;
     out.has_attitude = m.orientation_covariance[0] != -1.0 &&
                        (q[0] != 0.0 || q[1] != 0.0 || q[2] != 0.0 || q[3] != 0.0);
@@ -239,9 +234,18 @@ class WritingSink : public RosMessageSink {
   }
 
   const std::string& error() const { return error_; }
+  // The error was the session writer's (the output), not the bag's.
+  bool write_failed() const { return write_failed_; }
 
  private:
-  bool ConvertScan(const RosLaserScan& m, LidarScan* scan, std::string* why) {
+  // The message's time on the bag's sensor clock: its header stamp, or for
+  // a topic stamped on another clock its log time moved onto that clock.
+  int64_t Stamp(const RosMessageInfo& info, const RosHeader& h) const {
+    auto it = setup_.stamps_from_log_time.find(*info.topic);
+    return it == setup_.stamps_from_log_time.end() ? h.stamp_ns : info.log_time_ns + it->second;
+  }
+
+  bool ConvertScan(const RosLaserScan& m, int64_t stamp_ns, LidarScan* scan, std::string* why) {
     const size_t n = m.ranges.size();
     if (!(std::isfinite(m.angle_increment) && m.angle_increment != 0.0f &&
           std::isfinite(m.angle_min) && std::isfinite(m.angle_max))) {
@@ -285,7 +289,7 @@ class WritingSink : public RosMessageSink {
     }
     const bool has_intensity = m.intensities.size() == n;
     if (!has_intensity && !m.intensities.empty()) ++report_->intensities_dropped;
-    const int64_t stamp = m.header.stamp_ns - setup_.time_origin_ns;
+    const int64_t stamp = stamp_ns - setup_.time_origin_ns;
     scan->index = static_cast<uint32_t>(report_->scans);
     scan->samples.reserve(n);
     for (size_t k = 0; k < n; ++k) {
@@ -315,11 +319,11 @@ class WritingSink : public RosMessageSink {
   // driver that writes a wrong time_increment (seen in real bags: 2.2e-7 s
   // a beam at 12.5 scans/s) makes a span far shorter. Said once, not fixed:
   // nothing in the message tells the right value.
-  void CheckBeamTimes(const RosLaserScan& m) {
+  void CheckBeamTimes(const RosLaserScan& m, int64_t stamp_ns) {
     const int64_t previous = previous_scan_stamp_;
-    previous_scan_stamp_ = m.header.stamp_ns;
-    if (previous != 0 && m.header.stamp_ns > previous) {
-      const double period = (m.header.stamp_ns - previous) * 1e-9;
+    previous_scan_stamp_ = stamp_ns;
+    if (previous != 0 && stamp_ns > previous) {
+      const double period = (stamp_ns - previous) * 1e-9;
       if (min_period_s_ == 0.0 || period < min_period_s_) min_period_s_ = period;
     }
     beam_span_s_ = std::max(beam_span_s_, std::abs(static_cast<double>(m.time_increment)) * m.ranges.size());
@@ -342,6 +346,7 @@ class WritingSink : public RosMessageSink {
     const Status s = writer_->Append(buffer_, log_time_ns);
     if (!s.ok()) {
       error_ = s.message();
+      write_failed_ = true;
       return false;
     }
     return true;
@@ -360,6 +365,7 @@ class WritingSink : public RosMessageSink {
   size_t beams_ = 0;
   int scans_checked_ = 0;
   std::string error_;
+  bool write_failed_ = false;
 };
 
 // Removes what a failed import wrote (only the files it creates).
@@ -435,8 +441,14 @@ Status ChooseTopic(const RosBagSummary& summary, RosMessageKind kind, const std:
                        " topics (" + list + "): choose one with " + option);
 }
 
-Status ImportRosBag(const std::string& bag, const std::string& session_dir,
-                    const RosImportOptions& options, RosImportReport* report) {
+Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
+                    const RosImportOptions& options, RosImportReport* report,
+                    RosImportFailure* failure) {
+  const std::string bag = RosBagPath(bag_path);
+  RosImportFailure local_failure;
+  if (failure == nullptr) failure = &local_failure;
+  // Everything below is the bag's fault unless said otherwise.
+  *failure = RosImportFailure::kBag;
   // The readers keep the bag open across the passes; closed when done.
   struct Release {
     ~Release() { ReleaseRosBags(); }
@@ -448,6 +460,18 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   std::vector<std::string> summary_warnings;
   Status s = SummarizeRosBag(bag, &summary, &summary_warnings);
   if (!s.ok()) return s;
+  RosReadStats stats;
+  // A refusal says what the readers read past too: a bag torn before its
+  // first scan has no LaserScan topic, because of the tear.
+  const auto refuse = [&](const std::string& why) {
+    std::string text = bag + ": " + why;
+    std::vector<std::string> said = summary_warnings;
+    for (const std::string& w : stats.warnings) {
+      if (std::find(said.begin(), said.end(), w) == said.end()) said.push_back(w);
+    }
+    for (const std::string& w : said) text += "; " + w;
+    return Status::Error(text);
+  };
   r.format = summary.format;
   for (auto [kind, requested, required, topic] :
        {std::tuple{RosMessageKind::kLaserScan, options.scan_topic, false, &r.scan_topic},
@@ -460,10 +484,10 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   if (r.scan_topic.empty() && r.odom_topic.empty() && r.imu_topic.empty()) {
     std::string why;
     for (const std::string& w : r.warnings) why += "; " + w;
-    return Status::Error(bag +
-                         ": no sensor_msgs/LaserScan, nav_msgs/Odometry or sensor_msgs/Imu "
-                         "topic: nothing sweepscan reads" +
-                         why);
+    return refuse(
+        "no sensor_msgs/LaserScan, nav_msgs/Odometry or sensor_msgs/Imu topic: nothing sweepscan "
+        "reads" +
+        why);
   }
 
   // Pass 1: tf, and the first message of each sensor topic.
@@ -480,7 +504,6 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     return [&options, from, to](double f) { return !options.progress || options.progress(from + (to - from) * f); };
   };
   read.progress = progress(0.0, 0.05);
-  RosReadStats stats;
   // /tf_static whole (a few messages), then the first of /tf's: reading
   // both at once would stop /tf_static where /tf stops.
   for (const bool statics : {true, false}) {
@@ -498,7 +521,7 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   s = ReadRosBag(bag, read, &first, &stats);
   if (!s.ok() && !first.stopped_early_) return s;
   for (const std::string& topic : sensors) {
-    if (first.first_.count(topic) == 0) return Status::Error(bag + ": " + topic + " holds no message");
+    if (first.first_.count(topic) == 0) return refuse(topic + " holds no message");
   }
   r.base_frame = options.base_frame;
   if (r.base_frame.empty()) r.base_frame = NormalizeFrame(first.odom_child_);
@@ -546,9 +569,20 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   }
   if (r.imu_topic.empty()) r.warnings.push_back("no IMU: the heading comes from the odometry alone");
 
+  std::vector<std::pair<std::string, int64_t>> offsets;  // topic, stamp - log time
+  for (const std::string* topic : {&r.scan_topic, &r.odom_topic, &r.imu_topic}) {
+    if (!topic->empty())
+      offsets.emplace_back(*topic, first.first_.at(*topic).stamp_ns - first.first_log_.at(*topic));
+  }
+  CheckClocks(offsets, &r);
   // Robot time: shifted by whole seconds to start near 1 s.
   int64_t earliest = std::numeric_limits<int64_t>::max();
-  for (const auto& [topic, h] : first.first_) earliest = std::min(earliest, h.stamp_ns);
+  for (const auto& [topic, h] : first.first_) {
+    auto log = r.stamps_from_log_time.find(topic);
+    earliest = std::min(earliest, log == r.stamps_from_log_time.end()
+                                      ? h.stamp_ns
+                                      : first.first_log_.at(topic) + log->second);
+  }
   r.time_origin_ns = (earliest / kNsPerS - 1) * kNsPerS;
 
   RobotGeometry g;
@@ -577,7 +611,10 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   meta.notes = options.notes;
   std::unique_ptr<SessionWriter> writer;
   s = SessionWriter::Create(session_dir, meta, SessionWriterOptions(), &writer);
-  if (!s.ok()) return s;
+  if (!s.ok()) {
+    *failure = RosImportFailure::kOutput;
+    return s;
+  }
 
   // The bag's SHA-256 on the second core while pass 2 reads it.
   std::atomic<bool> stop_hash{false};
@@ -589,14 +626,24 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
   read.progress = progress(0.1, 1.0);
   s = ReadRosBag(bag, read, &sink, &stats);
   if (s.ok() && !sink.Finish()) s = Status::Error(sink.error());
-  if (!s.ok() && !sink.error().empty() && s.message().find("cancelled") != std::string::npos) {
+  if (!s.ok() && sink.write_failed()) {
+    // The session writer's error names the session's file.
+    *failure = RosImportFailure::kOutput;
+    s = Status::Error(sink.error());
+  } else if (!s.ok() && !sink.error().empty()) {
     s = Status::Error(bag + ": " + sink.error());
+  } else if (!s.ok() && s.message().find("cancelled") != std::string::npos) {
+    *failure = RosImportFailure::kCancelled;
   }
   if (s.ok() && !r.scan_topic.empty() && r.scans == 0) {
-    s = Status::Error(bag + ": no usable scan on " + r.scan_topic +
-                      (r.first_scan_refusal.empty() ? "" : " (first refused: " + r.first_scan_refusal + ")"));
+    s = refuse(
+        "no usable scan on " + r.scan_topic +
+        (r.first_scan_refusal.empty() ? "" : " (first refused: " + r.first_scan_refusal + ")"));
   }
-  if (s.ok()) s = writer->Close();
+  if (s.ok()) {
+    s = writer->Close();
+    if (!s.ok()) *failure = RosImportFailure::kOutput;
+  }
   if (s.ok()) {
     // What the readers read past (a file cut short, a damaged summary).
     for (const std::string& w : summary_warnings) r.warnings.push_back(w);
@@ -605,8 +652,11 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
         r.warnings.push_back(w);
     }
     if (r.scans_refused > 0) {
-      r.warnings.push_back(std::to_string(r.scans_refused) + " scans refused (first: " +
-                           r.first_scan_refusal + ")");
+      r.warnings.push_back(
+          std::to_string(r.scans_refused) + " scans refused (first: " + r.first_scan_refusal + ")" +
+          (r.scans_too_large == 0 ? ""
+                                  : "; " + std::to_string(r.scans_too_large) +
+                                        " of them too large for a session record"));
     }
     if (r.out_of_order > 0) {
       r.warnings.push_back(std::to_string(r.out_of_order) +
@@ -627,6 +677,7 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     }
     meta.settings["import"] = provenance;
     s = writer->UpdateMeta(meta);
+    if (!s.ok()) *failure = RosImportFailure::kOutput;
   }
   writer.reset();
   if (!s.ok()) {
@@ -636,6 +687,7 @@ Status ImportRosBag(const std::string& bag, const std::string& session_dir,
     return s;
   }
   if (report != nullptr) *report = std::move(r);
+  *failure = RosImportFailure::kNone;
   return Status::Ok();
 }
 
@@ -673,6 +725,8 @@ nlohmann::json RosImportReport::ToJson() const {
           {"time_gaps", time_gaps},
           {"intensities_dropped", intensities_dropped},
           {"undecodable", undecodable},
+          {"scans_too_large", scans_too_large},
+          {"stamps_from_log_time_ns", stamps_from_log_time},
           {"warnings", warnings}};
 }
 

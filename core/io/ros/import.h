@@ -36,10 +36,10 @@
 #define SWEEPSCAN_CORE_IO_ROS_IMPORT_H_
 
 #include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/common/status.h"
 #include "core/geometry/transform.h"
@@ -99,15 +99,31 @@ struct RosImportReport {
   uint64_t out_of_order = 0;        // messages stamped before their predecessor (sorted)
   uint64_t time_gaps = 0;           // forward jumps > 1 s within a topic
   uint64_t undecodable = 0;         // messages whose bytes did not decode
+  uint64_t scans_too_large = 0;     // scans whose session record would pass its 1 MiB cap
+  // Topics whose header stamps are on another clock than the others' (a
+  // driver stamping from boot, or 0): their times are their log times plus
+  // the other topics' stamp - log time offset (docs/ros-bags.md, "Clocks").
+  // Topic -> that offset, ns.
+  std::map<std::string, int64_t> stamps_from_log_time;
   std::vector<std::string> warnings;
 
   nlohmann::json ToJson() const;
 };
 
+// Why an import failed: the CLI's exit code (1 for kOutput, 2 for kBag).
+enum class RosImportFailure {
+  kNone,
+  kBag,        // the bag cannot be read, or holds nothing to import
+  kOutput,     // the session cannot be created or written (a folder in the way, a full disk)
+  kCancelled,  // options.progress returned false
+};
+
 // Imports `bag` into a new session folder `session_dir` (which must not
-// exist or be empty). On failure nothing is left at session_dir.
+// exist or be empty). On failure nothing is left at session_dir, and
+// *failure (if given) says whose fault it was.
 Status ImportRosBag(const std::string& bag, const std::string& session_dir,
-                    const RosImportOptions& options, RosImportReport* report);
+                    const RosImportOptions& options, RosImportReport* report,
+                    RosImportFailure* failure = nullptr);
 
 // Picks the topic of `kind`: `requested` if given (it must exist, be of
 // that type and in an encoding read here), else the only one with messages
