@@ -530,6 +530,32 @@ TEST(ChooseTopicTest, OnlyTopicsWithMessagesInAnEncodingReadHereAreChosen) {
   EXPECT_EQ(topic, "/scan");
 }
 
+// A scan with more returns than a session record holds (60 000: over the
+// session writer's 1 MiB record cap, under the 65 535 samples a record
+// counts) is skipped and counted, and the import goes on; it used to stop
+// the whole import with the writer's error.
+TEST_F(ImportTest, AScanTooLargeForASessionRecordIsSkippedNotTheImport) {
+  const std::string bag = dir_ + "/big_scan.bag";
+  const std::string out = Shell(std::string(SWEEPSCAN_PYTHON3) + " " + SWEEPSCAN_SOURCE_DIR +
+                                "/tests/core/io/ros/big_scan_bag.py " + bag + " 2>&1");
+  ASSERT_TRUE(Exists(bag)) << out;
+  RosImportReport report;
+  SessionMeta meta;
+  SensorLog log;
+  RosImportOptions options;
+  options.base_frame = "base_link";
+  ImportAndLoad("big_scan", options, &report, &meta, &log);
+  ASSERT_EQ(log.scans.size(), 2u);
+  EXPECT_EQ(log.scans[0].samples.size(), 360u);
+  EXPECT_EQ(log.scans[1].samples.size(), 360u);
+  EXPECT_EQ(report.scans, 2u);
+  EXPECT_EQ(report.scans_refused, 1u);
+  EXPECT_EQ(report.scans_too_large, 1u);
+  EXPECT_EQ(
+      report.first_scan_refusal,
+      "/scan message 1: 60000 returns make a 1080017-byte session record, more than its 1048576");
+}
+
 TEST_F(ImportTest, NotABagIsRefused) {
   const std::string text = dir_ + "/notes.txt";
   std::ofstream(text) << "not a bag\n";

@@ -206,7 +206,7 @@ TEST(McapRecoveryTest, ASummaryWithoutChannelsIsNotDamage) {
     b.insert(b.end(), reinterpret_cast<const uint8_t*>(&v),
              reinterpret_cast<const uint8_t*>(&v) + 8);
   }
-  b.resize(b.size() - 4);  // summary_crc u32 0: not computed
+  b.insert(b.end(), 4, 0);  // summary_crc u32 0: not computed
   b.insert(b.end(), full.end() - 8, full.end());
   RosBagSummary s;
   Ros2ReadReport report;
