@@ -200,7 +200,7 @@ Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s, Ros2ReadRe
   if (st.ok()) st = bag.CountMessages();
   if (st.ok()) bag.Fill(s);
   if (st.ok() && bag.damaged() && report != nullptr) {
-    report->warnings.push_back(bag.DamageWarning(s->message_count, "can be read"));
+    report->warnings.push_back(bag.DamageWarning(s->message_count, "could be read"));
   }
   return st;
 }
@@ -306,7 +306,7 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
         if (!st.ok()) return st;
       }
     }
-    if (report != nullptr) report->warnings.push_back(bag.DamageWarning(done, "were read"));
+    if (report != nullptr) report->warnings.push_back(bag.DamageWarning(done, "could be read"));
   }
   return Status::Ok();
 }

@@ -32,7 +32,7 @@ namespace sweepscan::io {
 // "database disk image is malformed") is read as far as it can be: the
 // messages sqlite can still read are counted and delivered, and a warning
 // in *report says so ("the database is damaged or truncated (...): N
-// messages were read, the rest is lost"). When not even the topics table
+// messages could be read, the rest is lost"). When not even the topics table
 // can be read, the error says the file is damaged or truncated.
 Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s,
                            Ros2ReadReport* report = nullptr);
