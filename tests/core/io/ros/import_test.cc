@@ -506,6 +506,27 @@ TEST_F(ImportTest, BagsRosReadsAreNotRefused) {
   }
 }
 
+// RosReadStats are added to (ros_messages.h), so that several reads share
+// one: a ROS 1 read used to overwrite the caller's counts and warnings.
+TEST_F(ImportTest, AReadAddsToTheCallersStats) {
+  struct Sink : RosMessageSink {
+    bool OnLaserScan(const RosMessageInfo&, const RosLaserScan&) override { return ++n, true; }
+    bool OnOdometry(const RosMessageInfo&, const RosOdometry&) override { return ++n, true; }
+    bool OnImu(const RosMessageInfo&, const RosImu&) override { return ++n, true; }
+    bool OnTf(const RosMessageInfo&, const RosTfMessage&) override { return ++n, true; }
+    uint64_t n = 0;
+  } sink;
+  RosReadStats stats;
+  stats.messages_read = 1000;
+  stats.bytes_read = 7;
+  stats.warnings = {"an earlier read's warning"};
+  ASSERT_TRUE(ReadRosBag(Bag("rules"), RosReadOptions(), &sink, &stats).ok());
+  ASSERT_GT(sink.n, 5u);
+  EXPECT_EQ(stats.messages_read, 1000 + sink.n);
+  EXPECT_GT(stats.bytes_read, 7u);
+  EXPECT_EQ(stats.warnings, std::vector<std::string>{"an earlier read's warning"});
+}
+
 TEST(ChooseTopicTest, OnlyTopicsWithMessagesInAnEncodingReadHereAreChosen) {
   RosBagSummary s;
   s.format = "mcap";
