@@ -42,6 +42,7 @@
 #include "ui/view/point_values.h"
 #include "ui/workspace/live_batch.h"
 
+class QImage;
 class QTimer;
 
 namespace sweepscan::ui {
@@ -256,9 +257,16 @@ class Workspace : public QObject {
   // Outlier removal, planes with deviation histograms, density (Eq. 18-19)
   // and room dimensions on a job thread, the same EvaluateCloud as
   // `sweepscan-cli evaluate`. The previous result is kept for before / after.
+  // Evaluations describe one cloud: another session, a live cloud (Connect,
+  // New Session, a recording) forgets both; another pose source or
+  // calibration of the same session forgets the current one and keeps it as
+  // the previous (evaluationCleared). A result for a cloud replaced while it
+  // was computed is dropped (evaluationFinished(false)).
   void Evaluate();
   const CloudEvaluation* evaluation() const { return evaluation_.get(); }
   const CloudEvaluation* previous_evaluation() const { return previous_evaluation_.get(); }
+  // The session the evaluation was made on (empty for a live cloud).
+  QString evaluated_session() const { return evaluated_session_; }
   // What the evaluated cloud was assembled under.
   const MountingError& evaluated_calibration() const { return evaluated_calibration_; }
   // The deviation map of the last evaluation: each point of the cloud shown
@@ -271,6 +279,10 @@ class Workspace : public QObject {
   // The report of the last evaluation (and the one before) as JSON
   // (docs/evaluation-report.md), written atomically to `path`.
   bool SaveEvaluationReport(const QString& path, const QString& image_name, QString* error) const;
+  // The same on a job thread, with `view` (a screenshot of the view) written
+  // beside it as PNG (same name, .png): Export report. A failure is a failed
+  // job (jobFinished), which the main window shows as an error.
+  void ExportEvaluationReport(const QString& path, const QImage& view);
 
   // ---- The cloud ----------------------------------------------------------
   BatchMailbox* mailbox() { return &mailbox_; }
@@ -318,6 +330,8 @@ class Workspace : public QObject {
   void calibrationIteration(int iteration, double cost);
   void calibrationFinished(bool ok, const QString& message);
   void evaluationFinished(bool ok, const QString& message);
+  // evaluation() no longer describes the cloud shown and is null now.
+  void evaluationCleared();
   void passesSplit(bool ok, const QString& message);
   void poseSourceChanged(int source);       // The choice (a PoseSource).
   void shownPoseSourceChanged(int source);  // A new cloud is on its way, made with this.
@@ -363,6 +377,13 @@ class Workspace : public QObject {
   void WithReplaySource(std::function<void()> then);
   // The cloud store pages beside `folder` (a session, the sessions folder).
   void PageBeside(const QString& folder);
+  // What was computed on the cloud shown (calibration, evaluation, pass
+  // labels, deviations) when another session or a live cloud replaces it
+  // (workspace_analysis.cc).
+  void ForgetSessionResults();
+  // The evaluation when the cloud changes; `keep_as_previous`: the same
+  // session under other poses or another calibration, kept for before / after.
+  void ForgetEvaluation(bool keep_as_previous);
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success);
   // A job's progress callback (any thread): the fraction to the status bar
@@ -438,6 +459,13 @@ class Workspace : public QObject {
   std::shared_ptr<const QuantizedValues> pass_values_, deviation_values_;
   std::shared_ptr<CloudEvaluation> evaluation_, previous_evaluation_;
   MountingError evaluated_calibration_, previous_calibration_;
+  QString evaluated_session_;
+  // Bumped by every cloud that replaces the one shown (ForgetEvaluation):
+  // an evaluation started on an older cloud is dropped when it ends.
+  uint64_t cloud_generation_ = 0;
+  // A calibration waits for the opened session's samples to be read again
+  // (WithOpenedSamples): a failure of that job is the calibration's.
+  bool calibration_waiting_ = false;
   size_t point_count_ = 0;
   size_t scan_count_ = 0;
 

@@ -1,8 +1,11 @@
 // Workspace, by concern: the calibration (picks, automatic, the pass
 // split, loading a calibration file, showing the calibrated cloud) and the
 // evaluation, each a job on the job thread.
+#include <QBuffer>
 #include <QDateTime>
+#include <QDir>
 #include <QFileInfo>
+#include <QImage>
 #include <QMetaObject>
 
 #include "core/calibration/automatic.h"
@@ -17,6 +20,28 @@ namespace {
 // The deviation map's band: a point farther than this from every fitted
 // plane is on none (furniture, the robot's own clutter) and shows grey.
 constexpr double kDeviationBandM = 0.05;
+
+// The report's JSON (docs/evaluation-report.md).
+std::string ReportJson(const QString& session, const QString& image_name,
+                       const CloudEvaluation& evaluation, const MountingError& calibration,
+                       const CloudEvaluation* previous, const MountingError& previous_calibration) {
+  auto angles = [](const MountingError& c) {
+    return nlohmann::json{{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}};
+  };
+  nlohmann::json report = {
+      {"format", "sweepscan-evaluation-report"},
+      {"version", 1},
+      {"session", session.toStdString()},
+      {"created", QDateTime::currentDateTimeUtc().toString(Qt::ISODateWithMs).toStdString()},
+      {"image", image_name.toStdString()},
+      {"calibration_rad", angles(calibration)},
+      {"evaluation", EvaluationToJson(evaluation)}};
+  if (previous != nullptr) {
+    report["previous"] = {{"calibration_rad", angles(previous_calibration)},
+                          {"evaluation", EvaluationToJson(*previous)}};
+  }
+  return report.dump(2) + "\n";
+}
 
 }  // namespace
 
@@ -62,7 +87,11 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
     return;
   }
   if (opened_samples_released_) {
-    WithOpenedSamples([=] { Calibrate(picks, refine, board_thickness_m); });
+    calibration_waiting_ = true;
+    WithOpenedSamples([=] {
+      calibration_waiting_ = false;
+      Calibrate(picks, refine, board_thickness_m);
+    });
     return;
   }
   std::shared_ptr<const hardware::Recording> recording = opened_;
@@ -104,7 +133,11 @@ void Workspace::CalibrateAutomatic() {
     return;
   }
   if (opened_samples_released_) {
-    WithOpenedSamples([this] { CalibrateAutomatic(); });
+    calibration_waiting_ = true;
+    WithOpenedSamples([this] {
+      calibration_waiting_ = false;
+      CalibrateAutomatic();
+    });
     return;
   }
   std::shared_ptr<const hardware::Recording> recording = opened_;
@@ -192,13 +225,19 @@ void Workspace::Evaluate() {
   auto points = std::make_shared<std::vector<Eigen::Vector3f>>();
   auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
   if (snapshot->size() == 0) {
-    emit evaluationFinished(false, tr("The cloud is empty: open or record a session first."));
+    // The workspace holds one session's cloud (or the live one); a
+    // project's sessions are drawn as layers of the view, not evaluated.
+    emit evaluationFinished(
+        false, tr("No session's cloud to evaluate. The evaluation works on a single session's "
+                  "cloud: open or record a session. A project's clouds are not evaluated "
+                  "together: open one of its sessions (File > Open Session) to evaluate it."));
     return;
   }
   auto result = std::make_shared<CloudEvaluation>();
   auto deviations = std::make_shared<std::vector<float>>();
   auto quantized = std::make_shared<QuantizedValues>();
   const MountingError shown = shown_calibration_;
+  const uint64_t generation = cloud_generation_;
   RunJob(
       tr("Evaluating"),
       [this, snapshot, points, result, deviations,
@@ -215,9 +254,13 @@ void Workspace::Evaluate() {
         EvaluationControl control;
         control.cancel = cancel;
         control.progress = [this](const EvaluationProgress& p) {
+          // The evaluation's "done" is not the job's: the deviation map of
+          // every point comes after it.
+          const bool done = p.stage == EvaluationStage::kDone;
           const QString what =
-              tr("Evaluating: %1").arg(QString::fromLatin1(EvaluationStageName(p.stage)));
-          const double f = p.fraction;
+              done ? tr("Evaluating: deviation map")
+                   : tr("Evaluating: %1").arg(QString::fromLatin1(EvaluationStageName(p.stage)));
+          const double f = done ? -1.0 : p.fraction;
           QMetaObject::invokeMethod(this, [this, what, f] { emit jobProgress(what, f); });
           return true;
         };
@@ -229,15 +272,53 @@ void Workspace::Evaluate() {
         *quantized = Quantize(*deviations);  // as the view keeps them, off the GUI thread
         return QString();
       },
-      [this, result, shown, deviations, quantized] {
-        previous_evaluation_ = evaluation_;
-        previous_calibration_ = evaluated_calibration_;
+      [this, result, shown, deviations, quantized, generation] {
+        if (generation != cloud_generation_) {
+          // Another session, live cloud, pose source or calibration since:
+          // these figures describe a cloud no longer shown.
+          emit evaluationFinished(
+              false, tr("The cloud shown changed while it was evaluated: evaluate it again."));
+          return;
+        }
+        // A re-evaluation of the same cloud: the last result is "before".
+        // (After another pose source or calibration ForgetEvaluation has
+        // made it the previous already.)
+        if (evaluation_ != nullptr) {
+          previous_evaluation_ = evaluation_;
+          previous_calibration_ = evaluated_calibration_;
+        }
         evaluation_ = result;
         deviation_map_ = std::move(*deviations);
         deviation_values_ = quantized;
         evaluated_calibration_ = shown;
+        evaluated_session_ = session_dir_;
         emit evaluationFinished(true, QString());
       });
+}
+
+void Workspace::ForgetEvaluation(bool keep_as_previous) {
+  ++cloud_generation_;
+  deviation_map_.clear();
+  deviation_values_.reset();
+  if (keep_as_previous && evaluation_ != nullptr) {
+    previous_evaluation_ = evaluation_;
+    previous_calibration_ = evaluated_calibration_;
+  } else if (!keep_as_previous) {
+    previous_evaluation_.reset();
+  }
+  const bool had = evaluation_ != nullptr;
+  evaluation_.reset();
+  if (!keep_as_previous) evaluated_session_.clear();
+  if (had) emit evaluationCleared();
+}
+
+void Workspace::ForgetSessionResults() {
+  ForgetEvaluation(/*keep_as_previous=*/false);
+  pass_labels_.clear();
+  pass_values_.reset();
+  calibration_.reset();
+  calibration_waiting_ = false;
+  opened_circle_ = OpenedCircle();
 }
 
 bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_name,
@@ -246,28 +327,47 @@ bool Workspace::SaveEvaluationReport(const QString& path, const QString& image_n
     *error = tr("Evaluate first.");
     return false;
   }
-  auto angles = [](const MountingError& c) {
-    return nlohmann::json{{"alpha", c.alpha}, {"beta", c.beta}, {"gamma", c.gamma}};
-  };
-  nlohmann::json report = {{"format", "sweepscan-evaluation-report"},
-                           {"version", 1},
-                           {"session", session_dir_.toStdString()},
-                           {"created", QDateTime::currentDateTimeUtc()
-                                           .toString(Qt::ISODateWithMs)
-                                           .toStdString()},
-                           {"image", image_name.toStdString()},
-                           {"calibration_rad", angles(evaluated_calibration_)},
-                           {"evaluation", EvaluationToJson(*evaluation_)}};
-  if (previous_evaluation_ != nullptr) {
-    report["previous"] = {{"calibration_rad", angles(previous_calibration_)},
-                          {"evaluation", EvaluationToJson(*previous_evaluation_)}};
-  }
-  const Status s = WriteFileChecked(path.toStdString(), report.dump(2) + "\n");
+  const Status s = WriteFileChecked(
+      path.toStdString(),
+      ReportJson(evaluated_session_, image_name, *evaluation_, evaluated_calibration_,
+                 previous_evaluation_.get(), previous_calibration_));
   if (!s.ok()) {
     *error = QString::fromStdString(s.message());
     return false;
   }
   return true;
+}
+
+void Workspace::ExportEvaluationReport(const QString& path, const QImage& view) {
+  const QString what = tr("Exporting the report %1").arg(path);
+  if (evaluation_ == nullptr) {
+    emit jobFinished(what, false, tr("Evaluate the cloud shown first."));
+    return;
+  }
+  const QFileInfo info(path);
+  const QString image_name = info.completeBaseName() + QStringLiteral(".png");
+  const std::string image_path = info.dir().filePath(image_name).toStdString();
+  // The figures as they are now (the cloud may change while the files are
+  // written); the writing, and the image's encoding, on the job thread.
+  const std::string json =
+      ReportJson(evaluated_session_, image_name, *evaluation_, evaluated_calibration_,
+                 previous_evaluation_.get(), previous_calibration_);
+  const std::string file = path.toStdString();
+  RunJob(
+      what,
+      [view, image_path, json, file](std::atomic<bool>*) -> QString {
+        QByteArray png;
+        QBuffer buffer(&png);
+        buffer.open(QIODevice::WriteOnly);
+        if (view.isNull() || !view.save(&buffer, "PNG")) {
+          return tr("%1: cannot encode the view's image").arg(QString::fromStdString(image_path));
+        }
+        // Each file complete or absent (core/common/checked_file.h).
+        Status s = WriteFileChecked(image_path, png.toStdString());
+        if (s.ok()) s = WriteFileChecked(file, json);
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, path] { emit message(tr("Exported the evaluation report to %1").arg(path)); });
 }
 
 void Workspace::ShowCalibrated(const MountingError& calibration) {
