@@ -129,14 +129,18 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
     : QWidget(parent), workspace_(workspace), view_(view) {
   auto* layout = new QVBoxLayout(this);
   evaluate_ = new QPushButton(tr("Evaluate the cloud shown"));
+  evaluate_->setObjectName(QStringLiteral("evaluate"));
   layout->addWidget(evaluate_);
-  summary_ =
-      new QLabel(tr("Planes, deviations, density and room size of the cloud shown. "
-                    "Evaluate before and after a calibration to compare."));
+  intro_ =
+      tr("Planes, deviations, density and room size of the cloud shown. "
+         "Evaluate before and after a calibration to compare.");
+  summary_ = new QLabel(intro_);
+  summary_->setObjectName(QStringLiteral("evaluationSummary"));
   summary_->setWordWrap(true);
   summary_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   layout->addWidget(summary_);
   planes_ = new QTableWidget(0, 5);
+  planes_->setObjectName(QStringLiteral("evaluationPlanes"));
   planes_->setHorizontalHeaderLabels(
       {tr("plane"), tr("points"), tr("RMS (mm)"), tr("tilt (°)"), tr("before: RMS, tilt")});
   planes_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
@@ -148,6 +152,7 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   histogram_ = new HistogramPlot;
   layout->addWidget(histogram_);
   dimensions_ = new QTableWidget(0, 3);
+  dimensions_->setObjectName(QStringLiteral("evaluationDimensions"));
   dimensions_->setHorizontalHeaderLabels({tr("dimension"), tr("now (m)"), tr("before (m)")});
   dimensions_->horizontalHeader()->setSectionResizeMode(QHeaderView::Stretch);
   dimensions_->setEditTriggers(QAbstractItemView::NoEditTriggers);
@@ -172,6 +177,7 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   shown->addWidget(deviation_range_, 1, 1);
   layout->addLayout(shown);
   export_ = new QPushButton(tr("Export report…"));
+  export_->setObjectName(QStringLiteral("exportReport"));
   export_->setToolTip(tr("The evaluation as JSON, with a PNG of the view beside it"));
   export_->setEnabled(false);
   layout->addWidget(export_);
@@ -182,10 +188,12 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   connect(deviation_range_, qOverload<double>(&QDoubleSpinBox::valueChanged), view_,
           &CloudView::SetDeviationRange);
   connect(export_, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, tr("Export evaluation report"),
-                                                      QString(), tr("Report (*.json)"));
-    QString error;
-    if (!path.isEmpty() && !ExportReport(path, &error)) summary_->setText(error);
+    QString path = QFileDialog::getSaveFileName(this, tr("Export evaluation report"), QString(),
+                                                tr("Report (*.json)"));
+    if (path.isEmpty()) return;
+    // Qt's own dialog leaves a name typed without its suffix bare.
+    if (QFileInfo(path).suffix().isEmpty()) path += QStringLiteral(".json");
+    ExportReportInBackground(path);
   });
   // A new cloud (another session, a before / after replay, another pose
   // source) has neither the old planes nor the old deviations.
@@ -195,6 +203,16 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   };
   connect(workspace_, &Workspace::sessionChanged, this, forget);
   connect(workspace_, &Workspace::shownPoseSourceChanged, this, forget);
+  // ... nor the old figures: the workspace has forgotten them.
+  connect(workspace_, &Workspace::evaluationCleared, this, [this] {
+    ShowCleared(workspace_->previous_evaluation() != nullptr
+                    ? tr("The cloud shown has changed (another pose source or calibration): "
+                         "evaluate it again. The last evaluation is kept as \"before\".")
+                    : tr("The cloud shown has changed: evaluate it again."));
+  });
+  connect(workspace_, &Workspace::sessionChanged, this, [this] {
+    if (workspace_->evaluation() == nullptr) ShowCleared(intro_);
+  });
   connect(planes_, &QTableWidget::itemSelectionChanged, this, &EvaluationPanel::ShowHistogram);
   connect(workspace_, &Workspace::evaluationFinished, this, &EvaluationPanel::Show);
 }
@@ -209,10 +227,21 @@ QString EvaluationPanel::summary_text() const { return summary_->text(); }
 
 int EvaluationPanel::plane_rows() const { return planes_->rowCount(); }
 
+void EvaluationPanel::ShowCleared(const QString& text) {
+  summary_->setText(text);
+  planes_->setRowCount(0);
+  dimensions_->setRowCount(0);
+  histogram_->Set(DeviationHistogram(), DeviationHistogram(), QString());
+  export_->setEnabled(false);
+}
+
 void EvaluationPanel::Show(bool ok, const QString& message) {
   evaluate_->setEnabled(true);
   const CloudEvaluation* e = workspace_->evaluation();
   if (!ok || e == nullptr) {
+    // The tables show the evaluation the workspace holds (it may be one
+    // from before a refused re-evaluation), or none.
+    if (e == nullptr) ShowCleared(QString());
     summary_->setText(
         tr("<b style='color:#c62828'>Not evaluated:</b> %1").arg(message.toHtmlEscaped()));
     emit evaluated(false);
@@ -251,11 +280,12 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
   for (size_t i = 0; i < e->dimensions.size(); ++i) {
     const RoomDimension& d = e->dimensions[i];
     const int r = static_cast<int>(i);
+    // Planes numbered as the table's rows (from 1), as an operator reads them.
     dimensions_->setItem(r, 0,
                          new QTableWidgetItem(QStringLiteral("%1 (%2-%3)")
                                                   .arg(QString::fromStdString(d.axis))
-                                                  .arg(d.plane_a)
-                                                  .arg(d.plane_b)));
+                                                  .arg(d.plane_a + 1)
+                                                  .arg(d.plane_b + 1)));
     dimensions_->setItem(r, 1, Item(QString::number(d.distance_m, 'f', 4)));
     QString b = QStringLiteral("-");
     if (before != nullptr && i < before->dimensions.size() &&
@@ -276,7 +306,7 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
     patch.color = PlaneColor(p.kind, p.kind == "wall" ? walls++ : 0);
     patch.label = QStringLiteral("%1 %2: %3 mm")
                       .arg(QString::fromStdString(p.kind))
-                      .arg(i)
+                      .arg(i + 1)
                       .arg(p.plane.rms * 1e3, 0, 'f', 1);
     patches.push_back(patch);
   }
@@ -307,8 +337,23 @@ void EvaluationPanel::ShowDeviations(bool on) {
     }
     view_->SetColorMode(CloudView::ColorMode::kDeviation);
   } else if (view_->color_mode() == CloudView::ColorMode::kDeviation) {
-    view_->SetColorMode(static_cast<CloudView::ColorMode>(color_before_));
+    // The colouring from before, unless the cloud now shown has no values
+    // for it (the pass labels of a calibration drive no longer shown): grey
+    // under its legend says nothing.
+    auto mode = static_cast<CloudView::ColorMode>(color_before_);
+    const bool given = mode == CloudView::ColorMode::kPass ||
+                       mode == CloudView::ColorMode::kDeviation ||
+                       mode == CloudView::ColorMode::kIntensity;
+    if (given && !view_->has_point_values(mode)) mode = CloudView::ColorMode::kHeight;
+    view_->SetColorMode(mode);
   }
+}
+
+void EvaluationPanel::ExportReportInBackground(const QString& path) {
+  // The view grabbed now (GUI thread), the files written on the job thread;
+  // a failure comes back as a failed job, shown as an error by the main
+  // window as Export Cloud's is. The summary stays.
+  workspace_->ExportEvaluationReport(path, view_->GrabImage());
 }
 
 bool EvaluationPanel::ExportReport(const QString& path, QString* error) {
@@ -337,10 +382,11 @@ void EvaluationPanel::ShowHistogram() {
       }
     }
   }
-  histogram_->Set(p.deviations, before, tr("%1 %2: deviations from its plane (RMS %3 mm)")
-                                    .arg(QString::fromStdString(p.kind))
-                                    .arg(r)
-                                    .arg(p.plane.rms * 1e3, 0, 'f', 2));
+  histogram_->Set(p.deviations, before,
+                  tr("%1 %2: deviations from its plane (RMS %3 mm)")
+                      .arg(QString::fromStdString(p.kind))
+                      .arg(r + 1)
+                      .arg(p.plane.rms * 1e3, 0, 'f', 2));
 }
 
 }  // namespace sweepscan::ui

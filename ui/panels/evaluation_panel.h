@@ -37,8 +37,11 @@ class EvaluationPanel : public QWidget {
   void ShowDeviations(bool on);
   void ShowPlanes(bool on);
   // Writes `path` (JSON, docs/evaluation-report.md) and beside it the view
-  // as PNG (same name, .png).
+  // as PNG (same name, .png), here and now.
   bool ExportReport(const QString& path, QString* error);
+  // The same as Export report… does it: on the job thread (progress in the
+  // status bar); a failure is shown as an error, the summary stays.
+  void ExportReportInBackground(const QString& path);
   QString summary_text() const;
   int plane_rows() const;
 
@@ -47,6 +50,8 @@ class EvaluationPanel : public QWidget {
 
  private:
   void Show(bool ok, const QString& message);
+  // No evaluation of the cloud shown: empty tables, no export; `text` says why.
+  void ShowCleared(const QString& text);
   void ShowHistogram();
 
   Workspace* workspace_;
@@ -58,6 +63,7 @@ class EvaluationPanel : public QWidget {
   QDoubleSpinBox* deviation_range_;
   int color_before_ = 0;
   QLabel* summary_;
+  QString intro_;  // What the panel does, shown until an evaluation.
   QTableWidget* planes_;
   QTableWidget* dimensions_;
   HistogramPlot* histogram_;
