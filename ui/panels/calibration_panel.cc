@@ -14,6 +14,7 @@
 #include <QPushButton>
 #include <QScrollArea>
 #include <QSettings>
+#include <QSignalBlocker>
 #include <QTableWidget>
 #include <QTimer>
 #include <QUndoCommand>
@@ -41,6 +42,20 @@ class CostPlot : public QWidget {
     costs_.push_back(std::max(cost, 1e-30));
     update();
   }
+  // "cost 40512 -> 40498 (-0.034 %), 5 iterations, log scale": the relative
+  // change, which three digits of each end cannot show when it is small.
+  QString Caption() const {
+    if (costs_.size() < 2) return QString();
+    const double first = costs_.front(), last = costs_.back();
+    const double change = 100.0 * (last - first) / first;
+    // Enough digits that the two ends differ where the costs do.
+    const int digits = std::abs(change) >= 1.0 ? 3 : std::abs(change) >= 0.01 ? 6 : 9;
+    return tr("cost %1 -> %2 (%3 %), %4 iterations, log scale")
+        .arg(first, 0, 'g', digits)
+        .arg(last, 0, 'g', digits)
+        .arg(change, 0, 'g', 2)
+        .arg(costs_.size() - 1);
+  }
 
  protected:
   void paintEvent(QPaintEvent*) override {
@@ -55,8 +70,10 @@ class CostPlot : public QWidget {
       return;
     }
     double lo = std::log10(*std::min_element(costs_.begin(), costs_.end()));
-    double hi = std::log10(*std::max_element(costs_.begin(), costs_.end()));
-    if (hi - lo < 1e-9) hi = lo + 1.0;
+    const double hi = std::log10(*std::max_element(costs_.begin(), costs_.end()));
+    // At least a decade high: a solve that barely moves the cost (it started
+    // near the answer) draws a nearly flat line, not a full-height drop.
+    lo = std::min(lo, hi - 1.0);
     const QRectF r = QRectF(rect()).adjusted(8, 16, -8, -8);
     QPainterPath path;
     for (size_t i = 0; i < costs_.size(); ++i) {
@@ -70,11 +87,7 @@ class CostPlot : public QWidget {
     p.setPen(QPen(QColor(30, 136, 229), 2));
     p.drawPath(path);
     p.setPen(palette().text().color());
-    p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignLeft,
-               tr("cost %1 -> %2 (%3 iterations, log scale)")
-                   .arg(costs_.front(), 0, 'g', 3)
-                   .arg(costs_.back(), 0, 'g', 3)
-                   .arg(costs_.size() - 1));
+    p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignLeft, Caption());
   }
 
  private:
@@ -82,6 +95,10 @@ class CostPlot : public QWidget {
 };
 
 namespace {
+
+QString PassesIntro() {
+  return QObject::tr("Open a calibration drive: its two passes are split automatically.");
+}
 
 const QColor kColorA(0, 200, 255);
 const QColor kColorB(255, 60, 200);
@@ -130,7 +147,17 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
   connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
   connect(workspace_, &Workspace::passesSplit, this, &CalibrationPanel::OnPassesSplit);
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
-    after_->setChecked(false);
+    {
+      // Not ShowAfter(false): the new session replays under its own
+      // calibration already.
+      const QSignalBlocker block(after_);
+      after_->setChecked(false);
+      after_->setText(tr("Show calibrated"));
+    }
+    // The result was the previous session's (the workspace has let it go).
+    solving_ = false;
+    result_->clear();
+    plot_->Clear();
     pass_shown_ = -1;
     // Picks are points of one session's cloud: another session's pairs (and
     // their undo history) would pair points of a cloud no longer shown. The
@@ -154,11 +181,29 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
       undo_->clear();
       pairs_session_ = dir;
     }
-    passes_->setText(workspace_->circle_drive()
-                         ? tr("Opened %1; splitting the passes when it has replayed.")
-                               .arg(workspace_->circle_drive_note())
-                         : tr("Not a calibration drive: %1").arg(workspace_->circle_drive_note()));
+    if (workspace_->recording_opened() == nullptr) {
+      passes_->setText(PassesIntro());
+    } else {
+      passes_->setText(
+          workspace_->circle_drive()
+              ? tr("Opened %1; splitting the passes when it has replayed.")
+                    .arg(workspace_->circle_drive_note())
+              : tr("Not a calibration drive: %1").arg(workspace_->circle_drive_note()));
+    }
     Refresh();
+  });
+  // Once every panel has seen the new session (the evaluation panel gives
+  // the view back the colouring it had before its deviations, perhaps the
+  // passes): a cloud without pass labels is not left grey under the pass
+  // legend that this panel chose for the previous one.
+  connect(workspace_, &Workspace::sessionChanged, this, &CalibrationPanel::RestoreColorMode,
+          Qt::QueuedConnection);
+  // The operator's own colouring since the passes were shown is kept.
+  connect(view_, &CloudView::colorModeChanged, this, [this](int mode) {
+    const auto m = static_cast<CloudView::ColorMode>(mode);
+    if (m != CloudView::ColorMode::kPass && m != CloudView::ColorMode::kDeviation) {
+      passes_colored_ = false;
+    }
   });
   connect(workspace_, &Workspace::sessionRenamed, this,
           [this](const QString& dir) { pairs_session_ = dir; });
@@ -207,7 +252,7 @@ QWidget* CalibrationPanel::BuildTargetStep() {
 QWidget* CalibrationPanel::BuildPassesStep() {
   auto* box = new QGroupBox(tr("2. The two passes"));
   auto* layout = new QVBoxLayout(box);
-  passes_ = new QLabel(tr("Open a calibration drive: its two passes are split automatically."));
+  passes_ = new QLabel(PassesIntro());
   passes_->setWordWrap(true);
   layout->addWidget(passes_);
   auto* row = new QHBoxLayout;
@@ -394,9 +439,26 @@ void CalibrationPanel::ApplyPassLabels(int attempts_left) {
     return;
   }
   view_->SetPointValues(CloudView::ColorMode::kPass, *labels);
+  if (view_->color_mode() != CloudView::ColorMode::kPass) {
+    color_before_passes_ = static_cast<int>(view_->color_mode());
+  }
   view_->SetColorMode(CloudView::ColorMode::kPass);
+  passes_colored_ = true;
   view_->SetPassFilter(pass_shown_);
   Refresh();
+}
+
+void CalibrationPanel::RestoreColorMode() {
+  if (!passes_colored_ || workspace_->pass_values() != nullptr) return;
+  passes_colored_ = false;
+  if (view_->color_mode() != CloudView::ColorMode::kPass) return;
+  // Height, time and range come with every point; the other colourings'
+  // values belonged to the previous cloud.
+  auto mode = static_cast<CloudView::ColorMode>(color_before_passes_);
+  if (mode != CloudView::ColorMode::kTime && mode != CloudView::ColorMode::kRange) {
+    mode = CloudView::ColorMode::kHeight;
+  }
+  view_->SetColorMode(mode);
 }
 
 void CalibrationPanel::AddPick(const Eigen::Vector3d& world) {

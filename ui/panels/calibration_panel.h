@@ -98,6 +98,10 @@ class CalibrationPanel : public QWidget {
   // Gives the view the pass labels once it holds every point (the view
   // takes points on the GUI tick, after the workspace has them).
   void ApplyPassLabels(int attempts_left = 100);
+  // Gives the view back the colouring it had before ApplyPassLabels chose
+  // the passes, once the cloud shown has no pass labels (another session,
+  // the live cloud), unless the operator has chosen another since.
+  void RestoreColorMode();
   void StartSolving();
 
   Workspace* workspace_;
@@ -115,6 +119,8 @@ class CalibrationPanel : public QWidget {
   QPushButton* pass_buttons_[3];  // both, A, B
   QPushButton* split_;
   int pass_shown_ = -1;
+  bool passes_colored_ = false;  // The view shows the passes because this panel chose so.
+  int color_before_passes_ = 0;  // A CloudView::ColorMode.
   QPushButton* after_;
   QPushButton* save_calibration_;
   QPushButton* use_for_robot_;
