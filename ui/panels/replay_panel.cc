@@ -15,16 +15,19 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     : QWidget(parent), workspace_(workspace) {
   auto* layout = new QVBoxLayout(this);
   session_ = new QLabel(tr("No session"));
+  session_->setObjectName(QStringLiteral("replaySession"));
   session_->setWordWrap(true);
   session_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   layout->addWidget(session_);
   slider_ = new QSlider(Qt::Horizontal);
+  slider_->setObjectName(QStringLiteral("replaySlider"));
   slider_->setRange(0, 1000);
   slider_->setEnabled(false);
   slider_->setToolTip(tr("Replay position: drag to seek"));
   layout->addWidget(slider_);
   auto* row = new QHBoxLayout;
   position_ = new QLabel(QStringLiteral("0.0 / 0.0 s"));
+  position_->setObjectName(QStringLiteral("replayPosition"));
   speed_ = new QComboBox;
   for (double s : {1.0, 2.0, 5.0, 10.0, 20.0}) speed_->addItem(QStringLiteral("%1x").arg(s), s);
   speed_->addItem(tr("max"), 0.0);
@@ -68,6 +71,9 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     workspace_->SeekReplay(length_s_ * slider_->value() / 1000.0);
   });
   connect(workspace_, &Workspace::replayProgress, this, [this](double pos, double len) {
+    // A replay stopped by a new session or a live cloud may have reported
+    // last after the panel was reset for it.
+    if (!workspace_->replaying()) return;
     length_s_ = len;
     slider_->setEnabled(len > 0);
     if (!dragging_ && len > 0) slider_->setValue(static_cast<int>(1000.0 * pos / len));
@@ -85,7 +91,16 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     }
     session_->setText(dir.isEmpty() ? tr("No session") : QFileInfo(dir).fileName());
     session_->setToolTip(dir);
-    if (!workspace_->replaying()) slider_->setEnabled(false);
+    // The position and length were the previous session's: a new replay
+    // reports its own (replayProgress), a live cloud or a recording has none.
+    length_s_ = 0.0;
+    dragging_ = false;
+    {
+      const QSignalBlocker block(slider_);
+      slider_->setValue(0);
+    }
+    slider_->setEnabled(false);
+    position_->setText(QStringLiteral("0.0 / 0.0 s"));
     ShowPoseSource();
   });
   connect(pose_source_, QOverload<int>::of(&QComboBox::activated), this, [this] {
