@@ -1,0 +1,396 @@
+// What the panels computed or showed for one session's cloud goes with it,
+// driven through the real widgets under a real display (xvfb-run in CI):
+// the evaluation (its tables, its report, its "before" column), the view's
+// pass colouring, the replay panel's name and position, the calibration
+// result; a failed report export is an error message; a calibration whose
+// session cannot be read again ends instead of staying on "Solving…".
+#include <gtest/gtest.h>
+
+#include <QAction>
+#include <QApplication>
+#include <QFile>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QSlider>
+#include <QTableWidget>
+#include <QTemporaryDir>
+#include <QTest>
+#include <QTimer>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/calibration/calibration_file.h"
+#include "tests/testing/run_command.h"
+#include "tests/ui/app_fixture.h"
+#include "ui/main_window.h"
+#include "ui/panels/calibration_panel.h"
+#include "ui/panels/evaluation_panel.h"
+#include "ui/panels/replay_panel.h"
+#include "ui/view/cloud_view.h"
+#include "ui/workspace/workspace.h"
+
+namespace sweepscan::ui {
+namespace {
+
+using testing::kResources;
+using testing::WaitFor;
+
+// Two sessions recorded once for the whole binary with the CLI: the lab
+// drive (a straight drive, "A") and a one-turn circle drive in the same lab
+// ("B", a calibration drive: its passes are split and coloured).
+QString Simulated(const char* scenario, const char* name) {
+  static QTemporaryDir dir;
+  const QString session = dir.path() + "/" + name + ".sweepscan";
+  if (!QFileInfo::exists(session)) {
+    const auto sim = testing::RunCommand(
+        std::string(SWEEPSCAN_CLI) + " simulate --scenario " + kResources.toStdString() +
+        "/scenarios/" + scenario + " --out " + dir.path().toStdString() + "/" + name + ".ply");
+    EXPECT_EQ(sim.code, 0) << sim.out;
+  }
+  return session;
+}
+QString LabSession() { return Simulated("lab.json", "lab"); }
+QString CircleSession() { return Simulated("lab_circle.json", "circle"); }
+
+template <typename W>
+W* Named(QWidget* parent, const char* name) {
+  W* w = parent->findChild<W*>(QString::fromLatin1(name));
+  EXPECT_NE(w, nullptr) << name;
+  return w;
+}
+
+class SessionResultsTest : public testing::AppFixture {
+ protected:
+  EvaluationPanel* evaluation() { return window_->evaluation_panel(); }
+
+  // Clicks "Evaluate the cloud shown" and waits for the result.
+  bool EvaluateByButton() {
+    bool done = false, ok = false;
+    QObject context;
+    QObject::connect(evaluation(), &EvaluationPanel::evaluated, &context, [&](bool r) {
+      done = true;
+      ok = r;
+    });
+    QTest::mouseClick(Named<QPushButton>(evaluation(), "evaluate"), Qt::LeftButton);
+    EXPECT_TRUE(WaitFor([&] { return done; }, 120000));
+    return ok;
+  }
+  // Opens a session, waits for its replay and the view to hold every point.
+  void Open(const QString& session) {
+    ASSERT_NO_FATAL_FAILURE(OpenAndReplay(session));
+    const size_t n = workspace_->CloudSize();
+    ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() == n; }, 10000));
+  }
+  // Opens the circle drive and waits for the calibration panel to colour
+  // its passes.
+  void OpenCircle() {
+    bool split = false;
+    QObject context;
+    QObject::connect(workspace_.get(), &Workspace::passesSplit, &context, [&] { split = true; });
+    ASSERT_NO_FATAL_FAILURE(Open(CircleSession()));
+    ASSERT_TRUE(workspace_->circle_drive()) << workspace_->circle_drive_note().toStdString();
+    ASSERT_TRUE(WaitFor([&] { return split; }, 60000));
+    ASSERT_TRUE(WaitFor(
+        [&] { return window_->view()->color_mode() == CloudView::ColorMode::kPass; }, 10000));
+  }
+  QPushButton* export_button() { return Named<QPushButton>(evaluation(), "exportReport"); }
+  QString summary() { return Named<QLabel>(evaluation(), "evaluationSummary")->text(); }
+  QTableWidget* planes_table() { return Named<QTableWidget>(evaluation(), "evaluationPlanes"); }
+  QTableWidget* dimensions_table() {
+    return Named<QTableWidget>(evaluation(), "evaluationDimensions");
+  }
+  // The "before" column of the planes table, row by row.
+  QStringList before_column() {
+    QStringList out;
+    QTableWidget* t = planes_table();
+    for (int r = 0; r < t->rowCount(); ++r) out << t->item(r, 4)->text();
+    return out;
+  }
+};
+
+// Session A evaluated, session B opened: the panel shows none of A's
+// figures and cannot export them; B's evaluation has no "before" from A,
+// and its report names B with B's numbers. Another pose source of B clears
+// B's figures too but keeps them as B's "before".
+TEST_F(SessionResultsTest, AnEvaluationGoesWithTheSessionItDescribes) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  const size_t a_points = workspace_->evaluation()->points_in;
+  ASSERT_GT(planes_table()->rowCount(), 0);
+  EXPECT_TRUE(export_button()->isEnabled());
+
+  ASSERT_NO_FATAL_FAILURE(OpenCircle());
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));  // the pass split
+  EXPECT_EQ(workspace_->evaluation(), nullptr);
+  EXPECT_EQ(workspace_->previous_evaluation(), nullptr);
+  EXPECT_EQ(planes_table()->rowCount(), 0);
+  EXPECT_EQ(dimensions_table()->rowCount(), 0);
+  EXPECT_FALSE(export_button()->isEnabled());
+  EXPECT_EQ(summary().indexOf(QLocale().toString(qulonglong(a_points))), -1)
+      << summary().toStdString();
+  QString error;
+  EXPECT_FALSE(evaluation()->ExportReport(tmp_.path() + "/stale.json", &error));
+
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  const size_t b_points = workspace_->evaluation()->points_in;
+  EXPECT_NE(b_points, a_points);
+  EXPECT_EQ(workspace_->previous_evaluation(), nullptr);  // not A's
+  EXPECT_EQ(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
+  for (const QString& b : before_column()) EXPECT_EQ(b, "-");
+  ASSERT_TRUE(evaluation()->ExportReport(tmp_.path() + "/b.json", &error)) << error.toStdString();
+  std::ifstream in(tmp_.path().toStdString() + "/b.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["session"], CircleSession().toStdString());
+  EXPECT_EQ(report["evaluation"]["points"], b_points);
+  EXPECT_FALSE(report.contains("previous"));
+
+  // Another pose source: another cloud of the same session.
+  bool replayed = false;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, &context,
+                   [&] { replayed = true; });
+  workspace_->SetPoseSource(PoseSource::kOdometry);
+  EXPECT_EQ(workspace_->evaluation(), nullptr);
+  EXPECT_EQ(planes_table()->rowCount(), 0);
+  EXPECT_FALSE(export_button()->isEnabled());
+  ASSERT_NE(workspace_->previous_evaluation(), nullptr);  // B's, for before / after
+  // Then the passes are split again (a job: one at a time).
+  ASSERT_TRUE(WaitFor([&] { return replayed && !workspace_->job_running(); }, 60000));
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  EXPECT_NE(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
+
+  // New Session and Connect: a live cloud, no evaluation.
+  workspace_->NewSession();
+  EXPECT_EQ(workspace_->evaluation(), nullptr);
+  EXPECT_EQ(workspace_->previous_evaluation(), nullptr);
+  EXPECT_EQ(planes_table()->rowCount(), 0);
+  EXPECT_FALSE(export_button()->isEnabled());
+}
+
+// An evaluation still running when the cloud is replaced (New Session)
+// describes a cloud no longer shown: it is dropped, not shown.
+TEST_F(SessionResultsTest, AnEvaluationOfAReplacedCloudIsDropped) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  bool done = false, ok = true;
+  QObject context;
+  QObject::connect(evaluation(), &EvaluationPanel::evaluated, &context, [&](bool r) {
+    done = true;
+    ok = r;
+  });
+  QTest::mouseClick(Named<QPushButton>(evaluation(), "evaluate"), Qt::LeftButton);
+  ASSERT_TRUE(workspace_->job_running());
+  workspace_->NewSession();
+  ASSERT_TRUE(WaitFor([&] { return done; }, 120000));
+  EXPECT_FALSE(ok);
+  EXPECT_EQ(workspace_->evaluation(), nullptr);
+  EXPECT_EQ(planes_table()->rowCount(), 0);
+  EXPECT_FALSE(export_button()->isEnabled());
+  EXPECT_NE(summary().indexOf("changed while it was evaluated"), -1) << summary().toStdString();
+}
+
+// The operator reads planes from 1 (the table's rows): the dimensions'
+// planes and the progress say the same; "done" is said when it is.
+TEST_F(SessionResultsTest, PlanesAreNumberedFromOneAndTheProgressNamesTheDeviationMap) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  QStringList stages;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::jobProgress, &context,
+                   [&](const QString& what, double) { stages << what; });
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  EXPECT_FALSE(stages.contains("Evaluating: done")) << stages.join(", ").toStdString();
+  EXPECT_TRUE(stages.contains("Evaluating: deviation map")) << stages.join(", ").toStdString();
+  const CloudEvaluation* e = workspace_->evaluation();
+  ASSERT_FALSE(e->dimensions.empty());
+  QTableWidget* dims = dimensions_table();
+  for (int r = 0; r < dims->rowCount(); ++r) {
+    const RoomDimension& d = e->dimensions[r];
+    EXPECT_EQ(dims->item(r, 0)->text(), QStringLiteral("%1 (%2-%3)")
+                                            .arg(QString::fromStdString(d.axis))
+                                            .arg(d.plane_a + 1)
+                                            .arg(d.plane_b + 1));
+  }
+}
+
+// Evaluate with no session's cloud (a project's clouds are layers of the
+// view, not a session's): the panel says what the evaluation works on.
+TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSession) {
+  EXPECT_FALSE(EvaluateByButton());
+  EXPECT_NE(summary().indexOf("single session"), -1) << summary().toStdString();
+  EXPECT_NE(summary().indexOf("project"), -1) << summary().toStdString();
+}
+
+// Answers the file chooser with `path`, typed into its name field.
+void AnswerFileChooser(const QString& path, bool* answered) {
+  QTimer::singleShot(50, [path, answered] {
+    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+    if (chooser == nullptr) {
+      AnswerFileChooser(path, answered);
+      return;
+    }
+    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
+    ASSERT_NE(field, nullptr);
+    field->setText(path);
+    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
+    *answered = true;
+  });
+}
+
+// Export report… into a folder that cannot be written: an error message as
+// for any failed export (the main window's), the summary stays; into a
+// writable one: the report and its image.
+TEST_F(SessionResultsTest, AFailedReportExportIsAnErrorAndTheSummaryStays) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  const QString evaluated = summary();
+  // Not a folder (a file's name in its place): unwritable even for root.
+  QFile blocker(tmp_.path() + "/not-a-folder");
+  ASSERT_TRUE(blocker.open(QIODevice::WriteOnly));
+  blocker.close();
+  const QString bad = tmp_.path() + "/not-a-folder/report.json";
+  const int errors = window_->errors_shown();
+  bool answered = false, finished = false, ok = true;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                   [&](const QString&, bool r, const QString&) {
+                     finished = true;
+                     ok = r;
+                   });
+  AnswerFileChooser(bad, &answered);
+  QTest::mouseClick(export_button(), Qt::LeftButton);
+  ASSERT_TRUE(answered);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 30000));
+  EXPECT_FALSE(ok);
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+  EXPECT_NE(window_->last_error().indexOf("not-a-folder"), -1)
+      << window_->last_error().toStdString();
+  EXPECT_EQ(summary(), evaluated);
+  EXPECT_TRUE(export_button()->isEnabled());
+
+  const QString good = tmp_.path() + "/report.json";
+  answered = finished = false;
+  AnswerFileChooser(good, &answered);
+  QTest::mouseClick(export_button(), Qt::LeftButton);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 30000));
+  EXPECT_TRUE(ok) << window_->last_error().toStdString();
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+  std::ifstream in(good.toStdString());
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["session"], LabSession().toStdString());
+  EXPECT_EQ(report["image"], "report.png");
+  EXPECT_TRUE(QImage(tmp_.path() + "/report.png").width() > 0);
+}
+
+// The calibration panel colours a calibration drive by pass; the next
+// session (no passes) and the live cloud get the colouring from before
+// back, unless the operator chose another meanwhile.
+TEST_F(SessionResultsTest, ThePassColouringEndsWithTheCalibrationDrive) {
+  CloudView* view = window_->view();
+  ASSERT_EQ(view->color_mode(), CloudView::ColorMode::kHeight);
+  ASSERT_NO_FATAL_FAILURE(OpenCircle());
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  EXPECT_TRUE(WaitFor([&] { return view->color_mode() == CloudView::ColorMode::kHeight; }, 2000))
+      << static_cast<int>(view->color_mode());
+
+  // Coloured by deviation over the passes, then another session: neither.
+  ASSERT_NO_FATAL_FAILURE(OpenCircle());
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  ASSERT_TRUE(EvaluateByButton());
+  evaluation()->ShowDeviations(true);
+  ASSERT_EQ(view->color_mode(), CloudView::ColorMode::kDeviation);
+  ConnectToSimulator();
+  EXPECT_TRUE(WaitFor([&] { return view->color_mode() == CloudView::ColorMode::kHeight; }, 2000))
+      << static_cast<int>(view->color_mode());
+  workspace_->Disconnect();
+
+  // The operator's own choice after the passes is kept.
+  ASSERT_NO_FATAL_FAILURE(OpenCircle());
+  QAction* time = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == "&Time") time = a;
+  }
+  ASSERT_NE(time, nullptr);
+  time->trigger();
+  ASSERT_EQ(view->color_mode(), CloudView::ColorMode::kTime);
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  QTest::qWait(100);
+  EXPECT_EQ(view->color_mode(), CloudView::ColorMode::kTime);
+}
+
+// New Session and Connect: the replay panel no longer names the session
+// nor stands at its time; the calibration panel no longer shows its result.
+TEST_F(SessionResultsTest, NewSessionAndConnectResetTheReplayAndCalibrationPanels) {
+  ReplayPanel* replay = window_->replay_panel();
+  CalibrationPanel* calibration = window_->calibration_panel();
+  auto* name = Named<QLabel>(replay, "replaySession");
+  auto* slider = Named<QSlider>(replay, "replaySlider");
+  auto* position = Named<QLabel>(replay, "replayPosition");
+  const std::string file = tmp_.path().toStdString() + "/calibration.json";
+  ASSERT_TRUE(SaveCalibrationFile(file, MountingError{0.001, 0.002, 0.003}, nullptr).ok());
+
+  for (const bool connect : {false, true}) {
+    SCOPED_TRACE(connect ? "Connect" : "New Session");
+    ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+    ASSERT_EQ(name->text(), "lab.sweepscan");
+    ASSERT_GT(slider->value(), 900);
+    ASSERT_NE(position->text(), "0.0 / 0.0 s");
+    QString error;
+    ASSERT_TRUE(calibration->LoadCalibration(QString::fromStdString(file), &error))
+        << error.toStdString();
+    ASSERT_NE(calibration->result_text().indexOf("Converged"), -1);
+
+    if (connect) {
+      ConnectToSimulator();
+    } else {
+      workspace_->NewSession();
+    }
+    QTest::qWait(200);  // what the replay had still queued, if anything
+    EXPECT_EQ(name->text(), "No session");
+    EXPECT_EQ(slider->value(), 0);
+    EXPECT_FALSE(slider->isEnabled());
+    EXPECT_EQ(position->text(), "0.0 / 0.0 s");
+    EXPECT_EQ(calibration->result_text(), "");
+    EXPECT_EQ(workspace_->calibration_result(), nullptr);
+    EXPECT_TRUE(workspace_->session_dir().isEmpty());
+    workspace_->Disconnect();
+  }
+}
+
+// A session let go of its samples (opened streamed) is read whole again
+// before a calibration; when that read fails the calibration ends with the
+// reason instead of staying on "Solving…".
+TEST_F(SessionResultsTest, ACalibrationWhoseSessionCannotBeReadAgainEnds) {
+  // A copy of the circle drive, whose frames.bin is taken away once opened.
+  const QString session = tmp_.path() + "/circle.sweepscan";
+  const auto copy = testing::RunCommand("cp -r '" + CircleSession().toStdString() + "' '" +
+                                        session.toStdString() + "'");
+  ASSERT_EQ(copy.code, 0) << copy.out;
+  workspace_->set_stream_open_above_bytes(0);  // every session streamed
+  bool split = false;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::passesSplit, &context, [&] { split = true; });
+  ASSERT_NO_FATAL_FAILURE(Open(session));
+  ASSERT_TRUE(WaitFor([&] { return split && !workspace_->job_running(); }, 60000));
+  ASSERT_TRUE(QFile::remove(session + "/frames.bin"));
+
+  CalibrationPanel* panel = window_->calibration_panel();
+  bool solved = false, ok = true;
+  QObject::connect(panel, &CalibrationPanel::solved, &context, [&](bool r) {
+    solved = true;
+    ok = r;
+  });
+  panel->SolveAutomatic();
+  ASSERT_TRUE(WaitFor([&] { return solved; }, 30000)) << panel->result_text().toStdString();
+  EXPECT_FALSE(ok);
+  EXPECT_FALSE(panel->solving());
+  EXPECT_NE(panel->result_text().indexOf("Not solved"), -1) << panel->result_text().toStdString();
+  EXPECT_NE(panel->result_text().indexOf("frames.bin"), -1) << panel->result_text().toStdString();
+  EXPECT_FALSE(workspace_->job_running());
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }
