@@ -504,6 +504,12 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
     return [&options, from, to](double f) { return !options.progress || options.progress(from + (to - from) * f); };
   };
   read.progress = progress(0.0, 0.05);
+  // A read that stopped because options.progress said so is a cancel.
+  const auto cancelled_or = [&](const Status& st) {
+    if (st.message().find("cancelled") != std::string::npos)
+      *failure = RosImportFailure::kCancelled;
+    return st;
+  };
   // /tf_static whole (a few messages), then the first of /tf's: reading
   // both at once would stop /tf_static where /tf stops.
   for (const bool statics : {true, false}) {
@@ -514,12 +520,12 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
     }
     if (part.topics.empty()) continue;
     s = ReadRosBag(bag, part, &first, &stats);
-    if (!s.ok() && !first.tf_stopped_) return s;
+    if (!s.ok() && !first.tf_stopped_) return cancelled_or(s);
   }
   read.topics = sensors;
   read.progress = progress(0.05, 0.1);
   s = ReadRosBag(bag, read, &first, &stats);
-  if (!s.ok() && !first.stopped_early_) return s;
+  if (!s.ok() && !first.stopped_early_) return cancelled_or(s);
   for (const std::string& topic : sensors) {
     if (first.first_.count(topic) == 0) return refuse(topic + " holds no message");
   }

@@ -60,7 +60,8 @@ Status SummarizeMcap(const std::string& path, RosBagSummary* s, Ros2ReadReport* 
                      const std::function<bool(double)>& progress = nullptr);
 
 // Decodes the messages of opt.topics (all decodable ones if empty) and hands
-// them to the sink in file order. Fills *summary (if given) from what was read.
+// them to the sink in log-time order (above). Fills *summary (if given) from
+// what was read.
 Status ReadMcap(const std::string& path, const RosReadOptions& opt, RosMessageSink* sink,
                 RosBagSummary* summary, RosReadStats* stats, Ros2ReadReport* report = nullptr);
 

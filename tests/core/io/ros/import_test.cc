@@ -267,17 +267,29 @@ TEST_F(ImportTest, CancelLeavesNoSession) {
   RosImportOptions o;
   // Pass 1 (tf, first messages) is 0..0.1 of the work: cancel as pass 2 starts.
   o.progress = [](double f) { return f < 0.08; };
-  const Status s = ImportRosBag(Bag("rules"), Out("cancelled"), o, nullptr);
+  RosImportFailure failure = RosImportFailure::kNone;
+  Status s = ImportRosBag(Bag("rules"), Out("cancelled"), o, nullptr, &failure);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("cancelled"), std::string::npos) << s.message();
   EXPECT_FALSE(Exists(Out("cancelled")));
+  EXPECT_EQ(failure, RosImportFailure::kCancelled);
+  // Cancelled in pass 1.
+  o.progress = [](double) { return false; };
+  s = ImportRosBag(Bag("rules"), Out("cancelled"), o, nullptr, &failure);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(failure, RosImportFailure::kCancelled) << s.message();
 }
 
 TEST_F(ImportTest, ExistingSessionIsNotOverwritten) {
   ASSERT_TRUE(ImportRosBag(Bag("rules"), Out("twice"), RosImportOptions(), nullptr).ok());
-  const Status s = ImportRosBag(Bag("rules"), Out("twice"), RosImportOptions(), nullptr);
+  RosImportFailure failure = RosImportFailure::kNone;
+  Status s = ImportRosBag(Bag("rules"), Out("twice"), RosImportOptions(), nullptr, &failure);
   ASSERT_FALSE(s.ok());
   EXPECT_TRUE(Exists(Out("twice") + "/frames.bin"));  // the first import is intact
+  EXPECT_EQ(failure, RosImportFailure::kOutput);      // the output's fault (exit 1), not the bag's
+  s = ImportRosBag(Bag("no_such"), Out("none"), RosImportOptions(), nullptr, &failure);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(failure, RosImportFailure::kBag);
 }
 
 // A bag cut in half is refused with where it broke.
