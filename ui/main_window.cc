@@ -194,6 +194,9 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   });
   connect(connection_panel_, &ConnectionPanel::errorOccurred, this,
           [this](const QString& m) { ShowError(tr("Cannot connect"), m); });
+  // Connecting replaces the session shown (as New Session does).
+  connection_panel_->SetConfirm(
+      [this](const std::function<void()>& retry) { return ConfirmDiscard(retry); });
 
   BuildMenus();
   BuildStatusBar();
@@ -270,7 +273,14 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
               progress_->setVisible(false);
               cancel_->setVisible(false);
             }
-            if (!ok) ShowError(what, message);
+            // The operator's own Cancel is not an error: a note in the
+            // status bar, no box to dismiss (RunJob reports it as this
+            // message; a job's own "Cancelled." too).
+            if (!ok && message == QLatin1String("Cancelled.")) {
+              statusBar()->showMessage(tr("%1: cancelled").arg(what), 6000);
+            } else if (!ok) {
+              ShowError(what, message);
+            }
           });
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
     UpdateTitle();
@@ -552,14 +562,18 @@ bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
   // dialog on top of it).
   QWidget* w = qobject_cast<QWidget*>(watched);
   if (w == nullptr || !InWindowOf(w, this)) return QMainWindow::eventFilter(watched, event);
-  if (key->key() == Qt::Key_Space && key->modifiers() == Qt::NoModifier) {
-    // The emergency stop wins over whatever widget has focus.
+  const bool text_field = qobject_cast<QLineEdit*>(w) != nullptr ||
+                          w->inherits("QAbstractSpinBox") || w->inherits("QComboBox");
+  // The emergency stop wins over whatever widget has focus while a robot is
+  // connected (a text field included: a panicked Space must stop it). With
+  // none, a text field types its space (a key file's path had its spaces
+  // eaten, and a stop was announced for no robot).
+  if (key->key() == Qt::Key_Space && key->modifiers() == Qt::NoModifier &&
+      (workspace_->link_open() || !text_field)) {
     if (type == QEvent::KeyPress && !key->isAutoRepeat()) workspace_->EmergencyStop();
     event->accept();
     return true;
   }
-  const bool text_field = qobject_cast<QLineEdit*>(w) != nullptr ||
-                          w->inherits("QAbstractSpinBox") || w->inherits("QComboBox");
   // A held drive key's release always counts, whatever the modifiers held
   // with it (W, then Shift for a Shift+click) and wherever the focus went.
   if (type == QEvent::KeyRelease && IsDriveKey(key->key()) && !key->isAutoRepeat() &&
@@ -657,6 +671,27 @@ RosImportDialog* MainWindow::ImportRosRecordingPath(const QString& path) {
 }
 
 void MainWindow::OpenSessionPath(const QString& dir) {
+  // Said plainly, before asking to discard anything: "DIR/meta.json: cannot
+  // open for reading" read like a damaged session. A recent session that
+  // is gone leaves the list.
+  const QFileInfo folder(dir);
+  if (!folder.exists()) {
+    QSettings settings;
+    QStringList recent = settings.value(QStringLiteral("sessions/recent")).toStringList();
+    if (recent.removeAll(dir) > 0) {
+      settings.setValue(QStringLiteral("sessions/recent"), recent);
+      RebuildRecentMenu();
+    }
+    ShowError(tr("Open session"), tr("%1 does not exist (moved or deleted?).").arg(dir));
+    return;
+  }
+  if (!folder.isDir() || !QFileInfo::exists(dir + QStringLiteral("/meta.json"))) {
+    ShowError(tr("Open session"),
+              tr("%1 is not a sweepscan session: a session is a folder holding meta.json and "
+                 "frames.bin (NAME.sweepscan).")
+                  .arg(dir));
+    return;
+  }
   if (!ConfirmDiscard([this, dir] { OpenSessionPath(dir); })) return;
   workspace_->OpenSession(dir, replay_panel_->speed());
 }

@@ -164,6 +164,7 @@ class MainWindow : public QMainWindow {
   QAction* measure_ = nullptr;
   QAction* ceiling_ = nullptr;
   double ceiling_z_ = std::numeric_limits<double>::quiet_NaN();  // NaN: none found.
+  int plan_widened_from_ = 0;  // The plan's column width before showing it widened it (0: not).
   // The room view waits for the next session opened (its replay finished,
   // its points drained into the view) or live cloud; a camera moved since
   // (by the operator, a script, a test) cancels it.

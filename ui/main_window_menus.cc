@@ -12,6 +12,7 @@
 #include <QMessageBox>
 #include <QSettings>
 #include <QStatusBar>
+#include <QTimer>
 #include <QUndoCommand>
 #include <QUndoGroup>
 #include <QUndoStack>
@@ -32,6 +33,18 @@
 
 namespace sweepscan::ui {
 namespace {
+
+// A file dialog's name without a suffix takes the chosen filter's first one
+// ("PLY (*.ply)" -> name.ply): the non-native dialog leaves it bare, and the
+// exporter then refused "unknown cloud format".
+QString WithFilterSuffix(const QString& path, const QString& filter) {
+  if (path.isEmpty() || !QFileInfo(path).suffix().isEmpty()) return path;
+  const int star = filter.indexOf(QStringLiteral("*."));
+  if (star < 0) return path;
+  int end = star + 2;
+  while (end < filter.size() && filter[end].isLetterOrNumber()) ++end;
+  return path + filter.mid(star + 1, end - star - 1);
+}
 
 // The pose sources an opened session can be made with, in menu order.
 constexpr PoseSource kPoseSources[] = {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm};
@@ -114,20 +127,32 @@ void MainWindow::BuildFileMenu() {
     if (dir.isEmpty()) return;
     SaveSessionTo(dir);
   });
-  save_as->setShortcut(QKeySequence::SaveAs);
+  // Spelled out: QKeySequence::SaveAs is empty under X11's generic theme
+  // (and KDE's), which left Ctrl+Shift+S dead while Help listed it.
+  save_as->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
   file->addSeparator();
   project_->AddFileMenuActions(file);
   file->addSeparator();
   QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, tr("Export cloud"), QString(),
-                                                      tr("PLY (*.ply);;PCD (*.pcd)"));
-    if (!path.isEmpty()) workspace_->ExportCloud(path);
+    QSettings settings;
+    QString filter;
+    const QString path = WithFilterSuffix(
+        QFileDialog::getSaveFileName(this, tr("Export cloud"),
+                                     settings.value(QStringLiteral("export/dir")).toString(),
+                                     tr("PLY (*.ply);;PCD (*.pcd)"), &filter),
+        filter);
+    if (path.isEmpty()) return;
+    settings.setValue(QStringLiteral("export/dir"), QFileInfo(path).absolutePath());
+    workspace_->ExportCloud(path);
   });
   export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
   file->addAction(tr("Export Floor P&lan…"), plan_panel_, &PlanPanel::ExportWithDialog);
   QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {
+    QString filter;
     const QString path =
-        QFileDialog::getSaveFileName(this, tr("Save screenshot"), QString(), tr("PNG (*.png)"));
+        WithFilterSuffix(QFileDialog::getSaveFileName(this, tr("Save screenshot"), QString(),
+                                                      tr("PNG (*.png)"), &filter),
+                         filter);
     QString error;
     if (!path.isEmpty() && !view_->SaveScreenshot(path, &error)) ShowError(tr("Screenshot"), error);
   });
@@ -220,11 +245,36 @@ void MainWindow::BuildViewMenu() {
     // A plan needs room: shown narrow (docked beside the panels), it takes
     // about half the window.
     connect(show_plan, &QAction::toggled, this, [this, plan](bool on) {
-      if (!on) return;
-      plan->raise();  // In front of the tabs it shares.
+      if (!on) {
+        // The column goes back to the width it had before the plan widened
+        // it: left wide, the 3D view stayed a third of the window (and the
+        // saved layout kept it so).
+        if (plan_widened_from_ > 0 && !plan->isFloating()) {
+          QList<QDockWidget*> others;
+          for (QDockWidget* dock : findChildren<QDockWidget*>()) {
+            if (dock != plan && dock->isVisible() && !dock->isFloating() &&
+                dockWidgetArea(dock) == dockWidgetArea(plan)) {
+              others << dock;
+            }
+          }
+          if (!others.isEmpty()) {
+            QList<int> widths;
+            for (int i = 0; i < others.size(); ++i) widths << plan_widened_from_;
+            resizeDocks(others, widths, Qt::Horizontal);
+          }
+        }
+        plan_widened_from_ = 0;
+        return;
+      }
       if (!plan->isFloating() && plan->width() < width() / 3) {
+        plan_widened_from_ = plan->width();
         resizeDocks({plan}, {width() * 9 / 20}, Qt::Horizontal);
       }
+      // In front of the tabs it shares, now and once it is shown: raised
+      // only inside this slot, the tab bar kept Evaluation in front when it
+      // was the tab shown.
+      plan->raise();
+      QTimer::singleShot(0, plan, [plan] { plan->raise(); });
     });
   }
   QMenu* panels = view->addMenu(tr("&Panels"));
@@ -234,13 +284,7 @@ void MainWindow::BuildViewMenu() {
 
 void MainWindow::BuildRobotMenu() {
   QMenu* robot = menuBar()->addMenu(tr("&Robot"));
-  robot
-      ->addAction(tr("&Connect"), this,
-                  [this] {
-                    QString error;
-                    if (!connection_panel_->ConnectNow(&error))
-                      ShowError(tr("Cannot connect"), error);
-                  })
+  robot->addAction(tr("&Connect"), connection_panel_, &ConnectionPanel::RequestConnect)
       ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
   robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect)
       ->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));

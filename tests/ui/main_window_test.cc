@@ -25,6 +25,7 @@
 #include <QProcess>
 #include <QPushButton>
 #include <QSettings>
+#include <QStatusBar>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTest>
@@ -131,6 +132,58 @@ TEST_F(AppTest, SpaceStopsTheSimulatedRobotWithin200msWhateverHasFocus) {
   workspace_->ClearEmergencyStop();
   workspace_->Drive(0.2, 0.0);
   EXPECT_TRUE(WaitFor([&] { return workspace_->sim_robot()->TrueTwist().v > 0.1; }, 3000));
+}
+
+// With no robot connected, Space in a text field types a space (a key
+// file's path lost its spaces), and the stop says nothing received it
+// (it announced "the robot is halted" with no robot).
+TEST_F(AppTest, WithNoRobotSpaceTypesInATextFieldAndTheStopSaysNothingReceivedIt) {
+  ASSERT_FALSE(workspace_->link_open());
+  auto* field = window_->connection_panel()->findChild<QLineEdit*>();
+  ASSERT_NE(field, nullptr);
+  field->clear();
+  field->setFocus();
+  QTest::keyClicks(field, "my key");
+  EXPECT_EQ(field->text(), "my key");
+  QStringList said;
+  QObject::connect(workspace_.get(), &Workspace::message, [&said](const QString& m) { said << m; });
+  workspace_->EmergencyStop();
+  ASSERT_FALSE(said.isEmpty());
+  EXPECT_EQ(said.last(), "No robot connected: nothing to stop.");
+}
+
+// View > Floor Plan brings the plan in front of the tab it shares (it
+// stayed behind Evaluation), and hiding it gives the 3D view its width
+// back (the column stayed at half the window, and the saved layout with
+// it). File > Save Session As has its Ctrl+Shift+S (QKeySequence::SaveAs
+// is empty under X11's generic theme).
+TEST_F(AppTest, FloorPlanComesToTheFrontAndHidingItGivesTheWidthBack) {
+  window_->resize(1400, 860);
+  auto* plan = window_->findChild<QDockWidget*>(QStringLiteral("planDock"));
+  auto* evaluation = window_->findChild<QDockWidget*>(QStringLiteral("evaluationDock"));
+  ASSERT_NE(plan, nullptr);
+  ASSERT_NE(evaluation, nullptr);
+  evaluation->show();
+  evaluation->raise();
+  QTest::qWait(100);
+  ASSERT_FALSE(plan->isVisible());
+  const int before = evaluation->width();
+  plan->toggleViewAction()->trigger();
+  ASSERT_TRUE(WaitFor([&] { return !plan->visibleRegion().isEmpty(); }, 2000))
+      << "the plan stayed behind another tab";
+  EXPECT_GT(plan->width(), window_->width() / 3);
+  plan->toggleViewAction()->trigger();
+  QTest::qWait(100);
+  evaluation->raise();
+  ASSERT_TRUE(WaitFor([&] { return !evaluation->visibleRegion().isEmpty(); }, 2000));
+  EXPECT_NEAR(evaluation->width(), before, 8) << "the column kept the plan's width";
+
+  QAction* save_as = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == QStringLiteral("Save Session &As…")) save_as = a;
+  }
+  ASSERT_NE(save_as, nullptr);
+  EXPECT_EQ(save_as->shortcut(), QKeySequence(QStringLiteral("Ctrl+Shift+S")));
 }
 
 // A held drive key never leaves the robot driving on its own: its release
@@ -385,6 +438,10 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
   workspace_->CancelJob();
   ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
   EXPECT_NE(message.indexOf("ancel"), -1) << message.toStdString();
+  // The operator's own Cancel is said in the status bar, not as an error box.
+  EXPECT_EQ(window_->errors_shown(), 0) << window_->last_error().toStdString();
+  EXPECT_NE(window_->statusBar()->currentMessage().indexOf("cancelled"), -1)
+      << window_->statusBar()->currentMessage().toStdString();
   EXPECT_EQ(workspace_->pose_source(), PoseSource::kEkf);
   EXPECT_TRUE(window_->pose_source_action(PoseSource::kEkf)->isChecked());
   EXPECT_EQ(workspace_->shown_pose_source(), PoseSource::kEkf);

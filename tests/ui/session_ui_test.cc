@@ -13,6 +13,7 @@
 #include <QLineEdit>
 #include <QMessageBox>
 #include <QPushButton>
+#include <QSettings>
 #include <QTemporaryDir>
 #include <QTest>
 #include <QTimer>
@@ -224,6 +225,22 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   ASSERT_TRUE(WaitFor([&] { return finished || !failed.isEmpty(); }, 60000));
   EXPECT_TRUE(finished) << failed.toStdString();
   EXPECT_GT(workspace_->CloudSnapshot().size(), 1000u);
+
+  // 4. A folder that is no session, and a recent session since deleted:
+  // said plainly (it was "DIR/meta.json: cannot open for reading"), and the
+  // deleted one leaves Open Recent.
+  const QString plain = tmp_.path() + "/photos";
+  QDir().mkpath(plain);
+  window_->OpenSessionPath(plain);
+  EXPECT_NE(window_->last_error().indexOf("is not a sweepscan session"), -1)
+      << window_->last_error().toStdString();
+  const QString gone = tmp_.path() + "/gone.sweepscan";
+  QSettings().setValue(QStringLiteral("sessions/recent"), QStringList{gone, truncated});
+  window_->OpenSessionPath(gone);
+  EXPECT_NE(window_->last_error().indexOf("does not exist"), -1)
+      << window_->last_error().toStdString();
+  EXPECT_EQ(QSettings().value(QStringLiteral("sessions/recent")).toStringList(),
+            QStringList{truncated});
 
   // The app still works: the simulator connects and streams.
   ConnectToSimulator();

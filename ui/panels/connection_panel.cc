@@ -106,10 +106,7 @@ ConnectionPanel::ConnectionPanel(Workspace* workspace, const QString& scenarios_
   buttons->addWidget(connect_);
   buttons->addWidget(disconnect_);
   layout->addLayout(buttons);
-  connect(connect_, &QPushButton::clicked, this, [this] {
-    QString error;
-    if (!ConnectNow(&error)) emit errorOccurred(error);
-  });
+  connect(connect_, &QPushButton::clicked, this, &ConnectionPanel::RequestConnect);
   connect(disconnect_, &QPushButton::clicked, workspace_, &Workspace::Disconnect);
 
   state_ = new QLabel;
@@ -165,6 +162,14 @@ void ConnectionPanel::SetOptions(const ConnectOptions& o) {
   key_file_->setText(o.key_file);
   serial_port_->setEditText(o.serial_port);
   baud_->setEditText(QString::number(o.baud));
+}
+
+void ConnectionPanel::RequestConnect() {
+  // A connection replaces the session shown, as New Session does: an
+  // unsaved recording is offered to be saved first.
+  if (confirm_ && !confirm_([this] { RequestConnect(); })) return;
+  QString error;
+  if (!ConnectNow(&error)) emit errorOccurred(error);
 }
 
 bool ConnectionPanel::ConnectNow(QString* error) {

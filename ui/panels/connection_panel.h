@@ -6,6 +6,7 @@
 #define SWEEPSCAN_UI_PANELS_CONNECTION_PANEL_H_
 
 #include <QWidget>
+#include <functional>
 
 #include "ui/workspace/workspace.h"
 
@@ -27,6 +28,15 @@ class ConnectionPanel : public QWidget {
   void SetOptions(const ConnectOptions& options);
   // Connects with the panel's options; errors go to the caller as a message.
   bool ConnectNow(QString* error);
+  // Asked before the Connect button connects (a connection replaces the
+  // session shown): false holds it; `retry` connects once the question is
+  // settled (an unsaved recording being copied first).
+  void SetConfirm(std::function<bool(const std::function<void()>& retry)> confirm) {
+    confirm_ = std::move(confirm);
+  }
+  // What Connect (the button, Robot > Connect) does: asks, then connects;
+  // an error is errorOccurred.
+  void RequestConnect();
 
  signals:
   void errorOccurred(const QString& message);
@@ -36,6 +46,7 @@ class ConnectionPanel : public QWidget {
   void UpdateState();
 
   Workspace* workspace_;
+  std::function<bool(const std::function<void()>&)> confirm_;
   QComboBox* kind_;
   QStackedWidget* pages_;
   QComboBox* scenario_;

@@ -111,12 +111,15 @@ void Workspace::EmergencyStop() {
   commanded_ = Twist2d();
   InvokeOnConnection([](hardware::RobotConnection* c) { c->EmergencyStop(); });
   QString said = QStringLiteral("EMERGENCY STOP: the robot is halted until you clear it.");
-  if (connection_ != nullptr && health_.state == hardware::LinkHealth::State::kFailed) {
+  if (connection_ == nullptr) {
+    // Not the stop's usual reassurance: nothing received it.
+    said = QStringLiteral("No robot connected: nothing to stop.");
+  } else if (health_.state == hardware::LinkHealth::State::kFailed) {
     said = QStringLiteral(
                "EMERGENCY STOP, but the link has failed (%1): the stop cannot reach the robot. Its "
                "watchdog stopped it when the link was lost; stop it at the robot.")
                .arg(health_.last_error);
-  } else if (connection_ != nullptr && !authenticated_) {
+  } else if (!authenticated_) {
     said = QStringLiteral(
         "EMERGENCY STOP while the link is down: the robot's watchdog stopped it when the link was "
         "lost; the stop is sent and latched as soon as the link returns.");
