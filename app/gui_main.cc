@@ -6,7 +6,7 @@
 //             [--pairs FILE [--calibration-tour DIR]]
 //             [--pose-source ekf|odometry|sfm] [--pose-source-tour PNG]
 //             [--memory-budget MIB] [--rest-budget N] [--lod-budget N] [--draw-pace N]
-//             [--project FILE] [--floor-plan [--plan-height M]]
+//             [--project FILE] [--floor-plan [--plan-height M]] [PATH]
 // On quit after --quit-after it prints one JSON line (points, scans,
 // link_state, session, frames_rendered, event-loop latency, memory).
 #include <QVTKOpenGLNativeWidget.h>
@@ -14,7 +14,6 @@
 #include <unistd.h>
 
 #include <QApplication>
-#include <QCommandLineParser>
 #include <QDir>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
@@ -36,6 +35,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/gui_options.h"
 #include "app/gui_tour.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/cloud_pager.h"
@@ -57,30 +57,6 @@ using ui::CloudView;
 using ui::MainWindow;
 using ui::Workspace;
 
-struct Options {
-  bool simulate = false;
-  bool drive_demo = false;
-  QString scenario;  // Resolved to the default when not given.
-  QString replay;
-  QString project;  // A project file to open at start.
-  bool floor_plan = false;  // View > Floor Plan shown at start.
-  double plan_height_m = -1.0;  // its cut (< 0: the last one set)
-  double speed = 0.0;
-  QString screenshot, window_screenshot, export_cloud, sessions_dir;
-  double quit_after_s = -1.0;  // < 0: run until the operator quits.
-  int orbit_frames = 0;        // > 0: the orbit benchmark after --replay.
-  QString pairs;               // With --replay: load into the calibration panel and solve.
-  QString tour;                // With --replay and --pairs: the calibration tour's folder.
-  QString pose_source;         // Of the session replayed (as if chosen in Tools > Pose Source).
-  QString pose_source_tour;    // With --replay: the pose source screenshot.
-  double memory_budget_mib = -1.0;  // The cloud store's; < 0: the default (a quarter of RAM).
-  long long rest_budget = -1;       // Points drawn at rest; < 0: the view's default.
-  long long draw_pace = -1;         // Points between the driver's finishes; < 0: the default.
-  long long lod_budget = -1;        // Points drawn while the camera moves.
-  double seek_s = -1.0;             // With --replay: seek there once shown (< 0: no).
-  QString bad_number;               // "--option 'value'" that is not a number it takes
-};
-
 // The scenarios' folder's parent: PREFIX/share/sweepscan when installed
 // (the package: /usr/share/sweepscan), else the source tree's resources/.
 QString ResourcesDir() {
@@ -91,146 +67,31 @@ QString ResourcesDir() {
   return QStringLiteral(SWEEPSCAN_SOURCE_DIR "/resources");
 }
 
-Options ParseOptions(const QCoreApplication& app, const QString& resources) {
-  QCommandLineParser parser;
-  parser.setApplicationDescription(QStringLiteral(
-      "Operator workstation for mobile 3D lidar scanning: connect, drive, watch the cloud grow, "
-      "record, replay, export."));
-  parser.addHelpOption();
-  parser.addVersionOption();
-  const QCommandLineOption simulate("simulate",
-                                    "Connect to the built-in simulated robot at start.");
-  const QCommandLineOption scenario(
-      "scenario", "Scenario of the simulated robot (default: resources/scenarios/lab.json).",
-      "FILE");
-  const QCommandLineOption drive_demo(
-      "drive-demo",
-      "Record and drive the scenario's path with the same drive commands the keyboard sends.");
-  const QCommandLineOption replay("replay", "Open and replay a session folder.", "SESSION");
-  const QCommandLineOption project(
-      "project", "Open a project (many sessions in one frame, docs/project-format.md) at start.",
-      "FILE");
-  const QCommandLineOption speed(
-      "speed", "Replay speed: 1 to 20, or 0 for as fast as possible (default 0).", "X", "0");
-  const QCommandLineOption screenshot("screenshot", "Save the view as PNG just before quitting.",
-                                      "PATH");
-  const QCommandLineOption window_shot(
-      "window-screenshot", "Save the whole window as PNG just before quitting.", "PATH");
-  const QCommandLineOption export_cloud(
-      "export-cloud", "Write the cloud (PLY or PCD) just before quitting.", "PATH");
-  const QCommandLineOption quit_after("quit-after",
-                                      "Quit after S seconds (prints a JSON summary line).", "S");
-  const QCommandLineOption orbit(
-      "orbit-benchmark",
-      "With --replay: once the session is shown, render N frames orbiting the camera at the rest "
-      "level and N at the motion level, print timings and memory as JSON and quit.",
-      "N");
-  const QCommandLineOption pairs(
-      "pairs",
-      "With --replay: load a pairs file into the calibration panel once the session is shown, "
-      "solve (refined corners) and show the calibrated cloud.",
-      "FILE");
-  const QCommandLineOption tour(
-      "calibration-tour",
-      "With --replay (a circle drive) and --pairs: go through the calibration steps and the "
-      "evaluation, saving a window screenshot of each into DIR, then quit.",
-      "DIR");
-  const QCommandLineOption pose_source(
-      "pose-source",
-      "Poses of opened sessions: ekf (default), odometry or sfm (the EKF corrected by the planes "
-      "the scans cross), as `sweepscan-cli reconstruct --pose-source`. Kept like the choice in "
-      "Tools > Pose Source.",
-      "S");
-  const QCommandLineOption pose_source_tour(
-      "pose-source-tour",
-      "With --replay: once the session is shown, choose Tools > Pose Source > SfM, wait for it, "
-      "save a screenshot with the menu open as PNG, then quit.",
-      "PNG");
-  const QCommandLineOption sessions(
-      "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
-  const QCommandLineOption memory_budget(
-      "memory-budget",
-      "Memory for the cloud's points, in MiB (default: a quarter of the machine's RAM). Above it "
-      "the oldest chunks are paged to an unnamed cache file beside the session and read back when "
-      "shown or picked.",
-      "MIB");
-  const QCommandLineOption rest_budget(
-      "rest-budget",
-      "Points drawn at most when the camera is still (default: 1000000 with a software renderer, "
-      "10000000 on a GPU).",
-      "N");
-  const QCommandLineOption lod_budget(
-      "lod-budget", "Points drawn at most while the camera moves or points stream in (default 30000 under a "
-      "software renderer, 1000000 on a GPU).",
-      "N");
-  const QCommandLineOption draw_pace(
-      "draw-pace",
-      "Let the OpenGL driver finish its work every N points drawn, so that a software "
-      "renderer's memory for a frame stays bounded (default 262144 under a software renderer, "
-      "0 on a GPU; 0: never).",
-      "N");
-  const QCommandLineOption seek(
-      "seek",
-      "With --replay: once the session is shown, seek its replay to S seconds from its start "
-      "and replay on at 1x (a benchmark: the JSON line's seek_ms is the seek's time, and its "
-      "event-loop latency and insertion_ms count from the seek on).",
-      "S");
-  const QCommandLineOption floor_plan(
-      "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
-  const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m).", "M");
-  parser.addOptions({floor_plan, plan_height, draw_pace, seek});
-  parser.addOptions({simulate, scenario, drive_demo, replay, speed, screenshot, window_shot,
-                     export_cloud, quit_after, orbit, pairs, tour, pose_source, pose_source_tour,
-                     sessions, memory_budget, rest_budget, lod_budget, project});
-  parser.process(app);
-
-  Options o;
-  o.simulate = parser.isSet(simulate);
-  o.drive_demo = parser.isSet(drive_demo);
-  o.scenario = parser.isSet(scenario) ? parser.value(scenario)
-                                      : resources + QStringLiteral("/scenarios/lab.json");
-  o.replay = parser.value(replay);
-  o.speed = parser.value(speed).toDouble();
-  o.screenshot = parser.value(screenshot);
-  o.window_screenshot = parser.value(window_shot);
-  o.export_cloud = parser.value(export_cloud);
-  o.sessions_dir = parser.value(sessions);
-  // A number the option takes, or the option named in o.bad_number (refused
-  // in Main): "2G" read as 0 would have been a zero-byte memory budget.
-  const auto number = [&](const QCommandLineOption& option, double lo, double* out) {
-    if (!parser.isSet(option)) return;
-    bool ok = false;
-    const double v = parser.value(option).toDouble(&ok);
-    if (ok && v >= lo && std::isfinite(v)) {
-      *out = v;
-    } else if (o.bad_number.isEmpty()) {
-      o.bad_number = QStringLiteral("--%1 '%2'").arg(option.names().front(), parser.value(option));
-    }
-  };
-  const auto count = [&](const QCommandLineOption& option, long long* out) {
-    double v = -1.0;
-    number(option, 0.0, &v);
-    if (v >= 0.0) *out = static_cast<long long>(v);
-  };
-  number(quit_after, 0.0, &o.quit_after_s);
-  if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
-  o.pairs = parser.value(pairs);
-  o.tour = parser.value(tour);
-  o.pose_source = parser.value(pose_source);
-  o.project = parser.value(project);
-  o.floor_plan = parser.isSet(floor_plan);
-  number(plan_height, -1e6, &o.plan_height_m);
-  o.pose_source_tour = parser.value(pose_source_tour);
-  number(memory_budget, 0.0, &o.memory_budget_mib);
-  count(rest_budget, &o.rest_budget);
-  count(lod_budget, &o.lod_budget);
-  count(draw_pace, &o.draw_pace);
-  if (parser.isSet(seek)) {
-    bool ok = false;
-    o.seek_s = parser.value(seek).toDouble(&ok);
-    if (!ok || !(o.seek_s >= 0.0)) o.seek_s = -2.0;  // Refused in Main.
+// `sweepscan PATH`, as a file manager or a shell opens things: a session
+// folder as File > Open Session, a project as File > Open Project, a ROS
+// recording as File > Import ROS Recording. It was ignored without a word.
+// What is none of them is said in a message, and the app stays open.
+void OpenPathGiven(const QString& path, MainWindow* window) {
+  const QFileInfo f(path);
+  const QString suffix = f.suffix().toLower();
+  if (path.endsWith(QLatin1String(kProjectSuffix))) {
+    window->project()->OpenProject(f.absoluteFilePath());  // Its errors are shown there.
+  } else if (f.isDir() && QFileInfo::exists(f.absoluteFilePath() + QStringLiteral("/meta.json"))) {
+    window->OpenSessionPath(f.absoluteFilePath());
+  } else if ((f.isFile() && (suffix == "bag" || suffix == "mcap" || suffix == "db3" ||
+                             f.fileName() == QLatin1String("metadata.yaml"))) ||
+             (f.isDir() &&
+              QFileInfo::exists(f.absoluteFilePath() + QStringLiteral("/metadata.yaml")))) {
+    window->ImportRosRecordingPath(f.absoluteFilePath());
+  } else {
+    window->ShowError(QObject::tr("Open"),
+                      !f.exists() ? QObject::tr("%1 does not exist.").arg(path)
+                                  : QObject::tr("%1 is not a sweepscan session (a folder with "
+                                                "meta.json), a project (.sweepscan-project) or a "
+                                                "ROS recording (.bag, .mcap, .db3, a ROS 2 bag "
+                                                "folder).")
+                                        .arg(path));
   }
-  return o;
 }
 
 // A field of /proc/self/status in MiB: VmRSS (resident now), VmHWM (peak).
@@ -664,6 +525,10 @@ int Main(int argc, char** argv) {
   const QString resources = ResourcesDir();
   const Options o = ParseOptions(app, resources);
 
+  if (!o.bad_arguments.isEmpty() || (!o.open_path.isEmpty() && !o.replay.isEmpty())) {
+    std::fprintf(stderr, "sweepscan: one PATH to open, and not beside --replay (see --help)\n");
+    return 2;
+  }
   if (!o.bad_number.isEmpty()) {
     std::fprintf(stderr, "sweepscan: %s is not a number the option takes (see --help)\n",
                  qPrintable(o.bad_number));
@@ -725,6 +590,7 @@ int Main(int argc, char** argv) {
     std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
     return 2;
   }
+  if (!o.open_path.isEmpty()) OpenPathGiven(o.open_path, &window);
   if (o.floor_plan) {
     if (o.plan_height_m > 0) window.plan_panel()->height_box()->setValue(o.plan_height_m);
     window.RaiseDock(QStringLiteral("planDock"));

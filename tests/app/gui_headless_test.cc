@@ -53,4 +53,30 @@ TEST(GuiHeadlessTest, ANumberOptionThatIsNotANumberIsRefusedByName) {
   }
 }
 
+// `sweepscan PATH` opens what it names (it was ignored without a word): a
+// session as File > Open Session; a folder that is none is said; two paths,
+// or a PATH beside --replay, are refused.
+TEST(GuiHeadlessTest, APathOnTheCommandLineIsOpened) {
+  if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
+  const std::string gui = SWEEPSCAN_GUI;
+  auto r = sweepscan::testing::RunCommand(gui + " a.sweepscan b.sweepscan");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("one PATH to open"), std::string::npos) << r.out;
+  const std::string dir = "/tmp/sweepscan_gui_path_test";
+  sweepscan::testing::ShellOrFail("rm -rf " + dir + " && mkdir -p " + dir + "/photos");
+  r = sweepscan::testing::RunCommand(gui + " " + dir + "/photos --quit-after 2");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("photos is not a sweepscan session"), std::string::npos) << r.out;
+  r = sweepscan::testing::RunCommand(std::string(SWEEPSCAN_CLI) +
+                                     " simulate --scenario " SWEEPSCAN_SOURCE_DIR
+                                     "/resources/scenarios/lab.json --out " +
+                                     dir + "/lab.ply");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = sweepscan::testing::RunCommand(gui + " " + dir + "/lab.sweepscan --quit-after 20");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"session\":\"" + dir + "/lab.sweepscan\""), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"last_error\":\"\""), std::string::npos) << r.out;
+  sweepscan::testing::ShellOrFail("rm -rf " + dir);
+}
+
 }  // namespace
