@@ -116,10 +116,20 @@ TEST_F(RosImportUiTest, ChoosersOfferOnlyTopicsTheImportCanRead) {
   EXPECT_EQ(items(dialog->scan_topic()), "/scan_front");
   EXPECT_EQ(items(dialog->imu_topic()), "/imu/data none");
   EXPECT_EQ(items(dialog->odom_topic()), "/odom_wheels /odom_fused none");
-  // Only the ROS 1-encoded scan: nothing to make a cloud of, "none" alone.
+  const auto says_no_cloud = [&] {
+    for (const QLabel* l : dialog->findChildren<QLabel*>()) {
+      if (l->text().contains("the session will hold the trajectory only, no cloud")) return true;
+    }
+    return false;
+  };
+  EXPECT_FALSE(says_no_cloud());
+  // Only the ROS 1-encoded scan: nothing to make a cloud of, "none" alone,
+  // and the dialog says so before the import (it made a 0-point session
+  // without a word).
   s.topics.erase(s.topics.begin() + 1, s.topics.begin() + 3);
   dialog->Fill(s);
   EXPECT_EQ(items(dialog->scan_topic()), "none");
+  EXPECT_TRUE(says_no_cloud());
   dialog->reject();
 }
 

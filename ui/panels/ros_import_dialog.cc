@@ -156,6 +156,13 @@ void RosImportDialog::Fill(const io::RosBagSummary& s) {
     }
     combo->setCurrentIndex(0);
   }
+  // Said before the import, not found out after it: the session then
+  // holds a trajectory and no cloud (it imported 0 points without a word).
+  if (scan_->currentData().toString() == QLatin1String("none")) {
+    about_->setText(about_->text() +
+                    tr("<br><b>No sensor_msgs/LaserScan topic this import reads:</b> the session "
+                       "will hold the trajectory only, no cloud."));
+  }
   ready_ = true;
   buttons_->button(QDialogButtonBox::Ok)->setEnabled(true);
 }
