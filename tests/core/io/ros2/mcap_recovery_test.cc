@@ -14,27 +14,11 @@
 namespace sweepscan::io {
 namespace {
 
+using testing::McapRecord;
+using testing::McapRecords;
 using testing::ReadBytes;
 using testing::RecordingSink;
 using testing::Ros2Data;
-
-struct Record {
-  uint8_t op;
-  size_t pos, len;  // len: content bytes
-};
-
-// The top-level records (test-side walk: opcode u8, length u64 LE, content).
-std::vector<Record> Records(const std::vector<uint8_t>& b) {
-  std::vector<Record> r;
-  for (size_t pos = 8; pos + 9 <= b.size();) {
-    uint64_t len;
-    memcpy(&len, b.data() + pos + 1, 8);
-    r.push_back({b[pos], pos, static_cast<size_t>(len)});
-    if (b[pos] == 0x02) break;  // Footer
-    pos += 9 + len;
-  }
-  return r;
-}
 
 Status ReadMemory(const std::vector<uint8_t>& b, RecordingSink* sink, Ros2ReadReport* report) {
   return ReadMcapFromMemory(b.data(), b.size(), RosReadOptions(), sink, nullptr, nullptr, report);
@@ -49,7 +33,7 @@ std::vector<int64_t> LogTimes(const RecordingSink& sink) {
 // The file as a recorder leaves it before it closes: everything before the
 // Data End record (no summary, no Footer).
 std::vector<uint8_t> Unfinished(const std::vector<uint8_t>& full, size_t* data_end) {
-  for (const Record& r : Records(full)) {
+  for (const McapRecord& r : McapRecords(full)) {
     if (r.op == 0x0F) *data_end = r.pos;
   }
   return std::vector<uint8_t>(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(*data_end));
@@ -96,8 +80,8 @@ TEST(McapRecoveryTest, AnUnfinishedFileWhoseLastChunkIsDamagedKeepsTheChunksBefo
     const std::vector<uint8_t> full = ReadBytes(Ros2Data(name));
     size_t data_end = 0;
     const std::vector<uint8_t> unfinished = Unfinished(full, &data_end);
-    Record last{};
-    for (const Record& r : Records(unfinished)) {
+    McapRecord last{};
+    for (const McapRecord& r : McapRecords(unfinished)) {
       if (r.op == 0x06 && r.pos + 9 + r.len <= unfinished.size()) last = r;
     }
     ASSERT_EQ(last.op, 0x06);
@@ -149,14 +133,14 @@ TEST(McapRecoveryTest, ChunksOutOfLogTimeOrderAreReadInLogTimeOrder) {
   const std::vector<uint8_t> full = ReadBytes(Ros2Data("ros2_lz4_nosummary.mcap"));
   RecordingSink all;
   ASSERT_TRUE(ReadMemory(full, &all, nullptr).ok());
-  std::vector<Record> chunks;
-  for (const Record& r : Records(full)) {
+  std::vector<McapRecord> chunks;
+  for (const McapRecord& r : McapRecords(full)) {
     if (r.op == 0x06) chunks.push_back(r);
   }
   // Chunks 6 and 7 hold no channel's first message (each channel is
   // defined before its first message, in the file as in time).
   ASSERT_GT(chunks.size(), 8u);
-  const Record a = chunks[6], c = chunks[7];
+  const McapRecord a = chunks[6], c = chunks[7];
   ASSERT_EQ(a.pos + 9 + a.len, c.pos);
   std::vector<uint8_t> b(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(a.pos));
   b.insert(b.end(), full.begin() + static_cast<std::ptrdiff_t>(c.pos),
@@ -186,14 +170,14 @@ TEST(McapRecoveryTest, ASummaryWithoutChannelsIsNotDamage) {
   const std::vector<uint8_t> full = ReadBytes(Ros2Data("ros2_zstd.mcap"));
   std::vector<uint8_t> b;
   size_t summary_start = 0, offsets_start = 0;
-  for (const Record& r : Records(full)) {
+  for (const McapRecord& r : McapRecords(full)) {
     if (r.op == 0x0F) summary_start = r.pos + 9 + r.len;
     if (r.op == 0x0E && offsets_start == 0) offsets_start = r.pos;
   }
   ASSERT_NE(summary_start, 0u);
   ASSERT_NE(offsets_start, 0u);
   b.assign(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(summary_start));
-  for (const Record& r : Records(full)) {
+  for (const McapRecord& r : McapRecords(full)) {
     // The summary section less its Channels; Summary Offsets dropped too
     // (they would point at the removed group).
     if (r.pos < summary_start || r.op == 0x04 || r.op == 0x0E || r.op == 0x02) continue;

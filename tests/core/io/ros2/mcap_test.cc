@@ -19,6 +19,8 @@ namespace {
 
 using testing::kBaseNs;
 using testing::kLatencyNs;
+using testing::McapRecord;
+using testing::McapRecords;
 using testing::ReadBytes;
 using testing::RecordingSink;
 using testing::Ros2Data;
@@ -26,26 +28,8 @@ using testing::Ros2Data;
 const char* const kFiles[] = {"ros2_zstd.mcap", "ros2_lz4_nosummary.mcap", "ros2_unchunked.mcap"};
 constexpr uint64_t kDecodable = testing::kMessages - testing::kChatters;  // 46
 
-struct Record {
-  uint8_t op;
-  size_t pos, len;  // len: content bytes
-};
-
-// The top-level records (test-side walk: opcode u8, length u64 LE, content).
-std::vector<Record> Records(const std::vector<uint8_t>& b) {
-  std::vector<Record> r;
-  for (size_t pos = 8; pos + 9 <= b.size();) {
-    uint64_t len;
-    memcpy(&len, b.data() + pos + 1, 8);
-    r.push_back({b[pos], pos, static_cast<size_t>(len)});
-    if (b[pos] == 0x02) break;  // Footer
-    pos += 9 + len;
-  }
-  return r;
-}
-
 size_t First(const std::vector<uint8_t>& b, uint8_t op) {
-  for (const Record& r : Records(b)) {
+  for (const McapRecord& r : McapRecords(b)) {
     if (r.op == op) return r.pos;
   }
   ADD_FAILURE() << "no record 0x" << std::hex << int{op};
@@ -182,7 +166,7 @@ TEST(McapTest, TruncatedFilesKeepTheMessagesBeforeTheTear) {
     RecordingSink all;
     ASSERT_TRUE(ReadMemory(full, &all, nullptr, nullptr).ok());
     size_t data_end = 0;
-    for (const Record& r : Records(full)) {
+    for (const McapRecord& r : McapRecords(full)) {
       if (r.op == 0x0F) data_end = r.pos;
     }
     std::vector<size_t> cuts = {0,
@@ -410,7 +394,7 @@ TEST(McapTest, AnAbsurdSchemaLengthIsRefusedBeforeAllocating) {
 TEST(McapTest, BrokenSummaryFallsBackToAScan) {
   std::vector<uint8_t> b = ReadBytes(Ros2Data("ros2_zstd.mcap"));
   size_t statistics = 0;
-  for (const Record& r : Records(b)) {
+  for (const McapRecord& r : McapRecords(b)) {
     if (r.op == 0x0B) statistics = r.pos;
   }
   ASSERT_NE(statistics, 0u);

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -22,6 +23,24 @@ namespace sweepscan::io::testing {
 
 inline std::string Ros2Data(const std::string& name) {
   return std::string(SWEEPSCAN_SOURCE_DIR) + "/tests/data/ros2/" + name;
+}
+
+// An MCAP file's top-level records, walked test-side (opcode u8, length
+// u64 LE, content), up to the Footer.
+struct McapRecord {
+  uint8_t op;
+  size_t pos, len;  // len: content bytes
+};
+inline std::vector<McapRecord> McapRecords(const std::vector<uint8_t>& b) {
+  std::vector<McapRecord> r;
+  for (size_t pos = 8; pos + 9 <= b.size();) {
+    uint64_t len;
+    std::memcpy(&len, b.data() + pos + 1, 8);
+    r.push_back({b[pos], pos, static_cast<size_t>(len)});
+    if (b[pos] == 0x02) break;  // Footer
+    pos += 9 + len;
+  }
+  return r;
 }
 
 inline std::vector<uint8_t> ReadBytes(const std::string& path) {
