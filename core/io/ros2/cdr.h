@@ -86,6 +86,11 @@ Status DecodeCdrTfMessage(const uint8_t* data, size_t n, RosTfMessage* m);
 struct Ros2ReadReport {
   std::vector<std::string> warnings;
   bool torn_tail = false;  // the file ended inside a record (or lacks its footer)
+  // An MCAP read in log-time order (chunks out of it) at its fullest: the
+  // chunks whose messages were waiting at once, and those messages. What
+  // bounds its memory; tests check it stays the chunks overlapping in time.
+  uint64_t peak_chunks_held = 0;
+  uint64_t peak_messages_held = 0;
 };
 
 // Decodes one CDR message of `kind` and hands it to the sink. A message that

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <queue>
 #include <set>
 #include <vector>
 
@@ -164,7 +165,7 @@ Status Reader::Walk(uint64_t footer_at) {
       if (s.ok() && collect_units_) {
         int64_t t = 0;
         memcpy(&t, record_.data() + 6, 8);  // log_time; the record has it (Message() checked)
-        units_.push_back({pos, len, t, t, false});
+        units_.push_back({pos, len, t, t, false, false, 1});
       }
     } else if (op == kSchema || op == kChannel || op == kMessage) {
       s = ReadContent(content, len, &record_);
@@ -324,21 +325,28 @@ Status Reader::Message(Fields* f, const std::string& where) {
 Status Reader::Chunk(uint64_t pos, uint64_t len) {
   Status s = LoadChunk(pos, len);
   if (!s.ok()) return s;
-  if (collect_units_) {
-    // The first of two passes: counted and checked now, delivered later.
-    int64_t times[2];  // message_start_time, message_end_time (LoadChunk read them)
-    s = src_->ReadAt(pos + kPrefix, sizeof(times), reinterpret_cast<uint8_t*>(times));
-    if (!s.ok()) return s;
-    if (!chunk_.empty()) units_.push_back({pos, len, times[0], times[1], true});
-  }
   std::vector<Pending> pending;
   s = ChunkRecords(pos, &pending);
   // Messages before a damaged record are handed on before the error.
-  for (const Pending& m : pending) {
-    const Status d = Deliver(m);
-    if (!d.ok()) return d;
+  size_t delivered = 0;
+  Status d;
+  for (; delivered < pending.size() && d.ok(); ++delivered) {
+    d = Deliver(pending[delivered]);
+    if (!d.ok()) break;
   }
-  return s;
+  if (collect_units_ && delivered > 0) {
+    // The first of two passes: counted and checked now, delivered later.
+    // Recorded only with what this pass accepted: when the chunk's records
+    // fail after some messages and the file ends there in zeros, Walk calls
+    // it a torn tail and returns Ok, so the second pass must hand on the
+    // same messages and stop there quietly, not fail on the same damage.
+    // The span is the messages' own log times (pending is sorted), not the
+    // chunk header's, which only the writer vouches for.
+    const bool torn = !s.ok() || !d.ok();
+    units_.push_back(
+        {pos, len, pending.front().log_ns, pending[delivered - 1].log_ns, true, torn, delivered});
+  }
+  return d.ok() ? s : d;
 }
 
 Status Reader::Deliver(const Pending& m) {
@@ -467,48 +475,80 @@ Status Reader::ChunkRecords(uint64_t pos, std::vector<Pending>* pending) {
 }
 
 Status Reader::DeliverInLogTimeOrder() {
-  // Units whose time spans overlap are read together and their messages
-  // merged; the others one by one, as in file order. Memory: the chunks of
-  // the largest group of overlapping ones.
+  // A k-way merge: units in order of their first log time, their messages
+  // queued by (log time, unit, place in the unit). Before a unit is loaded,
+  // every queued message earlier than its first is handed on (no later unit
+  // has one as early), and a chunk's buffer is freed with its last message.
+  // Memory is then the chunks that overlap the current instant, however
+  // long a chain of slightly overlapping chunks is, and progress and cancel
+  // are checked per chunk. The order is that of a stable sort of all the
+  // messages by log time over the units sorted by start (file order on ties).
   std::stable_sort(units_.begin(), units_.end(),
                    [](const Unit& a, const Unit& b) { return a.start < b.start; });
+  struct Queued {
+    Pending m;
+    size_t unit, seq;
+  };
+  const auto later = [](const Queued& a, const Queued& b) {
+    if (a.m.log_ns != b.m.log_ns) return a.m.log_ns > b.m.log_ns;
+    return a.unit != b.unit ? a.unit > b.unit : a.seq > b.seq;
+  };
+  std::priority_queue<Queued, std::vector<Queued>, decltype(later)> queue(later);
+  std::vector<std::vector<uint8_t>> buffers(units_.size());  // never resized: pointers stay valid
+  std::vector<size_t> left(units_.size(), 0);                // queued messages per unit
+  uint64_t held = 0;
+  // Hands on the queued messages before `until` (all of them if `all`).
+  const auto flush = [&](int64_t until, bool all) {
+    while (!queue.empty() && (all || queue.top().m.log_ns < until)) {
+      const Queued q = queue.top();
+      queue.pop();
+      const Status s = Deliver(q.m);
+      if (!s.ok()) return s;
+      if (--left[q.unit] == 0) {
+        std::vector<uint8_t>().swap(buffers[q.unit]);
+        --held;
+      }
+    }
+    return Status::Ok();
+  };
   const uint64_t size = src_->size();
   uint64_t bytes = 0;
-  for (size_t i = 0; i < units_.size();) {
-    size_t j = i + 1;
-    int64_t end = units_[i].end;
-    for (; j < units_.size() && units_[j].start <= end; ++j) end = std::max(end, units_[j].end);
-    std::vector<std::vector<uint8_t>> buffers(j - i);
-    std::vector<Pending> pending;
-    for (size_t k = i; k < j; ++k) {
-      const Unit& u = units_[k];
-      Status s;
-      if (u.chunk) {
-        s = LoadChunk(u.pos, u.len);
-        if (s.ok()) s = ChunkRecords(u.pos, &pending);
-        buffers[k - i].swap(chunk_);  // the pending messages' pointers move with the storage
-      } else {
-        s = ReadContent(u.pos + kPrefix, u.len, &buffers[k - i]);
-        if (s.ok())
-          pending.push_back({u.start, buffers[k - i].data(), buffers[k - i].size(), 0, u.pos});
-      }
-      if (!s.ok()) return s;
-      bytes += u.len;
-    }
-    std::stable_sort(pending.begin(), pending.end(),
-                     [](const Pending& a, const Pending& b) { return a.log_ns < b.log_ns; });
-    for (const Pending& m : pending) {
-      const Status s = Deliver(m);
-      if (!s.ok()) return s;
-    }
+  for (size_t k = 0; k < units_.size(); ++k) {
+    const Unit& u = units_[k];
+    Status s = flush(u.start, false);
+    if (!s.ok()) return s;
     if (opt_ != nullptr && opt_->progress &&
         !opt_->progress(0.5 + 0.5 * std::min(1.0, static_cast<double>(bytes) / size))) {
       cancelled_ = true;
       return Error("cancelled");
     }
-    i = j;
+    std::vector<Pending> pending;
+    if (u.chunk) {
+      s = LoadChunk(u.pos, u.len);
+      if (s.ok()) {
+        s = ChunkRecords(u.pos, &pending);
+        // The first pass read this far and no further (a torn tail).
+        if (u.torn) s = Status::Ok();
+      }
+      buffers[k].swap(chunk_);  // the pending messages' pointers move with the storage
+    } else {
+      s = ReadContent(u.pos + kPrefix, u.len, &buffers[k]);
+      if (s.ok()) pending.push_back({u.start, buffers[k].data(), buffers[k].size(), 0, u.pos});
+    }
+    if (!s.ok()) return s;
+    bytes += u.len;
+    if (pending.size() > u.messages) pending.resize(u.messages);
+    if (pending.empty()) {
+      std::vector<uint8_t>().swap(buffers[k]);
+      continue;
+    }
+    left[k] = pending.size();
+    report_->peak_chunks_held = std::max(report_->peak_chunks_held, ++held);
+    for (size_t i = 0; i < pending.size(); ++i) queue.push({pending[i], k, i});
+    report_->peak_messages_held =
+        std::max(report_->peak_messages_held, static_cast<uint64_t>(queue.size()));
   }
-  return Status::Ok();
+  return flush(0, true);
 }
 
 Status Reader::Decompress(const std::string& compression, const std::vector<uint8_t>& in,

@@ -14,8 +14,9 @@
 // writers append messages as they arrive, and such a file is read in one
 // pass in file order. When chunks go back in time or overlap (by their
 // message_start_time / message_end_time; the spec allows it), the file is
-// read twice: counted and checked first, then its chunks are delivered by
-// start time, overlapping ones merged by log_time. Messages outside chunks
+// read twice: counted and checked first, then its chunks' messages are
+// merged by log_time (holding only the chunks that overlap the current
+// instant, see docs/ros-bags.md). Messages outside chunks
 // that go back in time are read in file order, and Ros2ReadReport says how
 // many went back.
 //

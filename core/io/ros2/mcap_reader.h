@@ -76,8 +76,10 @@ class Reader {
   // is put in log-time order when the chunks are not (DeliverInLogTimeOrder).
   struct Unit {
     uint64_t pos, len;
-    int64_t start, end;
+    int64_t start, end;  // the log times of its first and last message
     bool chunk;
+    bool torn;        // its records failed after `messages` (the file's torn tail)
+    size_t messages;  // how many of its messages (in log-time order) the first pass accepted
   };
   // A message inside a chunk, waiting to be handed on in log-time order.
   struct Pending {
