@@ -38,11 +38,13 @@ class Bag {
     return Status::Error(path_ + ": the database is damaged or truncated (" + what +
                          ": sqlite: " + sqlite3_errmsg(db_) + ")");
   }
-  // The last error was damage (a file cut short, overwritten pages).
-  bool Corrupt() const {
-    const int e = sqlite3_errcode(db_);
-    return e == SQLITE_CORRUPT || e == SQLITE_IOERR;
-  }
+  // The last error was damage (a file cut short, overwritten pages). A
+  // file cut short reads as SQLITE_CORRUPT (sqlite zero-fills a short read
+  // and then finds the page malformed; SQLITE_NOTADB is a file that is no
+  // database at all, said as such). SQLITE_IOERR is the disk or the OS
+  // failing to read: a failed read, not a partial bag to import with a
+  // warning.
+  bool Corrupt() const { return sqlite3_errcode(db_) == SQLITE_CORRUPT; }
   // Counts, first and last timestamps per topic (GROUP BY over messages);
   // on a damaged file, of the messages that can be read (MarkDamaged).
   Status CountMessages();
