@@ -11,10 +11,29 @@
 #include <string>
 
 #include "core/common/checked_file.h"
+#include "core/session/frames_bytes.h"
 #include "core/session/guarded_mapping.h"
 #include "core/session/session.h"
 
 namespace sweepscan {
+
+namespace {
+
+// The CRC of the file's first record, if it is whole (read with pread, before
+// the mapping): a fingerprint of the recording.
+bool FirstRecordCrc(int fd, uint32_t* crc) {
+  uint8_t length[4];
+  if (::pread(fd, length, 4, kSessionFramesHeaderSize) != 4) return false;
+  const uint32_t n = session_internal::GetU32(length);
+  if (n > kSessionMaxRecordBytes) return false;
+  uint8_t field[4];
+  const off_t at = static_cast<off_t>(kSessionFramesHeaderSize + 12 + n);
+  if (::pread(fd, field, 4, at) != 4) return false;
+  *crc = session_internal::GetU32(field);
+  return true;
+}
+
+}  // namespace
 
 Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options,
                        const FrameVisitor& visit, FramesLoadReport* report) {
@@ -30,8 +49,20 @@ Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options
   }
   const auto device = static_cast<uint64_t>(opened.st_dev);
   const auto inode = static_cast<uint64_t>(opened.st_ino);
-  if ((options.expect_device != 0 || options.expect_inode != 0) &&
-      (device != options.expect_device || inode != options.expect_inode)) {
+  uint32_t first_crc = 0;
+  const bool has_first = FirstRecordCrc(fd, &first_crc);
+  // The recording is known by its first record (a recording written over
+  // the session begins with another: its receive time differs), the file
+  // by its inode only when the first pass saw no whole record. Not the
+  // inode alone: some network file systems (sshfs without use_ino, CIFS
+  // with noserverino) number a file anew at each open, and a file made
+  // after another was deleted can get its number back.
+  const bool replaced =
+      options.expect_first_record
+          ? !has_first || first_crc != options.expect_first_record_crc
+          : (options.expect_device != 0 || options.expect_inode != 0) &&
+                (device != options.expect_device || inode != options.expect_inode);
+  if (replaced) {
     ::close(fd);
     return Status::Error(path +
                          ": replaced since its first pass was read (a recording written over "
@@ -42,6 +73,8 @@ Status VisitFramesFile(const std::string& path, const FramesLoadOptions& options
     if (report != nullptr) {
       report->file_device = device;
       report->file_inode = inode;
+      report->has_first_record = has_first;
+      report->first_record_crc = first_crc;
     }
   };
   // Mapped, not read: the file is visited once, front to back, and the

@@ -317,19 +317,31 @@ Status SessionWriter::Create(const std::string& dir, const SessionMeta& meta,
   const std::string frames = Join(dir, kSessionFramesFile);
   // A session that could not be begun (a full disk) leaves nothing behind:
   // its empty folder made the next `record` refuse it as an existing one.
+  // Only what this call made goes (a frames.bin that O_EXCL found is
+  // another writer's, and so is the meta.json beside it).
+  bool made_meta = false, made_frames = false;
   auto undo = [&](const Status& failed) {
-    ::unlink(frames.c_str());
-    ::unlink(Join(dir, kSessionMetaFile).c_str());
-    if (made_dir) ::rmdir(dir.c_str());
+    if (made_frames) ::unlink(frames.c_str());
+    if (made_meta) ::unlink(Join(dir, kSessionMetaFile).c_str());
+    if (made_dir) ::rmdir(dir.c_str());  // Only if empty.
     return failed;
   };
   SessionMeta m = meta;
   m.format_version = kSessionFormatVersion;
   if (m.created_utc.empty()) m.created_utc = UtcNowIso8601();
   Status s = WriteSessionMeta(Join(dir, kSessionMetaFile), m);
-  if (!s.ok()) return undo(s);
+  if (!s.ok()) return undo(s);  // Written atomically: no meta.json of ours.
+  made_meta = true;
   const int fd = ::open(frames.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) return undo(Status::Error(Errno(frames + ": cannot create")));
+  if (fd < 0) {
+    const int error = errno;
+    const Status failed = Status::Error(Errno(frames + ": cannot create"));
+    // EEXIST: another writer began a session here after the check above;
+    // its files stay.
+    if (error == EEXIST) return failed;
+    return undo(failed);
+  }
+  made_frames = true;
   const std::vector<uint8_t> header = SessionFramesHeader();
   if (!WriteAll(fd, header.data(), header.size()) || ::fsync(fd) != 0) {
     const Status failed = Status::Error(Errno(frames + ": cannot write the file header"));

@@ -115,6 +115,10 @@ struct FramesLoadOptions {
   // --overwrite`) mixed one file's poses with another's scans. 0, 0: any.
   uint64_t expect_device = 0;
   uint64_t expect_inode = 0;
+  // Or, when the first pass saw a whole first record, its CRC field must be
+  // this one (the inode alone may change, or come back: frames_file.cc).
+  bool expect_first_record = false;
+  uint32_t expect_first_record_crc = 0;
 };
 
 // One damaged stretch of frames.bin that was skipped.
@@ -157,6 +161,8 @@ struct FramesLoadReport {
   int64_t last_time_ns = 0;
   uint64_t file_device = 0;  // The file read (VisitFramesFile; 0 from memory).
   uint64_t file_inode = 0;
+  bool has_first_record = false;  // Its first record is whole; its CRC field:
+  uint32_t first_record_crc = 0;
 
   bool damaged() const { return !damage.empty(); }
   uint64_t damaged_bytes() const;

@@ -151,6 +151,8 @@ void SessionReplaySource::Decode() {
   FramesLoadOptions same_file = DefaultSessionFramesOptions();
   same_file.expect_device = decode_.frames.file_device;
   same_file.expect_inode = decode_.frames.file_inode;
+  same_file.expect_first_record = decode_.frames.has_first_record;
+  same_file.expect_first_record_crc = decode_.frames.first_record_crc;
   const Status s = DecodeSessionStreaming(dir_, same_file, sinks, &info);
   {
     std::lock_guard<std::mutex> lock(mu_);

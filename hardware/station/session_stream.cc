@@ -124,6 +124,8 @@ Status SessionCloudStream::PlacePoints(const PointSink& sink, const DecodeProgre
   FramesLoadOptions same_file = frames_options_;  // The file pass 1 read, not its successor.
   same_file.expect_device = decode_.frames.file_device;
   same_file.expect_inode = decode_.frames.file_inode;
+  same_file.expect_first_record = decode_.frames.has_first_record;
+  same_file.expect_first_record_crc = decode_.frames.first_record_crc;
   const Status s = DecodeSessionStreaming(dir_, same_file, sinks, &again, progress);
   {
     std::lock_guard<std::mutex> lock(mutex);

@@ -8,8 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <fstream>
+#include <vector>
 
 #include "core/cloud/reconstruct.h"
+#include "core/common/crc32c.h"
 #include "hardware/station/replay_source.h"
 #include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
@@ -186,9 +189,38 @@ TEST(SessionStreamTest, ASessionRecordedOverBetweenThePassesIsRefused) {
       stream.EstimatePoses(dir, DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
   std::unique_ptr<SessionReplaySource> replay;
   ASSERT_TRUE(SessionReplaySource::Open(dir, nullptr, &replay).ok());
-  // Another file under the same name, as a writer's O_EXCL create makes it.
+  // The same bytes under a new inode (a network file system that numbers a
+  // file anew at each open): the same recording, read on.
   testing::ShellOrFail("cp '" + dir + "/frames.bin' '" + dir + "/frames.new' && mv '" + dir +
                        "/frames.new' '" + dir + "/frames.bin'");
+  EXPECT_TRUE(stream.PlacePoints([](const CloudPoint*, size_t) { return Status::Ok(); }).ok());
+  ASSERT_TRUE(
+      stream.EstimatePoses(dir, DefaultSessionFramesOptions(), ReconstructionOptions()).ok());
+  // Another recording under the same name, as a writer's O_EXCL create
+  // makes it: here the same records but the first received 1 ms later.
+  {
+    std::fstream f(dir + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
+    std::vector<uint8_t> head(16 + 12);
+    f.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+    uint32_t length = 0;
+    std::memcpy(&length, head.data() + 16, 4);
+    std::vector<uint8_t> record(12 + length);
+    f.seekg(16);
+    f.read(reinterpret_cast<char*>(record.data()), static_cast<std::streamsize>(record.size()));
+    int64_t t = 0;
+    std::memcpy(&t, record.data() + 4, 8);
+    t += 1000000;
+    std::memcpy(record.data() + 4, &t, 8);
+    const uint32_t crc = Crc32c(record.data(), record.size());
+    std::ofstream copy(dir + "/frames.new", std::ios::binary);
+    f.seekg(0);
+    copy << f.rdbuf();
+    copy.seekp(16);
+    copy.write(reinterpret_cast<const char*>(record.data()),
+               static_cast<std::streamsize>(record.size()));
+    copy.write(reinterpret_cast<const char*>(&crc), 4);
+  }
+  testing::ShellOrFail("mv '" + dir + "/frames.new' '" + dir + "/frames.bin'");
   size_t points = 0;
   const Status s = stream.PlacePoints([&points](const CloudPoint*, size_t n) {
     points += n;
