@@ -390,6 +390,31 @@ TEST_F(SessionResultsTest, ACalibrationWhoseSessionCannotBeReadAgainEnds) {
   EXPECT_FALSE(workspace_->job_running());
 }
 
+// A calibration (or a pass split) still running when another session
+// takes its place ends without a result: it was shown, and offered to the
+// robot, as the new session's (the review's case: Calibrate, then Connect).
+TEST_F(SessionResultsTest, ACalibrationOfASessionNoLongerShownGivesNoResult) {
+  ASSERT_NO_FATAL_FAILURE(OpenCircle());
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  bool finished = false, ok = true;
+  QString said;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::calibrationFinished, &context,
+                   [&](bool r, const QString& m) {
+                     finished = true;
+                     ok = r;
+                     said = m;
+                   });
+  workspace_->CalibrateAutomatic();
+  ASSERT_TRUE(workspace_->job_running());
+  workspace_->NewSession();
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 120000));
+  EXPECT_FALSE(ok);
+  EXPECT_NE(said.indexOf("The session changed while it was calibrated"), -1) << said.toStdString();
+  EXPECT_EQ(workspace_->calibration_result(), nullptr);
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+}
+
 }  // namespace
 }  // namespace sweepscan::ui
 

@@ -454,6 +454,11 @@ class Workspace : public QObject {
   // What opening a session sets, whichever way it was opened.
   void TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
                   const QString& dir, bool samples_released);
+  // False (and calibrationFinished(false, why)) when the session shown is no
+  // longer the one a calibration job started on (`session`, its
+  // session_generation_ then).
+  bool StillTheSession(uint64_t session);
+  uint64_t session_generation_ = 0;  // Bumped by ForgetSessionResults.
   std::vector<float> pass_labels_;
   std::vector<float> deviation_map_;
   std::shared_ptr<const QuantizedValues> pass_values_, deviation_values_;

@@ -117,7 +117,8 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
         if (!s.ok()) return *error = QString::fromStdString(s.message());
         return QString();
       },
-      [this, result] {
+      [this, result, session = session_generation_] {
+        if (!StillTheSession(session)) return;
         calibration_ = result;
         const MountingError& a = result->summary.angles;
         emit calibrationFinished(true, tr("alpha %1, beta %2, gamma %3 mrad")
@@ -125,6 +126,16 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
                                            .arg(a.beta * 1e3, 0, 'f', 2)
                                            .arg(a.gamma * 1e3, 0, 'f', 2));
       });
+}
+
+bool Workspace::StillTheSession(uint64_t session) {
+  // A calibration started on one session and finished after another was
+  // opened (or New Session, Connect) would be shown, and offered to the
+  // robot, as this one's.
+  if (session == session_generation_) return true;
+  emit calibrationFinished(false, tr("The session changed while it was calibrated: calibrate the "
+                                     "session shown again."));
+  return false;
 }
 
 void Workspace::CalibrateAutomatic() {
@@ -158,7 +169,8 @@ void Workspace::CalibrateAutomatic() {
         s = SolveAutomatic(store, recording->geometry, {}, o, &result->summary);
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, result] {
+      [this, result, session = session_generation_] {
+        if (!StillTheSession(session)) return;
         calibration_ = result;
         emit calibrationFinished(true, QString());
       });
@@ -209,7 +221,13 @@ void Workspace::SplitPasses() {
         *quantized = Quantize(*labels);  // as the view keeps them, off the GUI thread
         return QString();
       },
-      [this, labels, quantized] {
+      [this, labels, quantized, generation = cloud_generation_] {
+        // Labels of the points of a cloud no longer shown (another session,
+        // Connect, New Session while it ran) would colour the next one.
+        if (generation != cloud_generation_) {
+          emit passesSplit(false, tr("The cloud shown changed while its passes were split."));
+          return;
+        }
         pass_labels_ = std::move(*labels);
         pass_values_ = quantized;
         size_t a = 0, b = 0;
@@ -313,6 +331,7 @@ void Workspace::ForgetEvaluation(bool keep_as_previous) {
 }
 
 void Workspace::ForgetSessionResults() {
+  ++session_generation_;
   ForgetEvaluation(/*keep_as_previous=*/false);
   pass_labels_.clear();
   pass_values_.reset();
