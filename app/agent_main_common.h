@@ -100,15 +100,17 @@ struct AgentCommandLine {
       // stays when `--serial` replaces its `listen`, and a missing key
       // file used to stop the agent there; on the command line it is a
       // mistake, refused as `sweepscan record` refuses it.
+      // The simulator (a test and demo tool, whose --pty is its serial
+      // link) only says so, as it only warns about a key others may read.
       const QString where = origin ? origin(key_file.names().first()) : QString();
-      if (where.isEmpty()) {
+      if (where.isEmpty() && key_permissions == hardware::KeyFilePermissions::kOwnerOnly) {
         *error = QStringLiteral(
             "--key-file does not apply to the serial link (it has no "
             "authentication)");
         return false;
       }
       std::fprintf(stderr, "note: %s: not used on the serial link (it has no authentication)\n",
-                   qPrintable(where));
+                   qPrintable(where.isEmpty() ? QStringLiteral("--key-file") : where));
     } else if (parser.isSet(key_file)) {
       QString warning;
       if (!hardware::ReadKeyFile(parser.value(key_file), &config->agent.key, error,

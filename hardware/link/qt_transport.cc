@@ -330,6 +330,12 @@ void PtyMasterStream::Flush() {
     } else if (put < 0 && errno == EINTR) {
       continue;
     } else {
+      if (put < 0 && errno != EAGAIN && errno != EWOULDBLOCK) {
+        // Not a full buffer but a failing pty: what waits cannot go (and
+        // the write notifier would fire at once, again and again).
+        bytes_dropped_ += static_cast<uint64_t>(pending_.size() - done);
+        done = pending_.size();
+      }
       break;
     }
   }

@@ -13,8 +13,10 @@
 // non-blocking write(2) (pty). What the pty's kernel buffer cannot take of a
 // write is queued and sent when it can, up to a bound; beyond it whole
 // writes are dropped and counted, as a serial line with nobody listening
-// would lose them, but a write begun is always finished: a frame is never
-// cut in the middle (the link's receiver would count it corrupt).
+// would lose them, but a write begun is finished: a frame is not cut in the
+// middle (the link's receiver would count it corrupt), unless the agent
+// throws away a queue its reader has not touched for seconds
+// (DiscardQueued: the frame at the kernel's end may then be cut).
 //
 // Threading: every stream lives on the thread that created it (the I/O
 // thread) and is used only there; signals are emitted on that thread.
