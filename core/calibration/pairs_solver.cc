@@ -565,15 +565,18 @@ std::string CalibrationSummary::FullReport() const {
 namespace {
 
 // `first`: the pass-1 picks in the world under `initial`.
+// `check_finite`: also that the samples and poses are finite (not the
+// picks' fault: the poses' or the recording's).
 Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry& geometry,
-                  const MountingError& initial, std::vector<Eigen::Vector3d>* first_out) {
+                  const MountingError& initial, std::vector<Eigen::Vector3d>* first_out,
+                  bool check_finite = true) {
   std::vector<Eigen::Vector3d>& first = *first_out;
   for (size_t k = 0; k < pairs.size(); ++k) {
     const std::string where = PairName(k) + ": ";
     const ObservationPair& p = pairs[k];
     for (const LidarObservation* o : {&p.pass1, &p.pass2}) {
-      if (!Finite(o->p_lidar) || !Finite(o->world_from_body.translation()) ||
-          !o->world_from_body.rotation().coeffs().allFinite()) {
+      if (check_finite && (!Finite(o->p_lidar) || !Finite(o->world_from_body.translation()) ||
+                           !o->world_from_body.rotation().coeffs().allFinite())) {
         return Status::Error(where + "a sample or its pose is not finite");
       }
     }
@@ -587,7 +590,7 @@ Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry
     for (size_t j = 0; j < k; ++j) {
       if (pairs[j].pass1.ref == p.pass1.ref && pairs[j].pass2.ref == p.pass2.ref &&
           pairs[j].pass1.p_lidar == p.pass1.p_lidar && pairs[j].pass2.p_lidar == p.pass2.p_lidar) {
-        return Status::Error(where + "same samples as pair " + std::to_string(j + 1));
+        return Status::Error(where + "same samples as " + PairName(j));
       }
     }
     first.push_back(ProjectObservation(p.pass1, geometry, initial));
@@ -600,7 +603,7 @@ Status CheckPairs(const std::vector<ObservationPair>& pairs, const RobotGeometry
 Status CheckObservationPairs(const std::vector<ObservationPair>& pairs,
                              const RobotGeometry& geometry, const MountingError& initial) {
   std::vector<Eigen::Vector3d> first;
-  return CheckPairs(pairs, geometry, initial, &first);
+  return CheckPairs(pairs, geometry, initial, &first, /*check_finite=*/false);
 }
 
 namespace {

@@ -149,10 +149,10 @@ struct CalibrationSummary {
   std::string FullReport() const;
 };
 
-// The pairs themselves, as SolvePairs checks them first: finite samples and
-// poses, the two picks of a pair from different passes (at least 1 s
-// apart), no pair twice. A failure is bad input (the picks), not a solve
-// that failed.
+// The picks' part of the pairs' checks SolvePairs makes first: the two
+// picks of a pair from different passes (at least 1 s apart), no pair
+// twice. A failure is bad input (the picks), not a solve that failed (the
+// samples and poses being finite is SolvePairs' check).
 Status CheckObservationPairs(const std::vector<ObservationPair>& pairs,
                              const RobotGeometry& geometry, const MountingError& initial);
 

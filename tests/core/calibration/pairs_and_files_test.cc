@@ -69,7 +69,8 @@ TEST(SolvePairsTest, DuplicatePairsAreRefused) {
   CalibrationSummary s;
   const Status st = SolvePairs(pairs, RobotGeometry(), {}, CalibrationOptions(), &s);
   ASSERT_FALSE(st.ok());
-  EXPECT_NE(st.message().find("same samples as pair 1"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("same samples as pair 1 (pairs[0])"), std::string::npos)
+      << st.message();
 }
 
 TEST(SolvePairsTest, InvalidOptions) {
