@@ -39,6 +39,7 @@
 #include "app/gui_tour.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/cloud_pager.h"
+#include "core/io/ros/ros_bag.h"
 #include "core/scenario/scenario.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
@@ -73,15 +74,13 @@ QString ResourcesDir() {
 // What is none of them is said in a message, and the app stays open.
 void OpenPathGiven(const QString& path, MainWindow* window) {
   const QFileInfo f(path);
-  const QString suffix = f.suffix().toLower();
   if (path.endsWith(QLatin1String(kProjectSuffix))) {
     window->project()->OpenProject(f.absoluteFilePath());  // Its errors are shown there.
   } else if (f.isDir() && QFileInfo::exists(f.absoluteFilePath() + QStringLiteral("/meta.json"))) {
     window->OpenSessionPath(f.absoluteFilePath());
-  } else if ((f.isFile() && (suffix == "bag" || suffix == "mcap" || suffix == "db3" ||
-                             f.fileName() == QLatin1String("metadata.yaml"))) ||
-             (f.isDir() &&
-              QFileInfo::exists(f.absoluteFilePath() + QStringLiteral("/metadata.yaml")))) {
+  } else if (f.fileName() == QLatin1String("metadata.yaml") ||
+             io::LooksLikeRosBag(QFile::encodeName(f.absoluteFilePath()).toStdString())) {
+    // As the CLI tells a bag (a split ROS 2 folder without metadata.yaml too).
     window->ImportRosRecordingPath(f.absoluteFilePath());
   } else {
     window->ShowError(QObject::tr("Open"),

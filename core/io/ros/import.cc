@@ -23,6 +23,24 @@
 namespace sweepscan::io {
 namespace {
 
+// A crafted bag's log time (MCAP's is a u64, read as int64) near the
+// limits would overflow (undefined); saturated, its offset is simply far
+// beyond any clock's, and the clock check treats it so.
+int64_t SaturatingAdd(int64_t a, int64_t b) {
+  int64_t r;
+  if (!__builtin_add_overflow(a, b, &r)) return r;
+  return b > 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
+int64_t SaturatingSub(int64_t a, int64_t b) {
+  int64_t r;
+  if (!__builtin_sub_overflow(a, b, &r)) return r;
+  return b < 0 ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+}
+
+}  // namespace
+
+namespace {
+
 using import_internal::CheckClocks;
 using import_internal::StampCheck;
 
@@ -242,7 +260,8 @@ class WritingSink : public RosMessageSink {
   // a topic stamped on another clock its log time moved onto that clock.
   int64_t Stamp(const RosMessageInfo& info, const RosHeader& h) const {
     auto it = setup_.stamps_from_log_time.find(*info.topic);
-    return it == setup_.stamps_from_log_time.end() ? h.stamp_ns : info.log_time_ns + it->second;
+    return it == setup_.stamps_from_log_time.end() ? h.stamp_ns
+                                                   : SaturatingAdd(info.log_time_ns, it->second);
   }
 
   bool ConvertScan(const RosLaserScan& m, int64_t stamp_ns, LidarScan* scan, std::string* why) {
@@ -578,7 +597,8 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
   std::vector<std::pair<std::string, int64_t>> offsets;  // topic, stamp - log time
   for (const std::string* topic : {&r.scan_topic, &r.odom_topic, &r.imu_topic}) {
     if (!topic->empty())
-      offsets.emplace_back(*topic, first.first_.at(*topic).stamp_ns - first.first_log_.at(*topic));
+      offsets.emplace_back(
+          *topic, SaturatingSub(first.first_.at(*topic).stamp_ns, first.first_log_.at(*topic)));
   }
   CheckClocks(offsets, &r);
   // Robot time: shifted by whole seconds to start near 1 s.
@@ -587,7 +607,7 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
     auto log = r.stamps_from_log_time.find(topic);
     earliest = std::min(earliest, log == r.stamps_from_log_time.end()
                                       ? h.stamp_ns
-                                      : first.first_log_.at(topic) + log->second);
+                                      : SaturatingAdd(first.first_log_.at(topic), log->second));
   }
   r.time_origin_ns = (earliest / kNsPerS - 1) * kNsPerS;
 
