@@ -477,8 +477,25 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
   r.session = session_dir;
   RosBagSummary summary;
   std::vector<std::string> summary_warnings;
-  Status s = SummarizeRosBag(bag, &summary, &summary_warnings);
-  if (!s.ok()) return s;
+  // A read that stopped because options.progress said so is a cancel;
+  // known by the answer, not by the message's words (a bag under
+  // /data/cancelled/ that fails is the bag's fault).
+  bool cancel_asked = false;
+  auto progress = [&](double from, double to) {
+    return [&options, &cancel_asked, from, to](double f) {
+      if (!options.progress || options.progress(from + (to - from) * f)) return true;
+      cancel_asked = true;
+      return false;
+    };
+  };
+  const auto cancelled_or = [&](const Status& st) {
+    if (cancel_asked) *failure = RosImportFailure::kCancelled;
+    return st;
+  };
+  // The summary reads a bag without an index whole (an MCAP without its
+  // summary section): cancellable, at the start of the work.
+  Status s = SummarizeRosBag(bag, &summary, &summary_warnings, progress(0.0, 0.0));
+  if (!s.ok()) return cancelled_or(s);
   RosReadStats stats;
   // A refusal says what the readers read past too: a bag torn before its
   // first scan has no LaserScan topic, because of the tear.
@@ -519,16 +536,7 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
   for (const RosTopicInfo& t : summary.topics) {
     if (t.kind() == RosMessageKind::kTf) read.topics.insert(t.topic);
   }
-  auto progress = [&](double from, double to) {
-    return [&options, from, to](double f) { return !options.progress || options.progress(from + (to - from) * f); };
-  };
   read.progress = progress(0.0, 0.05);
-  // A read that stopped because options.progress said so is a cancel.
-  const auto cancelled_or = [&](const Status& st) {
-    if (st.message().find("cancelled") != std::string::npos)
-      *failure = RosImportFailure::kCancelled;
-    return st;
-  };
   // /tf_static whole (a few messages), then the first of /tf's: reading
   // both at once would stop /tf_static where /tf stops.
   for (const bool statics : {true, false}) {
@@ -658,7 +666,7 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
     s = Status::Error(sink.error());
   } else if (!s.ok() && !sink.error().empty()) {
     s = Status::Error(bag + ": " + sink.error());
-  } else if (!s.ok() && s.message().find("cancelled") != std::string::npos) {
+  } else if (!s.ok() && cancel_asked) {
     *failure = RosImportFailure::kCancelled;
   }
   if (s.ok() && !r.scan_topic.empty() && r.scans == 0) {

@@ -78,7 +78,8 @@ Status SummarizeRosBag(const std::string& given, RosBagSummary* summary,
                        std::vector<std::string>* warnings,
                        const std::function<bool(double)>& progress) {
   const std::string path = RosBagPath(given);
-  if (!IsDirectory(path) && LooksLikeRosbag1(path)) return SummarizeRosbag1(path, summary);
+  if (!IsDirectory(path) && LooksLikeRosbag1(path))
+    return SummarizeRosbag1(path, summary, progress);
   if (LooksLikeRosBag(path)) {
     Ros2ReadReport report;
     const Status s = SummarizeRos2Bag(path, summary, &report, progress);

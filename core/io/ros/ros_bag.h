@@ -29,8 +29,9 @@ bool LooksLikeRosBag(const std::string& path);
 // `warnings` (optional) gets what the summary read past (ROS 2: a damaged
 // summary section, a file cut short). `progress` (optional) hears the
 // fraction read of a bag that must be read whole for its summary (an MCAP
-// without a summary section; the others are summarised from their index)
-// and cancels it by returning false.
+// without a summary section), of a ROS 1 bag's index walked, or 0 while a
+// rosbag2 sqlite3 bag's messages are counted, and cancels any of them by
+// returning false ("PATH: cancelled").
 Status SummarizeRosBag(const std::string& path, RosBagSummary* summary,
                        std::vector<std::string>* warnings = nullptr,
                        const std::function<bool(double)>& progress = nullptr);

@@ -320,7 +320,7 @@ Status SummarizeRos2Bag(const std::string& path, RosBagSummary* s, Ros2ReadRepor
   for (size_t i = 0; st.ok() && i < files.size(); ++i) {
     RosBagSummary part;
     st = storage == "mcap" ? SummarizeMcap(files[i], &part, report, shares.Of(i, progress))
-                           : SummarizeRos2Sqlite(files[i], &part, report);
+                           : SummarizeRos2Sqlite(files[i], &part, report, shares.Of(i, progress));
     if (st.ok()) Merge(part, i == 0, s);
   }
   return st;

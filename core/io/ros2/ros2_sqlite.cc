@@ -3,6 +3,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <utility>
 
@@ -31,6 +32,7 @@ class Bag {
   Status Open();
   Status Prepare(const char* sql, sqlite3_stmt** stmt);
   Status Error(const std::string& what) const {
+    if (cancelled_) return Status::Error(path_ + ": cancelled");
     if (Corrupt()) return Damaged(what);
     return Status::Error(path_ + ": " + what + ": " + sqlite3_errmsg(db_));
   }
@@ -44,7 +46,7 @@ class Bag {
   // database at all, said as such). SQLITE_IOERR is the disk or the OS
   // failing to read: a failed read, not a partial bag to import with a
   // warning.
-  bool Corrupt() const { return sqlite3_errcode(db_) == SQLITE_CORRUPT; }
+  bool Corrupt() const { return !cancelled_ && sqlite3_errcode(db_) == SQLITE_CORRUPT; }
   // Counts, first and last timestamps per topic (GROUP BY over messages);
   // on a damaged file, of the messages that can be read (MarkDamaged).
   Status CountMessages();
@@ -59,6 +61,29 @@ class Bag {
   }
   bool damaged() const { return !damage_.empty(); }
 
+  // Lets `progress` stop one long statement too (the GROUP BY that counts,
+  // the ORDER BY that sorts: seconds on a bag of millions of messages,
+  // before their first row): sqlite calls back every ~100 000 of its
+  // virtual machine's steps, and false interrupts the statement
+  // (SQLITE_INTERRUPT, said as "cancelled"). It is asked at the fraction
+  // last reported (set_fraction), so that a bar does not jump back.
+  void CancelBy(const std::function<bool(double)>& progress) {
+    if (!progress) return;
+    progress_ = progress;
+    sqlite3_progress_handler(
+        db_, 100000,
+        [](void* self) -> int {
+          auto* bag = static_cast<Bag*>(self);
+          if (bag->progress_(bag->fraction_)) return 0;
+          bag->cancelled_ = true;
+          return 1;
+        },
+        this);
+  }
+  void set_fraction(double f) { fraction_ = f; }
+  double fraction() const { return fraction_; }
+  bool cancelled() const { return cancelled_; }
+
   const std::string& path() const { return path_; }
   std::map<int64_t, Topic>& topics() { return topics_; }
 
@@ -68,6 +93,9 @@ class Bag {
   sqlite3* db_ = nullptr;
   std::map<int64_t, Topic> topics_;  // by topics.id
   std::string damage_;               // sqlite's word for the damage, once seen
+  std::function<bool(double)> progress_;
+  double fraction_ = 0.0;
+  bool cancelled_ = false;
 };
 
 // Finalizes a statement when it goes out of scope.
@@ -162,6 +190,7 @@ Status Bag::CountMessages() {
     t.last_ns = t.count == 0 ? ts : std::max(t.last_ns, ts);
     ++t.count;
   }
+  if (cancelled_) return Error("counting messages");
   return Status::Ok();
 }
 
@@ -196,10 +225,14 @@ void Bag::Fill(RosBagSummary* s) const {
 
 }  // namespace
 
-Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s, Ros2ReadReport* report) {
+Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s, Ros2ReadReport* report,
+                           const std::function<bool(double)>& progress) {
   Bag bag(path);
   Status st = bag.Open();
-  if (st.ok()) st = bag.CountMessages();
+  if (st.ok()) {
+    bag.CancelBy(progress);
+    st = bag.CountMessages();
+  }
   if (st.ok()) bag.Fill(s);
   if (st.ok() && bag.damaged() && report != nullptr) {
     report->warnings.push_back(bag.DamageWarning(s->message_count, "could be read"));
@@ -213,7 +246,10 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
   if (stats == nullptr) stats = &local_stats;
   Bag bag(path);
   Status st = bag.Open();
-  if (st.ok()) st = bag.CountMessages();
+  if (st.ok()) {
+    bag.CancelBy(opt.progress);
+    st = bag.CountMessages();
+  }
   if (!st.ok()) return st;
   if (summary != nullptr) bag.Fill(summary);
   uint64_t total = 0;
@@ -270,9 +306,9 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
       }
     }
     ++done;
-    if (opt.progress && (done % 256 == 0 || done == total) &&
-        !opt.progress(total ? std::min(1.0, static_cast<double>(done) / total) : 1.0)) {
-      return Status::Error(path + ": cancelled");
+    if (opt.progress && (done % 256 == 0 || done == total)) {
+      bag.set_fraction(total ? std::min(1.0, static_cast<double>(done) / total) : 1.0);
+      if (!opt.progress(bag.fraction())) return Status::Error(path + ": cancelled");
     }
     return Status::Ok();
   };
@@ -308,6 +344,7 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
         if (!st.ok()) return st;
       }
     }
+    if (bag.cancelled()) return bag.Error("reading messages");
     if (report != nullptr) report->warnings.push_back(bag.DamageWarning(done, "could be read"));
   }
   return Status::Ok();

@@ -17,6 +17,7 @@
 #ifndef SWEEPSCAN_CORE_IO_ROS2_ROS2_SQLITE_H_
 #define SWEEPSCAN_CORE_IO_ROS2_ROS2_SQLITE_H_
 
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -34,8 +35,11 @@ namespace sweepscan::io {
 // in *report says so ("the database is damaged or truncated (...): N
 // messages could be read, the rest is lost"). When not even the topics table
 // can be read, the error says the file is damaged or truncated.
+// `progress` (optional) is asked while the count runs (at fraction 0) and
+// cancels it by returning false ("PATH: cancelled").
 Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s,
-                           Ros2ReadReport* report = nullptr);
+                           Ros2ReadReport* report = nullptr,
+                           const std::function<bool(double)>& progress = nullptr);
 
 // Decodes the messages of opt.topics (all decodable ones if empty) whose
 // serialization_format is "cdr" and hands them to the sink by timestamp.

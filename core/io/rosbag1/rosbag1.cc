@@ -220,7 +220,8 @@ bool LooksLikeRosbag1(const std::string& path) {
   return f.read(head, sizeof(head)) && std::memcmp(head, kMagic, sizeof(head)) == 0;
 }
 
-Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary) {
+Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary,
+                        const std::function<bool(double)>& progress) {
   std::unique_lock<std::mutex> lock;
   rosbag::Bag* cached = nullptr;
   Status s = Acquire(path, &lock, &cached, false);
@@ -242,7 +243,12 @@ Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary) {
     // connection and time; no message is read), where a View a topic would
     // walk it once a topic.
     RosTopicInfo* last = nullptr;
+    const uint32_t total = progress ? all.size() : 0;
     for (const rosbag::MessageInstance& m : all) {
+      if (progress && (out.message_count & 65535) == 0 &&
+          !progress(total == 0 ? 0.0 : static_cast<double>(out.message_count) / total)) {
+        return Status::Error(path + ": cancelled");
+      }
       if (last == nullptr || last->topic != m.getTopic()) last = &topics[m.getTopic()];
       const int64_t t = Ns(m.getTime());
       if (last->message_count++ == 0) last->first_ns = t;

@@ -13,6 +13,7 @@
 #ifndef SWEEPSCAN_CORE_IO_ROSBAG1_ROSBAG1_H_
 #define SWEEPSCAN_CORE_IO_ROSBAG1_ROSBAG1_H_
 
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -26,7 +27,10 @@ bool LooksLikeRosbag1(const std::string& path);
 
 // Topics, types, counts and the time span, from the bag's index (no message
 // is decoded). `compression` is the first chunk's ("none", "bz2", "lz4").
-Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary);
+// `progress` (optional) hears the fraction of the index walked (a ten-hour
+// bag's takes a second or two) and cancels by returning false.
+Status SummarizeRosbag1(const std::string& path, RosBagSummary* summary,
+                        const std::function<bool(double)>& progress = nullptr);
 
 // Decodes the messages of the requested topics (options.topics; empty =
 // every topic of a type ros_messages.h knows) and hands them to the sink in

@@ -468,6 +468,35 @@ TEST_F(ImportTest, DamagedLengthsAndOffsetsAreRefusedNotTrusted) {
   EXPECT_TRUE(said) << ::testing::PrintToString(report.warnings);
 }
 
+// A bag that fails to read is the bag's fault (exit 2), whatever the words
+// of its path: one under a folder named "cancelled" whose chunk is damaged
+// (seen when the messages are first read, after the summary from the index)
+// was taken for the operator's cancel, because the kind was told by the
+// message's text.
+TEST_F(ImportTest, AFailedReadIsNotACancelWhateverThePathSays) {
+  std::ifstream in(Bag("rules"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::vector<BagRecord> records = Records(bytes, 13, bytes.size());
+  const auto chunk = std::find_if(records.begin(), records.end(),
+                                  [](const BagRecord& r) { return r.fields.at("op") == "\x05"; });
+  ASSERT_NE(chunk, records.end());
+  // The chunk's first record's header length, far beyond the chunk.
+  const uint32_t huge = 0x00ffffff;
+  std::memcpy(&bytes[chunk->data_at], &huge, 4);
+  ASSERT_EQ(mkdir((dir_ + "/cancelled").c_str(), 0755), 0);
+  const std::string odd = dir_ + "/cancelled/chunk.bag";
+  std::ofstream(odd, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  RosBagSummary summary;
+  ASSERT_TRUE(SummarizeRosBag(odd, &summary).ok());  // the index is whole
+  RosImportFailure failure = RosImportFailure::kNone;
+  const Status s = ImportRosBag(odd, Out("odd_cancelled"), RosImportOptions(), nullptr, &failure);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(odd + ": "), std::string::npos) << s.message();
+  EXPECT_EQ(failure, RosImportFailure::kBag) << s.message();
+  EXPECT_FALSE(Exists(Out("odd_cancelled")));
+}
+
 // A topic is chosen only if its messages can be decoded here: an MCAP
 // converted from a ROS 1 bag keeps the "ros1" encoding, which the MCAP reader
 // does not read; it was chosen, read whole, and refused as "holds no message".

@@ -120,6 +120,51 @@ TEST(Ros2SqliteTest, TopicFilterAndCancel) {
   EXPECT_EQ(stopper.order.size(), 3u);
 }
 
+// A bag of millions of messages is counted (GROUP BY) and sorted (ORDER BY)
+// by one sqlite statement each, seconds before its first row: the progress
+// callback is asked during them too, and stops them.
+TEST(Ros2SqliteTest, CountingAndSortingAreCancellable) {
+  Scratch scratch("ros2_sqlite_cancel");
+  const std::string db = scratch.Copy(Ros2Data(kDb), "big.db3");
+  Exec(db,
+       "WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 200000) "
+       "INSERT INTO messages (topic_id, timestamp, data) SELECT (SELECT id FROM topics WHERE "
+       "name = '/chatter'), (SELECT MIN(timestamp) FROM messages), x'00' FROM n");
+  int asked = 0;
+  RosBagSummary s;
+  Status st = SummarizeRos2Sqlite(db, &s, nullptr, [&](double f) {
+    EXPECT_EQ(f, 0.0);
+    ++asked;
+    return true;
+  });
+  ASSERT_TRUE(st.ok()) << st.message();
+  EXPECT_EQ(s.message_count, uint64_t{testing::kMessages} + 200000);
+  EXPECT_GT(asked, 0);  // during the count, which has no row to report before it ends
+  st = SummarizeRos2Sqlite(db, &s, nullptr, [](double) { return false; });
+  EXPECT_EQ(st.message(), db + ": cancelled");
+
+  // Reading: stopped in the count or the sort, before any message.
+  RecordingSink sink;
+  RosReadOptions opt;
+  opt.progress = [](double) { return false; };
+  st = ReadRos2Sqlite(db, opt, &sink, nullptr, nullptr);
+  EXPECT_EQ(st.message(), db + ": cancelled");
+  EXPECT_TRUE(sink.order.empty());
+  // Stopped at the first report after 256 messages: the fraction then is
+  // the read's, not 0 (the sort's callbacks ask at the last fraction).
+  double last = -1.0;
+  bool went_back = false;
+  opt.progress = [&](double f) {
+    went_back = went_back || f < last;
+    last = f;
+    return f < 0.5;
+  };
+  st = ReadRos2Sqlite(db, opt, &sink, nullptr, nullptr);
+  EXPECT_EQ(st.message(), db + ": cancelled");
+  EXPECT_FALSE(went_back);
+  EXPECT_GE(last, 0.5);
+}
+
 TEST(Ros2SqliteTest, BadDatabasesAreNamed) {
   Scratch scratch("ros2_sqlite_bad");
   RosBagSummary s;
