@@ -585,9 +585,12 @@ int Main(int argc, char** argv) {
     }
   }
   if (o.drive_demo && !StartDriveDemo(o, &workspace, &window)) return 2;
+  // A project that cannot be opened: a scripted run (benchmark, tour) stops
+  // with exit 2; the operator has read its box, and the app stays open,
+  // as for a path given without --project (OpenPathGiven).
   if (!o.project.isEmpty() && !window.project()->OpenProject(o.project)) {
     std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
-    return 2;
+    if (scripted) return 2;
   }
   if (!o.open_path.isEmpty()) OpenPathGiven(o.open_path, &window);
   if (o.floor_plan) {

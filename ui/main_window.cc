@@ -282,15 +282,23 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
               ShowError(what, message);
             }
           });
+  // A new recording is listed in Open Recent as it starts: one the operator
+  // chose not to save stays in its folder, and this is where it is found
+  // again. Saved under a new name, the listing follows it.
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
     UpdateTitle();
-    if (!dir.isEmpty() && !workspace_->unsaved()) AddRecent(dir);
+    session_dir_shown_ = dir;
+    if (!dir.isEmpty()) AddRecent(dir);
     UpdateActions();
     ShowPoseSource();
   });
   connect(workspace_, &Workspace::sessionRenamed, this, [this](const QString& dir) {
     UpdateTitle();
     UpdateActions();
+    if (!session_dir_shown_.isEmpty() && !QFileInfo::exists(session_dir_shown_)) {
+      RemoveRecent(session_dir_shown_);  // moved
+    }
+    session_dir_shown_ = dir;
     AddRecent(dir);
     statusBar()->showMessage(tr("Saved %1").arg(dir), 6000);
   });
@@ -377,6 +385,10 @@ void MainWindow::BuildStatusBar() {
   pose_source_label_->setObjectName(QStringLiteral("statusPoseSource"));
   pose_source_label_->setContentsMargins(12, 0, 12, 0);  // Apart from the speeds beside it.
   fps_label_ = new QLabel;
+  fps_label_->setObjectName(QStringLiteral("statusFps"));
+  fps_label_->setToolTip(
+      tr("Frames drawn in the last second. The view draws only when something "
+         "changes: the camera, the cloud or a finer pass at rest."));
   clip_label_ = new QLabel;
   clip_label_->setObjectName(QStringLiteral("statusClip"));
   progress_ = new QProgressBar;
@@ -515,12 +527,11 @@ void MainWindow::OnTick() {
     UpdateTeleop();  // Re-send while held (10 Hz is plenty; 30 Hz is fine).
   view_->RenderIfDirty();
 
-  ++fps_frames_;
   if (fps_clock_.elapsed() >= 1000) {
-    static uint64_t last_frames = 0;
     const uint64_t frames = view_->frames_rendered();
-    fps_ = (frames - last_frames) * 1000.0 / fps_clock_.elapsed();
-    last_frames = frames;
+    const bool still = frames == fps_last_frames_;
+    fps_ = (frames - fps_last_frames_) * 1000.0 / fps_clock_.elapsed();
+    fps_last_frames_ = frames;
     fps_clock_.restart();
     const hardware::LinkHealth& h = workspace_->health();
     QString link = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
@@ -528,7 +539,9 @@ void MainWindow::OnTick() {
     if (h.outage_open) link = tr("reconnecting (%1 s)").arg(h.outage_s, 0, 'f', 0);
     if (workspace_->recording()) link += tr(" · REC");
     link_label_->setText(tr("Link: %1").arg(link));
-    fps_label_->setText(tr("%1 fps").arg(fps_, 0, 'f', 0));
+    // The view draws only when something changes: no frame in the last
+    // second is a still view, not a stalled one ("0 fps" read as a hang).
+    fps_label_->setText(still ? tr("view still") : tr("%1 fps").arg(fps_, 0, 'f', 0));
     // A live cloud: into the room once it shows a ceiling.
     if (room_view_pending_ && workspace_->recording_opened() == nullptr &&
         view_->camera_generation() == room_view_camera_ && view_->point_count() > 200'000 &&
@@ -676,12 +689,7 @@ void MainWindow::OpenSessionPath(const QString& dir) {
   // is gone leaves the list.
   const QFileInfo folder(dir);
   if (!folder.exists()) {
-    QSettings settings;
-    QStringList recent = settings.value(QStringLiteral("sessions/recent")).toStringList();
-    if (recent.removeAll(dir) > 0) {
-      settings.setValue(QStringLiteral("sessions/recent"), recent);
-      RebuildRecentMenu();
-    }
+    RemoveRecent(dir);
     ShowError(tr("Open session"), tr("%1 does not exist (moved or deleted?).").arg(dir));
     return;
   }
@@ -723,6 +731,14 @@ void MainWindow::AddRecent(const QString& dir) {
   RebuildRecentMenu();
 }
 
+void MainWindow::RemoveRecent(const QString& dir) {
+  QSettings settings;
+  QStringList recent = settings.value(QStringLiteral("sessions/recent")).toStringList();
+  if (recent.removeAll(dir) == 0) return;
+  settings.setValue(QStringLiteral("sessions/recent"), recent);
+  RebuildRecentMenu();
+}
+
 void MainWindow::RebuildRecentMenu() {
   recent_menu_->clear();
   const QStringList recent = QSettings().value(QStringLiteral("sessions/recent")).toStringList();
@@ -746,6 +762,19 @@ void MainWindow::ShowError(const QString& title, const QString& message) {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
+  // A saved or opened session being copied under a new name: quitting
+  // stops the copy (its partial folder is removed), so it is asked. A new
+  // recording being copied is ConfirmDiscard's: it refuses to quit then.
+  if (workspace_->saving() && !workspace_->unsaved() && interactive_ &&
+      QMessageBox::question(this, tr("Saving"),
+                            tr("%1 is still running. Quit and stop the copy? The session "
+                               "itself stays as it was; the partial copy is removed.")
+                                .arg(workspace_->job_name()),
+                            QMessageBox::Yes | QMessageBox::No,
+                            QMessageBox::No) != QMessageBox::Yes) {
+    event->ignore();
+    return;
+  }
   if (!ConfirmDiscard([this] { close(); }) || !project_->ConfirmClose()) {
     event->ignore();
     return;

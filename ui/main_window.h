@@ -138,6 +138,7 @@ class MainWindow : public QMainWindow {
   // that asked) then runs again once it is saved.
   bool ConfirmDiscard(const std::function<void()>& retry);
   void AddRecent(const QString& dir);
+  void RemoveRecent(const QString& dir);
   void RebuildRecentMenu();
   void UpdateActions();
   void UpdateTitle();  // The project's file, the session's folder.
@@ -186,13 +187,14 @@ class MainWindow : public QMainWindow {
 
   bool interactive_ = true;
   QString last_error_;
+  QString session_dir_shown_;  // the session in the title, for Open Recent when it moves
   int errors_shown_ = 0;
   QSet<int> keys_held_;
   // Forgets the held drive keys and stops the keyboard's motion.
   void ReleaseDriveKeys();
   QElapsedTimer tick_clock_;
   QElapsedTimer fps_clock_;
-  uint64_t fps_frames_ = 0;
+  uint64_t fps_last_frames_ = 0;  // view_->frames_rendered() a second ago
   double fps_ = 0.0;
   std::vector<double> latencies_ms_;
   uint64_t frames_at_last_tick_ = 0;  // the view's frames when the last tick began

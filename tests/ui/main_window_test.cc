@@ -21,6 +21,7 @@
 #include <QFile>
 #include <QFileInfo>
 #include <QImage>
+#include <QLabel>
 #include <QLineEdit>
 #include <QProcess>
 #include <QPushButton>
@@ -150,6 +151,42 @@ TEST_F(AppTest, WithNoRobotSpaceTypesInATextFieldAndTheStopSaysNothingReceivedIt
   workspace_->EmergencyStop();
   ASSERT_FALSE(said.isEmpty());
   EXPECT_EQ(said.last(), "No robot connected: nothing to stop.");
+}
+
+// The drive limits and the calibration circle an operator sets are there at
+// the next start (they went back to the defaults), and the limits apply at
+// once. A view with nothing to draw says it is still ("0 fps" read as a hang).
+TEST_F(AppTest, DriveSettingsAreKeptAndAStillViewSaysSo) {
+  auto spin = [this](const char* key) {
+    return window_->drive_panel()->findChild<QDoubleSpinBox*>(QString::fromLatin1(key));
+  };
+  ASSERT_NE(spin("drive/speed_limit_mps"), nullptr);
+  ASSERT_NE(spin("drive/circle_radius_m"), nullptr);
+  spin("drive/speed_limit_mps")->setValue(0.2);
+  spin("drive/turn_rate_limit_radps")->setValue(0.6);
+  spin("drive/circle_radius_m")->setValue(1.5);
+  EXPECT_EQ(workspace_->limits().v_max_mps, 0.2);
+
+  window_.reset();  // the app closed, and started again
+  workspace_ = std::make_unique<Workspace>();
+  window_ = std::make_unique<MainWindow>(workspace_.get(), kResources);
+  window_->SetInteractive(false);
+  window_->show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
+  EXPECT_EQ(spin("drive/speed_limit_mps")->value(), 0.2);
+  EXPECT_EQ(spin("drive/turn_rate_limit_radps")->value(), 0.6);
+  EXPECT_EQ(spin("drive/circle_radius_m")->value(), 1.5);
+  EXPECT_EQ(spin("drive/circle_turns")->value(), 3.0);  // never changed: the default
+  EXPECT_EQ(workspace_->limits().v_max_mps, 0.2);
+  EXPECT_EQ(workspace_->limits().w_max_radps, 0.6);
+
+  auto* fps = window_->findChild<QLabel*>(QStringLiteral("statusFps"));
+  ASSERT_NE(fps, nullptr);
+  QTest::qWait(2500);  // two status updates with nothing to draw
+  EXPECT_EQ(fps->text(), "view still");
+  window_->view()->Orbit(10.0);  // a frame drawn in the next second
+  ASSERT_TRUE(WaitFor([&] { return fps->text().endsWith(" fps"); }, 3000))
+      << fps->text().toStdString();
 }
 
 // View > Floor Plan brings the plan in front of the tab it shares (it

@@ -49,8 +49,17 @@ TEST_F(AppTest, SaveCloseAndOpenRestoreTheSameCloudPointForPoint) {
   QObject::connect(workspace_.get(), &Workspace::sessionRenamed,
                    [&](const QString& dir) { renamed = dir; });
   const QString recorded = workspace_->session_dir();
+  // Listed in Open Recent from its start (a recording not saved stays in
+  // its folder; this is where the operator finds it again) ...
+  const auto recent = [] {
+    return QSettings().value(QStringLiteral("sessions/recent")).toStringList();
+  };
+  EXPECT_EQ(recent().value(0), recorded);
   ASSERT_TRUE(window_->SaveSessionTo(saved)) << window_->last_error().toStdString();
   EXPECT_FALSE(QFileInfo::exists(recorded));  // a new recording is moved, not copied
+  // ... and the listing follows it when it moves.
+  EXPECT_EQ(recent().value(0), saved);
+  EXPECT_FALSE(recent().contains(recorded));
   EXPECT_EQ(workspace_->session_dir(), saved);
   EXPECT_EQ(changed, 0);
   EXPECT_EQ(renamed, saved);

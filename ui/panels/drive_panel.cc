@@ -7,7 +7,9 @@
 #include <QHBoxLayout>
 #include <QLabel>
 #include <QPushButton>
+#include <QSettings>
 #include <QVBoxLayout>
+#include <cmath>
 
 namespace sweepscan::ui {
 namespace {
@@ -20,6 +22,21 @@ QDoubleSpinBox* Spin(double lo, double hi, double step, double value, const QStr
   s->setDecimals(decimals);
   s->setValue(value);
   s->setSuffix(suffix);
+  return s;
+}
+
+// A spin box that starts at the value the operator left it at (QSettings
+// `key`, else `value`) and keeps each change there: the limits an operator
+// sets for a robot and a room hold from one start to the next.
+QDoubleSpinBox* KeptSpin(const QString& key, double lo, double hi, double step, double value,
+                         const QString& suffix, int decimals = 2) {
+  bool ok = false;
+  const double kept = QSettings().value(key).toDouble(&ok);
+  QDoubleSpinBox* s =
+      Spin(lo, hi, step, ok && std::isfinite(kept) ? kept : value, suffix, decimals);
+  s->setObjectName(key);
+  QObject::connect(s, QOverload<double>::of(&QDoubleSpinBox::valueChanged), s,
+                   [key](double v) { QSettings().setValue(key, v); });
   return s;
 }
 
@@ -44,9 +61,12 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
 
   auto* teleop = new QGroupBox(tr("Keyboard"));
   auto* teleop_form = new QFormLayout(teleop);
-  v_max_ = Spin(0.01, 1.0, 0.05, workspace_->limits().v_max_mps, tr(" m/s"));
-  w_max_ = Spin(0.05, 3.0, 0.1, workspace_->limits().w_max_radps, tr(" rad/s"));
+  v_max_ = KeptSpin(QStringLiteral("drive/speed_limit_mps"), 0.01, 1.0, 0.05,
+                    workspace_->limits().v_max_mps, tr(" m/s"));
+  w_max_ = KeptSpin(QStringLiteral("drive/turn_rate_limit_radps"), 0.05, 3.0, 0.1,
+                    workspace_->limits().w_max_radps, tr(" rad/s"));
   auto apply_limits = [this] { workspace_->SetLimits({v_max_->value(), w_max_->value()}); };
+  apply_limits();  // the kept ones
   connect(v_max_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, apply_limits);
   connect(w_max_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, apply_limits);
   teleop_form->addRow(tr("Speed limit"), v_max_);
@@ -65,9 +85,10 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
 
   auto* script = new QGroupBox(tr("Calibration circle"));
   auto* script_form = new QFormLayout(script);
-  radius_ = Spin(0.2, 5.0, 0.1, 1.0, tr(" m"));
-  speed_ = Spin(0.01, 0.5, 0.01, 0.05, tr(" m/s"));
-  turns_ = Spin(0.25, 5.0, 0.25, 3.0, QString(), 2);  // the calibration drive (docs/calibration.md)
+  // The calibration drive's defaults (docs/calibration.md), or the operator's.
+  radius_ = KeptSpin(QStringLiteral("drive/circle_radius_m"), 0.2, 5.0, 0.1, 1.0, tr(" m"));
+  speed_ = KeptSpin(QStringLiteral("drive/circle_speed_mps"), 0.01, 0.5, 0.01, 0.05, tr(" m/s"));
+  turns_ = KeptSpin(QStringLiteral("drive/circle_turns"), 0.25, 5.0, 0.25, 3.0, QString());
   script_form->addRow(tr("Radius"), radius_);
   script_form->addRow(tr("Speed"), speed_);
   script_form->addRow(tr("Turns"), turns_);
