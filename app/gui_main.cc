@@ -561,6 +561,7 @@ int Main(int argc, char** argv) {
   const bool scripted = o.quit_after_s >= 0 || o.orbit_frames > 0 || !o.tour.isEmpty() ||
                         !o.pose_source_tour.isEmpty();
   window.SetInteractive(!scripted);
+  if (scripted) window.ResetLayout();
   // The size the operator left it at (MainWindow restored it), else 1400 x
   // 860 within the screen; scripted runs (benchmarks, screenshots) always
   // get the same size.

@@ -200,6 +200,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
 
   BuildMenus();
   BuildStatusBar();
+  default_layout_ = saveState();  // before the operator's (View > Panels > Reset Layout)
   RestoreSettings();
 
   connect(workspace_, &Workspace::message, this,
@@ -410,6 +411,11 @@ void MainWindow::BuildStatusBar() {
     l->setContentsMargins(12, 0, 0, 0);
     statusBar()->addPermanentWidget(l);
   }
+}
+
+void MainWindow::ResetLayout() {
+  restoreState(default_layout_);
+  plan_widened_from_ = 0;
 }
 
 void MainWindow::RestoreSettings() {

@@ -106,6 +106,10 @@ class MainWindow : public QMainWindow {
   QString pose_source_status() const;  // The status bar's "Poses: ..." text.
   // Brings a dock (by object name, e.g. "evaluationDock") to the front.
   void RaiseDock(const QString& name);
+  // View > Panels > Reset Layout: the docks where a first start puts them
+  // (scripted runs start so too: their screenshots and benchmarks do not
+  // depend on how the operator left the window).
+  void ResetLayout();
   // The room view: the ceiling the cloud shows hidden (View > Hide Ceiling,
   // C, checked; the status bar says so) and the camera looking into the
   // room. Done when an opened session has replayed, and once for a live
@@ -130,6 +134,7 @@ class MainWindow : public QMainWindow {
   void BuildStatusBar();
   void ShowPoseSource();
   void RestoreSettings();
+  QByteArray default_layout_;  // the docks as built, before RestoreSettings
   void SaveSettings();
   void OnTick();
   void UpdateTeleop();

@@ -280,6 +280,10 @@ void MainWindow::BuildViewMenu() {
   QMenu* panels = view->addMenu(tr("&Panels"));
   for (QDockWidget* dock : findChildren<QDockWidget*>())
     panels->addAction(dock->toggleViewAction());
+  panels->addSeparator();
+  QAction* reset = panels->addAction(tr("&Reset Layout"), this, &MainWindow::ResetLayout);
+  reset->setObjectName(QStringLiteral("resetLayout"));
+  reset->setToolTip(tr("The panels where a first start puts them"));
 }
 
 void MainWindow::BuildRobotMenu() {

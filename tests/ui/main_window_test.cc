@@ -223,6 +223,32 @@ TEST_F(AppTest, FloorPlanComesToTheFrontAndHidingItGivesTheWidthBack) {
   EXPECT_EQ(save_as->shortcut(), QKeySequence(QStringLiteral("Ctrl+Shift+S")));
 }
 
+// View > Panels > Reset Layout puts the docks back where a first start
+// does: a plan left open and wide, a panel closed and another floated, as
+// the window was saved, no longer squeeze the 3D view at the next start.
+TEST_F(AppTest, ResetLayoutPutsThePanelsBackWhereAFirstStartDoes) {
+  window_->resize(1400, 860);
+  auto* plan = window_->findChild<QDockWidget*>(QStringLiteral("planDock"));
+  auto* drive = window_->findChild<QDockWidget*>(QStringLiteral("driveDock"));
+  ASSERT_NE(plan, nullptr);
+  ASSERT_NE(drive, nullptr);
+  QTest::qWait(100);
+  const int view_width = window_->view()->width();
+  ASSERT_FALSE(plan->isVisible());
+  ASSERT_TRUE(drive->isVisible());
+  plan->toggleViewAction()->trigger();
+  drive->close();
+  QTest::qWait(100);
+  ASSERT_LT(window_->view()->width(), view_width - 100);
+  auto* reset = window_->findChild<QAction*>(QStringLiteral("resetLayout"));
+  ASSERT_NE(reset, nullptr);
+  reset->trigger();
+  QTest::qWait(100);
+  EXPECT_FALSE(plan->isVisible());
+  EXPECT_TRUE(drive->isVisible());
+  EXPECT_NEAR(window_->view()->width(), view_width, 8);
+}
+
 // A held drive key never leaves the robot driving on its own: its release
 // counts with a modifier held by then (W, then Shift for a Shift+click), the
 // window losing the keyboard stops it, and Space stops the robot from a
