@@ -226,7 +226,7 @@ int RunPlan(int argc, char** argv) {
   int code = LoadInput(args, &cloud);
   if (code != kExitOk) return code;
   // A cut through a floor or ceiling slab draws the slab's whole extent as
-  // points, which the fit turns into diagonal "walls" (219 of them at 2.69 m
+  // points, which the fit turns into diagonal "walls" (hundreds of them at 2.69 m
   // under the office floor's 2.7 m ceiling).
   if (double level = 0.0; plan::LevelSurfaceNearCut(cloud, options.section, 0.03, &level)) {
     std::fprintf(stderr,
