@@ -210,10 +210,9 @@ int RunProjectAlign(const Args& args) {
   // of degrees), and ICP then fits one warped room into a look-alike one
   // with a sigma of a millimetre: a confident wrong placement.
   if (cloud_options.pose_source != PoseSource::kEkf) {
-    PrintError(
-        "--pose-source odometry: sessions are not aligned with odometry poses (the wheels alone "
-        "bend a building's rooms, and a bent room fits a look-alike one); align with the EKF "
-        "poses, the default");
+    PrintError(std::string("--pose-source ") + PoseSourceName(cloud_options.pose_source) +
+               ": sessions are aligned with the EKF poses only, the default (odometry: the "
+               "wheels alone bend a building's rooms, and a bent room fits a look-alike one)");
     return kExitBadInput;
   }
   if (project.Anchor() < 0) return (PrintError(file + ": no anchor session (add a session first)"), kExitBadInput);

@@ -557,7 +557,7 @@ TEST_F(ProjectCliTest, OdometryIsNotAlignedAndDrawingWithItWarns) {
   const std::string project = NewProject("odometry.sweepscan-project", "ab");
   CommandRun r = Cli("project align " + project + " --pose-source odometry");
   EXPECT_EQ(r.code, 2) << r.out;
-  EXPECT_NE(r.out.find("align with the EKF poses"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("aligned with the EKF poses only"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("building the cloud"), std::string::npos) << r.out;
   r = Cli("project --help");
   EXPECT_EQ(r.out.find("ekf|odometry"), std::string::npos) << r.out;
