@@ -17,6 +17,7 @@
 #include "core/common/file_suffix.h"
 #include "core/plan/floor_plan.h"
 #include "core/plan/plan_writers.h"
+#include "core/plan/section.h"
 
 namespace sweepscan::app {
 
@@ -224,6 +225,16 @@ int RunPlan(int argc, char** argv) {
   std::vector<Eigen::Vector3f> cloud;
   int code = LoadInput(args, &cloud);
   if (code != kExitOk) return code;
+  // A cut through a floor or ceiling slab draws the slab's whole extent as
+  // points, which the fit turns into diagonal "walls" (hundreds of them at 2.69 m
+  // under the office floor's 2.7 m ceiling).
+  if (double level = 0.0; plan::LevelSurfaceNearCut(cloud, options.section, 0.03, &level)) {
+    std::fprintf(stderr,
+                 "sweepscan-cli: warning: the cut at %.3f m +- %.3f m is within 3 cm of a level "
+                 "surface at %.2f m (a floor or a ceiling): its points are drawn as walls; cut at "
+                 "least 0.1 m from it (--height)\n",
+                 options.section.height_m, options.section.band_m, level);
+  }
   plan::FloorPlan floor_plan;
   Status s = plan::BuildFloorPlan(cloud, options, &floor_plan);
   if (!s.ok()) {

@@ -5,6 +5,8 @@
 #include "app/cli_project.h"
 
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -17,8 +19,11 @@
 #include "app/cli_common.h"
 #include "core/calibration/calibration_file.h"
 #include "core/project/project.h"
+#include "core/session/session.h"
 
 namespace sweepscan::app {
+
+namespace fs = std::filesystem;
 
 const char* const kProjectUsage =
     "usage: sweepscan-cli project <subcommand> PROJECT.sweepscan-project [options]\n"
@@ -34,8 +39,7 @@ const char* const kProjectUsage =
     "                     add session folders (unplaced until aligned)\n"
     "  remove PROJECT ID  take a session out (its folder is left alone)\n"
     "  info PROJECT       the sessions, their poses and how each was found\n"
-    "  align PROJECT [--session ID] [--to ID] [--pairs FILE] [--no-icp]\n"
-    "        [--hold-free] [--pose-source ekf|odometry]\n"
+    "  align PROJECT [--session ID] [--to ID] [--pairs FILE] [--no-icp] [--hold-free]\n"
     "                     place unplaced sessions (or --session ID again) against\n"
     "                     placed ones: planes (or the picked --pairs) then\n"
     "                     point-to-plane ICP. Overlap that leaves a direction free\n"
@@ -44,7 +48,11 @@ const char* const kProjectUsage =
     "                     that direction and the project records it as free.\n"
     "                     A session whose cloud cannot be built is reported and the\n"
     "                     others are still placed and saved (exit 1); a session is\n"
-    "                     never placed against one placed against it\n"
+    "                     never placed against one placed against it. Clouds are\n"
+    "                     built with the EKF poses (wheels alone bend a building's\n"
+    "                     rooms). What another program saved to PROJECT meanwhile\n"
+    "                     is kept: the placements are applied onto it, and one\n"
+    "                     whose session changed there is refused (exit 1)\n"
     "  export PROJECT --out FILE.las|FILE.ply|FILE.pcd [--sessions ID,ID]\n"
     "                     the placed, visible sessions' clouds in the project frame;\n"
     "                     LAS is streamed one session at a time, each its own\n"
@@ -58,17 +66,41 @@ const char* const kProjectUsage =
     "three or more points picked in the session (source) and in --to (target),\n"
     "each in its own session's frame (metres).\n";
 
-Status LoadProjectAndSay(const std::string& file, Project* project) {
+Status LoadProjectAndSay(const std::string& file, Project* project, std::string* text) {
+  std::string bytes;
+  if (!ReadProjectFile(file, &bytes)) return LoadProject(file, project);  // says why
   std::vector<std::string> repairs;
-  const Status s = LoadProject(file, project, &repairs);
+  const Status s = ProjectFromJson(bytes, file, project, &repairs);
   for (const std::string& r : repairs)
     std::cerr << "sweepscan-cli: warning: " << file << ": " << r << "\n";
+  if (text != nullptr) *text = std::move(bytes);
   return s;
 }
 
-namespace {
+bool ReadProjectFile(const std::string& file, std::string* text) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return false;
+  text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return !in.bad();
+}
 
-namespace fs = std::filesystem;
+Status CheckSessionFolder(const std::string& project_file, const std::string& path) {
+  ProjectSession probe;
+  probe.path = path;
+  const std::string dir = ResolveSessionPath(project_file, probe);
+  if (!fs::is_directory(dir)) {
+    return Status::Error(path +
+                         ": not a session folder (paths are relative to the project's folder)");
+  }
+  // The app's words (ProjectController::AddSession): any folder is not a
+  // session, and an empty one would only fail later, at align or export.
+  if (!fs::exists(fs::path(dir) / kSessionMetaFile)) {
+    return Status::Error(path + ": not a session folder (no " + kSessionMetaFile + ")");
+  }
+  return Status::Ok();
+}
+
+namespace {
 
 int Fail(int code, const std::string& message) {
   PrintError(message);
@@ -97,12 +129,8 @@ int RunNew(const Args& args) {
     calibration = m;
   }
   for (size_t i = 1; i < pos.size(); ++i) {
-    ProjectSession probe;
-    probe.path = pos[i];
-    if (!fs::is_directory(ResolveSessionPath(file, probe))) {
-      return Fail(kExitBadInput,
-                  pos[i] + ": not a session folder (paths are relative to the project's folder)");
-    }
+    if (const Status folder = CheckSessionFolder(file, pos[i]); !folder.ok())
+      return Fail(kExitBadInput, folder.message());
     ProjectSession* added = nullptr;
     const Status s = project.AddSession(pos[i], &added, file);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
@@ -118,48 +146,68 @@ int RunNew(const Args& args) {
   return kExitOk;
 }
 
+// Loads `file`, applies `edit` and saves, unless another program saved the
+// file in between (`project align` in another terminal, the app): the edit
+// is then made again on what that program wrote, so that neither loses the
+// other's work. `edit` returns an exit code after its message.
+int EditProject(const std::string& file, const std::function<int(Project*)>& edit) {
+  for (int attempt = 0;; ++attempt) {
+    Project project;
+    std::string text;
+    Status s = LoadProjectAndSay(file, &project, &text);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+    std::ostringstream said;
+    std::streambuf* const cerr = std::cerr.rdbuf(said.rdbuf());
+    const int code = edit(&project);
+    std::cerr.rdbuf(cerr);
+    std::string now;
+    if (code == kExitOk && attempt < 5 && ReadProjectFile(file, &now) && now != text) continue;
+    std::cerr << said.str();
+    if (code != kExitOk) return code;
+    s = SaveProject(file, project);
+    if (!s.ok()) return Fail(kExitFailure, s.message());
+    return kExitOk;
+  }
+}
+
 int RunAdd(const Args& args) {
   const std::vector<std::string>& pos = args.positional();
-  if (pos.size() < 2) return Fail(kExitBadInput, "project add needs PROJECT and at least one SESSION");
-  Project project;
-  Status s = LoadProjectAndSay(pos[0], &project);
-  if (!s.ok()) return Fail(kExitBadInput, s.message());
+  if (pos.size() < 2)
+    return Fail(kExitBadInput, "project add needs PROJECT and at least one SESSION");
   std::optional<MountingError> calibration;
   if (args.Has("calibration")) {
     MountingError m;
-    s = LoadCalibrationFile(args.Get("calibration"), &m);
+    const Status s = LoadCalibrationFile(args.Get("calibration"), &m);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
     calibration = m;
   }
-  for (size_t i = 1; i < pos.size(); ++i) {
-    ProjectSession probe;
-    probe.path = pos[i];
-    if (!fs::is_directory(ResolveSessionPath(pos[0], probe))) {
-      return Fail(kExitBadInput, pos[i] + ": not a session folder (paths are relative to the project's folder)");
+  return EditProject(pos[0], [&](Project* project) {
+    for (size_t i = 1; i < pos.size(); ++i) {
+      if (const Status folder = CheckSessionFolder(pos[0], pos[i]); !folder.ok())
+        return Fail(kExitBadInput, folder.message());
+      ProjectSession* added = nullptr;
+      const Status s = project->AddSession(pos[i], &added, pos[0]);
+      if (!s.ok()) return Fail(kExitBadInput, s.message());
+      added->calibration = calibration;
+      std::cerr << "added '" << added->id << "'"
+                << (added->project_from_session ? " as the anchor" : ", not placed yet") << "\n";
     }
-    ProjectSession* added = nullptr;
-    s = project.AddSession(pos[i], &added, pos[0]);
-    if (!s.ok()) return Fail(kExitBadInput, s.message());
-    added->calibration = calibration;
-    std::cerr << "added '" << added->id << "'"
-              << (added->project_from_session ? " as the anchor" : ", not placed yet") << "\n";
-  }
-  s = SaveProject(pos[0], project);
-  if (!s.ok()) return Fail(kExitFailure, s.message());
-  return kExitOk;
+    return kExitOk;
+  });
 }
 
 int RunRemove(const Args& args) {
   const std::vector<std::string>& pos = args.positional();
   if (pos.size() != 2) return Fail(kExitBadInput, "project remove needs PROJECT and one session ID");
-  Project project;
-  Status s = LoadProjectAndSay(pos[0], &project);
-  if (!s.ok()) return Fail(kExitBadInput, s.message());
-  s = project.RemoveSession(pos[1]);
-  if (!s.ok()) return Fail(kExitBadInput, s.message());
-  s = SaveProject(pos[0], project);
-  if (!s.ok()) return Fail(kExitFailure, s.message());
-  return kExitOk;
+  return EditProject(pos[0], [&](Project* project) {
+    std::string anchor;
+    const Status s = project->RemoveSession(pos[1], &anchor);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+    if (!anchor.empty()) {
+      std::cerr << "'" << anchor << "' is the anchor now: the project's frame is its start pose\n";
+    }
+    return kExitOk;
+  });
 }
 
 int RunProjectInfo(const Args& args) {
@@ -193,10 +241,16 @@ int RunProjectInfo(const Args& args) {
     j["yaw_deg"] = yaw_deg;
     j["method"] = e.method;
     j["reference"] = e.reference;
-    if (e.method != "anchor") {
+    if (e.method == "manual") {
+      // Typed in (or a reference dropped): its zero covariance means
+      // unknown, not a perfect fit.
+      text << ": not measured";
+      j["pose_source"] = nullptr;
+    } else if (e.method != "anchor") {
       text << ": rms " << Fixed(e.rms_m * 1000, 1) << " mm, overlap " << Fixed(e.overlap * 100, 0)
            << " %, 1-sigma " << Fixed(e.SigmaTranslation() * 1000, 2) << " mm / "
-           << Fixed(e.SigmaRotation() * 180 / M_PI, 4) << " deg";
+           << Fixed(e.SigmaRotation() * 180 / M_PI, 4) << " deg, " << e.pose_source << " poses";
+      j["pose_source"] = e.pose_source;
       if (!e.free_direction.isZero()) {
         // Stored in the reference's frame; shown in the project's.
         const int r = project.Find(e.reference);

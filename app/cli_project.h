@@ -39,8 +39,17 @@ class SessionClouds {
 int ProjectPositions(const Args& args, const std::string& project_file, std::vector<Eigen::Vector3f>* points);
 
 // LoadProject with its repairs (a reference loop an older sweepscan saved,
-// core/project/project.h) said on stderr as warnings.
-Status LoadProjectAndSay(const std::string& file, Project* project);
+// core/project/project.h) said on stderr as warnings; `text` (optional):
+// the file's bytes as read, to tell later whether another program saved it.
+Status LoadProjectAndSay(const std::string& file, Project* project, std::string* text = nullptr);
+// The file's bytes; false if it cannot be read.
+bool ReadProjectFile(const std::string& file, std::string* text);
+// Whether `path` (relative to the project file's folder) is a session
+// folder: one with a meta.json, as the app requires.
+Status CheckSessionFolder(const std::string& project_file, const std::string& path);
+// Warns on stderr about the sessions in `chosen` whose placement was
+// measured with other poses than `source`, the clouds are drawn with.
+void WarnPoseSource(const Project& project, const std::vector<size_t>& chosen, PoseSource source);
 
 // --strict and --pose-source; kExitOk or an exit code after one error line.
 int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions* options);

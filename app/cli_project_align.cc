@@ -9,6 +9,7 @@
 // finds it. A simulated session knows where the robot was put down in the
 // scenario's world; when both are simulated, the pose is compared with that
 // truth and the difference printed (never used to place anything).
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -20,6 +21,7 @@
 
 #include "app/cli_common.h"
 #include "app/cli_project.h"
+#include "core/common/checked_file.h"
 #include "core/common/json_reader.h"
 #include "core/pose/pose_estimator.h"
 #include "core/registration/registration.h"
@@ -102,6 +104,12 @@ Status LoadPairs(const std::string& path, std::vector<PointPair>* pairs) {
       }
       pairs->push_back(pair);
     }
+    // Fewer picks than a rigid pose needs; none at all fell back to the
+    // planes without a word.
+    if (pairs->size() < 3) {
+      o.Fail("pairs", std::to_string(pairs->size()) +
+                          " pair(s) given, at least 3 needed (points picked in both sessions)");
+    }
   } catch (const JsonError& e) {
     return Status::Error(path + ": " + e.what());
   }
@@ -115,9 +123,76 @@ hardware::RegistrationAttempt Register(const Args& args, const std::vector<Point
                                        const std::vector<Eigen::Vector3f>& target) {
   hardware::SessionRegistrationOptions options;
   options.pairs = pairs;
+  options.by_pairs = args.Has("pairs");
   options.hold_free = args.Flag("hold-free");
   options.icp = !args.Flag("no-icp");
   return hardware::RegisterSession(source, target, reference, options);
+}
+
+// What may differ between the session as this run started from it and as
+// the file holds it now without invalidating the run's registration: its
+// visibility and colour. Anything else (its folder, calibration, pose or
+// evidence) and the registration was of other clouds or from another pose.
+std::string ChangedSince(const ProjectSession& was, const ProjectSession& now) {
+  if (was.path != now.path) return "its path is now '" + now.path + "'";
+  const auto as_saved = [](const ProjectSession& s) {
+    Project one;
+    one.sessions = {s};
+    one.sessions[0].visible = true;
+    one.sessions[0].color.clear();
+    return ProjectToJson(one);
+  };
+  ProjectSession a = was, b = now;
+  a.project_from_session.reset(), b.project_from_session.reset();
+  if (as_saved(a) != as_saved(b)) return "its calibration changed";
+  if (as_saved(was) != as_saved(now)) {
+    return now.project_from_session ? "it was placed again (" + now.registration.method + ")"
+                                    : "its placement was removed";
+  }
+  return "";
+}
+
+// Puts this run's placements (`placed`, in the order made, from `ours`)
+// onto `base`, the file as it is now: each only if its session and the one
+// it was placed against are there as the run started from them (or that
+// one's placement was applied too). `realigned`, placed again from
+// `previous`, moves the sessions `base` has placed against it. Returns
+// those moved; `unmerged` gets "ID\n  why" for each placement not applied.
+std::vector<std::string> ApplyPlacements(const Project& started, const Project& ours,
+                                         const std::vector<std::string>& placed,
+                                         const std::string& realigned,
+                                         const std::optional<Rigid3d>& previous, Project* base,
+                                         std::vector<std::string>* unmerged) {
+  std::vector<std::string> applied, moved;
+  for (const std::string& id : placed) {
+    const ProjectSession& mine = ours.sessions[ours.Find(id)];
+    const std::string& reference = mine.registration.reference;
+    const auto unchanged = [&](const std::string& which) -> std::string {
+      const int now = base->Find(which);
+      if (now < 0) return "'" + which + "' was removed from the project meanwhile";
+      const std::string what =
+          ChangedSince(started.sessions[started.Find(which)], base->sessions[now]);
+      return what.empty() ? "" : "'" + which + "' was changed meanwhile: " + what;
+    };
+    std::string why = unchanged(id);
+    if (why.empty() && std::find(applied.begin(), applied.end(), reference) == applied.end()) {
+      why = std::find(placed.begin(), placed.end(), reference) != placed.end()
+                ? "'" + reference + "', placed against in this run, was not saved either"
+                : unchanged(reference);
+    }
+    if (!why.empty()) {
+      unmerged->push_back(id + "\n  placed against '" + reference + "', not saved: " + why);
+      continue;
+    }
+    ProjectSession& target = base->sessions[base->Find(id)];
+    target.project_from_session = mine.project_from_session;
+    target.registration = mine.registration;
+    applied.push_back(id);
+    if (id == realigned && previous) {
+      moved = base->MoveDependants(id, *mine.project_from_session * previous->inverse());
+    }
+  }
+  return moved;
 }
 
 }  // namespace
@@ -125,10 +200,21 @@ hardware::RegistrationAttempt Register(const Args& args, const std::vector<Point
 int RunProjectAlign(const Args& args) {
   const std::string file = args.positional()[0];
   Project project;
-  Status s = LoadProjectAndSay(file, &project);
+  std::string text_read;  // to tell at the end whether another program saved the file
+  Status s = LoadProjectAndSay(file, &project, &text_read);
   if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
+  const Project started = project;
   hardware::SessionCloudOptions cloud_options;
   if (const int code = SessionCloudOptionsFromArgs(args, &cloud_options); code != kExitOk) return code;
+  // Wheel slip warps each odometry cloud differently (a room turned by tens
+  // of degrees), and ICP then fits one warped room into a look-alike one
+  // with a sigma of a millimetre: a confident wrong placement.
+  if (cloud_options.pose_source != PoseSource::kEkf) {
+    PrintError(std::string("--pose-source ") + PoseSourceName(cloud_options.pose_source) +
+               ": sessions are aligned with the EKF poses only, the default (odometry: the "
+               "wheels alone bend a building's rooms, and a bent room fits a look-alike one)");
+    return kExitBadInput;
+  }
   if (project.Anchor() < 0) return (PrintError(file + ": no anchor session (add a session first)"), kExitBadInput);
 
   // Which sessions to place and against which.
@@ -171,6 +257,10 @@ int RunProjectAlign(const Args& args) {
     if (!s.ok()) return (PrintError(s.message()), kExitBadInput);
   }
 
+  // Before the clouds are built and registered (minutes on a building),
+  // not after: a read-only folder or a full disk fails now.
+  if (s = CheckCanWrite(file); !s.ok()) return (PrintError(s.message()), kExitFailure);
+
   SessionClouds clouds(file, cloud_options);
   std::ostream& text = args.Flag("json") ? std::cerr : std::cout;  // stdout is the JSON's
   nlohmann::json report = nlohmann::json::array();
@@ -180,6 +270,7 @@ int RunProjectAlign(const Args& args) {
   // (a registration is between the two clouds in their own frames, which
   // placing others does not change), each possibly minutes long.
   std::map<std::pair<std::string, std::string>, std::string> failed;
+  std::vector<std::string> placed_here;  // in the order placed
   bool progress = true;
   while (progress && !unplaced.empty()) {
     progress = false;
@@ -230,6 +321,9 @@ int RunProjectAlign(const Args& args) {
       const ProjectSession& ref = project.sessions[project.Find(best->reference)];
       ps.project_from_session = *ref.project_from_session * best->fine.target_from_source;
       ps.registration = hardware::EvidenceOf(*best, pairs);
+      ps.registration.pose_source = PoseSourceName(cloud_options.pose_source);
+      placed_here.push_back(ps.id);
+      refusals.erase(ps.id);  // a pass before could not place it yet
       const RegistrationResult& r = best->fine;
       nlohmann::json j = {{"session", ps.id}, {"reference", ref.id}, {"method", best->method},
                           {"rms_m", r.rms_m}, {"overlap", r.overlap}, {"iterations", r.iterations},
@@ -260,26 +354,51 @@ int RunProjectAlign(const Args& args) {
       progress = true;
     }
   }
-  std::vector<std::string> moved;
   if (!realigned.empty()) {
     ProjectSession& ps = project.sessions[project.Find(realigned)];
     if (!ps.project_from_session) {
       ps.project_from_session = previous_pose;
       ps.registration = previous_evidence;
       if (previous_pose) text << "'" << realigned << "' keeps its placement\n";
-    } else if (previous_pose) {
-      moved =
-          project.MoveDependants(realigned, *ps.project_from_session * previous_pose->inverse());
-      for (const std::string& id : moved) {
-        text << "moved '" << id << "' with '" << realigned << "' (placed against it)\n";
-      }
     }
   }
-  s = SaveProject(file, project);
+  // Another program may have saved the file meanwhile (`project add`, the
+  // app): this run's placements go onto what is there now.
+  std::string text_now;
+  Project base;
+  std::vector<std::string> unmerged;
+  if (!ReadProjectFile(file, &text_now) || text_now != text_read) {
+    std::vector<std::string> repairs;  // said when it was read first
+    s = ProjectFromJson(text_now, file, &base, &repairs);
+    if (!s.ok()) {
+      PrintError(file + " was changed by another program while aligning and cannot be read now (" +
+                 s.message() + "); this run's placements are not saved");
+      return kExitFailure;
+    }
+    text << file << " was changed by another program while aligning: its changes are kept\n";
+  } else {
+    base = started;
+  }
+  const std::vector<std::string> moved =
+      ApplyPlacements(started, project, placed_here, realigned, previous_pose, &base, &unmerged);
+  for (const std::string& id : moved) {
+    text << "moved '" << id << "' with '" << realigned << "' (placed against it)\n";
+  }
+  s = SaveProject(file, base);
   if (!s.ok()) return (PrintError(s.message()), kExitFailure);
+  for (const std::string& why : unmerged) {
+    const std::string id = why.substr(0, why.find('\n'));
+    refusals[id] = why.substr(id.size());
+    if (std::find(unplaced.begin(), unplaced.end(), id) == unplaced.end()) unplaced.push_back(id);
+  }
   if (args.Flag("json")) {
     nlohmann::json refused = nlohmann::json::object();
     for (const auto& [id, why] : refusals) refused[id] = why.substr(1);
+    nlohmann::json saved = nlohmann::json::array();
+    for (const nlohmann::json& j : report) {
+      if (refusals.count(j["session"].get<std::string>()) == 0) saved.push_back(j);
+    }
+    report = saved;
     std::cout << nlohmann::json{{"placed", report}, {"refused", refused}, {"moved", moved}}.dump(2)
               << "\n";
   }

@@ -24,7 +24,9 @@ namespace sweepscan::app {
 namespace {
 
 // The sessions to write: placed and visible, or those --sessions names.
-int SelectSessions(const Args& args, const Project& project, std::vector<size_t>* chosen) {
+// `purpose`: what they are for, as the refusal says it ("to export").
+int SelectSessions(const Args& args, const Project& project, const std::string& purpose,
+                   std::vector<size_t>* chosen) {
   std::set<std::string> named;
   if (args.Has("sessions")) {
     std::stringstream list(args.Get("sessions"));
@@ -51,7 +53,9 @@ int SelectSessions(const Args& args, const Project& project, std::vector<size_t>
     chosen->push_back(i);
   }
   if (chosen->empty()) {
-    PrintError("no placed session to export");
+    PrintError("no placed session " + purpose +
+               " (sweepscan-cli project align places them; hidden ones count only with "
+               "--sessions)");
     return kExitBadInput;
   }
   return kExitOk;
@@ -73,6 +77,18 @@ int ProjectCloud(const std::string& file, const hardware::SessionCloudOptions& o
 
 }  // namespace
 
+void WarnPoseSource(const Project& project, const std::vector<size_t>& chosen, PoseSource source) {
+  for (size_t i : chosen) {
+    const RegistrationEvidence& e = project.sessions[i].registration;
+    if (e.method == "anchor" || e.method == "manual" || e.pose_source == PoseSourceName(source)) {
+      continue;
+    }
+    std::cerr << "sweepscan-cli: warning: '" << project.sessions[i].id << "' was placed with its "
+              << e.pose_source << " cloud and is drawn with its " << PoseSourceName(source)
+              << " cloud: the two differ, and the placement need not hold for it\n";
+  }
+}
+
 int ProjectPositions(const Args& args, const std::string& file, std::vector<Eigen::Vector3f>* points) {
   Project project;
   const Status s = LoadProjectAndSay(file, &project);
@@ -80,7 +96,9 @@ int ProjectPositions(const Args& args, const std::string& file, std::vector<Eige
   hardware::SessionCloudOptions options;
   if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;
   std::vector<size_t> chosen;
-  if (const int code = SelectSessions(args, project, &chosen); code != kExitOk) return code;
+  if (const int code = SelectSessions(args, project, "to draw", &chosen); code != kExitOk)
+    return code;
+  WarnPoseSource(project, chosen, options.pose_source);
   for (size_t i : chosen) {
     hardware::SessionCloud cloud;
     if (const int code = ProjectCloud(file, options, project.sessions[i], &cloud); code != kExitOk) return code;
@@ -103,7 +121,9 @@ int RunProjectExport(const Args& args) {
   hardware::SessionCloudOptions options;
   if (const int code = SessionCloudOptionsFromArgs(args, &options); code != kExitOk) return code;
   std::vector<size_t> chosen;
-  if (const int code = SelectSessions(args, project, &chosen); code != kExitOk) return code;
+  if (const int code = SelectSessions(args, project, "to export", &chosen); code != kExitOk)
+    return code;
+  WarnPoseSource(project, chosen, options.pose_source);
   // Before the clouds are built, not after (minutes on a building).
   s = CheckCanWrite(out);
   if (!s.ok()) return (PrintError(s.message()), kExitFailure);

@@ -11,7 +11,10 @@
 #define SWEEPSCAN_CORE_PLAN_AXIS_TICKS_H_
 
 #include <cmath>
+#include <string>
 #include <vector>
+
+#include "core/common/format_number.h"
 
 namespace sweepscan::plan {
 
@@ -30,6 +33,12 @@ inline std::vector<double> AxisTicks(double lo, double hi) {
     ticks.push_back((first + i) * step + 0.0);  // + 0.0: -0 -> 0
   }
   return ticks;
+}
+
+// A tick's label, the same in both drawings: "3" for a whole number of
+// metres (every tick AxisTicks gives), else three decimals.
+inline std::string AxisLabel(double v) {
+  return FormatFixed(v, std::abs(v - std::round(v)) < 1e-9 ? 0 : 3);
 }
 
 }  // namespace sweepscan::plan

@@ -16,11 +16,6 @@
 namespace sweepscan::plan {
 namespace {
 
-// "3" for a whole number of metres (the axes' labels), else "%.3f".
-std::string FormatNumber(double v) {
-  return FormatFixed(v, std::abs(v - std::round(v)) < 1e-9 ? 0 : 3);
-}
-
 constexpr double kPi = 3.14159265358979323846;
 
 class Dxf {
@@ -257,12 +252,12 @@ Status SectionDxf(const std::vector<Eigen::Vector2d>& s_z, const DxfOptions& o, 
   const double tick = 0.075;
   for (const double m : AxisTicks(lo.x(), hi.x())) {
     d.Line(kDxfLayerAxes, {m, -tick}, {m, tick});
-    d.Text(kDxfLayerAxes, {m, -tick - 1.2 * o.text_height_m}, o.text_height_m, 0.0, FormatNumber(m));
+    d.Text(kDxfLayerAxes, {m, -tick - 1.2 * o.text_height_m}, o.text_height_m, 0.0, AxisLabel(m));
   }
   for (const double z : AxisTicks(lo.y(), hi.y())) {
     d.Line(kDxfLayerAxes, {lo.x() - tick, z}, {lo.x() + tick, z});
-    d.Text(kDxfLayerAxes, {lo.x() - tick - 1.5 * o.text_height_m, z - 0.4 * o.text_height_m}, o.text_height_m, 0.0,
-           FormatNumber(z));
+    d.Text(kDxfLayerAxes, {lo.x() - tick - 1.5 * o.text_height_m, z - 0.4 * o.text_height_m},
+           o.text_height_m, 0.0, AxisLabel(z));
   }
   for (const Eigen::Vector2d& q : s_z) {
     d.Code(0, "POINT");

@@ -52,6 +52,15 @@ Status HorizontalSection(const std::vector<Eigen::Vector3f>& cloud, const Horizo
 Status VerticalSection(const std::vector<Eigen::Vector3f>& cloud, const VerticalSectionOptions& options,
                        std::vector<Eigen::Vector2d>* points, SectionStats* stats = nullptr);
 
+// Whether a level surface (a floor, a ceiling: a centimetre of z holding at
+// least 8 times the points of the median occupied centimetre within 1 m of
+// the cut) lies within `reach_m` of the cut's slab. A cut through one draws
+// its whole extent as points, which the wall fit turns into diagonal
+// "walls". Sets *level_z to the surface's height (the middle of its
+// centimetre) when found.
+bool LevelSurfaceNearCut(const std::vector<Eigen::Vector3f>& cloud,
+                         const HorizontalSectionOptions& options, double reach_m, double* level_z);
+
 // One representative point (the centroid) per occupied square cell of side
 // `cell_m`, in a deterministic order (sorted by cell): a drawing's copy of a
 // section, its density evened out. cell_m must be > 0.

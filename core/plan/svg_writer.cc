@@ -230,13 +230,15 @@ Status SectionSvg(const std::vector<Eigen::Vector2d>& s_z, const SvgOptions& o, 
   const Eigen::Vector2d tick(0.0, 1.5 / p.k);
   for (const double m : AxisTicks(p.min.x(), p.max.x())) {
     s += p.Line(Eigen::Vector2d(m, 0.0) - tick, Eigen::Vector2d(m, 0.0) + tick);
-    s += Label(p, {m - 0.5, 0.0}, {m + 0.5, 0.0}, Num(m), o.text_height_mm, -2.0 - o.text_height_mm);
+    s += Label(p, {m - 0.5, 0.0}, {m + 0.5, 0.0}, AxisLabel(m), o.text_height_mm,
+               -2.0 - o.text_height_mm);
   }
   for (const double z : AxisTicks(p.min.y(), p.max.y())) {
     const Eigen::Vector2d at(p.min.x(), z), side(1.5 / p.k, 0.0);
     s += p.Line(at - side, at + side);
-    s += "<text x=\"" + Num(p.X(p.min.x()) - 2.5) + "\" y=\"" + Num(p.Y(z) + 0.35 * o.text_height_mm) +
-         "\" font-size=\"" + Num(o.text_height_mm) + "\" text-anchor=\"end\">" + Num(z) + "</text>\n";
+    s += "<text x=\"" + Num(p.X(p.min.x()) - 2.5) + "\" y=\"" +
+         Num(p.Y(z) + 0.35 * o.text_height_mm) + "\" font-size=\"" + Num(o.text_height_mm) +
+         "\" text-anchor=\"end\" stroke=\"none\">" + AxisLabel(z) + "</text>\n";
   }
   s += "</g>\n";
   s += Title(p, o.title, o.text_height_mm);

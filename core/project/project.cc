@@ -1,9 +1,12 @@
 #include "core/project/project.h"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -70,8 +73,14 @@ Rigid3d ReadPose(const JsonObject& o) {
   // map grid's, a stray digit) would be exported and drawn rounded, so it is
   // refused rather than kept to mislead.
   if (t.cwiseAbs().maxCoeff() > kMaxProjectOffsetM) {
+    // As many decimals as it takes to read beyond the limit: 8000.4 m
+    // printed as "8000 m, beyond 8000 m" contradicted itself.
+    const double far = t.cwiseAbs().maxCoeff();
     char at[96];
-    std::snprintf(at, sizeof(at), "lies %.0f m from the project's origin", t.cwiseAbs().maxCoeff());
+    for (int digits = 0; digits <= 9; ++digits) {
+      std::snprintf(at, sizeof(at), "lies %.*f m from the project's origin", digits, far);
+      if (std::strtod(at + 5, nullptr) > kMaxProjectOffsetM) break;
+    }
     o.Fail("translation_m",
            std::string(at) +
                ", beyond 8000 m: sessions are placed in the building's local frame "
@@ -108,6 +117,32 @@ void CheckCovariance(const JsonObject& o, const std::array<double, 36>& c) {
   }
 }
 
+// "2026-11-26T07:40:12Z", optionally with a fraction of a second: what
+// the writers stamp (UtcNowIso8601), and a hand edit can keep.
+bool IsIso8601Utc(const std::string& t) {
+  const auto digits = [&](size_t at, size_t n, int lo, int hi) {
+    if (at + n > t.size()) return false;
+    int v = 0;
+    for (size_t i = at; i < at + n; ++i) {
+      if (!std::isdigit(static_cast<unsigned char>(t[i]))) return false;
+      v = v * 10 + (t[i] - '0');
+    }
+    return v >= lo && v <= hi;
+  };
+  if (t.size() < 20 || !digits(0, 4, 0, 9999) || t[4] != '-' || !digits(5, 2, 1, 12) ||
+      t[7] != '-' || !digits(8, 2, 1, 31) || t[10] != 'T' || !digits(11, 2, 0, 23) ||
+      t[13] != ':' || !digits(14, 2, 0, 59) || t[16] != ':' || !digits(17, 2, 0, 60)) {
+    return false;
+  }
+  size_t i = 19;
+  if (t[i] == '.') {
+    const size_t start = ++i;
+    while (i < t.size() && std::isdigit(static_cast<unsigned char>(t[i]))) ++i;
+    if (i == start) return false;
+  }
+  return i + 1 == t.size() && t[i] == 'Z';
+}
+
 RegistrationEvidence ReadEvidence(const JsonObject& o) {
   static const std::set<std::string> kMethods = {"anchor", "manual", "pairs", "planes",
                                                  "planes+icp", "pairs+icp", "icp"};
@@ -121,11 +156,26 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
   // would be dropped on the next save without a word.
   if (e.method == "anchor") {
     o.AllowOnly({"method", "reference"});
-  } else {
-    o.AllowOnly({"method", "reference", "rms_m", "overlap", "correspondences", "iterations",
-                 "covariance", "free_direction", "pairs", "time_utc"});
+    // Even empty: the docs forbid the key, and a reader that tests for its
+    // presence would take the anchor as placed against something.
+    if (o.Has("reference")) o.Fail("reference", "the anchor is aligned to nothing");
+    return e;
   }
+  o.AllowOnly({"method", "reference", "rms_m", "overlap", "correspondences", "iterations",
+               "covariance", "free_direction", "pairs", "time_utc", "pose_source"});
   e.reference = o.String("reference", "");
+  // A measured pose was measured against a session; only one typed in
+  // (manual) rests on none.
+  if (e.method != "manual" && e.reference.empty()) {
+    o.Fail("reference", o.Has("reference") ? "must not be empty"
+                                           : "missing: a " + e.method +
+                                                 " placement names the session it was aligned to");
+  }
+  if (o.Has("reference") && e.reference.empty()) o.Fail("reference", "must not be empty");
+  e.pose_source = o.String("pose_source", "ekf");
+  if (e.pose_source != "ekf" && e.pose_source != "odometry") {
+    o.Fail("pose_source", "must be \"ekf\" or \"odometry\", got \"" + e.pose_source + "\"");
+  }
   e.rms_m = o.NonNegative("rms_m", 0.0);
   e.overlap = o.InRange("overlap", 0.0, 1.0, 0.0);
   e.correspondences = o.Has("correspondences") ? o.Count("correspondences") : 0;
@@ -155,6 +205,10 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
     }
   }
   e.time_utc = o.String("time_utc", "");
+  if (o.Has("time_utc") && !IsIso8601Utc(e.time_utc)) {
+    o.Fail("time_utc",
+           "expected ISO 8601 UTC such as \"2026-11-26T07:40:12Z\", got \"" + e.time_utc + "\"");
+  }
   return e;
 }
 
@@ -192,8 +246,6 @@ ProjectSession ReadSession(const JsonObject& o) {
       o.Fail("project_from_session",
              "the anchor defines the project's frame: its pose must be the identity");
     }
-    if (!s.registration.reference.empty())
-      o.Fail("registration.reference", "the anchor is aligned to nothing");
   }
   s.visible = o.Bool("visible", true);
   s.color = o.String("color", s.color);
@@ -207,6 +259,18 @@ fs::path PathKey(const std::string& path) {
   fs::path p = fs::path(path).lexically_normal();
   if (p.filename().empty() && p.has_parent_path()) p = p.parent_path();
   return p;
+}
+
+// The folder `path` names, however written (relative or absolute, a
+// trailing separator, through ".." or a symbolic link), resolved against
+// `project_file`'s folder.
+fs::path FolderKey(const std::string& project_file, const std::string& path) {
+  ProjectSession probe;
+  probe.path = path;
+  std::error_code error;
+  const fs::path resolved = PathKey(ResolveSessionPath(project_file, probe));
+  const fs::path canonical = fs::weakly_canonical(resolved, error);
+  return error ? resolved : PathKey(canonical.string());
 }
 
 // JSON strings are UTF-8 (RFC 8259 section 8.1); a folder name in another
@@ -267,10 +331,18 @@ json EvidenceJson(const RegistrationEvidence& e) {
     j["pairs"] = pairs;
   }
   if (!e.time_utc.empty()) j["time_utc"] = e.time_utc;
+  // Said for what was measured; a pose typed in was measured with no cloud.
+  if (e.method != "manual") j["pose_source"] = e.pose_source;
   return j;
 }
 
 }  // namespace
+
+void MakeAnchor(ProjectSession* session) {
+  session->project_from_session = Rigid3d::Identity();
+  session->registration = RegistrationEvidence();
+  session->registration.method = "anchor";
+}
 
 double RegistrationEvidence::SigmaRotation() const { return WorstSigma(covariance, 0); }
 double RegistrationEvidence::SigmaTranslation() const { return WorstSigma(covariance, 3); }
@@ -302,19 +374,9 @@ Status Project::AddSession(const std::string& path, ProjectSession** added,
                          ": the folder's name is not UTF-8, which a project file (JSON) cannot "
                          "hold; rename the folder");
   }
-  // The same folder however it is written: relative or absolute, with or
-  // without a trailing separator, through "..".
-  const auto where = [&](const std::string& p) {
-    ProjectSession probe;
-    probe.path = p;
-    std::error_code error;
-    const fs::path resolved = PathKey(ResolveSessionPath(project_file, probe));
-    const fs::path canonical = fs::weakly_canonical(resolved, error);
-    return error ? resolved : PathKey(canonical.string());
-  };
-  const fs::path key = where(path);
+  const fs::path key = FolderKey(project_file, path);
   for (const ProjectSession& s : sessions) {
-    if (PathKey(s.path) == PathKey(path) || where(s.path) == key) {
+    if (PathKey(s.path) == PathKey(path) || FolderKey(project_file, s.path) == key) {
       return Status::Error(path + ": already in the project as '" + s.id + "'");
     }
   }
@@ -332,16 +394,18 @@ Status Project::AddSession(const std::string& path, ProjectSession** added,
   s.id = id;
   s.path = path;
   s.color = SessionColor(sessions.size());
-  if (Anchor() < 0) {
-    s.project_from_session = Rigid3d::Identity();
-    s.registration.method = "anchor";
-  }
   sessions.push_back(s);
+  // A project without an anchor (one an older sweepscan saved after its
+  // anchor was removed) gets its first session as the anchor, not the one
+  // just added: the order of the file is the operator's.
+  const bool placed = std::any_of(sessions.begin(), sessions.end(),
+                                  [](const ProjectSession& p) { return p.project_from_session; });
+  if (Anchor() < 0 && !placed) MakeAnchor(&sessions.front());
   if (added != nullptr) *added = &sessions.back();
   return Status::Ok();
 }
 
-Status Project::RemoveSession(const std::string& id) {
+Status Project::RemoveSession(const std::string& id, std::string* new_anchor) {
   const int i = Find(id);
   if (i < 0) return Status::Error("no session '" + id + "' in the project");
   if (sessions[i].registration.method == "anchor") {
@@ -364,7 +428,14 @@ Status Project::RemoveSession(const std::string& id) {
     return Status::Error(dependants + " placed against '" + id +
                          "': align them to another session (or remove them) first");
   }
+  const bool was_anchor = sessions[i].registration.method == "anchor";
   sessions.erase(sessions.begin() + i);
+  // The others are unplaced (else the anchor stays, above): the project's
+  // frame becomes the first one's, as if it had been added first.
+  if (was_anchor && !sessions.empty()) {
+    MakeAnchor(&sessions.front());
+    if (new_anchor != nullptr) *new_anchor = sessions.front().id;
+  }
   return Status::Ok();
 }
 
@@ -435,16 +506,30 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
       const std::string path = "sessions[" + std::to_string(i) + "]";
       ProjectSession ps = ReadSession(JsonObject(sessions[i], path));
       if (p.Find(ps.id) >= 0) throw JsonError(path + ".id: '" + ps.id + "' appears twice");
+      // The same folder twice (a hand-edited absolute path beside the
+      // relative one) would be exported twice.
+      const fs::path key = FolderKey(source, ps.path);
       for (const ProjectSession& other : p.sessions) {
-        if (PathKey(other.path) == PathKey(ps.path)) {
+        if (PathKey(other.path) == PathKey(ps.path) || FolderKey(source, other.path) == key) {
           throw JsonError(path + ".path: '" + ps.path + "' is also session '" + other.id + "'");
         }
       }
       p.sessions.push_back(std::move(ps));
     }
     int anchors = 0;
-    for (const ProjectSession& ps : p.sessions) anchors += ps.registration.method == "anchor";
+    bool placed = false;
+    for (const ProjectSession& ps : p.sessions) {
+      anchors += ps.registration.method == "anchor";
+      placed = placed || ps.project_from_session;
+    }
     if (anchors > 1) throw JsonError("sessions: more than one anchor");
+    // What sweepscan before 2026-12 saved when the anchor was removed: no
+    // frame at all, and `align` had nothing to place against.
+    if (anchors == 0 && !placed && !p.sessions.empty() && repairs != nullptr) {
+      MakeAnchor(&p.sessions.front());
+      repairs->push_back("no session is the anchor: '" + p.sessions.front().id +
+                         "', the first, now is (the project's frame is its start pose)");
+    }
     for (ProjectSession& ps : p.sessions) {
       const std::string& reference = ps.registration.reference;
       if (reference.empty()) continue;
@@ -474,7 +559,10 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
       repairs->push_back(wrong + ": '" + ps.id +
                          "' keeps its pose, now held as placed by hand (manual); " +
                          "align it again to measure it");
-      ps.registration.reference.clear();
+      // The numbers measured its pose against that reference; held by
+      // hand, nothing measured it (a manual placement's zero covariance
+      // means unknown).
+      ps.registration = RegistrationEvidence();
       ps.registration.method = "manual";
     }
     *project = std::move(p);

@@ -69,6 +69,10 @@ struct RegistrationEvidence {
   Eigen::Vector3d free_direction = Eigen::Vector3d::Zero();
   std::vector<PickedPair> pairs;
   std::string time_utc;  // when it was computed, ISO 8601
+  // The poses the two clouds were built with when it was measured, "ekf"
+  // or "odometry" (absent in a file: "ekf"). Drawn with other poses, the
+  // clouds differ from the ones registered, and the placement need not hold.
+  std::string pose_source = "ekf";
   // 1-sigma of the rotation (rad) and translation (m) from the covariance:
   // the square roots of the largest eigenvalues of its two diagonal blocks.
   double SigmaRotation() const;
@@ -106,8 +110,10 @@ struct Project {
   Status AddSession(const std::string& path, ProjectSession** added,
                     const std::string& project_file = "");
   // Removes it; refuses the anchor while other sessions are placed, and a
-  // session others are placed against (their reference).
-  Status RemoveSession(const std::string& id);
+  // session others are placed against (their reference). When the anchor
+  // goes and (unplaced) sessions remain, the first of them becomes the
+  // anchor; its id is then set in `new_anchor` (optional).
+  Status RemoveSession(const std::string& id, std::string* new_anchor = nullptr);
   // Session `id` was placed again and moved by `delta` (its new pose times
   // the old one's inverse). The sessions placed against it, and those placed
   // against them, were measured relative to it: they move by `delta` too.
@@ -119,6 +125,9 @@ struct Project {
   // refer to each other.
   bool PlacedThrough(const std::string& id, const std::string& on) const;
 };
+
+// Makes `session` the anchor: the identity, aligned to nothing.
+void MakeAnchor(ProjectSession* session);
 
 // The distinct colours new sessions get in turn (Tableau 10).
 std::string SessionColor(size_t index);
@@ -132,8 +141,11 @@ std::string ResolveSessionPath(const std::string& project_file, const ProjectSes
 // against an unplaced session or in a loop (which sweepscan before
 // 2026-11-29 could save) is refused without it; with it, the reference is
 // dropped (the session keeps its pose, now held as placed by hand: method
-// "manual") and what was done is said there, so that such a project opens
-// and can be aligned again.
+// "manual", the old measurement's numbers cleared) and what was done is
+// said there, so that such a project opens and can be aligned again. A
+// project with sessions but no anchor and none placed (what removing the
+// anchor left before 2026-12) gets its first session as the anchor, said
+// there too.
 Status LoadProject(const std::string& path, Project* project,
                    std::vector<std::string>* repairs = nullptr);
 Status SaveProject(const std::string& path, const Project& project);

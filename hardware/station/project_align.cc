@@ -29,7 +29,7 @@ RegistrationAttempt RegisterSession(const std::vector<Eigen::Vector3f>& source,
   RegistrationAttempt a;
   a.reference = reference;
   const double coarse_end = options.icp ? 0.5 : 1.0;
-  if (!options.pairs.empty()) {
+  if (options.by_pairs || !options.pairs.empty()) {
     a.status = AlignByPairs(options.pairs, &a.coarse);
     a.method = "pairs";
   } else {

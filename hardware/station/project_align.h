@@ -31,6 +31,9 @@ namespace sweepscan::hardware {
 
 struct SessionRegistrationOptions {
   std::vector<PointPair> pairs;  // non-empty: coarse by these picks, not by planes
+  // Coarse by `pairs` even when empty (then refused): picks given as none
+  // are a mistake, not a request for planes.
+  bool by_pairs = false;
   bool hold_free = false;        // ICP: hold a free direction at the coarse pose instead of refusing
   bool icp = true;               // refine by ICP after the coarse step
 };

@@ -321,6 +321,9 @@ TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
   EXPECT_FALSE(project()->Align("b", "c"));
   panel->SelectSession("c");
   EXPECT_EQ(panel->reference_box()->count(), 2);  // a and b
+  // Placed by hand: nothing measured it, no sigma of zero.
+  ASSERT_NE(panel->item("b"), nullptr);
+  EXPECT_EQ(panel->item("b")->text(1), QString::fromUtf8("manual · not measured"));
 
   // A loop an older sweepscan could save (b against c, c against b) opens
   // repaired, says so, and is modified until saved.
@@ -339,6 +342,24 @@ TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
   ASSERT_TRUE(project()->SaveProject());
   Project saved;
   EXPECT_TRUE(LoadProject(looped, &saved).ok());  // strict: nothing left to repair
+}
+
+// The anchor removed while the others are unplaced: the first left is the
+// anchor, and the status bar says so (the project kept no frame, and the
+// next session added became the anchor without a word).
+TEST_F(ProjectUiTest, RemovingTheAnchorSaysWhichSessionIsTheAnchorNow) {
+  ASSERT_TRUE(project()->OpenProject(MakeProject("anchor")));
+  TurnsWhileBusy(60000);
+  QString said;
+  const QMetaObject::Connection c =
+      QObject::connect(project(), &ProjectController::message, [&](const QString& m) { said = m; });
+  project()->RemoveSession("a");
+  QObject::disconnect(c);
+  const Project& p = project()->document()->project();
+  ASSERT_EQ(p.sessions.size(), 2u);
+  EXPECT_EQ(p.Anchor(), 0);
+  EXPECT_EQ(p.sessions[0].id, "b");
+  EXPECT_NE(said.indexOf("'b' is the anchor now"), -1) << said.toStdString();
 }
 
 // The file changed by another program while open here (the CLI in a

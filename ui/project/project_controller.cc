@@ -269,12 +269,17 @@ void ProjectController::SetColor(const std::string& id, const QString& color) {
 
 void ProjectController::RemoveSession(const std::string& id) {
   Project after = document_.project();
-  const Status s = after.RemoveSession(id);
+  std::string anchor;
+  const Status s = after.RemoveSession(id, &anchor);
   if (!s.ok()) {
     show_error_(tr("Cannot remove the session"), QString::fromStdString(s.message()));
     return;
   }
   Push(after, tr("remove '%1'").arg(Id(id)));
+  if (!anchor.empty()) {
+    emit message(
+        tr("'%1' is the anchor now: the project's frame is its start pose").arg(Id(anchor)));
+  }
 }
 
 void ProjectController::ShowOnly(const std::string& id) {

@@ -42,6 +42,8 @@ QString Placement(const ProjectSession& s, bool* placed) {
   if (!*placed) return QObject::tr("not placed");
   const RegistrationEvidence& e = s.registration;
   if (e.method == "anchor") return QObject::tr("anchor (the project's frame)");
+  // Typed in, or its reference dropped: the zero covariance means unknown.
+  if (e.method == "manual") return QObject::tr("manual · not measured");
   QString text = QObject::tr("%1 to %2 · rms %3 mm · overlap %4 % · 1σ %5 mm / %6°")
                      .arg(QString::fromStdString(e.method), QString::fromStdString(e.reference))
                      .arg(e.rms_m * 1e3, 0, 'f', 1)

@@ -320,6 +320,25 @@ std::vector<Eigen::Vector2d> LShapedRoom() {
   return pts;
 }
 
+// A cut through the floor (z = 0) or the office floor's 2.7 m ceiling draws
+// the slab's extent as "walls" (219 diagonal ones at 2.69 m): it is found,
+// at its height; cuts clear of both are not flagged.
+TEST_F(OfficeFloorPlanTest, ACutInTheFloorOrCeilingSlabIsFound) {
+  const auto level = [&](double height, double* z) {
+    HorizontalSectionOptions o;
+    o.height_m = height;
+    return LevelSurfaceNearCut(*cloud_, o, 0.03, z);
+  };
+  double z = -1.0;
+  ASSERT_TRUE(level(2.69, &z));
+  EXPECT_NEAR(z, 2.7, 0.01);
+  ASSERT_TRUE(level(2.63, &z));
+  EXPECT_NEAR(z, 2.7, 0.01);
+  ASSERT_TRUE(level(0.02, &z));
+  EXPECT_NEAR(z, 0.0, 0.01);
+  for (const double clear : {0.2, 1.0, 2.05, 2.55}) EXPECT_FALSE(level(clear, &z)) << clear;
+}
+
 TEST(FloorPlanRoomsTest, AnLShapedRoomIsOneOutlineWithItsSixCorners) {
   FloorPlan plan;
   ASSERT_TRUE(BuildFloorPlanFromSection(LShapedRoom(), FloorPlanOptions(), &plan).ok());

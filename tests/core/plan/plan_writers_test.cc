@@ -324,6 +324,28 @@ TEST(PlanWritersRefusalTest, ASectionWithAStrayPointKeepsItsScalesShort) {
   EXPECT_LT(svg.size(), 200000u);
 }
 
+// The section's scale labels read as the DXF's ("1", not "1.00") and carry
+// no stroke: the axes group's red one drew the z labels outlined, bold.
+TEST(PlanWritersRefusalTest, SectionScaleLabelsAreTheDxfsAndUnstroked) {
+  std::vector<Eigen::Vector2d> s_z;
+  for (int i = 0; i <= 400; ++i) s_z.emplace_back(0.01 * i, 0.0);
+  for (int i = 0; i <= 250; ++i) s_z.emplace_back(4.0, 0.01 * i);
+  std::string svg, dxf;
+  ASSERT_TRUE(SectionSvg(s_z, SvgOptions(), &svg).ok());
+  ASSERT_TRUE(SectionDxf(s_z, DxfOptions(), &dxf).ok());
+  const size_t axes = svg.find("<g id=\"axes\"");
+  ASSERT_NE(axes, std::string::npos);
+  std::vector<std::string> labels;
+  for (size_t at = svg.find("<text", axes); at != std::string::npos && at < svg.find("</g>", axes);
+       at = svg.find("<text", at + 1)) {
+    const std::string element = svg.substr(at, svg.find("</text>", at) - at);
+    EXPECT_NE(element.find("stroke=\"none\""), std::string::npos) << element;
+    labels.push_back(element.substr(element.find('>') + 1));
+  }
+  EXPECT_EQ(labels, DxfTexts(dxf));
+  EXPECT_EQ(labels, (std::vector<std::string>{"0", "1", "2", "3", "4", "0", "1", "2"}));
+}
+
 // Labels of lines within 5 degrees of vertical read bottom to top in both
 // drawings, whichever way the line runs and however little it is off plumb
 // (0.02 deg turned a value top to bottom); others along the line, left to

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -372,7 +373,10 @@ TEST_F(ProjectCliTest, PlacingASessionAgainKeepsOrMovesWhatDependsOnIt) {
 // failed and why.
 TEST_F(ProjectCliTest, AnUnreadableSessionCostsOnlyItsOwnPlacement) {
   const std::string project = NewProject("unreadable.sweepscan-project", "ab");
+  // A session folder (it has a meta.json) whose recording is gone.
   std::filesystem::create_directories(P("empty.sweepscan"));
+  std::filesystem::copy_file(P("building_a.sweepscan/meta.json"), P("empty.sweepscan/meta.json"),
+                             std::filesystem::copy_options::overwrite_existing);
   ASSERT_EQ(RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
                        " project add unreadable.sweepscan-project empty.sweepscan")
                 .code,
@@ -447,6 +451,208 @@ TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   EXPECT_NE(r.out.find("warning: " + P("loop.sweepscan-project") + ": the references form a loop"),
             std::string::npos)
       << r.out;
+}
+
+// Runs `project align ARGS` in the background and, once it has read the
+// project (it says so as it builds the first cloud, seconds before it
+// saves), `meanwhile`; returns align's output and exit code.
+CommandRun AlignWhile(const std::string& align_args, const std::string& meanwhile) {
+  const std::string log = P("align-while.log");
+  std::filesystem::remove(log);
+  const CommandRun r = RunCommand(
+      "cd " + Dir() + " && (" + SWEEPSCAN_CLI + " project align " + align_args + " > " + log +
+      " 2>&1; echo \"rc=$?\" >> " + log + ") & until grep -q 'building the cloud' " + log +
+      " 2>/dev/null; do sleep 0.02; done; cd " + Dir() + " && " + meanwhile + "; wait");
+  EXPECT_EQ(r.code, 0) << r.out;
+  std::ifstream in(log);
+  std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t rc = out.rfind("rc=");
+  EXPECT_NE(rc, std::string::npos) << out;
+  return {rc == std::string::npos ? -1 : std::stoi(out.substr(rc + 3)), out};
+}
+
+// Align runs for minutes on a building; what another program saves to the
+// project meanwhile is kept, and a placement whose session changed there
+// is refused by name, not written over it.
+TEST_F(ProjectCliTest, AlignKeepsWhatAnotherProgramSavedMeanwhile) {
+  const std::string project = NewProject("meanwhile.sweepscan-project", "ab");
+  CommandRun r = AlignWhile(
+      "meanwhile.sweepscan-project",
+      std::string(SWEEPSCAN_CLI) + " project add meanwhile.sweepscan-project building_c.sweepscan");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("was changed by another program while aligning: its changes are kept"),
+            std::string::npos)
+      << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 3u);
+  EXPECT_EQ(p.sessions[2].id, "building_c");                    // the other program's
+  ASSERT_TRUE(p.sessions[1].project_from_session.has_value());  // this run's
+  EXPECT_EQ(p.sessions[1].registration.pose_source, "ekf");
+  const Rigid3d truth = TrueStart('a').inverse() * TrueStart('b');
+  EXPECT_LT(TranslationError(*p.sessions[1].project_from_session, truth), 0.02);
+
+  // The session this run placed was taken out meanwhile: refused, named,
+  // and the other program's edit stays.
+  NewProject("meanwhile.sweepscan-project", "ab");
+  r = AlignWhile(
+      "meanwhile.sweepscan-project",
+      std::string(SWEEPSCAN_CLI) + " project remove meanwhile.sweepscan-project building_b");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("'building_b':\n  placed against 'building_a', not saved: 'building_b' was "
+                       "removed from the project meanwhile"),
+            std::string::npos)
+      << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 1u);
+
+  // Its calibration changed meanwhile: its cloud is not the one registered.
+  NewProject("meanwhile.sweepscan-project", "ab");
+  std::ofstream(P("cal.json")) << R"({"format": "sweepscan-calibration", "version": 1,
+      "mounting_error_rad": {"alpha": 0.01, "beta": 0.0, "gamma": 0.0}})";
+  r = AlignWhile("meanwhile.sweepscan-project --json",
+                 "rm meanwhile.sweepscan-project && " + std::string(SWEEPSCAN_CLI) +
+                     " project new meanwhile.sweepscan-project building_a.sweepscan && " +
+                     SWEEPSCAN_CLI +
+                     " project add meanwhile.sweepscan-project building_b.sweepscan " +
+                     "--calibration cal.json");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("'building_b' was changed meanwhile: its calibration changed"),
+            std::string::npos)
+      << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 2u);
+  EXPECT_FALSE(p.sessions[1].project_from_session.has_value());
+  EXPECT_TRUE(p.sessions[1].calibration.has_value());
+}
+
+// A folder the project cannot be saved in fails before any cloud is built,
+// not after the minutes of aligning.
+TEST_F(ProjectCliTest, AlignSaysAProjectItCannotSaveBeforeAligning) {
+  NewProject("readonly.sweepscan-project", "ab");
+  std::filesystem::create_directories(P("ro"));
+  Project p;
+  ASSERT_TRUE(LoadProject(P("readonly.sweepscan-project"), &p).ok());
+  for (ProjectSession& s : p.sessions) s.path = "../" + s.path;
+  ASSERT_TRUE(SaveProject(P("ro/readonly.sweepscan-project"), p).ok());
+  std::filesystem::permissions(
+      P("ro"), std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec |
+                   std::filesystem::perms::others_read | std::filesystem::perms::others_exec);
+  // root writes anywhere: run it as nobody.
+  const std::string as =
+      ::geteuid() == 0 ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
+  const CommandRun r =
+      RunCommand(as + SWEEPSCAN_CLI + " project align " + P("ro/readonly.sweepscan-project"));
+  std::filesystem::permissions(P("ro"), std::filesystem::perms::owner_all);
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("cannot create readonly.sweepscan-project.tmp-"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("building the cloud"), std::string::npos) << r.out;
+}
+
+// Odometry clouds are warped by wheel slip: align refuses them rather than
+// place a bent room on a look-alike one; drawing with them says the
+// placements were measured with the EKF's.
+TEST_F(ProjectCliTest, OdometryIsNotAlignedAndDrawingWithItWarns) {
+  const std::string project = NewProject("odometry.sweepscan-project", "ab");
+  CommandRun r = Cli("project align " + project + " --pose-source odometry");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("aligned with the EKF poses only"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("building the cloud"), std::string::npos) << r.out;
+  r = Cli("project --help");
+  EXPECT_EQ(r.out.find("ekf|odometry"), std::string::npos) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  p.sessions[1].project_from_session = TrueStart('a').inverse() * TrueStart('b');
+  p.sessions[1].registration.method = "planes+icp";
+  p.sessions[1].registration.reference = "building_a";
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  r = Cli("plan " + project + " --pose-source odometry");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("warning: 'building_b' was placed with its ekf cloud and is drawn with its "
+                       "odometry cloud"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("'building_a' was placed"), std::string::npos) << r.out;  // the anchor
+  r = Cli("plan " + project);
+  EXPECT_EQ(r.out.find("warning"), std::string::npos) << r.out;
+  // Picks given as none are refused, not replaced by the planes.
+  std::ofstream(P("no-pairs.json")) << R"({"pairs": []})";
+  r = Cli("project align " + project + " --session building_b --to building_a --pairs " +
+          P("no-pairs.json"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no-pairs.json: pairs: 0 pair(s) given, at least 3 needed"),
+            std::string::npos)
+      << r.out;
+  // A pose typed in was not measured: no rms, overlap or sigma of zero.
+  p.sessions[1].registration = RegistrationEvidence();
+  p.sessions[1].registration.method = "manual";
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  r = Cli("project info " + project);
+  EXPECT_NE(r.out.find("manual: not measured"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("rms 0.0 mm"), std::string::npos) << r.out;
+  // Nothing placed to draw: said for the plan.
+  for (ProjectSession& s : p.sessions) s.visible = false;
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  r = Cli("plan " + project);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no placed session to draw"), std::string::npos) << r.out;
+}
+
+// The anchor removed while the others are unplaced: the first left is the
+// anchor, and aligning the removed session again places it against it.
+TEST_F(ProjectCliTest, RemovingTheAnchorMakesTheNextSessionTheAnchor) {
+  const std::string project = NewProject("anchor.sweepscan-project", "ab");
+  CommandRun r = Cli("project remove " + project + " building_a");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("'building_b' is the anchor now"), std::string::npos) << r.out;
+  r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
+                 " project add anchor.sweepscan-project building_a.sweepscan");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("added 'building_a', not placed yet"), std::string::npos) << r.out;
+  r = Cli("project align " + project);
+  ASSERT_EQ(r.code, 0) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_EQ(p.Anchor(), 0);
+  const Rigid3d truth = TrueStart('b').inverse() * TrueStart('a');
+  EXPECT_LT(TranslationError(*p.sessions[1].project_from_session, truth), 0.02);
+  EXPECT_LT(RotationErrorDeg(*p.sessions[1].project_from_session, truth), 0.3);
+  // A file an older sweepscan left without an anchor opens with its first
+  // session as the anchor, said.
+  p.sessions.erase(p.sessions.begin() + 1);
+  p.sessions[0].project_from_session.reset();
+  p.sessions[0].registration = RegistrationEvidence();
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  r = Cli("project info " + project);
+  EXPECT_NE(r.out.find("no session is the anchor: 'building_b', the first, now is"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("anchor"), std::string::npos) << r.out;
+}
+
+// A folder without meta.json is no session, as in the app.
+TEST_F(ProjectCliTest, AFolderWithoutMetaJsonIsNotASession) {
+  std::filesystem::create_directories(P("nometa.sweepscan"));
+  std::filesystem::remove(P("nometa.sweepscan-project"));
+  CommandRun r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
+                            " project new nometa.sweepscan-project building_a.sweepscan "
+                            "nometa.sweepscan");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("nometa.sweepscan: not a session folder (no meta.json)"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("nometa.sweepscan-project")));
+  const std::string project = NewProject("nometa.sweepscan-project", "a");
+  for (const std::string& folder : {std::string("."), std::string("nometa.sweepscan")}) {
+    r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
+                   " project add nometa.sweepscan-project " + folder);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find(folder + ": not a session folder (no meta.json)"), std::string::npos)
+        << r.out;
+  }
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_EQ(p.sessions.size(), 1u);
 }
 
 }  // namespace

@@ -156,6 +156,12 @@ TEST(ProjectTest, ReferencesFormATreeRootedAtTheAnchor) {
       << repairs[0];
   EXPECT_EQ(repaired.sessions[1].registration.method, "manual");
   EXPECT_EQ(repaired.sessions[1].registration.reference, "");
+  // Nothing measured it now: the old registration's numbers go with it.
+  EXPECT_EQ(repaired.sessions[1].registration.rms_m, 0.0);
+  EXPECT_EQ(repaired.sessions[1].registration.overlap, 0.0);
+  EXPECT_EQ(repaired.sessions[1].registration.correspondences, 0u);
+  EXPECT_EQ(repaired.sessions[1].registration.SigmaTranslation(), 0.0);
+  EXPECT_TRUE(repaired.sessions[1].registration.pairs.empty());
   EXPECT_TRUE(repaired.sessions[1].project_from_session->translation().isApprox(
       loop.sessions[1].project_from_session->translation()));
   EXPECT_EQ(repaired.sessions[2].registration.reference, "room_b");
@@ -222,6 +228,113 @@ TEST(ProjectTest, TheAnchorStaysWhileOthersArePlacedOnIt) {
   EXPECT_TRUE(p.RemoveSession("room_b").ok());
   EXPECT_TRUE(p.RemoveSession("room_a").ok());
   EXPECT_FALSE(p.RemoveSession("nothing").ok());
+}
+
+// The anchor removed while the others are unplaced: the first of them is
+// the anchor (a project without one had nothing to align against, and the
+// next session added silently became it).
+TEST(ProjectTest, RemovingTheAnchorMakesTheFirstLeftTheAnchor) {
+  Project p;
+  ASSERT_TRUE(p.AddSession("a.sweepscan", nullptr).ok());
+  ASSERT_TRUE(p.AddSession("b.sweepscan", nullptr).ok());
+  ASSERT_TRUE(p.AddSession("c.sweepscan", nullptr).ok());
+  std::string anchor;
+  ASSERT_TRUE(p.RemoveSession("a", &anchor).ok());
+  EXPECT_EQ(anchor, "b");
+  ASSERT_EQ(p.Anchor(), 0);
+  EXPECT_EQ(p.sessions[0].registration.method, "anchor");
+  EXPECT_TRUE(p.sessions[0].project_from_session->translation().isZero());
+  EXPECT_FALSE(p.sessions[1].project_from_session.has_value());
+  anchor.clear();
+  ASSERT_TRUE(p.RemoveSession("c", &anchor).ok());
+  EXPECT_EQ(anchor, "");  // not the anchor
+  Project q;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(p), "p.sweepscan-project", &q).ok());
+  EXPECT_EQ(q.Anchor(), 0);
+
+  // A file saved so by an older sweepscan: repaired on opening, said; a
+  // session added to it does not take the first one's place.
+  Project none;
+  ASSERT_TRUE(none.AddSession("b.sweepscan", nullptr).ok());
+  ASSERT_TRUE(none.AddSession("c.sweepscan", nullptr).ok());
+  none.sessions[0].project_from_session.reset();
+  none.sessions[0].registration = RegistrationEvidence();
+  std::vector<std::string> repairs;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(none), "p", &q, &repairs).ok());
+  ASSERT_EQ(repairs.size(), 1u);
+  EXPECT_NE(repairs[0].find("no session is the anchor: 'b', the first, now is"), std::string::npos)
+      << repairs[0];
+  EXPECT_EQ(q.Anchor(), 0);
+  ProjectSession* added = nullptr;
+  ASSERT_TRUE(none.AddSession("d.sweepscan", &added).ok());
+  EXPECT_FALSE(added->project_from_session.has_value());
+  EXPECT_EQ(none.Anchor(), 0);
+}
+
+// The loader compares the folders the paths name, not their spelling; the
+// evidence's time and reference are what the format says; the pose source
+// a placement was measured with is kept (absent: ekf).
+TEST(ProjectTest, LoaderRefusesWhatTheFormatForbids) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "sweepscan_project_rules";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "scans" / "room_a.sweepscan");
+  const std::string file = (dir / "floor.sweepscan-project").string();
+  const std::string good = ProjectToJson(TwoSessions());
+  struct Edit {
+    std::function<void(nlohmann::json*)> apply;
+    std::string expect;
+  };
+  const std::string absolute = (dir / "scans" / "room_a.sweepscan").string();
+  const Edit edits[] = {
+      {[&](nlohmann::json* e) { (*e)["sessions"][1]["path"] = absolute; },
+       "floor.sweepscan-project: sessions[1].path: '" + absolute + "' is also session 'room_a'"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"]["time_utc"] = "yesterday"; },
+       "sessions[1].registration.time_utc: expected ISO 8601 UTC"},
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][1]["registration"]["time_utc"] = "2026-11-26 07:00:00";
+       },
+       "sessions[1].registration.time_utc: expected ISO 8601 UTC"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"].erase("reference"); },
+       "sessions[1].registration.reference: missing: a planes+icp placement names the session"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"]["reference"] = ""; },
+       "sessions[1].registration.reference: must not be empty"},
+      {[](nlohmann::json* e) { (*e)["sessions"][0]["registration"]["reference"] = ""; },
+       "sessions[0].registration.reference: the anchor is aligned to nothing"},
+      {[](nlohmann::json* e) { (*e)["sessions"][1]["registration"]["pose_source"] = "sfm"; },
+       "sessions[1].registration.pose_source: must be \"ekf\" or \"odometry\""},
+      {[](nlohmann::json* e) {
+         (*e)["sessions"][1]["project_from_session"]["translation_m"][0] = 8000.4;
+       },
+       "translation_m: lies 8000.4 m from the project's origin, beyond 8000 m"},
+  };
+  Project p;
+  for (const Edit& edit : edits) {
+    nlohmann::json e = nlohmann::json::parse(good);
+    edit.apply(&e);
+    std::ofstream(file) << e.dump(2);
+    const Status refused = LoadProject(file, &p);
+    EXPECT_FALSE(refused.ok()) << edit.expect;
+    EXPECT_NE(refused.message().find(edit.expect), std::string::npos) << refused.message();
+  }
+  nlohmann::json e = nlohmann::json::parse(good);
+  EXPECT_EQ(e["sessions"][1]["registration"]["pose_source"], "ekf");
+  e["sessions"][1]["registration"].erase("pose_source");  // a file from before it was kept
+  e["sessions"][1]["registration"]["time_utc"] = "2026-11-26T07:00:00.250Z";
+  ASSERT_TRUE(ProjectFromJson(e.dump(), "p", &p).ok());
+  EXPECT_EQ(p.sessions[1].registration.pose_source, "ekf");
+  e["sessions"][1]["registration"]["pose_source"] = "odometry";
+  ASSERT_TRUE(ProjectFromJson(e.dump(), "p", &p).ok());
+  Project q;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(p), "p", &q).ok());
+  EXPECT_EQ(q.sessions[1].registration.pose_source, "odometry");
+  // A manual placement names no reference and no pose source.
+  e["sessions"][1]["registration"] = {{"method", "manual"}};
+  ASSERT_TRUE(ProjectFromJson(e.dump(), "p", &p).ok());
+  EXPECT_EQ(
+      nlohmann::json::parse(ProjectToJson(p))["sessions"][1]["registration"].count("pose_source"),
+      0u);
+  std::filesystem::remove_all(dir);
 }
 
 // A session others are placed against cannot go: the file would name a
