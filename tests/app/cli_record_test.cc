@@ -150,13 +150,16 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
         return record.state() == QProcess::NotRunning;
       },
       30000));
-  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  // The path was not driven as asked: exit 1, the session kept.
+  ASSERT_EQ(record.exitCode(), 1) << err.toStdString();
   EXPECT_TRUE(err.contains("link lost at")) << err.toStdString();
-  EXPECT_TRUE(err.contains("drive script stopped by the outage")) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script aborted at")) << err.toStdString();
+  EXPECT_TRUE(err.contains("the link was lost")) << err.toStdString();
   EXPECT_TRUE(err.contains("reconnected after")) << err.toStdString();
   const QByteArray out = record.readAllStandardOutput();
   const QJsonObject summary = QJsonDocument::fromJson(out).object();
   ASSERT_EQ(summary["outages_s"].toArray().size(), 1) << out.toStdString() << err.toStdString();
+  EXPECT_TRUE(summary["drive_script"].toObject()["aborted"].toBool()) << out.toStdString();
   EXPECT_NEAR(summary["outages_s"].toArray()[0].toDouble(), 3.0, 1.5);
 
   QProcess info;
@@ -173,6 +176,98 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
   EXPECT_FALSE(gap["new_clock_epoch"].toBool());
   // The robot stopped at the cut and did not move again: the wheels' last
   // records (after the reconnection) are at rest.
+  SensorLog log;
+  RecordedSeconds(session, &log);
+  ASSERT_FALSE(log.wheels.empty());
+  EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
+}
+
+// The wheels' speeds after the robot first came to rest from driving (the
+// watchdog's stop): the largest, which is 0 when it stayed stopped.
+double FastestAfterTheFirstStop(const SensorLog& log) {
+  auto speed = [](const WheelSpeedMeasurement& w) { return std::abs(w.left_mps) + std::abs(w.right_mps); };
+  size_t i = 0;
+  while (i < log.wheels.size() && speed(log.wheels[i]) < 0.05) ++i;  // Until it drives.
+  while (i < log.wheels.size() && speed(log.wheels[i]) > 1e-3) ++i;  // Until it stands.
+  EXPECT_LT(i, log.wheels.size()) << "the robot never drove and stopped";
+  double fastest = 0.0;
+  for (; i < log.wheels.size(); ++i) fastest = std::max(fastest, speed(log.wheels[i]));
+  return fastest;
+}
+
+// The recorder frozen (SIGSTOP, as a laptop's suspend or a debugger) for
+// 2 s mid-script: the robot's watchdog stops the robot after 0.5 s, and the
+// script must not drive it again. It did: 20 ms after SIGCONT the recorder
+// sent the segment the wall clock had reached and the robot drove on, with
+// no word said. Now the script is aborted with the reason, the recording
+// goes on to its --duration, exit 1, and the robot stays stopped.
+TEST_F(CliRecordTest, AFrozenRecorderAbortsItsDriveScriptAndTheRobotStaysStopped) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+  f.close();
+  const QString session = dir_.filePath("frozen.sweepscan");
+  QProcess record;
+  StartRecord(&record, session, {"--duration", "7", "--drive-script", script, "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(1500);
+  const auto pid = static_cast<pid_t>(record.processId());
+  ::kill(pid, SIGSTOP);
+  sweepscan::testing::Pump(2000);
+  ::kill(pid, SIGCONT);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      30000));
+  EXPECT_EQ(record.exitCode(), 1) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script aborted at")) << err.toStdString();
+  EXPECT_TRUE(err.contains("did not run for")) << err.toStdString();
+  const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
+  const QJsonObject drive = summary["drive_script"].toObject();
+  EXPECT_TRUE(drive["aborted"].toBool());
+  EXPECT_FALSE(drive["completed"].toBool());
+  EXPECT_TRUE(drive["reason"].toString().contains("did not run for")) << drive["reason"].toString().toStdString();
+  EXPECT_EQ(summary["stopped_by"].toString(), "duration") << "the recording went on";
+  SensorLog log;
+  EXPECT_NEAR(RecordedSeconds(session, &log), 7.0, 1.0);
+  EXPECT_LT(FastestAfterTheFirstStop(log), 0.01);
+}
+
+// A stall on the way (1 s: the link survives, under the 2 s stall limit)
+// trips the robot's watchdog; the held frames then arrive, a Drive among
+// them. The recorder's loop never stood still, but the robot reports the
+// trip in its Status, and the script is aborted for it.
+TEST_F(CliRecordTest, AWatchdogTripTheRobotReportsAbortsTheDriveScript) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+  f.close();
+  const quint16 agent_port = address_.section(':', -1).toUShort();
+  sweepscan::testing::FaultProxy proxy(agent_port);
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("tripped.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()), "--key-file",
+                key_, "--out", session, "--duration", "6", "--drive-script", script, "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(1500);
+  proxy.Stall(1000);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      30000));
+  EXPECT_EQ(record.exitCode(), 1) << err.toStdString();
+  EXPECT_FALSE(err.contains("link lost")) << err.toStdString();
+  EXPECT_TRUE(err.contains("watchdog stopped it")) << err.toStdString();
   SensorLog log;
   RecordedSeconds(session, &log);
   ASSERT_FALSE(log.wheels.empty());
