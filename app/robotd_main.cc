@@ -112,7 +112,7 @@ int AgentMain(int argc, char** argv) {
     for (const QCommandLineOption* option : std::initializer_list<const QCommandLineOption*>{
              &lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
              &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha,
-             &common.buffer}) {
+             &common.buffer, &common.lidar_idle}) {
       keys << option->names().first();
     }
     const QString path = parser.value(config_file);
@@ -215,6 +215,12 @@ int AgentMain(int argc, char** argv) {
   }
   std::printf("%s\n", qPrintable(serving));
   std::fflush(stdout);
+  if (config.agent.lidar_idle_off > sweepscan::Duration::zero()) {
+    std::fprintf(stderr, "lidar motor off after %.0f s without a client (lidar-idle-s)\n",
+                 sweepscan::ToSeconds(config.agent.lidar_idle_off));
+  } else {
+    std::fprintf(stderr, "lidar motor left on without a client (lidar-idle-s = 0)\n");
+  }
 
   sweepscan::app::ServiceNotifier service;
   service.Ready(serving);
