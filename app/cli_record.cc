@@ -5,7 +5,7 @@
 // disk whatever happens to the process), prints the link's health once a
 // second, and stops cleanly on Ctrl+C, SIGTERM, SIGHUP (the ssh session
 // that ran it closed), SIGQUIT, --duration or the end of a drive script,
-// sending Stop first.
+// sending Stop first and turning the lidar off.
 #include <QCoreApplication>
 #include <QDir>
 #include <QElapsedTimer>
@@ -60,6 +60,8 @@ const char* const kRecordUsage =
     "  --calibration FILE     the robot's mounting error, stored as the session's calibration\n"
     "  --connect-timeout S    give up if no authenticated link within S seconds (default 10)\n"
     "  --stall-s S            a link silent this long is dropped and reconnected (default 2)\n"
+    "  --keep-lidar           leave the lidar spinning at the end (another recording follows);\n"
+    "                         by default it is turned off\n"
     "  --json                 print the summary as JSON on stdout\n"
     "\n"
     "Exit codes: 0 recorded, 1 the link never came up, the session could not be\n"
@@ -200,7 +202,7 @@ void PrintHealth(double elapsed_s, const hardware::LinkHealth& h, bool recording
 }  // namespace
 
 int RunRecord(int argc, char** argv) {
-  Args args({"json", "help"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
+  Args args({"json", "help", "keep-lidar"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
                                "scenario", "calibration", "connect-timeout", "stall-s"});
   std::string parse_error;
   if (!args.Parse(argc, argv, 2, &parse_error)) {
@@ -345,6 +347,9 @@ int RunRecord(int argc, char** argv) {
   // while a drive script's last command is still in force (until the
   // watchdog). The session was closed first, although this said otherwise.
   connection.StopMotion();  // Nothing when the link is down.
+  // The X4 would spin on after we leave (the agent turns it off by itself
+  // only after its lidar-idle-s); --keep-lidar for a recording that follows.
+  if (!args.Flag("keep-lidar")) connection.SetLidarMotor(false);
   const bool recorded = connection.recording();
   const double seconds = recorded ? clock.elapsed() * 1e-3 : 0.0;
   const hardware::LinkHealth health = connection.health();

@@ -19,6 +19,7 @@
 
 #include "core/common/time.h"
 #include "hardware/link/telemetry_decoder.h"
+#include "hardware/station/robot_connection.h"
 #include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
 
@@ -386,6 +387,32 @@ TEST_F(CliRecordTest, BadOptionsAreRefusedBeforeConnecting) {
     EXPECT_NE(err.find(c.says), std::string::npos) << c.args.join(' ').toStdString() << ": " << err;
   }
   EXPECT_FALSE(QFileInfo::exists(out));
+}
+
+// The X4 spun on after the recorder left: it never sent LidarMotor off,
+// assuming the agent stopped it. Now a clean end turns it off (the agent's
+// state, read by a client that sends nothing), unless --keep-lidar.
+TEST_F(CliRecordTest, TheRecordersCleanEndTurnsTheLidarOffUnlessToldToKeepIt) {
+  for (const bool keep : {false, true}) {
+    SCOPED_TRACE(keep ? "--keep-lidar" : "default");
+    QProcess record;
+    StartRecord(&record, dir_.filePath(keep ? "keep.sweepscan" : "off.sweepscan"),
+                keep ? QStringList{"--duration", "2", "--keep-lidar"} : QStringList{"--duration", "2"});
+    ASSERT_TRUE(record.waitForFinished(20000));
+    ASSERT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+    hardware::RobotConnectionOptions options;
+    options.address = "tcp:" + address_;
+    QFile key(key_);
+    ASSERT_TRUE(key.open(QIODevice::ReadOnly));
+    const QByteArray bytes = key.readAll();
+    options.key.assign(bytes.begin(), bytes.end());
+    hardware::RobotConnection look(options);
+    QString error;
+    ASSERT_TRUE(look.Start(&error)) << error.toStdString();
+    ASSERT_TRUE(WaitFor([&] { return look.health().have_status; }, 10000));
+    EXPECT_EQ(look.health().agent_status.lidar_motor_on, keep);
+    look.Shutdown();
+  }
 }
 
 // The link on a serial port: sweepscan-sim --pty offers a pseudo-terminal,
