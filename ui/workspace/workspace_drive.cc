@@ -152,7 +152,14 @@ std::vector<sim::DriveSegment> Workspace::CirclePath(double radius_m, double spe
 void Workspace::StartScriptedDrive(const std::vector<sim::DriveSegment>& path) {
   AbortScriptedDrive();
   if (path.empty()) return;
-  script_.emplace(path);
+  // The app's script ticks on the GUI thread, and a GUI hiccup does not
+  // stop the robot: the I/O thread keeps its link fed. Only a stall long
+  // enough to be the whole process (a suspend, SIGSTOP) aborts on the
+  // clocks; a shorter freeze of the whole process trips the robot's
+  // watchdog, whose report aborts the script at the next Status.
+  hardware::DriveScriptOptions options;
+  options.max_loop_gap_ns = 2'000'000'000;
+  script_.emplace(path, options);
   script_timer_ = new QTimer(this);
   script_timer_->setTimerType(Qt::PreciseTimer);
   connect(script_timer_, &QTimer::timeout, this, &Workspace::OnScriptTick);
