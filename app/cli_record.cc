@@ -325,6 +325,15 @@ int RunRecord(int argc, char** argv) {
                                   "on\n",
                                   outage_s, qPrintable(details));
                    });
+  // Said as each device's first bytes after an outage show it: the agent's
+  // buffer (robotd --buffer-s) did not reach back over the whole outage.
+  QObject::connect(&connection, &hardware::RobotConnection::dataLost, &app,
+                   [&](int device, double seconds) {
+                     std::fprintf(stderr,
+                                  "sweepscan-cli: %s: %.2f s of data lost in the outage (longer "
+                                  "than the robot's buffer, robotd --buffer-s)\n",
+                                  hardware::LinkDeviceName(static_cast<uint8_t>(device)), seconds);
+                   });
   QTimer health_timer;
   QObject::connect(&health_timer, &QTimer::timeout, &app, [&] {
     const hardware::LinkHealth h = connection.health();
@@ -377,6 +386,10 @@ int RunRecord(int argc, char** argv) {
         {"reconnects", health.reconnects},
         {"outages_s", outages_s},
         {"resent_bytes", health.late_bytes},
+        {"data_lost_s",
+         {{"lidar", health.data_lost_s[0]},
+          {"imu", health.data_lost_s[1]},
+          {"motor_board", health.data_lost_s[2]}}},
         {"round_trip_ms", {{"mean", health.latency_mean_ms}, {"max", health.latency_max_ms}}},
         {"stopped_by", signal != 0 ? "signal" : (o.duration_s > 0 ? "duration" : "script")}};
     if (!o.script.empty()) {
@@ -393,6 +406,10 @@ int RunRecord(int argc, char** argv) {
                 qPrintable(o.out), seconds, static_cast<unsigned long long>(health.session_records),
                 static_cast<unsigned long long>(health.frames_missing),
                 static_cast<unsigned long long>(health.reconnects), outages_s.size());
+    if (health.data_lost_s[0] + health.data_lost_s[1] + health.data_lost_s[2] > 0.0) {
+      std::printf("data lost in outages: lidar %.2f s, imu %.2f s, motor board %.2f s\n",
+                  health.data_lost_s[0], health.data_lost_s[1], health.data_lost_s[2]);
+    }
     if (script.aborted()) {
       std::printf("drive script aborted at %.1f s of %.1f s: %s\n", script.elapsed_s(),
                   script.duration_s(), script.abort_reason().c_str());

@@ -183,6 +183,67 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
   EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
 }
 
+// An outage longer than the robot's buffer (robotd --buffer-s 1, 4.5 s
+// cut): the recorder says, as each device's first bytes after it arrive, how
+// many seconds of its data were lost, and its summary sums them per device,
+// as `info` lists them for the session's gap. It said "0 frames lost in
+// transit" and nothing of the seconds lost.
+TEST_F(CliRecordTest, DataLostBeyondTheRobotsBufferIsSaidAndSummed) {
+  QProcess sim;
+  sim.start(QStringLiteral(SWEEPSCAN_SIM), {"--scenario", kScenario, "--listen", "127.0.0.1:0",
+                                            "--key-file", key_, "--buffer-s", "1"});
+  QByteArray listening;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        listening += sim.readAllStandardOutput();
+        return listening.contains('\n');
+      },
+      10000));
+  ASSERT_TRUE(listening.startsWith("listening on 127.0.0.1:")) << listening.toStdString();
+  sweepscan::testing::FaultProxy proxy(listening.mid(23).trimmed().toUShort());
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("lossy.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()),
+                "--key-file", key_, "--out", session, "--duration", "12", "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(2000);
+  proxy.CutFor(4500, sweepscan::testing::FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      40000));
+  sim.terminate();
+  sim.waitForFinished(5000);
+  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  EXPECT_TRUE(err.contains("imu: ")) << err.toStdString();
+  EXPECT_TRUE(err.contains("s of data lost in the outage")) << err.toStdString();
+  const QByteArray out = record.readAllStandardOutput();
+  const QJsonObject summary = QJsonDocument::fromJson(out).object();
+  const QJsonObject lost = summary["data_lost_s"].toObject();
+  ASSERT_EQ(summary["outages_s"].toArray().size(), 1) << out.toStdString() << err.toStdString();
+  const double outage_s = summary["outages_s"].toArray()[0].toDouble();
+
+  QProcess info;
+  info.start(QStringLiteral(SWEEPSCAN_CLI), {"info", session, "--json"});
+  ASSERT_TRUE(info.waitForFinished(30000));
+  ASSERT_EQ(info.exitCode(), 0) << info.readAllStandardError().toStdString();
+  const QJsonArray gaps =
+      QJsonDocument::fromJson(info.readAllStandardOutput()).object()["gaps"].toArray();
+  ASSERT_EQ(gaps.size(), 1);
+  const QJsonObject in_session = gaps[0].toObject()["data_lost_s"].toObject();
+  for (const char* device : {"lidar", "imu", "motor_board"}) {
+    // Beyond the second the buffer kept, at most the outage (and a chunk's span).
+    EXPECT_GT(lost[device].toDouble(), 1.0) << device << " " << out.toStdString();
+    EXPECT_LT(lost[device].toDouble(), outage_s + 0.5) << device << " " << out.toStdString();
+    EXPECT_NEAR(lost[device].toDouble(), in_session[device].toDouble(), 0.01) << device;
+  }
+}
+
 // The wheels' speeds after the robot first came to rest from driving (the
 // watchdog's stop): the largest, which is 0 when it stayed stopped.
 double FastestAfterTheFirstStop(const SensorLog& log) {
