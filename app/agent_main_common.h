@@ -6,6 +6,7 @@
 #include <QCommandLineParser>
 #include <QCoreApplication>
 #include <QHostAddress>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -41,6 +42,12 @@ struct AgentCommandLine {
                             "Keep the last S seconds of device bytes, 0..60 (default 10), and "
                             "resend them to a workstation that reconnects after an outage.",
                             "S"};
+  QCommandLineOption lidar_idle{
+      QStringLiteral("lidar-idle-s"),
+      "Turn the lidar's motor off after S seconds without a client; 0 = never (default: "
+      "buffer-s + 20, 30 s; at least buffer-s + 5, so a returning workstation finds the "
+      "lidar's bytes of its outage).",
+      "S"};
 
   // Where a value that did not come from the command line came from, for
   // its messages: e.g. "robotd.conf:7: v-max" for the option named "v-max"
@@ -48,7 +55,7 @@ struct AgentCommandLine {
   std::function<QString(const QString& name)> origin;
 
   void Add(QCommandLineParser* parser) const {
-    parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha, buffer});
+    parser->addOptions({listen, key_file, watchdog, v_max, w_max, accel, alpha, buffer, lidar_idle});
   }
 
   // The subject of a message about `option`'s value: "--v-max", or where
@@ -161,6 +168,20 @@ struct AgentCommandLine {
       }
     }
     config->agent.telemetry_buffer = FromSeconds(buffer_s);
+    // Long enough that a workstation back within the buffer's time (plus
+    // the agent's wait for its resume) is resent the lidar's bytes too.
+    const double least_idle_s = buffer_s + ToSeconds(config->agent.resume_wait);
+    double idle_s = std::max(30.0, buffer_s + 20.0);
+    if (!Number(parser, lidar_idle, &idle_s, error)) return false;
+    if (!(idle_s == 0.0 || (idle_s >= least_idle_s && idle_s <= 86400.0))) {
+      *error = Subject(lidar_idle) +
+               QStringLiteral(" must be 0 (never) or within %1..86400 (buffer-s + %2 s), got %3")
+                   .arg(least_idle_s)
+                   .arg(ToSeconds(config->agent.resume_wait))
+                   .arg(parser.value(lidar_idle));
+      return false;
+    }
+    config->agent.lidar_idle_off = FromSeconds(idle_s);
     return config->IsValid(error);
   }
 

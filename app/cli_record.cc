@@ -5,7 +5,7 @@
 // disk whatever happens to the process), prints the link's health once a
 // second, and stops cleanly on Ctrl+C, SIGTERM, SIGHUP (the ssh session
 // that ran it closed), SIGQUIT, --duration or the end of a drive script,
-// sending Stop first.
+// sending Stop first and turning the lidar off.
 #include <QCoreApplication>
 #include <QDir>
 #include <QElapsedTimer>
@@ -24,6 +24,7 @@
 #include "core/calibration/calibration_file.h"
 #include "core/scenario/scenario.h"
 #include "hardware/link/qt_transport.h"
+#include "hardware/station/drive_script.h"
 #include "hardware/station/robot_connection.h"
 
 namespace sweepscan::app {
@@ -40,7 +41,9 @@ const char* const kRecordUsage =
     "A link that drops or stays silent for --stall-s reconnects by itself with backoff;\n"
     "the session goes on in the same folder with the gap recorded (`info` lists it), and\n"
     "the robot sends what it buffered meanwhile (robotd --buffer-s). A reconnection never\n"
-    "drives: a --drive-script stops at the first outage and the robot stays stopped.\n"
+    "drives: a --drive-script is aborted at the first outage, at a watchdog stop the robot\n"
+    "reports, or when this process was stopped or suspended for longer than the robot's\n"
+    "watchdog (0.5 s); the robot stays stopped and the recording goes on.\n"
     "\n"
     "Options:\n"
     "  --connect HOST:PORT    the agent's TCP address (robotd's --listen)\n"
@@ -57,10 +60,13 @@ const char* const kRecordUsage =
     "  --calibration FILE     the robot's mounting error, stored as the session's calibration\n"
     "  --connect-timeout S    give up if no authenticated link within S seconds (default 10)\n"
     "  --stall-s S            a link silent this long is dropped and reconnected (default 2)\n"
+    "  --keep-lidar           leave the lidar spinning at the end (another recording follows);\n"
+    "                         by default it is turned off\n"
     "  --json                 print the summary as JSON on stdout\n"
     "\n"
-    "Exit codes: 0 recorded, 1 the link never came up or the session could not be\n"
-    "written, 2 bad options or the key was refused.\n";
+    "Exit codes: 0 recorded, 1 the link never came up, the session could not be\n"
+    "written, or the drive script was aborted (the session is kept), 2 bad options or\n"
+    "the key was refused.\n";
 
 namespace {
 
@@ -196,7 +202,7 @@ void PrintHealth(double elapsed_s, const hardware::LinkHealth& h, bool recording
 }  // namespace
 
 int RunRecord(int argc, char** argv) {
-  Args args({"json", "help"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
+  Args args({"json", "help", "keep-lidar"}, {"connect", "key-file", "serial", "out", "duration", "drive-script",
                                "scenario", "calibration", "connect-timeout", "stall-s"});
   std::string parse_error;
   if (!args.Parse(argc, argv, 2, &parse_error)) {
@@ -227,9 +233,7 @@ int RunRecord(int argc, char** argv) {
   since_start.start();
   QTimer script_timer;
   script_timer.setTimerType(Qt::PreciseTimer);
-  QElapsedTimer script_clock;
-  double script_s = 0.0;
-  for (const sim::DriveSegment& s : o.script) script_s += s.duration_s;
+  hardware::DriveScript script(o.script);
 
   // The session starts when the link is authenticated (as the app's Record
   // button on a connected link) and stays open across reconnections.
@@ -251,23 +255,34 @@ int RunRecord(int argc, char** argv) {
                  connection.health().agent_name.c_str());
     if (o.duration_s > 0) QTimer::singleShot(static_cast<int>(o.duration_s * 1e3), &app, &QCoreApplication::quit);
     if (!o.script.empty()) {
-      script_clock.start();
+      script.Start(hardware::ScriptClocks::Now());
       script_timer.start(100);  // 10 Hz, as the app's scripted drives.
     }
   });
-  QObject::connect(&script_timer, &QTimer::timeout, &app, [&] {
-    double t = script_clock.elapsed() * 1e-3;
-    for (const sim::DriveSegment& s : o.script) {
-      if (t < s.duration_s) {
-        connection.Drive(s.v, s.w);
-        return;
-      }
-      t -= s.duration_s;
-    }
+  // An aborted script leaves the robot stopped (the recording goes on until
+  // Ctrl+C or --duration): nothing here may set it moving again.
+  auto say_script_aborted = [&] {
     script_timer.stop();
     connection.StopMotion();
-    std::fprintf(stderr, "drive script done (%.1f s)\n", script_s);
-    if (o.duration_s < 0) app.quit();
+    std::fprintf(stderr,
+                 "sweepscan-cli: drive script aborted at %.1f s of %.1f s: %s; the robot stays "
+                 "stopped until you drive it; the recording goes on\n",
+                 script.elapsed_s(), script.duration_s(), script.abort_reason().c_str());
+  };
+  QObject::connect(&script_timer, &QTimer::timeout, &app, [&] {
+    const hardware::LinkHealth h = connection.health();
+    const hardware::DriveScript::Step step =
+        script.Tick(hardware::ScriptClocks::Now(), h.have_status ? &h.agent_status : nullptr);
+    if (step.action == hardware::DriveScript::Action::kDrive) {
+      connection.Drive(step.v, step.w);
+    } else if (step.action == hardware::DriveScript::Action::kAbort) {
+      say_script_aborted();
+    } else {
+      script_timer.stop();
+      connection.StopMotion();
+      std::fprintf(stderr, "drive script done (%.1f s)\n", script.duration_s());
+      if (o.duration_s < 0) app.quit();
+    }
   });
   QObject::connect(&connection, &hardware::RobotConnection::authenticationFailed, &app,
                    [&](const QString& reason) {
@@ -289,18 +304,17 @@ int RunRecord(int argc, char** argv) {
                                   clock.elapsed() * 1e-3, qPrintable(error));
                      app.quit();
                    });
-  // Outages: said on stderr as they happen. A drive script stops at the
-  // first one: the agent's watchdog stopped the robot, and a reconnection
-  // must not set it moving again without the operator.
+  // Outages: said on stderr as they happen. A drive script is aborted at
+  // the first one: the agent's watchdog stopped the robot, and a
+  // reconnection must not set it moving again without the operator.
   std::vector<double> outages_s;
   QObject::connect(&connection, &hardware::RobotConnection::linkLost, &app, [&](const QString& reason) {
     std::fprintf(stderr, "sweepscan-cli: link lost at %.1f s (%s); reconnecting (Ctrl+C to stop)\n",
                  connection.recording() ? clock.elapsed() * 1e-3 : since_start.elapsed() * 1e-3,
                  qPrintable(reason));
-    if (script_timer.isActive()) {
-      script_timer.stop();
-      std::fprintf(stderr, "sweepscan-cli: drive script stopped by the outage; the robot stays "
-                           "stopped\n");
+    if (script.running()) {
+      script.Abort("the link was lost (" + reason.toStdString() + ")");
+      say_script_aborted();
     }
   });
   QObject::connect(&connection, &hardware::RobotConnection::linkRestored, &app,
@@ -310,6 +324,15 @@ int RunRecord(int argc, char** argv) {
                                   "sweepscan-cli: reconnected after %.1f s (%s); the session goes "
                                   "on\n",
                                   outage_s, qPrintable(details));
+                   });
+  // Said as each device's first bytes after an outage show it: the agent's
+  // buffer (robotd --buffer-s) did not reach back over the whole outage.
+  QObject::connect(&connection, &hardware::RobotConnection::dataLost, &app,
+                   [&](int device, double seconds) {
+                     std::fprintf(stderr,
+                                  "sweepscan-cli: %s: %.2f s of data lost in the outage (longer "
+                                  "than the robot's buffer, robotd --buffer-s)\n",
+                                  hardware::LinkDeviceName(static_cast<uint8_t>(device)), seconds);
                    });
   QTimer health_timer;
   QObject::connect(&health_timer, &QTimer::timeout, &app, [&] {
@@ -333,6 +356,9 @@ int RunRecord(int argc, char** argv) {
   // while a drive script's last command is still in force (until the
   // watchdog). The session was closed first, although this said otherwise.
   connection.StopMotion();  // Nothing when the link is down.
+  // The X4 would spin on after we leave (the agent turns it off by itself
+  // only after its lidar-idle-s); --keep-lidar for a recording that follows.
+  if (!args.Flag("keep-lidar")) connection.SetLidarMotor(false);
   const bool recorded = connection.recording();
   const double seconds = recorded ? clock.elapsed() * 1e-3 : 0.0;
   const hardware::LinkHealth health = connection.health();
@@ -352,7 +378,7 @@ int RunRecord(int argc, char** argv) {
   if (!recorded) return exit_code == kExitOk ? kExitFailure : exit_code;
   const int signal = QuitSignal();
   if (args.Flag("json")) {
-    const nlohmann::json summary = {
+    nlohmann::json summary = {
         {"session", QDir(o.out).absolutePath().toStdString()},
         {"seconds", seconds},
         {"records", health.session_records},
@@ -360,8 +386,19 @@ int RunRecord(int argc, char** argv) {
         {"reconnects", health.reconnects},
         {"outages_s", outages_s},
         {"resent_bytes", health.late_bytes},
+        {"data_lost_s",
+         {{"lidar", health.data_lost_s[0]},
+          {"imu", health.data_lost_s[1]},
+          {"motor_board", health.data_lost_s[2]}}},
         {"round_trip_ms", {{"mean", health.latency_mean_ms}, {"max", health.latency_max_ms}}},
         {"stopped_by", signal != 0 ? "signal" : (o.duration_s > 0 ? "duration" : "script")}};
+    if (!o.script.empty()) {
+      summary["drive_script"] = {{"completed", !script.aborted() && !script.running()},
+                                 {"aborted", script.aborted()},
+                                 {"at_s", script.elapsed_s()},
+                                 {"duration_s", script.duration_s()},
+                                 {"reason", script.abort_reason()}};
+    }
     std::cout << summary.dump() << "\n";
   } else {
     std::printf("%s: %.1f s, %llu records, %llu frames lost in transit, %llu reconnects, "
@@ -369,7 +406,17 @@ int RunRecord(int argc, char** argv) {
                 qPrintable(o.out), seconds, static_cast<unsigned long long>(health.session_records),
                 static_cast<unsigned long long>(health.frames_missing),
                 static_cast<unsigned long long>(health.reconnects), outages_s.size());
+    if (health.data_lost_s[0] + health.data_lost_s[1] + health.data_lost_s[2] > 0.0) {
+      std::printf("data lost in outages: lidar %.2f s, imu %.2f s, motor board %.2f s\n",
+                  health.data_lost_s[0], health.data_lost_s[1], health.data_lost_s[2]);
+    }
+    if (script.aborted()) {
+      std::printf("drive script aborted at %.1f s of %.1f s: %s\n", script.elapsed_s(),
+                  script.duration_s(), script.abort_reason().c_str());
+    }
   }
+  // The session is complete, but the path was not driven as asked.
+  if (script.aborted() && exit_code == kExitOk) exit_code = kExitFailure;
   return exit_code;
 }
 

@@ -23,7 +23,8 @@ int CommentStart(const QString& line) {
 }  // namespace
 
 bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
-                         std::vector<AgentConfigSetting>* settings, QString* error) {
+                         std::vector<AgentConfigSetting>* settings, QString* error,
+                         QStringList* warnings) {
   constexpr qint64 kMaxBytes = 64 * 1024;  // A configuration, not a data file.
   QFile file(path);
   if (!file.open(QIODevice::ReadOnly)) {
@@ -38,9 +39,16 @@ bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
   QSet<QString> seen;
   const QList<QByteArray> lines = bytes.split('\n');
   for (int i = 0; i < lines.size(); ++i) {
+    bool skip = false;
     const auto fail = [&](const QString& why) {
-      *error = QStringLiteral("%1:%2: %3").arg(path).arg(i + 1).arg(why);
-      return false;
+      const QString where = QStringLiteral("%1:%2: %3").arg(path).arg(i + 1).arg(why);
+      if (warnings == nullptr) {
+        *error = where;
+        return false;
+      }
+      warnings->push_back(where);
+      skip = true;
+      return true;
     };
     QString line = QString::fromUtf8(lines[i]);
     const int hash = CommentStart(line);
@@ -48,14 +56,26 @@ bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
     line = line.trimmed();
     if (line.isEmpty()) continue;
     const int equals = line.indexOf(QLatin1Char('='));
-    if (equals < 0) return fail(QStringLiteral("expected 'key = value', got '%1'").arg(line));
+    if (equals < 0) {
+      if (!fail(QStringLiteral("expected 'key = value', got '%1'").arg(line))) return false;
+      continue;
+    }
     const QString key = line.left(equals).trimmed();
     const QString value = line.mid(equals + 1).trimmed();
     if (!keys.contains(key)) {
-      return fail(QStringLiteral("unknown key '%1' (keys: %2)").arg(key, keys.join(QStringLiteral(", "))));
+      if (!fail(QStringLiteral("unknown key '%1' (keys: %2)").arg(key, keys.join(QStringLiteral(", ")))))
+        return false;
+    } else if (value.isEmpty()) {
+      if (!fail(QStringLiteral("'%1' has no value").arg(key))) return false;
+    } else if (seen.contains(key)) {
+      if (!fail(QStringLiteral("'%1' is set twice; the last one is used").arg(key))) return false;
+      // Lenient: the last value wins, as in systemd's files.
+      for (AgentConfigSetting& earlier : *settings) {
+        if (earlier.key == key) earlier = {key, value, i + 1};
+      }
+      continue;
     }
-    if (value.isEmpty()) return fail(QStringLiteral("'%1' has no value").arg(key));
-    if (seen.contains(key)) return fail(QStringLiteral("'%1' is set twice").arg(key));
+    if (skip) continue;
     seen.insert(key);
     settings->push_back({key, value, i + 1});
   }

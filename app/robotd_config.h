@@ -26,8 +26,14 @@ struct AgentConfigSetting {
 // may set (each takes a value). False with "FILE:LINE: why" for a line that
 // is not `key = value`, an unknown key, a key given twice, an empty value,
 // or a file that cannot be read or is over 64 KiB.
+// `warnings` non-null: lenient, for `--stop-motors`, which must find the
+// motor port whatever else the file gets wrong: a bad line, an unknown key
+// or an empty value is skipped, a key given twice keeps its last value, and
+// each is a "FILE:LINE: why" in *warnings; only a file that cannot be read
+// fails.
 bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
-                         std::vector<AgentConfigSetting>* settings, QString* error);
+                         std::vector<AgentConfigSetting>* settings, QString* error,
+                         QStringList* warnings = nullptr);
 
 }  // namespace sweepscan::app
 

@@ -112,14 +112,25 @@ int AgentMain(int argc, char** argv) {
     for (const QCommandLineOption* option : std::initializer_list<const QCommandLineOption*>{
              &lidar, &imu, &motor, &serial, &name, &common.listen, &common.key_file,
              &common.watchdog, &common.v_max, &common.w_max, &common.accel, &common.alpha,
-             &common.buffer}) {
+             &common.buffer, &common.lidar_idle}) {
       keys << option->names().first();
     }
     const QString path = parser.value(config_file);
     std::vector<sweepscan::app::AgentConfigSetting> settings;
     QString file_error;
-    if (!sweepscan::app::ReadAgentConfigFile(path, keys, &settings, &file_error)) {
-      return Fail(file_error);
+    // --stop-motors must stop the board whatever else the file gets wrong
+    // (the service runs it after any exit, a refused configuration's too):
+    // it reads leniently, and an unreadable file leaves the command line's.
+    const bool stopping = parser.isSet(stop_motors);
+    QStringList warnings;
+    if (!sweepscan::app::ReadAgentConfigFile(path, keys, &settings, &file_error,
+                                             stopping ? &warnings : nullptr)) {
+      if (!stopping) return Fail(file_error);
+      warnings << file_error;
+      settings.clear();
+    }
+    for (const QString& warning : warnings) {
+      std::fprintf(stderr, "sweepscan-robotd: --stop-motors: warning: %s\n", qPrintable(warning));
     }
     // The link is one choice: `--listen` or `--serial` on the command line
     // replaces the file's, whichever of the two that is (the shipped file
@@ -138,7 +149,7 @@ int AgentMain(int argc, char** argv) {
     }
     // The file's options first: QCommandLineParser::value() is the last one given.
     arguments = QStringList{arguments.first()} + from_file + arguments.mid(1);
-    if (!parser.parse(arguments)) return Fail(parser.errorText());
+    if (!parser.parse(arguments) && !stopping) return Fail(parser.errorText());
   }
   // A bad value from the file is reported at its line, with its key as written.
   common.origin = [&file_origin](const QString& name) { return file_origin.value(name); };
@@ -215,6 +226,12 @@ int AgentMain(int argc, char** argv) {
   }
   std::printf("%s\n", qPrintable(serving));
   std::fflush(stdout);
+  if (config.agent.lidar_idle_off > sweepscan::Duration::zero()) {
+    std::fprintf(stderr, "lidar motor off after %.0f s without a client (lidar-idle-s)\n",
+                 sweepscan::ToSeconds(config.agent.lidar_idle_off));
+  } else {
+    std::fprintf(stderr, "lidar motor left on without a client (lidar-idle-s = 0)\n");
+  }
 
   sweepscan::app::ServiceNotifier service;
   service.Ready(serving);

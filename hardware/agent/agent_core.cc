@@ -166,6 +166,11 @@ bool AgentOptions::IsValid(std::string* error) const {
     return fail("telemetry buffer must be within 0..60 s");
   }
   if (resume_wait <= Duration::zero()) return fail("resume wait must be positive");
+  if (lidar_idle_off < Duration::zero() ||
+      (lidar_idle_off > Duration::zero() && lidar_idle_off < telemetry_buffer + resume_wait)) {
+    return fail("lidar idle time must be 0 (never) or at least the telemetry buffer's time plus "
+                "the resume wait (a returning client's resend needs the lidar's bytes)");
+  }
   if (max_client_payload < kLinkNonceSize + kLinkMacSize || max_client_payload > kLinkMaxPayload) {
     return fail("max client payload must be within [64, 65536]");
   }
@@ -182,6 +187,7 @@ void AgentOutput::Clear() {
   close_client = false;
   close_reason.clear();
   auth_failure = false;
+  log.clear();
 }
 
 AgentCore::AgentCore(const AgentOptions& options)
@@ -195,16 +201,12 @@ void AgentCore::Start(Time now, AgentOutput* out) {
   start_time_ = now;
   // Nothing read before now was kept: a resume from before it is a break.
   buffer_ = TelemetryBuffer(options_.telemetry_buffer, options_.telemetry_buffer_max_bytes, now);
-  // The lidar may still be scanning from a previous run of the agent: stop
-  // it so its replies to the requests below are not buried in scan packets.
-  auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
-  const auto stop = EncodeX4Command(kX4CmdStop);
-  lidar.insert(lidar.end(), stop.begin(), stop.end());
-  out->lidar_dtr = false;  // And its motor off until a client asks for it.
-  lidar_requests_sent_ = 0;
+  BeginLidarStartup(now, out);
+  out->lidar_dtr = false;  // Its motor off until a client asks for it.
   // A zero command so a board that kept the last velocity of a crashed agent stops.
   SendMotorCommand(now, out);
   Tick(now, out);
+  lidar_startup_in_output_ = true;
 }
 
 void AgentCore::OnClientConnected(Time now, AgentOutput* out) {
@@ -497,6 +499,7 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
     out->lidar_dtr = lidar->on;
     if (lidar->on && !lidar_motor_on_) lidar_motor_on_since_ = now;
     lidar_motor_on_ = lidar->on;
+    lidar_scan_after_startup_ = false;  // Said now.
     Ack(now, message, AckResult::kAccepted, out);
   }
 }
@@ -520,132 +523,9 @@ void AgentCore::Deny(Time now, const std::string& reason, AgentOutput* out) {
   out->close_reason = reason;
 }
 
-void AgentCore::OnDeviceBytes(LinkDevice device, const uint8_t* data, size_t n, Time now,
-                              AgentOutput* out) {
-  const uint8_t id = static_cast<uint8_t>(device);
-  if (id < 1 || id > 3 || n == 0) return;
-  const size_t index = LinkDeviceIndex(device);
-  device_bytes_[index] += n;
-  have_device_bytes_[index] = true;
-  last_device_bytes_[index] = now;
-  if (device == LinkDevice::kMotorBoard) {
-    // Only the battery voltage and stop flag matter here; the workstation
-    // decodes the full feedback from the Telemetry.
-    motor_feedback_.Feed(data, n, now);
-    for (const MotorFeedback& feedback : motor_feedback_.TakeRecords()) {
-      battery_v_ = static_cast<float>(feedback.voltage_v);
-      motor_stop_flag_ = feedback.stop_flag != 0;
-    }
-  }
-  const uint64_t serial = buffer_.Push(id, now, data, n, now);
-  // No telemetry before auth; held ones wait in the buffer.
-  if (!client_connected_ || !authenticated_ || closing_ || telemetry_held_) return;
-  if (telemetry_paused_) {
-    pending_break_[index] = true;
-    ++counters_.telemetry_chunks_dropped;
-    return;
-  }
-  TelemetryBuffer::Piece piece;
-  piece.serial = serial;
-  piece.device = id;
-  piece.receive_time = now;
-  piece.data = data;
-  piece.size = n;
-  SendTelemetryPiece(now, piece, out);
-}
-
-void AgentCore::SendTelemetryPiece(Time now, const TelemetryBuffer::Piece& piece,
-                                   AgentOutput* out) {
-  uint8_t flags = piece.flags;
-  if (pending_break_[piece.device - 1]) {
-    flags |= kTelemetryBreak;
-    pending_break_[piece.device - 1] = false;
-  }
-  const std::vector<uint8_t> frames =
-      encoder_.EncodeTelemetry(now, static_cast<LinkDevice>(piece.device), piece.receive_time,
-                               piece.data, piece.size, flags);
-  out->to_client.insert(out->to_client.end(), frames.begin(), frames.end());
-  ++counters_.telemetry_frames_sent;
-}
-
-// A new client (a connection, or a serial client's Hello) gets each
-// device's first chunk marked as a break unless its TelemetryResume joins
-// what it is sent to what it holds (ReleaseTelemetry). Without a resume
-// (no buffer, an older client, or a resume that came after resume_wait)
-// the bytes read while the link was down never reach it, and the break is
-// what tells its decoder to restart and its recording that they are lost:
-// unmarked, a late resume lost the outage's data and the session said
-// "no data lost". On a fresh client's first bytes a break costs nothing.
-void AgentCore::HoldTelemetry(Time now) {
-  pending_break_.fill(true);
-  if (!buffer_.enabled()) return;  // No buffer: live from the start, as before.
-  telemetry_held_ = true;
-  held_from_serial_ = buffer_.next_serial();
-  held_since_ = now;
-}
-
-void AgentCore::ReleaseTelemetry(const TelemetryResume* resume, Time now, AgentOutput* out) {
-  telemetry_held_ = false;
-  buffer_.Evict(now);
-  if (resume == nullptr) {
-    buffer_.CollectFrom(held_from_serial_, [&](const TelemetryBuffer::Piece& piece) {
-      SendTelemetryPiece(now, piece, out);
-    });
-    return;
-  }
-  ++counters_.resumes;
-  for (uint8_t d = 1; d <= 3; ++d) {
-    if (resume->devices[d - 1].have && buffer_.LostAfter(d, resume->devices[d - 1])) {
-      ++counters_.resume_breaks;
-    }
-  }
-  // The resume says what the client holds: the breaks are CollectAfter's.
-  pending_break_.fill(false);
-  std::array<bool, 3> breaks{};
-  buffer_.CollectAfter(*resume, held_from_serial_,
-                       [&](const TelemetryBuffer::Piece& piece) {
-                         if (piece.serial < held_from_serial_) {
-                           ++counters_.chunks_resent;
-                           counters_.bytes_resent += piece.size;
-                         }
-                         SendTelemetryPiece(now, piece, out);
-                       },
-                       &breaks);
-  // A device with lost bytes but nothing kept: its next live chunk says so.
-  for (int d = 0; d < 3; ++d) pending_break_[d] = breaks[d];
-}
-
-void AgentCore::SetDevicePortError(LinkDevice device, bool error, Time now, AgentOutput* out) {
-  const uint8_t id = static_cast<uint8_t>(device);
-  if (id < 1 || id > 3) return;
-  const size_t index = LinkDeviceIndex(device);
-  if (port_error_[index] == error) return;
-  port_error_[index] = error;
-  if (client_authenticated()) SendStatus(now, out);
-}
-
-void AgentCore::OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out) {
-  if (device == LinkDevice::kMotorBoard && started_) SendMotorCommand(now, out);
-  if (device == LinkDevice::kLidar) {
-    out->lidar_dtr = lidar_motor_on_;
-    if (lidar_motor_on_) {
-      auto& bytes = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
-      const auto scan = EncodeX4Command(kX4CmdScan);
-      bytes.insert(bytes.end(), scan.begin(), scan.end());
-    }
-  }
-}
-
 void AgentCore::Tick(Time now, AgentOutput* out) {
-  // Start-up requests to the lidar, one at a time.
-  if (started_ && lidar_requests_sent_ < 2 &&
-      now - start_time_ >= options_.lidar_request_spacing * (lidar_requests_sent_ + 1)) {
-    auto& lidar = out->to_device[LinkDeviceIndex(LinkDevice::kLidar)];
-    const auto request =
-        EncodeX4Command(lidar_requests_sent_ == 0 ? kX4CmdDeviceInfo : kX4CmdHealth);
-    lidar.insert(lidar.end(), request.begin(), request.end());
-    ++lidar_requests_sent_;
-  }
+  lidar_startup_in_output_ = false;
+  TickLidar(now, out);
 
   if (client_connected_ && !closing_ && handshake_ != nullptr) {
     HandleHandshakeState(handshake_->Tick(now, &out->to_client), now, out);

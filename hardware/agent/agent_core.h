@@ -116,6 +116,15 @@ struct AgentOptions {
   Duration telemetry_buffer = std::chrono::seconds(10);
   size_t telemetry_buffer_max_bytes = 0;
   Duration resume_wait = std::chrono::seconds(5);
+  // The lidar's motor (and scan) off once no valid frame has come from an
+  // authenticated client for this long (the client left, or its link is
+  // half-open): an X4 spinning between sessions wears its motor and drains
+  // the battery. 0 = never. It must outlast what a returning client is
+  // resent (telemetry_buffer, plus resume_wait and a reconnection), or the
+  // resume would find no lidar bytes: IsValid refuses less than
+  // telemetry_buffer + resume_wait. A client turns it on again with
+  // LidarMotor, as the app and `record` do at every authentication.
+  Duration lidar_idle_off = std::chrono::seconds(30);
   // Nonce source; null = FillRandomBytes (/dev/urandom). Tests may inject one.
   std::function<bool(uint8_t*, size_t)> random_source;
 
@@ -135,10 +144,11 @@ struct AgentOutput {
   bool close_client = false;
   std::string close_reason;     // Why, for the log ("authentication failed", "input flood").
   bool auth_failure = false;    // The close is a failed authentication (address lockout).
+  std::vector<std::string> log;  // Lines for the agent's log (the lidar's idle stop).
 
   bool empty() const {
     return to_client.empty() && to_device[0].empty() && to_device[1].empty() &&
-           to_device[2].empty() && !lidar_dtr.has_value() && !close_client;
+           to_device[2].empty() && !lidar_dtr.has_value() && !close_client && log.empty();
   }
   void Clear();
 };
@@ -170,6 +180,7 @@ struct AgentCounters {
   // Live Telemetry chunks not sent while the link was congested (kept in
   // the buffer; the device's next chunk sent carries the break flag).
   uint64_t telemetry_chunks_dropped = 0;
+  uint64_t lidar_idle_stops = 0;  // Lidar motor turned off for want of a client.
 };
 
 // One connection's authentication, before it may become the client (TCP):
@@ -271,8 +282,10 @@ class AgentCore {
   // again, stops without waiting for a drive command. Start() queues its
   // zero before the ports are open, so this is the one that reaches it.
   // The lidar's DTR line gets the motor's state (opening a tty raises DTR,
-  // which would spin the X4's motor), and an X4 plugged in again while its
-  // motor is on is told to scan again.
+  // which would spin the X4's motor), and the X4 its start-up sequence
+  // again, as at Start() (an X4 plugged in after the agent started, or
+  // plugged in again, got none): stop, device info, health, then scan if
+  // its motor is on.
   void OnDevicePortOpened(LinkDevice device, Time now, AgentOutput* out);
   // The link cannot take more for now (a serial line or radio slower than
   // the telemetry, or a reader that stalled; a connection that cannot be
@@ -329,6 +342,10 @@ class AgentCore {
   // non-null), or send what was read since it was adopted; then live.
   void ReleaseTelemetry(const TelemetryResume* resume, Time now, AgentOutput* out);
   void SendTelemetryPiece(Time now, const TelemetryBuffer::Piece& piece, AgentOutput* out);
+  // A5 65 now; A5 90 and A5 92 from Tick, lidar_request_spacing apart;
+  // then A5 60 if the motor is on.
+  void BeginLidarStartup(Time now, AgentOutput* out);
+  void TickLidar(Time now, AgentOutput* out);
   void UpdateRamp(Time now);
   void UpdateWatchdogArming();
   bool MotionCommanded() const;
@@ -367,7 +384,12 @@ class AgentCore {
   // Devices.
   bool started_ = false;
   Time start_time_;
+  Time lidar_startup_at_;
   int lidar_requests_sent_ = 0;  // Start-up requests: 0, 1 (A5 90 sent), 2 (A5 92 sent).
+  bool lidar_scan_after_startup_ = false;  // A5 60 after the requests (a port that reopened).
+  // Start()'s A5 65 is still in the caller's output: a port opened before
+  // the caller's next Tick (RobotAgent opens them right after Start) gets it.
+  bool lidar_startup_in_output_ = false;
   bool lidar_motor_on_ = false;
   Time lidar_motor_on_since_;
   std::array<bool, 3> have_device_bytes_{};

@@ -534,6 +534,8 @@ void RobotAgent::OnSimStep() {
 
 void RobotAgent::Dispatch(AgentOutput* out) {
   if (out->empty()) return;
+  for (const std::string& line : out->log) emit logMessage(QString::fromStdString(line));
+  out->log.clear();
   if (out->lidar_dtr.has_value()) {
     // The X4's motor, before the lidar's bytes (A5 60 wants it spinning).
     // On a pseudo-terminal (sweepscan-sim --device-ptys) the ioctl fails

@@ -116,6 +116,9 @@ std::string LinkHealth::ToString() const {
       << reconnect_attempts << " attempts: " << outage_reason.toStdString() << ")"
       << "; resent " << late_chunks << " chunks " << late_bytes << " B, breaks " << breaks
       << ", clock epoch " << clock_epoch;
+    for (int i = 0; i < 3; ++i) {
+      if (data_lost_s[i] > 0.0) s << "; " << kNames[i] << " data lost " << data_lost_s[i] << " s";
+    }
   }
   return s.str();
 }
@@ -303,11 +306,15 @@ void RobotConnection::Decode(const uint8_t* data, size_t n) {
     TrackAgentFrame(message);
     if (std::holds_alternative<Telemetry>(message.payload)) {
       const auto& telemetry = std::get<Telemetry>(message.payload);
+      bool had_bytes = false;  // of this device, before this chunk
+      Time last_bytes_at{};
       if (telemetry.device >= 1 && telemetry.device <= 3) {
         ++health_.devices[telemetry.device - 1].frames;
         health_.devices[telemetry.device - 1].bytes += telemetry.bytes.size();
         // What we hold of this device, for a TelemetryResume after an outage.
         TelemetryResumePosition& pos = positions_[telemetry.device - 1];
+        had_bytes = pos.have;
+        last_bytes_at = pos.after_time;
         const auto n = static_cast<uint32_t>(telemetry.bytes.size());
         if (!pos.have || telemetry.receive_time > pos.after_time) {
           pos = {true, telemetry.receive_time, n};
@@ -323,6 +330,12 @@ void RobotConnection::Decode(const uint8_t* data, size_t n) {
       // client's first chunks when no resume joins them) loses nothing.
       if ((telemetry.flags & kTelemetryBreak) && health_.devices[telemetry.device - 1].frames > 1) {
         ++health_.breaks;
+        // As the session's decoder counts it (TelemetryDecoder), live.
+        if (had_bytes) {
+          const double lost = std::max(0.0, ToSeconds(telemetry.receive_time - last_bytes_at));
+          health_.data_lost_s[telemetry.device - 1] += lost;
+          emit dataLost(telemetry.device, lost);
+        }
       }
       if (options_.decode_telemetry) {
         decoder_.AddTelemetry(telemetry);

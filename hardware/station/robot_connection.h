@@ -139,6 +139,12 @@ struct LinkHealth {
   uint64_t late_chunks = 0;
   uint64_t late_bytes = 0;
   uint64_t breaks = 0;
+  // Per device (lidar, IMU, motor board): seconds of its data lost in
+  // outages, between its last bytes before a break and the first after (the
+  // robot's clock; a break across a robot reboot counts no seconds). What
+  // `info` lists per gap as data_lost_s, known here as the first bytes after
+  // each outage arrive.
+  std::array<double, 3> data_lost_s{};
   uint32_t clock_epoch = 0;     // Robot clock epochs seen (reboots) since Start().
   ClockTie clock_tie;           // Workstation - robot, now.
 
@@ -201,6 +207,10 @@ class RobotConnection : public QObject {
   // was resent, lost, and how the clock tie moved (for the status bar / log).
   void linkRestored(double outage_s, const QString& details);
   void statusReceived();  // health().agent_status updated.
+  // After an outage, `device`'s (1..3, LinkDevice) first bytes say that
+  // `seconds` of its data before them were lost (the agent's buffer did not
+  // reach back that far); health().data_lost_s holds the sums.
+  void dataLost(int device, double seconds);
   // Writing the session failed (disk full, a pulled drive, a file size
   // limit): nothing more is recorded. Once per recording; StopRecording()
   // returns the same error.

@@ -19,6 +19,7 @@
 
 #include "core/common/time.h"
 #include "hardware/link/telemetry_decoder.h"
+#include "hardware/station/robot_connection.h"
 #include "tests/testing/fault_proxy.h"
 #include "tests/testing/qt_wait.h"
 
@@ -150,13 +151,16 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
         return record.state() == QProcess::NotRunning;
       },
       30000));
-  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  // The path was not driven as asked: exit 1, the session kept.
+  ASSERT_EQ(record.exitCode(), 1) << err.toStdString();
   EXPECT_TRUE(err.contains("link lost at")) << err.toStdString();
-  EXPECT_TRUE(err.contains("drive script stopped by the outage")) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script aborted at")) << err.toStdString();
+  EXPECT_TRUE(err.contains("the link was lost")) << err.toStdString();
   EXPECT_TRUE(err.contains("reconnected after")) << err.toStdString();
   const QByteArray out = record.readAllStandardOutput();
   const QJsonObject summary = QJsonDocument::fromJson(out).object();
   ASSERT_EQ(summary["outages_s"].toArray().size(), 1) << out.toStdString() << err.toStdString();
+  EXPECT_TRUE(summary["drive_script"].toObject()["aborted"].toBool()) << out.toStdString();
   EXPECT_NEAR(summary["outages_s"].toArray()[0].toDouble(), 3.0, 1.5);
 
   QProcess info;
@@ -173,6 +177,159 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
   EXPECT_FALSE(gap["new_clock_epoch"].toBool());
   // The robot stopped at the cut and did not move again: the wheels' last
   // records (after the reconnection) are at rest.
+  SensorLog log;
+  RecordedSeconds(session, &log);
+  ASSERT_FALSE(log.wheels.empty());
+  EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
+}
+
+// An outage longer than the robot's buffer (robotd --buffer-s 1, 4.5 s
+// cut): the recorder says, as each device's first bytes after it arrive, how
+// many seconds of its data were lost, and its summary sums them per device,
+// as `info` lists them for the session's gap. It said "0 frames lost in
+// transit" and nothing of the seconds lost.
+TEST_F(CliRecordTest, DataLostBeyondTheRobotsBufferIsSaidAndSummed) {
+  QProcess sim;
+  sim.start(QStringLiteral(SWEEPSCAN_SIM), {"--scenario", kScenario, "--listen", "127.0.0.1:0",
+                                            "--key-file", key_, "--buffer-s", "1"});
+  QByteArray listening;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        listening += sim.readAllStandardOutput();
+        return listening.contains('\n');
+      },
+      10000));
+  ASSERT_TRUE(listening.startsWith("listening on 127.0.0.1:")) << listening.toStdString();
+  sweepscan::testing::FaultProxy proxy(listening.mid(23).trimmed().toUShort());
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("lossy.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()),
+                "--key-file", key_, "--out", session, "--duration", "12", "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(2000);
+  proxy.CutFor(4500, sweepscan::testing::FaultProxy::RefuseMode::kClosed);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      40000));
+  sim.terminate();
+  sim.waitForFinished(5000);
+  ASSERT_EQ(record.exitCode(), 0) << err.toStdString();
+  EXPECT_TRUE(err.contains("imu: ")) << err.toStdString();
+  EXPECT_TRUE(err.contains("s of data lost in the outage")) << err.toStdString();
+  const QByteArray out = record.readAllStandardOutput();
+  const QJsonObject summary = QJsonDocument::fromJson(out).object();
+  const QJsonObject lost = summary["data_lost_s"].toObject();
+  ASSERT_EQ(summary["outages_s"].toArray().size(), 1) << out.toStdString() << err.toStdString();
+  const double outage_s = summary["outages_s"].toArray()[0].toDouble();
+
+  QProcess info;
+  info.start(QStringLiteral(SWEEPSCAN_CLI), {"info", session, "--json"});
+  ASSERT_TRUE(info.waitForFinished(30000));
+  ASSERT_EQ(info.exitCode(), 0) << info.readAllStandardError().toStdString();
+  const QJsonArray gaps =
+      QJsonDocument::fromJson(info.readAllStandardOutput()).object()["gaps"].toArray();
+  ASSERT_EQ(gaps.size(), 1);
+  const QJsonObject in_session = gaps[0].toObject()["data_lost_s"].toObject();
+  for (const char* device : {"lidar", "imu", "motor_board"}) {
+    // Beyond the second the buffer kept, at most the outage (and a chunk's span).
+    EXPECT_GT(lost[device].toDouble(), 1.0) << device << " " << out.toStdString();
+    EXPECT_LT(lost[device].toDouble(), outage_s + 0.5) << device << " " << out.toStdString();
+    EXPECT_NEAR(lost[device].toDouble(), in_session[device].toDouble(), 0.01) << device;
+  }
+}
+
+// The wheels' speeds after the robot first came to rest from driving (the
+// watchdog's stop): the largest, which is 0 when it stayed stopped.
+double FastestAfterTheFirstStop(const SensorLog& log) {
+  auto speed = [](const WheelSpeedMeasurement& w) { return std::abs(w.left_mps) + std::abs(w.right_mps); };
+  size_t i = 0;
+  while (i < log.wheels.size() && speed(log.wheels[i]) < 0.05) ++i;  // Until it drives.
+  while (i < log.wheels.size() && speed(log.wheels[i]) > 1e-3) ++i;  // Until it stands.
+  EXPECT_LT(i, log.wheels.size()) << "the robot never drove and stopped";
+  double fastest = 0.0;
+  for (; i < log.wheels.size(); ++i) fastest = std::max(fastest, speed(log.wheels[i]));
+  return fastest;
+}
+
+// The recorder frozen (SIGSTOP, as a laptop's suspend or a debugger) for
+// 2 s mid-script: the robot's watchdog stops the robot after 0.5 s, and the
+// script must not drive it again. It did: 20 ms after SIGCONT the recorder
+// sent the segment the wall clock had reached and the robot drove on, with
+// no word said. Now the script is aborted with the reason, the recording
+// goes on to its --duration, exit 1, and the robot stays stopped.
+TEST_F(CliRecordTest, AFrozenRecorderAbortsItsDriveScriptAndTheRobotStaysStopped) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+  f.close();
+  const QString session = dir_.filePath("frozen.sweepscan");
+  QProcess record;
+  StartRecord(&record, session, {"--duration", "7", "--drive-script", script, "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(1500);
+  const auto pid = static_cast<pid_t>(record.processId());
+  ::kill(pid, SIGSTOP);
+  sweepscan::testing::Pump(2000);
+  ::kill(pid, SIGCONT);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      30000));
+  EXPECT_EQ(record.exitCode(), 1) << err.toStdString();
+  EXPECT_TRUE(err.contains("drive script aborted at")) << err.toStdString();
+  EXPECT_TRUE(err.contains("did not run for")) << err.toStdString();
+  const QJsonObject summary = QJsonDocument::fromJson(record.readAllStandardOutput()).object();
+  const QJsonObject drive = summary["drive_script"].toObject();
+  EXPECT_TRUE(drive["aborted"].toBool());
+  EXPECT_FALSE(drive["completed"].toBool());
+  EXPECT_TRUE(drive["reason"].toString().contains("did not run for")) << drive["reason"].toString().toStdString();
+  EXPECT_EQ(summary["stopped_by"].toString(), "duration") << "the recording went on";
+  SensorLog log;
+  EXPECT_NEAR(RecordedSeconds(session, &log), 7.0, 1.0);
+  EXPECT_LT(FastestAfterTheFirstStop(log), 0.01);
+}
+
+// A stall on the way (1 s: the link survives, under the 2 s stall limit)
+// trips the robot's watchdog; the held frames then arrive, a Drive among
+// them. The recorder's loop never stood still, but the robot reports the
+// trip in its Status, and the script is aborted for it.
+TEST_F(CliRecordTest, AWatchdogTripTheRobotReportsAbortsTheDriveScript) {
+  const QString script = dir_.filePath("drive.json");
+  QFile f(script);
+  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
+  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+  f.close();
+  const quint16 agent_port = address_.section(':', -1).toUShort();
+  sweepscan::testing::FaultProxy proxy(agent_port);
+  ASSERT_TRUE(proxy.isListening());
+  const QString session = dir_.filePath("tripped.sweepscan");
+  QProcess record;
+  record.start(QStringLiteral(SWEEPSCAN_CLI),
+               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()), "--key-file",
+                key_, "--out", session, "--duration", "6", "--drive-script", script, "--json"});
+  QByteArray err;
+  ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
+  sweepscan::testing::Pump(1500);
+  proxy.Stall(1000);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        err += record.readAllStandardError();
+        return record.state() == QProcess::NotRunning;
+      },
+      30000));
+  EXPECT_EQ(record.exitCode(), 1) << err.toStdString();
+  EXPECT_FALSE(err.contains("link lost")) << err.toStdString();
+  EXPECT_TRUE(err.contains("watchdog stopped it")) << err.toStdString();
   SensorLog log;
   RecordedSeconds(session, &log);
   ASSERT_FALSE(log.wheels.empty());
@@ -291,6 +448,32 @@ TEST_F(CliRecordTest, BadOptionsAreRefusedBeforeConnecting) {
     EXPECT_NE(err.find(c.says), std::string::npos) << c.args.join(' ').toStdString() << ": " << err;
   }
   EXPECT_FALSE(QFileInfo::exists(out));
+}
+
+// The X4 spun on after the recorder left: it never sent LidarMotor off,
+// assuming the agent stopped it. Now a clean end turns it off (the agent's
+// state, read by a client that sends nothing), unless --keep-lidar.
+TEST_F(CliRecordTest, TheRecordersCleanEndTurnsTheLidarOffUnlessToldToKeepIt) {
+  for (const bool keep : {false, true}) {
+    SCOPED_TRACE(keep ? "--keep-lidar" : "default");
+    QProcess record;
+    StartRecord(&record, dir_.filePath(keep ? "keep.sweepscan" : "off.sweepscan"),
+                keep ? QStringList{"--duration", "2", "--keep-lidar"} : QStringList{"--duration", "2"});
+    ASSERT_TRUE(record.waitForFinished(20000));
+    ASSERT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+    hardware::RobotConnectionOptions options;
+    options.address = "tcp:" + address_;
+    QFile key(key_);
+    ASSERT_TRUE(key.open(QIODevice::ReadOnly));
+    const QByteArray bytes = key.readAll();
+    options.key.assign(bytes.begin(), bytes.end());
+    hardware::RobotConnection look(options);
+    QString error;
+    ASSERT_TRUE(look.Start(&error)) << error.toStdString();
+    ASSERT_TRUE(WaitFor([&] { return look.health().have_status; }, 10000));
+    EXPECT_EQ(look.health().agent_status.lidar_motor_on, keep);
+    look.Shutdown();
+  }
 }
 
 // The link on a serial port: sweepscan-sim --pty offers a pseudo-terminal,

@@ -26,6 +26,7 @@
 #include <QThread>
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -36,6 +37,7 @@
 #include "core/io/ros/import.h"
 #include "core/sim/world.h"
 #include "hardware/station/direct_device.h"
+#include "hardware/station/drive_script.h"
 #include "hardware/station/recording.h"
 #include "hardware/station/replay_source.h"
 #include "hardware/station/robot_connection.h"
@@ -113,6 +115,8 @@ class Workspace : public QObject {
   Twist2d commanded() const { return commanded_; }
   // Scripted drive: the segments' (v, w) sent as drive commands at 10 Hz,
   // exactly what the keyboard sends. CirclePath is the calibration drive.
+  // Aborted, with a message, when the robot stops on its own (a watchdog
+  // trip, this process frozen or the computer asleep: hardware/station/drive_script.h).
   void StartScriptedDrive(const std::vector<sim::DriveSegment>& path);
   void AbortScriptedDrive();
   bool scripted_drive_running() const { return script_timer_ != nullptr; }
@@ -413,8 +417,7 @@ class Workspace : public QObject {
   SessionMeta live_meta_;
 
   QTimer* script_timer_ = nullptr;
-  std::vector<sim::DriveSegment> script_;
-  QElapsedTimer script_clock_;
+  std::optional<hardware::DriveScript> script_;
 
   bool recording_ = false;
   bool unsaved_ = false;

@@ -152,11 +152,18 @@ std::vector<sim::DriveSegment> Workspace::CirclePath(double radius_m, double spe
 void Workspace::StartScriptedDrive(const std::vector<sim::DriveSegment>& path) {
   AbortScriptedDrive();
   if (path.empty()) return;
-  script_ = path;
+  // The app's script ticks on the GUI thread, and a GUI hiccup does not
+  // stop the robot: the I/O thread keeps its link fed. Only a stall long
+  // enough to be the whole process (a suspend, SIGSTOP) aborts on the
+  // clocks; a shorter freeze of the whole process trips the robot's
+  // watchdog, whose report aborts the script at the next Status.
+  hardware::DriveScriptOptions options;
+  options.max_loop_gap_ns = 2'000'000'000;
+  script_.emplace(path, options);
   script_timer_ = new QTimer(this);
   script_timer_->setTimerType(Qt::PreciseTimer);
   connect(script_timer_, &QTimer::timeout, this, &Workspace::OnScriptTick);
-  script_clock_.start();
+  script_->Start(hardware::ScriptClocks::Now());
   script_timer_->start(kScriptTickMs);
   OnScriptTick();
 }
@@ -170,16 +177,24 @@ void Workspace::AbortScriptedDrive() {
 }
 
 void Workspace::OnScriptTick() {
-  double t = script_clock_.elapsed() * 1e-3;
-  for (const sim::DriveSegment& s : script_) {
-    if (t < s.duration_s) {
-      Drive(s.v, s.w);
-      return;
-    }
-    t -= s.duration_s;
+  // health_ is the I/O thread's copy of at most kHealthMs ago; a freeze of
+  // the whole process is caught by the script's own clocks first.
+  const hardware::DriveScript::Step step = script_->Tick(
+      hardware::ScriptClocks::Now(), health_.have_status ? &health_.agent_status : nullptr);
+  if (step.action == hardware::DriveScript::Action::kDrive) {
+    Drive(step.v, step.w);
+    return;
   }
+  const double at_s = script_->elapsed_s();
   AbortScriptedDrive();
-  emit message(QStringLiteral("Scripted drive finished."));
+  if (step.action == hardware::DriveScript::Action::kDone) {
+    emit message(QStringLiteral("Scripted drive finished."));
+  } else {
+    emit message(QStringLiteral("Scripted drive aborted at %1 s: %2. The robot stays stopped "
+                                "until you drive it.")
+                     .arg(at_s, 0, 'f', 1)
+                     .arg(QString::fromStdString(step.reason)));
+  }
 }
 
 

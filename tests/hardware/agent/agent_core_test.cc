@@ -385,33 +385,115 @@ TEST_F(AuthenticatedAgentTest, LidarStartUpRequestsAndMotorCommands) {
 // port and LidarMotor off stopped the scan only. Now: off at start, on
 // with LidarMotor on (before A5 60, RobotAgent sets it first), off with
 // LidarMotor off, and the state in force again whenever the lidar's port
-// (re)opens, with A5 60 again for an X4 plugged back in while on.
+// (re)opens, with the start-up sequence and A5 60 after it for an X4
+// plugged back in while on.
 TEST_F(AuthenticatedAgentTest, LidarMotorSwitchesTheAdaptersDtrLine) {
   RunWithHeartbeats(Ms(0), Ms(300));
   EXPECT_EQ(h_.lidar_dtr, std::vector<bool>{false}) << "the motor off at start";
   h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(300), &h_.out);
   h_.Collect();
   EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{false, false})) << "and when its port opens";
+  RunWithHeartbeats(Ms(310), Ms(600));
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65, 0xA5, 0x90, 0xA5, 0x92, 0xA5, 0x65,
+                                                  0xA5, 0x90, 0xA5, 0x92}))
+      << "the start-up sequence again, no scan with the motor off";
   h_.lidar_bytes.clear();
   h_.lidar_dtr.clear();
-  h_.Send(Ms(310), LidarMotor{true});
+  h_.Send(Ms(610), LidarMotor{true});
   EXPECT_EQ(h_.lidar_dtr, std::vector<bool>{true});
   EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
-  // Unplugged and plugged in again while on: DTR raised, scanning again.
+  // Unplugged and plugged in again while on: DTR raised, the start-up
+  // sequence, then scanning again.
   h_.lidar_bytes.clear();
-  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(315), &h_.out);
+  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(615), &h_.out);
   h_.Collect();
   EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{true, true}));
-  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
+  RunWithHeartbeats(Ms(620), Ms(1000));
+  EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65, 0xA5, 0x90, 0xA5, 0x92, 0xA5, 0x60}));
   h_.lidar_bytes.clear();
-  h_.Send(Ms(320), LidarMotor{false});
+  h_.Send(Ms(1010), LidarMotor{false});
   EXPECT_EQ(h_.lidar_dtr, (std::vector<bool>{true, true, false}));
   EXPECT_EQ(h_.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65}));
-  h_.lidar_bytes.clear();
-  h_.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(330), &h_.out);
-  h_.Collect();
-  EXPECT_EQ(h_.lidar_dtr.back(), false);
-  EXPECT_TRUE(h_.lidar_bytes.empty()) << "no scan for a port opened with the motor off";
+}
+
+// An X4 plugged in after the agent started got nothing: the start-up
+// sequence was sent once, timed from the start, to a port not yet open.
+// Now a port that opens later gets stop, device info and health, spaced as
+// at the start (the sequence Start() queued is not sent twice to a port
+// opened with it).
+TEST(AgentCoreTest, ALidarPortOpenedLateGetsTheStartUpSequence) {
+  AgentHarness h(TestOptions());
+  h.Start(Ms(0));
+  h.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(0), &h.out);  // Opened with the start.
+  h.Collect();
+  h.TickRange(Ms(10), Ms(500));
+  const std::vector<uint8_t> startup = {0xA5, 0x65, 0xA5, 0x90, 0xA5, 0x92};
+  EXPECT_EQ(h.lidar_bytes, startup);
+  h.lidar_bytes.clear();
+  h.agent.OnDevicePortOpened(LinkDevice::kLidar, Ms(4000), &h.out);  // Plugged in later.
+  h.Collect();
+  EXPECT_EQ(h.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65})) << "stop at once";
+  h.TickRange(Ms(4010), Ms(4090));
+  EXPECT_EQ(h.lidar_bytes.size(), 2u) << "device info 100 ms later, not before";
+  h.TickRange(Ms(4100), Ms(4500));
+  EXPECT_EQ(h.lidar_bytes, startup);
+}
+
+// The X4 spun on after the workstation left, for as long as robotd ran. Now
+// its motor goes off once no client has said anything for lidar_idle_off,
+// and a client's LidarMotor turns it on again; a talking client keeps it.
+TEST(AgentCoreTest, TheLidarMotorGoesOffWhenNoClientHasSpokenForTheIdleTime) {
+  AgentOptions options = TestOptions();
+  options.lidar_idle_off = std::chrono::seconds(30);
+  AgentHarness h(options);
+  h.Start(Ms(0));
+  h.Connect(Ms(0));
+  h.Authenticate(Ms(0), options.key);
+  h.Send(Ms(1000), LidarMotor{true});
+  for (int t = 1100; t <= 40000; t += 100) {  // A client heartbeating: on all along.
+    h.Send(Ms(t), Heartbeat{});
+    h.Tick(Ms(t));
+  }
+  EXPECT_TRUE(h.agent.status(Ms(40000)).lidar_motor_on);
+  h.agent.OnClientDisconnected(Ms(40000), &h.out);
+  h.Collect();
+  h.lidar_bytes.clear();
+  h.lidar_dtr.clear();
+  h.TickRange(Ms(40010), Ms(69990), milliseconds(20));
+  EXPECT_TRUE(h.agent.status(Ms(69990)).lidar_motor_on) << "within the idle time";
+  EXPECT_TRUE(h.lidar_dtr.empty());
+  h.TickRange(Ms(70000), Ms(70100));
+  EXPECT_FALSE(h.agent.status(Ms(70100)).lidar_motor_on) << "30 s after the client's last frame";
+  EXPECT_EQ(h.lidar_dtr, std::vector<bool>{false});
+  EXPECT_EQ(h.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x65}));
+  EXPECT_EQ(h.agent.counters().lidar_idle_stops, 1u);
+  h.TickRange(Ms(70200), Ms(100000), milliseconds(100));
+  EXPECT_EQ(h.agent.counters().lidar_idle_stops, 1u) << "said once";
+  // The next workstation asks for it at its authentication, as the app and
+  // `record` do: on again.
+  h.Connect(Ms(100000));
+  h.client = LinkEncoder(LinkSender::kClient);
+  h.Authenticate(Ms(100000), options.key);
+  h.lidar_dtr.clear();
+  h.lidar_bytes.clear();
+  h.Send(Ms(100010), LidarMotor{true});
+  EXPECT_EQ(h.lidar_dtr, std::vector<bool>{true});
+  EXPECT_EQ(h.lidar_bytes, (std::vector<uint8_t>{0xA5, 0x60}));
+  EXPECT_TRUE(h.agent.status(Ms(100010)).lidar_motor_on);
+}
+
+TEST(AgentCoreTest, TheLidarIdleTimeMustOutlastTheResumeWindow) {
+  AgentOptions options = TestOptions();
+  options.telemetry_buffer = std::chrono::seconds(10);
+  options.resume_wait = std::chrono::seconds(5);
+  options.lidar_idle_off = std::chrono::seconds(14);
+  std::string error;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("lidar idle"), std::string::npos) << error;
+  options.lidar_idle_off = std::chrono::seconds(15);
+  EXPECT_TRUE(options.IsValid(&error)) << error;
+  options.lidar_idle_off = Duration::zero();  // Never.
+  EXPECT_TRUE(options.IsValid(&error)) << error;
 }
 
 TEST(AgentCoreTest, SerialLinkWithoutAuthRepeatsHelloAndAcceptsCommands) {

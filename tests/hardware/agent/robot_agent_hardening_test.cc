@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "hardware/agent/robot_agent.h"
+#include "hardware/codecs/motor_board_codec.h"
 #include "hardware/link/hmac_sha256.h"
 #include "hardware/link/qt_transport.h"
 #include "hardware/station/robot_connection.h"
@@ -582,6 +583,50 @@ TEST(RobotdConfigFileTest, BadValuesFromTheFileNameTheSettingAndItsLine) {
                     "127.0.0.1:0", "--key-file", QString::fromStdString(key)},
                    "listening on", &code);
   EXPECT_EQ(code, 0) << out;
+}
+
+// `--config FILE --stop-motors` (the service's ExecStopPost) did nothing
+// when the file had an unknown or a repeated key: exit 2, the motor port
+// never opened, the board left driving after a crash. It reads the file
+// leniently now: the motor port is found, the file's mistakes are warnings,
+// and the board (a pseudo-terminal here) gets zero commands. Only a motor
+// port that cannot be found or opened fails it.
+TEST(RobotdConfigFileTest, StopMotorsStopsTheBoardWhateverElseTheFileGetsWrong) {
+  LinkPty board;
+  ASSERT_GE(board.master, 0);
+  const std::string conf = WriteConfig(
+      "broken.conf", "lidar = /nonexistent/lidar\nmotor = /nonexistent/motor\n"
+                     "wheel-base = 0.3\nwatchdog-ms = 500\nwatchdog-ms = 400\nnot a setting\n"
+                     "motor = " + board.slave + "\n");
+  ProcessRun r = RunRobotd({"--config", conf});
+  EXPECT_EQ(r.code, 2) << "the agent itself still refuses the file: " << r.err;
+  r = RunRobotd({"--config", conf, "--stop-motors"});
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(conf + ":3: unknown key 'wheel-base'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(conf + ":5: 'watchdog-ms' is set twice"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(conf + ":7: 'motor' is set twice; the last one is used"), std::string::npos)
+      << r.err;
+  std::string bytes;
+  WaitFor(
+      [&] {
+        ReadAvailable(board.master, &bytes);
+        return bytes.size() >= 11;
+      },
+      3000);
+  MotorCommandDecoder decoder;
+  decoder.Feed(std::vector<uint8_t>(bytes.begin(), bytes.end()), Time());
+  const std::vector<MotorCommand> commands = decoder.TakeRecords();
+  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << bytes.size() << " bytes)";
+  for (const MotorCommand& c : commands) {
+    EXPECT_EQ(c.vx_mps, 0.0);
+    EXPECT_EQ(c.wz_radps, 0.0);
+  }
+  // No motor port to be opened: that is a failure, said as such.
+  const std::string lost =
+      WriteConfig("lost.conf", "wheel-base = 0.3\nmotor = /nonexistent/motor\n");
+  r = RunRobotd({"--config", lost, "--stop-motors"});
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("/nonexistent/motor"), std::string::npos) << r.err;
 }
 
 }  // namespace

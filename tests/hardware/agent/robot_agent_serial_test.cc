@@ -247,6 +247,46 @@ TEST(RobotAgentLidarMotorTest, LidarMotorSwitchesDtrBeforeTheScanCommand) {
   agent.Shutdown();
 }
 
+// An X4 plugged in after the agent started (or plugged in again) got no
+// start-up sequence: it was sent once, timed from the agent's start, to a
+// port that was not open. The lidar is a name (as udev gives one) that
+// appears 0.5 s after the start, pointing at a pseudo-terminal; what the
+// agent writes to it is read at the other end.
+TEST(RobotAgentLidarMotorTest, ALidarPluggedInAfterTheStartGetsTheStartUpSequence) {
+  char dir_template[] = "/tmp/sweepscan-lidar-XXXXXX";
+  ASSERT_NE(::mkdtemp(dir_template), nullptr);
+  const std::string link = std::string(dir_template) + "/lidar";
+  RobotAgentConfig config;
+  config.link = RobotAgentConfig::LinkKind::kPty;
+  config.agent.require_auth = false;
+  config.agent.name = "late lidar test agent";
+  config.lidar_port = QString::fromStdString(link);
+  config.device_reopen_ms = 100;
+  RobotAgent agent(config);
+  QString error;
+  ASSERT_TRUE(agent.Start(&error)) << error.toStdString();
+  Pump(500);  // The start's requests have gone to no port.
+  int master = -1, slave = -1;
+  char name[128];
+  termios raw{};
+  ::cfmakeraw(&raw);
+  ASSERT_EQ(::openpty(&master, &slave, name, &raw, nullptr), 0);
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  ASSERT_EQ(::symlink(name, link.c_str()), 0);
+  std::string bytes;
+  WaitFor([&] {
+    ReadAvailable(master, &bytes);
+    return bytes.size() >= 6;
+  }, 3000);
+  EXPECT_EQ(bytes, std::string("\xA5\x65\xA5\x90\xA5\x92", 6))
+      << "stop, device info, health; got " << bytes.size() << " bytes";
+  agent.Shutdown();
+  ::close(slave);
+  ::close(master);
+  ::unlink(link.c_str());
+  ::rmdir(dir_template);
+}
+
 }  // namespace
 }  // namespace hardware
 }  // namespace sweepscan
