@@ -167,7 +167,15 @@ void MainWindow::BuildEditMenu() {
   QAction* undo = undo_->group()->createUndoAction(this, tr("&Undo"));
   undo->setShortcut(QKeySequence::Undo);
   QAction* redo = undo_->group()->createRedoAction(this, tr("&Redo"));
-  redo->setShortcuts({QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence::Redo});
+  // Ctrl+Shift+Z and Ctrl+Y, with the platform's own once: X11's Redo is
+  // Ctrl+Shift+Z, and the same key twice on one action is an ambiguous
+  // shortcut that Qt refuses ("Ambiguous shortcut overload"): no key redid.
+  QList<QKeySequence> keys = {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z),
+                              QKeySequence(Qt::CTRL | Qt::Key_Y)};
+  for (const QKeySequence& k : QKeySequence::keyBindings(QKeySequence::Redo)) {
+    if (!keys.contains(k)) keys << k;
+  }
+  redo->setShortcuts(keys);
   edit->addAction(undo);
   edit->addAction(redo);
 }

@@ -223,6 +223,32 @@ TEST_F(AppTest, FloorPlanComesToTheFrontAndHidingItGivesTheWidthBack) {
   EXPECT_EQ(save_as->shortcut(), QKeySequence(QStringLiteral("Ctrl+Shift+S")));
 }
 
+// Edit > Redo from the keyboard: Ctrl+Shift+Z and Ctrl+Y. It had the same
+// key twice (X11's QKeySequence::Redo is Ctrl+Shift+Z), which Qt refuses as
+// ambiguous: no key redid anything.
+TEST_F(AppTest, RedoWorksFromTheKeyboard) {
+  // Window shortcuts need the window active, which no window manager makes it here.
+  QApplication::setActiveWindow(window_.get());
+  ASSERT_TRUE(WaitFor([&] { return QApplication::activeWindow() == window_.get(); }, 2000));
+  const double before = window_->view()->point_size();
+  QAction* larger = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == QStringLiteral("Larger Points")) larger = a;
+  }
+  ASSERT_NE(larger, nullptr);
+  larger->trigger();
+  ASSERT_EQ(window_->view()->point_size(), before + 1);
+  for (const QKeySequence& redo :
+       {QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), QKeySequence(Qt::CTRL | Qt::Key_Y)}) {
+    QTest::keySequence(window_.get(), QKeySequence(Qt::CTRL | Qt::Key_Z));
+    ASSERT_TRUE(WaitFor([&] { return window_->view()->point_size() == before; }, 1000))
+        << "Ctrl+Z did not undo";
+    QTest::keySequence(window_.get(), redo);
+    EXPECT_TRUE(WaitFor([&] { return window_->view()->point_size() == before + 1; }, 1000))
+        << redo.toString().toStdString() << " did not redo";
+  }
+}
+
 // View > Panels > Reset Layout puts the docks back where a first start
 // does: a plan left open and wide, a panel closed and another floated, as
 // the window was saved, no longer squeeze the 3D view at the next start.
