@@ -14,6 +14,7 @@
 #include <QMessageBox>
 #include <QPushButton>
 #include <QSettings>
+#include <QStatusBar>
 #include <QTemporaryDir>
 #include <QTest>
 #include <QTimer>
@@ -22,6 +23,8 @@
 #include "core/cloud/cloud_io.h"
 #include "tests/ui/app_fixture.h"
 #include "ui/main_window.h"
+#include "ui/project/project_controller.h"
+#include "ui/project/project_layer.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/workspace.h"
 
@@ -253,6 +256,24 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
 
   // The app still works: the simulator connects and streams.
   ConnectToSimulator();
+}
+
+// A session opened beside an open project is drawn in its own frame, the
+// project's sessions in the anchor's: the same room can show twice, apart,
+// and the status bar says why (it was left for the operator to puzzle over).
+TEST_F(AppTest, ASessionOpenedBesideAProjectSaysItIsInItsOwnFrame) {
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  const QString session = tmp_.path() + "/lab.sweepscan";
+  const QString file = tmp_.path() + "/lab.sweepscan-project";
+  const auto made = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " project new " +
+                                        file.toStdString() + " " + session.toStdString());
+  ASSERT_EQ(made.code, 0) << made.out;
+  ASSERT_TRUE(window_->project()->OpenProject(file)) << window_->last_error().toStdString();
+  ASSERT_TRUE(WaitFor([&] { return window_->project()->layer()->shown_points() > 0; }, 60000));
+  OpenAndReplay(session);
+  EXPECT_TRUE(window_->statusBar()->currentMessage().contains(
+      "lab.sweepscan is drawn in its own frame beside the open project"))
+      << window_->statusBar()->currentMessage().toStdString();
 }
 
 TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
