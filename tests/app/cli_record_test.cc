@@ -35,17 +35,22 @@ class CliRecordTest : public ::testing::Test {
   void SetUp() override {
     ASSERT_TRUE(dir_.isValid());
     key_ = WriteKey("robot.key", "the simulated robot's key, long enough");
-    sim_.start(QStringLiteral(SWEEPSCAN_SIM),
-               {"--scenario", kScenario, "--listen", "127.0.0.1:0", "--key-file", key_});
+    ASSERT_NO_FATAL_FAILURE(StartSim(&sim_, {}, &address_));
+  }
+  // The simulated robot on loopback with this fixture's key: *address is
+  // "127.0.0.1:PORT".
+  void StartSim(QProcess* sim, const QStringList& extra, QString* address) {
+    sim->start(QStringLiteral(SWEEPSCAN_SIM),
+               QStringList{"--scenario", kScenario, "--listen", "127.0.0.1:0", "--key-file", key_} + extra);
     QByteArray out;
     ASSERT_TRUE(WaitFor(
         [&] {
-          out += sim_.readAllStandardOutput();
+          out += sim->readAllStandardOutput();
           return out.contains('\n');
         },
         10000));
     ASSERT_TRUE(out.startsWith("listening on 127.0.0.1:")) << out.toStdString();
-    address_ = QString::fromUtf8(out.mid(13).trimmed());
+    *address = QString::fromUtf8(out.mid(13).trimmed());
   }
   void TearDown() override {
     sim_.terminate();
@@ -59,6 +64,22 @@ class CliRecordTest : public ::testing::Test {
     f.close();
     f.setPermissions(QFile::ReadOwner | QFile::WriteOwner);
     return path;
+  }
+  // 30 s straight on at 0.1 m/s: a drive script still running when a
+  // test's fault comes.
+  QString WriteSlowStraightScript() {
+    const QString script = dir_.filePath("drive.json");
+    QFile f(script);
+    EXPECT_TRUE(f.open(QIODevice::WriteOnly));
+    f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
+    return script;
+  }
+  // `record` through a FaultProxy (or any relay) on this port.
+  void StartRecordVia(QProcess* p, quint16 port, const QString& out, const QStringList& extra) {
+    p->start(QStringLiteral(SWEEPSCAN_CLI),
+             QStringList{"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(port),
+                         "--key-file", key_, "--out", out} +
+                 extra);
   }
   void StartRecord(QProcess* p, const QString& out, const QStringList& extra = {}) {
     p->start(QStringLiteral(SWEEPSCAN_CLI),
@@ -128,19 +149,13 @@ TEST_F(CliRecordTest, DrivesAScriptHeadlessAndTheSessionHoldsTheDrive) {
 // stopped), the session is one folder whose `info --json` lists the gap, and
 // the robot's buffer filled it: no lidar data lost.
 TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothingLost) {
-  const QString script = dir_.filePath("drive.json");
-  QFile f(script);
-  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
-  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
-  f.close();
+  const QString script = WriteSlowStraightScript();
   const quint16 agent_port = address_.section(':', -1).toUShort();
   sweepscan::testing::FaultProxy proxy(agent_port);
   ASSERT_TRUE(proxy.isListening());
   const QString session = dir_.filePath("flaky.sweepscan");
   QProcess record;
-  record.start(QStringLiteral(SWEEPSCAN_CLI),
-               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()), "--key-file",
-                key_, "--out", session, "--duration", "9", "--drive-script", script, "--json"});
+  StartRecordVia(&record, proxy.port(), session, {"--duration", "9", "--drive-script", script, "--json"});
   QByteArray err;
   ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
   sweepscan::testing::Pump(2500);
@@ -190,23 +205,13 @@ TEST_F(CliRecordTest, ALinkCutMidRecordingIsOneSessionWithTheGapListedAndNothing
 // transit" and nothing of the seconds lost.
 TEST_F(CliRecordTest, DataLostBeyondTheRobotsBufferIsSaidAndSummed) {
   QProcess sim;
-  sim.start(QStringLiteral(SWEEPSCAN_SIM), {"--scenario", kScenario, "--listen", "127.0.0.1:0",
-                                            "--key-file", key_, "--buffer-s", "1"});
-  QByteArray listening;
-  ASSERT_TRUE(WaitFor(
-      [&] {
-        listening += sim.readAllStandardOutput();
-        return listening.contains('\n');
-      },
-      10000));
-  ASSERT_TRUE(listening.startsWith("listening on 127.0.0.1:")) << listening.toStdString();
-  sweepscan::testing::FaultProxy proxy(listening.mid(23).trimmed().toUShort());
+  QString address;
+  ASSERT_NO_FATAL_FAILURE(StartSim(&sim, {"--buffer-s", "1"}, &address));
+  sweepscan::testing::FaultProxy proxy(address.section(':', -1).toUShort());
   ASSERT_TRUE(proxy.isListening());
   const QString session = dir_.filePath("lossy.sweepscan");
   QProcess record;
-  record.start(QStringLiteral(SWEEPSCAN_CLI),
-               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()),
-                "--key-file", key_, "--out", session, "--duration", "12", "--json"});
+  StartRecordVia(&record, proxy.port(), session, {"--duration", "12", "--json"});
   QByteArray err;
   ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
   sweepscan::testing::Pump(2000);
@@ -264,11 +269,7 @@ double FastestAfterTheFirstStop(const SensorLog& log) {
 // no word said. Now the script is aborted with the reason, the recording
 // goes on to its --duration, exit 1, and the robot stays stopped.
 TEST_F(CliRecordTest, AFrozenRecorderAbortsItsDriveScriptAndTheRobotStaysStopped) {
-  const QString script = dir_.filePath("drive.json");
-  QFile f(script);
-  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
-  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
-  f.close();
+  const QString script = WriteSlowStraightScript();
   const QString session = dir_.filePath("frozen.sweepscan");
   QProcess record;
   StartRecord(&record, session, {"--duration", "7", "--drive-script", script, "--json"});
@@ -304,19 +305,13 @@ TEST_F(CliRecordTest, AFrozenRecorderAbortsItsDriveScriptAndTheRobotStaysStopped
 // them. The recorder's loop never stood still, but the robot reports the
 // trip in its Status, and the script is aborted for it.
 TEST_F(CliRecordTest, AWatchdogTripTheRobotReportsAbortsTheDriveScript) {
-  const QString script = dir_.filePath("drive.json");
-  QFile f(script);
-  ASSERT_TRUE(f.open(QIODevice::WriteOnly));
-  f.write(R"({"segments": [{"v_mps": 0.1, "w_radps": 0, "duration_s": 30}]})");
-  f.close();
+  const QString script = WriteSlowStraightScript();
   const quint16 agent_port = address_.section(':', -1).toUShort();
   sweepscan::testing::FaultProxy proxy(agent_port);
   ASSERT_TRUE(proxy.isListening());
   const QString session = dir_.filePath("tripped.sweepscan");
   QProcess record;
-  record.start(QStringLiteral(SWEEPSCAN_CLI),
-               {"record", "--connect", QStringLiteral("127.0.0.1:%1").arg(proxy.port()), "--key-file",
-                key_, "--out", session, "--duration", "6", "--drive-script", script, "--json"});
+  StartRecordVia(&record, proxy.port(), session, {"--duration", "6", "--drive-script", script, "--json"});
   QByteArray err;
   ASSERT_TRUE(WaitRecording(&record, &err)) << err.toStdString();
   sweepscan::testing::Pump(1500);
