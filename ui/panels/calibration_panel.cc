@@ -74,7 +74,9 @@ class CostPlot : public QWidget {
     // At least a decade high: a solve that barely moves the cost (it started
     // near the answer) draws a nearly flat line, not a full-height drop.
     lo = std::min(lo, hi - 1.0);
-    const QRectF r = QRectF(rect()).adjusted(8, 16, -8, -8);
+    // Below the caption's line: a flat cost (a solve that starts near the
+    // answer) was drawn through the caption's text.
+    const QRectF r = QRectF(rect()).adjusted(8, fontMetrics().height() + 8, -8, -8);
     QPainterPath path;
     for (size_t i = 0; i < costs_.size(); ++i) {
       const double x = r.left() + r.width() * i / (costs_.size() - 1);
