@@ -10,16 +10,23 @@
 #include <gtest/gtest.h>
 
 #include <QAction>
+#include <QApplication>
 #include <QComboBox>
 #include <QDir>
+#include <QDockWidget>
 #include <QElapsedTimer>
+#include <QFile>
+#include <QFileDialog>
 #include <QFileInfo>
 #include <QLabel>
+#include <QLineEdit>
 #include <QLocale>
 #include <QMenu>
 #include <QMenuBar>
+#include <QMessageBox>
 #include <QPushButton>
 #include <QTest>
+#include <QTimer>
 #include <QTreeWidget>
 #include <QTreeWidgetItem>
 #include <QUndoGroup>
@@ -471,6 +478,146 @@ TEST_F(ProjectUiTest, RefusalShowsTheReasonAndChangesNothing) {
   EXPECT_EQ(project()->undo_stack()->count(), commands);
   EXPECT_FALSE(window_->isWindowModified());
   EXPECT_EQ(panel->item("c")->text(1), "not placed");
+}
+
+// Align and Pick Pairs… come back once the clouds are drawn (they waited
+// for busy(), which includes the points still going to the view, and
+// nothing asked again when those were drawn), and the panel's outcome line
+// is said while true: gone with the placement undone and with the project
+// closed, back with the redo.
+TEST_F(ProjectUiTest, AlignOutcomeFollowsUndoAndTheButtonsComeBack) {
+  ASSERT_TRUE(project()->OpenProject(MakeProject("outcome")));
+  ProjectPanel* panel = project()->panel();
+  panel->SelectSession("b");  // While a's cloud loads.
+  TurnsWhileBusy(60000);
+  EXPECT_TRUE(panel->align_button()->isEnabled());
+  EXPECT_TRUE(panel->pick_button()->isEnabled());
+  panel->reference_box()->setCurrentIndex(panel->reference_box()->findData("a"));
+  QTest::mouseClick(panel->align_button(), Qt::LeftButton);
+  EXPECT_TRUE(project()->busy());
+  TurnsWhileBusy(120000);
+  ASSERT_TRUE(project()->document()->project().sessions[1].project_from_session.has_value());
+  const QString placed = panel->status_label()->text();
+  EXPECT_TRUE(placed.startsWith("Placed 'b' against 'a'")) << placed.toStdString();
+  EXPECT_TRUE(panel->align_button()->isEnabled());  // b may be aligned again
+  EXPECT_TRUE(panel->pick_button()->isEnabled());
+
+  window_->undo_group()->undo();
+  EXPECT_EQ(panel->item("b")->text(1), "not placed");
+  EXPECT_EQ(panel->status_label()->text(), "");
+  window_->undo_group()->redo();
+  EXPECT_EQ(panel->status_label()->text(), placed);
+  // A refusal or a cancel changes nothing: said until the project changes.
+  emit project()->alignFinished(false, "cancelled");
+  EXPECT_EQ(panel->status_label()->text(), "cancelled");
+  project()->SetVisible("a", false);
+  EXPECT_EQ(panel->status_label()->text(), "");
+  emit project()->alignFinished(false, "cancelled");
+  ASSERT_TRUE(project()->CloseProject());
+  EXPECT_EQ(panel->status_label()->text(), "");
+}
+
+// Remove from Project is disabled with core/project's reason where it would
+// refuse (the anchor while others are placed against it), and says who
+// becomes the anchor where it would not.
+TEST_F(ProjectUiTest, RemoveIsOfferedOnlyWhereItCanAct) {
+  const QString file = MakeProject("removal");
+  const auto run = RunCommand(std::string(SWEEPSCAN_CLI) + " project align --session b --to a " +
+                              file.toStdString());
+  ASSERT_EQ(run.code, 0) << run.out;
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  const auto remove_of = [&](const std::string& id) {
+    QAction* remove = nullptr;
+    for (QAction* a : project()->panel()->ContextMenu(id)->actions()) {
+      if (a->text() == "Remove from Project") remove = a;
+    }
+    return remove;
+  };
+  QAction* anchor = remove_of("a");
+  ASSERT_NE(anchor, nullptr);
+  EXPECT_FALSE(anchor->isEnabled());
+  EXPECT_NE(anchor->toolTip().indexOf("anchor"), -1) << anchor->toolTip().toStdString();
+  EXPECT_TRUE(remove_of("c")->isEnabled());
+  project()->RemoveSession("b");
+  QAction* now = remove_of("a");
+  EXPECT_TRUE(now->isEnabled());
+  EXPECT_NE(now->toolTip().indexOf("'c' becomes the anchor"), -1) << now->toolTip().toStdString();
+}
+
+// A project in the recent list that is gone: said as for sessions, and off
+// the list (it stayed, and said "cannot open: No such file or directory").
+TEST_F(ProjectUiTest, AGoneRecentProjectIsSaidAndLeavesTheList) {
+  const QString file = MakeProject("gone");
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  ASSERT_TRUE(project()->CloseProject());
+  ASSERT_TRUE(QFile::remove(file));
+  QMenu* recent = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->menu() == nullptr) continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->menu() != nullptr && b->text().contains("Recent Projec")) recent = b->menu();
+    }
+  }
+  ASSERT_NE(recent, nullptr);
+  ASSERT_EQ(recent->actions().value(0)->toolTip(), QFileInfo(file).absoluteFilePath());
+  recent->actions().value(0)->trigger();
+  EXPECT_NE(window_->last_error().indexOf("does not exist (moved or deleted?)"), -1)
+      << window_->last_error().toStdString();
+  EXPECT_FALSE(project()->document()->is_open());
+  for (QAction* a : recent->actions()) EXPECT_NE(a->toolTip(), QFileInfo(file).absoluteFilePath());
+}
+
+// File > New Project… over an existing project, its name typed without the
+// suffix: the dialog asks about the file written (it asked about "floor",
+// then wrote floor.sweepscan-project), the Project tab comes forward, and
+// Save replaces the file without calling it another program's change.
+TEST_F(ProjectUiTest, NewProjectAsksBeforeReplacingAFileAndSavesOverIt) {
+  const QString file = MakeProject("existing");
+  QAction* new_project = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->menu() == nullptr) continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->text() == "New &Project…") new_project = b;
+    }
+  }
+  ASSERT_NE(new_project, nullptr);
+  auto* connection = window_->findChild<QDockWidget*>("connectionDock");
+  connection->raise();
+  QApplication::processEvents();
+  // A tab behind another is "visible" to Qt, with nothing of it on screen.
+  auto* dock = window_->findChild<QDockWidget*>("projectDock");
+  EXPECT_TRUE(dock->visibleRegion().isEmpty());  // Connection is the tab in front.
+  QString asked;
+  QTimer driver;
+  driver.setInterval(20);
+  QObject::connect(&driver, &QTimer::timeout, [&] {
+    QWidget* modal = QApplication::activeModalWidget();
+    if (auto* box = qobject_cast<QMessageBox*>(modal)) {
+      asked = box->text();
+      box->button(QMessageBox::Yes)->click();
+    } else if (auto* dialog = qobject_cast<QFileDialog*>(modal)) {
+      auto* name = dialog->findChild<QLineEdit*>("fileNameEdit");
+      if (name == nullptr) return;
+      dialog->setDirectory(QString::fromStdString(Dir()));
+      name->setText("existing");
+      QMetaObject::invokeMethod(dialog, "accept", Qt::QueuedConnection);
+    }
+  });
+  driver.start();
+  new_project->trigger();
+  driver.stop();
+  EXPECT_NE(asked.indexOf("existing.sweepscan-project already exists"), -1) << asked.toStdString();
+  ASSERT_EQ(QFileInfo(project()->document()->path()).canonicalFilePath(),
+            QFileInfo(file).canonicalFilePath());
+  QApplication::processEvents();
+  EXPECT_FALSE(dock->visibleRegion().isEmpty());
+  ASSERT_TRUE(project()->AddSession(QString::fromStdString(Dir()) + "/a.sweepscan"));
+  EXPECT_TRUE(project()->SaveProject()) << window_->last_error().toStdString();
+  Project saved;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &saved).ok());
+  EXPECT_EQ(saved.sessions.size(), 1u);
 }
 
 // A pick on the project's layer tests only the blocks of points its ray

@@ -42,7 +42,27 @@ PairPicking::PairPicking(ProjectController* controller, CloudView* view, QWidget
     if (active()) ShowMarkers();
   });
   connect(controller_->document(), &ProjectDocument::changed, this, [this] {
-    if (active()) ShowMarkers();
+    if (!active()) return;
+    // Its session or reference gone (removed, an addition undone) or the
+    // reference no longer placed: nothing left to pick in, said as it is.
+    const Project& p = controller_->document()->project();
+    const int r = p.Find(reference_);
+    QString gone;
+    if (p.Find(session_) < 0) {
+      gone = tr("'%1' is no longer in the project").arg(Id(session_));
+    } else if (r < 0) {
+      gone = tr("'%1' is no longer in the project").arg(Id(reference_));
+    } else if (!p.sessions[r].project_from_session) {
+      gone = tr("'%1' is no longer placed").arg(Id(reference_));
+    }
+    if (gone.isEmpty()) {
+      ShowMarkers();
+      return;
+    }
+    if (aligning_) controller_->Cancel();
+    aligning_ = false;
+    End();
+    emit message(tr("Pair picking ended: %1; its picks are dropped").arg(gone));
   });
   connect(controller_->jobs(), &ProjectJobs::finished, this, [this] {
     if (active()) emit changed();  // Align may be possible now.
@@ -111,10 +131,15 @@ bool PairPicking::AddPick(const PickHit& hit) {
   const std::string& want = want_target ? reference_ : session_;
   const std::string got = hit.layer.toStdString();
   if (got != want) {
-    emit message(got.empty() || (got != session_ && got != reference_)
-                     ? tr("That point is not in '%1': Shift + click in '%1'").arg(Id(want))
-                     : tr("Now the same point in '%1' (%2)")
-                           .arg(Id(want), want_target ? tr("cyan") : tr("yellow")));
+    if (got.empty() || (got != session_ && got != reference_)) {
+      emit message(tr("That point is not in '%1': Shift + click in '%1'").arg(Id(want)));
+    } else if (want_target) {
+      emit message(tr("Now the same point in '%1' (cyan)").arg(Id(want)));
+    } else {
+      // A pair starts in the session: there is nothing in it to match yet.
+      emit message(tr("A pair starts in '%1' (yellow); then the same point in '%2' (cyan)")
+                       .arg(Id(session_), Id(reference_)));
+    }
     return false;
   }
   std::vector<Pick> after = picks_;

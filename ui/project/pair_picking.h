@@ -18,7 +18,10 @@
 // the mode is on (UndoRouter): Ctrl+Z / Ctrl+Shift+Z undo and redo a pick
 // (the keys are taken before the Edit menu's shortcuts, which could act on
 // another history by then), and no history holds picks of a mode that has
-// ended. Esc cancels the mode and leaves the project as it was. The view
+// ended. Esc cancels the mode and leaves the project as it was. The mode
+// ends, and says why, when its session or reference leaves the project or
+// the reference is no longer placed (the panel's edits are disabled while
+// it runs; an undo or a closed project still can). The view
 // shows each pair's two points numbered: in the session yellow, in the
 // reference cyan, the pick waiting for its partner larger.
 //

@@ -1,6 +1,7 @@
 #include "ui/project/project_controller.h"
 
 #include <QAction>
+#include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QMenu>
@@ -57,6 +58,9 @@ ProjectController::ProjectController(QWidget* window, CloudView* view,
   connect(pump_, &QTimer::timeout, this, [this] {
     if (layer_->Pump()) return;
     pump_->stop();
+    // No longer busy(): Align and Pick Pairs… wait for this (they stayed
+    // disabled after an alignment until the selection changed).
+    panel_->Refresh();
     if (!jobs_.running()) LoadMissing();  // Says shown() when all is drawn.
   });
   connect(&document_, &ProjectDocument::opened, this, [this] {
@@ -95,11 +99,8 @@ QString ProjectController::title() const {
 void ProjectController::AddFileMenuActions(QMenu* file) {
   file->addAction(tr("New &Project…"), this, [this] {
     if (!ConfirmClose()) return;
-    QString path = QFileDialog::getSaveFileName(window_, tr("New project"), QString(),
-                                                tr("sweepscan projects (*.sweepscan-project)"));
-    if (path.isEmpty()) return;
-    if (!path.endsWith(QLatin1String(kProjectSuffix))) path += QLatin1String(kProjectSuffix);
-    NewProject(path);
+    const QString path = ChooseProjectFile(tr("New project"), QString());
+    if (!path.isEmpty()) NewProject(path);
   })->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_N));
   file->addAction(tr("Open Pro&ject…"), this, [this] {
     if (!ConfirmClose()) return;
@@ -114,11 +115,8 @@ void ProjectController::AddFileMenuActions(QMenu* file) {
   save_->setShortcut(QKeySequence::Save);
   // No shortcut: QKeySequence::SaveAs (Ctrl+Shift+S) is Save Session As.
   save_as_ = file->addAction(tr("Save Project &As…"), this, [this] {
-    QString path = QFileDialog::getSaveFileName(window_, tr("Save project as"), document_.path(),
-                                                tr("sweepscan projects (*.sweepscan-project)"));
-    if (path.isEmpty()) return;
-    if (!path.endsWith(QLatin1String(kProjectSuffix))) path += QLatin1String(kProjectSuffix);
-    SaveProjectAs(path);
+    const QString path = ChooseProjectFile(tr("Save project as"), document_.path());
+    if (!path.isEmpty()) SaveProjectAs(path);
   });
   add_ = file->addAction(tr("A&dd Session to Project…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(
@@ -141,8 +139,36 @@ void ProjectController::UpdateActions() {
   }
 }
 
+QString ProjectController::ChooseProjectFile(const QString& title, const QString& start) {
+  // The dialog adds the suffix itself, so that its overwrite question is
+  // about the file written: "floor" typed over floor.sweepscan-project was
+  // replaced without a word when the suffix was added after the dialog.
+  QFileDialog dialog(window_, title, start,
+                     tr("sweepscan projects (*%1)").arg(QLatin1String(kProjectSuffix)));
+  dialog.setAcceptMode(QFileDialog::AcceptSave);
+  dialog.setFileMode(QFileDialog::AnyFile);
+  dialog.setDefaultSuffix(QString::fromLatin1(kProjectSuffix).mid(1));
+  dialog.setOption(QFileDialog::DontConfirmOverwrite, false);
+  if (dialog.exec() != QDialog::Accepted || dialog.selectedFiles().isEmpty()) return QString();
+  QString path = dialog.selectedFiles().front();
+  if (path.endsWith(QLatin1String(kProjectSuffix))) return path;
+  // A platform's dialog that left the suffix off: its question was about
+  // another name, so ask about this one.
+  path += QLatin1String(kProjectSuffix);
+  if (QFileInfo::exists(path) &&
+      QMessageBox::question(
+          window_, title, tr("%1 already exists.\n\nReplace it?").arg(QFileInfo(path).fileName()),
+          QMessageBox::Yes | QMessageBox::No, QMessageBox::No) != QMessageBox::Yes) {
+    return QString();
+  }
+  return path;
+}
+
 bool ProjectController::NewProject(const QString& path) {
   document_.New(path);
+  // The panel to the front, as when a project opens (there are no clouds
+  // to wait for: shown() never comes for an empty project).
+  if (auto* dock = qobject_cast<QDockWidget*>(panel_->parentWidget())) dock->raise();
   emit message(tr("New project %1: add sessions (File > Add Session to Project…), then save (Ctrl+S)")
                    .arg(QFileInfo(path).fileName()));
   return true;
@@ -550,9 +576,23 @@ void ProjectController::RebuildRecentMenu() {
   recent_menu_->clear();
   const QStringList recent = QSettings().value(kRecentKey).toStringList();
   for (const QString& path : recent) {
-    recent_menu_->addAction(QFileInfo(path).fileName(), this, [this, path] {
-      if (ConfirmClose()) OpenProject(path);
-    })->setToolTip(path);
+    recent_menu_
+        ->addAction(QFileInfo(path).fileName(), this,
+                    [this, path] {
+                      if (!QFileInfo::exists(path)) {
+                        // As Open Recent does for sessions: said plainly, and off the list.
+                        QSettings s;
+                        QStringList left = s.value(kRecentKey).toStringList();
+                        left.removeAll(path);
+                        s.setValue(kRecentKey, left);
+                        RebuildRecentMenu();
+                        show_error_(tr("Open project"),
+                                    tr("%1 does not exist (moved or deleted?).").arg(path));
+                        return;
+                      }
+                      if (ConfirmClose()) OpenProject(path);
+                    })
+        ->setToolTip(path);
   }
   recent_menu_->setEnabled(!recent.isEmpty());
 }

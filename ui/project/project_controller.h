@@ -126,6 +126,9 @@ class ProjectController : public QObject {
   void Show();  // The layer from the project and the clouds; pumps what is new.
   // Builds the clouds of placed, visible sessions not built yet (one job).
   void LoadMissing();
+  // A project file to write, from a save dialog that adds the suffix and
+  // asks before replacing a file (empty: cancelled).
+  QString ChooseProjectFile(const QString& title, const QString& start);
   void AddRecent(const QString& path);
   void RebuildRecentMenu();
   void UpdateActions();

@@ -22,7 +22,10 @@ void ProjectDocument::New(const QString& path) {
   project_ = Project();
   project_.name = QFileInfo(path).completeBaseName().toStdString();
   saved_json_.clear();  // Not on disk yet: modified until saved.
-  disk_text_.clear();
+  // A file already there is the one the operator chose to replace (New
+  // Project… asked): Save overwrites it without calling it another
+  // program's change; one that appears later still counts as that.
+  disk_text_ = FileText(path);
   ++generation_;
   ++opened_count_;
   emit opened();

@@ -37,7 +37,9 @@ class ProjectDocument : public QObject {
   // after Save As, whose sessions are the same folders under the same ids.
   uint64_t opened_count() const { return opened_count_; }
 
-  // A new, empty project to be saved at `path` (nothing written yet).
+  // A new, empty project to be saved at `path` (nothing written yet). A
+  // file already at `path` is replaced by the first Save, as the caller
+  // has confirmed (ChangedOnDisk() only sees changes after this).
   void New(const QString& path);
   // Reads `path`; on failure the open project stays. References a file
   // may hold from before 2026-11-29 (a loop, a session against itself) are

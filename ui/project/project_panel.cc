@@ -12,8 +12,10 @@
 #include <QPixmap>
 #include <QProgressBar>
 #include <QPushButton>
+#include <QScrollArea>
 #include <QToolButton>
 #include <QTreeWidget>
+#include <QUndoStack>
 #include <QVBoxLayout>
 
 #include "ui/project/pair_pick_box.h"
@@ -58,7 +60,24 @@ QString Placement(const ProjectSession& s, bool* placed) {
 
 ProjectPanel::ProjectPanel(ProjectController* controller, QWidget* parent)
     : QWidget(parent), controller_(controller) {
-  auto* layout = new QVBoxLayout(this);
+  // The content scrolls inside the dock rather than being squeezed: the
+  // pair-picking box and a long status (a refusal's reason) need more
+  // height than the dock under the Drive panel has, and a squeezed layout
+  // drew its wrapped labels over one another. Qt's scroll area gives the
+  // content the height its wrapped labels need at the width it has
+  // (heightForWidth), and the dock keeps its own size when the box comes
+  // and goes (it grew with the box and stayed tall, squeezing the Drive
+  // panel).
+  auto* outer = new QVBoxLayout(this);
+  outer->setContentsMargins(0, 0, 0, 0);
+  auto* scroll = new QScrollArea;
+  scroll->setObjectName(QStringLiteral("projectScroll"));
+  scroll->setFrameShape(QFrame::NoFrame);
+  scroll->setWidgetResizable(true);
+  scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  outer->addWidget(scroll);
+  auto* content = new QWidget;
+  auto* layout = new QVBoxLayout(content);
   name_ = new QLabel;
   name_->setWordWrap(true);
   layout->addWidget(name_);
@@ -125,28 +144,63 @@ ProjectPanel::ProjectPanel(ProjectController* controller, QWidget* parent)
   });
   edit_row->addWidget(add_);
   edit_row->addStretch(1);
+  layout->addLayout(edit_row);
+  // The progress on a row of its own, the dock's whole width: beside Add
+  // Session its text ("Aligning 'b' to 'a': hypotheses") wrapped into two
+  // cut-off lines.
+  auto* progress_row = new QHBoxLayout;
   progress_ = new QProgressBar;
+  progress_->setObjectName(QStringLiteral("projectProgress"));
   progress_->setTextVisible(true);
   progress_->setVisible(false);
-  edit_row->addWidget(progress_, 2);
+  progress_->setSizePolicy(QSizePolicy::Ignored, QSizePolicy::Fixed);
+  progress_row->addWidget(progress_, 1);
   cancel_ = new QToolButton;
   cancel_->setObjectName(QStringLiteral("projectCancel"));
   cancel_->setText(tr("Cancel"));
   cancel_->setVisible(false);
   connect(cancel_, &QToolButton::clicked, controller_, &ProjectController::Cancel);
-  edit_row->addWidget(cancel_);
-  layout->addLayout(edit_row);
+  progress_row->addWidget(cancel_);
+  layout->addLayout(progress_row);
 
   status_ = new QLabel;
   status_->setWordWrap(true);
   status_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   layout->addWidget(status_);
-  connect(controller_, &ProjectController::alignFinished, this,
-          [this](bool, const QString& text) {
-            status_->setText(text);
-            status_is_progress_ = false;
-          });
+  scroll->setWidget(content);
+  connect(controller_, &ProjectController::alignFinished, this, &ProjectPanel::ShowOutcome);
+  // An outcome is true of the project as it was edited then: undone past
+  // (or another project) it goes, redone it comes back (UpdateOutcome).
+  connect(controller_->undo_stack(), &QUndoStack::indexChanged, this, &ProjectPanel::UpdateOutcome);
+  connect(controller_->document(), &ProjectDocument::opened, this, [this] {
+    outcome_.clear();
+    outcome_command_ = nullptr;
+    UpdateOutcome();
+  });
   Refresh();
+}
+
+void ProjectPanel::ShowOutcome(bool placed, const QString& text) {
+  const QUndoStack* undo = controller_->undo_stack();
+  outcome_ = text;
+  // A placement is the command on top of the stack now; a refusal or a
+  // cancel changed nothing, and is said while the project is as it was
+  // then (the same command on top).
+  outcome_index_ = undo->index();
+  outcome_command_ = outcome_index_ > 0 ? undo->command(outcome_index_ - 1) : nullptr;
+  outcome_placed_ = placed;
+  status_is_progress_ = false;
+  UpdateOutcome();
+}
+
+void ProjectPanel::UpdateOutcome() {
+  if (status_is_progress_) return;  // A job's progress; the outcome after it.
+  const QUndoStack* undo = controller_->undo_stack();
+  const QUndoCommand* top = undo->index() > 0 ? undo->command(undo->index() - 1) : nullptr;
+  const bool applied = outcome_placed_ ? undo->index() >= outcome_index_ && outcome_index_ > 0 &&
+                                             undo->command(outcome_index_ - 1) == outcome_command_
+                                       : undo->index() == outcome_index_ && top == outcome_command_;
+  status_->setText(!outcome_.isEmpty() && applied ? outcome_ : QString());
 }
 
 QTreeWidgetItem* ProjectPanel::item(const std::string& id) const {
@@ -249,8 +303,8 @@ void ProjectPanel::ShowProgress(const QString& what, double fraction) {
     status_->setText(what + QStringLiteral("…"));
     status_is_progress_ = true;
   } else if (status_is_progress_) {
-    status_->clear();  // Done: an alignment's outcome stays, a progress text goes.
     status_is_progress_ = false;
+    UpdateOutcome();  // Done: a progress text goes, an outcome still true stays.
   }
   UpdateAlign();
 }
@@ -266,8 +320,20 @@ void ProjectPanel::ChooseColor(const std::string& id) {
 
 QMenu* ProjectPanel::ContextMenu(const std::string& id) {
   auto* menu = new QMenu(this);
+  menu->setToolTipsVisible(true);  // Why an entry is disabled.
   const Project& p = controller_->document()->project();
   const int i = p.Find(id);
+  // While pairs are picked, the project holds still as it does for the
+  // panel's buttons: a session removed under the mode left it picking in
+  // a session that no longer existed.
+  const bool picking = controller_->pair_picking()->active();
+  const QString not_now = tr("Not while pairs are picked: Esc or Cancel ends the picking first");
+  const auto edit = [&](QAction* a) {
+    if (!picking) return a;
+    a->setEnabled(false);
+    a->setToolTip(not_now);
+    return a;
+  };
   QMenu* align = menu->addMenu(tr("Align to"));
   for (const ProjectSession& s : p.sessions) {
     if (s.id == id || !s.project_from_session || p.PlacedThrough(s.id, id)) continue;
@@ -275,11 +341,25 @@ QMenu* ProjectPanel::ContextMenu(const std::string& id) {
     align->addAction(QString::fromStdString(reference), this,
                      [this, id, reference] { controller_->Align(id, reference); });
   }
-  align->setEnabled(i >= 0 && i != p.Anchor() && !align->isEmpty() && !controller_->busy());
-  menu->addAction(tr("Colour…"), this, [this, id] { ChooseColor(id); });
-  menu->addAction(tr("Show Only This"), this, [this, id] { controller_->ShowOnly(id); });
+  align->setEnabled(i >= 0 && i != p.Anchor() && !align->isEmpty() && !controller_->busy() &&
+                    !picking);
+  edit(menu->addAction(tr("Colour…"), this, [this, id] { ChooseColor(id); }));
+  edit(menu->addAction(tr("Show Only This"), this, [this, id] { controller_->ShowOnly(id); }));
   menu->addSeparator();
-  menu->addAction(tr("Remove from Project"), this, [this, id] { controller_->RemoveSession(id); });
+  QAction* remove = edit(menu->addAction(tr("Remove from Project"), this,
+                                         [this, id] { controller_->RemoveSession(id); }));
+  // What core/project would refuse (the anchor while others are placed
+  // against it, a session others are placed against) is disabled with
+  // the reason, not offered and then refused in a box.
+  Project after = p;
+  const Status can = after.RemoveSession(id);
+  if (!can.ok()) {
+    remove->setEnabled(false);
+    remove->setToolTip(QString::fromStdString(can.message()));
+  } else if (!picking && i == p.Anchor() && after.Anchor() >= 0) {
+    remove->setToolTip(tr("'%1' becomes the anchor: the project's frame is its start pose")
+                           .arg(QString::fromStdString(after.sessions[after.Anchor()].id)));
+  }
   return menu;
 }
 

@@ -4,8 +4,11 @@
 // or "not placed"); the reference to align the selected session to and
 // Align, or Pick Pairs… for the pairs' mode (PairPickBox below the list);
 // the job's progress with Cancel; a context menu (Align to, Colour,
-// Show Only This, Remove from Project). It only calls the controller,
-// which makes every edit an undoable command.
+// Show Only This, Remove from Project; its edits disabled while pairs are
+// picked, and a removal core/project refuses disabled with the reason);
+// the last alignment's outcome while it is true (not once undone or the
+// project closed). It only calls the controller, which makes every edit an
+// undoable command. The content scrolls in its dock.
 //
 // GUI thread only.
 #ifndef SWEEPSCAN_UI_PROJECT_PROJECT_PANEL_H_
@@ -23,6 +26,7 @@ class QPushButton;
 class QToolButton;
 class QTreeWidget;
 class QTreeWidgetItem;
+class QUndoCommand;
 
 namespace sweepscan::ui {
 
@@ -55,6 +59,9 @@ class ProjectPanel : public QWidget {
 
  private:
   void UpdateAlign();
+  // An alignment's outcome, said while the project is as it left it.
+  void ShowOutcome(bool placed, const QString& text);
+  void UpdateOutcome();
   void ChooseColor(const std::string& id);
 
   ProjectController* controller_;
@@ -70,6 +77,10 @@ class ProjectPanel : public QWidget {
   QLabel* status_;
   bool refreshing_ = false;
   bool status_is_progress_ = false;
+  QString outcome_;
+  int outcome_index_ = 0;                          // the undo stack's index as the outcome came
+  const QUndoCommand* outcome_command_ = nullptr;  // the command below that index
+  bool outcome_placed_ = false;
 };
 
 }  // namespace sweepscan::ui
