@@ -7,17 +7,54 @@ namespace sweepscan::app {
 
 namespace {
 
-// Where a comment starts: a `#` at the start of the line or after a space
-// or tab, as in systemd's and most ini files' values. A `#` anywhere was
-// taken for one, so `name = robot#2` became `robot` without a word.
-int CommentStart(const QString& line) {
-  for (int i = 0; i < line.size(); ++i) {
+// Where a comment starts, from `from` on: a `#` at the start of the line or
+// after a space or tab, as in systemd's and most ini files' values. A `#`
+// anywhere was taken for one, so `name = robot#2` became `robot` without a
+// word.
+int CommentStart(const QString& line, int from = 0) {
+  for (int i = from; i < line.size(); ++i) {
     if (line[i] == QLatin1Char('#') &&
         (i == 0 || line[i - 1] == QLatin1Char(' ') || line[i - 1] == QLatin1Char('\t'))) {
       return i;
     }
   }
   return -1;
+}
+
+bool IsQuote(QChar c) { return c == QLatin1Char('"') || c == QLatin1Char('\''); }
+
+// The value after the `=` at `equals`: as written, trimmed, up to a comment;
+// or, when it starts with a quote (" or '), what is between that quote and
+// the next one of the same kind, as systemd's and shell files are written
+// (`lidar = "/dev/ttyUSB0"`): a `#` inside the quotes is part of the value,
+// and after the closing quote only spaces and a comment may follow. Until
+// 2026-11-29 the quotes were kept, so a quoted port was opened by a name
+// with quotes in it, and failed. False with why for an unclosed quote or
+// text after the closing one.
+bool ValueAfter(const QString& line, int equals, QString* value, QString* why) {
+  int start = equals + 1;
+  while (start < line.size() && line[start].isSpace()) ++start;
+  if (start < line.size() && IsQuote(line[start])) {
+    const QChar quote = line[start];
+    const int end = line.indexOf(quote, start + 1);
+    if (end < 0) {
+      *why =
+          QStringLiteral("the value's %1 is not closed (quote it whole, or not at all)").arg(quote);
+      return false;
+    }
+    QString after = line.mid(end + 1);
+    const int comment = CommentStart(line, end + 1);
+    if (comment >= 0) after = line.mid(end + 1, comment - end - 1);
+    if (!after.trimmed().isEmpty()) {
+      *why = QStringLiteral("text after the value's closing %1: '%2'").arg(quote, after.trimmed());
+      return false;
+    }
+    *value = line.mid(start + 1, end - start - 1);
+    return true;
+  }
+  const int comment = CommentStart(line, start);
+  *value = line.mid(start, comment < 0 ? -1 : comment - start).trimmed();
+  return true;
 }
 
 }  // namespace
@@ -50,18 +87,21 @@ bool ReadAgentConfigFile(const QString& path, const QStringList& keys,
       skip = true;
       return true;
     };
-    QString line = QString::fromUtf8(lines[i]);
+    const QString line = QString::fromUtf8(lines[i]);
     const int hash = CommentStart(line);
-    if (hash >= 0) line.truncate(hash);
-    line = line.trimmed();
-    if (line.isEmpty()) continue;
     const int equals = line.indexOf(QLatin1Char('='));
-    if (equals < 0) {
-      if (!fail(QStringLiteral("expected 'key = value', got '%1'").arg(line))) return false;
+    if (equals < 0 || (hash >= 0 && hash < equals)) {
+      const QString text = line.left(hash).trimmed();
+      if (text.isEmpty()) continue;  // Blank, or a comment.
+      if (!fail(QStringLiteral("expected 'key = value', got '%1'").arg(text))) return false;
       continue;
     }
     const QString key = line.left(equals).trimmed();
-    const QString value = line.mid(equals + 1).trimmed();
+    QString value, why;
+    if (!ValueAfter(line, equals, &value, &why)) {
+      if (!fail(QStringLiteral("'%1': %2").arg(key, why))) return false;
+      continue;
+    }
     if (!keys.contains(key)) {
       if (!fail(QStringLiteral("unknown key '%1' (keys: %2)").arg(key, keys.join(QStringLiteral(", ")))))
         return false;

@@ -536,6 +536,52 @@ TEST(RobotdConfigFileTest, TheCommandLinesLinkReplacesTheFilesAndHashInsideAValu
   EXPECT_NE(r.err.find("--key-file does not apply to the serial link"), std::string::npos) << r.err;
 }
 
+// Values quoted as in systemd's or shell files (`serial = "/dev/pts/3"`)
+// lose one pair of matching quotes; a `#` inside the quotes is the value's.
+// Until 2026-11-29 the quotes were kept: the link's port was opened as
+// `"/dev/pts/3"` (with its quotes) and robotd gave up. A quote left open, or
+// text after the closing one, is refused at its line.
+TEST(RobotdConfigFileTest, QuotedValuesLoseTheirQuotes) {
+  LinkPty link;
+  ASSERT_GE(link.master, 0);
+  const std::string quoted =
+      WriteConfig("quoted.conf", "imu = '/nonexistent/tty'\nserial = \"" + link.slave +
+                                     "\"   # the radio\nname = \"robot #2's\" # the second one\n");
+  std::string hello;
+  int code = -1;
+  const std::string out =
+      ServeAndStop({"--config", QString::fromStdString(quoted)}, "serving the link on", &code, [&] {
+        WaitFor(
+            [&] {
+              return ReadAvailable(link.master, &hello) > 0 &&
+                     hello.find("robot #2's") != std::string::npos;
+            },
+            5000);
+      });
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("serving the link on " + link.slave + "\n"), std::string::npos) << out;
+  EXPECT_NE(hello.find("sweepscan-robotd 0.1.0 (robot #2's)"), std::string::npos)
+      << "the Hello's name: " << hello.size() << " bytes read";
+  EXPECT_NE(out.find("/nonexistent/tty: "), std::string::npos)
+      << "the IMU's port, unquoted: " << out;
+
+  const struct {
+    std::string line;  // Line 2 of the file.
+    std::string says;  // After "FILE:2: ".
+  } cases[] = {
+      {"lidar = \"/dev/ttyUSB0", "'lidar': the value's \" is not closed"},
+      {"name = 'robot' 2", "'name': text after the value's closing ': '2'"},
+      {"name = \"\"", "'name' has no value"},
+  };
+  for (const auto& c : cases) {
+    const std::string conf =
+        WriteConfig("bad-quotes.conf", "imu = /nonexistent/tty\n" + c.line + "\n");
+    const ProcessRun r = RunRobotd({"--config", conf});
+    EXPECT_EQ(r.code, 2) << c.line << ": " << r.err;
+    EXPECT_NE(r.err.find(conf + ":2: " + c.says), std::string::npos) << c.line << ": " << r.err;
+  }
+}
+
 // A bad value from the file names the setting as it is written there and
 // its FILE:LINE (it said "v_max must be positive and finite" for
 // `v-max = nan`, naming neither); on the command line, the option.
