@@ -13,6 +13,7 @@
 #include <QHostAddress>
 #include <QSerialPort>
 #include <QSocketNotifier>
+#include <QStringList>
 #include <QTcpSocket>
 #include <algorithm>
 #include <cerrno>
@@ -411,6 +412,27 @@ bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error)
   return true;
 }
 
+QString KeyFileAccessOfOthers(unsigned mode) {
+  // "read", "written", "executed" for one class's three bits, joined.
+  const auto rights = [](unsigned bits) {
+    QStringList what;
+    if ((bits & 4) != 0) what << QStringLiteral("read");
+    if ((bits & 2) != 0) what << QStringLiteral("written");
+    if ((bits & 1) != 0) what << QStringLiteral("executed");
+    const QString last = what.takeLast();
+    return what.isEmpty() ? last : what.join(QStringLiteral(", ")) + QStringLiteral(" and ") + last;
+  };
+  const unsigned group = (mode >> 3) & 7;
+  const unsigned others = mode & 7;
+  if (group == 0 && others == 0) return QString();
+  if (group == others)
+    return QStringLiteral("can be %1 by its group and others").arg(rights(group));
+  QStringList parts;
+  if (group != 0) parts << QStringLiteral("%1 by its group").arg(rights(group));
+  if (others != 0) parts << QStringLiteral("%1 by others").arg(rights(others));
+  return QStringLiteral("can be ") + parts.join(QStringLiteral(", and "));
+}
+
 bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
                  KeyFilePermissions permissions, QString* warning) {
   auto fail = [&](const QString& message) {
@@ -430,8 +452,8 @@ bool ReadKeyFile(const QString& path, std::vector<uint8_t>* key, QString* error,
   }
   if ((st.st_mode & 077) != 0 && permissions != KeyFilePermissions::kAny) {
     const QString message =
-        QStringLiteral("key file %1 is readable by others (mode %2); restrict it: chmod 600 %1")
-            .arg(path)
+        QStringLiteral("key file %1 %2 (mode %3); only its owner may have access: chmod 600 %1")
+            .arg(path, KeyFileAccessOfOthers(st.st_mode))
             .arg(static_cast<unsigned>(st.st_mode & 0777), 4, 8, QLatin1Char('0'));
     if (permissions == KeyFilePermissions::kOwnerOnly) return fail(message);
     if (warning != nullptr) *warning = message;

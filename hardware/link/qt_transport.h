@@ -183,13 +183,21 @@ struct LinkAddress {
 };
 bool ParseLinkAddress(const QString& text, LinkAddress* address, QString* error);
 
-// What ReadKeyFile says about a key file that others may read.
+// What ReadKeyFile does with a key file its group or others have any
+// access to (read, write or execute).
 enum class KeyFilePermissions {
   kAny,        // Accept (the workstation's default).
   kWarn,       // Accept, with a warning in *warning (sweepscan-sim).
-  kOwnerOnly,  // Refuse group- or world-readable files, like ssh (sweepscan-robotd).
+  kOwnerOnly,  // Refuse a file its group or others have any access to, like ssh (sweepscan-robotd).
 };
 inline constexpr qint64 kMaxKeyFileBytes = 64 * 1024;
+
+// What a key file's mode lets its group and others do, for ReadKeyFile's
+// message: "can be written by its group" (0620), "can be read by its group
+// and others" (0644), "can be read and written by its group, and read by
+// others" (0664); empty when only the owner has any access. Any group or
+// others bit at all is refused by kOwnerOnly, as ssh refuses a private key.
+QString KeyFileAccessOfOthers(unsigned mode);
 
 // Reads a pre-shared key file: its bytes exactly, except one trailing line
 // end (LF or CR LF), removed so `echo secret > key` works (the rule

@@ -368,7 +368,8 @@ TEST(KeyFileHardeningTest, PermissionsSizeAndFolders) {
   EXPECT_TRUE(error.contains("0644")) << error.toStdString();
   // ... warned about by the simulator, accepted as before by default.
   EXPECT_TRUE(ReadKeyFile(shared, &key, &error, KeyFilePermissions::kWarn, &warning));
-  EXPECT_TRUE(warning.contains("readable by others")) << warning.toStdString();
+  EXPECT_TRUE(warning.contains("can be read by its group and others (mode 0644)"))
+      << warning.toStdString();
   EXPECT_TRUE(ReadKeyFile(shared, &key, &error));
   ASSERT_TRUE(ReadKeyFile(own, &key, &error, KeyFilePermissions::kOwnerOnly));
   EXPECT_EQ(std::string(key.begin(), key.end()), "secret");
@@ -382,6 +383,44 @@ TEST(KeyFileHardeningTest, PermissionsSizeAndFolders) {
   EXPECT_EQ(key.size(), 64u * 1024u);
   EXPECT_FALSE(ReadKeyFile(QString::fromStdString(TempDirPath()), &key, &error));
   EXPECT_TRUE(error.contains("folder")) << error.toStdString();
+}
+
+// The refusal says what the mode allows, and whom: a key file of mode 0620
+// (its group may write it, not read it) was refused as "readable by
+// others". The rule is unchanged: any access at all for the group or others
+// is refused (a key its group may write may be replaced by a key of theirs).
+TEST(KeyFileHardeningTest, TheRefusalSaysWhatTheModeAllowsAndTheFix) {
+  const struct {
+    mode_t mode;
+    const char* says;  // After "key file PATH ".
+  } cases[] = {
+      {0620, "can be written by its group (mode 0620)"},
+      {0640, "can be read by its group (mode 0640)"},
+      {0604, "can be read by others (mode 0604)"},
+      {0602, "can be written by others (mode 0602)"},
+      {0644, "can be read by its group and others (mode 0644)"},
+      {0664, "can be read and written by its group, and read by others (mode 0664)"},
+      {0610, "can be executed by its group (mode 0610)"},
+      {0677, "can be read, written and executed by its group and others (mode 0677)"},
+      {0401, "can be executed by others (mode 0401)"},
+  };
+  for (const auto& c : cases) {
+    const QString path = QString::fromStdString(WriteKey("mode.key", "secret\n", c.mode));
+    std::vector<uint8_t> key;
+    QString error;
+    EXPECT_FALSE(ReadKeyFile(path, &key, &error, KeyFilePermissions::kOwnerOnly)) << c.says;
+    EXPECT_EQ(error.toStdString(),
+              QStringLiteral("key file %1 %2; only its owner may have access: chmod 600 %1")
+                  .arg(path, QString::fromLatin1(c.says))
+                  .toStdString());
+  }
+  for (const mode_t mode : {0400, 0600, 0700}) {
+    const QString path = QString::fromStdString(WriteKey("mode.key", "secret\n", mode));
+    std::vector<uint8_t> key;
+    QString error;
+    EXPECT_TRUE(ReadKeyFile(path, &key, &error, KeyFilePermissions::kOwnerOnly))
+        << std::oct << mode << ": " << error.toStdString();
+  }
 }
 
 struct ProcessRun {
@@ -415,6 +454,16 @@ TEST(RobotdOptionsTest, UnsafeKeyFilesAndWatchdogPeriodsAreRefused) {
   ProcessRun r = with({"--key-file", shared});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("chmod 600"), std::string::npos) << r.err;
+  // Writable by its group, not readable: said as such (it said "readable by others").
+  const std::string group_writable = WriteKey("robotd-group-writable.key", "secret\n", 0620);
+  r = with({"--key-file", group_writable});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("sweepscan-robotd: key file " + group_writable +
+                       " can be written by its group (mode 0620); only its owner may have "
+                       "access: chmod 600 " +
+                       group_writable + "\n"),
+            std::string::npos)
+      << r.err;
   r = with({"--key-file", big});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("refused"), std::string::npos) << r.err;
