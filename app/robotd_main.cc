@@ -6,6 +6,7 @@
 #include <QCommandLineParser>
 #include <QCoreApplication>
 #include <QHash>
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <initializer_list>
@@ -55,6 +56,36 @@ int StopMotors(const QString& port, qint32 baud) {
     return 1;
   }
   std::printf("zero command sent to the motor board on %s\n", qPrintable(port));
+  return 0;
+}
+
+// A stop asked for during start-up (`systemctl stop` while the file and the
+// key are read or the ports open: SIGTERM, or SIGINT, SIGHUP, SIGQUIT): the
+// event loop that acts on it has not started yet, so start-up looks for it
+// between its steps and leaves there. Until 2026-11-29 it was acted on only
+// once the loop ran: the agent finished starting and said it was ready
+// (READY=1, "listening on") before it stopped, however slow its start.
+bool StopPending() { return sweepscan::app::QuitSignal() != 0; }
+
+int StoppedDuringStartup(const char* what) {
+  const char* name = "a signal";
+  switch (sweepscan::app::QuitSignal()) {
+    case SIGINT:
+      name = "SIGINT";
+      break;
+    case SIGTERM:
+      name = "SIGTERM";
+      break;
+    case SIGHUP:
+      name = "SIGHUP";
+      break;
+    case SIGQUIT:
+      name = "SIGQUIT";
+      break;
+    default:
+      break;
+  }
+  std::fprintf(stderr, "sweepscan-robotd: %s during start-up: %s; exiting\n", name, what);
   return 0;
 }
 
@@ -186,10 +217,13 @@ int AgentMain(int argc, char** argv) {
   describe(3, config.motor_port, config.motor_baud, "motor board");
 
   if (parser.isSet(stop_motors)) {
+    // A signal meanwhile does not stop this one: it is the stop.
     if (config.motor_port.isEmpty())
       return Fail(QStringLiteral("--stop-motors: no motor board port (--motor)"));
     return StopMotors(config.motor_port, config.motor_baud);
   }
+  // The configuration is read (a slow file system, a file that is a pipe).
+  if (StopPending()) return StoppedDuringStartup("stopped before the ports were opened");
   // Not before --stop-motors: it must stop the board whatever else the
   // configuration gets wrong (the service runs it after any exit).
   if (config.agent.name.size() > sweepscan::hardware::kLinkMaxStringSize) {
@@ -214,10 +248,19 @@ int AgentMain(int argc, char** argv) {
     config.agent.require_auth = false;
   }
   if (!common.Apply(parser, !parser.isSet(serial), &config, &error)) return Fail(error);
+  // The key is read.
+  if (StopPending()) return StoppedDuringStartup("stopped before the ports were opened");
 
   RobotAgent agent(config);
   sweepscan::app::LogAgentEvents(&agent);
   if (!agent.Start(&error)) return Fail(error);
+  // The ports are open (a USB adapter can take seconds): the motor board has
+  // had its zero as its port opened; the shutdown sends it again and closes
+  // the ports, and the agent never says it is ready.
+  if (StopPending()) {
+    agent.Shutdown();
+    return StoppedDuringStartup("the ports were opened; motors stopped, ports closed");
+  }
   QString serving;
   if (config.link == RobotAgentConfig::LinkKind::kTcp) {
     serving = QStringLiteral("listening on %1:%2").arg(config.listen_address).arg(agent.tcp_port());

@@ -18,6 +18,7 @@
 #include <pty.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <termios.h>
 #include <unistd.h>
@@ -25,6 +26,7 @@
 #include <QCoreApplication>
 #include <QElapsedTimer>
 #include <QProcess>
+#include <QProcessEnvironment>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -722,6 +724,96 @@ TEST(RobotdConfigFileTest, StopMotorsStopsTheBoardWhateverElseTheFileGetsWrong) 
   r = RunRobotd({"--config", lost, "--stop-motors"});
   EXPECT_EQ(r.code, 1) << r.err;
   EXPECT_NE(r.err.find("/nonexistent/motor"), std::string::npos) << r.err;
+}
+
+// --- sweepscan-robotd's start-up and shutdown ---------------------------
+
+// systemd's notification socket (NOTIFY_SOCKET), read by the test.
+struct NotifySocket {
+  int fd = -1;
+  std::string path;
+  explicit NotifySocket(std::string at) : path(std::move(at)) {
+    ::unlink(path.c_str());
+    fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", path.c_str());
+    if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) != 0) {
+      ::close(fd);
+      fd = -1;
+    }
+  }
+  ~NotifySocket() {
+    if (fd >= 0) ::close(fd);
+    ::unlink(path.c_str());
+  }
+  // The messages received so far, each followed by '|'.
+  std::string Receive() {
+    std::string all;
+    char buffer[512];
+    ssize_t n;
+    while ((n = ::recv(fd, buffer, sizeof(buffer), 0)) > 0) all.append(buffer, n).append("|");
+    return all;
+  }
+};
+
+// `systemctl stop` while robotd starts (here: while it reads its
+// configuration, or its key, from a pipe that the test fills only after its
+// SIGTERM) ends the start there: exit 0 with a line saying so, no port
+// opened, never "listening on" nor READY=1. It was acted on only once the
+// event loop ran: robotd opened its ports, sent the board its zero, served
+// the link and told systemd it was ready, and only then stopped.
+TEST(RobotdStartupTest, AStopDuringStartUpEndsItBetweenItsSteps) {
+  for (const bool key_in_pipe : {false, true}) {
+    SCOPED_TRACE(key_in_pipe ? "the key file is a pipe" : "the configuration file is a pipe");
+    LinkPty board;  // The motor board: robotd must not open its port.
+    ASSERT_GE(board.master, 0);
+    const std::string key = WriteKey("startup.key", "the start-up test's key", 0600);
+    const std::string pipe = TempDirPath() + "/startup.fifo";
+    ::unlink(pipe.c_str());
+    ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0) << std::strerror(errno);
+    const std::string conf_text = "motor = " + board.slave + "\nlisten = 127.0.0.1:0\nkey-file = " +
+                                  (key_in_pipe ? pipe : key) + "\n";
+    const std::string conf = key_in_pipe ? WriteConfig("startup.conf", conf_text) : pipe;
+    NotifySocket notify(TempDirPath() + "/startup.notify");
+    ASSERT_GE(notify.fd, 0);
+    QProcess robotd;
+    QProcessEnvironment env = QProcessEnvironment::systemEnvironment();
+    env.insert("NOTIFY_SOCKET", QString::fromStdString(notify.path));
+    robotd.setProcessEnvironment(env);
+    robotd.start(QStringLiteral(SWEEPSCAN_ROBOTD), {"--config", QString::fromStdString(conf)});
+    // robotd blocks opening the pipe until a writer opens it; a writer's
+    // non-blocking open succeeds only once robotd has it open for reading,
+    // that is after robotd put its signal handlers in place.
+    int writer = -1;
+    ASSERT_TRUE(WaitFor(
+        [&] {
+          writer = ::open(pipe.c_str(), O_WRONLY | O_NONBLOCK | O_CLOEXEC);
+          return writer >= 0 || robotd.state() == QProcess::NotRunning;
+        },
+        20000));
+    ASSERT_GE(writer, 0) << robotd.readAllStandardError().toStdString();
+    ASSERT_EQ(::kill(static_cast<pid_t>(robotd.processId()), SIGTERM), 0);
+    // Then the rest of the start-up can go on: the file's bytes and its end.
+    const std::string text = key_in_pipe ? std::string("the start-up test's key") : conf_text;
+    ASSERT_EQ(::write(writer, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+    ::close(writer);
+    ASSERT_TRUE(robotd.waitForFinished(20000)) << "robotd did not leave";
+    const std::string out = robotd.readAllStandardOutput().toStdString();
+    const std::string err = robotd.readAllStandardError().toStdString();
+    EXPECT_EQ(robotd.exitStatus(), QProcess::NormalExit) << err;
+    EXPECT_EQ(robotd.exitCode(), 0) << err;
+    EXPECT_NE(err.find("sweepscan-robotd: SIGTERM during start-up: stopped before the ports were "
+                       "opened; exiting"),
+              std::string::npos)
+        << err;
+    EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
+    EXPECT_EQ(notify.Receive().find("READY=1"), std::string::npos) << "ready while stopping";
+    std::string heard;
+    ReadAvailable(board.master, &heard);
+    EXPECT_EQ(heard.size(), 0u) << "the motor port was opened after the stop";
+    ::unlink(pipe.c_str());
+  }
 }
 
 }  // namespace
