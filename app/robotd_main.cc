@@ -222,6 +222,12 @@ int AgentMain(int argc, char** argv) {
       return Fail(QStringLiteral("--stop-motors: no motor board port (--motor)"));
     return StopMotors(config.motor_port, config.motor_baud);
   }
+  // Under systemd's Type=notify without the means to notify it, the start
+  // would time out with no word as to why: said first.
+  const QString notify_warning = sweepscan::app::ServiceNotifier::MissingSupportWarning();
+  if (!notify_warning.isEmpty()) {
+    std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(notify_warning));
+  }
   // The configuration is read (a slow file system, a file that is a pipe).
   if (StopPending()) return StoppedDuringStartup("stopped before the ports were opened");
   // Not before --stop-motors: it must stop the board whatever else the

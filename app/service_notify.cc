@@ -1,6 +1,7 @@
 #include "app/service_notify.h"
 
 #include <QTimer>
+#include <QtGlobal>
 #include <algorithm>
 #include <cstdint>
 
@@ -30,6 +31,24 @@ ServiceNotifier::ServiceNotifier(QObject* parent) : QObject(parent) {
     watchdog_interval_ms_ = static_cast<int>(std::max<uint64_t>(1, usec / 2000));
   }
 #endif
+}
+
+bool ServiceNotifier::Supported() {
+#ifdef SWEEPSCAN_HAVE_LIBSYSTEMD
+  return true;
+#else
+  return false;
+#endif
+}
+
+QString ServiceNotifier::MissingSupportWarning() {
+  if (Supported() || qEnvironmentVariableIsEmpty("NOTIFY_SOCKET")) return QString();
+  return QStringLiteral(
+      "warning: NOTIFY_SOCKET is set (systemd runs this as a Type=notify service) but this "
+      "build has no sd_notify support (built without libsystemd): systemd will not hear "
+      "READY=1 and will fail the start at its timeout, nor WATCHDOG=1; rebuild with "
+      "libsystemd-dev installed, or run it as Type=simple without WatchdogSec "
+      "(systemctl edit sweepscan-robotd)");
 }
 
 void ServiceNotifier::Ready(const QString& status) {

@@ -5,7 +5,10 @@
 // That is the service's watchdog; the link watchdog that stops the motors
 // when the workstation goes quiet is the agent's own (docs/robot-agent.md).
 // Without libsystemd (SWEEPSCAN_HAVE_LIBSYSTEMD unset) or outside systemd
-// (no NOTIFY_SOCKET) every call does nothing.
+// (no NOTIFY_SOCKET) every call does nothing; the first under systemd is a
+// mistake (the Type=notify unit times out waiting for READY=1), which CMake
+// warns about when it does not find libsystemd and robotd says at start-up
+// (MissingSupportWarning).
 #ifndef SWEEPSCAN_APP_SERVICE_NOTIFY_H_
 #define SWEEPSCAN_APP_SERVICE_NOTIFY_H_
 
@@ -26,6 +29,11 @@ class ServiceNotifier : public QObject {
   void Stopping();
   // The watchdog ping interval, 0 when systemd asked for none.
   int watchdog_interval_ms() const { return watchdog_interval_ms_; }
+  // Built with libsystemd: the calls above reach systemd.
+  static bool Supported();
+  // A line for the log when systemd waits for notifications (NOTIFY_SOCKET
+  // is set) that this build cannot send; empty otherwise.
+  static QString MissingSupportWarning();
 
  private:
   int watchdog_interval_ms_ = 0;
