@@ -47,12 +47,14 @@ int StopMotors(const QString& port, qint32 baud) {
   // Three times: the board may have been mid-frame when the agent died
   // (its decoder resynchronises on the next frame's header).
   for (int i = 0; i < 3; ++i) serial.Write(zero.data(), zero.size());
-  const bool drained = serial.Drain(1000);
+  QString why;
+  const bool drained = serial.Drain(1000, &why);
   serial.Close();
   if (!drained) {
     std::fprintf(stderr,
-                 "sweepscan-robotd: --stop-motors: %s: the zero command did not leave the port\n",
-                 qPrintable(port));
+                 "sweepscan-robotd: --stop-motors: %s: the zero command did not leave the port "
+                 "(%s)\n",
+                 qPrintable(port), qPrintable(why));
     return 1;
   }
   std::printf("zero command sent to the motor board on %s\n", qPrintable(port));

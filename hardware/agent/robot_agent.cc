@@ -169,9 +169,14 @@ void RobotAgent::Shutdown() {
   // a board that holds its last command would keep driving.
   core_->StopForShutdown(Now(), &out_);
   Dispatch(&out_);
+  // Bounded (a wedged adapter would otherwise hold the stop until systemd
+  // kills the agent), and said when the bound was hit.
   for (SerialStream*& device : devices_) {
     if (device != nullptr && device->IsOpen()) {
-      device->Drain(kShutdownDrainMs);
+      QString why;
+      if (!device->Drain(kShutdownDrainMs, &why)) {
+        emit logMessage(QStringLiteral("shutting down: %1").arg(why));
+      }
       device->Close();
     }
   }

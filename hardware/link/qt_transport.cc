@@ -17,7 +17,12 @@
 #include <QTcpSocket>
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
+#include <condition_variable>
 #include <cstring>
+#include <memory>
+#include <mutex>
+#include <thread>
 #include <vector>
 
 namespace sweepscan {
@@ -133,16 +138,83 @@ void SerialStream::Close() {
   if (port_->isOpen()) port_->close();
 }
 
-bool SerialStream::Drain(int timeout_ms) {
-  if (!port_->isOpen()) return false;
+namespace {
+
+// tcdrain(3) on `fd`, waited for at most `timeout_ms`: 0 when it is done,
+// ETIMEDOUT when the time ran out, else tcdrain's errno. A wedged USB-serial
+// adapter (or its driver) may never finish sending, and tcdrain has no
+// timeout of its own: it runs on a thread of its own, on a duplicate of the
+// descriptor that the thread closes, so the caller can leave it behind
+// (it ends when the call returns, or with the process). On time-out what the
+// driver still holds is thrown away (TCOFLUSH), which also wakes a tcdrain
+// waiting for a UART's queue and spares close() its wait for the same bytes
+// (up to 30 s for a serial port's closing_wait).
+int TcdrainWithin(int fd, int timeout_ms) {
+  struct State {
+    std::mutex mutex;
+    std::condition_variable done_changed;
+    bool done = false;
+    int error = 0;
+  };
+  auto state = std::make_shared<State>();
+  const int copy = ::fcntl(fd, F_DUPFD_CLOEXEC, 0);
+  if (copy < 0) return errno;
+  std::thread([state, copy] {
+    const int error = ::tcdrain(copy) == 0 ? 0 : errno;
+    ::close(copy);
+    const std::lock_guard<std::mutex> lock(state->mutex);
+    state->done = true;
+    state->error = error;
+    state->done_changed.notify_all();
+  }).detach();
+  std::unique_lock<std::mutex> lock(state->mutex);
+  if (state->done_changed.wait_for(lock, std::chrono::milliseconds(std::max(timeout_ms, 0)),
+                                   [&] { return state->done; })) {
+    return state->error;
+  }
+  lock.unlock();
+  ::tcflush(fd, TCOFLUSH);
+  return ETIMEDOUT;
+}
+
+}  // namespace
+
+bool SerialStream::Drain(int timeout_ms, QString* why) {
+  if (!port_->isOpen()) {
+    if (why != nullptr) *why = QStringLiteral("%1 is not open").arg(name_);
+    return false;
+  }
   QElapsedTimer clock;
   clock.start();
   while (port_->bytesToWrite() > 0) {
     const qint64 left = timeout_ms - clock.elapsed();
     if (left <= 0 || !port_->waitForBytesWritten(static_cast<int>(left))) break;
   }
-  // Written to the driver is not yet sent: wait for the UART too.
-  return port_->bytesToWrite() == 0 && ::tcdrain(static_cast<int>(port_->handle())) == 0;
+  if (port_->bytesToWrite() > 0) {
+    if (why != nullptr) {
+      *why = QStringLiteral("%1: %2 bytes not taken by the port within %3 ms")
+                 .arg(name_)
+                 .arg(port_->bytesToWrite())
+                 .arg(timeout_ms);
+    }
+    return false;
+  }
+  // Written to the driver is not yet sent: wait for the UART too, within
+  // what is left of the bound (a short minimum, for a pty's or a healthy
+  // port's immediate answer when the wait above took it all).
+  const int left = std::max<int>(static_cast<int>(timeout_ms - clock.elapsed()), 50);
+  const int error = TcdrainWithin(static_cast<int>(port_->handle()), left);
+  if (error == 0) return true;
+  if (why != nullptr) {
+    *why = error == ETIMEDOUT ? QStringLiteral(
+                                    "%1: the driver did not finish sending within %2 ms (a wedged "
+                                    "adapter?); what it held was thrown away")
+                                    .arg(name_)
+                                    .arg(timeout_ms)
+                              : QStringLiteral("%1: tcdrain: %2")
+                                    .arg(name_, QString::fromLocal8Bit(std::strerror(error)));
+  }
+  return false;
 }
 
 qint64 SerialStream::BytesQueued() const { return port_->isOpen() ? port_->bytesToWrite() : 0; }

@@ -86,8 +86,12 @@ class SerialStream : public ByteStream {
   void Close() override;
   // Blocks until every byte written so far has left the port (at most
   // timeout_ms): QSerialPort only buffers a write, and its event loop sends
-  // it, so a port closed without this loses what was last written.
-  bool Drain(int timeout_ms);
+  // it, so a port closed without this loses what was last written. The
+  // driver's own wait (tcdrain) is bounded too, on a thread of its own: a
+  // wedged adapter's never returns. False with *why (if given) when the
+  // bytes did not all leave in time; what the driver still held is then
+  // thrown away, so that closing the port does not wait for it either.
+  bool Drain(int timeout_ms, QString* why = nullptr);
   qint64 BytesQueued() const override;
   qint64 DiscardQueued() override;
   QString Describe() const override;

@@ -13,11 +13,16 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <linux/audit.h>
+#include <linux/filter.h>
+#include <linux/seccomp.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <pty.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <termios.h>
@@ -29,6 +34,7 @@
 #include <QProcessEnvironment>
 #include <atomic>
 #include <chrono>
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -863,6 +869,170 @@ TEST(RobotdStartupTest, ABuildWithoutNotifySupportSaysSoUnderSystemd) {
   EXPECT_EQ(out.find("NOTIFY_SOCKET"), std::string::npos) << out;
   EXPECT_EQ(code, 0) << out;
   EXPECT_NE(notify.Receive().find("READY=1"), std::string::npos);
+}
+
+// A process whose tcdrain never returns, as on a wedged USB-serial adapter
+// (a pseudo-terminal's returns at once: it has no queue to wait for): a
+// seccomp filter sends every ioctl(TCSBRK) it makes (tcdrain) to a listener
+// that never answers, so the kernel holds the call. Closing the listener
+// ends the calls held (ENOSYS).
+struct HeldTcdrainProcess {
+  pid_t pid = -1;
+  int listener = -1;  // The seccomp listener: held calls stay held while it is open.
+  int output = -1;    // The process's stdout and stderr (non-blocking).
+  std::string error;  // Why it did not start.
+  int status = -1;    // waitpid's, once it has exited.
+
+  explicit HeldTcdrainProcess(const std::vector<std::string>& command) {
+#if defined(__x86_64__)
+    constexpr uint32_t kArch = AUDIT_ARCH_X86_64;
+#elif defined(__aarch64__)
+    constexpr uint32_t kArch = AUDIT_ARCH_AARCH64;
+#else
+    error = "no seccomp filter for this architecture";
+    return;
+#endif
+    sock_filter filter[] = {
+        BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, arch)),
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, kArch, 1, 0),
+        BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
+        BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, nr)),
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, __NR_ioctl, 1, 0),
+        BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
+        // The request's low 32 bits (little-endian).
+        BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, args[1])),
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, TCSBRK, 0, 1),
+        BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_USER_NOTIF),
+        BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
+    };
+    sock_fprog program{static_cast<unsigned short>(std::size(filter)), filter};
+    std::vector<char*> argv;  // Made before fork(): the child only makes system calls.
+    for (const std::string& a : command) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    int channel[2], pipe[2];
+    if (::socketpair(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0, channel) != 0 ||
+        ::pipe2(pipe, O_CLOEXEC) != 0) {
+      error = std::strerror(errno);
+      return;
+    }
+    pid = ::fork();
+    if (pid == 0) {
+      ::dup2(pipe[1], 1);
+      ::dup2(pipe[1], 2);
+      ::prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0);
+      const int fd = static_cast<int>(::syscall(SYS_seccomp, SECCOMP_SET_MODE_FILTER,
+                                                SECCOMP_FILTER_FLAG_NEW_LISTENER, &program));
+      if (fd < 0) ::_exit(126);
+      char byte = 0;
+      iovec io{&byte, 1};
+      alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+      msghdr message{};
+      message.msg_iov = &io;
+      message.msg_iovlen = 1;
+      message.msg_control = control;
+      message.msg_controllen = sizeof(control);
+      cmsghdr* header = CMSG_FIRSTHDR(&message);
+      header->cmsg_level = SOL_SOCKET;
+      header->cmsg_type = SCM_RIGHTS;
+      header->cmsg_len = CMSG_LEN(sizeof(int));
+      std::memcpy(CMSG_DATA(header), &fd, sizeof(int));
+      if (::sendmsg(channel[1], &message, 0) != 1) ::_exit(126);
+      ::close(fd);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    ::close(channel[1]);
+    ::close(pipe[1]);
+    output = pipe[0];
+    ::fcntl(output, F_SETFL, O_NONBLOCK);
+    char byte = 0;
+    iovec io{&byte, 1};
+    alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+    msghdr message{};
+    message.msg_iov = &io;
+    message.msg_iovlen = 1;
+    message.msg_control = control;
+    message.msg_controllen = sizeof(control);
+    if (pid > 0 && ::recvmsg(channel[0], &message, 0) == 1) {
+      const cmsghdr* header = CMSG_FIRSTHDR(&message);
+      if (header != nullptr && header->cmsg_type == SCM_RIGHTS) {
+        std::memcpy(&listener, CMSG_DATA(header), sizeof(int));
+      }
+    }
+    ::close(channel[0]);
+    if (listener < 0) error = "the kernel refused the seccomp filter (user notification)";
+  }
+  ~HeldTcdrainProcess() {
+    ReleaseHeldCalls();
+    if (pid > 0 && !Exited()) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+    }
+    if (output >= 0) ::close(output);
+  }
+  void ReleaseHeldCalls() {
+    if (listener >= 0) ::close(listener);
+    listener = -1;
+  }
+  bool Exited() {
+    if (status != -1) return true;
+    return pid > 0 && ::waitpid(pid, &status, WNOHANG) == pid;
+  }
+  std::string Read() {
+    std::string text;
+    ReadAvailable(output, &text);
+    return text;
+  }
+};
+
+// SIGTERM's shutdown waits for the zero command to leave the motor board's
+// port, and that wait is bounded: 200 ms, then what the driver holds is
+// thrown away, the port closed, said in the log, exit 0. The driver's own
+// wait (tcdrain) had no bound: on a wedged adapter `systemctl stop` hung
+// until systemd killed the agent (TimeoutStopSec), the port never closed.
+TEST(RobotdShutdownTest, AWedgedMotorPortDoesNotHoldTheStop) {
+  const std::string key = WriteKey("wedged.key", "the wedged port test's key", 0600);
+  LinkPty board;
+  ASSERT_GE(board.master, 0);
+  HeldTcdrainProcess robotd(
+      {SWEEPSCAN_ROBOTD, "--motor", board.slave, "--listen", "127.0.0.1:0", "--key-file", key});
+  if (robotd.pid > 0 && robotd.listener < 0 && robotd.error.find("refused") != std::string::npos) {
+    GTEST_SKIP() << robotd.error;
+  }
+  ASSERT_GE(robotd.listener, 0) << robotd.error;
+  std::string out, heard;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        out += robotd.Read();
+        ReadAvailable(board.master, &heard);
+        return (out.find("listening on") != std::string::npos && heard.size() >= 11) ||
+               robotd.Exited();
+      },
+      20000))
+      << out;
+  ASSERT_FALSE(robotd.Exited()) << out;
+  ASSERT_EQ(::kill(robotd.pid, SIGTERM), 0);
+  // Generous (200 ms are asked): a loaded machine, not a bound being measured.
+  const bool exited = WaitFor([&] { return robotd.Exited(); }, 10000);
+  robotd.ReleaseHeldCalls();  // The old robotd's stop goes on from here.
+  WaitFor([&] { return robotd.Exited(); }, 10000);
+  out += robotd.Read();
+  ReadAvailable(board.master, &heard);
+  EXPECT_TRUE(exited) << "the stop hung on the wedged port: " << out;
+  ASSERT_TRUE(robotd.Exited()) << out;
+  EXPECT_TRUE(WIFEXITED(robotd.status) && WEXITSTATUS(robotd.status) == 0) << out;
+  EXPECT_NE(out.find("shutting down: " + board.slave +
+                     ": the driver did not finish sending within 200 ms (a wedged adapter?); what "
+                     "it held was thrown away"),
+            std::string::npos)
+      << out;
+  // The zero command was handed to the port before the wait.
+  MotorCommandDecoder decoder;
+  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
+  const std::vector<MotorCommand> commands = decoder.TakeRecords();
+  ASSERT_GE(commands.size(), 2u) << "the zero at the start and at the stop";
+  EXPECT_EQ(commands.back().vx_mps, 0.0);
+  EXPECT_EQ(commands.back().wz_radps, 0.0);
 }
 
 }  // namespace
