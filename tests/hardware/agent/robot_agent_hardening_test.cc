@@ -18,7 +18,9 @@
 #include <linux/seccomp.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <pty.h>
+#include <sys/ioctl.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -30,6 +32,7 @@
 
 #include <QCoreApplication>
 #include <QElapsedTimer>
+#include <QFile>
 #include <QProcess>
 #include <QProcessEnvironment>
 #include <atomic>
@@ -871,19 +874,20 @@ TEST(RobotdStartupTest, ABuildWithoutNotifySupportSaysSoUnderSystemd) {
   EXPECT_NE(notify.Receive().find("READY=1"), std::string::npos);
 }
 
-// A process whose tcdrain never returns, as on a wedged USB-serial adapter
-// (a pseudo-terminal's returns at once: it has no queue to wait for): a
-// seccomp filter sends every ioctl(TCSBRK) it makes (tcdrain) to a listener
-// that never answers, so the kernel holds the call. Closing the listener
-// ends the calls held (ENOSYS).
-struct HeldTcdrainProcess {
+// A process whose ioctl(`request`) calls the kernel holds: a seccomp filter
+// sends each to a listener (the test's), and the call waits until the
+// listener answers (Continue()) or is closed (ReleaseHeldCalls(): ENOSYS).
+// With TCSBRK its tcdrain never returns, as on a wedged USB-serial adapter
+// (a pseudo-terminal's returns at once: it has no queue to wait for); with
+// TIOCEXCL (which QSerialPort's open makes) its serial ports open slowly.
+struct HeldIoctlProcess {
   pid_t pid = -1;
   int listener = -1;  // The seccomp listener: held calls stay held while it is open.
   int output = -1;    // The process's stdout and stderr (non-blocking).
   std::string error;  // Why it did not start.
   int status = -1;    // waitpid's, once it has exited.
 
-  explicit HeldTcdrainProcess(const std::vector<std::string>& command) {
+  HeldIoctlProcess(const std::vector<std::string>& command, uint32_t request) {
 #if defined(__x86_64__)
     constexpr uint32_t kArch = AUDIT_ARCH_X86_64;
 #elif defined(__aarch64__)
@@ -901,7 +905,7 @@ struct HeldTcdrainProcess {
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
         // The request's low 32 bits (little-endian).
         BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, args[1])),
-        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, TCSBRK, 0, 1),
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, request, 0, 1),
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_USER_NOTIF),
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
     };
@@ -962,7 +966,7 @@ struct HeldTcdrainProcess {
     ::close(channel[0]);
     if (listener < 0) error = "the kernel refused the seccomp filter (user notification)";
   }
-  ~HeldTcdrainProcess() {
+  ~HeldIoctlProcess() {
     ReleaseHeldCalls();
     if (pid > 0 && !Exited()) {
       ::kill(pid, SIGKILL);
@@ -973,6 +977,25 @@ struct HeldTcdrainProcess {
   void ReleaseHeldCalls() {
     if (listener >= 0) ::close(listener);
     listener = -1;
+  }
+  // A call is held.
+  bool Holding() const {
+    pollfd ready{listener, POLLIN, 0};
+    return listener >= 0 && ::poll(&ready, 1, 0) == 1 && (ready.revents & POLLIN) != 0;
+  }
+  // Lets the calls held so far go on; the number let go.
+  int Continue() {
+    int n = 0;
+    while (Holding()) {
+      seccomp_notif call{};
+      if (::ioctl(listener, SECCOMP_IOCTL_NOTIF_RECV, &call) != 0) break;
+      seccomp_notif_resp answer{};
+      answer.id = call.id;
+      answer.flags = SECCOMP_USER_NOTIF_FLAG_CONTINUE;
+      // ENOENT: the call was interrupted (a signal) and will be made again.
+      if (::ioctl(listener, SECCOMP_IOCTL_NOTIF_SEND, &answer) == 0) ++n;
+    }
+    return n;
   }
   bool Exited() {
     if (status != -1) return true;
@@ -994,8 +1017,9 @@ TEST(RobotdShutdownTest, AWedgedMotorPortDoesNotHoldTheStop) {
   const std::string key = WriteKey("wedged.key", "the wedged port test's key", 0600);
   LinkPty board;
   ASSERT_GE(board.master, 0);
-  HeldTcdrainProcess robotd(
-      {SWEEPSCAN_ROBOTD, "--motor", board.slave, "--listen", "127.0.0.1:0", "--key-file", key});
+  HeldIoctlProcess robotd(
+      {SWEEPSCAN_ROBOTD, "--motor", board.slave, "--listen", "127.0.0.1:0", "--key-file", key},
+      TCSBRK);
   if (robotd.pid > 0 && robotd.listener < 0 && robotd.error.find("refused") != std::string::npos) {
     GTEST_SKIP() << robotd.error;
   }
@@ -1033,6 +1057,69 @@ TEST(RobotdShutdownTest, AWedgedMotorPortDoesNotHoldTheStop) {
   ASSERT_GE(commands.size(), 2u) << "the zero at the start and at the stop";
   EXPECT_EQ(commands.back().vx_mps, 0.0);
   EXPECT_EQ(commands.back().wz_radps, 0.0);
+}
+
+// No SIGTERM pending for `pid` (one of its threads has taken it).
+bool SigtermTaken(pid_t pid) {
+  QFile status(QStringLiteral("/proc/%1/status").arg(pid));
+  if (!status.open(QIODevice::ReadOnly)) return true;
+  for (const QByteArray& line : status.readAll().split('\n')) {
+    if (line.startsWith("ShdPnd:") || line.startsWith("SigPnd:")) {
+      if ((line.mid(7).trimmed().toULongLong(nullptr, 16) & (1ULL << (SIGTERM - 1))) != 0) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// A stop while the ports open (a USB adapter's open can take seconds; here
+// the motor port's open is held by the kernel until the SIGTERM is in) is
+// seen once they are open: the agent's shutdown sends the board its zero
+// and closes the ports, exit 0, never "listening on". It was acted on only
+// once the event loop ran, after the link was served and READY=1 sent.
+TEST(RobotdStartupTest, AStopWhileThePortsOpenStopsTheMotorsAndEndsTheStart) {
+  const std::string key = WriteKey("opening.key", "the slow open test's key", 0600);
+  LinkPty board;
+  ASSERT_GE(board.master, 0);
+  HeldIoctlProcess robotd(
+      {SWEEPSCAN_ROBOTD, "--motor", board.slave, "--listen", "127.0.0.1:0", "--key-file", key},
+      TIOCEXCL);
+  if (robotd.pid > 0 && robotd.listener < 0 && robotd.error.find("refused") != std::string::npos) {
+    GTEST_SKIP() << robotd.error;
+  }
+  ASSERT_GE(robotd.listener, 0) << robotd.error;
+  std::string out;
+  ASSERT_TRUE(WaitFor([&] { return robotd.Holding() || robotd.Exited(); }, 20000));
+  ASSERT_FALSE(robotd.Exited()) << robotd.Read();
+  ASSERT_EQ(::kill(robotd.pid, SIGTERM), 0);
+  ASSERT_TRUE(WaitFor([&] { return SigtermTaken(robotd.pid); }, 10000));
+  // The open goes on (the call the signal interrupted is made again).
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        robotd.Continue();
+        out += robotd.Read();
+        return robotd.Exited();
+      },
+      20000))
+      << out;
+  out += robotd.Read();
+  EXPECT_TRUE(WIFEXITED(robotd.status) && WEXITSTATUS(robotd.status) == 0) << out;
+  EXPECT_NE(out.find("sweepscan-robotd: SIGTERM during start-up: the ports were opened; motors "
+                     "stopped, ports closed; exiting"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
+  std::string heard;
+  ReadAvailable(board.master, &heard);
+  MotorCommandDecoder decoder;
+  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
+  const std::vector<MotorCommand> commands = decoder.TakeRecords();
+  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << heard.size() << " bytes)";
+  for (const MotorCommand& c : commands) {
+    EXPECT_EQ(c.vx_mps, 0.0);
+    EXPECT_EQ(c.wz_radps, 0.0);
+  }
 }
 
 }  // namespace
