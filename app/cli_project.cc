@@ -18,6 +18,7 @@
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "core/calibration/calibration_file.h"
+#include "core/common/checked_file.h"
 #include "core/project/project.h"
 #include "core/session/session.h"
 
@@ -30,7 +31,8 @@ const char* const kProjectUsage =
     "\n"
     "A project is a building scanned in several sessions (drives), each placed in\n"
     "one frame by registration (docs/project-format.md, docs/registration.md). The\n"
-    "first session added is the anchor: the project's frame is its start pose.\n"
+    "first session added is the anchor: the project's frame is its start pose\n"
+    "(`project anchor` makes another session the anchor).\n"
     "\n"
     "Subcommands:\n"
     "  new PROJECT [SESSION...] [--name N] [--description D] [--calibration FILE]\n"
@@ -38,6 +40,11 @@ const char* const kProjectUsage =
     "  add PROJECT SESSION... [--calibration FILE]\n"
     "                     add session folders (unplaced until aligned)\n"
     "  remove PROJECT ID  take a session out (its folder is left alone)\n"
+    "  anchor PROJECT ID  make a placed session the anchor: the project's frame\n"
+    "                     becomes its start pose, every placement is re-expressed\n"
+    "                     in it (the building stays as it is), and the placements\n"
+    "                     between it and the old anchor are turned round, each\n"
+    "                     with its measurement (covariance, pairs) inverted\n"
     "  info PROJECT       the sessions, their poses and how each was found\n"
     "  align PROJECT [--session ID] [--to ID] [--pairs FILE] [--no-icp] [--hold-free]\n"
     "                     place unplaced sessions (or --session ID again) against\n"
@@ -158,12 +165,16 @@ int EditProject(const std::string& file, const std::function<int(Project*)>& edi
     if (!s.ok()) return Fail(kExitBadInput, s.message());
     std::ostringstream said;
     std::streambuf* const cerr = std::cerr.rdbuf(said.rdbuf());
+    const std::string before = ProjectToJson(project);
     const int code = edit(&project);
     std::cerr.rdbuf(cerr);
     std::string now;
     if (code == kExitOk && attempt < 5 && ReadProjectFile(file, &now) && now != text) continue;
     std::cerr << said.str();
     if (code != kExitOk) return code;
+    // Nothing changed (the anchor made the anchor): the file, perhaps
+    // written by hand, is left as it is.
+    if (ProjectToJson(project) == before) return kExitOk;
     s = SaveProject(file, project);
     if (!s.ok()) return Fail(kExitFailure, s.message());
     return kExitOk;
@@ -208,6 +219,56 @@ int RunRemove(const Args& args) {
     }
     return kExitOk;
   });
+}
+
+int RunAnchor(const Args& args) {
+  const std::vector<std::string>& pos = args.positional();
+  if (pos.size() != 2)
+    return Fail(kExitBadInput, "project anchor needs PROJECT and one session ID");
+  // Said before anything is changed, as `align` does.
+  if (const Status w = CheckCanWrite(pos[0]); !w.ok()) return Fail(kExitFailure, w.message());
+  nlohmann::json out;
+  const int code = EditProject(pos[0], [&](Project* project) {
+    Project::AnchorChange change;
+    const int was = project->Anchor();
+    const Status s = project->ChangeAnchor(pos[1], &change);
+    if (!s.ok()) return Fail(kExitBadInput, s.message());
+    const std::string& id = pos[1];
+    out = {{"project", pos[0]},
+           {"anchor", id},
+           {"changed", was != project->Find(id)},
+           {"old_anchor", change.old_anchor},
+           {"old_anchor_placed", nullptr},
+           {"reversed", change.reversed}};
+    if (was == project->Find(id)) {
+      std::cerr << "'" << id << "' is the anchor already; nothing changed\n";
+      return kExitOk;
+    }
+    size_t placed = 0;
+    for (const ProjectSession& ps : project->sessions) placed += ps.project_from_session ? 1 : 0;
+    std::cerr << "'" << id << "' is the anchor now: the project's frame is its start pose";
+    if (placed > 1) std::cerr << "; " << placed - 1 << " placement(s) re-expressed in it";
+    std::cerr << "\n";
+    std::string from = id;
+    for (const std::string& r : change.reversed) {
+      std::cerr << "turned round: '" << r << "' is placed against '" << from
+                << "' by the same measurement, inverted\n";
+      from = r;
+    }
+    if (!change.old_anchor.empty()) {
+      const ProjectSession& old = project->sessions[project->Find(change.old_anchor)];
+      out["old_anchor_placed"] = old.project_from_session.has_value();
+      if (change.old_anchor_unplaced) {
+        std::cerr << "'" << old.id << "', the old anchor, is not placed now (nothing else was)\n";
+      } else if (old.registration.method == "manual") {
+        std::cerr << "'" << old.id << "', the old anchor, is held where it is by hand (manual): '"
+                  << id << "' rests on a placement by hand, not on it\n";
+      }
+    }
+    return kExitOk;
+  });
+  if (code == kExitOk && args.Flag("json")) std::cout << out.dump(2) << "\n";
+  return code;
 }
 
 int RunProjectInfo(const Args& args) {
@@ -303,6 +364,7 @@ int RunProject(int argc, char** argv) {
       {"new", {"name", "description", "calibration", "json"}},
       {"add", {"calibration", "json"}},
       {"remove", {"json"}},
+      {"anchor", {"json"}},
       {"info", {"json"}},
       {"align", {"session", "to", "pairs", "no-icp", "hold-free", "pose-source", "strict", "json"}},
       {"export", {"out", "sessions", "pose-source", "strict", "json"}},
@@ -318,6 +380,7 @@ int RunProject(int argc, char** argv) {
   if (sub == "new") return RunNew(args);
   if (sub == "add") return RunAdd(args);
   if (sub == "remove") return RunRemove(args);
+  if (sub == "anchor") return RunAnchor(args);
   if (sub == "info") return RunProjectInfo(args);
   if (sub == "align") return RunProjectAlign(args);
   if (sub == "export") return RunProjectExport(args);

@@ -470,6 +470,117 @@ std::vector<std::string> Project::MoveDependants(const std::string& id, const Ri
   return moved;
 }
 
+namespace {
+
+Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// The measurement `e` of reference_from_session = `measured`, turned round:
+// the reference placed against the session (`session`), by the inverse.
+// A left perturbation in the reference's frame, measured = Exp(xi) * M,
+// is one in the session's frame for the inverse, M^-1 * Exp(-xi) =
+// Exp(-Ad(M^-1) xi) * M^-1, so the covariance becomes Ad C Ad^T with
+// Ad(R, t) = [R 0; [t]x R  R] in (rotation, translation) order.
+RegistrationEvidence Reversed(const RegistrationEvidence& e, const std::string& session,
+                              const Rigid3d& measured) {
+  RegistrationEvidence r = e;
+  r.reference = session;
+  const Rigid3d inverse = measured.inverse();
+  const Eigen::Matrix3d rot = inverse.rotation().toRotationMatrix();
+  Eigen::Matrix<double, 6, 6> ad = Eigen::Matrix<double, 6, 6>::Zero();
+  ad.block<3, 3>(0, 0) = rot;
+  ad.block<3, 3>(3, 0) = Hat(inverse.translation()) * rot;
+  ad.block<3, 3>(3, 3) = rot;
+  Eigen::Matrix<double, 6, 6> c;
+  for (int i = 0; i < 36; ++i) c(i / 6, i % 6) = e.covariance[i];
+  const Eigen::Matrix<double, 6, 6> turned = ad * c * ad.transpose();
+  for (int i = 0; i < 36; ++i) r.covariance[i] = turned(i / 6, i % 6);
+  // A translation free along d in the reference's frame is one along R d
+  // in the session's (the adjoint's translation block, no rotation part).
+  if (!e.free_direction.isZero()) r.free_direction = (rot * e.free_direction).normalized();
+  for (PickedPair& p : r.pairs) std::swap(p.source, p.target);
+  return r;
+}
+
+}  // namespace
+
+Status Project::ChangeAnchor(const std::string& id, AnchorChange* change) {
+  AnchorChange said;
+  const int s = Find(id);
+  if (s < 0) return Status::Error("no session '" + id + "' in the project");
+  const int a = Anchor();
+  if (s == a) {
+    if (change != nullptr) *change = said;
+    return Status::Ok();
+  }
+  if (a >= 0) said.old_anchor = sessions[a].id;
+  if (!sessions[s].project_from_session) {
+    for (size_t k = 0; k < sessions.size(); ++k) {
+      if (static_cast<int>(k) != a && sessions[k].project_from_session) {
+        return Status::Error("'" + id +
+                             "' is not placed: align it first (the anchor's frame must be known "
+                             "relative to the placed sessions')");
+      }
+    }
+    // Nothing placed but the anchor: no placement to re-express, and the
+    // old anchor, measured against nothing, is not placed in the new frame.
+    if (a >= 0) {
+      sessions[a].project_from_session.reset();
+      sessions[a].registration = RegistrationEvidence();
+      said.old_anchor_unplaced = true;
+    }
+    MakeAnchor(&sessions[s]);
+    if (change != nullptr) *change = said;
+    return Status::Ok();
+  }
+  const Rigid3d new_from_old = sessions[s].project_from_session->inverse();
+  for (const ProjectSession& other : sessions) {
+    if (other.project_from_session &&
+        (new_from_old * *other.project_from_session).translation().cwiseAbs().maxCoeff() >
+            kMaxProjectOffsetM) {
+      return Status::Error("'" + other.id + "' would lie beyond 8000 m of '" + id +
+                           "''s start pose (a cloud's float positions would be rounded); '" + id +
+                           "' cannot be the anchor");
+    }
+  }
+  // The chain of references from `id` to its root: the anchor, or a
+  // session held by hand without a reference.
+  std::vector<int> chain = {s};
+  std::set<int> seen = {s};
+  for (int k = Find(sessions[s].registration.reference);
+       k >= 0 && sessions[k].project_from_session && seen.insert(k).second;
+       k = Find(sessions[k].registration.reference)) {
+    chain.push_back(k);
+  }
+  std::vector<RegistrationEvidence> turned;
+  for (size_t k = 0; k + 1 < chain.size(); ++k) {
+    const ProjectSession& from = sessions[chain[k]];
+    const ProjectSession& to = sessions[chain[k + 1]];
+    turned.push_back(Reversed(from.registration, from.id,
+                              to.project_from_session->inverse() * *from.project_from_session));
+  }
+  for (size_t k = 0; k < turned.size(); ++k) {
+    sessions[chain[k + 1]].registration = turned[k];
+    said.reversed.push_back(sessions[chain[k + 1]].id);
+  }
+  // The old anchor off the chain (`id` rests on a session held by hand):
+  // held where it is, by hand too.
+  if (a >= 0 && chain.back() != a) {
+    sessions[a].registration = RegistrationEvidence();
+    sessions[a].registration.method = "manual";
+  }
+  for (ProjectSession& other : sessions) {
+    if (other.project_from_session)
+      other.project_from_session = new_from_old * *other.project_from_session;
+  }
+  MakeAnchor(&sessions[s]);
+  if (change != nullptr) *change = said;
+  return Status::Ok();
+}
+
 std::string ProjectDirectory(const std::string& project_file) {
   const fs::path dir = fs::path(project_file).parent_path();
   return dir.empty() ? "." : dir.string();

@@ -124,6 +124,33 @@ struct Project {
   // against: MoveDependants would move it with `on`, and the two would
   // refer to each other.
   bool PlacedThrough(const std::string& id, const std::string& on) const;
+  // Makes session `id` the anchor: the project's frame becomes its start
+  // pose (docs/project-format.md, "Changing the anchor"). Every placement
+  // is re-expressed in that frame, project_from_session' =
+  // inverse(project_from_id) * project_from_session, so that every point
+  // stays where it was relative to every other. The placements on the
+  // chain of references from `id` to the anchor (or to a session placed by
+  // hand without one) are turned round: each of those sessions is then
+  // placed against the one that was placed against it, by the same
+  // measurement inverted (the covariance carried into the new reference's
+  // frame by the adjoint, the free direction rotated into it, the pairs'
+  // source and target swapped; rms, overlap, counts, time and pose source
+  // kept as measured). `id`'s own evidence thus goes to its old reference.
+  // The old anchor, when it is not on that chain, is held where it is by
+  // hand (manual, no reference). Every other placement keeps its reference
+  // and its evidence, which are relative to the reference and unchanged.
+  // Refuses an unknown id, `id` unplaced while any session but the anchor
+  // is placed (its frame is not known relative to theirs; with nothing
+  // else placed the old anchor becomes unplaced instead), and a session
+  // that would then lie beyond kMaxProjectOffsetM of the new origin. Nothing
+  // changes when it refuses, or when `id` is the anchor already.
+  struct AnchorChange {
+    std::string old_anchor;            // "" if there was none (or `id` is it)
+    bool old_anchor_unplaced = false;  // nothing else was placed: not placed now
+    // The sessions whose placement was turned round, from `id` outwards.
+    std::vector<std::string> reversed;
+  };
+  Status ChangeAnchor(const std::string& id, AnchorChange* change = nullptr);
 };
 
 // Makes `session` the anchor: the identity, aligned to nothing.

@@ -1,5 +1,5 @@
 // Undoable project edits (visibility, colour, adding and removing a
-// session, a placement by alignment) on the project's QUndoStack: each
+// session, a placement by alignment, a change of anchor) on the project's QUndoStack: each
 // holds the project before and after, which are small (no points). The
 // stack is cleared whenever the document's generation changes; should a
 // command of an older generation still be reached, it becomes obsolete

@@ -308,6 +308,32 @@ void ProjectController::RemoveSession(const std::string& id) {
   }
 }
 
+void ProjectController::MakeAnchor(const std::string& id) {
+  Project after = document_.project();
+  Project::AnchorChange change;
+  const bool was = after.Anchor() == after.Find(id);
+  const Status s = after.ChangeAnchor(id, &change);
+  if (!s.ok()) {
+    show_error_(tr("Cannot make the session the anchor"), QString::fromStdString(s.message()));
+    return;
+  }
+  if (was) return;
+  Push(after, tr("make '%1' the anchor").arg(Id(id)));
+  QString text = tr("'%1' is the anchor now: the project's frame is its start pose").arg(Id(id));
+  if (!change.reversed.empty()) {
+    QStringList turned;
+    for (const std::string& r : change.reversed) turned << QStringLiteral("'%1'").arg(Id(r));
+    text += tr("; placed the other way round now: %1").arg(turned.join(QStringLiteral(", ")));
+  }
+  if (change.old_anchor_unplaced) {
+    text += tr("; '%1', the old anchor, is not placed now").arg(Id(change.old_anchor));
+  } else if (const int a = after.Find(change.old_anchor);
+             a >= 0 && after.sessions[a].registration.method == "manual") {
+    text += tr("; '%1', the old anchor, is held where it is by hand").arg(Id(change.old_anchor));
+  }
+  emit message(text);
+}
+
 void ProjectController::ShowOnly(const std::string& id) {
   Project after = document_.project();
   for (ProjectSession& s : after.sessions) s.visible = s.id == id;
@@ -525,7 +551,8 @@ bool ProjectController::Align(const std::string& id, const std::string& referenc
         // The project as it is now (the reference may have moved meanwhile).
         Project after = document_.project();
         const int i = after.Find(id), r = after.Find(out->attempt.reference);
-        if (i < 0 || r < 0 || !after.sessions[r].project_from_session ||
+        // `id` made the anchor meanwhile: the frame is its own now.
+        if (i < 0 || r < 0 || i == after.Anchor() || !after.sessions[r].project_from_session ||
             after.PlacedThrough(out->attempt.reference, id)) {
           emit alignFinished(false, tr("the project changed meanwhile"));
           return;

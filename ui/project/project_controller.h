@@ -88,6 +88,10 @@ class ProjectController : public QObject {
   void SetColor(const std::string& id, const QString& color);  // "#rrggbb"
   void RemoveSession(const std::string& id);
   void ShowOnly(const std::string& id);
+  // Makes session `id` the anchor (Project::ChangeAnchor): the project's
+  // frame becomes its start pose, the building unmoved; what core/project
+  // refuses is said (show_error) and changes nothing.
+  void MakeAnchor(const std::string& id);
   // Registers session `id` against the placed `reference` on the job
   // thread (loading either cloud first if needed). False if it cannot start
   // (a job runs, unknown ids, the reference unplaced or placed against

@@ -346,6 +346,24 @@ QMenu* ProjectPanel::ContextMenu(const std::string& id) {
   edit(menu->addAction(tr("Colour…"), this, [this, id] { ChooseColor(id); }));
   edit(menu->addAction(tr("Show Only This"), this, [this, id] { controller_->ShowOnly(id); }));
   menu->addSeparator();
+  // Make Anchor: what core/project refuses (an unplaced session while
+  // others are placed, one too far) is disabled with the reason.
+  QAction* anchor =
+      edit(menu->addAction(tr("Make Anchor"), this, [this, id] { controller_->MakeAnchor(id); }));
+  Project anchored = p;
+  const Status can_anchor = anchored.ChangeAnchor(id);
+  if (i >= 0 && i == p.Anchor()) {
+    anchor->setEnabled(false);
+    anchor->setToolTip(tr("'%1' is the anchor: the project's frame is its start pose")
+                           .arg(QString::fromStdString(id)));
+  } else if (!can_anchor.ok()) {
+    anchor->setEnabled(false);
+    anchor->setToolTip(QString::fromStdString(can_anchor.message()));
+  } else if (!picking) {
+    anchor->setToolTip(tr("The project's frame becomes '%1''s start pose; the building stays as it "
+                          "is, the placements between it and the anchor are turned round")
+                           .arg(QString::fromStdString(id)));
+  }
   QAction* remove = edit(menu->addAction(tr("Remove from Project"), this,
                                          [this, id] { controller_->RemoveSession(id); }));
   // What core/project would refuse (the anchor while others are placed

@@ -4,8 +4,9 @@
 // or "not placed"); the reference to align the selected session to and
 // Align, or Pick Pairs… for the pairs' mode (PairPickBox below the list);
 // the job's progress with Cancel; a context menu (Align to, Colour,
-// Show Only This, Remove from Project; its edits disabled while pairs are
-// picked, and a removal core/project refuses disabled with the reason);
+// Show Only This, Make Anchor, Remove from Project; its edits disabled
+// while pairs are picked, and a change of anchor or a removal core/project
+// refuses disabled with the reason);
 // the last alignment's outcome while it is true (not once undone or the
 // project closed). It only calls the controller, which makes every edit an
 // undoable command. The content scrolls in its dock.

@@ -79,6 +79,12 @@ void WritePairs(char source, char target, const std::vector<Eigen::Vector3d>& wo
   std::ofstream(P(name)) << nlohmann::json{{"pairs", pairs}}.dump(2);
 }
 
+bool ReadFile(const std::string& path, std::string* text) {
+  std::ifstream in(path, std::ios::binary);
+  text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return static_cast<bool>(in) || in.eof();
+}
+
 double TranslationError(const Rigid3d& estimate, const Rigid3d& truth) {
   return (truth.inverse() * estimate).translation().norm();
 }
@@ -629,6 +635,129 @@ TEST_F(ProjectCliTest, RemovingTheAnchorMakesTheNextSessionTheAnchor) {
             std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("anchor"), std::string::npos) << r.out;
+}
+
+// `project anchor`: the building re-expressed in another session's frame.
+// Placed by the truth (what align finds, exactly), b against a by pairs and
+// c against b, then anchored on c: every pose is the truth seen from c's
+// start, the chain c -> b -> a is turned round with its pairs, and the
+// exported cloud is the same points moved by the one change of frame.
+TEST_F(ProjectCliTest, AnchorMakesAPlacedSessionTheFrameAndKeepsTheBuilding) {
+  const std::string project = NewProject("anchored.sweepscan-project", "abc");
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  const auto place = [&](char id, char reference, const std::string& method) {
+    ProjectSession& s = p.sessions[id - 'a'];
+    s.project_from_session = TrueStart('a').inverse() * TrueStart(id);
+    s.registration.method = method;
+    s.registration.reference = std::string("building_") + reference;
+    for (int i = 0; i < 6; ++i) s.registration.covariance[i * 7] = i < 3 ? 1e-8 : 1e-6;
+    const Rigid3d reference_from_session = TrueStart(reference).inverse() * TrueStart(id);
+    for (const Eigen::Vector3d& source :
+         {Eigen::Vector3d(1, 0, 0.5), Eigen::Vector3d(0, 2, 1), Eigen::Vector3d(-1, 1, 2)}) {
+      s.registration.pairs.push_back({source, reference_from_session * source});
+    }
+  };
+  place('b', 'a', "pairs");
+  place('c', 'b', "pairs+icp");
+  ASSERT_TRUE(SaveProject(project, p).ok());
+  CommandRun r = Cli("project export " + project + " --out " + P("anchored_before.ply"));
+  ASSERT_EQ(r.code, 0) << r.out;
+
+  r = Cli("project anchor " + project + " building_c --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("'building_c' is the anchor now: the project's frame is its start pose; 2 "
+                       "placement(s) re-expressed in it"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("turned round: 'building_b' is placed against 'building_c'"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("turned round: 'building_a' is placed against 'building_b'"),
+            std::string::npos)
+      << r.out;
+  const nlohmann::json said = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  EXPECT_EQ(said["anchor"], "building_c");
+  EXPECT_EQ(said["old_anchor"], "building_a");
+  EXPECT_TRUE(said["changed"].get<bool>());
+  EXPECT_EQ(said["reversed"], nlohmann::json({"building_b", "building_a"}));
+
+  Project q;
+  ASSERT_TRUE(LoadProject(project, &q).ok());
+  ASSERT_EQ(q.Anchor(), 2);
+  for (char id : {'a', 'b', 'c'}) {
+    const ProjectSession& s = q.sessions[id - 'a'];
+    ASSERT_TRUE(s.project_from_session.has_value()) << id;
+    const Rigid3d truth = TrueStart('c').inverse() * TrueStart(id);
+    EXPECT_LT(TranslationError(*s.project_from_session, truth), 1e-9) << id;
+    EXPECT_LT(RotationErrorDeg(*s.project_from_session, truth), 1e-7) << id;
+  }
+  EXPECT_EQ(q.sessions[1].registration.reference, "building_c");
+  EXPECT_EQ(q.sessions[1].registration.method, "pairs+icp");
+  EXPECT_EQ(q.sessions[0].registration.reference, "building_b");
+  EXPECT_EQ(q.sessions[0].registration.method, "pairs");
+  for (const ProjectSession& s : q.sessions) {
+    if (s.registration.reference.empty()) continue;
+    const Rigid3d reference_from_session =
+        q.sessions[q.Find(s.registration.reference)].project_from_session->inverse() *
+        *s.project_from_session;
+    for (const PickedPair& pair : s.registration.pairs) {
+      EXPECT_LT((reference_from_session * pair.source - pair.target).norm(), 1e-9) << s.id;
+    }
+  }
+  r = Cli("project export " + project + " --out " + P("anchored_after.ply"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::vector<CloudPoint> before, after;
+  ASSERT_TRUE(LoadCloud(P("anchored_before.ply"), &before).ok());
+  ASSERT_TRUE(LoadCloud(P("anchored_after.ply"), &after).ok());
+  ASSERT_EQ(before.size(), after.size());
+  ASSERT_GT(before.size(), 1000u);
+  const Rigid3d c_from_a = TrueStart('c').inverse() * TrueStart('a');
+  double worst = 0.0;
+  for (size_t i = 0; i < before.size(); ++i) {
+    const Eigen::Vector3d was(before[i].x, before[i].y, before[i].z);
+    const Eigen::Vector3d now(after[i].x, after[i].y, after[i].z);
+    worst = std::max(worst, (c_from_a * was - now).norm());
+  }
+  EXPECT_LT(worst, 1e-4);  // float positions within a few tens of metres
+  r = Cli("project info " + project);
+  EXPECT_NE(r.out.find("; anchor"), std::string::npos) << r.out;
+
+  // The anchor already: said, and the file is not written again.
+  std::string bytes, again;
+  ASSERT_TRUE(ReadFile(project, &bytes));
+  r = Cli("project anchor " + project + " building_c");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("'building_c' is the anchor already; nothing changed"), std::string::npos)
+      << r.out;
+  ASSERT_TRUE(ReadFile(project, &again));
+  EXPECT_EQ(again, bytes);
+  // Unknown, and the usage.
+  r = Cli("project anchor " + project + " nothing");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no session 'nothing' in the project"), std::string::npos) << r.out;
+  EXPECT_EQ(Cli("project anchor " + project).code, 2);
+  EXPECT_EQ(Cli("project anchor " + project + " building_c --out x.las").code, 2);
+
+  // An unplaced session while others are placed: refused, the file as it was.
+  q.sessions[0].project_from_session.reset();
+  q.sessions[0].registration = RegistrationEvidence();
+  ASSERT_TRUE(SaveProject(project, q).ok());
+  ASSERT_TRUE(ReadFile(project, &bytes));
+  r = Cli("project anchor " + project + " building_a");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("'building_a' is not placed: align it first"), std::string::npos) << r.out;
+  ASSERT_TRUE(ReadFile(project, &again));
+  EXPECT_EQ(again, bytes);
+  // Nothing placed but the anchor: the old anchor is unplaced, said.
+  const std::string fresh = NewProject("anchored_fresh.sweepscan-project", "ab");
+  r = Cli("project anchor " + fresh + " building_b");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("'building_a', the old anchor, is not placed now"), std::string::npos)
+      << r.out;
+  ASSERT_TRUE(LoadProject(fresh, &q).ok());
+  EXPECT_EQ(q.Anchor(), 1);
+  EXPECT_FALSE(q.sessions[0].project_from_session.has_value());
 }
 
 // A folder without meta.json is no session, as in the app.

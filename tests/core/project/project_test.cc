@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <random>
 
 namespace sweepscan {
 namespace {
@@ -440,6 +442,315 @@ TEST(ProjectTest, StrictLoadingNamesThePlace) {
     const Status refused = ProjectFromJson(e.dump(), "x", &p);
     EXPECT_NE(refused.message().find(edit.expect), std::string::npos) << refused.message();
   }
+}
+
+// A building of known truth for the anchor's change: world_from_session of
+// each session drawn at random (within 40 m, any rotation), the project's
+// poses their inverse(world_from_a) * world_from_k, references as a tree
+//   a (anchor) <- b <- c <- h,  a <- d,  e (manual, no reference) <- f,
+// and g not placed. Each measured placement carries a covariance built from
+// known perturbations, a free direction and pairs that hold exactly.
+struct Building {
+  Project project;
+  std::map<std::string, Rigid3d> world_from;  // the truth
+  // Per measured session: the perturbations (in its reference's frame)
+  // whose outer products sum to its covariance.
+  std::map<std::string, std::vector<Eigen::Matrix<double, 6, 1>>> perturbations;
+};
+
+Rigid3d RandomPose(std::mt19937* rng, double extent) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> u(-extent, extent);
+  const Eigen::Quaterniond q(n(*rng), n(*rng), n(*rng), n(*rng));
+  return Rigid3d({u(*rng), u(*rng), u(*rng)}, q.normalized());
+}
+
+// Exp(xi) to first order and beyond: the rotation by the vector omega, then
+// the translation v (xi = (omega, v)).
+Rigid3d Exp(const Eigen::Matrix<double, 6, 1>& xi) {
+  const Eigen::Vector3d w = xi.head<3>();
+  const Eigen::Quaterniond q = w.norm() > 0
+                                   ? Eigen::Quaterniond(Eigen::AngleAxisd(w.norm(), w.normalized()))
+                                   : Eigen::Quaterniond::Identity();
+  return Rigid3d(xi.tail<3>(), q);
+}
+
+// Log of a near-identity transform: (rotation vector, translation).
+Eigen::Matrix<double, 6, 1> Log(const Rigid3d& t) {
+  const Eigen::AngleAxisd aa(t.rotation());
+  Eigen::Matrix<double, 6, 1> xi;
+  xi.head<3>() = aa.angle() * aa.axis();
+  xi.tail<3>() = t.translation();
+  return xi;
+}
+
+Building RandomBuilding(uint32_t seed) {
+  std::mt19937 rng(seed);
+  Building b;
+  for (const char* id : {"a", "b", "c", "d", "e", "f", "g", "h"}) {
+    EXPECT_TRUE(b.project.AddSession(std::string(id) + ".sweepscan", nullptr).ok());
+    b.world_from[id] = RandomPose(&rng, 40.0);
+  }
+  std::normal_distribution<double> n(0.0, 1.0);
+  const auto place = [&](const std::string& id, const std::string& reference,
+                         const std::string& method) {
+    ProjectSession& s = b.project.sessions[b.project.Find(id)];
+    s.project_from_session = b.world_from["a"].inverse() * b.world_from[id];
+    s.registration.method = method;
+    s.registration.reference = reference;
+    if (method == "manual") return;
+    s.registration.rms_m = 0.004;
+    s.registration.overlap = 0.3;
+    s.registration.correspondences = 5000;
+    s.registration.iterations = 9;
+    s.registration.time_utc = "2026-11-29T10:00:00Z";
+    s.registration.pose_source = "ekf";
+    Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+    for (int k = 0; k < 7; ++k) {
+      Eigen::Matrix<double, 6, 1> xi;
+      for (int i = 0; i < 6; ++i) xi[i] = n(rng) * (i < 3 ? 1e-3 : 5e-3);
+      b.perturbations[id].push_back(xi);
+      c += xi * xi.transpose();
+    }
+    for (int i = 0; i < 36; ++i) s.registration.covariance[i] = c(i / 6, i % 6);
+    s.registration.free_direction = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    // Picks that hold exactly: the same world point in both frames.
+    const Rigid3d reference_from_session = b.world_from[reference].inverse() * b.world_from[id];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d source(n(rng), n(rng), n(rng));
+      s.registration.pairs.push_back({source, reference_from_session * source});
+    }
+  };
+  place("b", "a", "planes+icp");
+  place("c", "b", "pairs+icp");
+  place("h", "c", "icp");
+  place("d", "a", "planes");
+  place("e", "", "manual");
+  place("f", "e", "pairs");
+  return b;
+}
+
+// Every placed session's points land where the truth puts them, seen from
+// `anchor`'s start pose: the same building, only its origin changed.
+void ExpectSameBuilding(const Building& b, const Project& p, const std::string& anchor) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  for (const ProjectSession& s : p.sessions) {
+    if (s.id == "g") {
+      EXPECT_FALSE(s.project_from_session.has_value());
+      continue;
+    }
+    ASSERT_TRUE(s.project_from_session.has_value()) << s.id;
+    const Rigid3d truth = b.world_from.at(anchor).inverse() * b.world_from.at(s.id);
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d point(u(rng), u(rng), u(rng));
+      EXPECT_LT((*s.project_from_session * point - truth * point).norm(), 1e-9)
+          << "'" << s.id << "' anchored on '" << anchor << "'";
+    }
+  }
+}
+
+// Making another session the anchor moves the origin, not the building: on
+// random buildings, every session's points are where the truth says, seen
+// from the new anchor, and the references still form a tree whose every
+// measurement (the pairs) holds between the session and its reference.
+TEST(ProjectTest, ChangingTheAnchorKeepsTheBuildingAndTurnsTheChainRound) {
+  struct Case {
+    std::string anchor;
+    std::vector<std::string> reversed;
+    std::map<std::string, std::string> reference;  // afterwards ("" for none)
+    std::map<std::string, std::string> method;
+  };
+  const std::vector<Case> cases = {
+      {"b",
+       {"a"},
+       {{"a", "b"}, {"c", "b"}, {"h", "c"}, {"d", "a"}, {"e", ""}, {"f", "e"}},
+       {{"b", "anchor"}, {"a", "planes+icp"}, {"c", "pairs+icp"}, {"e", "manual"}}},
+      {"h",
+       {"c", "b", "a"},
+       {{"c", "h"}, {"b", "c"}, {"a", "b"}, {"d", "a"}, {"f", "e"}},
+       {{"h", "anchor"}, {"c", "icp"}, {"b", "pairs+icp"}, {"a", "planes+icp"}, {"d", "planes"}}},
+      {"d",
+       {"a"},
+       {{"a", "d"}, {"b", "a"}, {"c", "b"}, {"h", "c"}, {"f", "e"}},
+       {{"d", "anchor"}, {"a", "planes"}, {"b", "planes+icp"}}},
+      // On a chain that ends at a session held by hand, the old anchor is
+      // held by hand too.
+      {"f",
+       {"e"},
+       {{"e", "f"}, {"a", ""}, {"b", "a"}, {"d", "a"}},
+       {{"f", "anchor"}, {"e", "pairs"}, {"a", "manual"}}},
+      {"e",
+       {},
+       {{"a", ""}, {"f", "e"}, {"b", "a"}},
+       {{"e", "anchor"}, {"a", "manual"}, {"f", "pairs"}}},
+  };
+  for (uint32_t seed = 1; seed <= 25; ++seed) {
+    const Building b = RandomBuilding(seed);
+    ExpectSameBuilding(b, b.project, "a");
+    for (const Case& c : cases) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", anchor " + c.anchor);
+      Project p = b.project;
+      Project::AnchorChange change;
+      const Status s = p.ChangeAnchor(c.anchor, &change);
+      ASSERT_TRUE(s.ok()) << s.message();
+      EXPECT_EQ(change.old_anchor, "a");
+      EXPECT_FALSE(change.old_anchor_unplaced);
+      EXPECT_EQ(change.reversed, c.reversed);
+      ASSERT_EQ(p.Anchor(), p.Find(c.anchor));
+      EXPECT_EQ(p.sessions.size(), b.project.sessions.size());
+      ExpectSameBuilding(b, p, c.anchor);
+      for (const auto& [id, reference] : c.reference) {
+        EXPECT_EQ(p.sessions[p.Find(id)].registration.reference, reference) << id;
+      }
+      for (const auto& [id, method] : c.method) {
+        EXPECT_EQ(p.sessions[p.Find(id)].registration.method, method) << id;
+      }
+      // Every measurement holds between the session and its reference.
+      for (const ProjectSession& ps : p.sessions) {
+        if (ps.registration.reference.empty()) continue;
+        const ProjectSession& r = p.sessions[p.Find(ps.registration.reference)];
+        const Rigid3d reference_from_session =
+            r.project_from_session->inverse() * *ps.project_from_session;
+        for (const PickedPair& pair : ps.registration.pairs) {
+          EXPECT_LT((reference_from_session * pair.source - pair.target).norm(), 1e-9) << ps.id;
+        }
+      }
+      // A valid file, nothing to repair, and the same again when read.
+      Project q;
+      std::vector<std::string> repairs;
+      const Status loaded = ProjectFromJson(ProjectToJson(p), "p.sweepscan-project", &q, &repairs);
+      ASSERT_TRUE(loaded.ok()) << loaded.message();
+      EXPECT_TRUE(repairs.empty());
+      ExpectSameBuilding(b, q, c.anchor);
+    }
+  }
+}
+
+// A placement turned round carries its uncertainty: the covariance, built
+// from known perturbations of reference_from_session, is that of the same
+// perturbations pushed through the inverse (measured numerically here),
+// in the new reference's frame; the free direction is where the inverse
+// stays free; turning back gives the first evidence again.
+TEST(ProjectTest, ATurnedPlacementCarriesItsCovarianceAndFreeDirection) {
+  for (uint32_t seed = 1; seed <= 10; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Building b = RandomBuilding(seed);
+    Project p = b.project;
+    ASSERT_TRUE(p.ChangeAnchor("b").ok());
+    const RegistrationEvidence& was = b.project.sessions[b.project.Find("b")].registration;
+    const RegistrationEvidence& turned = p.sessions[p.Find("a")].registration;
+    // a_from_b as measured; b_from_a now.
+    const Rigid3d measured = b.world_from.at("a").inverse() * b.world_from.at("b");
+    Eigen::Matrix<double, 6, 6> expect = Eigen::Matrix<double, 6, 6>::Zero();
+    const double eps = 1e-6;
+    for (const Eigen::Matrix<double, 6, 1>& xi : b.perturbations.at("b")) {
+      // measured perturbed in a's frame, inverted, compared in b's frame.
+      const Rigid3d inverse = (Exp(eps * xi) * measured).inverse();
+      const Eigen::Matrix<double, 6, 1> turned_xi = Log(inverse * measured) / eps;
+      expect += turned_xi * turned_xi.transpose();
+    }
+    double worst = 0.0;
+    for (int i = 0; i < 36; ++i) {
+      worst = std::max(worst, std::abs(turned.covariance[i] - expect(i / 6, i % 6)));
+    }
+    EXPECT_LT(worst, 1e-4 * expect.cwiseAbs().maxCoeff());
+    // It differs from the one it came from (the lever arm of the rotation).
+    EXPECT_GT(std::abs(turned.SigmaTranslation() - was.SigmaTranslation()), 1e-6);
+    // Free along d in a's frame: the inverse moves along turned.free_direction in b's.
+    const Rigid3d slid = (Rigid3d::Translation(0.5 * was.free_direction) * measured).inverse();
+    const Rigid3d moved = slid * measured;
+    EXPECT_LT(moved.rotation().angularDistance(Eigen::Quaterniond::Identity()), 1e-12);
+    EXPECT_NEAR(std::abs(moved.translation().normalized().dot(turned.free_direction)), 1.0, 1e-9);
+    EXPECT_NEAR(turned.free_direction.norm(), 1.0, 1e-12);
+    // The numbers a measurement has, as measured.
+    EXPECT_EQ(turned.rms_m, was.rms_m);
+    EXPECT_EQ(turned.overlap, was.overlap);
+    EXPECT_EQ(turned.correspondences, was.correspondences);
+    EXPECT_EQ(turned.time_utc, was.time_utc);
+    EXPECT_EQ(turned.pose_source, was.pose_source);
+    ASSERT_EQ(turned.pairs.size(), was.pairs.size());
+    EXPECT_EQ(turned.pairs[0].source, was.pairs[0].target);
+
+    // Back to a: the poses and the evidence are the first ones again.
+    Project::AnchorChange back;
+    ASSERT_TRUE(p.ChangeAnchor("a", &back).ok());
+    EXPECT_EQ(back.old_anchor, "b");
+    EXPECT_EQ(back.reversed, std::vector<std::string>{"b"});
+    for (size_t k = 0; k < p.sessions.size(); ++k) {
+      const ProjectSession& now = p.sessions[k];
+      const ProjectSession& first = b.project.sessions[k];
+      EXPECT_EQ(now.registration.method, first.registration.method) << now.id;
+      EXPECT_EQ(now.registration.reference, first.registration.reference) << now.id;
+      for (int i = 0; i < 36; ++i) {
+        EXPECT_NEAR(now.registration.covariance[i], first.registration.covariance[i], 1e-15)
+            << now.id;
+      }
+      EXPECT_LT((now.registration.free_direction - first.registration.free_direction).norm(),
+                1e-12);
+      ASSERT_EQ(now.project_from_session.has_value(), first.project_from_session.has_value());
+      if (!now.project_from_session) continue;
+      EXPECT_LT(
+          (now.project_from_session->translation() - first.project_from_session->translation())
+              .norm(),
+          1e-9);
+      EXPECT_LT(now.project_from_session->rotation().angularDistance(
+                    first.project_from_session->rotation()),
+                1e-9);
+    }
+  }
+}
+
+// Only a placed session's frame is known relative to the others: an
+// unplaced one is refused while anything else is placed, and then nothing
+// changes; with nothing placed but the anchor, the old anchor is unplaced
+// instead. The anchor already: nothing to do. Too far: refused.
+TEST(ProjectTest, TheAnchorChangesOnlyToASessionWhoseFrameIsKnown) {
+  const Building b = RandomBuilding(3);
+  Project p = b.project;
+  Status s = p.ChangeAnchor("g");
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("'g' is not placed: align it first"), std::string::npos)
+      << s.message();
+  EXPECT_EQ(ProjectToJson(p), ProjectToJson(b.project));
+  EXPECT_NE(p.ChangeAnchor("nothing").message().find("no session 'nothing'"), std::string::npos);
+  Project::AnchorChange change;
+  change.old_anchor = "x";
+  ASSERT_TRUE(p.ChangeAnchor("a", &change).ok());
+  EXPECT_EQ(change.old_anchor, "");
+  EXPECT_EQ(ProjectToJson(p), ProjectToJson(b.project));
+
+  Project fresh;
+  for (const char* f : {"a.sweepscan", "b.sweepscan", "c.sweepscan"}) {
+    ASSERT_TRUE(fresh.AddSession(f, nullptr).ok());
+  }
+  ASSERT_TRUE(fresh.ChangeAnchor("c", &change).ok());
+  EXPECT_EQ(change.old_anchor, "a");
+  EXPECT_TRUE(change.old_anchor_unplaced);
+  EXPECT_EQ(fresh.Anchor(), 2);
+  EXPECT_FALSE(fresh.sessions[0].project_from_session.has_value());
+  EXPECT_EQ(fresh.sessions[0].registration.method, "");
+  Project q;
+  ASSERT_TRUE(ProjectFromJson(ProjectToJson(fresh), "p", &q).ok());
+  EXPECT_EQ(q.Anchor(), 2);
+
+  // 6 km east and 6 km west of the anchor: either as the anchor puts the
+  // other 12 km away, beyond what a cloud's floats hold.
+  Project far;
+  ProjectSession* added = nullptr;
+  for (const char* f : {"a.sweepscan", "east.sweepscan", "west.sweepscan"}) {
+    ASSERT_TRUE(far.AddSession(f, &added).ok());
+  }
+  far.sessions[1].project_from_session = Rigid3d::Translation({6000, 0, 0});
+  far.sessions[1].registration.method = "manual";
+  far.sessions[2].project_from_session = Rigid3d::Translation({-6000, 0, 0});
+  far.sessions[2].registration.method = "manual";
+  const std::string before = ProjectToJson(far);
+  s = far.ChangeAnchor("east");
+  EXPECT_NE(s.message().find("'west' would lie beyond 8000 m of 'east''s start pose"),
+            std::string::npos)
+      << s.message();
+  EXPECT_EQ(ProjectToJson(far), before);
 }
 
 TEST(ProjectTest, SavesAtomicallyAndResolvesPathsAgainstItsFolder) {
