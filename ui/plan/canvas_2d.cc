@@ -24,8 +24,8 @@ double NiceLength(double m) {
 
 double ScreenAngle(const QPointF& v) { return std::atan2(-v.y(), v.x()) * 180.0 / M_PI; }
 
-void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text, const QColor& color,
-                double room) {
+void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
+                const QColor& color, double room, QPolygonF* painted) {
   if (p->fontMetrics().horizontalAdvance(text) + 6 > room) return;
   while (degrees > 90.0) degrees -= 180.0;
   while (degrees <= -90.0) degrees += 180.0;
@@ -34,6 +34,7 @@ void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& t
   p->rotate(-degrees);
   const QRectF box = p->fontMetrics().boundingRect(text).adjusted(-3, -1, 3, 1);
   const QRectF plate(-box.width() / 2, -box.height() / 2, box.width(), box.height());
+  if (painted != nullptr) *painted = p->transform().map(QPolygonF(plate));
   p->setPen(Qt::NoPen);
   p->setBrush(QColor(255, 255, 255, 230));
   p->drawRoundedRect(plate, 2, 2);

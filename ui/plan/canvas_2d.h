@@ -19,6 +19,7 @@
 #include <optional>
 
 class QPainter;
+class QPolygonF;
 
 namespace sweepscan::ui {
 
@@ -38,6 +39,11 @@ class Canvas2d : public QWidget {
 
   QSize sizeHint() const override { return {640, 480}; }
 
+ signals:
+  // New content, or none (what the dock's buttons act on).
+  void contentChanged();
+
+ public:
  protected:
   // The drawing's extent in model metres; false when there is none.
   virtual bool Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const = 0;
@@ -86,9 +92,10 @@ double ScreenAngle(const QPointF& v);
 
 // Text centred at `at`, turned by `degrees` (kept upright), on a white
 // plate; left out when longer than `room` pixels (the line it labels, at
-// a zoom too small to read both).
-void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text, const QColor& color,
-                double room = 1e9);
+// a zoom too small to read both). The plate drawn (widget pixels) goes to
+// `painted` if given; it is left alone when nothing is drawn.
+void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
+                const QColor& color, double room = 1e9, QPolygonF* painted = nullptr);
 
 }  // namespace sweepscan::ui
 

@@ -1,5 +1,6 @@
 #include "ui/plan/plan_canvas.h"
 
+#include <QFontMetricsF>
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
@@ -38,6 +39,7 @@ void PlanCanvas::SetPlan(const plan::FloorPlan& plan, bool fit) {
   plan_ = plan;
   empty_text_.clear();
   Follow(fit);
+  emit contentChanged();
 }
 
 void PlanCanvas::ClearPlan(const QString& why) {
@@ -46,6 +48,7 @@ void PlanCanvas::ClearPlan(const QString& why) {
   empty_text_ = why;
   Unfollow();
   update();
+  emit contentChanged();
 }
 
 bool PlanCanvas::Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const {
@@ -77,6 +80,8 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
   QPainter p(this);
   if (!PaintBackground(&p, plan_.has_value(), empty_text_)) return;
   const plan::FloorPlan& plan = *plan_;
+  figures_.clear();
+  room_labels_.clear();
   PaintRooms(&p, false);  // Under everything: the fills.
   // The section's points (decimated to one a 2 cm cell by the plan).
   QPolygonF points;
@@ -128,8 +133,10 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kOpening, 1.0));
     p.drawArc(QRectF(a.x() - r, a.y() - r, 2 * r, 2 * r), static_cast<int>(start * 16), static_cast<int>(span * 16));
     const QPointF mid = ToWidget(0.5 * (o.a + o.b) - 0.3 * o.width_m * n);
-    PaintLabel(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)), kOpening,
-               1.5 * r);
+    QPolygonF plate;
+    PaintLabel(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)),
+               kOpening, 1.5 * r, &plate);
+    if (!plate.isEmpty()) figures_.push_back(plate);
   }
   // Dimensions: the line, slashes at its ends, the length above its middle.
   for (const plan::Dimension& d : plan.dimensions) {
@@ -141,11 +148,17 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kDimension, 1.6));
     p.drawLine(a - slash, a + slash);
     p.drawLine(b - slash, b + slash);
+    QPolygonF plate;
     PaintLabel(&p, 0.5 * (a + b), ScreenAngle(b - a),
                QString::fromStdString(plan::FormatMetres(d.distance_m)) + tr(" m"), kDimension,
-               std::hypot(b.x() - a.x(), b.y() - a.y()) - 16.0);
+               std::hypot(b.x() - a.x(), b.y() - a.y()) - 16.0, &plate);
+    if (!plate.isEmpty()) figures_.push_back(plate);
+    // The line itself (and its end slashes) is kept clear of the names too.
+    const QPointF side = 3.0 * QPointF(-u.y(), u.x());
+    figures_.push_back(QPolygonF(
+        {a - 5.0 * u + side, b + 5.0 * u + side, b + 5.0 * u - side, a - 5.0 * u - side}));
   }
-  PaintRooms(&p, true);  // The names over the lines.
+  PaintRooms(&p, true);  // The names where they clear the figures.
   if (section_line_ && !drag_) PaintSectionLine(&p, *section_line_, false);
   if (drag_) PaintSectionLine(&p, *drag_, true);
   PaintScaleBar(&p);
@@ -167,14 +180,49 @@ void PlanCanvas::PaintRooms(QPainter* p, bool names) const {
       p->setBrush(Qt::NoBrush);
       continue;
     }
-    // Two lines at the label point, left out when the room is too small on
-    // screen to hold them (the width of a square of its area).
-    const double room_px = std::sqrt(std::max(0.0, room.area_m2)) * scale();
-    const double line_px = p->fontMetrics().height() + 2.0;
-    const QPointF at = ToWidget(room.label);
-    PaintLabel(p, at - QPointF(0, 0.5 * line_px), 0.0, tr("Room %1").arg(i + 1), kRoomText, room_px);
-    PaintLabel(p, at + QPointF(0, 0.5 * line_px), 0.0, tr("%1 m²").arg(room.area_m2, 0, 'f', 2), kRoomText,
-               room_px);
+    PaintRoomName(p, i, room);
+  }
+}
+
+void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room) const {
+  // The name over the area at core/plan's label point (rooms.cc keeps it
+  // clear of the dimension lines for the exported drawings), in the largest
+  // font, from the view's down to kMinRoomFontPx, whose block lies inside
+  // the room's outline and clear of every figure and dimension line drawn
+  // (figures_): the names covered the dimensions' figures at any zoom, and
+  // spilled across walls when zoomed out. None fits: no name (the area is
+  // in the summary; zooming in brings it back).
+  QPolygonF outline;
+  for (const Eigen::Vector2d& v : room.outline) outline << ToWidget(v);
+  const QString name = tr("Room %1").arg(index + 1);
+  const QString area = tr("%1 m²").arg(room.area_m2, 0, 'f', 2);
+  const QPointF at = ToWidget(room.label);
+  QFont font = p->font();
+  const double base = font.pixelSize() > 0 ? font.pixelSize() : QFontMetricsF(font).height();
+  for (double px = std::round(base); px >= kMinRoomFontPx; px -= 1.0) {
+    font.setPixelSize(static_cast<int>(px));
+    const QFontMetricsF m(font);
+    const double line = m.height() + 2.0;
+    const double width = std::max(m.horizontalAdvance(name), m.horizontalAdvance(area)) + 6.0;
+    const QRectF block(at.x() - 0.5 * width, at.y() - line - 1.0, width, 2.0 * line + 2.0);
+    const QPolygonF box(block);
+    bool fits = true;
+    for (const QPointF& c :
+         {block.topLeft(), block.topRight(), block.bottomLeft(), block.bottomRight()}) {
+      fits = fits && outline.containsPoint(c, Qt::OddEvenFill);
+    }
+    for (size_t k = 0; fits && k < figures_.size(); ++k) {
+      // The boxes first: QPolygonF::intersects goes through painter paths.
+      fits = !block.intersects(figures_[k].boundingRect()) || !box.intersects(figures_[k]);
+    }
+    if (!fits) continue;
+    p->save();
+    p->setFont(font);
+    PaintLabel(p, at - QPointF(0, 0.5 * line), 0.0, name, kRoomText);
+    PaintLabel(p, at + QPointF(0, 0.5 * line), 0.0, area, kRoomText);
+    p->restore();
+    room_labels_.push_back({name, block});
+    return;
   }
 }
 
