@@ -19,6 +19,7 @@
 #include <optional>
 
 class QPainter;
+class QFontMetrics;
 class QPolygonF;
 
 namespace sweepscan::ui {
@@ -43,7 +44,6 @@ class Canvas2d : public QWidget {
   // New content, or none (what the dock's buttons act on).
   void contentChanged();
 
- public:
  protected:
   // The drawing's extent in model metres; false when there is none.
   virtual bool Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const = 0;
@@ -96,6 +96,15 @@ double ScreenAngle(const QPointF& v);
 // `painted` if given; it is left alone when nothing is drawn.
 void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
                 const QColor& color, double room = 1e9, QPolygonF* painted = nullptr);
+
+// The plate PaintLabel would draw (widget pixels) with these metrics,
+// without drawing it: where a label goes is chosen before it is drawn.
+QPolygonF LabelPlate(const QFontMetrics& metrics, const QPointF& at, double degrees,
+                     const QString& text);
+
+// Whether two convex polygons (label plates, a line's band) overlap by
+// more than a touch.
+bool ConvexOverlap(const QPolygonF& a, const QPolygonF& b);
 
 }  // namespace sweepscan::ui
 

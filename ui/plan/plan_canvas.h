@@ -72,6 +72,8 @@ class PlanCanvas : public Canvas2d {
   };
   static constexpr double kMinRoomFontPx = 7.0;  // smaller is not read: left out
   const std::vector<QPolygonF>& figures() const { return figures_; }
+  // The doors' and dimensions' figures alone (their plates).
+  const std::vector<QPolygonF>& label_plates() const { return labels_; }
   const std::vector<RoomLabel>& room_labels() const { return room_labels_; }
 
  signals:
@@ -99,7 +101,8 @@ class PlanCanvas : public Canvas2d {
   std::optional<SectionLine> section_line_;
   std::optional<SectionLine> drag_;  // the line being drawn
   bool section_mode_ = false;
-  mutable std::vector<QPolygonF> figures_;
+  mutable std::vector<QPolygonF> labels_;   // the figures' plates
+  mutable std::vector<QPolygonF> figures_;  // and the dimension lines' bands
   mutable std::vector<RoomLabel> room_labels_;
 };
 

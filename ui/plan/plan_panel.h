@@ -102,12 +102,12 @@ class PlanPanel : public QWidget {
   void hideEvent(QHideEvent* event) override;
 
  private:
-  void Stale(bool fit);
+  void Stale(bool fit);  // The inputs changed: rebuilt soon if shown.
   // The export, Fit and Remove buttons (and the File action) enabled when
   // they can act, with why not in their tooltips.
   void UpdateActions();
-  QString NoPlanReason() const;  // why Export cannot, as the operator can mend it  // The inputs
-                                 // changed: rebuilt soon if shown.
+  // Why Export cannot act, said so that the operator can mend it.
+  QString NoPlanReason() const;
   bool settle_pending() const;
   void ShowProgress(const QString& what, double fraction);
   // The section of the line alone (the plan kept), on the job thread.
