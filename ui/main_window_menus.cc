@@ -146,7 +146,8 @@ void MainWindow::BuildFileMenu() {
     workspace_->ExportCloud(path);
   });
   export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
-  file->addAction(tr("Export Floor P&lan…"), plan_panel_, &PlanPanel::ExportWithDialog);
+  plan_panel_->SetFileExportAction(
+      file->addAction(tr("Export Floor P&lan…"), plan_panel_, &PlanPanel::ExportWithDialog));
   QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {
     QString filter;
     const QString path =

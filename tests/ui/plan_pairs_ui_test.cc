@@ -24,6 +24,7 @@
 #include <gtest/gtest.h>
 
 #include <QAction>
+#include <QApplication>
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDockWidget>
@@ -34,6 +35,9 @@
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QLabel>
+#include <QMenu>
+#include <QMenuBar>
+#include <QPolygonF>
 #include <QPushButton>
 #include <QSettings>
 #include <QTest>
@@ -41,6 +45,7 @@
 #include <QTreeWidget>
 #include <QUndoGroup>
 #include <QUndoStack>
+#include <QWheelEvent>
 #include <QXmlStreamReader>
 #include <algorithm>
 #include <cmath>
@@ -618,6 +623,159 @@ TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
   EXPECT_FALSE(picking->active());
   EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
   EXPECT_TRUE(window_->undo_group()->canUndo());
+}
+
+// Pair picking holds the project still (the context menu's edits disabled
+// as the panel's buttons are) and ends, saying why, when its session goes
+// by another route; the box lays out whole under a long refusal and the
+// dock keeps its height (it overlapped itself, then stayed tall).
+TEST_F(PlanPairsUiTest, PickingEndsWhenItsSessionGoesAndItsBoxLaysOut) {
+  OpenAndLoad(MakeProject("picking-gone"));
+  ProjectPanel* panel = project()->panel();
+  auto* dock = window_->findChild<QDockWidget*>("projectDock");
+  dock->raise();
+  // A refusal's long reason in the panel, as a refused Align leaves it.
+  emit project()->alignFinished(false,
+                                QString("Cannot align 'c' to 'a': ") +
+                                    QString("the walls leave a direction free ").repeated(6));
+  QApplication::processEvents();
+  const int dock_height = dock->height();
+  PairPicking* picking = project()->pair_picking();
+  QString said;
+  QObject::connect(picking, &PairPicking::message, [&](const QString& m) { said = m; });
+  ASSERT_TRUE(picking->Start("c", "a"));
+  Turns([&] { return !project()->busy(); }, 60000);
+  Rigid3d shown_c;
+  ASSERT_TRUE(project()->layer()->drawn_pose("c", &shown_c));
+  const TruthPicks truth = MakeTruthPicks(shown_c);
+  window_->PointPicked(truth.in_a[0]);  // The reference first: nothing to match yet.
+  EXPECT_NE(said.indexOf("A pair starts in 'c'"), -1) << said.toStdString();
+  window_->PointPicked(truth.in_c[0]);
+  window_->PointPicked(truth.in_a[0]);
+  window_->PointPicked(truth.in_c[1]);
+  QApplication::processEvents();
+  PairPickBox* box = panel->pair_box();
+  ASSERT_TRUE(box->isVisible());
+  QLabel* text = box->instruction();
+  EXPECT_GE(text->height(), text->heightForWidth(text->width())) << text->text().toStdString();
+  EXPECT_GE(box->list()->height(), box->list()->minimumHeight());
+  EXPECT_FALSE(box->list()->geometry().intersects(box->hold_free()->geometry()));
+  EXPECT_FALSE(text->geometry().intersects(box->list()->geometry()));
+  EXPECT_GE(panel->status_label()->height(),
+            panel->status_label()->heightForWidth(panel->status_label()->width()));
+  EXPECT_EQ(dock->height(), dock_height);
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    window_->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/picking-box.png");
+  }
+
+  for (QAction* a : panel->ContextMenu("c")->actions()) {
+    if (a->text() == "Remove from Project" || a->text() == "Align to" ||
+        a->text() == "Show Only This") {
+      EXPECT_FALSE(a->isEnabled()) << a->text().toStdString();
+    }
+  }
+  // Removed by another route (the controller, as an undone addition would).
+  project()->RemoveSession("c");
+  EXPECT_FALSE(picking->active());
+  EXPECT_NE(said.indexOf("'c' is no longer in the project"), -1) << said.toStdString();
+  EXPECT_EQ(said.indexOf("unchanged"), -1);
+  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
+  window_->undo_group()->undo();
+  EXPECT_EQ(project()->document()->project().Find("c"), 2);
+  QApplication::processEvents();
+  EXPECT_FALSE(box->isVisible());
+  EXPECT_EQ(dock->height(), dock_height);
+}
+
+// Export… (and File > Export Floor Plan…) only with a plan, the canvas's
+// reason otherwise; the section's buttons only with a section. Room names
+// keep off the dimensions' and doors' figures and inside their rooms at
+// every zoom, smaller or left out where they do not fit; the figures keep
+// off each other.
+TEST_F(PlanPairsUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
+  QAction* file_export = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->menu() == nullptr) continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->text() == "Export Floor P&lan…") file_export = b;
+    }
+  }
+  ASSERT_NE(file_export, nullptr);
+  EXPECT_FALSE(file_export->isEnabled());  // Nothing open.
+  PlanPanel* panel = ShowPlanOfRoomsAB("exports");
+  auto* export_button = panel->findChild<QPushButton*>("planExport");
+  ASSERT_NE(export_button, nullptr);
+  EXPECT_TRUE(export_button->isEnabled());
+  EXPECT_TRUE(file_export->isEnabled());
+  EXPECT_FALSE(panel->section_export_button()->isEnabled());  // No section line.
+  const plan::FloorPlan plan = *panel->canvas()->plan();
+  ASSERT_FALSE(plan.rooms.empty());
+  ASSERT_FALSE(plan.dimensions.empty());
+
+  PlanCanvas canvas;
+  canvas.resize(900, 700);
+  canvas.SetPlan(plan, true);
+  canvas.Fit();
+  const auto zoom = [&](int steps) {
+    const QPointF at(450, 350);
+    QWheelEvent wheel(at, canvas.mapToGlobal(at.toPoint()), QPoint(), QPoint(0, 120 * steps),
+                      Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+    QApplication::sendEvent(&canvas, &wheel);
+  };
+  size_t at_fit = 0;
+  for (int steps : {0, -4, -4, -4, 14, 3, 3}) {
+    zoom(steps);
+    (void)canvas.grab();
+    if (steps == 0) {
+      at_fit = canvas.room_labels().size();
+      if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+        canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names-fit.png");
+      }
+    }
+    // No figure covers another (two rooms' dimensions cross at their middles).
+    const std::vector<QPolygonF>& plates = canvas.label_plates();
+    for (size_t i = 0; i < plates.size(); ++i) {
+      for (size_t j = i + 1; j < plates.size(); ++j) {
+        EXPECT_FALSE(plates[i].intersected(plates[j]).boundingRect().width() > 1.0 &&
+                     plates[i].intersected(plates[j]).boundingRect().height() > 1.0)
+            << "figures " << i << " and " << j << " at " << canvas.scale() << " px/m";
+      }
+    }
+    for (const PlanCanvas::RoomLabel& label : canvas.room_labels()) {
+      for (const QPolygonF& figure : canvas.figures()) {
+        EXPECT_FALSE(QPolygonF(label.block).intersects(figure))
+            << label.name.toStdString() << " at " << canvas.scale() << " px/m";
+      }
+      const int room = label.name.mid(5).toInt() - 1;
+      QPolygonF outline;
+      for (const Eigen::Vector2d& v : plan.rooms[room].outline) outline << canvas.ToWidget(v);
+      EXPECT_TRUE(outline.containsPoint(label.block.topLeft(), Qt::OddEvenFill) &&
+                  outline.containsPoint(label.block.bottomRight(), Qt::OddEvenFill))
+          << label.name.toStdString() << " at " << canvas.scale() << " px/m";
+    }
+    if (steps == -4 && canvas.scale() < 8.0) {
+      EXPECT_TRUE(canvas.room_labels().empty()) << canvas.scale();
+    }
+  }
+  // Fitted, every room has its name beside its dimensions' crossing, but
+  // the corridor (2 m, 37 px wide here, narrower than its name at 7 px).
+  EXPECT_EQ(at_fit, plan.rooms.size() - 1);
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names.png");
+  }
+
+  // A cut above the ceiling: no plan, and Export says why.
+  const uint64_t built = panel->plans_built();
+  panel->height_box()->setValue(5.0);
+  Turns([&] { return !panel->busy() && !panel->canvas()->plan(); }, 60000);
+  EXPECT_EQ(panel->plans_built(), built);
+  EXPECT_FALSE(export_button->isEnabled());
+  EXPECT_NE(export_button->toolTip().indexOf(panel->canvas()->empty_text()), -1)
+      << export_button->toolTip().toStdString();
+  QString error;
+  EXPECT_FALSE(panel->ExportPlan(QString::fromStdString(Dir()) + "/x.svg", &error));
+  EXPECT_EQ(error.indexOf("View > Floor Plan draws one"), -1) << error.toStdString();
+  EXPECT_FALSE(file_export->isEnabled());
 }
 
 }  // namespace

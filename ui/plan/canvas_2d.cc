@@ -2,6 +2,7 @@
 
 #include <QMouseEvent>
 #include <QPainter>
+#include <QTransform>
 #include <QWheelEvent>
 #include <algorithm>
 #include <cmath>
@@ -24,8 +25,46 @@ double NiceLength(double m) {
 
 double ScreenAngle(const QPointF& v) { return std::atan2(-v.y(), v.x()) * 180.0 / M_PI; }
 
-void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text, const QColor& color,
-                double room) {
+QPolygonF LabelPlate(const QFontMetrics& metrics, const QPointF& at, double degrees,
+                     const QString& text) {
+  while (degrees > 90.0) degrees -= 180.0;
+  while (degrees <= -90.0) degrees += 180.0;
+  const QRectF box = metrics.boundingRect(text).adjusted(-3, -1, 3, 1);
+  QTransform t;
+  t.translate(at.x(), at.y());
+  t.rotate(-degrees);
+  return t.map(QPolygonF(QRectF(-box.width() / 2, -box.height() / 2, box.width(), box.height())));
+}
+
+bool ConvexOverlap(const QPolygonF& a, const QPolygonF& b) {
+  // Separating axis theorem: two convex polygons are apart exactly when
+  // one of their edges' normals separates their projections.
+  if (a.isEmpty() || b.isEmpty() || !a.boundingRect().intersects(b.boundingRect())) return false;
+  for (const QPolygonF* edges : {&a, &b}) {
+    const int n = edges->size();
+    for (int i = 0; i < n; ++i) {
+      const QPointF e = edges->at((i + 1) % n) - edges->at(i);
+      const QPointF axis(-e.y(), e.x());
+      if (axis.manhattanLength() < 1e-9) continue;  // a closing point repeated
+      double a_min = 1e300, a_max = -1e300, b_min = 1e300, b_max = -1e300;
+      for (const QPointF& q : a) {
+        const double d = QPointF::dotProduct(q, axis);
+        a_min = std::min(a_min, d);
+        a_max = std::max(a_max, d);
+      }
+      for (const QPointF& q : b) {
+        const double d = QPointF::dotProduct(q, axis);
+        b_min = std::min(b_min, d);
+        b_max = std::max(b_max, d);
+      }
+      if (a_max <= b_min || b_max <= a_min) return false;
+    }
+  }
+  return true;
+}
+
+void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
+                const QColor& color, double room, QPolygonF* painted) {
   if (p->fontMetrics().horizontalAdvance(text) + 6 > room) return;
   while (degrees > 90.0) degrees -= 180.0;
   while (degrees <= -90.0) degrees += 180.0;
@@ -34,6 +73,7 @@ void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& t
   p->rotate(-degrees);
   const QRectF box = p->fontMetrics().boundingRect(text).adjusted(-3, -1, 3, 1);
   const QRectF plate(-box.width() / 2, -box.height() / 2, box.width(), box.height());
+  if (painted != nullptr) *painted = p->transform().map(QPolygonF(plate));
   p->setPen(Qt::NoPen);
   p->setBrush(QColor(255, 255, 255, 230));
   p->drawRoundedRect(plate, 2, 2);

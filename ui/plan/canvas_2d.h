@@ -19,6 +19,8 @@
 #include <optional>
 
 class QPainter;
+class QFontMetrics;
+class QPolygonF;
 
 namespace sweepscan::ui {
 
@@ -37,6 +39,10 @@ class Canvas2d : public QWidget {
   Eigen::Vector2d ToModel(const QPointF& w) const;
 
   QSize sizeHint() const override { return {640, 480}; }
+
+ signals:
+  // New content, or none (what the dock's buttons act on).
+  void contentChanged();
 
  protected:
   // The drawing's extent in model metres; false when there is none.
@@ -86,9 +92,19 @@ double ScreenAngle(const QPointF& v);
 
 // Text centred at `at`, turned by `degrees` (kept upright), on a white
 // plate; left out when longer than `room` pixels (the line it labels, at
-// a zoom too small to read both).
-void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text, const QColor& color,
-                double room = 1e9);
+// a zoom too small to read both). The plate drawn (widget pixels) goes to
+// `painted` if given; it is left alone when nothing is drawn.
+void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
+                const QColor& color, double room = 1e9, QPolygonF* painted = nullptr);
+
+// The plate PaintLabel would draw (widget pixels) with these metrics,
+// without drawing it: where a label goes is chosen before it is drawn.
+QPolygonF LabelPlate(const QFontMetrics& metrics, const QPointF& at, double degrees,
+                     const QString& text);
+
+// Whether two convex polygons (label plates, a line's band) overlap by
+// more than a touch.
+bool ConvexOverlap(const QPolygonF& a, const QPolygonF& b);
 
 }  // namespace sweepscan::ui
 

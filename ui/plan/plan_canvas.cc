@@ -1,5 +1,7 @@
 #include "ui/plan/plan_canvas.h"
 
+#include <QFontInfo>
+#include <QFontMetricsF>
 #include <QKeyEvent>
 #include <QMouseEvent>
 #include <QPainter>
@@ -38,6 +40,7 @@ void PlanCanvas::SetPlan(const plan::FloorPlan& plan, bool fit) {
   plan_ = plan;
   empty_text_.clear();
   Follow(fit);
+  emit contentChanged();
 }
 
 void PlanCanvas::ClearPlan(const QString& why) {
@@ -46,6 +49,7 @@ void PlanCanvas::ClearPlan(const QString& why) {
   empty_text_ = why;
   Unfollow();
   update();
+  emit contentChanged();
 }
 
 bool PlanCanvas::Extent(Eigen::Vector2d* min, Eigen::Vector2d* max) const {
@@ -77,6 +81,9 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
   QPainter p(this);
   if (!PaintBackground(&p, plan_.has_value(), empty_text_)) return;
   const plan::FloorPlan& plan = *plan_;
+  labels_.clear();
+  figures_.clear();
+  room_labels_.clear();
   PaintRooms(&p, false);  // Under everything: the fills.
   // The section's points (decimated to one a 2 cm cell by the plan).
   QPolygonF points;
@@ -128,10 +135,17 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kOpening, 1.0));
     p.drawArc(QRectF(a.x() - r, a.y() - r, 2 * r, 2 * r), static_cast<int>(start * 16), static_cast<int>(span * 16));
     const QPointF mid = ToWidget(0.5 * (o.a + o.b) - 0.3 * o.width_m * n);
-    PaintLabel(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)), kOpening,
-               1.5 * r);
+    QPolygonF plate;
+    PaintLabel(&p, mid, ScreenAngle(b - a), QString::fromStdString(plan::FormatMetres(o.width_m)),
+               kOpening, 1.5 * r, &plate);
+    if (!plate.isEmpty()) labels_.push_back(plate);
   }
-  // Dimensions: the line, slashes at its ends, the length above its middle.
+  // Dimensions: the lines and their end slashes first, then each length
+  // over its line's middle, slid along the line off the figures placed
+  // before it, or left out when nowhere on its line is clear (a room's two
+  // dimensions cross near their middles, and their figures covered each
+  // other); a later line never runs over an earlier figure.
+  std::vector<QPolygonF> bands;
   for (const plan::Dimension& d : plan.dimensions) {
     const QPointF a = ToWidget(d.a), b = ToWidget(d.b);
     const QPointF u = (b - a) / std::max(1e-9, std::hypot(b.x() - a.x(), b.y() - a.y()));
@@ -141,11 +155,44 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
     p.setPen(QPen(kDimension, 1.6));
     p.drawLine(a - slash, a + slash);
     p.drawLine(b - slash, b + slash);
-    PaintLabel(&p, 0.5 * (a + b), ScreenAngle(b - a),
-               QString::fromStdString(plan::FormatMetres(d.distance_m)) + tr(" m"), kDimension,
-               std::hypot(b.x() - a.x(), b.y() - a.y()) - 16.0);
+    // The line itself (and its end slashes) is kept clear of the names.
+    const QPointF side = 3.0 * QPointF(-u.y(), u.x());
+    bands.push_back(QPolygonF(
+        {a - 5.0 * u + side, b + 5.0 * u + side, b + 5.0 * u - side, a - 5.0 * u - side}));
   }
-  PaintRooms(&p, true);  // The names over the lines.
+  for (const plan::Dimension& d : plan.dimensions) {
+    const QPointF a = ToWidget(d.a), b = ToWidget(d.b);
+    const double length = std::hypot(b.x() - a.x(), b.y() - a.y());
+    const QPointF u = (b - a) / std::max(1e-9, length);
+    const QString text = QString::fromStdString(plan::FormatMetres(d.distance_m)) + tr(" m");
+    const double room = length - 16.0, width = p.fontMetrics().horizontalAdvance(text) + 6.0;
+    if (width > room) continue;  // PaintLabel leaves it out too
+    const double slack = 0.5 * (room - width), step = 0.25 * width;
+    std::optional<QPointF> at;
+    for (int k = 0; !at && k * step <= slack; ++k) {
+      bool clear = false;
+      for (const double sign : {1.0, -1.0}) {
+        const QPointF there = 0.5 * (a + b) + sign * k * step * u;
+        const QPolygonF plate = LabelPlate(p.fontMetrics(), there, ScreenAngle(b - a), text);
+        clear = std::none_of(labels_.begin(), labels_.end(),
+                             [&](const QPolygonF& other) { return ConvexOverlap(plate, other); });
+        if (clear) {
+          at = there;
+          break;
+        }
+        if (k == 0) break;
+      }
+    }
+    // Nowhere clear on its line (zoomed out): left out, as a line too
+    // short for its figure is; zooming in brings it back.
+    if (!at) continue;
+    QPolygonF plate;
+    PaintLabel(&p, *at, ScreenAngle(b - a), text, kDimension, room, &plate);
+    if (!plate.isEmpty()) labels_.push_back(plate);
+  }
+  figures_ = labels_;
+  figures_.insert(figures_.end(), bands.begin(), bands.end());
+  PaintRooms(&p, true);  // The names where they clear the figures.
   if (section_line_ && !drag_) PaintSectionLine(&p, *section_line_, false);
   if (drag_) PaintSectionLine(&p, *drag_, true);
   PaintScaleBar(&p);
@@ -167,14 +214,64 @@ void PlanCanvas::PaintRooms(QPainter* p, bool names) const {
       p->setBrush(Qt::NoBrush);
       continue;
     }
-    // Two lines at the label point, left out when the room is too small on
-    // screen to hold them (the width of a square of its area).
-    const double room_px = std::sqrt(std::max(0.0, room.area_m2)) * scale();
-    const double line_px = p->fontMetrics().height() + 2.0;
-    const QPointF at = ToWidget(room.label);
-    PaintLabel(p, at - QPointF(0, 0.5 * line_px), 0.0, tr("Room %1").arg(i + 1), kRoomText, room_px);
-    PaintLabel(p, at + QPointF(0, 0.5 * line_px), 0.0, tr("%1 m²").arg(room.area_m2, 0, 'f', 2), kRoomText,
-               room_px);
+    PaintRoomName(p, i, room);
+  }
+}
+
+void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room) const {
+  // The name over the area in the largest font, from the view's down to
+  // kMinRoomFontPx, whose block lies inside the room's outline and clear of
+  // every figure and dimension line drawn (figures_): at core/plan's label
+  // point if it is clear there, else at the clear point nearest to it (the
+  // rooms' dimensions cross at their middles, where the label point is).
+  // None fits: no name (the area is in the summary; zooming in brings it
+  // back). The names once covered the dimensions' figures at any zoom and
+  // spilled across walls when zoomed out.
+  QPolygonF outline;
+  for (const Eigen::Vector2d& v : room.outline) outline << ToWidget(v);
+  const QString name = tr("Room %1").arg(index + 1);
+  const QString area = tr("%1 m²").arg(room.area_m2, 0, 'f', 2);
+  const QPointF label = ToWidget(room.label);
+  // Candidate centres: the label point, then a grid over the room (at most
+  // 40 x 40 points) by distance from it.
+  const QRectF bounds = outline.boundingRect().intersected(QRectF(rect()));
+  if (bounds.isEmpty()) return;
+  const double step = std::max({4.0, bounds.width() / 40.0, bounds.height() / 40.0});
+  std::vector<QPointF> candidates{label};
+  for (double y = bounds.top() + 0.5 * step; y < bounds.bottom(); y += step) {
+    for (double x = bounds.left() + 0.5 * step; x < bounds.right(); x += step) {
+      if (outline.containsPoint({x, y}, Qt::OddEvenFill)) candidates.emplace_back(x, y);
+    }
+  }
+  const auto distance = [&](const QPointF& q) { return QPointF::dotProduct(q - label, q - label); };
+  std::sort(candidates.begin() + 1, candidates.end(),
+            [&](const QPointF& l, const QPointF& r) { return distance(l) < distance(r); });
+  QFont font = p->font();
+  // The view's own size (the dimensions' figures), not its line height.
+  const int base = QFontInfo(font).pixelSize();
+  for (double px = base; px >= kMinRoomFontPx; px -= 1.0) {
+    font.setPixelSize(static_cast<int>(px));
+    const QFontMetricsF m(font);
+    const double line = m.height() + 2.0;
+    const double width = std::max(m.horizontalAdvance(name), m.horizontalAdvance(area)) + 6.0;
+    for (const QPointF& at : candidates) {
+      const QRectF block(at.x() - 0.5 * width, at.y() - line - 1.0, width, 2.0 * line + 2.0);
+      const QPolygonF box(block.adjusted(-1, -1, 1, 1));  // clear by a pixel, not touching
+      bool fits = true;
+      for (const QPointF& c :
+           {block.topLeft(), block.topRight(), block.bottomLeft(), block.bottomRight()}) {
+        fits = fits && outline.containsPoint(c, Qt::OddEvenFill);
+      }
+      for (size_t k = 0; fits && k < figures_.size(); ++k) fits = !ConvexOverlap(box, figures_[k]);
+      if (!fits) continue;
+      p->save();
+      p->setFont(font);
+      PaintLabel(p, at - QPointF(0, 0.5 * line), 0.0, name, kRoomText);
+      PaintLabel(p, at + QPointF(0, 0.5 * line), 0.0, area, kRoomText);
+      p->restore();
+      room_labels_.push_back({name, block});
+      return;
+    }
   }
 }
 

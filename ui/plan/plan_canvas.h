@@ -20,8 +20,11 @@
 
 #include <Eigen/Core>
 #include <QPointF>
+#include <QPolygonF>
+#include <QRectF>
 #include <QString>
 #include <optional>
+#include <vector>
 
 #include "core/plan/floor_plan.h"
 #include "ui/plan/canvas_2d.h"
@@ -47,6 +50,8 @@ class PlanCanvas : public Canvas2d {
   void SetPlan(const plan::FloorPlan& plan, bool fit);
   void ClearPlan(const QString& why);  // why: shown in the middle
   const std::optional<plan::FloorPlan>& plan() const { return plan_; }
+  // Why there is no plan (ClearPlan's `why`).
+  const QString& empty_text() const { return empty_text_; }
   Eigen::Vector2d ToPlan(const QPointF& w) const { return ToModel(w); }
 
   // The section line drawn over the plan (none: nothing drawn).
@@ -57,6 +62,19 @@ class PlanCanvas : public Canvas2d {
   bool section_mode() const { return section_mode_; }
   // A section line's drag under way (its rubber band).
   bool drawing_section() const { return drag_.has_value(); }
+
+  // As the last paint left them (for tests): the dimensions' and doors'
+  // figures and the dimension lines (widget pixels), and the room names
+  // drawn (a name and the block of its two lines).
+  struct RoomLabel {
+    QString name;
+    QRectF block;
+  };
+  static constexpr double kMinRoomFontPx = 7.0;  // smaller is not read: left out
+  const std::vector<QPolygonF>& figures() const { return figures_; }
+  // The doors' and dimensions' figures alone (their plates).
+  const std::vector<QPolygonF>& label_plates() const { return labels_; }
+  const std::vector<RoomLabel>& room_labels() const { return room_labels_; }
 
  signals:
   // The operator drew `section_line()`.
@@ -75,6 +93,7 @@ class PlanCanvas : public Canvas2d {
 
  private:
   void PaintRooms(QPainter* p, bool names) const;
+  void PaintRoomName(QPainter* p, size_t index, const plan::Room& room) const;
   void PaintSectionLine(QPainter* p, const SectionLine& line, bool rubber_band) const;
 
   std::optional<plan::FloorPlan> plan_;
@@ -82,6 +101,9 @@ class PlanCanvas : public Canvas2d {
   std::optional<SectionLine> section_line_;
   std::optional<SectionLine> drag_;  // the line being drawn
   bool section_mode_ = false;
+  mutable std::vector<QPolygonF> labels_;   // the figures' plates
+  mutable std::vector<QPolygonF> figures_;  // and the dimension lines' bands
+  mutable std::vector<RoomLabel> room_labels_;
 };
 
 }  // namespace sweepscan::ui

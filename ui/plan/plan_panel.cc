@@ -1,5 +1,6 @@
 #include "ui/plan/plan_panel.h"
 
+#include <QAction>
 #include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -229,6 +230,7 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
     if (!project_->document()->is_open()) Stale(true);
   });
   connect(&jobs_, &ProjectJobs::progress, this, &PlanPanel::ShowProgress);
+  connect(canvas_, &PlanCanvas::contentChanged, this, &PlanPanel::UpdateActions);
   canvas_->ClearPlan(tr("Open a project (File > Open Project…) or a session to draw its floor plan."));
   // The last section line, drawn again over the next plan.
   const QVariantList line = settings.value(kSectionKey).toList();
@@ -242,6 +244,7 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
       section_pane_->setVisible(true);
     }
   }
+  UpdateActions();
 }
 
 QWidget* PlanPanel::MakeSectionPane() {
@@ -254,19 +257,20 @@ QWidget* PlanPanel::MakeSectionPane() {
   section_summary_->setObjectName(QStringLiteral("planSectionSummary"));
   section_summary_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   row->addWidget(section_summary_, 1);
-  QPushButton* fit = AddButton(row, tr("Fit"), QString(), tr("The whole section in the view (or double-click it)"));
+  section_fit_ = AddButton(row, tr("Fit"), QString(),
+                           tr("The whole section in the view (or double-click it)"));
   section_export_ = AddButton(row, tr("Export Section…"), QStringLiteral("planSectionExport"),
                               tr("The section as SVG (1:50, paper millimetres, z up)"));
   connect(section_export_, &QPushButton::clicked, this, &PlanPanel::ExportSectionWithDialog);
-  auto* clear = new QToolButton;
-  clear->setObjectName(QStringLiteral("planSectionClear"));
-  clear->setText(tr("Remove"));
-  clear->setToolTip(tr("Removes the section line and its section"));
-  connect(clear, &QToolButton::clicked, this, [this] { SetSectionLine(std::nullopt); });
-  row->addWidget(clear);
+  section_remove_ = new QToolButton;
+  section_remove_->setObjectName(QStringLiteral("planSectionClear"));
+  section_remove_->setText(tr("Remove"));
+  connect(section_remove_, &QToolButton::clicked, this, [this] { SetSectionLine(std::nullopt); });
+  row->addWidget(section_remove_);
   layout->addLayout(row);
   section_canvas_ = new SectionCanvas;
-  connect(fit, &QPushButton::clicked, section_canvas_, &SectionCanvas::Fit);
+  connect(section_fit_, &QPushButton::clicked, section_canvas_, &SectionCanvas::Fit);
+  connect(section_canvas_, &SectionCanvas::contentChanged, this, &PlanPanel::UpdateActions);
   layout->addWidget(section_canvas_, 1);
   section_pane_->setVisible(false);
   return section_pane_;
@@ -280,11 +284,54 @@ void PlanPanel::Stale(bool fit) {
   stale_ = true;
   fit_next_ = fit_next_ || fit;
   if (isVisible()) settle_->start();  // Restarted by each edit: one build after a burst.
+  UpdateActions();  // A project or session opened or closed: File > Export Floor Plan.
 }
 
 void PlanPanel::showEvent(QShowEvent* event) {
   QWidget::showEvent(event);
   if (stale_ && !jobs_.running()) settle_->start();
+  UpdateActions();
+}
+
+void PlanPanel::hideEvent(QHideEvent* event) {
+  QWidget::hideEvent(event);
+  UpdateActions();
+}
+
+void PlanPanel::SetFileExportAction(QAction* action) {
+  file_export_ = action;
+  UpdateActions();
+}
+
+void PlanPanel::UpdateActions() {
+  // Enabled only when they can act, the reason in the tooltip when not
+  // (Export… once said "View > Floor Plan draws one" with the dock open
+  // and a cut height that found no walls).
+  const bool plan = canvas_->plan().has_value();
+  const QString why = canvas_->empty_text();
+  export_->setEnabled(plan);
+  export_->setToolTip(
+      plan ? tr("The plan as SVG (1:50, paper millimetres) or DXF R12 (metres), by the suffix")
+           : tr("No plan to export: %1").arg(why));
+  if (file_export_ != nullptr) {
+    // Hidden, the dock builds no plan: the action says how to get one.
+    const bool source = project_->document()->is_open() || workspace_->point_count() > 0;
+    file_export_->setEnabled(plan || (source && !isVisible()));
+    file_export_->setToolTip(plan || (source && !isVisible()) ? QString()
+                             : source                         ? tr("No plan to export: %1").arg(why)
+                                      : tr("Open a project or a session first"));
+  }
+  const std::optional<SectionOf>& section = section_canvas_->section();
+  const bool has_section = section && !section->s_z.empty();
+  section_export_->setEnabled(has_section);
+  section_fit_->setEnabled(has_section);
+  section_export_->setToolTip(has_section
+                                  ? tr("The section as SVG (1:50, paper millimetres, z up) or DXF")
+                                  : tr("No section to export yet"));
+  const bool line = canvas_->section_line().has_value() && plan;
+  section_remove_->setEnabled(line);
+  section_remove_->setToolTip(line ? tr("Removes the section line and its section")
+                                   : tr("No section line on a plan to remove"));
 }
 
 void PlanPanel::ShowProgress(const QString& what, double fraction) {
@@ -414,6 +461,7 @@ void PlanPanel::SetSectionLine(const std::optional<SectionLine>& line) {
   }
   settings.setValue(kSectionKey, QVariantList{line->a.x(), line->a.y(), line->b.x(), line->b.y()});
   section_pane_->setVisible(true);
+  UpdateActions();
   RebuildSection();
 }
 
@@ -478,9 +526,17 @@ void PlanPanel::ShowSection(const SectionOf& section, bool fit) {
                                    .arg(o.b.y(), 0, 'f', 2));
 }
 
+QString PlanPanel::NoPlanReason() const {
+  // Hidden, the dock builds nothing; shown, the canvas says why it has no plan.
+  if (!isVisible() || canvas_->empty_text().isEmpty()) {
+    return tr("There is no floor plan to export yet: View > Floor Plan draws one.");
+  }
+  return tr("There is no floor plan to export: %1").arg(canvas_->empty_text());
+}
+
 bool PlanPanel::ExportPlan(const QString& path, QString* error) const {
   if (!canvas_->plan()) {
-    *error = tr("There is no floor plan to export yet: View > Floor Plan draws one.");
+    *error = NoPlanReason();
     return false;
   }
   const QString suffix = QFileInfo(path).suffix().toLower();
@@ -501,8 +557,7 @@ bool PlanPanel::ExportPlan(const QString& path, QString* error) const {
 
 void PlanPanel::ExportWithDialog() {
   if (!canvas_->plan()) {
-    show_error_(tr("Cannot export the floor plan"),
-                tr("There is no floor plan to export yet: View > Floor Plan draws one."));
+    show_error_(tr("Cannot export the floor plan"), NoPlanReason());
     return;
   }
   const QString svg = tr("SVG drawing, 1:50 (*.svg)"), dxf = tr("DXF R12 drawing, metres (*.dxf)");

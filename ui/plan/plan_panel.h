@@ -33,6 +33,7 @@
 #include "ui/plan/plan_canvas.h"
 #include "ui/project/project_jobs.h"
 
+class QAction;
 class QDoubleSpinBox;
 class QLabel;
 class QProgressBar;
@@ -69,6 +70,9 @@ class PlanPanel : public QWidget {
   bool ExportPlan(const QString& path, QString* error) const;
   // File > Export Floor Plan…: the file chosen, then ExportPlan; errors shown.
   void ExportWithDialog();
+  // The File menu's Export Floor Plan action, enabled with the dock's
+  // Export… (or, the dock hidden, when there is something to plan).
+  void SetFileExportAction(QAction* action);
 
   // The section line (none: no section); its section is built now or
   // after the build under way, and the line kept in the settings.
@@ -95,9 +99,15 @@ class PlanPanel : public QWidget {
 
  protected:
   void showEvent(QShowEvent* event) override;
+  void hideEvent(QHideEvent* event) override;
 
  private:
   void Stale(bool fit);  // The inputs changed: rebuilt soon if shown.
+  // The export, Fit and Remove buttons (and the File action) enabled when
+  // they can act, with why not in their tooltips.
+  void UpdateActions();
+  // Why Export cannot act, said so that the operator can mend it.
+  QString NoPlanReason() const;
   bool settle_pending() const;
   void ShowProgress(const QString& what, double fraction);
   // The section of the line alone (the plan kept), on the job thread.
@@ -126,6 +136,9 @@ class PlanPanel : public QWidget {
   SectionCanvas* section_canvas_ = nullptr;
   QLabel* section_summary_ = nullptr;
   QPushButton* section_export_ = nullptr;
+  QPushButton* section_fit_ = nullptr;
+  QToolButton* section_remove_ = nullptr;
+  QAction* file_export_ = nullptr;
   QTimer* settle_;
   bool stale_ = true;
   bool fit_next_ = true;  // a new source: the next plan fitted

@@ -33,6 +33,7 @@ void SectionCanvas::SetSection(const SectionOf& section, double cut_height_m, bo
     max_ = max_.cwiseMax(q);
   }
   Follow(fit);
+  emit contentChanged();
 }
 
 void SectionCanvas::ClearSection(const QString& why) {
@@ -40,6 +41,7 @@ void SectionCanvas::ClearSection(const QString& why) {
   empty_text_ = why;
   Unfollow();
   update();
+  emit contentChanged();
 }
 
 double SectionCanvas::length() const {
