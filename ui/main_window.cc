@@ -6,6 +6,7 @@
 #include <QActionGroup>
 #include <QApplication>
 #include <QCloseEvent>
+#include <QDir>
 #include <QDockWidget>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -469,8 +470,20 @@ void MainWindow::SaveSettings() {
   s.setValue(QStringLiteral("link/baud"), o.baud);
   s.setValue(QStringLiteral("view/color"), static_cast<int>(view_->color_mode()));
   s.setValue(QStringLiteral("view/point_size"), view_->point_size());
-  s.setValue(QStringLiteral("sessions/root"), workspace_->sessions_root());
   s.setValue(kPoseSourceKey, QString::fromLatin1(PoseSourceName(workspace_->pose_source())));
+}
+
+QString MainWindow::SessionDialogDir() const {
+  for (const QString& dir : {QSettings().value(QStringLiteral("sessions/open_dir")).toString(),
+                             workspace_->sessions_root()}) {
+    if (!dir.isEmpty() && QFileInfo(dir).isDir()) return dir;
+  }
+  return QDir::homePath();
+}
+
+void MainWindow::ChooseSessionsRoot(const QString& dir) {
+  workspace_->set_sessions_root(dir);
+  QSettings().setValue(QStringLiteral("sessions/root"), dir);
 }
 
 QString MainWindow::clip_status() const {

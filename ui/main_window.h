@@ -95,6 +95,14 @@ class MainWindow : public QMainWindow {
   // keeps an unsaved recording instead.
   RosImportDialog* ImportRosRecordingPath(const QString& path);
   bool SaveSessionTo(const QString& dir);
+  // Where File > Open Session's and Save Session As's dialogs start: the
+  // folder a session was last opened from, else the sessions folder, else
+  // the home folder; the first that exists (a dialog given a missing folder
+  // starts in the working directory).
+  QString SessionDialogDir() const;
+  // Tools > Sessions Folder… with the folder chosen: used and kept in the
+  // settings (a --sessions-dir on the command line is used, not kept).
+  void ChooseSessionsRoot(const QString& dir);
   void ShowError(const QString& title, const QString& message);
   // The distance tool (Tools > Measure Distance, M): two Shift + clicks.
   QAction* measure_action() const { return measure_; }

@@ -105,8 +105,10 @@ void MainWindow::BuildFileMenu() {
   new_session->setShortcut(QKeySequence::New);
   QAction* open = file->addAction(tr("&Open Session…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(
-        this, tr("Open session folder (NAME.sweepscan)"), workspace_->sessions_root());
-    if (!dir.isEmpty()) OpenSessionPath(dir);
+        this, tr("Open session folder (NAME.sweepscan)"), SessionDialogDir());
+    if (dir.isEmpty()) return;
+    QSettings().setValue(QStringLiteral("sessions/open_dir"), QFileInfo(dir).absolutePath());
+    OpenSessionPath(dir);
   });
   open->setShortcut(QKeySequence::Open);
   recent_menu_ = file->addMenu(tr("Open &Recent"));
@@ -123,7 +125,7 @@ void MainWindow::BuildFileMenu() {
   import_ros->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_I));
   QAction* save_as = file->addAction(tr("Save Session &As…"), this, [this] {
     const QString dir = QFileDialog::getSaveFileName(
-        this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
+        this, tr("Save session as"), SessionDialogDir(), tr("Sessions (*.sweepscan)"));
     if (dir.isEmpty()) return;
     SaveSessionTo(dir);
   });
@@ -327,7 +329,7 @@ void MainWindow::BuildToolsMenu() {
   tools->addAction(tr("&Sessions Folder…"), this, [this] {
     const QString dir = QFileDialog::getExistingDirectory(this, tr("Where new recordings go"),
                                                           workspace_->sessions_root());
-    if (!dir.isEmpty()) workspace_->set_sessions_root(dir);
+    if (!dir.isEmpty()) ChooseSessionsRoot(dir);
   });
   tools->addAction(tr("&Device Check…"), this, [this] {
     auto* dialog = new DeviceCheckDialog(workspace_, this);

@@ -48,7 +48,7 @@ bool MainWindow::ConfirmDiscard(const std::function<void()>& retry) {
       return false;
     }
     const QString dir = QFileDialog::getSaveFileName(
-        this, tr("Save session as"), workspace_->sessions_root(), tr("Sessions (*.sweepscan)"));
+        this, tr("Save session as"), SessionDialogDir(), tr("Sessions (*.sweepscan)"));
     if (dir.isEmpty() || !SaveSessionTo(dir)) return false;
     if (!workspace_->unsaved()) return true;  // moved at once
     // Being copied onto another disk (SaveSessionAs refuses while another

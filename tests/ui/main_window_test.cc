@@ -194,6 +194,37 @@ TEST_F(AppTest, DriveSettingsAreKeptAndAStillViewSaysSo) {
 // back (the column stayed at half the window, and the saved layout with
 // it). File > Save Session As has its Ctrl+Shift+S (QKeySequence::SaveAs
 // is empty under X11's generic theme).
+// A sessions folder given on the command line (--sessions-dir, as the
+// fixture sets it) is used but not kept: it was saved as the operator's
+// default on quitting. Tools > Sessions Folder… keeps its choice. The
+// session dialogs start in a folder that exists: the one a session was
+// last opened from, the sessions folder, else home (a missing folder made
+// Qt's dialog start in the working directory).
+TEST_F(AppTest, ACommandLineSessionsFolderIsNotKeptAndSessionDialogsStartInAFolderThatExists) {
+  const QString root = workspace_->sessions_root();
+  ASSERT_FALSE(QFileInfo(root).exists());
+  EXPECT_EQ(window_->SessionDialogDir(), QDir::homePath());
+  ASSERT_TRUE(QDir().mkpath(root));
+  EXPECT_EQ(window_->SessionDialogDir(), root);
+  const QString opened_from = tmp_.path() + "/drives";
+  QSettings().setValue("sessions/open_dir", opened_from);
+  EXPECT_EQ(window_->SessionDialogDir(), root);  // Gone since: not used.
+  ASSERT_TRUE(QDir().mkpath(opened_from));
+  EXPECT_EQ(window_->SessionDialogDir(), opened_from);
+
+  ASSERT_TRUE(window_->close());
+  EXPECT_FALSE(QSettings().contains("sessions/root"))
+      << QSettings().value("sessions/root").toString().toStdString();
+  const QString chosen = tmp_.path() + "/chosen";
+  window_->ChooseSessionsRoot(chosen);
+  EXPECT_EQ(workspace_->sessions_root(), chosen);
+  EXPECT_EQ(QSettings().value("sessions/root").toString(), chosen);
+  window_.reset();
+  ui::Workspace next;
+  ui::MainWindow again(&next, kResources);
+  EXPECT_EQ(next.sessions_root(), chosen);
+}
+
 TEST_F(AppTest, FloorPlanComesToTheFrontAndHidingItGivesTheWidthBack) {
   window_->resize(1400, 860);
   auto* plan = window_->findChild<QDockWidget*>(QStringLiteral("planDock"));
