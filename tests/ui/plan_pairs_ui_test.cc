@@ -623,6 +623,16 @@ TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
   EXPECT_FALSE(picking->active());
   EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
   EXPECT_TRUE(window_->undo_group()->canUndo());
+
+  // Closing the project while picking ends it and says so ("cancelled: the
+  // project is unchanged" read as if the close had not happened).
+  QString said;
+  QObject::connect(picking, &PairPicking::message, [&](const QString& m) { said = m; });
+  ASSERT_TRUE(picking->Start("c", "a"));
+  window_->PointPicked(truth.in_c[0]);
+  ASSERT_TRUE(project()->CloseProject());
+  EXPECT_FALSE(picking->active());
+  EXPECT_EQ(said, "Pair picking ended: the project was closed; its picks are dropped");
 }
 
 // Pair picking holds the project still (the context menu's edits disabled

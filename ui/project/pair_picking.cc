@@ -59,10 +59,7 @@ PairPicking::PairPicking(ProjectController* controller, CloudView* view, QWidget
       ShowMarkers();
       return;
     }
-    if (aligning_) controller_->Cancel();
-    aligning_ = false;
-    End();
-    emit message(tr("Pair picking ended: %1; its picks are dropped").arg(gone));
+    Abandon(gone);
   });
   connect(controller_->jobs(), &ProjectJobs::finished, this, [this] {
     if (active()) emit changed();  // Align may be possible now.
@@ -112,6 +109,14 @@ void PairPicking::Cancel() {
   aligning_ = false;
   End();
   emit message(tr("Pair picking cancelled: the project is unchanged"));
+}
+
+void PairPicking::Abandon(const QString& why) {
+  if (!active()) return;
+  if (aligning_) controller_->Cancel();
+  aligning_ = false;
+  End();
+  emit message(tr("Pair picking ended: %1; its picks are dropped").arg(why));
 }
 
 void PairPicking::End() {

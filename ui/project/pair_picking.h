@@ -68,6 +68,9 @@ class PairPicking : public QObject {
   // placed, `id` the anchor or the reference itself.
   bool Start(const std::string& id, const std::string& reference);
   void Cancel();  // Esc: the picks dropped, the project untouched.
+  // Ended by something else (the project closed, another one opened): the
+  // picks dropped, `why` said.
+  void Abandon(const QString& why);
   // The click's point, if it is in the session expected next (else a
   // message says where to click, and false).
   bool AddPick(const PickHit& hit);

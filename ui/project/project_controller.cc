@@ -66,7 +66,10 @@ ProjectController::ProjectController(QWidget* window, CloudView* view,
   connect(&document_, &ProjectDocument::opened, this, [this] {
     // Another project: its own clouds, and none of the old one's jobs.
     jobs_.Cancel();
-    picking_->Cancel();
+    // "Cancelled: the project is unchanged" read as if the close had not
+    // happened.
+    picking_->Abandon(document_.is_open() ? tr("another project was opened")
+                                          : tr("the project was closed"));
     preview_.clear();
     clouds_.clear();
     load_failures_.clear();
