@@ -450,6 +450,21 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   EXPECT_NE(panel->result_text().indexOf("planes"), -1);
   EXPECT_NE(panel->result_text().indexOf("smoothed over the drive"), -1)
       << panel->result_text().toStdString();
+  // The cost beside the RMS is the whole solve's, from its first iteration
+  // to its last (all rounds), without a percentage: the last round's alone
+  // (it starts near the answer) read "-0.16 %" beside "60 mm -> 5.8 mm".
+  const std::vector<CalibrationIteration>& trace = r->summary.trace;
+  ASSERT_GE(trace.size(), 2u);
+  EXPECT_LT(r->summary.final_rms_m, 0.5 * r->summary.initial_rms_m);
+  EXPECT_LT(trace.back().cost, 0.5 * trace.front().cost)
+      << "the whole solve's cost fell as its RMS";
+  const QString caption = panel->cost_caption();
+  EXPECT_TRUE(caption.startsWith(QStringLiteral("solver cost %1 -> %2, %3 iterations")
+                                     .arg(trace.front().cost, 0, 'g', 3)
+                                     .arg(trace.back().cost, 0, 'g', 3)
+                                     .arg(trace.size() - 1)))
+      << caption.toStdString();
+  EXPECT_EQ(caption.indexOf('%'), -1) << caption.toStdString();
 }
 
 // An IMU whose tilt readings are far noisier than its data sheet (3 deg;
