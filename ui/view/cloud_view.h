@@ -302,6 +302,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
     QRectF box;
   };
   const std::vector<PlaneLabelBox>& plane_label_boxes() const { return plane_label_boxes_; }
+  // Where the colour bar drew in the last frame, in widget pixels: its bar,
+  // title and labels (empty when not drawn). Kept inside the view (a long
+  // title on a narrow view moves the bar left) and kept clear of plane
+  // labels, as is the axes' corner.
+  const QRectF& color_bar_box() const { return color_bar_box_; }
   // The distance tool: a line between two points with its length.
   void SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
   void ClearMeasurement();
@@ -426,6 +431,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
   std::vector<PlaneLabelBox> plane_label_boxes_;
   void LayoutPlaneLabels();  // before each frame (the renderer's StartEvent)
+  QRectF LayoutColorBar();   // before each frame; its box in display pixels
+  QRectF color_bar_box_;
+  vtkSmartPointer<vtkTextActor> text_measure_;  // sizes the bar's texts, never drawn
   size_t plane_count_ = 0;
   bool planes_visible_ = true;
   vtkSmartPointer<vtkActor> measure_line_;

@@ -15,6 +15,8 @@
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
+#include <vtkScalarsToColors.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
@@ -144,14 +146,67 @@ void CloudView::SetPlanesVisible(bool visible) {
   RequestRender();
 }
 
+QRectF CloudView::LayoutColorBar() {
+  // The bar's frame: 7 % of the view's width at 88 %, from 5 % to 50 % of
+  // its height (BuildColorBar). The title is centred over the frame and the
+  // labels of a categorical bar (the passes) stand left of it, so on a
+  // narrow view the title ran off the right edge: the frame moves left
+  // until the title fits.
+  color_bar_box_ = QRectF();
+  int* size = renderer_->GetSize();
+  if (!color_bar_->GetVisibility() || size[0] <= 0 || size[1] <= 0) return QRectF();
+  if (!text_measure_) text_measure_ = vtkSmartPointer<vtkTextActor>::New();
+  auto measure = [&](vtkTextProperty* property, const char* text) {
+    text_measure_->GetTextProperty()->ShallowCopy(property);
+    text_measure_->SetInput(text);
+    double extent[2] = {0.0, 0.0};
+    text_measure_->GetSize(renderer_, extent);
+    return QSizeF(extent[0], extent[1]);
+  };
+  const double w = size[0], h = size[1], margin = 6.0;
+  const QSizeF title = measure(color_bar_->GetTitleTextProperty(), color_bar_->GetTitle());
+  const double frame_w = 0.07 * w;
+  double x = std::min(0.88 * w, w - margin - 0.5 * (frame_w + title.width()));
+  x = std::max(0.0, x);
+  if (std::abs(x / w - color_bar_->GetPosition()[0]) > 1e-9) {
+    color_bar_->SetPosition(x / w, 0.05);
+  }
+  const double centre = x + 0.5 * frame_w;
+  const double half = 0.5 * std::max(frame_w, title.width());
+  QRectF box(centre - half, 0.05 * h, 2.0 * half, 0.45 * h);
+  vtkScalarsToColors* lut = color_bar_->GetLookupTable();
+  if (lut != nullptr && lut->GetIndexedLookup() && color_bar_->GetDrawAnnotations()) {
+    // The categories' names, left of the swatches with their leaders.
+    double widest = 0.0;
+    for (vtkIdType i = 0; i < lut->GetNumberOfAnnotatedValues(); ++i) {
+      widest = std::max(
+          widest,
+          measure(color_bar_->GetAnnotationTextProperty(), lut->GetAnnotation(i).c_str()).width());
+    }
+    box.setLeft(
+        std::min(box.left(), x - widest - 2.0 * margin - color_bar_->GetAnnotationLeaderPadding()));
+  }
+  return box.adjusted(-2.0, -2.0, 2.0, 2.0);
+}
+
 void CloudView::LayoutPlaneLabels() {
   plane_label_boxes_.clear();
+  const double ratio = devicePixelRatioF();
+  auto to_widget = [&](const QRectF& b) {  // display pixels (y up) to widget pixels (y down)
+    return QRectF(b.left() / ratio, height() - b.bottom() / ratio, b.width() / ratio,
+                  b.height() / ratio);
+  };
+  // The colour bar and the axes' corner are placed first: a plane's label
+  // on them hid the bar's own labels.
+  const QRectF bar = LayoutColorBar();
+  color_bar_box_ = bar.isEmpty() ? QRectF() : to_widget(bar);
   if (plane_labels_.empty()) return;
   int* size = renderer_->GetSize();
   int* origin = renderer_->GetOrigin();
   const QRectF viewport(origin[0], origin[1], size[0], size[1]);
-  const double ratio = devicePixelRatioF();
   std::vector<QRectF> placed;
+  if (!bar.isEmpty()) placed.push_back(bar);
+  placed.push_back(QRectF(0.0, 0.0, 0.16 * size[0], 0.22 * size[1]));  // the axes
   // SetPlanes' order (the evaluation's: floor, ceiling, then the walls by
   // size) is the order of precedence: the first keeps its place.
   for (size_t i = 0; i < plane_labels_.size(); ++i) {
@@ -190,9 +245,7 @@ void CloudView::LayoutPlaneLabels() {
                               static_cast<int>(std::lround(box.center().y())));
     label->SetVisibility(true);
     // Widget pixels (y down), as WorldToWidget gives them.
-    plane_label_boxes_.push_back(
-        {static_cast<int>(i), QRectF(box.left() / ratio, height() - box.bottom() / ratio,
-                                     box.width() / ratio, box.height() / ratio)});
+    plane_label_boxes_.push_back({static_cast<int>(i), to_widget(box)});
   }
 }
 
