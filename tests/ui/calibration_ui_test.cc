@@ -5,6 +5,12 @@
 // refused.
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
+#include <vtkPropCollection.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
+#include <vtkScalarBarActor.h>
+#include <vtkScalarsToColors.h>
 
 #include <QAction>
 #include <QApplication>
@@ -450,6 +456,21 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   EXPECT_NE(panel->result_text().indexOf("planes"), -1);
   EXPECT_NE(panel->result_text().indexOf("smoothed over the drive"), -1)
       << panel->result_text().toStdString();
+  // The cost beside the RMS is the whole solve's, from its first iteration
+  // to its last (all rounds), without a percentage: the last round's alone
+  // (it starts near the answer) read "-0.16 %" beside "60 mm -> 5.8 mm".
+  const std::vector<CalibrationIteration>& trace = r->summary.trace;
+  ASSERT_GE(trace.size(), 2u);
+  EXPECT_LT(r->summary.final_rms_m, 0.5 * r->summary.initial_rms_m);
+  EXPECT_LT(trace.back().cost, 0.5 * trace.front().cost)
+      << "the whole solve's cost fell as its RMS";
+  const QString caption = panel->cost_caption();
+  EXPECT_TRUE(caption.startsWith(QStringLiteral("solver cost %1 -> %2, %3 iterations")
+                                     .arg(trace.front().cost, 0, 'g', 3)
+                                     .arg(trace.back().cost, 0, 'g', 3)
+                                     .arg(trace.size() - 1)))
+      << caption.toStdString();
+  EXPECT_EQ(caption.indexOf('%'), -1) << caption.toStdString();
 }
 
 // An IMU whose tilt readings are far noisier than its data sheet (3 deg;
@@ -474,6 +495,75 @@ TEST_F(CalibrationTest, AutomaticRefusesAnImuFarNoisierThanItsDataSheet) {
   EXPECT_EQ(workspace_->calibration_result(), nullptr);
   EXPECT_TRUE(window_->isVisible());
   EXPECT_FALSE(workspace_->job_running());
+}
+
+// The colour bar after Evaluate, on a calibration drive coloured by pass and
+// then by deviation, in the test window's narrow view: one bar, its labels
+// drawn once (the passes' two names and no numbers; then five numbers and
+// no names), its title and labels inside the view, and no plane's label on
+// it (the planes' names, drawn over the view, covered "pass A (near side)"
+// and left "side)" showing; the deviation's title ran off the right edge).
+TEST_F(CalibrationTest, ColourBarIsOneLegendClearOfThePlaneLabelsAfterEvaluate) {
+  OpenDiamond();
+  CloudView* view = window_->view();
+  ASSERT_EQ(view->color_mode(), CloudView::ColorMode::kPass);
+  EvaluationPanel* evaluation = window_->evaluation_panel();
+  bool done = false, ok = false;
+  QObject context;
+  QObject::connect(evaluation, &EvaluationPanel::evaluated, &context, [&](bool r) {
+    done = true;
+    ok = r;
+  });
+  evaluation->Evaluate();
+  ASSERT_TRUE(WaitFor([&] { return done; }, 180000));
+  ASSERT_TRUE(ok) << evaluation->summary_text().toStdString();
+  ASSERT_GT(view->plane_count(), 4u);
+  vtkRenderer* renderer = view->renderWindow()->GetRenderers()->GetFirstRenderer();
+  const QRectF widget(0, 0, view->width(), view->height());
+  for (const bool deviation : {false, true}) {
+    SCOPED_TRACE(deviation ? "deviation" : "pass");
+    evaluation->ShowDeviations(deviation);
+    view->ViewOblique();
+    view->RenderNow();
+    std::vector<vtkScalarBarActor*> bars;
+    vtkPropCollection* props = renderer->GetViewProps();
+    props->InitTraversal();
+    while (vtkProp* prop = props->GetNextProp()) {
+      if (auto* bar = vtkScalarBarActor::SafeDownCast(prop)) bars.push_back(bar);
+    }
+    ASSERT_EQ(bars.size(), 1u);
+    vtkScalarBarActor* bar = bars[0];
+    EXPECT_TRUE(bar->GetVisibility());
+    vtkScalarsToColors* lut = bar->GetLookupTable();
+    if (deviation) {
+      EXPECT_FALSE(lut->GetIndexedLookup());
+      EXPECT_EQ(lut->GetNumberOfAnnotatedValues(), 0);
+      EXPECT_EQ(bar->GetNumberOfLabels(), 5);
+      EXPECT_STREQ(bar->GetTitle(), "deviation (mm)");
+    } else {
+      EXPECT_TRUE(lut->GetIndexedLookup());
+      EXPECT_EQ(lut->GetNumberOfAnnotatedValues(), 2);
+      // Indexed: the two names, and no numbers beside them (VTK draws no
+      // tick labels for an indexed table).
+      EXPECT_STREQ(bar->GetTitle(), "pass");
+    }
+    // The bar as VTK drew it, within the legend's box, itself in the view.
+    int rect[4];
+    bar->GetScalarBarRect(rect, renderer);
+    const double ratio = view->devicePixelRatioF();
+    const QRectF drawn(rect[0] / ratio, view->height() - (rect[1] + rect[3]) / ratio,
+                       rect[2] / ratio, rect[3] / ratio);
+    const QRectF legend = view->color_bar_box();
+    EXPECT_TRUE(legend.contains(drawn.adjusted(1, 1, -1, -1)))
+        << drawn.x() << " " << drawn.y() << " " << drawn.width() << " " << drawn.height();
+    EXPECT_TRUE(widget.contains(legend))
+        << legend.x() << " " << legend.y() << " " << legend.width() << " " << legend.height()
+        << " in " << widget.width() << " x " << widget.height();
+    EXPECT_FALSE(view->plane_label_boxes().empty());
+    for (const CloudView::PlaneLabelBox& b : view->plane_label_boxes()) {
+      EXPECT_FALSE(b.box.intersects(legend)) << "plane " << b.plane + 1 << "'s label";
+    }
+  }
 }
 
 }  // namespace

@@ -32,7 +32,14 @@ namespace sweepscan::ui {
 // The solver's cost per LM iteration on a log scale (the paper's Fig. 8).
 class CostPlot : public QWidget {
  public:
-  CostPlot() { setMinimumHeight(90); }
+  CostPlot() {
+    setMinimumHeight(90);
+    setToolTip(
+        tr("The solver's cost per Levenberg-Marquardt iteration over the whole solve: half "
+           "the sum of the squared residuals (pairs and corners: their gaps in metres; "
+           "automatic: each point's distance to its plane over its noise, robust). It is "
+           "not the RMS in mm above it."));
+  }
   void Clear() {
     costs_.clear();
     update();
@@ -42,18 +49,31 @@ class CostPlot : public QWidget {
     costs_.push_back(std::max(cost, 1e-30));
     update();
   }
-  // "cost 40512 -> 40498 (-0.034 %), 5 iterations, log scale": the relative
-  // change, which three digits of each end cannot show when it is small.
+  // The whole solve whose result is shown (CalibrationSummary::trace: every
+  // inner solve of the automatic mode's rounds and of the refined corners,
+  // numbered on). While solving, Add draws the inner solve under way, which
+  // starts again at iteration 0 each round: its last round starts near the
+  // answer and barely moves, which beside the RMS's drop over the whole solve
+  // read as a contradiction ("-0.16 %" beside "60 mm -> 5.8 mm").
+  void Set(const std::vector<CalibrationIteration>& trace) {
+    costs_.clear();
+    for (const CalibrationIteration& it : trace) costs_.push_back(std::max(it.cost, 1e-30));
+    update();
+  }
+  // "solver cost 1.44e+06 -> 4.05e+04, 53 iterations, log scale": the solver's
+  // own objective (half the sum of the squared residuals, weighted and
+  // robust in the automatic mode; not the RMS in mm above it) at the start
+  // and the end of the solve. No percentage: the relative change of such a
+  // sum is nothing an operator can set beside the RMS.
   QString Caption() const {
     if (costs_.size() < 2) return QString();
     const double first = costs_.front(), last = costs_.back();
-    const double change = 100.0 * (last - first) / first;
+    const double change = std::abs(last - first) / first;
     // Enough digits that the two ends differ where the costs do.
-    const int digits = std::abs(change) >= 1.0 ? 3 : std::abs(change) >= 0.01 ? 6 : 9;
-    return tr("cost %1 -> %2 (%3 %), %4 iterations, log scale")
+    const int digits = change >= 0.01 ? 3 : change >= 1e-4 ? 6 : 9;
+    return tr("solver cost %1 -> %2, %3 iterations, log scale")
         .arg(first, 0, 'g', digits)
         .arg(last, 0, 'g', digits)
-        .arg(change, 0, 'g', 2)
         .arg(costs_.size() - 1);
   }
 
@@ -626,6 +646,7 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
   for (const std::string& w : s.warnings)
     text += tr("<br>warning: %1").arg(QString::fromStdString(w));
   result_->setText(text);
+  plot_->Set(s.trace);  // the whole solve the figures above are of
   emit solved(s.converged);
   Refresh();
   // The result in sight when the panel scrolls.
@@ -674,6 +695,8 @@ void CalibrationPanel::UseForRobot() {
 }
 
 QString CalibrationPanel::result_text() const { return result_->text(); }
+
+QString CalibrationPanel::cost_caption() const { return plot_->Caption(); }
 
 QString CalibrationPanel::pick_prompt() const { return next_pick_->text(); }
 

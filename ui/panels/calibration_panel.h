@@ -70,6 +70,9 @@ class CalibrationPanel : public QWidget {
   // Makes the result the robot's calibration for live scans and new recordings.
   void UseForRobot();
   QString result_text() const;
+  // The cost plot's caption: the solver's cost at the start and end of the
+  // solve shown ("solver cost A -> B, N iterations, log scale").
+  QString cost_caption() const;
   // Step 3's prompt: what to pick next, and what opening another session cleared.
   QString pick_prompt() const;
 

@@ -40,6 +40,7 @@
 #include <QColor>
 #include <QImage>
 #include <QPoint>
+#include <QRectF>
 #include <QString>
 #include <algorithm>
 #include <array>
@@ -64,6 +65,7 @@ class QTimer;
 class vtkActor;
 class vtkActor2D;
 class vtkBillboardTextActor3D;
+class vtkTextActor;
 class vtkAxesActor;
 class vtkGenericOpenGLRenderWindow;
 class vtkLookupTable;
@@ -285,9 +287,26 @@ class CloudView : public QVTKOpenGLNativeWidget {
     QColor color;
     QString label;
   };
+  // Each plane's name is drawn over the view (2D, on top of the cloud) at
+  // its rectangle's centre; a name that would cover one placed before it (a
+  // floor's and a ceiling's centres meet seen from above, walls' seen end
+  // on) is moved up or down, a line at a time, to the nearest clear place
+  // within a few lines, or left out of that frame. Laid out every frame.
   void SetPlanes(const std::vector<PlanePatch>& planes);
   void SetPlanesVisible(bool visible);
   size_t plane_count() const { return plane_count_; }
+  // The plane names drawn in the last frame: the plane's index in
+  // SetPlanes' order and its box in widget pixels.
+  struct PlaneLabelBox {
+    int plane = 0;
+    QRectF box;
+  };
+  const std::vector<PlaneLabelBox>& plane_label_boxes() const { return plane_label_boxes_; }
+  // Where the colour bar drew in the last frame, in widget pixels: its bar,
+  // title and labels (empty when not drawn). Kept inside the view (a long
+  // title on a narrow view moves the bar left) and kept clear of plane
+  // labels, as is the axes' corner.
+  const QRectF& color_bar_box() const { return color_bar_box_; }
   // The distance tool: a line between two points with its length.
   void SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
   void ClearMeasurement();
@@ -408,7 +427,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
   LayerPicker layer_picker_;
   PickCounts last_pick_counts_;
   vtkSmartPointer<vtkActor> planes_;
-  std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> plane_labels_;
+  std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;
+  std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
+  std::vector<PlaneLabelBox> plane_label_boxes_;
+  void LayoutPlaneLabels();  // before each frame (the renderer's StartEvent)
+  QRectF LayoutColorBar();   // before each frame; its box in display pixels
+  QRectF color_bar_box_;
+  vtkSmartPointer<vtkTextActor> text_measure_;  // sizes the bar's texts, never drawn
   size_t plane_count_ = 0;
   bool planes_visible_ = true;
   vtkSmartPointer<vtkActor> measure_line_;

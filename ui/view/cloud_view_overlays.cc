@@ -1,16 +1,23 @@
 // CloudView's annotations: the evaluation's fitted planes as translucent
-// coloured rectangles with their names, and the two-point distance tool.
+// coloured rectangles with their names (laid out on screen each frame, off
+// each other), and the two-point distance tool.
 // They live apart from the cloud's chunks; the planes are the only
 // translucent actor (one extra pass, drawn only while planes are shown).
 #include <vtkActor.h>
 #include <vtkBillboardTextActor3D.h>
+#include <vtkCallbackCommand.h>
+#include <vtkCamera.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkCommand.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
+#include <vtkScalarBarActor.h>
+#include <vtkScalarsToColors.h>
+#include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
@@ -34,9 +41,33 @@ vtkSmartPointer<vtkBillboardTextActor3D> NewLabel() {
   return label;
 }
 
+// A plane's name over the view: the same look as the billboards, drawn on
+// top of the cloud (a name behind a wall was cut by the wall's points).
+vtkSmartPointer<vtkTextActor> NewOverlayLabel() {
+  auto label = vtkSmartPointer<vtkTextActor>::New();
+  vtkTextProperty* t = label->GetTextProperty();
+  t->SetFontSize(15);
+  t->SetBold(true);
+  t->SetBackgroundColor(0.1, 0.1, 0.12);
+  t->SetBackgroundOpacity(0.75);
+  t->SetFrame(false);
+  t->SetJustificationToCentered();
+  t->SetVerticalJustificationToCentered();
+  label->GetPositionCoordinate()->SetCoordinateSystemToDisplay();
+  label->PickableOff();
+  return label;
+}
+
 }  // namespace
 
 void CloudView::BuildAnnotations() {
+  auto layout = vtkSmartPointer<vtkCallbackCommand>::New();
+  layout->SetClientData(this);
+  layout->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+    static_cast<CloudView*>(self)->LayoutPlaneLabels();
+  });
+  renderer_->AddObserver(vtkCommand::StartEvent, layout);
+
   auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
   mapper->SetScalarModeToUseCellData();
@@ -75,8 +106,10 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
   auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
   colors->SetNumberOfComponents(3);
   colors->SetName("colors");
-  for (const auto& label : plane_labels_) renderer_->RemoveActor(label);
+  for (const auto& label : plane_labels_) renderer_->RemoveActor2D(label);
   plane_labels_.clear();
+  plane_label_anchors_.clear();
+  plane_label_boxes_.clear();
   for (const PlanePatch& p : planes) {
     vtkIdType ids[4];
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -89,12 +122,13 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
                                   static_cast<unsigned char>(p.color.green()),
                                   static_cast<unsigned char>(p.color.blue())};
     colors->InsertNextTypedTuple(rgb);
-    auto label = NewLabel();
+    auto label = NewOverlayLabel();
     label->SetInput(p.label.toUtf8().constData());
-    label->SetPosition(centre.data());
     label->GetTextProperty()->SetColor(p.color.redF(), p.color.greenF(), p.color.blueF());
-    renderer_->AddActor(label);
+    label->VisibilityOff();  // until laid out
+    renderer_->AddActor2D(label);
     plane_labels_.push_back(label);
+    plane_label_anchors_.push_back(centre);
   }
   auto poly = vtkSmartPointer<vtkPolyData>::New();
   poly->SetPoints(points);
@@ -108,12 +142,111 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
 void CloudView::SetPlanesVisible(bool visible) {
   planes_visible_ = visible;
   planes_->SetVisibility(visible && plane_count_ > 0);
-  for (const auto& label : plane_labels_) {
-    // A label above the clip height belongs to a hidden plane (the ceiling).
-    const bool clipped = !std::isnan(clip_height_) && label->GetPosition()[2] > clip_height_;
-    label->SetVisibility(visible && !clipped);
-  }
+  // The labels follow at the next frame (LayoutPlaneLabels).
   RequestRender();
+}
+
+QRectF CloudView::LayoutColorBar() {
+  // The bar's frame: 7 % of the view's width at 88 %, from 5 % to 50 % of
+  // its height (BuildColorBar). The title is centred over the frame and the
+  // labels of a categorical bar (the passes) stand left of it, so on a
+  // narrow view the title ran off the right edge: the frame moves left
+  // until the title fits.
+  color_bar_box_ = QRectF();
+  int* size = renderer_->GetSize();
+  if (!color_bar_->GetVisibility() || size[0] <= 0 || size[1] <= 0) return QRectF();
+  if (!text_measure_) text_measure_ = vtkSmartPointer<vtkTextActor>::New();
+  auto measure = [&](vtkTextProperty* property, const char* text) {
+    text_measure_->GetTextProperty()->ShallowCopy(property);
+    text_measure_->SetInput(text);
+    double extent[2] = {0.0, 0.0};
+    text_measure_->GetSize(renderer_, extent);
+    return QSizeF(extent[0], extent[1]);
+  };
+  const double w = size[0], h = size[1], margin = 6.0;
+  const QSizeF title = measure(color_bar_->GetTitleTextProperty(), color_bar_->GetTitle());
+  const double frame_w = 0.07 * w;
+  double x = std::min(0.88 * w, w - margin - 0.5 * (frame_w + title.width()));
+  x = std::max(0.0, x);
+  if (std::abs(x / w - color_bar_->GetPosition()[0]) > 1e-9) {
+    color_bar_->SetPosition(x / w, 0.05);
+  }
+  const double centre = x + 0.5 * frame_w;
+  const double half = 0.5 * std::max(frame_w, title.width());
+  QRectF box(centre - half, 0.05 * h, 2.0 * half, 0.45 * h);
+  vtkScalarsToColors* lut = color_bar_->GetLookupTable();
+  if (lut != nullptr && lut->GetIndexedLookup() && color_bar_->GetDrawAnnotations()) {
+    // The categories' names, left of the swatches with their leaders.
+    double widest = 0.0;
+    for (vtkIdType i = 0; i < lut->GetNumberOfAnnotatedValues(); ++i) {
+      widest = std::max(
+          widest,
+          measure(color_bar_->GetAnnotationTextProperty(), lut->GetAnnotation(i).c_str()).width());
+    }
+    box.setLeft(
+        std::min(box.left(), x - widest - 2.0 * margin - color_bar_->GetAnnotationLeaderPadding()));
+  }
+  return box.adjusted(-2.0, -2.0, 2.0, 2.0);
+}
+
+void CloudView::LayoutPlaneLabels() {
+  plane_label_boxes_.clear();
+  const double ratio = devicePixelRatioF();
+  auto to_widget = [&](const QRectF& b) {  // display pixels (y up) to widget pixels (y down)
+    return QRectF(b.left() / ratio, height() - b.bottom() / ratio, b.width() / ratio,
+                  b.height() / ratio);
+  };
+  // The colour bar and the axes' corner are placed first: a plane's label
+  // on them hid the bar's own labels.
+  const QRectF bar = LayoutColorBar();
+  color_bar_box_ = bar.isEmpty() ? QRectF() : to_widget(bar);
+  if (plane_labels_.empty()) return;
+  int* size = renderer_->GetSize();
+  int* origin = renderer_->GetOrigin();
+  const QRectF viewport(origin[0], origin[1], size[0], size[1]);
+  std::vector<QRectF> placed;
+  if (!bar.isEmpty()) placed.push_back(bar);
+  placed.push_back(QRectF(0.0, 0.0, 0.16 * size[0], 0.22 * size[1]));  // the axes
+  // SetPlanes' order (the evaluation's: floor, ceiling, then the walls by
+  // size) is the order of precedence: the first keeps its place.
+  for (size_t i = 0; i < plane_labels_.size(); ++i) {
+    vtkTextActor* label = plane_labels_[i];
+    const Eigen::Vector3d& a = plane_label_anchors_[i];
+    // A label above the clip height belongs to a hidden plane (the ceiling).
+    const bool clipped = !std::isnan(clip_height_) && a.z() > clip_height_;
+    label->SetVisibility(false);
+    if (!planes_visible_ || clipped) continue;
+    // Behind the camera or off the view: not drawn.
+    vtkCamera* camera = renderer_->GetActiveCamera();
+    const Eigen::Vector3d eye(camera->GetPosition());
+    const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
+    if (camera->GetParallelProjection() == 0 && (a - eye).dot(forward) <= 0.0) continue;
+    renderer_->SetWorldPoint(a.x(), a.y(), a.z(), 1.0);
+    renderer_->WorldToDisplay();
+    double d[3];
+    renderer_->GetDisplayPoint(d);
+    if (!viewport.contains(d[0], d[1])) continue;
+    double extent[2];
+    label->GetSize(renderer_, extent);
+    const double w = extent[0] + 4.0, h = extent[1] + 2.0;
+    // Up or down a line at a time, the nearest clear place first.
+    bool found = false;
+    QRectF box;
+    for (int step = 0; step <= 8 && !found; ++step) {
+      const int k = (step + 1) / 2 * (step % 2 == 1 ? 1 : -1);
+      box = QRectF(d[0] - w / 2, d[1] + k * h - h / 2, w, h);
+      if (!viewport.contains(box)) continue;
+      found = std::none_of(placed.begin(), placed.end(),
+                           [&](const QRectF& q) { return q.intersects(box); });
+    }
+    if (!found) continue;
+    placed.push_back(box);
+    label->SetDisplayPosition(static_cast<int>(std::lround(box.center().x())),
+                              static_cast<int>(std::lround(box.center().y())));
+    label->SetVisibility(true);
+    // Widget pixels (y down), as WorldToWidget gives them.
+    plane_label_boxes_.push_back({static_cast<int>(i), to_widget(box)});
+  }
 }
 
 void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
