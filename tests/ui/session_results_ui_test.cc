@@ -1,6 +1,7 @@
 // What the panels computed or showed for one session's cloud goes with it,
 // driven through the real widgets under a real display (xvfb-run in CI):
-// the evaluation (its tables, its report, its "before" column), the view's
+// the evaluation (its tables, its report, its "before" column, its planes'
+// names in the view kept off each other), the view's
 // pass colouring, the replay panel's name and position, the calibration
 // result; a failed report export is an error message; a calibration whose
 // session cannot be read again ends instead of staying on "Solving…".
@@ -19,7 +20,9 @@
 #include <QTemporaryDir>
 #include <QTest>
 #include <QTimer>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "core/calibration/calibration_file.h"
@@ -413,6 +416,51 @@ TEST_F(SessionResultsTest, ACalibrationOfASessionNoLongerShownGivesNoResult) {
   EXPECT_NE(said.indexOf("The session changed while it was calibrated"), -1) << said.toStdString();
   EXPECT_EQ(workspace_->calibration_result(), nullptr);
   ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+}
+
+// The evaluated planes' names in the view, on the simulated lab room (floor,
+// ceiling, walls): each drawn at its own plane's centre or a few lines
+// above or below it, never on another name, from above (where the floor's
+// and the ceiling's centres meet), obliquely, from the front and the side.
+// They used to be drawn each at its centre, on each other.
+TEST_F(SessionResultsTest, PlaneNamesInTheViewStayOffEachOther) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  ASSERT_TRUE(EvaluateByButton()) << evaluation()->summary_text().toStdString();
+  const CloudEvaluation* e = workspace_->evaluation();
+  ASSERT_NE(e, nullptr);
+  ASSERT_GE(e->planes.size(), 5u);  // the floor, the ceiling, walls
+  CloudView* view = window_->view();
+  view->SetClipHeight(std::numeric_limits<double>::quiet_NaN());  // the ceiling's name too
+  const QRectF widget(0, 0, view->width(), view->height());
+  for (int v = 0; v < 4; ++v) {
+    SCOPED_TRACE(v);
+    if (v == 0) view->ViewTop();
+    if (v == 1) view->ViewOblique();
+    if (v == 2) view->ViewFront();
+    if (v == 3) view->ViewSide();
+    view->RenderNow();
+    const std::vector<CloudView::PlaneLabelBox> boxes = view->plane_label_boxes();
+    // Most are named (a name is left out only where no place near its
+    // plane is clear), the first (the floor) always.
+    EXPECT_GE(boxes.size(), e->planes.size() * 2 / 3);
+    ASSERT_FALSE(boxes.empty());
+    EXPECT_EQ(boxes[0].plane, 0);
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      const CloudView::PlaneLabelBox& b = boxes[i];
+      ASSERT_LT(b.plane, static_cast<int>(e->planes.size()));
+      // At its own plane's centre, or a few lines above or below it.
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+      for (const Eigen::Vector3d& c : e->planes[b.plane].outline) centre += 0.25 * c;
+      const QPointF at = view->WorldToWidget(centre);
+      EXPECT_NEAR(b.box.center().x(), at.x(), 1.0) << b.plane;
+      EXPECT_LE(std::abs(b.box.center().y() - at.y()), 4.5 * b.box.height()) << b.plane;
+      EXPECT_TRUE(widget.contains(b.box)) << b.plane;
+      for (size_t j = 0; j < i; ++j) {
+        EXPECT_FALSE(b.box.intersects(boxes[j].box))
+            << "plane " << b.plane + 1 << "'s name covers plane " << boxes[j].plane + 1 << "'s";
+      }
+    }
+  }
 }
 
 }  // namespace
