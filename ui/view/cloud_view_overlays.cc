@@ -21,6 +21,8 @@
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
+#include <QColor>
+#include <algorithm>
 #include <cmath>
 
 #include "ui/view/cloud_view.h"
@@ -49,7 +51,7 @@ vtkSmartPointer<vtkTextActor> NewOverlayLabel() {
   t->SetFontSize(15);
   t->SetBold(true);
   t->SetBackgroundColor(0.1, 0.1, 0.12);
-  t->SetBackgroundOpacity(0.75);
+  t->SetBackgroundOpacity(0.85);
   t->SetFrame(false);
   t->SetJustificationToCentered();
   t->SetVerticalJustificationToCentered();
@@ -124,7 +126,12 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
     colors->InsertNextTypedTuple(rgb);
     auto label = NewOverlayLabel();
     label->SetInput(p.label.toUtf8().constData());
-    label->GetTextProperty()->SetColor(p.color.redF(), p.color.greenF(), p.color.blueF());
+    // The plane's hue, lightened where it is dark (the floor's brown read
+    // grey on the plate's near-black over a bright cloud).
+    const QColor hsl = p.color.toHsl();
+    const QColor text = QColor::fromHsl(std::max(0, hsl.hslHue()), hsl.hslSaturation(),
+                                        std::max(hsl.lightness(), 175));
+    label->GetTextProperty()->SetColor(text.redF(), text.greenF(), text.blueF());
     label->VisibilityOff();  // until laid out
     renderer_->AddActor2D(label);
     plane_labels_.push_back(label);
