@@ -17,6 +17,7 @@
 #include "core/common/file_suffix.h"
 #include "core/plan/floor_plan.h"
 #include "core/plan/plan_writers.h"
+#include "core/plan/rooms.h"
 #include "core/plan/section.h"
 
 namespace sweepscan::app {
@@ -274,13 +275,16 @@ int RunPlan(int argc, char** argv) {
       return kExitFailure;
     }
   }
+  const std::string no_rooms = plan::NoRoomsReason(floor_plan);
   if (args.Flag("json")) {
     nlohmann::json report = PlanJson(floor_plan);
     if (args.Has("section-line")) report["vertical_section_points"] = section_points;
+    if (!no_rooms.empty()) report["no_rooms_reason"] = no_rooms;
     std::cout << report.dump(2) << "\n";
   } else {
     PrintPlan(floor_plan);
     if (args.Has("section-line")) std::printf("vertical section: %zu points\n", section_points);
+    if (!no_rooms.empty()) std::fprintf(stderr, "sweepscan-cli: note: %s\n", no_rooms.c_str());
   }
   return kExitOk;
 }

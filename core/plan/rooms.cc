@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <string>
 #include <unordered_map>
 #include <utility>
 
@@ -633,6 +634,18 @@ void FindRooms(const FloorPlanOptions& options, FloorPlan* plan) {
   };
   std::stable_sort(plan->rooms.begin(), plan->rooms.end(),
                    [&](const Room& a, const Room& b) { return band_key(a) < band_key(b); });
+}
+
+std::string NoRoomsReason(const FloorPlan& plan) {
+  if (!plan.rooms.empty()) return std::string();
+  const bool walls = std::any_of(plan.faces.begin(), plan.faces.end(),
+                                 [](const WallFace& f) { return f.structural; });
+  if (!walls) return "no room: no wall faces at this cut";
+  return "no room: the walls found at this cut do not close around any free floor (a wall the "
+         "scans "
+         "did not reach leaves a gap; the scan plane crosses the walls beside the drive, so turn "
+         "in "
+         "each room to reach the walls ahead and behind)";
 }
 
 }  // namespace sweepscan::plan

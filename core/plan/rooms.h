@@ -31,6 +31,8 @@
 #ifndef SWEEPSCAN_CORE_PLAN_ROOMS_H_
 #define SWEEPSCAN_CORE_PLAN_ROOMS_H_
 
+#include <string>
+
 #include "core/plan/floor_plan.h"
 
 namespace sweepscan::plan {
@@ -38,6 +40,12 @@ namespace sweepscan::plan {
 // Fills plan->rooms from plan->faces, walls and openings (any earlier rooms
 // replaced). options: room_cell_m, min_room_area_m2 (and IsValid()).
 void FindRooms(const FloorPlanOptions& options, FloorPlan* plan);
+
+// Why `plan` has no room, in words an operator can act on; "" when it has
+// one. A straight drive sees the walls beside it but not the ones ahead and
+// behind, which the vertical scan plane never crosses: its free floor runs
+// out of the drawing and no room closes (step 2 above).
+std::string NoRoomsReason(const FloorPlan& plan);
 
 }  // namespace sweepscan::plan
 

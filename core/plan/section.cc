@@ -92,34 +92,37 @@ Status VerticalSection(const std::vector<Eigen::Vector3f>& cloud, const Vertical
   return Status::Ok();
 }
 
-bool LevelSurfaceNearCut(const std::vector<Eigen::Vector3f>& cloud,
-                         const HorizontalSectionOptions& options, double reach_m, double* level_z) {
-  constexpr double kBin = 0.01, kWindow = 1.0, kRatio = 8.0;
-  const double lo = options.height_m - kWindow;
-  const int bins = static_cast<int>(std::lround(2.0 * kWindow / kBin));
-  if (!std::isfinite(lo)) return false;
-  std::vector<size_t> count(bins, 0);
-  for (const Eigen::Vector3f& p : cloud) {
-    const double k = std::floor((p.z() - lo) / kBin);
-    if (k >= 0 && k < bins) ++count[static_cast<size_t>(k)];
-  }
+CutLevels::CutLevels(const HorizontalSectionOptions& options)
+    : options_(options), lo_(options.height_m - kWindow) {
+  if (std::isfinite(lo_)) count_.assign(static_cast<size_t>(std::lround(2.0 * kWindow / kBin)), 0);
+}
+
+bool CutLevels::LevelNear(double reach_m, double* level_z) const {
   std::vector<size_t> occupied;
-  for (size_t c : count) {
+  for (size_t c : count_) {
     if (c > 0) occupied.push_back(c);
   }
   if (occupied.size() < 3) return false;
   std::nth_element(occupied.begin(), occupied.begin() + occupied.size() / 2, occupied.end());
   const double median = static_cast<double>(occupied[occupied.size() / 2]);
-  const double near = options.band_m + reach_m;
+  const double near = options_.band_m + reach_m;
   int best = -1;
-  for (int k = 0; k < bins; ++k) {
-    const double z = lo + (k + 0.5) * kBin;
-    if (std::abs(z - options.height_m) > near + 0.5 * kBin || count[k] < kRatio * median) continue;
-    if (best < 0 || count[k] > count[best]) best = k;
+  for (int k = 0; k < static_cast<int>(count_.size()); ++k) {
+    const double z = lo_ + (k + 0.5) * kBin;
+    if (std::abs(z - options_.height_m) > near + 0.5 * kBin || count_[k] < kRatio * median)
+      continue;
+    if (best < 0 || count_[k] > count_[best]) best = k;
   }
   if (best < 0) return false;
-  *level_z = lo + (best + 0.5) * kBin;
+  *level_z = lo_ + (best + 0.5) * kBin;
   return true;
+}
+
+bool LevelSurfaceNearCut(const std::vector<Eigen::Vector3f>& cloud,
+                         const HorizontalSectionOptions& options, double reach_m, double* level_z) {
+  CutLevels levels(options);
+  for (const Eigen::Vector3f& p : cloud) levels.Add(p.z());
+  return levels.LevelNear(reach_m, level_z);
 }
 
 std::vector<Eigen::Vector2d> DecimateGrid(const std::vector<Eigen::Vector2d>& points, double cell_m) {

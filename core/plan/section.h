@@ -17,6 +17,7 @@
 #define SWEEPSCAN_CORE_PLAN_SECTION_H_
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -60,6 +61,26 @@ Status VerticalSection(const std::vector<Eigen::Vector3f>& cloud, const Vertical
 // centimetre) when found.
 bool LevelSurfaceNearCut(const std::vector<Eigen::Vector3f>& cloud,
                          const HorizontalSectionOptions& options, double reach_m, double* level_z);
+
+// LevelSurfaceNearCut's counting, for points that arrive one at a time (the
+// app's plan transforms each session's points into the project's frame as
+// it cuts them): a centimetre histogram of z within 1 m of the cut.
+class CutLevels {
+ public:
+  explicit CutLevels(const HorizontalSectionOptions& options);
+  void Add(double z) {
+    const double k = std::floor((z - lo_) / kBin);
+    if (k >= 0 && k < static_cast<double>(count_.size())) ++count_[static_cast<size_t>(k)];
+  }
+  // LevelSurfaceNearCut's answer for the points added.
+  bool LevelNear(double reach_m, double* level_z) const;
+
+ private:
+  static constexpr double kBin = 0.01, kWindow = 1.0, kRatio = 8.0;
+  HorizontalSectionOptions options_;
+  double lo_;
+  std::vector<size_t> count_;
+};
 
 // One representative point (the centroid) per occupied square cell of side
 // `cell_m`, in a deterministic order (sorted by cell): a drawing's copy of a

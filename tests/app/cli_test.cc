@@ -181,3 +181,22 @@ TEST(CliTest, PlanOfAScenarioTakesTheCalibration) {
   EXPECT_GE(n_corrected, 3u);
   EXPECT_GT(worst_end(raw, &n_raw), 0.010);
 }
+
+// The straight lab drive sees the walls beside it, never the end walls its
+// vertical scan plane runs parallel to: no room closes, and the plan says
+// why and what to do rather than leaving "0 rooms" to be puzzled over.
+TEST(CliTest, APlanWithNoRoomSaysWhy) {
+  const CliRun r = Cli("plan --scenario " + Scenario("lab") + " --svg " + Tmp("lab_plan.svg"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find(", 0 rooms"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("note: no room: the walls found at this cut do not close around any free "
+                       "floor"),
+            std::string::npos)
+      << r.out;
+  // For scripts, in the report.
+  const CliRun json = Cli("plan --scenario " + Scenario("lab") + " --json");
+  ASSERT_EQ(json.code, 0) << json.out;
+  const nlohmann::json report = nlohmann::json::parse(json.out);
+  EXPECT_NE(report.value("no_rooms_reason", std::string()).find("do not close"), std::string::npos)
+      << json.out;
+}

@@ -774,8 +774,14 @@ TEST_F(PlanPairsUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
     canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names.png");
   }
 
-  // A cut above the ceiling: no plan, and Export says why.
-  const uint64_t built = panel->plans_built();
+  // A cut in the ceiling's slab (2.7 m) is said under the plan, as the CLI
+  // warns; a cut above the ceiling: no plan, and Export says why.
+  uint64_t built = panel->plans_built();
+  panel->height_box()->setValue(2.69);
+  Turns([&] { return !panel->busy() && panel->plans_built() > built; }, 60000);
+  EXPECT_NE(panel->summary_label()->text().indexOf("level surface at 2.70 m"), -1)
+      << panel->summary_label()->text().toStdString();
+  built = panel->plans_built();
   panel->height_box()->setValue(5.0);
   Turns([&] { return !panel->busy() && !panel->canvas()->plan(); }, 60000);
   EXPECT_EQ(panel->plans_built(), built);

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+
+#include "core/plan/section.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -52,8 +55,11 @@ Status BuildSectionOf(const std::vector<PlanInput>& inputs, const plan::Vertical
 }
 
 Status BuildPlanOf(const std::vector<PlanInput>& inputs, const plan::FloorPlanOptions& options,
-                   const std::function<bool(double)>& progress, plan::FloorPlan* plan) {
+                   const std::function<bool(double)>& progress, plan::FloorPlan* plan,
+                   double* level_near_cut) {
   *plan = plan::FloorPlan();
+  if (level_near_cut != nullptr) *level_near_cut = std::numeric_limits<double>::quiet_NaN();
+  plan::CutLevels levels(options.section);
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(error);
   size_t total = 0;
@@ -79,7 +85,9 @@ Status BuildPlanOf(const std::vector<PlanInput>& inputs, const plan::FloorPlanOp
         ++stats.non_finite;
         continue;
       }
-      if (std::abs(z_row.dot(p) + t.z() - height) > band) continue;
+      const double z = z_row.dot(p) + t.z();
+      levels.Add(z);
+      if (std::abs(z - height) > band) continue;
       section.push_back((r.topRows<2>() * p + t.head<2>()).eval());
     }
     done += points.size();
@@ -87,6 +95,8 @@ Status BuildPlanOf(const std::vector<PlanInput>& inputs, const plan::FloorPlanOp
   stats.points_in = total;
   stats.points_out = section.size();
   if (!progress(0.6)) return Status::Error(kPlanCancelled);
+  if (double level = 0.0; level_near_cut != nullptr && levels.LevelNear(0.03, &level))
+    *level_near_cut = level;
   const Status s = plan::BuildFloorPlanFromSection(section, options, plan);
   plan->section = stats;
   if (!s.ok()) return s;

@@ -48,9 +48,12 @@ Status BuildSectionOf(const std::vector<PlanInput>& inputs, const plan::Vertical
 // common frame) of every input, then BuildFloorPlanFromSection; the plan's
 // section statistics count every input point. `progress` gets 0..1 (the
 // cut is the first 60 %, the fit the rest, reported at its start and end)
-// and returns false to cancel.
+// and returns false to cancel. If `level_near_cut` is given it is set to
+// the height of a floor or ceiling within 3 cm of the cut's slab, NaN when
+// there is none (plan::LevelSurfaceNearCut: the CLI's warning).
 Status BuildPlanOf(const std::vector<PlanInput>& inputs, const plan::FloorPlanOptions& options,
-                   const std::function<bool(double)>& progress, plan::FloorPlan* plan);
+                   const std::function<bool(double)>& progress, plan::FloorPlan* plan,
+                   double* level_near_cut = nullptr);
 
 }  // namespace sweepscan::ui
 

@@ -10,12 +10,16 @@
 #include <QPushButton>
 #include <QSettings>
 #include <QSplitter>
+#include <QStringList>
 #include <QTimer>
 #include <QToolButton>
 #include <QVBoxLayout>
+#include <cmath>
+#include <limits>
 #include <memory>
 
 #include "core/plan/plan_writers.h"
+#include "core/plan/rooms.h"
 #include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
 #include "ui/plan/section_canvas.h"
@@ -96,6 +100,8 @@ std::vector<PlanInput> InputsOf(const PlanSource& source) {
 // What a job builds: the plan, the section, or both.
 struct Built {
   plan::FloorPlan plan;
+  double level_near_cut =
+      std::numeric_limits<double>::quiet_NaN();  // a floor or ceiling in the cut
   bool section_wanted = false;
   SectionOf section;
   QString section_error;  // "" when built
@@ -380,10 +386,13 @@ void PlanPanel::Rebuild() {
       what,
       [source, options, vertical, built, what](std::atomic<bool>* cancel, const ProjectJobs::Progress& progress) {
         const std::vector<PlanInput> inputs = InputsOf(*source);
-        const Status s = BuildPlanOf(inputs, options, [&](double f) {
-          progress(f < 0.6 ? what + tr(": cutting") : what + tr(": fitting walls"), f);
-          return !*cancel;
-        }, &built->plan);
+        const Status s = BuildPlanOf(
+            inputs, options,
+            [&](double f) {
+              progress(f < 0.6 ? what + tr(": cutting") : what + tr(": fitting walls"), f);
+              return !*cancel;
+            },
+            &built->plan, &built->level_near_cut);
         if (*cancel) return QString(kPlanCancelled);
         // The section too, whether the plan's cut found walls or not.
         if (vertical && !BuildSection(inputs, *vertical, cancel, progress, built.get())) {
@@ -434,7 +443,21 @@ void PlanPanel::Rebuild() {
                                  .arg(plan.openings.size())
                                  .arg(plan.dimensions.size())
                                  .arg(plan.rooms.size());
-        summary_->setText(text);
+        // What the CLI warns about, said where the operator looks.
+        QStringList notes;
+        if (std::isfinite(built->level_near_cut)) {
+          notes << tr("The cut is within 3 cm of a level surface at %1 m (a floor or a ceiling): "
+                      "its points "
+                      "are drawn as walls; cut at least 0.1 m from it.")
+                       .arg(built->level_near_cut, 0, 'f', 2);
+        }
+        if (const std::string why = plan::NoRoomsReason(plan); !why.empty()) {
+          QString line = QString::fromStdString(why);
+          line[0] = line[0].toUpper();
+          notes << line + QLatin1Char('.');
+        }
+        summary_->setText(
+            notes.isEmpty() ? text : text + QLatin1Char('\n') + notes.join(QLatin1Char(' ')));
         emit planBuilt(true, text);
       });
 }

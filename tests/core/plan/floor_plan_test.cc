@@ -3,6 +3,8 @@
 // reconstructed with the true poses in the world frame and merged, cut at
 // 1.0 m. The truth: OfficeFloorRooms() (every room's inner faces) and
 // OfficeFloorDoors() (the doors' jambs on the walls' centre lines).
+#include "core/plan/floor_plan.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/plan/floor_plan.h"
+#include "core/plan/rooms.h"
 #include "core/plan/section.h"
 #include "core/sim/scene.h"
 #include "tests/testing/worlds.h"
@@ -370,6 +372,15 @@ TEST(FloorPlanRoomsTest, AnOpenSectionHasNoRoom) {
   ASSERT_TRUE(BuildFloorPlanFromSection(pts, FloorPlanOptions(), &plan).ok());
   EXPECT_GE(plan.faces.size(), 3u);
   EXPECT_TRUE(plan.rooms.empty());
+  // Said so, with what to do; a closed room has nothing to say, a section
+  // of no walls says that.
+  EXPECT_NE(NoRoomsReason(plan).find("do not close around any free floor"), std::string::npos)
+      << NoRoomsReason(plan);
+  FloorPlan closed;
+  ASSERT_TRUE(BuildFloorPlanFromSection(LShapedRoom(), FloorPlanOptions(), &closed).ok());
+  EXPECT_EQ(NoRoomsReason(closed), "");
+  plan.faces.clear();
+  EXPECT_EQ(NoRoomsReason(plan), "no room: no wall faces at this cut");
 }
 
 TEST(FloorPlanRefusalTest, BadInputIsRefusedWithAReason) {
