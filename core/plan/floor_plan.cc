@@ -8,7 +8,9 @@
 // (2) Runs: the line's points sorted by t = u . (p - c) and split where two
 //     neighbours are >= opening_width apart; runs shorter than
 //     min_face_length or with fewer than min_face_points points are dropped
-//     (door jambs, a table leg, clutter that happens to be collinear).
+//     (door jambs, a table leg, clutter that happens to be collinear), and
+//     so are runs whose own fit is not parallel to the line (Oblique: the
+//     slice of another surface crossing the line's band at a small angle).
 //     Assumes a wall is seen continuously at the cut height: gaps shorter
 //     than an opening (a missing return, a corner's abutting wall) are bridged.
 // (3) Shadows: a gap between two kept runs is a shadow, not an opening, when
@@ -114,6 +116,7 @@ class Planner {
   double FirstHit(const Eigen::Vector2d& p, const Eigen::Vector2d& d, const FloorPlan& plan, int skip_a,
                   int skip_b, double limit, bool openings_block = false) const;
   bool Shadow(const Line2d& line, double t0, double t1) const;
+  bool Oblique(const Line2d& line, const Run& run) const;
 
   const std::vector<Eigen::Vector2d>& pts_;
   const FloorPlanOptions& o_;
@@ -153,6 +156,24 @@ bool Planner::Shadow(const Line2d& line, double t0, double t1) const {
   return n >= kShadowCover * bins;
 }
 
+// A surface that crosses the line's band at a small angle leaves a run of
+// its own points in the band: the slice of another line. Two such slices
+// far apart (a cabinet's front and a board 2.7 m on, 5 deg off the line
+// through both) would otherwise be joined by step (3) into a slanted wall.
+// A run of the line's own surface is parallel to it within the plan's
+// parallel tolerance plus 3 sigma of its own direction: a TLS fit of n
+// points with residual rms s over a length L has a direction sigma of
+// s sqrt(12 / n) / L (the slope's variance over points spread evenly on L).
+bool Planner::Oblique(const Line2d& line, const Run& run) const {
+  Line2d own;
+  double rms = 0.0;
+  if (!FitLine(pts_, run.idx, &own, &rms)) return false;
+  const double length = std::max(run.t1 - run.t0, 1e-3);
+  const double sigma =
+      std::max(rms, 0.002) * std::sqrt(12.0 / static_cast<double>(run.idx.size())) / length;
+  return std::abs(Cross(own.u, line.u)) > std::sin(o_.parallel_tolerance_rad) + 3.0 * sigma;
+}
+
 void Planner::FacesOfLine(const Line2d& detected, int line_id, FloorPlan* plan) {
   // (1) Refit on the full points, trimmed to 3 sigma.
   Line2d line = detected;
@@ -179,7 +200,8 @@ void Planner::FacesOfLine(const Line2d& detected, int line_id, FloorPlan* plan) 
   runs.erase(std::remove_if(runs.begin(), runs.end(),
                             [&](const Run& r) {
                               return r.t1 - r.t0 < o_.min_face_length_m ||
-                                     static_cast<int>(r.idx.size()) < o_.min_face_points;
+                                     static_cast<int>(r.idx.size()) < o_.min_face_points ||
+                                     Oblique(line, r);
                             }),
              runs.end());
   // (3) Shadows join runs.

@@ -200,3 +200,31 @@ TEST(CliTest, APlanWithNoRoomSaysWhy) {
   EXPECT_NE(report.value("no_rooms_reason", std::string()).find("do not close"), std::string::npos)
       << json.out;
 }
+
+// The lab drive's recording, planned as an operator would plan it (EKF
+// poses): every box of the lab (core/sim/scene.cc LabScene) is axis-aligned,
+// so every face must be. The south cabinet's front (y 0.45) and the target
+// board (y 0.16), 2.7 m apart, once lay near one line 5 deg off the axes and
+// were joined into a slanted structural "wall" (135 points, rms 10 mm); the
+// board is its own face, parallel to the wall behind it.
+TEST(CliTest, TheLabDrivesPlanHasNoSlantedFace) {
+  const std::string session = Tmp("lab_plan.sweepscan");
+  CliRun r = Cli("simulate --scenario " + Scenario("lab") + " --out " + Tmp("lab_plan.ply") +
+                 " --session " + session + " --overwrite");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("plan " + session + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const nlohmann::json plan = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  ASSERT_GE(plan["faces"].size(), 4u) << r.out;
+  bool board = false;
+  for (const auto& f : plan["faces"]) {
+    const double dx = f["b"][0].get<double>() - f["a"][0].get<double>();
+    const double dy = f["b"][1].get<double>() - f["a"][1].get<double>();
+    const double folded = std::fmod(std::abs(std::atan2(dy, dx)), 0.5 * M_PI);
+    const double off = std::min(folded, 0.5 * M_PI - folded);
+    EXPECT_LT(off, 0.5 * M_PI / 180.0) << f.dump();
+    board = board || (std::abs(f["a"][1].get<double>() - 0.16) < 0.01 &&
+                      f["length_m"].get<double>() > 0.4 && f["length_m"].get<double>() < 0.62);
+  }
+  EXPECT_TRUE(board) << r.out;
+}
