@@ -14,6 +14,7 @@
 #include <set>
 
 #include "core/common/json_reader.h"
+#include "core/geometry/skew.h"
 
 namespace sweepscan {
 
@@ -472,12 +473,6 @@ std::vector<std::string> Project::MoveDependants(const std::string& id, const Ri
 
 namespace {
 
-Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 // The measurement `e` of reference_from_session = `measured`, turned round:
 // the reference placed against the session (`session`), by the inverse.
 // A left perturbation in the reference's frame, measured = Exp(xi) * M,
@@ -492,7 +487,7 @@ RegistrationEvidence Reversed(const RegistrationEvidence& e, const std::string& 
   const Eigen::Matrix3d rot = inverse.rotation().toRotationMatrix();
   Eigen::Matrix<double, 6, 6> ad = Eigen::Matrix<double, 6, 6>::Zero();
   ad.block<3, 3>(0, 0) = rot;
-  ad.block<3, 3>(3, 0) = Hat(inverse.translation()) * rot;
+  ad.block<3, 3>(3, 0) = Skew(inverse.translation()) * rot;
   ad.block<3, 3>(3, 3) = rot;
   Eigen::Matrix<double, 6, 6> c;
   for (int i = 0; i < 36; ++i) c(i / 6, i % 6) = e.covariance[i];

@@ -44,11 +44,12 @@
 // combined in block order: the result does not depend on the thread count.
 #include <algorithm>
 #include <array>
-#include <map>
-#include <set>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <set>
 
+#include "core/geometry/skew.h"
 #include "core/registration/internal.h"
 #include "core/registration/registration.h"
 
@@ -111,7 +112,7 @@ Matrix6d RobustCovariance(const std::vector<Eigen::Vector3f>& source, const std:
   for (const PointPair& pp : pairs) {
     const Eigen::Vector3d q = t * pp.source;
     Eigen::Matrix<double, 3, 6> j;
-    j.leftCols<3>() = -registration_internal::Skew(q);
+    j.leftCols<3>() = -Skew(q);
     j.rightCols<3>() = Eigen::Matrix3d::Identity();
     pair_scores.push_back(pair_lambda * j.transpose() * (q - pp.target));
   }
@@ -246,7 +247,7 @@ Status RefineIcp(const std::vector<Eigen::Vector3f>& source_in,
       for (const PointPair& pp : options.pairs) {
         const Eigen::Vector3d q = t * pp.source;
         Eigen::Matrix<double, 3, 6> j;
-        j.leftCols<3>() = -registration_internal::Skew(q);
+        j.leftCols<3>() = -Skew(q);
         j.rightCols<3>() = Eigen::Matrix3d::Identity();
         sums.h += lambda * j.transpose() * j;
         sums.g += lambda * j.transpose() * (q - pp.target);

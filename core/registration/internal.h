@@ -64,12 +64,6 @@ struct Surface {
 bool BuildSurface(const std::vector<Eigen::Vector3f>& points, int k, Control* control,
                   Surface* surface);
 
-inline Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
 // T <- Exp(xi) * T with xi = (omega, v): the retraction q' = R(omega) q + v
 // whose first order is the linearisation dq = omega x q + v used by the
 // Jacobians.

@@ -17,13 +17,13 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "core/geometry/skew.h"
 #include "core/registration/internal.h"
 #include "core/registration/registration.h"
 
 namespace sweepscan {
 
 using registration_internal::Matrix6d;
-using registration_internal::Skew;
 
 Status AlignByPairs(const std::vector<PointPair>& pairs, const PairAlignOptions& options,
                     RegistrationResult* result) {

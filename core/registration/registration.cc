@@ -17,6 +17,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/geometry/skew.h"
 #include "core/registration/internal.h"
 
 namespace sweepscan {

@@ -6,16 +6,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/geometry/skew.h"
 #include "core/sfm/sequence.h"
 
 namespace sweepscan::sfm {
 namespace {
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
 
 Eigen::Matrix3d ExpSO3(const Eigen::Vector3d& w) {
   const double a = w.norm();
