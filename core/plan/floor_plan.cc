@@ -25,7 +25,9 @@
 //     stations every 0.1 m along the face, rays go both ways to the first
 //     obstacle (an occupied 2 cm cell or another face). A side whose rays
 //     mostly hit nothing is outside the scanned area (the outer side of an
-//     outer wall): the face faces the other side. If both sides hit, the
+//     outer wall): the face faces the other side. When both sides' rays
+//     mostly miss, a side none hit from is outside if at least 5 % of the
+//     other's (3 or more) hit. If both sides hit, the
 //     free side is the one with the larger median distance (the thin wall's
 //     other face is 0.1 m behind, the room metres in front).
 // (7) Walls: faces i, j parallel within parallel_tolerance, back to back
@@ -281,12 +283,28 @@ void Planner::Facing(FloorPlan* plan) const {
     }
     double median[2];
     bool hits[2];
+    int count[2] = {0, 0};
     for (int s = 0; s < 2; ++s) {
       std::sort(side[s].begin(), side[s].end());
       median[s] = side[s][side[s].size() / 2];
       hits[s] = median[s] < kMaxRay;
+      for (const double d : side[s]) count[s] += d < kMaxRay;
     }
-    if (!hits[0] && !hits[1]) continue;  // a lone line: no side known
+    if (!hits[0] && !hits[1]) {
+      // Both sides mostly open: a wall at the end of a room seen only from
+      // afar (a straight drive's scan plane crosses the far wall's section
+      // a few times). A side no ray hit anything from is still outside when
+      // the other side's rays met the scanned room at a few stations; else
+      // a lone line, no side known.
+      const int least = std::max(3, static_cast<int>(std::ceil(0.05 * stations)));
+      if (count[1] == 0 && count[0] >= least) {
+        hits[0] = true;
+      } else if (count[0] == 0 && count[1] >= least) {
+        hits[1] = true;
+      } else {
+        continue;
+      }
+    }
     const int free_side = !hits[1] ? 0 : !hits[0] ? 1 : (median[0] >= median[1] ? 0 : 1);
     f.normal = free_side == 0 ? n : Eigen::Vector2d(-n);
     f.normal_known = true;
