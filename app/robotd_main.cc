@@ -261,10 +261,17 @@ int AgentMain(int argc, char** argv) {
 
   RobotAgent agent(config);
   sweepscan::app::LogAgentEvents(&agent);
-  if (!agent.Start(&error)) return Fail(error);
-  // The ports are open (a USB adapter can take seconds): the motor board has
-  // had its zero as its port opened; the shutdown sends it again and closes
-  // the ports, and the agent never says it is ready.
+  // Asked between the ports' opens too (each can take seconds on a USB
+  // adapter): the motor board's is the first, so its zero goes out whichever
+  // open the stop interrupts. Until 2026-11-29 the stop waited for all three.
+  if (!agent.Start(&error, StopPending)) return Fail(error);
+  // The motor board has had its zero as its port opened; the shutdown sends
+  // it again and closes the ports, and the agent never says it is ready.
+  if (agent.stopped_during_start()) {
+    agent.Shutdown();
+    return StoppedDuringStartup(
+        "stopped while the ports were opened (the rest not opened); motors stopped, ports closed");
+  }
   if (StopPending()) {
     agent.Shutdown();
     return StoppedDuringStartup("the ports were opened; motors stopped, ports closed");

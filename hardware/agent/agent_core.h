@@ -248,8 +248,10 @@ class AgentCore {
  public:
   explicit AgentCore(const AgentOptions& options);
 
-  // Once, before anything else: lidar start-up requests, first motor zero.
+  // Once, before anything else but the ports' first opens (RobotAgent opens
+  // the motor board's before it): lidar start-up requests, first motor zero.
   void Start(Time now, AgentOutput* out);
+  bool started() const { return started_; }
 
   // A client connected (TCP accept, or the serial link opened): new encoder
   // sequence, Hello, and AuthChallenge with a fresh nonce when required.

@@ -1,6 +1,7 @@
 #include "hardware/agent/robot_agent.h"
 
 #include <QHostAddress>
+#include <QStringList>
 #include <QTcpServer>
 #include <QTcpSocket>
 #include <QTimer>
@@ -90,7 +91,7 @@ Time RobotAgent::Now() const {
       std::chrono::duration_cast<Duration>(std::chrono::steady_clock::now().time_since_epoch()));
 }
 
-bool RobotAgent::Start(QString* error) {
+bool RobotAgent::Start(QString* error, const std::function<bool()>& stop_requested) {
   if (!config_.IsValid(error)) return false;
   clock_.start();
 
@@ -130,9 +131,34 @@ bool RobotAgent::Start(QString* error) {
     }
   }
 
-  core_->Start(Now(), &out_);
   if (sim_ == nullptr) {
-    for (int i = 0; i < 3; ++i) OpenDevice(i);
+    // The motor board first: a stop asked for while the others open (a USB
+    // adapter's open can take seconds) then finds it open, and the
+    // shutdown sends it its zero. The lidar last, right after the core's
+    // start: the start's bytes (the board's zero, the lidar's start-up
+    // sequence) wait in the output until the lidar's open dispatches them;
+    // dispatched by an earlier open, the lidar's would go to a port not
+    // open yet. Qt sends none of them before the event loop runs anyway.
+    const QString* port[3] = {&config_.lidar_port, &config_.imu_port, &config_.motor_port};
+    QStringList not_opened;
+    bool stop = false;
+    for (const int i : {2, 1, 0}) {
+      stop = stop || (stop_requested && stop_requested());
+      if (stop) {
+        if (!port[i]->isEmpty()) not_opened << *port[i];
+        continue;
+      }
+      if (i == 0) core_->Start(Now(), &out_);
+      OpenDevice(i);
+    }
+    if (!core_->started()) core_->Start(Now(), &out_);
+    if (!not_opened.isEmpty()) {
+      stopped_during_start_ = true;
+      Dispatch(&out_);
+      emit logMessage(QStringLiteral("stop asked for during start-up: %1 not opened")
+                          .arg(not_opened.join(QStringLiteral(", "))));
+      return true;  // The caller shuts the agent down.
+    }
     reopen_timer_ = new QTimer(this);
     connect(reopen_timer_, &QTimer::timeout, this, [this] {
       for (int i = 0; i < 3; ++i) {
@@ -141,6 +167,7 @@ bool RobotAgent::Start(QString* error) {
     });
     reopen_timer_->start(config_.device_reopen_ms);
   } else {
+    core_->Start(Now(), &out_);
     sim_timer_ = new QTimer(this);
     sim_timer_->setTimerType(Qt::PreciseTimer);
     connect(sim_timer_, &QTimer::timeout, this, &RobotAgent::OnSimStep);

@@ -33,6 +33,7 @@
 #include <QObject>
 #include <QString>
 #include <array>
+#include <functional>
 #include <memory>
 #include <type_traits>
 #include <utility>
@@ -165,7 +166,14 @@ class RobotAgent : public QObject {
   // Opens the devices (a device that fails to open is retried and reported
   // as a port error; the agent still runs) and the link. False with a
   // message when the link cannot be served (port in use, bad address).
-  bool Start(QString* error);
+  // `stop_requested` (optional) is asked before each device port opens
+  // (sweepscan-robotd: a quit signal came during a slow open): once it
+  // says true the rest are not opened; if any was left, Start() returns
+  // with stopped_during_start() set (and its timers not started) and the
+  // caller is to call Shutdown() (the motor board, opened first, gets its
+  // zero there).
+  bool Start(QString* error, const std::function<bool()>& stop_requested = nullptr);
+  bool stopped_during_start() const { return stopped_during_start_; }
   void Shutdown();
 
   quint16 tcp_port() const;  // The listening port (useful with listen_port 0).
@@ -237,6 +245,7 @@ class RobotAgent : public QObject {
   QTimer* link_reopen_timer_ = nullptr;  // kSerial.
   bool link_failed_ = false;             // Reopening the serial link failed (logged once).
   bool shutting_down_ = false;
+  bool stopped_during_start_ = false;
   QTimer* sim_timer_ = nullptr;
   QTimer* reopen_timer_ = nullptr;
   // Peer address -> clock_ ms of its last failed authentication, within

@@ -702,6 +702,72 @@ TEST(RobotdStartupTest, AStopWhileThePortsOpenStopsTheMotorsAndEndsTheStart) {
   }
 }
 
+// A stop while the second of the three ports opens (the IMU's, held by the
+// kernel until the SIGTERM is in) ends the start there: the motor board,
+// opened first, gets its zero; the lidar's port is never opened (it would
+// have had the X4's stop command, A5 65, at once); exit 0. The stop was
+// looked for only after all three opens, however long each took.
+TEST(RobotdStartupTest, AStopBetweenThePortsOpensStopsTheMotorsAndOpensNoMore) {
+  const std::string key = WriteKey("between.key", "the stop between opens test's key", 0600);
+  LinkPty board, imu, lidar;
+  ASSERT_GE(board.master, 0);
+  ASSERT_GE(imu.master, 0);
+  ASSERT_GE(lidar.master, 0);
+  HeldIoctlProcess robotd({SWEEPSCAN_ROBOTD, "--motor", board.slave, "--imu", imu.slave, "--lidar",
+                           lidar.slave, "--listen", "127.0.0.1:0", "--key-file", key},
+                          TIOCEXCL);
+  if (robotd.pid > 0 && robotd.listener < 0 && robotd.error.find("refused") != std::string::npos) {
+    GTEST_SKIP() << robotd.error;
+  }
+  ASSERT_GE(robotd.listener, 0) << robotd.error;
+  // The first open (TIOCEXCL) goes on; the second is held.
+  ASSERT_TRUE(WaitFor([&] { return robotd.Holding() || robotd.Exited(); }, 20000));
+  ASSERT_EQ(robotd.Continue(), 1);
+  ASSERT_TRUE(WaitFor([&] { return robotd.Holding() || robotd.Exited(); }, 20000));
+  ASSERT_FALSE(robotd.Exited()) << robotd.Read();
+  ASSERT_EQ(::kill(robotd.pid, SIGTERM), 0);
+  ASSERT_TRUE(WaitFor([&] { return SigtermTaken(robotd.pid); }, 10000));
+  QElapsedTimer since_released;
+  since_released.start();
+  int opens_after_the_stop = 0;
+  std::string out;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        opens_after_the_stop += robotd.Continue();
+        out += robotd.Read();
+        return robotd.Exited();
+      },
+      20000))
+      << out;
+  const qint64 exit_ms = since_released.elapsed();
+  out += robotd.Read();
+  EXPECT_TRUE(WIFEXITED(robotd.status) && WEXITSTATUS(robotd.status) == 0) << out;
+  // The IMU's, made again after the signal interrupted it; no third.
+  EXPECT_EQ(opens_after_the_stop, 1) << out;
+  EXPECT_LT(exit_ms, 5000) << "generous: a loaded machine, not a bound being measured";
+  std::printf("exited %lld ms after the second open was let go\n", static_cast<long long>(exit_ms));
+  EXPECT_NE(out.find("sweepscan-robotd: SIGTERM during start-up: stopped while the ports were "
+                     "opened (the rest not opened); motors stopped, ports closed; exiting"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("stop asked for during start-up: " + lidar.slave + " not opened"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
+  std::string lidar_heard, heard;
+  ReadAvailable(lidar.master, &lidar_heard);
+  EXPECT_EQ(lidar_heard.size(), 0u) << "the lidar's port was opened after the stop";
+  ReadAvailable(board.master, &heard);
+  MotorCommandDecoder decoder;
+  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
+  const std::vector<MotorCommand> commands = decoder.TakeRecords();
+  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << heard.size() << " bytes)";
+  for (const MotorCommand& c : commands) {
+    EXPECT_EQ(c.vx_mps, 0.0);
+    EXPECT_EQ(c.wz_radps, 0.0);
+  }
+}
+
 }  // namespace
 }  // namespace hardware
 }  // namespace sweepscan
