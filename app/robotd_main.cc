@@ -6,8 +6,8 @@
 #include <QCommandLineParser>
 #include <QCoreApplication>
 #include <QHash>
-#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <initializer_list>
 #include <vector>
@@ -70,24 +70,10 @@ int StopMotors(const QString& port, qint32 baud) {
 bool StopPending() { return sweepscan::app::QuitSignal() != 0; }
 
 int StoppedDuringStartup(const char* what) {
-  const char* name = "a signal";
-  switch (sweepscan::app::QuitSignal()) {
-    case SIGINT:
-      name = "SIGINT";
-      break;
-    case SIGTERM:
-      name = "SIGTERM";
-      break;
-    case SIGHUP:
-      name = "SIGHUP";
-      break;
-    case SIGQUIT:
-      name = "SIGQUIT";
-      break;
-    default:
-      break;
-  }
-  std::fprintf(stderr, "sweepscan-robotd: %s during start-up: %s; exiting\n", name, what);
+  // glibc's name without its "SIG" (2.32 on; Debian 12 has 2.36).
+  const char* name = ::sigabbrev_np(sweepscan::app::QuitSignal());
+  std::fprintf(stderr, "sweepscan-robotd: %s%s during start-up: %s; exiting\n",
+               name != nullptr ? "SIG" : "", name != nullptr ? name : "a signal", what);
   return 0;
 }
 
