@@ -149,6 +149,18 @@ namespace {
 // driver still holds is thrown away (TCOFLUSH), which also wakes a tcdrain
 // waiting for a UART's queue and spares close() its wait for the same bytes
 // (up to 30 s for a serial port's closing_wait).
+//
+// A thread left behind stays until the process exits; it is not ended on
+// purpose. Closing the caller's descriptor does not wake it (the call holds
+// the open file), and TCOFLUSH need not: a USB-serial adapter that stopped
+// taking data keeps its write in flight, which a flush does not reclaim on
+// every driver (nor does it reach the call the tests hold in a seccomp
+// listener). pthread_cancel would end it (tcdrain is a cancellation point,
+// its wait interruptible), but the thread's duplicate is what keeps the
+// port open after close(): with it gone, that close() is the port's last
+// and the kernel waits there, up to closing_wait (30 s), for the very bytes
+// the bound gave up on; keeping the duplicate instead leaks the open port.
+// Drain's callers (the agent's shutdown, --stop-motors) exit right after it.
 int TcdrainWithin(int fd, int timeout_ms) {
   struct State {
     std::mutex mutex;

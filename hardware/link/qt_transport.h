@@ -91,6 +91,9 @@ class SerialStream : public ByteStream {
   // wedged adapter's never returns. False with *why (if given) when the
   // bytes did not all leave in time; what the driver still held is then
   // thrown away, so that closing the port does not wait for it either.
+  // The driver's wait, then, stays on its thread, holding the port open,
+  // until the process exits (why: TcdrainWithin in qt_transport.cc): call
+  // it before exiting, as the agent's shutdown and --stop-motors do.
   bool Drain(int timeout_ms, QString* why = nullptr);
   qint64 BytesQueued() const override;
   qint64 DiscardQueued() override;
