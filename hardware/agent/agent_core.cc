@@ -144,6 +144,7 @@ bool AgentOptions::IsValid(std::string* error) const {
   if (watchdog < kAgentMinWatchdog || watchdog > kAgentMaxWatchdog) {
     return fail("watchdog period must be within 100..5000 ms");
   }
+  if (stale_drive_after <= Duration::zero()) return fail("stale_drive_after must be positive");
   if (!PositiveFinite(v_max_mps)) return fail("v_max must be positive and finite");
   if (!PositiveFinite(w_max_radps)) return fail("w_max must be positive and finite");
   if (!PositiveFinite(accel_max_mps2)) return fail("accel_max must be positive and finite");
@@ -219,6 +220,8 @@ void AgentCore::OnClientConnected(Time now, AgentOutput* out) {
   client_name_.clear();
   connected_at_ = now;
   last_client_frame_ = now;
+  have_transit_ = false;
+  have_late_read_ = false;
   decoder_ = LinkDecoder(ClientDecoderOptions(options_));
   encoder_ = LinkEncoder(LinkSender::kAgent);  // Each connection numbers from 0.
   have_status_time_ = false;
@@ -247,6 +250,8 @@ bool AgentCore::AdoptClient(AgentHandshake* handshake, Time now, AgentOutput* ou
   client_name_ = handshake->client_name();
   connected_at_ = now;
   last_client_frame_ = now;
+  have_transit_ = false;
+  have_late_read_ = false;
   decoder_ = std::move(handshake->decoder());
   encoder_ = LinkEncoder(LinkSender::kAgent, handshake->next_agent_sequence());
   have_status_time_ = false;
@@ -323,6 +328,8 @@ void AgentCore::OnClientDisconnected(Time now, AgentOutput* out) {
   if (was_authenticated && MotionCommanded()) {
     ++watchdog_trips_;
     last_trip_ = now;
+    stale_drive_logged_ = false;
+    on_time_since_trip_ = false;
     watchdog_ = WatchdogState::kTripped;
     HardStop(now, out);
   }
@@ -394,6 +401,16 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
   }
   ++frames_received_;
   if (authenticated_) last_client_frame_ = now;  // Any valid frame feeds the watchdog.
+  const Duration late = NoteClientTransit(now, message.header.time);
+  if (late > options_.stale_drive_after) {
+    have_late_read_ = true;
+    late_read_time_ = now;
+  }
+  // The same read as a late frame: the rest of a stall's burst, sent before
+  // the client could know of a trip, however little late itself.
+  const bool held =
+      late > options_.stale_drive_after || (have_late_read_ && late_read_time_ == now);
+  if (!held) on_time_since_trip_ = true;
 
   const LinkPayload& payload = message.payload;
   if (const auto* hello = std::get_if<Hello>(&payload)) {
@@ -407,6 +424,7 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
     // sent while it was away (a radio link down) went nowhere, so hold
     // telemetry for its TelemetryResume as a new connection does.
     if (options_.hello_on_client_hello) {
+      have_transit_ = false;  // Maybe another client, on another clock.
       SendGreeting(now, out);
       if (authenticated_) HoldTelemetry(now);
     }
@@ -455,6 +473,22 @@ void AgentCore::HandleMessage(const LinkMessage& message, Time now, AgentOutput*
   if (const auto* drive = std::get_if<DriveCommand>(&payload)) {
     if (estop_latched_) {
       Ack(now, message, AckResult::kEmergencyStopLatched, out);
+      return;
+    }
+    if (watchdog_ == WatchdogState::kTripped && held && !on_time_since_trip_) {
+      // Held by the stall that tripped the watchdog: the robot stays stopped
+      // until a drive the link delivers on time (the client's next one).
+      // Once a frame has come on time, the stall is over: a drive delayed
+      // later (at rest, tripped long ago) is judged as from rest.
+      ++counters_.stale_drives;
+      if (!stale_drive_logged_) {
+        stale_drive_logged_ = true;
+        out->log.push_back(
+            "drive command delivered " +
+            std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(late).count()) +
+            " ms late after the watchdog trip (a stalled link): not applied");
+      }
+      Ack(now, message, AckResult::kInvalid, out);
       return;
     }
     if (!MotionCommanded()) {
@@ -541,6 +575,8 @@ void AgentCore::Tick(Time now, AgentOutput* out) {
   if (watchdog_ == WatchdogState::kArmed && now - last_client_frame_ >= options_.watchdog) {
     ++watchdog_trips_;
     last_trip_ = now;
+    stale_drive_logged_ = false;
+    on_time_since_trip_ = false;
     watchdog_ = WatchdogState::kTripped;
     HardStop(now, out);
     if (client_authenticated()) SendStatus(now, out);
@@ -567,6 +603,32 @@ void AgentCore::Tick(Time now, AgentOutput* out) {
 
 bool AgentCore::MotionCommanded() const {
   return commanded_v_ != 0.0 || commanded_w_ != 0.0 || applied_v_ != 0.0 || applied_w_ != 0.0;
+}
+
+Duration AgentCore::NoteClientTransit(Time now, Time sent) {
+  // The two clocks are unrelated, so a transit is the offset between them
+  // plus the delay; the least one is the offset plus the fastest delay, and
+  // the excess over it is how long the link held the frame. Windows of 5 s,
+  // so that the clocks' drift (1e-4 s/s at worst) and a lasting change of
+  // route do not accumulate.
+  constexpr Duration kWindow = std::chrono::seconds(5);
+  // Saturated: the sender's time is whatever the client put there.
+  const auto minus = [](Duration a, Duration b) {
+    Duration::rep ns = 0;
+    if (!__builtin_sub_overflow(a.count(), b.count(), &ns)) return Duration(ns);
+    return b < a ? Duration::max() : Duration::min();
+  };
+  const Duration transit = minus(now.time_since_epoch(), sent.time_since_epoch());
+  if (!have_transit_ || now - transit_window_start_ >= kWindow) {
+    least_transit_before_ = have_transit_ && now - transit_window_start_ < 2 * kWindow
+                                ? least_transit_now_
+                                : Duration::max();
+    least_transit_now_ = Duration::max();
+    transit_window_start_ = now;
+    have_transit_ = true;
+  }
+  least_transit_now_ = std::min(least_transit_now_, transit);
+  return minus(transit, std::min(least_transit_now_, least_transit_before_));
 }
 
 void AgentCore::UpdateWatchdogArming() {

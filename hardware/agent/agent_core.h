@@ -25,7 +25,8 @@
 //  - watchdog: no valid frame from the authenticated client for
 //    options.watchdog while motion is commanded -> zero to the motors at once
 //    (no ramp), state tripped, reported in Status. A lost connection trips it
-//    at once.
+//    at once. The drives a stalled link held past the trip, delivered late
+//    by their sender times, do not re-arm it (AgentOptions::stale_drive_after).
 //  - CommandAck for every command (echo time for the client's latency), Status
 //    at options.status_period and on every change of watchdog / e-stop / auth state.
 //  - LidarMotor on/off -> the X4's motor on / off (its adapter's DTR line,
@@ -82,6 +83,17 @@ struct AgentOptions {
   // would leave a robot driving blind; a shorter one trips between the
   // client's 100 ms heartbeats).
   Duration watchdog = kLinkDefaultWatchdog;
+  // After a watchdog trip, a DriveCommand that the link delivered later than
+  // this after its due time is stale: it was held by the stall that tripped
+  // the watchdog (Wi-Fi behind a wall holds every frame, then delivers them
+  // at once) and does not start the robot again (docs/protocol.md,
+  // "Watchdog"). The due time is the frame's sender time plus the least
+  // transit (receive time minus sender time) of the connection's last 5 to
+  // 10 s. One client heartbeat period. A drive in the same read as a frame
+  // that late is stale too, however little late itself: the rest of the
+  // burst, sent before the client could know of the trip. Only until a
+  // frame comes on time: the stall is over then.
+  Duration stale_drive_after = std::chrono::milliseconds(100);
   double v_max_mps = 0.5;                    // |commanded v| <= v_max.
   double w_max_radps = 1.5;                  // |commanded w| <= w_max.
   double accel_max_mps2 = 1.0;               // Ramp of applied v (speeding up and slowing down).
@@ -181,6 +193,9 @@ struct AgentCounters {
   // the buffer; the device's next chunk sent carries the break flag).
   uint64_t telemetry_chunks_dropped = 0;
   uint64_t lidar_idle_stops = 0;  // Lidar motor turned off for want of a client.
+  // DriveCommands refused after a watchdog trip: the link held them
+  // (options.stale_drive_after).
+  uint64_t stale_drives = 0;
 };
 
 // One connection's authentication, before it may become the client (TCP):
@@ -348,6 +363,10 @@ class AgentCore {
   // then A5 60 if the motor is on.
   void BeginLidarStartup(Time now, AgentOutput* out);
   void TickLidar(Time now, AgentOutput* out);
+  // How late the link delivered a client frame sent at `sent` (sender
+  // clock) and received `now`: its transit beyond the least of the last 5
+  // to 10 s (two windows of 5 s; a stall up to 5 s is measured in full).
+  Duration NoteClientTransit(Time now, Time sent);
   void UpdateRamp(Time now);
   void UpdateWatchdogArming();
   bool MotionCommanded() const;
@@ -368,6 +387,18 @@ class AgentCore {
   uint32_t last_client_sequence_ = 0;
   Time connected_at_;
   Time last_client_frame_;  // Last valid frame from the authenticated client.
+  // NoteClientTransit's windows: the least transit of the current one
+  // (since transit_window_start_) and of the one before. Reset per connection.
+  bool have_transit_ = false;
+  Time transit_window_start_;
+  Duration least_transit_now_{};
+  Duration least_transit_before_{};
+  bool stale_drive_logged_ = false;  // Since the last trip.
+  bool on_time_since_trip_ = false;  // A frame not held by a stall came since the last trip.
+  // The receive time of the last frame later than stale_drive_after (the
+  // frames of one read share it).
+  bool have_late_read_ = false;
+  Time late_read_time_;
   std::string client_name_;
 
   // Motion. commanded_* is the clamped set-point, applied_* the ramped value.

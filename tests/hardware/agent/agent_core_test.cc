@@ -285,6 +285,56 @@ TEST_F(AuthenticatedAgentTest, WatchdogStopsWithinThePeriodOfTheLastFrame) {
   EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
 }
 
+// A link that stalls past the watchdog (Wi-Fi behind a wall) holds the
+// client's frames and then delivers them at once. The watchdog stopped the
+// robot; the drives the link held, 650 ms to 50 ms late, do not start it
+// again, whether over stale_drive_after late or in the same read as those
+// that are. Once a frame has come on time, drives do again. They used to
+// re-arm it with the set-point of before the stall until the client, told
+// of the trip by the Status the stall also held, stopped it.
+TEST_F(AuthenticatedAgentTest, DrivesAStallHeldPastAWatchdogTripDoNotRestartTheRobot) {
+  h_.Send(Ms(0), DriveCommand{0.3, 0.0});
+  RunWithHeartbeats(Ms(0), Ms(500));
+  ASSERT_GT(h_.agent.applied_v_mps(), 0.2);
+  // Nothing arrives after 500 ms; the client drives on at 10 Hz meanwhile.
+  std::vector<uint8_t> held;
+  for (int ms = 600; ms <= 1200; ms += 100) {
+    for (const auto& frame : {h_.client.EncodeDrive(Ms(ms), 0.3, 0.0),
+                              h_.client.Encode(Ms(ms), LinkPayload{Heartbeat{}})}) {
+      held.insert(held.end(), frame.begin(), frame.end());
+    }
+  }
+  h_.TickRange(Ms(510), Ms(1240));
+  ASSERT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  ASSERT_FALSE(h_.motor_commands.empty());
+  ASSERT_EQ(h_.motor_commands.back().vx_mps, 0.0);
+  h_.motor_commands.clear();
+  const size_t acks_before = h_.All<CommandAck>().size();
+  h_.SendBytes(Ms(1250), held);
+  h_.TickRange(Ms(1250), Ms(1500));
+  EXPECT_FALSE(h_.AnyNonZeroMotorCommand());
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  EXPECT_EQ(h_.agent.counters().stale_drives, 7u);
+  const std::vector<CommandAck> acks = h_.All<CommandAck>();
+  size_t refused = 0;
+  for (size_t i = acks_before; i < acks.size(); ++i) {
+    if (acks[i].acked_type == static_cast<uint8_t>(LinkMessageType::kDriveCommand)) {
+      EXPECT_EQ(acks[i].result, AckResult::kInvalid);
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, 7u);
+  // A frame on time ends the stall: a drive delayed later (150 ms, in a
+  // read of its own) is not the stall's, and drives again.
+  h_.SendBytes(Ms(1505), h_.client.Encode(Ms(1500), LinkPayload{Heartbeat{}}));
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kTripped);
+  h_.SendBytes(Ms(1750), h_.client.EncodeDrive(Ms(1600), 0.3, 0.0));
+  EXPECT_EQ(h_.agent.watchdog_state(), WatchdogState::kArmed);
+  h_.TickRange(Ms(1760), Ms(1850));
+  EXPECT_TRUE(h_.AnyNonZeroMotorCommand());
+  EXPECT_EQ(h_.agent.counters().stale_drives, 7u);
+}
+
 TEST_F(AuthenticatedAgentTest, HeartbeatsKeepTheWatchdogFedAndAreAcked) {
   h_.Send(Ms(0), DriveCommand{0.2, 0.0});
   RunWithHeartbeats(Ms(0), Ms(3000));

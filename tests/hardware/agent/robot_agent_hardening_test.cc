@@ -6,7 +6,9 @@
 //  - a keyed peer that drives and stops reading is dropped (bounded send
 //    queue) and the robot stops;
 //  - a flood of frame candidates with good header CRCs and bad frame CRCs
-//    does not delay the watchdog.
+//    does not delay the watchdog;
+//  - the drives a stalled link held past a watchdog trip, delivered at
+//    once, do not start the robot again (a motor board on a pty).
 // The agent runs on the test's main thread (its event loop pumped by
 // WaitFor); attackers are plain blocking POSIX sockets on their own threads.
 // Figures are printed (docs/robot-agent.md, "Measured").
@@ -349,6 +351,104 @@ TEST(RobotAgentHardeningTest, AnOverwhelmingFloodStopsTheRobotNoLaterThanTheWatc
   std::printf("[measured] robot stopped %.1f ms after the last valid frame under a full-speed flood "
               "(%.0f MB)%s\n", latency_ms, mb, dropped ? ", link dropped (decode backlog)" : "");
   EXPECT_LE(latency_ms, 600.0);
+}
+
+// A link that stalls past the watchdog (Wi-Fi behind a wall) holds every
+// frame, then delivers them at once. Here the client drives, then for 1 s
+// makes its frames as it goes on driving (a drive and a heartbeat each
+// 100 ms) but holds them, then writes them in one go, then sends only
+// heartbeats: the motor board (a pseudo-terminal) hears the watchdog's zero
+// during the stall and then only zeros; a drive on time moves it again.
+// The held drives used to start it again, at the set-point of before the
+// stall, until the client learned of the trip from the Status held with
+// them and stopped it.
+TEST(RobotAgentStallTest, DrivesAStalledLinkHeldPastTheWatchdogDoNotRestartTheRobot) {
+  int master = -1, slave = -1;
+  char board[128];
+  termios raw{};
+  ::cfmakeraw(&raw);
+  ASSERT_EQ(::openpty(&master, &slave, board, &raw, nullptr), 0);
+  ::fcntl(master, F_SETFL, O_NONBLOCK);
+  ::close(slave);
+  RobotAgentConfig config;
+  config.listen_port = 0;
+  config.agent.key = KeyBytes();
+  config.motor_port = QString::fromLatin1(board);
+  QStringList log;  // Before the agent: its shutdown logs too.
+  RobotAgent agent(config);
+  QObject::connect(&agent, &RobotAgent::logMessage, [&](const QString& m) { log << m; });
+  QString error;
+  ASSERT_TRUE(agent.Start(&error)) << error.toStdString();
+  const uint16_t port = agent.tcp_port();
+  // 1 driving, 2 stalled, 3 the stall's frames written, heartbeats; 4 drives on time.
+  std::atomic<int> phase{0};
+  std::atomic<bool> moving_again{false}, done{false}, authenticated{false};
+  std::thread client([&] {
+    RawClient c(port);
+    authenticated = c.Authenticate();
+    auto& link = c.encoder();
+    const auto sleep_ms = [](int ms) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(ms));
+    };
+    phase = 1;
+    for (int i = 0; authenticated && i < 6; ++i, sleep_ms(50)) {
+      c.Send(link.EncodeDrive(RawClient::Now(), 0.3, 0.0));
+    }
+    phase = 2;
+    std::vector<uint8_t> held;
+    for (int i = 0; authenticated && i < 10; ++i) {
+      sleep_ms(100);
+      for (const auto& frame : {link.EncodeDrive(RawClient::Now(), 0.3, 0.0),
+                                link.Encode(RawClient::Now(), LinkPayload{Heartbeat{}})}) {
+        held.insert(held.end(), frame.begin(), frame.end());
+      }
+    }
+    c.Send(held);
+    phase = 3;
+    for (int i = 0; authenticated && i < 5; ++i) {
+      sleep_ms(100);
+      c.Send(link.Encode(RawClient::Now(), LinkPayload{Heartbeat{}}));
+    }
+    phase = 4;
+    for (int i = 0; authenticated && i < 40 && !moving_again; ++i, sleep_ms(50)) {
+      c.Send(link.EncodeDrive(RawClient::Now(), 0.3, 0.0));
+    }
+    c.Send(link.Encode(RawClient::Now(), LinkPayload{Stop{}}));
+    done = true;
+  });
+  MotorCommandDecoder decoder;
+  bool drove = false, stopped_in_stall = false;
+  int restarts = 0;  // Non-zero commands after the stall's zero, before phase 4.
+  std::string heard;
+  const bool finished = WaitFor(
+      [&] {
+        // The phase first: what is read below was written before it changed.
+        const int now_phase = phase;
+        std::string bytes;
+        ReadAvailable(master, &bytes);
+        decoder.Feed(std::vector<uint8_t>(bytes.begin(), bytes.end()), Time());
+        for (const MotorCommand& m : decoder.TakeRecords()) {
+          const bool zero = m.vx_mps == 0.0 && m.wz_radps == 0.0;
+          if (now_phase == 1 && !zero) drove = true;
+          if (now_phase == 2 && zero && drove) stopped_in_stall = true;
+          if ((now_phase == 2 || now_phase == 3) && !zero && stopped_in_stall) ++restarts;
+          if (now_phase == 4 && !zero) moving_again = true;
+        }
+        return done.load();
+      },
+      20000);
+  client.join();
+  ::close(master);
+  ASSERT_TRUE(finished);
+  ASSERT_TRUE(authenticated.load());
+  EXPECT_TRUE(drove);
+  EXPECT_TRUE(stopped_in_stall) << "no watchdog zero during the stall";
+  EXPECT_EQ(restarts, 0) << "the stall's drives drove the board again";
+  EXPECT_TRUE(moving_again.load()) << "a drive on time did not move the robot";
+  EXPECT_GE(agent.core().counters().stale_drives, 10u);
+  const QStringList refused = log.filter(QStringLiteral("late after the watchdog trip"));
+  ASSERT_EQ(refused.size(), 1) << log.join('\n').toStdString();
+  std::printf("[measured] %s\n", qPrintable(refused.first()));
 }
 
 }  // namespace
