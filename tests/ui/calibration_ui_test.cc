@@ -24,6 +24,7 @@
 #include <QLineEdit>
 #include <QProcess>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QSettings>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
@@ -443,11 +444,27 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   const nlohmann::json expected = nlohmann::json::parse(cli.out)["mounting_error_rad"];
   OpenDiamond();
   CalibrationPanel* panel = window_->calibration_panel();
+  // The live plot's iterations, read after the panel has drawn each one
+  // (connected after the panel's slot, so called after it).
+  std::vector<int> live;
+  const QRegularExpression iterations(QStringLiteral(", (\\d+) iterations"));
+  const QMetaObject::Connection watch =
+      QObject::connect(workspace_.get(), &Workspace::calibrationIteration, [&](int, double) {
+        const QRegularExpressionMatch m = iterations.match(panel->cost_caption());
+        if (m.hasMatch()) live.push_back(m.captured(1).toInt());
+      });
   panel->SolveAutomatic();
   ASSERT_TRUE(WaitForSolve(panel)) << panel->result_text().toStdString();
+  QObject::disconnect(watch);
   const PickCalibrationResult* r = workspace_->calibration_result();
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(r->summary.method, "auto-planes");
+  // While solving, the plot grew through the rounds into the whole solve's
+  // trace; it restarted at each round's first iteration.
+  ASSERT_FALSE(live.empty());
+  EXPECT_TRUE(std::is_sorted(live.begin(), live.end())) << ::testing::PrintToString(live);
+  EXPECT_EQ(static_cast<size_t>(live.back()), r->summary.trace.size() - 1)
+      << ::testing::PrintToString(live);
   EXPECT_NEAR(r->summary.angles.alpha, expected["alpha"].get<double>(), 1e-9);
   EXPECT_NEAR(r->summary.angles.beta, expected["beta"].get<double>(), 1e-9);
   EXPECT_NEAR(r->summary.angles.gamma, expected["gamma"].get<double>(), 1e-9);

@@ -44,17 +44,20 @@ class CostPlot : public QWidget {
     costs_.clear();
     update();
   }
-  void Add(int iteration, double cost) {
-    if (iteration == 0) costs_.clear();
+  // One iteration of the solve under way (StartSolving clears the plot).
+  // The automatic mode's rounds and the refined corners' each run an inner
+  // solve whose iterations count from 0 again; they are drawn on after the
+  // ones before, as CalibrationSummary::trace numbers them, so the live
+  // plot grows into the final one instead of starting over each round.
+  void Add(double cost) {
     costs_.push_back(std::max(cost, 1e-30));
     update();
   }
   // The whole solve whose result is shown (CalibrationSummary::trace: every
   // inner solve of the automatic mode's rounds and of the refined corners,
-  // numbered on). While solving, Add draws the inner solve under way, which
-  // starts again at iteration 0 each round: its last round starts near the
-  // answer and barely moves, which beside the RMS's drop over the whole solve
-  // read as a contradiction ("-0.16 %" beside "60 mm -> 5.8 mm").
+  // numbered on). The last round alone starts near the answer and barely
+  // moves, which beside the RMS's drop over the whole solve read as a
+  // contradiction ("-0.16 %" beside "60 mm -> 5.8 mm").
   void Set(const std::vector<CalibrationIteration>& trace) {
     costs_.clear();
     for (const CalibrationIteration& it : trace) costs_.push_back(std::max(it.cost, 1e-30));
@@ -165,7 +168,7 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
   layout->addStretch(1);
 
   connect(workspace_, &Workspace::calibrationIteration, this,
-          [this](int i, double cost) { plot_->Add(i, cost); });
+          [this](int, double cost) { plot_->Add(cost); });
   connect(workspace_, &Workspace::calibrationFinished, this, &CalibrationPanel::ShowResult);
   connect(workspace_, &Workspace::passesSplit, this, &CalibrationPanel::OnPassesSplit);
   connect(workspace_, &Workspace::sessionChanged, this, [this](const QString& dir) {
