@@ -210,12 +210,10 @@ int AgentMain(int argc, char** argv) {
       return Fail(QStringLiteral("--stop-motors: no motor board port (--motor)"));
     return StopMotors(config.motor_port, config.motor_baud);
   }
-  // Under systemd's Type=notify without the means to notify it, the start
-  // would time out with no word as to why: said first.
-  const QString notify_warning = sweepscan::app::ServiceNotifier::MissingSupportWarning();
-  if (!notify_warning.isEmpty()) {
-    std::fprintf(stderr, "sweepscan-robotd: %s\n", qPrintable(notify_warning));
-  }
+  // The service manager's notification socket (NOTIFY_SOCKET), read now so
+  // that an address robotd cannot use (vsock:, a path too long) is said
+  // first: under Type=notify the start would time out with no word as to why.
+  sweepscan::app::ServiceNotifier service;
   // The configuration is read (a slow file system, a file that is a pipe).
   if (StopPending()) return StoppedDuringStartup("stopped before the ports were opened");
   // Not before --stop-motors: it must stop the board whatever else the
@@ -277,7 +275,6 @@ int AgentMain(int argc, char** argv) {
     std::fprintf(stderr, "lidar motor left on without a client (lidar-idle-s = 0)\n");
   }
 
-  sweepscan::app::ServiceNotifier service;
   service.Ready(serving);
   QObject::connect(&agent, &RobotAgent::clientConnected, &service, [&](const QString& peer) {
     service.Status(serving + QStringLiteral(", client ") + peer);

@@ -1,8 +1,9 @@
 // sweepscan-robotd as a process, as systemd and an operator start and stop
 // it: its key file's permissions and the refusal's words, its options, its
 // configuration file (quoting, bad lines, the link given on the command
-// line), and its start-up and shutdown (a stop during start-up, a build
-// without libsystemd under systemd, a wedged serial adapter at the stop).
+// line), and its start-up and shutdown (a stop during start-up, a wedged
+// serial adapter at the stop). Its notifications to systemd:
+// service_notify_test.cc.
 // Real processes, pseudo-terminals for the boards and loopback TCP; the
 // kernel holds chosen calls (seccomp user notification) where a test needs
 // a slow open or a wedged port.
@@ -539,55 +540,6 @@ TEST(RobotdStartupTest, AStopDuringStartUpEndsItBetweenItsSteps) {
     EXPECT_EQ(heard.size(), 0u) << "the motor port was opened after the stop";
     ::unlink(pipe.c_str());
   }
-}
-
-// The packaged unit is Type=notify: a robotd built without libsystemd
-// (configure warns) sends no READY=1, and systemd fails its start at the
-// timeout. It was silent about it; now it says so as it starts when
-// NOTIFY_SOCKET is set, and still runs (outside systemd it is fine).
-TEST(RobotdStartupTest, ABuildWithoutNotifySupportSaysSoUnderSystemd) {
-  const std::string key = WriteKey("notify.key", "the notify test's key", 0600);
-  NotifySocket notify(TempDirPath() + "/notify.socket");
-  ASSERT_GE(notify.fd, 0);
-  // Runs `program` until it listens, then SIGTERM; its stdout and stderr.
-  const auto run = [&](const char* program, bool under_systemd, int* code) {
-    QProcess robotd;
-    QProcessEnvironment env = QProcessEnvironment::systemEnvironment();
-    env.remove("NOTIFY_SOCKET");
-    if (under_systemd) env.insert("NOTIFY_SOCKET", QString::fromStdString(notify.path));
-    robotd.setProcessEnvironment(env);
-    robotd.start(QString::fromLatin1(program),
-                 {"--imu", "/nonexistent/tty", "--listen", "127.0.0.1:0", "--key-file",
-                  QString::fromStdString(key)});
-    QByteArray out;
-    WaitFor(
-        [&] {
-          out += robotd.readAllStandardOutput();
-          return out.contains("listening on") || robotd.state() == QProcess::NotRunning;
-        },
-        20000);
-    robotd.terminate();
-    robotd.waitForFinished(20000);
-    *code = robotd.exitStatus() == QProcess::NormalExit ? robotd.exitCode() : -1;
-    return (out + robotd.readAllStandardOutput() + robotd.readAllStandardError()).toStdString();
-  };
-  const std::string warning =
-      "sweepscan-robotd: warning: NOTIFY_SOCKET is set (systemd runs this as a Type=notify "
-      "service) but this build has no sd_notify support (built without libsystemd)";
-  int code = -1;
-  std::string out = run(SWEEPSCAN_ROBOTD_WITHOUT_LIBSYSTEMD, true, &code);
-  EXPECT_NE(out.find(warning), std::string::npos) << out;
-  EXPECT_NE(out.find("listening on 127.0.0.1:"), std::string::npos) << "it still runs: " << out;
-  EXPECT_EQ(code, 0) << out;
-  EXPECT_EQ(notify.Receive(), "");
-  out = run(SWEEPSCAN_ROBOTD_WITHOUT_LIBSYSTEMD, false, &code);
-  EXPECT_EQ(out.find("NOTIFY_SOCKET"), std::string::npos) << "outside systemd: " << out;
-  EXPECT_EQ(code, 0) << out;
-  // The build with libsystemd notifies, and has nothing to say about it.
-  out = run(SWEEPSCAN_ROBOTD, true, &code);
-  EXPECT_EQ(out.find("NOTIFY_SOCKET"), std::string::npos) << out;
-  EXPECT_EQ(code, 0) << out;
-  EXPECT_NE(notify.Receive().find("READY=1"), std::string::npos);
 }
 
 // SIGTERM's shutdown waits for the zero command to leave the motor board's
