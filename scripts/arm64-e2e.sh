@@ -7,7 +7,8 @@
 #      pseudo-terminals, the amd64 and the arm64 robotd on the same device
 #      bytes, recorded by the app's recorder and by `sweepscan-cli record`
 #      (identical sensor records), the round trip, the CPU robotd takes under
-#      emulation, the watchdog's stop time, the config file and sd_notify.
+#      emulation, the watchdog's stop time, the config file and the service
+#      notifications (READY=1, WATCHDOG=1, STOPPING=1).
 # CI runs the same test inside the suite (scripts/test.sh); this prints the
 # figures alone. Usage: scripts/arm64-e2e.sh [repetitions, default 3]
 set -euo pipefail

@@ -3,16 +3,15 @@
 # Debian 12 amd64 machine with Debian's multiarch and leaves it in
 # build-arm64/app/sweepscan-robotd. Installs what it needs if missing (root or
 # sudo): the arm64 architecture, crossbuild-essential-arm64, the :arm64
-# development packages robotd links (QtCore/Network/SerialPort, OpenSSL,
-# libsystemd) and qemu-user-static to run the result here
+# development packages robotd links (QtCore/Network/SerialPort, OpenSSL)
+# and qemu-user-static to run the result here
 # (docs/deployment.md, "Cross-building for arm64").
 #   scripts/build-arm64.sh [extra cmake -D options]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(crossbuild-essential-arm64 qemu-user-static file pkg-config cmake ninja-build ccache help2man
-          qtbase5-dev-tools qtbase5-dev:arm64 libqt5serialport5-dev:arm64 libssl-dev:arm64
-          libsystemd-dev:arm64)
+          qtbase5-dev-tools qtbase5-dev:arm64 libqt5serialport5-dev:arm64 libssl-dev:arm64)
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 if ! dpkg --print-foreign-architectures | grep -qx arm64; then

@@ -11,9 +11,9 @@ packages=(
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   clang-14 libclang-rt-14-dev
   xvfb xauth libgl1-mesa-dri socat
-  # sweepscan-robotd's service notifications (sd_notify); the packages' man
-  # pages (help2man) and the checks of the unit, rules and desktop entry.
-  libsystemd-dev help2man systemd udev desktop-file-utils shellcheck librsvg2-bin dpkg-dev lintian
+  # The packages' man pages (help2man) and the checks of the unit, rules and
+  # desktop entry (systemd-analyze, udevadm, ...).
+  help2man systemd udev desktop-file-utils shellcheck librsvg2-bin dpkg-dev lintian
   # ROS bags (docs/ros-bags.md): ROS 1 through Debian's rosbag_storage and
   # message headers (rosbag/bag.h needs the ROS 2 pluginlib beside them);
   # ROS 2's sqlite3 and MCAP storages need sqlite3, zstd and lz4.

@@ -14,7 +14,8 @@ set(CMAKE_CXX_COMPILER aarch64-linux-gnu-g++)
 # first (find_* add lib/aarch64-linux-gnu from CMAKE_LIBRARY_ARCHITECTURE).
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_PREFIX_PATH /usr/lib/aarch64-linux-gnu/cmake)
-# pkg-config (libsystemd): the arm64 .pc files only.
+# pkg-config: the arm64 .pc files only (robotd looks nothing up with it since
+# it stopped linking libsystemd, but a lookup must never find amd64 ones).
 set(ENV{PKG_CONFIG_LIBDIR} /usr/lib/aarch64-linux-gnu/pkgconfig:/usr/share/pkgconfig)
 
 # Running what was built (help2man's man pages, the end-to-end check): qemu's
