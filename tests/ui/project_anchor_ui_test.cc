@@ -1,11 +1,14 @@
 // Editing a project's sessions in the desktop app through the Project
 // panel's context menu (docs/desktop-app.md, "Projects"): Remove from
 // Project offered only where core/project allows it, removing the anchor,
-// and Make Anchor moving the project's frame (not the building), undone and
-// redone, and not overwritten by an alignment that ends after it. Driven
+// and Make Anchor moving the project's frame (not the building, on screen
+// either), undone and redone, and not overwritten by an alignment that ends after it. Driven
 // through the real widgets under a real display (xvfb-run in CI) on the
 // office floor's drives recorded by the CLI.
 #include <gtest/gtest.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
 
 #include <QAction>
 #include <QApplication>
@@ -205,6 +208,65 @@ TEST_F(ProjectUiTest, MakeAnchorMovesTheFrameNotTheBuildingAndUndoes) {
   window_->undo_group()->redo();
   expect_frame("b");
   EXPECT_TRUE(window_->isWindowModified());
+}
+
+// Make Anchor moves the project's frame, not the building: on screen too.
+// The camera moves with the frame, so that the sessions' origins and a
+// point above them are drawn at the same pixels after the change and after
+// its undo (the camera held still made the building jump by b's pose).
+TEST_F(ProjectUiTest, MakeAnchorKeepsTheBuildingStillOnScreen) {
+  const QString file = MakeProject("anchor-on-screen");
+  Project p;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &p).ok());
+  const Rigid3d a_from_b = Rigid3d::FromPose(4.0, -3.0, 0.02, 0.01, -0.02, 1.1);
+  p.sessions[1].project_from_session = a_from_b;
+  p.sessions[1].registration.method = "manual";
+  ASSERT_TRUE(SaveProject(file.toStdString(), p).ok());
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  CloudView* view = window_->view();
+  view->ViewOblique();
+  vtkRenderer* renderer = view->renderWindow()->GetRenderers()->GetFirstRenderer();
+  // Where a point of the building (in the frame of `anchor`'s start pose)
+  // is drawn, in display pixels.
+  const auto on_screen = [&](const Eigen::Vector3d& in_a, const std::string& anchor) {
+    view->RenderNow();
+    const Eigen::Vector3d w = anchor == "a" ? in_a : a_from_b.inverse() * in_a;
+    renderer->SetWorldPoint(w.x(), w.y(), w.z(), 1.0);
+    renderer->WorldToDisplay();
+    double d[3];
+    renderer->GetDisplayPoint(d);
+    return Eigen::Vector2d(d[0], d[1]);
+  };
+  const std::vector<Eigen::Vector3d> building = {Eigen::Vector3d::Zero(), a_from_b.translation(),
+                                                 a_from_b * Eigen::Vector3d(1.0, 2.0, 2.5)};
+  std::vector<Eigen::Vector2d> before;
+  for (const Eigen::Vector3d& x : building) before.push_back(on_screen(x, "a"));
+  // On screen and apart: a jump would show.
+  const QRectF widget(0, 0, view->width(), view->height());
+  for (const Eigen::Vector2d& d : before) ASSERT_TRUE(widget.contains(d.x(), d.y()));
+  ASSERT_GT((before[0] - before[1]).norm(), 20.0);
+  const uint64_t placements = view->camera_generation();
+
+  project()->MakeAnchor("b");
+  ASSERT_EQ(project()->document()->project().Anchor(), 1);
+  ASSERT_TRUE(WaitFor([&] { return !project()->busy(); }, 60000));
+  for (size_t k = 0; k < building.size(); ++k) {
+    EXPECT_LT((on_screen(building[k], "b") - before[k]).norm(), 1.0)
+        << k << ": " << on_screen(building[k], "b").transpose() << " was " << before[k].transpose();
+  }
+  window_->undo_group()->undo();
+  ASSERT_EQ(project()->document()->project().Anchor(), 0);
+  ASSERT_TRUE(WaitFor([&] { return !project()->busy(); }, 60000));
+  for (size_t k = 0; k < building.size(); ++k) {
+    EXPECT_LT((on_screen(building[k], "a") - before[k]).norm(), 1.0) << k;
+  }
+  window_->undo_group()->redo();
+  for (size_t k = 0; k < building.size(); ++k) {
+    EXPECT_LT((on_screen(building[k], "b") - before[k]).norm(), 1.0) << k;
+  }
+  // Not a placement of the camera by the operator (the room view may still come).
+  EXPECT_EQ(view->camera_generation(), placements);
 }
 
 // A session made the anchor while it is being aligned: the alignment's

@@ -12,6 +12,7 @@
 #include <QString>
 #include <QUndoCommand>
 #include <cstdint>
+#include <functional>
 
 #include "core/project/project.h"
 #include "ui/project/project_document.h"
@@ -20,28 +21,44 @@ namespace sweepscan::ui {
 
 class ProjectEditCommand : public QUndoCommand {
  public:
-  ProjectEditCommand(ProjectDocument* document, Project after, const QString& text)
+  // `move_frame` (a change of anchor): every placement of `after` is
+  // new_from_old times its place in the document's project. Called with
+  // new_from_old on redo and its inverse on undo, so that what is drawn in
+  // the project's frame (the view's camera) moves with it and the building
+  // holds still on screen.
+  ProjectEditCommand(ProjectDocument* document, Project after, const QString& text,
+                     std::function<void(const Rigid3d&)> move_frame = {},
+                     const Rigid3d& new_from_old = Rigid3d())
       : document_(document),
         generation_(document->generation()),
         before_(document->project()),
-        after_(std::move(after)) {
+        after_(std::move(after)),
+        move_frame_(std::move(move_frame)),
+        new_from_old_(new_from_old) {
     setText(text);
   }
-  void redo() override { Apply(after_); }
-  void undo() override { Apply(before_); }
+  void redo() override {
+    if (Apply(after_) && move_frame_) move_frame_(new_from_old_);
+  }
+  void undo() override {
+    if (Apply(before_) && move_frame_) move_frame_(new_from_old_.inverse());
+  }
 
  private:
-  void Apply(const Project& p) {
+  bool Apply(const Project& p) {
     if (document_->generation() != generation_) {
       setObsolete(true);
-      return;
+      return false;
     }
     document_->Set(p);
+    return true;
   }
 
   ProjectDocument* document_;
   uint64_t generation_;
   Project before_, after_;
+  std::function<void(const Rigid3d&)> move_frame_;
+  Rigid3d new_from_old_;
 };
 
 }  // namespace sweepscan::ui

@@ -18,6 +18,7 @@
 #include "ui/project/project_commands.h"
 #include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
+#include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -321,7 +322,21 @@ void ProjectController::MakeAnchor(const std::string& id) {
     return;
   }
   if (was) return;
-  Push(after, tr("make '%1' the anchor").arg(Id(id)));
+  // The building stays where it is and the frame moves under it; the view's
+  // camera moves with the frame, or the building would seem to jump by the
+  // change on screen. A session unplaced until now (nothing else was placed)
+  // has no pose in the old frame: the old anchor is not drawn after it.
+  const std::optional<Rigid3d>& was_placed =
+      document_.project().sessions[document_.project().Find(id)].project_from_session;
+  if (was_placed) {
+    CloudView* view = view_;
+    undo_.push(new ProjectEditCommand(
+        &document_, after, tr("make '%1' the anchor").arg(Id(id)),
+        [view](const Rigid3d& new_from_old) { view->MoveCameraWithFrame(new_from_old); },
+        was_placed->inverse()));
+  } else {
+    Push(after, tr("make '%1' the anchor").arg(Id(id)));
+  }
   QString text = tr("'%1' is the anchor now: the project's frame is its start pose").arg(Id(id));
   if (!change.reversed.empty()) {
     QStringList turned;

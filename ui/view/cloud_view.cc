@@ -614,6 +614,21 @@ void CloudView::LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& posi
   RequestRender();
 }
 
+void CloudView::MoveCameraWithFrame(const Rigid3d& new_from_old) {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  Eigen::Vector3d position, focal, up;
+  camera->GetPosition(position.data());
+  camera->GetFocalPoint(focal.data());
+  camera->GetViewUp(up.data());
+  position = new_from_old * position;
+  focal = new_from_old * focal;
+  up = new_from_old.rotation() * up;
+  camera->SetPosition(position.data());
+  camera->SetFocalPoint(focal.data());
+  camera->SetViewUp(up.data());
+  RequestRender();
+}
+
 void CloudView::Orbit(double degrees) {
   ++camera_generation_;
   renderer_->GetActiveCamera()->Azimuth(degrees);

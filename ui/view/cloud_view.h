@@ -234,6 +234,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void Orbit(double degrees);
   // Puts the camera at `position` looking at `focal`, z up.
   void LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position);
+  // Moves the camera rigidly by `new_from_old` (its position, focal point
+  // and view-up) as the points it looks at are re-expressed in another
+  // frame (a project's change of anchor): what was on screen stays there.
+  // Not a placement: camera_generation() is unchanged.
+  void MoveCameraWithFrame(const Rigid3d& new_from_old);
   // Counts the camera placements (View menu, LookAt, Orbit, the mouse);
   // FitToCloud keeps the direction and does not count.
   uint64_t camera_generation() const { return camera_generation_; }
