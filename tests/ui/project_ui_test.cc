@@ -5,7 +5,8 @@
 // opened through the app; visibility and colour through the panel and
 // undone; the recent-projects menu; b aligned against a through the panel
 // and compared with where the scenarios put the robot down; a corridor's
-// refusal that leaves the project as it was. The event loop is watched
+// refusal that leaves the project as it was; Save merging what the CLI
+// saved meanwhile, and naming the sessions both changed. The event loop is watched
 // while clouds load and registrations run.
 #include <gtest/gtest.h>
 
@@ -326,34 +327,84 @@ TEST_F(ProjectUiTest, ASessionIsNotAlignedToOnePlacedAgainstIt) {
 }
 
 // The file changed by another program while open here (the CLI in a
-// terminal): Save does not overwrite it silently (without dialogs, it
-// refuses and says why); Save As still writes; opened again, it saves.
-TEST_F(ProjectUiTest, SaveDoesNotOverwriteWhatAnotherProgramChanged) {
+// terminal made b the anchor): Save merges its changes with the window's
+// own (c's colour), as the CLI's align merges, and asks nothing; the
+// window then holds the merge, unmodified, and its undo history starts again.
+TEST_F(ProjectUiTest, SaveMergesWhatAnotherProgramChanged) {
+  const QString file = MakeProject("merged");
+  Project p;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &p).ok());
+  const Rigid3d a_from_b = Rigid3d::FromPose(4.0, -3.0, 0.0, 0.0, 0.0, 1.1);
+  p.sessions[1].project_from_session = a_from_b;
+  p.sessions[1].registration.method = "planes+icp";
+  p.sessions[1].registration.reference = "a";
+  ASSERT_TRUE(SaveProject(file.toStdString(), p).ok());
+  ASSERT_TRUE(project()->OpenProject(file));
+  TurnsWhileBusy(60000);
+  project()->SetColor("c", "#00ff00");
+  const auto run =
+      RunCommand(std::string(SWEEPSCAN_CLI) + " project anchor " + file.toStdString() + " b");
+  ASSERT_EQ(run.code, 0) << run.out;
+  const int errors = window_->errors_shown();
+  QString said;
+  const QMetaObject::Connection c =
+      QObject::connect(project(), &ProjectController::message, [&](const QString& m) { said = m; });
+  EXPECT_TRUE(project()->SaveProject());
+  QObject::disconnect(c);
+  EXPECT_EQ(window_->errors_shown(), errors);
+  EXPECT_NE(said.indexOf("another program's changes to 'a', 'b'"), -1) << said.toStdString();
+  Project on_disk;
+  ASSERT_TRUE(LoadProject(file.toStdString(), &on_disk).ok());
+  EXPECT_EQ(on_disk.Anchor(), 1);  // the CLI's change kept
+  EXPECT_EQ(on_disk.sessions[0].registration.reference, "b");
+  ASSERT_TRUE(on_disk.sessions[0].project_from_session.has_value());
+  EXPECT_LT(
+      (on_disk.sessions[0].project_from_session->translation() - a_from_b.inverse().translation())
+          .norm(),
+      1e-9);
+  EXPECT_EQ(on_disk.sessions[2].color, "#00ff00");  // and the window's
+  EXPECT_EQ(ProjectToJson(project()->document()->project()), ProjectToJson(on_disk));
+  EXPECT_FALSE(window_->isWindowModified());
+  EXPECT_FALSE(project()->document()->ChangedOnDisk());
+  EXPECT_EQ(project()->undo_stack()->count(), 0);
+  ASSERT_TRUE(WaitFor([&] { return !project()->busy(); }, 60000));
+  Rigid3d drawn;
+  ASSERT_TRUE(project()->layer()->drawn_pose("b", &drawn));
+  EXPECT_LT(drawn.translation().norm(), 1e-6);  // drawn in the merged frame
+}
+
+// The same session changed on both sides (recoloured here, removed by the
+// CLI): Save does not overwrite the file silently; without dialogs it
+// refuses and names the session; Save As still writes; opened again, it saves.
+TEST_F(ProjectUiTest, SaveRefusesWhenTheSameSessionChangedOnBothSides) {
   const QString file = MakeProject("changed");
   ASSERT_TRUE(project()->OpenProject(file));
   TurnsWhileBusy(60000);
   project()->SetColor("b", "#00ff00");
-  Project other;
-  ASSERT_TRUE(LoadProject(file.toStdString(), &other).ok());
-  other.description = "placed by the CLI meanwhile";
-  ASSERT_TRUE(SaveProject(file.toStdString(), other).ok());
+  project()->SetColor("c", "#0000ff");
+  const auto run =
+      RunCommand(std::string(SWEEPSCAN_CLI) + " project remove " + file.toStdString() + " b");
+  ASSERT_EQ(run.code, 0) << run.out;
 
   EXPECT_FALSE(project()->SaveProject());
-  EXPECT_NE(window_->last_error().indexOf("changed by another program"), -1)
-      << window_->last_error().toStdString();
+  const std::string error = window_->last_error().toStdString();
+  EXPECT_NE(error.find("changed by another program"), std::string::npos) << error;
+  EXPECT_NE(error.find("'b': its colour here, removed in the file"), std::string::npos) << error;
+  EXPECT_EQ(error.find("'c'"), std::string::npos) << error;  // c merges
   Project on_disk;
   ASSERT_TRUE(LoadProject(file.toStdString(), &on_disk).ok());
-  EXPECT_EQ(on_disk.description, "placed by the CLI meanwhile");
+  EXPECT_EQ(on_disk.Find("b"), -1);
+  EXPECT_EQ(on_disk.sessions[on_disk.Find("c")].color, SessionColor(2));
   EXPECT_TRUE(window_->isWindowModified());
 
   const QString copy = QString::fromStdString(Dir()) + "/changed-copy.sweepscan-project";
   ASSERT_TRUE(project()->SaveProjectAs(copy));
-  project()->SetColor("c", "#0000ff");
+  project()->SetColor("c", "#ff00ff");
   EXPECT_TRUE(project()->SaveProject());  // its own file, unchanged since
   ASSERT_TRUE(project()->OpenProject(file));
   TurnsWhileBusy(60000);
-  EXPECT_EQ(project()->document()->project().description, "placed by the CLI meanwhile");
-  project()->SetColor("b", "#00ff00");
+  EXPECT_EQ(project()->document()->project().Find("b"), -1);
+  project()->SetColor("c", "#00ff00");
   EXPECT_TRUE(project()->SaveProject());
 }
 

@@ -84,6 +84,8 @@ ProjectController::ProjectController(QWidget* window, CloudView* view,
   connect(&document_, &ProjectDocument::modifiedChanged, this, &ProjectController::titleChanged);
   connect(&document_, &ProjectDocument::renamed, this, &ProjectController::titleChanged);
   connect(&document_, &ProjectDocument::renamed, &undo_, &QUndoStack::clear);
+  // Its commands hold projects without the other program's changes.
+  connect(&document_, &ProjectDocument::merged, &undo_, &QUndoStack::clear);
   connect(&jobs_, &ProjectJobs::progress, panel_, &ProjectPanel::ShowProgress);
   connect(&jobs_, &ProjectJobs::finished, panel_, [this] {
     panel_->ShowProgress(QString(), -2.0);
@@ -201,32 +203,50 @@ bool ProjectController::OpenProject(const QString& path) {
 
 bool ProjectController::SaveProject() {
   if (!document_.is_open()) return false;
-  // Another program (the CLI in a terminal) changed the file since it was
-  // opened here: saving would silently overwrite what it did.
-  if (document_.ChangedOnDisk()) {
+  // Another program (the CLI in a terminal) may have changed the file since
+  // it was opened here: its changes are merged with this window's, as the
+  // CLI's align merges, and only what cannot be merged is asked about.
+  ProjectDocument::Merge merge;
+  Status s = document_.SaveMerging(&merge);
+  if (!merge.refused.empty()) {
     const QString file = QFileInfo(document_.path()).fileName();
+    QString why = Id(merge.refused);
+    if (!merge.conflicts.empty()) {
+      QStringList lines;
+      for (const std::string& c : merge.conflicts) lines << Id(c);
+      why = tr("these changed both there and here:\n%1").arg(lines.join(QLatin1Char('\n')));
+    }
     if (!interactive_()) {
       show_error_(tr("Cannot save the project"),
-                  tr("%1 was changed by another program since it was opened here; saving would "
-                     "overwrite those changes. Save it under another name, or open it again.")
-                      .arg(document_.path()));
+                  tr("%1 was changed by another program since it was opened here, and its "
+                     "changes cannot be merged with this window's: %2\n\nSaving would overwrite "
+                     "them. Save it under another name, or open it again.")
+                      .arg(document_.path(), why));
       return false;
     }
     const auto answer = QMessageBox::warning(
         window_, tr("Project changed on disk"),
-        tr("%1 was changed by another program (sweepscan-cli?) since it was opened here.\n\n"
-           "Overwrite those changes with the project as it is here?")
-            .arg(file),
+        tr("%1 was changed by another program (sweepscan-cli?) since it was opened here, and its "
+           "changes cannot be merged with this window's: %2\n\n"
+           "Overwrite all its changes with the project as it is here?")
+            .arg(file, why),
         QMessageBox::Save | QMessageBox::Cancel, QMessageBox::Cancel);
     if (answer != QMessageBox::Save) return false;
+    s = document_.Save();
   }
-  const Status s = document_.Save();
   if (!s.ok()) {
     show_error_(tr("Cannot save the project"), QString::fromStdString(s.message()));
     return false;
   }
   AddRecent(QFileInfo(document_.path()).absoluteFilePath());
-  emit message(tr("Saved %1").arg(document_.path()));
+  if (merge.from_file.empty()) {
+    emit message(tr("Saved %1").arg(document_.path()));
+  } else {
+    QStringList ids;
+    for (const std::string& id : merge.from_file) ids << QStringLiteral("'%1'").arg(Id(id));
+    emit message(tr("Saved %1 with another program's changes to %2 (the undo history starts again)")
+                     .arg(document_.path(), ids.join(QStringLiteral(", "))));
+  }
   return true;
 }
 

@@ -4,6 +4,8 @@
 #include <QFile>
 #include <QFileInfo>
 
+#include "core/project/project_merge.h"
+
 namespace sweepscan::ui {
 namespace {
 
@@ -65,6 +67,51 @@ Status ProjectDocument::Save() {
   disk_text_ = saved_json_;
   if (was) emit modifiedChanged(false);
   return s;
+}
+
+Status ProjectDocument::SaveMerging(Merge* merge) {
+  *merge = Merge();
+  if (!ChangedOnDisk()) return Save();
+  const std::string path = path_.toStdString();
+  if (disk_text_.empty()) {
+    merge->refused = "it was not there when the project was made here";
+    return Status::Error(path + ": " + merge->refused);
+  }
+  if (!QFileInfo::exists(path_)) {
+    merge->refused = "it was removed";
+    return Status::Error(path + ": " + merge->refused);
+  }
+  // Both as Open reads them: repaired, as the document was when opened.
+  Project base, file;
+  std::vector<std::string> repairs;
+  Status s = ProjectFromJson(disk_text_, path, &base, &repairs);
+  if (s.ok()) s = ProjectFromJson(FileText(path_), path, &file, &repairs);
+  if (!s.ok()) {
+    merge->refused = "it cannot be read now: " + s.message();
+    return Status::Error(path + ": " + merge->refused);
+  }
+  ProjectMerge m = MergeProjects(base, project_, file);
+  if (!m.conflicts.empty()) {
+    merge->conflicts = std::move(m.conflicts);
+    merge->refused = "sessions changed both there and here";
+    return Status::Error(path + ": " + merge->refused);
+  }
+  s = SaveProject(path, m.merged);
+  if (!s.ok()) return s;
+  merge->from_file = std::move(m.from_file);
+  const bool was = modified();
+  const bool took = ProjectToJson(m.merged) != ProjectToJson(project_);
+  project_ = std::move(m.merged);
+  saved_json_ = ProjectToJson(project_);
+  disk_text_ = saved_json_;
+  if (took) {
+    ++generation_;
+    emit merged();
+    Changed(was);
+  } else if (was) {
+    emit modifiedChanged(false);
+  }
+  return Status::Ok();
 }
 
 Status ProjectDocument::SaveAs(const QString& path) {

@@ -15,6 +15,7 @@
 #include <QString>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/project/project.h"
 
@@ -49,6 +50,23 @@ class ProjectDocument : public QObject {
   const std::vector<std::string>& repairs() const { return repairs_; }
   // Writes the project atomically to its path.
   Status Save();
+  // What SaveMerging did.
+  struct Merge {
+    // Why the file could not be merged ("" if it was, or had not changed):
+    // the sessions changed both there and here (`conflicts`), or it cannot
+    // be read now, or it was never read here (a new project's file).
+    // Nothing was written then.
+    std::string refused;
+    std::vector<std::string> conflicts;  // MergeProjects's "ID: why"
+    std::vector<std::string> from_file;  // the sessions the merge took from the file
+  };
+  // Save(), merged with what another program saved to the file meanwhile
+  // (ChangedOnDisk(); core/project/project_merge.h, against the file as
+  // read or written here), as `sweepscan-cli project align` merges. When
+  // the merge took anything from the file, the document holds the merge and
+  // a new generation begins (merged()): the undo commands hold projects
+  // without the file's changes, and undoing one would drop them.
+  Status SaveMerging(Merge* merge);
   // Writes the project atomically to `path` and makes that its file: every
   // session's folder stored again relative to the new file's folder (the
   // same folders, so no cloud is built again), the name following the
@@ -71,6 +89,7 @@ class ProjectDocument : public QObject {
  signals:
   void opened();   // another project (or none) is open
   void renamed();  // the same project, saved under another file (SaveAs)
+  void merged();   // the project holds another program's changes (SaveMerging)
   void changed();  // the contents changed (after opened(), too)
   void modifiedChanged(bool modified);
 

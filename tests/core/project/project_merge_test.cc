@@ -1,0 +1,153 @@
+// Merging a project edited here with the file another program saved
+// meanwhile (core/project/project_merge.h): what one side changed is kept,
+// what both changed differently is a conflict naming the session, and so
+// are placements that would not hold together in the merge.
+#include "core/project/project_merge.h"
+
+#include <gtest/gtest.h>
+
+namespace sweepscan {
+namespace {
+
+// a the anchor, b placed against a, c unplaced.
+Project Base() {
+  Project p;
+  p.name = "floor";
+  for (const char* path : {"a.sweepscan", "b.sweepscan", "c.sweepscan"})
+    EXPECT_TRUE(p.AddSession(path, nullptr).ok());
+  p.sessions[1].project_from_session = Rigid3d::FromPose(4.0, -3.0, 0.0, 0.0, 0.0, 1.1);
+  p.sessions[1].registration.method = "planes+icp";
+  p.sessions[1].registration.reference = "a";
+  return p;
+}
+
+void PlaceC(Project* p, const std::string& against, const Rigid3d& reference_from_c) {
+  ProjectSession& c = p->sessions[p->Find("c")];
+  c.project_from_session = *p->sessions[p->Find(against)].project_from_session * reference_from_c;
+  c.registration = RegistrationEvidence();
+  c.registration.method = "planes+icp";
+  c.registration.reference = against;
+}
+
+// Session `id` as the file would hold it.
+std::string Saved(const Project& p, const std::string& id) {
+  Project one;
+  one.sessions = {p.sessions[p.Find(id)]};
+  return ProjectToJson(one);
+}
+
+std::vector<std::string> Ids(const Project& p) {
+  std::vector<std::string> ids;
+  for (const ProjectSession& s : p.sessions) ids.push_back(s.id);
+  return ids;
+}
+
+TEST(ProjectMergeTest, KeepsEachSidesOwnChanges) {
+  const Project base = Base();
+  Project here = base, file = base;
+  here.sessions[1].color = "#00ff00";  // b recoloured here
+  here.description = "east wing";
+  ASSERT_TRUE(here.AddSession("d.sweepscan", nullptr).ok());
+  const Rigid3d b_from_c = Rigid3d::FromPose(1.0, 2.0, 0.0, 0.0, 0.0, -0.3);
+  PlaceC(&file, "b", b_from_c);  // the CLI aligned c
+  file.sessions[0].visible = false;
+  const ProjectMerge m = MergeProjects(base, here, file);
+  EXPECT_TRUE(m.conflicts.empty()) << m.conflicts.front();
+  EXPECT_EQ(Ids(m.merged), (std::vector<std::string>{"a", "b", "c", "d"}));
+  EXPECT_EQ(m.merged.description, "east wing");
+  EXPECT_EQ(m.merged.sessions[1].color, "#00ff00");
+  EXPECT_FALSE(m.merged.sessions[0].visible);
+  ASSERT_TRUE(m.merged.sessions[2].project_from_session.has_value());
+  EXPECT_EQ(Saved(m.merged, "c"), Saved(file, "c"));
+  EXPECT_EQ(m.from_file, (std::vector<std::string>{"a", "c"}));
+}
+
+TEST(ProjectMergeTest, TakesRemovalsFromEitherSide) {
+  const Project base = Base();
+  Project here = base, file = base;
+  ASSERT_TRUE(here.RemoveSession("c").ok());
+  ASSERT_TRUE(file.AddSession("d.sweepscan", nullptr).ok());
+  ASSERT_TRUE(file.RemoveSession("b").ok());
+  const ProjectMerge m = MergeProjects(base, here, file);
+  EXPECT_TRUE(m.conflicts.empty());
+  EXPECT_EQ(Ids(m.merged), (std::vector<std::string>{"a", "d"}));
+}
+
+TEST(ProjectMergeTest, TheSameSessionChangedOnBothSidesConflicts) {
+  const Project base = Base();
+  Project here = base, file = base;
+  here.sessions[1].color = "#00ff00";
+  file.sessions[1].color = "#ff0000";
+  here.sessions[2].visible = false;  // changed here only: not a conflict
+  ProjectMerge m = MergeProjects(base, here, file);
+  EXPECT_EQ(m.conflicting, (std::vector<std::string>{"b"}));
+  ASSERT_EQ(m.conflicts.size(), 1u);
+  EXPECT_EQ(m.conflicts[0], "'b': its colour here, its colour in the file");
+  // The same change on both sides is no conflict.
+  file.sessions[1].color = "#00ff00";
+  EXPECT_TRUE(MergeProjects(base, here, file).conflicts.empty());
+  // Removed in the file, edited here.
+  file = base;
+  ASSERT_TRUE(file.RemoveSession("c").ok());
+  m = MergeProjects(base, here, file);
+  EXPECT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
+  EXPECT_EQ(m.conflicts[0], "'c': hidden here, removed in the file");
+}
+
+TEST(ProjectMergeTest, APlacementAgainstAReferenceMovedOnTheOtherSideConflicts) {
+  const Project base = Base();
+  Project here = base, file = base;
+  PlaceC(&file, "b", Rigid3d::FromPose(1.0, 2.0, 0.0, 0.0, 0.0, -0.3));
+  // b placed again here (c untouched here, so it would be taken from the file).
+  here.sessions[1].project_from_session = Rigid3d::FromPose(4.1, -3.0, 0.0, 0.0, 0.0, 1.1);
+  ProjectMerge m = MergeProjects(base, here, file);
+  EXPECT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
+  EXPECT_EQ(m.conflicts[0], "'c': placed against 'b', placed again here");
+  // b removed here instead.
+  here = base;
+  ASSERT_TRUE(here.RemoveSession("b").ok());
+  m = MergeProjects(base, here, file);
+  EXPECT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
+  EXPECT_EQ(m.conflicts[0], "'c': placed against 'b', removed here");
+}
+
+TEST(ProjectMergeTest, APlacementInTheOldFrameConflictsWithAChangeOfAnchor) {
+  const Project base = Base();
+  Project here = base, file = base;
+  ASSERT_TRUE(here.ChangeAnchor("b").ok());
+  // c placed in the file by hand, in a's frame, on no reference.
+  file.sessions[2].project_from_session = Rigid3d::FromPose(8.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+  file.sessions[2].registration.method = "manual";
+  ProjectMerge m = MergeProjects(base, here, file);
+  ASSERT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
+  EXPECT_EQ(m.conflicts[0], "'c': placed in the file while the anchor became 'b' here");
+  // No placement in the file: the change of anchor merges.
+  file = base;
+  file.sessions[2].color = "#123456";
+  m = MergeProjects(base, here, file);
+  EXPECT_TRUE(m.conflicts.empty()) << m.conflicts.front();
+  EXPECT_EQ(m.merged.Anchor(), 1);
+  EXPECT_EQ(m.merged.sessions[2].color, "#123456");
+  EXPECT_EQ(m.merged.sessions[0].registration.reference, "b");
+  // The anchor changed in the file, a placement here.
+  here = base;
+  PlaceC(&here, "a", Rigid3d::FromPose(0.0, 5.0, 0.0, 0.0, 0.0, 0.0));
+  file = base;
+  ASSERT_TRUE(file.ChangeAnchor("b").ok());
+  m = MergeProjects(base, here, file);
+  ASSERT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
+}
+
+TEST(ProjectMergeTest, TheProjectsNameChangedOnBothSidesConflicts) {
+  const Project base = Base();
+  Project here = base, file = base;
+  here.name = "first floor";
+  file.name = "ground floor";
+  const ProjectMerge m = MergeProjects(base, here, file);
+  ASSERT_EQ(m.conflicts.size(), 1u);
+  EXPECT_EQ(m.conflicts[0], "the project's name: changed here and in the file");
+  EXPECT_TRUE(m.conflicting.empty());
+}
+
+}  // namespace
+}  // namespace sweepscan
