@@ -312,6 +312,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // title on a narrow view moves the bar left) and kept clear of plane
   // labels, as is the axes' corner.
   const QRectF& color_bar_box() const { return color_bar_box_; }
+  // How many times the colour bar's texts were measured (its title, a
+  // category's name): a frame with nothing changed measures none.
+  uint64_t color_bar_measures() const { return color_bar_measures_; }
   // The distance tool: a line between two points with its length.
   void SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
   void ClearMeasurement();
@@ -439,6 +442,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
   QRectF LayoutColorBar();   // before each frame; its box in display pixels
   QRectF color_bar_box_;
   vtkSmartPointer<vtkTextActor> text_measure_;  // sizes the bar's texts, never drawn
+  // LayoutColorBar's last result and what it was measured for (the view's
+  // size and DPI, the lookup table, and the bar's, the table's and the two
+  // text properties' modification times: the title, position and
+  // visibility are the bar's own); the same again measures nothing.
+  std::array<uint64_t, 8> color_bar_key_{};
+  QRectF color_bar_layout_;
+  uint64_t color_bar_measures_ = 0;
   size_t plane_count_ = 0;
   bool planes_visible_ = true;
   vtkSmartPointer<vtkActor> measure_line_;

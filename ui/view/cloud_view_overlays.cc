@@ -14,6 +14,7 @@
 #include <vtkPolyData.h>
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
+#include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
 #include <vtkScalarsToColors.h>
@@ -23,6 +24,7 @@
 
 #include <QColor>
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "ui/view/cloud_view.h"
@@ -159,11 +161,28 @@ QRectF CloudView::LayoutColorBar() {
   // labels of a categorical bar (the passes) stand left of it, so on a
   // narrow view the title ran off the right edge: the frame moves left
   // until the title fits.
+  //
+  // Measuring a text costs ~25 us (FreeType) and the layout runs before
+  // every frame, so it is measured again only when what it depends on
+  // changed: the key below, taken after the bar was moved.
   color_bar_box_ = QRectF();
   int* size = renderer_->GetSize();
   if (!color_bar_->GetVisibility() || size[0] <= 0 || size[1] <= 0) return QRectF();
+  vtkScalarsToColors* lut = color_bar_->GetLookupTable();
+  const auto key = [&] {
+    return std::array<uint64_t, 8>{static_cast<uint64_t>(size[0]),
+                                   static_cast<uint64_t>(size[1]),
+                                   static_cast<uint64_t>(renderer_->GetRenderWindow()->GetDPI()),
+                                   reinterpret_cast<uintptr_t>(lut),
+                                   color_bar_->GetMTime(),
+                                   lut != nullptr ? lut->GetMTime() : 0,
+                                   color_bar_->GetTitleTextProperty()->GetMTime(),
+                                   color_bar_->GetAnnotationTextProperty()->GetMTime()};
+  };
+  if (key() == color_bar_key_) return color_bar_layout_;
   if (!text_measure_) text_measure_ = vtkSmartPointer<vtkTextActor>::New();
   auto measure = [&](vtkTextProperty* property, const char* text) {
+    ++color_bar_measures_;
     text_measure_->GetTextProperty()->ShallowCopy(property);
     text_measure_->SetInput(text);
     double extent[2] = {0.0, 0.0};
@@ -181,7 +200,6 @@ QRectF CloudView::LayoutColorBar() {
   const double centre = x + 0.5 * frame_w;
   const double half = 0.5 * std::max(frame_w, title.width());
   QRectF box(centre - half, 0.05 * h, 2.0 * half, 0.45 * h);
-  vtkScalarsToColors* lut = color_bar_->GetLookupTable();
   if (lut != nullptr && lut->GetIndexedLookup() && color_bar_->GetDrawAnnotations()) {
     // The categories' names, left of the swatches with their leaders.
     double widest = 0.0;
@@ -193,7 +211,9 @@ QRectF CloudView::LayoutColorBar() {
     box.setLeft(
         std::min(box.left(), x - widest - 2.0 * margin - color_bar_->GetAnnotationLeaderPadding()));
   }
-  return box.adjusted(-2.0, -2.0, 2.0, 2.0);
+  color_bar_layout_ = box.adjusted(-2.0, -2.0, 2.0, 2.0);
+  color_bar_key_ = key();
+  return color_bar_layout_;
 }
 
 void CloudView::LayoutPlaneLabels() {
