@@ -9,6 +9,9 @@
 // saved meanwhile, and naming the sessions both changed. The event loop is watched
 // while clouds load and registrations run.
 #include <gtest/gtest.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
 
 #include <QAction>
 #include <QApplication>
@@ -342,6 +345,19 @@ TEST_F(ProjectUiTest, SaveMergesWhatAnotherProgramChanged) {
   ASSERT_TRUE(project()->OpenProject(file));
   TurnsWhileBusy(60000);
   project()->SetColor("c", "#00ff00");
+  // Where b's start is drawn: it stays there when the merge moves the frame to it.
+  CloudView* view = window_->view();
+  view->ViewOblique();
+  vtkRenderer* renderer = view->renderWindow()->GetRenderers()->GetFirstRenderer();
+  const auto on_screen = [&](const Eigen::Vector3d& w) {
+    view->RenderNow();
+    renderer->SetWorldPoint(w.x(), w.y(), w.z(), 1.0);
+    renderer->WorldToDisplay();
+    double d[3];
+    renderer->GetDisplayPoint(d);
+    return Eigen::Vector2d(d[0], d[1]);
+  };
+  const Eigen::Vector2d b_start = on_screen(a_from_b.translation());
   const auto run =
       RunCommand(std::string(SWEEPSCAN_CLI) + " project anchor " + file.toStdString() + " b");
   ASSERT_EQ(run.code, 0) << run.out;
@@ -371,6 +387,8 @@ TEST_F(ProjectUiTest, SaveMergesWhatAnotherProgramChanged) {
   Rigid3d drawn;
   ASSERT_TRUE(project()->layer()->drawn_pose("b", &drawn));
   EXPECT_LT(drawn.translation().norm(), 1e-6);  // drawn in the merged frame
+  EXPECT_LT((on_screen(Eigen::Vector3d::Zero()) - b_start).norm(), 1.0)
+      << on_screen(Eigen::Vector3d::Zero()).transpose() << " was " << b_start.transpose();
 }
 
 // The same session changed on both sides (recoloured here, removed by the

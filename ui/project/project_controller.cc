@@ -207,7 +207,18 @@ bool ProjectController::SaveProject() {
   // it was opened here: its changes are merged with this window's, as the
   // CLI's align merges, and only what cannot be merged is asked about.
   ProjectDocument::Merge merge;
+  const Project before = document_.project();
   Status s = document_.SaveMerging(&merge);
+  // The file's change of anchor (`sweepscan-cli project anchor`) moved the
+  // frame under the building: the camera moves with it, as after Make
+  // Anchor here. (A merge holds no placement in the old frame.)
+  const Project& after = document_.project();
+  if (s.ok() && after.Anchor() >= 0 && before.Anchor() >= 0 &&
+      after.sessions[after.Anchor()].id != before.sessions[before.Anchor()].id) {
+    const int i = before.Find(after.sessions[after.Anchor()].id);
+    if (i >= 0 && before.sessions[i].project_from_session)
+      view_->MoveCameraWithFrame(before.sessions[i].project_from_session->inverse());
+  }
   if (!merge.refused.empty()) {
     const QString file = QFileInfo(document_.path()).fileName();
     QString why = Id(merge.refused);
