@@ -357,7 +357,8 @@ void ProjectController::MakeAnchor(const std::string& id) {
   // camera moves with the frame, or the building would seem to jump by the
   // change on screen. A session unplaced until now (nothing else was placed)
   // has no pose in the old frame: the old anchor is not drawn after it.
-  const std::optional<Rigid3d>& was_placed =
+  // A copy: the push replaces the document's project.
+  const std::optional<Rigid3d> was_placed =
       document_.project().sessions[document_.project().Find(id)].project_from_session;
   if (was_placed) {
     CloudView* view = view_;
