@@ -594,6 +594,20 @@ TEST(RobotdShutdownTest, AWedgedMotorPortDoesNotHoldTheStop) {
 }
 
 // No SIGTERM pending for `pid` (one of its threads has taken it).
+// What the motor board's pty heard: at least one command, and every one a zero.
+void ExpectOnlyZeroMotorCommands(int board_master) {
+  std::string heard;
+  ReadAvailable(board_master, &heard);
+  MotorCommandDecoder decoder;
+  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
+  const std::vector<MotorCommand> commands = decoder.TakeRecords();
+  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << heard.size() << " bytes)";
+  for (const MotorCommand& c : commands) {
+    EXPECT_EQ(c.vx_mps, 0.0);
+    EXPECT_EQ(c.wz_radps, 0.0);
+  }
+}
+
 bool SigtermTaken(pid_t pid) {
   QFile status(QStringLiteral("/proc/%1/status").arg(pid));
   if (!status.open(QIODevice::ReadOnly)) return true;
@@ -644,16 +658,7 @@ TEST(RobotdStartupTest, AStopWhileThePortsOpenStopsTheMotorsAndEndsTheStart) {
             std::string::npos)
       << out;
   EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
-  std::string heard;
-  ReadAvailable(board.master, &heard);
-  MotorCommandDecoder decoder;
-  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
-  const std::vector<MotorCommand> commands = decoder.TakeRecords();
-  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << heard.size() << " bytes)";
-  for (const MotorCommand& c : commands) {
-    EXPECT_EQ(c.vx_mps, 0.0);
-    EXPECT_EQ(c.wz_radps, 0.0);
-  }
+  ExpectOnlyZeroMotorCommands(board.master);
 }
 
 // A stop while the second of the three ports opens (the IMU's, held by the
@@ -708,18 +713,10 @@ TEST(RobotdStartupTest, AStopBetweenThePortsOpensStopsTheMotorsAndOpensNoMore) {
             std::string::npos)
       << out;
   EXPECT_EQ(out.find("listening on"), std::string::npos) << out;
-  std::string lidar_heard, heard;
+  std::string lidar_heard;
   ReadAvailable(lidar.master, &lidar_heard);
   EXPECT_EQ(lidar_heard.size(), 0u) << "the lidar's port was opened after the stop";
-  ReadAvailable(board.master, &heard);
-  MotorCommandDecoder decoder;
-  decoder.Feed(std::vector<uint8_t>(heard.begin(), heard.end()), Time());
-  const std::vector<MotorCommand> commands = decoder.TakeRecords();
-  ASSERT_FALSE(commands.empty()) << "nothing reached the board (" << heard.size() << " bytes)";
-  for (const MotorCommand& c : commands) {
-    EXPECT_EQ(c.vx_mps, 0.0);
-    EXPECT_EQ(c.wz_radps, 0.0);
-  }
+  ExpectOnlyZeroMotorCommands(board.master);
 }
 
 }  // namespace
