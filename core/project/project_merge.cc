@@ -38,6 +38,54 @@ bool PlacementChanged(const ProjectSession* was, const ProjectSession* now) {
   return was == nullptr || Placement(*was) != Placement(*now);
 }
 
+// A session's fields in the groups an edit changes together: its folder,
+// its calibration, its placement (the pose and how it was found), shown or
+// hidden, its colour.
+constexpr int kFieldGroups = 5;
+
+void CopyGroup(const ProjectSession& from, int group, ProjectSession* to) {
+  switch (group) {
+    case 0:
+      to->path = from.path;
+      break;
+    case 1:
+      to->calibration = from.calibration;
+      break;
+    case 2:
+      to->project_from_session = from.project_from_session;
+      to->registration = from.registration;
+      break;
+    case 3:
+      to->visible = from.visible;
+      break;
+    default:
+      to->color = from.color;
+  }
+}
+
+// Group `group` of s alone, as the file would hold it.
+std::string SavedGroup(const ProjectSession& s, int group) {
+  ProjectSession only;
+  only.id = s.id;
+  CopyGroup(s, group, &only);
+  return Saved(only);
+}
+
+// A session both sides edited, merged group by group: each group takes the
+// side that changed it (a change of anchor in the file moves every
+// placement, which must not clash with a colour set here). False when
+// both changed one group differently.
+bool MergeFields(const ProjectSession& base, const ProjectSession& here, const ProjectSession& file,
+                 ProjectSession* merged) {
+  *merged = base;
+  for (int g = 0; g < kFieldGroups; ++g) {
+    const std::string b = SavedGroup(base, g), h = SavedGroup(here, g), f = SavedGroup(file, g);
+    if (h != b && f != b && h != f) return false;
+    CopyGroup(h != b ? here : file, g, merged);
+  }
+  return true;
+}
+
 // What one side did to a session, for the conflict's message.
 std::string Change(const ProjectSession* was, const ProjectSession* now) {
   if (was == nullptr) return "added";
@@ -103,6 +151,15 @@ ProjectMerge MergeProjects(const Project& base, const Project& here, const Proje
     const ProjectSession* h = Find(here, id);
     const ProjectSession* f = Find(file, id);
     const bool here_changed = !Same(b, h), file_changed = !Same(b, f);
+    ProjectSession fields;
+    if (here_changed && file_changed && b != nullptr && h != nullptr && f != nullptr &&
+        MergeFields(*b, *h, *f, &fields)) {
+      // Edited on both sides, in different fields.
+      m.from_file.push_back(id);
+      m.merged.sessions.push_back(fields);
+      source[id] = SavedGroup(*h, 2) != SavedGroup(*b, 2) ? &here : &file;  // the placement's
+      continue;
+    }
     const ProjectSession* take = here_changed ? h : f;
     if (here_changed && file_changed && !Same(h, f)) {
       conflict(id, Change(b, h) + " here, " + Change(b, f) + " in the file");

@@ -138,6 +138,40 @@ TEST(ProjectMergeTest, APlacementInTheOldFrameConflictsWithAChangeOfAnchor) {
   ASSERT_EQ(m.conflicting, (std::vector<std::string>{"c"}));
 }
 
+// `sweepscan-cli project anchor b` moves every placement into b's frame;
+// a colour set here on b and a hidden here are other fields of the same
+// sessions, so the merge takes both (it once refused: "its colour here,
+// placed again in the file").
+TEST(ProjectMergeTest, AChangeOfAnchorThereMergesWithOtherFieldsSetHere) {
+  const Project base = Base();
+  Project here = base, file = base;
+  here.sessions[1].color = "#00ff00";
+  here.sessions[0].visible = false;
+  ASSERT_TRUE(file.ChangeAnchor("b").ok());
+  ProjectMerge m = MergeProjects(base, here, file);
+  EXPECT_TRUE(m.conflicts.empty()) << m.conflicts.front();
+  EXPECT_EQ(m.merged.Anchor(), 1);
+  EXPECT_EQ(m.merged.sessions[1].color, "#00ff00");
+  EXPECT_FALSE(m.merged.sessions[0].visible);
+  for (const char* id : {"a", "b"}) {
+    const ProjectSession& merged = m.merged.sessions[m.merged.Find(id)];
+    const ProjectSession& there = file.sessions[file.Find(id)];
+    ASSERT_TRUE(merged.project_from_session.has_value()) << id;
+    EXPECT_TRUE(merged.project_from_session->ToIsometry().isApprox(
+        there.project_from_session->ToIsometry(), 1e-12))
+        << id;
+    EXPECT_EQ(merged.registration.method, there.registration.method) << id;
+    EXPECT_EQ(merged.registration.reference, there.registration.reference) << id;
+  }
+  EXPECT_EQ(m.from_file, (std::vector<std::string>{"a", "b"}));
+  // The same field changed on both sides is still a conflict (and a, in
+  // b's frame in the file, with it: b stays here's, in a's).
+  file.sessions[1].color = "#ff0000";
+  m = MergeProjects(base, here, file);
+  EXPECT_EQ(m.conflicting, (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(m.conflicts[1], "'b': its colour here, placed again (anchor), its colour in the file");
+}
+
 TEST(ProjectMergeTest, TheProjectsNameChangedOnBothSidesConflicts) {
   const Project base = Base();
   Project here = base, file = base;
