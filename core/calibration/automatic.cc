@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/calibration/combine.h"
 #include "core/calibration/internal.h"
 #include "core/calibration/passes.h"
 #include "core/evaluation/plane_scoring.h"
@@ -391,10 +392,12 @@ void ReportFinalStatistics(PlaneProblem* problem, const double* abg, const AutoS
     // (not the robust cost), and the cluster-robust one; report the larger
     // per angle.
     const double s2 = sq_norm / std::max(1, residuals - 3);
-    Eigen::Vector3d iid, clustered;
-    if (problem->AngleSigmas(group_of_row, s2, &iid, &clustered)) {
-      summary->sigma_iid_rad = iid;
-      summary->sigma_rad = iid.cwiseMax(clustered);
+    Eigen::Matrix3d iid, clustered;
+    if (problem->AngleCovariances(group_of_row, s2, &iid, &clustered)) {
+      summary->sigma_iid_rad = iid.diagonal().cwiseMax(0.0).cwiseSqrt();
+      summary->sigma_rad =
+          summary->sigma_iid_rad.cwiseMax(clustered.diagonal().cwiseMax(0.0).cwiseSqrt());
+      summary->covariance_rad2 = WithSigmas(clustered, summary->sigma_rad);
     } else {
       summary->warnings.push_back("covariance could not be computed (rank-deficient Jacobian)");
     }

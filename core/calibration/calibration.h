@@ -8,6 +8,7 @@
 //   automatic.h         the automatic mode (planes seen in both passes)
 //   calibration_file.h  calibration files
 //   workflow.h          picks -> calibration, as the CLI and the app run it
+//   combine.h           two calibrations of one recording made into one
 //   passes.h            the passes of a circle drive
 #ifndef SWEEPSCAN_CORE_CALIBRATION_CALIBRATION_H_
 #define SWEEPSCAN_CORE_CALIBRATION_CALIBRATION_H_
@@ -15,6 +16,7 @@
 #include "core/calibration/automatic.h"
 #include "core/calibration/board_fit.h"
 #include "core/calibration/calibration_file.h"
+#include "core/calibration/combine.h"
 #include "core/calibration/pairs_solver.h"
 #include "core/calibration/passes.h"
 #include "core/calibration/picks.h"

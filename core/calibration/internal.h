@@ -137,10 +137,10 @@ class PlaneProblem {
 
   // Final statistics on the solved problem: the angles' observability ...
   void CheckObservability(const CalibrationOptions& options, CalibrationSummary* summary);
-  // ... and the angles' 1-sigma from one Jacobian: iid, s2 (J'J)^-1, and
+  // ... and the angles' covariance from one Jacobian: iid, s2 (J'J)^-1, and
   // cluster-robust over the rows' groups (pairs_solver.cc).
-  bool AngleSigmas(const std::vector<int>& group_of_row, double s2, Eigen::Vector3d* iid,
-                   Eigen::Vector3d* clustered);
+  bool AngleCovariances(const std::vector<int>& group_of_row, double s2, Eigen::Matrix3d* iid,
+                        Eigen::Matrix3d* clustered);
 
  private:
   struct Impl;

@@ -318,7 +318,10 @@ void ComputeCovariance(ceres::Problem* problem, double* abg, int num_residuals,
   // planes' parameters in the automatic mode, few against thousands of rows).
   const int dof = std::max(1, num_residuals - 3);
   const double s2 = 2.0 * summary->final_cost / dof;
-  for (int i = 0; i < 3; ++i) summary->sigma_rad[i] = std::sqrt(std::max(0.0, c[4 * i] * s2));
+  summary->covariance_rad2 = Eigen::Map<const Eigen::Matrix3d>(c) * s2;
+  for (int i = 0; i < 3; ++i) {
+    summary->sigma_rad[i] = std::sqrt(std::max(0.0, summary->covariance_rad2(i, i)));
+  }
 }
 
 }  // namespace
@@ -421,8 +424,8 @@ void PlaneProblem::CheckObservability(const CalibrationOptions& options,
 // grouped by g. With independent rows it reduces to the familiar
 // (J'J)^-1 s^2; with errors shared inside a group (a pose error lasting a
 // second) it grows accordingly, where the iid formula would not.
-bool PlaneProblem::AngleSigmas(const std::vector<int>& group_of_row, double s2,
-                               Eigen::Vector3d* iid, Eigen::Vector3d* clustered) {
+bool PlaneProblem::AngleCovariances(const std::vector<int>& group_of_row, double s2,
+                                    Eigen::Matrix3d* iid, Eigen::Matrix3d* clustered) {
   ceres::Problem* problem = &impl_->problem;
   ceres::CRSMatrix crs;
   std::vector<double> residuals;
@@ -447,11 +450,8 @@ bool PlaneProblem::AngleSigmas(const std::vector<int>& group_of_row, double s2,
   const double groups = static_cast<double>(score.size());
   if (groups > 1) meat *= groups / (groups - 1.0);
   const Eigen::MatrixXd hinv = h.completeOrthogonalDecomposition().pseudoInverse();
-  const Eigen::MatrixXd cov = hinv * meat * hinv;
-  for (int i = 0; i < 3; ++i) {
-    (*iid)[i] = std::sqrt(std::max(0.0, hinv(i, i) * s2));
-    (*clustered)[i] = std::sqrt(std::max(0.0, cov(i, i)));
-  }
+  *iid = hinv.topLeftCorner<3, 3>() * s2;
+  *clustered = (hinv * meat * hinv).topLeftCorner<3, 3>();
   return iid->allFinite() && clustered->allFinite();
 }
 

@@ -95,6 +95,11 @@ struct CalibrationSummary {
   MountingError angles;
   Eigen::Vector3d sigma_rad =
       Eigen::Vector3d::Constant(-1.0);  // 1-sigma (alpha, beta, gamma); -1: unknown
+  // The angles' covariance (rad^2) as the method measured it, sigma_rad^2 on
+  // its diagonal before the poses' own heading and tilt sigmas join it (the
+  // workflows add those; CombineAngleEstimates needs the correlations:
+  // the board's alpha and beta err together). Zero: unknown.
+  Eigen::Matrix3d covariance_rad2 = Eigen::Matrix3d::Zero();
   double initial_rms_m = 0.0;  // RMS pair distance (pairs) or point-to-plane distance (auto)
   double final_rms_m = 0.0;
   // Automatic mode: the RMS of the normalised residuals r_i / sigma_i at the

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/calibration/board_fit.h"
+#include "core/calibration/combine.h"
 #include "core/calibration/internal.h"
 
 namespace sweepscan {
@@ -295,13 +296,17 @@ Status SolveRefinedCorners(const std::vector<LidarObservation>& pass1,
   const bool joint = options.estimate_range_offsets &&
                      OffsetJacobian(pass1, pass2, geometry, c, options, d, k1, k2, &g);
   Eigen::Matrix<double, 3, 12> m;
-  Eigen::Vector3d corner_sigma = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d corner_cov = Eigen::Matrix3d::Zero();
   if (DiscrepancyToAngles(j, joint ? &g : nullptr, kOffsetPriorWeight, &m)) {
     const Eigen::Matrix3d range_cov = RangeErrorCovariance(p1, p2, geometry, c, options, m, k1, k2);
     summary->sigma_range_rad = range_cov.diagonal().cwiseMax(0.0).cwiseSqrt();
-    corner_sigma = (CornerModelCovariance(m, k1, k2) + range_cov).diagonal().cwiseMax(0.0).cwiseSqrt();
+    corner_cov = CornerModelCovariance(m, k1, k2) + range_cov;
   }
-  summary->sigma_rad = inner.sigma_rad.cwiseMax(corner_sigma);
+  summary->sigma_rad = inner.sigma_rad.cwiseMax(corner_cov.diagonal().cwiseMax(0.0).cwiseSqrt());
+  // The correlations are the corners' (they see every edge point; the
+  // misfit's four pairs only scale them).
+  summary->covariance_rad2 =
+      WithSigmas(corner_cov.isZero() ? inner.covariance_rad2 : corner_cov, summary->sigma_rad);
   summary->rejected_edge_points = static_cast<int>(k1.rejected_edge_points + k2.rejected_edge_points);
   summary->shifted_edge_points = static_cast<int>(k1.shifted_edge_points + k2.shifted_edge_points);
   summary->edge_points = static_cast<int>(k1.edge_points + k2.edge_points);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/calibration/automatic.h"
+#include "core/calibration/combine.h"
 #include "core/calibration/internal.h"
 
 namespace sweepscan {
@@ -36,6 +37,44 @@ Eigen::AlignedBox3d TargetRegionFromPicks(const std::vector<PickPair>& picks,
   return region;
 }
 
+namespace {
+
+// The board's angles and the room's planes' made into one (combine.h), the
+// board's kept in result->board_alone; or, when the two disagree beyond
+// chance, the board's alone with a warning that says so.
+void CombineWithPlanes(const PickCalibrationOptions& options, PickCalibrationResult* result) {
+  CalibrationSummary& summary = result->summary;
+  const CalibrationSummary& planes = result->planes;
+  // The poses' errors, independent between the two for the check (combine.h).
+  const Eigen::Vector3d pose(options.pose_heading_sigma_rad, options.pose_tilt_sigma_rad,
+                             options.pose_tilt_sigma_rad);
+  const Eigen::Matrix3d unmodelled = 2.0 * pose.cwiseAbs2().asDiagonal().toDenseMatrix();
+  const CombinedAngles c = CombineAngleEstimates(
+      summary.angles, summary.covariance_rad2, planes.angles, planes.covariance_rad2, unmodelled);
+  result->planes_chi2 = c.chi2 > 0.0 ? c.chi2 : -1.0;
+  if (!c.combined) {
+    if (c.chi2 > 0.0) {
+      char text[400];
+      std::snprintf(text, sizeof(text),
+                    "the board and the room's planes disagree (chi^2 %.1f over the three angles, "
+                    "above %.1f; planes: alpha %+.2f, beta %+.2f, gamma %+.2f mrad): the board's "
+                    "angles alone are given; check the picks and that the room's surfaces are flat",
+                    c.chi2, kMaxCombineChi2, 1e3 * planes.angles.alpha, 1e3 * planes.angles.beta,
+                    1e3 * planes.angles.gamma);
+      summary.warnings.push_back(text);
+    }
+    return;
+  }
+  result->has_board_alone = true;
+  result->board_alone = summary;
+  summary.method = "refined-corners+planes";
+  summary.angles = c.angles;
+  summary.covariance_rad2 = c.covariance_rad2;
+  summary.sigma_rad = c.sigma_rad;
+}
+
+}  // namespace
+
 Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geometry,
                           const std::vector<PickPair>& picks,
                           const PickCalibrationOptions& options, PickCalibrationResult* result) {
@@ -47,14 +86,17 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
   SampleStore scaled;
   bool use_scaled = false;
   if (options.path_scale_from_planes) {
-    CalibrationSummary planes;
+    CalibrationSummary& planes = result->planes;
     AutoCalibrationOptions auto_options;
     auto_options.solver.progress = options.solver.progress;
+    auto_options.pose_heading_sigma_rad = options.pose_heading_sigma_rad;
+    auto_options.pose_tilt_sigma_rad = options.pose_tilt_sigma_rad;
     const Status a = SolveAutomatic(recorded, geometry, initial, auto_options, &planes);
     if (a.ok()) {
       scaled = recorded.ScaledAbout(planes.path_centre, planes.path_scale);
       use_scaled = true;
       result->path_scale = planes.path_scale;
+      result->has_planes = true;
     } else {
       scale_warning = "the poses' distance scale was not corrected (the room's planes gave none: " +
                       a.message() + ")";
@@ -145,7 +187,10 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
     summary.warnings.push_back(text);
   }
   if (!scale_warning.empty()) summary.warnings.push_back(scale_warning);
-  for (CalibrationSummary* sum : {&summary, &result->baseline}) {
+  if (options.refine && options.combine_with_planes && result->has_planes) {
+    CombineWithPlanes(options, result);
+  }
+  for (CalibrationSummary* sum : {&summary, &result->baseline, &result->board_alone}) {
     if (sum->sigma_rad.minCoeff() < 0.0) continue;  // unknown
     sum->sigma_rad[0] = std::hypot(sum->sigma_rad[0], options.pose_heading_sigma_rad);
     sum->sigma_rad[1] = std::hypot(sum->sigma_rad[1], options.pose_tilt_sigma_rad);
@@ -166,6 +211,11 @@ Status CalibrateFromPicks(const SampleStore& recorded, const RobotGeometry& geom
                           options.solver.board_thickness_m, &result->corners[k])
               .ok();
     }
+  }
+  // Combined: the corners' distance under the combined angles, as the pair
+  // checks below show it (the board's own stays in board_alone).
+  if (result->has_board_alone && result->has_corners) {
+    summary.final_rms_m = CornerRms(result->corners[0], result->corners[1]);
   }
   for (const ObservationPair& pair : resolved) {
     PickCalibrationResult::PairCheck check;

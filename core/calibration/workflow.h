@@ -59,6 +59,14 @@ struct PickCalibrationOptions {
   // without it on drives with +-1 % wheel errors). Costs one automatic
   // solve; skipped, with a warning, if that fails. Off for truth poses.
   bool path_scale_from_planes = false;
+  // refine with path_scale_from_planes: combine the board's angles with the
+  // room's planes' (that automatic solve's) by their covariances
+  // (CombineAngleEstimates, combine.h), unless the two disagree beyond
+  // chance. The board's corners read alpha and beta mostly as one
+  // combination and the planes pin it (docs/calibration.md, "The board and
+  // the room's planes together"). The board's own result stays in
+  // PickCalibrationResult::board_alone.
+  bool combine_with_planes = false;
   // The poses' own heading and tilt errors, added in quadrature to the
   // solve's sigma (alpha; beta and gamma), as in the automatic mode
   // (AutoCalibrationOptions::pose_heading_sigma_rad): four corner pairs
@@ -81,11 +89,22 @@ struct PickCalibrationResult {
     kImplausible,         // solved, but to no mounting error: the picks pair different points
   };
   Failure failure = Failure::kNone;
-  CalibrationSummary summary;  // method "pairs" or "refined-corners"
+  CalibrationSummary summary;  // method "pairs", "refined-corners" or "refined-corners+planes"
   // refine: the raw picks' solve (method "pairs"), when it succeeded.
   bool has_baseline = false;
   CalibrationSummary baseline;
   double path_scale = 1.0;      // applied to the poses (path_scale_from_planes)
+  // path_scale_from_planes: the automatic solve that gave the scale (its
+  // angles and sigma: the room's planes alone), when it succeeded.
+  bool has_planes = false;
+  CalibrationSummary planes;
+  // combine_with_planes: the board's result before combining (the poses'
+  // sigmas added as to `summary`), and the two estimates' disagreement
+  // d^2 (chi^2, 3 dof; -1: not compared). `summary` holds the combination
+  // (method "refined-corners+planes") when d^2 was within the bound.
+  bool has_board_alone = false;
+  CalibrationSummary board_alone;
+  double planes_chi2 = -1.0;
   Eigen::AlignedBox3d region;  // the target region used
   TargetSightings sightings;   // the target's sightings in that region
 
