@@ -15,6 +15,7 @@
 #include "app/cli_recording.h"
 #include "core/calibration/automatic.h"
 #include "core/calibration/calibration_file.h"
+#include "core/calibration/combine.h"
 #include "core/calibration/passes.h"
 #include "core/calibration/picks.h"
 #include "core/calibration/samples.h"
@@ -26,7 +27,7 @@ namespace sweepscan::app {
 
 const char* const kCalibrateUsage =
     "usage: sweepscan-cli calibrate SESSION|--scenario FILE\n"
-    "           (--pairs PAIRS.json [--refine [--board-thickness M]] | --auto)\n"
+    "           (--pairs PAIRS.json [--refine [--board-thickness M] [--board-only]] | --auto)\n"
     "                               [--out CALIB.json] [--pose-source ekf|odometry|truth]\n"
     "                               [--no-smooth] [--json]\n"
     "\n"
@@ -43,6 +44,11 @@ const char* const kCalibrateUsage =
     "                    45 deg and three turns at 0.05 m/s: see docs/calibration.md\n"
     "  --board-thickness M  with --refine: the target board's thickness in metres (default\n"
     "                    0.005; 0 for a sheet): beams that pass an edge can hit its edge face\n"
+    "  --board-only      with --refine: the board's angles alone; by default, on EKF or\n"
+    "                    odometry poses, they are combined with the room's planes' (the\n"
+    "                    automatic mode on the same drive) by their covariances, which pins\n"
+    "                    the alpha + beta the board reads loosely, unless the two disagree\n"
+    "                    beyond chance (then the board's alone, with a warning)\n"
     "  --auto            no picks: planes seen in both passes (floor, ceiling, walls, board);\n"
     "                    refuses a drive that is not a circle, and a result at the angle\n"
     "                    bounds, with collapsed residuals or with residuals far above the\n"
@@ -92,6 +98,11 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
   }
   if (args.Flag("refine") && !args.Has("pairs")) {
     PrintError("--refine needs --pairs FILE");
+    return kExitBadInput;
+  }
+  if (args.Flag("board-only") && !args.Flag("refine")) {
+    PrintError("--board-only needs --refine (only the refined corners are combined with the "
+               "room's planes)");
     return kExitBadInput;
   }
   if (args.Has("board-thickness")) {
@@ -166,9 +177,19 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
 // 72 mrad, in the robustness sweep's drives).
 constexpr double kMaxOdometryDepartureRad = 0.01;
 
+// What a calibration gives beside its result: the raw picks' baseline
+// (--refine) and, when the board was combined with the room's planes, the
+// two it was made of.
+struct Beside {
+  std::unique_ptr<CalibrationSummary> baseline;     // raw picks, with --refine
+  std::unique_ptr<CalibrationSummary> board_alone;  // combined: the board's own
+  std::unique_ptr<CalibrationSummary> planes;       // the room's planes (path scale)
+  double planes_chi2 = -1.0;  // the two's disagreement, chi^2 over 3 angles
+};
+
 int SolveCalibration(const Args& args, const RecordingInput& in, const SampleStore& store,
                      const std::vector<PickPair>& picks, double odometry_departure_rad,
-                     CalibrationSummary* summary, std::unique_ptr<CalibrationSummary>* baseline) {
+                     CalibrationSummary* summary, Beside* beside) {
   // EKF poses take roll and pitch from the IMU: a tilt far noisier than the
   // data sheet bends beta and gamma unseen (workflow.h, CheckImuTiltNoise).
   // Odometry and truth poses do not use the IMU's tilt.
@@ -222,6 +243,7 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
   // The EKF's (or the odometry's) distance scale from the room's planes
   // first (workflow.h); simulated truth needs none.
   options.path_scale_from_planes = args.Get("pose-source", "ekf") != "truth";
+  options.combine_with_planes = options.path_scale_from_planes && !args.Flag("board-only");
   if (args.Get("pose-source", "ekf") == "truth") {
     options.pose_heading_sigma_rad = options.pose_tilt_sigma_rad = 0.0;
   } else if (!SmoothedPoses(args)) {
@@ -247,13 +269,18 @@ int SolveCalibration(const Args& args, const RecordingInput& in, const SampleSto
   }
   *summary = result.summary;
   summary->path_scale = result.path_scale;  // applied to the poses first (1: none)
-  if (result.has_baseline) *baseline = std::make_unique<CalibrationSummary>(result.baseline);
+  if (result.has_baseline) beside->baseline = std::make_unique<CalibrationSummary>(result.baseline);
+  if (result.has_board_alone) {
+    beside->board_alone = std::make_unique<CalibrationSummary>(result.board_alone);
+  }
+  if (result.has_planes) beside->planes = std::make_unique<CalibrationSummary>(result.planes);
+  beside->planes_chi2 = result.planes_chi2;
   return kExitOk;
 }
 
 nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
-                                 const CalibrationSummary& summary,
-                                 const CalibrationSummary* baseline) {
+                                 const CalibrationSummary& summary, const Beside& beside) {
+  const CalibrationSummary* baseline = beside.baseline.get();
   nlohmann::json report;
   report["input"] = in.name;
   report["pose_source"] = args.Get("pose-source", "ekf");
@@ -271,7 +298,7 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
   report["outer_iterations"] = summary.outer_iterations;
   report["lm_iterations"] = summary.trace.size();
   report["condition_number"] = summary.condition_number;
-  if (summary.method == "refined-corners") {
+  if (summary.method.rfind("refined-corners", 0) == 0) {
     report["board_thickness_m"] = summary.board_thickness_m;
     report["edge_points"] = summary.edge_points;
     report["rejected_edge_points"] = summary.rejected_edge_points;
@@ -319,13 +346,31 @@ nlohmann::json CalibrationReport(const Args& args, const RecordingInput& in,
     }
     report["baseline"] = b;
   }
+  // The combination's parts: the board alone and the room's planes alone.
+  for (const auto& [key, part] : {std::make_pair("board_alone", beside.board_alone.get()),
+                                  std::make_pair("room_planes", beside.planes.get())}) {
+    // The planes' angles are shown as a part of the combination only.
+    if (part == nullptr || (key == std::string("room_planes") && !beside.board_alone)) continue;
+    nlohmann::json b;
+    b["method"] = part->method;
+    b["mounting_error_rad"] = AnglesJson(part->angles);
+    b["sigma_rad"] = AnglesJson({part->sigma_rad[0], part->sigma_rad[1], part->sigma_rad[2]});
+    if (in.has_truth) {
+      const MountingError& t = in.scenario.mounting_error;
+      b["error_rad"] = AnglesJson(
+          {part->angles.alpha - t.alpha, part->angles.beta - t.beta, part->angles.gamma - t.gamma});
+    }
+    report[key] = b;
+  }
+  if (beside.planes_chi2 >= 0.0) report["planes_chi2"] = beside.planes_chi2;
   if (args.Has("out")) report["out"] = args.Get("out");
   return report;
 }
 
 void PrintCalibration(const Args& args, const RecordingInput& in,
-                      const CalibrationSummary& summary, const CalibrationSummary* baseline,
+                      const CalibrationSummary& summary, const Beside& beside,
                       const nlohmann::json& report) {
+  const CalibrationSummary* baseline = beside.baseline.get();
   std::cout << summary.FullReport();
   if (in.has_truth) {
     std::printf("  error vs truth:   %+.3f %+.3f %+.3f mrad\n",
@@ -344,13 +389,35 @@ void PrintCalibration(const Args& args, const RecordingInput& in,
     }
     std::printf("\n");
   }
+  for (const auto& [key, name] : {std::make_pair("board_alone", "the board alone:        "),
+                                  std::make_pair("room_planes", "the room's planes alone:")}) {
+    if (!report.contains(key)) continue;
+    const nlohmann::json& part = report[key];
+    std::printf("  %s %+.6f %+.6f %+.6f rad, 1-sigma %.2f %.2f %.2f mrad", name,
+                part["mounting_error_rad"]["alpha"].get<double>(),
+                part["mounting_error_rad"]["beta"].get<double>(),
+                part["mounting_error_rad"]["gamma"].get<double>(),
+                1e3 * part["sigma_rad"]["alpha"].get<double>(),
+                1e3 * part["sigma_rad"]["beta"].get<double>(),
+                1e3 * part["sigma_rad"]["gamma"].get<double>());
+    if (in.has_truth) {
+      std::printf(", error %+.3f %+.3f %+.3f mrad", 1e3 * part["error_rad"]["alpha"].get<double>(),
+                  1e3 * part["error_rad"]["beta"].get<double>(),
+                  1e3 * part["error_rad"]["gamma"].get<double>());
+    }
+    std::printf("\n");
+  }
+  if (report.contains("planes_chi2")) {
+    std::printf("  board vs planes:  chi^2 %.2f over 3 angles (combined up to %.2f)\n",
+                report["planes_chi2"].get<double>(), kMaxCombineChi2);
+  }
   if (args.Has("out")) std::printf("  written:          %s\n", args.Get("out").c_str());
 }
 
 }  // namespace
 
 int RunCalibrate(int argc, char** argv) {
-  Args args({"json", "auto", "refine", "help", "strict", "no-smooth"},
+  Args args({"json", "auto", "refine", "help", "strict", "no-smooth", "board-only"},
             {"scenario", "pairs", "out", "pose-source", "seed", "board-thickness"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
@@ -378,8 +445,8 @@ int RunCalibrate(int argc, char** argv) {
   }
 
   CalibrationSummary summary;
-  std::unique_ptr<CalibrationSummary> baseline;  // raw picks, with --refine
-  code = SolveCalibration(args, in, store, picks, odometry_departure_rad, &summary, &baseline);
+  Beside beside;
+  code = SolveCalibration(args, in, store, picks, odometry_departure_rad, &summary, &beside);
   if (code != kExitOk) return code;
   if (args.Has("out")) {
     const Status w = SaveCalibrationFile(args.Get("out"), summary.angles, &summary);
@@ -388,12 +455,12 @@ int RunCalibrate(int argc, char** argv) {
       return kExitFailure;
     }
   }
-  const nlohmann::json report = CalibrationReport(args, in, summary, baseline.get());
+  const nlohmann::json report = CalibrationReport(args, in, summary, beside);
   if (args.Flag("json")) {
     std::cout << report.dump(2) << "\n";
     return kExitOk;
   }
-  PrintCalibration(args, in, summary, baseline.get(), report);
+  PrintCalibration(args, in, summary, beside, report);
   return kExitOk;
 }
 
