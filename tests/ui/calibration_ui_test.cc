@@ -14,6 +14,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDir>
 #include <QDoubleSpinBox>
@@ -255,10 +256,17 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   QTest::keyClicks(thickness, QStringLiteral("12"));
   EXPECT_DOUBLE_EQ(thickness->value(), 12.0);
   EXPECT_DOUBLE_EQ(QSettings().value(QStringLiteral("calibration/board_thickness_mm")).toDouble(), 12.0);
+  // Combined with the room's planes by default (kept in the settings), for
+  // the refined solve only.
+  auto* combine = panel->findChild<QCheckBox*>(QStringLiteral("combineWithPlanes"));
+  ASSERT_NE(combine, nullptr);
+  EXPECT_TRUE(combine->isChecked());
   panel->SetRefine(false);
   EXPECT_FALSE(thickness->isEnabled());
+  EXPECT_FALSE(combine->isEnabled());
   panel->SetRefine(true);
   EXPECT_TRUE(thickness->isEnabled());
+  EXPECT_TRUE(combine->isEnabled());
   thickness->selectAll();
   QTest::keyClicks(thickness, QStringLiteral("5"));
   panel->Solve();
@@ -297,6 +305,43 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
     EXPECT_LT((r->corners[0].corners[k] - r->corners[1].corners[k]).norm(), 0.01) << k;
     EXPECT_LT((r->corners[0].corners[k] - kDiamondCorners[k]).norm(), 0.03) << k;
   }
+  // The board and the room's planes, each alone, beside their combination
+  // (workflow.h, combine_with_planes), as `sweepscan-cli calibrate --refine`.
+  EXPECT_EQ(r->summary.method, "refined-corners+planes");
+  ASSERT_TRUE(r->has_board_alone && r->has_planes);
+  EXPECT_GE(r->planes_chi2, 0.0);
+  const QString text = panel->result_text();
+  EXPECT_NE(text.indexOf(QStringLiteral("combined with the room's planes (agreement chi² %1")
+                             .arg(r->planes_chi2, 0, 'f', 1)),
+            -1)
+      << text.toStdString();
+  EXPECT_NE(text.indexOf(QStringLiteral("board alone: %1 ± %2")
+                             .arg(r->board_alone.angles.alpha * 1e3, 0, 'f', 2)
+                             .arg(r->board_alone.sigma_rad[0] * 1e3, 0, 'f', 2)),
+            -1)
+      << text.toStdString();
+  EXPECT_NE(text.indexOf(QStringLiteral("planes alone: %1 ± %2")
+                             .arg(r->planes.angles.alpha * 1e3, 0, 'f', 2)
+                             .arg(r->planes.sigma_rad[0] * 1e3, 0, 'f', 2)),
+            -1)
+      << text.toStdString();
+  // Unticked (a click, kept in the settings): the board's angles alone, the
+  // very part shown beside the combination; the rest goes on with it.
+  const CalibrationSummary board_alone = r->board_alone;
+  QTest::mouseClick(combine, Qt::LeftButton, {}, QPoint(8, combine->height() / 2));
+  EXPECT_FALSE(combine->isChecked());
+  EXPECT_FALSE(QSettings().value(QStringLiteral("calibration/combine_with_planes")).toBool());
+  panel->Solve();
+  ASSERT_TRUE(WaitForSolve(panel)) << panel->result_text().toStdString();
+  r = workspace_->calibration_result();
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->summary.method, "refined-corners");
+  EXPECT_FALSE(r->has_board_alone);
+  EXPECT_NEAR(r->summary.angles.alpha, board_alone.angles.alpha, 1e-12);
+  EXPECT_NEAR(r->summary.angles.beta, board_alone.angles.beta, 1e-12);
+  EXPECT_NEAR(r->summary.angles.gamma, board_alone.angles.gamma, 1e-12);
+  EXPECT_EQ(panel->result_text().indexOf(QStringLiteral("board alone")), -1);
+  panel->SetCombineWithPlanes(true);
 
   // After: the session re-assembled under the solved angles, the passes
   // labelled again.

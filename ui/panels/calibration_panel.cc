@@ -25,6 +25,7 @@
 
 #include "core/calibration/calibration_file.h"
 #include "core/common/checked_file.h"
+#include "ui/panels/calibration_result_text.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -378,6 +379,21 @@ QWidget* CalibrationPanel::BuildSolveStep() {
   connect(thickness_, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, [](double mm) {
     QSettings().setValue(QStringLiteral("calibration/board_thickness_mm"), mm);
   });
+  // The board reads alpha + beta loosely; the room's planes, from the same
+  // drive, pin it (docs/calibration.md, "The board and the room's planes
+  // together"). Each part alone is shown beside the result.
+  combine_ = new QCheckBox(tr("Combine with the room's planes"));
+  combine_->setObjectName(QStringLiteral("combineWithPlanes"));
+  combine_->setToolTip(
+      tr("Weigh the board's angles with the automatic mode's on the same drive by their "
+         "uncertainties, unless the two disagree beyond chance. Off: the board's angles alone."));
+  combine_->setChecked(
+      QSettings().value(QStringLiteral("calibration/combine_with_planes"), true).toBool());
+  layout->addWidget(combine_);
+  connect(refine_, &QCheckBox::toggled, combine_, &QWidget::setEnabled);
+  connect(combine_, &QCheckBox::toggled, this, [](bool on) {
+    QSettings().setValue(QStringLiteral("calibration/combine_with_planes"), on);
+  });
   auto* row = new QHBoxLayout;
   solve_ = new QPushButton(tr("Solve"));
   solve_->setToolTip(tr("Levenberg-Marquardt on the picked pairs (Miao et al. Eq. 15-17)"));
@@ -564,6 +580,8 @@ void CalibrationPanel::SetBoardThickness(double metres) { thickness_->setValue(m
 
 double CalibrationPanel::board_thickness() const { return thickness_->value() * 1e-3; }
 
+void CalibrationPanel::SetCombineWithPlanes(bool combine) { combine_->setChecked(combine); }
+
 void CalibrationPanel::Solve() {
   const std::vector<PickPair> p = pairs();
   if (p.size() < 4) {
@@ -571,7 +589,7 @@ void CalibrationPanel::Solve() {
     return;
   }
   StartSolving();
-  workspace_->Calibrate(p, refine_->isChecked(), board_thickness());
+  workspace_->Calibrate(p, refine_->isChecked(), board_thickness(), !combine_->isChecked());
 }
 
 void CalibrationPanel::SolveAutomatic() {
@@ -601,53 +619,7 @@ void CalibrationPanel::ShowResult(bool ok, const QString& message) {
     return;
   }
   const CalibrationSummary& s = r->summary;
-  auto angle = [](double v, double sigma) {
-    return sigma >= 0
-               ? QStringLiteral("%1 ± %2").arg(v * 1e3, 0, 'f', 2).arg(sigma * 1e3, 0, 'f', 2)
-               : QStringLiteral("%1").arg(v * 1e3, 0, 'f', 2);
-  };
-  const bool automatic = s.method == "auto-planes";
-  const QString ghost =
-      automatic ? tr("point-to-plane RMS: %1 mm -> %2 mm, %3 points on %4 planes")
-                      .arg(s.initial_rms_m * 1e3, 0, 'f', 1)
-                      .arg(s.final_rms_m * 1e3, 0, 'f', 2)
-                      .arg(s.residual_blocks)
-                      .arg(s.planes)
-                : tr("the ghost (RMS pair distance): %1 mm -> %2 mm, %3 pairs, %4 sightings")
-                      .arg(s.initial_rms_m * 1e3, 0, 'f', 1)
-                      .arg(s.final_rms_m * 1e3, 0, 'f', 2)
-                      .arg(s.residual_blocks)
-                      .arg(static_cast<int>(r->sightings.windows.size()));
-  QString text = tr("<b>%1</b> (%2)<br>alpha %3 mrad<br>beta %4 mrad<br>gamma %5 mrad<br>%6")
-                     .arg(s.converged ? tr("Converged") : tr("Not converged"))
-                     .arg(QString::fromStdString(s.method))
-                     .arg(angle(s.angles.alpha, s.sigma_rad[0]))
-                     .arg(angle(s.angles.beta, s.sigma_rad[1]))
-                     .arg(angle(s.angles.gamma, s.sigma_rad[2]))
-                     .arg(s.method == "file" ? message.toHtmlEscaped() : ghost);
-  // Workspace::Calibrate and CalibrateAutomatic solve on the EKF's poses
-  // smoothed over the drive (as `sweepscan-cli calibrate`), while the view
-  // shows the forward filter's cloud: say which the angles rest on.
-  if (s.method != "file") text += tr("<br>poses: the EKF's, smoothed over the drive");
-  // Refined picks: how the board's edges held (docs/calibration.md, "Mixed
-  // returns"): lines a sample short or long at an edge (mixed returns) are
-  // kept and their share widens the sigma above; lines further off are
-  // rejected.
-  if (s.rejected_edge_points >= 0) {
-    text += tr("<br>board edges: %1 edge points kept, %2 rejected, %3 a sample off (mixed returns), "
-               "%4 mixed returns recognised beyond the lines")
-                .arg(s.edge_points)
-                .arg(s.rejected_edge_points)
-                .arg(s.shifted_edge_points)
-                .arg(s.mixed_edge_samples);
-  }
-  if (r->has_baseline) {
-    text += tr("<br>raw picks alone (the paper's method): %1 mm -> %2 mm")
-                .arg(r->baseline.initial_rms_m * 1e3, 0, 'f', 1)
-                .arg(r->baseline.final_rms_m * 1e3, 0, 'f', 1);
-  }
-  for (const std::string& w : s.warnings)
-    text += tr("<br>warning: %1").arg(QString::fromStdString(w));
+  const QString text = CalibrationResultText(*r, message);
   result_->setText(text);
   plot_->Set(s.trace);  // the whole solve the figures above are of
   emit solved(s.converged);

@@ -62,6 +62,10 @@ class CalibrationPanel : public QWidget {
   // settings; CalibrationOptions::board_thickness_m).
   void SetBoardThickness(double metres);
   double board_thickness() const;
+  // The refined solve combined with the room's planes (the default, kept
+  // in the settings) or the board's angles alone (workflow.h,
+  // PickCalibrationOptions::combine_with_planes).
+  void SetCombineWithPlanes(bool combine);
   // Step 2: pass A (0), pass B (1) or both (-1) in the view.
   void ShowPass(int pass);
   bool LoadCalibration(const QString& path, QString* error);
@@ -114,6 +118,7 @@ class CalibrationPanel : public QWidget {
   QTableWidget* table_;
   QCheckBox* refine_;
   QDoubleSpinBox* thickness_;
+  QCheckBox* combine_;
   QPushButton* solve_;
   QPushButton* auto_;
   QPushButton* cancel_;

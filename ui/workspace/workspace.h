@@ -218,9 +218,11 @@ class Workspace : public QObject {
   // workflow as `sweepscan-cli calibrate --pairs`): poses by the EKF, the
   // target region from the picks, the pairs solve or, with refine, the
   // refined-corners solve (the board `board_thickness_m` thick) with the
-  // raw picks as baseline. Progress per LM
-  // iteration (calibrationIteration), cancel through CancelJob().
-  void Calibrate(const std::vector<PickPair>& picks, bool refine, double board_thickness_m);
+  // raw picks as baseline, combined with the room's planes unless
+  // `board_only` (PickCalibrationOptions::combine_with_planes). Progress per
+  // LM iteration (calibrationIteration), cancel through CancelJob().
+  void Calibrate(const std::vector<PickPair>& picks, bool refine, double board_thickness_m,
+                 bool board_only = false);
   // The automatic mode (no picks): planes seen in both passes, the same
   // SolveAutomatic as `sweepscan-cli calibrate --auto` with EKF poses. The
   // result arrives like a picks solve (calibrationFinished), with method

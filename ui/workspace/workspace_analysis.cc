@@ -81,7 +81,7 @@ Status CalibrationPoses(const hardware::Recording& recording, ReconstructionResu
 }  // namespace
 
 void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
-                          double board_thickness_m) {
+                          double board_thickness_m, bool board_only) {
   if (opened_ == nullptr) {
     emit calibrationFinished(false, QStringLiteral("Open a calibration drive's session first."));
     return;
@@ -90,7 +90,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
     calibration_waiting_ = true;
     WithOpenedSamples([=] {
       calibration_waiting_ = false;
-      Calibrate(picks, refine, board_thickness_m);
+      Calibrate(picks, refine, board_thickness_m, board_only);
     });
     return;
   }
@@ -99,7 +99,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
   auto error = std::make_shared<QString>();
   RunJob(
       tr("Calibrating"),
-      [this, recording, picks, refine, board_thickness_m, result,
+      [this, recording, picks, refine, board_thickness_m, board_only, result,
        error](std::atomic<bool>* cancel) -> QString {
         // The picks snap to samples under these poses.
         ReconstructionResult poses;
@@ -112,6 +112,7 @@ void Workspace::Calibrate(const std::vector<PickPair>& picks, bool refine,
         o.refine = refine;
         o.solver.board_thickness_m = board_thickness_m;
         o.path_scale_from_planes = true;  // as the CLI on EKF poses (workflow.h)
+        o.combine_with_planes = !board_only;
         o.solver.progress = &progress;
         s = CalibrateFromPicks(store, recording->geometry, picks, o, result.get());
         if (!s.ok()) return *error = QString::fromStdString(s.message());
