@@ -254,6 +254,21 @@ def main():
                 line.append("%s %+.3f (%.3f)" % (n, 1e3 * e, 1e3 * s))
             if rejected is not None:
                 line.append("rejected edge points %s, mixed %s" % (rejected, mixed))
+            # The refined picks combined with the room's planes (calibrate
+            # --refine without --board-only): each part alone too.
+            for part, label in (("board_alone", "board alone"), ("room_planes", "room's planes alone")):
+                if part not in d:
+                    continue
+                key = "%s: %s" % (mode, label)
+                for table in (errors, inside, counted):
+                    table.setdefault(key, [[], [], []] if table is errors else 0)
+                for i, n in enumerate(NAMES):
+                    e = d[part]["mounting_error_rad"][n] - angles[i]
+                    errors[key][i].append(e)
+                    counted[key] += 1
+                    inside[key] += abs(e) <= 3.0 * d[part]["sigma_rad"][n]
+            if "planes_chi2" in d:
+                line.append("board vs planes chi^2 %.2f" % d["planes_chi2"])
             print("seed %3d %-7s error mrad (sigma): %s" % (seed, mode, ", ".join(line)), flush=True)
     if a.csv:
         with open(a.csv, "w") as f:
@@ -264,14 +279,15 @@ def main():
     print()
     print("| mode | drives solved | alpha RMS / max (mrad) | beta RMS / max | gamma RMS / max | inside 3 sigma | refused |")
     print("|---|---|---|---|---|---|---|")
-    for m in modes:
+    for m in errors:
         cells = []
         for i in range(3):
             v = errors[m][i]
             cells.append("%.3f / %.3f" % (1e3 * rms(v), 1e3 * max((abs(x) for x in v), default=float("nan"))))
         share = 100.0 * inside[m] / counted[m] if counted[m] else float("nan")
         print("| %s | %d of %d | %s | %.0f %% (%d of %d) | %d |" % (
-            m, len(errors[m][0]), a.drives, " | ".join(cells), share, inside[m], counted[m], len(refused[m])))
+            m, len(errors[m][0]), a.drives, " | ".join(cells), share, inside[m], counted[m],
+            len(refused.get(m, []))))
     for m in modes:
         for seed, why in refused[m]:
             print("refused: %s seed %d: %s" % (m, seed, why))
