@@ -21,6 +21,7 @@
 
 #include "tests/testing/cli_files.h"
 #include "tests/testing/run_command.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace {
 
@@ -30,7 +31,7 @@ std::string Dir() {
   static const std::string dir = [] {
     const std::string d = ::testing::TempDir() + "/sweepscan_cli_robust_" + std::to_string(::getpid());
     sweepscan::testing::ShellOrFail("rm -rf '" + d + "' && mkdir -p '" + d + "'");
-    return d;
+    return sweepscan::testing::RemoveAtExit(d);
   }();
   return dir;
 }

@@ -12,6 +12,8 @@
 #include <iterator>
 #include <string>
 
+#include "tests/testing/remove_at_exit.h"
+
 namespace sweepscan::testing {
 
 // PATH in the source tree.
@@ -23,7 +25,7 @@ inline std::string SourcePath(const std::string& path) { return std::string(SWEE
 inline std::string ProcessTmp(const std::string& name) {
   static const std::string dir = [] {
     std::string t = ::testing::TempDir() + "/sweepscan_test_XXXXXX";
-    return std::string(mkdtemp(&t[0]));
+    return RemoveAtExit(std::string(mkdtemp(&t[0])));
   }();
   mkdir(dir.c_str(), 0700);
   return dir + "/" + name;

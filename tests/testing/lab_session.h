@@ -14,6 +14,7 @@
 #include "hardware/emulation/simulate_session.h"
 #include "tests/testing/run_command.h"
 #include "tests/testing/worlds.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan::testing {
 
@@ -22,6 +23,7 @@ inline const std::string& LabDriveSession() {
     const std::string d =
         ::testing::TempDir() + "/sweepscan_lab_drive_" + std::to_string(::getpid()) + ".sweepscan";
     ShellOrFail("rm -rf '" + d + "'");
+    RemoveAtExit(d);
     sim::SimConfig config = LabConfig(3);
     config.path = {{0.2, 0.0, 12.0}, {0.0, 0.3, 8.0}, {0.15, 0.1, 10.0}, {0.2, -0.05, 10.0}};
     hardware::SimulateSessionReport report;
@@ -37,7 +39,7 @@ inline const std::string& LabDriveSession() {
 // from the middle of frames.bin: 60 000 bytes of the lab drive are about
 // 1.5 s of records, a gap in every stream.
 inline std::string DamagedCopy(const std::string& session, size_t bytes) {
-  const std::string d = session + ".damaged";
+  const std::string d = RemoveAtExit(session + ".damaged");
   ShellOrFail("rm -rf '" + d + "' && cp -r '" + session + "' '" + d + "'");
   std::fstream f(d + "/frames.bin", std::ios::in | std::ios::out | std::ios::binary);
   f.seekg(0, std::ios::end);

@@ -21,6 +21,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/session/session.h"
 #include "tests/testing/run_command.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan {
 namespace {
@@ -32,7 +33,7 @@ std::string Dir() {
   static const std::string dir = [] {
     const std::string d = ::testing::TempDir() + "/sweepscan_las_" + std::to_string(::getpid());
     EXPECT_EQ(RunCommand("rm -rf '" + d + "' && mkdir -p '" + d + "'").code, 0);
-    return d;
+    return sweepscan::testing::RemoveAtExit(d);
   }();
   return dir;
 }

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/cloud/cloud_io.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan {
 namespace {
@@ -28,7 +29,7 @@ std::string TempDir(const std::string& name) {
   const std::string dir = ::testing::TempDir() + "/checked_file_" + name + "_" +
                           std::to_string(::getpid());
   ::mkdir(dir.c_str(), 0755);
-  return dir;
+  return sweepscan::testing::RemoveAtExit(dir);
 }
 
 bool Exists(const std::string& path) {

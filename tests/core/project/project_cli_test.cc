@@ -20,6 +20,7 @@
 #include "core/geometry/transform.h"
 #include "core/project/project.h"
 #include "tests/testing/run_command.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan {
 namespace {
@@ -29,7 +30,10 @@ using testing::RunCommand;
 
 // One folder a process: ctest runs each test of this file as its own
 // process, two at a time, and each process's suite set-up empties it.
-std::string Dir() { return ::testing::TempDir() + "/sweepscan_project_cli_" + std::to_string(::getpid()); }
+std::string Dir() {
+  return testing::RemoveAtExit(::testing::TempDir() + "/sweepscan_project_cli_" +
+                               std::to_string(::getpid()));
+}
 std::string P(const std::string& name) { return Dir() + "/" + name; }
 CommandRun Cli(const std::string& args) { return RunCommand(std::string(SWEEPSCAN_CLI) + " " + args); }
 

@@ -12,6 +12,7 @@
 
 #include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
+#include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan::hardware {
 namespace {
@@ -181,7 +182,7 @@ TEST(SessionReplaySourceTest, ADamagedSessionGivesTheRecordsOfItsWholeDecode) {
 // ends at its first slice and says why, not after the wheel and IMU records
 // it still holds.
 TEST(SessionReplaySourceTest, AFramesFileGoneBeforeAReplayStartsOverEndsItWithTheReason) {
-  const std::string copy = Session() + ".gone";
+  const std::string copy = testing::RemoveAtExit(Session() + ".gone");
   sweepscan::testing::ShellOrFail("rm -rf '" + copy + "' && cp -r '" + Session() + "' '" + copy +
                                   "'");
   std::unique_ptr<SessionReplaySource> source = Open(copy);
@@ -202,7 +203,7 @@ TEST(SessionReplaySourceTest, AFramesFileGoneBeforeAReplayStartsOverEndsItWithTh
 // hands out the scans before the cut, exactly the whole decode's, then ends
 // and says where; the process lives.
 TEST(SessionReplaySourceTest, AFramesFileCutWhileReadEndsTheReplayWithThePlace) {
-  const std::string copy = Session() + ".cut";
+  const std::string copy = testing::RemoveAtExit(Session() + ".cut");
   sweepscan::testing::ShellOrFail("rm -rf '" + copy + "' && cp -r '" + Session() + "' '" + copy +
                                   "'");
   size_t total_scans = 0;
