@@ -33,6 +33,7 @@
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/cloud_pager.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/image_compare.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -407,23 +408,6 @@ TEST_F(CloudStoreUiTest, APickOnPagedChunksIsTheNearestPointUnderTheCursor) {
   EXPECT_GE(pager.paged_out_chunks(), 2u);
 }
 
-// Pixels that differ by more than a grey level or two in some channel.
-size_t DifferingPixels(const QImage& a, const QImage& b) {
-  const QImage x = a.convertToFormat(QImage::Format_RGB32), y = b.convertToFormat(QImage::Format_RGB32);
-  if (x.size() != y.size()) return static_cast<size_t>(x.width()) * x.height();
-  size_t n = 0;
-  for (int r = 0; r < x.height(); ++r) {
-    const QRgb* p = reinterpret_cast<const QRgb*>(x.constScanLine(r));
-    const QRgb* q = reinterpret_cast<const QRgb*>(y.constScanLine(r));
-    for (int c = 0; c < x.width(); ++c) {
-      const int d = std::max({std::abs(qRed(p[c]) - qRed(q[c])), std::abs(qGreen(p[c]) - qGreen(q[c])),
-                              std::abs(qBlue(p[c]) - qBlue(q[c]))});
-      n += d > 2 ? 1 : 0;
-    }
-  }
-  return n;
-}
-
 TEST_F(CloudStoreUiTest, TheRestLevelIsDrawnInPassesOfTheLodBudgetToTheOneFrameImage) {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
@@ -455,7 +439,7 @@ TEST_F(CloudStoreUiTest, TheRestLevelIsDrawnInPassesOfTheLodBudgetToTheOneFrameI
   EXPECT_GE(drawn + CloudView::kChunkPoints, rest);
   EXPECT_GE(passes, drawn / (budget + CloudView::kChunkPoints));
   const QImage last = view->grabFramebuffer();
-  const size_t before = DifferingPixels(first, whole), after = DifferingPixels(last, whole);
+  const size_t before = testing::DifferingPixels(first, whole), after = testing::DifferingPixels(last, whole);
   std::printf("%zu rest points in %zu passes; pixels unlike the one-frame image: %zu after pass 0, %zu after the last\n",
               drawn, passes, before, after);
   // The same image but for the text's anti-aliased edges (the colour bar's
@@ -518,7 +502,7 @@ TEST_F(CloudStoreUiTest, ASoftwareRendererIsWaitedForEveryPaceOfPointsAndDrawsTh
   std::printf("%zu points a frame, paced every %zu: %zu waits\n", rest, pace, frame_waits);
   EXPECT_GE(frame_waits, rest / (pace + CloudView::kChunkPoints));
   EXPECT_LE(frame_waits, rest / pace + 1);
-  EXPECT_EQ(DifferingPixels(paced, unpaced), 0u);
+  EXPECT_EQ(testing::DifferingPixels(paced, unpaced), 0u);
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {

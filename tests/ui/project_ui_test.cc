@@ -44,6 +44,7 @@
 #include "core/scenario/scenario.h"
 #include "tests/testing/event_loop_turns.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/image_compare.h"
 #include "tests/ui/project_ui_fixture.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
@@ -681,6 +682,76 @@ TEST_F(ProjectLayerPickTest, TheBlockCulledPickIsTheNearestPointUnderTheRay) {
     }
   }
   EXPECT_GT(hits, 300u);
+}
+
+// A project's layers have a motion level within the view's LOD budget, drawn
+// while the camera moves, and join the progressive passes at rest: pass 0
+// draws their motion level, each further pass a piece (65 536 points) or a
+// LOD budget of them, nearest first, to the image of one frame. Before,
+// every frame drew every layer point, in motion too (the office floor's
+// 1.1 M: about 100 ms a frame under llvmpipe).
+class ProjectLayerLodTest : public testing::AppFixture {};
+
+TEST_F(ProjectLayerLodTest, MotionLevelWithinTheLodBudgetAndRestInPassesToTheOneFrameImage) {
+  CloudView* view = window_->view();
+  const size_t budget = 20000;
+  view->SetLodBudget(budget);
+  view->SetRestBudget(1'000'000);
+  auto cloud = std::make_shared<ProjectCloud>();
+  cloud->id = "s";
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int slab = 0; slab < 60; ++slab) {  // a vertical slice every 0.15 m, in scan order
+    for (int k = 0; k < 5000; ++k) {
+      cloud->positions.emplace_back(0.15f * slab + 0.01f * u(rng), 5.0f * u(rng), 2.5f * u(rng));
+    }
+  }
+  for (const Eigen::Vector3f& p : cloud->positions) cloud->bounds.extend(p);
+  const size_t n = cloud->positions.size();
+  Project project;
+  ProjectSession session;
+  session.id = "s";
+  session.project_from_session = Rigid3d();
+  project.sessions.push_back(session);
+  ProjectLayer layer(view);
+  layer.Sync(project, {{"s", cloud}});
+  while (layer.Pump()) {
+  }
+  view->FitToCloud();
+  view->SetLodActive(false);
+  EXPECT_EQ(view->layer_points_drawn(), n);  // Every point at rest (within the rest budget).
+  const QImage whole = view->GrabImage();     // In one frame.
+
+  // In motion: every 15th point (300 000 / 20 000), a subset of the rest.
+  view->SetLodActive(true);
+  EXPECT_LE(view->layer_points_drawn(), budget + n / ProjectLayer::kPiecePoints + 1);
+  EXPECT_GE(view->layer_points_drawn(), budget * 9 / 10);
+  view->SetLodActive(false);
+  EXPECT_EQ(view->layer_points_drawn(), n);
+
+  view->RequestRender();
+  ASSERT_TRUE(view->RenderIfDirty());  // Pass 0: the motion level.
+  ASSERT_TRUE(view->drawing_passes());
+  const QImage first = view->grabFramebuffer();
+  size_t passes = 0, drawn = 0;
+  while (view->drawing_passes() && passes < 100) {
+    ASSERT_TRUE(view->RenderIfDirty());
+    ++passes;
+    EXPECT_LE(view->last_pass_points(), std::max(budget, ProjectLayer::kPiecePoints));
+    drawn += view->last_pass_points();
+  }
+  EXPECT_FALSE(view->RenderIfDirty());
+  EXPECT_EQ(drawn, n);  // Every piece once.
+  EXPECT_EQ(passes, (n + ProjectLayer::kPiecePoints - 1) / ProjectLayer::kPiecePoints);
+  const QImage last = view->grabFramebuffer();
+  const size_t before = testing::DifferingPixels(first, whole);
+  const size_t after = testing::DifferingPixels(last, whole);
+  std::printf("%zu layer points in %zu passes; pixels unlike the one-frame image: %zu after pass 0, "
+              "%zu after the last\n",
+              drawn, passes, before, after);
+  EXPECT_LT(after, static_cast<size_t>(whole.width()) * whole.height() / 200);
+  EXPECT_GT(before, 10 * after + 1000);
+  EXPECT_EQ(view->layer_points_drawn(), n);  // Between passes as at rest.
 }
 
 }  // namespace

@@ -88,18 +88,19 @@ ProjectLayer::Entry ProjectLayer::NewEntry(const ProjectCloudPtr& cloud, size_t 
   const size_t n = cloud->positions.size();
   const size_t share = std::max<size_t>(1, view_->rest_budget() / std::max<size_t>(1, sessions));
   e.stride = std::max<size_t>(1, (n + share - 1) / share);
+  const size_t motion_share = std::max<size_t>(1, view_->lod_budget() / std::max<size_t>(1, sessions));
+  const size_t motion = std::max<size_t>(1, (n + motion_share - 1) / motion_share);
+  e.motion_stride = e.stride * std::max<size_t>(1, (motion + e.stride - 1) / e.stride);
   return e;
 }
 
-void ProjectLayer::AddPiece(Entry* e) {
-  const std::vector<Eigen::Vector3f>& all = e->cloud->positions;
-  const size_t first = e->next;
-  const size_t last = std::min(all.size(), first + kPiecePoints * e->stride);
-  const size_t m = (last - first + e->stride - 1) / e->stride;
-  e->next = last;
+vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::PieceMapper(const Entry& e, size_t first,
+                                                             size_t last, size_t step) const {
+  const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
+  const size_t m = (last - first + step - 1) / step;
   auto xyz = vtkSmartPointer<vtkFloatArray>::New();
   xyz->SetNumberOfComponents(3);
-  if (e->stride == 1) {
+  if (step == 1) {
     // In place: the positions outlive the actor (the entry holds both), and
     // save = 1 tells VTK not to free them.
     xyz->SetArray(const_cast<float*>(all[first].data()), static_cast<vtkIdType>(3 * m), 1);
@@ -107,7 +108,7 @@ void ProjectLayer::AddPiece(Entry* e) {
     xyz->SetNumberOfTuples(static_cast<vtkIdType>(m));
     float* out = xyz->GetPointer(0);
     for (size_t k = 0; k < m; ++k) {
-      const Eigen::Vector3f& p = all[first + k * e->stride];
+      const Eigen::Vector3f& p = all[first + k * step];
       out[3 * k] = p.x();
       out[3 * k + 1] = p.y();
       out[3 * k + 2] = p.z();
@@ -126,7 +127,7 @@ void ProjectLayer::AddPiece(Entry* e) {
   auto slot = vtkSmartPointer<vtkUnsignedCharArray>::New();
   slot->SetName("session");
   slot->SetNumberOfValues(static_cast<vtkIdType>(m));
-  std::fill_n(slot->GetPointer(0), m, static_cast<unsigned char>(e->slot));
+  std::fill_n(slot->GetPointer(0), m, static_cast<unsigned char>(e.slot));
   auto poly = vtkSmartPointer<vtkPolyData>::New();
   poly->SetPoints(points);
   poly->SetVerts(verts);
@@ -138,15 +139,28 @@ void ProjectLayer::AddPiece(Entry* e) {
   mapper->SetScalarModeToUsePointData();
   mapper->SetScalarRange(0, kSlots - 1);
   mapper->ScalarVisibilityOn();
+  return mapper;
+}
+
+void ProjectLayer::AddPiece(Entry* e) {
+  const size_t first = e->next;
+  const size_t last = std::min(e->cloud->positions.size(), first + kPiecePoints * e->stride);
+  e->next = last;
+  vtkSmartPointer<vtkPolyDataMapper> rest = PieceMapper(*e, first, last, e->stride);
+  // The motion level's points are among the drawn ones (first is a
+  // multiple of stride past the session's start, motion_stride of stride),
+  // so the progressive passes draw them again where they already are.
+  vtkSmartPointer<vtkPolyDataMapper> motion =
+      e->motion_stride > e->stride ? PieceMapper(*e, first, last, e->motion_stride) : nullptr;
   auto actor = vtkSmartPointer<vtkActor>::New();
-  actor->SetMapper(mapper);
+  actor->SetMapper(rest);
   actor->GetProperty()->SetRepresentationToPoints();
   actor->PickableOff();
   actor->SetVisibility(e->visible);
   if (e->matrix) actor->SetUserMatrix(e->matrix);
-  view_->AddLayer(actor);
+  view_->AddLayer(actor, motion);
   e->pieces.push_back(actor);
-  e->drawn += m;
+  e->drawn += static_cast<size_t>(rest->GetInput()->GetNumberOfPoints());
 }
 
 bool ProjectLayer::Pump() {

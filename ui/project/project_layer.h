@@ -10,7 +10,10 @@
 // the sessions' colours (the view's scalar path; no colour arrays).
 // Unplaced sessions are not drawn. A session above its share of the rest
 // budget (the view's, divided among the project's sessions) draws every
-// k-th point.
+// k-th point. Each piece also has a motion level, every j-th of its drawn
+// points within the session's share of the view's LOD budget, which the
+// view draws while the camera moves and as the first of its progressive
+// passes at rest (CloudView::AddLayer).
 //
 // Picking: the layer is the view's layer picker. A Shift + click tests
 // every point of the drawn sessions (not only every k-th) through each
@@ -40,6 +43,7 @@
 class vtkActor;
 class vtkLookupTable;
 class vtkMatrix4x4;
+class vtkPolyDataMapper;
 
 namespace sweepscan::ui {
 
@@ -82,6 +86,10 @@ class ProjectLayer {
     ProjectCloudPtr cloud;
     std::vector<vtkSmartPointer<vtkActor>> pieces;  // built so far
     size_t stride = 1;
+    // The motion level's: a multiple of stride (its points among the
+    // drawn ones), every k-th point above the session's share of the view's
+    // LOD budget.
+    size_t motion_stride = 1;
     size_t next = 0;  // the first point of the next piece
     int slot = 0;
     bool visible = true;
@@ -91,6 +99,10 @@ class ProjectLayer {
   };
   Entry NewEntry(const ProjectCloudPtr& cloud, size_t sessions) const;
   void AddPiece(Entry* entry);
+  // The points first, first + step, ... before last, as a vertex cloud of
+  // slot bytes under the shared lookup table.
+  vtkSmartPointer<vtkPolyDataMapper> PieceMapper(const Entry& e, size_t first, size_t last,
+                                                 size_t step) const;
   void Remove(Entry* entry);
   int FreeSlot() const;
 

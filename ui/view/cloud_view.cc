@@ -488,21 +488,38 @@ void CloudView::SetPointSize(double pixels) {
   for (const auto* level : {&motion_batches_, &rest_batches_}) {
     for (const auto& b : *level) b->drawn.actor->GetProperty()->SetPointSize(pixels);
   }
-  for (auto& layer : layers_) layer->GetProperty()->SetPointSize(pixels);
+  for (auto& layer : layers_) layer.actor->GetProperty()->SetPointSize(pixels);
   RequestRender();
 }
 
-void CloudView::AddLayer(vtkActor* actor) {
-  layers_.emplace_back(actor);
+void CloudView::AddLayer(vtkActor* actor, vtkPolyDataMapper* motion) {
+  Layer layer{actor, vtkPolyDataMapper::SafeDownCast(actor->GetMapper()), motion};
   actor->GetProperty()->SetPointSize(point_size_);
-  ApplyClip(static_cast<vtkPolyDataMapper*>(actor->GetMapper()));
+  for (vtkPolyDataMapper* m : {layer.rest.Get(), layer.motion.Get()}) {
+    if (m != nullptr) ApplyClip(m);
+  }
+  if (lod_active_ && motion != nullptr) actor->SetMapper(motion);
+  layers_.push_back(std::move(layer));
   renderer_->AddActor(actor);
   RequestRender();
 }
 
+size_t CloudView::layer_points_drawn() const {
+  size_t n = 0;
+  for (const Layer& l : layers_) {
+    auto* mapper = vtkPolyDataMapper::SafeDownCast(l.actor->GetMapper());
+    if (l.actor->GetVisibility() && mapper != nullptr && mapper->GetInput() != nullptr) {
+      n += static_cast<size_t>(mapper->GetInput()->GetNumberOfPoints());
+    }
+  }
+  return n;
+}
+
 void CloudView::RemoveLayer(vtkActor* actor) {
   renderer_->RemoveActor(actor);
-  layers_.erase(std::remove(layers_.begin(), layers_.end(), actor), layers_.end());
+  layers_.erase(std::remove_if(layers_.begin(), layers_.end(),
+                               [actor](const Layer& l) { return l.actor.Get() == actor; }),
+                layers_.end());
   RequestRender();
 }
 
@@ -555,7 +572,11 @@ void CloudView::SetClipHeight(double z) {
   for (const auto* level : {&motion_batches_, &rest_batches_}) {
     for (const auto& b : *level) ApplyClip(b->drawn.mapper);
   }
-  for (auto& layer : layers_) ApplyClip(static_cast<vtkPolyDataMapper*>(layer->GetMapper()));
+  for (auto& layer : layers_) {
+    for (vtkPolyDataMapper* m : {layer.rest.Get(), layer.motion.Get()}) {
+      if (m != nullptr) ApplyClip(m);
+    }
+  }
   // The planes too: a hidden ceiling must not tint the view from above.
   ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
   SetPlanesVisible(planes_visible_);  // Labels of hidden planes go with them.

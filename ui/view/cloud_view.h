@@ -323,8 +323,15 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Point actors drawn with the cloud and owned by someone else: the clip
   // (Hide Ceiling) and the point size apply to them, FitToCloud and
   // FindCeiling take their visible points in (through each actor's
-  // matrix). Picked through the layer picker; not under the point budgets.
-  void AddLayer(vtkActor* actor);
+  // matrix). Picked through the layer picker. Their owner keeps them within
+  // the rest budget; `motion`, a mapper of a subset of the actor's points
+  // (its owner's share of the LOD budget), is drawn in its place while the
+  // motion level is, and the layers join the progressive passes at rest
+  // like the rest batches (cloud_view_progressive.cc).
+  void AddLayer(vtkActor* actor, vtkPolyDataMapper* motion = nullptr);
+  // The visible layers' points a frame draws now (their motion mappers'
+  // while the motion level is up).
+  size_t layer_points_drawn() const;
   void RemoveLayer(vtkActor* actor);
 
   // ---- Rendering ----
@@ -345,6 +352,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
  protected:
   void mousePressEvent(QMouseEvent* event) override;
+  // A new size is drawn at the motion level, and at rest again once the
+  // size has been still kSettleMs (cloud_view_progressive.cc).
+  void resizeEvent(QResizeEvent* event) override;
 
  private:
   struct Chunk;
@@ -399,9 +409,17 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void MergeCensus();            // New sealed chunks' census cubes into the cloud's.
   bool RefineSlice(int max_ms);  // True when the queue is empty.
   // Progressive rest passes (cloud_view_progressive.cc).
+  // A project's session piece (AddLayer): its actor, its own (rest) mapper
+  // and its motion mapper (null: none, drawn whole at both levels).
+  struct Layer {
+    vtkSmartPointer<vtkActor> actor;
+    vtkSmartPointer<vtkPolyDataMapper> rest, motion;
+  };
   struct Progress {
     bool active = false;
-    std::vector<Batch*> order;  // The rest batches to draw, nearest first.
+    // The rest batches' and layers' actors to draw, nearest first, with
+    // their points.
+    std::vector<std::pair<vtkActor*, size_t>> order;
     size_t next = 0;            // The next pass's first batch in `order`.
     size_t last_points = 0;
     uint64_t drawn = 0;
@@ -469,7 +487,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<uint64_t> cube_keys_;
   std::vector<uint32_t> cube_counts_;
   std::vector<std::unique_ptr<Batch>> motion_batches_, rest_batches_;
-  std::vector<vtkSmartPointer<vtkActor>> layers_;
+  std::vector<Layer> layers_;
 
   ColorMode color_mode_ = ColorMode::kHeight;
   double point_size_ = 2.0;

@@ -391,6 +391,11 @@ void CloudView::ShowLevels() {
   // rest level (each chunk's where it has one, cloud_view_batches.cc).
   for (const auto& b : motion_batches_) b->drawn.actor->SetVisibility(lod_active_);
   for (const auto& b : rest_batches_) b->drawn.actor->SetVisibility(!lod_active_);
+  // A project's layers: their motion mapper in place of their own (both
+  // keep their buffers, so a switch uploads nothing).
+  for (const Layer& l : layers_) {
+    if (l.motion) l.actor->SetMapper(lod_active_ ? l.motion.Get() : l.rest.Get());
+  }
 }
 
 namespace {

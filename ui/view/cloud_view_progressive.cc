@@ -25,14 +25,22 @@
 //   bar, drawn in pass 0 too) and the other renderers (the axes marker).
 // The depth range is the whole scene's, set before pass 0 and kept.
 //
-// Between passes every prop is as it was: a frame someone else renders (a
-// resize's repaint, the interactor as the camera starts to move) draws the
+// Between passes every prop is as it was: a frame someone else renders (the
+// interactor as the camera starts to move, an exposure's repaint) draws the
 // whole scene. Anything that asks for a new frame starts again at pass 0;
-// the camera starting to move cancels the passes (SetLodActive).
+// the camera starting to move cancels the passes (SetLodActive). A resize
+// is drawn at the motion level (resizeEvent): Qt repaints a resized view at
+// once, outside the passes, and with the rest level up that was one frame
+// of the whole rest level (91-260 ms of the GUI thread for the office
+// floor's 1.1 M points each time the floor-plan dock opened, 0.35-0.46 s
+// for a million points above).
+#include <vtkActor.h>
 #include <vtkActor2D.h>
 #include <vtkCamera.h>
 #include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkMapper.h>
 #include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
 #include <vtkProp.h>
 #include <vtkPropCollection.h>
 #include <vtkRenderer.h>
@@ -42,6 +50,8 @@
 #include <malloc.h>
 
 #include <QElapsedTimer>
+#include <QResizeEvent>
+#include <QTimer>
 #include <algorithm>
 #include <set>
 #include <utility>
@@ -53,7 +63,8 @@
 namespace sweepscan::ui {
 namespace {
 
-// Props hidden or shown for one pass, put back as they were when it ends.
+// Props hidden or shown, and actors' mappers swapped, for one pass, put
+// back as they were when it ends.
 class PassScope {
  public:
   PassScope() = default;
@@ -61,15 +72,22 @@ class PassScope {
   PassScope& operator=(const PassScope&) = delete;
   ~PassScope() {
     for (auto it = saved_.rbegin(); it != saved_.rend(); ++it) it->first->SetVisibility(it->second);
+    for (auto it = mappers_.rbegin(); it != mappers_.rend(); ++it) it->first->SetMapper(it->second);
   }
   void Set(vtkProp* prop, bool visible) {
     if (static_cast<bool>(prop->GetVisibility()) == visible) return;
     saved_.emplace_back(prop, prop->GetVisibility());
     prop->SetVisibility(visible);
   }
+  void SetMapper(vtkActor* actor, vtkMapper* mapper) {
+    if (actor->GetMapper() == mapper) return;
+    mappers_.emplace_back(actor, actor->GetMapper());
+    actor->SetMapper(mapper);
+  }
 
  private:
   std::vector<std::pair<vtkProp*, vtkTypeBool>> saved_;
+  std::vector<std::pair<vtkActor*, vtkSmartPointer<vtkMapper>>> mappers_;
 };
 
 std::vector<vtkProp*> VisibleProps(vtkRenderer* renderer) {
@@ -85,11 +103,25 @@ std::vector<vtkProp*> VisibleProps(vtkRenderer* renderer) {
 
 }  // namespace
 
+void CloudView::resizeEvent(QResizeEvent* event) {
+  // Switched before Qt's repaint of the new size (QOpenGLWidget's resize
+  // paints at once), back to rest by the settle timer, as after the camera
+  // stops: PlanRest for the new aspect, then the passes.
+  if (WantPasses()) {
+    SetLodActive(true);
+    settle_->start();
+  }
+  QVTKOpenGLNativeWidget::resizeEvent(event);
+}
+
 bool CloudView::WantPasses() {
   if (lod_active_ || !renderer_known_) return false;
   SyncBatches();
   size_t points = 0;
   for (const auto& b : rest_batches_) points += b->points();
+  for (const Layer& l : layers_) {
+    if (l.motion && l.actor->GetVisibility()) points += l.rest->GetInput()->GetNumberOfPoints();
+  }
   return points > lod_budget_;
 }
 
@@ -103,21 +135,30 @@ void CloudView::StartPasses() {
   // The rest batches nearest the eye first (their boxes' distance).
   double eye[3];
   renderer_->GetActiveCamera()->GetPosition(eye);
-  std::vector<std::pair<double, Batch*>> by_distance;
-  for (const auto& b : rest_batches_) {
-    if (b->points() == 0) continue;
-    const double* box = b->drawn.poly->GetBounds();
+  // The layers' pieces (a project's sessions) with them, by their boxes in
+  // the project's frame (the actors' bounds, through their matrices).
+  std::vector<std::pair<double, std::pair<vtkActor*, size_t>>> by_distance;
+  auto add = [&](vtkActor* actor, const double* box, size_t points) {
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) {
       const double q = std::clamp(eye[k], box[2 * k], box[2 * k + 1]);
       d2 += (eye[k] - q) * (eye[k] - q);
     }
-    by_distance.emplace_back(d2, b.get());
+    by_distance.push_back({d2, {actor, points}});
+  };
+  for (const auto& b : rest_batches_) {
+    if (b->points() > 0) add(b->drawn.actor, b->drawn.poly->GetBounds(), b->points());
+  }
+  for (const Layer& l : layers_) {
+    const vtkIdType n = l.rest->GetInput()->GetNumberOfPoints();
+    if (l.motion && l.actor->GetVisibility() && n > 0) {
+      add(l.actor, l.actor->GetBounds(), static_cast<size_t>(n));
+    }
   }
   std::stable_sort(by_distance.begin(), by_distance.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   progress_.order.clear();
-  for (const auto& [d2, b] : by_distance) progress_.order.push_back(b);
+  for (const auto& [d2, item] : by_distance) progress_.order.push_back(item);
   progress_.next = 0;
   progress_.last_points = 0;
   ++progress_.drawn;
@@ -134,6 +175,10 @@ void CloudView::StartPasses() {
       scope.Set(b->drawn.actor, true);
       batch_actors.insert(b->drawn.actor);
     }
+    for (const Layer& l : layers_) {
+      if (l.motion) scope.SetMapper(l.actor, l.motion);
+      batch_actors.insert(l.actor);
+    }
     for (vtkProp* p : VisibleProps(renderer_)) {
       if (batch_actors.count(p) == 0 && vtkActor2D::SafeDownCast(p) == nullptr &&
           p->HasTranslucentPolygonalGeometry()) {
@@ -148,10 +193,10 @@ void CloudView::StartPasses() {
 void CloudView::NextPass() {
   QElapsedTimer clock;
   clock.start();
-  const std::vector<Batch*>& order = progress_.order;
+  const std::vector<std::pair<vtkActor*, size_t>>& order = progress_.order;
   size_t end = progress_.next, points = 0;
   while (end < order.size()) {
-    const size_t n = order[end]->points();
+    const size_t n = order[end].second;
     if (end > progress_.next && points + n > lod_budget_) break;
     points += n;
     ++end;
@@ -160,10 +205,11 @@ void CloudView::NextPass() {
   {
     PassScope scope;
     std::set<vtkProp*> pass, batch_actors;
-    for (size_t i = progress_.next; i < end; ++i) pass.insert(order[i]->drawn.actor);
+    for (size_t i = progress_.next; i < end; ++i) pass.insert(order[i].first);
     for (const auto* level : {&motion_batches_, &rest_batches_}) {
       for (const auto& b : *level) batch_actors.insert(b->drawn.actor);
     }
+    for (const Layer& l : layers_) batch_actors.insert(l.actor);
     for (vtkProp* p : VisibleProps(renderer_)) {
       if (pass.count(p) != 0) continue;
       const bool overlay = batch_actors.count(p) == 0 &&

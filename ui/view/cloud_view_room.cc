@@ -31,9 +31,9 @@ double CloudView::FindCeiling() const {
   // Layers (a project's sessions): about 200 000 heights in all, through
   // each actor's matrix (its third row gives z).
   for (const auto& layer : layers_) {
-    auto* poly = vtkPolyData::SafeDownCast(layer->GetMapper()->GetInput());
-    if (!layer->GetVisibility() || poly == nullptr || poly->GetNumberOfPoints() == 0) continue;
-    vtkMatrix4x4* m = layer->GetMatrix();
+    auto* poly = layer.rest ? vtkPolyData::SafeDownCast(layer.rest->GetInput()) : nullptr;
+    if (!layer.actor->GetVisibility() || poly == nullptr || poly->GetNumberOfPoints() == 0) continue;
+    vtkMatrix4x4* m = layer.actor->GetMatrix();
     const vtkIdType n = poly->GetNumberOfPoints();
     const vtkIdType step = std::max<vtkIdType>(1, n * static_cast<vtkIdType>(layers_.size()) / 200'000);
     for (vtkIdType k = 0; k < n; k += step) {
