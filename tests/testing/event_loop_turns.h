@@ -18,6 +18,8 @@
 #include <ctime>
 #include <functional>
 
+#include "tests/testing/qt_wait.h"
+
 namespace sweepscan::testing {
 
 struct EventLoopTurns {
@@ -40,9 +42,10 @@ inline EventLoopTurns MeasureTurnsUntil(const std::function<bool()>& done, int t
   QElapsedTimer clock, gap;
   clock.start();
   gap.start();
+  EventLoopTurner loop;
   while (!done() && clock.elapsed() < timeout_ms) {
     const double cpu0 = ThisThreadCpuMs();
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+    loop.Turn();
     t.worst_turn_cpu_ms = std::max(t.worst_turn_cpu_ms, ThisThreadCpuMs() - cpu0);
     t.worst_gap_ms = std::max(t.worst_gap_ms, gap.restart());
     ++t.turns;

@@ -7,6 +7,7 @@
 
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <QApplication>
 #include <QCoreApplication>
@@ -20,6 +21,7 @@
 #include <functional>
 #include <memory>
 
+#include "tests/testing/qt_wait.h"
 #include "tests/testing/run_command.h"
 #include "ui/main_window.h"
 #include "ui/panels/connection_panel.h"
@@ -40,18 +42,6 @@ inline void RecordOfficeFloorSessions(const std::string& dir) {
   }
   const auto run = RunCommand(cmd + "wait");
   ASSERT_EQ(run.code, 0) << run.out;
-}
-
-// Runs the event loop until `done` or the timeout; false on the timeout.
-inline bool WaitFor(const std::function<bool()>& done, int timeout_ms) {
-  QElapsedTimer clock;
-  clock.start();
-  while (!done()) {
-    if (clock.elapsed() > timeout_ms) return false;
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-    QThread::msleep(2);
-  }
-  return true;
 }
 
 class AppFixture : public ::testing::Test {
@@ -127,9 +117,18 @@ class OfficeFloorAppFixture : public AppFixture {
 
 // The UI tests' main(): listing the tests (CTest's discovery) needs no
 // display; running them does (xvfb-run in CI).
+//
+// Each test runs in a session of its own, as an app started from a desktop
+// does. Linux's scheduler shares the CPU fairly between sessions
+// (autogroups) and by nice value within one. The app's background jobs run
+// at nice 10 behind its GUI thread (ui/workspace/background_priority.h);
+// under `ctest -j2` every test shares ctest's session, so the other test's
+// GUI thread and renderer at nice 0 starved them: a floor plan that takes
+// 1-2 s alone took 30-57 s beside CloudStoreUiTest, near its 60 s wait.
 inline int RunUiTests(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
+  (void)setsid();  // Fails only for a process group leader, which has its own already.
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   std::setlocale(LC_NUMERIC, "C");  // As the app does (app/gui_main.cc).
