@@ -641,6 +641,12 @@ void CloudView::MoveCameraWithFrame(const Rigid3d& new_from_old) {
   camera->GetPosition(position.data());
   camera->GetFocalPoint(focal.data());
   camera->GetViewUp(up.data());
+  // The ceiling clip is a height in the frame: it moves with it, kept level
+  // and exact under the focal point (the new frame's tilt against the old
+  // is the two start poses' few mrad: a few cm across a room).
+  if (!std::isnan(clip_height_)) {
+    SetClipHeight((new_from_old * Eigen::Vector3d(focal.x(), focal.y(), clip_height_)).z());
+  }
   position = new_from_old * position;
   focal = new_from_old * focal;
   up = new_from_old.rotation() * up;

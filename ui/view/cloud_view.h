@@ -236,8 +236,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position);
   // Moves the camera rigidly by `new_from_old` (its position, focal point
   // and view-up) as the points it looks at are re-expressed in another
-  // frame (a project's change of anchor): what was on screen stays there.
-  // Not a placement: camera_generation() is unchanged.
+  // frame (a project's change of anchor): what was on screen stays there,
+  // the ceiling clip with it. Not a placement: camera_generation() is
+  // unchanged.
   void MoveCameraWithFrame(const Rigid3d& new_from_old);
   // Counts the camera placements (View menu, LookAt, Orbit, the mouse);
   // FitToCloud keeps the direction and does not count.
