@@ -19,7 +19,6 @@
 #include <QElapsedTimer>
 #include <QFile>
 #include <QFileInfo>
-#include <QMouseEvent>
 #include <QScreen>
 #include <QSettings>
 #include <QSurfaceFormat>
@@ -35,8 +34,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "app/gui_figures.h"
 #include "app/gui_options.h"
 #include "app/gui_tour.h"
+#include "app/orbit_benchmark.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/cloud_pager.h"
 #include "core/io/ros/ros_bag.h"
@@ -93,45 +94,6 @@ void OpenPathGiven(const QString& path, MainWindow* window) {
   }
 }
 
-// A field of /proc/self/status in MiB: VmRSS (resident now), VmHWM (peak).
-double StatusMiB(const char* field) {
-  QFile f(QStringLiteral("/proc/self/status"));
-  if (!f.open(QIODevice::ReadOnly)) return 0.0;
-  const QByteArray key = QByteArray(field) + ':';
-  for (const QByteArray& line : f.readAll().split('\n')) {
-    if (line.startsWith(key)) {
-      return line.mid(key.size()).trimmed().split(' ')[0].toDouble() / 1024.0;
-    }
-  }
-  return 0.0;
-}
-double ResidentMiB() { return StatusMiB("VmRSS"); }
-
-// Where the memory is: the cloud store's resident payloads, the points in
-// VTK's arrays (both levels), the C++ heap in use and free (kept by malloc
-// for reuse), the resident set's anonymous and file-backed parts (the
-// libraries, mapped files), and how often the view waited for the driver
-// (--draw-pace).
-nlohmann::json MemoryBreakdown(MainWindow* window) {
-  const struct mallinfo2 heap = mallinfo2();
-  return {{"store_mib", CloudPager::Default().resident_bytes() / 1048576.0},
-          {"store_unpacked_mib", CloudPager::Default().unpacked_bytes() / 1048576.0},
-          {"store_paged_out_chunks", CloudPager::Default().paged_out_chunks()},
-          {"vtk_points", window->view()->vtk_point_count()},
-          {"heap_in_use_mib", (heap.uordblks + heap.hblkhd) / 1048576.0},
-          {"heap_free_mib", heap.fordblks / 1048576.0},
-          {"rss_anon_mib", StatusMiB("RssAnon")},
-          {"rss_file_mib", StatusMiB("RssFile")},
-          {"peak_rss_mib", StatusMiB("VmHWM")},
-          {"draw_waits", window->view()->draw_waits()}};
-}
-
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1) + 0.5))];
-}
-
 // --drive-demo: record and drive the scenario's path once the link is up.
 bool StartDriveDemo(const Options& o, Workspace* workspace, MainWindow* window) {
   sim::SimConfig config;
@@ -150,184 +112,6 @@ bool StartDriveDemo(const Options& o, Workspace* workspace, MainWindow* window) 
                      workspace->StartScriptedDrive(config.path);
                    });
   return true;
-}
-
-// --orbit-benchmark N: time to open and show the session, then frames per
-// second while the camera orbits at the rest level planned for the first
-// camera ("fps_full": every point when the cloud is within the rest budget)
-// and at the motion level ("fps_lod"), the time back to the rest level for
-// the last camera, picks, and where the memory is.
-void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
-  auto clock = std::make_shared<QElapsedTimer>();
-  clock->start();
-  QObject::connect(workspace, &Workspace::replayFinished, window, [=] {
-   // After the other slots of replayFinished and what the workspace does
-   // after them (it lets go of a large session's samples).
-   QTimer::singleShot(0, window, [=] {
-    // Let the GUI tick take the last batches before timing the first frame.
-    const size_t expected = workspace->CloudSize();
-    QElapsedTimer wait;
-    wait.start();
-    while (window->view()->point_count() < expected && wait.elapsed() < 120000) {
-      QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
-    }
-    window->view()->SetLodActive(false);
-    window->view()->FitToCloud();
-    window->view()->RenderNow();
-    const double open_s = clock->nsecsElapsed() * 1e-9;
-    // A frame's two halves: VTK's render into the widget's framebuffer, and
-    // the events after it, where Qt paints the widget and presents it.
-    double render_ms = 0.0, present_ms = 0.0;
-    auto fps = [&](bool lod) {
-      window->view()->SetLodActive(lod);
-      QElapsedTimer t, part;
-      t.start();
-      render_ms = present_ms = 0.0;
-      for (int i = 0; i < frames; ++i) {
-        window->view()->Orbit(360.0 / frames);
-        part.start();
-        window->view()->RenderNow();
-        render_ms += part.nsecsElapsed() * 1e-6 / frames;
-        part.start();
-        QCoreApplication::processEvents();
-        present_ms += part.nsecsElapsed() * 1e-6 / frames;
-      }
-      return frames / (t.nsecsElapsed() * 1e-9);
-    };
-    const double full = fps(false);
-    const double lod = fps(true);
-    const double lod_render_ms = render_ms, lod_present_ms = present_ms;
-    const int lod_level = window->view()->lod_level();
-    const size_t lod_points = window->view()->motion_point_count();
-    // Back at rest: the rest level planned and built for the new camera.
-    QElapsedTimer rest_clock;
-    rest_clock.start();
-    window->view()->SetLodActive(false);
-    window->view()->RenderNow();
-    const double rest_s = rest_clock.nsecsElapsed() * 1e-9;
-    const size_t rest_points = window->view()->DrawnPoints().size();
-    // The same rest level in one frame, and in progressive passes as the
-    // GUI's timer draws them: the passes (pass 0 included) and the
-    // event-loop turns that drew (a pass, or Qt's paint of the widget).
-    QElapsedTimer frame_clock;
-    frame_clock.start();
-    window->view()->RenderNow();
-    QCoreApplication::processEvents();
-    const double rest_frame_ms = frame_clock.nsecsElapsed() * 1e-6;
-    std::vector<double> pass_ms;
-    QElapsedTimer passes_clock;
-    passes_clock.start();
-    const uint64_t passes_before = window->view()->passes_drawn();
-    window->view()->RequestRender();
-    do {
-      const uint64_t frames = window->view()->frames_rendered();
-      QElapsedTimer turn;
-      turn.start();
-      QCoreApplication::processEvents();
-      if (window->view()->frames_rendered() != frames) pass_ms.push_back(turn.nsecsElapsed() * 1e-6);
-    } while (window->view()->drawing_passes() || pass_ms.empty());
-    const double passes_s = passes_clock.nsecsElapsed() * 1e-9;
-    // The picking layer: 25 picks over a 5 x 5 grid of the view.
-    QElapsedTimer pick_clock;
-    pick_clock.start();
-    int hits = 0;
-    std::vector<double> each_pick_ms;
-    const uint64_t page_ins_before = CloudPager::Default().page_ins();
-    for (int i = 0; i < 25; ++i) {
-      const QPoint at(window->view()->width() * (1 + i % 5) / 6,
-                      window->view()->height() * (1 + i / 5) / 6);
-      Eigen::Vector3d world;
-      QElapsedTimer one;
-      one.start();
-      hits += window->view()->PickPoint(at, &world) ? 1 : 0;
-      each_pick_ms.push_back(one.nsecsElapsed() * 1e-6);
-    }
-    const double pick_ms = pick_clock.nsecsElapsed() * 1e-6 / 25;
-    const uint64_t pick_page_ins = CloudPager::Default().page_ins() - page_ins_before;
-    // From a Shift + click (the mouse event) to the frame that shows the
-    // pick's marker: picking, the calibration panel's pair list, the frame.
-    std::vector<double> click_ms;
-    for (int i = 0; i < 10; ++i) {
-      const QPoint at(window->view()->width() * (2 + i % 3) / 6,
-                      window->view()->height() * (2 + i / 3 % 3) / 6);
-      const size_t before = window->calibration_panel()->pair_points().size();
-      QElapsedTimer click;
-      click.start();
-      QMouseEvent press(QEvent::MouseButtonPress, at, Qt::LeftButton, Qt::LeftButton,
-                        Qt::ShiftModifier);
-      QCoreApplication::sendEvent(window->view(), &press);
-      window->view()->RenderIfDirty();
-      if (window->calibration_panel()->pair_points().size() != before) {
-        click_ms.push_back(click.nsecsElapsed() * 1e-6);
-      }
-    }
-    nlohmann::json j = {{"points", window->view()->point_count()},
-                        {"open_and_show_s", open_s},
-                        {"fps_full", full},
-                        {"fps_lod", lod},
-                        {"lod_level", lod_level},
-                        {"lod_points", lod_points},
-                        {"lod_frame_ms", {{"render", lod_render_ms}, {"present", lod_present_ms}}},
-                        {"to_rest_s", rest_s},
-                        {"rest_points", rest_points},
-                        {"rest_frame_ms", rest_frame_ms},
-                        {"rest_passes",
-                         {{"passes", window->view()->passes_drawn() - passes_before},
-                          {"turns", pass_ms.size()},
-                          {"max_ms", Percentile(pass_ms, 1.0)},
-                          {"median_ms", Percentile(pass_ms, 0.5)},
-                          {"total_s", passes_s}}},
-                        {"pick_ms", pick_ms},
-                        {"pick_hits_of_25", hits},
-                        {"pick_max_ms", Percentile(each_pick_ms, 1.0)},
-                        {"pick_page_ins", pick_page_ins},
-                        {"click_to_highlight_ms",
-                         {{"median", Percentile(click_ms, 0.5)},
-                          {"max", Percentile(click_ms, 1.0)},
-                          {"clicks", click_ms.size()}}},
-                        {"rss_mib", ResidentMiB()},
-                        {"memory", MemoryBreakdown(window)}};
-    // Then (after the memory, read at the whole room's rest level as before)
-    // zoomed in at rest: the spot of the far end wall 1 m above the floor
-    // (the motion point nearest it) looked at from 2 m towards the middle:
-    // the time to plan and build its rest level, the rest points drawn, and
-    // those within 0.3 m of the spot (how much of it is drawn).
-    const std::vector<Eigen::Vector3f> motion = window->view()->MotionPoints();
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e9f), hi = -lo;
-    for (const Eigen::Vector3f& p : motion) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    const Eigen::Vector3f aim(hi.x(), 0.5f * (lo.y() + hi.y()), lo.z() + 1.0f);
-    Eigen::Vector3f spot = aim;
-    for (const Eigen::Vector3f& p : motion) {
-      if (spot == aim || (p - aim).squaredNorm() < (spot - aim).squaredNorm()) spot = p;
-    }
-    Eigen::Vector3f inward(0.5f * (lo.x() + hi.x()) - spot.x(), 0.5f * (lo.y() + hi.y()) - spot.y(),
-                           0.0f);
-    inward.normalize();
-    window->view()->LookAt(spot.cast<double>(),
-                           (spot + 2.0f * inward + Eigen::Vector3f(0, 0, 0.2f)).cast<double>());
-    window->view()->RenderNow();
-    window->view()->SetLodActive(true);
-    QElapsedTimer zoom_clock;
-    zoom_clock.start();
-    window->view()->SetLodActive(false);
-    window->view()->RenderNow();
-    const double zoom_rest_s = zoom_clock.nsecsElapsed() * 1e-9;
-    const std::vector<Eigen::Vector3f> zoom_drawn = window->view()->DrawnPoints();
-    const size_t zoom_spot = static_cast<size_t>(
-        std::count_if(zoom_drawn.begin(), zoom_drawn.end(),
-                      [&](const Eigen::Vector3f& p) { return (p - spot).norm() < 0.3f; }));
-    j["zoomed"] = {{"to_rest_s", zoom_rest_s},
-                   {"rest_points", zoom_drawn.size()},
-                   {"spot_points", zoom_spot}};
-    std::printf("%s\n", j.dump().c_str());
-    std::fflush(stdout);
-    window->SetInteractive(false);
-    window->close();
-   });
-  });
 }
 
 // --pairs FILE: load the picks once the session is shown, solve, and show
@@ -589,9 +373,14 @@ int Main(int argc, char** argv) {
   // A project that cannot be opened: a scripted run (benchmark, tour) stops
   // with exit 2; the operator has read its box, and the app stays open,
   // as for a path given without --project (OpenPathGiven).
-  if (!o.project.isEmpty() && !window.project()->OpenProject(o.project)) {
-    std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
-    if (scripted) return 2;
+  if (!o.project.isEmpty()) {
+    // Its clock starts before the open.
+    if (o.orbit_frames > 0 && o.replay.isEmpty())
+      StartProjectOrbitBenchmark(o.orbit_frames, &window);
+    if (!window.project()->OpenProject(o.project)) {
+      std::fprintf(stderr, "sweepscan: %s\n", qPrintable(window.last_error()));
+      if (scripted) return 2;
+    }
   }
   if (!o.open_path.isEmpty()) OpenPathGiven(o.open_path, &window);
   if (o.floor_plan) {

@@ -39,8 +39,9 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
                                       "Quit after S seconds (prints a JSON summary line).", "S");
   const QCommandLineOption orbit(
       "orbit-benchmark",
-      "With --replay: once the session is shown, render N frames orbiting the camera at the rest "
-      "level and N at the motion level, print timings and memory as JSON and quit.",
+      "With --replay (or --project: once every placed session is drawn): once the session is "
+      "shown, render N frames orbiting the camera at the rest level and N at the motion level, "
+      "print timings and memory as JSON and quit.",
       "N");
   const QCommandLineOption pairs(
       "pairs",

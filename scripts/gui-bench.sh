@@ -13,14 +13,17 @@
 #   5. CloudCompare (Debian's `cloudcompare`) opening the same clouds as
 #      PLY, `-SILENT -O`: its wall time and peak resident memory;
 #   6. seeking the 10 M and 100 M sessions' replays to near their ends
-#      (`--seek`): the seek's time, event-loop latency, peak memory.
+#      (`--seek`): the seek's time, event-loop latency, peak memory;
+#   7. the office floor as a project (rooms a and b, b aligned to a): the
+#      project's sessions drawn as the view's layers, open and show, orbit
+#      at both levels, the rest passes, picks, memory.
 # Usage: scripts/gui-bench.sh [WORKDIR] [SECTIONS]   (after scripts/build.sh)
-#   SECTIONS: any of 1..6 (default all), e.g. "2 5". The sessions take
+#   SECTIONS: any of 1..7 (default all), e.g. "2 5". The sessions take
 #   ~20 GB of disk in WORKDIR, made once (simulate: ~4 minutes for 100 M).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-/tmp/sweepscan-gui-bench}
-sections=${2:-1 2 3 4 5 6}
+sections=${2:-1 2 3 4 5 6 7}
 want() { [[ " $sections " == *" $1 "* ]]; }
 mkdir -p "$work"
 cli=build/app/sweepscan-cli
@@ -33,7 +36,7 @@ make_scenario() {  # seconds out
 }
 
 for s in 600 1950 20400; do
-  if [ ! -d "$work/lab_$s.sweepscan" ]; then
+  if [[ "$sections" =~ [1-6] ]] && [ ! -d "$work/lab_$s.sweepscan" ]; then
     make_scenario $s "$work/lab_$s.json"
     $cli simulate --scenario "$work/lab_$s.json" --out "$work/lab_$s.ply" --overwrite > /dev/null
   fi
@@ -76,4 +79,19 @@ if want 6; then
   gui --replay "$work/lab_1950.sweepscan" --speed 0 --seek 1900 --quit-after 30
   echo "## lab_20400 seeking to 20 000 s, then 1x"
   gui --replay "$work/lab_20400.sweepscan" --speed 0 --seek 20000 --quit-after 100
+fi
+if want 7; then
+  echo "## the office floor's project (a, and b aligned to it): open, show, orbit"
+  for d in a b; do
+    if [ ! -d "$work/building_$d.sweepscan" ]; then
+      $cli simulate --scenario "resources/scenarios/building_$d.json" --out "$work/building_$d.ply" \
+        --session "$work/building_$d.sweepscan" --overwrite > /dev/null
+    fi
+  done
+  project="$work/floor.sweepscan-project"
+  if [ ! -f "$project" ]; then
+    $cli project new "$project" "$work/building_a.sweepscan" "$work/building_b.sweepscan" > /dev/null
+    $cli project align --session building_b --to building_a "$project" > /dev/null
+  fi
+  gui --project "$project" --orbit-benchmark 30
 fi
