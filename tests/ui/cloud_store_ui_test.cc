@@ -34,6 +34,7 @@
 #include "core/cloud/cloud_pager.h"
 #include "tests/ui/app_fixture.h"
 #include "tests/ui/image_compare.h"
+#include "tests/ui/paced_frame.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -487,22 +488,8 @@ TEST_F(CloudStoreUiTest, ASoftwareRendererIsWaitedForEveryPaceOfPointsAndDrawsTh
   if (!view->software_renderer()) GTEST_SKIP() << "a GPU: the view never waits";
   EXPECT_EQ(view->draw_pace(), CloudView::kSoftwareDrawPace);
 
-  view->SetDrawPace(0);
-  size_t waits = view->draw_waits();
-  const QImage unpaced = view->GrabImage();
-  EXPECT_EQ(view->draw_waits(), waits);
-
-  // An eighth of the frame a pace: a wait once a pace's worth of batches
-  // is drawn (a batch is at most a chunk), never sooner.
-  const size_t pace = rest / 8;
-  view->SetDrawPace(pace);
-  waits = view->draw_waits();
-  const QImage paced = view->GrabImage();
-  const size_t frame_waits = view->draw_waits() - waits;
-  std::printf("%zu points a frame, paced every %zu: %zu waits\n", rest, pace, frame_waits);
-  EXPECT_GE(frame_waits, rest / (pace + CloudView::kChunkPoints));
-  EXPECT_LE(frame_waits, rest / pace + 1);
-  EXPECT_EQ(testing::DifferingPixels(paced, unpaced), 0u);
+  // An eighth of the frame a pace (a batch is at most a chunk).
+  testing::ExpectPacedFrameWaitsAndMatches(view, rest, rest / 8, CloudView::kChunkPoints);
 }
 
 TEST_F(CloudStoreUiTest, ACloudLargerThanTheMemoryBudgetOpensAndPicksTheTruePoint) {

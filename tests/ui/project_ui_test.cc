@@ -45,6 +45,7 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/ui/app_fixture.h"
 #include "tests/ui/image_compare.h"
+#include "tests/ui/paced_frame.h"
 #include "tests/ui/project_ui_fixture.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
@@ -752,6 +753,12 @@ TEST_F(ProjectLayerLodTest, MotionLevelWithinTheLodBudgetAndRestInPassesToTheOne
   EXPECT_LT(after, static_cast<size_t>(whole.width()) * whole.height() / 200);
   EXPECT_GT(before, 10 * after + 1000);
   EXPECT_EQ(view->layer_points_drawn(), n);  // Between passes as at rest.
+
+  // Paced as the cloud is (a software renderer's binned scenes stay
+  // bounded, ui/view/paced_mapper.h): a wait once a pace's worth of pieces
+  // is drawn, never sooner, and the unpaced image.
+  if (!view->software_renderer()) GTEST_SKIP() << "a GPU: the view never waits";
+  testing::ExpectPacedFrameWaitsAndMatches(view, n, n / 4, ProjectLayer::kPiecePoints);
 }
 
 }  // namespace

@@ -497,6 +497,7 @@ void CloudView::AddLayer(vtkActor* actor, vtkPolyDataMapper* motion) {
   actor->GetProperty()->SetPointSize(point_size_);
   for (vtkPolyDataMapper* m : {layer.rest.Get(), layer.motion.Get()}) {
     if (m != nullptr) ApplyClip(m);
+    if (auto* paced = PacedMapper::SafeDownCast(m)) paced->SetPacer(&pacer_);
   }
   if (lod_active_ && motion != nullptr) actor->SetMapper(motion);
   layers_.push_back(std::move(layer));

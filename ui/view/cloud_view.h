@@ -328,7 +328,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // the rest budget; `motion`, a mapper of a subset of the actor's points
   // (its owner's share of the LOD budget), is drawn in its place while the
   // motion level is, and the layers join the progressive passes at rest
-  // like the rest batches (cloud_view_progressive.cc).
+  // like the rest batches (cloud_view_progressive.cc). Its mappers that are
+  // PacedMapper are paced with the cloud's (SetDrawPace).
   void AddLayer(vtkActor* actor, vtkPolyDataMapper* motion = nullptr);
   // The visible layers' points a frame draws now (their motion mappers'
   // while the motion level is up).
