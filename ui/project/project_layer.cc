@@ -134,9 +134,9 @@ vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::PieceMapper(const Entry& e, siz
   poly->SetVerts(verts);
   poly->GetPointData()->SetScalars(slot);
   // Paced by the view it is drawn in, as the cloud's mappers are
-  // (CloudView::AddLayer; ui/view/paced_mapper.h): unpaced, llvmpipe held
-  // ~190 MiB of binned scenes after a frame of the office floor's 567 000
-  // points, for as long as the app ran.
+  // (CloudView::AddLayer; ui/view/paced_mapper.h): unpaced, llvmpipe's
+  // binned scenes after frames of the office floor's 567 000 points kept
+  // the app about 90 MiB larger for as long as it ran.
   auto mapper = vtkSmartPointer<PacedMapper>::New();
   mapper->SetInputData(poly);
   mapper->SetLookupTable(lut_);
