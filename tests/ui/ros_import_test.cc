@@ -60,6 +60,9 @@ TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
   const std::string bag = kData + "/ros2/ros2_zstd.mcap";
   QPointer<RosImportDialog> dialog = OpenChooser(bag);
   ASSERT_TRUE(dialog && dialog->isVisible());
+  // It blocks the window (nothing opened or recorded meanwhile that Import
+  // would replace unasked).
+  EXPECT_EQ(QApplication::activeModalWidget(), dialog.data());
   ASSERT_EQ(dialog->scan_topic()->count(), 1);  // one LaserScan: no "none" offered
   EXPECT_TRUE(dialog->scan_topic()->currentText().startsWith("/scan  (20 messages")) << dialog->scan_topic()->currentText().toStdString();
   EXPECT_EQ(dialog->odom_topic()->currentData().toString(), "/odom");

@@ -52,6 +52,10 @@ RosImportDialog::RosImportDialog(Workspace* workspace, const QString& bag, doubl
   setObjectName(QStringLiteral("rosImportDialog"));
   setWindowTitle(tr("Import ROS Recording"));
   setAttribute(Qt::WA_DeleteOnClose);
+  // Modal to the window, as an import's options are: the discard was
+  // confirmed when the dialog was made, so nothing may be recorded, opened
+  // or imported meanwhile that Import would then replace unasked.
+  setWindowModality(Qt::WindowModal);
   about_ = new QLabel(tr("Reading %1…").arg(bag), this);
   about_->setWordWrap(true);
   scan_ = new QComboBox(this);
