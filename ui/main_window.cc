@@ -187,6 +187,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                 8000);
           });
   connect(view_, &CloudView::pointPicked, this, &MainWindow::PointPicked);
+  // A project's change of anchor: the clip moved with the frame; the
+  // ceiling Hide Ceiling restores moves with it, and the status says so.
+  connect(view_, &CloudView::movedWithFrame, this, [this](double dz) {
+    if (!std::isnan(ceiling_z_)) ceiling_z_ += dz;
+    clip_label_->setText(clip_status());
+  });
   connect(view_, &CloudView::colorModeChanged, this, [this](int mode) {
     if (mode >= 0 && mode < color_group_->actions().size()) {
       color_group_->actions()[mode]->setChecked(true);

@@ -27,6 +27,7 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QPushButton>
+#include <QStatusBar>
 #include <QTest>
 #include <QTimer>
 #include <QTreeWidget>
@@ -248,18 +249,33 @@ TEST_F(ProjectUiTest, MakeAnchorKeepsTheBuildingStillOnScreen) {
   for (const Eigen::Vector2d& d : before) ASSERT_TRUE(widget.contains(d.x(), d.y()));
   ASSERT_GT((before[0] - before[1]).norm(), 20.0);
   const uint64_t placements = view->camera_generation();
-  // The ceiling hidden above 2.4 m of a's frame: the same cut of the
-  // building in the new frame, exact at the point of it under the camera's
-  // focal point (the frames' tilt, 22 mrad here, cannot keep a level cut
-  // exact everywhere).
-  view->SetClipHeight(2.4);
+  // Hide Ceiling (on with the room view, or turned on here): the same cut
+  // of the building in the new frame, exact at the point of it under the
+  // camera's focal point (the frames' tilt, 22 mrad here, cannot keep a
+  // level cut exact everywhere); the status says the new height, and
+  // Hide Ceiling off and on again restores it, not the old frame's.
+  QAction* ceiling = window_->ceiling_action();
+  if (!ceiling->isChecked()) ceiling->trigger();
+  const double clip_in_a = view->clip_height();
+  ASSERT_FALSE(std::isnan(clip_in_a));
+  auto* clip_label = window_->statusBar()->findChild<QLabel*>(QStringLiteral("statusClip"));
+  ASSERT_NE(clip_label, nullptr);
   const auto cut_after = [&](const Rigid3d& new_from_old) {
     Eigen::Vector3d focal;
     renderer->GetActiveCamera()->GetFocalPoint(focal.data());
     return (new_from_old * Eigen::Vector3d(focal.x(), focal.y(), view->clip_height())).z();
   };
+  const auto expect_clip = [&](double z) {
+    EXPECT_NEAR(view->clip_height(), z, 1e-9);
+    EXPECT_NE(clip_label->text().indexOf(QString::number(z, 'f', 2)), -1)
+        << clip_label->text().toStdString() << " for " << z;
+    ceiling->trigger();
+    EXPECT_TRUE(std::isnan(view->clip_height()));
+    ceiling->trigger();
+    EXPECT_NEAR(view->clip_height(), z, 1e-9);
+  };
   double cut = cut_after(a_from_b.inverse());
-  ASSERT_GT(std::abs(cut - 2.4), 0.02);  // b's frame is another: a kept clip would show.
+  ASSERT_GT(std::abs(cut - clip_in_a), 0.02);  // b's frame is another: a kept clip would show.
 
   project()->MakeAnchor("b");
   ASSERT_EQ(project()->document()->project().Anchor(), 1);
@@ -268,7 +284,7 @@ TEST_F(ProjectUiTest, MakeAnchorKeepsTheBuildingStillOnScreen) {
     EXPECT_LT((on_screen(building[k], "b") - before[k]).norm(), 1.0)
         << k << ": " << on_screen(building[k], "b").transpose() << " was " << before[k].transpose();
   }
-  EXPECT_NEAR(view->clip_height(), cut, 1e-9);
+  expect_clip(cut);
   cut = cut_after(a_from_b);
   window_->undo_group()->undo();
   ASSERT_EQ(project()->document()->project().Anchor(), 0);
@@ -276,14 +292,14 @@ TEST_F(ProjectUiTest, MakeAnchorKeepsTheBuildingStillOnScreen) {
   for (size_t k = 0; k < building.size(); ++k) {
     EXPECT_LT((on_screen(building[k], "a") - before[k]).norm(), 1.0) << k;
   }
-  EXPECT_NEAR(view->clip_height(), cut, 1e-9);
-  EXPECT_NEAR(view->clip_height(), 2.4, 1e-3);  // The focal point hardly moved.
+  expect_clip(cut);
+  EXPECT_NEAR(view->clip_height(), clip_in_a, 1e-3);  // The focal point hardly moved.
   cut = cut_after(a_from_b.inverse());
   window_->undo_group()->redo();
   for (size_t k = 0; k < building.size(); ++k) {
     EXPECT_LT((on_screen(building[k], "b") - before[k]).norm(), 1.0) << k;
   }
-  EXPECT_NEAR(view->clip_height(), cut, 1e-9);
+  expect_clip(cut);
   // Not a placement of the camera by the operator (the room view may still come).
   EXPECT_EQ(view->camera_generation(), placements);
 }

@@ -643,11 +643,13 @@ void CloudView::MoveCameraWithFrame(const Rigid3d& new_from_old) {
   camera->GetFocalPoint(focal.data());
   camera->GetViewUp(up.data());
   // The ceiling clip is a height in the frame: it moves with it, kept level
-  // and exact under the focal point (the new frame's tilt against the old
-  // is the two start poses' few mrad: a few cm across a room).
-  if (!std::isnan(clip_height_)) {
-    SetClipHeight((new_from_old * Eigen::Vector3d(focal.x(), focal.y(), clip_height_)).z());
-  }
+  // and exact under the focal point. The new frame's tilt against the old
+  // (the two start poses' difference: a few mrad, tens in a steep start)
+  // moves the cut elsewhere by the tilt times the distance: 2 cm at 5 m
+  // for 4 mrad.
+  const double h = std::isnan(clip_height_) ? focal.z() : clip_height_;
+  const double dz = (new_from_old * Eigen::Vector3d(focal.x(), focal.y(), h)).z() - h;
+  if (!std::isnan(clip_height_)) SetClipHeight(clip_height_ + dz);
   position = new_from_old * position;
   focal = new_from_old * focal;
   up = new_from_old.rotation() * up;
@@ -655,6 +657,7 @@ void CloudView::MoveCameraWithFrame(const Rigid3d& new_from_old) {
   camera->SetFocalPoint(focal.data());
   camera->SetViewUp(up.data());
   RequestRender();
+  emit movedWithFrame(dz);
 }
 
 void CloudView::Orbit(double degrees) {

@@ -111,6 +111,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Shift + left click on the cloud or a layer (the picking layer).
   void pointPicked(const sweepscan::ui::PickHit& hit);
   void colorModeChanged(int mode);  // A ColorMode.
+  // MoveCameraWithFrame moved the frame under the view: a level surface
+  // under the focal point (the clip's height, else the focal point's)
+  // moved by `dz` metres, and the clip with it. A height kept elsewhere in
+  // the old frame (a ceiling found there) is that much higher now.
+  void movedWithFrame(double dz);
 
  public:
   // ---- Content ----
