@@ -7,15 +7,18 @@
 #include <QTimer>
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <vector>
 
 #include "app/gui_figures.h"
 #include "core/cloud/cloud_pager.h"
+#include "core/project/project.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/project/project_controller.h"
+#include "ui/project/project_document.h"
 #include "ui/project/project_layer.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/workspace.h"
@@ -57,21 +60,23 @@ Orbit OrbitOnce(CloudView* view, int frames, bool lod) {
 // built for the last camera (`to_rest_s`), the same level in one frame, and
 // in progressive passes as the GUI's timer draws them (the passes, pass 0
 // included, and the event-loop turns that drew: a pass, or Qt's paint of
-// the widget). `rest_points` is what `points_drawn_at_rest` counts then.
+// the widget). `lod_points` is what `points_drawn` counts at the motion
+// level, `rest_points` what it counts back at rest.
 nlohmann::json OrbitAndRest(CloudView* view, int frames,
-                            const std::function<size_t()>& points_drawn_at_rest) {
+                            const std::function<size_t()>& points_drawn) {
   const Orbit full = OrbitOnce(view, frames, false);
   const Orbit lod = OrbitOnce(view, frames, true);
   nlohmann::json j = {{"fps_full", full.fps},
                       {"fps_lod", lod.fps},
                       {"lod_level", view->lod_level()},
+                      {"lod_points", points_drawn()},
                       {"lod_frame_ms", {{"render", lod.render_ms}, {"present", lod.present_ms}}}};
   QElapsedTimer rest_clock;
   rest_clock.start();
   view->SetLodActive(false);
   view->RenderNow();
   j["to_rest_s"] = rest_clock.nsecsElapsed() * 1e-9;
-  j["rest_points"] = points_drawn_at_rest();
+  j["rest_points"] = points_drawn();
   QElapsedTimer frame_clock;
   frame_clock.start();
   view->RenderNow();
@@ -211,8 +216,10 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
       ShowWhole(view);
       nlohmann::json j = {{"points", view->point_count()},
                           {"open_and_show_s", clock->nsecsElapsed() * 1e-9}};
-      j.update(OrbitAndRest(view, frames, [view] { return view->DrawnPoints().size(); }));
-      j["lod_points"] = view->motion_point_count();
+      // DrawnPoints() is the rest level's; the motion level's, its sample.
+      j.update(OrbitAndRest(view, frames, [view] {
+        return view->lod_active() ? view->motion_point_count() : view->DrawnPoints().size();
+      }));
       j.update(Picks(view));
       j["click_to_highlight_ms"] = ClicksToMarker(window);
       // The memory read at the whole room's rest level, before the zoom.
@@ -228,29 +235,50 @@ void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
   auto clock = std::make_shared<QElapsedTimer>();
   clock->start();
   ui::ProjectController* project = window->project();
-  // Until every placed session's cloud is built and handed to the view (the
-  // layer pumps its pieces from a timer): polled, as busy() has no signal.
+  // Until the open's jobs have built every placed, visible session's cloud
+  // and the layer has handed its pieces to the view: polled, as busy() has
+  // no signal. A placed, visible session not drawn then (its folder
+  // unreadable: the app has said why), or none at all, gives no figure of
+  // the project: said on stderr, exit 1; so does an open not done in 10
+  // minutes.
   auto poll = new QTimer(window);
   QObject::connect(poll, &QTimer::timeout, window, [=] {
-    if (project->busy() || project->layer()->drawn_points() == 0) return;
+    const bool late = clock->elapsed() > 600000;
+    if (project->busy() && !late) return;
     poll->stop();
     poll->deleteLater();
+    size_t placed = 0;
+    for (const ProjectSession& s : project->document()->project().sessions) {
+      placed += s.project_from_session && s.visible ? 1 : 0;
+    }
+    const size_t drawn = project->layer()->drawn_sessions().size();
+    if (late || drawn == 0 || drawn < placed) {
+      std::fprintf(stderr,
+                   "sweepscan: --orbit-benchmark: %zu of the project's %zu placed, visible "
+                   "sessions drawn%s%s\n",
+                   drawn, placed, late ? " after 10 minutes" : "",
+                   window->last_error().isEmpty() ? "" : qPrintable(": " + window->last_error()));
+      window->SetInteractive(false);
+      window->close();
+      QCoreApplication::exit(1);
+      return;
+    }
     CloudView* view = window->view();
     ShowWhole(view);
-    nlohmann::json j = {{"sessions", project->layer()->drawn_sessions().size()},
+    nlohmann::json j = {{"sessions", drawn},
                         {"points", project->layer()->drawn_points()},
                         {"open_and_show_s", clock->nsecsElapsed() * 1e-9}};
     j.update(OrbitAndRest(view, frames, [view] { return view->layer_points_drawn(); }));
-    view->SetLodActive(true);
-    j["lod_points"] = view->layer_points_drawn();
-    view->SetLodActive(false);
-    view->RenderNow();
+    j.erase("lod_level");  // The session cloud's grid; a project's motion level is a stride.
     j.update(Picks(view));
     j["rss_mib"] = ResidentMiB();
     j["memory"] = MemoryBreakdown(window);
+    // The layers' points in VTK's arrays: both levels (vtk_points is the
+    // session cloud's).
+    j["memory"]["layer_vtk_points"] = j["points"].get<size_t>() + j["lod_points"].get<size_t>();
     PrintAndClose(j, window);
   });
-  poll->start(50);
+  poll->start(10);
 }
 
 }  // namespace sweepscan::app

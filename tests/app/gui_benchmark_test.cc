@@ -49,21 +49,25 @@ size_t Simulate(const std::string& scenario, const std::string& name) {
   return PlyVertices(Dir() + "/" + name + ".ply");
 }
 
-// The app's last JSON line.
+// The app's JSON line (its last line that is one; stderr is left out).
 nlohmann::json Benchmark(const std::string& args) {
-  const auto r = RunCommand(std::string(SWEEPSCAN_GUI) + " " + args + " 2>/dev/null");
+  const auto r = RunCommand("(" + std::string(SWEEPSCAN_GUI) + " " + args + " 2>/dev/null)");
   EXPECT_EQ(r.code, 0) << r.out;
-  const size_t at = r.out.rfind("\n{");
-  const std::string line = r.out.substr(at == std::string::npos ? 0 : at + 1);
-  nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
-  EXPECT_FALSE(j.is_discarded()) << r.out;
-  return j;
+  std::istringstream lines(r.out);
+  std::string line, last;
+  while (std::getline(lines, line)) {
+    if (!line.empty() && line.front() == '{') last = line;
+  }
+  nlohmann::json j = nlohmann::json::parse(last, nullptr, false);
+  EXPECT_TRUE(j.is_object()) << r.out;
+  return j.is_object() ? j : nlohmann::json::object();
 }
 
 void ExpectOrbitAndRestFigures(const nlohmann::json& j) {
   EXPECT_GT(j.value("fps_full", 0.0), 0.0);
   EXPECT_GT(j.value("fps_lod", 0.0), 0.0);
   EXPECT_GT(j.value("open_and_show_s", 0.0), 0.0);
+  ASSERT_TRUE(j.contains("rest_passes") && j.contains("memory"));
   EXPECT_GE(j["rest_passes"].value("passes", 0), 1);
   EXPECT_GT(j.value("pick_hits_of_25", 0), 0);  // The picks land on the room.
   EXPECT_GT(j.value("rss_mib", 0.0), 100.0);
@@ -85,6 +89,7 @@ TEST(OrbitBenchmarkTest, ASessionsFiguresCountTheCloudItWasGiven) {
   EXPECT_GT(j.value("lod_points", size_t{0}), 10000u);
   EXPECT_LE(j.value("lod_points", size_t{0}), 20000u);
   ExpectOrbitAndRestFigures(j);
+  ASSERT_TRUE(j.contains("click_to_highlight_ms") && j.contains("zoomed"));
   EXPECT_GT(j["click_to_highlight_ms"].value("clicks", 0), 0);
   EXPECT_GT(j["zoomed"].value("spot_points", 0), 0);  // The far wall's spot is drawn.
 }
@@ -112,6 +117,27 @@ TEST(OrbitBenchmarkTest, AProjectsFiguresCountItsPlacedSessions) {
   EXPECT_GT(j.value("lod_points", size_t{0}), 20000u);
   EXPECT_LE(j.value("lod_points", size_t{0}), 30000u + (a + b) / 65536 + 2);
   ExpectOrbitAndRestFigures(j);
+  EXPECT_FALSE(j.contains("lod_level"));  // The session cloud's grid: none here.
+  EXPECT_EQ(j["memory"].value("layer_vtk_points", size_t{0}),
+            j.value("points", size_t{0}) + j.value("lod_points", size_t{0}));
+}
+
+// A project none of whose sessions can be drawn (the anchor's folder is
+// gone) gives no figures: said, exit 1, and no hang.
+TEST(OrbitBenchmarkTest, AProjectWithNothingToDrawIsRefused) {
+  if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
+  sweepscan::testing::ShellOrFail("mkdir -p " + Dir());
+  Simulate("lab.json", "gone");
+  const std::string project = Dir() + "/gone.sweepscan-project";
+  sweepscan::testing::ShellOrFail(std::string(SWEEPSCAN_CLI) + " project new " + project + " " +
+                                  Dir() + "/gone.sweepscan > /dev/null && rm -rf " + Dir() +
+                                  "/gone.sweepscan");
+  const auto r =
+      RunCommand(std::string(SWEEPSCAN_GUI) + " --project " + project + " --orbit-benchmark 6");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("--orbit-benchmark: 0 of the project's 1 placed, visible sessions drawn"),
+            std::string::npos)
+      << r.out;
 }
 
 }  // namespace
