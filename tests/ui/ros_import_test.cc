@@ -215,6 +215,27 @@ TEST_F(RosImportUiTest, NotABagSaysSoAndTheAppGoesOn) {
   EXPECT_FALSE(workspace_->job_running());
 }
 
+// A recording started while the bag was being read (the chooser is modal
+// only once shown): Import does not replace it, and says why.
+TEST_F(RosImportUiTest, ARecordingStartedMeanwhileIsNotReplaced) {
+  ASSERT_NO_FATAL_FAILURE(ConnectToSimulator());
+  QPointer<RosImportDialog> dialog = OpenChooser(kData + "/ros2/ros2_zstd.mcap");
+  ASSERT_TRUE(dialog && dialog->isVisible());
+  QString error;
+  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  const QString recording = workspace_->session_dir();
+  const QString session = tmp_.path() + "/imported.sweepscan";
+  dialog->session_dir()->setText(session);
+  ClickImport(dialog);
+  ASSERT_TRUE(
+      WaitFor([&] { return window_->last_error().contains("Stop the recording first"); }, 10000))
+      << window_->last_error().toStdString();
+  EXPECT_TRUE(workspace_->recording());
+  EXPECT_EQ(workspace_->session_dir(), recording);
+  EXPECT_FALSE(QFileInfo::exists(session));
+  ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+}
+
 }  // namespace
 }  // namespace sweepscan::ui
 

@@ -52,9 +52,19 @@ void Workspace::InspectRosBag(const QString& bag) {
 
 void Workspace::ImportRosRecording(const QString& bag, const QString& session_dir,
                                    const io::RosImportOptions& options, double speed) {
+  const QString what = tr("Importing %1").arg(bag);
+  // The import opens its session in place of the one shown: not of one
+  // being recorded (started while the bag was being read, before its
+  // chooser, modal to the window, was shown).
+  if (recording_) {
+    emit jobFinished(
+        what, false,
+        tr("Stop the recording first: the import opens its session in place of the one "
+           "being recorded."));
+    return;
+  }
   auto report = std::make_shared<io::RosImportReport>();
   const std::string bag_path = bag.toStdString(), out = session_dir.toStdString();
-  const QString what = tr("Importing %1").arg(bag);
   RunJob(
       what,
       [this, report, bag_path, out, options, what](std::atomic<bool>* cancel) -> QString {
