@@ -7,6 +7,7 @@
 
 #include <QVTKOpenGLNativeWidget.h>
 #include <gtest/gtest.h>
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include <QApplication>
@@ -18,6 +19,7 @@
 #include <QTest>
 #include <QThread>
 #include <clocale>
+#include <csignal>
 #include <functional>
 #include <memory>
 
@@ -128,7 +130,14 @@ class OfficeFloorAppFixture : public AppFixture {
 inline int RunUiTests(int argc, char** argv) {
   ::testing::InitGoogleTest(&argc, argv);
   if (::testing::GTEST_FLAG(list_tests)) return RUN_ALL_TESTS();
-  (void)setsid();  // Fails only for a process group leader, which has its own already.
+  // Fails for a process group leader (a test run from a shell leads its
+  // job's group): it then stays in the shell's session, as before. Out of
+  // ctest's session, Ctrl+C on ctest no longer reaches it: it ends when
+  // its parent does instead.
+  if (setsid() >= 0) {
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() == 1) return 1;  // The parent ended before the line above.
+  }
   QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
   QApplication app(argc, argv);
   std::setlocale(LC_NUMERIC, "C");  // As the app does (app/gui_main.cc).
