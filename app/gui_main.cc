@@ -317,6 +317,13 @@ int Main(int argc, char** argv) {
                  qPrintable(o.bad_number));
     return 2;
   }
+  // It measures an opened session or project; on nothing it would wait forever.
+  if (o.orbit_frames > 0 && o.replay.isEmpty() && o.project.isEmpty()) {
+    std::fprintf(stderr,
+                 "sweepscan: --orbit-benchmark measures --replay SESSION or --project FILE: "
+                 "give one\n");
+    return 2;
+  }
   if (o.memory_budget_mib >= 0) {
     CloudPager::Default().SetBudget(static_cast<size_t>(o.memory_budget_mib * 1048576.0));
   }

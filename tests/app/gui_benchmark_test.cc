@@ -140,4 +140,14 @@ TEST(OrbitBenchmarkTest, AProjectWithNothingToDrawIsRefused) {
       << r.out;
 }
 
+// Nothing to measure: refused at once, not a wait without end.
+TEST(OrbitBenchmarkTest, WithoutASessionOrAProjectItIsRefused) {
+  if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
+  const auto r = RunCommand(std::string(SWEEPSCAN_GUI) + " --orbit-benchmark 6");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--orbit-benchmark measures --replay SESSION or --project FILE"),
+            std::string::npos)
+      << r.out;
+}
+
 }  // namespace
