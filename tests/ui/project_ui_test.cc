@@ -44,8 +44,8 @@
 #include "core/scenario/scenario.h"
 #include "tests/testing/event_loop_turns.h"
 #include "tests/ui/app_fixture.h"
-#include "tests/ui/image_compare.h"
 #include "tests/ui/paced_frame.h"
+#include "tests/ui/progressive_passes.h"
 #include "tests/ui/project_ui_fixture.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
@@ -730,28 +730,12 @@ TEST_F(ProjectLayerLodTest, MotionLevelWithinTheLodBudgetAndRestInPassesToTheOne
   view->SetLodActive(false);
   EXPECT_EQ(view->layer_points_drawn(), n);
 
-  view->RequestRender();
-  ASSERT_TRUE(view->RenderIfDirty());  // Pass 0: the motion level.
-  ASSERT_TRUE(view->drawing_passes());
-  const QImage first = view->grabFramebuffer();
-  size_t passes = 0, drawn = 0;
-  while (view->drawing_passes() && passes < 100) {
-    ASSERT_TRUE(view->RenderIfDirty());
-    ++passes;
-    EXPECT_LE(view->last_pass_points(), std::max(budget, ProjectLayer::kPiecePoints));
-    drawn += view->last_pass_points();
-  }
-  EXPECT_FALSE(view->RenderIfDirty());
-  EXPECT_EQ(drawn, n);  // Every piece once.
-  EXPECT_EQ(passes, (n + ProjectLayer::kPiecePoints - 1) / ProjectLayer::kPiecePoints);
-  const QImage last = view->grabFramebuffer();
-  const size_t before = testing::DifferingPixels(first, whole);
-  const size_t after = testing::DifferingPixels(last, whole);
-  std::printf("%zu layer points in %zu passes; pixels unlike the one-frame image: %zu after pass 0, "
-              "%zu after the last\n",
-              drawn, passes, before, after);
-  EXPECT_LT(after, static_cast<size_t>(whole.width()) * whole.height() / 200);
-  EXPECT_GT(before, 10 * after + 1000);
+  // Pass 0 the motion level, then a piece or a LOD budget a pass.
+  testing::PassesDrawn drawn;
+  ASSERT_NO_FATAL_FAILURE(testing::DrawPassesToTheOneFrameImage(
+      view, whole, std::max(budget, ProjectLayer::kPiecePoints), &drawn));
+  EXPECT_EQ(drawn.points, n);  // Every piece once.
+  EXPECT_EQ(drawn.passes, (n + ProjectLayer::kPiecePoints - 1) / ProjectLayer::kPiecePoints);
   EXPECT_EQ(view->layer_points_drawn(), n);  // Between passes as at rest.
 
   // Paced as the cloud is (a software renderer's binned scenes stay
