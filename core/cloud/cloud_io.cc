@@ -3,7 +3,6 @@
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
-#include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_cloud.h>
@@ -628,22 +627,6 @@ Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points) {
     p.flags = q.flags;
   }
   return Status::Ok();
-}
-
-std::vector<Eigen::Vector3f> VoxelDownsample(const std::vector<Eigen::Vector3f>& points, double leaf_m) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr in(new pcl::PointCloud<pcl::PointXYZ>);
-  in->resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i) (*in)[i] = pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z());
-  pcl::PointCloud<pcl::PointXYZ> out;
-  pcl::VoxelGrid<pcl::PointXYZ> grid;
-  grid.setInputCloud(in);
-  const float leaf = static_cast<float>(leaf_m);
-  grid.setLeafSize(leaf, leaf, leaf);
-  grid.filter(out);
-  std::vector<Eigen::Vector3f> result;
-  result.reserve(out.size());
-  for (const auto& p : out) result.emplace_back(p.x, p.y, p.z);
-  return result;
 }
 
 }  // namespace sweepscan

@@ -63,11 +63,6 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
 // and the attributes it has of the same name and type).
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points);
 
-// Voxel-grid downsampling (PCL VoxelGrid, centroid per occupied voxel) for
-// display and for fast evaluation.
-std::vector<Eigen::Vector3f> VoxelDownsample(const std::vector<Eigen::Vector3f>& points,
-                                             double leaf_m);
-
 }  // namespace sweepscan
 
 #endif  // SWEEPSCAN_CORE_CLOUD_CLOUD_IO_H_

@@ -111,9 +111,7 @@ extern const char* const kRegistrationCancelled;
 
 // Voxel-grid downsampling: the centroid of the points in each cube of side
 // voxel_m (voxels ordered by their integer coordinates, so the output does
-// not depend on the input's order within a voxel or on threads). Not named
-// VoxelDownsample: core/cloud/cloud_io.h has that one (PCL's VoxelGrid), and
-// a program linking both would hold two definitions of one name.
+// not depend on the input's order within a voxel or on threads).
 std::vector<Eigen::Vector3f> VoxelCentroids(const std::vector<Eigen::Vector3f>& points,
                                             double voxel_m);
 

@@ -134,18 +134,6 @@ TEST(CloudIoErrorsTest, RefusesMissingCorruptAndUnknownFiles) {
   EXPECT_FALSE(SaveCloud("/dev/null/x.ply", pts).ok());
 }
 
-TEST(CloudIoTest, VoxelDownsampleKeepsOnePointPerVoxel) {
-  std::vector<Eigen::Vector3f> pts;
-  // Two dense clusters 1 m apart, each inside one 0.5 m voxel.
-  for (int i = 0; i < 1000; ++i) {
-    pts.emplace_back(0.1f + 0.0001f * i, 0.1f, 0.1f);
-    pts.emplace_back(1.1f + 0.0001f * i, 0.1f, 0.1f);
-  }
-  const auto out = VoxelDownsample(pts, 0.5);
-  ASSERT_EQ(out.size(), 2u);
-  EXPECT_NEAR(std::min(out[0].x(), out[1].x()), 0.1f + 0.0001f * 499.5f, 1e-4);
-}
-
 // Headers are checked against the file size before anything is allocated
 // (issue 16: `element vertex -5` or 2^64-1 aborted with std::bad_alloc; 10
 // declared vertices followed by 1.2 MB of junk were accepted).
