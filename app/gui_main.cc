@@ -240,10 +240,21 @@ bool HasDisplay() {
 // "Desktop app"). Memory is still given back where it matters: the pager
 // and the workspace call malloc_trim after dropping chunks or a session, the
 // view when it has drawn its last pass at rest.
+//
+// Two arenas, not glibc's eight a core: every thread that allocates (the
+// GUI, the open's decoders and placer, llvmpipe's rasterizers, oneTBB's
+// workers, Qt's) would get an arena of its own, each holding its own freed
+// and, with huge pages (below), its own 2 MiB pages. At 9.5 M points that
+// was 60 MiB: 501-507 MiB resident after the orbit benchmark with seven
+// arenas, 441-444 with two, the open no slower (docs/performance.md,
+// "Two heap arenas"). A thread keeps the arena it first took, and the lock
+// is held for a block's bookkeeping only. An operator's MALLOC_ARENA_MAX
+// is kept.
 void KeepFreedMemoryForReuse() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest; blocks below it come from the heap.
   mallopt(M_TRIM_THRESHOLD, 512 << 20);
   mallopt(M_TOP_PAD, 64 << 20);
+  if (std::getenv("MALLOC_ARENA_MAX") == nullptr) mallopt(M_ARENA_MAX, 2);
 }
 
 // Transparent huge pages for the heap. Opening a 100 M-point session
