@@ -7,15 +7,16 @@ offered_qos_profiles}]}, then one JSON line a message {"topic", "timestamp"
 
 Python's standard sqlite3 is the independent writer (node 20 has no
 node:sqlite). The tables are rosbag2's sqlite3 storage (Humble, schema
-version 3), as tests/core/io/ros2/make_ros2_db3.py writes them; rows are
+version 3: tests/tools/rosbag2_sqlite.py, which make_ros2_db3.py uses too); rows are
 inserted in the order they come, ids from 1, as rosbag2 does while recording.
 
 usage: session_to_ros2.mjs ... --format sqlite  (spawns: ros2_db3_from_stream.py OUT)
 """
 import json
 import os
-import sqlite3
 import sys
+
+import rosbag2_sqlite  # tests/tools/rosbag2_sqlite.py, beside this file
 
 
 def main():
@@ -24,27 +25,8 @@ def main():
     os.makedirs(bag, exist_ok=True)
     db_name = f"{name}_0.db3"
     db_path = os.path.join(bag, db_name)
-    if os.path.exists(db_path):
-        os.remove(db_path)
     topics = json.loads(sys.stdin.readline())["topics"]
-    db = sqlite3.connect(db_path)
-    db.executescript("""
-        CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
-        INSERT INTO schema VALUES (3, 'humble');
-        CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL,
-                              metadata TEXT NOT NULL);
-        CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
-                            serialization_format TEXT NOT NULL,
-                            offered_qos_profiles TEXT NOT NULL);
-        CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,
-                              timestamp INTEGER NOT NULL, data BLOB NOT NULL);
-        CREATE INDEX timestamp_idx ON messages (timestamp ASC);
-    """)
-    topic_ids = {}
-    for i, t in enumerate(topics, start=1):
-        topic_ids[t["name"]] = i
-        db.execute("INSERT INTO topics VALUES (?, ?, ?, ?, ?)",
-                   (i, t["name"], t["type"], t["serialization_format"], t["offered_qos_profiles"]))
+    db, topic_ids = rosbag2_sqlite.create(db_path, topics)
     counts = {t["name"]: 0 for t in topics}
     span = [None, None]
 
@@ -61,31 +43,7 @@ def main():
     db.commit()
     db.close()
     first, last = span[0] or 0, span[1] or 0
-    total = sum(counts.values())
-    with open(os.path.join(bag, "metadata.yaml"), "w") as f:
-        f.write("rosbag2_bagfile_information:\n"
-                "  version: 5\n"
-                "  storage_identifier: sqlite3\n"
-                f"  duration:\n    nanoseconds: {last - first}\n"
-                f"  starting_time:\n    nanoseconds_since_epoch: {first}\n"
-                f"  message_count: {total}\n"
-                "  topics_with_message_count:\n")
-        for t in topics:
-            f.write("    - topic_metadata:\n"
-                    f"        name: {t['name']}\n"
-                    f"        type: {t['type']}\n"
-                    f"        serialization_format: {t['serialization_format']}\n"
-                    f"        offered_qos_profiles: {json.dumps(t['offered_qos_profiles'])}\n"
-                    f"      message_count: {counts[t['name']]}\n")
-        f.write("  compression_format: \"\"\n"
-                "  compression_mode: \"\"\n"
-                "  relative_file_paths:\n"
-                f"    - {db_name}\n"
-                "  files:\n"
-                f"    - path: {db_name}\n"
-                f"      starting_time:\n        nanoseconds_since_epoch: {first}\n"
-                f"      duration:\n        nanoseconds: {last - first}\n"
-                f"      message_count: {total}\n")
+    rosbag2_sqlite.write_metadata(bag, db_name, topics, counts, first, last)
 
 
 if __name__ == "__main__":
