@@ -8,8 +8,10 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 
+#include <cmath>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/testing/remove_at_exit.h"
@@ -34,6 +36,21 @@ inline std::string ProcessTmp(const std::string& name) {
 inline std::string ReadWholeFile(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+// Expects the three angles of `sweepscan-cli calibrate --json` (its output
+// `out`, parsed as `calibration`) within three of their sigmas and 1 mrad
+// of the mounting error hidden in resources/scenarios/SCENARIO.json.
+inline void ExpectScenarioMountingError(const nlohmann::json& calibration,
+                                        const std::string& scenario, const std::string& out) {
+  const nlohmann::json truth_file =
+      nlohmann::json::parse(ReadWholeFile(SourcePath("resources/scenarios/" + scenario + ".json")));
+  for (const char* k : {"alpha", "beta", "gamma"}) {
+    const double truth = truth_file["mounting_error_rad"][k];
+    const double err = calibration["mounting_error_rad"][k].get<double>() - truth;
+    EXPECT_LT(std::abs(err), 3.0 * calibration["sigma_rad"][k].get<double>()) << k << "\n" << out;
+    EXPECT_LT(std::abs(err), 1e-3) << k;
+  }
 }
 
 }  // namespace sweepscan::testing
