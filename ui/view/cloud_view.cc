@@ -1,5 +1,4 @@
 #include "ui/view/cloud_view.h"
-#include "ui/view/cloud_view_chunk.h"
 
 #include <vtkActor.h>
 #include <vtkArrowSource.h>
@@ -36,8 +35,8 @@
 #include <limits>
 #include <string>
 
-#include "core/cloud/cloud_pager.h"
 #include "core/common/checked_file.h"
+#include "ui/view/cloud_view_chunk.h"
 
 namespace sweepscan::ui {
 using cloud_view_internal::kScalarName;
@@ -245,82 +244,6 @@ void CloudView::NewDrawnActor(Drawn* d) {
   renderer_->AddActor(d->actor);
 }
 
-CloudView::Chunk* CloudView::GrowingChunk() {
-  if (!chunks_.empty() && !chunks_.back()->sealed()) return chunks_.back().get();
-  auto chunk = std::make_unique<Chunk>();
-  chunk->growing.reserve(kChunkPoints);
-  Drawn& d = chunk->rest;
-  d.stride = 1;
-  d.points = vtkSmartPointer<vtkPoints>::New();
-  d.points->SetDataTypeToFloat();
-  d.points->Allocate(kChunkPoints);
-  d.scalar = vtkSmartPointer<vtkFloatArray>::New();
-  d.scalar->SetName(kScalarName);
-  d.scalar->Allocate(kChunkPoints);
-  d.verts = vtkSmartPointer<vtkCellArray>::New();
-  d.verts->Use32BitStorage();  // 8 bytes a point instead of 16.
-  d.verts->AllocateExact(kChunkPoints, kChunkPoints);
-  d.poly = vtkSmartPointer<vtkPolyData>::New();
-  d.poly->SetPoints(d.points);
-  d.poly->SetVerts(d.verts);
-  d.poly->GetPointData()->AddArray(d.scalar);
-  NewDrawnActor(&d);
-  d.mapper->SetInputData(d.poly);
-  chunk->bounds = EmptyBounds();
-  chunks_.push_back(std::move(chunk));
-  return chunks_.back().get();
-}
-
-void CloudView::RemoveChunkActors(Chunk* chunk) {
-  DrawnChanged();
-  for (Drawn* d : {&chunk->motion, &chunk->rest}) {
-    if (d->actor) renderer_->RemoveActor(d->actor);
-    *d = Drawn();
-  }
-}
-
-void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed,
-                          std::shared_ptr<const ChunkPayload> payload) {
-  // The growing chunk's points are the packed chunk's first points: the
-  // sealed chunk takes its place (and its values given so far).
-  std::vector<uint16_t> values[3];
-  size_t known = 0;
-  if (!chunks_.empty() && !chunks_.back()->sealed()) {
-    Chunk* growing = chunks_.back().get();
-    known = growing->size;
-    for (int k = 0; k < 3; ++k) values[k] = std::move(growing->values[k]);
-    RemoveChunkActors(growing);
-    chunks_.pop_back();
-  }
-  auto chunk = std::make_unique<Chunk>();
-  chunk->size = packed->size();
-  chunk->bounds = packed->bounds();
-  for (int k = 0; k < 3; ++k) {
-    if (!values[k].empty() || has_values_[3 + k]) {
-      values[k].resize(chunk->size, cloud_view_internal::kNoValue);
-      chunk->values[k] = std::move(values[k]);
-    }
-  }
-  chunk->packed = std::move(packed);
-  DrawnChanged();
-  Chunk* c = chunk.get();
-  chunks_.push_back(std::move(chunk));
-  point_count_ += c->size - known;
-  c->serial = next_serial_++;
-  if (payload == nullptr && !lod_active_) payload = c->packed->Pin();  // Read twice below.
-  BuildMotion(c, payload);
-  FitMotion();
-  // A chunk sealed at rest is drawn in full until the next plan.
-  if (!lod_active_) BuildDrawn(c, 1, &c->rest, payload);
-  ShowLevels();
-}
-
-void CloudView::SealGrowing() {
-  Chunk* growing = chunks_.back().get();
-  AddSealed(PackedChunk::Pack(growing->growing.data(), growing->growing.size(),
-                              &CloudPager::Default()));
-}
-
 void CloudView::Clear() {
   for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
@@ -351,88 +274,6 @@ void CloudView::Clear() {
   trajectory_poly_->SetLines(vtkSmartPointer<vtkCellArray>::New());
   robot_->VisibilityOff();
   ApplyLookupTable();
-  RequestRender();
-}
-
-void CloudView::AppendSealed(const std::vector<std::shared_ptr<const PackedChunk>>& chunks,
-                             const std::vector<std::shared_ptr<const ChunkPayload>>& unpacked) {
-  if (chunks.empty()) return;
-  // A large batch (an opened session's whole cloud at once) is drawn at
-  // the level it will have: the motion sample's candidates for the final
-  // count and no full-resolution rest level per chunk, which for 10 M
-  // points would build 10 M drawn points only to drop them after the loop.
-  size_t incoming = 0;
-  for (const auto& packed : chunks) incoming += packed->size();
-  count_hint_ = point_count_ + incoming;
-  if (point_count_ + incoming > lod_budget_) SetLodActive(true);
-  for (size_t k = 0; k < chunks.size(); ++k) {
-    const auto& packed = chunks[k];
-    if (packed->size() == 0) continue;
-    if (!have_origin_) {
-      time_origin_ns_ = packed->first_time_ns();
-      have_origin_ = true;
-    }
-    const auto& b = packed->bounds();
-    const float t_hi = static_cast<float>((packed->last_time_ns() - time_origin_ns_) * 1e-9);
-    AddSealed(packed, k < unpacked.size() ? unpacked[k] : nullptr);
-    UpdateRanges(static_cast<float>(b[4]), t_hi, packed->max_range_m());
-    UpdateRanges(static_cast<float>(b[5]), t_hi, packed->max_range_m());
-  }
-  count_hint_ = 0;
-  if (point_count_ > lod_budget_) {
-    SetLodActive(true);
-    settle_->start();
-  }
-  RequestRender();
-}
-
-void CloudView::AppendPoints(const std::vector<CloudPoint>& points) {
-  if (points.empty()) return;
-  if (!have_origin_) {
-    time_origin_ns_ = points.front().time_ns;
-    have_origin_ = true;
-  }
-  Chunk* chunk = GrowingChunk();
-  float z_lo = points.front().z, z_hi = z_lo, t_hi = 0.0f, r_hi = 0.0f;
-  const int m = static_cast<int>(color_mode_);
-  for (const CloudPoint& p : points) {
-    if (chunk->size >= kChunkPoints) {
-      SealGrowing();
-      chunk = GrowingChunk();
-    }
-    Drawn& d = chunk->rest;
-    const vtkIdType id = d.points->InsertNextPoint(p.x, p.y, p.z);
-    // A new point has no pass yet: drawn only while no pass filter is on.
-    if (pass_filter_ < 0) d.verts->InsertNextCell(1, &id);
-    const float t = static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9);
-    d.scalar->InsertNextValue(m == 0 ? p.z : m == 1 ? t : m == 2 ? p.range_m : kNaN);
-    chunk->growing.push_back(p);
-    for (auto& v : chunk->values) {
-      if (!v.empty()) v.push_back(cloud_view_internal::kNoValue);
-    }
-    ++chunk->size;
-    ExtendBounds(&chunk->bounds, p);
-    ++point_count_;
-    z_lo = std::min(z_lo, p.z);
-    z_hi = std::max(z_hi, p.z);
-    t_hi = std::max(t_hi, t);
-    r_hi = std::max(r_hi, p.range_m);
-  }
-  // Only the growing chunk is marked modified: it alone is uploaded again.
-  Drawn& d = chunk->rest;
-  d.points->Modified();
-  d.verts->Modified();
-  d.scalar->Modified();
-  d.poly->Modified();
-  // While points stream in, sealed chunks are drawn at the motion level
-  // (renders stay short and the GUI responsive); the rest level returns when
-  // the data pauses.
-  if (point_count_ > lod_budget_) {
-    SetLodActive(true);
-    settle_->start();
-  }
-  UpdateRanges(z_lo, t_hi, r_hi);
-  UpdateRanges(z_hi, t_hi, r_hi);
   RequestRender();
 }
 

@@ -382,6 +382,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ClearBatches();
   void InstallBatchObserver();
   Chunk* GrowingChunk();
+  // Appends n points (at most the growing chunk's room) to it, widening
+  // the running colour ranges (AppendPoints).
+  void AppendToGrowing(Chunk* chunk, const CloudPoint* p, size_t n, float* z_lo, float* z_hi,
+                       float* t_hi, float* r_hi);
   void SealGrowing();  // The view's own packing of a full growing chunk.
   // `payload`: the chunk's, if the caller has it unpacked (else pinned here).
   void AddSealed(std::shared_ptr<const PackedChunk> packed,

@@ -1,7 +1,8 @@
-// CloudView's internals shared by its source files (cloud_view.cc: content,
-// camera, picking; cloud_view_colors.cc: colour modes and lookup tables;
-// cloud_view_lod.cc: the level of detail): the chunk of points with what is
-// drawn of it. Not for use outside ui/view/.
+// CloudView's internals shared by its source files (cloud_view.cc: the
+// scene, camera and frames; cloud_view_append.cc: points and sealed chunks
+// as they arrive; cloud_view_colors.cc: colour modes and lookup tables;
+// cloud_view_lod.cc: the level of detail; ...): the chunk of points with
+// what is drawn of it. Not for use outside ui/view/.
 //
 // A chunk's points live in one place: the shared packed chunk of the cloud
 // store (core/cloud/packed_chunk.h, 14 bytes a point, pageable), or, for the
