@@ -247,6 +247,8 @@ void CloudView::NewDrawnActor(Drawn* d) {
 void CloudView::Clear() {
   for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
+  if (spare_growing_) RemoveChunkActors(spare_growing_.get());
+  spare_growing_.reset();
   cube_index_.clear();
   cube_keys_.clear();
   cube_counts_.clear();

@@ -382,6 +382,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ClearBatches();
   void InstallBatchObserver();
   Chunk* GrowingChunk();
+  // Drops the growing chunk (the last of chunks_), keeping its level's
+  // arrays, mapper and actor, hidden, for the next one (spare_growing_).
+  void RetireGrowing();
   // Appends n points (at most the growing chunk's room) to it, widening
   // the running colour ranges (AppendPoints).
   void AppendToGrowing(Chunk* chunk, const CloudPoint* p, size_t n, float* z_lo, float* z_hi,
@@ -492,6 +495,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkAxesActor> axes_;
   vtkSmartPointer<vtkOrientationMarkerWidget> axes_widget_;
   std::vector<std::unique_ptr<Chunk>> chunks_;
+  std::unique_ptr<Chunk> spare_growing_;  // RetireGrowing: for GrowingChunk to reuse.
   // The cloud's census: every chunk's 0.5 m cubes (PackedChunk::CellKey)
   // summed, the rest plan's unit.
   std::unordered_map<uint64_t, uint32_t> cube_index_;  // key -> index below
