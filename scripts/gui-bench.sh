@@ -16,14 +16,17 @@
 #      (`--seek`): the seek's time, event-loop latency, peak memory;
 #   7. the office floor as a project (rooms a and b, b aligned to a): the
 #      project's sessions drawn as the view's layers, open and show, orbit
-#      at both levels, the rest passes, picks, memory.
+#      at both levels, the rest passes, picks, memory;
+#   8. the view's live insertion alone (tests/bench/
+#      view_insertion_benchmark.cc): GUI seconds an hour of X4 points, live
+#      and at 20x, no display and no renderer in the way.
 # Usage: scripts/gui-bench.sh [WORKDIR] [SECTIONS]   (after scripts/build.sh)
-#   SECTIONS: any of 1..7 (default all), e.g. "2 5". The sessions take
+#   SECTIONS: any of 1..8 (default all), e.g. "2 5". The sessions take
 #   ~20 GB of disk in WORKDIR, made once (simulate: ~4 minutes for 100 M).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-/tmp/sweepscan-gui-bench}
-sections=${2:-1 2 3 4 5 6 7}
+sections=${2:-1 2 3 4 5 6 7 8}
 want() { [[ " $sections " == *" $1 "* ]]; }
 mkdir -p "$work"
 cli=build/app/sweepscan-cli
@@ -94,4 +97,8 @@ if want 7; then
     $cli project align --session building_b --to building_a "$project" > /dev/null
   fi
   gui --project "$project" --orbit-benchmark 30
+fi
+if want 8; then
+  echo "## the view's live insertion alone (view_insertion_benchmark)"
+  build/tests/view_insertion_benchmark
 fi
