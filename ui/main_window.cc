@@ -523,7 +523,7 @@ void MainWindow::OnTick() {
     QElapsedTimer insertion;
     insertion.start();
     view_->AppendSealed(b.sealed, b.unpacked);
-    view_->AppendPoints(b.points);
+    view_->AppendPoints(std::move(b.points));  // Kept by the view, not copied.
     insertion_ms_ += insertion.nsecsElapsed() * 1e-6;
     view_->AppendTrajectory(b.trajectory);
     if (b.has_pose) {

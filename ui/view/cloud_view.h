@@ -121,6 +121,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // ---- Content ----
   void Clear();
   // Points in order; the view packs a growing chunk itself when it fills.
+  // The view keeps the vector it is given (moved), and copies the other.
+  void AppendPoints(std::vector<CloudPoint>&& points);
   void AppendPoints(const std::vector<CloudPoint>& points);
   // Chunks sealed by the cloud store, in order. The growing chunk's points
   // are the first points of the first one (the store seals what it grew).
@@ -385,10 +387,11 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Drops the growing chunk (the last of chunks_), keeping its level's
   // arrays, mapper and actor, hidden, for the next one (spare_growing_).
   void RetireGrowing();
-  // Appends n points (at most the growing chunk's room) to it, widening
-  // the running colour ranges (AppendPoints).
-  void AppendToGrowing(Chunk* chunk, const CloudPoint* p, size_t n, float* z_lo, float* z_hi,
-                       float* t_hi, float* r_hi);
+  // Appends the batch's points first .. first + n - 1 (at most the growing
+  // chunk's room; kept, not copied) to it, widening the running colour
+  // ranges (AppendPoints).
+  void AppendToGrowing(Chunk* chunk, const std::shared_ptr<const std::vector<CloudPoint>>& batch,
+                       size_t first, size_t n, float* z_lo, float* z_hi, float* t_hi, float* r_hi);
   void SealGrowing();  // The view's own packing of a full growing chunk.
   // `payload`: the chunk's, if the caller has it unpacked (else pinned here).
   void AddSealed(std::shared_ptr<const PackedChunk> packed,

@@ -351,13 +351,13 @@ void CloudView::Recolor(Chunk* chunk, Drawn* d) {
                                                              : ValueOf(*chunk, m, d->At(k));
     }
   } else if (!chunk->sealed()) {
-    for (size_t k = 0; k < n; ++k) {
-      const CloudPoint& p = chunk->growing[k];
+    chunk->growing.ForEach([&](size_t k, const CloudPoint& p) {
+      if (k >= n) return;
       s[k] = m == 0 ? p.z
              : m == 1 ? static_cast<float>((p.time_ns - time_origin_ns_) * 1e-9)
              : m == 2 ? p.range_m
                       : ValueOf(*chunk, m, k);
-    }
+    });
   } else if (m == 0) {
     for (size_t k = 0; k < n; ++k) s[k] = xyz[3 * k + 2];
   } else if (m >= 3) {

@@ -163,13 +163,12 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // The growing chunk (at most 65 536 points): every point.
   for (const auto& c : chunks_) {
     if (c->sealed() || c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin(c->bounds.data()))) continue;
-    size_t best = c->size;
-    for (size_t i = 0; i < c->size; ++i) {
-      const CloudPoint& p = c->growing[i];
-      if (p.z > clip_z || !Passes(*c, i)) continue;  // Clipped or not drawn: not pickable.
-      if (nearer(p.x - o.x(), p.y - o.y(), p.z - o.z(), &best_t)) best = i;
-    }
-    if (best < c->size) take(&c->growing[best].x);
+    const CloudPoint* best = nullptr;
+    c->growing.ForEach([&](size_t i, const CloudPoint& p) {
+      if (p.z > clip_z || !Passes(*c, i)) return;  // Clipped or not drawn: not pickable.
+      if (nearer(p.x - o.x(), p.y - o.y(), p.z - o.z(), &best_t)) best = &p;
+    });
+    if (best != nullptr) take(&best->x);
   }
   // Sealed chunks: only the blocks the ray passes near
   // (PackedChunk::block_bounds(); a ray through a room revisited for hours
