@@ -3,7 +3,8 @@
 // one crossing into the next, are drawn point for point with their colour
 // scalars exact (height, time, range), VTK's cells the points the pass
 // filter shows (new points not drawn while a filter is on, drawn again
-// with it off), under a real display (xvfb-run in CI).
+// with it off), and a NaN first height leaves the colours' range finite,
+// under a real display (xvfb-run in CI).
 #include <gtest/gtest.h>
 
 #include <QtTest>
@@ -127,6 +128,23 @@ TEST(CloudViewGrowingTest, StreamedPointsAreDrawnExactlyWithTheirScalarsAndThePa
   cloud.insert(cloud.end(), batch.begin(), batch.end());
   view.RenderNow();
   EXPECT_EQ(Sorted(view.BatchedPoints()), Sorted(cloud));
+}
+
+// A first batch whose first point has a NaN height (a chunk may hold one):
+// the height colours span the other points' heights (the range started
+// from the batch's first point, and a NaN start left it NaN for the
+// session).
+TEST(CloudViewGrowingTest, ANanFirstHeightLeavesTheColourRangeFinite) {
+  CloudView view;
+  std::mt19937 rng(7);
+  std::vector<CloudPoint> points = RoomPoints(20000, 0, &rng);
+  for (CloudPoint& p : points) p.z += 10.0f;  // A room on an upper floor: not the default span.
+  points[0].z = std::numeric_limits<float>::quiet_NaN();
+  view.AppendPoints(points);
+  const std::array<double, 2> range = view.color_range();
+  EXPECT_EQ(range[0], 10.0);  // The floor: whole metres below the lowest point.
+  EXPECT_TRUE(std::isfinite(range[1]));
+  EXPECT_GE(range[1], 12.7);
 }
 
 }  // namespace

@@ -138,6 +138,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // ---- Appearance ----
   void SetColorMode(ColorMode mode);
   ColorMode color_mode() const { return color_mode_; }
+  // The values the colour map spans now (the colour bar's ends).
+  std::array<double, 2> color_range() const;
   // Values for kPass (0 = pass A, 1 = pass B of a circle drive, NaN none) or
   // kDeviation (mm from the fitted plane, NaN off every plane), one per point
   // in the order the points were appended; points beyond `values` (or

@@ -12,6 +12,7 @@
 
 #include <QTimer>
 #include <algorithm>
+#include <limits>
 #include <vector>
 
 #include "core/cloud/cloud_pager.h"
@@ -212,7 +213,8 @@ void CloudView::AppendPoints(std::vector<CloudPoint>&& moved) {
     time_origin_ns_ = points.front().time_ns;
     have_origin_ = true;
   }
-  float z_lo = points.front().z, z_hi = z_lo, t_hi = 0.0f, r_hi = 0.0f;
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  float z_lo = inf, z_hi = -inf, t_hi = 0.0f, r_hi = 0.0f;
   Chunk* chunk = GrowingChunk();
   for (size_t i = 0; i < points.size();) {
     if (chunk->size >= kChunkPoints) {
@@ -230,8 +232,10 @@ void CloudView::AppendPoints(std::vector<CloudPoint>&& moved) {
     SetLodActive(true);
     settle_->start();
   }
-  UpdateRanges(z_lo, t_hi, r_hi);
-  UpdateRanges(z_hi, t_hi, r_hi);
+  if (z_lo <= z_hi) {  // Not when every height was NaN.
+    UpdateRanges(z_lo, t_hi, r_hi);
+    UpdateRanges(z_hi, t_hi, r_hi);
+  }
   RequestRender();
 }
 
@@ -255,7 +259,10 @@ void CloudView::AppendToGrowing(Chunk* chunk,
   float* xyz = xyz_array->GetPointer(static_cast<vtkIdType>(3 * old));
   float* s = d.scalar->GetPointer(static_cast<vtkIdType>(old));
   const int m = static_cast<int>(color_mode_);
-  float lo[3] = {p[0].x, p[0].y, p[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
+  // From +-inf: a NaN coordinate (a chunk may hold one) is then never a
+  // bound, as std::min and std::max keep the first argument against NaN.
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
   float t_max = *t_hi, r_max = *r_hi;
   for (size_t k = 0; k < n; ++k) {
     const CloudPoint& q = p[k];

@@ -61,6 +61,11 @@ void CloudView::UpdateRanges(float z, float t, float r) {
   if (changed) ApplyLookupTable();
 }
 
+std::array<double, 2> CloudView::color_range() const {
+  const double* r = lut_->GetTableRange();
+  return {r[0], r[1]};
+}
+
 void CloudView::ApplyLookupTable() {
   const int m = static_cast<int>(color_mode_);
   color_bar_->SetTitle(kBarTitles[m]);
