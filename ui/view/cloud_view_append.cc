@@ -25,6 +25,11 @@ using cloud_view_internal::kScalarName;
 
 namespace {
 
+// Bounds and ranges start from +-inf: a NaN coordinate (a chunk may hold
+// one) is then never a bound, as std::min and std::max keep their first
+// argument against NaN.
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
 // 0, 1, 2, ... kChunkPoints: the growing chunk's vertex cells while every
 // point is drawn are the identity (cell k is point k), their offsets and
 // connectivity both prefixes of this one array. Shared read-only, it saves
@@ -213,8 +218,7 @@ void CloudView::AppendPoints(std::vector<CloudPoint>&& moved) {
     time_origin_ns_ = points.front().time_ns;
     have_origin_ = true;
   }
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  float z_lo = inf, z_hi = -inf, t_hi = 0.0f, r_hi = 0.0f;
+  float z_lo = kInf, z_hi = -kInf, t_hi = 0.0f, r_hi = 0.0f;
   Chunk* chunk = GrowingChunk();
   for (size_t i = 0; i < points.size();) {
     if (chunk->size >= kChunkPoints) {
@@ -259,10 +263,7 @@ void CloudView::AppendToGrowing(Chunk* chunk,
   float* xyz = xyz_array->GetPointer(static_cast<vtkIdType>(3 * old));
   float* s = d.scalar->GetPointer(static_cast<vtkIdType>(old));
   const int m = static_cast<int>(color_mode_);
-  // From +-inf: a NaN coordinate (a chunk may hold one) is then never a
-  // bound, as std::min and std::max keep the first argument against NaN.
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  float lo[3] = {inf, inf, inf}, hi[3] = {-inf, -inf, -inf};
+  float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
   float t_max = *t_hi, r_max = *r_hi;
   for (size_t k = 0; k < n; ++k) {
     const CloudPoint& q = p[k];

@@ -6,13 +6,13 @@
 //
 // A chunk's points live in one place: the shared packed chunk of the cloud
 // store (core/cloud/packed_chunk.h, 14 bytes a point, pageable), or, for the
-// one growing chunk, the CloudPoints of the batches that brought them. VTK holds only what is
-// drawn: the chunk's points in the view's spatially even sample (the motion
-// level, core/geometry/voxel_sample.h; a few to a few hundred a chunk) and,
-// at rest, every stride-th point of each census cube in view, the strides
-// spending the rest budget evenly on screen, with the motion level's among
-// them. Each drawn level carries one scalar array, the colour mode's, mapped
-// through the shared lookup table on the GPU side.
+// one growing chunk, the CloudPoints of the batches that brought them. VTK
+// holds only what is drawn: the chunk's points in the view's spatially even
+// sample (the motion level, core/geometry/voxel_sample.h; a few to a few
+// hundred a chunk) and, at rest, every stride-th point of each census cube
+// in view, the strides spending the rest budget evenly on screen, with the
+// motion level's among them. Each drawn level carries one scalar array, the
+// colour mode's, mapped through the shared lookup table on the GPU side.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_CHUNK_H_
 
@@ -86,10 +86,6 @@ class GrowingPoints {
     size_ += n;
   }
   size_t size() const { return size_; }
-  void clear() {
-    spans_.clear();
-    size_ = 0;
-  }
   // Point i: a binary search over the spans (a few hundred at most).
   const CloudPoint& operator[](size_t i) const {
     const auto s = std::upper_bound(spans_.begin(), spans_.end(), i,
