@@ -15,6 +15,47 @@ namespace sweepscan {
 
 static_assert(PackedChunk::kBlockPoints == kCodecBlockPoints, "a pick decodes the blocks it tests");
 
+namespace {
+
+// Step q of the 255 across [lo, hi], the ends exact: a piece's side is
+// lo + q (hi - lo) / 255, in double (hi - lo of two floats is exact there).
+double PieceSide(float lo, float hi, uint8_t q) {
+  if (q == 255) return hi;
+  return lo + (static_cast<double>(hi) - lo) * q / 255.0;
+}
+
+// A piece's extent [min, max] on one axis of its block's [lo, hi] as the
+// steps at or outside it (q[0] the min's, q[1] the max's), checked against
+// PieceSide so that rounding never puts a point outside its piece's box.
+// No finite coordinate (min > max): q = {255, 0}, an empty box.
+void QuantisePiece(float lo, float hi, float min, float max, uint8_t q[2]) {
+  if (!(min <= max) || !(lo <= hi)) {
+    q[0] = 255;
+    q[1] = 0;
+    return;
+  }
+  const double steps = hi > lo ? 255.0 / (static_cast<double>(hi) - lo) : 0.0;
+  int q0 =
+      std::clamp(static_cast<int>(std::floor((min - static_cast<double>(lo)) * steps)), 0, 255);
+  int q1 = std::clamp(static_cast<int>(std::ceil((max - static_cast<double>(lo)) * steps)), 0, 255);
+  while (q0 > 0 && PieceSide(lo, hi, static_cast<uint8_t>(q0)) > min) --q0;
+  while (q1 < 255 && PieceSide(lo, hi, static_cast<uint8_t>(q1)) < max) ++q1;
+  q[0] = static_cast<uint8_t>(q0);
+  q[1] = static_cast<uint8_t>(q1);
+}
+
+}  // namespace
+
+bool PackedChunk::PieceBox(size_t piece, double box[6]) const {
+  const std::array<float, 6>& block = block_bounds_[piece / kPiecesPerBlock];
+  const std::array<uint8_t, 6>& q = piece_boxes_[piece];
+  for (int a = 0; a < 3; ++a) {
+    if (q[2 * a] > q[2 * a + 1]) return false;
+  }
+  for (int k = 0; k < 6; ++k) box[k] = PieceSide(block[k & ~1], block[k | 1], q[k]);
+  return true;
+}
+
 bool QuantiseRange(float range_m, uint16_t* q) {
   // 65 535 steps are 16.38 m: anything longer (or NaN) keeps its float.
   if (!(range_m >= 0.0f && range_m < 17.0f)) return false;
@@ -173,6 +214,19 @@ std::shared_ptr<const PackedChunk> PackedChunk::Pack(const CloudPoint* points, s
       }
     }
     chunk->block_bounds_[k] = box;
+  }
+  chunk->piece_boxes_.resize((n + kPiecePoints - 1) / kPiecePoints);
+  for (size_t p = 0; p < chunk->piece_boxes_.size(); ++p) {
+    const std::array<float, 6>& block = chunk->block_bounds_[p / kPiecesPerBlock];
+    for (int a = 0; a < 3; ++a) {
+      float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+      for (size_t i = p * kPiecePoints; i < std::min(n, (p + 1) * kPiecePoints); ++i) {
+        const float v = a == 0 ? points[i].x : a == 1 ? points[i].y : points[i].z;
+        lo = std::min(lo, v);  // NaN is passed over, as in the block's box.
+        hi = std::max(hi, v);
+      }
+      QuantisePiece(block[2 * a], block[2 * a + 1], lo, hi, &chunk->piece_boxes_[p][2 * a]);
+    }
   }
   TakeCensus(points, n, chunk.get());
   chunk->first_time_ns_ = n > 0 ? points[0].time_ns : 0;

@@ -152,6 +152,65 @@ TEST(PackedChunkTest, BlockBoundsHoldTheirPointsAndAreAttained) {
   }
 }
 
+// A scan line's pieces: every point inside its piece's box, each side
+// within one step (a 255th of the block's box) of the point that attains
+// it, so a ray passing a block's slab away from the points misses the
+// pieces; a piece without a finite coordinate has no box.
+TEST(PackedChunkTest, PieceBoxesHoldTheirPointsWithinAStepOfTheirBlocks) {
+  std::vector<CloudPoint> points;
+  for (size_t i = 0; i < 3 * PackedChunk::kBlockPoints + 40; ++i) {  // a short last piece
+    const double a = 2.0 * M_PI * static_cast<double>(i) / 700.0;    // an X4's turn
+    CloudPoint p;
+    p.x = GridPosition(GridIndex(static_cast<float>(0.0002 * i)));
+    p.y = GridPosition(GridIndex(static_cast<float>(2.5 * std::cos(a))));
+    p.z = GridPosition(GridIndex(static_cast<float>(1.2 + 1.2 * std::sin(a))));
+    p.range_m = 2.5f;
+    points.push_back(p);
+  }
+  // Then with NaNs (off the grid: positions kept as floats).
+  for (const bool with_nan : {false, true}) {
+    if (with_nan) {
+      const float nan = std::numeric_limits<float>::quiet_NaN();
+      for (size_t i = 2 * PackedChunk::kPiecePoints; i < 3 * PackedChunk::kPiecePoints; ++i) {
+        points[i].x = points[i].y = points[i].z = nan;  // piece 2: no point at all
+      }
+      points[5 * PackedChunk::kPiecePoints + 3].y = nan;  // piece 5: one coordinate missing
+    }
+    const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
+    ASSERT_EQ(chunk->positions_on_grid(), !with_nan);
+    ASSERT_EQ(chunk->piece_count(),
+              (points.size() + PackedChunk::kPiecePoints - 1) / PackedChunk::kPiecePoints);
+    for (size_t p = 0; p < chunk->piece_count(); ++p) {
+      double box[6];
+      if (with_nan && p == 2) {
+        EXPECT_FALSE(chunk->PieceBox(p, box));
+        continue;
+      }
+      ASSERT_TRUE(chunk->PieceBox(p, box)) << p;
+      const std::array<float, 6>& block = chunk->block_bounds()[p / PackedChunk::kPiecesPerBlock];
+      double attained[6] = {HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL, HUGE_VAL, -HUGE_VAL};
+      for (size_t i = p * PackedChunk::kPiecePoints;
+           i < std::min(points.size(), (p + 1) * PackedChunk::kPiecePoints); ++i) {
+        const float v[3] = {points[i].x, points[i].y, points[i].z};
+        for (int a = 0; a < 3; ++a) {
+          if (std::isnan(v[a])) continue;
+          EXPECT_GE(v[a], box[2 * a]) << "piece " << p << " point " << i;
+          EXPECT_LE(v[a], box[2 * a + 1]) << "piece " << p << " point " << i;
+          attained[2 * a] = std::min<double>(attained[2 * a], v[a]);
+          attained[2 * a + 1] = std::max<double>(attained[2 * a + 1], v[a]);
+        }
+      }
+      for (int a = 0; a < 3; ++a) {
+        const double step = (static_cast<double>(block[2 * a + 1]) - block[2 * a]) / 255.0;
+        EXPECT_LE(attained[2 * a] - box[2 * a], step * (1 + 1e-9))
+            << "piece " << p << " axis " << a;
+        EXPECT_LE(box[2 * a + 1] - attained[2 * a + 1], step * (1 + 1e-9))
+            << "piece " << p << " axis " << a;
+      }
+    }
+  }
+}
+
 TEST(PackedChunkTest, TheCensusCountsEveryPointInItsCube) {
   // Scattered points, a scan line's worth of neighbours and points on cube
   // faces, at both signs; and a chunk spanning more cubes than the dense
