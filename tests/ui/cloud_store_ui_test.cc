@@ -330,11 +330,14 @@ TEST_F(CloudStoreUiTest, AtRestTheNearestCubesAreDrawnDenserThanTheFarOnes) {
   EXPECT_GT(far_drawn, 0u);
 }
 
-// Against every point of the cloud: the pick reads only the blocks its ray
-// passes near (PackedChunk::block_bounds()), and no point within 5 pixels
-// of the cursor may be nearer the camera than the pick (its tolerance is
-// 6). An oblique camera over the room: rays pass over floor, walls and
-// furniture, through many chunks' boxes.
+// Against every point of the cloud: the pick reads only the pieces of the
+// blocks its ray passes near (PackedChunk::block_bounds(), PieceBox), and
+// no point within a pixel less than its tolerance of the cursor may be
+// nearer the camera than the pick. An oblique camera over the room: rays
+// pass over floor, walls and furniture, through many chunks' boxes. Every
+// third pick has a tolerance of 2 pixels, not 6; every other pick tests
+// its blocks a chunk at a time from the start (on this small cloud the
+// first waves in entry order nearly always find the point).
 void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
   ASSERT_NO_FATAL_FAILURE(OpenLab());
   CloudView* view = window_->view();
@@ -356,7 +359,7 @@ void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
   std::mt19937 rng(11);
   std::uniform_int_distribution<size_t> any(0, snapshot.size() - 1);
   int picks = 0;
-  size_t by_chunk = 0;
+  size_t by_chunk = 0, in_order = 0;
   for (int tries = 0; picks < 30 && tries < 1000; ++tries) {
     const size_t k = any(rng);
     if (!std::isnan(clip) && snapshot[k].z > clip) continue;
@@ -365,12 +368,15 @@ void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
         cursor.y() > view->height() - 10) {
       continue;
     }
+    const double tolerance = picks % 3 == 2 ? 2.0 : 6.0;
+    view->SetPickBlocksInOrder(picks % 2 == 0 ? 224 : 0);
     Eigen::Vector3d got;
-    ASSERT_TRUE(view->PickPoint(cursor, &got));
+    ASSERT_TRUE(view->PickPoint(cursor, &got, tolerance));
     double nearest = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < snapshot.size(); ++i) {
       const CloudPoint& p = snapshot[i];
-      if ((!std::isnan(clip) && p.z > clip) || std::hypot(at[i].x() - cursor.x(), at[i].y() - cursor.y()) > 5.0) {
+      if ((!std::isnan(clip) && p.z > clip) ||
+          std::hypot(at[i].x() - cursor.x(), at[i].y() - cursor.y()) > tolerance - 1.0) {
         continue;
       }
       nearest = std::min(nearest, (Eigen::Vector3d(p.x, p.y, p.z) - eye).norm());
@@ -378,10 +384,11 @@ void CloudStoreUiTest::PicksAreTheNearestPointsUnderTheCursor() {
     EXPECT_LE((got - eye).norm(), nearest + 1e-3) << "pick " << picks << " at " << cursor.x() << ", " << cursor.y();
     ++picks;
     by_chunk += view->last_pick_counts().blocks_by_chunk;
+    in_order += view->last_pick_counts().blocks_in_order;
   }
   EXPECT_EQ(picks, 30);
-  // Some picks went beyond the first waves in entry order to the rest of
-  // their blocks, tested a chunk at a time.
+  // Both paths were taken: blocks in entry order, and blocks a chunk at a time.
+  EXPECT_GT(in_order, 0u);
   EXPECT_GT(by_chunk, 0u);
 }
 

@@ -179,26 +179,66 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // is inside the grown box there: no point of a block entered beyond the
   // best can be nearer. A compressed chunk has only the blocks it tests
   // decoded (PackedChunk::PinBlockPositions).
+  //
+  // Within a block met, only its pieces the ray passes near
+  // (PackedChunk::PieceBox: a block is a slab across the room, a piece a
+  // few decimetres of a scan line): the block's entry is its nearest met
+  // piece's, and only those pieces' points are tested.
   struct Candidate {
     double enter;
     const Chunk* chunk;
     uint32_t block;
+    uint32_t pieces;  // Bit p: the block's piece p is met.
   };
+  // The chunk's margin serves its blocks and pieces: they lie inside its
+  // box, so no point of theirs is farther from the eye than its far side.
+  // Chunks are gathered on every core, their candidates joined in the
+  // chunks' order (the sort's ties then fall as on one thread).
+  static_assert(PackedChunk::kPiecesPerBlock <= 32, "a piece a bit");
+  const RaySlabs slabs(o, d);
+  const double bound = best_t;  // The growing chunk's point, if it has one.
+  std::vector<std::vector<Candidate>> met(chunks_.size());
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, chunks_.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t ci = r.begin(); ci != r.end(); ++ci) {
+          const Chunk& c = *chunks_[ci];
+          double enter = 0.0;
+          const double chunk_margin = margin(c.bounds.data());
+          if (!c.sealed() || c.size == 0 ||
+              !slabs.Hits(c.bounds.data(), chunk_margin, bound, &enter) || enter >= bound) {
+            continue;
+          }
+          const PackedChunk& packed = *c.packed;
+          const auto& blocks = packed.block_bounds();
+          for (size_t k = 0; k < blocks.size(); ++k) {
+            const double box[6] = {blocks[k][0], blocks[k][1], blocks[k][2],
+                                   blocks[k][3], blocks[k][4], blocks[k][5]};
+            if (box[4] > clip_z || !slabs.Hits(box, chunk_margin, bound, &enter) || enter >= bound)
+              continue;
+            Candidate candidate{std::numeric_limits<double>::infinity(), &c,
+                                static_cast<uint32_t>(k), 0};
+            const size_t first_piece = k * PackedChunk::kPiecesPerBlock;
+            const size_t end_piece =
+                std::min(packed.piece_count(), first_piece + PackedChunk::kPiecesPerBlock);
+            for (size_t p = first_piece; p < end_piece; ++p) {
+              double piece[6];
+              if (!packed.PieceBox(p, piece) || piece[4] > clip_z ||
+                  !slabs.Hits(piece, chunk_margin, bound, &enter) || enter >= bound) {
+                continue;
+              }
+              candidate.pieces |= uint32_t{1} << (p - first_piece);
+              candidate.enter = std::min(candidate.enter, enter);
+            }
+            if (candidate.pieces != 0) met[ci].push_back(candidate);
+          }
+        }
+      });
   std::vector<Candidate> candidates;
-  for (const auto& c : chunks_) {
-    double enter = 0.0;
-    if (!c->sealed() || c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin(c->bounds.data()), &enter) ||
-        enter >= best_t) {
-      continue;
-    }
-    const auto& blocks = c->packed->block_bounds();
-    for (size_t k = 0; k < blocks.size(); ++k) {
-      const double box[6] = {blocks[k][0], blocks[k][1], blocks[k][2],
-                             blocks[k][3], blocks[k][4], blocks[k][5]};
-      if (box[4] > clip_z || !RayHitsBox(o, d, box, margin(box), &enter) || enter >= best_t) continue;
-      candidates.push_back({enter, c.get(), static_cast<uint32_t>(k)});
-    }
-  }
+  size_t count = 0;
+  for (const std::vector<Candidate>& m : met) count += m.size();
+  candidates.reserve(count);
+  for (const std::vector<Candidate>& m : met)
+    candidates.insert(candidates.end(), m.begin(), m.end());
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.enter < b.enter; });
   // A block's point nearest the camera under the cursor and before
@@ -219,6 +259,14 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
         packed.BlockPositions(pin, candidate.block, &first);
     double best = bound;
     size_t best_i = c.size;
+    // The met pieces' points, in the block's order (a tie goes to the first).
+    auto for_pieces = [&](auto&& test) {
+      for (uint32_t m = candidate.pieces; m != 0; m &= m - 1) {
+        const size_t from =
+            begin + static_cast<size_t>(__builtin_ctz(m)) * PackedChunk::kPiecePoints;
+        test(from, std::min(end, from + PackedChunk::kPiecePoints));
+      }
+    };
     if (packed.positions_on_grid()) {
       // Whole millimetres after the chunk's origin (docs/cloud-store.md):
       // the ray's origin and the clip moved there, the points are not decoded.
@@ -226,18 +274,22 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
       const double ox = o.x() - origin[0] * kGridStepM, oy = o.y() - origin[1] * kGridStepM,
                    oz = o.z() - origin[2] * kGridStepM;
       const int64_t top = std::isfinite(clip_z) ? clip_k - origin[2] : clip_k;
-      const int16_t* q = payload->xyz_mm.data() + 3 * (begin - first);
-      for (size_t i = begin; i < end; ++i, q += 3) {
-        if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
-        if (nearer(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, &best))
-          best_i = i;
-      }
+      for_pieces([&](size_t from, size_t to) {
+        const int16_t* q = payload->xyz_mm.data() + 3 * (from - first);
+        for (size_t i = from; i < to; ++i, q += 3) {
+          if (q[2] > top || !Passes(c, i)) continue;  // Clipped or not drawn: not pickable.
+          if (nearer(q[0] * kGridStepM - ox, q[1] * kGridStepM - oy, q[2] * kGridStepM - oz, &best))
+            best_i = i;
+        }
+      });
     } else {
-      const float* p = payload->xyz.data() + 3 * (begin - first);
-      for (size_t i = begin; i < end; ++i, p += 3) {
-        if (p[2] > clip_z || !Passes(c, i)) continue;
-        if (nearer(p[0] - o.x(), p[1] - o.y(), p[2] - o.z(), &best)) best_i = i;
-      }
+      for_pieces([&](size_t from, size_t to) {
+        const float* p = payload->xyz.data() + 3 * (from - first);
+        for (size_t i = from; i < to; ++i, p += 3) {
+          if (p[2] > clip_z || !Passes(c, i)) continue;
+          if (nearer(p[0] - o.x(), p[1] - o.y(), p[2] - o.z(), &best)) best_i = i;
+        }
+      });
     }
     if (best_i == c.size) return;
     out->t = best;
@@ -261,9 +313,10 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   last_pick_counts_ = PickCounts();
   std::vector<BlockHit> hits;
   size_t w1 = 0;
-  for (size_t w0 = 0, wave = 32;
-       wave <= 128 && w0 < candidates.size() && candidates[w0].enter < best_t; w0 = w1, wave *= 2) {
-    w1 = std::min(candidates.size(), w0 + wave);
+  const size_t in_order = std::min(candidates.size(), pick_blocks_in_order_);
+  for (size_t w0 = 0, wave = 32; wave <= 128 && w0 < in_order && candidates[w0].enter < best_t;
+       w0 = w1, wave *= 2) {
+    w1 = std::min(in_order, w0 + wave);
     hits.assign(w1 - w0, BlockHit());
     const double bound = best_t;
     tbb::parallel_for(tbb::blocked_range<size_t>(w0, w1, 8), [&](const tbb::blocked_range<size_t>& r) {
