@@ -276,23 +276,27 @@ PackedChunk::PositionsPin PackedChunk::PinPositions() const {
 }
 
 std::shared_ptr<const ChunkPayload> PackedChunk::BlockPositions(const PositionsPin& pin,
-                                                                size_t block, size_t* first) const {
+                                                                size_t block, size_t* first,
+                                                                size_t points) const {
   if (pin.payload != nullptr) {
     *first = 0;
     return pin.payload;
   }
   *first = block * kBlockPoints;
-  return Unpack(*pin.packed, block);
+  return Unpack(*pin.packed, block, points);
 }
 
-std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t block) const {
+std::shared_ptr<ChunkPayload> PackedChunk::Unpack(const std::vector<uint8_t>& bytes, size_t block,
+                                                  size_t points) const {
   auto p = std::make_shared<ChunkPayload>();
   std::string error;
   const bool ok =
       block == kWholeChunk
           ? DecodeSegments(bytes, segment_ends_, size_, positions_on_grid_, ranges_quantised_, 0,
-                           (size_ + kCodecSegmentPoints - 1) / kCodecSegmentPoints, false, p.get(), &error)
-          : DecodeBlockPositions(bytes, segment_ends_, size_, positions_on_grid_, block, p.get(), &error);
+                           (size_ + kCodecSegmentPoints - 1) / kCodecSegmentPoints, false, p.get(),
+                           &error)
+          : DecodeBlockPositions(bytes, segment_ends_, size_, positions_on_grid_, block, p.get(),
+                                 &error, points);
   if (!ok) {
     // Bytes this process compressed (and maybe wrote to and read back from
     // its own unnamed file): a failure is a fault of the machine or ours,

@@ -176,9 +176,12 @@ class PackedChunk {
     std::shared_ptr<const ChunkPayload> payload;         // unpacked, or
     std::shared_ptr<const std::vector<uint8_t>> packed;  // compressed
   };
+  // With `points`, a compressed block decodes its first `points` only (a
+  // multiple of 8; the pieces a pick tests end there).
   PositionsPin PinPositions() const;
   std::shared_ptr<const ChunkPayload> BlockPositions(const PositionsPin& pin, size_t block,
-                                                     size_t* first) const;
+                                                     size_t* first,
+                                                     size_t points = kBlockPoints) const;
   bool resident() const;  // In memory, unpacked or compressed (not only in the cache file).
   bool unpacked() const;  // Unpacked in memory.
   size_t payload_bytes() const { return payload_bytes_; }  // Unpacked.
@@ -214,7 +217,8 @@ class PackedChunk {
   // From the compressed bytes, the whole payload (kWholeChunk) or one
   // block's positions; fatal if they do not decode.
   static constexpr size_t kWholeChunk = ~size_t{0};
-  std::shared_ptr<ChunkPayload> Unpack(const std::vector<uint8_t>& bytes, size_t block) const;
+  std::shared_ptr<ChunkPayload> Unpack(const std::vector<uint8_t>& bytes, size_t block,
+                                       size_t points = kBlockPoints) const;
 
   size_t size_ = 0;
   std::array<double, 6> bounds_{};

@@ -196,17 +196,19 @@ size_t GroupBytes(const uint8_t* codes, size_t g) {
 }
 
 // The inverse of PackAxis for the points of blocks [b0, b1) of the
-// segment's m, into v (the block b0's first point at v[0]); returns where
-// the axis ends, or null if its bytes run past `end` (a damaged segment).
+// segment's m, at most `points` of them (a multiple of kGroup), into v (the
+// block b0's first point at v[0]); returns where the axis ends, or null if
+// its bytes run past `end` (a damaged segment).
 const uint8_t* UnpackAxis(const uint8_t* in, const uint8_t* end, size_t m, size_t b0, size_t b1,
-                          size_t stride, uint16_t* v) {
+                          size_t points, size_t stride, uint16_t* v) {
   const size_t groups = (m + kGroup - 1) / kGroup;
   const size_t head = 2 * (Blocks(m) - 1) + (groups + 1) / 2;  // Block starts and width codes.
   if (static_cast<size_t>(end - in) < head) return nullptr;
   const uint8_t* starts = in;
   const uint8_t* codes = starts + 2 * (Blocks(m) - 1);
   const uint8_t* data = in + head;
-  const size_t g0 = b0 * kBlockGroups, g1 = std::min(groups, b1 * kBlockGroups);
+  const size_t g0 = b0 * kBlockGroups,
+               g1 = std::min({groups, b1 * kBlockGroups, g0 + points / kGroup});
   const size_t total = GroupBytes(codes, groups);
   if (static_cast<size_t>(end - data) < total) return nullptr;
   in = data + GroupBytes(codes, g0);
@@ -317,9 +319,10 @@ class FrameReader {
   }
 
   // Blocks [b0, b1) of segment s's positions (b1 clipped to the segment's
-  // blocks), the block b0's first point at out[0] (3 int16 or 3 floats a
-  // point, by `grid`).
-  bool Positions(size_t s, bool grid, size_t b0, size_t b1, void* out) {
+  // blocks), at most `points` of them (a multiple of kGroup), the block
+  // b0's first point at out[0] (3 int16 or 3 floats a point, by `grid`).
+  bool Positions(size_t s, bool grid, size_t b0, size_t b1, void* out,
+                 size_t points = kCodecSegmentPoints) {
     const size_t m = std::min(kCodecSegmentPoints, n_ - s * kCodecSegmentPoints);
     b1 = std::min(b1, Blocks(m));
     size_t begin = 0, end = 0;
@@ -331,7 +334,7 @@ class FrameReader {
       for (int b = 0; b < 4; ++b) crc |= uint32_t{crc_at[b]} << (8 * b);
       if (Crc32c(in, static_cast<size_t>(crc_at - in)) != crc) return Refuse(s, "CRC-32C mismatch");
       for (int a = 0; a < 3 && in != nullptr; ++a) {
-        in = UnpackAxis(in, crc_at, m, b0, b1, 3, static_cast<uint16_t*>(out) + a);
+        in = UnpackAxis(in, crc_at, m, b0, b1, points, 3, static_cast<uint16_t*>(out) + a);
       }
       if (in != crc_at) return Refuse(s, "its groups do not fill its bytes");
       return true;
@@ -340,8 +343,9 @@ class FrameReader {
     scratch_.resize(3 * m);
     const uint8_t* in = plain_.data();
     for (int a = 0; a < 3; ++a) in = GetPlanes(in, m, 3, false, scratch_.data() + a);
-    const size_t first = b0 * kCodecBlockPoints, count = std::min(m, b1 * kCodecBlockPoints) - first;
-    std::memcpy(out, scratch_.data() + 3 * first, 3 * count * sizeof(float));
+    const size_t first = b0 * kCodecBlockPoints;
+    const size_t count = std::min(std::min(m, b1 * kCodecBlockPoints) - first, points);
+    if (count > 0) std::memcpy(out, scratch_.data() + 3 * first, 3 * count * sizeof(float));
     return true;
   }
 
@@ -431,19 +435,23 @@ bool DecodeSegments(const std::vector<uint8_t>& bytes, const std::vector<uint32_
   return true;
 }
 
-bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
-                          bool grid, size_t block, ChunkPayload* p, std::string* error) {
+bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends,
+                          size_t n, bool grid, size_t block, ChunkPayload* p, std::string* error,
+                          size_t points) {
   FrameReader reader(bytes, ends, n, error);
   if (!reader.CheckFrames()) return false;
   const size_t first = block * kCodecBlockPoints;
   *p = ChunkPayload();
   if (first >= n) return true;
-  const size_t count = std::min(n - first, kCodecBlockPoints);
+  // Whole groups: a group's eight values are written together.
+  points = std::min(kCodecBlockPoints, (points + kGroup - 1) / kGroup * kGroup);
+  const size_t count = std::min({n - first, kCodecBlockPoints, points});
+  if (count == 0) return true;  // No point asked for: none read.
   (grid ? p->xyz_mm.resize(3 * count) : p->xyz.resize(3 * count));
   void* out = grid ? static_cast<void*>(p->xyz_mm.data()) : static_cast<void*>(p->xyz.data());
   constexpr size_t kBlocksASegment = kCodecSegmentPoints / kCodecBlockPoints;
-  return reader.Positions(block / kBlocksASegment, grid, block % kBlocksASegment, block % kBlocksASegment + 1,
-                          out);
+  return reader.Positions(block / kBlocksASegment, grid, block % kBlocksASegment,
+                          block % kBlocksASegment + 1, out, points);
 }
 
 }  // namespace sweepscan

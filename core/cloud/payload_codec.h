@@ -67,11 +67,14 @@ bool DecodeSegments(const std::vector<uint8_t>& bytes, const std::vector<uint32_
 
 // The positions of block `block` of a chunk of n points (points
 // [block * kCodecBlockPoints, ...), at most kCodecBlockPoints of them) as a
-// payload of those points' positions alone. Grid positions decode that
+// payload of those points' positions alone; with `points`, of its first
+// `points` only (rounded up to a multiple of 8: a pick that needs the
+// block's first pieces decodes no further). Grid positions decode that
 // block only (its segment's CRC is checked whole); floats decode its
 // segment. False, with `error`, as DecodeSegments.
-bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends, size_t n,
-                          bool grid, size_t block, ChunkPayload* out, std::string* error);
+bool DecodeBlockPositions(const std::vector<uint8_t>& bytes, const std::vector<uint32_t>& ends,
+                          size_t n, bool grid, size_t block, ChunkPayload* out, std::string* error,
+                          size_t points = kCodecBlockPoints);
 
 }  // namespace sweepscan
 

@@ -79,6 +79,12 @@ void RoundTrip(bool grid, bool quantised, const uint8_t* data, size_t size) {
     const size_t first = b * kCodecBlockPoints, count = std::min(n - first, kCodecBlockPoints);
     Check(grid ? Same(back.xyz_mm, p.xyz_mm.data() + 3 * first, 3 * count)
                : Same(back.xyz, p.xyz.data() + 3 * first, 3 * count));
+    // Its first points alone (whole groups of 8), as a pick decodes them.
+    const size_t points = (b * 37 + n) % (kCodecBlockPoints + 1);
+    Check(DecodeBlockPositions(bytes, ends, n, grid, b, &back, &error, points));
+    const size_t head = std::min(count, (points + 7) / 8 * 8);
+    Check(grid ? Same(back.xyz_mm, p.xyz_mm.data() + 3 * first, 3 * head)
+               : Same(back.xyz, p.xyz.data() + 3 * first, 3 * head));
   }
 }
 
@@ -108,6 +114,14 @@ void Damaged(bool grid, bool quantised, const uint8_t* data, size_t size) {
   for (size_t b = 0; b * kCodecBlockPoints < n; ++b) {
     if (DecodeBlockPositions(bytes, ends, n, grid, b, &back, &error)) {
       const size_t count = std::min(n - b * kCodecBlockPoints, kCodecBlockPoints);
+      Check((grid ? back.xyz_mm.size() : back.xyz.size()) == 3 * count);
+    } else {
+      Check(!error.empty());
+    }
+    const size_t points = (b * 37 + n) % (kCodecBlockPoints + 1);
+    if (DecodeBlockPositions(bytes, ends, n, grid, b, &back, &error, points)) {
+      const size_t count =
+          std::min({n - b * kCodecBlockPoints, kCodecBlockPoints, (points + 7) / 8 * 8});
       Check((grid ? back.xyz_mm.size() : back.xyz.size()) == 3 * count);
     } else {
       Check(!error.empty());

@@ -255,8 +255,10 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
     const size_t begin = candidate.block * PackedChunk::kBlockPoints;
     const size_t end = std::min(c.size, begin + PackedChunk::kBlockPoints);
     size_t first = 0;  // The chunk's point i is the payload's i - first.
+    // Compressed, the block is decoded up to its last met piece only.
     const std::shared_ptr<const ChunkPayload> payload =
-        packed.BlockPositions(pin, candidate.block, &first);
+        packed.BlockPositions(pin, candidate.block, &first,
+                              (32 - __builtin_clz(candidate.pieces)) * PackedChunk::kPiecePoints);
     double best = bound;
     size_t best_i = c.size;
     // The met pieces' points, in the block's order (a tie goes to the first).

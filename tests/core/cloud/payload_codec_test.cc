@@ -203,6 +203,19 @@ TEST(PayloadCodecTest, BlocksDecodeAlone) {
         want.dt_ns.clear();
         want.beam.clear();
         EXPECT_TRUE(SameBits(part, want)) << "layout " << layout << ", " << n << " points, block " << b;
+        // Its first points alone (a pick's first pieces), in whole groups of 8.
+        for (size_t points : {size_t{0}, size_t{8}, size_t{32}, size_t{100}, size_t{224}}) {
+          ASSERT_TRUE(
+              DecodeBlockPositions(encoded.bytes, encoded.ends, n, grid, b, &part, &error, points))
+              << error;
+          const size_t count = std::min({n - first, kCodecBlockPoints, (points + 7) / 8 * 8});
+          ChunkPayload head = Slice(p, first, count);
+          head.range_q.clear();
+          head.dt_ns.clear();
+          head.beam.clear();
+          EXPECT_TRUE(SameBits(part, head))
+              << "layout " << layout << ", " << n << " points, block " << b << ", first " << points;
+        }
       }
     }
   }
