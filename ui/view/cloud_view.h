@@ -281,9 +281,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
     size_t blocks_in_order = 0, blocks_by_chunk = 0, chunks = 0;
   };
   const PickCounts& last_pick_counts() const { return last_pick_counts_; }
-  // At most this many blocks are tested in entry order (the waves: 224)
-  // before the rest are tested a chunk at a time; a test sets 0 to send a
-  // small cloud's every block down the second path.
+  // At most this many blocks are tested in entry order (by default as many
+  // as the waves take, 224) before the rest are tested a chunk at a time; a
+  // test sets 0 to send a small cloud's every block down the second path.
   void SetPickBlocksInOrder(size_t blocks) { pick_blocks_in_order_ = blocks; }
   // Where a world point lands in the widget (pixels), for tests and overlays.
   QPointF WorldToWidget(const Eigen::Vector3d& world);
@@ -475,7 +475,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> marker_labels_;
   LayerPicker layer_picker_;
   PickCounts last_pick_counts_;
-  size_t pick_blocks_in_order_ = 224;
+  size_t pick_blocks_in_order_ = std::numeric_limits<size_t>::max();
   vtkSmartPointer<vtkActor> planes_;
   std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
