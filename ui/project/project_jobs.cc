@@ -24,6 +24,20 @@ std::string CloudKey(const std::string& project_file, const ProjectSession& sess
   return key;
 }
 
+void IndexForPicks(ProjectCloud* cloud) {
+  const std::vector<Eigen::Vector3f>& all = cloud->positions;
+  cloud->bounds.setEmpty();
+  cloud->block_bounds.assign((all.size() + ProjectCloud::kPickBlock - 1) / ProjectCloud::kPickBlock,
+                             Eigen::AlignedBox3f());
+  cloud->piece_bounds.assign((all.size() + ProjectCloud::kPickPiece - 1) / ProjectCloud::kPickPiece,
+                             Eigen::AlignedBox3f());
+  for (size_t i = 0; i < all.size(); ++i) {
+    cloud->bounds.extend(all[i]);
+    cloud->block_bounds[i / ProjectCloud::kPickBlock].extend(all[i]);
+    cloud->piece_bounds[i / ProjectCloud::kPickPiece].extend(all[i]);
+  }
+}
+
 Status BuildProjectCloud(const std::string& project_file, const ProjectSession& session,
                          const std::function<bool(double)>& progress, ProjectCloudPtr* cloud) {
   hardware::SessionCloudOptions options;
@@ -35,12 +49,7 @@ Status BuildProjectCloud(const std::string& project_file, const ProjectSession& 
   out->id = session.id;
   out->key = CloudKey(project_file, session);
   out->positions = hardware::Positions(built.points);
-  for (const Eigen::Vector3f& p : out->positions) out->bounds.extend(p);
-  out->block_bounds.resize((out->positions.size() + ProjectCloud::kPickBlock - 1) /
-                           ProjectCloud::kPickBlock);
-  for (size_t i = 0; i < out->positions.size(); ++i) {
-    out->block_bounds[i / ProjectCloud::kPickBlock].extend(out->positions[i]);
-  }
+  IndexForPicks(out.get());
   out->damage = built.damage;
   out->has_truth = built.has_true_start;
   out->world_from_session_truth = built.world_from_session_truth;

@@ -16,6 +16,8 @@
 #include <QColor>
 #include <algorithm>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include "core/geometry/ray_box.h"
 #include "ui/view/cloud_view.h"
@@ -270,16 +272,17 @@ bool ProjectLayer::drawn_pose(const std::string& id, Rigid3d* project_from_sessi
 namespace {
 
 // Whether a point of `box` can lie within the pick's tolerance of the ray
-// o + t d (|d| = 1), 0 < t < max_t: the box grown by the tolerance at its
-// far side (tolerance_per_t times the farthest t it can have), met by the
-// ray within (0, max_t) (slabs).
-bool RayNearBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::AlignedBox3f& box,
-                double tolerance_per_t, double max_t) {
+// o + t d (|d| = 1), 0 < t < max_t, and where the ray enters the box grown
+// by the tolerance at its far side (tolerance_per_t times the farthest t it
+// can have; slabs).
+bool RayNearBox(const RaySlabs& slabs, const Eigen::Vector3d& o, const Eigen::AlignedBox3f& box,
+                double tolerance_per_t, double max_t, double* enter) {
   if (box.isEmpty()) return false;
-  const Eigen::Vector3d lo = box.min().cast<double>(), hi = box.max().cast<double>();
+  const double b[6] = {box.min().x(), box.max().x(), box.min().y(),
+                       box.max().y(), box.min().z(), box.max().z()};
+  const Eigen::Vector3d lo(b[0], b[2], b[4]), hi(b[1], b[3], b[5]);
   const double far = (0.5 * (lo + hi) - o).norm() + 0.5 * (hi - lo).norm();
-  const double margin = tolerance_per_t * std::min(far, max_t);
-  return RayHitsBox(o, d, lo, hi, margin, max_t);
+  return slabs.Hits(b, tolerance_per_t * std::min(far, max_t), max_t, enter);
 }
 
 }  // namespace
@@ -295,28 +298,46 @@ bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* 
     const Eigen::Vector3d o = r.transpose() * (ray.origin - t);
     const Eigen::Vector3d d = r.transpose() * ray.direction;
     const Eigen::Vector3d z_row = r.row(2).transpose();
+    const RaySlabs slabs(o, d);
     const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
     const std::vector<Eigen::AlignedBox3f>& blocks = e.cloud->block_bounds;
-    // Every point uploaded so far (the pieces hold every k-th of them).
-    for (size_t i = 0; i < e.next; ++i) {
-      const size_t block = i / ProjectCloud::kPickBlock;
-      if (i % ProjectCloud::kPickBlock == 0 && block < blocks.size() &&
-          !RayNearBox(o, d, blocks[block], ray.tolerance_per_t, *best_t)) {
-        i += ProjectCloud::kPickBlock - 1;  // none of its points can be hit
-        continue;
+    const std::vector<Eigen::AlignedBox3f>& pieces = e.cloud->piece_bounds;
+    // Every point uploaded so far (the drawn pieces hold every k-th of
+    // them): the pick pieces the ray passes near in the blocks it meets,
+    // nearest entry first, until one enters beyond the point found (a
+    // point within the tolerance lies inside its piece's grown box, so the
+    // ray is in that box before the point).
+    std::vector<std::pair<double, size_t>> met;  // (entry, piece)
+    const size_t uploaded = std::min(e.next, all.size());
+    for (size_t b = 0; b * ProjectCloud::kPickBlock < uploaded && b < blocks.size(); ++b) {
+      double enter = 0.0;
+      if (!RayNearBox(slabs, o, blocks[b], ray.tolerance_per_t, *best_t, &enter)) continue;
+      const size_t p0 = b * (ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
+      const size_t p1 =
+          std::min(pieces.size(), p0 + ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
+      for (size_t p = p0; p < p1 && p * ProjectCloud::kPickPiece < uploaded; ++p) {
+        if (RayNearBox(slabs, o, pieces[p], ray.tolerance_per_t, *best_t, &enter))
+          met.emplace_back(enter, p);
       }
-      const Eigen::Vector3d p = all[i].cast<double>();
-      if (z_row.dot(p) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
-      const Eigen::Vector3d v = p - o;
-      const double along = v.dot(d);
-      if (along <= 0 || along >= *best_t) continue;
-      const double tol = ray.tolerance_per_t * along;
-      if (v.squaredNorm() - along * along <= tol * tol) {
-        *best_t = along;
-        hit->layer = QString::fromStdString(id);
-        hit->local = p;
-        hit->world = e.pose * p;
-        found = true;
+    }
+    std::sort(met.begin(), met.end());
+    for (const auto& [enter, p] : met) {
+      if (enter >= *best_t) break;
+      const size_t end = std::min(uploaded, (p + 1) * ProjectCloud::kPickPiece);
+      for (size_t i = p * ProjectCloud::kPickPiece; i < end; ++i) {
+        const Eigen::Vector3d q = all[i].cast<double>();
+        if (z_row.dot(q) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
+        const Eigen::Vector3d v = q - o;
+        const double along = v.dot(d);
+        if (along <= 0 || along >= *best_t) continue;
+        const double tol = ray.tolerance_per_t * along;
+        if (v.squaredNorm() - along * along <= tol * tol) {
+          *best_t = along;
+          hit->layer = QString::fromStdString(id);
+          hit->local = q;
+          hit->world = e.pose * q;
+          found = true;
+        }
       }
     }
   }
