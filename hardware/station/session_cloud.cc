@@ -2,8 +2,54 @@
 
 #include "core/cloud/reconstruct.h"
 #include "hardware/station/recording.h"
+#include "hardware/station/session_stream.h"
 
 namespace sweepscan::hardware {
+
+Status LoadSessionPositions(const std::string& project_file, const ProjectSession& session,
+                            const SessionCloudOptions& options, SessionCloud* cloud,
+                            std::vector<Eigen::Vector3f>* positions) {
+  if (options.pose_source != PoseSource::kEkf && options.pose_source != PoseSource::kOdometry) {
+    return Status::Error("a project's session clouds are built from the EKF or the wheels alone");
+  }
+  SessionCloud out;
+  out.id = session.id;
+  out.dir = ResolveSessionPath(project_file, session);
+  const auto refuse = [&](const Status& s) {
+    return Status::Error("session '" + session.id + "': " + s.message());
+  };
+  Status s = ReadSessionMeta(out.dir + "/" + kSessionMetaFile, &out.meta);
+  if (!s.ok()) return refuse(s);
+  const nlohmann::json& settings = out.meta.settings;
+  if (settings.is_object() && settings.contains("scenario")) {
+    const Pose2d start = SessionStartPose(out.meta);
+    out.has_true_start = true;
+    out.world_from_session_truth = Rigid3d::FromPose(start.x, start.y, 0.0, 0.0, 0.0, start.yaw);
+  }
+  // The session's own frame: the poses start at the identity (as LoadSessionCloud's).
+  ReconstructionOptions ro;
+  ro.pose.source = options.pose_source;
+  ro.calibration = session.calibration ? *session.calibration : out.meta.calibration;
+  out.calibration = ro.calibration;
+  const auto half = [&](double from) -> DecodeProgress {
+    if (!options.progress) return nullptr;
+    return [&options, from](double f) { return options.progress(from + 0.5 * f); };
+  };
+  SessionCloudStream stream;
+  s = stream.EstimatePoses(out.dir, options.frames, ro, nullptr, half(0.0));
+  if (!s.ok()) return refuse(s);
+  if (!stream.decode().frames.damage.empty()) out.damage = stream.decode().frames.DamageSummary();
+  positions->clear();
+  s = stream.PlacePoints(
+      [positions](const CloudPoint* p, size_t n) {
+        for (size_t i = 0; i < n; ++i) positions->emplace_back(p[i].x, p[i].y, p[i].z);
+        return Status::Ok();
+      },
+      half(0.5));
+  if (!s.ok()) return refuse(s);
+  *cloud = std::move(out);
+  return Status::Ok();
+}
 
 Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
                         const SessionCloudOptions& options, SessionCloud* cloud) {

@@ -26,7 +26,10 @@ namespace sweepscan::hardware {
 
 struct SessionCloudOptions {
   PoseSource pose_source = PoseSource::kEkf;  // kEkf or kOdometry
-  FramesLoadOptions frames;                   // skip damaged records (default) or refuse them
+  // Skip damaged records (the default, as everywhere a session is opened:
+  // the app's project view built its clouds refusing them, though it says
+  // a cloud's damage) or refuse them (the CLI's --strict).
+  FramesLoadOptions frames = DefaultSessionFramesOptions();
   DecodeProgress progress;                    // 0..1 of the decoding; false cancels
 };
 
@@ -46,6 +49,16 @@ struct SessionCloud {
 
 Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
                         const SessionCloudOptions& options, SessionCloud* cloud);
+
+// The same cloud's positions alone, streamed (session_stream.h: frames.bin
+// read twice record by record, each scan placed as it is decoded), into
+// `positions` (12 bytes a point); `cloud` gets all but its points. The
+// decoded session and its 32-byte points are never held: a 99.5 M-point
+// session's cloud peaked at 7.3 GB through LoadSessionCloud. The progress
+// runs 0..0.5 over the first pass, 0.5..1 over the second.
+Status LoadSessionPositions(const std::string& project_file, const ProjectSession& session,
+                            const SessionCloudOptions& options, SessionCloud* cloud,
+                            std::vector<Eigen::Vector3f>* positions);
 
 // p <- t * p for every point (double precision in, float out).
 void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points);

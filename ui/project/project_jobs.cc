@@ -43,12 +43,12 @@ Status BuildProjectCloud(const std::string& project_file, const ProjectSession& 
   hardware::SessionCloudOptions options;
   options.progress = progress;
   hardware::SessionCloud built;
-  const Status s = hardware::LoadSessionCloud(project_file, session, options, &built);
-  if (!s.ok()) return s;
   auto out = std::make_shared<ProjectCloud>();
+  const Status s =
+      hardware::LoadSessionPositions(project_file, session, options, &built, &out->positions);
+  if (!s.ok()) return s;
   out->id = session.id;
   out->key = CloudKey(project_file, session);
-  out->positions = hardware::Positions(built.points);
   IndexForPicks(out.get());
   out->damage = built.damage;
   out->has_truth = built.has_true_start;

@@ -14,6 +14,7 @@
 #include "core/cloud/reconstruct.h"
 #include "core/common/crc32c.h"
 #include "hardware/station/replay_source.h"
+#include "hardware/station/session_cloud.h"
 #include "tests/testing/lab_session.h"
 #include "tests/testing/run_command.h"
 
@@ -112,6 +113,49 @@ TEST(SessionStreamTest, ADamagedSessionHasTheSameGapAndDropsTheSameSamples) {
   ASSERT_EQ(whole.gaps.size(), 1u);
   EXPECT_GT(whole.gap_samples_dropped, 0u);
   ExpectSameCloud(dir, ReconstructionOptions());
+}
+
+// A project's session cloud streamed (LoadSessionPositions: what the app's
+// project view builds, never holding the decoded session or its 32-byte
+// points) is LoadSessionCloud's positions bit for bit, with its damage,
+// calibration and truth: under a project calibration, and on a damaged
+// copy with the session's own; its progress climbs to the end.
+TEST(SessionStreamTest, AProjectSessionsPositionsStreamedAreLoadSessionClouds) {
+  for (const bool damaged : {false, true}) {
+    ProjectSession session;
+    session.id = "s";
+    session.path = damaged ? DamagedCopy(60000) : Session();  // absolute
+    if (!damaged) session.calibration = MountingError{0.01, -0.02, 0.015};
+    const std::string project = "/nowhere/p.sweepscan-project";
+    SessionCloud whole, streamed;
+    Status s = LoadSessionCloud(project, session, SessionCloudOptions(), &whole);
+    ASSERT_TRUE(s.ok()) << s.message();
+    SessionCloudOptions options;
+    double last = -1.0;
+    bool climbs = true;
+    options.progress = [&](double f) {
+      climbs = climbs && f >= last;
+      last = f;
+      return true;
+    };
+    std::vector<Eigen::Vector3f> positions;
+    s = LoadSessionPositions(project, session, options, &streamed, &positions);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const std::vector<Eigen::Vector3f> want = Positions(whole.points);
+    ASSERT_GT(want.size(), 100000u);
+    ASSERT_EQ(positions.size(), want.size());
+    EXPECT_EQ(std::memcmp(positions.data(), want.data(), want.size() * sizeof(Eigen::Vector3f)), 0);
+    EXPECT_TRUE(streamed.points.empty());
+    EXPECT_EQ(streamed.damage, whole.damage);
+    EXPECT_EQ(streamed.damage.empty(), !damaged);
+    EXPECT_EQ(streamed.calibration.alpha, whole.calibration.alpha);
+    EXPECT_EQ(streamed.calibration.gamma, damaged ? whole.calibration.gamma : 0.015);
+    EXPECT_EQ(streamed.has_true_start, whole.has_true_start);
+    EXPECT_TRUE(streamed.world_from_session_truth.translation().isApprox(
+        whole.world_from_session_truth.translation(), 0.0));
+    EXPECT_TRUE(climbs);
+    EXPECT_GT(last, 0.9);
+  }
 }
 
 TEST(SessionStreamTest, StreamingDecodeHandsOverWhatDecodeSessionKeeps) {
