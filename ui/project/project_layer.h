@@ -16,9 +16,11 @@
 // passes at rest (CloudView::AddLayer).
 //
 // Picking: the layer is the view's layer picker. A Shift + click tests
-// every point of the drawn sessions (not only every k-th) through each
-// session's pose, and reports the session's id and the point in the
-// session's own frame, which is what a picked pair is made of.
+// the points of the drawn sessions (all of them, not only every k-th)
+// through each session's pose, in the pieces its ray passes near
+// (ProjectCloud::piece_bounds), nearest first, and reports the session's
+// id and the point in the session's own frame, which is what a picked
+// pair is made of.
 //
 // A session's points go to VTK in pieces of kPiecePoints, a few per GUI
 // tick (Pump), as the view's chunks do: a frame that uploads a whole
