@@ -1,6 +1,6 @@
 // Ray / axis-aligned box test (the slab method), for picks: whether the ray
-// o + t d, 0 <= t <= max_t, meets the box [lo, hi] grown by `margin` on
-// every side, and where it enters it. Header-only.
+// o + t d, 0 <= t <= max_t, meets a box grown by `margin` on every side,
+// and where it enters it. Header-only.
 #ifndef SWEEPSCAN_CORE_GEOMETRY_RAY_BOX_H_
 #define SWEEPSCAN_CORE_GEOMETRY_RAY_BOX_H_
 
@@ -12,32 +12,10 @@
 
 namespace sweepscan {
 
-// `enter`, if given, is where the ray enters the grown box (0 if it starts
-// inside).
-inline bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                       const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double margin,
-                       double max_t = std::numeric_limits<double>::infinity(),
-                       double* enter = nullptr) {
-  double t0 = 0.0, t1 = max_t;
-  for (int k = 0; k < 3; ++k) {
-    const double a = lo[k] - margin, b = hi[k] + margin;
-    if (std::abs(d[k]) < 1e-12) {
-      if (o[k] < a || o[k] > b) return false;
-      continue;
-    }
-    double ta = (a - o[k]) / d[k], tb = (b - o[k]) / d[k];
-    if (ta > tb) std::swap(ta, tb);
-    t0 = std::max(t0, ta);
-    t1 = std::min(t1, tb);
-    if (t0 > t1) return false;
-  }
-  if (enter != nullptr) *enter = t0;
-  return true;
-}
-
-// The same test of many boxes against one ray (a pick on a few hundred
-// million points tests a million): the direction's reciprocals taken once.
-// Boxes in VTK's order (x min, x max, y min, y max, z min, z max).
+// Many boxes against one ray (a pick on a few hundred million points tests
+// a million): the direction's reciprocals taken once. Boxes in VTK's order
+// (x min, x max, y min, y max, z min, z max); `enter` is where the ray
+// enters the grown box (0 if it starts inside).
 class RaySlabs {
  public:
   RaySlabs(const Eigen::Vector3d& o, const Eigen::Vector3d& d) : o_(o) {

@@ -68,18 +68,6 @@ void CloudView::mousePressEvent(QMouseEvent* event) {
   QVTKOpenGLNativeWidget::mousePressEvent(event);
 }
 
-namespace {
-
-// The box b (VTK's order: x min, x max, y min, ...) grown by `margin`.
-bool RayHitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const double b[6],
-                double margin, double* enter = nullptr) {
-  return sweepscan::RayHitsBox(o, d, Eigen::Vector3d(b[0], b[2], b[4]),
-                               Eigen::Vector3d(b[1], b[3], b[5]), margin,
-                               std::numeric_limits<double>::infinity(), enter);
-}
-
-}  // namespace
-
 void CloudView::SetLayerPicker(LayerPicker picker) { layer_picker_ = std::move(picker); }
 
 bool CloudView::PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px) {
@@ -161,8 +149,14 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // point under the cursor, whatever the level of detail.
   //
   // The growing chunk (at most 65 536 points): every point.
+  const RaySlabs slabs(o, d);
   for (const auto& c : chunks_) {
-    if (c->sealed() || c->size == 0 || !RayHitsBox(o, d, c->bounds.data(), margin(c->bounds.data()))) continue;
+    double enter = 0.0;
+    if (c->sealed() || c->size == 0 ||
+        !slabs.Hits(c->bounds.data(), margin(c->bounds.data()),
+                    std::numeric_limits<double>::infinity(), &enter)) {
+      continue;
+    }
     const CloudPoint* best = nullptr;
     c->growing.ForEach([&](size_t i, const CloudPoint& p) {
       if (p.z > clip_z || !Passes(*c, i)) return;  // Clipped or not drawn: not pickable.
@@ -195,7 +189,6 @@ bool CloudView::PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px) 
   // Chunks are gathered on every core, their candidates joined in the
   // chunks' order (the sort's ties then fall as on one thread).
   static_assert(PackedChunk::kPiecesPerBlock <= 32, "a piece a bit");
-  const RaySlabs slabs(o, d);
   const double bound = best_t;  // The growing chunk's point, if it has one.
   std::vector<std::vector<Candidate>> met(chunks_.size());
   tbb::parallel_for(
