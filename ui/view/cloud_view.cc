@@ -504,12 +504,44 @@ void CloudView::MoveCameraWithFrame(const Rigid3d& new_from_old) {
 }
 
 void CloudView::Orbit(double degrees) {
+  const bool planned = !CameraMovedSincePlan();
   ++camera_generation_;
   renderer_->GetActiveCamera()->Azimuth(degrees);
+  // Not a placement that plans the rest level again (RenderIfDirty): the
+  // benchmarks orbit at the rest level planned for the first camera.
+  if (planned) planned_camera_ = CurrentCameraKey();
   RequestRender();
 }
 
+CloudView::CameraKey CloudView::CurrentCameraKey() const {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  CameraKey key{};
+  camera->GetPosition(&key[0]);
+  camera->GetFocalPoint(&key[3]);
+  camera->GetViewUp(&key[6]);
+  key[9] = camera->GetViewAngle();
+  key[10] = camera->GetParallelScale();
+  key[11] = width();
+  key[12] = height();
+  return key;
+}
+
+bool CloudView::CameraMovedSincePlan() const {
+  // Rounding aside (an orbit's 30 steps of 12 degrees come back within
+  // 1e-13 m): a placement moves the camera by millimetres at least.
+  const CameraKey now = CurrentCameraKey();
+  for (size_t k = 0; k < now.size(); ++k) {
+    if (std::abs(now[k] - planned_camera_[k]) > 1e-9 * (1.0 + std::abs(now[k]))) return true;
+  }
+  return false;
+}
+
 bool CloudView::RenderIfDirty() {
+  if (dirty_ && !lod_active_ && !interacting_ && (point_count_ > lod_budget_ || !layers_.empty()) &&
+      CameraMovedSincePlan()) {
+    SetLodActive(true);  // Drawn at the motion level now, planned for this camera at rest.
+    settle_->start();
+  }
   if (dirty_ && WantPasses()) {
     StartPasses();
   } else if (dirty_) {

@@ -239,7 +239,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ViewFront();
   void ViewSide();
   void FitToCloud();
-  // Turns the camera about the view's vertical axis (benchmarks, demos).
+  // Turns the camera about the view's vertical axis (benchmarks, demos),
+  // keeping the rest level as it is (a placement by the View menu or
+  // LookAt plans it again for the new camera).
   void Orbit(double degrees);
   // Puts the camera at `position` looking at `focal`, z up.
   void LookAt(const Eigen::Vector3d& focal, const Eigen::Vector3d& position);
@@ -559,6 +561,17 @@ class CloudView : public QVTKOpenGLNativeWidget {
   QTimer* refine_timer_ = nullptr;
   Progress progress_;
   bool interacting_ = false;
+  // The camera the rest level was last planned for (PlanRest): position,
+  // focal point, view-up, view angle, parallel scale and the viewport's
+  // size. A camera placed without the mouse (the View menu, LookAt, a
+  // project's change of anchor) differs from it at the next
+  // RenderIfDirty, which then goes to the motion level and back to rest
+  // through the settle timer, as after a drag: the rest level kept the old
+  // camera's plan, dense where it looked before and thin where it looks now.
+  using CameraKey = std::array<double, 13>;
+  CameraKey CurrentCameraKey() const;
+  bool CameraMovedSincePlan() const;
+  CameraKey planned_camera_{};
   uint64_t camera_generation_ = 0;
   uint64_t drawn_generation_ = 0;
   uint64_t synced_generation_ = ~uint64_t{0};  // drawn_generation_ at the last SyncBatches

@@ -499,6 +499,7 @@ void CloudView::PlanRest() {
   // the view; each is read again only when the plan wants a cube finer than
   // it holds, or less than half of what it holds.
   refine_queue_.clear();
+  planned_camera_ = CurrentCameraKey();
   MergeCensus();
   vtkCamera* camera = renderer_->GetActiveCamera();
   double planes[24];

@@ -1,0 +1,90 @@
+// The view's rest level follows the camera however it is placed: after a
+// placement without the mouse (View > Top, LookAt, as the menus and the
+// room view do) the app's render tick goes to the motion level and the
+// settle timer plans the rest level again for the new camera, as after a
+// drag. Before, the rest level kept the old camera's plan: zoomed into one
+// corner and then View > Top, the far corner stayed at the handful of
+// points the corner view gave it. Under a real display (xvfb-run in CI).
+#include <gtest/gtest.h>
+
+#include <QElapsedTimer>
+#include <QtTest>
+#include <random>
+#include <vector>
+
+#include "tests/ui/app_fixture.h"
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+// A 20 x 20 m floor of random points (every chunk spans it), in time order.
+std::vector<CloudPoint> Floor(size_t n) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 20.0f);
+  std::vector<CloudPoint> points(n);
+  for (size_t i = 0; i < n; ++i) {
+    CloudPoint& p = points[i];
+    p.x = u(rng), p.y = u(rng), p.z = 0.0f;
+    p.range_m = 2.0f;
+    p.scan = static_cast<uint32_t>(i / 1000);
+    p.time_ns = static_cast<int64_t>(i) * 200000;
+  }
+  return points;
+}
+
+// The app's render tick (MainWindow's timer) until the view is back at rest
+// with its passes drawn.
+void TickUntilRest(CloudView* view) {
+  QElapsedTimer clock;
+  clock.start();
+  bool moved = false;
+  while (clock.elapsed() < 20000) {
+    QTest::qWait(20);
+    view->RenderIfDirty();
+    moved = moved || view->lod_active();
+    if (moved && !view->lod_active() && !view->drawing_passes()) return;
+  }
+  FAIL() << "the view did not come back to rest";
+}
+
+size_t InCorner(const std::vector<Eigen::Vector3f>& points) {
+  size_t n = 0;
+  for (const Eigen::Vector3f& p : points) n += p.x() > 15.0f && p.y() > 15.0f;
+  return n;
+}
+
+TEST(CloudViewRestTest, APlacementWithoutTheMousePlansTheRestLevelForTheNewCamera) {
+  CloudView view;
+  view.resize(400, 300);
+  view.show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(&view));
+  view.SetLodBudget(20000);
+  view.SetRestBudget(100000);
+  view.AppendPoints(Floor(1'500'000));
+  TickUntilRest(&view);
+
+  // Close over the opposite corner: the far corner gets few points.
+  view.LookAt(Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(1, 0.99, 2));
+  TickUntilRest(&view);
+  const size_t corner_view = InCorner(view.DrawnPoints());
+
+  // View > Top (the menu's slot): the whole floor planned afresh.
+  view.ViewTop();
+  TickUntilRest(&view);
+  const std::vector<Eigen::Vector3f> top = view.DrawnPoints();
+  // What planning at once for this camera draws (as Budget changes do).
+  view.SetLodActive(true);
+  view.SetLodActive(false);
+  const std::vector<Eigen::Vector3f> planned = view.DrawnPoints();
+  EXPECT_EQ(top.size(), planned.size());
+  EXPECT_EQ(InCorner(top), InCorner(planned));
+  // From above, the far corner holds its share: a sixteenth of the floor.
+  EXPECT_GT(InCorner(top), planned.size() / 32);
+  EXPECT_GT(InCorner(top), 2 * corner_view) << corner_view;
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }
