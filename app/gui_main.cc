@@ -161,8 +161,15 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
     QThread::msleep(100);
     QCoreApplication::processEvents();
   }
-  window->view()->SetLodActive(false);  // Every point in the images, not the thinned preview.
+  // Fitted first: the rest level is planned for the camera the images use.
   window->view()->FitToCloud();
+  window->view()->SetLodActive(false);  // Every point in the images, not the thinned preview.
+  // A project's sessions planned for that camera too (on their own thread).
+  QElapsedTimer detail;
+  detail.start();
+  while (window->project()->layer()->detail_pending() && detail.elapsed() < 10000) {
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
+  }
   QString error;
   if (!o.screenshot.isEmpty() && !window->view()->SaveScreenshot(o.screenshot, &error)) {
     std::fprintf(stderr, "sweepscan: %s\n", qPrintable(error));
@@ -441,8 +448,10 @@ int Main(int argc, char** argv) {
     }
     workspace.OpenSession(o.replay, o.speed);
   }
-  // Follow the robot in demos: fit the view every few seconds (not in the tours).
-  if (scripted && o.tour.isEmpty() && o.pose_source_tour.isEmpty()) {
+  // Follow the robot in demos: fit the view every few seconds (not in the
+  // tours, nor in the orbit benchmark, whose cameras it would move between
+  // their frames).
+  if (scripted && o.tour.isEmpty() && o.pose_source_tour.isEmpty() && o.orbit_frames <= 0) {
     auto* fit = new QTimer(&window);
     QObject::connect(fit, &QTimer::timeout, window.view(), &CloudView::FitToCloud);
     fit->start(3000);

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -190,9 +191,11 @@ void PrintAndClose(const nlohmann::json& j, MainWindow* window) {
 }
 
 // The cloud fitted and drawn at rest once: the end of "open and show".
+// Fitted first: the rest level is planned for the fitted camera (planned
+// before, the view's render tick plans it again for the new one).
 void ShowWhole(CloudView* view) {
-  view->SetLodActive(false);
   view->FitToCloud();
+  view->SetLodActive(false);
   view->RenderNow();
 }
 
@@ -229,6 +232,43 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
       PrintAndClose(j, window);
     });
   });
+}
+
+// A project zoomed in at rest, as ZoomedIn for a session: the spot of the
+// drawn sessions' far end 1 m above their floor (the detail's point nearest
+// it, planned for the whole view) looked at from 2 m towards the middle;
+// the time until the rest level planned for that camera is drawn, and the
+// points drawn within 0.3 m of the spot against the sessions' points there.
+nlohmann::json ProjectZoomedIn(CloudView* view, const ui::ProjectLayer* layer) {
+  const Eigen::AlignedBox3d box = layer->drawn_bounds();
+  const Eigen::Vector3d aim(box.max().x(), box.center().y(), box.min().z() + 1.0);
+  Eigen::Vector3d spot = aim;
+  double best = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& p : layer->DetailPoints()) {
+    if ((p - aim).squaredNorm() < best) {
+      best = (p - aim).squaredNorm();
+      spot = p;
+    }
+  }
+  Eigen::Vector3d inward(box.center().x() - spot.x(), box.center().y() - spot.y(), 0.0);
+  inward.normalize();
+  view->LookAt(spot, spot + 2.0 * inward + Eigen::Vector3d(0.0, 0.0, 0.2));
+  view->RenderNow();
+  QElapsedTimer clock;
+  clock.start();
+  view->SetLodActive(true);
+  view->SetLodActive(false);
+  while (layer->detail_pending() && clock.elapsed() < 60000) {
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+  }
+  view->RenderNow();
+  const double rest_s = clock.nsecsElapsed() * 1e-9;
+  size_t at_spot = 0;
+  for (const Eigen::Vector3d& p : layer->DetailPoints()) at_spot += (p - spot).norm() < 0.3;
+  return {{"to_rest_s", rest_s},
+          {"rest_points", view->layer_points_drawn()},
+          {"spot_points", at_spot},
+          {"spot_points_in_sessions", layer->PointsNear(spot, 0.3)}};
 }
 
 void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
@@ -271,6 +311,7 @@ void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
     j.update(OrbitAndRest(view, frames, [view] { return view->layer_points_drawn(); }));
     j.erase("lod_level");  // The session cloud's grid; a project's motion level is a stride.
     j.update(Picks(view));
+    j["zoomed"] = ProjectZoomedIn(view, project->layer());
     j["rss_mib"] = ResidentMiB();
     j["memory"] = MemoryBreakdown(window);
     // The layers' points in VTK's arrays: both levels (vtk_points is the

@@ -1,12 +1,12 @@
 #include "ui/project/project_jobs.h"
 
-#include <filesystem>
-
 #include <QMetaObject>
 #include <cstdio>
+#include <filesystem>
 #include <mutex>
 
 #include "hardware/station/session_cloud.h"
+#include "ui/project/project_detail.h"
 #include "ui/workspace/background_priority.h"
 
 namespace sweepscan::ui {
@@ -36,6 +36,7 @@ void IndexForPicks(ProjectCloud* cloud) {
     cloud->block_bounds[i / ProjectCloud::kPickBlock].extend(all[i]);
     cloud->piece_bounds[i / ProjectCloud::kPickPiece].extend(all[i]);
   }
+  CountCubes(cloud);
 }
 
 Status BuildProjectCloud(const std::string& project_file, const ProjectSession& session,

@@ -16,6 +16,7 @@
 #include <QObject>
 #include <QString>
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -45,13 +46,19 @@ struct ProjectCloud {
   static constexpr size_t kPickPiece = 64;
   std::vector<Eigen::AlignedBox3f> block_bounds;
   std::vector<Eigen::AlignedBox3f> piece_bounds;
+  // The cubes of the rest level planned for the camera (project_detail.h):
+  // each piece's 0.5 m cube (of its box's centre; PackedChunk::CellKey), as
+  // an index into cube_keys. 0.06 bytes a point.
+  std::vector<uint32_t> piece_cubes;
+  std::vector<uint64_t> cube_keys;
   std::string damage;  // frames.bin's damage, "" if none
   bool has_truth = false;  // a simulated session: where the robot was put down
   Rigid3d world_from_session_truth;
 };
 using ProjectCloudPtr = std::shared_ptr<const ProjectCloud>;
 
-// Sets `cloud`'s bounds, block_bounds and piece_bounds from its positions.
+// Sets `cloud`'s bounds, block_bounds, piece_bounds and census from its
+// positions.
 void IndexForPicks(ProjectCloud* cloud);
 
 // What a session's cloud depends on: a session whose folder (absolute, so

@@ -15,11 +15,14 @@
 
 #include <QColor>
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <set>
 #include <utility>
 #include <vector>
 
 #include "core/geometry/ray_box.h"
+#include "ui/project/project_detail.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/paced_mapper.h"
 
@@ -35,6 +38,33 @@ vtkSmartPointer<vtkMatrix4x4> Matrix(const Rigid3d& t) {
     for (int c = 0; c < 4; ++c) m->SetElement(r, c, e(r, c));
   }
   return m;
+}
+
+// Points `xyz` as vertices carrying the slot byte of their session (the
+// shared lookup table's entry): VTK data only, no mapper, so any thread.
+vtkSmartPointer<vtkPolyData> SlotPoly(const vtkSmartPointer<vtkFloatArray>& xyz, int slot_value) {
+  const size_t m = static_cast<size_t>(xyz->GetNumberOfTuples());
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetData(xyz);
+  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New();
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(m + 1));
+  auto connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(m));
+  for (size_t k = 0; k <= m; ++k)
+    offsets->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
+  for (size_t k = 0; k < m; ++k)
+    connectivity->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
+  auto verts = vtkSmartPointer<vtkCellArray>::New();
+  verts->SetData(offsets, connectivity);
+  auto slot = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  slot->SetName("session");
+  slot->SetNumberOfValues(static_cast<vtkIdType>(m));
+  std::fill_n(slot->GetPointer(0), m, static_cast<unsigned char>(slot_value));
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetVerts(verts);
+  poly->GetPointData()->SetScalars(slot);
+  return poly;
 }
 
 bool SameMatrix(vtkMatrix4x4* a, vtkMatrix4x4* b) {
@@ -57,16 +87,219 @@ ProjectLayer::ProjectLayer(CloudView* view) : view_(view) {
   view_->SetLayerPicker([this](const CloudView::PickRay& ray, double* best_t, PickHit* hit) {
     return Pick(ray, best_t, hit);
   });
+  empty_ = vtkSmartPointer<PacedMapper>::New();
+  empty_->SetInputData(vtkSmartPointer<vtkPolyData>::New());
+  planned_ = QObject::connect(view_, &CloudView::restPlanned, view_, [this] { PlanDetail(); });
 }
 
 ProjectLayer::~ProjectLayer() {
+  QObject::disconnect(planned_);
+  alive_.reset();  // A plan's result queued after this finds nobody.
+  if (detail_thread_) detail_thread_->join();
   view_->SetLayerPicker(nullptr);
   Clear();
 }
 
 void ProjectLayer::Remove(Entry* e) {
+  DropDetail(e);
   for (auto& actor : e->pieces) view_->RemoveLayer(actor);
   e->pieces.clear();
+  e->piece_rest.clear();
+  e->piece_motion.clear();
+}
+
+void ProjectLayer::DropDetail(Entry* e) {
+  if (e->detail.empty()) return;
+  for (auto& actor : e->detail) view_->RemoveLayer(actor);
+  e->detail.clear();
+  e->detail_rest.clear();
+  e->detail_points = 0;
+  std::vector<std::pair<vtkActor*, vtkPolyDataMapper*>> rests;
+  for (size_t k = 0; k < e->pieces.size(); ++k) rests.emplace_back(e->pieces[k], e->piece_rest[k]);
+  view_->SetLayerRests(rests);
+}
+
+// A plan's result: each thinned session's points at rest, as polydata of a
+// rest batch's size at most (the view's progressive passes draw one at a
+// time, nearest first), built on the plan's thread.
+struct ProjectLayer::DetailResult {
+  struct Session {
+    std::string id;
+    ProjectCloudPtr cloud;  // the cloud planned (a rebuilt one is another)
+    std::vector<vtkSmartPointer<vtkPolyData>> polys;
+    size_t points = 0;
+  };
+  std::vector<Session> sessions;
+};
+
+void ProjectLayer::PlanDetail() {
+  // The sessions thinned at rest; the others draw every point already.
+  std::vector<DetailSession> sessions;
+  auto result = std::make_shared<DetailResult>();
+  std::vector<int> slot_values;
+  size_t whole = 0;
+  // What the plan depends on: the camera, the budget and the sessions (each
+  // cloud, pose and slot). The view plans its rest level more often than
+  // its camera changes (every return to rest): the same plan is not made
+  // twice, nor shown over itself.
+  std::vector<double> key;
+  for (auto& [id, e] : entries_) {
+    if (!e.visible) continue;
+    if (e.stride > 1) {
+      sessions.push_back({e.cloud.get(), e.pose});
+      result->sessions.push_back({id, e.cloud, {}, 0});
+      slot_values.push_back(e.slot);
+      const Eigen::Vector4d q = e.pose.rotation().coeffs();
+      const Eigen::Vector3d t = e.pose.translation();
+      key.insert(key.end(), {static_cast<double>(reinterpret_cast<uintptr_t>(e.cloud.get())), q[0],
+                             q[1], q[2], q[3], t[0], t[1], t[2], static_cast<double>(e.slot)});
+    } else {
+      whole += e.cloud->positions.size();
+    }
+  }
+  DetailCamera camera;
+  view_->ViewFrustum(camera.planes.data(), camera.eye.data());
+  camera.clip_z = view_->clip_height();
+  // The rest budget less what is drawn beside the detail: the sessions
+  // drawn whole and the thinned ones' motion level (within the LOD budget).
+  const size_t rest = view_->rest_budget();
+  const size_t budget = rest - std::min(rest / 2, whole + view_->lod_budget());
+  key.insert(key.end(), camera.planes.begin(), camera.planes.begin() + 16);  // the sides
+  key.insert(key.end(), camera.eye.data(), camera.eye.data() + 3);
+  key.insert(key.end(),
+             {std::isnan(camera.clip_z) ? -1e300 : camera.clip_z, static_cast<double>(budget)});
+  if (key == planned_key_) return;  // Planned for this already (or being planned).
+  if (detail_thread_) {
+    detail_wanted_ = true;  // Planned again when the running plan ends.
+    return;
+  }
+  planned_key_ = key;
+  if (sessions.empty()) {
+    for (auto& [id, e] : entries_) DropDetail(&e);
+    return;
+  }
+  // Off the GUI thread: 70-120 ms for a 99.5 M-point session on it (the
+  // pieces in view, then the points copied). The clouds are immutable and
+  // held by the result.
+  std::weak_ptr<bool> alive = alive_;
+  detail_thread_ =
+      std::make_unique<std::thread>([this, alive, sessions, camera, budget, slot_values, result] {
+        const std::vector<std::vector<uint32_t>> planned = ui::PlanDetail(sessions, camera, budget);
+        for (size_t s = 0; s < planned.size(); ++s) {
+          const std::vector<Eigen::Vector3f>& all = sessions[s].cloud->positions;
+          const std::vector<uint32_t>& indices = planned[s];
+          // In actors of the view's rest batch size: a progressive pass draws
+          // one, its upload included, within about 30 ms (65 536 points took
+          // 34-42 ms).
+          constexpr size_t kBatch = CloudView::kRestBatchPoints;
+          for (size_t first = 0; first < indices.size(); first += kBatch) {
+            const size_t count = std::min(kBatch, indices.size() - first);
+            auto xyz = vtkSmartPointer<vtkFloatArray>::New();
+            xyz->SetNumberOfComponents(3);
+            xyz->SetNumberOfTuples(static_cast<vtkIdType>(count));
+            float* out = xyz->GetPointer(0);
+            for (size_t k = 0; k < count; ++k) {
+              const Eigen::Vector3f& p = all[indices[first + k]];
+              out[3 * k] = p.x();
+              out[3 * k + 1] = p.y();
+              out[3 * k + 2] = p.z();
+            }
+            result->sessions[s].polys.push_back(SlotPoly(xyz, slot_values[s]));
+          }
+          result->sessions[s].points = indices.size();
+        }
+        QMetaObject::invokeMethod(
+            view_,
+            [this, alive, result] {
+              if (alive.lock()) FinishDetail(*result);
+            },
+            Qt::QueuedConnection);
+      });
+}
+
+void ProjectLayer::FinishDetail(const DetailResult& result) {
+  detail_thread_->join();
+  detail_thread_.reset();
+  if (!detail_wanted_) {
+    ApplyDetail(result);
+    return;
+  }
+  // The camera or the sessions changed while it ran: the plan for them,
+  // not this one, is shown.
+  detail_wanted_ = false;
+  PlanDetail();
+}
+
+void ProjectLayer::ApplyDetail(const DetailResult& result) {
+  for (auto& [id, e] : entries_) DropDetail(&e);
+  std::vector<std::pair<vtkActor*, vtkPolyDataMapper*>> rests;
+  for (const DetailResult::Session& planned : result.sessions) {
+    const auto it = entries_.find(planned.id);
+    if (it == entries_.end() || it->second.cloud != planned.cloud) continue;
+    Entry* e = &it->second;
+    for (const vtkSmartPointer<vtkPolyData>& poly : planned.polys) {
+      auto actor = vtkSmartPointer<vtkActor>::New();
+      vtkSmartPointer<vtkPolyDataMapper> mapper = SlotMapper(poly);
+      actor->SetMapper(mapper);
+      actor->GetProperty()->SetRepresentationToPoints();
+      actor->PickableOff();
+      actor->SetVisibility(e->visible);
+      if (e->matrix) actor->SetUserMatrix(e->matrix);
+      view_->AddLayer(actor, empty_);
+      e->detail.push_back(actor);
+      e->detail_rest.push_back(mapper);
+    }
+    e->detail_points = planned.points;
+    for (size_t k = 0; k < e->pieces.size(); ++k) {
+      if (e->piece_motion[k]) rests.emplace_back(e->pieces[k], e->piece_motion[k]);
+    }
+  }
+  view_->SetLayerRests(rests);
+}
+
+bool ProjectLayer::detail_pending() const { return detail_thread_ != nullptr || detail_wanted_; }
+
+std::vector<Eigen::Vector3d> ProjectLayer::DetailPoints() const {
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& [id, e] : entries_) {
+    if (!e.visible) continue;
+    for (const auto& mapper : e.detail_rest) {
+      vtkPoints* points = mapper->GetInput()->GetPoints();
+      for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+        double p[3];
+        points->GetPoint(i, p);
+        out.push_back(e.pose * Eigen::Vector3d(p[0], p[1], p[2]));
+      }
+    }
+  }
+  return out;
+}
+
+Eigen::AlignedBox3d ProjectLayer::drawn_bounds() const {
+  Eigen::AlignedBox3d box;
+  for (const auto& [id, e] : entries_) {
+    if (!e.visible || e.cloud->bounds.isEmpty()) continue;
+    const Eigen::AlignedBox3d b = e.cloud->bounds.cast<double>();
+    for (int k = 0; k < 8; ++k) box.extend(e.pose * b.corner(Eigen::AlignedBox3d::CornerType(k)));
+  }
+  return box;
+}
+
+size_t ProjectLayer::PointsNear(const Eigen::Vector3d& c, double r) const {
+  size_t n = 0;
+  for (const auto& [id, e] : entries_) {
+    if (!e.visible) continue;
+    const Eigen::Vector3f local = (e.pose.inverse() * c).cast<float>();
+    const float r2 = static_cast<float>(r * r);
+    for (const Eigen::Vector3f& p : e.cloud->positions) n += (p - local).squaredNorm() < r2;
+  }
+  return n;
+}
+
+size_t ProjectLayer::detail_points() const {
+  size_t n = 0;
+  for (const auto& [id, e] : entries_) n += e.visible ? e.detail_points : 0;
+  return n;
 }
 
 void ProjectLayer::Clear() {
@@ -117,24 +350,11 @@ vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::PieceMapper(const Entry& e, siz
       out[3 * k + 2] = p.z();
     }
   }
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetData(xyz);
-  auto offsets = vtkSmartPointer<vtkTypeInt32Array>::New();
-  offsets->SetNumberOfValues(static_cast<vtkIdType>(m + 1));
-  auto connectivity = vtkSmartPointer<vtkTypeInt32Array>::New();
-  connectivity->SetNumberOfValues(static_cast<vtkIdType>(m));
-  for (size_t k = 0; k <= m; ++k) offsets->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
-  for (size_t k = 0; k < m; ++k) connectivity->SetValue(static_cast<vtkIdType>(k), static_cast<int32_t>(k));
-  auto verts = vtkSmartPointer<vtkCellArray>::New();
-  verts->SetData(offsets, connectivity);
-  auto slot = vtkSmartPointer<vtkUnsignedCharArray>::New();
-  slot->SetName("session");
-  slot->SetNumberOfValues(static_cast<vtkIdType>(m));
-  std::fill_n(slot->GetPointer(0), m, static_cast<unsigned char>(e.slot));
-  auto poly = vtkSmartPointer<vtkPolyData>::New();
-  poly->SetPoints(points);
-  poly->SetVerts(verts);
-  poly->GetPointData()->SetScalars(slot);
+  return SlotMapper(SlotPoly(xyz, e.slot));
+}
+
+vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::SlotMapper(
+    const vtkSmartPointer<vtkPolyData>& poly) const {
   // Paced by the view it is drawn in, as the cloud's mappers are
   // (CloudView::AddLayer; ui/view/paced_mapper.h): unpaced, llvmpipe's
   // binned scenes after frames of the office floor's 567 000 points kept
@@ -166,7 +386,11 @@ void ProjectLayer::AddPiece(Entry* e) {
   actor->SetVisibility(e->visible);
   if (e->matrix) actor->SetUserMatrix(e->matrix);
   view_->AddLayer(actor, motion);
+  // Beside a detail the piece draws its motion level at rest too.
+  if (!e->detail.empty() && motion) view_->SetLayerRests({{actor, motion}});
   e->pieces.push_back(actor);
+  e->piece_rest.push_back(rest);
+  e->piece_motion.push_back(motion);
   e->drawn += static_cast<size_t>(rest->GetInput()->GetNumberOfPoints());
 }
 
@@ -216,6 +440,7 @@ void ProjectLayer::Sync(const Project& project,
     if (e.visible != shown) {
       e.visible = shown;
       for (auto& actor : e.pieces) actor->SetVisibility(shown);
+      for (auto& actor : e.detail) actor->SetVisibility(shown);
       changed = true;
     }
     if (s.project_from_session) {
@@ -224,6 +449,7 @@ void ProjectLayer::Sync(const Project& project,
         e.matrix = m;
         e.pose = *s.project_from_session;
         for (auto& actor : e.pieces) actor->SetUserMatrix(m);
+        for (auto& actor : e.detail) actor->SetUserMatrix(m);
         changed = true;
       }
     }
@@ -237,7 +463,10 @@ void ProjectLayer::Sync(const Project& project,
       changed = true;
     }
   }
-  if (changed) view_->RequestRender();
+  if (changed) {
+    PlanDetail();  // What is shown changed under a still camera.
+    view_->RequestRender();
+  }
 }
 
 std::vector<std::string> ProjectLayer::drawn_sessions() const {

@@ -34,6 +34,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include "core/common/checked_file.h"
 #include "ui/view/cloud_view_chunk.h"
@@ -365,6 +366,26 @@ void CloudView::RemoveLayer(vtkActor* actor) {
                                [actor](const Layer& l) { return l.actor.Get() == actor; }),
                 layers_.end());
   RequestRender();
+}
+
+void CloudView::SetLayerRests(const std::vector<std::pair<vtkActor*, vtkPolyDataMapper*>>& rests) {
+  if (rests.empty()) return;
+  const std::unordered_map<vtkActor*, vtkPolyDataMapper*> by_actor(rests.begin(), rests.end());
+  for (Layer& l : layers_) {
+    const auto it = by_actor.find(l.actor.Get());
+    if (it == by_actor.end() || l.rest.Get() == it->second) continue;
+    l.rest = it->second;
+    ApplyClip(l.rest);
+    if (auto* paced = PacedMapper::SafeDownCast(l.rest)) paced->SetPacer(&pacer_);
+    if (!lod_active_ || !l.motion) l.actor->SetMapper(l.rest);
+  }
+  RequestRender();
+}
+
+void CloudView::ViewFrustum(double planes[24], double eye[3]) const {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  camera->GetFrustumPlanes(renderer_->GetTiledAspectRatio(), planes);
+  camera->GetPosition(eye);
 }
 
 void CloudView::SetGridVisible(bool visible) {

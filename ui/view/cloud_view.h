@@ -116,6 +116,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // moved by `dz` metres, and the clip with it. A height kept elsewhere in
   // the old frame (a ceiling found there) is that much higher now.
   void movedWithFrame(double dz);
+  // The rest level was planned for the camera, now still or placed
+  // (PlanRest): a project's layer plans its own for it (ProjectLayer).
+  void restPlanned();
 
  public:
   // ---- Content ----
@@ -350,6 +353,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // while the motion level is up).
   size_t layer_points_drawn() const;
   void RemoveLayer(vtkActor* actor);
+  // The mappers layers draw at rest from now on, (actor, mapper) (their
+  // owner's choice: the motion mapper while a rest level planned for the
+  // camera is drawn beside it, ProjectLayer's detail). Their motion mappers
+  // are kept. One pass over the layers, however many.
+  void SetLayerRests(const std::vector<std::pair<vtkActor*, vtkPolyDataMapper*>>& rests);
+  // The camera's six frustum planes (vtkCamera::GetFrustumPlanes: a x + b y
+  // + c z + d >= 0 inside) for this view's aspect, and its eye.
+  void ViewFrustum(double planes[24], double eye[3]) const;
 
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }

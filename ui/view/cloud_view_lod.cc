@@ -568,6 +568,7 @@ void CloudView::PlanRest() {
   std::stable_sort(queue.begin(), queue.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& q : queue) refine_queue_.push_back(q.second);
+  emit restPlanned();
 }
 
 bool CloudView::RefineSlice(int max_ms) {
