@@ -18,8 +18,9 @@ static_assert(PackedChunk::kBlockPoints == kCodecBlockPoints, "a pick decodes th
 namespace {
 
 // Step q of the 255 across [lo, hi], the ends exact: a piece's side is
-// lo + q (hi - lo) / 255, in double (hi - lo of two floats is exact there).
+// lo + q (hi - lo) / 255, in double (the loops below check the rounding).
 double PieceSide(float lo, float hi, uint8_t q) {
+  if (q == 0) return lo;
   if (q == 255) return hi;
   return lo + (static_cast<double>(hi) - lo) * q / 255.0;
 }
@@ -32,6 +33,14 @@ void QuantisePiece(float lo, float hi, float min, float max, uint8_t q[2]) {
   if (!(min <= max) || !(lo <= hi)) {
     q[0] = 255;
     q[1] = 0;
+    return;
+  }
+  // An infinite coordinate (a chunk may hold one, as it may a NaN): no
+  // step is finite; the piece keeps the block's side (q * inf would be
+  // NaN at q = 0, and its conversion to int undefined).
+  if (!std::isfinite(static_cast<double>(hi) - lo)) {
+    q[0] = 0;
+    q[1] = 255;
     return;
   }
   const double steps = hi > lo ? 255.0 / (static_cast<double>(hi) - lo) : 0.0;

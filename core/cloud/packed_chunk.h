@@ -176,9 +176,9 @@ class PackedChunk {
     std::shared_ptr<const ChunkPayload> payload;         // unpacked, or
     std::shared_ptr<const std::vector<uint8_t>> packed;  // compressed
   };
+  PositionsPin PinPositions() const;
   // With `points`, a compressed block decodes its first `points` only (a
   // multiple of 8; the pieces a pick tests end there).
-  PositionsPin PinPositions() const;
   std::shared_ptr<const ChunkPayload> BlockPositions(const PositionsPin& pin, size_t block,
                                                      size_t* first,
                                                      size_t points = kBlockPoints) const;

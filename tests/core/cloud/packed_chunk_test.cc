@@ -167,7 +167,8 @@ TEST(PackedChunkTest, PieceBoxesHoldTheirPointsWithinAStepOfTheirBlocks) {
     p.range_m = 2.5f;
     points.push_back(p);
   }
-  // Then with NaNs (off the grid: positions kept as floats).
+  // Then with NaNs (off the grid: positions kept as floats), and an
+  // infinite coordinate (its block's pieces keep the block's side there).
   for (const bool with_nan : {false, true}) {
     if (with_nan) {
       const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -175,6 +176,7 @@ TEST(PackedChunkTest, PieceBoxesHoldTheirPointsWithinAStepOfTheirBlocks) {
         points[i].x = points[i].y = points[i].z = nan;  // piece 2: no point at all
       }
       points[5 * PackedChunk::kPiecePoints + 3].y = nan;  // piece 5: one coordinate missing
+      points[PackedChunk::kBlockPoints + 7].z = std::numeric_limits<float>::infinity();
     }
     const auto chunk = PackedChunk::Pack(points.data(), points.size(), nullptr);
     ASSERT_EQ(chunk->positions_on_grid(), !with_nan);
@@ -202,6 +204,11 @@ TEST(PackedChunkTest, PieceBoxesHoldTheirPointsWithinAStepOfTheirBlocks) {
       }
       for (int a = 0; a < 3; ++a) {
         const double step = (static_cast<double>(block[2 * a + 1]) - block[2 * a]) / 255.0;
+        if (!std::isfinite(step)) {  // The infinite one's block: its side.
+          EXPECT_EQ(box[2 * a], block[2 * a]) << "piece " << p << " axis " << a;
+          EXPECT_EQ(box[2 * a + 1], block[2 * a + 1]) << "piece " << p << " axis " << a;
+          continue;
+        }
         EXPECT_LE(attained[2 * a] - box[2 * a], step * (1 + 1e-9))
             << "piece " << p << " axis " << a;
         EXPECT_LE(box[2 * a + 1] - attained[2 * a + 1], step * (1 + 1e-9))
