@@ -305,6 +305,11 @@ void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
     }
     CloudView* view = window->view();
     ShowWhole(view);
+    // And the sessions' rest level planned for that camera on its thread.
+    while (project->layer()->detail_pending()) {
+      QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+    }
+    view->RenderNow();
     nlohmann::json j = {{"sessions", drawn},
                         {"points", project->layer()->drawn_points()},
                         {"open_and_show_s", clock->nsecsElapsed() * 1e-9}};

@@ -1,5 +1,5 @@
-// The view's rest level follows the camera however it is placed: after a
-// placement without the mouse (View > Top, LookAt, as the menus and the
+// The view's rest level follows the camera and the clip however they are
+// set: after a placement without the mouse (View > Top, LookAt, as the menus and the
 // room view do) the app's render tick goes to the motion level and the
 // settle timer plans the rest level again for the new camera, as after a
 // drag. Before, the rest level kept the old camera's plan: zoomed into one
@@ -9,6 +9,7 @@
 
 #include <QElapsedTimer>
 #include <QtTest>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -82,6 +83,36 @@ TEST(CloudViewRestTest, APlacementWithoutTheMousePlansTheRestLevelForTheNewCamer
   // From above, the far corner holds its share: a sixteenth of the floor.
   EXPECT_GT(InCorner(top), planned.size() / 32);
   EXPECT_GT(InCorner(top), 2 * corner_view) << corner_view;
+}
+
+// Hide Ceiling off: the rest level planned under the clip left the cubes
+// above it out; it is planned again without the clip, so the ceiling comes
+// back at rest (it stayed away until the camera moved).
+TEST(CloudViewRestTest, AClipTakenAwayPlansTheRestLevelAgain) {
+  std::vector<CloudPoint> points = Floor(600'000);
+  // Half of it a ceiling, in runs as scan lines cross it.
+  for (size_t i = 0; i < points.size(); ++i) points[i].z = (i / 1000) % 2 == 0 ? 2.5f : 0.0f;
+  CloudView view;
+  view.resize(400, 300);
+  view.show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(&view));
+  view.SetLodBudget(20000);
+  view.SetRestBudget(100000);
+  view.SetClipHeight(2.0);
+  view.AppendPoints(points);
+  TickUntilRest(&view);
+  const auto ceiling = [&] {
+    size_t n = 0;
+    for (const Eigen::Vector3f& p : view.DrawnPoints()) n += p.z() > 2.0f;
+    return n;
+  };
+  // Above the clip, hardly more than the motion level's points (the rest
+  // level holds them too; the clip hides them).
+  const size_t clipped = ceiling();
+  EXPECT_LE(clipped, 20000u);
+  view.SetClipHeight(std::numeric_limits<double>::quiet_NaN());
+  TickUntilRest(&view);
+  EXPECT_GT(ceiling(), 2 * clipped + 10000) << clipped;  // Half the budget's, about 50 000.
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <QElapsedTimer>
 #include <QTest>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -170,6 +171,50 @@ TEST_F(ProjectDetailTest, ARestLevelPlannedForTheCameraDrawsWhatItLooksAtInFull)
   layer_->Sync(project_, {{"s", cloud_}});
   WaitForDetail();
   EXPECT_EQ(layer_->DetailPoints().size(), top.size());
+}
+
+// A cloud made without IndexForPicks (no boxes, no cubes) is neither
+// planned for the camera nor unpickable: its every-k-th points stay at
+// rest, and a pick tests its points one by one (it found none before).
+TEST_F(ProjectDetailTest, ACloudWithoutItsIndexIsDrawnThinnedAndPickedPointByPoint) {
+  auto bare = std::make_shared<ProjectCloud>();
+  bare->id = "s";
+  bare->positions = cloud_->positions;
+  bare->bounds = cloud_->bounds;
+  ASSERT_FALSE(IndexedForPicks(*bare));
+  layer_->Sync(project_, {{"s", bare}});
+  while (layer_->Pump()) {
+  }
+  view_->SetLodActive(true);
+  view_->SetLodActive(false);
+  WaitForDetail();
+  EXPECT_EQ(layer_->detail_points(), 0u);
+  EXPECT_EQ(view_->layer_points_drawn(), layer_->drawn_points());  // the pieces' rest level
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> v(-1.0, 1.0);
+  size_t hits = 0;
+  for (int r = 0; r < 40; ++r) {
+    CloudView::PickRay ray;
+    ray.origin = Eigen::Vector3d(10.0 + 8.0 * v(rng), 10.0 + 8.0 * v(rng), 3.0);
+    const Eigen::Vector3d target = *session_.project_from_session *
+                                   bare->positions[rng() % bare->positions.size()].cast<double>();
+    ray.direction = (target - ray.origin).normalized();
+    ray.tolerance_per_t = 0.001;
+    double expected = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3f& q : bare->positions) {
+      const Eigen::Vector3d w = *session_.project_from_session * q.cast<double>() - ray.origin;
+      const double along = w.dot(ray.direction);
+      const double tol = ray.tolerance_per_t * along;
+      if (along > 0 && along < expected && w.squaredNorm() - along * along <= tol * tol)
+        expected = along;
+    }
+    double t = std::numeric_limits<double>::infinity();
+    PickHit hit;
+    ASSERT_TRUE(layer_->Pick(ray, &t, &hit)) << r;
+    EXPECT_NEAR(t, expected, 1e-9) << r;
+    hits += hit.layer == "s";
+  }
+  EXPECT_EQ(hits, 40u);
 }
 
 // The plan itself: cubes out of view draw nothing, the clip in the

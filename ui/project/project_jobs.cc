@@ -39,6 +39,15 @@ void IndexForPicks(ProjectCloud* cloud) {
   CountCubes(cloud);
 }
 
+bool IndexedForPicks(const ProjectCloud& cloud) {
+  const size_t n = cloud.positions.size();
+  return cloud.block_bounds.size() ==
+             (n + ProjectCloud::kPickBlock - 1) / ProjectCloud::kPickBlock &&
+         cloud.piece_bounds.size() ==
+             (n + ProjectCloud::kPickPiece - 1) / ProjectCloud::kPickPiece &&
+         cloud.piece_cubes.size() == cloud.piece_bounds.size();
+}
+
 Status BuildProjectCloud(const std::string& project_file, const ProjectSession& session,
                          const std::function<bool(double)>& progress, ProjectCloudPtr* cloud) {
   hardware::SessionCloudOptions options;

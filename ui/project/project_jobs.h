@@ -60,6 +60,9 @@ using ProjectCloudPtr = std::shared_ptr<const ProjectCloud>;
 // Sets `cloud`'s bounds, block_bounds, piece_bounds and census from its
 // positions.
 void IndexForPicks(ProjectCloud* cloud);
+// Whether `cloud` holds that index for every point (a cloud made without
+// IndexForPicks is picked point by point and never planned for the camera).
+bool IndexedForPicks(const ProjectCloud& cloud);
 
 // What a session's cloud depends on: a session whose folder (absolute, so
 // that the project saved elsewhere keeps its clouds) or calibration

@@ -109,11 +109,12 @@ void ProjectLayer::Remove(Entry* e) {
 }
 
 void ProjectLayer::DropDetail(Entry* e) {
-  if (e->detail.empty()) return;
+  if (!e->detailed) return;
   for (auto& actor : e->detail) view_->RemoveLayer(actor);
   e->detail.clear();
   e->detail_rest.clear();
   e->detail_points = 0;
+  e->detailed = false;
   std::vector<std::pair<vtkActor*, vtkPolyDataMapper*>> rests;
   for (size_t k = 0; k < e->pieces.size(); ++k) rests.emplace_back(e->pieces[k], e->piece_rest[k]);
   view_->SetLayerRests(rests);
@@ -138,23 +139,27 @@ void ProjectLayer::PlanDetail() {
   auto result = std::make_shared<DetailResult>();
   std::vector<int> slot_values;
   size_t whole = 0;
-  // What the plan depends on: the camera, the budget and the sessions (each
-  // cloud, pose and slot). The view plans its rest level more often than
-  // its camera changes (every return to rest): the same plan is not made
-  // twice, nor shown over itself.
-  std::vector<double> key;
+  // What the plan depends on: the sessions (each cloud, pose and slot), the
+  // budget, and the camera and clip (CloudView::CameraKey, compared as the
+  // view compares them: the frustum planes themselves change in their last
+  // bits with each frame's clipping range). The view plans its rest level
+  // more often than they change (every return to rest): the same plan is
+  // not made twice, nor shown over itself.
+  DetailKey key;
   for (auto& [id, e] : entries_) {
     if (!e.visible) continue;
-    if (e.stride > 1) {
+    if (e.stride > 1 && IndexedForPicks(*e.cloud)) {
       sessions.push_back({e.cloud.get(), e.pose});
       result->sessions.push_back({id, e.cloud, {}, 0});
       slot_values.push_back(e.slot);
       const Eigen::Vector4d q = e.pose.rotation().coeffs();
       const Eigen::Vector3d t = e.pose.translation();
-      key.insert(key.end(), {static_cast<double>(reinterpret_cast<uintptr_t>(e.cloud.get())), q[0],
-                             q[1], q[2], q[3], t[0], t[1], t[2], static_cast<double>(e.slot)});
+      key.sessions.insert(key.sessions.end(),
+                          {static_cast<double>(reinterpret_cast<uintptr_t>(e.cloud.get())), q[0],
+                           q[1], q[2], q[3], t[0], t[1], t[2], static_cast<double>(e.slot)});
     } else {
-      whole += e.cloud->positions.size();
+      // Every point, or (no index to plan with) every k-th.
+      whole += (e.cloud->positions.size() + e.stride - 1) / e.stride;
     }
   }
   DetailCamera camera;
@@ -164,11 +169,13 @@ void ProjectLayer::PlanDetail() {
   // drawn whole and the thinned ones' motion level (within the LOD budget).
   const size_t rest = view_->rest_budget();
   const size_t budget = rest - std::min(rest / 2, whole + view_->lod_budget());
-  key.insert(key.end(), camera.planes.begin(), camera.planes.begin() + 16);  // the sides
-  key.insert(key.end(), camera.eye.data(), camera.eye.data() + 3);
-  key.insert(key.end(),
-             {std::isnan(camera.clip_z) ? -1e300 : camera.clip_z, static_cast<double>(budget)});
-  if (key == planned_key_) return;  // Planned for this already (or being planned).
+  key.camera = view_->CurrentCameraKey();
+  key.budget = budget;
+  if (planned_key_ && key.sessions == planned_key_->sessions &&
+      key.budget == planned_key_->budget &&
+      CloudView::SameCamera(key.camera, planned_key_->camera)) {
+    return;  // Planned for this already (or being planned).
+  }
   if (detail_thread_) {
     detail_wanted_ = true;  // Planned again when the running plan ends.
     return;
@@ -225,8 +232,10 @@ void ProjectLayer::FinishDetail(const DetailResult& result) {
     return;
   }
   // The camera or the sessions changed while it ran: the plan for them,
-  // not this one, is shown.
+  // not this one, is shown (made again even if they came back to what this
+  // one was for: its result is gone).
   detail_wanted_ = false;
+  planned_key_.reset();
   PlanDetail();
 }
 
@@ -250,6 +259,7 @@ void ProjectLayer::ApplyDetail(const DetailResult& result) {
       e->detail_rest.push_back(mapper);
     }
     e->detail_points = planned.points;
+    e->detailed = true;  // Even with no point in view: its pieces draw their motion level.
     for (size_t k = 0; k < e->pieces.size(); ++k) {
       if (e->piece_motion[k]) rests.emplace_back(e->pieces[k], e->piece_motion[k]);
     }
@@ -305,6 +315,7 @@ size_t ProjectLayer::detail_points() const {
 void ProjectLayer::Clear() {
   for (auto& [id, e] : entries_) Remove(&e);
   entries_.clear();
+  planned_key_.reset();  // Its clouds' addresses may be new clouds' next.
 }
 
 int ProjectLayer::FreeSlot() const {
@@ -387,7 +398,7 @@ void ProjectLayer::AddPiece(Entry* e) {
   if (e->matrix) actor->SetUserMatrix(e->matrix);
   view_->AddLayer(actor, motion);
   // Beside a detail the piece draws its motion level at rest too.
-  if (!e->detail.empty() && motion) view_->SetLayerRests({{actor, motion}});
+  if (e->detailed && motion) view_->SetLayerRests({{actor, motion}});
   e->pieces.push_back(actor);
   e->piece_rest.push_back(rest);
   e->piece_motion.push_back(motion);
@@ -538,7 +549,12 @@ bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* 
     // ray is in that box before the point).
     std::vector<std::pair<double, size_t>> met;  // (entry, piece)
     const size_t uploaded = std::min(e.next, all.size());
-    for (size_t b = 0; b * ProjectCloud::kPickBlock < uploaded && b < blocks.size(); ++b) {
+    const bool indexed = IndexedForPicks(*e.cloud);
+    if (!indexed) {  // No boxes: every piece, entered at the eye.
+      for (size_t p = 0; p * ProjectCloud::kPickPiece < uploaded; ++p) met.emplace_back(0.0, p);
+    }
+    for (size_t b = 0; indexed && b * ProjectCloud::kPickBlock < uploaded && b < blocks.size();
+         ++b) {
       double enter = 0.0;
       if (!RayNearBox(slabs, o, blocks[b], ray.tolerance_per_t, *best_t, &enter)) continue;
       const size_t p0 = b * (ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);

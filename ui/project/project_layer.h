@@ -37,6 +37,7 @@
 #include <QMetaObject>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -130,6 +131,7 @@ class ProjectLayer {
     std::vector<vtkSmartPointer<vtkPolyDataMapper>> piece_rest, piece_motion;
     std::vector<vtkSmartPointer<vtkActor>> detail;                // PlanDetail's, if any
     std::vector<vtkSmartPointer<vtkPolyDataMapper>> detail_rest;  // their rest mappers
+    bool detailed = false;  // in the plan shown: its pieces draw their motion level at rest
     size_t detail_points = 0;
   };
   Entry NewEntry(const ProjectCloudPtr& cloud, size_t sessions) const;
@@ -154,7 +156,12 @@ class ProjectLayer {
   QMetaObject::Connection planned_;           // CloudView::restPlanned -> PlanDetail
   std::unique_ptr<std::thread> detail_thread_;
   bool detail_wanted_ = false;       // planned again when the running plan ends
-  std::vector<double> planned_key_;  // what the last plan started was for
+  struct DetailKey {
+    std::vector<double> sessions;  // each planned session's cloud, pose and slot
+    size_t budget = 0;
+    CloudView::CameraKey camera{};
+  };
+  std::optional<DetailKey> planned_key_;  // what the last plan started was for
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
   std::map<std::string, Entry> entries_;
 };

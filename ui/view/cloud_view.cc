@@ -544,17 +544,19 @@ CloudView::CameraKey CloudView::CurrentCameraKey() const {
   key[10] = camera->GetParallelScale();
   key[11] = width();
   key[12] = height();
+  key[13] = std::isnan(clip_height_) ? -1e300 : clip_height_;
   return key;
 }
 
-bool CloudView::CameraMovedSincePlan() const {
-  // Rounding aside (an orbit's 30 steps of 12 degrees come back within
-  // 1e-13 m): a placement moves the camera by millimetres at least.
-  const CameraKey now = CurrentCameraKey();
-  for (size_t k = 0; k < now.size(); ++k) {
-    if (std::abs(now[k] - planned_camera_[k]) > 1e-9 * (1.0 + std::abs(now[k]))) return true;
+bool CloudView::SameCamera(const CameraKey& a, const CameraKey& b) {
+  for (size_t k = 0; k < a.size(); ++k) {
+    if (!(std::abs(a[k] - b[k]) <= 1e-9 * (1.0 + std::abs(a[k])))) return false;
   }
-  return false;
+  return true;
+}
+
+bool CloudView::CameraMovedSincePlan() const {
+  return !SameCamera(CurrentCameraKey(), planned_camera_);
 }
 
 bool CloudView::RenderIfDirty() {

@@ -361,6 +361,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // The camera's six frustum planes (vtkCamera::GetFrustumPlanes: a x + b y
   // + c z + d >= 0 inside) for this view's aspect, and its eye.
   void ViewFrustum(double planes[24], double eye[3]) const;
+  // What a rest level is planned for: the camera's position, focal point,
+  // view-up, view angle and parallel scale, the viewport's size and the
+  // clip height (-1e300 for none); and whether two differ by more than
+  // rounding (an orbit's 30 steps of 12 degrees come back within 1e-13 m,
+  // a placement moves the camera by millimetres at least).
+  using CameraKey = std::array<double, 14>;
+  CameraKey CurrentCameraKey() const;
+  static bool SameCamera(const CameraKey& a, const CameraKey& b);
 
   // ---- Rendering ----
   void RequestRender() { dirty_ = true; }
@@ -572,15 +580,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
   QTimer* refine_timer_ = nullptr;
   Progress progress_;
   bool interacting_ = false;
-  // The camera the rest level was last planned for (PlanRest): position,
-  // focal point, view-up, view angle, parallel scale and the viewport's
-  // size. A camera placed without the mouse (the View menu, LookAt, a
-  // project's change of anchor) differs from it at the next
-  // RenderIfDirty, which then goes to the motion level and back to rest
-  // through the settle timer, as after a drag: the rest level kept the old
-  // camera's plan, dense where it looked before and thin where it looks now.
-  using CameraKey = std::array<double, 13>;
-  CameraKey CurrentCameraKey() const;
+  // The camera and clip the rest level was last planned for (PlanRest).
+  // A camera placed without the mouse (the View menu, LookAt, a project's
+  // change of anchor) or a clip changed (Hide Ceiling) differs from it at
+  // the next RenderIfDirty, which then goes to the motion level and back
+  // to rest through the settle timer, as after a drag: the rest level kept
+  // the old plan, dense where it looked before and thin where it looks
+  // now, and without the cubes a clip had hidden.
   bool CameraMovedSincePlan() const;
   CameraKey planned_camera_{};
   uint64_t camera_generation_ = 0;
