@@ -49,6 +49,15 @@ void TickUntilRest(CloudView* view) {
   FAIL() << "the view did not come back to rest";
 }
 
+// A small view on screen with small budgets: motion 20 000, rest 100 000.
+void ShowSmall(CloudView* view) {
+  view->resize(400, 300);
+  view->show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(view));
+  view->SetLodBudget(20000);
+  view->SetRestBudget(100000);
+}
+
 size_t InCorner(const std::vector<Eigen::Vector3f>& points) {
   size_t n = 0;
   for (const Eigen::Vector3f& p : points) n += p.x() > 15.0f && p.y() > 15.0f;
@@ -57,11 +66,7 @@ size_t InCorner(const std::vector<Eigen::Vector3f>& points) {
 
 TEST(CloudViewRestTest, APlacementWithoutTheMousePlansTheRestLevelForTheNewCamera) {
   CloudView view;
-  view.resize(400, 300);
-  view.show();
-  ASSERT_TRUE(QTest::qWaitForWindowExposed(&view));
-  view.SetLodBudget(20000);
-  view.SetRestBudget(100000);
+  ASSERT_NO_FATAL_FAILURE(ShowSmall(&view));
   view.AppendPoints(Floor(1'500'000));
   TickUntilRest(&view);
 
@@ -93,11 +98,7 @@ TEST(CloudViewRestTest, AClipTakenAwayPlansTheRestLevelAgain) {
   // Half of it a ceiling, in runs as scan lines cross it.
   for (size_t i = 0; i < points.size(); ++i) points[i].z = (i / 1000) % 2 == 0 ? 2.5f : 0.0f;
   CloudView view;
-  view.resize(400, 300);
-  view.show();
-  ASSERT_TRUE(QTest::qWaitForWindowExposed(&view));
-  view.SetLodBudget(20000);
-  view.SetRestBudget(100000);
+  ASSERT_NO_FATAL_FAILURE(ShowSmall(&view));
   view.SetClipHeight(2.0);
   view.AppendPoints(points);
   TickUntilRest(&view);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/pick_truth.h"
 #include "ui/main_window.h"
 #include "ui/project/project_detail.h"
 #include "ui/project/project_layer.h"
@@ -200,14 +201,8 @@ TEST_F(ProjectDetailTest, ACloudWithoutItsIndexIsDrawnThinnedAndPickedPointByPoi
                                    bare->positions[rng() % bare->positions.size()].cast<double>();
     ray.direction = (target - ray.origin).normalized();
     ray.tolerance_per_t = 0.001;
-    double expected = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector3f& q : bare->positions) {
-      const Eigen::Vector3d w = *session_.project_from_session * q.cast<double>() - ray.origin;
-      const double along = w.dot(ray.direction);
-      const double tol = ray.tolerance_per_t * along;
-      if (along > 0 && along < expected && w.squaredNorm() - along * along <= tol * tol)
-        expected = along;
-    }
+    const double expected =
+        testing::NearestAlongRay(bare->positions, *session_.project_from_session, ray);
     double t = std::numeric_limits<double>::infinity();
     PickHit hit;
     ASSERT_TRUE(layer_->Pick(ray, &t, &hit)) << r;

@@ -45,6 +45,7 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/ui/app_fixture.h"
 #include "tests/ui/paced_frame.h"
+#include "tests/ui/pick_truth.h"
 #include "tests/ui/progressive_passes.h"
 #include "tests/ui/project_ui_fixture.h"
 #include "ui/project/pair_picking.h"
@@ -661,14 +662,7 @@ TEST_F(ProjectLayerPickTest, TheBlockCulledPickIsTheNearestPointUnderTheRay) {
     ray.direction = (target - ray.origin).normalized();
     ray.tolerance_per_t = 0.002;
     // Every point, in the project's frame.
-    double expected_t = std::numeric_limits<double>::infinity();
-    for (const Eigen::Vector3f& q : cloud->positions) {
-      const Eigen::Vector3d w = pose * q.cast<double>() - ray.origin;
-      const double along = w.dot(ray.direction);
-      const double tol = ray.tolerance_per_t * along;
-      if (along > 0 && along < expected_t && w.squaredNorm() - along * along <= tol * tol)
-        expected_t = along;
-    }
+    const double expected_t = testing::NearestAlongRay(cloud->positions, pose, ray);
     double t = std::numeric_limits<double>::infinity();
     PickHit hit;
     const bool found = layer.Pick(ray, &t, &hit);

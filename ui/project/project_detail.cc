@@ -6,6 +6,7 @@
 
 #include "core/cloud/cube_budget.h"
 #include "core/cloud/packed_chunk.h"
+#include "core/geometry/box_planes.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -13,38 +14,11 @@ namespace {
 // A plane n . x + d >= 0 (inside) as four numbers.
 using Plane4 = std::array<double, 4>;
 
-enum class InView { kOut, kPartly, kWhole };
-
-// Where the box (x0, x1, y0, y1, z0, z1) lies against the planes: out if
-// its corner farthest along some plane's normal is behind that plane,
-// whole if every plane has even its nearest corner in front.
-InView BoxInView(const float b[6], const std::vector<Plane4>& planes) {
-  bool whole = true;
-  for (const Plane4& n : planes) {
-    const double far = n[0] * (n[0] >= 0 ? b[1] : b[0]) + n[1] * (n[1] >= 0 ? b[3] : b[2]) +
-                       n[2] * (n[2] >= 0 ? b[5] : b[4]) + n[3];
-    if (far < 0) return InView::kOut;
-    const double near = n[0] * (n[0] >= 0 ? b[0] : b[1]) + n[1] * (n[1] >= 0 ? b[2] : b[3]) +
-                        n[2] * (n[2] >= 0 ? b[4] : b[5]) + n[3];
-    whole = whole && near >= 0;
-  }
-  return whole ? InView::kWhole : InView::kPartly;
-}
-
 InView BoxInView(const Eigen::AlignedBox3f& box, const std::vector<Plane4>& planes) {
   if (box.isEmpty()) return InView::kOut;  // No finite point.
   const float b[6] = {box.min().x(), box.max().x(), box.min().y(),
                       box.max().y(), box.min().z(), box.max().z()};
-  return BoxInView(b, planes);
-}
-
-double SquaredDistanceToBox(const Eigen::Vector3d& eye, const std::array<float, 6>& b) {
-  double d2 = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double q = std::clamp<double>(eye[k], b[2 * k], b[2 * k + 1]);
-    d2 += (eye[k] - q) * (eye[k] - q);
-  }
-  return d2;
+  return BoxAgainstPlanes(b, planes.front().data(), planes.size());
 }
 
 }  // namespace
@@ -112,8 +86,8 @@ std::vector<std::vector<uint32_t>> PlanDetail(const std::vector<DetailSession>& 
     const Eigen::Vector3d eye = r.transpose() * (camera.eye - t);
     for (size_t c = 0; c < count.size(); ++c) {
       if (count[c] == 0) continue;
-      demand.push_back(
-          {SquaredDistanceToBox(eye, PackedChunk::CellBox(cloud.cube_keys[c])), count[c]});
+      const std::array<float, 6> cube = PackedChunk::CellBox(cloud.cube_keys[c]);
+      demand.push_back({SquaredDistanceToBox(eye.data(), cube.data()), count[c]});
       owner.emplace_back(s, static_cast<uint32_t>(c));
     }
   }

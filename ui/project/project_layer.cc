@@ -247,13 +247,8 @@ void ProjectLayer::ApplyDetail(const DetailResult& result) {
     if (it == entries_.end() || it->second.cloud != planned.cloud) continue;
     Entry* e = &it->second;
     for (const vtkSmartPointer<vtkPolyData>& poly : planned.polys) {
-      auto actor = vtkSmartPointer<vtkActor>::New();
       vtkSmartPointer<vtkPolyDataMapper> mapper = SlotMapper(poly);
-      actor->SetMapper(mapper);
-      actor->GetProperty()->SetRepresentationToPoints();
-      actor->PickableOff();
-      actor->SetVisibility(e->visible);
-      if (e->matrix) actor->SetUserMatrix(e->matrix);
+      vtkSmartPointer<vtkActor> actor = EntryActor(*e, mapper);
       view_->AddLayer(actor, empty_);
       e->detail.push_back(actor);
       e->detail_rest.push_back(mapper);
@@ -364,6 +359,17 @@ vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::PieceMapper(const Entry& e, siz
   return SlotMapper(SlotPoly(xyz, e.slot));
 }
 
+vtkSmartPointer<vtkActor> ProjectLayer::EntryActor(const Entry& e,
+                                                   vtkPolyDataMapper* mapper) const {
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetRepresentationToPoints();
+  actor->PickableOff();
+  actor->SetVisibility(e.visible);
+  if (e.matrix) actor->SetUserMatrix(e.matrix);
+  return actor;
+}
+
 vtkSmartPointer<vtkPolyDataMapper> ProjectLayer::SlotMapper(
     const vtkSmartPointer<vtkPolyData>& poly) const {
   // Paced by the view it is drawn in, as the cloud's mappers are
@@ -390,12 +396,7 @@ void ProjectLayer::AddPiece(Entry* e) {
   // so the progressive passes draw them again where they already are.
   vtkSmartPointer<vtkPolyDataMapper> motion =
       e->motion_stride > e->stride ? PieceMapper(*e, first, last, e->motion_stride) : nullptr;
-  auto actor = vtkSmartPointer<vtkActor>::New();
-  actor->SetMapper(rest);
-  actor->GetProperty()->SetRepresentationToPoints();
-  actor->PickableOff();
-  actor->SetVisibility(e->visible);
-  if (e->matrix) actor->SetUserMatrix(e->matrix);
+  vtkSmartPointer<vtkActor> actor = EntryActor(*e, rest);
   view_->AddLayer(actor, motion);
   // Beside a detail the piece draws its motion level at rest too.
   if (e->detailed && motion) view_->SetLayerRests({{actor, motion}});

@@ -140,6 +140,8 @@ class ProjectLayer {
   // slot bytes under the shared lookup table.
   vtkSmartPointer<vtkPolyDataMapper> PieceMapper(const Entry& e, size_t first, size_t last,
                                                  size_t step) const;
+  // A point actor of the entry's (its visibility and pose) drawing `mapper`.
+  vtkSmartPointer<vtkActor> EntryActor(const Entry& e, vtkPolyDataMapper* mapper) const;
   // A mapper of slot-byte vertices under the shared lookup table.
   vtkSmartPointer<vtkPolyDataMapper> SlotMapper(const vtkSmartPointer<vtkPolyData>& poly) const;
   void Remove(Entry* entry);

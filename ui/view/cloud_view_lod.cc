@@ -16,6 +16,7 @@
 #include <limits>
 
 #include "core/cloud/cube_budget.h"
+#include "core/geometry/box_planes.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
 
@@ -402,35 +403,13 @@ namespace {
 
 // Where an axis-aligned box (x min, x max, y min, y max, z min, z max) lies
 // against the view frustum's six inward planes and the clip height.
-enum class InView { kOut, kPartly, kWhole };
-
 template <typename T>
 InView BoxInView(const T* b, const double planes[24], double clip_height) {
   if (!std::isnan(clip_height) && b[4] > clip_height) return InView::kOut;
-  bool whole = std::isnan(clip_height) || b[5] <= clip_height;
-  for (int p = 0; p < 6; ++p) {
-    // The box's corners farthest and nearest along the plane's inward
-    // normal: out if the farthest is behind the plane, whole while every
-    // nearest is in front of its plane.
-    const double* n = planes + 4 * p;
-    const double far = n[0] * (n[0] >= 0 ? b[1] : b[0]) + n[1] * (n[1] >= 0 ? b[3] : b[2]) +
-                       n[2] * (n[2] >= 0 ? b[5] : b[4]) + n[3];
-    if (far < 0) return InView::kOut;
-    const double near = n[0] * (n[0] >= 0 ? b[0] : b[1]) + n[1] * (n[1] >= 0 ? b[2] : b[3]) +
-                        n[2] * (n[2] >= 0 ? b[4] : b[5]) + n[3];
-    whole = whole && near >= 0;
-  }
-  return whole ? InView::kWhole : InView::kPartly;
-}
-
-template <typename T>
-double SquaredDistanceToBox(const double eye[3], const T* b) {
-  double d2 = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double q = std::clamp<double>(eye[k], b[2 * k], b[2 * k + 1]);
-    d2 += (eye[k] - q) * (eye[k] - q);
-  }
-  return d2;
+  const InView frustum = BoxAgainstPlanes(b, planes, 6);
+  if (frustum == InView::kWhole && !std::isnan(clip_height) && b[5] > clip_height)
+    return InView::kPartly;
+  return frustum;
 }
 
 int Log2(int stride) {
