@@ -25,6 +25,7 @@
 #include "ui/project/project_detail.h"
 #include "ui/view/cloud_view.h"
 #include "ui/view/paced_mapper.h"
+#include "ui/workspace/background_priority.h"
 
 namespace sweepscan::ui {
 namespace {
@@ -191,6 +192,7 @@ void ProjectLayer::PlanDetail() {
   std::weak_ptr<bool> alive = alive_;
   detail_thread_ =
       std::make_unique<std::thread>([this, alive, sessions, camera, budget, slot_values, result] {
+        LowerThisThreadsPriority();  // As the jobs': the GUI and the renderer first.
         const std::vector<std::vector<uint32_t>> planned = ui::PlanDetail(sessions, camera, budget);
         for (size_t s = 0; s < planned.size(); ++s) {
           const std::vector<Eigen::Vector3f>& all = sessions[s].cloud->positions;
