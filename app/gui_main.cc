@@ -165,11 +165,7 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
   window->view()->FitToCloud();
   window->view()->SetLodActive(false);  // Every point in the images, not the thinned preview.
   // A project's sessions planned for that camera too (on their own thread).
-  QElapsedTimer detail;
-  detail.start();
-  while (window->project()->layer()->detail_pending() && detail.elapsed() < 10000) {
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 10);
-  }
+  WaitForProjectDetail(window->project()->layer(), 10000);
   QString error;
   if (!o.screenshot.isEmpty() && !window->view()->SaveScreenshot(o.screenshot, &error)) {
     std::fprintf(stderr, "sweepscan: %s\n", qPrintable(error));

@@ -147,10 +147,33 @@ nlohmann::json ClicksToMarker(MainWindow* window) {
           {"clicks", click_ms.size()}};
 }
 
-// Zoomed in at rest: the spot of the far end wall 1 m above the floor (the
-// motion point nearest it) looked at from 2 m towards the middle: the time
-// to plan and build its rest level, the rest points drawn, and those within
-// 0.3 m of the spot (how much of it is drawn).
+// The camera 2 m from the spot of the far end wall 1 m above the floor
+// (the point of `points` nearest it; lo and hi the cloud's corners),
+// looking towards the middle, drawn once; the spot. Floats for a session's
+// motion points, doubles for a project's planned ones.
+template <typename V>
+V LookAtFarEnd(CloudView* view, const std::vector<V>& points, const V& lo, const V& hi) {
+  using S = typename V::Scalar;
+  const V aim(hi.x(), S(0.5) * (lo.y() + hi.y()), lo.z() + S(1));
+  V spot = aim;
+  S best = std::numeric_limits<S>::infinity();
+  for (const V& p : points) {
+    if ((p - aim).squaredNorm() < best) {
+      best = (p - aim).squaredNorm();
+      spot = p;
+    }
+  }
+  V inward(S(0.5) * (lo.x() + hi.x()) - spot.x(), S(0.5) * (lo.y() + hi.y()) - spot.y(), S(0));
+  inward.normalize();
+  view->LookAt(spot.template cast<double>(),
+               (spot + S(2) * inward + V(S(0), S(0), S(0.2))).template cast<double>());
+  view->RenderNow();
+  return spot;
+}
+
+// Zoomed in at rest (LookAtFarEnd of the motion points): the time to plan
+// and build its rest level, the rest points drawn, and those within 0.3 m
+// of the spot (how much of it is drawn).
 nlohmann::json ZoomedIn(CloudView* view) {
   const std::vector<Eigen::Vector3f> motion = view->MotionPoints();
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e9f), hi = -lo;
@@ -158,17 +181,7 @@ nlohmann::json ZoomedIn(CloudView* view) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  const Eigen::Vector3f aim(hi.x(), 0.5f * (lo.y() + hi.y()), lo.z() + 1.0f);
-  Eigen::Vector3f spot = aim;
-  for (const Eigen::Vector3f& p : motion) {
-    if (spot == aim || (p - aim).squaredNorm() < (spot - aim).squaredNorm()) spot = p;
-  }
-  Eigen::Vector3f inward(0.5f * (lo.x() + hi.x()) - spot.x(), 0.5f * (lo.y() + hi.y()) - spot.y(),
-                         0.0f);
-  inward.normalize();
-  view->LookAt(spot.cast<double>(),
-               (spot + 2.0f * inward + Eigen::Vector3f(0, 0, 0.2f)).cast<double>());
-  view->RenderNow();
+  const Eigen::Vector3f spot = LookAtFarEnd(view, motion, lo, hi);
   view->SetLodActive(true);
   QElapsedTimer clock;
   clock.start();
@@ -234,33 +247,19 @@ void StartOrbitBenchmark(int frames, Workspace* workspace, MainWindow* window) {
   });
 }
 
-// A project zoomed in at rest, as ZoomedIn for a session: the spot of the
-// drawn sessions' far end 1 m above their floor (the detail's point nearest
-// it, planned for the whole view) looked at from 2 m towards the middle;
+// A project zoomed in at rest, as ZoomedIn for a session (LookAtFarEnd of
+// the points planned for the whole view, in the drawn sessions' bounds):
 // the time until the rest level planned for that camera is drawn, and the
 // points drawn within 0.3 m of the spot against the sessions' points there.
 nlohmann::json ProjectZoomedIn(CloudView* view, const ui::ProjectLayer* layer) {
   const Eigen::AlignedBox3d box = layer->drawn_bounds();
-  const Eigen::Vector3d aim(box.max().x(), box.center().y(), box.min().z() + 1.0);
-  Eigen::Vector3d spot = aim;
-  double best = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& p : layer->DetailPoints()) {
-    if ((p - aim).squaredNorm() < best) {
-      best = (p - aim).squaredNorm();
-      spot = p;
-    }
-  }
-  Eigen::Vector3d inward(box.center().x() - spot.x(), box.center().y() - spot.y(), 0.0);
-  inward.normalize();
-  view->LookAt(spot, spot + 2.0 * inward + Eigen::Vector3d(0.0, 0.0, 0.2));
-  view->RenderNow();
+  const Eigen::Vector3d spot = LookAtFarEnd(view, layer->DetailPoints(), Eigen::Vector3d(box.min()),
+                                            Eigen::Vector3d(box.max()));
   QElapsedTimer clock;
   clock.start();
   view->SetLodActive(true);
   view->SetLodActive(false);
-  while (layer->detail_pending() && clock.elapsed() < 60000) {
-    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-  }
+  WaitForProjectDetail(layer, 60000);
   view->RenderNow();
   const double rest_s = clock.nsecsElapsed() * 1e-9;
   size_t at_spot = 0;
@@ -306,9 +305,7 @@ void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
     CloudView* view = window->view();
     ShowWhole(view);
     // And the sessions' rest level planned for that camera on its thread.
-    while (project->layer()->detail_pending()) {
-      QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
-    }
+    WaitForProjectDetail(project->layer(), 600000);
     view->RenderNow();
     nlohmann::json j = {{"sessions", drawn},
                         {"points", project->layer()->drawn_points()},
@@ -325,6 +322,14 @@ void StartProjectOrbitBenchmark(int frames, MainWindow* window) {
     PrintAndClose(j, window);
   });
   poll->start(10);
+}
+
+void WaitForProjectDetail(const ui::ProjectLayer* layer, int timeout_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  while (layer->detail_pending() && clock.elapsed() < timeout_ms) {
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 5);
+  }
 }
 
 }  // namespace sweepscan::app

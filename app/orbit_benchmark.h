@@ -6,6 +6,7 @@
 
 namespace sweepscan::ui {
 class MainWindow;
+class ProjectLayer;
 class Workspace;
 }  // namespace sweepscan::ui
 
@@ -22,8 +23,14 @@ void StartOrbitBenchmark(int frames, ui::Workspace* workspace, ui::MainWindow* w
 // With --project FILE: the same once every placed session's cloud is drawn
 // (the project's layers: "points" are the points the rest level draws,
 // "lod_points" the motion level's), without the clicks (they pick for the
-// calibration panel, a session's) and the zoom.
+// calibration panel, a session's); the zoom waits for the sessions' rest
+// level planned for it.
 void StartProjectOrbitBenchmark(int frames, ui::MainWindow* window);
+
+// Runs the event loop until the project's rest level planned on its thread
+// is shown (ProjectLayer::detail_pending), at most `timeout_ms`: what a
+// scripted run's figures and pictures wait for.
+void WaitForProjectDetail(const ui::ProjectLayer* layer, int timeout_ms);
 
 }  // namespace sweepscan::app
 
