@@ -449,7 +449,11 @@ TEST_F(AppTest, PoseSourceSfmReprocessesTheSessionAsTheCliDoes) {
   EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
 
   // SfM from the menu. The view settles first, so that what is measured is
-  // the job's effect on the event loop (see the calibration test).
+  // the job's effect on the event loop (see the calibration test), and the
+  // job the opened circle drive starts (splitting its passes) ends: the app
+  // refuses another pose source while it runs, as an operator is told
+  // (seen beside the whole suite on 2 cores).
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
   ASSERT_TRUE(WaitFor([&] { return !window_->view()->lod_active(); }, 10000));
   window_->view()->RenderNow();
   WaitFor([] { return false; }, 100);
