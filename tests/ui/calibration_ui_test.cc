@@ -49,6 +49,7 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/pick_truth.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
@@ -213,7 +214,7 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
       }
       const QPoint px = view->WorldToWidget(inside).toPoint();
       const size_t made = picks_made();
-      QTest::mouseClick(view, Qt::LeftButton, Qt::ShiftModifier, px);
+      ASSERT_TRUE(testing::ShiftClick(view, px));
       ASSERT_EQ(picks_made(), made + 1) << "no pick at " << inside.transpose() << " (pass "
                                         << pass << ", pixel " << px.x() << ", " << px.y() << ")";
     }

@@ -10,29 +10,17 @@
 #include <QElapsedTimer>
 #include <QtTest>
 #include <limits>
-#include <random>
 #include <vector>
 
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/random_floor.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
 namespace {
 
 // A 20 x 20 m floor of random points (every chunk spans it), in time order.
-std::vector<CloudPoint> Floor(size_t n) {
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(0.0f, 20.0f);
-  std::vector<CloudPoint> points(n);
-  for (size_t i = 0; i < n; ++i) {
-    CloudPoint& p = points[i];
-    p.x = u(rng), p.y = u(rng), p.z = 0.0f;
-    p.range_m = 2.0f;
-    p.scan = static_cast<uint32_t>(i / 1000);
-    p.time_ns = static_cast<int64_t>(i) * 200000;
-  }
-  return points;
-}
+std::vector<CloudPoint> Floor(size_t n) { return testing::RandomFloor(n, 20.0f, 5); }
 
 // The app's render tick (MainWindow's timer) until the view is back at rest
 // with its passes drawn.

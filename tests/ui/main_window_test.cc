@@ -49,6 +49,7 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/pick_truth.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
@@ -747,7 +748,7 @@ TEST_F(AppTest, MeasureDistanceBetweenTwoClickedPoints) {
   for (const CloudPoint* p : {a, b}) {
     const QPointF px = view->WorldToWidget(Eigen::Vector3d(p->x, p->y, p->z));
     ASSERT_TRUE(view->PickPoint(px.toPoint(), &picked[k]));
-    QTest::mouseClick(view, Qt::LeftButton, Qt::ShiftModifier, px.toPoint());
+    ASSERT_TRUE(testing::ShiftClick(view, px.toPoint()));
     ++k;
   }
   // The clicks measured; they did not add calibration picks.

@@ -85,9 +85,7 @@ ProjectLayer::ProjectLayer(CloudView* view) : view_(view) {
   lut_->SetNumberOfTableValues(kSlots);
   lut_->SetTableRange(0, kSlots - 1);
   for (int i = 0; i < kSlots; ++i) lut_->SetTableValue(i, 0.5, 0.5, 0.5, 1.0);
-  view_->SetLayerPicker([this](const CloudView::PickRay& ray, double* best_t, PickHit* hit) {
-    return Pick(ray, best_t, hit);
-  });
+  view_->SetLayerPicker([this] { return PickSnapshot(); });
   empty_ = vtkSmartPointer<PacedMapper>::New();
   empty_->SetInputData(vtkSmartPointer<vtkPolyData>::New());
   planned_ = QObject::connect(view_, &CloudView::restPlanned, view_, [this] { PlanDetail(); });
@@ -102,6 +100,7 @@ ProjectLayer::~ProjectLayer() {
 }
 
 void ProjectLayer::Remove(Entry* e) {
+  view_->InvalidatePicks();  // A pick in flight may have found its points.
   DropDetail(e);
   for (auto& actor : e->pieces) view_->RemoveLayer(actor);
   e->pieces.clear();
@@ -452,6 +451,7 @@ void ProjectLayer::Sync(const Project& project,
     }
     Entry& e = it->second;
     if (e.visible != shown) {
+      if (!shown) view_->InvalidatePicks();
       e.visible = shown;
       for (auto& actor : e.pieces) actor->SetVisibility(shown);
       for (auto& actor : e.detail) actor->SetVisibility(shown);
@@ -460,6 +460,7 @@ void ProjectLayer::Sync(const Project& project,
     if (s.project_from_session) {
       auto m = Matrix(*s.project_from_session);
       if (!SameMatrix(m, e.matrix)) {
+        view_->InvalidatePicks();  // A pick in flight placed its point at the old pose.
         e.matrix = m;
         e.pose = *s.project_from_session;
         for (auto& actor : e.pieces) actor->SetUserMatrix(m);
@@ -531,65 +532,83 @@ bool RayNearBox(const RaySlabs& slabs, const Eigen::Vector3d& o, const Eigen::Al
 }  // namespace
 
 bool ProjectLayer::Pick(const CloudView::PickRay& ray, double* best_t, PickHit* hit) const {
-  bool found = false;
+  return PickSnapshot()(ray, best_t, hit);
+}
+
+LayerPick ProjectLayer::PickSnapshot() const {
+  // What a pick reads, as it is now: the clouds are shared and never
+  // change (a rebuilt one is another), the poses and counts are copied.
+  struct Target {
+    std::string id;
+    Rigid3d pose;
+    ProjectCloudPtr cloud;
+    size_t uploaded;
+  };
+  std::vector<Target> targets;
   for (const auto& [id, e] : entries_) {
     if (!e.visible || e.pieces.empty()) continue;
-    // The ray in the session's frame (a rigid motion keeps t and the
-    // distances to the ray); the clip stays in the project's frame.
-    const Eigen::Matrix3d r = e.pose.rotation().toRotationMatrix();
-    const Eigen::Vector3d t = e.pose.translation();
-    const Eigen::Vector3d o = r.transpose() * (ray.origin - t);
-    const Eigen::Vector3d d = r.transpose() * ray.direction;
-    const Eigen::Vector3d z_row = r.row(2).transpose();
-    const RaySlabs slabs(o, d);
-    const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
-    const std::vector<Eigen::AlignedBox3f>& blocks = e.cloud->block_bounds;
-    const std::vector<Eigen::AlignedBox3f>& pieces = e.cloud->piece_bounds;
-    // Every point uploaded so far (the drawn pieces hold every k-th of
-    // them): the pick pieces the ray passes near in the blocks it meets,
-    // nearest entry first, until one enters beyond the point found (a
-    // point within the tolerance lies inside its piece's grown box, so the
-    // ray is in that box before the point).
-    std::vector<std::pair<double, size_t>> met;  // (entry, piece)
-    const size_t uploaded = std::min(e.next, all.size());
-    const bool indexed = IndexedForPicks(*e.cloud);
-    if (!indexed) {  // No boxes: every piece, entered at the eye.
-      for (size_t p = 0; p * ProjectCloud::kPickPiece < uploaded; ++p) met.emplace_back(0.0, p);
-    }
-    for (size_t b = 0; indexed && b * ProjectCloud::kPickBlock < uploaded && b < blocks.size();
-         ++b) {
-      double enter = 0.0;
-      if (!RayNearBox(slabs, o, blocks[b], ray.tolerance_per_t, *best_t, &enter)) continue;
-      const size_t p0 = b * (ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
-      const size_t p1 =
-          std::min(pieces.size(), p0 + ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
-      for (size_t p = p0; p < p1 && p * ProjectCloud::kPickPiece < uploaded; ++p) {
-        if (RayNearBox(slabs, o, pieces[p], ray.tolerance_per_t, *best_t, &enter))
-          met.emplace_back(enter, p);
+    targets.push_back({id, e.pose, e.cloud, std::min(e.next, e.cloud->positions.size())});
+  }
+  return [targets = std::move(targets)](const PickRay& ray, double* best_t, PickHit* hit) {
+    bool found = false;
+    for (const Target& e : targets) {
+      // The ray in the session's frame (a rigid motion keeps t and the
+      // distances to the ray); the clip stays in the project's frame.
+      const Eigen::Matrix3d r = e.pose.rotation().toRotationMatrix();
+      const Eigen::Vector3d t = e.pose.translation();
+      const Eigen::Vector3d o = r.transpose() * (ray.origin - t);
+      const Eigen::Vector3d d = r.transpose() * ray.direction;
+      const Eigen::Vector3d z_row = r.row(2).transpose();
+      const RaySlabs slabs(o, d);
+      const std::vector<Eigen::Vector3f>& all = e.cloud->positions;
+      const std::vector<Eigen::AlignedBox3f>& blocks = e.cloud->block_bounds;
+      const std::vector<Eigen::AlignedBox3f>& pieces = e.cloud->piece_bounds;
+      // Every point uploaded so far (the drawn pieces hold every k-th of
+      // them): the pick pieces the ray passes near in the blocks it meets,
+      // nearest entry first, until one enters beyond the point found (a
+      // point within the tolerance lies inside its piece's grown box, so the
+      // ray is in that box before the point).
+      std::vector<std::pair<double, size_t>> met;  // (entry, piece)
+      const size_t uploaded = e.uploaded;
+      const bool indexed = IndexedForPicks(*e.cloud);
+      if (!indexed) {  // No boxes: every piece, entered at the eye.
+        for (size_t p = 0; p * ProjectCloud::kPickPiece < uploaded; ++p) met.emplace_back(0.0, p);
       }
-    }
-    std::sort(met.begin(), met.end());
-    for (const auto& [enter, p] : met) {
-      if (enter >= *best_t) break;
-      const size_t end = std::min(uploaded, (p + 1) * ProjectCloud::kPickPiece);
-      for (size_t i = p * ProjectCloud::kPickPiece; i < end; ++i) {
-        const Eigen::Vector3d q = all[i].cast<double>();
-        if (z_row.dot(q) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
-        const Eigen::Vector3d v = q - o;
-        const double along = v.dot(d);
-        if (along <= 0 || along >= *best_t) continue;
-        const double tol = ray.tolerance_per_t * along;
-        if (v.squaredNorm() - along * along <= tol * tol) {
-          *best_t = along;
-          hit->layer = QString::fromStdString(id);
-          hit->local = q;
-          hit->world = e.pose * q;
-          found = true;
+      for (size_t b = 0; indexed && b * ProjectCloud::kPickBlock < uploaded && b < blocks.size();
+           ++b) {
+        double enter = 0.0;
+        if (!RayNearBox(slabs, o, blocks[b], ray.tolerance_per_t, *best_t, &enter)) continue;
+        const size_t p0 = b * (ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
+        const size_t p1 =
+            std::min(pieces.size(), p0 + ProjectCloud::kPickBlock / ProjectCloud::kPickPiece);
+        for (size_t p = p0; p < p1 && p * ProjectCloud::kPickPiece < uploaded; ++p) {
+          if (RayNearBox(slabs, o, pieces[p], ray.tolerance_per_t, *best_t, &enter))
+            met.emplace_back(enter, p);
+        }
+      }
+      std::sort(met.begin(), met.end());
+      for (const auto& [enter, p] : met) {
+        if (enter >= *best_t) break;
+        const size_t end = std::min(uploaded, (p + 1) * ProjectCloud::kPickPiece);
+        for (size_t i = p * ProjectCloud::kPickPiece; i < end; ++i) {
+          const Eigen::Vector3d q = all[i].cast<double>();
+          if (z_row.dot(q) + t.z() > ray.clip_z) continue;  // Clipped: not pickable.
+          const Eigen::Vector3d v = q - o;
+          const double along = v.dot(d);
+          if (along <= 0 || along >= *best_t) continue;
+          const double tol = ray.tolerance_per_t * along;
+          if (v.squaredNorm() - along * along <= tol * tol) {
+            *best_t = along;
+            hit->layer = QString::fromStdString(e.id);
+            hit->local = q;
+            hit->world = e.pose * q;
+            found = true;
+          }
         }
       }
     }
-  }
-  return found;
+    return found;
+  };
 }
 
 QColor ProjectLayer::drawn_color(const std::string& id) const {

@@ -15,12 +15,12 @@
 // view draws while the camera moves and as the first of its progressive
 // passes at rest (CloudView::AddLayer).
 //
-// Picking: the layer is the view's layer picker. A Shift + click tests
-// the points of the drawn sessions (all of them, not only every k-th)
-// through each session's pose, in the pieces its ray passes near
-// (ProjectCloud::piece_bounds), nearest first, and reports the session's
-// id and the point in the session's own frame, which is what a picked
-// pair is made of.
+// Picking: the layer is the view's layer picker. A Shift + click tests,
+// on the view's pick thread, the points of the drawn sessions (all of
+// them, not only every k-th) through each session's pose, in the pieces
+// its ray passes near (ProjectCloud::piece_bounds), nearest first, and
+// reports the session's id and the point in the session's own frame, which
+// is what a picked pair is made of.
 //
 // A session's points go to VTK in pieces of kPiecePoints, a few per GUI
 // tick (Pump), as the view's chunks do: a frame that uploads a whole
@@ -85,8 +85,11 @@ class ProjectLayer {
   // The pose a drawn session is shown at (false if it is not drawn).
   bool drawn_pose(const std::string& id, Rigid3d* project_from_session) const;
 
-  // The view's layer picker (CloudView::LayerPicker): the nearest point of
-  // a drawn session under the ray, nearer than *best_t.
+  // The view's layer picker (CloudView::LayerPicker): the search of the
+  // drawn sessions as they are now, for the pick thread, which finds the
+  // nearest point of a drawn session under the ray, nearer than *best_t.
+  LayerPick PickSnapshot() const;
+  // That search, now.
   bool Pick(const CloudView::PickRay& ray, double* best_t, PickHit* hit) const;
 
   // The rest level planned for the view's camera (project_detail.h), for

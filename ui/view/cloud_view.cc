@@ -26,9 +26,11 @@
 #include <vtkVariant.h>
 
 #include <QBuffer>
+#include <QCoreApplication>
 #include <QElapsedTimer>
 #include <QFileInfo>
 #include <QMouseEvent>
+#include <QThreadPool>
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
@@ -196,7 +198,12 @@ void CloudView::InstallObservers() {
   connect(this, &QObject::destroyed, [clock] { delete clock; });
 }
 
-CloudView::~CloudView() = default;
+CloudView::~CloudView() {
+  // A pick still searching posts its result to this view: let it finish
+  // first (the posted result is dropped with the view).
+  WaitForPicks();
+  QCoreApplication::removePostedEvents(this, QEvent::MetaCall);
+}
 
 void CloudView::BuildGrid() {
   // 1 m floor grid, 40 x 40 m around the origin.
@@ -246,6 +253,7 @@ void CloudView::NewDrawnActor(Drawn* d) {
 }
 
 void CloudView::Clear() {
+  InvalidatePicks();  // A pick of the cloud that was reports nothing.
   for (auto& c : chunks_) RemoveChunkActors(c.get());
   chunks_.clear();
   if (spare_growing_) RemoveChunkActors(spare_growing_.get());

@@ -29,7 +29,8 @@
 // Render requests are coalesced: RequestRender() marks the view dirty and
 // the owner's timer calls RenderIfDirty() (ParaView's pqView::render()).
 //
-// Threading: GUI thread only, like every VTK object.
+// Threading: GUI thread only, like every VTK object; a click's pick
+// searches on the view's pick thread (cloud_pick.h) over what it was given.
 #ifndef SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
 #define SWEEPSCAN_UI_VIEW_CLOUD_VIEW_H_
 
@@ -57,10 +58,12 @@
 #include "core/geometry/path_cover.h"
 #include "core/geometry/voxel_sample.h"
 #include "core/pose/odometry.h"
+#include "ui/view/cloud_pick.h"
 #include "ui/view/paced_mapper.h"
 #include "ui/view/point_values.h"
 
 class QMouseEvent;
+class QThreadPool;
 class QTimer;
 class vtkActor;
 class vtkActor2D;
@@ -78,15 +81,6 @@ class vtkRenderer;
 class vtkScalarBarActor;
 
 namespace sweepscan::ui {
-
-// What a Shift + click found: the point in the view's frame, and which
-// layer it belongs to with the point in that layer's own frame (a project
-// session's: what pairs for registration are made of).
-struct PickHit {
-  Eigen::Vector3d world = Eigen::Vector3d::Zero();
-  QString layer;  // "" for the view's own cloud, else the layer's id
-  Eigen::Vector3d local = Eigen::Vector3d::Zero();  // == world for the view's own cloud
-};
 
 class CloudView : public QVTKOpenGLNativeWidget {
   Q_OBJECT
@@ -259,32 +253,37 @@ class CloudView : public QVTKOpenGLNativeWidget {
   uint64_t camera_generation() const { return camera_generation_; }
 
   // ---- Picking layer ----
-  // The cloud point under display position `pos` (widget pixels): among the
-  // points within `tolerance_px` of the viewing ray, the one nearest the
-  // camera. Chunks whose bounding box the widened ray misses are skipped, so
-  // a click tests only the chunks under the cursor. False if none.
-  bool PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px = 6.0);
+  // A Shift + click is picked on the view's pick thread (cloud_pick.h:
+  // what the search needs is taken at the click, the cloud's points are
+  // tested there, clicks answered in order) and pointPicked reports the
+  // point; the GUI thread meanwhile keeps drawing and taking points in.
+  // The pick of a cloud cleared (or of layers replaced) since is dropped.
+  static constexpr double kPickTolerancePx = 6.0;
+  // Picks clicked and not yet reported (or dropped).
+  int picks_in_flight() const { return picks_in_flight_; }
+  // Waits for the pick thread to finish (their results are still to be
+  // delivered by the event loop).
+  void WaitForPicks();
+  // Drops the picks in flight: what they search has changed (a layer's
+  // owner removed, hid or moved a layer; Clear and SetLayerPicker do it).
+  void InvalidatePicks() { ++pick_generation_; }
+  // The cloud point under display position `pos` (widget pixels), now, on
+  // this thread: among the points within `tolerance_px` of the viewing ray,
+  // the one nearest the camera. Chunks whose bounding box the widened ray
+  // misses are skipped, so a click tests only the chunks under the cursor.
+  // False if none.
+  bool PickPoint(const QPoint& pos, Eigen::Vector3d* world, double tolerance_px = kPickTolerancePx);
   // The same, the layers' points included (through the layer picker).
-  bool PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px = 6.0);
-  // A click's viewing ray in the view's frame, from the eye: a point at
-  // distance t along it (t = (p - origin) . direction) is under the cursor within
-  // tolerance_per_t * t of the ray; points above clip_z are hidden.
-  struct PickRay {
-    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // unit
-    double tolerance_per_t = 0.0;
-    double clip_z = std::numeric_limits<double>::infinity();
-  };
-  // The layers' owner finds its point under the ray nearer than *best_t
-  // (then updates *best_t and *hit, and returns true). The view's own
-  // points and the layers' compete: the nearest to the camera wins.
-  using LayerPicker = std::function<bool(const PickRay& ray, double* best_t, PickHit* hit)>;
+  bool PickPoint(const QPoint& pos, PickHit* hit, double tolerance_px = kPickTolerancePx);
+  using PickRay = ui::PickRay;
+  using PickCounts = ui::PickCounts;
+  // The layers' owner, called on the GUI thread at a click, returns its
+  // search of the layers as they are then (LayerPick: a snapshot, run on
+  // the pick thread). The view's own points and the layers' compete: the
+  // nearest to the camera wins.
+  using LayerPicker = std::function<LayerPick()>;
   void SetLayerPicker(LayerPicker picker);
-  // What the last pick tested of the sealed chunks: blocks in entry order
-  // (the nearest first), then blocks a chunk at a time, in that many chunks.
-  struct PickCounts {
-    size_t blocks_in_order = 0, blocks_by_chunk = 0, chunks = 0;
-  };
+  // What the last pick tested of the sealed chunks.
   const PickCounts& last_pick_counts() const { return last_pick_counts_; }
   // At most this many blocks are tested in entry order (by default as many
   // as the waves take, 224) before the rest are tested a chunk at a time; a
@@ -496,6 +495,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> marker_labels_;
   LayerPicker layer_picker_;
   PickCounts last_pick_counts_;
+  // The search of a pick at `pos` (GUI thread: the ray, the growing chunk
+  // tested, the sealed chunks and the layers taken as they are).
+  PickSearch PreparePick(const QPoint& pos, double tolerance_px);
+  void StartPick(const QPoint& pos);  // A click's pick, on the pick thread.
+  void FinishPick(uint64_t generation, const PickResult& result);  // Its result, back here.
+  std::unique_ptr<QThreadPool> pick_pool_;  // One thread, made at the first click.
+  uint64_t pick_generation_ = 0;            // InvalidatePicks.
+  int picks_in_flight_ = 0;
   size_t pick_blocks_in_order_ = std::numeric_limits<size_t>::max();
   vtkSmartPointer<vtkActor> planes_;
   std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;

@@ -138,7 +138,7 @@ void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed,
                           std::shared_ptr<const ChunkPayload> payload) {
   // The growing chunk's points are the packed chunk's first points: the
   // sealed chunk takes its place (and its values given so far).
-  std::vector<uint16_t> values[3];
+  std::shared_ptr<std::vector<uint16_t>> values[3];
   size_t known = 0;
   if (!chunks_.empty() && !chunks_.back()->sealed()) {
     Chunk* growing = chunks_.back().get();
@@ -150,8 +150,10 @@ void CloudView::AddSealed(std::shared_ptr<const PackedChunk> packed,
   chunk->size = packed->size();
   chunk->bounds = packed->bounds();
   for (int k = 0; k < 3; ++k) {
-    if (!values[k].empty() || has_values_[3 + k]) {
-      values[k].resize(chunk->size, cloud_view_internal::kNoValue);
+    if ((values[k] && !values[k]->empty()) || has_values_[3 + k]) {
+      // The growing chunk's own vector (never shared), grown to the chunk.
+      if (!values[k]) values[k] = std::make_shared<std::vector<uint16_t>>();
+      values[k]->resize(chunk->size, cloud_view_internal::kNoValue);
       chunk->values[k] = std::move(values[k]);
     }
   }
@@ -289,8 +291,8 @@ void CloudView::AppendToGrowing(Chunk* chunk,
     chunk->growing.Append(batch, first, n);
   }
   // Values given after the fact: none yet for the new points.
-  for (auto& v : chunk->values) {
-    if (!v.empty()) v.resize(v.size() + n, cloud_view_internal::kNoValue);
+  for (auto& v : chunk->values) {  // The growing chunk's: not shared.
+    if (v && !v->empty()) v->resize(v->size() + n, cloud_view_internal::kNoValue);
   }
   // A new point has no pass yet: drawn only while no pass filter is on.
   if (pass_filter_ < 0) SetIdentityVerts(d.verts, old + n);

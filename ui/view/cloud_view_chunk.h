@@ -127,8 +127,14 @@ struct CloudView::Chunk {
   std::array<double, 6> bounds{};  // x min, x max, y min, y max, z min, z max
   // Values given after the fact (pass, deviation, intensity), one per point,
   // quantised to 16 bits over their range (CloudView::value_lo_/step_);
-  // empty when none were given.
-  std::vector<uint16_t> values[3];
+  // null or empty when none were given. A sealed chunk's are shared with
+  // the picks searching on the pick thread (cloud_pick.h): replaced when
+  // new ones are given, never changed in place.
+  std::shared_ptr<std::vector<uint16_t>> values[3];
+  const std::vector<uint16_t>& Values(int k) const {
+    static const std::vector<uint16_t> kNone;
+    return values[k] ? *values[k] : kNone;
+  }
   Drawn motion;  // Sealed chunks: the level drawn while the camera moves.
   Drawn rest;    // The growing chunk: every point; sealed: the rest level.
   int rest_target = 0;               // The finest rest stride the last plan asked for (0: none).

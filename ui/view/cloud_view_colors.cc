@@ -130,8 +130,10 @@ void CloudView::SetPointValues(ColorMode mode, const QuantizedValues& values) {
   value_step_[m - 3] = values.step;
   size_t offset = 0;
   for (auto& c : chunks_) {
-    std::vector<uint16_t>& q = c->values[m - 3];
-    q.assign(c->size, kNoValue);
+    // A new vector: a pick in flight may hold the old one.
+    auto shared = std::make_shared<std::vector<uint16_t>>(c->size, kNoValue);
+    c->values[m - 3] = shared;
+    std::vector<uint16_t>& q = *shared;
     if (offset < values.q.size()) {
       const size_t n = std::min(c->size, values.q.size() - offset);
       std::copy_n(values.q.begin() + offset, n, q.begin());

@@ -129,15 +129,14 @@ class CubeShiftOf {
 }  // namespace
 
 float CloudView::ValueOf(const Chunk& chunk, int mode, size_t i) const {
-  const std::vector<uint16_t>& v = chunk.values[mode - 3];
+  const std::vector<uint16_t>& v = chunk.Values(mode - 3);
   if (i >= v.size() || v[i] == kNoValue) return kNaN;
   return static_cast<float>(value_lo_[mode - 3] + v[i] * value_step_[mode - 3]);
 }
 
 bool CloudView::Passes(const Chunk& chunk, size_t i) const {
-  if (pass_filter_ < 0) return true;
-  const float pass = ValueOf(chunk, 3, i);
-  return !std::isnan(pass) && std::abs(pass - pass_filter_) < 0.5f;
+  static_assert(PassTest::kNone == kNoValue);
+  return PassTest{pass_filter_, value_lo_[0], value_step_[0]}.Passes(chunk.Values(0), i);
 }
 
 void CloudView::BuildDrawn(Chunk* chunk, int stride, Drawn* d,
