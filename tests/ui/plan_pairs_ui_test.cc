@@ -54,6 +54,7 @@
 #include "core/scenario/scenario.h"
 #include "tests/testing/event_loop_turns.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/pick_truth.h"
 #include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
 #include "ui/plan/plan_panel.h"
@@ -519,6 +520,24 @@ TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
     EXPECT_LT(QLineF(view->WorldToWidget(hit.world), at).length(), 8.0);
   }
   EXPECT_GE(hits, 3);
+
+  // An operator's Shift + click on c: searched on the view's pick thread
+  // (the layer's snapshot of a and c), it starts a pair at the point
+  // PickPoint finds there, in c's frame. Undone, to pick the truth below.
+  bool clicked = false;
+  for (size_t i = 0; i < c_cloud->positions.size(); i += c_cloud->positions.size() / 37) {
+    const QPoint at = view->WorldToWidget(shown_c * c_cloud->positions[i].cast<double>()).toPoint();
+    PickHit want;
+    if (!view->rect().contains(at) || !view->PickPoint(at, &want) || want.layer != "c") continue;
+    ASSERT_TRUE(testing::ShiftClick(view, at));
+    ASSERT_EQ(picking->picks().size(), 1u);
+    EXPECT_EQ(picking->picks()[0].source, want.local);
+    picking->undo_stack()->undo();
+    ASSERT_TRUE(picking->picks().empty());
+    clicked = true;
+    break;
+  }
+  EXPECT_TRUE(clicked);
 
   const TruthPicks truth = MakeTruthPicks(shown_c);
   // The reference first: refused with where to click instead.
