@@ -171,6 +171,7 @@ int StreamPositions(const Args& args, const std::string& dir, ReconstructionOpti
   const int code = OpenSessionStream(args, dir, /*session_calibration=*/false, &options, &stream);
   if (code != kExitOk) return code;
   points->clear();
+  points->reserve(stream.PointBound());
   const Status s = stream.PlacePoints([points](const CloudPoint* p, size_t n) {
     for (size_t i = 0; i < n; ++i) points->emplace_back(p[i].x, p[i].y, p[i].z);
     return Status::Ok();

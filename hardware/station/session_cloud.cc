@@ -40,6 +40,7 @@ Status LoadSessionPositions(const std::string& project_file, const ProjectSessio
   if (!s.ok()) return refuse(s);
   if (!stream.decode().frames.damage.empty()) out.damage = stream.decode().frames.DamageSummary();
   positions->clear();
+  positions->reserve(stream.PointBound());
   s = stream.PlacePoints(
       [positions](const CloudPoint* p, size_t n) {
         for (size_t i = 0; i < n; ++i) positions->emplace_back(p[i].x, p[i].y, p[i].z);

@@ -60,6 +60,17 @@ class SessionCloudStream {
   // widened by the longest range plus the lidar's offset from the body
   // (and 1 mm for float rounding). The LAS writer needs its extent first.
   void PointBounds(double min[3], double max[3]) const;
+  // After pass 1: at most this many points pass 2 places (0: not known).
+  // Pass 2 places at most one point a lidar sample, and an X4 packet holds
+  // its samples in 2 bytes each after a 10-byte header
+  // (docs/device-codecs.md): the lidar's bytes over 2, which pass 1 counts
+  // without decoding them, exceed the points by about a tenth (40 samples
+  // a packet) plus the samples without a return. An imported bag's
+  // (measurement session's) records are not counted: 0. A caller that
+  // keeps every point reserves this and is never reallocated (the copy of
+  // a doubling held 1.5 times the points at the peak); the tail a bound
+  // leaves unused is never written, so never resident.
+  size_t PointBound() const { return decode_.telemetry.device_bytes[0] / 2; }
   // After pass 2: the poses, moved out (result().poses is then empty).
   PoseBuffer TakePoses() { return std::move(result_.poses); }
   // Motion records and poses held, bytes (what pass 1 keeps for pass 2).

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <vector>
@@ -156,6 +157,39 @@ TEST(SessionStreamTest, AProjectSessionsPositionsStreamedAreLoadSessionClouds) {
     EXPECT_TRUE(climbs);
     EXPECT_GT(last, 0.9);
   }
+}
+
+// After pass 1 the stream bounds the points pass 2 places (the lidar's
+// bytes over 2), tightly enough to reserve: within a quarter of them on the
+// lab drive. LoadSessionPositions reserves it and so never reallocates.
+TEST(SessionStreamTest, PassOneBoundsThePointsPassTwoPlaces) {
+  SessionCloudStream stream;
+  Status s =
+      stream.EstimatePoses(Session(), DefaultSessionFramesOptions(), ReconstructionOptions());
+  ASSERT_TRUE(s.ok()) << s.message();
+  const size_t bound = stream.PointBound();
+  size_t placed = 0;
+  s = stream.PlacePoints([&placed](const CloudPoint*, size_t n) {
+    placed += n;
+    return Status::Ok();
+  });
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_GT(placed, 100000u);
+  EXPECT_GE(bound, placed);
+  EXPECT_LE(bound, placed + placed / 4) << bound << " for " << placed << " points";
+  std::printf("bound %zu for %zu points placed (%.3f)\n", bound, placed,
+              static_cast<double>(bound) / placed);
+
+  ProjectSession session;
+  session.id = "s";
+  session.path = Session();
+  SessionCloud cloud;
+  std::vector<Eigen::Vector3f> positions;
+  s = LoadSessionPositions("/nowhere/p.sweepscan-project", session, SessionCloudOptions(), &cloud,
+                           &positions);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_LE(positions.size(), bound);
+  EXPECT_EQ(positions.capacity(), bound);  // Reserved once, never grown.
 }
 
 TEST(SessionStreamTest, StreamingDecodeHandsOverWhatDecodeSessionKeeps) {
