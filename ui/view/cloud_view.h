@@ -257,7 +257,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // what the search needs is taken at the click, the cloud's points are
   // tested there, clicks answered in order) and pointPicked reports the
   // point; the GUI thread meanwhile keeps drawing and taking points in.
-  // The pick of a cloud cleared (or of layers replaced) since is dropped.
+  // A pick is dropped if what it searched changed before it came back
+  // (InvalidatePicks).
   static constexpr double kPickTolerancePx = 6.0;
   // Picks clicked and not yet reported (or dropped).
   int picks_in_flight() const { return picks_in_flight_; }

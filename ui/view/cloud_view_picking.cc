@@ -102,7 +102,8 @@ void CloudView::StartPick(const QPoint& pos) {
 
 void CloudView::FinishPick(uint64_t generation, const PickResult& result) {
   --picks_in_flight_;
-  // A pick made on a cloud since cleared (or of layers since replaced) is stale.
+  // A pick of a cloud since cleared, or of a layer since removed, hidden or
+  // moved, is stale (InvalidatePicks).
   if (generation != pick_generation_) return;
   last_pick_counts_ = result.counts;
   if (result.found) emit pointPicked(result.hit);
