@@ -186,7 +186,8 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
                     .arg(c.gamma * 1e3, 0, 'f', 2),
                 8000);
           });
-  connect(view_, &CloudView::pointPicked, this, &MainWindow::PointPicked);
+  view_->SetPickContext([this] { return static_cast<int>(CurrentPickMode()); });
+  connect(view_, &CloudView::pointPicked, this, &MainWindow::RoutePick);
   // A project's change of anchor: the clip moved with the frame; the
   // ceiling Hide Ceiling restores moves with it, and the status says so.
   connect(view_, &CloudView::movedWithFrame, this, [this](double dz) {
@@ -354,13 +355,26 @@ void MainWindow::RaiseDock(const QString& name) {
   }
 }
 
-void MainWindow::PointPicked(const PickHit& hit) {
-  if (project_->pair_picking()->active()) {
-    project_->pair_picking()->AddPick(hit);
-  } else if (measure_->isChecked()) {
-    Measure(hit.world);  // A project session's point too: the view's frame.
-  } else {
-    calibration_panel_->AddPick(hit.world);
+MainWindow::PickMode MainWindow::CurrentPickMode() const {
+  if (project_->pair_picking()->active()) return PickMode::kPair;
+  return measure_->isChecked() ? PickMode::kMeasure : PickMode::kCalibration;
+}
+
+void MainWindow::RoutePick(const PickHit& hit, int mode) {
+  const PickMode now = CurrentPickMode();
+  switch (static_cast<PickMode>(mode)) {
+    case PickMode::kPair:
+      if (now == PickMode::kPair) project_->pair_picking()->AddPick(hit);
+      break;
+    case PickMode::kMeasure:
+      // A project session's point too: the view's frame.
+      if (now == PickMode::kMeasure) Measure(hit.world);
+      break;
+    case PickMode::kCalibration:
+      // Clicked before the distance tool or pair picking began: still the
+      // calibration's, which did not end.
+      calibration_panel_->AddPick(hit.world);
+      break;
   }
 }
 

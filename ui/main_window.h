@@ -66,10 +66,13 @@ class MainWindow : public QMainWindow {
   ProjectController* project() const { return project_.get(); }
   // View > Floor Plan (ui/plan/): the plan view's dock and File > Export Floor Plan….
   PlanPanel* plan_panel() const { return plan_panel_; }
-  // A Shift + click's point (what CloudView::pointPicked calls): a pair's
-  // pick while pairs are picked, else an end of the distance tool when it
-  // is on, else a calibration pick.
-  void PointPicked(const PickHit& hit);
+  // A Shift + click's point: a pair's pick while pairs are picked, else an
+  // end of the distance tool when it is on, else a calibration pick. The
+  // view's points come back after the click (CloudView::SetPickContext)
+  // and go where the click was made: to the mode then, or nowhere if that
+  // mode has ended (a pair's pick after pair picking ended, an end of the
+  // distance tool after it was switched off).
+  void PointPicked(const PickHit& hit) { RoutePick(hit, static_cast<int>(CurrentPickMode())); }
   // Dialogs (unsaved changes, errors) are shown unless disabled (tests, demos):
   // then errors go to lastError() and unsaved recordings stay where they are.
   void SetInteractive(bool interactive) { interactive_ = interactive; }
@@ -131,6 +134,9 @@ class MainWindow : public QMainWindow {
   bool eventFilter(QObject* watched, QEvent* event) override;
 
  private:
+  enum class PickMode { kCalibration, kMeasure, kPair };
+  PickMode CurrentPickMode() const;
+  void RoutePick(const PickHit& hit, int mode);  // `mode`: a PickMode
   void BuildMenus();
   void BuildFileMenu();
   void BuildEditMenu();

@@ -3,8 +3,8 @@
 // TCP, the VTK view's rendered image, the emergency stop on Space, a wrong
 // key against a sweepscan-sim process, the pose source of opened sessions
 // (EKF, odometry, SfM) against `reconstruct --pose-source`, the evaluation
-// panel, measuring and the device check. Saving and opening sessions:
-// session_ui_test.cc; replay and seeking: replay_ui_test.cc.
+// panel and the device check. Measuring: measure_ui_test.cc; saving and
+// opening sessions: session_ui_test.cc; replay and seeking: replay_ui_test.cc.
 #include "ui/main_window.h"
 
 #include <QVTKOpenGLNativeWidget.h>
@@ -49,7 +49,6 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
-#include "tests/ui/pick_truth.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
 #include "ui/panels/device_check_dialog.h"
@@ -717,48 +716,6 @@ TEST_F(AppTest, EvaluationPanelMatchesTheCliOnTheSameSession) {
   const QImage image(tmp_.path() + "/report.png");
   ASSERT_FALSE(image.isNull());
   EXPECT_GT(CountBrightPixels(image), 1000);
-}
-
-// The distance tool: two Shift + clicks on cloud points measure the
-// distance between the points under the cursor.
-TEST_F(AppTest, MeasureDistanceBetweenTwoClickedPoints) {
-  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
-  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
-  const std::vector<CloudPoint> cloud = workspace_->CloudSnapshot().Flatten();
-  CloudView* view = window_->view();
-  ASSERT_TRUE(WaitFor([&] { return view->point_count() == cloud.size(); }, 10000));
-  // Seen from above with everything over 10 cm hidden: the floor.
-  view->SetClipHeight(0.10);
-  view->ViewTop();
-  view->RenderNow();
-  EXPECT_TRUE(view->color_bar_drawn());  // a cloud coloured by height: its bar
-  // Two floor-level points far apart, found where the top view shows them.
-  const CloudPoint* a = nullptr;
-  const CloudPoint* b = nullptr;
-  for (const CloudPoint& p : cloud) {
-    if (p.z > 0.02) continue;
-    if (a == nullptr || p.x < a->x) a = &p;
-    if (b == nullptr || p.x > b->x) b = &p;
-  }
-  ASSERT_TRUE(a != nullptr && b != nullptr);
-  window_->measure_action()->setChecked(true);
-  const int picks_before = window_->calibration_panel()->pair_count();
-  Eigen::Vector3d picked[2];
-  int k = 0;
-  for (const CloudPoint* p : {a, b}) {
-    const QPointF px = view->WorldToWidget(Eigen::Vector3d(p->x, p->y, p->z));
-    ASSERT_TRUE(view->PickPoint(px.toPoint(), &picked[k]));
-    ASSERT_TRUE(testing::ShiftClick(view, px.toPoint()));
-    ++k;
-  }
-  // The clicks measured; they did not add calibration picks.
-  EXPECT_EQ(window_->calibration_panel()->pair_count(), picks_before);
-  EXPECT_NEAR(window_->measured_distance(), (picked[1] - picked[0]).norm(), 1e-9);
-  // A pixel or so from the wanted point (the top view is ~1 cm per pixel
-  // here), or a wall's foot (below 10 cm) above it.
-  const double truth = std::hypot(b->x - a->x, b->y - a->y);
-  EXPECT_NEAR(window_->measured_distance(), truth, 0.15);
-  EXPECT_GT(truth, 3.0);
 }
 
 TEST_F(AppTest, DeviceCheckReadsAnImuOnASerialLine) {

@@ -102,8 +102,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   ~CloudView() override;
 
  signals:
-  // Shift + left click on the cloud or a layer (the picking layer).
-  void pointPicked(const sweepscan::ui::PickHit& hit);
+  // Shift + left click on the cloud or a layer (the picking layer);
+  // `context` is what the pick context (SetPickContext) said at the click.
+  void pointPicked(const sweepscan::ui::PickHit& hit, int context);
   void colorModeChanged(int mode);  // A ColorMode.
   // MoveCameraWithFrame moved the frame under the view: a level surface
   // under the focal point (the clip's height, else the focal point's)
@@ -268,6 +269,12 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // Drops the picks in flight: what they search has changed (a layer's
   // owner removed, hid or moved a layer; Clear and SetLayerPicker do it).
   void InvalidatePicks() { ++pick_generation_; }
+  // Asked at each Shift + click, on the GUI thread; its answer comes back
+  // with the point (pointPicked). The point arrives 1-100 ms after the
+  // click, and the owner's mode may have changed meanwhile (the distance
+  // tool switched, pair picking ended): this is how the owner sends the
+  // point where the click was made. Unset: 0.
+  void SetPickContext(std::function<int()> context) { pick_context_ = std::move(context); }
   // The cloud point under display position `pos` (widget pixels), now, on
   // this thread: among the points within `tolerance_px` of the viewing ray,
   // the one nearest the camera. Chunks whose bounding box the widened ray
@@ -500,7 +507,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // tested, the sealed chunks and the layers taken as they are).
   PickSearch PreparePick(const QPoint& pos, double tolerance_px);
   void StartPick(const QPoint& pos);  // A click's pick, on the pick thread.
-  void FinishPick(uint64_t generation, const PickResult& result);  // Its result, back here.
+  // Its result, back here.
+  void FinishPick(uint64_t generation, int context, const PickResult& result);
+  std::function<int()> pick_context_;
   std::unique_ptr<QThreadPool> pick_pool_;  // One thread, made at the first click.
   uint64_t pick_generation_ = 0;            // InvalidatePicks.
   int picks_in_flight_ = 0;

@@ -90,23 +90,25 @@ void CloudView::StartPick(const QPoint& pos) {
   }
   auto search = std::make_shared<const PickSearch>(PreparePick(pos, kPickTolerancePx));
   const uint64_t generation = pick_generation_;
+  const int context = pick_context_ ? pick_context_() : 0;
   ++picks_in_flight_;
   // The view waits for this thread before it goes (~CloudView), so the
   // result is posted to a live object, and dropped with it if it goes first.
-  pick_pool_->start(QRunnable::create([this, search, generation] {
+  pick_pool_->start(QRunnable::create([this, search, generation, context] {
     PickResult result = search->Run();
     QMetaObject::invokeMethod(
-        this, [this, generation, result] { FinishPick(generation, result); }, Qt::QueuedConnection);
+        this, [this, generation, context, result] { FinishPick(generation, context, result); },
+        Qt::QueuedConnection);
   }));
 }
 
-void CloudView::FinishPick(uint64_t generation, const PickResult& result) {
+void CloudView::FinishPick(uint64_t generation, int context, const PickResult& result) {
   --picks_in_flight_;
   // A pick of a cloud since cleared, or of a layer since removed, hidden or
   // moved, is stale (InvalidatePicks).
   if (generation != pick_generation_) return;
   last_pick_counts_ = result.counts;
-  if (result.found) emit pointPicked(result.hit);
+  if (result.found) emit pointPicked(result.hit, context);
 }
 
 void CloudView::WaitForPicks() {
