@@ -1,18 +1,13 @@
-// The plan view and pair picking in the desktop app (docs/desktop-app.md,
-// "Floor plan" and "Projects"), through the real widgets under a real
-// display (xvfb-run in CI), on the office floor's drives
-// (resources/scenarios/building_{a,b,c}.json) recorded by the CLI:
+// The plan view in the desktop app (docs/desktop-app.md, "Floor plan"),
+// through the real widgets under a real display (xvfb-run in CI), on the
+// office floor's drives (resources/scenarios/building_{a,b,c}.json)
+// recorded by the CLI (pair picking: pair_picking_ui_test.cc):
 //
 // * View > Floor Plan of rooms a and b (b placed by the CLI): walls, doors
 //   and room b's inner width 5.5 m from the dimensions; a new cut height;
 //   Cancel; File > Export Floor Plan as SVG (read back as XML) and DXF (read
 //   and audited by ezdxf through tests/tools/check_dxf.py); the event loop
 //   never blocked while the plan is built.
-// * The corridor c, which the planes refuse, placed against a from four picked
-//   pairs: the picks go through the slot a Shift + click calls (MainWindow::
-//   PointPicked) with points from where the scenarios put the robot down, the
-//   buttons pressed for real; a pick through the view's own picking lands in
-//   the session under the cursor; Ctrl+Z undoes a pick, Esc leaves it as it was.
 // * A vertical section drawn on the plan with the mouse (Shift + drag; the
 //   Section button's drag, which Esc drops) across rooms a and b: floor,
 //   ceiling and walls where the office floor has them; rebuilt with a new
@@ -20,6 +15,7 @@
 //   grabbed to build/tests/plan_section_panel.png to look at.
 // * Rooms of a hand-made plan drawn as a tinted fill with their names; plan_build.h's
 //   vertical section of posed clouds against core/plan's.
+// * Export… only with a plan; room names clear the dimensions and doors.
 #include <gtest/gtest.h>
 
 #include <QAction>
@@ -42,7 +38,6 @@
 #include <QTest>
 #include <QToolButton>
 #include <QTreeWidget>
-#include <QUndoGroup>
 #include <QUndoStack>
 #include <QWheelEvent>
 #include <QXmlStreamReader>
@@ -53,14 +48,11 @@
 #include "core/project/project.h"
 #include "core/scenario/scenario.h"
 #include "tests/testing/event_loop_turns.h"
-#include "tests/ui/app_fixture.h"
-#include "tests/ui/pick_truth.h"
+#include "tests/ui/project_ui_fixture.h"
 #include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
 #include "ui/plan/plan_panel.h"
 #include "ui/plan/section_canvas.h"
-#include "ui/project/pair_pick_box.h"
-#include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
 #include "ui/project/project_layer.h"
 #include "ui/project/project_panel.h"
@@ -71,37 +63,11 @@ namespace {
 
 using testing::kResources;
 using testing::RunCommand;
+using testing::StartOf;
 using testing::WaitFor;
 
-Rigid3d StartOf(const char* scenario) {
-  sim::SimConfig c;
-  EXPECT_TRUE(LoadScenario(kResources.toStdString() + "/scenarios/" + scenario, &c).ok());
-  return Rigid3d::FromPose(c.start.x, c.start.y, 0, 0, 0, c.start.yaw);
-}
-
-class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
+class PlanUiTest : public testing::ProjectUiFixture {
  protected:
-  // a (the anchor), b, c, made by the CLI; `then` runs after (e.g. an align).
-  QString MakeProject(const std::string& name, const std::string& then = "") {
-    const std::string file = Dir() + "/" + name + ".sweepscan-project";
-    const std::string cli = SWEEPSCAN_CLI;
-    const auto run = RunCommand("cd " + Dir() + " && rm -f " + file + " && " + cli + " project new " + file +
-                                " a.sweepscan b.sweepscan c.sweepscan" +
-                                (then.empty() ? "" : " && " + cli + " " + then + " " + file));
-    EXPECT_EQ(run.code, 0) << run.out;
-    return QString::fromStdString(file);
-  }
-
-  ProjectController* project() { return window_->project(); }
-
-  // Runs the event loop until `done` (expected before the timeout),
-  // measuring its turns (tests/testing/event_loop_turns.h).
-  testing::EventLoopTurns Turns(const std::function<bool()>& done, int timeout_ms) {
-    const testing::EventLoopTurns t = testing::MeasureTurnsUntil(done, timeout_ms);
-    EXPECT_TRUE(t.done) << "not done after " << timeout_ms << " ms";
-    return t;
-  }
-
   // The plan and section jobs built on the GUI thread would be one turn of hundreds of
   // ms of CPU (~570 for the rebuild of both); their turns are the panel's updates, 10-20
   // ms. The dock's first show renders the 3D view at its new size, a frame of the
@@ -112,11 +78,6 @@ class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
   static void ExpectDockShown() {
     testing::ExpectResponsive("dock shown", testing::MeasureTurnsUntil([] { return false; }, 400),
                               500.0);
-  }
-
-  void OpenAndLoad(const QString& file) {
-    ASSERT_TRUE(project()->OpenProject(file));
-    Turns([&] { return !project()->busy(); }, 60000);
   }
 
   // View > Floor Plan on a and b (b placed by the CLI), its first plan built.
@@ -131,7 +92,7 @@ class PlanPairsUiTest : public testing::OfficeFloorAppFixture {
   }
 };
 
-TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
+TEST_F(PlanUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   OpenAndLoad(MakeProject("plan", "project align --session b --to a"));
   PlanPanel* panel = window_->plan_panel();
   ASSERT_NE(panel, nullptr);
@@ -145,7 +106,8 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   EXPECT_DOUBLE_EQ(panel->height_box()->value(), 1.0);
   EXPECT_DOUBLE_EQ(panel->band_box()->value(), 0.05);
   ExpectDockShown();
-  ExpectResponsive("plan", Turns([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000));
+  ExpectResponsive("plan",
+                   Turns([&] { return panel->plans_built() == 1 && !panel->busy(); }, 60000));
   std::printf("%s\n", panel->summary_label()->text().toStdString().c_str());
 
   ASSERT_TRUE(panel->canvas()->plan().has_value());
@@ -161,11 +123,13 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   EXPECT_LT(best, 0.02);
   // The canvas fits the plan: its extent within the widget.
   const QPointF lo = panel->canvas()->ToWidget(p.min), hi = panel->canvas()->ToWidget(p.max);
-  EXPECT_TRUE(panel->canvas()->rect().contains(lo.toPoint()) && panel->canvas()->rect().contains(hi.toPoint()));
+  EXPECT_TRUE(panel->canvas()->rect().contains(lo.toPoint()) &&
+              panel->canvas()->rect().contains(hi.toPoint()));
 
   // A new cut height: built again (after the edits settle), the view kept.
   panel->height_box()->setValue(1.5);
-  ExpectResponsive("second plan", Turns([&] { return panel->plans_built() == 2 && !panel->busy(); }, 60000));
+  ExpectResponsive("second plan",
+                   Turns([&] { return panel->plans_built() == 2 && !panel->busy(); }, 60000));
   EXPECT_DOUBLE_EQ(panel->canvas()->plan()->height_m, 1.5);
 
   // Cancelled: the plan shown stays the last one built.
@@ -198,10 +162,11 @@ TEST_F(PlanPairsUiTest, PlanOfTwoRoomsShowsWallsAndExports) {
   EXPECT_EQ(root, "svg");
   EXPECT_GE(groups, 4);
   EXPECT_GT(lines, 10);
-  const auto read = RunCommand("/usr/bin/python3 " + kResources.toStdString() + "/../tests/tools/check_dxf.py " +
-                               dxf.toStdString() + " 2>&1");
+  const auto read = RunCommand("/usr/bin/python3 " + kResources.toStdString() +
+                               "/../tests/tools/check_dxf.py " + dxf.toStdString() + " 2>&1");
   ASSERT_EQ(read.code, 0) << read.out;
-  const QJsonObject dxf_json = QJsonDocument::fromJson(QByteArray::fromStdString(read.out)).object();
+  const QJsonObject dxf_json =
+      QJsonDocument::fromJson(QByteArray::fromStdString(read.out)).object();
   EXPECT_EQ(dxf_json["dxfversion"].toString(), "AC1009");
   EXPECT_EQ(dxf_json["audit"].toObject()["errors"].toInt(), 0) << read.out.substr(0, 400);
   EXPECT_GT(dxf_json["counts"].toObject()["LINE"].toObject()["WALLS"].toInt(), 0);
@@ -215,8 +180,8 @@ Eigen::Vector2d ProjectXy(const Rigid3d& start_a, double x, double y) {
 }
 
 // The section points with z in [z0, z1] and s in [s0, s1].
-std::vector<Eigen::Vector2d> Within(const std::vector<Eigen::Vector2d>& s_z, double s0, double s1, double z0,
-                                    double z1) {
+std::vector<Eigen::Vector2d> Within(const std::vector<Eigen::Vector2d>& s_z, double s0, double s1,
+                                    double z0, double z1) {
   std::vector<Eigen::Vector2d> out;
   for (const Eigen::Vector2d& q : s_z) {
     if (q.x() >= s0 && q.x() <= s1 && q.y() >= z0 && q.y() <= z1) out.push_back(q);
@@ -231,7 +196,7 @@ double Quantile(std::vector<double> v, double q) {
   return v[k];
 }
 
-TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
+TEST_F(PlanUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   window_->resize(1600, 1000);  // As an operator's screen: room for both drawings.
   PlanPanel* panel = ShowPlanOfRoomsAB("section");
   PlanCanvas* canvas = panel->canvas();
@@ -242,7 +207,8 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   const Rigid3d start_a = StartOf("building_a.json");
   const Eigen::Vector2d a = ProjectXy(start_a, -0.3, 4.5), b = ProjectXy(start_a, 10.9, 4.5);
   const QPoint wa = canvas->ToWidget(a).toPoint(), wb = canvas->ToWidget(b).toPoint();
-  ASSERT_TRUE(canvas->rect().contains(wa) && canvas->rect().contains(wb)) << wa.x() << "," << wa.y();
+  ASSERT_TRUE(canvas->rect().contains(wa) && canvas->rect().contains(wb))
+      << wa.x() << "," << wa.y();
 
   // The Section button's drag, dropped by Esc: no line, the mode kept for
   // another try, then left by a second Esc.
@@ -301,16 +267,19 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   // the ceiling at 2.7 (the storey), nothing between.
   for (const auto& [x0, x1] : {std::pair{0.5, 4.5}, std::pair{5.6, 10.1}}) {
     std::vector<double> z;
-    for (const Eigen::Vector2d& q : Within(section.s_z, s_of(x0), s_of(x1), -1.0, 4.0)) z.push_back(q.y());
+    for (const Eigen::Vector2d& q : Within(section.s_z, s_of(x0), s_of(x1), -1.0, 4.0))
+      z.push_back(q.y());
     ASSERT_GT(z.size(), 200u) << x0;
     EXPECT_NEAR(Quantile(z, 0.02), 0.0, 0.03) << "floor, x " << x0 << ".." << x1;
     EXPECT_NEAR(Quantile(z, 0.98), 2.7, 0.03) << "ceiling, x " << x0 << ".." << x1;
-    EXPECT_LT(Within(section.s_z, s_of(x0), s_of(x1), 0.3, 2.4).size(), z.size() / 50) << "clutter, x " << x0;
+    EXPECT_LT(Within(section.s_z, s_of(x0), s_of(x1), 0.3, 2.4).size(), z.size() / 50)
+        << "clutter, x " << x0;
   }
   // The walls' faces: a's west wall x 0, a|b at 5.0 and 5.1, b's east wall
   // 10.6; each a column of points from floor to ceiling at its s.
   for (const double x : {0.0, 5.0, 5.1, 10.6}) {
-    const std::vector<Eigen::Vector2d> wall = Within(section.s_z, s_of(x) - 0.04, s_of(x) + 0.04, 0.3, 2.4);
+    const std::vector<Eigen::Vector2d> wall =
+        Within(section.s_z, s_of(x) - 0.04, s_of(x) + 0.04, 0.3, 2.4);
     ASSERT_GT(wall.size(), 100u) << "no wall at x " << x;
     std::vector<double> s;
     for (const Eigen::Vector2d& q : wall) s.push_back(q.x());
@@ -326,7 +295,8 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   QElapsedTimer rebuild;
   rebuild.start();
   const testing::EventLoopTurns rebuild_turns = Turns(
-      [&] { return panel->plans_built() == 2 && panel->sections_built() == 2 && !panel->busy(); }, 60000);
+      [&] { return panel->plans_built() == 2 && panel->sections_built() == 2 && !panel->busy(); },
+      60000);
   std::printf("rebuild at 1.5 m: %lld ms\n", static_cast<long long>(rebuild.elapsed()));
   ExpectResponsive("rebuild", rebuild_turns);
   EXPECT_DOUBLE_EQ(canvas->plan()->height_m, 1.5);
@@ -339,10 +309,11 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   ASSERT_TRUE(panel->ExportSection(svg, &error)) << error.toStdString();
   const QString dxf = tmp_.path() + "/section.dxf";
   ASSERT_TRUE(panel->ExportSection(dxf, &error)) << error.toStdString();
-  const auto read = RunCommand("/usr/bin/python3 " + kResources.toStdString() + "/../tests/tools/check_dxf.py '" +
-                               dxf.toStdString() + "' 2>&1");
+  const auto read = RunCommand("/usr/bin/python3 " + kResources.toStdString() +
+                               "/../tests/tools/check_dxf.py '" + dxf.toStdString() + "' 2>&1");
   ASSERT_EQ(read.code, 0) << read.out;
-  const QJsonObject dxf_json = QJsonDocument::fromJson(QByteArray::fromStdString(read.out)).object();
+  const QJsonObject dxf_json =
+      QJsonDocument::fromJson(QByteArray::fromStdString(read.out)).object();
   EXPECT_EQ(dxf_json["counts"].toObject()["POINT"].toObject()["SECTION"].toInt(),
             static_cast<int>(panel->section_canvas()->section()->s_z.size()));
   EXPECT_EQ(dxf_json["audit"].toObject()["errors"].toInt(), 0) << read.out;
@@ -352,8 +323,8 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   const std::string png = tmp_.path().toStdString() + "/section.png";
   const auto render = RunCommand("rsvg-convert -o '" + png + "' '" + svg.toStdString() + "' 2>&1");
   ASSERT_EQ(render.code, 0) << render.out;
-  const auto ink = RunCommand("/usr/bin/python3 " + kResources.toStdString() + "/../tests/tools/png_ink.py '" + png +
-                              "' 2>&1");
+  const auto ink = RunCommand("/usr/bin/python3 " + kResources.toStdString() +
+                              "/../tests/tools/png_ink.py '" + png + "' 2>&1");
   ASSERT_EQ(ink.code, 0) << ink.out;
   const QJsonObject ink_json = QJsonDocument::fromJson(QByteArray::fromStdString(ink.out)).object();
   EXPECT_GT(ink_json["width"].toInt(), ink_json["height"].toInt());  // 11.2 m long, 2.7 m high
@@ -368,7 +339,7 @@ TEST_F(PlanPairsUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
 // A plan with one room, drawn by a canvas of its own: the room's tint fills
 // its outline away from the label, its name is written at the label point;
 // the same plan without the room leaves both white.
-TEST_F(PlanPairsUiTest, RoomsAreFilledAndNamed) {
+TEST_F(PlanUiTest, RoomsAreFilledAndNamed) {
   plan::FloorPlan plan;
   plan.min = {0.0, 0.0};
   plan.max = {10.0, 8.0};
@@ -425,7 +396,9 @@ TEST(PlanBuildTest, SectionOfPosedCloudsIsCoreSectionOfTheMovedClouds) {
   o.b = {8.0, 4.5};
   o.band_m = 0.05;
   SectionOf section;
-  ASSERT_TRUE(BuildSectionOf(inputs, o, [](double) { return true; }, &section).ok());
+  ASSERT_TRUE(BuildSectionOf(
+                  inputs, o, [](double) { return true; }, &section)
+                  .ok());
   std::vector<Eigen::Vector3f> moved;
   for (const PlanInput& in : inputs) {
     for (const Eigen::Vector3f& p : *in.positions) {
@@ -438,282 +411,19 @@ TEST(PlanBuildTest, SectionOfPosedCloudsIsCoreSectionOfTheMovedClouds) {
   EXPECT_EQ(section.stats.points_in, 300000u);
   EXPECT_GT(stats.points_out, 1000u);
   // float against double poses: a point on the slab's edge may go either way.
-  EXPECT_NEAR(static_cast<double>(section.stats.points_out), static_cast<double>(stats.points_out), 3.0);
+  EXPECT_NEAR(static_cast<double>(section.stats.points_out), static_cast<double>(stats.points_out),
+              3.0);
   const std::vector<Eigen::Vector2d> drawn = plan::DecimateGrid(s_z, kSectionCellM);
   EXPECT_NEAR(static_cast<double>(section.s_z.size()), static_cast<double>(drawn.size()), 3.0);
   int calls = 0;
-  EXPECT_EQ(BuildSectionOf(inputs, o, [&](double) { return ++calls < 3; }, &section).message(), kPlanCancelled);
+  EXPECT_EQ(BuildSectionOf(
+                inputs, o, [&](double) { return ++calls < 3; }, &section)
+                .message(),
+            kPlanCancelled);
   o.b = o.a;
-  EXPECT_FALSE(BuildSectionOf(inputs, o, [](double) { return true; }, &section).ok());
-}
-
-// The four door-jamb points picked in c (the corridor) and in a, from where
-// the scenarios put the robot down: the door of room a at x 2.0 .. 2.9 on
-// the corridor's wall y = 2.0 (world), at heights not on one line.
-struct TruthPicks {
-  std::vector<PickHit> in_c, in_a;
-  Rigid3d a_from_c;
-};
-
-TruthPicks MakeTruthPicks(const Rigid3d& shown_c) {
-  const Rigid3d start_a = StartOf("building_a.json"), start_c = StartOf("building_c.json");
-  TruthPicks t;
-  t.a_from_c = start_a.inverse() * start_c;
-  for (const Eigen::Vector3d& w : {Eigen::Vector3d(2.0, 2.0, 0.5), Eigen::Vector3d(2.9, 2.0, 1.5),
-                                   Eigen::Vector3d(2.0, 2.0, 1.8), Eigen::Vector3d(2.9, 2.0, 0.3)}) {
-    PickHit c;
-    c.layer = "c";
-    c.local = start_c.inverse() * w;
-    c.world = shown_c * c.local;  // where the view draws it
-    PickHit a;
-    a.layer = "a";
-    a.local = start_a.inverse() * w;
-    a.world = a.local;  // a is the anchor
-    t.in_c.push_back(c);
-    t.in_a.push_back(a);
-  }
-  return t;
-}
-
-TEST_F(PlanPairsUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
-  OpenAndLoad(MakeProject("pairs"));
-  ProjectPanel* panel = project()->panel();
-  PairPicking* picking = project()->pair_picking();
-  const int window_commands = project()->undo_stack()->count();
-  panel->SelectSession("c");
-  ASSERT_EQ(panel->reference_box()->currentText(), "a");
-  ASSERT_TRUE(panel->pick_button()->isEnabled());
-  QTest::mouseClick(panel->pick_button(), Qt::LeftButton);
-  ASSERT_TRUE(picking->active());
-  EXPECT_TRUE(panel->pair_box()->isVisible());
-  EXPECT_FALSE(panel->align_button()->isEnabled());  // One thing at a time.
-  // c, unplaced, is loaded and drawn beside the project for picking.
-  // (While pairs are picked and aligned the view draws two sessions, ~0.7 M
-  // points: under Mesa's llvmpipe on two cores, one of them the job's, a
-  // frame takes 0.3-0.8 s, so the gaps are printed, not bounded; the plan's
-  // and a single session's are bounded above and in project_ui_test.)
-  std::printf("loading c for picking: longest event-loop gap %lld ms\n",
-              static_cast<long long>(Turns([&] { return !project()->busy(); }, 60000).worst_gap_ms));
-  const ProjectLayer* layer = project()->layer();
-  EXPECT_EQ(layer->drawn_sessions(), (std::vector<std::string>{"a", "c"}));
-  Rigid3d shown_c;
-  ASSERT_TRUE(layer->drawn_pose("c", &shown_c));
-  EXPECT_GT(shown_c.translation().x(), 2.0);  // Off the anchor's frame, not over a.
-
-  // The view's own picking: a click on c's drawn points names c and gives
-  // the point under the cursor in c's frame.
-  CloudView* view = window_->view();
-  view->ViewTop();
-  view->FitToCloud();
-  view->RenderNow();
-  const ProjectCloudPtr c_cloud = project()->clouds().at("c");
-  int hits = 0;
-  for (size_t i = 0; i < c_cloud->positions.size() && hits < 5; i += c_cloud->positions.size() / 37) {
-    const Eigen::Vector3d world = shown_c * c_cloud->positions[i].cast<double>();
-    const QPointF at = view->WorldToWidget(world);
-    if (!view->rect().contains(at.toPoint())) continue;
-    PickHit hit;
-    if (!view->PickPoint(at.toPoint(), &hit)) continue;
-    if (hit.layer != "c") continue;  // a's points may be nearer the camera there
-    ++hits;
-    EXPECT_LT((shown_c * hit.local - hit.world).norm(), 1e-6);
-    EXPECT_LT(QLineF(view->WorldToWidget(hit.world), at).length(), 8.0);
-  }
-  EXPECT_GE(hits, 3);
-
-  // An operator's Shift + click on c: searched on the view's pick thread
-  // (the layer's snapshot of a and c), it starts a pair at the point
-  // PickPoint finds there, in c's frame. Undone, to pick the truth below.
-  bool clicked = false;
-  for (size_t i = 0; i < c_cloud->positions.size(); i += c_cloud->positions.size() / 37) {
-    const QPoint at = view->WorldToWidget(shown_c * c_cloud->positions[i].cast<double>()).toPoint();
-    PickHit want;
-    if (!view->rect().contains(at) || !view->PickPoint(at, &want) || want.layer != "c") continue;
-    ASSERT_TRUE(testing::ShiftClick(view, at));
-    ASSERT_EQ(picking->picks().size(), 1u);
-    EXPECT_EQ(picking->picks()[0].source, want.local);
-    picking->undo_stack()->undo();
-    ASSERT_TRUE(picking->picks().empty());
-    clicked = true;
-    break;
-  }
-  EXPECT_TRUE(clicked);
-
-  const TruthPicks truth = MakeTruthPicks(shown_c);
-  // The reference first: refused with where to click instead.
-  window_->PointPicked(truth.in_a[0]);
-  EXPECT_TRUE(picking->picks().empty());
-  for (int k = 0; k < 4; ++k) {
-    window_->PointPicked(truth.in_c[k]);
-    window_->PointPicked(truth.in_a[k]);
-    EXPECT_EQ(picking->pairs().size(), static_cast<size_t>(k + 1));
-    EXPECT_EQ(panel->pair_box()->align_button()->isEnabled(), k + 1 >= 3);
-  }
-  EXPECT_EQ(panel->pair_box()->list()->topLevelItemCount(), 4);
-  // A fifth pick in c, undone by Ctrl+Z (the picks' own undo, not the
-  // project's), which is what Edit > Undo offers while picking.
-  window_->PointPicked(truth.in_c[0]);
-  ASSERT_EQ(picking->picks().size(), 5u);
-  EXPECT_EQ(window_->undo_group()->activeStack(), picking->undo_stack());
-  EXPECT_EQ(window_->undo_group()->undoText(), "pick 5 in 'c'");
-  QTest::keyClick(window_->view(), Qt::Key_Z, Qt::ControlModifier);
-  EXPECT_EQ(picking->picks().size(), 4u);
-  EXPECT_EQ(project()->undo_stack()->count(), window_commands);
-  // And by the button.
-  window_->PointPicked(truth.in_c[1]);
-  QTest::mouseClick(panel->pair_box()->undo_button(), Qt::LeftButton);
-  EXPECT_EQ(picking->picks().size(), 4u);
-  EXPECT_EQ(picking->pairs().size(), 4u);
-  EXPECT_FALSE(window_->isWindowModified());
-
-  bool finished = false, placed = false;
-  QString outcome;
-  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString& m) {
-    finished = true;
-    placed = ok;
-    outcome = m;
-  });
-  ASSERT_TRUE(panel->pair_box()->hold_free()->isChecked());
-  QTest::mouseClick(panel->pair_box()->align_button(), Qt::LeftButton);
-  ASSERT_TRUE(picking->aligning());
-  std::printf("aligning by pairs: longest event-loop gap %lld ms (last frame %.0f ms)\n",
-              static_cast<long long>(Turns([&] { return finished && !project()->busy(); }, 120000).worst_gap_ms),
-              view->last_render_ms());
-  ASSERT_TRUE(placed) << outcome.toStdString() << " / " << window_->last_error().toStdString();
-  std::printf("%s\n", outcome.toStdString().c_str());
-  EXPECT_FALSE(picking->active());
-  EXPECT_FALSE(panel->pair_box()->isVisible());
-
-  const ProjectSession& c = project()->document()->project().sessions[2];
-  ASSERT_TRUE(c.project_from_session.has_value());
-  const Rigid3d diff = truth.a_from_c.inverse() * *c.project_from_session;
-  EXPECT_LT(diff.translation().norm(), 0.05) << outcome.toStdString();
-  EXPECT_LT(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0.5);
-  EXPECT_EQ(c.registration.method, "pairs+icp");
-  EXPECT_EQ(c.registration.reference, "a");
-  EXPECT_EQ(c.registration.pairs.size(), 4u);
-  EXPECT_NE(panel->item("c")->text(1).indexOf("pairs+icp to a"), -1);
-  // One undoable edit: undone, c is unplaced again; redone, placed. The
-  // mode's picks are gone from Edit > Undo.
-  EXPECT_EQ(project()->undo_stack()->count(), window_commands + 1);
-  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
-  window_->undo_group()->undo();
-  EXPECT_FALSE(project()->document()->project().sessions[2].project_from_session.has_value());
-  window_->undo_group()->redo();
-  EXPECT_TRUE(project()->document()->project().sessions[2].project_from_session.has_value());
-  WaitFor([&] { return !project()->busy(); }, 60000);
-  EXPECT_EQ(layer->drawn_sessions(), (std::vector<std::string>{"a", "c"}));
-}
-
-TEST_F(PlanPairsUiTest, EscapeLeavesTheProjectAsItWas) {
-  OpenAndLoad(MakeProject("escape"));
-  const std::string before = ProjectToJson(project()->document()->project());
-  const int commands = project()->undo_stack()->count();
-  PairPicking* picking = project()->pair_picking();
-  ASSERT_TRUE(picking->Start("c", "a"));
-  Turns([&] { return !project()->busy(); }, 60000);
-  Rigid3d shown_c;
-  ASSERT_TRUE(project()->layer()->drawn_pose("c", &shown_c));
-  const TruthPicks truth = MakeTruthPicks(shown_c);
-  window_->PointPicked(truth.in_c[0]);
-  window_->PointPicked(truth.in_a[0]);
-  window_->PointPicked(truth.in_c[1]);
-  ASSERT_EQ(picking->picks().size(), 2u);
-  QTest::keyClick(window_->view(), Qt::Key_Escape);
-  EXPECT_FALSE(picking->active());
-  EXPECT_TRUE(picking->picks().empty());
-  EXPECT_EQ(ProjectToJson(project()->document()->project()), before);
-  EXPECT_EQ(project()->undo_stack()->count(), commands);
-  EXPECT_FALSE(window_->isWindowModified());
-  EXPECT_EQ(project()->layer()->drawn_sessions(), std::vector<std::string>{"a"});  // The preview is gone.
-  EXPECT_FALSE(project()->panel()->pair_box()->isVisible());
-  // Picks after the mode are the calibration's again, not pairs.
-  window_->PointPicked(truth.in_c[0]);
-  EXPECT_TRUE(picking->picks().empty());
-
-  // Started and left without a pick: Edit > Undo is the project's again.
-  // (Clearing an empty stack says nothing, and the mode's empty history
-  // stayed the active one: Undo greyed out over the project's edits.)
-  project()->SetColor("a", "#00ff00");
-  Turns([&] { return !project()->busy(); }, 60000);
-  ASSERT_TRUE(picking->Start("c", "a"));
-  EXPECT_EQ(window_->undo_group()->activeStack(), picking->undo_stack());
-  QTest::keyClick(window_->view(), Qt::Key_Escape);
-  EXPECT_FALSE(picking->active());
-  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
-  EXPECT_TRUE(window_->undo_group()->canUndo());
-
-  // Closing the project while picking ends it and says so ("cancelled: the
-  // project is unchanged" read as if the close had not happened).
-  QString said;
-  QObject::connect(picking, &PairPicking::message, [&](const QString& m) { said = m; });
-  ASSERT_TRUE(picking->Start("c", "a"));
-  window_->PointPicked(truth.in_c[0]);
-  ASSERT_TRUE(project()->CloseProject());
-  EXPECT_FALSE(picking->active());
-  EXPECT_EQ(said, "Pair picking ended: the project was closed; its picks are dropped");
-}
-
-// Pair picking holds the project still (the context menu's edits disabled
-// as the panel's buttons are) and ends, saying why, when its session goes
-// by another route; the box lays out whole under a long refusal and the
-// dock keeps its height (it overlapped itself, then stayed tall).
-TEST_F(PlanPairsUiTest, PickingEndsWhenItsSessionGoesAndItsBoxLaysOut) {
-  OpenAndLoad(MakeProject("picking-gone"));
-  ProjectPanel* panel = project()->panel();
-  auto* dock = window_->findChild<QDockWidget*>("projectDock");
-  dock->raise();
-  // A refusal's long reason in the panel, as a refused Align leaves it.
-  emit project()->alignFinished(false,
-                                QString("Cannot align 'c' to 'a': ") +
-                                    QString("the walls leave a direction free ").repeated(6));
-  QApplication::processEvents();
-  const int dock_height = dock->height();
-  PairPicking* picking = project()->pair_picking();
-  QString said;
-  QObject::connect(picking, &PairPicking::message, [&](const QString& m) { said = m; });
-  ASSERT_TRUE(picking->Start("c", "a"));
-  Turns([&] { return !project()->busy(); }, 60000);
-  Rigid3d shown_c;
-  ASSERT_TRUE(project()->layer()->drawn_pose("c", &shown_c));
-  const TruthPicks truth = MakeTruthPicks(shown_c);
-  window_->PointPicked(truth.in_a[0]);  // The reference first: nothing to match yet.
-  EXPECT_NE(said.indexOf("A pair starts in 'c'"), -1) << said.toStdString();
-  window_->PointPicked(truth.in_c[0]);
-  window_->PointPicked(truth.in_a[0]);
-  window_->PointPicked(truth.in_c[1]);
-  QApplication::processEvents();
-  PairPickBox* box = panel->pair_box();
-  ASSERT_TRUE(box->isVisible());
-  QLabel* text = box->instruction();
-  EXPECT_GE(text->height(), text->heightForWidth(text->width())) << text->text().toStdString();
-  EXPECT_GE(box->list()->height(), box->list()->minimumHeight());
-  EXPECT_FALSE(box->list()->geometry().intersects(box->hold_free()->geometry()));
-  EXPECT_FALSE(text->geometry().intersects(box->list()->geometry()));
-  EXPECT_GE(panel->status_label()->height(),
-            panel->status_label()->heightForWidth(panel->status_label()->width()));
-  EXPECT_EQ(dock->height(), dock_height);
-  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
-    window_->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/picking-box.png");
-  }
-
-  for (QAction* a : panel->ContextMenu("c")->actions()) {
-    if (a->text() == "Remove from Project" || a->text() == "Align to" ||
-        a->text() == "Show Only This") {
-      EXPECT_FALSE(a->isEnabled()) << a->text().toStdString();
-    }
-  }
-  // Removed by another route (the controller, as an undone addition would).
-  project()->RemoveSession("c");
-  EXPECT_FALSE(picking->active());
-  EXPECT_NE(said.indexOf("'c' is no longer in the project"), -1) << said.toStdString();
-  EXPECT_EQ(said.indexOf("unchanged"), -1);
-  EXPECT_EQ(window_->undo_group()->activeStack(), project()->undo_stack());
-  window_->undo_group()->undo();
-  EXPECT_EQ(project()->document()->project().Find("c"), 2);
-  QApplication::processEvents();
-  EXPECT_FALSE(box->isVisible());
-  EXPECT_EQ(dock->height(), dock_height);
+  EXPECT_FALSE(BuildSectionOf(
+                   inputs, o, [](double) { return true; }, &section)
+                   .ok());
 }
 
 // Export… (and File > Export Floor Plan…) only with a plan, the canvas's
@@ -721,7 +431,7 @@ TEST_F(PlanPairsUiTest, PickingEndsWhenItsSessionGoesAndItsBoxLaysOut) {
 // keep off the dimensions' and doors' figures and inside their rooms at
 // every zoom, smaller or left out where they do not fit; the figures keep
 // off each other.
-TEST_F(PlanPairsUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
+TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   QAction* file_export = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {
     if (a->menu() == nullptr) continue;
