@@ -70,6 +70,10 @@ class BatchedKdTree {
   void KnnRange(size_t begin, size_t end, int k, uint32_t* idx, float* d2) const;
 
   size_t MemoryBytes() const;
+  // The tree's nodes, and the room held for them: the same after Build(),
+  // which counts the nodes before it makes them.
+  size_t node_count() const { return nodes_.size(); }
+  size_t node_capacity() const { return nodes_.capacity(); }
   // Queries of KnnRange calls on this thread so far that needed the
   // fallback descent (for tests and the benchmark's report).
   static size_t ThreadFallbacks();
@@ -87,6 +91,12 @@ class BatchedKdTree {
   // Makes node id the parent of left and right (its box theirs); returns id.
   int32_t Join(int32_t id, int32_t left, int32_t right);
   int32_t BuildNode(const uint64_t* keys, uint32_t begin, uint32_t end, int bit);
+  // Where BuildNode splits [begin, end), splitting on bit `bit` or below:
+  // the split position (its children split on *child_bit and below), or
+  // end for a leaf.
+  static uint32_t SplitOf(const uint64_t* keys, uint32_t begin, uint32_t end, int bit,
+                          int* child_bit);
+  static size_t CountNodes(const uint64_t* keys, uint32_t begin, uint32_t end, int bit);
   // The nearest-first descent shared by Knn and NearestWhere: visit(s, d2)
   // for every point of the leaves nearer than worst().
   template <class Worst, class Visit>

@@ -8,6 +8,7 @@
 // evaluation within 100 ms.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -369,6 +370,30 @@ TEST(NeighbourIndexTest, BatchedKernelsAndFallbackAreExact) {
       const Eigen::Vector3f p(index.sorted_point(idx[0][s * k + j]));
       ASSERT_FLOAT_EQ((p - q).squaredNorm(), d2[0][s * k + j]);
     }
+  }
+}
+
+// The tree's nodes are counted before they are made, so the room held for
+// them is exactly their number (a vector reserved for the most there could
+// be and shrunk after held them twice while it copied: the evaluation's
+// peak). Codes with runs of identical values (piles, halved by position)
+// and codes that differ in their last bits only.
+TEST(NeighbourIndexTest, BatchedTreeHoldsRoomForItsNodesAlone) {
+  std::mt19937_64 rng(5);
+  for (const int piles : {0, 1, 40}) {
+    std::vector<uint64_t> keys;
+    for (int i = 0; i < 50000; ++i) keys.push_back(rng() & ((uint64_t{1} << 48) - 1));
+    for (int p = 0; p < piles; ++p) {
+      const uint64_t at = rng() & ((uint64_t{1} << 48) - 1);
+      for (int i = 0; i < 500 + 37 * p; ++i) keys.push_back(at);
+      for (int i = 0; i < 100; ++i) keys.push_back(at + static_cast<uint64_t>(i % 3));
+    }
+    std::sort(keys.begin(), keys.end());
+    const std::vector<float> xyz(3 * keys.size(), 0.0f);  // read only by queries
+    BatchedKdTree tree;
+    tree.Build(xyz.data(), keys.data(), keys.size());
+    EXPECT_GT(tree.node_count(), keys.size() / BatchedKdTree::kLeafSize) << piles;
+    EXPECT_EQ(tree.node_capacity(), tree.node_count()) << piles;
   }
 }
 
