@@ -74,6 +74,8 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   // One short line: a word-wrapped label in a form row is clipped when the dock is squeezed.
   auto* hint = new QLabel(tr("Hold arrows or W A S D to drive."));
   teleop_form->addRow(hint);
+  // The command alone, short: a longer line (it once said "(scripted)"
+  // here) widened the panel past its dock and cut off the emergency stop.
   command_ = new QLabel;
   command_->setObjectName(QStringLiteral("driveCommand"));
   teleop_form->addRow(tr("Command"), command_);
@@ -98,6 +100,10 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   row->addWidget(start_circle_);
   row->addWidget(abort_);
   script_form->addRow(row);
+  script_state_ = new QLabel(tr("Driving the circle: Abort ends it."));
+  script_state_->setObjectName(QStringLiteral("driveScriptState"));
+  script_state_->setVisible(false);
+  script_form->addRow(script_state_);
   connect(start_circle_, &QPushButton::clicked, this, [this] {
     workspace_->StartScriptedDrive(
         Workspace::CirclePath(radius_->value(), speed_->value(), turns_->value()));
@@ -109,10 +115,8 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
 }
 
 void DrivePanel::ShowCommand(const Twist2d& c) {
-  command_->setText(tr("v %1 m/s, w %2 rad/s%3")
-                        .arg(c.v, 0, 'f', 2)
-                        .arg(c.w, 0, 'f', 2)
-                        .arg(workspace_->scripted_drive_running() ? tr(" (scripted)") : QString()));
+  command_->setText(tr("v %1 m/s, w %2 rad/s").arg(c.v, 0, 'f', 2).arg(c.w, 0, 'f', 2));
+  script_state_->setVisible(workspace_->scripted_drive_running());
   abort_->setEnabled(workspace_->scripted_drive_running());
   const bool can_drive = workspace_->authenticated();
   start_circle_->setEnabled(can_drive && !workspace_->scripted_drive_running());

@@ -38,6 +38,7 @@ class DrivePanel : public QWidget {
   QPushButton* start_circle_;
   QPushButton* abort_;
   QLabel* command_;
+  QLabel* script_state_;  // shown while a scripted drive runs
 };
 
 }  // namespace sweepscan::ui
