@@ -22,6 +22,7 @@
 #include "ui/workspace/workspace.h"
 
 class QAction;
+class QDockWidget;
 class QActionGroup;
 class QLabel;
 class QMenu;
@@ -185,6 +186,8 @@ class MainWindow : public QMainWindow {
   QAction* ceiling_ = nullptr;
   double ceiling_z_ = std::numeric_limits<double>::quiet_NaN();  // NaN: none found.
   int plan_widened_from_ = 0;  // The plan's column width before showing it widened it (0: not).
+  void WidenPlanColumn(QDockWidget* plan);   // View > Floor Plan shown
+  void NarrowPlanColumn(QDockWidget* plan);  // ... and hidden
   // The room view waits for the next session opened (its replay finished,
   // its points drained into the view) or live cloud; a camera moved since
   // (by the operator, a script, a test) cancels it.

@@ -254,33 +254,16 @@ void MainWindow::BuildViewMenu() {
     show_plan->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_F));
     view->addAction(show_plan);
     // A plan needs room: shown narrow (docked beside the panels), it takes
-    // about half the window.
+    // about half the window, and gives it back when hidden.
     connect(show_plan, &QAction::toggled, this, [this, plan](bool on) {
       if (!on) {
-        // The column goes back to the width it had before the plan widened
-        // it: left wide, the 3D view stayed a third of the window (and the
-        // saved layout kept it so).
-        if (plan_widened_from_ > 0 && !plan->isFloating()) {
-          QList<QDockWidget*> others;
-          for (QDockWidget* dock : findChildren<QDockWidget*>()) {
-            if (dock != plan && dock->isVisible() && !dock->isFloating() &&
-                dockWidgetArea(dock) == dockWidgetArea(plan)) {
-              others << dock;
-            }
-          }
-          if (!others.isEmpty()) {
-            QList<int> widths;
-            for (int i = 0; i < others.size(); ++i) widths << plan_widened_from_;
-            resizeDocks(others, widths, Qt::Horizontal);
-          }
-        }
-        plan_widened_from_ = 0;
+        NarrowPlanColumn(plan);
         return;
       }
-      if (!plan->isFloating() && plan->width() < width() / 3) {
-        plan_widened_from_ = plan->width();
-        resizeDocks({plan}, {width() * 9 / 20}, Qt::Horizontal);
-      }
+      // Once laid out: shown at start (--floor-plan, a restored layout)
+      // the docks have no widths yet, and widening them then left the 3D
+      // view a strip of 300 px that the saved layout kept.
+      QTimer::singleShot(0, plan, [this, plan] { WidenPlanColumn(plan); });
       // In front of the tabs it shares, now and once it is shown: raised
       // only inside this slot, the tab bar kept Evaluation in front when it
       // was the tab shown.
@@ -436,6 +419,49 @@ void MainWindow::BuildHelpMenu() {
                           "scanning with a vertical 2D lidar (Miao et al. 2022; Choi et al. "
                           "2017).</p>"));
   });
+}
+
+// The plan's column widened to about half the window when it is narrower
+// than a third, and narrowed to that when it leaves the 3D view less than
+// a third (shown before the window's first layout, it took what the
+// layout gave it).
+void MainWindow::WidenPlanColumn(QDockWidget* plan) {
+  if (!plan->isVisible() || plan->isFloating()) return;
+  const int want =
+      std::max(plan->minimumSizeHint().width(),
+               std::min(width() * 9 / 20, plan->width() + view_->width() - width() / 3));
+  if (plan->width() < width() / 3 && plan->width() < want) {
+    if (plan_widened_from_ == 0) plan_widened_from_ = plan->width();
+    resizeDocks({plan}, {want}, Qt::Horizontal);
+  } else if (view_->width() < width() / 3 && plan->width() > want) {
+    resizeDocks({plan}, {want}, Qt::Horizontal);
+  }
+}
+
+// The plan's column back to its width before the plan widened it, or, if
+// the plan was shown wide from a saved layout, to the width its panels ask
+// for (as on a first start). Left wide, the 3D view stayed a third of the
+// window, and the saved layout kept it so.
+void MainWindow::NarrowPlanColumn(QDockWidget* plan) {
+  const int was = plan_widened_from_;
+  plan_widened_from_ = 0;
+  if (plan->isFloating()) return;
+  QList<QDockWidget*> others;
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) {
+    if (dock != plan && dock->isVisible() && !dock->isFloating() &&
+        dockWidgetArea(dock) == dockWidgetArea(plan)) {
+      others << dock;
+    }
+  }
+  if (others.isEmpty()) return;
+  const int column = others.front()->width();
+  int asked = 0;
+  for (QDockWidget* dock : others) asked = std::max(asked, dock->sizeHint().width());
+  const int target = was > 0 ? was : std::min(column, asked);
+  if (target == column) return;
+  QList<int> widths;
+  for (int i = 0; i < others.size(); ++i) widths << target;
+  resizeDocks(others, widths, Qt::Horizontal);
 }
 
 }  // namespace sweepscan::ui

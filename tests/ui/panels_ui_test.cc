@@ -3,16 +3,23 @@
 //
 // * The drive panel stays inside its dock while a scripted drive runs (the
 //   command's "(scripted)" once pushed the emergency stop's edge out).
+// * The floor plan shown at start (`--floor-plan`: raised before the
+//   window's first layout) leaves the 3D view a third of the window, and
+//   hidden gives the view its width back, also after a restart.
 #include <gtest/gtest.h>
 
 #include <QAbstractButton>
+#include <QAction>
 #include <QDockWidget>
 #include <QPushButton>
 #include <QTest>
 #include <cmath>
+#include <memory>
 
 #include "tests/ui/app_fixture.h"
+#include "ui/main_window.h"
 #include "ui/panels/drive_panel.h"
+#include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/workspace.h"
 
@@ -58,6 +65,39 @@ TEST_F(PanelsTest, DrivePanelFitsItsDockWhileAScriptedDriveRuns) {
   QTest::qWait(300);
   EXPECT_TRUE(ButtonsInside(panel, dock));
   workspace_->AbortScriptedDrive();
+}
+
+TEST_F(PanelsTest, FloorPlanShownAtStartLeavesTheViewAThirdAndHiddenGivesItBack) {
+  // Windows as the app makes them at start, larger than the fixture's.
+  const auto start = [this](bool with_plan) {
+    window_.reset();
+    window_ = std::make_unique<MainWindow>(workspace_.get(), testing::kResources);
+    window_->SetInteractive(false);
+    window_->resize(1400, 860);
+    window_->show();
+    if (with_plan) window_->RaiseDock(QStringLiteral("planDock"));  // --floor-plan, at once
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(window_.get()));
+    QTest::qWait(200);
+  };
+  ASSERT_NO_FATAL_FAILURE(start(false));
+  const int first_start = window_->view()->width();
+  ASSERT_NO_FATAL_FAILURE(start(true));
+  auto* plan = window_->findChild<QDockWidget*>(QStringLiteral("planDock"));
+  ASSERT_TRUE(plan->isVisible());
+  const int w = window_->width();
+  EXPECT_GE(window_->view()->width(), w / 3 - 8) << "window " << w << ", plan " << plan->width();
+  EXPECT_GE(plan->width(), w / 3) << "the plan has room";
+
+  // Hidden: the view gets its width back, as wide as a first start's.
+  plan->toggleViewAction()->trigger();
+  QTest::qWait(200);
+  EXPECT_NEAR(window_->view()->width(), first_start, 8) << "window " << w;
+
+  // Quit and start again: the layout saved is the one shown.
+  window_->close();
+  ASSERT_NO_FATAL_FAILURE(start(false));
+  EXPECT_FALSE(window_->findChild<QDockWidget*>(QStringLiteral("planDock"))->isVisible());
+  EXPECT_NEAR(window_->view()->width(), first_start, 8);
 }
 
 }  // namespace

@@ -175,6 +175,11 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
     jobs_.Cancel();
   });
   row->addWidget(cancel_);
+  layout->addLayout(row);
+  // The buttons on a second row: on one with the cut's boxes the panel
+  // could not be narrower than about 730 px, and a plan docked beside the
+  // panels squeezed the 3D view to a strip.
+  row = new QHBoxLayout;
   QPushButton* update = AddButton(row, tr("Update"), QStringLiteral("planUpdate"),
                                   tr("Builds the plan again now (a live cloud grows without rebuilding it)"));
   connect(update, &QPushButton::clicked, this, &PlanPanel::Rebuild);
@@ -190,6 +195,7 @@ PlanPanel::PlanPanel(ProjectController* project, Workspace* workspace,
   section_tool_->setToolTip(tr("Draw a vertical section: drag its line A → A′ on the plan (or Shift + drag "
                                "without the button; Esc cancels). The section looks the way the arrows point."));
   row->addWidget(section_tool_);
+  row->addStretch(1);
   layout->addLayout(row);
   canvas_ = new PlanCanvas;
   connect(fit_, &QPushButton::clicked, canvas_, &PlanCanvas::Fit);
