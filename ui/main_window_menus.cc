@@ -454,11 +454,13 @@ void MainWindow::NarrowPlanColumn(QDockWidget* plan) {
     }
   }
   if (others.isEmpty()) return;
-  const int column = others.front()->width();
+  // The plan's width is the column's; a panel tabbed behind the plan keeps
+  // the width it had when last in front.
+  const int column = plan->width();
   int asked = 0;
   for (QDockWidget* dock : others) asked = std::max(asked, dock->sizeHint().width());
   const int target = was > 0 ? was : std::min(column, asked);
-  if (target == column) return;
+  if (target >= column) return;
   QList<int> widths;
   for (int i = 0; i < others.size(); ++i) widths << target;
   resizeDocks(others, widths, Qt::Horizontal);

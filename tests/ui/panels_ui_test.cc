@@ -96,7 +96,17 @@ TEST_F(PanelsTest, FloorPlanShownAtStartLeavesTheViewAThirdAndHiddenGivesItBack)
   // Quit and start again: the layout saved is the one shown.
   window_->close();
   ASSERT_NO_FATAL_FAILURE(start(false));
-  EXPECT_FALSE(window_->findChild<QDockWidget*>(QStringLiteral("planDock"))->isVisible());
+  plan = window_->findChild<QDockWidget*>(QStringLiteral("planDock"));
+  EXPECT_FALSE(plan->isVisible());
+  EXPECT_NEAR(window_->view()->width(), first_start, 8);
+
+  // View > Floor Plan on and off in a laid-out window: the same.
+  plan->toggleViewAction()->trigger();
+  QTest::qWait(200);
+  EXPECT_GE(plan->width(), w / 3);
+  EXPECT_GE(window_->view()->width(), w / 3 - 8);
+  plan->toggleViewAction()->trigger();
+  QTest::qWait(200);
   EXPECT_NEAR(window_->view()->width(), first_start, 8);
 }
 
