@@ -324,6 +324,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   connect(workspace_, &Workspace::poseSourceFailed, this,
           [this](const QString& m) { ShowError(tr("Pose source"), m); });
   connect(workspace_, &Workspace::authenticatedChanged, this, &MainWindow::UpdateActions);
+  connect(workspace_, &Workspace::linkStateChanged, this, &MainWindow::UpdateActions);
 
   qApp->installEventFilter(this);
   auto* tick = new QTimer(this);
@@ -667,8 +668,13 @@ void MainWindow::UpdateTeleop() {
 }
 
 void MainWindow::UpdateActions() {
-  record_->setEnabled(workspace_->link_open() && !workspace_->recording());
+  const bool open = workspace_->link_open();
+  record_->setEnabled(open && !workspace_->recording());
   stop_record_->setEnabled(workspace_->recording());
+  connect_action_->setEnabled(!open);
+  disconnect_action_->setEnabled(open);
+  clear_estop_->setEnabled(workspace_->authenticated());
+  abort_script_->setEnabled(workspace_->scripted_drive_running());
 }
 
 void MainWindow::ShowError(const QString& title, const QString& message) {

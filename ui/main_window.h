@@ -180,6 +180,10 @@ class MainWindow : public QMainWindow {
   QAction* record_ = nullptr;
   QAction* stop_record_ = nullptr;
   QAction* estop_ = nullptr;
+  QAction* connect_action_ = nullptr;
+  QAction* disconnect_action_ = nullptr;
+  QAction* clear_estop_ = nullptr;
+  QAction* abort_script_ = nullptr;
   QActionGroup* color_group_ = nullptr;
   QActionGroup* pose_source_group_ = nullptr;
   QAction* measure_ = nullptr;

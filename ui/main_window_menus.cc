@@ -282,10 +282,15 @@ void MainWindow::BuildViewMenu() {
 
 void MainWindow::BuildRobotMenu() {
   QMenu* robot = menuBar()->addMenu(tr("&Robot"));
-  robot->addAction(tr("&Connect"), connection_panel_, &ConnectionPanel::RequestConnect)
-      ->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
-  robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect)
-      ->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));
+  // What the link's state allows, as the connection and drive panels'
+  // buttons (UpdateActions); the menu checks again as it opens, for the
+  // scripted drive, which says nothing when it starts.
+  connect(robot, &QMenu::aboutToShow, this, &MainWindow::UpdateActions);
+  connect_action_ =
+      robot->addAction(tr("&Connect"), connection_panel_, &ConnectionPanel::RequestConnect);
+  connect_action_->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_K));
+  disconnect_action_ = robot->addAction(tr("&Disconnect"), workspace_, &Workspace::Disconnect);
+  disconnect_action_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_K));
   robot->addSeparator();
   record_ = robot->addAction(tr("&Record"), this, [this] {
     QString error;
@@ -299,10 +304,13 @@ void MainWindow::BuildRobotMenu() {
   stop_record_->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_R));
   robot->addSeparator();
   // Space is handled in eventFilter so that it works whatever has focus; the
-  // action shows the binding in the menu.
+  // action shows the binding in the menu. Always enabled: with no robot it
+  // says so.
   estop_ = robot->addAction(tr("&Emergency Stop\tSpace"), workspace_, &Workspace::EmergencyStop);
-  robot->addAction(tr("C&lear Emergency Stop"), workspace_, &Workspace::ClearEmergencyStop);
-  robot->addAction(tr("&Abort Scripted Drive"), workspace_, &Workspace::AbortScriptedDrive);
+  clear_estop_ =
+      robot->addAction(tr("C&lear Emergency Stop"), workspace_, &Workspace::ClearEmergencyStop);
+  abort_script_ =
+      robot->addAction(tr("&Abort Scripted Drive"), workspace_, &Workspace::AbortScriptedDrive);
 }
 
 void MainWindow::BuildToolsMenu() {

@@ -6,11 +6,16 @@
 // * The floor plan shown at start (`--floor-plan`: raised before the
 //   window's first layout) leaves the 3D view a third of the window, and
 //   hidden gives the view its width back, also after a restart.
+// * Pause only while a replay runs, "Resume" while paused; the Robot menu's
+//   Connect, Disconnect, Clear Emergency Stop and Abort Scripted Drive only
+//   when the link and the drive allow them.
 #include <gtest/gtest.h>
 
 #include <QAbstractButton>
 #include <QAction>
 #include <QDockWidget>
+#include <QMenu>
+#include <QMenuBar>
 #include <QPushButton>
 #include <QTest>
 #include <cmath>
@@ -19,6 +24,7 @@
 #include "tests/ui/app_fixture.h"
 #include "ui/main_window.h"
 #include "ui/panels/drive_panel.h"
+#include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/workspace.h"
@@ -108,6 +114,79 @@ TEST_F(PanelsTest, FloorPlanShownAtStartLeavesTheViewAThirdAndHiddenGivesItBack)
   plan->toggleViewAction()->trigger();
   QTest::qWait(200);
   EXPECT_NEAR(window_->view()->width(), first_start, 8);
+}
+
+TEST_F(PanelsTest, PauseOnlyWhileAReplayRuns) {
+  auto* pause = window_->findChild<QPushButton*>(QStringLiteral("replayPause"));
+  ASSERT_NE(pause, nullptr);
+  EXPECT_FALSE(pause->isEnabled());  // no session
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  window_->replay_panel()->SetSpeed(1.0);  // real time: it runs for a minute
+  bool finished = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
+  window_->OpenSessionPath(tmp_.path() + "/lab.sweepscan");
+  ASSERT_TRUE(WaitFor([&] { return pause->isEnabled(); }, 60000));
+  EXPECT_EQ(pause->text(), "Pause");
+  QTest::mouseClick(pause, Qt::LeftButton);
+  EXPECT_TRUE(pause->isChecked());
+  EXPECT_EQ(pause->text(), "Resume");
+  // Paused, the cloud stops growing.
+  QTest::qWait(300);
+  const size_t points = window_->view()->point_count();
+  QTest::qWait(600);
+  EXPECT_EQ(window_->view()->point_count(), points);
+  QTest::mouseClick(pause, Qt::LeftButton);
+  EXPECT_EQ(pause->text(), "Pause");
+  ASSERT_TRUE(WaitFor([&] { return window_->view()->point_count() > points; }, 10000));
+  // At full speed to its end: nothing left to pause.
+  window_->replay_panel()->SetSpeed(0.0);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 120000));
+  EXPECT_FALSE(pause->isEnabled());
+  EXPECT_EQ(pause->text(), "Pause");
+}
+
+TEST_F(PanelsTest, RobotMenuOffersWhatTheLinkAllows) {
+  QMenu* robot = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->text() == "&Robot") robot = a->menu();
+  }
+  ASSERT_NE(robot, nullptr);
+  const auto action = [robot](const char* text) {
+    for (QAction* a : robot->actions()) {
+      if (a->text().startsWith(QString::fromUtf8(text))) return a;
+    }
+    ADD_FAILURE() << text;
+    return static_cast<QAction*>(nullptr);
+  };
+  QAction* connect = action("&Connect");
+  QAction* disconnect = action("&Disconnect");
+  QAction* estop = action("&Emergency Stop");
+  QAction* clear = action("C&lear Emergency Stop");
+  QAction* abort = action("&Abort Scripted Drive");
+  ASSERT_TRUE(connect && disconnect && estop && clear && abort);
+  // No link: connect, and the emergency stop (which says there is no robot).
+  EXPECT_TRUE(connect->isEnabled());
+  EXPECT_FALSE(disconnect->isEnabled());
+  EXPECT_TRUE(estop->isEnabled());
+  EXPECT_FALSE(clear->isEnabled());
+  EXPECT_FALSE(abort->isEnabled());
+
+  ConnectToSimulator();
+  EXPECT_FALSE(connect->isEnabled());
+  EXPECT_TRUE(disconnect->isEnabled());
+  EXPECT_TRUE(clear->isEnabled());
+  EXPECT_FALSE(abort->isEnabled());
+  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 1.0));
+  emit robot->aboutToShow();  // the menu opened
+  EXPECT_TRUE(abort->isEnabled());
+  abort->trigger();
+  EXPECT_FALSE(workspace_->scripted_drive_running());
+
+  disconnect->trigger();
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->link_open(); }, 10000));
+  EXPECT_TRUE(connect->isEnabled());
+  EXPECT_FALSE(disconnect->isEnabled());
+  EXPECT_FALSE(clear->isEnabled());
 }
 
 }  // namespace

@@ -34,7 +34,9 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   speed_->setCurrentIndex(speed_->count() - 1);
   speed_->setToolTip(tr("Replay speed"));
   pause_ = new QPushButton(tr("Pause"));
+  pause_->setObjectName(QStringLiteral("replayPause"));
   pause_->setCheckable(true);
+  pause_->setEnabled(false);  // While a replay runs (UpdatePause).
   row->addWidget(position_, 1);
   row->addWidget(speed_);
   row->addWidget(pause_);
@@ -64,7 +66,11 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
 
   connect(speed_, QOverload<int>::of(&QComboBox::currentIndexChanged), this,
           [this] { workspace_->SetReplaySpeed(speed()); });
-  connect(pause_, &QPushButton::toggled, workspace_, &Workspace::SetReplayPaused);
+  connect(pause_, &QPushButton::toggled, this, [this](bool paused) {
+    workspace_->SetReplayPaused(paused);
+    UpdatePause();
+  });
+  connect(workspace_, &Workspace::replayFinished, this, &ReplayPanel::UpdatePause);
   connect(slider_, &QSlider::sliderPressed, this, [this] { dragging_ = true; });
   connect(slider_, &QSlider::sliderReleased, this, [this] {
     dragging_ = false;
@@ -76,6 +82,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     if (!workspace_->replaying()) return;
     length_s_ = len;
     slider_->setEnabled(len > 0);
+    UpdatePause();
     if (!dragging_ && len > 0) slider_->setValue(static_cast<int>(1000.0 * pos / len));
     position_->setText(QStringLiteral("%1 / %2 s").arg(pos, 0, 'f', 1).arg(len, 0, 'f', 1));
   });
@@ -101,6 +108,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     }
     slider_->setEnabled(false);
     position_->setText(QStringLiteral("0.0 / 0.0 s"));
+    UpdatePause();
     ShowPoseSource();
   });
   connect(pose_source_, QOverload<int>::of(&QComboBox::activated), this, [this] {
@@ -132,6 +140,18 @@ void ReplayPanel::ShowPoseSource() {
     note = tr("Cloud made with the %1 poses.").arg(PoseSourceTitle(shown));
   }
   pose_note_->setText(note);
+}
+
+void ReplayPanel::UpdatePause() {
+  // Nothing to pause with no replay running (no session, a live cloud, a
+  // replay at its end); paused, the button says what it will do.
+  const bool running = workspace_->replaying();
+  if (!running && pause_->isChecked()) {
+    const QSignalBlocker block(pause_);
+    pause_->setChecked(false);
+  }
+  pause_->setEnabled(running);
+  pause_->setText(pause_->isChecked() ? tr("Resume") : tr("Pause"));
 }
 
 QString ReplayPanel::pose_source_text() const { return pose_note_->text(); }

@@ -36,6 +36,7 @@ class ReplayPanel : public QWidget {
   QComboBox* pose_source_;
   QLabel* pose_note_;
   void ShowPoseSource();
+  void UpdatePause();  // Enabled while a replay runs; "Resume" when paused.
 
   double length_s_ = 0.0;
   bool dragging_ = false;
