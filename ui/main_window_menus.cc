@@ -211,6 +211,17 @@ void MainWindow::BuildViewMenu() {
     });
   }
   color_group_->actions()[0]->setChecked(true);
+  // Pass, deviation and intensity are offered when the cloud has them (a
+  // circle drive split, an evaluation, a lidar that reports intensities);
+  // chosen without them, every point was grey under a legend for nothing.
+  const auto offer_colors = [this] {
+    for (int i = 0; i < CloudView::kColorModes; ++i) {
+      color_group_->actions()[i]->setEnabled(
+          view_->has_point_values(static_cast<CloudView::ColorMode>(i)));
+    }
+  };
+  connect(view_, &CloudView::pointValuesChanged, this, offer_colors);
+  offer_colors();
   view->addAction(
           tr("Larger Points"), this,
           [this] {

@@ -9,6 +9,9 @@
 // * Pause only while a replay runs, "Resume" while paused; the Robot menu's
 //   Connect, Disconnect, Clear Emergency Stop and Abort Scripted Drive only
 //   when the link and the drive allow them.
+// * Colour by pass, deviation and intensity offered when the cloud has
+//   those values; the colour bar only for colours that mean something, its
+//   labels at round values.
 #include <gtest/gtest.h>
 
 #include <QAbstractButton>
@@ -20,10 +23,13 @@
 #include <QTest>
 #include <cmath>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "tests/ui/app_fixture.h"
 #include "ui/main_window.h"
 #include "ui/panels/drive_panel.h"
+#include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/view/cloud_view.h"
 #include "ui/workspace/sim_robot.h"
@@ -187,6 +193,79 @@ TEST_F(PanelsTest, RobotMenuOffersWhatTheLinkAllows) {
   EXPECT_TRUE(connect->isEnabled());
   EXPECT_FALSE(disconnect->isEnabled());
   EXPECT_FALSE(clear->isEnabled());
+}
+
+// Five evenly spaced labels over 0..3 m read 0.0, 0.8, 1.5, 2.2, 3.0;
+// round ones, with the decimals their step needs.
+TEST(ColorBarTicksTest, RoundValuesWithTheirDecimals) {
+  int decimals = -1;
+  EXPECT_EQ(CloudView::BarTicks(0.0, 3.0, &decimals),
+            (std::vector<double>{0, 0.5, 1, 1.5, 2, 2.5, 3}));
+  EXPECT_EQ(decimals, 1);
+  EXPECT_EQ(CloudView::BarTicks(0.0, 60.0, &decimals),
+            (std::vector<double>{0, 10, 20, 30, 40, 50, 60}));
+  EXPECT_EQ(decimals, 0);
+  EXPECT_EQ(CloudView::BarTicks(-30.0, 30.0, &decimals),
+            (std::vector<double>{-30, -20, -10, 0, 10, 20, 30}));
+  const std::vector<double> unit = CloudView::BarTicks(0.0, 1.0, &decimals);
+  ASSERT_EQ(unit.size(), 6u);
+  EXPECT_NEAR(unit[1], 0.2, 1e-12);
+  EXPECT_EQ(decimals, 1);  // an intensity of 0..1: 0.0, 0.2 ... 1.0, not 0, 0, 0, 1, 1
+  const std::vector<double> height = CloudView::BarTicks(-0.12, 2.63, &decimals);
+  EXPECT_EQ(decimals, 1);
+  ASSERT_FALSE(height.empty());
+  EXPECT_GE(height.front(), -0.12);
+  EXPECT_LE(height.back(), 2.63);
+  EXPECT_NEAR(height[1] - height[0], 0.5, 1e-12);
+  EXPECT_TRUE(CloudView::BarTicks(1.0, 1.0, &decimals).empty());
+}
+
+TEST_F(PanelsTest, ColourModesOfferedWhenTheCloudHasThem) {
+  QMenu* colour = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->text() != "&View") continue;
+    for (QAction* b : a->menu()->actions()) {
+      if (b->text() == "&Colour by") colour = b->menu();
+    }
+  }
+  ASSERT_NE(colour, nullptr);
+  const QList<QAction*> modes = colour->actions();
+  ASSERT_EQ(modes.size(), CloudView::kColorModes);
+  const auto offered = [&] {
+    std::string s;
+    for (QAction* a : modes) s += a->isEnabled() ? '1' : '0';
+    return s;
+  };
+  EXPECT_EQ(offered(), "111000");  // height, time, range; no pass, deviation, intensity
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(tmp_.path() + "/lab.sweepscan"));
+  // The lab drive is no circle drive, and the X4 reports no intensities.
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 60000));
+  EXPECT_EQ(offered(), "111000");
+  CloudView* view = window_->view();
+  view->RenderNow();
+  EXPECT_TRUE(view->color_bar_drawn());
+  // Chosen anyway (by code: the menu does not offer it): grey, no legend.
+  view->SetColorMode(CloudView::ColorMode::kIntensity);
+  view->RenderNow();
+  EXPECT_FALSE(view->color_bar_drawn());
+  view->SetColorMode(CloudView::ColorMode::kHeight);
+
+  // Evaluated: deviations.
+  EvaluationPanel* evaluation = window_->evaluation_panel();
+  bool evaluated = false;
+  QObject::connect(evaluation, &EvaluationPanel::evaluated, [&](bool) { evaluated = true; });
+  evaluation->Evaluate();
+  ASSERT_TRUE(WaitFor([&] { return evaluated; }, 120000));
+  EXPECT_EQ(offered(), "111010");
+  modes[static_cast<int>(CloudView::ColorMode::kDeviation)]->trigger();
+  EXPECT_EQ(view->color_mode(), CloudView::ColorMode::kDeviation);
+  view->RenderNow();
+  EXPECT_TRUE(view->color_bar_drawn());
+
+  // Another cloud (File > New Session): its values go, and the offer with them.
+  workspace_->NewSession();
+  EXPECT_TRUE(WaitFor([&] { return offered() == "111000"; }, 5000)) << offered();
 }
 
 }  // namespace

@@ -271,6 +271,7 @@ void CloudView::Clear() {
   have_origin_ = false;
   have_points_ = false;
   has_values_[3] = has_values_[4] = has_values_[5] = false;
+  emit pointValuesChanged();
   pass_filter_ = -1;
   range_lo_[0] = 0.0;
   range_hi_[0] = 3.0;
@@ -591,9 +592,7 @@ void CloudView::RenderNow() {
   QElapsedTimer clock;
   clock.start();
   SyncBatches();  // Their bounds for the clipping range.
-  // The bar explains the cloud's colours: with no cloud (a project's
-  // layers alone, coloured by session) it would explain nothing.
-  color_bar_->SetVisibility(color_bar_wanted_ && point_count_ > 0);
+  color_bar_->SetVisibility(ColorBarShown());
   renderer_->ResetCameraClippingRange();
   window_->Render();
   last_render_ms_ = clock.nsecsElapsed() * 1e-6;

@@ -106,6 +106,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // `context` is what the pick context (SetPickContext) said at the click.
   void pointPicked(const sweepscan::ui::PickHit& hit, int context);
   void colorModeChanged(int mode);  // A ColorMode.
+  // has_point_values() changed: values given (SetPointValues) or cleared
+  // with the cloud.
+  void pointValuesChanged();
   // MoveCameraWithFrame moved the frame under the view: a level surface
   // under the focal point (the clip's height, else the focal point's)
   // moved by `dz` metres, and the clip with it. A height kept elsewhere in
@@ -150,6 +153,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool has_point_values(ColorMode mode) const {
     return has_values_[static_cast<int>(mode)];
   }
+  // The colour bar's labels over [lo, hi]: round values (steps of 1, 2 or
+  // 5 times a power of ten, three to seven of them) and the decimals they
+  // need. Empty for an empty range.
+  static std::vector<double> BarTicks(double lo, double hi, int* decimals);
   // The deviation colours span -max_mm (blue) .. 0 (white) .. +max_mm (red).
   void SetDeviationRange(double max_mm);
   // Draws only pass A (0), only pass B (1), or every point (-1). The picking
@@ -480,6 +487,14 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void NextPass();
   void UpdateRanges(float z, float t, float r);
   void ApplyLookupTable();
+  // The bar's labels at BarTicks(lo, hi).
+  void SetBarTicks(double lo, double hi);
+  // The colour bar explains the cloud's colours: not with no cloud (a
+  // project's layers alone, coloured by session), nor when the mode has no
+  // values (every point grey: a pass mode with no passes split).
+  bool ColorBarShown() const {
+    return color_bar_wanted_ && point_count_ > 0 && has_values_[static_cast<int>(color_mode_)];
+  }
   void BuildGrid();
   void BuildColorBar();
   void BuildRobotAndTrajectory();

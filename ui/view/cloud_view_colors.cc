@@ -2,6 +2,7 @@
 // deviation, intensity), their lookup tables and colour bar, the colour
 // ranges that grow with a live cloud, values given after the fact
 // (SetPointValues), and the pass filter that draws one pass of a circle drive.
+#include <vtkDoubleArray.h>
 #include <vtkLookupTable.h>
 #include <vtkPointData.h>
 #include <vtkRenderer.h>
@@ -11,6 +12,7 @@
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "ui/view/cloud_view.h"
 #include "ui/view/cloud_view_chunk.h"
@@ -81,6 +83,7 @@ void CloudView::ApplyLookupTable() {
     lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
     lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
     lut_->SetTableRange(0.0, 1.0);
+    color_bar_->SetUseCustomLabels(false);
     color_bar_->SetLabelFormat("%.0f");
     return;
   }
@@ -99,7 +102,7 @@ void CloudView::ApplyLookupTable() {
       }
     }
     lut_->SetTableRange(-deviation_max_mm_, deviation_max_mm_);
-    color_bar_->SetLabelFormat("%.0f");
+    SetBarTicks(-deviation_max_mm_, deviation_max_mm_);
     return;
   }
   if (color_mode_ == ColorMode::kIntensity) {
@@ -110,7 +113,7 @@ void CloudView::ApplyLookupTable() {
       lut_->SetTableValue(i, v, v, v, 1.0);
     }
     lut_->SetTableRange(intensity_lo_, intensity_hi_);
-    color_bar_->SetLabelFormat("%.0f");
+    SetBarTicks(intensity_lo_, intensity_hi_);
     return;
   }
   lut_->SetHueRange(0.667, 0.0);
@@ -119,7 +122,45 @@ void CloudView::ApplyLookupTable() {
   lut_->SetAlphaRange(1.0, 1.0);
   lut_->ForceBuild();
   lut_->SetTableRange(range_lo_[m], range_hi_[m]);
-  color_bar_->SetLabelFormat("%.1f");
+  SetBarTicks(range_lo_[m], range_hi_[m]);
+}
+
+// Labels at steps of 1, 2 or 5 times a power of ten, at least a sixth of
+// the range (three to seven labels), with the decimals the step needs: five
+// evenly spaced labels over 0..3 m read 0.0, 0.8, 1.5, 2.2, 3.0, and over
+// an intensity's fallback 0..1 with "%.0f" they read 0, 0, 0, 1, 1.
+std::vector<double> CloudView::BarTicks(double lo, double hi, int* decimals) {
+  *decimals = 0;
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {};
+  const double raw = (hi - lo) / 6.0;
+  const double power = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = 10.0 * power;
+  for (const double m : {1.0, 2.0, 5.0}) {
+    if (m * power >= raw * (1.0 - 1e-9)) {
+      step = m * power;
+      break;
+    }
+  }
+  std::vector<double> ticks;
+  for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + 1e-9 * step; k += 1.0) {
+    ticks.push_back(k == 0.0 ? 0.0 : k * step);  // no "-0"
+  }
+  *decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
+  return ticks;
+}
+
+void CloudView::SetBarTicks(double lo, double hi) {
+  int decimals = 0;
+  const std::vector<double> ticks = BarTicks(lo, hi, &decimals);
+  if (ticks.empty()) {
+    color_bar_->SetUseCustomLabels(false);
+    return;
+  }
+  auto labels = vtkSmartPointer<vtkDoubleArray>::New();
+  for (const double t : ticks) labels->InsertNextValue(t);
+  color_bar_->SetLabelFormat(("%." + std::to_string(decimals) + "f").c_str());
+  color_bar_->SetCustomLabels(labels);
+  color_bar_->SetUseCustomLabels(true);
 }
 
 void CloudView::SetPointValues(ColorMode mode, const QuantizedValues& values) {
@@ -145,6 +186,7 @@ void CloudView::SetPointValues(ColorMode mode, const QuantizedValues& values) {
     }
   }
   has_values_[m] = true;
+  emit pointValuesChanged();
   if (mode == ColorMode::kPass && pass_filter_ >= 0) ApplyPassFilter();
   if (mode == ColorMode::kIntensity) {
     intensity_lo_ = values.lo;

@@ -129,7 +129,7 @@ void CloudView::StartPasses() {
   dirty_ = false;
   QElapsedTimer clock;
   clock.start();
-  color_bar_->SetVisibility(color_bar_wanted_ && point_count_ > 0);
+  color_bar_->SetVisibility(ColorBarShown());
   renderer_->ResetCameraClippingRange();  // The whole scene's, kept by every pass.
 
   // The rest batches nearest the eye first (their boxes' distance).
