@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <QAction>
+#include <QImage>
 #include <QTest>
 #include <QUndoStack>
 #include <cmath>
@@ -86,6 +87,28 @@ TEST_F(MeasureTest, MeasuresTheDistanceBetweenTwoClickedPoints) {
   const double truth = std::hypot(b_.x - a_.x, b_.y - a_.y);
   EXPECT_NEAR(window_->measured_distance(), truth, 0.15);
   EXPECT_GT(truth, 3.0);
+
+  // The distance is written over the cloud at the segment's middle, in the
+  // segment's magenta (the path is amber), whatever is in front of it.
+  view_->ViewOblique();
+  view_->RenderNow();
+  const QRectF box = view_->measure_label_box();
+  ASSERT_FALSE(box.isEmpty());
+  const QPointF mid = view_->WorldToWidget(0.5 * (picked[0] + picked[1]));
+  EXPECT_TRUE(box.adjusted(-2, -2, 2, 2).contains(mid)) << mid.x() << " " << mid.y();
+  const QImage image = view_->GrabImage().convertToFormat(QImage::Format_RGB32);
+  const double sx = image.width() / static_cast<double>(view_->width());
+  int magenta = 0;
+  for (int y = static_cast<int>(box.top() * sx); y < static_cast<int>(box.bottom() * sx); ++y) {
+    for (int x = static_cast<int>(box.left() * sx); x < static_cast<int>(box.right() * sx); ++x) {
+      const QRgb c = image.pixel(x, y);
+      magenta += qRed(c) > 200 && qGreen(c) < 150 && qBlue(c) > 200 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(magenta, 20) << "the label's text";
+  window_->measure_action()->setChecked(false);  // the tool off: the distance goes
+  view_->RenderNow();
+  EXPECT_TRUE(view_->measure_label_box().isEmpty());
 }
 
 // A click's point comes back after the click. The distance tool switched

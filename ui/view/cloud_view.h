@@ -340,6 +340,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
     QRectF box;
   };
   const std::vector<PlaneLabelBox>& plane_label_boxes() const { return plane_label_boxes_; }
+  // Where the distance's label drew in the last frame, in widget pixels
+  // (empty when not drawn): over the cloud, at the segment's middle.
+  QRectF measure_label_box() const { return measure_label_box_; }
   // Where the colour bar drew in the last frame, in widget pixels: its bar,
   // title and labels (empty when not drawn). Kept inside the view (a long
   // title on a narrow view moves the bar left) and kept clear of plane
@@ -533,7 +536,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
   std::vector<PlaneLabelBox> plane_label_boxes_;
-  void LayoutPlaneLabels();  // before each frame (the renderer's StartEvent)
+  // Before each frame (the renderer's StartEvent): the colour bar, the
+  // distance's label, then the planes' names clear of them.
+  void LayoutPlaneLabels();
   QRectF LayoutColorBar();   // before each frame; its box in display pixels
   QRectF color_bar_box_;
   vtkSmartPointer<vtkTextActor> text_measure_;  // sizes the bar's texts, never drawn
@@ -547,7 +552,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t plane_count_ = 0;
   bool planes_visible_ = true;
   vtkSmartPointer<vtkActor> measure_line_;
-  vtkSmartPointer<vtkBillboardTextActor3D> measure_label_;
+  vtkSmartPointer<vtkTextActor> measure_label_;  // over the view, at measure_mid_
+  Eigen::Vector3d measure_mid_ = Eigen::Vector3d::Zero();
+  QRectF measure_label_box_;
+  bool measuring_ = false;
+  static constexpr double kMeasureColor[3] = {1.0, 0.35, 1.0};
+  // `p` in display pixels (y up); false if behind a perspective camera.
+  bool ToDisplay(const Eigen::Vector3d& p, double* d) const;
   vtkSmartPointer<vtkPoints> trajectory_points_;
   vtkSmartPointer<vtkPolyData> trajectory_poly_;
   // The path as drawn: simplified to within 5 mm of every pose, ground

@@ -4,7 +4,6 @@
 // They live apart from the cloud's chunks; the planes are the only
 // translucent actor (one extra pass, drawn only while planes are shown).
 #include <vtkActor.h>
-#include <vtkBillboardTextActor3D.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
@@ -33,20 +32,8 @@ namespace sweepscan::ui {
 
 namespace {
 
-vtkSmartPointer<vtkBillboardTextActor3D> NewLabel() {
-  auto label = vtkSmartPointer<vtkBillboardTextActor3D>::New();
-  label->GetTextProperty()->SetFontSize(15);
-  label->GetTextProperty()->SetBold(true);
-  label->GetTextProperty()->SetColor(1.0, 1.0, 1.0);
-  label->GetTextProperty()->SetBackgroundColor(0.1, 0.1, 0.12);
-  label->GetTextProperty()->SetBackgroundOpacity(0.75);
-  label->GetTextProperty()->SetJustificationToCentered();
-  label->PickableOff();
-  return label;
-}
-
-// A plane's name over the view: the same look as the billboards, drawn on
-// top of the cloud (a name behind a wall was cut by the wall's points).
+// A text over the view (a plane's name, a distance), drawn on top of the
+// cloud: in the scene, a name behind a wall was cut by the wall's points.
 vtkSmartPointer<vtkTextActor> NewOverlayLabel() {
   auto label = vtkSmartPointer<vtkTextActor>::New();
   vtkTextProperty* t = label->GetTextProperty();
@@ -88,9 +75,15 @@ void CloudView::BuildAnnotations() {
   auto line_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   line_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
   line_mapper->SetResolveCoincidentTopologyToPolygonOffset();
+  // Drawn in front of the surfaces its ends were picked on (the floor's
+  // points hid a segment along it), as the path is.
+  line_mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -20000.0);
+  line_mapper->SetRelativeCoincidentTopologyPointOffsetParameter(-20000.0);
   measure_line_ = vtkSmartPointer<vtkActor>::New();
   measure_line_->SetMapper(line_mapper);
-  measure_line_->GetProperty()->SetColor(1.0, 0.92, 0.23);
+  // Magenta: no height, time or range colour, and apart from the path's
+  // amber (the yellow it had read as the robot's path).
+  measure_line_->GetProperty()->SetColor(kMeasureColor[0], kMeasureColor[1], kMeasureColor[2]);
   measure_line_->GetProperty()->SetLineWidth(3.0);
   measure_line_->GetProperty()->SetPointSize(9.0);
   measure_line_->GetProperty()->SetRenderPointsAsSpheres(true);
@@ -98,10 +91,12 @@ void CloudView::BuildAnnotations() {
   measure_line_->PickableOff();
   measure_line_->VisibilityOff();
   renderer_->AddActor(measure_line_);
-  measure_label_ = NewLabel();
-  measure_label_->GetTextProperty()->SetColor(1.0, 0.92, 0.23);
+  // Over the view, as the planes' names: in the scene, the walls in front
+  // of the segment's middle cut its text.
+  measure_label_ = NewOverlayLabel();
+  measure_label_->GetTextProperty()->SetColor(kMeasureColor[0], kMeasureColor[1], kMeasureColor[2]);
   measure_label_->VisibilityOff();
-  renderer_->AddActor(measure_label_);
+  renderer_->AddActor2D(measure_label_);
 }
 
 void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
@@ -227,13 +222,28 @@ void CloudView::LayoutPlaneLabels() {
   // on them hid the bar's own labels.
   const QRectF bar = LayoutColorBar();
   color_bar_box_ = bar.isEmpty() ? QRectF() : to_widget(bar);
-  if (plane_labels_.empty()) return;
   int* size = renderer_->GetSize();
   int* origin = renderer_->GetOrigin();
   const QRectF viewport(origin[0], origin[1], size[0], size[1]);
   std::vector<QRectF> placed;
   if (!bar.isEmpty()) placed.push_back(bar);
   placed.push_back(QRectF(0.0, 0.0, 0.16 * size[0], 0.22 * size[1]));  // the axes
+  // The distance at its segment's middle, placed before the planes' names.
+  measure_label_->SetVisibility(false);
+  measure_label_box_ = QRectF();
+  double d[3];
+  if (measuring_ && ToDisplay(measure_mid_, d) && viewport.contains(d[0], d[1])) {
+    double extent[2];
+    measure_label_->GetSize(renderer_, extent);
+    const QRectF box(d[0] - extent[0] / 2 - 2.0, d[1] - extent[1] / 2 - 1.0, extent[0] + 4.0,
+                     extent[1] + 2.0);
+    measure_label_->SetDisplayPosition(static_cast<int>(std::lround(d[0])),
+                                       static_cast<int>(std::lround(d[1])));
+    measure_label_->SetVisibility(true);
+    placed.push_back(box);
+    measure_label_box_ = to_widget(box);
+  }
+  if (plane_labels_.empty()) return;
   // SetPlanes' order (the evaluation's: floor, ceiling, then the walls by
   // size) is the order of precedence: the first keeps its place.
   for (size_t i = 0; i < plane_labels_.size(); ++i) {
@@ -244,15 +254,7 @@ void CloudView::LayoutPlaneLabels() {
     label->SetVisibility(false);
     if (!planes_visible_ || clipped) continue;
     // Behind the camera or off the view: not drawn.
-    vtkCamera* camera = renderer_->GetActiveCamera();
-    const Eigen::Vector3d eye(camera->GetPosition());
-    const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
-    if (camera->GetParallelProjection() == 0 && (a - eye).dot(forward) <= 0.0) continue;
-    renderer_->SetWorldPoint(a.x(), a.y(), a.z(), 1.0);
-    renderer_->WorldToDisplay();
-    double d[3];
-    renderer_->GetDisplayPoint(d);
-    if (!viewport.contains(d[0], d[1])) continue;
+    if (!ToDisplay(a, d) || !viewport.contains(d[0], d[1])) continue;
     double extent[2];
     label->GetSize(renderer_, extent);
     const double w = extent[0] + 4.0, h = extent[1] + 2.0;
@@ -276,6 +278,17 @@ void CloudView::LayoutPlaneLabels() {
   }
 }
 
+bool CloudView::ToDisplay(const Eigen::Vector3d& p, double* d) const {
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  const Eigen::Vector3d eye(camera->GetPosition());
+  const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
+  if (camera->GetParallelProjection() == 0 && (p - eye).dot(forward) <= 0.0) return false;
+  renderer_->SetWorldPoint(p.x(), p.y(), p.z(), 1.0);
+  renderer_->WorldToDisplay();
+  renderer_->GetDisplayPoint(d);
+  return true;
+}
+
 void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   auto points = vtkSmartPointer<vtkPoints>::New();
   const vtkIdType ids[2] = {points->InsertNextPoint(a.data()), points->InsertNextPoint(b.data())};
@@ -290,16 +303,17 @@ void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& 
   poly->SetVerts(verts);
   static_cast<vtkPolyDataMapper*>(measure_line_->GetMapper())->SetInputData(poly);
   measure_line_->VisibilityOn();
-  const Eigen::Vector3d mid = 0.5 * (a + b);
-  measure_label_->SetPosition(mid.x(), mid.y(), mid.z());
-  measure_label_->SetInput(QStringLiteral("%1 m").arg((b - a).norm(), 0, 'f', 3).toUtf8().constData());
-  measure_label_->VisibilityOn();
+  measure_mid_ = 0.5 * (a + b);
+  measuring_ = true;  // the label is placed before each frame (LayoutPlaneLabels)
+  measure_label_->SetInput(
+      QStringLiteral("%1 m").arg((b - a).norm(), 0, 'f', 3).toUtf8().constData());
   RequestRender();
 }
 
 void CloudView::ClearMeasurement() {
   measure_line_->VisibilityOff();
   measure_label_->VisibilityOff();
+  measuring_ = false;
   RequestRender();
 }
 
