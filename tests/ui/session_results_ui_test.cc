@@ -12,6 +12,7 @@
 #include <QFile>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QFontMetrics>
 #include <QLabel>
 #include <QLineEdit>
 #include <QPushButton>
@@ -143,6 +144,7 @@ TEST_F(SessionResultsTest, AnEvaluationGoesWithTheSessionItDescribes) {
   EXPECT_EQ(workspace_->previous_evaluation(), nullptr);  // not A's
   EXPECT_EQ(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
   for (const QString& b : before_column()) EXPECT_EQ(b, "-");
+  EXPECT_TRUE(planes_table()->isColumnHidden(4));  // nothing to compare with
   ASSERT_TRUE(evaluation()->ExportReport(tmp_.path() + "/b.json", &error)) << error.toStdString();
   std::ifstream in(tmp_.path().toStdString() + "/b.json");
   const nlohmann::json report = nlohmann::json::parse(in);
@@ -164,6 +166,8 @@ TEST_F(SessionResultsTest, AnEvaluationGoesWithTheSessionItDescribes) {
   ASSERT_TRUE(WaitFor([&] { return replayed && !workspace_->job_running(); }, 60000));
   ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
   EXPECT_NE(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
+  EXPECT_FALSE(planes_table()->isColumnHidden(4));  // B's with the EKF, before
+  EXPECT_FALSE(dimensions_table()->isColumnHidden(2));
 
   // New Session and Connect: a live cloud, no evaluation.
   workspace_->NewSession();
@@ -210,10 +214,19 @@ TEST_F(SessionResultsTest, PlanesAreNumberedFromOneAndTheProgressNamesTheDeviati
   QTableWidget* dims = dimensions_table();
   for (int r = 0; r < dims->rowCount(); ++r) {
     const RoomDimension& d = e->dimensions[r];
-    EXPECT_EQ(dims->item(r, 0)->text(), QStringLiteral("%1 (%2-%3)")
-                                            .arg(QString::fromStdString(d.axis))
+    EXPECT_EQ(dims->item(r, 0)->text(), QStringLiteral("%1 %2 \u2013 %3 %4")
+                                            .arg(QString::fromStdString(e->planes[d.plane_a].kind))
                                             .arg(d.plane_a + 1)
+                                            .arg(QString::fromStdString(e->planes[d.plane_b].kind))
                                             .arg(d.plane_b + 1));
+  }
+  // No previous evaluation of B: no "before" columns, and the names whole.
+  EXPECT_TRUE(planes_table()->isColumnHidden(4));
+  EXPECT_TRUE(dims->isColumnHidden(2));
+  const QFontMetrics metrics(dims->font());
+  for (int r = 0; r < dims->rowCount(); ++r) {
+    EXPECT_LE(metrics.horizontalAdvance(dims->item(r, 0)->text()), dims->columnWidth(0))
+        << dims->item(r, 0)->text().toStdString();
   }
 }
 

@@ -20,6 +20,20 @@
 
 namespace sweepscan::ui {
 
+// A dimension by the planes it spans, numbered as the planes table's rows
+// (from 1), as an operator reads them: "wall 3 - wall 4". Its axis alone
+// ("horizontal (3-4)", cut to "horizontal ...") did not say which walls.
+QString DimensionName(const CloudEvaluation& e, const RoomDimension& d) {
+  const auto plane = [&](int i) {
+    const bool known = i >= 0 && static_cast<size_t>(i) < e.planes.size();
+    return QStringLiteral("%1 %2")
+        .arg(known ? QString::fromStdString(e.planes[static_cast<size_t>(i)].kind)
+                   : QStringLiteral("plane"))
+        .arg(i + 1);
+  };
+  return QStringLiteral("%1 \u2013 %2").arg(plane(d.plane_a), plane(d.plane_b));
+}
+
 // A plane's signed deviations n . p + d as bars (the paper's Fig. 9).
 class HistogramPlot : public QWidget {
  public:
@@ -144,6 +158,8 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   planes_->setHorizontalHeaderLabels(
       {tr("plane"), tr("points"), tr("RMS (mm)"), tr("tilt (°)"), tr("before: RMS, tilt")});
   planes_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  planes_->horizontalHeader()->setStretchLastSection(true);
+  planes_->setColumnHidden(4, true);  // shown when there is a previous evaluation
   planes_->setSelectionBehavior(QAbstractItemView::SelectRows);
   planes_->setSelectionMode(QAbstractItemView::SingleSelection);
   planes_->setEditTriggers(QAbstractItemView::NoEditTriggers);
@@ -154,7 +170,10 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   dimensions_ = new QTableWidget(0, 3);
   dimensions_->setObjectName(QStringLiteral("evaluationDimensions"));
   dimensions_->setHorizontalHeaderLabels({tr("dimension"), tr("now (m)"), tr("before (m)")});
-  dimensions_->horizontalHeader()->setSectionResizeMode(QHeaderView::Stretch);
+  // The name takes the room; the figures are as wide as they need.
+  dimensions_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  dimensions_->horizontalHeader()->setSectionResizeMode(0, QHeaderView::Stretch);
+  dimensions_->setColumnHidden(2, true);
   dimensions_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   dimensions_->setMinimumHeight(100);
   layout->addWidget(dimensions_);
@@ -260,6 +279,10 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
                 .arg(before->planes.size());
   }
   summary_->setText(text);
+  // "before" only when there is one: an empty column's header was cut to
+  // "before: RM" and pushed the table into scrolling.
+  planes_->setColumnHidden(4, before == nullptr);
+  dimensions_->setColumnHidden(2, before == nullptr);
   planes_->setRowCount(static_cast<int>(e->planes.size()));
   for (size_t i = 0; i < e->planes.size(); ++i) {
     const EvaluatedPlane& p = e->planes[i];
@@ -280,12 +303,7 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
   for (size_t i = 0; i < e->dimensions.size(); ++i) {
     const RoomDimension& d = e->dimensions[i];
     const int r = static_cast<int>(i);
-    // Planes numbered as the table's rows (from 1), as an operator reads them.
-    dimensions_->setItem(r, 0,
-                         new QTableWidgetItem(QStringLiteral("%1 (%2-%3)")
-                                                  .arg(QString::fromStdString(d.axis))
-                                                  .arg(d.plane_a + 1)
-                                                  .arg(d.plane_b + 1)));
+    dimensions_->setItem(r, 0, new QTableWidgetItem(DimensionName(*e, d)));
     dimensions_->setItem(r, 1, Item(QString::number(d.distance_m, 'f', 4)));
     QString b = QStringLiteral("-");
     if (before != nullptr && i < before->dimensions.size() &&

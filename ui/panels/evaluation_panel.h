@@ -27,6 +27,10 @@ namespace sweepscan::ui {
 class CloudView;
 class HistogramPlot;
 
+// A room dimension's name in the panel: the planes it spans, as
+// "wall 3 – wall 4" (planes numbered from 1, as the planes table's rows).
+QString DimensionName(const CloudEvaluation& e, const RoomDimension& d);
+
 class EvaluationPanel : public QWidget {
   Q_OBJECT
  public:
