@@ -12,14 +12,17 @@
 // * Colour by pass, deviation and intensity offered when the cloud has
 //   those values; the colour bar only for colours that mean something, its
 //   labels at round values.
+// * The link's health in a few rounded lines, not a dump of every counter.
 #include <gtest/gtest.h>
 
 #include <QAbstractButton>
 #include <QAction>
 #include <QDockWidget>
+#include <QLabel>
 #include <QMenu>
 #include <QMenuBar>
 #include <QPushButton>
+#include <QRegularExpression>
 #include <QTest>
 #include <cmath>
 #include <memory>
@@ -28,6 +31,7 @@
 
 #include "tests/ui/app_fixture.h"
 #include "ui/main_window.h"
+#include "ui/panels/connection_panel.h"
 #include "ui/panels/drive_panel.h"
 #include "ui/panels/evaluation_panel.h"
 #include "ui/panels/replay_panel.h"
@@ -266,6 +270,53 @@ TEST_F(PanelsTest, ColourModesOfferedWhenTheCloudHasThem) {
   // Another cloud (File > New Session): its values go, and the offer with them.
   workspace_->NewSession();
   EXPECT_TRUE(WaitFor([&] { return offered() == "111000"; }, 5000)) << offered();
+}
+
+TEST_F(PanelsTest, LinkHealthReadsAtAGlance) {
+  ConnectToSimulator();
+  auto* health = window_->connection_panel()->findChild<QLabel*>(QStringLiteral("linkHealth"));
+  ASSERT_NE(health, nullptr);
+  ASSERT_TRUE(WaitFor([&] { return workspace_->health().devices[0].frames_per_s > 0.0; }, 10000));
+  QTest::qWait(1200);  // the panel's next update
+  const QString text = health->text();
+  const QStringList lines = text.split(QLatin1Char('\n'));
+  EXPECT_LE(lines.size(), 4) << text.toStdString();
+  EXPECT_TRUE(lines[0].contains(QRegularExpression("lidar \\d+/s, IMU \\d+/s, motor \\d+/s")))
+      << text.toStdString();
+  EXPECT_TRUE(text.contains("errors: none")) << text.toStdString();
+  EXPECT_FALSE(text.contains(QRegularExpression("\\d\\.\\d\\d")))
+      << "rounded: " << text.toStdString();
+  EXPECT_TRUE(text.contains("robot: battery")) << text.toStdString();
+  // Every counter, unrounded, is still there for a bug report.
+  EXPECT_EQ(health->toolTip().toStdString(), workspace_->health().ToString());
+}
+
+TEST(LinkHealthTextTest, SaysWhatWentWrong) {
+  hardware::LinkHealth h;
+  h.frames_per_s = 333.333;
+  h.bytes_per_s = 36356.4;
+  h.devices[0].frames_per_s = 154.154;
+  h.devices[1].frames_per_s = 100.1;
+  h.devices[2].frames_per_s = 50.0501;
+  h.crc_errors = 2;
+  h.sequence_gaps = 1;
+  h.frames_missing = 3;
+  h.have_status = true;
+  h.agent_status.battery_voltage_v = 12.06f;
+  h.agent_status.emergency_stop_latched = true;
+  h.outages = 1;
+  h.outage_s = 2.34;
+  h.reconnect_attempts = 3;
+  h.outage_reason = "no data for 2 s";
+  h.data_lost_s[1] = 0.5;
+  h.reconnects = 1;
+  EXPECT_EQ(ConnectionPanel::HealthText(h).toStdString(),
+            "333 frames/s, 36.4 kB/s: lidar 154/s, IMU 100/s, motor 50/s\n"
+            "errors: 2 CRC, 3 frames lost in a gap\n"
+            "robot: battery 12.1 V, emergency stop latched\n"
+            "1 outage (last 2.3 s, 3 attempts: no data for 2 s)\n"
+            "IMU data lost: 0.5 s\n"
+            "reconnected once");
 }
 
 }  // namespace

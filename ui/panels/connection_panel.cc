@@ -4,7 +4,6 @@
 #include <QDir>
 #include <QFileDialog>
 #include <QFileInfo>
-#include <QFontDatabase>
 #include <QFormLayout>
 #include <QHBoxLayout>
 #include <QLabel>
@@ -113,7 +112,7 @@ ConnectionPanel::ConnectionPanel(Workspace* workspace, const QString& scenarios_
   state_->setObjectName(QStringLiteral("linkState"));
   layout->addWidget(state_);
   health_ = new QLabel;
-  health_->setFont(QFontDatabase::systemFont(QFontDatabase::FixedFont));
+  health_->setObjectName(QStringLiteral("linkHealth"));
   health_->setWordWrap(true);
   health_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   health_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
@@ -188,7 +187,70 @@ void ConnectionPanel::UpdateState() {
   QString state = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
   if (workspace_->authenticated()) state = tr("connected, authenticated");
   state_->setText(tr("Link: %1").arg(state));
-  health_->setText(open ? QString::fromStdString(h.ToString()) : QString());
+  health_->setText(open ? HealthText(h) : QString());
+  // Everything, unrounded, for a bug report.
+  health_->setToolTip(open ? QString::fromStdString(h.ToString()) : QString());
+}
+
+QString ConnectionPanel::HealthText(const hardware::LinkHealth& h) {
+  QStringList lines;
+  lines << tr("%1 frames/s, %2 kB/s: lidar %3/s, IMU %4/s, motor %5/s")
+               .arg(h.frames_per_s, 0, 'f', 0)
+               .arg(h.bytes_per_s / 1000.0, 0, 'f', 1)
+               .arg(h.devices[0].frames_per_s, 0, 'f', 0)
+               .arg(h.devices[1].frames_per_s, 0, 'f', 0)
+               .arg(h.devices[2].frames_per_s, 0, 'f', 0);
+  if (h.latency_samples > 0) {
+    lines << tr("round trip %1 ms (mean %2, max %3)")
+                 .arg(h.latency_last_ms, 0, 'f', 1)
+                 .arg(h.latency_mean_ms, 0, 'f', 1)
+                 .arg(h.latency_max_ms, 0, 'f', 1);
+  }
+  QStringList errors;
+  const auto count = [&errors](uint64_t n, const QString& what) {
+    if (n > 0) errors << QStringLiteral("%L1 %2").arg(n).arg(what);
+  };
+  count(h.crc_errors, tr("CRC"));
+  count(h.length_errors, tr("length"));
+  count(h.framing_errors, tr("framing"));
+  count(h.payload_errors, tr("payload"));
+  count(h.input_floods, tr("floods"));
+  count(h.acks_refused, tr("commands refused"));
+  if (h.sequence_gaps > 0) {
+    errors << (h.sequence_gaps == 1
+                   ? tr("%L1 frames lost in a gap").arg(h.frames_missing)
+                   : tr("%L1 frames lost in %L2 gaps").arg(h.frames_missing).arg(h.sequence_gaps));
+  }
+  lines << (errors.isEmpty() ? tr("errors: none") : tr("errors: %1").arg(errors.join(", ")));
+  if (h.have_status) {
+    QString robot = tr("robot: battery %1 V").arg(h.agent_status.battery_voltage_v, 0, 'f', 1);
+    if (h.agent_status.emergency_stop_latched) robot += tr(", emergency stop latched");
+    if (h.agent_status.fault_bits != 0) {
+      robot += tr(", faults 0x%1").arg(h.agent_status.fault_bits, 0, 16);
+    }
+    lines << robot;
+  }
+  if (h.outages > 0) {
+    lines << (h.outages == 1 ? tr("1 outage (%2 %3 s, %4 attempts: %5)")
+                             : tr("%L1 outages (%2 %3 s, %4 attempts: %5)").arg(h.outages))
+                 .arg(h.outage_open ? tr("now") : tr("last"))
+                 .arg(h.outage_s, 0, 'f', 1)
+                 .arg(h.reconnect_attempts)
+                 .arg(h.outage_reason);
+    static const char* kDevices[3] = {"lidar", "IMU", "motor"};
+    for (int i = 0; i < 3; ++i) {
+      if (h.data_lost_s[i] > 0.0) {
+        lines << tr("%1 data lost: %2 s")
+                     .arg(QLatin1String(kDevices[i]))
+                     .arg(h.data_lost_s[i], 0, 'f', 1);
+      }
+    }
+  }
+  if (h.reconnects > 0) {
+    lines << (h.reconnects == 1 ? tr("reconnected once")
+                                : tr("reconnected %L1 times").arg(h.reconnects));
+  }
+  return lines.join(QLatin1Char('\n'));
 }
 
 }  // namespace sweepscan::ui

@@ -26,6 +26,10 @@ class ConnectionPanel : public QWidget {
 
   ConnectOptions options() const;
   void SetOptions(const ConnectOptions& options);
+  // The link's health as the panel shows it, a few short lines an operator
+  // reads at a glance: the rates, the round trip, the errors (or none),
+  // the robot's battery and faults, the outages.
+  static QString HealthText(const hardware::LinkHealth& h);
   // Connects with the panel's options; errors go to the caller as a message.
   bool ConnectNow(QString* error);
   // Asked before the Connect button connects (a connection replaces the
