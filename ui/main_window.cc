@@ -265,6 +265,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   connect(workspace_, &Workspace::sessionChanged, this, [this] {
     pending_intensity_.reset();
     room_view_pending_ = true;
+    ceiling_found_live_ = false;
     room_view_ready_ = false;
     room_view_camera_ = view_->camera_generation();
   });
@@ -581,11 +582,26 @@ void MainWindow::OnTick() {
     // The view draws only when something changes: no frame in the last
     // second is a still view, not a stalled one ("0 fps" read as a hang).
     fps_label_->setText(still ? tr("view still") : tr("%1 fps").arg(fps_, 0, 'f', 0));
-    // A live cloud: into the room once it shows a ceiling.
+    // A live cloud: its ceiling hidden as soon as one shows (the first
+    // 40 s of a drive were a roof over the room), once: the operator may
+    // show it again; the camera into the room once the cloud is large
+    // enough to frame.
     if (room_view_pending_ && workspace_->recording_opened() == nullptr &&
-        view_->camera_generation() == room_view_camera_ && view_->point_count() > 200'000 &&
-        !std::isnan(view_->FindCeiling())) {
-      ApplyRoomView();
+        view_->camera_generation() == room_view_camera_) {
+      if (!ceiling_found_live_ && view_->point_count() > kLiveCeilingPoints) {
+        const double ceiling = view_->FindCeiling();
+        if (!std::isnan(ceiling)) {
+          ceiling_found_live_ = true;
+          ceiling_z_ = ceiling;
+          if (ceiling_->isChecked()) {
+            view_->SetClipHeight(ceiling - 0.05);
+            clip_label_->setText(clip_status());
+          } else {
+            ceiling_->setChecked(true);  // its slot clips just under ceiling_z_
+          }
+        }
+      }
+      if (view_->point_count() > 200'000 && !std::isnan(view_->FindCeiling())) ApplyRoomView();
     }
   }
   const Twist2d c = workspace_->commanded();

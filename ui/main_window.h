@@ -198,6 +198,10 @@ class MainWindow : public QMainWindow {
   bool room_view_pending_ = true;
   bool room_view_ready_ = false;
   uint64_t room_view_camera_ = 0;  // The view's camera generation when it was asked for.
+  // A live cloud's ceiling, hidden once found (from this many points: a few
+  // seconds of an X4), before the room view frames the cloud.
+  static constexpr size_t kLiveCeilingPoints = 20'000;
+  bool ceiling_found_live_ = false;
   std::vector<Eigen::Vector3d> measure_points_;
   double measured_m_ = 0.0;
 

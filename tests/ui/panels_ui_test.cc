@@ -13,6 +13,8 @@
 //   those values; the colour bar only for colours that mean something, its
 //   labels at round values.
 // * The link's health in a few rounded lines, not a dump of every counter.
+// * A live cloud's ceiling hidden within seconds, long before the room view
+//   frames the cloud (at 200 000 points), and once: shown again, it stays.
 #include <gtest/gtest.h>
 
 #include <QAbstractButton>
@@ -289,6 +291,27 @@ TEST_F(PanelsTest, LinkHealthReadsAtAGlance) {
   EXPECT_TRUE(text.contains("robot: battery")) << text.toStdString();
   // Every counter, unrounded, is still there for a bug report.
   EXPECT_EQ(health->toolTip().toStdString(), workspace_->health().ToString());
+}
+
+TEST_F(PanelsTest, LiveCeilingHiddenWithinSeconds) {
+  ConnectToSimulator();
+  CloudView* view = window_->view();
+  QAction* ceiling = window_->ceiling_action();
+  EXPECT_FALSE(ceiling->isChecked());
+  const uint64_t camera = view->camera_generation();
+  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.1, 1.0));
+  // The lab's ceiling is at 2.5 m.
+  ASSERT_TRUE(WaitFor([&] { return ceiling->isChecked(); }, 30000)) << view->point_count();
+  EXPECT_LT(view->point_count(), 100'000u);
+  EXPECT_NEAR(view->clip_height(), 2.45, 0.06);
+  EXPECT_EQ(view->camera_generation(), camera);  // not yet framed: too few points
+  // The operator shows it again: it is not hidden again behind their back.
+  ceiling->trigger();
+  const size_t points = view->point_count();
+  ASSERT_TRUE(WaitFor([&] { return view->point_count() > points + 10'000; }, 30000));
+  QTest::qWait(1100);  // a status tick
+  EXPECT_FALSE(ceiling->isChecked());
+  workspace_->AbortScriptedDrive();
 }
 
 TEST(LinkHealthTextTest, SaysWhatWentWrong) {
