@@ -516,7 +516,10 @@ QString MainWindow::clip_status() const {
 void MainWindow::ApplyRoomView() {
   room_view_pending_ = room_view_ready_ = false;
   const double ceiling = view_->ShowRoom();
-  if (std::isnan(ceiling)) return;
+  if (!std::isnan(ceiling)) HideCeilingAt(ceiling);
+}
+
+void MainWindow::HideCeilingAt(double ceiling) {
   ceiling_z_ = ceiling;
   ceiling_->setChecked(true);
   view_->SetClipHeight(ceiling - 0.05);  // Also when it was checked already.
@@ -592,13 +595,7 @@ void MainWindow::OnTick() {
         const double ceiling = view_->FindCeiling();
         if (!std::isnan(ceiling)) {
           ceiling_found_live_ = true;
-          ceiling_z_ = ceiling;
-          if (ceiling_->isChecked()) {
-            view_->SetClipHeight(ceiling - 0.05);
-            clip_label_->setText(clip_status());
-          } else {
-            ceiling_->setChecked(true);  // its slot clips just under ceiling_z_
-          }
+          HideCeilingAt(ceiling);
         }
       }
       if (view_->point_count() > 200'000 && !std::isnan(view_->FindCeiling())) ApplyRoomView();

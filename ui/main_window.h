@@ -202,6 +202,8 @@ class MainWindow : public QMainWindow {
   // seconds of an X4), before the room view frames the cloud.
   static constexpr size_t kLiveCeilingPoints = 20'000;
   bool ceiling_found_live_ = false;
+  // Hide Ceiling checked, the clip just under `ceiling` (found in the cloud).
+  void HideCeilingAt(double ceiling);
   std::vector<Eigen::Vector3d> measure_points_;
   double measured_m_ = 0.0;
 
