@@ -170,29 +170,25 @@ TEST_F(PairPickingUiTest, PairsPlaceTheCorridorThePlanesRefuse) {
   EXPECT_EQ(picking->pairs().size(), 4u);
   EXPECT_FALSE(window_->isWindowModified());
 
-  bool finished = false, placed = false;
-  QString outcome;
-  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString& m) {
-    finished = true;
-    placed = ok;
-    outcome = m;
-  });
+  const auto align = WatchAlign();
   ASSERT_TRUE(panel->pair_box()->hold_free()->isChecked());
   QTest::mouseClick(panel->pair_box()->align_button(), Qt::LeftButton);
   ASSERT_TRUE(picking->aligning());
-  std::printf("aligning by pairs: longest event-loop gap %lld ms (last frame %.0f ms)\n",
-              static_cast<long long>(
-                  Turns([&] { return finished && !project()->busy(); }, 120000).worst_gap_ms),
-              view->last_render_ms());
-  ASSERT_TRUE(placed) << outcome.toStdString() << " / " << window_->last_error().toStdString();
-  std::printf("%s\n", outcome.toStdString().c_str());
+  std::printf(
+      "aligning by pairs: longest event-loop gap %lld ms (last frame %.0f ms)\n",
+      static_cast<long long>(
+          Turns([&] { return align->finished && !project()->busy(); }, 120000).worst_gap_ms),
+      view->last_render_ms());
+  ASSERT_TRUE(align->placed) << align->message.toStdString() << " / "
+                             << window_->last_error().toStdString();
+  std::printf("%s\n", align->message.toStdString().c_str());
   EXPECT_FALSE(picking->active());
   EXPECT_FALSE(panel->pair_box()->isVisible());
 
   const ProjectSession& c = project()->document()->project().sessions[2];
   ASSERT_TRUE(c.project_from_session.has_value());
   const Rigid3d diff = truth.a_from_c.inverse() * *c.project_from_session;
-  EXPECT_LT(diff.translation().norm(), 0.05) << outcome.toStdString();
+  EXPECT_LT(diff.translation().norm(), 0.05) << align->message.toStdString();
   EXPECT_LT(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0.5);
   EXPECT_EQ(c.registration.method, "pairs+icp");
   EXPECT_EQ(c.registration.reference, "a");

@@ -316,20 +316,15 @@ TEST_F(ProjectUiTest, AnAlignmentDoesNotReplaceTheAnchorMadeMeanwhile) {
   ASSERT_TRUE(SaveProject(file.toStdString(), p).ok());
   ASSERT_TRUE(project()->OpenProject(file));
   TurnsWhileBusy(60000);
-  bool finished = false, placed = true;
-  QString outcome;
-  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString& m) {
-    finished = true;
-    placed = ok;
-    outcome = m;
-  });
+  const auto align = WatchAlign();
   ASSERT_TRUE(project()->Align("b", "a"));
   project()->MakeAnchor("b");
   ASSERT_EQ(project()->document()->project().Anchor(), 1);
   TurnsWhileBusy(120000);
-  ASSERT_TRUE(finished);
-  EXPECT_FALSE(placed);
-  EXPECT_NE(outcome.indexOf("the project changed meanwhile"), -1) << outcome.toStdString();
+  ASSERT_TRUE(align->finished);
+  EXPECT_FALSE(align->placed);
+  EXPECT_NE(align->message.indexOf("the project changed meanwhile"), -1)
+      << align->message.toStdString();
   const Project& now = project()->document()->project();
   ASSERT_EQ(now.Anchor(), 1);
   EXPECT_TRUE(now.sessions[1].project_from_session->translation().isZero());

@@ -10,6 +10,7 @@
 
 #include <QString>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "core/geometry/transform.h"
@@ -65,6 +66,22 @@ class ProjectUiFixture : public OfficeFloorAppFixture {
     const EventLoopTurns t = MeasureTurnsUntil(done, timeout_ms);
     EXPECT_TRUE(t.done) << "not done after " << timeout_ms << " ms";
     return t;
+  }
+  // The outcome of the project's next alignment (alignFinished), watched
+  // from this call on.
+  struct AlignOutcome {
+    bool finished = false, placed = false;
+    QString message;
+  };
+  std::shared_ptr<AlignOutcome> WatchAlign() {
+    auto outcome = std::make_shared<AlignOutcome>();
+    QObject::connect(project(), &ui::ProjectController::alignFinished, window_.get(),
+                     [outcome](bool ok, const QString& m) {
+                       outcome->finished = true;
+                       outcome->placed = ok;
+                       outcome->message = m;
+                     });
+    return outcome;
   }
   // Opens the project and waits for its sessions to load.
   void OpenAndLoad(const QString& file) {

@@ -196,13 +196,7 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   panel->SelectSession("b");
   ASSERT_EQ(panel->reference_box()->currentText(), "a");
   ASSERT_TRUE(panel->align_button()->isEnabled());
-  bool finished = false, placed = false;
-  QString outcome;
-  QObject::connect(project(), &ProjectController::alignFinished, [&](bool ok, const QString& m) {
-    finished = true;
-    placed = ok;
-    outcome = m;
-  });
+  const auto align = WatchAlign();
   QTest::mouseClick(panel->align_button(), Qt::LeftButton);
   ASSERT_TRUE(project()->busy());
   // Saved under another name meanwhile: the same project and sessions, so
@@ -213,9 +207,10 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   // A frame of session a, as above; a registration on the GUI thread
   // would hold it for seconds.
   testing::ExpectResponsive("aligning", TurnsWhileBusy(120000), kFrameCpuBoundMs);
-  ASSERT_TRUE(finished);
-  ASSERT_TRUE(placed) << outcome.toStdString() << " / " << window_->last_error().toStdString();
-  std::printf("%s\n", outcome.toStdString().c_str());
+  ASSERT_TRUE(align->finished);
+  ASSERT_TRUE(align->placed) << align->message.toStdString() << " / "
+                             << window_->last_error().toStdString();
+  std::printf("%s\n", align->message.toStdString().c_str());
 
   // Where the scenarios put the robot down: project_from_b = world_from_a^-1 world_from_b.
   sim::SimConfig a, b;
@@ -226,8 +221,9 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   const ProjectSession& s = project()->document()->project().sessions[1];
   ASSERT_TRUE(s.project_from_session.has_value());
   const Rigid3d diff = truth.inverse() * *s.project_from_session;
-  EXPECT_LT(diff.translation().norm(), 0.05) << outcome.toStdString();
-  EXPECT_LT(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0.5) << outcome.toStdString();
+  EXPECT_LT(diff.translation().norm(), 0.05) << align->message.toStdString();
+  EXPECT_LT(Eigen::AngleAxisd(diff.rotation()).angle() * 180.0 / M_PI, 0.5)
+      << align->message.toStdString();
   EXPECT_EQ(s.registration.reference, "a");
   EXPECT_EQ(s.registration.method, "planes+icp");
   EXPECT_NE(panel->item("b")->text(1).indexOf("planes+icp to a"), -1);
