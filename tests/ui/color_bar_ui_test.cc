@@ -8,7 +8,9 @@
 
 #include <QApplication>
 #include <QTest>
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "tests/ui/app_fixture.h"
@@ -81,6 +83,63 @@ TEST(ColorBarTest, AFrameWithNothingChangedMeasuresNoText) {
   EXPECT_GT(view->color_bar_measures(), pass_measures);
   EXPECT_EQ(view->color_bar_box(), Drawn(CloudView::ColorMode::kPass, 260)->color_bar_box());
   EXPECT_LE(view->color_bar_box().right(), 260.0);
+}
+
+// Key 1 on a long room in a view taller than wide (the app's, beside its
+// panels): ResetCamera alone fits the room to the view's whole width, and
+// its east end was under the bar (the review's Top view). Fitted into the
+// part left of the bar instead, and filling it.
+TEST(ColorBarTest, TopViewFitsTheCloudLeftOfTheBar) {
+  auto view = std::make_unique<CloudView>();
+  view->resize(480, 640);
+  view->show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(view.get()));
+  // A 12 m x 3 m room's floor and ceiling, 2.5 m high, every 0.1 m.
+  std::vector<CloudPoint> points;
+  for (int i = 0; i <= 120; ++i) {
+    for (int k = 0; k <= 30; ++k) {
+      for (float z : {0.0f, 2.5f}) {
+        CloudPoint p;
+        p.x = 0.1f * i;
+        p.y = 0.1f * k;
+        p.z = z;
+        points.push_back(p);
+      }
+    }
+  }
+  view->AppendPoints(points);
+  view->SetColorMode(CloudView::ColorMode::kHeight);
+  // The room's extent across the view, its corners drawn where expected.
+  auto across = [&](const QRectF& bar) {
+    double left = HUGE_VAL, right = -HUGE_VAL;
+    for (float x : {0.0f, 12.0f}) {
+      for (float y : {0.0f, 3.0f}) {
+        for (float z : {0.0f, 2.5f}) {  // the ceiling, nearer the eye, is drawn larger
+          const QPointF at = view->WorldToWidget(Eigen::Vector3d(x, y, z));
+          EXPECT_TRUE(QRectF(view->rect()).contains(at)) << x << " " << y << " " << z;
+          if (!bar.isEmpty()) {
+            EXPECT_LT(at.x(), bar.left()) << x << " " << y << " " << z;
+          }
+          left = std::min(left, at.x());
+          right = std::max(right, at.x());
+        }
+      }
+    }
+    return std::make_pair(left, right);
+  };
+
+  view->ViewTop();
+  view->RenderNow();
+  const QRectF bar = view->color_bar_box();
+  ASSERT_FALSE(bar.isEmpty());
+  const auto [left, right] = across(bar);
+  EXPECT_GT(right - left, 0.95 * (bar.left() - 16.0));  // the free part, less its margins
+
+  // The bar hidden: the view's whole width, past where the bar was.
+  view->SetColorBarVisible(false);
+  view->ViewTop();
+  view->RenderNow();
+  EXPECT_GT(across(QRectF()).second, bar.left() + 20.0);
 }
 
 }  // namespace

@@ -495,7 +495,10 @@ void CloudView::FitToCloud() {
   const bool grid = grid_->GetVisibility();
   grid_->SetVisibility(point_count_ == 0 && layers_.empty());
   renderer_->ResetCamera();
+  double bounds[6];
+  renderer_->ComputeVisiblePropBounds(bounds);
   grid_->SetVisibility(grid);
+  FitLeftOfColorBar(bounds);
   renderer_->ResetCameraClippingRange();
   RequestRender();
 }

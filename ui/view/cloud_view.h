@@ -243,6 +243,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void ViewOblique();
   void ViewFront();
   void ViewSide();
+  // The cloud (and the robot) in the view, left of the colour bar when it
+  // is shown (FitLeftOfColorBar); the grid is left out.
   void FitToCloud();
   // Turns the camera about the view's vertical axis (benchmarks, demos),
   // keeping the rest level as it is (a placement by the View menu or
@@ -540,6 +542,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // distance's label, then the planes' names clear of them.
   void LayoutPlaneLabels();
   QRectF LayoutColorBar();   // before each frame; its box in display pixels
+  // FitToCloud's last step: the fitted bounds moved out from under the bar.
+  void FitLeftOfColorBar(const double bounds[6]);
   QRectF color_bar_box_;
   vtkSmartPointer<vtkTextActor> text_measure_;  // sizes the bar's texts, never drawn
   // LayoutColorBar's last result and what it was measured for (the view's

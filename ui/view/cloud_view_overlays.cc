@@ -211,6 +211,71 @@ QRectF CloudView::LayoutColorBar() {
   return color_bar_layout_;
 }
 
+void CloudView::FitLeftOfColorBar(const double bounds[6]) {
+  // ResetCamera fits the bounds' sphere to the whole view, centred, and the
+  // colour bar stands over the view's right eighth: a room seen from above
+  // (key 1) fills the view's width, and its east wall was under the bar.
+  // The bounds' box as projected is fitted instead into the part left of
+  // the bar. A perspective draws what is at distance d at a size of 1/d, so
+  // moving the eye back along its axis to d / s shrinks the box by s
+  // (exactly in the focal plane, nearly so for the box's nearer and farther
+  // corners); a pan by the box's offset from the free part's centre, at the
+  // focal plane's 2 d tan(a/2) / h metres a pixel (a the vertical view
+  // angle, h the view's height), centres it. A few rounds absorb what the
+  // box's depth makes inexact: the eye moved back by D/s - D shrinks a
+  // corner at distance d < D by more than s.
+  if (!ColorBarShown()) return;
+  color_bar_->SetVisibility(true);  // as the next frame will draw it
+  const QRectF bar = LayoutColorBar();
+  if (bar.isEmpty() || bounds[0] > bounds[1]) return;
+  const int* size = renderer_->GetSize();
+  const int* origin = renderer_->GetOrigin();
+  constexpr double kMargin = 8.0;
+  const QRectF free(origin[0] + kMargin, origin[1] + kMargin,
+                    bar.left() - origin[0] - 2.0 * kMargin, size[1] - 2.0 * kMargin);
+  // A view too narrow to give the bar a column of its own keeps the fit.
+  if (free.width() < 0.5 * size[0] || free.height() <= 0.0) return;
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  double zoom = 1.0;
+  for (int round = 0; round < 8; ++round) {
+    double lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d corner(bounds[c & 1], bounds[2 + ((c >> 1) & 1)],
+                                   bounds[4 + ((c >> 2) & 1)]);
+      double d[3];
+      if (!ToDisplay(corner, d)) return;  // the eye inside the box: nothing to fit
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], d[k]);
+        hi[k] = std::max(hi[k], d[k]);
+      }
+    }
+    const QRectF box(QPointF(lo[0], lo[1]), QPointF(hi[0], hi[1]));
+    if (round == 0 && !box.intersects(bar)) return;  // clear of it already
+    // Never nearer than ResetCamera's fit (zoom <= 1): what it shows, whole.
+    const double s =
+        std::min({1.0 / zoom, free.width() / box.width(), free.height() / box.height()});
+    if (free.adjusted(-1.0, -1.0, 1.0, 1.0).contains(box) && s < 1.01) return;
+    if (std::abs(s - 1.0) > 0.005) {
+      camera->Dolly(s);  // the distance over s
+      zoom *= s;
+      continue;
+    }
+    const double per_pixel =
+        2.0 * camera->GetDistance() * std::tan(camera->GetViewAngle() * M_PI / 360.0) / size[1];
+    const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
+    Eigen::Vector3d up(camera->GetViewUp());
+    up = (up - up.dot(forward) * forward).normalized();
+    const Eigen::Vector3d right = forward.cross(up);
+    const QPointF offset = free.center() - box.center();
+    // The eye moves against the offset for the scene to move with it.
+    const Eigen::Vector3d move = -(offset.x() * right + offset.y() * up) * per_pixel;
+    const Eigen::Vector3d position = Eigen::Vector3d(camera->GetPosition()) + move;
+    const Eigen::Vector3d focal = Eigen::Vector3d(camera->GetFocalPoint()) + move;
+    camera->SetPosition(position.data());
+    camera->SetFocalPoint(focal.data());
+  }
+}
+
 void CloudView::LayoutPlaneLabels() {
   plane_label_boxes_.clear();
   const double ratio = devicePixelRatioF();
