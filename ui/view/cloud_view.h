@@ -67,7 +67,6 @@ class QThreadPool;
 class QTimer;
 class vtkActor;
 class vtkActor2D;
-class vtkBillboardTextActor3D;
 class vtkTextActor;
 class vtkAxesActor;
 class vtkGenericOpenGLRenderWindow;
@@ -317,8 +316,12 @@ class CloudView : public QVTKOpenGLNativeWidget {
     bool highlighted = false;  // drawn larger
     QString label;             // drawn beside it in its colour ("" none): a pair's number
   };
-  // Overlay markers (picked points) drawn on top of the cloud.
+  // Overlay markers (picked points) drawn on top of the cloud, their
+  // labels over the view beside them.
   void SetMarkers(const std::vector<Marker>& markers);
+  // The labels drawn at the last frame, in widget pixels (those of markers
+  // off the view or behind the camera are not drawn).
+  const std::vector<QRectF>& marker_label_boxes() const { return marker_label_boxes_; }
 
   // ---- Annotations (cloud_view_overlays.cc) ----
   // Fitted planes as translucent coloured rectangles with their names.
@@ -520,7 +523,15 @@ class CloudView : public QVTKOpenGLNativeWidget {
   vtkSmartPointer<vtkActor> trajectory_;
   vtkSmartPointer<vtkActor> markers_[2];  // normal, highlighted
   std::vector<Marker> shown_markers_;
-  std::vector<vtkSmartPointer<vtkBillboardTextActor3D>> marker_labels_;
+  // The markers' labels, over the view beside their markers (placed each
+  // frame by LayoutOverlayLabels): a label in the scene was cut by the walls
+  // in front of it.
+  struct MarkerLabel {
+    vtkSmartPointer<vtkTextActor> actor;
+    Eigen::Vector3d at;
+  };
+  std::vector<MarkerLabel> marker_labels_;
+  std::vector<QRectF> marker_label_boxes_;
   LayerPicker layer_picker_;
   PickCounts last_pick_counts_;
   // The search of a pick at `pos` (GUI thread: the ray, the growing chunk
@@ -539,8 +550,9 @@ class CloudView : public QVTKOpenGLNativeWidget {
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
   std::vector<PlaneLabelBox> plane_label_boxes_;
   // Before each frame (the renderer's StartEvent): the colour bar, the
-  // distance's label, then the planes' names clear of them.
-  void LayoutPlaneLabels();
+  // distance's label, the picks' numbers, then the planes' names clear of
+  // them.
+  void LayoutOverlayLabels();
   QRectF LayoutColorBar();   // before each frame; its box in display pixels
   // FitToCloud's last step: the fitted bounds moved out from under the bar.
   void FitLeftOfColorBar(const double bounds[6]);
@@ -561,8 +573,12 @@ class CloudView : public QVTKOpenGLNativeWidget {
   QRectF measure_label_box_;
   bool measuring_ = false;
   static constexpr double kMeasureColor[3] = {1.0, 0.35, 1.0};
-  // `p` in display pixels (y up); false if behind a perspective camera.
+  // `p` in display pixels (y up) into `d`; false if behind a perspective
+  // camera (`d` then as VTK projects it, mirrored through the centre).
   bool ToDisplay(const Eigen::Vector3d& p, double* d) const;
+  // A text drawn over the view (2D, on top of the cloud), centred on its
+  // display position.
+  static vtkSmartPointer<vtkTextActor> NewOverlayLabel();
   vtkSmartPointer<vtkPoints> trajectory_points_;
   vtkSmartPointer<vtkPolyData> trajectory_poly_;
   // The path as drawn: simplified to within 5 mm of every pose, ground

@@ -1,6 +1,8 @@
 // CloudView's annotations: the evaluation's fitted planes as translucent
 // coloured rectangles with their names (laid out on screen each frame, off
-// each other), and the two-point distance tool.
+// each other), the two-point distance tool, and the placing of every text
+// drawn over the view (those names, the distance, the picks' numbers, the
+// colour bar).
 // They live apart from the cloud's chunks; the planes are the only
 // translucent actor (one extra pass, drawn only while planes are shown).
 #include <vtkActor.h>
@@ -30,11 +32,10 @@
 
 namespace sweepscan::ui {
 
-namespace {
-
-// A text over the view (a plane's name, a distance), drawn on top of the
-// cloud: in the scene, a name behind a wall was cut by the wall's points.
-vtkSmartPointer<vtkTextActor> NewOverlayLabel() {
+// A text over the view (a plane's name, a distance, a pick's number), drawn
+// on top of the cloud: in the scene, a name behind a wall was cut by the
+// wall's points.
+vtkSmartPointer<vtkTextActor> CloudView::NewOverlayLabel() {
   auto label = vtkSmartPointer<vtkTextActor>::New();
   vtkTextProperty* t = label->GetTextProperty();
   t->SetFontSize(15);
@@ -49,13 +50,11 @@ vtkSmartPointer<vtkTextActor> NewOverlayLabel() {
   return label;
 }
 
-}  // namespace
-
 void CloudView::BuildAnnotations() {
   auto layout = vtkSmartPointer<vtkCallbackCommand>::New();
   layout->SetClientData(this);
   layout->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
-    static_cast<CloudView*>(self)->LayoutPlaneLabels();
+    static_cast<CloudView*>(self)->LayoutOverlayLabels();
   });
   renderer_->AddObserver(vtkCommand::StartEvent, layout);
 
@@ -146,7 +145,7 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
 void CloudView::SetPlanesVisible(bool visible) {
   planes_visible_ = visible;
   planes_->SetVisibility(visible && plane_count_ > 0);
-  // The labels follow at the next frame (LayoutPlaneLabels).
+  // The labels follow at the next frame (LayoutOverlayLabels).
   RequestRender();
 }
 
@@ -276,7 +275,7 @@ void CloudView::FitLeftOfColorBar(const double bounds[6]) {
   }
 }
 
-void CloudView::LayoutPlaneLabels() {
+void CloudView::LayoutOverlayLabels() {
   plane_label_boxes_.clear();
   const double ratio = devicePixelRatioF();
   auto to_widget = [&](const QRectF& b) {  // display pixels (y up) to widget pixels (y down)
@@ -307,6 +306,20 @@ void CloudView::LayoutPlaneLabels() {
     measure_label_->SetVisibility(true);
     placed.push_back(box);
     measure_label_box_ = to_widget(box);
+  }
+  // The picks' numbers beside their markers, above and right of the dot.
+  marker_label_boxes_.clear();
+  for (MarkerLabel& m : marker_labels_) {
+    m.actor->SetVisibility(false);
+    if (!ToDisplay(m.at, d) || !viewport.contains(d[0], d[1])) continue;
+    double extent[2];
+    m.actor->GetSize(renderer_, extent);
+    const double x = d[0] + 10.0, y = d[1] + 8.0;
+    m.actor->SetDisplayPosition(static_cast<int>(std::lround(x)), static_cast<int>(std::lround(y)));
+    m.actor->SetVisibility(true);
+    const QRectF box(x - 2.0, y - 1.0, extent[0] + 4.0, extent[1] + 2.0);
+    placed.push_back(box);
+    marker_label_boxes_.push_back(to_widget(box));
   }
   if (plane_labels_.empty()) return;
   // SetPlanes' order (the evaluation's: floor, ceiling, then the walls by
@@ -344,14 +357,14 @@ void CloudView::LayoutPlaneLabels() {
 }
 
 bool CloudView::ToDisplay(const Eigen::Vector3d& p, double* d) const {
-  vtkCamera* camera = renderer_->GetActiveCamera();
-  const Eigen::Vector3d eye(camera->GetPosition());
-  const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
-  if (camera->GetParallelProjection() == 0 && (p - eye).dot(forward) <= 0.0) return false;
   renderer_->SetWorldPoint(p.x(), p.y(), p.z(), 1.0);
   renderer_->WorldToDisplay();
   renderer_->GetDisplayPoint(d);
-  return true;
+  // Behind the eye, the projection comes back mirrored through the centre.
+  vtkCamera* camera = renderer_->GetActiveCamera();
+  const Eigen::Vector3d eye(camera->GetPosition());
+  const Eigen::Vector3d forward(camera->GetDirectionOfProjection());
+  return camera->GetParallelProjection() != 0 || (p - eye).dot(forward) > 0.0;
 }
 
 void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -369,7 +382,7 @@ void CloudView::SetMeasurement(const Eigen::Vector3d& a, const Eigen::Vector3d& 
   static_cast<vtkPolyDataMapper*>(measure_line_->GetMapper())->SetInputData(poly);
   measure_line_->VisibilityOn();
   measure_mid_ = 0.5 * (a + b);
-  measuring_ = true;  // the label is placed before each frame (LayoutPlaneLabels)
+  measuring_ = true;  // the label is placed before each frame (LayoutOverlayLabels)
   measure_label_->SetInput(
       QStringLiteral("%1 m").arg((b - a).norm(), 0, 'f', 3).toUtf8().constData());
   RequestRender();

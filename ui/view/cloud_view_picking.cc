@@ -4,7 +4,6 @@
 // (the search: cloud_pick.h), and the markers that show picked points,
 // numbered when they carry a label.
 #include <vtkActor.h>
-#include <vtkBillboardTextActor3D.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
 #include <vtkPointData.h>
@@ -13,6 +12,7 @@
 #include <vtkPolyDataMapper.h>
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
+#include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
 
@@ -187,10 +187,8 @@ PickSearch CloudView::PreparePick(const QPoint& pos, double tolerance_px) {
 }
 
 QPointF CloudView::WorldToWidget(const Eigen::Vector3d& w) {
-  renderer_->SetWorldPoint(w.x(), w.y(), w.z(), 1.0);
-  renderer_->WorldToDisplay();
   double d[3];
-  renderer_->GetDisplayPoint(d);
+  ToDisplay(w, d);  // behind the eye too, as VTK projects it
   const double ratio = devicePixelRatioF();
   return QPointF(d[0] / ratio, height() - d[1] / ratio);
 }
@@ -235,25 +233,21 @@ void CloudView::SetMarkers(const std::vector<Marker>& markers) {
     static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetInputData(poly);
     static_cast<vtkPolyDataMapper*>(markers_[k]->GetMapper())->SetColorModeToDirectScalars();
   }
-  // Labels (a pair's number) beside their markers, facing the camera.
-  for (auto& label : marker_labels_) renderer_->RemoveActor(label);
+  // Labels (a pair's number) beside their markers, over the view; placed
+  // before each frame with the planes' names (LayoutOverlayLabels).
+  for (auto& label : marker_labels_) renderer_->RemoveActor2D(label.actor);
   marker_labels_.clear();
   for (const Marker& m : markers) {
     if (m.label.isEmpty()) continue;
-    auto label = vtkSmartPointer<vtkBillboardTextActor3D>::New();
+    vtkSmartPointer<vtkTextActor> label = NewOverlayLabel();
     label->SetInput(m.label.toUtf8().constData());
-    double at[3] = {m.position.x(), m.position.y(), m.position.z()};
-    label->SetPosition(at);
-    label->SetDisplayOffset(10, 8);  // Beside the dot, not over it.
     vtkTextProperty* text = label->GetTextProperty();
-    text->SetFontSize(16);
-    text->SetBold(true);
+    text->SetJustificationToLeft();
+    text->SetVerticalJustificationToBottom();
     text->SetColor(m.color.redF(), m.color.greenF(), m.color.blueF());
-    text->SetBackgroundColor(0.05, 0.05, 0.07);
-    text->SetBackgroundOpacity(0.8);
-    label->PickableOff();
-    renderer_->AddActor(label);
-    marker_labels_.push_back(label);
+    label->VisibilityOff();
+    renderer_->AddActor2D(label);
+    marker_labels_.push_back({label, m.position});
   }
   RequestRender();
 }

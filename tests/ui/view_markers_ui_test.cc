@@ -1,0 +1,92 @@
+// The cloud view's markers, as an operator finds them:
+// * the picks' labels ("A1", "B1": a pair's number beside each marker),
+//   drawn over the view beside their markers (CloudView::SetMarkers, placed
+//   before each frame by LayoutOverlayLabels): as texts in the scene they
+//   were cut by the walls in front of them.
+// A standalone CloudView under a real display (xvfb-run in CI).
+#include <gtest/gtest.h>
+
+#include <QImage>
+#include <QTest>
+#include <cstdlib>
+#include <memory>
+#include <vector>
+
+#include "tests/ui/app_fixture.h"
+#include "ui/view/cloud_view.h"
+
+namespace sweepscan::ui {
+namespace {
+
+// Pixels of `color` (within 40 a channel) in `box` (widget pixels).
+int PixelsOf(CloudView* view, const QRectF& box, const QColor& color) {
+  const QImage image = view->GrabImage().convertToFormat(QImage::Format_RGB32);
+  const double sx = image.width() / static_cast<double>(view->width());
+  int count = 0;
+  for (int y = static_cast<int>(box.top() * sx); y < static_cast<int>(box.bottom() * sx); ++y) {
+    for (int x = static_cast<int>(box.left() * sx); x < static_cast<int>(box.right() * sx); ++x) {
+      if (x < 0 || y < 0 || x >= image.width() || y >= image.height()) continue;
+      const QRgb c = image.pixel(x, y);
+      count += std::abs(qRed(c) - color.red()) < 40 && std::abs(qGreen(c) - color.green()) < 40 &&
+                       std::abs(qBlue(c) - color.blue()) < 40
+                   ? 1
+                   : 0;
+    }
+  }
+  return count;
+}
+
+TEST(ViewMarkersTest, ALabelBehindAWallIsDrawnOverItBesideItsMarker) {
+  auto view = std::make_unique<CloudView>();
+  view->resize(640, 480);
+  view->show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(view.get()));
+  // A wall across x = 2 m, 2 m wide and high, every centimetre: coloured
+  // by height, blue to red, no white in it.
+  std::vector<CloudPoint> wall;
+  for (int i = 0; i <= 200; ++i) {
+    for (int k = 0; k <= 200; ++k) {
+      CloudPoint p;
+      p.x = 2.0f;
+      p.y = -1.0f + 0.01f * i;
+      p.z = 0.01f * k;
+      wall.push_back(p);
+    }
+  }
+  view->AppendPoints(wall);
+  view->SetColorBarVisible(false);
+  // From x = 0 towards +x at 1 m: the wall fills the middle of the view,
+  // and a pick 1 m behind it, in white, labelled.
+  view->LookAt(Eigen::Vector3d(3, 0, 1), Eigen::Vector3d(0, 0, 1));
+  const QColor white(255, 255, 255);
+  const Eigen::Vector3d behind(3.0, -0.1, 0.9);
+  view->SetMarkers({CloudView::Marker(behind, white, false, QStringLiteral("A1"))});
+  view->RenderNow();
+
+  ASSERT_EQ(view->marker_label_boxes().size(), 1u);
+  const QRectF box = view->marker_label_boxes()[0];
+  // Right of the marker and above it, a few pixels off the dot.
+  const QPointF marker = view->WorldToWidget(behind);
+  EXPECT_GT(box.left(), marker.x() + 4.0) << box.left() << " " << marker.x();
+  EXPECT_LT(box.left(), marker.x() + 16.0) << box.left() << " " << marker.x();
+  EXPECT_LT(box.bottom(), marker.y()) << box.bottom() << " " << marker.y();
+  EXPECT_GT(box.bottom(), marker.y() - 16.0) << box.bottom() << " " << marker.y();
+  // Its text in the marker's white, over the wall (in the scene, the wall
+  // hid it all).
+  EXPECT_GT(PixelsOf(view.get(), box, white), 15);
+
+  // A marker behind the camera, or off the view: no label.
+  view->SetMarkers({CloudView::Marker(Eigen::Vector3d(-1, 0, 1), white, false, "A1"),
+                    CloudView::Marker(Eigen::Vector3d(3, 30, 1), white, false, "B1")});
+  view->RenderNow();
+  EXPECT_TRUE(view->marker_label_boxes().empty());
+  view->SetMarkers({});
+  view->RenderNow();
+  EXPECT_TRUE(view->marker_label_boxes().empty());
+  EXPECT_EQ(PixelsOf(view.get(), box, white), 0);
+}
+
+}  // namespace
+}  // namespace sweepscan::ui
+
+int main(int argc, char** argv) { return sweepscan::testing::RunUiTests(argc, argv); }
