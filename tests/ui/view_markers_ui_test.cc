@@ -2,12 +2,16 @@
 // * the picks' labels ("A1", "B1": a pair's number beside each marker),
 //   drawn over the view beside their markers (CloudView::SetMarkers, placed
 //   before each frame by LayoutOverlayLabels): as texts in the scene they
-//   were cut by the walls in front of them.
+//   were cut by the walls in front of them;
+// * the robot, a white chevron along its heading that a view of the whole
+//   room shows at a glance (it was a thin arrow in the path's orange).
 // A standalone CloudView under a real display (xvfb-run in CI).
 #include <gtest/gtest.h>
 
 #include <QImage>
+#include <QLineF>
 #include <QTest>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
 #include <vector>
@@ -84,6 +88,48 @@ TEST(ViewMarkersTest, ALabelBehindAWallIsDrawnOverItBesideItsMarker) {
   view->RenderNow();
   EXPECT_TRUE(view->marker_label_boxes().empty());
   EXPECT_EQ(PixelsOf(view.get(), box, white), 0);
+}
+
+// The robot seen from above over a 4 m floor coloured by height: its
+// chevron covers at least half its 0.10 m² in white pixels, its tip ahead
+// of it along the heading and nothing white behind.
+TEST(ViewMarkersTest, TheRobotIsAWhiteChevronAlongItsHeading) {
+  auto view = std::make_unique<CloudView>();
+  view->resize(640, 480);
+  view->show();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(view.get()));
+  std::vector<CloudPoint> floor;
+  for (int i = 0; i <= 200; ++i) {
+    for (int k = 0; k <= 200; ++k) {
+      CloudPoint p;
+      p.x = 0.02f * i;
+      p.y = 0.02f * k;
+      p.z = 0.001f * ((i * 7 + k * 3) % 10);  // a centimetre of noise
+      floor.push_back(p);
+    }
+  }
+  view->AppendPoints(floor);
+  view->SetColorBarVisible(false);
+  const QColor white(250, 250, 250);
+  for (const double yaw : {0.0, M_PI / 2}) {
+    view->SetRobotPose(Pose2d{2.0, 2.0, yaw});
+    view->ViewTop();
+    view->RenderNow();
+    const Eigen::Vector3d at(2.0, 2.0, 0.1), heading(std::cos(yaw), std::sin(yaw), 0.0);
+    const QPointF centre = view->WorldToWidget(at);
+    const double px_per_m =
+        QLineF(centre, view->WorldToWidget(at + Eigen::Vector3d::UnitX())).length();
+    ASSERT_GT(px_per_m, 50.0);
+    const QRectF around(centre - QPointF(0.5 * px_per_m, 0.5 * px_per_m),
+                        QSizeF(px_per_m, px_per_m));
+    EXPECT_GT(PixelsOf(view.get(), around, white), 0.5 * 0.103 * px_per_m * px_per_m) << yaw;
+    const auto white_near = [&](const Eigen::Vector3d& p) {
+      const QPointF q = view->WorldToWidget(p);
+      return PixelsOf(view.get(), QRectF(q - QPointF(2, 2), QSizeF(4, 4)), white);
+    };
+    EXPECT_GT(white_near(at + 0.30 * heading), 0) << "the tip, at " << yaw;
+    EXPECT_EQ(white_near(at - 0.45 * heading), 0) << "behind, at " << yaw;
+  }
 }
 
 }  // namespace

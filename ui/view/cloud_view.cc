@@ -1,11 +1,11 @@
 #include "ui/view/cloud_view.h"
 
 #include <vtkActor.h>
-#include <vtkArrowSource.h>
 #include <vtkAxesActor.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
+#include <vtkCellData.h>
 #include <vtkFloatArray.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkLookupTable.h>
@@ -120,17 +120,44 @@ void CloudView::BuildColorBar() {
 }
 
 void CloudView::BuildRobotAndTrajectory() {
-  // Robot marker: an arrow along the robot's x axis (its heading).
-  auto arrow = vtkSmartPointer<vtkArrowSource>::New();
-  arrow->SetTipLength(0.35);
-  arrow->SetShaftRadius(0.06);
-  arrow->SetTipRadius(0.15);
-  auto arrow_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-  arrow_mapper->SetInputConnection(arrow->GetOutputPort());
+  // Robot marker: a flat chevron pointing along the robot's x axis (its
+  // heading), white with a dark outline so that it reads on any colour of
+  // the cloud and apart from the amber path, 0.6 m long: about twice the
+  // robot, found at a glance in a view of a whole room (a thin 0.5 m arrow
+  // in the path's orange was lost on it). Drawn in front of the floor's
+  // points and the path, as the path is in front of the floor.
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  const double corners[4][2] = {{0.35, 0.0}, {-0.25, 0.22}, {-0.12, 0.0}, {-0.25, -0.22}};
+  for (const auto& c : corners) points->InsertNextPoint(c[0], c[1], 0.0);
+  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  const vtkIdType left[3] = {0, 1, 2}, right[3] = {0, 2, 3};
+  polys->InsertNextCell(3, left);
+  polys->InsertNextCell(3, right);
+  auto outline = vtkSmartPointer<vtkCellArray>::New();
+  const vtkIdType loop[5] = {0, 1, 2, 3, 0};
+  outline->InsertNextCell(5, loop);
+  auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colors->SetNumberOfComponents(3);
+  const unsigned char dark[3] = {25, 25, 30}, white[3] = {250, 250, 250};
+  colors->InsertNextTypedTuple(dark);  // cells: lines first, then polygons
+  colors->InsertNextTypedTuple(white);
+  colors->InsertNextTypedTuple(white);
+  auto chevron = vtkSmartPointer<vtkPolyData>::New();
+  chevron->SetPoints(points);
+  chevron->SetLines(outline);
+  chevron->SetPolys(polys);
+  chevron->GetCellData()->SetScalars(colors);
+  auto robot_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  robot_mapper->SetInputData(chevron);
+  robot_mapper->SetScalarModeToUseCellData();
+  robot_mapper->SetColorModeToDirectScalars();
+  robot_mapper->SetRelativeCoincidentTopologyPolygonOffsetParameters(0.0, -30000.0);
+  robot_mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -40000.0);
   robot_ = vtkSmartPointer<vtkActor>::New();
-  robot_->SetMapper(arrow_mapper);
-  robot_->SetScale(0.5);
-  robot_->GetProperty()->SetColor(1.0, 0.55, 0.1);
+  robot_->SetMapper(robot_mapper);
+  robot_->GetProperty()->SetLineWidth(2.0);
+  robot_->GetProperty()->LightingOff();  // flat: the same white seen from any side
+  robot_->PickableOff();
   robot_->VisibilityOff();
   renderer_->AddActor(robot_);
 
