@@ -282,9 +282,16 @@ void MainWindow::BuildViewMenu() {
       QTimer::singleShot(0, plan, [plan] { plan->raise(); });
     });
   }
+  // The panels as a first start places them: the left column from the top,
+  // then the right. The floor plan is View > Floor Plan, above: one entry.
   QMenu* panels = view->addMenu(tr("&Panels"));
-  for (QDockWidget* dock : findChildren<QDockWidget*>())
-    panels->addAction(dock->toggleViewAction());
+  panels->setObjectName(QStringLiteral("panelsMenu"));
+  for (const char* name : {"connectionDock", "projectDock", "driveDock", "replayDock",
+                           "calibrationDock", "evaluationDock"}) {
+    if (auto* dock = findChild<QDockWidget*>(QLatin1String(name))) {
+      panels->addAction(dock->toggleViewAction());
+    }
+  }
   panels->addSeparator();
   QAction* reset = panels->addAction(tr("&Reset Layout"), this, &MainWindow::ResetLayout);
   reset->setObjectName(QStringLiteral("resetLayout"));

@@ -12,6 +12,7 @@
 // * Colour by pass, deviation and intensity offered when the cloud has
 //   those values; the colour bar only for colours that mean something, its
 //   labels at round values.
+// * View > Panels lists each panel once, as they are placed.
 // * The link's health in a few rounded lines, not a dump of every counter.
 // * A live cloud's ceiling hidden within seconds, long before the room view
 //   frames the cloud (at 200 000 points), and once: shown again, it stays.
@@ -199,6 +200,59 @@ TEST_F(PanelsTest, RobotMenuOffersWhatTheLinkAllows) {
   EXPECT_TRUE(connect->isEnabled());
   EXPECT_FALSE(disconnect->isEnabled());
   EXPECT_FALSE(clear->isEnabled());
+}
+
+// View > Panels names each panel once, in the order a first start places
+// them: the left column from the top, then the right. The floor plan is
+// View > Floor Plan, and only there.
+TEST_F(PanelsTest, PanelsMenuListsEachPanelOnceAsTheyArePlaced) {
+  QMenu* view = nullptr;
+  for (QAction* a : window_->menuBar()->actions()) {
+    if (a->text() == "&View") view = a->menu();
+  }
+  ASSERT_NE(view, nullptr);
+  auto* panels = view->findChild<QMenu*>("panelsMenu");
+  ASSERT_NE(panels, nullptr);
+  std::vector<QDockWidget*> listed;
+  for (QAction* a : panels->actions()) {
+    for (QDockWidget* dock : window_->findChildren<QDockWidget*>()) {
+      if (dock->toggleViewAction() == a) listed.push_back(dock);
+    }
+  }
+  QStringList names;
+  for (QDockWidget* dock : listed) names << dock->windowTitle();
+  EXPECT_EQ(names.join(", ").toStdString(),
+            "Connection, Project, Drive, Session and replay, Calibration, Evaluation");
+  // Each as it stands: the left column's, then the right's, each from the
+  // top (of the tabs that share a place, the one in front).
+  std::vector<QDockWidget*> in_front;
+  QStringList front_names;
+  for (QDockWidget* dock : listed) {
+    if (dock->visibleRegion().isEmpty()) continue;
+    in_front.push_back(dock);
+    front_names << dock->windowTitle();
+  }
+  EXPECT_EQ(front_names.join(", ").toStdString(),
+            "Connection, Drive, Session and replay, Calibration");
+  for (size_t i = 1; i < in_front.size(); ++i) {
+    QDockWidget* a = in_front[i - 1];
+    QDockWidget* b = in_front[i];
+    const bool left_a = window_->dockWidgetArea(a) == Qt::LeftDockWidgetArea;
+    const bool left_b = window_->dockWidgetArea(b) == Qt::LeftDockWidgetArea;
+    EXPECT_TRUE(left_a >= left_b) << front_names[i].toStdString();
+    if (left_a == left_b) {
+      EXPECT_LT(a->geometry().top(), b->geometry().top()) << front_names[i].toStdString();
+    }
+  }
+  // The floor plan: once in all of View.
+  auto* plan = window_->findChild<QDockWidget*>("planDock");
+  ASSERT_NE(plan, nullptr);
+  int entries = 0;
+  for (QMenu* menu : view->findChildren<QMenu*>()) {
+    entries += menu->actions().count(plan->toggleViewAction());
+  }
+  entries += view->actions().count(plan->toggleViewAction());
+  EXPECT_EQ(entries, 1);
 }
 
 // Five evenly spaced labels over 0..3 m read 0.0, 0.8, 1.5, 2.2, 3.0;
