@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/plan/plan_writers.h"
+
 namespace sweepscan::ui {
 namespace {
 
@@ -21,14 +23,25 @@ double NiceLength(double m) {
   return 10.0 * e;
 }
 
+// A label's turn (degrees, counter-clockwise on screen) so that it reads
+// left to right or bottom to top, as the exported drawings do (core/plan's
+// writers, drawing practice: read from the bottom or the right). A line
+// within kUprightBandDeg of vertical counts as vertical: a wall 0.01 deg
+// off plumb had its figure read top to bottom on screen, bottom to top on
+// paper.
+double Readable(double degrees) {
+  while (degrees > 90.0 + plan::kUprightBandDeg) degrees -= 180.0;
+  while (degrees <= -90.0 + plan::kUprightBandDeg) degrees += 180.0;
+  return degrees;
+}
+
 }  // namespace
 
 double ScreenAngle(const QPointF& v) { return std::atan2(-v.y(), v.x()) * 180.0 / M_PI; }
 
 QPolygonF LabelPlate(const QFontMetrics& metrics, const QPointF& at, double degrees,
                      const QString& text) {
-  while (degrees > 90.0) degrees -= 180.0;
-  while (degrees <= -90.0) degrees += 180.0;
+  degrees = Readable(degrees);
   const QRectF box = metrics.boundingRect(text).adjusted(-3, -1, 3, 1);
   QTransform t;
   t.translate(at.x(), at.y());
@@ -66,8 +79,7 @@ bool ConvexOverlap(const QPolygonF& a, const QPolygonF& b) {
 void PaintLabel(QPainter* p, const QPointF& at, double degrees, const QString& text,
                 const QColor& color, double room, QPolygonF* painted) {
   if (p->fontMetrics().horizontalAdvance(text) + 6 > room) return;
-  while (degrees > 90.0) degrees -= 180.0;
-  while (degrees <= -90.0) degrees += 180.0;
+  degrees = Readable(degrees);
   p->save();
   p->translate(at);
   p->rotate(-degrees);

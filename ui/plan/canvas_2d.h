@@ -90,7 +90,8 @@ class Canvas2d : public QWidget {
 // Qt's angle (degrees, counter-clockwise on screen) of a widget vector.
 double ScreenAngle(const QPointF& v);
 
-// Text centred at `at`, turned by `degrees` (kept upright), on a white
+// Text centred at `at`, turned by `degrees` (made to read left to right
+// or bottom to top, as the exported drawings read), on a white
 // plate; left out when longer than `room` pixels (the line it labels, at
 // a zoom too small to read both). The plate drawn (widget pixels) goes to
 // `painted` if given; it is left alone when nothing is drawn.

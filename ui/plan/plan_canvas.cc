@@ -7,6 +7,7 @@
 #include <QPainter>
 #include <QPainterPath>
 #include <QPolygonF>
+#include <QTransform>
 #include <algorithm>
 #include <cmath>
 
@@ -220,8 +221,9 @@ void PlanCanvas::PaintRooms(QPainter* p, bool names) const {
 
 void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room) const {
   // The name over the area in the largest font, from the view's down to
-  // kMinRoomFontPx, whose block lies inside the room's outline and clear of
-  // every figure and dimension line drawn (figures_): at core/plan's label
+  // kMinRoomFontPx, across the plan or else along it (a corridor), whose
+  // block lies inside the room's outline and clear of every figure and
+  // dimension line drawn (figures_): at core/plan's label
   // point if it is clear there, else at the clear point nearest to it (the
   // rooms' dimensions cross at their middles, where the label point is).
   // None fits: no name (the area is in the summary; zooming in brings it
@@ -249,28 +251,39 @@ void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room
   QFont font = p->font();
   // The view's own size (the dimensions' figures), not its line height.
   const int base = QFontInfo(font).pixelSize();
-  for (double px = base; px >= kMinRoomFontPx; px -= 1.0) {
-    font.setPixelSize(static_cast<int>(px));
-    const QFontMetricsF m(font);
-    const double line = m.height() + 2.0;
-    const double width = std::max(m.horizontalAdvance(name), m.horizontalAdvance(area)) + 6.0;
-    for (const QPointF& at : candidates) {
-      const QRectF block(at.x() - 0.5 * width, at.y() - line - 1.0, width, 2.0 * line + 2.0);
-      const QPolygonF box(block.adjusted(-1, -1, 1, 1));  // clear by a pixel, not touching
-      bool fits = true;
-      for (const QPointF& c :
-           {block.topLeft(), block.topRight(), block.bottomLeft(), block.bottomRight()}) {
-        fits = fits && outline.containsPoint(c, Qt::OddEvenFill);
+  // Across the plan first, at every size; then along it, turned as a
+  // vertical dimension's figure is: a corridor (2 m) is narrower than its
+  // name across it until zoomed far in, but long.
+  for (const double degrees : {0.0, 90.0}) {
+    for (double px = base; px >= kMinRoomFontPx; px -= 1.0) {
+      font.setPixelSize(static_cast<int>(px));
+      const QFontMetricsF m(font);
+      const double line = m.height() + 2.0;
+      const double width = std::max(m.horizontalAdvance(name), m.horizontalAdvance(area)) + 6.0;
+      const QSizeF size =
+          degrees == 0.0 ? QSizeF(width, 2.0 * line + 2.0) : QSizeF(2.0 * line + 2.0, width);
+      for (const QPointF& at : candidates) {
+        const QRectF block(at - QPointF(0.5 * size.width(), 0.5 * size.height()), size);
+        const QPolygonF box(block.adjusted(-1, -1, 1, 1));  // clear by a pixel, not touching
+        bool fits = true;
+        for (const QPointF& c :
+             {block.topLeft(), block.topRight(), block.bottomLeft(), block.bottomRight()}) {
+          fits = fits && outline.containsPoint(c, Qt::OddEvenFill);
+        }
+        for (size_t k = 0; fits && k < figures_.size(); ++k) {
+          fits = !ConvexOverlap(box, figures_[k]);
+        }
+        if (!fits) continue;
+        // The name's line, then the area's below it in the text's frame.
+        const QPointF down = QTransform().rotate(-degrees).map(QPointF(0.0, 0.5 * line));
+        p->save();
+        p->setFont(font);
+        PaintLabel(p, at - down, degrees, name, kRoomText);
+        PaintLabel(p, at + down, degrees, area, kRoomText);
+        p->restore();
+        room_labels_.push_back({name, block});
+        return;
       }
-      for (size_t k = 0; fits && k < figures_.size(); ++k) fits = !ConvexOverlap(box, figures_[k]);
-      if (!fits) continue;
-      p->save();
-      p->setFont(font);
-      PaintLabel(p, at - QPointF(0, 0.5 * line), 0.0, name, kRoomText);
-      PaintLabel(p, at + QPointF(0, 0.5 * line), 0.0, area, kRoomText);
-      p->restore();
-      room_labels_.push_back({name, block});
-      return;
     }
   }
 }
