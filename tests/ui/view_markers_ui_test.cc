@@ -13,6 +13,7 @@
 #include <QTest>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -40,24 +41,37 @@ int PixelsOf(CloudView* view, const QRectF& box, const QColor& color) {
   return count;
 }
 
-TEST(ViewMarkersTest, ALabelBehindAWallIsDrawnOverItBesideItsMarker) {
+// A 640 x 480 view, shown.
+std::unique_ptr<CloudView> Shown() {
   auto view = std::make_unique<CloudView>();
   view->resize(640, 480);
   view->show();
-  ASSERT_TRUE(QTest::qWaitForWindowExposed(view.get()));
-  // A wall across x = 2 m, 2 m wide and high, every centimetre: coloured
-  // by height, blue to red, no white in it.
-  std::vector<CloudPoint> wall;
+  EXPECT_TRUE(QTest::qWaitForWindowExposed(view.get()));
+  return view;
+}
+
+// 201 x 201 points, the (i, k)th at `at(i, k)`.
+std::vector<CloudPoint> Grid(const std::function<Eigen::Vector3f(int, int)>& at) {
+  std::vector<CloudPoint> points;
   for (int i = 0; i <= 200; ++i) {
     for (int k = 0; k <= 200; ++k) {
+      const Eigen::Vector3f v = at(i, k);
       CloudPoint p;
-      p.x = 2.0f;
-      p.y = -1.0f + 0.01f * i;
-      p.z = 0.01f * k;
-      wall.push_back(p);
+      p.x = v.x();
+      p.y = v.y();
+      p.z = v.z();
+      points.push_back(p);
     }
   }
-  view->AppendPoints(wall);
+  return points;
+}
+
+TEST(ViewMarkersTest, ALabelBehindAWallIsDrawnOverItBesideItsMarker) {
+  std::unique_ptr<CloudView> view = Shown();
+  // A wall across x = 2 m, 2 m wide and high, every centimetre: coloured
+  // by height, blue to red, no white in it.
+  view->AppendPoints(
+      Grid([](int i, int k) { return Eigen::Vector3f(2.0f, -1.0f + 0.01f * i, 0.01f * k); }));
   view->SetColorBarVisible(false);
   // From x = 0 towards +x at 1 m: the wall fills the middle of the view,
   // and a pick 1 m behind it, in white, labelled.
@@ -94,21 +108,10 @@ TEST(ViewMarkersTest, ALabelBehindAWallIsDrawnOverItBesideItsMarker) {
 // chevron covers at least half its 0.10 m² in white pixels, its tip ahead
 // of it along the heading and nothing white behind.
 TEST(ViewMarkersTest, TheRobotIsAWhiteChevronAlongItsHeading) {
-  auto view = std::make_unique<CloudView>();
-  view->resize(640, 480);
-  view->show();
-  ASSERT_TRUE(QTest::qWaitForWindowExposed(view.get()));
-  std::vector<CloudPoint> floor;
-  for (int i = 0; i <= 200; ++i) {
-    for (int k = 0; k <= 200; ++k) {
-      CloudPoint p;
-      p.x = 0.02f * i;
-      p.y = 0.02f * k;
-      p.z = 0.001f * ((i * 7 + k * 3) % 10);  // a centimetre of noise
-      floor.push_back(p);
-    }
-  }
-  view->AppendPoints(floor);
+  std::unique_ptr<CloudView> view = Shown();
+  view->AppendPoints(Grid([](int i, int k) {
+    return Eigen::Vector3f(0.02f * i, 0.02f * k, 0.001f * ((i * 7 + k * 3) % 10));  // 1 cm of noise
+  }));
   view->SetColorBarVisible(false);
   const QColor white(250, 250, 250);
   for (const double yaw : {0.0, M_PI / 2}) {
