@@ -38,6 +38,7 @@
 #include "ui/panels/fit_height_to_width.h"
 #include "ui/panels/replay_panel.h"
 #include "ui/panels/ros_import_dialog.h"
+#include "ui/panels/scroll_wheel_guard.h"
 #include "ui/plan/plan_panel.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_controller.h"
@@ -328,6 +329,7 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   connect(workspace_, &Workspace::linkStateChanged, this, &MainWindow::UpdateActions);
 
   qApp->installEventFilter(this);
+  ScrollWheelGuard::Install(this);
   auto* tick = new QTimer(this);
   tick->setTimerType(Qt::PreciseTimer);
   connect(tick, &QTimer::timeout, this, &MainWindow::OnTick);

@@ -13,6 +13,7 @@
 //   those values; the colour bar only for colours that mean something, its
 //   labels at round values.
 // * View > Panels lists each panel once, as they are placed.
+// * The wheel scrolls a panel; a spin box takes it only with the focus.
 // * The link's health in a few rounded lines, not a dump of every counter.
 // * A live cloud's ceiling hidden within seconds, long before the room view
 //   frames the cloud (at 200 000 points), and once: shown again, it stays.
@@ -20,13 +21,18 @@
 
 #include <QAbstractButton>
 #include <QAction>
+#include <QApplication>
 #include <QDockWidget>
+#include <QDoubleSpinBox>
 #include <QLabel>
 #include <QMenu>
 #include <QMenuBar>
 #include <QPushButton>
 #include <QRegularExpression>
+#include <QScrollArea>
+#include <QScrollBar>
 #include <QTest>
+#include <QWheelEvent>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -253,6 +259,42 @@ TEST_F(PanelsTest, PanelsMenuListsEachPanelOnceAsTheyArePlaced) {
   }
   entries += view->actions().count(plan->toggleViewAction());
   EXPECT_EQ(entries, 1);
+}
+
+// A wheel turned over the board thickness while scrolling the Calibration
+// panel scrolls the panel and leaves the thickness alone (it once set it
+// to 0 mm, saved); a click into the box first, and the wheel steps it.
+TEST_F(PanelsTest, TheWheelScrollsAPanelAndStepsABoxOnlyOnceItHasTheFocus) {
+  auto* dock = window_->findChild<QDockWidget*>("calibrationDock");
+  auto* thickness = window_->findChild<QDoubleSpinBox*>("boardThickness");
+  ASSERT_TRUE(dock != nullptr && thickness != nullptr);
+  auto* area = qobject_cast<QScrollArea*>(dock->widget());
+  ASSERT_NE(area, nullptr);
+  window_->resizeDocks({dock}, {260}, Qt::Vertical);  // short: its panel scrolls
+  QApplication::processEvents();
+  QScrollBar* bar = area->verticalScrollBar();
+  ASSERT_GT(bar->maximum(), 0);
+  EXPECT_EQ(thickness->focusPolicy(), Qt::StrongFocus);
+  const double before = thickness->value();
+  const auto turn = [&](int notches) {
+    const QPointF at(thickness->width() / 2.0, thickness->height() / 2.0);
+    QWheelEvent wheel(at, thickness->mapToGlobal(at.toPoint()), QPoint(), QPoint(0, 120 * notches),
+                      Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+    QApplication::sendEvent(thickness, &wheel);
+  };
+  bar->setValue(0);
+  turn(-2);  // down
+  EXPECT_GT(bar->value(), 0);
+  EXPECT_EQ(thickness->value(), before);
+
+  QApplication::setActiveWindow(window_.get());
+  thickness->setFocus(Qt::MouseFocusReason);
+  ASSERT_TRUE(thickness->hasFocus());
+  const int scrolled = bar->value();
+  turn(1);
+  EXPECT_GT(thickness->value(), before);
+  EXPECT_EQ(bar->value(), scrolled);
+  thickness->setValue(before);
 }
 
 // Five evenly spaced labels over 0..3 m read 0.0, 0.8, 1.5, 2.2, 3.0;
