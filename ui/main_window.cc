@@ -175,6 +175,9 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   tabifyDockWidget(evaluation_dock, plan_dock);
   plan_dock->hide();
   calibration_dock->raise();
+  connect(calibration_panel_, &CalibrationPanel::fileError, this, &MainWindow::ShowError);
+  connect(calibration_panel_, &CalibrationPanel::message, this,
+          [this](const QString& m) { statusBar()->showMessage(m, 10000); });
   connect(calibration_panel_, &CalibrationPanel::robotCalibrationChanged, this,
           [this](const MountingError& c) {
             QSettings().setValue(QStringLiteral("robot/calibration_rad"),

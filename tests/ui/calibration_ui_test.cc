@@ -20,6 +20,7 @@
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QFileDialog>
 #include <QFileInfo>
 #include <QImage>
 #include <QLineEdit>
@@ -27,6 +28,7 @@
 #include <QPushButton>
 #include <QRegularExpression>
 #include <QSettings>
+#include <QStatusBar>
 #include <QSurfaceFormat>
 #include <QTemporaryDir>
 #include <QTest>
@@ -478,6 +480,60 @@ TEST_F(CalibrationTest, PairsStayWithTheirSessionAndGoWhenAnotherOpens) {
   EXPECT_EQ(history->count(), 0);
   EXPECT_NE(panel->pick_prompt().indexOf("the pair picked in the live cloud was cleared"), -1)
       << panel->pick_prompt().toStdString();
+}
+
+// Answers the next file chooser: checks where it opened, then types
+// `name` into it and accepts.
+void AnswerFileChooser(const QString& name, QString* opened_in, QString* suggested) {
+  QTimer::singleShot(50, [=] {
+    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+    if (chooser == nullptr) {
+      AnswerFileChooser(name, opened_in, suggested);
+      return;
+    }
+    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
+    ASSERT_NE(field, nullptr);
+    *opened_in = chooser->directory().absolutePath();
+    *suggested = field->text();
+    field->setText(name);
+    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
+  });
+}
+
+// The pairs' Save… and Load… through their file choosers: opened beside
+// the session, named after it; a name typed without a suffix gets .json;
+// a pick waiting for its partner is said not to be saved; a file that is
+// no pairs file is an error message (it was a line in step 4, scrolled out
+// of view), and the pairs stay.
+TEST_F(CalibrationTest, PairsFilesBesideTheSessionAndTheirErrorsSaid) {
+  OpenDiamond();
+  CalibrationPanel* panel = window_->calibration_panel();
+  panel->AddPick(kDiamondCorners[0]);
+  panel->AddPick(kDiamondCorners[0]);
+  panel->AddPick(kDiamondCorners[1]);  // its partner not yet picked
+  const QString folder = QFileInfo(DiamondSession()).absolutePath();
+  QString opened_in, suggested;
+  AnswerFileChooser(QStringLiteral("mine"), &opened_in, &suggested);
+  window_->findChild<QPushButton*>(QStringLiteral("savePairs"))->click();
+  EXPECT_EQ(opened_in, folder);
+  EXPECT_EQ(suggested, QStringLiteral("diamond-pairs.json"));
+  std::vector<PickPair> saved;
+  ASSERT_TRUE(LoadPairsFile((folder + "/mine.json").toStdString(), &saved).ok());
+  EXPECT_EQ(saved.size(), 1u);
+  EXPECT_NE(window_->statusBar()->currentMessage().indexOf("the unfinished pair is not saved"), -1)
+      << window_->statusBar()->currentMessage().toStdString();
+
+  QFile text(folder + "/notes.json");
+  ASSERT_TRUE(text.open(QIODevice::WriteOnly));
+  text.write("these are notes, not pairs\n");
+  text.close();
+  const int errors = window_->errors_shown();
+  AnswerFileChooser(QStringLiteral("notes.json"), &opened_in, &suggested);
+  window_->findChild<QPushButton*>(QStringLiteral("loadPairs"))->click();
+  EXPECT_EQ(opened_in, folder);
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
+  EXPECT_NE(window_->last_error().indexOf("notes.json"), -1) << window_->last_error().toStdString();
+  EXPECT_EQ(panel->pair_points().size(), 2u);
 }
 
 // The automatic mode, one button beside Solve, gives what

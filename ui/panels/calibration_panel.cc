@@ -1,6 +1,7 @@
 #include "ui/panels/calibration_panel.h"
 
 #include <QCheckBox>
+#include <QDir>
 #include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QFileInfo>
@@ -324,7 +325,9 @@ QWidget* CalibrationPanel::BuildPickStep() {
   auto* remove = new QPushButton(tr("Delete"));
   remove->setShortcut(QKeySequence::Delete);
   auto* load = new QPushButton(tr("Load…"));
+  load->setObjectName(QStringLiteral("loadPairs"));
   auto* save = new QPushButton(tr("Save…"));
+  save->setObjectName(QStringLiteral("savePairs"));
   row->addWidget(remove);
   row->addWidget(load);
   row->addWidget(save);
@@ -335,16 +338,36 @@ QWidget* CalibrationPanel::BuildPickStep() {
     if (r >= 0) DeletePair(r);
   });
   connect(save, &QPushButton::clicked, this, [this] {
-    const QString path =
-        QFileDialog::getSaveFileName(this, tr("Save pairs"), QString(), tr("Pairs (*.json)"));
+    const QString path = WithJsonSuffix(QFileDialog::getSaveFileName(
+        this, tr("Save pairs"), SuggestedFile(QStringLiteral("pairs")), tr("Pairs (*.json)")));
+    if (path.isEmpty()) return;
     QString error;
-    if (!path.isEmpty() && !SavePairs(path, &error)) result_->setText(error);
+    if (!SavePairs(path, &error)) {
+      emit fileError(tr("Save pairs"), error);
+      return;
+    }
+    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
+    const size_t saved = pairs().size();
+    // A pick waiting for its partner is no pair: said, not silently left out.
+    emit message(saved == pairs_.size()
+                     ? tr("Saved %n pair(s) to %1", nullptr, static_cast<int>(saved)).arg(path)
+                     : tr("Saved %n pair(s) to %1; the unfinished pair is not saved", nullptr,
+                          static_cast<int>(saved))
+                           .arg(path));
   });
   connect(load, &QPushButton::clicked, this, [this] {
-    const QString path =
-        QFileDialog::getOpenFileName(this, tr("Load pairs"), QString(), tr("Pairs (*.json)"));
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Load pairs"), QFileInfo(SuggestedFile(QStringLiteral("pairs"))).absolutePath(),
+        tr("Pairs (*.json)"));
+    if (path.isEmpty()) return;
     QString error;
-    if (!path.isEmpty() && !LoadPairs(path, &error)) result_->setText(error);
+    if (!LoadPairs(path, &error)) {
+      emit fileError(tr("Load pairs"), error);
+      return;
+    }
+    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
+    emit message(
+        tr("Loaded %n pair(s) from %1", nullptr, static_cast<int>(pairs().size())).arg(path));
   });
   return box;
 }
@@ -438,16 +461,30 @@ QWidget* CalibrationPanel::BuildKeepStep() {
   layout->addWidget(load_calibration, 1, 1);
   connect(after_, &QPushButton::toggled, this, &CalibrationPanel::ShowAfter);
   connect(save_calibration_, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, tr("Save calibration"), QString(),
-                                                      tr("Calibration (*.json)"));
+    const QString path = WithJsonSuffix(QFileDialog::getSaveFileName(
+        this, tr("Save calibration"), SuggestedFile(QStringLiteral("calibration")),
+        tr("Calibration (*.json)")));
+    if (path.isEmpty()) return;
     QString error;
-    if (!path.isEmpty() && !SaveCalibration(path, &error)) result_->setText(error);
+    if (!SaveCalibration(path, &error)) {
+      emit fileError(tr("Save calibration"), error);
+      return;
+    }
+    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
+    emit message(tr("Saved the calibration to %1").arg(path));
   });
   connect(load_calibration, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getOpenFileName(this, tr("Load calibration"), QString(),
-                                                      tr("Calibration (*.json)"));
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Load calibration"),
+        QFileInfo(SuggestedFile(QStringLiteral("calibration"))).absolutePath(),
+        tr("Calibration (*.json)"));
+    if (path.isEmpty()) return;
     QString error;
-    if (!path.isEmpty() && !LoadCalibration(path, &error)) result_->setText(error);
+    if (!LoadCalibration(path, &error)) {
+      emit fileError(tr("Load calibration"), error);
+      return;
+    }
+    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
   });
   connect(use_for_robot_, &QPushButton::clicked, this, &CalibrationPanel::UseForRobot);
   return box;
@@ -538,6 +575,23 @@ std::vector<PickPair> CalibrationPanel::pairs() const {
     out.push_back(pair);
   }
   return out;
+}
+
+QString CalibrationPanel::SuggestedFile(const QString& what) const {
+  const QString session = workspace_->session_dir();
+  if (!session.isEmpty()) {
+    const QFileInfo info(session);
+    return info.absolutePath() + QLatin1Char('/') + info.completeBaseName() + QLatin1Char('-') +
+           what + QStringLiteral(".json");
+  }
+  const QString dir =
+      QSettings().value(QStringLiteral("calibration/files_dir"), QDir::homePath()).toString();
+  return dir + QLatin1Char('/') + what + QStringLiteral(".json");
+}
+
+QString CalibrationPanel::WithJsonSuffix(const QString& path) {
+  if (path.isEmpty() || !QFileInfo(path).suffix().isEmpty()) return path;
+  return path + QStringLiteral(".json");
 }
 
 bool CalibrationPanel::SavePairs(const QString& path, QString* error) const {

@@ -92,6 +92,11 @@ class CalibrationPanel : public QWidget {
  signals:
   void solved(bool ok);
   void robotCalibrationChanged(const MountingError& calibration);
+  // A file the operator chose could not be read or written: said in a
+  // message box (MainWindow::ShowError), not in a step scrolled out of view.
+  void fileError(const QString& title, const QString& message);
+  // What a file operation did, for the status bar.
+  void message(const QString& text);
 
  private:
   QWidget* BuildTargetStep();
@@ -110,6 +115,11 @@ class CalibrationPanel : public QWidget {
   // the live cloud), unless the operator has chosen another since.
   void RestoreColorMode();
   void StartSolving();
+  // The Save and Load dialogs' file: beside the session shown, named after
+  // it ("lab-pairs.json"), or the folder last used.
+  QString SuggestedFile(const QString& what) const;
+  // `path` as chosen in a save dialog, with ".json" when it has no suffix.
+  static QString WithJsonSuffix(const QString& path);
 
   Workspace* workspace_;
   CloudView* view_;
