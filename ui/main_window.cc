@@ -25,6 +25,7 @@
 #include <QToolButton>
 #include <QUndoCommand>
 #include <QUndoStack>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -93,21 +94,35 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     addDockWidget(area, dock);
     return dock;
   };
+  // A panel in a scroll area that scrolls up and down only: its labels
+  // wrap instead, and the area is at least as wide as the panel can be
+  // (`at_least` px or more). A few pixels short, a button given the focus
+  // at the panel's right edge had it scrolled left with its titles cut
+  // (". Solve"); the scroll bar is kept at 0 for any content that grows
+  // wider later.
+  auto upright = [](QScrollArea* scroll, QWidget* panel, int at_least) {
+    scroll->setWidget(panel);
+    scroll->setWidgetResizable(true);
+    scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    scroll->setMinimumWidth(std::max(at_least, panel->minimumSizeHint().width() +
+                                                   scroll->verticalScrollBar()->sizeHint().width() +
+                                                   2 * scroll->frameWidth()));
+    QScrollBar* sideways = scroll->horizontalScrollBar();
+    connect(sideways, &QScrollBar::valueChanged, scroll, [sideways](int v) {
+      if (v != 0) sideways->setValue(0);
+    });
+    return scroll;
+  };
   // A panel of short rows in a scroll area: the dock column can then be
   // shorter than its panels' sum (a laptop's screen), and a panel keeps the
   // height its wrapped labels need at the width it gets (FitHeightToWidth)
   // instead of clipping their last line.
-  auto scrolled = [](QWidget* panel) {
+  auto scrolled = [&upright](QWidget* panel) {
     auto* scroll = new QScrollArea;
-    scroll->setWidget(panel);
-    scroll->setWidgetResizable(true);
     scroll->setFrameShape(QFrame::NoFrame);
-    scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);  // Labels wrap instead.
     scroll->setSizePolicy(panel->sizePolicy());
-    scroll->setMinimumWidth(panel->minimumSizeHint().width() +
-                            scroll->verticalScrollBar()->sizeHint().width());
     FitHeightToWidth::Install(panel);
-    return scroll;
+    return upright(scroll, panel, 0);
   };
   QDockWidget* connection_dock = add_dock(scrolled(connection_panel_), tr("Connection"),
                                           QStringLiteral("connectionDock"), Qt::LeftDockWidgetArea);
@@ -116,19 +131,11 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   add_dock(scrolled(replay_panel_), tr("Session and replay"), QStringLiteral("replayDock"),
            Qt::RightDockWidgetArea);
   // The calibration steps scroll when the window is short.
-  auto* calibration_scroll = new QScrollArea;
-  calibration_scroll->setWidget(calibration_panel_);
-  calibration_scroll->setWidgetResizable(true);
-  calibration_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);  // Labels wrap instead.
-  calibration_scroll->setMinimumWidth(380);
   QDockWidget* calibration_dock =
-      add_dock(calibration_scroll, tr("Calibration"), QStringLiteral("calibrationDock"),
-               Qt::RightDockWidgetArea);
+      add_dock(upright(new QScrollArea, calibration_panel_, 380), tr("Calibration"),
+               QStringLiteral("calibrationDock"), Qt::RightDockWidgetArea);
   evaluation_panel_ = new EvaluationPanel(workspace_, view_);
-  auto* evaluation_scroll = new QScrollArea;
-  evaluation_scroll->setWidget(evaluation_panel_);
-  evaluation_scroll->setWidgetResizable(true);
-  evaluation_scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+  QScrollArea* evaluation_scroll = upright(new QScrollArea, evaluation_panel_, 0);
   QDockWidget* evaluation_dock =
       add_dock(evaluation_scroll, tr("Evaluation"), QStringLiteral("evaluationDock"),
                Qt::RightDockWidgetArea);

@@ -14,6 +14,7 @@
 //   labels at round values.
 // * View > Panels lists each panel once, as they are placed.
 // * The wheel scrolls a panel; a spin box takes it only with the focus.
+// * A panel never scrolls sideways.
 // * The link's health in a few rounded lines, not a dump of every counter.
 // * A live cloud's ceiling hidden within seconds, long before the room view
 //   frames the cloud (at 200 000 points), and once: shown again, it stays.
@@ -295,6 +296,31 @@ TEST_F(PanelsTest, TheWheelScrollsAPanelAndStepsABoxOnlyOnceItHasTheFocus) {
   EXPECT_GT(thickness->value(), before);
   EXPECT_EQ(bar->value(), scrolled);
   thickness->setValue(before);
+}
+
+// A panel never scrolls sideways: its labels wrap instead. A button given
+// the focus at the right edge of the Calibration panel (Solve, Cancel) had
+// the panel scrolled left by a few pixels, its steps' titles cut
+// (". Solve").
+TEST_F(PanelsTest, APanelNeverScrollsSideways) {
+  for (const char* name : {"calibrationDock", "evaluationDock", "connectionDock", "driveDock"}) {
+    auto* dock = window_->findChild<QDockWidget*>(name);
+    ASSERT_NE(dock, nullptr) << name;
+    auto* area = qobject_cast<QScrollArea*>(dock->widget());
+    ASSERT_NE(area, nullptr) << name;
+    dock->show();
+    dock->raise();
+    window_->resizeDocks({dock}, {1}, Qt::Horizontal);  // as narrow as it goes
+    QApplication::processEvents();
+    for (QWidget* w : area->widget()->findChildren<QWidget*>()) {
+      if (!w->isVisibleTo(area->widget()) || w->width() == 0) continue;
+      area->ensureWidgetVisible(w);
+      EXPECT_EQ(area->horizontalScrollBar()->value(), 0)
+          << name << ": " << w->metaObject()->className();
+    }
+    // Nothing wider than the place it is shown in.
+    EXPECT_LE(area->widget()->width(), area->viewport()->width()) << name;
+  }
 }
 
 // Five evenly spaced labels over 0..3 m read 0.0, 0.8, 1.5, 2.2, 3.0;
