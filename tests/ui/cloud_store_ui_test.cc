@@ -690,7 +690,8 @@ TEST(CloudViewPickTest, APointWithANanCoordinateIsNeverPicked) {
 TEST(CloudViewRoomTest, FindsTheCeilingOfARoomAndNoneWithoutOne) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  auto room = [&](bool with_ceiling) {
+  enum Ceiling { kNone, kFlat, kSmeared };
+  auto room = [&](Ceiling ceiling) {
     std::vector<CloudPoint> points;
     for (int i = 0; i < 200000; ++i) {
       CloudPoint p{};
@@ -699,8 +700,15 @@ TEST(CloudViewRoomTest, FindsTheCeilingOfARoomAndNoneWithoutOne) {
       const int face = static_cast<int>(4 * u(rng)) % 4;
       if (face == 0) {  // Floor.
         p.x = 6 * u(rng), p.y = 4 * u(rng), p.z = 0;
-      } else if (face == 1 && with_ceiling) {
+      } else if (face == 1 && ceiling == kFlat) {
         p.x = 6 * u(rng), p.y = 4 * u(rng), p.z = 2.7f;
+      } else if (face == 1 && ceiling == kSmeared) {
+        // An uncalibrated circle drive's: 2.30 to 2.65 m, thinner between
+        // its two passes' layers (2.45 to 2.50 m, a quarter as dense).
+        p.x = 6 * u(rng), p.y = 4 * u(rng);
+        do {
+          p.z = 2.3f + 0.35f * u(rng);
+        } while (p.z >= 2.45f && p.z < 2.5f && u(rng) < 0.75f);
       } else {  // Walls, up to 2.7 m.
         const bool x_wall = u(rng) < 0.5f;
         p.x = x_wall ? (u(rng) < 0.5f ? 0.0f : 6.0f) : 6 * u(rng);
@@ -715,10 +723,14 @@ TEST(CloudViewRoomTest, FindsTheCeilingOfARoomAndNoneWithoutOne) {
     return points;
   };
   CloudView view;
-  view.AppendPoints(room(true));
+  view.AppendPoints(room(kFlat));
   EXPECT_NEAR(view.FindCeiling(), 2.7, 0.051);
+  // The smeared ceiling's lower edge, so that hiding it leaves no lid.
   view.Clear();
-  view.AppendPoints(room(false));
+  view.AppendPoints(room(kSmeared));
+  EXPECT_NEAR(view.FindCeiling(), 2.3, 0.051);
+  view.Clear();
+  view.AppendPoints(room(kNone));
   EXPECT_TRUE(std::isnan(view.FindCeiling()));
 }
 

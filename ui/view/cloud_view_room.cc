@@ -67,9 +67,14 @@ double CloudView::FindCeiling() const {
   for (int b = bins - 1; b >= bins * 2 / 3; --b) {
     const size_t layer = count[b] + (b > 0 ? count[b - 1] : 0);
     if (layer >= 6.0 * wall && layer >= z.size() / 50) {
-      // The layer's lower edge: the lowest of its dense bins.
+      // The layer's lower edge: the lowest bin below it that still holds
+      // half the walls' count again. An uncalibrated circle drive smears
+      // its ceiling over 40 cm in two layers (one a pass) with a thinner
+      // bin between them (1.8 times the walls' on the diamond drive): the
+      // edge taken at 3 times stopped there and left the lower layer as a
+      // lid over the board the operator has to pick.
       int first = b;
-      while (first > 0 && count[first - 1] >= 3.0 * wall) --first;
+      while (first > 0 && count[first - 1] >= 1.5 * wall) --first;
       return (base + first) * kBin;
     }
   }
