@@ -30,6 +30,7 @@
 #include <QSettings>
 #include <QStatusBar>
 #include <QSurfaceFormat>
+#include <QTableWidget>
 #include <QTemporaryDir>
 #include <QTest>
 #include <QThread>
@@ -500,7 +501,8 @@ void AnswerFileChooser(const QString& name, QString* opened_in, QString* suggest
   });
 }
 
-// The pairs' Save… and Load… through their file choosers: opened beside
+// The pairs' Save… (offered with a complete pair) and Load… through
+// their file choosers: opened beside
 // the session, named after it; a name typed without a suffix gets .json;
 // a pick waiting for its partner is said not to be saved; a file that is
 // no pairs file is an error message (it was a line in step 4, scrolled out
@@ -508,13 +510,28 @@ void AnswerFileChooser(const QString& name, QString* opened_in, QString* suggest
 TEST_F(CalibrationTest, PairsFilesBesideTheSessionAndTheirErrorsSaid) {
   OpenDiamond();
   CalibrationPanel* panel = window_->calibration_panel();
+  auto* save = window_->findChild<QPushButton*>(QStringLiteral("savePairs"));
+  ASSERT_NE(save, nullptr);
+  EXPECT_FALSE(save->isEnabled());  // nothing to save
   panel->AddPick(kDiamondCorners[0]);
+  EXPECT_FALSE(save->isEnabled());  // half a pair
   panel->AddPick(kDiamondCorners[0]);
   panel->AddPick(kDiamondCorners[1]);  // its partner not yet picked
+  EXPECT_TRUE(save->isEnabled());
+  // Delete with a pair selected only.
+  auto* remove = window_->findChild<QPushButton*>(QStringLiteral("deletePair"));
+  auto* table = panel->findChild<QTableWidget*>();
+  ASSERT_TRUE(remove != nullptr && table != nullptr);
+  table->clearSelection();
+  table->setCurrentCell(-1, -1);
+  EXPECT_FALSE(remove->isEnabled());
+  table->selectRow(0);
+  EXPECT_TRUE(remove->isEnabled());
+  table->setCurrentCell(-1, -1);
   const QString folder = QFileInfo(DiamondSession()).absolutePath();
   QString opened_in, suggested;
   AnswerFileChooser(QStringLiteral("mine"), &opened_in, &suggested);
-  window_->findChild<QPushButton*>(QStringLiteral("savePairs"))->click();
+  save->click();
   EXPECT_EQ(opened_in, folder);
   EXPECT_EQ(suggested, QStringLiteral("diamond-pairs.json"));
   std::vector<PickPair> saved;

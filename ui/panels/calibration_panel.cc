@@ -322,11 +322,12 @@ QWidget* CalibrationPanel::BuildPickStep() {
   table_->setMinimumHeight(120);
   layout->addWidget(table_);
   auto* row = new QHBoxLayout;
-  auto* remove = new QPushButton(tr("Delete"));
+  auto* remove = delete_pair_ = new QPushButton(tr("Delete"));
+  remove->setObjectName(QStringLiteral("deletePair"));
   remove->setShortcut(QKeySequence::Delete);
   auto* load = new QPushButton(tr("Load…"));
   load->setObjectName(QStringLiteral("loadPairs"));
-  auto* save = new QPushButton(tr("Save…"));
+  auto* save = save_pairs_ = new QPushButton(tr("Save…"));
   save->setObjectName(QStringLiteral("savePairs"));
   row->addWidget(remove);
   row->addWidget(load);
@@ -753,6 +754,9 @@ void CalibrationPanel::Refresh() {
   }
   if (selected >= 0 && selected < table_->rowCount()) table_->selectRow(selected);
   table_->blockSignals(false);
+  // What they can act on: a selected pair, a complete pair to save.
+  delete_pair_->setEnabled(table_->currentRow() >= 0 && table_->currentRow() < table_->rowCount());
+  save_pairs_->setEnabled(!pairs().empty());
 
   std::vector<CloudView::Marker> markers;
   const int highlight = table_->currentRow();

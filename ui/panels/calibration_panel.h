@@ -126,6 +126,8 @@ class CalibrationPanel : public QWidget {
   QUndoStack* undo_;
   std::vector<PairPoints> pairs_;
   QTableWidget* table_;
+  QPushButton* delete_pair_;  // with a pair selected
+  QPushButton* save_pairs_;   // with a complete pair
   QCheckBox* refine_;
   QDoubleSpinBox* thickness_;
   QCheckBox* combine_;
