@@ -138,9 +138,19 @@ void MainWindow::BuildFileMenu() {
   QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
     QSettings settings;
     QString filter;
+    // Named after the session, in the folder last exported to, or beside
+    // the session (it opened in the working folder with no name).
+    const QFileInfo session(workspace_->session_dir());
+    const QString dir =
+        settings
+            .value(QStringLiteral("export/dir"),
+                   workspace_->session_dir().isEmpty() ? QString() : session.absolutePath())
+            .toString();
+    const QString name =
+        workspace_->session_dir().isEmpty() ? QString() : session.completeBaseName() + ".ply";
     const QString path = WithFilterSuffix(
         QFileDialog::getSaveFileName(this, tr("Export cloud"),
-                                     settings.value(QStringLiteral("export/dir")).toString(),
+                                     dir.isEmpty() ? name : dir + QLatin1Char('/') + name,
                                      tr("PLY (*.ply);;PCD (*.pcd)"), &filter),
         filter);
     if (path.isEmpty()) return;

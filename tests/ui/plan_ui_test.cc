@@ -26,16 +26,20 @@
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
 #include <QFile>
+#include <QFileDialog>
+#include <QFileInfo>
 #include <QImage>
 #include <QJsonDocument>
 #include <QJsonObject>
 #include <QLabel>
+#include <QLineEdit>
 #include <QMenu>
 #include <QMenuBar>
 #include <QPolygonF>
 #include <QPushButton>
 #include <QSettings>
 #include <QTest>
+#include <QTimer>
 #include <QToolButton>
 #include <QTreeWidget>
 #include <QUndoStack>
@@ -427,10 +431,11 @@ TEST(PlanBuildTest, SectionOfPosedCloudsIsCoreSectionOfTheMovedClouds) {
 }
 
 // Export… (and File > Export Floor Plan…) only with a plan, the canvas's
-// reason otherwise; the section's buttons only with a section. Room names
-// keep off the dimensions' and doors' figures and inside their rooms at
-// every zoom, smaller or left out where they do not fit, along a corridor
-// too narrow for them across; the figures keep off each other.
+// reason otherwise, its chooser beside the project and named after it;
+// the section's buttons only with a section. Room names keep off the
+// dimensions' and doors' figures and inside their rooms at every zoom,
+// smaller or left out where they do not fit, along a corridor too narrow
+// for them across; the figures keep off each other.
 TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   QAction* file_export = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {
@@ -447,6 +452,23 @@ TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   EXPECT_TRUE(export_button->isEnabled());
   EXPECT_TRUE(file_export->isEnabled());
   EXPECT_FALSE(panel->section_export_button()->isEnabled());  // No section line.
+  // Export…'s chooser opens beside the project, named after it; a name
+  // typed without a suffix is an SVG.
+  QString opened_in, suggested;
+  QTimer::singleShot(50, [&] {
+    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+    ASSERT_NE(chooser, nullptr);
+    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
+    ASSERT_NE(field, nullptr);
+    opened_in = chooser->directory().absolutePath();
+    suggested = field->text();
+    field->setText(QStringLiteral("drawing"));
+    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
+  });
+  export_button->click();
+  EXPECT_EQ(opened_in, QString::fromStdString(Dir()));
+  EXPECT_EQ(suggested, QStringLiteral("exports-plan.svg"));
+  EXPECT_TRUE(QFileInfo::exists(QString::fromStdString(Dir()) + "/drawing.svg"));
   const plan::FloorPlan plan = *panel->canvas()->plan();
   ASSERT_FALSE(plan.rooms.empty());
   ASSERT_FALSE(plan.dimensions.empty());

@@ -16,6 +16,7 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QPushButton>
+#include <QSettings>
 #include <QSlider>
 #include <QTableWidget>
 #include <QTemporaryDir>
@@ -238,20 +239,62 @@ TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSessio
   EXPECT_NE(summary().indexOf("project"), -1) << summary().toStdString();
 }
 
-// Answers the file chooser with `path`, typed into its name field.
-void AnswerFileChooser(const QString& path, bool* answered) {
-  QTimer::singleShot(50, [path, answered] {
+// Answers the file chooser with `path`, typed into its name field; where
+// it opened and the name it suggested to `opened_in` and `suggested`.
+void AnswerFileChooser(const QString& path, bool* answered, QString* opened_in = nullptr,
+                       QString* suggested = nullptr) {
+  QTimer::singleShot(50, [path, answered, opened_in, suggested] {
     auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
     if (chooser == nullptr) {
-      AnswerFileChooser(path, answered);
+      AnswerFileChooser(path, answered, opened_in, suggested);
       return;
     }
     auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
     ASSERT_NE(field, nullptr);
+    if (opened_in != nullptr) *opened_in = chooser->directory().absolutePath();
+    if (suggested != nullptr) *suggested = field->text();
     field->setText(path);
     QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
     *answered = true;
   });
+}
+
+// File > Export Cloud…'s chooser: beside the session, named after it (it
+// opened in the working folder with no name); a name typed without a
+// suffix takes the filter's (.ply). Once used, its folder is remembered.
+TEST_F(SessionResultsTest, ExportCloudOffersTheSessionsFolderAndName) {
+  QSettings().remove(QStringLiteral("export/dir"));
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  QAction* export_cloud = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == QStringLiteral("&Export Cloud…")) export_cloud = a;
+  }
+  ASSERT_NE(export_cloud, nullptr);
+  const QFileInfo session(LabSession());
+  bool answered = false, finished = false;
+  QString opened_in, suggested;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                   [&](const QString& what, bool, const QString&) {
+                     if (what.startsWith("Exporting")) finished = true;
+                   });
+  const QString out = tmp_.path() + "/exported";
+  AnswerFileChooser(out, &answered, &opened_in, &suggested);
+  export_cloud->trigger();
+  ASSERT_TRUE(answered);
+  EXPECT_EQ(opened_in, session.absolutePath());
+  EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  EXPECT_TRUE(QFileInfo::exists(out + ".ply")) << window_->last_error().toStdString();
+  // The next export starts where this one went.
+  answered = false;
+  AnswerFileChooser(tmp_.path() + "/again.ply", &answered, &opened_in, &suggested);
+  finished = false;
+  export_cloud->trigger();
+  ASSERT_TRUE(answered);
+  EXPECT_EQ(opened_in, QFileInfo(tmp_.path()).absoluteFilePath());
+  EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
 }
 
 // Export report… into a folder that cannot be written: an error message as

@@ -591,7 +591,15 @@ void PlanPanel::ExportWithDialog() {
   }
   const QString svg = tr("SVG drawing, 1:50 (*.svg)"), dxf = tr("DXF R12 drawing, metres (*.dxf)");
   QString filter;
-  QString path = QFileDialog::getSaveFileName(this, tr("Export floor plan"), QString(),
+  // Beside the project (or the session) it was drawn from, named after it.
+  const QString from = !project_->document()->path().isEmpty() ? project_->document()->path()
+                                                               : workspace_->session_dir();
+  const QFileInfo source(from);
+  const QString start = from.isEmpty()
+                            ? QString()
+                            : source.absolutePath() + QLatin1Char('/') + source.completeBaseName() +
+                                  QStringLiteral("-plan.svg");
+  QString path = QFileDialog::getSaveFileName(this, tr("Export floor plan"), start,
                                               svg + QStringLiteral(";;") + dxf, &filter);
   if (path.isEmpty()) return;
   const QString suffix = QFileInfo(path).suffix().toLower();
