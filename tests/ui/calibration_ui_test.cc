@@ -52,6 +52,7 @@
 #include "tests/testing/event_loop_turns.h"
 #include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/file_chooser.h"
 #include "tests/ui/pick_truth.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
@@ -483,24 +484,6 @@ TEST_F(CalibrationTest, PairsStayWithTheirSessionAndGoWhenAnotherOpens) {
       << panel->pick_prompt().toStdString();
 }
 
-// Answers the next file chooser: checks where it opened, then types
-// `name` into it and accepts.
-void AnswerFileChooser(const QString& name, QString* opened_in, QString* suggested) {
-  QTimer::singleShot(50, [=] {
-    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
-    if (chooser == nullptr) {
-      AnswerFileChooser(name, opened_in, suggested);
-      return;
-    }
-    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
-    ASSERT_NE(field, nullptr);
-    *opened_in = chooser->directory().absolutePath();
-    *suggested = field->text();
-    field->setText(name);
-    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
-  });
-}
-
 // The pairs' Save… (offered with a complete pair) and Load… through
 // their file choosers: opened beside
 // the session, named after it; a name typed without a suffix gets .json;
@@ -530,7 +513,7 @@ TEST_F(CalibrationTest, PairsFilesBesideTheSessionAndTheirErrorsSaid) {
   table->setCurrentCell(-1, -1);
   const QString folder = QFileInfo(DiamondSession()).absolutePath();
   QString opened_in, suggested;
-  AnswerFileChooser(QStringLiteral("mine"), &opened_in, &suggested);
+  testing::AnswerFileChooser(QStringLiteral("mine"), nullptr, &opened_in, &suggested);
   save->click();
   EXPECT_EQ(opened_in, folder);
   EXPECT_EQ(suggested, QStringLiteral("diamond-pairs.json"));
@@ -545,7 +528,7 @@ TEST_F(CalibrationTest, PairsFilesBesideTheSessionAndTheirErrorsSaid) {
   text.write("these are notes, not pairs\n");
   text.close();
   const int errors = window_->errors_shown();
-  AnswerFileChooser(QStringLiteral("notes.json"), &opened_in, &suggested);
+  testing::AnswerFileChooser(QStringLiteral("notes.json"), nullptr, &opened_in, &suggested);
   window_->findChild<QPushButton*>(QStringLiteral("loadPairs"))->click();
   EXPECT_EQ(opened_in, folder);
   EXPECT_EQ(window_->errors_shown(), errors + 1);

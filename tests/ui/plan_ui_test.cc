@@ -52,6 +52,7 @@
 #include "core/project/project.h"
 #include "core/scenario/scenario.h"
 #include "tests/testing/event_loop_turns.h"
+#include "tests/ui/file_chooser.h"
 #include "tests/ui/project_ui_fixture.h"
 #include "ui/plan/plan_build.h"
 #include "ui/plan/plan_canvas.h"
@@ -455,16 +456,7 @@ TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   // Export…'s chooser opens beside the project, named after it; a name
   // typed without a suffix is an SVG.
   QString opened_in, suggested;
-  QTimer::singleShot(50, [&] {
-    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
-    ASSERT_NE(chooser, nullptr);
-    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
-    ASSERT_NE(field, nullptr);
-    opened_in = chooser->directory().absolutePath();
-    suggested = field->text();
-    field->setText(QStringLiteral("drawing"));
-    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
-  });
+  testing::AnswerFileChooser(QStringLiteral("drawing"), nullptr, &opened_in, &suggested);
   export_button->click();
   EXPECT_EQ(opened_in, QString::fromStdString(Dir()));
   EXPECT_EQ(suggested, QStringLiteral("exports-plan.svg"));

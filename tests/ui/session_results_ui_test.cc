@@ -30,6 +30,7 @@
 #include "core/calibration/calibration_file.h"
 #include "tests/testing/run_command.h"
 #include "tests/ui/app_fixture.h"
+#include "tests/ui/file_chooser.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/evaluation_panel.h"
@@ -40,6 +41,7 @@
 namespace sweepscan::ui {
 namespace {
 
+using testing::AnswerFileChooser;
 using testing::kResources;
 using testing::WaitFor;
 
@@ -237,26 +239,6 @@ TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSessio
   EXPECT_FALSE(EvaluateByButton());
   EXPECT_NE(summary().indexOf("single session"), -1) << summary().toStdString();
   EXPECT_NE(summary().indexOf("project"), -1) << summary().toStdString();
-}
-
-// Answers the file chooser with `path`, typed into its name field; where
-// it opened and the name it suggested to `opened_in` and `suggested`.
-void AnswerFileChooser(const QString& path, bool* answered, QString* opened_in = nullptr,
-                       QString* suggested = nullptr) {
-  QTimer::singleShot(50, [path, answered, opened_in, suggested] {
-    auto* chooser = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
-    if (chooser == nullptr) {
-      AnswerFileChooser(path, answered, opened_in, suggested);
-      return;
-    }
-    auto* field = chooser->findChild<QLineEdit*>(QStringLiteral("fileNameEdit"));
-    ASSERT_NE(field, nullptr);
-    if (opened_in != nullptr) *opened_in = chooser->directory().absolutePath();
-    if (suggested != nullptr) *suggested = field->text();
-    field->setText(path);
-    QMetaObject::invokeMethod(chooser, "accept", Qt::QueuedConnection);
-    *answered = true;
-  });
 }
 
 // File > Export Cloud…'s chooser: beside the session, named after it (it
