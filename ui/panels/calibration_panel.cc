@@ -1,9 +1,7 @@
 #include "ui/panels/calibration_panel.h"
 
 #include <QCheckBox>
-#include <QDir>
 #include <QDoubleSpinBox>
-#include <QFileDialog>
 #include <QFileInfo>
 #include <QGridLayout>
 #include <QGroupBox>
@@ -24,8 +22,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/calibration/calibration_file.h"
-#include "core/common/checked_file.h"
 #include "ui/panels/calibration_result_text.h"
 #include "ui/view/cloud_view.h"
 
@@ -339,36 +335,27 @@ QWidget* CalibrationPanel::BuildPickStep() {
     if (r >= 0) DeletePair(r);
   });
   connect(save, &QPushButton::clicked, this, [this] {
-    const QString path = WithJsonSuffix(QFileDialog::getSaveFileName(
-        this, tr("Save pairs"), SuggestedFile(QStringLiteral("pairs")), tr("Pairs (*.json)")));
-    if (path.isEmpty()) return;
-    QString error;
-    if (!SavePairs(path, &error)) {
-      emit fileError(tr("Save pairs"), error);
-      return;
-    }
-    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
-    const size_t saved = pairs().size();
-    // A pick waiting for its partner is no pair: said, not silently left out.
-    emit message(saved == pairs_.size()
-                     ? tr("Saved %n pair(s) to %1", nullptr, static_cast<int>(saved)).arg(path)
+    ChooseFileAnd(
+        true, tr("Save pairs"), QStringLiteral("pairs"), tr("Pairs (*.json)"),
+        [this](const QString& path, QString* error) { return SavePairs(path, error); },
+        [this](const QString& path) {
+          // A pick waiting for its partner is no pair: said, not silently left out.
+          const int saved = static_cast<int>(pairs().size());
+          return saved == pair_count()
+                     ? tr("Saved %n pair(s) to %1", nullptr, saved).arg(path)
                      : tr("Saved %n pair(s) to %1; the unfinished pair is not saved", nullptr,
-                          static_cast<int>(saved))
-                           .arg(path));
+                          saved)
+                           .arg(path);
+        });
   });
   connect(load, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getOpenFileName(
-        this, tr("Load pairs"), QFileInfo(SuggestedFile(QStringLiteral("pairs"))).absolutePath(),
-        tr("Pairs (*.json)"));
-    if (path.isEmpty()) return;
-    QString error;
-    if (!LoadPairs(path, &error)) {
-      emit fileError(tr("Load pairs"), error);
-      return;
-    }
-    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
-    emit message(
-        tr("Loaded %n pair(s) from %1", nullptr, static_cast<int>(pairs().size())).arg(path));
+    ChooseFileAnd(
+        false, tr("Load pairs"), QStringLiteral("pairs"), tr("Pairs (*.json)"),
+        [this](const QString& path, QString* error) { return LoadPairs(path, error); },
+        [this](const QString& path) {
+          return tr("Loaded %n pair(s) from %1", nullptr, static_cast<int>(pairs().size()))
+              .arg(path);
+        });
   });
   return box;
 }
@@ -462,30 +449,16 @@ QWidget* CalibrationPanel::BuildKeepStep() {
   layout->addWidget(load_calibration, 1, 1);
   connect(after_, &QPushButton::toggled, this, &CalibrationPanel::ShowAfter);
   connect(save_calibration_, &QPushButton::clicked, this, [this] {
-    const QString path = WithJsonSuffix(QFileDialog::getSaveFileName(
-        this, tr("Save calibration"), SuggestedFile(QStringLiteral("calibration")),
-        tr("Calibration (*.json)")));
-    if (path.isEmpty()) return;
-    QString error;
-    if (!SaveCalibration(path, &error)) {
-      emit fileError(tr("Save calibration"), error);
-      return;
-    }
-    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
-    emit message(tr("Saved the calibration to %1").arg(path));
+    ChooseFileAnd(
+        true, tr("Save calibration"), QStringLiteral("calibration"), tr("Calibration (*.json)"),
+        [this](const QString& path, QString* error) { return SaveCalibration(path, error); },
+        [this](const QString& path) { return tr("Saved the calibration to %1").arg(path); });
   });
   connect(load_calibration, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getOpenFileName(
-        this, tr("Load calibration"),
-        QFileInfo(SuggestedFile(QStringLiteral("calibration"))).absolutePath(),
-        tr("Calibration (*.json)"));
-    if (path.isEmpty()) return;
-    QString error;
-    if (!LoadCalibration(path, &error)) {
-      emit fileError(tr("Load calibration"), error);
-      return;
-    }
-    QSettings().setValue(QStringLiteral("calibration/files_dir"), QFileInfo(path).absolutePath());
+    ChooseFileAnd(
+        false, tr("Load calibration"), QStringLiteral("calibration"), tr("Calibration (*.json)"),
+        [this](const QString& path, QString* error) { return LoadCalibration(path, error); },
+        [](const QString&) { return QString(); });
   });
   connect(use_for_robot_, &QPushButton::clicked, this, &CalibrationPanel::UseForRobot);
   return box;
@@ -576,32 +549,6 @@ std::vector<PickPair> CalibrationPanel::pairs() const {
     out.push_back(pair);
   }
   return out;
-}
-
-QString CalibrationPanel::SuggestedFile(const QString& what) const {
-  const QString session = workspace_->session_dir();
-  if (!session.isEmpty()) {
-    const QFileInfo info(session);
-    return info.absolutePath() + QLatin1Char('/') + info.completeBaseName() + QLatin1Char('-') +
-           what + QStringLiteral(".json");
-  }
-  const QString dir =
-      QSettings().value(QStringLiteral("calibration/files_dir"), QDir::homePath()).toString();
-  return dir + QLatin1Char('/') + what + QStringLiteral(".json");
-}
-
-QString CalibrationPanel::WithJsonSuffix(const QString& path) {
-  if (path.isEmpty() || !QFileInfo(path).suffix().isEmpty()) return path;
-  return path + QStringLiteral(".json");
-}
-
-bool CalibrationPanel::SavePairs(const QString& path, QString* error) const {
-  const Status s = WriteFileChecked(path.toStdString(), PairsToJson(pairs()));
-  if (!s.ok()) {
-    *error = QString::fromStdString(s.message());
-    return false;
-  }
-  return true;
 }
 
 bool CalibrationPanel::LoadPairs(const QString& path, QString* error) {
@@ -697,24 +644,6 @@ void CalibrationPanel::ShowAfter(bool after) {
   if (after_->isChecked() != after) after_->setChecked(after);  // Re-enters with the same value.
   workspace_->ShowCalibrated(after ? r->summary.angles : MountingError());
   after_->setText(after ? tr("Showing calibrated") : tr("Show calibrated"));
-}
-
-bool CalibrationPanel::SaveCalibration(const QString& path, QString* error) const {
-  const PickCalibrationResult* r = workspace_->calibration_result();
-  if (r == nullptr) {
-    *error = tr("Solve first.");
-    return false;
-  }
-  const Status s = SaveCalibrationFile(path.toStdString(), r->summary.angles, &r->summary);
-  if (!s.ok()) {
-    *error = QString::fromStdString(s.message());
-    return false;
-  }
-  return true;
-}
-
-bool CalibrationPanel::LoadCalibration(const QString& path, QString* error) {
-  return workspace_->LoadCalibration(path, error);
 }
 
 void CalibrationPanel::UseForRobot() {

@@ -22,6 +22,7 @@
 #define SWEEPSCAN_UI_PANELS_CALIBRATION_PANEL_H_
 
 #include <QWidget>
+#include <functional>
 #include <vector>
 
 #include "core/calibration/picks.h"
@@ -115,6 +116,12 @@ class CalibrationPanel : public QWidget {
   // the live cloud), unless the operator has chosen another since.
   void RestoreColorMode();
   void StartSolving();
+  // A Save… or Load… button (calibration_panel_files.cc): `act` on the
+  // file chosen, its error a message (fileError), its folder remembered,
+  // and what `done` says of it in the status bar.
+  void ChooseFileAnd(bool save, const QString& title, const QString& what, const QString& filter,
+                     const std::function<bool(const QString&, QString*)>& act,
+                     const std::function<QString(const QString&)>& done);
   // The Save and Load dialogs' file: beside the session shown, named after
   // it ("lab-pairs.json"), or the folder last used.
   QString SuggestedFile(const QString& what) const;
