@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <functional>
 
+#include "ui/filter_suffix.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
@@ -33,18 +34,6 @@
 
 namespace sweepscan::ui {
 namespace {
-
-// A file dialog's name without a suffix takes the chosen filter's first one
-// ("PLY (*.ply)" -> name.ply): the non-native dialog leaves it bare, and the
-// exporter then refused "unknown cloud format".
-QString WithFilterSuffix(const QString& path, const QString& filter) {
-  if (path.isEmpty() || !QFileInfo(path).suffix().isEmpty()) return path;
-  const int star = filter.indexOf(QStringLiteral("*."));
-  if (star < 0) return path;
-  int end = star + 2;
-  while (end < filter.size() && filter[end].isLetterOrNumber()) ++end;
-  return path + filter.mid(star + 1, end - star - 1);
-}
 
 // The pose sources an opened session can be made with, in menu order.
 constexpr PoseSource kPoseSources[] = {PoseSource::kEkf, PoseSource::kOdometry, PoseSource::kSfm};
@@ -140,14 +129,13 @@ void MainWindow::BuildFileMenu() {
     QString filter;
     // Named after the session, in the folder last exported to, or beside
     // the session (it opened in the working folder with no name).
-    const QFileInfo session(workspace_->session_dir());
-    const QString dir =
-        settings
-            .value(QStringLiteral("export/dir"),
-                   workspace_->session_dir().isEmpty() ? QString() : session.absolutePath())
-            .toString();
-    const QString name =
-        workspace_->session_dir().isEmpty() ? QString() : session.completeBaseName() + ".ply";
+    const QString session_dir = workspace_->session_dir();
+    const QFileInfo session(session_dir);
+    const QString dir = settings
+                            .value(QStringLiteral("export/dir"),
+                                   session_dir.isEmpty() ? QString() : session.absolutePath())
+                            .toString();
+    const QString name = session_dir.isEmpty() ? QString() : session.completeBaseName() + ".ply";
     const QString path = WithFilterSuffix(
         QFileDialog::getSaveFileName(this, tr("Export cloud"),
                                      dir.isEmpty() ? name : dir + QLatin1Char('/') + name,

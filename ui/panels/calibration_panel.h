@@ -125,8 +125,6 @@ class CalibrationPanel : public QWidget {
   // The Save and Load dialogs' file: beside the session shown, named after
   // it ("lab-pairs.json"), or the folder last used.
   QString SuggestedFile(const QString& what) const;
-  // `path` as chosen in a save dialog, with ".json" when it has no suffix.
-  static QString WithJsonSuffix(const QString& path);
 
   Workspace* workspace_;
   CloudView* view_;

@@ -9,6 +9,7 @@
 #include "core/calibration/calibration_file.h"
 #include "core/calibration/picks.h"
 #include "core/common/checked_file.h"
+#include "ui/filter_suffix.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/workspace/workspace.h"
 
@@ -20,7 +21,7 @@ void CalibrationPanel::ChooseFileAnd(bool save, const QString& title, const QStr
                                      const std::function<QString(const QString&)>& done) {
   const QString suggested = SuggestedFile(what);
   const QString path =
-      save ? WithJsonSuffix(QFileDialog::getSaveFileName(this, title, suggested, filter))
+      save ? WithFilterSuffix(QFileDialog::getSaveFileName(this, title, suggested, filter), filter)
            : QFileDialog::getOpenFileName(this, title, QFileInfo(suggested).absolutePath(), filter);
   if (path.isEmpty()) return;
   QString error;
@@ -44,11 +45,6 @@ QString CalibrationPanel::SuggestedFile(const QString& what) const {
   const QString dir =
       QSettings().value(QStringLiteral("calibration/files_dir"), QDir::homePath()).toString();
   return dir + QLatin1Char('/') + what + QStringLiteral(".json");
-}
-
-QString CalibrationPanel::WithJsonSuffix(const QString& path) {
-  if (path.isEmpty() || !QFileInfo(path).suffix().isEmpty()) return path;
-  return path + QStringLiteral(".json");
 }
 
 bool CalibrationPanel::SavePairs(const QString& path, QString* error) const {
