@@ -54,14 +54,6 @@ const char* const kReconstructUsage =
 
 namespace {
 
-// LAS System Identifier (spec §2.4): the hardware for a robot's recording,
-// the operation otherwise (a simulation, an imported bag of unknown sensors).
-std::string LasSystemIdentifier(const SessionMeta& meta) {
-  if (meta.content == kSessionContentMeasurements) return "OTHER";
-  if (meta.link.rfind("sim", 0) == 0) return "sweepscan simulation";
-  return "sweepscan YDLIDAR X4";
-}
-
 // Where a cloud export goes, in pieces: LAS 1.4 (docs/las-format.md)
 // through LasWriter, PLY / PCD through CloudFileWriter. The LAS writer needs
 // a box holding every point (its scale and offset) and the earliest point's
@@ -131,7 +123,7 @@ class CloudOutput {
     if (!time.ok()) {
       std::cerr << "sweepscan-cli: warning: " << session_ << "/" << kSessionMetaFile << ": " << time.message() << "\n";
     }
-    las_options_.system_identifier = LasSystemIdentifier(meta_);
+    las_options_.system_identifier = SessionSystemIdentifier(meta_);
     las_options_.generating_software = "sweepscan 0.1.0";
     return las_writer_.Open(path_, las_options_);
   }

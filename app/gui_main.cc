@@ -180,10 +180,14 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
     }
   }
   if (!o.export_cloud.isEmpty()) {
-    const Status s = SaveCloud(o.export_cloud.toStdString(), workspace->CloudSnapshot());
+    std::string note;
+    const Status s = workspace->ExportCloudNow(o.export_cloud, &note);
     if (!s.ok()) {
       std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
       exit_code = 1;
+    } else if (!note.empty()) {
+      std::fprintf(stderr, "sweepscan: warning: %s: %s\n", qPrintable(o.export_cloud),
+                   note.c_str());
     }
   }
   const nlohmann::json j = {

@@ -135,14 +135,26 @@ void MainWindow::BuildFileMenu() {
                             .value(QStringLiteral("export/dir"),
                                    session_dir.isEmpty() ? QString() : session.absolutePath())
                             .toString();
-    const QString name = session_dir.isEmpty() ? QString() : session.completeBaseName() + ".ply";
+    // In the format last exported (a surveyor exports LAS every time).
+    const QStringList filters = {tr("PLY (*.ply)"), tr("LAS 1.4 (*.las)"), tr("PCD (*.pcd)")};
+    const QString suffix = settings.value(QStringLiteral("export/suffix"), "ply").toString();
+    filter = filters[0];
+    for (const QString& f : filters) {
+      if (f.contains(QStringLiteral("*.") + suffix)) filter = f;
+    }
+    const QString name =
+        session_dir.isEmpty() ? QString() : session.completeBaseName() + '.' + suffix;
     const QString path = WithFilterSuffix(
         QFileDialog::getSaveFileName(this, tr("Export cloud"),
                                      dir.isEmpty() ? name : dir + QLatin1Char('/') + name,
-                                     tr("PLY (*.ply);;PCD (*.pcd)"), &filter),
+                                     filters.join(QStringLiteral(";;")), &filter),
         filter);
     if (path.isEmpty()) return;
     settings.setValue(QStringLiteral("export/dir"), QFileInfo(path).absolutePath());
+    const QString used = QFileInfo(path).suffix().toLower();
+    if (used == "ply" || used == "las" || used == "pcd") {
+      settings.setValue(QStringLiteral("export/suffix"), used);
+    }
     workspace_->ExportCloud(path);
   });
   export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));

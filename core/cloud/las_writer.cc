@@ -500,4 +500,37 @@ Status LasWriter::Finish() {
   return Status::Ok();
 }
 
+// ---------------------------------------------------------------------------
+
+Status SaveLas(const std::string& path, const CloudSnapshotRef& cloud,
+               const std::string& created_utc, LasWriterOptions options,
+               const std::atomic<bool>* cancel, LasWriteStats* stats, std::string* time_note) {
+  const auto cancelled = [cancel] { return cancel != nullptr && cancel->load(); };
+  const Status stopped = Status::Error(path + ": cancelled");
+  // Pass 1: the box that sets the scale and offset, and the earliest time
+  // that anchors the GPS clock (the header needs both before any record).
+  LasExtent extent;
+  if (!cloud.ForEachChunk([&](const CloudPoint* p, size_t n) {
+        extent.Add(p, n);
+        return !cancelled();
+      })) {
+    return stopped;
+  }
+  options.extent = extent;
+  const Status time = SetLasTimeFromSession(created_utc, extent, &options);
+  if (time_note != nullptr) *time_note = time.ok() ? std::string() : time.message();
+  // Pass 2: the records.
+  LasWriter writer;
+  Status s = writer.Open(path, options);
+  const bool all = s.ok() && cloud.ForEachChunk([&](const CloudPoint* p, size_t n) {
+    s = writer.Append(p, n);
+    return s.ok() && !cancelled();
+  });
+  if (!s.ok()) return s;  // The writer removes its temporary.
+  if (!all) return stopped;
+  s = writer.Finish();
+  if (s.ok() && stats != nullptr) *stats = writer.stats();
+  return s;
+}
+
 }  // namespace sweepscan

@@ -23,6 +23,7 @@
 #ifndef SWEEPSCAN_CORE_CLOUD_LAS_WRITER_H_
 #define SWEEPSCAN_CORE_CLOUD_LAS_WRITER_H_
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -173,6 +174,17 @@ class LasWriter {
   LasWriteStats stats_;
   std::string failed_;
 };
+
+// A cloud snapshot (the app's cloud) as a LAS file, in two passes over its
+// chunks, one chunk decoded at a time: the extent and earliest time, then the
+// records. `options.extent` and its time fields are set here from the cloud
+// and `created_utc` (SetLasTimeFromSession); when the time cannot be anchored
+// the file is still written, its times robot seconds, and the reason is put in
+// *time_note. Stops (no file) when `cancel` becomes true, with "cancelled".
+Status SaveLas(const std::string& path, const CloudSnapshotRef& cloud,
+               const std::string& created_utc, LasWriterOptions options,
+               const std::atomic<bool>* cancel = nullptr, LasWriteStats* stats = nullptr,
+               std::string* time_note = nullptr);
 
 }  // namespace sweepscan
 

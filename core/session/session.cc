@@ -92,6 +92,12 @@ std::string UtcNowIso8601() {
 // ---------------------------------------------------------------------------
 // meta.json
 
+std::string SessionSystemIdentifier(const SessionMeta& meta) {
+  if (meta.content == kSessionContentMeasurements) return "OTHER";
+  if (meta.link.rfind("sim", 0) == 0) return "sweepscan simulation";
+  return "sweepscan YDLIDAR X4";
+}
+
 Pose2d SessionStartPose(const SessionMeta& meta) {
   Pose2d start;
   const json& s = meta.settings;

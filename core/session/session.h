@@ -86,6 +86,11 @@ inline constexpr char kSessionContentMeasurements[] = "measurements";
 // bag's odometry frame; otherwise the origin (a real robot's world is its
 // start pose).
 Pose2d SessionStartPose(const SessionMeta& meta);
+// What recorded the session, as a LAS file's System Identifier names it
+// (ASPRS LAS 1.4 §2.4, docs/las-format.md): the hardware for a robot's
+// recording, the operation otherwise (a simulation; an imported bag, whose
+// sensors are unknown: "OTHER").
+std::string SessionSystemIdentifier(const SessionMeta& meta);
 
 nlohmann::json SessionMetaToJson(const SessionMeta& meta);
 // Strict: missing keys, wrong types, unknown keys, out-of-range values and an

@@ -23,6 +23,7 @@
 #include <QTest>
 #include <QTimer>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -277,6 +278,77 @@ TEST_F(SessionResultsTest, ExportCloudOffersTheSessionsFolderAndName) {
   EXPECT_EQ(opened_in, QFileInfo(tmp_.path()).absoluteFilePath());
   EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
   ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+}
+
+// LAS, which a surveyor's tools read, from the same chooser: a name typed
+// without a suffix takes .las; the file holds every point of the cloud, its
+// GPS times anchored on the session's start (meta.json's created_utc) and
+// its System Identifier naming the simulation (as `sweepscan-cli export`
+// writes; the format is read back by independent readers in
+// las_writer_test). The next export offers LAS again.
+TEST_F(SessionResultsTest, ExportCloudWritesLasAndOffersItNextTime) {
+  QSettings().remove(QStringLiteral("export/dir"));
+  QSettings().remove(QStringLiteral("export/suffix"));
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  QAction* export_cloud = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == QStringLiteral("&Export Cloud…")) export_cloud = a;
+  }
+  ASSERT_NE(export_cloud, nullptr);
+  bool answered = false, finished = false;
+  QString said, suggested, suggested_filter;
+  QObject context;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                   [&](const QString& what, bool, const QString&) {
+                     if (what.startsWith("Exporting")) finished = true;
+                   });
+  QObject::connect(workspace_.get(), &Workspace::message, &context,
+                   [&](const QString& m) { said = m; });
+  const QString out = tmp_.path() + "/survey";
+  AnswerFileChooser(out, &answered, nullptr, &suggested, QStringLiteral("LAS 1.4 (*.las)"),
+                    &suggested_filter);
+  export_cloud->trigger();
+  ASSERT_TRUE(answered);
+  EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
+  EXPECT_EQ(suggested_filter, QStringLiteral("PLY (*.ply)"));
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  QFile file(out + ".las");
+  ASSERT_TRUE(file.open(QIODevice::ReadOnly)) << window_->last_error().toStdString();
+  const QByteArray b = file.readAll();
+  ASSERT_GE(b.size(), 375);
+  const auto u16 = [&](int at) {
+    uint16_t v;
+    std::memcpy(&v, b.constData() + at, 2);
+    return v;
+  };
+  uint64_t count;
+  std::memcpy(&count, b.constData() + 247, 8);  // LAS 1.4 §2.4: Number of Point Records
+  EXPECT_EQ(b.left(4), QByteArray("LASF"));
+  EXPECT_EQ(b[24], 1);
+  EXPECT_EQ(b[25], 4);
+  EXPECT_EQ(u16(6) & 1, 1);  // Global Encoding bit 0: adjusted standard GPS time
+  EXPECT_EQ(QByteArray(b.constData() + 26).left(32), QByteArray("sweepscan simulation"));
+  EXPECT_EQ(count, workspace_->CloudSize());
+  EXPECT_GT(count, 200000u);
+  // The header's offset to the points plus the records fill the file
+  // (§2.4: Offset to Point Data at 96, Point Data Record Length at 105).
+  uint32_t offset;
+  std::memcpy(&offset, b.constData() + 96, 4);
+  EXPECT_EQ(static_cast<uint64_t>(b.size()), offset + count * u16(105));
+  EXPECT_NE(said.indexOf(QStringLiteral("Exported %1 points").arg(count)), -1)
+      << said.toStdString();
+  EXPECT_EQ(said.indexOf(QStringLiteral("robot seconds")), -1) << said.toStdString();
+  // The next export offers the same format, named after the session.
+  answered = false;
+  finished = false;
+  AnswerFileChooser(tmp_.path() + "/again.las", &answered, nullptr, &suggested, QString(),
+                    &suggested_filter);
+  export_cloud->trigger();
+  ASSERT_TRUE(answered);
+  EXPECT_EQ(suggested, QStringLiteral("lab.las"));
+  EXPECT_EQ(suggested_filter, QStringLiteral("LAS 1.4 (*.las)"));
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  QSettings().remove(QStringLiteral("export/suffix"));
 }
 
 // Export report… into a folder that cannot be written: an error message as

@@ -27,6 +27,7 @@
 #include "core/sfm/wheeled.h"
 #include "hardware/link/qt_transport.h"
 #include "ui/workspace/background_priority.h"
+#include "ui/workspace/cloud_export.h"
 #include "ui/workspace/live_processor.h"
 #include "ui/workspace/sim_robot.h"
 #include "ui/workspace/thread_call.h"
@@ -472,19 +473,29 @@ void Workspace::ExportCloud(const QString& path) {
   auto snapshot = std::make_shared<const CloudSnapshotRef>(CloudSnapshot());
   const size_t count = snapshot->size();
   const std::string file = path.toStdString();
+  const std::string session = session_dir_.toStdString();
+  const SessionMeta live = live_meta_;
+  auto note = std::make_shared<std::string>();
   RunJob(
       QStringLiteral("Exporting %1").arg(path),
-      [snapshot, file](std::atomic<bool>* cancel) -> QString {
+      [snapshot, file, session, live, note](std::atomic<bool>* cancel) -> QString {
         if (snapshot->size() == 0) return QStringLiteral("The cloud is empty: nothing to export.");
         // Streamed a chunk at a time (the cloud is not decoded whole; the
         // file appears whole or not at all).
-        const Status s = SaveCloud(file, *snapshot, cancel);
+        const Status s = ExportCloudFile(file, *snapshot, session, live, cancel, note.get());
         if (*cancel) return QStringLiteral("Cancelled.");
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, path, count] {
-        emit message(QStringLiteral("Exported %1 points to %2").arg(count).arg(path));
+      [this, path, count, note] {
+        QString said = QStringLiteral("Exported %1 points to %2").arg(count).arg(path);
+        if (!note->empty()) said += QStringLiteral(" (%1)").arg(QString::fromStdString(*note));
+        emit message(said);
       });
+}
+
+Status Workspace::ExportCloudNow(const QString& path, std::string* note) {
+  return ExportCloudFile(path.toStdString(), CloudSnapshot(), session_dir_.toStdString(),
+                         live_meta_, nullptr, note);
 }
 
 void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,

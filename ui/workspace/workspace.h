@@ -161,8 +161,11 @@ class Workspace : public QObject {
   void SetReplayPaused(bool paused);
   void SeekReplay(double position_s);
   bool replaying() const { return replaying_; }
-  // Writes the cloud shown (PLY or PCD by extension) on a job thread.
+  // Writes the cloud shown (LAS, PLY or PCD by extension; cloud_export.h)
+  // on a job thread.
   void ExportCloud(const QString& path);
+  // The same at once, on the calling thread (--export-cloud before quitting).
+  Status ExportCloudNow(const QString& path, std::string* note);
 
   // ---- ROS recordings (docs/ros-bags.md; workspace_import.cc) -----------
   // Reads what a bag holds (topics, types, counts, tf) on a job thread: an

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -20,8 +21,8 @@
 
 #include "core/cloud/cloud_io.h"
 #include "core/session/session.h"
-#include "tests/testing/run_command.h"
 #include "tests/testing/remove_at_exit.h"
+#include "tests/testing/run_command.h"
 
 namespace sweepscan {
 namespace {
@@ -250,6 +251,41 @@ TEST(LasWriterTest, AnyChunkingWritesTheSameBytes) {
     ASSERT_TRUE(Write(Tmp("chunked.las"), pts, o, chunk).ok());
     EXPECT_EQ(ReadBytes(Tmp("chunked.las")), whole) << chunk;
   }
+}
+
+// The app's export: a cloud store's snapshot (sealed, packed chunks and the
+// open one) written in two passes is the file the writer makes of the same
+// points in one; without a usable created_utc it is still written, and says
+// why its times are robot seconds; cancelled, it leaves nothing.
+TEST(LasWriterTest, ASnapshotIsWrittenAsItsPointsAre) {
+  PointChunks cloud(4096);
+  for (const CloudPoint& p : RoomPoints(30000)) cloud.Append(p);  // 7 sealed chunks and an open one
+  const CloudSnapshotRef snapshot = cloud.Snapshot();
+  ASSERT_EQ(snapshot.sealed.size(), 7u);
+  ASSERT_FALSE(snapshot.open.empty());
+  const std::vector<CloudPoint> pts = snapshot.Flatten();  // positions as the store keeps them
+  LasWriterOptions base;
+  base.system_identifier = "sweepscan YDLIDAR X4";
+  base.generating_software = "sweepscan 0.1.0";
+  std::string note = "x";
+  LasWriteStats stats;
+  ASSERT_TRUE(
+      SaveLas(Tmp("snapshot.las"), snapshot, "2026-11-22T10:15:00Z", base, nullptr, &stats, &note)
+          .ok());
+  EXPECT_EQ(note, "");
+  EXPECT_EQ(stats.points, pts.size());
+  ASSERT_TRUE(Write(Tmp("points.las"), pts, OptionsFor(pts)).ok());
+  EXPECT_EQ(ReadBytes(Tmp("snapshot.las")), ReadBytes(Tmp("points.las")));
+
+  ASSERT_TRUE(SaveLas(Tmp("undated.las"), snapshot, "", base, nullptr, nullptr, &note).ok());
+  EXPECT_NE(note.find("robot seconds"), std::string::npos) << note;
+  EXPECT_EQ(Get<uint16_t>(ReadBytes(Tmp("undated.las")), 6), 0x10);
+
+  std::atomic<bool> cancel{true};
+  const Status s = SaveLas(Tmp("cancelled.las"), snapshot, "2026-11-22T10:15:00Z", base, &cancel);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("cancelled"), std::string::npos) << s.message();
+  EXPECT_EQ(Ls(Dir()).find("cancelled"), std::string::npos) << Ls(Dir());
 }
 
 TEST(LasWriterTest, ScaleAndOffsetFollowTheExtent) {
