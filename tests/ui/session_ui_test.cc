@@ -10,6 +10,7 @@
 #include <QFile>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QLabel>
 #include <QLineEdit>
 #include <QMessageBox>
 #include <QPushButton>
@@ -231,12 +232,53 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
     ASSERT_TRUE(f.resize(f.size() / 2 + 7));
   }
   bool finished = false;
+  QString said;
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
+  QObject::connect(workspace_.get(), &Workspace::message, [&](const QString& m) {
+    if (m.contains(QStringLiteral("ends early"))) said = m;
+  });
   failed.clear();
   window_->OpenSessionPath(truncated);
   ASSERT_TRUE(WaitFor([&] { return finished || !failed.isEmpty(); }, 60000));
   EXPECT_TRUE(finished) << failed.toStdString();
   EXPECT_GT(workspace_->CloudSnapshot().size(), 1000u);
+  // ... and says that it ends early, where and why (it replayed to its cut
+  // as if that were the end of the drive).
+  EXPECT_TRUE(said.startsWith(truncated + QStringLiteral(": the recording ends early")))
+      << said.toStdString();
+  EXPECT_NE(said.indexOf(QStringLiteral(" bytes left out: record ")), -1) << said.toStdString();
+  // The replay panel keeps saying it while the session is open, and stops
+  // for a whole one.
+  auto* damage = window_->findChild<QLabel*>(QStringLiteral("replayDamage"));
+  ASSERT_NE(damage, nullptr);
+  EXPECT_TRUE(damage->isVisible());
+  EXPECT_EQ(damage->text(), QStringLiteral("ends early: cut off while recording"));
+  EXPECT_NE(damage->toolTip().indexOf(QStringLiteral("bytes left out")), -1);
+  // A stretch of damage inside (a bad sector, a copy gone wrong): skipped,
+  // counted and said beside the name too.
+  const QString damaged = tmp_.path() + "/damaged.sweepscan";
+  QDir().mkpath(damaged);
+  QFile::copy(good + "/meta.json", damaged + "/meta.json");
+  QFile::copy(good + "/frames.bin", damaged + "/frames.bin");
+  {
+    QFile f(damaged + "/frames.bin");
+    ASSERT_TRUE(f.open(QIODevice::ReadWrite));
+    ASSERT_TRUE(f.seek(f.size() * 2 / 5));
+    f.write(QByteArray(64, '\xA5'));
+  }
+  finished = false;
+  window_->OpenSessionPath(damaged);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  EXPECT_TRUE(damage->isVisible());
+  EXPECT_TRUE(damage->text().endsWith(QStringLiteral(" damaged records skipped")) ||
+              damage->text() == QStringLiteral("1 damaged record skipped"))
+      << damage->text().toStdString();
+  EXPECT_NE(damage->toolTip().indexOf(QStringLiteral("of data lost")), -1)
+      << damage->toolTip().toStdString();
+  finished = false;
+  window_->OpenSessionPath(good);
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
+  EXPECT_FALSE(damage->isVisible()) << damage->text().toStdString();
 
   // 4. A folder that is no session, and a recent session since deleted:
   // said plainly (it was "DIR/meta.json: cannot open for reading"), and the

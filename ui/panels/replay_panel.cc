@@ -7,6 +7,7 @@
 #include <QPushButton>
 #include <QSignalBlocker>
 #include <QSlider>
+#include <QStringList>
 #include <QVBoxLayout>
 
 namespace sweepscan::ui {
@@ -18,7 +19,18 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   session_->setObjectName(QStringLiteral("replaySession"));
   session_->setWordWrap(true);
   session_->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  layout->addWidget(session_);
+  // Kept in sight while the session is open, beside its name (the panel
+  // has no height to spare): the status bar's message of it lasts seconds,
+  // and a replay that stops at a cut looks like a whole drive.
+  auto* name_row = new QHBoxLayout;
+  name_row->addWidget(session_, 1);
+  layout->addLayout(name_row);
+  damage_ = new QLabel;
+  damage_->setObjectName(QStringLiteral("replayDamage"));
+  damage_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  damage_->setStyleSheet(QStringLiteral("color: #b35900;"));
+  damage_->hide();
+  name_row->addWidget(damage_);
   slider_ = new QSlider(Qt::Horizontal);
   slider_->setObjectName(QStringLiteral("replaySlider"));
   slider_->setRange(0, 1000);
@@ -110,6 +122,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
     position_->setText(QStringLiteral("0.0 / 0.0 s"));
     UpdatePause();
     ShowPoseSource();
+    ShowDamage();
   });
   connect(pose_source_, QOverload<int>::of(&QComboBox::activated), this, [this] {
     workspace_->SetPoseSource(static_cast<PoseSource>(pose_source_->currentData().toInt()));
@@ -140,6 +153,31 @@ void ReplayPanel::ShowPoseSource() {
     note = tr("Cloud made with the %1 poses.").arg(PoseSourceTitle(shown));
   }
   pose_note_->setText(note);
+}
+
+void ReplayPanel::ShowDamage() {
+  const hardware::Recording* opened = workspace_->recording_opened();
+  QStringList said, details;
+  if (opened != nullptr) {
+    const FramesLoadReport& f = opened->decode.frames;
+    if (f.damaged()) {
+      const auto n = static_cast<qulonglong>(f.corrupt_records_skipped);
+      said << (n == 1 ? tr("1 damaged record skipped") : tr("%1 damaged records skipped").arg(n));
+      details << QString::fromStdString(f.DamageSummary());
+    }
+    if (f.truncated_tail) {
+      // Short enough beside the name without wrapping (the rest is in the tooltip).
+      said << (said.isEmpty() ? tr("ends early: cut off while recording") : tr("ends early"));
+      details << tr("It ends early: its last record was cut off as it was written (a crash or "
+                    "power loss?), and what was recorded before it is shown. %1 bytes left out "
+                    "(%2).")
+                     .arg(f.tail_bytes_dropped)
+                     .arg(QString::fromStdString(f.tail_reason));
+    }
+  }
+  damage_->setText(said.join(QStringLiteral("; ")));
+  damage_->setToolTip(details.join(QLatin1Char('\n')));
+  damage_->setVisible(!said.isEmpty());
 }
 
 void ReplayPanel::UpdatePause() {

@@ -29,6 +29,7 @@ class ReplayPanel : public QWidget {
  private:
   Workspace* workspace_;
   QLabel* session_;
+  QLabel* damage_;  // What of the opened session could not be read; hidden if nothing.
   QSlider* slider_;
   QLabel* position_;
   QComboBox* speed_;
@@ -36,6 +37,7 @@ class ReplayPanel : public QWidget {
   QComboBox* pose_source_;
   QLabel* pose_note_;
   void ShowPoseSource();
+  void ShowDamage();
   void UpdatePause();  // Enabled while a replay runs; "Resume" when paused.
 
   double length_s_ = 0.0;

@@ -11,6 +11,7 @@
 #include <QFileInfo>
 #include <QMetaObject>
 #include <QStandardPaths>
+#include <QStringList>
 #include <QTimer>
 #include <algorithm>
 #include <cmath>
@@ -362,10 +363,20 @@ void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const
                            const QString& dir, bool samples_released) {
   StopRecordingOrSay();
   // A damaged recording opens without its damaged records; say what was
-  // lost (how many records and seconds, where).
-  if (recording->decode.frames.damaged()) {
-    emit message(tr("%1: %2").arg(dir).arg(QString::fromStdString(recording->decode.frames.DamageSummary())));
+  // lost (how many records and seconds, where). One cut off as it was
+  // written opens with what was recorded before the cut, which a replay
+  // that simply stops early would not tell.
+  const FramesLoadReport& frames = recording->decode.frames;
+  QStringList said;
+  if (frames.damaged()) said << QString::fromStdString(frames.DamageSummary());
+  if (frames.truncated_tail) {
+    said << tr("the recording ends early: its last record was cut off as it was written (a crash "
+               "or power loss?), and everything recorded before it is shown (%1 bytes left out: "
+               "%2)")
+                .arg(frames.tail_bytes_dropped)
+                .arg(QString::fromStdString(frames.tail_reason));
   }
+  if (!said.isEmpty()) emit message(tr("%1: %2").arg(dir, said.join(QStringLiteral("; "))));
   ForgetSessionResults();
   opened_ = std::move(recording);
   opened_samples_released_ = samples_released;
