@@ -200,7 +200,7 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   };
   auto picks_made = [&] {
     const auto& p = panel->pair_points();
-    return p.size() * 2 - ((!p.empty() && !p.back().has_b) ? 1 : 0);
+    return p.size() * 2 - ((!p.empty() && !p.back().complete()) ? 1 : 0);
   };
   for (const Eigen::Vector3d& corner : kDiamondCorners) {
     for (int pass = 0; pass < 2; ++pass) {
@@ -482,6 +482,66 @@ TEST_F(CalibrationTest, PairsStayWithTheirSessionAndGoWhenAnotherOpens) {
   EXPECT_EQ(history->count(), 0);
   EXPECT_NE(panel->pick_prompt().indexOf("the pair picked in the live cloud was cleared"), -1)
       << panel->pick_prompt().toStdString();
+}
+
+// A pair may start in either pass. Its first pick, made with pass B shown,
+// is listed under pass B and the prompt asks for the same corner in pass A
+// (it was listed under "pass A (m)", and the prompt asked for pass B). A
+// pick again in the pass the open pair has replaces that pick; with both
+// passes shown a pair takes A, then B; Undo takes back each pick. Before a
+// session is open, the prompt says to open one.
+TEST_F(CalibrationTest, APairStartedInPassBWaitsForItsPickInPassA) {
+  CalibrationPanel* panel = window_->calibration_panel();
+  // No session: step 3 says where pairs come from, not which pass to pick in.
+  EXPECT_NE(panel->pick_prompt().indexOf("open its session"), -1)
+      << panel->pick_prompt().toStdString();
+  OpenDiamond();
+  auto* table = panel->findChild<QTableWidget*>();
+  ASSERT_NE(table, nullptr);
+  const Eigen::Vector3d in_b = kDiamondCorners[0] + Eigen::Vector3d(0.02, 0.0, 0.0);
+  const Eigen::Vector3d again = kDiamondCorners[0] + Eigen::Vector3d(0.0, 0.01, 0.0);
+  const Eigen::Vector3d in_a = kDiamondCorners[0];
+  panel->ShowPass(1);
+  panel->AddPick(in_b);
+  ASSERT_EQ(panel->pair_points().size(), 1u);
+  EXPECT_EQ(table->item(0, 0)->text(), QStringLiteral("(pick A)"));
+  EXPECT_NE(table->item(0, 1)->text(), QStringLiteral("(pick B)"));
+  EXPECT_NE(panel->pick_prompt().indexOf("same corner in pass A"), -1)
+      << panel->pick_prompt().toStdString();
+  EXPECT_TRUE(panel->pairs().empty());
+  panel->AddPick(again);  // pass B again: the corner picked anew
+  ASSERT_EQ(panel->pair_points().size(), 1u);
+  EXPECT_FALSE(panel->pair_points()[0].has_a);
+  EXPECT_EQ(panel->pair_points()[0].b, again);
+  panel->ShowPass(0);
+  panel->AddPick(in_a);
+  ASSERT_EQ(panel->pairs().size(), 1u);
+  EXPECT_EQ(panel->pairs()[0].pass1.world, in_a);
+  EXPECT_EQ(panel->pairs()[0].pass2.world, again);
+  EXPECT_NE(panel->pick_prompt().indexOf("1 complete pairs"), -1)
+      << panel->pick_prompt().toStdString();
+  // Both passes shown: A, then B.
+  panel->ShowPass(-1);
+  panel->AddPick(kDiamondCorners[1]);
+  EXPECT_NE(panel->pick_prompt().indexOf("same corner in pass B"), -1)
+      << panel->pick_prompt().toStdString();
+  panel->AddPick(kDiamondCorners[2]);
+  ASSERT_EQ(panel->pairs().size(), 2u);
+  EXPECT_EQ(panel->pairs()[1].pass1.world, kDiamondCorners[1]);
+  EXPECT_EQ(panel->pairs()[1].pass2.world, kDiamondCorners[2]);
+  // Undo, a pick at a time: back to the first pair complete, then waiting
+  // for pass A with its second pass-B pick, then with its first.
+  QUndoStack* history = window_->session_undo_stack();
+  history->undo();
+  history->undo();
+  history->undo();
+  ASSERT_EQ(panel->pair_points().size(), 1u);
+  EXPECT_FALSE(panel->pair_points()[0].has_a);
+  EXPECT_EQ(panel->pair_points()[0].b, again);
+  history->undo();
+  ASSERT_EQ(panel->pair_points().size(), 1u);
+  EXPECT_EQ(panel->pair_points()[0].b, in_b);
+  EXPECT_EQ(table->item(0, 0)->text(), QStringLiteral("(pick A)"));
 }
 
 // The pairs' Save… (offered with a complete pair) and Load… through

@@ -514,17 +514,19 @@ void CalibrationPanel::RestoreColorMode() {
 }
 
 void CalibrationPanel::AddPick(const Eigen::Vector3d& world) {
+  // The pass a pick is in: the one shown (step 2's buttons); with both
+  // shown, the side the pair lacks, A first.
   std::vector<PairPoints> next = pairs_;
-  if (!next.empty() && !next.back().has_b) {
-    next.back().b = world;
-    next.back().has_b = true;
-    undo_->push(new PairsCommand(this, next, tr("pick B")));
-  } else {
-    PairPoints p;
-    p.a = world;
-    next.push_back(p);
-    undo_->push(new PairsCommand(this, next, tr("pick A")));
-  }
+  const bool open = !next.empty() && !next.back().complete();
+  int pass = pass_shown_;
+  if (pass < 0) pass = open && next.back().has_a ? 1 : 0;
+  if (!open) next.emplace_back().has_a = false;
+  // A second pick in the pass the open pair already has replaces its pick
+  // there (a corner picked again), undoably.
+  PairPoints& p = next.back();
+  (pass == 0 ? p.a : p.b) = world;
+  (pass == 0 ? p.has_a : p.has_b) = true;
+  undo_->push(new PairsCommand(this, next, pass == 0 ? tr("pick A") : tr("pick B")));
 }
 
 void CalibrationPanel::DeletePair(int index) {
@@ -542,7 +544,7 @@ void CalibrationPanel::SetPairs(const std::vector<PairPoints>& pairs) {
 std::vector<PickPair> CalibrationPanel::pairs() const {
   std::vector<PickPair> out;
   for (const PairPoints& p : pairs_) {
-    if (!p.has_b) continue;
+    if (!p.complete()) continue;
     PickPair pair;
     pair.pass1.world = p.a;
     pair.pass2.world = p.b;
@@ -668,11 +670,12 @@ void CalibrationPanel::Refresh() {
   table_->setRowCount(static_cast<int>(pairs_.size()));
   for (size_t i = 0; i < pairs_.size(); ++i) {
     const int row = static_cast<int>(i);
-    table_->setItem(row, 0, new QTableWidgetItem(Xyz(pairs_[i].a)));
+    table_->setItem(row, 0,
+                    new QTableWidgetItem(pairs_[i].has_a ? Xyz(pairs_[i].a) : tr("(pick A)")));
     table_->setItem(row, 1,
                     new QTableWidgetItem(pairs_[i].has_b ? Xyz(pairs_[i].b) : tr("(pick B)")));
     QString gap = QStringLiteral("-");
-    if (checks && pairs_[i].has_b) {
+    if (checks && pairs_[i].complete()) {
       const auto& c = result->pair_checks[i];
       gap = QStringLiteral("%1 → %2").arg(c.before_m * 1e3, 0, 'f', 1).arg(c.after_m * 1e3, 0,
                                                                             'f', 1);
@@ -691,7 +694,7 @@ void CalibrationPanel::Refresh() {
   const int highlight = table_->currentRow();
   for (size_t i = 0; i < pairs_.size(); ++i) {
     const bool h = static_cast<int>(i) == highlight;
-    if (pass_shown_ != 1) markers.push_back({pairs_[i].a, kColorA, h});
+    if (pairs_[i].has_a && pass_shown_ != 1) markers.push_back({pairs_[i].a, kColorA, h});
     if (pairs_[i].has_b && pass_shown_ != 0) markers.push_back({pairs_[i].b, kColorB, h});
   }
   // The fitted board corners the refined solve used (the raw picks stay).
@@ -705,15 +708,26 @@ void CalibrationPanel::Refresh() {
   }
   view_->SetMarkers(markers);
 
-  const bool open_b = !pairs_.empty() && !pairs_.back().has_b;
+  const bool open = !pairs_.empty() && !pairs_.back().complete();
   if (!pairs_.empty()) dropped_note_.clear();  // Picking again: the note has been read.
-  next_pick_->setText(
-      (open_b ? tr("Shift + click the <b style='color:#ff3cc8'>same corner in pass B</b>.")
-              : tr("Shift + click a target corner in <b style='color:#00b4e6'>pass A</b> "
-                   "(%1 complete pairs; at least 4).")
-                    .arg(pairs().size())) +
-      (dropped_note_.isEmpty() ? QString()
-                               : QStringLiteral("<br>") + dropped_note_.toHtmlEscaped()));
+  QString prompt;
+  if (open && !pairs_.back().has_b) {
+    prompt = tr("Shift + click the <b style='color:#ff3cc8'>same corner in pass B</b>.");
+  } else if (open) {
+    prompt = tr("Shift + click the <b style='color:#00b4e6'>same corner in pass A</b>.");
+  } else if (workspace_->recording_opened() == nullptr) {
+    // Nothing to solve on (a live cloud, a project): where pairs come from.
+    prompt = tr("Pairs are picked on a calibration drive: open its session (step 1).");
+  } else if (!workspace_->circle_drive()) {
+    prompt = tr("This session is no calibration drive (step 2): its pairs cannot be solved.");
+  } else {
+    prompt = tr("Shift + click a target corner in <b style='color:#00b4e6'>pass A</b> or "
+                "<b style='color:#ff3cc8'>pass B</b> (%1 complete pairs; at least 4).")
+                 .arg(pairs().size());
+  }
+  next_pick_->setText(prompt + (dropped_note_.isEmpty()
+                                    ? QString()
+                                    : QStringLiteral("<br>") + dropped_note_.toHtmlEscaped()));
   const bool opened = workspace_->recording_opened() != nullptr;
   solve_->setEnabled(!solving_ && pairs().size() >= 4 && opened);
   auto_->setEnabled(!solving_ && opened);

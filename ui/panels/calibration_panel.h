@@ -81,10 +81,12 @@ class CalibrationPanel : public QWidget {
   // Step 3's prompt: what to pick next, and what opening another session cleared.
   QString pick_prompt() const;
 
-  // The pairs as the panel holds them (B may be missing on the last one).
+  // The pairs as the panel holds them: the last one may wait for its pick
+  // in pass B, or in pass A when its first pick was made with pass B shown.
   struct PairPoints {
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-    bool has_b = false;
+    bool has_a = true, has_b = false;
+    bool complete() const { return has_a && has_b; }
   };
   // For the undo commands.
   void SetPairs(const std::vector<PairPoints>& pairs);
