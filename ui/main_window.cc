@@ -153,7 +153,24 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   // The Drive panel whole (its calibration circle too); the connection's
   // health text scrolls instead. A saved layout overrides this.
   resizeDocks({drive_dock}, {drive_panel_->sizeHint().height() + 8}, Qt::Vertical);
-  connect(project_.get(), &ProjectController::shown, project_dock, &QDockWidget::raise);
+  // ... and room for its sessions, placements and alignment (it had the
+  // connection's 230 px, which cut them): half the column, or what its
+  // content asks up to three fifths, the Drive panel scrolling below (its
+  // emergency stop stays on top). Only ever grown: an operator's own split
+  // stays.
+  connect(project_.get(), &ProjectController::shown, this, [this, project_dock, drive_dock] {
+    project_dock->raise();
+    const auto* scroll =
+        project_->panel()->findChild<QScrollArea*>(QStringLiteral("projectScroll"));
+    const QWidget* content = scroll != nullptr ? scroll->widget() : project_->panel();
+    const int column = centralWidget()->height();
+    // The dock's title bar and the tab bar under it take about 50 px.
+    const int want =
+        std::min(std::max(content->sizeHint().height() + 80, column / 2), column * 3 / 5);
+    if (project_dock->height() < want) {
+      resizeDocks({project_dock, drive_dock}, {want, column - want}, Qt::Vertical);
+    }
+  });
   connect(project_.get(), &ProjectController::titleChanged, this, &MainWindow::UpdateTitle);
   connect(project_.get(), &ProjectController::message, this,
           [this](const QString& m) { statusBar()->showMessage(m, 10000); });

@@ -29,6 +29,8 @@
 #include <QMenuBar>
 #include <QMessageBox>
 #include <QPushButton>
+#include <QScrollArea>
+#include <QScrollBar>
 #include <QTest>
 #include <QTimer>
 #include <QTreeWidget>
@@ -96,6 +98,14 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   ProjectPanel* panel = project()->panel();
   ASSERT_EQ(panel->tree()->topLevelItemCount(), 3);
   EXPECT_EQ(panel->item("c")->text(1), "not placed");
+  // Shown, the panel is given the height of what it holds (it had the
+  // Connection tab's, which cut its alignment row and its buttons): its
+  // content does not scroll.
+  auto* scroll = panel->findChild<QScrollArea*>(QStringLiteral("projectScroll"));
+  ASSERT_NE(scroll, nullptr);
+  EXPECT_TRUE(WaitFor([&] { return scroll->verticalScrollBar()->maximum() == 0; }, 3000))
+      << scroll->verticalScrollBar()->maximum() << " px to scroll in a "
+      << scroll->viewport()->height() << " px panel";
 
   // Hide a by its check box: an undoable edit that marks the project modified.
   const int commands = project()->undo_stack()->count();
