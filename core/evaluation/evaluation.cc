@@ -247,25 +247,33 @@ DeviationHistogram HistogramParallel(const std::vector<Eigen::Vector3f>& points,
   const size_t blocks = Runner::Blocks(indices.size(), kPassBlock);
   std::vector<std::vector<uint64_t>> counts(blocks);
   std::vector<double> sums(blocks), sums2(blocks);
+  std::vector<uint64_t> belows(blocks), aboves(blocks);
   *ok = runner->For(indices.size(), kPassBlock, [&](size_t b, size_t begin, size_t end) {
     std::vector<uint64_t>& c = counts[b];
     c.assign(bins, 0);
     double sum = 0.0, sum2 = 0.0;
+    uint64_t below = 0, above = 0;
     for (size_t k = begin; k < end; ++k) {
       const double r = plane.SignedDistance(points[indices[k]].cast<double>());
       sum += r;
       sum2 += r * r;
       const double f = std::floor((r - h.min_m) / bin_m);
+      below += f < 0;
+      above += f >= static_cast<double>(bins);
       const size_t bin = f < 0 ? 0 : std::min(bins - 1, static_cast<size_t>(f));
       ++c[bin];
     }
     sums[b] = sum;
     sums2[b] = sum2;
+    belows[b] = below;
+    aboves[b] = above;
   });
   if (!*ok) return h;
   double sum = 0.0, sum2 = 0.0;
   for (size_t b = 0; b < blocks; ++b) {
     for (size_t i = 0; i < bins; ++i) h.counts[i] += counts[b][i];
+    h.below += belows[b];
+    h.above += aboves[b];
     sum += sums[b];
     sum2 += sums2[b];
   }
@@ -585,6 +593,8 @@ DeviationHistogram MakeDeviationHistogram(const std::vector<Eigen::Vector3f>& po
     sum += r;
     sum2 += r * r;
     const double f = std::floor((r - h.min_m) / bin_m);
+    h.below += f < 0;
+    h.above += f >= static_cast<double>(bins);
     const size_t b = f < 0 ? 0 : std::min(bins - 1, static_cast<size_t>(f));
     ++h.counts[b];
   }

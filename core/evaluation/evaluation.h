@@ -117,6 +117,10 @@ struct DeviationHistogram {
   double bin_m = 0.0;
   double min_m = 0.0;  // left edge of bin 0
   std::vector<uint64_t> counts;
+  // Deviations beyond the bins' range, below bin 0's left edge and at or
+  // above the last bin's right edge; they are counted in the first and last
+  // bins too (so that the counts sum to `count`), and are told apart here.
+  uint64_t below = 0, above = 0;
   double mean_m = 0.0, stddev_m = 0.0;
   size_t count = 0;
   double BinCentre(size_t i) const { return min_m + (static_cast<double>(i) + 0.5) * bin_m; }

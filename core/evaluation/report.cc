@@ -19,7 +19,9 @@ nlohmann::json EvaluationToJson(const CloudEvaluation& e) {
                         {"min_m", p.deviations.min_m},
                         {"mean_m", p.deviations.mean_m},
                         {"stddev_m", p.deviations.stddev_m},
-                        {"counts", p.deviations.counts}}}});
+                        {"counts", p.deviations.counts},
+                        {"below", p.deviations.below},
+                        {"above", p.deviations.above}}}});
   }
   nlohmann::json dims = nlohmann::json::array();
   for (const auto& d : e.dimensions) {

@@ -45,17 +45,22 @@ TEST(OutlierRemovalTest, RemovesIsolatedPointsKeepsThePlane) {
 }
 
 TEST(HistogramTest, BinsAndMoments) {
-  std::vector<Eigen::Vector3f> pts = {
-      {0, 0, -0.003f}, {0, 0, 0.001f}, {0, 0, 0.0011f}, {0, 0, 0.5f}};
+  std::vector<Eigen::Vector3f> pts = {{0, 0, -0.003f}, {0, 0, 0.001f},   {0, 0, 0.0011f},
+                                      {0, 0, 0.5f},    {0, 0, -0.0095f}, {0, 0, -0.02f},
+                                      {0, 0, 0.0095f}};
   Plane plane;  // z = 0
-  const DeviationHistogram h = MakeDeviationHistogram(pts, {0, 1, 2, 3}, plane, 0.002, 0.01);
+  const DeviationHistogram h =
+      MakeDeviationHistogram(pts, {0, 1, 2, 3, 4, 5, 6}, plane, 0.002, 0.01);
   ASSERT_EQ(h.counts.size(), 10u);
   EXPECT_DOUBLE_EQ(h.min_m, -0.01);
   EXPECT_EQ(h.counts[3], 1u);  // -0.003 in [-0.004, -0.002)
   EXPECT_EQ(h.counts[5], 2u);  // 0.001, 0.0011 in [0, 0.002)
-  EXPECT_EQ(h.counts[9], 1u);  // 0.5 clamped into the last bin
-  EXPECT_EQ(h.count, 4u);
-  EXPECT_NEAR(h.mean_m, (-0.003 + 0.001 + 0.0011 + 0.5) / 4, 1e-7);
+  EXPECT_EQ(h.counts[0], 2u);  // -0.0095 in it, -0.02 clamped into it
+  EXPECT_EQ(h.counts[9], 2u);  // 0.0095 in it, 0.5 clamped into it
+  EXPECT_EQ(h.below, 1u);      // -0.02
+  EXPECT_EQ(h.above, 1u);      // 0.5
+  EXPECT_EQ(h.count, 7u);
+  EXPECT_NEAR(h.mean_m, (-0.003 + 0.001 + 0.0011 + 0.5 - 0.0095 - 0.02 + 0.0095) / 7, 1e-7);
 }
 
 TEST(EvaluationOptionsTest, Invalid) {

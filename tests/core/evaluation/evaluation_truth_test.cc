@@ -224,6 +224,8 @@ void ExpectIdentical(const CloudEvaluation& a, const CloudEvaluation& b) {
     EXPECT_EQ(a.planes[i].plane.rms, b.planes[i].plane.rms);
     EXPECT_EQ(a.planes[i].plane.count, b.planes[i].plane.count);
     EXPECT_EQ(a.planes[i].deviations.counts, b.planes[i].deviations.counts);
+    EXPECT_EQ(a.planes[i].deviations.below, b.planes[i].deviations.below);
+    EXPECT_EQ(a.planes[i].deviations.above, b.planes[i].deviations.above);
     EXPECT_EQ(a.planes[i].deviations.mean_m, b.planes[i].deviations.mean_m);
     EXPECT_EQ(a.planes[i].deviations.stddev_m, b.planes[i].deviations.stddev_m);
   }
