@@ -234,6 +234,44 @@ TEST_F(SessionResultsTest, PlanesAreNumberedFromOneAndTheProgressNamesTheDeviati
   }
 }
 
+// Selecting a plane in the table singles it out in the view: drawn more
+// opaque than the others and outlined, its name bold and laid out first (nothing in the
+// view said which rectangle the table's row was). The dimensions read to
+// the millimetre (they read to a tenth of one, on a cloud of 1 mm steps
+// and planes of several millimetres' RMS).
+TEST_F(SessionResultsTest, TheSelectedPlaneStandsOutInTheView) {
+  ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
+  ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
+  CloudView* view = window_->view();
+  QTableWidget* planes = planes_table();
+  ASSERT_GE(planes->rowCount(), 3);
+  ASSERT_EQ(view->plane_count(), static_cast<size_t>(planes->rowCount()));
+  EXPECT_EQ(view->selected_plane(), 0);  // the row selected after evaluating
+  planes->selectRow(2);
+  EXPECT_EQ(view->selected_plane(), 2);
+  for (int i = 0; i < planes->rowCount(); ++i) {
+    EXPECT_EQ(view->plane_opacity(i), i == 2 ? 0.6 : 0.2) << i;
+  }
+  view->RenderNow();
+  ASSERT_FALSE(view->plane_label_boxes().empty());
+  EXPECT_EQ(view->plane_label_boxes().front().plane, 2);  // placed first: never pushed aside
+  // Unselected (the table's selection cleared): all alike again.
+  planes->clearSelection();
+  planes->setCurrentCell(-1, -1);
+  EXPECT_EQ(view->selected_plane(), -1);
+  EXPECT_EQ(view->plane_opacity(0), 0.35);
+  planes->selectRow(2);
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    window_->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/selected-plane.png");
+  }
+  QTableWidget* dims = dimensions_table();
+  ASSERT_GT(dims->rowCount(), 0);
+  for (int r = 0; r < dims->rowCount(); ++r) {
+    const QString figure = dims->item(r, 1)->text();
+    EXPECT_EQ(figure.size() - figure.indexOf('.') - 1, 3) << figure.toStdString();
+  }
+}
+
 // Evaluate with no session's cloud (a project's clouds are layers of the
 // view, not a session's): the panel says what the evaluation works on.
 TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSession) {

@@ -75,10 +75,21 @@ class HistogramPlot : public QWidget {
     if (with_before) peak = std::max(peak, *std::max_element(then.begin(), then.end()));
     const QRectF r = QRectF(rect()).adjusted(6, 32, -6, -16);
     const double w = r.width() / now.size();
+    // The end bars also hold the deviations beyond the range: that part of
+    // them is drawn in brown, and said, so a plane with points far off it
+    // does not look clean.
+    const QColor kInside(67, 160, 71), kBeyond(141, 110, 99);
     for (size_t i = 0; i < now.size(); ++i) {
       const double bar = peak > 0 ? r.height() * now[i] / peak : 0.0;
-      p.fillRect(QRectF(r.left() + i * w, r.bottom() - bar, std::max(1.0, w - 1), bar),
-                 QColor(67, 160, 71));
+      const QRectF whole(r.left() + i * w, r.bottom() - bar, std::max(1.0, w - 1), bar);
+      p.fillRect(whole, kInside);
+      uint64_t beyond = 0;
+      if (i == 0) beyond += h_.below;
+      if (i + 1 == now.size()) beyond += h_.above;
+      if (beyond > 0 && h_.counts[i] > 0) {
+        const double part = bar * std::min(1.0, double(beyond) / double(h_.counts[i]));
+        p.fillRect(QRectF(whole.left(), whole.top(), whole.width(), part), kBeyond);
+      }
     }
     if (with_before) {
       QPainterPath path;
@@ -97,6 +108,16 @@ class HistogramPlot : public QWidget {
     }
     p.drawText(rect().adjusted(4, 2, -4, 0), Qt::AlignTop | Qt::AlignLeft, title_);
     const double lo = h_.min_m * 1e3, hi = (h_.min_m + h_.bin_m * h_.counts.size()) * 1e3;
+    if (h_.below + h_.above > 0) {
+      p.setPen(kBeyond.darker(130));
+      p.drawText(rect().adjusted(4, 16, -4, 0), Qt::AlignTop | Qt::AlignLeft,
+                 tr("brown: %L1 below %2 mm, %L3 above %4 mm")
+                     .arg(h_.below)
+                     .arg(lo, 0, 'f', 0)
+                     .arg(h_.above)
+                     .arg(hi, 0, 'f', 0));
+      p.setPen(palette().text().color());
+    }
     p.drawText(rect().adjusted(4, 0, -4, -2), Qt::AlignBottom | Qt::AlignLeft,
                QStringLiteral("%1 mm").arg(lo, 0, 'f', 0));
     p.drawText(rect().adjusted(4, 0, -4, -2), Qt::AlignBottom | Qt::AlignHCenter,
@@ -217,6 +238,7 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   // A new cloud (another session, a before / after replay, another pose
   // source) has neither the old planes nor the old deviations.
   auto forget = [this] {
+    patches_.clear();
     view_->SetPlanes({});
     deviations_shown_->setChecked(false);
   };
@@ -304,16 +326,18 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
     const RoomDimension& d = e->dimensions[i];
     const int r = static_cast<int>(i);
     dimensions_->setItem(r, 0, new QTableWidgetItem(DimensionName(*e, d)));
-    dimensions_->setItem(r, 1, Item(QString::number(d.distance_m, 'f', 4)));
+    // To the millimetre: the cloud's grid step, below its planes' RMS of
+    // several (a tenth of a millimetre claimed what it does not know).
+    dimensions_->setItem(r, 1, Item(QString::number(d.distance_m, 'f', 3)));
     QString b = QStringLiteral("-");
     if (before != nullptr && i < before->dimensions.size() &&
         before->dimensions[i].axis == d.axis) {
-      b = QString::number(before->dimensions[i].distance_m, 'f', 4);
+      b = QString::number(before->dimensions[i].distance_m, 'f', 3);
     }
     dimensions_->setItem(r, 2, Item(b));
   }
+  patches_.clear();
   if (!e->planes.empty()) planes_->selectRow(0);
-  ShowHistogram();
   // The planes in the view, coloured by kind, named with their RMS.
   std::vector<CloudView::PlanePatch> patches;
   int walls = 0;
@@ -328,7 +352,8 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
                       .arg(p.plane.rms * 1e3, 0, 'f', 1);
     patches.push_back(patch);
   }
-  view_->SetPlanes(patches);
+  patches_ = patches;
+  ShowHistogram();  // With the selected row's plane singled out.
   view_->SetPlanesVisible(planes_shown_->isChecked());
   if (workspace_->deviation_values() != nullptr) {
     view_->SetPointValues(CloudView::ColorMode::kDeviation, *workspace_->deviation_values());
@@ -383,7 +408,14 @@ bool EvaluationPanel::ExportReport(const QString& path, QString* error) {
 
 void EvaluationPanel::ShowHistogram() {
   const CloudEvaluation* e = workspace_->evaluation();
-  const int r = planes_->currentRow();
+  // The selected row (none once the selection is cleared, which leaves a
+  // current row behind).
+  const QList<QTableWidgetItem*> selected = planes_->selectedItems();
+  const int r = selected.isEmpty() ? -1 : selected.front()->row();
+  if (!patches_.empty()) {
+    for (size_t i = 0; i < patches_.size(); ++i) patches_[i].selected = static_cast<int>(i) == r;
+    view_->SetPlanes(patches_);
+  }
   if (e == nullptr || r < 0 || r >= static_cast<int>(e->planes.size())) return;
   const EvaluatedPlane& p = e->planes[r];
   // The same plane in the previous evaluation: the same kind, the nearest

@@ -13,7 +13,9 @@
 #define SWEEPSCAN_UI_PANELS_EVALUATION_PANEL_H_
 
 #include <QWidget>
+#include <vector>
 
+#include "ui/view/cloud_view.h"
 #include "ui/workspace/workspace.h"
 
 class QCheckBox;
@@ -24,7 +26,6 @@ class QTableWidget;
 
 namespace sweepscan::ui {
 
-class CloudView;
 class HistogramPlot;
 
 // A room dimension's name in the panel: the planes it spans, as
@@ -56,6 +57,7 @@ class EvaluationPanel : public QWidget {
   void Show(bool ok, const QString& message);
   // No evaluation of the cloud shown: empty tables, no export; `text` says why.
   void ShowCleared(const QString& text);
+  // The selected row's histogram, and its plane singled out in the view.
   void ShowHistogram();
 
   Workspace* workspace_;
@@ -71,6 +73,7 @@ class EvaluationPanel : public QWidget {
   QTableWidget* planes_;
   QTableWidget* dimensions_;
   HistogramPlot* histogram_;
+  std::vector<CloudView::PlanePatch> patches_;  // The planes drawn, in the table's order.
 };
 
 }  // namespace sweepscan::ui

@@ -325,10 +325,13 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
   // ---- Annotations (cloud_view_overlays.cc) ----
   // Fitted planes as translucent coloured rectangles with their names.
+  // A selected one (the evaluation's table row) stands out: more opaque,
+  // the others fainter, outlined in white, its name bold and placed first.
   struct PlanePatch {
     std::array<Eigen::Vector3d, 4> corners;
     QColor color;
     QString label;
+    bool selected = false;
   };
   // Each plane's name is drawn over the view (2D, on top of the cloud) at
   // its rectangle's centre; a name that would cover one placed before it (a
@@ -338,6 +341,10 @@ class CloudView : public QVTKOpenGLNativeWidget {
   void SetPlanes(const std::vector<PlanePatch>& planes);
   void SetPlanesVisible(bool visible);
   size_t plane_count() const { return plane_count_; }
+  // The selected plane's index in SetPlanes' order (-1: none), and the
+  // opacity each plane is drawn with (0..1).
+  int selected_plane() const { return selected_plane_; }
+  double plane_opacity(size_t i) const;
   // The plane names drawn in the last frame: the plane's index in
   // SetPlanes' order and its box in widget pixels.
   struct PlaneLabelBox {
@@ -546,6 +553,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   int picks_in_flight_ = 0;
   size_t pick_blocks_in_order_ = std::numeric_limits<size_t>::max();
   vtkSmartPointer<vtkActor> planes_;
+  vtkSmartPointer<vtkActor> plane_outline_;  // The selected plane's rectangle.
   std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
   std::vector<PlaneLabelBox> plane_label_boxes_;
@@ -566,6 +574,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   QRectF color_bar_layout_;
   uint64_t color_bar_measures_ = 0;
   size_t plane_count_ = 0;
+  int selected_plane_ = -1;
   bool planes_visible_ = true;
   vtkSmartPointer<vtkActor> measure_line_;
   vtkSmartPointer<vtkTextActor> measure_label_;  // over the view, at measure_mid_

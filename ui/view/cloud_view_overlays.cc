@@ -32,6 +32,17 @@
 
 namespace sweepscan::ui {
 
+namespace {
+
+// A plane's opacity: 0.35 with none selected; the selected one 0.6 and the
+// others 0.2, so that the one the table names is the one seen.
+double PlaneOpacity(int selected, size_t i) {
+  if (selected < 0) return 0.35;
+  return static_cast<int>(i) == selected ? 0.6 : 0.2;
+}
+
+}  // namespace
+
 // A text over the view (a plane's name, a distance, a pick's number), drawn
 // on top of the cloud: in the scene, a name behind a wall was cut by the
 // wall's points.
@@ -64,12 +75,23 @@ void CloudView::BuildAnnotations() {
   mapper->SetColorModeToDirectScalars();
   planes_ = vtkSmartPointer<vtkActor>::New();
   planes_->SetMapper(mapper);
-  planes_->GetProperty()->SetOpacity(0.35);
-  planes_->GetProperty()->SetEdgeVisibility(true);
-  planes_->GetProperty()->SetLineWidth(2.0);
+  // Translucent through the colours' alpha (PlaneOpacity), a plane each.
   planes_->PickableOff();
   planes_->VisibilityOff();
   renderer_->AddActor(planes_);
+  // The selected plane's outline, in front of the points it was fitted to
+  // (which hide most of its fill).
+  auto outline_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  outline_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
+  outline_mapper->SetResolveCoincidentTopologyToPolygonOffset();
+  outline_mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -20000.0);
+  plane_outline_ = vtkSmartPointer<vtkActor>::New();
+  plane_outline_->SetMapper(outline_mapper);
+  plane_outline_->GetProperty()->SetColor(1.0, 1.0, 1.0);
+  plane_outline_->GetProperty()->SetLineWidth(3.0);
+  plane_outline_->PickableOff();
+  plane_outline_->VisibilityOff();
+  renderer_->AddActor(plane_outline_);
 
   auto line_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   line_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
@@ -102,8 +124,12 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
   auto points = vtkSmartPointer<vtkPoints>::New();
   auto quads = vtkSmartPointer<vtkCellArray>::New();
   auto colors = vtkSmartPointer<vtkUnsignedCharArray>::New();
-  colors->SetNumberOfComponents(3);
+  colors->SetNumberOfComponents(4);
   colors->SetName("colors");
+  selected_plane_ = -1;
+  for (size_t i = 0; i < planes.size(); ++i) {
+    if (planes[i].selected) selected_plane_ = static_cast<int>(i);
+  }
   for (const auto& label : plane_labels_) renderer_->RemoveActor2D(label);
   plane_labels_.clear();
   plane_label_anchors_.clear();
@@ -116,10 +142,13 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
       centre += 0.25 * p.corners[k];
     }
     quads->InsertNextCell(4, ids);
-    const unsigned char rgb[3] = {static_cast<unsigned char>(p.color.red()),
-                                  static_cast<unsigned char>(p.color.green()),
-                                  static_cast<unsigned char>(p.color.blue())};
-    colors->InsertNextTypedTuple(rgb);
+    // The opacity in the colour (the actor's is 1): a cell each.
+    const size_t i = plane_labels_.size();
+    const unsigned char rgba[4] = {
+        static_cast<unsigned char>(p.color.red()), static_cast<unsigned char>(p.color.green()),
+        static_cast<unsigned char>(p.color.blue()),
+        static_cast<unsigned char>(std::lround(255.0 * PlaneOpacity(selected_plane_, i)))};
+    colors->InsertNextTypedTuple(rgba);
     auto label = NewOverlayLabel();
     label->SetInput(p.label.toUtf8().constData());
     // The plane's hue, lightened where it is dark (the floor's brown read
@@ -128,6 +157,7 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
     const QColor text = QColor::fromHsl(std::max(0, hsl.hslHue()), hsl.hslSaturation(),
                                         std::max(hsl.lightness(), 175));
     label->GetTextProperty()->SetColor(text.redF(), text.greenF(), text.blueF());
+    label->GetTextProperty()->SetBold(p.selected);
     label->VisibilityOff();  // until laid out
     renderer_->AddActor2D(label);
     plane_labels_.push_back(label);
@@ -138,13 +168,29 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
   poly->SetPolys(quads);
   poly->GetCellData()->SetScalars(colors);
   static_cast<vtkPolyDataMapper*>(planes_->GetMapper())->SetInputData(poly);
+  auto outline = vtkSmartPointer<vtkPolyData>::New();
+  if (selected_plane_ >= 0) {
+    auto corners = vtkSmartPointer<vtkPoints>::New();
+    auto loop = vtkSmartPointer<vtkCellArray>::New();
+    vtkIdType ids[5];
+    for (int k = 0; k < 4; ++k)
+      ids[k] = corners->InsertNextPoint(planes[selected_plane_].corners[k].data());
+    ids[4] = ids[0];
+    loop->InsertNextCell(5, ids);
+    outline->SetPoints(corners);
+    outline->SetLines(loop);
+  }
+  static_cast<vtkPolyDataMapper*>(plane_outline_->GetMapper())->SetInputData(outline);
   plane_count_ = planes.size();
   SetPlanesVisible(planes_visible_);
 }
 
+double CloudView::plane_opacity(size_t i) const { return PlaneOpacity(selected_plane_, i); }
+
 void CloudView::SetPlanesVisible(bool visible) {
   planes_visible_ = visible;
   planes_->SetVisibility(visible && plane_count_ > 0);
+  plane_outline_->SetVisibility(visible && selected_plane_ >= 0);
   // The labels follow at the next frame (LayoutOverlayLabels).
   RequestRender();
 }
@@ -322,9 +368,15 @@ void CloudView::LayoutOverlayLabels() {
     marker_label_boxes_.push_back(to_widget(box));
   }
   if (plane_labels_.empty()) return;
-  // SetPlanes' order (the evaluation's: floor, ceiling, then the walls by
-  // size) is the order of precedence: the first keeps its place.
+  // The selected plane's name first, then SetPlanes' order (the
+  // evaluation's: floor, ceiling, then the walls by size) is the order of
+  // precedence: the first keeps its place.
+  std::vector<size_t> order;
+  if (selected_plane_ >= 0) order.push_back(static_cast<size_t>(selected_plane_));
   for (size_t i = 0; i < plane_labels_.size(); ++i) {
+    if (static_cast<int>(i) != selected_plane_) order.push_back(i);
+  }
+  for (const size_t i : order) {
     vtkTextActor* label = plane_labels_[i];
     const Eigen::Vector3d& a = plane_label_anchors_[i];
     // A label above the clip height belongs to a hidden plane (the ceiling).
