@@ -20,6 +20,7 @@
 #include <functional>
 
 #include "ui/filter_suffix.h"
+#include "ui/help_text.h"
 #include "ui/main_window.h"
 #include "ui/panels/calibration_panel.h"
 #include "ui/panels/connection_panel.h"
@@ -431,30 +432,11 @@ void MainWindow::ShowPoseSource() {
 
 void MainWindow::BuildHelpMenu() {
   QMenu* help = menuBar()->addMenu(tr("&Help"));
-  help->addAction(
-          tr("&Keyboard"), this,
-          [this] {
-            QMessageBox::information(
-                this, tr("Keyboard"),
-                tr("Arrows / W A S D: drive while held (release stops)\n"
-                   "Space: emergency stop (whatever has focus)\n"
-                   "0, 1, 2, 3: 3D, top, front, side view;  F: fit to cloud\n"
-                   "Ctrl+R / Ctrl+Shift+R: record / stop\n"
-                   "Ctrl+O: open session;  Ctrl+I: import a ROS recording;  Ctrl+Shift+S: save session as;  Ctrl+E: export cloud\n"
-                   "Ctrl+Shift+O / Ctrl+S: open / save project;  Ctrl+Shift+A: add a session to it\n"
-                   "Shift + click: pick a point (calibration pairs, a project's pairs, or the distance tool)\n"
-                   "Ctrl+Shift+F: floor plan;  Esc: leave pair picking\n"
-                   "Shift + drag on the floor plan: a vertical section along the line;  Esc drops the drag\n"
-                   "M: measure distance;  C: hide the ceiling\n"
-                   "Ctrl+Z / Ctrl+Shift+Z: undo / redo"));
-          })
+  help->addAction(tr("&Keyboard and Mouse"), this,
+                  [this] { ShowKeyboardAndMouseHelp(this, menuBar()); })
       ->setShortcut(QKeySequence::HelpContents);
-  help->addAction(tr("&About sweepscan"), this, [this] {
-    QMessageBox::about(this, tr("About sweepscan"),
-                       tr("<b>sweepscan 0.1.0</b><p>Operator workstation for mobile 3D lidar "
-                          "scanning with a vertical 2D lidar (Miao et al. 2022; Choi et al. "
-                          "2017).</p>"));
-  });
+  help->addAction(tr("&About sweepscan"), this,
+                  [this] { QMessageBox::about(this, tr("About sweepscan"), AboutHtml()); });
 }
 
 // The plan's column widened to about half the window when it is narrower

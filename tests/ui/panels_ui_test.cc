@@ -14,6 +14,7 @@
 //   labels at round values.
 // * View > Panels lists each panel once, as they are placed.
 // * The wheel scrolls a panel; a spin box takes it only with the focus.
+// * F1's help lists every menu shortcut (read from the menus) and the mouse.
 // * A panel never scrolls sideways.
 // * The link's health in a few rounded lines, not a dump of every counter.
 // * A live cloud's ceiling hidden within seconds, long before the room view
@@ -23,6 +24,7 @@
 #include <QAbstractButton>
 #include <QAction>
 #include <QApplication>
+#include <QDialog>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
 #include <QLabel>
@@ -33,8 +35,10 @@
 #include <QScrollArea>
 #include <QScrollBar>
 #include <QTest>
+#include <QTextBrowser>
 #include <QWheelEvent>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -296,6 +300,51 @@ TEST_F(PanelsTest, TheWheelScrollsAPanelAndStepsABoxOnlyOnceItHasTheFocus) {
   EXPECT_GT(thickness->value(), before);
   EXPECT_EQ(bar->value(), scrolled);
   thickness->setValue(before);
+}
+
+// F1 opens Help > Keyboard and Mouse beside the window: every menu
+// shortcut is listed with its menu and item (the old box, typed by hand,
+// lacked Ctrl+N, Ctrl+K, Ctrl+Shift+P, Ctrl+Shift+W and more), and so are
+// the mouse's gestures in the view, which it did not mention at all.
+TEST_F(PanelsTest, F1ListsEveryShortcutOfTheMenusAndTheMouse) {
+  QApplication::setActiveWindow(window_.get());
+  ASSERT_TRUE(WaitFor([&] { return QApplication::activeWindow() == window_.get(); }, 2000));
+  QTest::keyClick(window_.get(), Qt::Key_F1);
+  QDialog* help = nullptr;
+  ASSERT_TRUE(WaitFor(
+      [&] { return (help = window_->findChild<QDialog*>(QStringLiteral("keyboardHelp"))); }, 2000));
+  EXPECT_TRUE(help->isVisible());
+  EXPECT_FALSE(help->isModal());
+  auto* browser = help->findChild<QTextBrowser*>();
+  ASSERT_NE(browser, nullptr);
+  const QString text = browser->toPlainText();
+  int listed = 0;
+  for (QAction* top : window_->menuBar()->actions()) {
+    std::function<void(QMenu*)> walk = [&](QMenu* menu) {
+      for (QAction* a : menu->actions()) {
+        if (a->menu() != nullptr) {
+          walk(a->menu());
+        } else if (!a->shortcut().isEmpty()) {
+          QString item = a->text().remove('&');
+          if (item.endsWith(QChar(0x2026))) item.chop(1);
+          const QString key = a->shortcut().toString(QKeySequence::NativeText);
+          EXPECT_NE(text.indexOf(key), -1) << key.toStdString();
+          EXPECT_NE(text.indexOf(QStringLiteral(" > ") + item), -1) << item.toStdString();
+          ++listed;
+        }
+      }
+    };
+    if (top->menu() != nullptr) walk(top->menu());
+  }
+  EXPECT_GE(listed, 25);
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    help->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/keyboard-help.png");
+  }
+  for (const char* gesture : {"Left drag", "Middle drag", "Right drag or wheel", "Shift + click",
+                              "Arrows or W A S D", "Space"}) {
+    EXPECT_NE(text.indexOf(QString::fromLatin1(gesture)), -1) << gesture;
+  }
+  help->close();
 }
 
 // A panel never scrolls sideways: its labels wrap instead. A button given
