@@ -5,11 +5,25 @@
 //   were cut by the walls in front of them;
 // * the robot, a white chevron along its heading that a view of the whole
 //   room shows at a glance (it was a thin arrow in the path's orange).
+// * VTK's one-letter keys do nothing in the view: its style switch turned
+//   the camera into a joystick ('j'), drew a red box round a pick ('p') and
+//   reset the camera ('r') as an operator typed.
 // A standalone CloudView under a real display (xvfb-run in CI).
 #include <gtest/gtest.h>
+#include <vtkCallbackCommand.h>
+#include <vtkCamera.h>
+#include <vtkCommand.h>
+#include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkInteractorStyle.h>
+#include <vtkPropCollection.h>
+#include <vtkRenderWindowInteractor.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
 
+#include <QApplication>
 #include <QImage>
 #include <QLineF>
+#include <QMouseEvent>
 #include <QTest>
 #include <cmath>
 #include <cstdlib>
@@ -133,6 +147,49 @@ TEST(ViewMarkersTest, TheRobotIsAWhiteChevronAlongItsHeading) {
     EXPECT_GT(white_near(at + 0.30 * heading), 0) << "the tip, at " << yaw;
     EXPECT_EQ(white_near(at - 0.45 * heading), 0) << "behind, at " << yaw;
   }
+}
+
+// Typed with the view focused and the cursor on the cloud, VTK's letters
+// leave the scene and the camera as they were, and a drag still orbits.
+TEST(ViewKeysTest, VtksOneLetterKeysLeaveTheViewAsItWas) {
+  std::unique_ptr<CloudView> view = Shown();
+  view->AppendPoints(
+      Grid([](int i, int k) { return Eigen::Vector3f(2.0f, -1.0f + 0.01f * i, 0.01f * k); }));
+  view->LookAt(Eigen::Vector3d(-1, -0.5, 1.5), Eigen::Vector3d(2, 0, 1));
+  view->RenderNow();
+  vtkRenderer* renderer = view->renderWindow()->GetRenderers()->GetFirstRenderer();
+  vtkCamera* camera = renderer->GetActiveCamera();
+  const int props = renderer->GetViewProps()->GetNumberOfItems();
+  double before[3];
+  camera->GetPosition(before);
+  view->setFocus();
+  QTest::mouseMove(view.get(), QPoint(320, 240));
+  for (const char key : {'j', 'p', 'r', 'u', 'l', 't', 'e', 'q'}) QTest::keyClick(view.get(), key);
+  view->RenderNow();
+  EXPECT_EQ(renderer->GetViewProps()->GetNumberOfItems(), props);  // no pick box
+  double after[3];
+  camera->GetPosition(after);
+  for (int k = 0; k < 3; ++k) EXPECT_EQ(after[k], before[k]) << k;  // no reset
+  EXPECT_TRUE(view->interactor()->GetInteractorStyle()->IsA("vtkInteractorStyleTrackballCamera"));
+  // A left drag orbits: the camera moves round the focal point, as far
+  // from it as before, and the interactor says an interaction started.
+  const double distance = camera->GetDistance();
+  int started = 0;
+  auto count = vtkSmartPointer<vtkCallbackCommand>::New();
+  count->SetClientData(&started);
+  count->SetCallback([](vtkObject*, unsigned long, void* n, void*) { ++*static_cast<int*>(n); });
+  view->interactor()->AddObserver(vtkCommand::StartInteractionEvent, count);
+  QTest::mousePress(view.get(), Qt::LeftButton, Qt::NoModifier, QPoint(320, 240));
+  for (int x = 325; x <= 400; x += 5) {
+    QMouseEvent move(QEvent::MouseMove, QPointF(x, 240), Qt::LeftButton, Qt::LeftButton,
+                     Qt::NoModifier);
+    QApplication::sendEvent(view.get(), &move);
+  }
+  EXPECT_EQ(started, 1);  // the interaction the view's motion level follows
+  QTest::mouseRelease(view.get(), Qt::LeftButton, Qt::NoModifier, QPoint(400, 240));
+  camera->GetPosition(after);
+  EXPECT_GT(std::hypot(after[0] - before[0], after[1] - before[1]), 0.3);
+  EXPECT_NEAR(camera->GetDistance(), distance, 1e-6 * distance);
 }
 
 }  // namespace

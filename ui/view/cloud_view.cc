@@ -8,7 +8,9 @@
 #include <vtkCellData.h>
 #include <vtkFloatArray.h>
 #include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkInteractorStyleTrackballCamera.h>
 #include <vtkLookupTable.h>
+#include <vtkObjectFactory.h>
 #include <vtkOrientationMarkerWidget.h>
 #include <vtkPlane.h>
 #include <vtkPlaneCollection.h>
@@ -45,6 +47,25 @@ namespace sweepscan::ui {
 using cloud_view_internal::kScalarName;
 using cloud_view_internal::kNaN;
 
+namespace {
+
+// VTK's trackball camera (left drag orbits, Ctrl + left rolls, middle pans,
+// right and the wheel zoom) without its one-letter keys. Through the
+// default style switch, 'j' made the camera a joystick, 't' back, 'a' moved
+// the cloud instead of the camera, 'p' drew a red box round whatever was
+// under the cursor, 'r' reset the camera and '3' asked for stereo: letters
+// an operator types in a window where keys drive the robot and name views.
+// The app's keys are its menus' (Help > Keyboard and Mouse).
+class CameraStyle : public vtkInteractorStyleTrackballCamera {
+ public:
+  static CameraStyle* New();
+  vtkTypeMacro(CameraStyle, vtkInteractorStyleTrackballCamera);
+  void OnChar() override {}
+};
+vtkStandardNewMacro(CameraStyle);
+
+}  // namespace
+
 CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   // A native window of its own: Qt then composes and presents the view's
   // own area only. As an alien widget (Qt's default) every frame was
@@ -64,6 +85,7 @@ CloudView::CloudView(QWidget* parent) : QVTKOpenGLNativeWidget(parent) {
   renderer_->SetBackground2(0.22, 0.24, 0.28);
   renderer_->GradientBackgroundOn();
   window_->AddRenderer(renderer_);
+  interactor()->SetInteractorStyle(vtkSmartPointer<CameraStyle>::New());
 
   BuildColorBar();
   BuildGrid();
