@@ -294,6 +294,21 @@ TEST_F(PlanUiTest, SectionDrawnOnThePlanShowsRoomsAsBuilt) {
   const QString shot = QCoreApplication::applicationDirPath() + "/plan_section_panel.png";
   EXPECT_TRUE(panel->grab().save(shot));
   std::printf("dock grabbed to %s\n", shot.toStdString().c_str());
+  // Its labels apart from one another (the plan's cut sat on the z ticks),
+  // the last tick of each axis with its unit.
+  const std::vector<SectionCanvas::Label>& labels = panel->section_canvas()->labels();
+  int cut_labels = 0, units = 0;
+  for (size_t i = 0; i < labels.size(); ++i) {
+    cut_labels += labels[i].text.startsWith(QStringLiteral("plan cut "));
+    units += labels[i].text.endsWith(QStringLiteral(" m")) &&
+             !labels[i].text.startsWith(QStringLiteral("plan cut"));
+    for (size_t k = i + 1; k < labels.size(); ++k) {
+      EXPECT_FALSE(ConvexOverlap(labels[i].plate, labels[k].plate))
+          << labels[i].text.toStdString() << " over " << labels[k].text.toStdString();
+    }
+  }
+  EXPECT_EQ(cut_labels, 1);
+  EXPECT_EQ(units, 2);
 
   // A new cut height: the plan and its section built again, the line kept.
   panel->height_box()->setValue(1.5);

@@ -61,13 +61,21 @@ QString SectionCanvas::CursorText(const Eigen::Vector2d& at) const {
 
 void SectionCanvas::paintEvent(QPaintEvent*) {
   QPainter p(this);
+  labels_.clear();
   if (!PaintBackground(&p, section_.has_value(), empty_text_)) return;
+  const auto label = [&](const QPointF& at, const QString& text, const QColor& color) {
+    Label l{text, {}};
+    PaintLabel(&p, at, 0.0, text, color, 1e9, &l.plate);
+    labels_.push_back(l);
+  };
   const double s_end = length();
-  // The plan's cut: where the plan above is the section of.
+  // The plan's cut: where the plan above is the section of, named above
+  // the line inside its far end (away from the z ticks at A).
   p.setPen(QPen(kCut, 1.0, Qt::DashLine));
   p.drawLine(ToWidget({0.0, cut_height_m_}), ToWidget({s_end, cut_height_m_}));
-  PaintLabel(&p, ToWidget({0.0, cut_height_m_}) + QPointF(44, -10), 0.0,
-             tr("plan cut %1 m").arg(cut_height_m_, 0, 'f', 2), kCut);
+  const QString cut = tr("plan cut %1 m").arg(cut_height_m_, 0, 'f', 2);
+  const double half = 0.5 * p.fontMetrics().horizontalAdvance(cut) + 6.0;
+  label(ToWidget({s_end, cut_height_m_}) + QPointF(-half - 8.0, -12.0), cut, kCut);
   // The points (decimated to one a 1 cm cell).
   QPolygonF points;
   points.reserve(static_cast<int>(section_->s_z.size()));
@@ -82,19 +90,25 @@ void SectionCanvas::paintEvent(QPaintEvent*) {
   const double over = 0.3;
   p.setPen(QPen(kGround, 2.0, Qt::SolidLine, Qt::FlatCap));
   p.drawLine(ToWidget({-over, 0.0}), ToWidget({s_end + over, 0.0}));
-  // Ticks every grid step: s under the ground line, z left of A.
+  // Ticks every grid step: s under the ground line, z left of A; the last
+  // of each axis carries the unit.
   const double step = GridStep();
+  const auto tick_text = [](double v, bool last) {
+    return last ? QStringLiteral("%1 m").arg(v) : QString::number(v);
+  };
   for (double s = 0.0; s <= s_end + 1e-9; s += step) {
     const QPointF at = ToWidget({s, 0.0});
     p.setPen(QPen(kTicks, 1.0));
     p.drawLine(at, at + QPointF(0, 6));
-    PaintLabel(&p, at + QPointF(0, 15), 0.0, QString::number(s), kTicks);
+    label(at + QPointF(0, 15), tick_text(s, s + step > s_end + 1e-9), kTicks);
   }
   for (double z = std::ceil(min_.y() / step) * step; z <= max_.y() + 1e-9; z += step) {
     const QPointF at = ToWidget({0.0, z});
     p.setPen(QPen(kTicks, 1.0));
     p.drawLine(at - QPointF(6, 0), at);
-    PaintLabel(&p, at - QPointF(20, 0), 0.0, QString::number(z), kTicks);
+    const QString text = tick_text(z, z + step > max_.y() + 1e-9);
+    // Right-aligned against the tick, whatever its width.
+    label(at - QPointF(12.0 + 0.5 * p.fontMetrics().horizontalAdvance(text), 0), text, kTicks);
   }
   // A and A': the line's ends, thin verticals over the section's height.
   QFont bold = p.font();
@@ -104,7 +118,7 @@ void SectionCanvas::paintEvent(QPaintEvent*) {
     p.drawLine(ToWidget({s, min_.y()}), ToWidget({s, max_.y()}));
     p.save();
     p.setFont(bold);
-    PaintLabel(&p, ToWidget({s, max_.y()}) - QPointF(0, 12), 0.0, name, kEnds);
+    label(ToWidget({s, max_.y()}) - QPointF(0, 12), name, kEnds);
     p.restore();
   }
   PaintCursor(&p);
