@@ -63,6 +63,13 @@ TEST_F(RosImportUiTest, ChooserImportsAndReplaysLikeTheCli) {
   // It blocks the window (nothing opened or recorded meanwhile that Import
   // would replace unasked).
   EXPECT_EQ(QApplication::activeModalWidget(), dialog.data());
+  // Its fields show what they hold whole: the hints and the session's path
+  // (the robot frame's hint was cut at "else base_fo").
+  for (QLineEdit* field : dialog->findChildren<QLineEdit*>()) {
+    const QString shown = field->text().isEmpty() ? field->placeholderText() : field->text();
+    EXPECT_LE(field->fontMetrics().horizontalAdvance(shown), field->width() - 8)
+        << shown.toStdString();
+  }
   ASSERT_EQ(dialog->scan_topic()->count(), 1);  // one LaserScan: no "none" offered
   EXPECT_TRUE(dialog->scan_topic()->currentText().startsWith("/scan  (20 messages")) << dialog->scan_topic()->currentText().toStdString();
   EXPECT_EQ(dialog->odom_topic()->currentData().toString(), "/odom");

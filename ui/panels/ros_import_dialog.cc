@@ -12,6 +12,7 @@
 #include <QLineEdit>
 #include <QPushButton>
 #include <QVBoxLayout>
+#include <algorithm>
 #include <cmath>
 
 #include "ui/workspace/workspace.h"
@@ -118,6 +119,16 @@ RosImportDialog::RosImportDialog(Workspace* workspace, const QString& bag, doubl
   layout->addWidget(error_);
   layout->addWidget(buttons_);
   setMinimumWidth(560);
+  // Fields as wide as what they show: their hints and the session's path
+  // were cut at 560 px ("the odometry's child frame, else base_fo").
+  const auto fit = [](QLineEdit* field, const QString& text, int at_most) {
+    const int need = field->fontMetrics().horizontalAdvance(text) + 24;
+    field->setMinimumWidth(std::min(need, at_most));
+  };
+  fit(base_frame_, base_frame_->placeholderText(), 640);
+  fit(mount_, mount_->placeholderText(), 640);
+  fit(imu_mount_, imu_mount_->placeholderText(), 640);
+  fit(session_dir_, session_dir_->text(), 640);
 
   auto done = std::make_shared<QMetaObject::Connection>();
   *done = connect(workspace_, &Workspace::rosBagInspected, this,
