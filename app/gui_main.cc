@@ -134,7 +134,22 @@ void StartCalibrationDemo(const QString& pairs, Workspace* workspace, MainWindow
       window->view()->SetClipHeight(2.0);
       window->view()->ViewOblique();
     });
-    panel->Solve();
+    // The pass split starts as a circle drive opens and may still run; one
+    // job at a time, so the solve waits for the jobs to end (it was refused
+    // as "still running" and never tried again).
+    if (!workspace->job_running()) {
+      panel->Solve();
+      return;
+    }
+    auto waiting = std::make_shared<QMetaObject::Connection>();
+    *waiting = QObject::connect(
+        workspace, &Workspace::jobFinished, window,
+        [workspace, panel, waiting] {
+          if (workspace->job_running()) return;  // the finished job started another
+          QObject::disconnect(*waiting);
+          panel->Solve();
+        },
+        Qt::QueuedConnection);
   });
 }
 
