@@ -539,6 +539,8 @@ void MainWindow::ChooseSessionsRoot(const QString& dir) {
 
 QString MainWindow::clip_status() const {
   if (std::isnan(view_->clip_height())) return QString();
+  if (!std::isnan(chosen_clip_))
+    return tr("Hidden above %1 m (C)").arg(view_->clip_height(), 0, 'f', 2);
   return tr("Ceiling hidden above %1 m (C)").arg(view_->clip_height(), 0, 'f', 2);
 }
 
@@ -550,6 +552,7 @@ void MainWindow::ApplyRoomView() {
 
 void MainWindow::HideCeilingAt(double ceiling) {
   ceiling_z_ = ceiling;
+  chosen_clip_ = std::numeric_limits<double>::quiet_NaN();  // a new cloud's ceiling
   ceiling_->setChecked(true);
   view_->SetClipHeight(ceiling - 0.05);  // Also when it was checked already.
   clip_label_->setText(clip_status());

@@ -189,6 +189,9 @@ class MainWindow : public QMainWindow {
   QAction* measure_ = nullptr;
   QAction* ceiling_ = nullptr;
   double ceiling_z_ = std::numeric_limits<double>::quiet_NaN();  // NaN: none found.
+  // The operator's own clip (View > Clip Height…) until the next cloud's
+  // ceiling is found; NaN: the ceiling's.
+  double chosen_clip_ = std::numeric_limits<double>::quiet_NaN();
   int plan_widened_from_ = 0;  // The plan's column width before showing it widened it (0: not).
   void WidenPlanColumn(QDockWidget* plan);   // View > Floor Plan shown
   void NarrowPlanColumn(QDockWidget* plan);  // ... and hidden

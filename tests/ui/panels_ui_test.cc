@@ -15,6 +15,7 @@
 // * View > Panels lists each panel once, as they are placed.
 // * The wheel scrolls a panel; a spin box takes it only with the focus.
 // * F1's help lists every menu shortcut (read from the menus) and the mouse.
+// * View > Clip Height… sets the operator's own clip; C keeps it.
 // * A panel never scrolls sideways.
 // * The link's health in a few rounded lines, not a dump of every counter.
 // * A live cloud's ceiling hidden within seconds, long before the room view
@@ -27,6 +28,7 @@
 #include <QDialog>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
+#include <QInputDialog>
 #include <QLabel>
 #include <QMenu>
 #include <QMenuBar>
@@ -34,8 +36,10 @@
 #include <QRegularExpression>
 #include <QScrollArea>
 #include <QScrollBar>
+#include <QStatusBar>
 #include <QTest>
 #include <QTextBrowser>
+#include <QTimer>
 #include <QWheelEvent>
 #include <cmath>
 #include <functional>
@@ -345,6 +349,41 @@ TEST_F(PanelsTest, F1ListsEveryShortcutOfTheMenusAndTheMouse) {
     EXPECT_NE(text.indexOf(QString::fromLatin1(gesture)), -1) << gesture;
   }
   help->close();
+}
+
+// Answers the next QInputDialog with `value`, as an operator types it.
+void AnswerInput(double value) {
+  QTimer::singleShot(50, [value] {
+    auto* dialog = qobject_cast<QInputDialog*>(QApplication::activeModalWidget());
+    if (dialog == nullptr) return AnswerInput(value);
+    dialog->setDoubleValue(value);
+    dialog->accept();
+  });
+}
+
+// View > Clip Height… (Shift+C): the operator's own height, said in the
+// status bar, kept by C's toggling; the clip was only ever the ceiling's.
+TEST_F(PanelsTest, ClipHeightIsTheOperatorsAndCKeepsIt) {
+  QAction* clip = nullptr;
+  for (QAction* a : window_->findChildren<QAction*>()) {
+    if (a->text() == QStringLiteral("Clip &Height…")) clip = a;
+  }
+  ASSERT_NE(clip, nullptr);
+  EXPECT_EQ(clip->shortcut(), QKeySequence(QStringLiteral("Shift+C")));
+  auto* status = window_->statusBar()->findChild<QLabel*>(QStringLiteral("statusClip"));
+  ASSERT_NE(status, nullptr);
+  AnswerInput(1.25);
+  clip->trigger();
+  EXPECT_DOUBLE_EQ(window_->view()->clip_height(), 1.25);
+  EXPECT_TRUE(window_->ceiling_action()->isChecked());
+  EXPECT_EQ(status->text(), QStringLiteral("Hidden above 1.25 m (C)"));
+  window_->ceiling_action()->toggle();
+  EXPECT_TRUE(std::isnan(window_->view()->clip_height()));
+  window_->ceiling_action()->toggle();
+  EXPECT_DOUBLE_EQ(window_->view()->clip_height(), 1.25);
+  AnswerInput(0.8);  // changed while on
+  clip->trigger();
+  EXPECT_DOUBLE_EQ(window_->view()->clip_height(), 0.8);
 }
 
 // A panel never scrolls sideways: its labels wrap instead. A button given
