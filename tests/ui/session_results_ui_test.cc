@@ -107,6 +107,12 @@ class SessionResultsTest : public testing::AppFixture {
   QPushButton* export_button() { return Named<QPushButton>(evaluation(), "exportReport"); }
   QString summary() { return Named<QLabel>(evaluation(), "evaluationSummary")->text(); }
   QTableWidget* planes_table() { return Named<QTableWidget>(evaluation(), "evaluationPlanes"); }
+  QAction* ExportCloudAction() {
+    for (QAction* a : window_->findChildren<QAction*>()) {
+      if (a->text() == QStringLiteral("&Export Cloud…")) return a;
+    }
+    return nullptr;
+  }
   QTableWidget* dimensions_table() {
     return Named<QTableWidget>(evaluation(), "evaluationDimensions");
   }
@@ -286,10 +292,7 @@ TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSessio
 TEST_F(SessionResultsTest, ExportCloudOffersTheSessionsFolderAndName) {
   QSettings().remove(QStringLiteral("export/dir"));
   ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
-  QAction* export_cloud = nullptr;
-  for (QAction* a : window_->findChildren<QAction*>()) {
-    if (a->text() == QStringLiteral("&Export Cloud…")) export_cloud = a;
-  }
+  QAction* export_cloud = ExportCloudAction();
   ASSERT_NE(export_cloud, nullptr);
   const QFileInfo session(LabSession());
   bool answered = false, finished = false;
@@ -328,10 +331,7 @@ TEST_F(SessionResultsTest, ExportCloudWritesLasAndOffersItNextTime) {
   QSettings().remove(QStringLiteral("export/dir"));
   QSettings().remove(QStringLiteral("export/suffix"));
   ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
-  QAction* export_cloud = nullptr;
-  for (QAction* a : window_->findChildren<QAction*>()) {
-    if (a->text() == QStringLiteral("&Export Cloud…")) export_cloud = a;
-  }
+  QAction* export_cloud = ExportCloudAction();
   ASSERT_NE(export_cloud, nullptr);
   bool answered = false, finished = false;
   QString said, suggested, suggested_filter;

@@ -19,6 +19,7 @@
 #include <QTemporaryDir>
 #include <QTest>
 #include <QTimer>
+#include <functional>
 #include <vector>
 
 #include "core/cloud/cloud_io.h"
@@ -222,15 +223,18 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   EXPECT_NE(failed.indexOf("frames.bin"), -1) << failed.toStdString();
 
   // 3. A truncated frames.bin (a crash mid-write) opens with what was recorded.
-  const QString truncated = tmp_.path() + "/truncated.sweepscan";
-  QDir().mkpath(truncated);
-  QFile::copy(good + "/meta.json", truncated + "/meta.json");
-  QFile::copy(good + "/frames.bin", truncated + "/frames.bin");
-  {
-    QFile f(truncated + "/frames.bin");
-    ASSERT_TRUE(f.open(QIODevice::ReadWrite));
-    ASSERT_TRUE(f.resize(f.size() / 2 + 7));
-  }
+  // A copy of the good session whose frames.bin `harm` damages.
+  const auto copy_of_good = [&](const char* name, const std::function<bool(QFile*)>& harm) {
+    const QString dir = tmp_.path() + "/" + name + ".sweepscan";
+    QDir().mkpath(dir);
+    QFile::copy(good + "/meta.json", dir + "/meta.json");
+    QFile::copy(good + "/frames.bin", dir + "/frames.bin");
+    QFile f(dir + "/frames.bin");
+    EXPECT_TRUE(f.open(QIODevice::ReadWrite) && harm(&f)) << name;
+    return dir;
+  };
+  const QString truncated =
+      copy_of_good("truncated", [](QFile* f) { return f->resize(f->size() / 2 + 7); });
   bool finished = false;
   QString said;
   QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { finished = true; });
@@ -256,16 +260,9 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   EXPECT_NE(damage->toolTip().indexOf(QStringLiteral("bytes left out")), -1);
   // A stretch of damage inside (a bad sector, a copy gone wrong): skipped,
   // counted and said beside the name too.
-  const QString damaged = tmp_.path() + "/damaged.sweepscan";
-  QDir().mkpath(damaged);
-  QFile::copy(good + "/meta.json", damaged + "/meta.json");
-  QFile::copy(good + "/frames.bin", damaged + "/frames.bin");
-  {
-    QFile f(damaged + "/frames.bin");
-    ASSERT_TRUE(f.open(QIODevice::ReadWrite));
-    ASSERT_TRUE(f.seek(f.size() * 2 / 5));
-    f.write(QByteArray(64, '\xA5'));
-  }
+  const QString damaged = copy_of_good("damaged", [](QFile* f) {
+    return f->seek(f->size() * 2 / 5) && f->write(QByteArray(64, '\xA5')) == 64;
+  });
   finished = false;
   window_->OpenSessionPath(damaged);
   ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
