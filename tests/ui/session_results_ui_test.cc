@@ -107,11 +107,27 @@ class SessionResultsTest : public testing::AppFixture {
   QPushButton* export_button() { return Named<QPushButton>(evaluation(), "exportReport"); }
   QString summary() { return Named<QLabel>(evaluation(), "evaluationSummary")->text(); }
   QTableWidget* planes_table() { return Named<QTableWidget>(evaluation(), "evaluationPlanes"); }
-  QAction* ExportCloudAction() {
+  // File > Export Cloud… answered with `name` (and the file type `filter`
+  // if given), as an operator would; true once the chooser was answered and
+  // the export's job ended. Where the chooser opened, the name and type it
+  // offered go to the last three.
+  bool ExportCloudThrough(const QString& name, const QString& filter = QString(),
+                          QString* opened_in = nullptr, QString* suggested = nullptr,
+                          QString* suggested_filter = nullptr) {
+    QAction* export_cloud = nullptr;
     for (QAction* a : window_->findChildren<QAction*>()) {
-      if (a->text() == QStringLiteral("&Export Cloud…")) return a;
+      if (a->text() == QStringLiteral("&Export Cloud…")) export_cloud = a;
     }
-    return nullptr;
+    if (export_cloud == nullptr) return false;
+    bool answered = false, finished = false;
+    QObject context;
+    QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
+                     [&](const QString& what, bool, const QString&) {
+                       if (what.startsWith("Exporting")) finished = true;
+                     });
+    AnswerFileChooser(name, &answered, opened_in, suggested, filter, suggested_filter);
+    export_cloud->trigger();
+    return answered && WaitFor([&] { return finished; }, 60000);
   }
   QTableWidget* dimensions_table() {
     return Named<QTableWidget>(evaluation(), "evaluationDimensions");
@@ -292,33 +308,17 @@ TEST_F(SessionResultsTest, EvaluatingWithoutASessionsCloudSaysItWorksOnOneSessio
 TEST_F(SessionResultsTest, ExportCloudOffersTheSessionsFolderAndName) {
   QSettings().remove(QStringLiteral("export/dir"));
   ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
-  QAction* export_cloud = ExportCloudAction();
-  ASSERT_NE(export_cloud, nullptr);
   const QFileInfo session(LabSession());
-  bool answered = false, finished = false;
   QString opened_in, suggested;
-  QObject context;
-  QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
-                   [&](const QString& what, bool, const QString&) {
-                     if (what.startsWith("Exporting")) finished = true;
-                   });
   const QString out = tmp_.path() + "/exported";
-  AnswerFileChooser(out, &answered, &opened_in, &suggested);
-  export_cloud->trigger();
-  ASSERT_TRUE(answered);
+  ASSERT_TRUE(ExportCloudThrough(out, QString(), &opened_in, &suggested));
   EXPECT_EQ(opened_in, session.absolutePath());
   EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
   EXPECT_TRUE(QFileInfo::exists(out + ".ply")) << window_->last_error().toStdString();
   // The next export starts where this one went.
-  answered = false;
-  AnswerFileChooser(tmp_.path() + "/again.ply", &answered, &opened_in, &suggested);
-  finished = false;
-  export_cloud->trigger();
-  ASSERT_TRUE(answered);
+  ASSERT_TRUE(ExportCloudThrough(tmp_.path() + "/again.ply", QString(), &opened_in, &suggested));
   EXPECT_EQ(opened_in, QFileInfo(tmp_.path()).absoluteFilePath());
   EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
 }
 
 // LAS, which a surveyor's tools read, from the same chooser: a name typed
@@ -331,25 +331,15 @@ TEST_F(SessionResultsTest, ExportCloudWritesLasAndOffersItNextTime) {
   QSettings().remove(QStringLiteral("export/dir"));
   QSettings().remove(QStringLiteral("export/suffix"));
   ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
-  QAction* export_cloud = ExportCloudAction();
-  ASSERT_NE(export_cloud, nullptr);
-  bool answered = false, finished = false;
   QString said, suggested, suggested_filter;
   QObject context;
-  QObject::connect(workspace_.get(), &Workspace::jobFinished, &context,
-                   [&](const QString& what, bool, const QString&) {
-                     if (what.startsWith("Exporting")) finished = true;
-                   });
   QObject::connect(workspace_.get(), &Workspace::message, &context,
                    [&](const QString& m) { said = m; });
   const QString out = tmp_.path() + "/survey";
-  AnswerFileChooser(out, &answered, nullptr, &suggested, QStringLiteral("LAS 1.4 (*.las)"),
-                    &suggested_filter);
-  export_cloud->trigger();
-  ASSERT_TRUE(answered);
+  ASSERT_TRUE(ExportCloudThrough(out, QStringLiteral("LAS 1.4 (*.las)"), nullptr, &suggested,
+                                 &suggested_filter));
   EXPECT_EQ(suggested, QStringLiteral("lab.ply"));
   EXPECT_EQ(suggested_filter, QStringLiteral("PLY (*.ply)"));
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
   QFile file(out + ".las");
   ASSERT_TRUE(file.open(QIODevice::ReadOnly)) << window_->last_error().toStdString();
   const QByteArray b = file.readAll();
@@ -377,15 +367,10 @@ TEST_F(SessionResultsTest, ExportCloudWritesLasAndOffersItNextTime) {
       << said.toStdString();
   EXPECT_EQ(said.indexOf(QStringLiteral("robot seconds")), -1) << said.toStdString();
   // The next export offers the same format, named after the session.
-  answered = false;
-  finished = false;
-  AnswerFileChooser(tmp_.path() + "/again.las", &answered, nullptr, &suggested, QString(),
-                    &suggested_filter);
-  export_cloud->trigger();
-  ASSERT_TRUE(answered);
+  ASSERT_TRUE(ExportCloudThrough(tmp_.path() + "/again.las", QString(), nullptr, &suggested,
+                                 &suggested_filter));
   EXPECT_EQ(suggested, QStringLiteral("lab.las"));
   EXPECT_EQ(suggested_filter, QStringLiteral("LAS 1.4 (*.las)"));
-  ASSERT_TRUE(WaitFor([&] { return finished; }, 60000));
   QSettings().remove(QStringLiteral("export/suffix"));
 }
 

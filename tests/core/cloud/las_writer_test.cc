@@ -255,8 +255,8 @@ TEST(LasWriterTest, AnyChunkingWritesTheSameBytes) {
 
 // The app's export: a cloud store's snapshot (sealed, packed chunks and the
 // open one) written in two passes is the file the writer makes of the same
-// points in one; without a usable created_utc it is still written, and says
-// why its times are robot seconds; cancelled, it leaves nothing.
+// points in one, and loaders.gl and copc.js read its every point; without a usable created_utc it
+// is still written, and says why its times are robot seconds; cancelled, it leaves nothing.
 TEST(LasWriterTest, ASnapshotIsWrittenAsItsPointsAre) {
   PointChunks cloud(4096);
   for (const CloudPoint& p : RoomPoints(30000)) cloud.Append(p);  // 7 sealed chunks and an open one
@@ -276,6 +276,21 @@ TEST(LasWriterTest, ASnapshotIsWrittenAsItsPointsAre) {
   EXPECT_EQ(stats.points, pts.size());
   ASSERT_TRUE(Write(Tmp("points.las"), pts, OptionsFor(pts)).ok());
   EXPECT_EQ(ReadBytes(Tmp("snapshot.las")), ReadBytes(Tmp("points.las")));
+  // And read by the independent readers: every point, where the store had it.
+  const CommandRun r =
+      RunCommand(std::string(SWEEPSCAN_NODE) + " " + SWEEPSCAN_SOURCE_DIR +
+                 "/tests/tools/read_las.mjs " + Tmp("snapshot.las") + " 5 4999 2>&1");
+  ASSERT_EQ(r.code, 0) << r.out
+                       << "\n(tests/tools/node_modules missing? run scripts/install-test-tools.sh)";
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["loaders_gl"]["decoded"].get<size_t>(), pts.size());
+  EXPECT_EQ(j["copc"]["header"]["pointCount"].get<size_t>(), pts.size());
+  ASSERT_GT(j["points"].size(), 10u);
+  for (const nlohmann::json& p : j["points"]) {
+    const CloudPoint& q = pts[p["index"].get<size_t>()];
+    const float xyz[3] = {q.x, q.y, q.z};
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(p["position"][k].get<double>(), xyz[k], 0.00005 + 1e-9);
+  }
 
   ASSERT_TRUE(SaveLas(Tmp("undated.las"), snapshot, "", base, nullptr, nullptr, &note).ok());
   EXPECT_NE(note.find("robot seconds"), std::string::npos) << note;
