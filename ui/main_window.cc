@@ -537,6 +537,11 @@ void MainWindow::ChooseSessionsRoot(const QString& dir) {
   QSettings().setValue(QStringLiteral("sessions/root"), dir);
 }
 
+double MainWindow::ClipHeightToApply() const {
+  if (!std::isnan(chosen_clip_)) return chosen_clip_;
+  return std::isnan(ceiling_z_) ? 2.0 : ceiling_z_ - 0.05;
+}
+
 QString MainWindow::clip_status() const {
   if (std::isnan(view_->clip_height())) return QString();
   if (!std::isnan(chosen_clip_))
@@ -554,7 +559,7 @@ void MainWindow::HideCeilingAt(double ceiling) {
   ceiling_z_ = ceiling;
   chosen_clip_ = std::numeric_limits<double>::quiet_NaN();  // a new cloud's ceiling
   ceiling_->setChecked(true);
-  view_->SetClipHeight(ceiling - 0.05);  // Also when it was checked already.
+  view_->SetClipHeight(ClipHeightToApply());  // Also when it was checked already.
   clip_label_->setText(clip_status());
 }
 

@@ -129,6 +129,9 @@ class MainWindow : public QMainWindow {
   void ApplyRoomView();
   QAction* ceiling_action() const { return ceiling_; }
   QString clip_status() const;  // The status bar's text about the clip.
+  // Where C hides the points above: the operator's height (Clip Height…),
+  // else just under the ceiling found (the walls to their top), else 2 m.
+  double ClipHeightToApply() const;
 
  protected:
   void closeEvent(QCloseEvent* event) override;

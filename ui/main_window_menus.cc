@@ -265,11 +265,7 @@ void MainWindow::BuildViewMenu() {
   ceiling_->setToolTip(tr("Hides the points above the ceiling's height found in the cloud (2 m "
                           "when it shows no ceiling), to see into the room"));
   connect(ceiling_, &QAction::toggled, view_, [this](bool on) {
-    // The operator's height, else just under the ceiling found: the walls
-    // to their top.
-    double z = std::isnan(ceiling_z_) ? 2.0 : ceiling_z_ - 0.05;
-    if (!std::isnan(chosen_clip_)) z = chosen_clip_;
-    view_->SetClipHeight(on ? z : std::numeric_limits<double>::quiet_NaN());
+    view_->SetClipHeight(on ? ClipHeightToApply() : std::numeric_limits<double>::quiet_NaN());
     clip_label_->setText(clip_status());
   });
   // A height of the operator's: a plan-like cut at 1 m, a shelf's top
@@ -277,7 +273,7 @@ void MainWindow::BuildViewMenu() {
   view->addAction(tr("Clip &Height…"), this,
                   [this] {
                     double now = view_->clip_height();
-                    if (std::isnan(now)) now = std::isnan(ceiling_z_) ? 2.0 : ceiling_z_ - 0.05;
+                    if (std::isnan(now)) now = ClipHeightToApply();
                     bool ok = false;
                     const double z = QInputDialog::getDouble(
                         this, tr("Clip height"), tr("Hide the points above this height (m):"), now,
