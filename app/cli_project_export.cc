@@ -1,13 +1,6 @@
 // sweepscan-cli project export: the placed, visible sessions' clouds in the
-// project's frame, as one file.
-//
-// LAS (docs/las-format.md) is streamed: a first pass builds each session's
-// cloud in turn for the extent (the scale and offset need the whole box
-// before the first record), a second builds it again and appends it, so
-// memory holds one session however many the project has; each session's
-// records carry its own Point Source ID (its 1-based place in the project
-// file) and GPS times from its own clock and start time. PLY and PCD are
-// written whole (their writers take one array).
+// project's frame, as one file (hardware/station/project_export.h, which
+// the app's File > Export Project Cloud writes through too).
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -19,6 +12,7 @@
 #include "core/cloud/las_writer.h"
 #include "core/common/file_suffix.h"
 #include "core/session/session.h"
+#include "hardware/station/project_export.h"
 
 namespace sweepscan::app {
 namespace {
@@ -124,99 +118,34 @@ int RunProjectExport(const Args& args) {
   if (const int code = SelectSessions(args, project, "to export", &chosen); code != kExitOk)
     return code;
   WarnPoseSource(project, chosen, options.pose_source);
-  // Before the clouds are built, not after (minutes on a building).
-  s = CheckCanWrite(out);
-  if (!s.ok()) return (PrintError(s.message()), kExitFailure);
+  hardware::ProjectExportResult result;
+  s = hardware::ExportProjectCloud(file, project, chosen, out, options, nullptr, &result);
+  for (const std::string& w : result.warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
+  if (!s.ok())
+    return (PrintError(s.message()), result.session_unreadable ? kExitBadInput : kExitFailure);
   nlohmann::json report = {{"project", file}, {"out", out}, {"sessions", nlohmann::json::array()}};
-
-  if (!HasFileSuffix(out, ".las")) {
-    std::vector<CloudPoint> all;
-    for (size_t i : chosen) {
-      hardware::SessionCloud cloud;
-      if (const int code = ProjectCloud(file, options, project.sessions[i], &cloud); code != kExitOk) return code;
-      report["sessions"].push_back({{"id", cloud.id}, {"points", cloud.points.size()}});
-      all.insert(all.end(), cloud.points.begin(), cloud.points.end());
+  const bool las = HasFileSuffix(out, ".las");
+  for (const hardware::ProjectExportSession& e : result.sessions) {
+    nlohmann::json j = {{"id", e.id}, {"points", e.points}};
+    if (las) {
+      j["point_source_id"] = e.point_source_id;
+      j["non_finite_skipped"] = e.non_finite_skipped;
     }
-    s = SaveCloud(out, all);
-    if (!s.ok()) return (PrintError(s.message()), kExitFailure);
-    report["points"] = all.size();
-  } else {
-    // Pass 1: the extent and each session's clock.
-    LasExtent extent;
-    struct Clock {
-      std::string created_utc;
-      LasExtent extent;
-    };
-    std::vector<Clock> clocks;
-    for (size_t i : chosen) {
-      hardware::SessionCloud cloud;
-      if (const int code = ProjectCloud(file, options, project.sessions[i], &cloud); code != kExitOk) return code;
-      Clock c{cloud.meta.created_utc, {}};
-      c.extent.Add(cloud.points.data(), cloud.points.size());
-      extent.Add(c.extent);
-      clocks.push_back(c);
-    }
-    LasWriterOptions o;
-    o.extent = extent;
-    o.wkt = kSweepscanProjectWkt;
-    o.system_identifier = "sweepscan project";
-    o.generating_software = "sweepscan 0.1.0";
-    // GPS time needs every session's start time; one session without it
-    // makes the whole file robot seconds (Global Encoding is per file).
-    std::vector<LasWriterOptions> times(chosen.size());
-    bool gps = true;
-    for (size_t k = 0; k < chosen.size(); ++k) {
-      const Status t = SetLasTimeFromSession(clocks[k].created_utc, clocks[k].extent, &times[k]);
-      if (!t.ok()) {
-        std::cerr << "sweepscan-cli: warning: '" << project.sessions[chosen[k]].id << "': " << t.message()
-                  << "; the file's times are robot seconds\n";
-        gps = false;
-      }
-    }
-    o.adjusted_gps_time = gps;
-    o.creation_year = times[0].creation_year;
-    o.creation_day_of_year = times[0].creation_day_of_year;
-    LasWriter writer;
-    s = writer.Open(out, o);
-    // Pass 2: the records.
-    for (size_t k = 0; s.ok() && k < chosen.size(); ++k) {
-      const ProjectSession& ps = project.sessions[chosen[k]];
-      hardware::SessionCloud cloud;
-      if (const int code = ProjectCloud(file, options, ps, &cloud); code != kExitOk) return code;
-      const uint16_t source_id = static_cast<uint16_t>(chosen[k] + 1);
-      if (gps) {
-        writer.SetSource(source_id, times[k].time_origin_ns, times[k].gps_time_at_origin_s);
-      } else {
-        writer.SetSource(source_id, 0, 0.0);
-      }
-      const LasWriteStats before = writer.stats();
-      s = writer.Append(cloud.points.data(), cloud.points.size());
-      // What was written of the session (a point with a NaN or infinite
-      // coordinate is skipped and counted, as the session export does).
-      const uint64_t skipped = writer.stats().non_finite - before.non_finite;
-      report["sessions"].push_back({{"id", ps.id},
-                                    {"point_source_id", source_id},
-                                    {"points", cloud.points.size() - skipped},
-                                    {"non_finite_skipped", skipped}});
-      if (skipped > 0) {
-        std::cerr << "sweepscan-cli: warning: '" << ps.id << "': " << skipped
-                  << " point(s) with a NaN or infinite coordinate left out\n";
-      }
-    }
-    if (s.ok()) s = writer.Finish();
-    if (!s.ok()) return (PrintError(s.message()), kExitFailure);
-    const LasWriteStats& w = writer.stats();
-    report["points"] = w.points;
-    report["non_finite_skipped"] = w.non_finite;
-    report["scale_m"] = w.quantisation.scale;
-    report["offset_m"] = {w.quantisation.offset[0], w.quantisation.offset[1], w.quantisation.offset[2]};
-    report["gps_time"] = gps ? "adjusted standard GPS time" : "robot seconds";
+    report["sessions"].push_back(j);
+  }
+  report["points"] = result.points;
+  if (las) {
+    const LasQuantisation& q = result.quantisation;
+    report["non_finite_skipped"] = result.non_finite_skipped;
+    report["scale_m"] = q.scale;
+    report["offset_m"] = {q.offset[0], q.offset[1], q.offset[2]};
+    report["gps_time"] = result.gps_time ? "adjusted standard GPS time" : "robot seconds";
   }
   if (args.Flag("json")) {
     std::cout << report.dump(2) << "\n";
   } else {
-    std::cout << "wrote " << report["points"].get<uint64_t>() << " points of " << chosen.size()
-              << " session(s) to " << out << "\n";
+    std::cout << "wrote " << result.points << " points of " << chosen.size() << " session(s) to "
+              << out << "\n";
   }
   return kExitOk;
 }

@@ -6,9 +6,10 @@
 
 namespace sweepscan::hardware {
 
-Status LoadSessionPositions(const std::string& project_file, const ProjectSession& session,
-                            const SessionCloudOptions& options, SessionCloud* cloud,
-                            std::vector<Eigen::Vector3f>* positions) {
+Status StreamSessionCloud(const std::string& project_file, const ProjectSession& session,
+                          const SessionCloudOptions& options, SessionCloud* cloud,
+                          const std::function<Status(const CloudPoint*, size_t)>& sink,
+                          const std::function<void(size_t bound)>& reserve) {
   if (options.pose_source != PoseSource::kEkf && options.pose_source != PoseSource::kOdometry) {
     return Status::Error("a project's session clouds are built from the EKF or the wheels alone");
   }
@@ -39,17 +40,24 @@ Status LoadSessionPositions(const std::string& project_file, const ProjectSessio
   s = stream.EstimatePoses(out.dir, options.frames, ro, nullptr, half(0.0));
   if (!s.ok()) return refuse(s);
   if (!stream.decode().frames.damage.empty()) out.damage = stream.decode().frames.DamageSummary();
+  if (reserve) reserve(stream.PointBound());
+  s = stream.PlacePoints(sink, half(0.5));
+  if (!s.ok()) return refuse(s);
+  *cloud = std::move(out);
+  return Status::Ok();
+}
+
+Status LoadSessionPositions(const std::string& project_file, const ProjectSession& session,
+                            const SessionCloudOptions& options, SessionCloud* cloud,
+                            std::vector<Eigen::Vector3f>* positions) {
   positions->clear();
-  positions->reserve(stream.PointBound());
-  s = stream.PlacePoints(
+  return StreamSessionCloud(
+      project_file, session, options, cloud,
       [positions](const CloudPoint* p, size_t n) {
         for (size_t i = 0; i < n; ++i) positions->emplace_back(p[i].x, p[i].y, p[i].z);
         return Status::Ok();
       },
-      half(0.5));
-  if (!s.ok()) return refuse(s);
-  *cloud = std::move(out);
-  return Status::Ok();
+      [positions](size_t bound) { positions->reserve(bound); });
 }
 
 Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,

@@ -11,6 +11,7 @@
 #define SWEEPSCAN_HARDWARE_STATION_SESSION_CLOUD_H_
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,12 +51,21 @@ struct SessionCloud {
 Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
                         const SessionCloudOptions& options, SessionCloud* cloud);
 
-// The same cloud's positions alone, streamed (session_stream.h: frames.bin
-// read twice record by record, each scan placed as it is decoded), into
-// `positions` (12 bytes a point); `cloud` gets all but its points. The
-// decoded session and its 32-byte points are never held: a 99.5 M-point
-// session's cloud peaked at 7.3 GB through LoadSessionCloud. The progress
-// runs 0..0.5 over the first pass, 0.5..1 over the second.
+// The same cloud streamed (session_stream.h: frames.bin read twice record
+// by record, each scan placed as it is decoded): `sink` gets its points in
+// order, in the session's frame, at most 65 536 a call on a thread of the
+// stream's own; an error it returns stops the stream and is returned.
+// `reserve` (may be empty) gets, before the first point, a bound on their
+// number. `cloud` gets all but its points. The progress runs 0..0.5 over
+// the first pass, 0.5..1 over the second.
+Status StreamSessionCloud(const std::string& project_file, const ProjectSession& session,
+                          const SessionCloudOptions& options, SessionCloud* cloud,
+                          const std::function<Status(const CloudPoint*, size_t)>& sink,
+                          const std::function<void(size_t bound)>& reserve = nullptr);
+
+// StreamSessionCloud's positions alone, into `positions` (12 bytes a
+// point). The decoded session and its 32-byte points are never held: a
+// 99.5 M-point session's cloud peaked at 7.3 GB through LoadSessionCloud.
 Status LoadSessionPositions(const std::string& project_file, const ProjectSession& session,
                             const SessionCloudOptions& options, SessionCloud* cloud,
                             std::vector<Eigen::Vector3f>* positions);
