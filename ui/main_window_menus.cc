@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <functional>
 
+#include "ui/cloud_export_chooser.h"
 #include "ui/filter_suffix.h"
 #include "ui/help_text.h"
 #include "ui/main_window.h"
@@ -127,39 +128,23 @@ void MainWindow::BuildFileMenu() {
   project_->AddFileMenuActions(file);
   file->addSeparator();
   QAction* export_cloud = file->addAction(tr("&Export Cloud…"), this, [this] {
-    QSettings settings;
-    QString filter;
-    // Named after the session, in the folder last exported to, or beside
-    // the session (it opened in the working folder with no name).
-    const QString session_dir = workspace_->session_dir();
-    const QFileInfo session(session_dir);
-    const QString dir = settings
-                            .value(QStringLiteral("export/dir"),
-                                   session_dir.isEmpty() ? QString() : session.absolutePath())
-                            .toString();
-    // In the format last exported (a surveyor exports LAS every time).
-    const QStringList filters = {tr("PLY (*.ply)"), tr("LAS 1.4 (*.las)"), tr("PCD (*.pcd)")};
-    const QString suffix = settings.value(QStringLiteral("export/suffix"), "ply").toString();
-    filter = filters[0];
-    for (const QString& f : filters) {
-      if (f.contains(QStringLiteral("*.") + suffix)) filter = f;
+    // With a project shown and no session, the cloud in view is the
+    // project's: that is what is exported.
+    if (workspace_->CloudSize() == 0 && project_->document()->is_open()) {
+      project_->ExportWithDialog();
+      return;
     }
-    const QString name =
-        session_dir.isEmpty() ? QString() : session.completeBaseName() + '.' + suffix;
-    const QString path = WithFilterSuffix(
-        QFileDialog::getSaveFileName(this, tr("Export cloud"),
-                                     dir.isEmpty() ? name : dir + QLatin1Char('/') + name,
-                                     filters.join(QStringLiteral(";;")), &filter),
-        filter);
-    if (path.isEmpty()) return;
-    settings.setValue(QStringLiteral("export/dir"), QFileInfo(path).absolutePath());
-    const QString used = QFileInfo(path).suffix().toLower();
-    if (used == "ply" || used == "las" || used == "pcd") {
-      settings.setValue(QStringLiteral("export/suffix"), used);
-    }
-    workspace_->ExportCloud(path);
+    // Named after the session, beside it (it opened in the working folder
+    // with no name).
+    const QFileInfo session(workspace_->session_dir());
+    const bool named = !workspace_->session_dir().isEmpty();
+    const QString path =
+        ChooseCloudExport(this, tr("Export cloud"), named ? session.completeBaseName() : QString(),
+                          named ? session.absolutePath() : QString());
+    if (!path.isEmpty()) workspace_->ExportCloud(path);
   });
   export_cloud->setShortcut(QKeySequence(Qt::CTRL | Qt::Key_E));
+  project_->AddExportAction(file);
   plan_panel_->SetFileExportAction(
       file->addAction(tr("Export Floor P&lan…"), plan_panel_, &PlanPanel::ExportWithDialog));
   QAction* shot = file->addAction(tr("Save &Screenshot…"), this, [this] {

@@ -140,7 +140,7 @@ void ProjectController::AddFileMenuActions(QMenu* file) {
 }
 
 void ProjectController::UpdateActions() {
-  for (QAction* a : {save_, save_as_, add_, close_}) {
+  for (QAction* a : {save_, save_as_, add_, close_, export_}) {
     if (a != nullptr) a->setEnabled(document_.is_open());
   }
 }

@@ -16,6 +16,8 @@
 //   job thread; success is an undoable placement, a refusal changes nothing
 //   and says why. The registration's coarse step is planes, or the
 //   operator's picked pairs (PairPicking: a mode of the panel and the view).
+// * Export writes the building's cloud as one file, session by session
+//   streamed on the job thread (project_controller_export.cc).
 // * While pairs are picked, the session and its reference are previewed:
 //   drawn even if hidden, and an unplaced session beside the project (its
 //   frame's origin moved, never rotated) so that both can be clicked.
@@ -70,6 +72,17 @@ class ProjectController : public QObject {
   // Project, Save Project As…, Add Session to Project…, Close Project.
   void AddFileMenuActions(QMenu* file);
   QAction* save_action() const { return save_; }
+  // File > Export Project Cloud… (project_controller_export.cc): the
+  // placed, visible sessions as one file in the project's frame
+  // (hardware/station/project_export.h, what `sweepscan-cli project
+  // export` writes), LAS 1.4, PLY or PCD, on the job thread with the
+  // panel's progress and cancel.
+  QAction* AddExportAction(QMenu* file);
+  void ExportWithDialog();
+  // The export to `path` once chosen (tests call it); false if it cannot
+  // start (no project, no placed and visible session, a job runs), said
+  // through show_error. The end is said as message() or show_error.
+  bool ExportCloud(const QString& path);
   // The window title's part: "floor.sweepscan-project[*]", "" without a project.
   QString title() const;
 
@@ -165,6 +178,7 @@ class ProjectController : public QObject {
   QAction* save_as_ = nullptr;
   QAction* add_ = nullptr;
   QAction* close_ = nullptr;
+  QAction* export_ = nullptr;
 };
 
 }  // namespace sweepscan::ui

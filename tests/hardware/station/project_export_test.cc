@@ -9,15 +9,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
 #include "core/cloud/cloud_io.h"
 #include "tests/testing/lab_session.h"
+#include "tests/testing/las_records.h"
 #include "tests/testing/remove_at_exit.h"
 
 namespace sweepscan::hardware {
@@ -67,17 +65,6 @@ std::vector<CloudPoint> Truth(const Rigid3d& placed) {
   return cloud.points;
 }
 
-std::string ReadBytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
-template <typename T>
-T Get(const std::string& b, size_t at) {
-  T v;
-  std::memcpy(&v, b.data() + at, sizeof(T));
-  return v;
-}
-
 TEST(ProjectExportTest, TheShownSessionsArePlacedAndVisibleOnes) {
   std::vector<std::string> unplaced;
   EXPECT_EQ(PlacedVisibleSessions(TwoPlaced(), &unplaced), (std::vector<size_t>{0, 2}));
@@ -121,32 +108,22 @@ TEST(ProjectExportTest, LasAndPlyHoldEachSessionWherePlaced) {
   EXPECT_TRUE(r.gps_time);
   EXPECT_TRUE(r.warnings.empty());
 
-  const std::string b = ReadBytes(P("floor.las"));
-  ASSERT_GT(b.size(), 375u);
-  EXPECT_EQ(b.substr(0, 4), "LASF");
-  EXPECT_EQ(Get<uint16_t>(b, 6) & 1, 1);  // Global Encoding: adjusted GPS time
-  EXPECT_EQ(std::string(b.data() + 26), "sweepscan project");
-  const uint32_t start = Get<uint32_t>(b, 96);
-  const uint16_t size = Get<uint16_t>(b, 105);
-  ASSERT_EQ(Get<uint64_t>(b, 247), truth.size());
-  ASSERT_EQ(b.size(), start + truth.size() * size);
-  const double scale[3] = {Get<double>(b, 131), Get<double>(b, 139), Get<double>(b, 147)};
-  const double offset[3] = {Get<double>(b, 155), Get<double>(b, 163), Get<double>(b, 171)};
+  testing::LasRecords las;
+  ASSERT_TRUE(las.Read(P("floor.las")));
+  EXPECT_EQ(las.global_encoding & 1, 1);  // adjusted GPS time
+  EXPECT_EQ(las.system_identifier, "sweepscan project");
+  ASSERT_EQ(las.count, truth.size());
   double worst = 0.0;
   size_t wrong_source = 0, other_clock = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
-    const size_t at = start + i * size;
-    const float want[3] = {truth[i].x, truth[i].y, truth[i].z};
-    for (int a = 0; a < 3; ++a) {
-      const double got = Get<int32_t>(b, at + 4 * a) * scale[a] + offset[a];
-      worst = std::max(worst, std::abs(got - want[a]));
-    }
-    wrong_source += Get<uint16_t>(b, at + 20) != (i < first ? 1 : 3);
+    worst = std::max(worst, (las.Position(i) - Eigen::Vector3d(truth[i].x, truth[i].y, truth[i].z))
+                                .cwiseAbs()
+                                .maxCoeff());
+    wrong_source += las.PointSourceId(i) != (i < first ? 1 : 3);
     // The same drive twice: session b's k-th point has a's k-th point's time.
-    if (i >= first)
-      other_clock += Get<double>(b, at + 22) != Get<double>(b, start + (i - first) * size + 22);
+    if (i >= first) other_clock += las.GpsTime(i) != las.GpsTime(i - first);
   }
-  EXPECT_LE(worst, 0.5 * scale[0] + 1e-6);
+  EXPECT_LE(worst, 0.5 * las.scale[0] + 1e-6);
   EXPECT_EQ(wrong_source, 0u);
   EXPECT_EQ(other_clock, 0u);
 

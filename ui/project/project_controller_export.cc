@@ -1,0 +1,88 @@
+// ProjectController's export: File > Export Project Cloud (and Export Cloud
+// when the project is what the view shows).
+#include <QAction>
+#include <QFileInfo>
+#include <QMenu>
+#include <QStringList>
+#include <memory>
+
+#include "hardware/station/project_export.h"
+#include "ui/cloud_export_chooser.h"
+#include "ui/project/project_controller.h"
+
+namespace sweepscan::ui {
+
+QAction* ProjectController::AddExportAction(QMenu* file) {
+  export_ = file->addAction(tr("Export Pro&ject Cloud…"), this, [this] { ExportWithDialog(); });
+  UpdateActions();
+  return export_;
+}
+
+void ProjectController::ExportWithDialog() {
+  if (!document_.is_open()) return;
+  const QFileInfo project(document_.path());
+  const QString path = ChooseCloudExport(window_, tr("Export project cloud"),
+                                         project.completeBaseName(), project.absolutePath());
+  if (!path.isEmpty()) ExportCloud(path);
+}
+
+bool ProjectController::ExportCloud(const QString& path) {
+  if (!document_.is_open()) return false;
+  const Project project = document_.project();
+  std::vector<std::string> unplaced;
+  const std::vector<size_t> chosen = hardware::PlacedVisibleSessions(project, &unplaced);
+  if (chosen.empty()) {
+    show_error_(
+        tr("Cannot export the project's cloud"),
+        tr("No session of %1 is both placed and shown: align a session (or show one) first.")
+            .arg(QFileInfo(document_.path()).fileName()));
+    return false;
+  }
+  const std::string file = document_.path().toStdString();
+  const std::string out = path.toStdString();
+  auto result = std::make_shared<hardware::ProjectExportResult>();
+  const bool started = jobs_.Run(
+      tr("Exporting %1").arg(QFileInfo(path).fileName()),
+      [project, chosen, file, out, result](std::atomic<bool>* cancel,
+                                           const ProjectJobs::Progress& progress) {
+        const Status s = hardware::ExportProjectCloud(
+            file, project, chosen, out, hardware::SessionCloudOptions(),
+            [&](const std::string& stage, double f) {
+              progress(QString::fromStdString(stage), f);
+              return !*cancel;
+            },
+            result.get());
+        if (*cancel) return tr("cancelled");
+        return s.ok() ? QString() : QString::fromStdString(s.message());
+      },
+      [this, path, result, unplaced, sessions = chosen.size()](const QString& error) {
+        if (jobs_.cancelled()) {
+          emit message(tr("Export cancelled: %1 was not written").arg(path));
+          return;
+        }
+        if (!error.isEmpty()) {
+          show_error_(tr("Cannot export the project's cloud"), error);
+          return;
+        }
+        QStringList notes;
+        if (!unplaced.empty()) {
+          QStringList ids;
+          for (const std::string& id : unplaced) ids << QString::fromStdString(id);
+          notes << tr("not placed, left out: %1").arg(ids.join(QStringLiteral(", ")));
+        }
+        for (const std::string& w : result->warnings) notes << QString::fromStdString(w);
+        QString said = tr("Exported %1 points of %2 session(s) to %3")
+                           .arg(result->points)
+                           .arg(sessions)
+                           .arg(path);
+        if (!notes.isEmpty()) said += QStringLiteral(" (%1)").arg(notes.join(QStringLiteral("; ")));
+        emit message(said);
+      });
+  if (!started) {
+    show_error_(tr("Cannot export the project's cloud"),
+                tr("The project is busy (loading or aligning): export when it has finished."));
+  }
+  return started;
+}
+
+}  // namespace sweepscan::ui
