@@ -568,6 +568,27 @@ TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
     canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names.png");
   }
+  // A section line whose "A" (drawn 14 px before its start) falls where
+  // the first room's name was: the name moves off it (the "A" once covered
+  // "31.2 m²"), still inside its room.
+  const PlanCanvas::RoomLabel first = at_fit.front();
+  const QPointF a_mark = first.block.center();
+  const double px = 1.0 / canvas.scale();
+  const Eigen::Vector2d start = canvas.ToModel(a_mark + QPointF(14.0, 0.0));
+  canvas.SetSectionLine(SectionLine{start, start + Eigen::Vector2d(60.0 * px, 0.0)});
+  (void)canvas.grab();
+  check_labels();
+  const QRectF a_plate(a_mark - QPointF(8.0, 9.0), QSizeF(16.0, 18.0));
+  bool named = false;
+  for (const PlanCanvas::RoomLabel& label : canvas.room_labels()) {
+    EXPECT_FALSE(label.block.intersects(a_plate)) << label.name.toStdString();
+    named = named || label.name == first.name;
+  }
+  EXPECT_TRUE(named) << first.name.toStdString() << " left out";
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names-section.png");
+  }
+  canvas.SetSectionLine(std::nullopt);
 
   // A cut in the ceiling's slab (2.7 m) is said under the plan, as the CLI
   // warns; a cut above the ceiling: no plan, and Export says why.

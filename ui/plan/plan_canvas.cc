@@ -193,6 +193,13 @@ void PlanCanvas::paintEvent(QPaintEvent*) {
   }
   figures_ = labels_;
   figures_.insert(figures_.end(), bands.begin(), bands.end());
+  // The section line drawn over the names, so the names keep clear of it
+  // (its "A" covered "31.2 m²" of the office floor's Room 4). Not the
+  // line being dragged: the names would jump at every move.
+  if (section_line_) {
+    const std::vector<QPolygonF> marks = SectionMarks(*section_line_, p.font());
+    figures_.insert(figures_.end(), marks.begin(), marks.end());
+  }
   PaintRooms(&p, true);  // The names where they clear the figures.
   if (section_line_ && !drag_) PaintSectionLine(&p, *section_line_, false);
   if (drag_) PaintSectionLine(&p, *drag_, true);
@@ -286,6 +293,25 @@ void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room
       }
     }
   }
+}
+
+std::vector<QPolygonF> PlanCanvas::SectionMarks(const SectionLine& line, QFont font) const {
+  const QPointF a = ToWidget(line.a), b = ToWidget(line.b);
+  const double length = std::hypot(b.x() - a.x(), b.y() - a.y());
+  if (length < 1.0) return {};
+  const QPointF u = (b - a) / length;
+  const QPointF n(u.y(), -u.x());
+  const QPointF side = 3.0 * QPointF(-u.y(), u.x());
+  std::vector<QPolygonF> marks{QPolygonF({a + side, b + side, b - side, a - side})};
+  for (const QPointF& end : {a, b}) {  // the stroke and its arrow
+    const QPointF tip = end + 28.0 * n;
+    marks.push_back(QPolygonF({end - 5.0 * u, tip - 5.0 * u, tip + 5.0 * u, end + 5.0 * u}));
+  }
+  font.setBold(true);
+  const QFontMetrics bold(font);
+  marks.push_back(LabelPlate(bold, a - 14.0 * u, 0.0, QStringLiteral("A")));
+  marks.push_back(LabelPlate(bold, b + 14.0 * u, 0.0, QStringLiteral("A'")));
+  return marks;
 }
 
 void PlanCanvas::PaintSectionLine(QPainter* p, const SectionLine& line, bool rubber_band) const {

@@ -19,6 +19,7 @@
 #define SWEEPSCAN_UI_PLAN_PLAN_CANVAS_H_
 
 #include <Eigen/Core>
+#include <QFont>
 #include <QPointF>
 #include <QPolygonF>
 #include <QRectF>
@@ -95,6 +96,10 @@ class PlanCanvas : public Canvas2d {
   void PaintRooms(QPainter* p, bool names) const;
   void PaintRoomName(QPainter* p, size_t index, const plan::Room& room) const;
   void PaintSectionLine(QPainter* p, const SectionLine& line, bool rubber_band) const;
+  // Where PaintSectionLine draws `line` (widget pixels): a band along it,
+  // its end strokes with their arrows, and the plates of "A" and "A'"
+  // (bold `font`).
+  std::vector<QPolygonF> SectionMarks(const SectionLine& line, QFont font) const;
 
   std::optional<plan::FloorPlan> plan_;
   QString empty_text_;
@@ -102,7 +107,8 @@ class PlanCanvas : public Canvas2d {
   std::optional<SectionLine> drag_;  // the line being drawn
   bool section_mode_ = false;
   mutable std::vector<QPolygonF> labels_;   // the figures' plates
-  mutable std::vector<QPolygonF> figures_;  // and the dimension lines' bands
+  mutable std::vector<QPolygonF>
+      figures_;  // and the dimension lines' bands and the section line's marks
   mutable std::vector<RoomLabel> room_labels_;
 };
 
