@@ -449,9 +449,9 @@ TEST(PlanBuildTest, SectionOfPosedCloudsIsCoreSectionOfTheMovedClouds) {
 // Export… (and File > Export Floor Plan…) only with a plan, the canvas's
 // reason otherwise, its chooser beside the project and named after it;
 // the section's buttons only with a section. Room names keep off the
-// dimensions' and doors' figures and inside their rooms at every zoom,
-// smaller or left out where they do not fit, along a corridor too narrow
-// for them across; the figures keep off each other.
+// dimensions' and doors' figures and the section line's marks, and inside their rooms at every
+// zoom, smaller or left out where they do not fit, along a corridor too narrow for them across; the
+// figures keep off each other.
 TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
   QAction* file_export = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {
