@@ -377,7 +377,13 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   EXPECT_NEAR(workspace_->robot_calibration().gamma, solved.gamma, 1e-9);
   ConnectToSimulator("lab_circle_diamond.json");
   ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  // Step 3 says the drive being recorded is picked once opened (its live
+  // cloud's picks are cleared then), and after it, to open it.
+  EXPECT_TRUE(panel->pick_prompt().startsWith("Recording: when the drive ends"))
+      << panel->pick_prompt().toStdString();
   ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+  EXPECT_NE(panel->pick_prompt().indexOf("open its session"), -1)
+      << panel->pick_prompt().toStdString();
   SessionMeta meta;
   ASSERT_TRUE(
       ReadSessionMeta((workspace_->session_dir() + "/meta.json").toStdString(), &meta).ok());

@@ -228,6 +228,7 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
       passes_colored_ = false;
     }
   });
+  connect(workspace_, &Workspace::recordingChanged, this, [this] { Refresh(); });
   connect(workspace_, &Workspace::sessionRenamed, this,
           [this](const QString& dir) { pairs_session_ = dir; });
   // The passes are split once the opened circle drive has replayed; after a
@@ -715,6 +716,12 @@ void CalibrationPanel::Refresh() {
     prompt = tr("Shift + click the <b style='color:#ff3cc8'>same corner in pass B</b>.");
   } else if (open) {
     prompt = tr("Shift + click the <b style='color:#00b4e6'>same corner in pass A</b>.");
+  } else if (workspace_->recording_opened() == nullptr && workspace_->recording()) {
+    // A live cloud's picks are cleared when the recording is opened: the
+    // pairs are picked then, on its split passes.
+    prompt =
+        tr("Recording: when the drive ends (Robot > Stop Recording), open it (step 1) "
+           "to pick pairs on its two passes.");
   } else if (workspace_->recording_opened() == nullptr) {
     // Nothing to solve on (a live cloud, a project): where pairs come from.
     prompt = tr("Pairs are picked on a calibration drive: open its session (step 1).");
