@@ -274,6 +274,8 @@ TEST_F(SessionResultsTest, TheSelectedPlaneStandsOutInTheView) {
   for (int i = 0; i < planes->rowCount(); ++i) {
     EXPECT_EQ(view->plane_opacity(i), i == 2 ? 0.6 : 0.2) << i;
   }
+  // The others keep their faint edges (the selected one is outlined).
+  EXPECT_EQ(view->plane_edges(), static_cast<size_t>(planes->rowCount() - 1));
   view->RenderNow();
   ASSERT_FALSE(view->plane_label_boxes().empty());
   EXPECT_EQ(view->plane_label_boxes().front().plane, 2);  // placed first: never pushed aside
@@ -282,6 +284,7 @@ TEST_F(SessionResultsTest, TheSelectedPlaneStandsOutInTheView) {
   planes->setCurrentCell(-1, -1);
   EXPECT_EQ(view->selected_plane(), -1);
   EXPECT_EQ(view->plane_opacity(0), 0.35);
+  EXPECT_EQ(view->plane_edges(), static_cast<size_t>(planes->rowCount()));
   planes->selectRow(2);
   if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
     window_->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/selected-plane.png");

@@ -503,6 +503,7 @@ void CloudView::SetClipHeight(double z) {
   // The planes too: a hidden ceiling must not tint the view from above.
   ApplyClip(static_cast<vtkPolyDataMapper*>(planes_->GetMapper()));
   ApplyClip(static_cast<vtkPolyDataMapper*>(plane_outline_->GetMapper()));
+  ApplyClip(static_cast<vtkPolyDataMapper*>(plane_edges_->GetMapper()));
   SetPlanesVisible(planes_visible_);  // Labels of hidden planes go with them.
   RequestRender();
 }

@@ -325,7 +325,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
 
   // ---- Annotations (cloud_view_overlays.cc) ----
   // Fitted planes as translucent coloured rectangles with their names.
-  // A selected one (the evaluation's table row) stands out: more opaque,
+  // Each is edged in faint black (its extent seen through its points); a
+  // selected one (the evaluation's table row) stands out: more opaque,
   // the others fainter, outlined in white, its name bold and placed first.
   struct PlanePatch {
     std::array<Eigen::Vector3d, 4> corners;
@@ -344,6 +345,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // The selected plane's index in SetPlanes' order (-1: none), and the
   // opacity each plane is drawn with (0..1).
   int selected_plane() const { return selected_plane_; }
+  // The planes edged in black (all but the selected one, outlined in white).
+  size_t plane_edges() const;
   double plane_opacity(size_t i) const;
   // The plane names drawn in the last frame: the plane's index in
   // SetPlanes' order and its box in widget pixels.
@@ -554,6 +557,7 @@ class CloudView : public QVTKOpenGLNativeWidget {
   size_t pick_blocks_in_order_ = std::numeric_limits<size_t>::max();
   vtkSmartPointer<vtkActor> planes_;
   vtkSmartPointer<vtkActor> plane_outline_;  // The selected plane's rectangle.
+  vtkSmartPointer<vtkActor> plane_edges_;    // The others' rectangles.
   std::vector<vtkSmartPointer<vtkTextActor>> plane_labels_;
   std::vector<Eigen::Vector3d> plane_label_anchors_;  // the rectangles' centres
   std::vector<PlaneLabelBox> plane_label_boxes_;

@@ -79,19 +79,27 @@ void CloudView::BuildAnnotations() {
   planes_->PickableOff();
   planes_->VisibilityOff();
   renderer_->AddActor(planes_);
-  // The selected plane's outline, in front of the points it was fitted to
-  // (which hide most of its fill).
-  auto outline_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-  outline_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
-  outline_mapper->SetResolveCoincidentTopologyToPolygonOffset();
-  outline_mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -20000.0);
-  plane_outline_ = vtkSmartPointer<vtkActor>::New();
-  plane_outline_->SetMapper(outline_mapper);
-  plane_outline_->GetProperty()->SetColor(1.0, 1.0, 1.0);
-  plane_outline_->GetProperty()->SetLineWidth(3.0);
-  plane_outline_->PickableOff();
-  plane_outline_->VisibilityOff();
-  renderer_->AddActor(plane_outline_);
+  // The selected plane's outline in white, the others' edges in faint
+  // black (VTK 9.1 has no edge opacity of their own: the fill's alpha is
+  // per cell, so the edges are lines of an actor each), in front of the
+  // points they were fitted to (which hide most of their fill).
+  const auto outline = [this](double grey, double width, double opacity) {
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
+    mapper->SetResolveCoincidentTopologyToPolygonOffset();
+    mapper->SetRelativeCoincidentTopologyLineOffsetParameters(0.0, -20000.0);
+    auto actor = vtkSmartPointer<vtkActor>::New();
+    actor->SetMapper(mapper);
+    actor->GetProperty()->SetColor(grey, grey, grey);
+    actor->GetProperty()->SetLineWidth(width);
+    actor->GetProperty()->SetOpacity(opacity);
+    actor->PickableOff();
+    actor->VisibilityOff();
+    renderer_->AddActor(actor);
+    return actor;
+  };
+  plane_outline_ = outline(1.0, 3.0, 1.0);
+  plane_edges_ = outline(0.0, 1.5, 0.35);
 
   auto line_mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   line_mapper->SetInputData(vtkSmartPointer<vtkPolyData>::New());
@@ -168,29 +176,40 @@ void CloudView::SetPlanes(const std::vector<PlanePatch>& planes) {
   poly->SetPolys(quads);
   poly->GetCellData()->SetScalars(colors);
   static_cast<vtkPolyDataMapper*>(planes_->GetMapper())->SetInputData(poly);
-  auto outline = vtkSmartPointer<vtkPolyData>::New();
-  if (selected_plane_ >= 0) {
+  // The rectangles of the planes selected (`selected`) or not, as loops.
+  const auto loops = [&](bool selected) {
     auto corners = vtkSmartPointer<vtkPoints>::New();
-    auto loop = vtkSmartPointer<vtkCellArray>::New();
-    vtkIdType ids[5];
-    for (int k = 0; k < 4; ++k)
-      ids[k] = corners->InsertNextPoint(planes[selected_plane_].corners[k].data());
-    ids[4] = ids[0];
-    loop->InsertNextCell(5, ids);
-    outline->SetPoints(corners);
-    outline->SetLines(loop);
-  }
-  static_cast<vtkPolyDataMapper*>(plane_outline_->GetMapper())->SetInputData(outline);
+    auto lines = vtkSmartPointer<vtkCellArray>::New();
+    for (size_t i = 0; i < planes.size(); ++i) {
+      if ((static_cast<int>(i) == selected_plane_) != selected) continue;
+      vtkIdType ids[5];
+      for (int k = 0; k < 4; ++k) ids[k] = corners->InsertNextPoint(planes[i].corners[k].data());
+      ids[4] = ids[0];
+      lines->InsertNextCell(5, ids);
+    }
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    poly->SetPoints(corners);
+    poly->SetLines(lines);
+    return poly;
+  };
+  static_cast<vtkPolyDataMapper*>(plane_outline_->GetMapper())->SetInputData(loops(true));
+  static_cast<vtkPolyDataMapper*>(plane_edges_->GetMapper())->SetInputData(loops(false));
   plane_count_ = planes.size();
   SetPlanesVisible(planes_visible_);
 }
 
 double CloudView::plane_opacity(size_t i) const { return PlaneOpacity(selected_plane_, i); }
 
+size_t CloudView::plane_edges() const {
+  return static_cast<size_t>(
+      static_cast<vtkPolyDataMapper*>(plane_edges_->GetMapper())->GetInput()->GetNumberOfLines());
+}
+
 void CloudView::SetPlanesVisible(bool visible) {
   planes_visible_ = visible;
   planes_->SetVisibility(visible && plane_count_ > 0);
   plane_outline_->SetVisibility(visible && selected_plane_ >= 0);
+  plane_edges_->SetVisibility(visible && plane_edges() > 0);
   // The labels follow at the next frame (LayoutOverlayLabels).
   RequestRender();
 }
