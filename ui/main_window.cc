@@ -730,7 +730,10 @@ void MainWindow::UpdateActions() {
 void MainWindow::ShowError(const QString& title, const QString& message) {
   last_error_ = message;
   ++errors_shown_;
-  statusBar()->showMessage(title + QStringLiteral(": ") + message, 10000);
+  // The first line: the bar has one (a refusal's first line says what
+  // failed, the reader's details follow in the box).
+  statusBar()->showMessage(title + QStringLiteral(": ") + message.section(QLatin1Char('\n'), 0, 0),
+                           10000);
   if (interactive_) QMessageBox::warning(this, title, message);
 }
 

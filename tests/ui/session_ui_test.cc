@@ -207,6 +207,14 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   ASSERT_TRUE(WaitFor([&] { return !failed.isEmpty(); }, 20000));
   EXPECT_NE(failed.indexOf("meta.json"), -1) << failed.toStdString();
   EXPECT_EQ(window_->last_error(), failed);
+  // Said plainly first, the reader's words after; the status bar has the
+  // plain line.
+  EXPECT_TRUE(
+      failed.startsWith("bad_meta.sweepscan cannot be opened; nothing in it was changed.\n\n"))
+      << failed.toStdString();
+  EXPECT_TRUE(window_->statusBar()->currentMessage().endsWith(
+      "bad_meta.sweepscan cannot be opened; nothing in it was changed."))
+      << window_->statusBar()->currentMessage().toStdString();
 
   // 2. A frames.bin with a broken header.
   const QString bad_frames = tmp_.path() + "/bad_frames.sweepscan";
@@ -221,6 +229,7 @@ TEST_F(AppTest, CorruptOrTruncatedSessionsAreRefusedAndTheAppKeepsWorking) {
   window_->OpenSessionPath(bad_frames);
   ASSERT_TRUE(WaitFor([&] { return !failed.isEmpty(); }, 20000));
   EXPECT_NE(failed.indexOf("frames.bin"), -1) << failed.toStdString();
+  EXPECT_TRUE(failed.startsWith("bad_frames.sweepscan cannot be opened;")) << failed.toStdString();
 
   // 3. A truncated frames.bin (a crash mid-write) opens with what was recorded.
   // A copy of the good session whose frames.bin `harm` damages.

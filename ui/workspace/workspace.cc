@@ -330,7 +330,8 @@ void Workspace::OpenSession(const QString& dir, double speed) {
         ReplayOpened(recording->decode.meta.calibration, shown,
                      shown == PoseSource::kSfm ? sfm_poses : nullptr, speed);
         emit sessionChanged(dir);
-      });
+      },
+      OpenRefused(dir));
 }
 
 Workspace::OpenedCircle Workspace::FindCircle(const SensorLog& log, const Pose2d& start,
@@ -509,8 +510,12 @@ Status Workspace::ExportCloudNow(const QString& path, std::string* note) {
                          live_meta_, nullptr, note);
 }
 
+QString Workspace::OpenRefused(const QString& dir) {
+  return tr("%1 cannot be opened; nothing in it was changed.").arg(QFileInfo(dir).fileName());
+}
+
 void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
-                       std::function<void()> on_success) {
+                       std::function<void()> on_success, const QString& refused) {
   if (job_thread_ != nullptr) {
     // Name the task in the way, so the operator knows what to wait for.
     emit jobFinished(what, false,
@@ -521,9 +526,10 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
   job_what_ = what;
   job_cancel_ = false;
   emit jobProgress(what, -1.0);  // Indeterminate until the job reports a fraction.
-  job_thread_ = std::make_unique<std::thread>([this, what, work, on_success] {
+  job_thread_ = std::make_unique<std::thread>([this, what, work, on_success, refused] {
     LowerThisThreadsPriority();
-    const QString error = work(&job_cancel_);
+    QString error = work(&job_cancel_);
+    if (!error.isEmpty() && !refused.isEmpty()) error = refused + QStringLiteral("\n\n") + error;
     QMetaObject::invokeMethod(this, [this, what, error, on_success] {
       if (job_thread_ != nullptr) {
         job_thread_->join();

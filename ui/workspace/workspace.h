@@ -393,8 +393,12 @@ class Workspace : public QObject {
   // The evaluation when the cloud changes; `keep_as_previous`: the same
   // session under other poses or another calibration, kept for before / after.
   void ForgetEvaluation(bool keep_as_previous);
+  // `refused`: said first, a line of its own, when the work fails (not
+  // when cancelled): what failed in plain words before the reader's ones.
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
-              std::function<void()> on_success);
+              std::function<void()> on_success, const QString& refused = QString());
+  // RunJob's `refused` for opening session folder `dir`.
+  static QString OpenRefused(const QString& dir);
   // A job's progress callback (any thread): the fraction to the status bar
   // at most every 2 % and at the end; false once the job is cancelled.
   std::function<bool(double)> JobProgress(const QString& what, std::atomic<bool>* cancel);

@@ -66,7 +66,8 @@ void Workspace::WithOpenedSamples(std::function<void()> then) {
         opened_ = recording;
         opened_samples_released_ = false;
         then();
-      });
+      },
+      OpenRefused(session_dir_));
 }
 
 size_t Workspace::CloudSize() const {

@@ -70,7 +70,8 @@ void Workspace::WithReplaySource(std::function<void()> then) {
         if (opened_ != light) return;  // Another session (or a recording) since.
         opened_source_ = std::move(*source);
         then();
-      });
+      },
+      OpenRefused(session_dir_));
 }
 
 void Workspace::OpenSessionForReplay(const QString& dir, double speed) {
@@ -104,7 +105,8 @@ void Workspace::OpenSessionForReplay(const QString& dir, double speed) {
         sfm_summary_.clear();
         ReplayOpened(light->decode.meta.calibration, source, nullptr, speed);
         emit sessionChanged(dir);
-      });
+      },
+      OpenRefused(dir));
 }
 
 void Workspace::SetReplaySpeed(double speed) {

@@ -45,7 +45,8 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
   auto poses = std::make_shared<std::shared_ptr<const PoseBuffer>>();
   RunJob(
       QStringLiteral("Opening %1").arg(dir),
-      [this, stream, light, circle, cloud, options, poses, source, path](std::atomic<bool>* cancel) -> QString {
+      [this, stream, light, circle, cloud, options, poses, source,
+       path](std::atomic<bool>* cancel) -> QString {
         const QString what = QStringLiteral("Opening %1").arg(QString::fromStdString(path));
         // The first pass (the wheels and IMU decoded, the EKF) is about a
         // third of the work, the second (the lidar decoded, the points
@@ -117,7 +118,8 @@ void Workspace::OpenSessionStreamed(const QString& dir) {
         });
         SetShownPoseSource(options->pose.source);
         emit sessionChanged(dir);
-      });
+      },
+      OpenRefused(dir));
 }
 
 }  // namespace sweepscan::ui
