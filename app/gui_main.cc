@@ -195,14 +195,24 @@ int FinishAndSummarize(const Options& o, Workspace* workspace, MainWindow* windo
     }
   }
   if (!o.export_cloud.isEmpty()) {
-    std::string note;
-    const Status s = workspace->ExportCloudNow(o.export_cloud, &note);
+    QStringList notes;
+    Status s;
+    // With a project shown and no session, the project's cloud (as File >
+    // Export Cloud writes it then).
+    if (workspace->CloudSize() == 0 && window->project()->document()->is_open()) {
+      s = window->project()->ExportCloudNow(o.export_cloud, &notes);
+    } else {
+      std::string note;
+      s = workspace->ExportCloudNow(o.export_cloud, &note);
+      if (!note.empty()) notes << QString::fromStdString(note);
+    }
     if (!s.ok()) {
       std::fprintf(stderr, "sweepscan: %s\n", s.message().c_str());
       exit_code = 1;
-    } else if (!note.empty()) {
+    }
+    for (const QString& note : notes) {
       std::fprintf(stderr, "sweepscan: warning: %s: %s\n", qPrintable(o.export_cloud),
-                   note.c_str());
+                   qPrintable(note));
     }
   }
   const nlohmann::json j = {

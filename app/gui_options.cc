@@ -34,7 +34,10 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   const QCommandLineOption window_shot(
       "window-screenshot", "Save the whole window as PNG just before quitting.", "PATH");
   const QCommandLineOption export_cloud(
-      "export-cloud", "Write the cloud (LAS, PLY or PCD by suffix) just before quitting.", "PATH");
+      "export-cloud",
+      "Write the cloud (LAS, PLY or PCD by suffix) just before quitting (the project's, as "
+      "`sweepscan-cli project export` writes it, with --project and no session).",
+      "PATH");
   const QCommandLineOption quit_after("quit-after",
                                       "Quit after S seconds (prints a JSON summary line).", "S");
   const QCommandLineOption orbit(

@@ -55,7 +55,8 @@ TEST(GuiHeadlessTest, ANumberOptionThatIsNotANumberIsRefusedByName) {
 
 // `sweepscan PATH` opens what it names (it was ignored without a word): a
 // session as File > Open Session; a folder that is none is said; two paths,
-// or a PATH beside --replay, are refused.
+// or a PATH beside --replay, are refused. --export-cloud beside --project
+// writes the project's cloud.
 TEST(GuiHeadlessTest, APathOnTheCommandLineIsOpened) {
   if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
   const std::string gui = SWEEPSCAN_GUI;
@@ -76,6 +77,20 @@ TEST(GuiHeadlessTest, APathOnTheCommandLineIsOpened) {
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("\"session\":\"" + dir + "/lab.sweepscan\""), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"last_error\":\"\""), std::string::npos) << r.out;
+
+  // --export-cloud with a project and no session writes the project's
+  // cloud, as File > Export Cloud does then: what `project export` writes,
+  // byte for byte.
+  const std::string cli = SWEEPSCAN_CLI;
+  sweepscan::testing::ShellOrFail(cli + " project new " + dir + "/p.sweepscan-project " + dir +
+                                  "/lab.sweepscan");
+  sweepscan::testing::ShellOrFail(cli + " project export " + dir + "/p.sweepscan-project --out " +
+                                  dir + "/cli.las");
+  r = sweepscan::testing::RunCommand(gui + " --project " + dir +
+                                     "/p.sweepscan-project --quit-after 5 --export-cloud " + dir +
+                                     "/app.las");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(sweepscan::testing::RunCommand("cmp " + dir + "/cli.las " + dir + "/app.las").code, 0);
   sweepscan::testing::ShellOrFail("rm -rf " + dir);
 }
 

@@ -28,6 +28,7 @@
 
 #include <QObject>
 #include <QString>
+#include <QStringList>
 #include <QUndoStack>
 #include <functional>
 #include <map>
@@ -83,6 +84,9 @@ class ProjectController : public QObject {
   // start (no project, no placed and visible session, a job runs), said
   // through show_error. The end is said as message() or show_error.
   bool ExportCloud(const QString& path);
+  // The same, here and now (the command line's --export-cloud at quit);
+  // *notes gets what the status bar would add (sessions left out, damage).
+  Status ExportCloudNow(const QString& path, QStringList* notes);
   // The window title's part: "floor.sweepscan-project[*]", "" without a project.
   QString title() const;
 

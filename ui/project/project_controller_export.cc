@@ -26,6 +26,37 @@ void ProjectController::ExportWithDialog() {
   if (!path.isEmpty()) ExportCloud(path);
 }
 
+namespace {
+
+// What the operator is told beside the count: the visible sessions left
+// out for want of a placement, and the export's warnings.
+QStringList Notes(const std::vector<std::string>& unplaced,
+                  const hardware::ProjectExportResult& result) {
+  QStringList notes;
+  if (!unplaced.empty()) {
+    QStringList ids;
+    for (const std::string& id : unplaced) ids << QString::fromStdString(id);
+    notes << QObject::tr("not placed, left out: %1").arg(ids.join(QStringLiteral(", ")));
+  }
+  for (const std::string& w : result.warnings) notes << QString::fromStdString(w);
+  return notes;
+}
+
+}  // namespace
+
+Status ProjectController::ExportCloudNow(const QString& path, QStringList* notes) {
+  if (!document_.is_open()) return Status::Error("no project is open");
+  std::vector<std::string> unplaced;
+  const Project& project = document_.project();
+  const std::vector<size_t> chosen = hardware::PlacedVisibleSessions(project, &unplaced);
+  hardware::ProjectExportResult result;
+  const Status s = hardware::ExportProjectCloud(document_.path().toStdString(), project, chosen,
+                                                path.toStdString(), hardware::SessionCloudOptions(),
+                                                nullptr, &result);
+  if (s.ok() && notes != nullptr) *notes = Notes(unplaced, result);
+  return s;
+}
+
 bool ProjectController::ExportCloud(const QString& path) {
   if (!document_.is_open()) return false;
   const Project project = document_.project();
@@ -64,13 +95,7 @@ bool ProjectController::ExportCloud(const QString& path) {
           show_error_(tr("Cannot export the project's cloud"), error);
           return;
         }
-        QStringList notes;
-        if (!unplaced.empty()) {
-          QStringList ids;
-          for (const std::string& id : unplaced) ids << QString::fromStdString(id);
-          notes << tr("not placed, left out: %1").arg(ids.join(QStringLiteral(", ")));
-        }
-        for (const std::string& w : result->warnings) notes << QString::fromStdString(w);
+        const QStringList notes = Notes(unplaced, *result);
         QString said = tr("Exported %1 points of %2 session(s) to %3")
                            .arg(result->points)
                            .arg(sessions)
