@@ -22,14 +22,21 @@ class SessionClouds {
  public:
   SessionClouds(std::string project_file, hardware::SessionCloudOptions options)
       : file_(std::move(project_file)), options_(std::move(options)) {}
+  // A session's cloud as registration takes it: its positions (12 bytes a
+  // point, streamed from frames.bin: hardware::LoadSessionPositions), with
+  // what it was built from (`info`, whose points stay empty).
+  struct Cloud {
+    hardware::SessionCloud info;
+    std::vector<Eigen::Vector3f> positions;
+  };
   // Null with *error set on failure.
-  const hardware::SessionCloud* Get(const ProjectSession& session, std::string* error);
+  const Cloud* Get(const ProjectSession& session, std::string* error);
   void Drop(const std::string& id) { clouds_.erase(id); }
 
  private:
   std::string file_;
   hardware::SessionCloudOptions options_;
-  std::map<std::string, hardware::SessionCloud> clouds_;
+  std::map<std::string, Cloud> clouds_;
   std::map<std::string, std::string> failed_;  // id -> why its cloud could not be built
 };
 

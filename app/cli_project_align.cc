@@ -42,7 +42,7 @@ int SessionCloudOptionsFromArgs(const Args& args, hardware::SessionCloudOptions*
   return kExitOk;
 }
 
-const hardware::SessionCloud* SessionClouds::Get(const ProjectSession& session, std::string* error) {
+const SessionClouds::Cloud* SessionClouds::Get(const ProjectSession& session, std::string* error) {
   auto it = clouds_.find(session.id);
   if (it != clouds_.end()) return &it->second;
   // A session that failed is not built again (align asks for each pair).
@@ -50,15 +50,16 @@ const hardware::SessionCloud* SessionClouds::Get(const ProjectSession& session, 
     *error = f->second;
     return nullptr;
   }
-  hardware::SessionCloud cloud;
+  Cloud cloud;
   std::cerr << "building the cloud of '" << session.id << "'...\n";
-  const Status s = hardware::LoadSessionCloud(file_, session, options_, &cloud);
+  const Status s =
+      hardware::LoadSessionPositions(file_, session, options_, &cloud.info, &cloud.positions);
   if (!s.ok()) {
     *error = failed_[session.id] = s.message();
     return nullptr;
   }
-  if (!cloud.damage.empty()) {
-    std::cerr << "sweepscan-cli: warning: " << cloud.dir << ": " << cloud.damage << "\n";
+  if (!cloud.info.damage.empty()) {
+    std::cerr << "sweepscan-cli: warning: " << cloud.info.dir << ": " << cloud.info.damage << "\n";
   }
   return &clouds_.emplace(session.id, std::move(cloud)).first->second;
 }
@@ -277,7 +278,7 @@ int RunProjectAlign(const Args& args) {
     for (auto it = unplaced.begin(); it != unplaced.end();) {
       ProjectSession& ps = project.sessions[project.Find(*it)];
       std::string error;
-      const hardware::SessionCloud* src = clouds.Get(ps, &error);
+      const SessionClouds::Cloud* src = clouds.Get(ps, &error);
       if (src == nullptr) {
         // One unreadable session costs its own placement, not the others'
         // (each of which may have taken minutes).
@@ -285,7 +286,7 @@ int RunProjectAlign(const Args& args) {
         ++it;
         continue;
       }
-      const std::vector<Eigen::Vector3f> source = hardware::Positions(src->points);
+      const std::vector<Eigen::Vector3f>& source = src->positions;
       std::optional<hardware::RegistrationAttempt> best;
       std::string reasons;
       for (const ProjectSession& ref : project.sessions) {
@@ -294,7 +295,7 @@ int RunProjectAlign(const Args& args) {
         // A session placed against this one would move with it
         // (MoveDependants) and the two would refer to each other.
         if (project.PlacedThrough(ref.id, ps.id)) continue;
-        const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
+        const SessionClouds::Cloud* tgt = clouds.Get(ref, &error);
         if (tgt == nullptr) {
           reasons += "\n  against '" + ref.id + "': its cloud cannot be built: " + error;
           continue;
@@ -305,7 +306,7 @@ int RunProjectAlign(const Args& args) {
           continue;
         }
         std::cerr << "aligning '" << ps.id << "' to '" << ref.id << "'...\n";
-        hardware::RegistrationAttempt a = Register(args, pairs, ref.id, source, hardware::Positions(tgt->points));
+        hardware::RegistrationAttempt a = Register(args, pairs, ref.id, source, tgt->positions);
         if (!a.status.ok()) {
           failed[pair] = a.status.message();
           reasons += "\n  against '" + ref.id + "': " + a.status.message();
@@ -339,9 +340,10 @@ int RunProjectAlign(const Args& args) {
                   << "): held at the coarse pose, not measured\n";
         j["free_direction"] = {r.free_direction.x(), r.free_direction.y(), r.free_direction.z()};
       }
-      const hardware::SessionCloud* tgt = clouds.Get(ref, &error);
-      if (src->has_true_start && tgt != nullptr && tgt->has_true_start) {
-        const Rigid3d truth = tgt->world_from_session_truth.inverse() * src->world_from_session_truth;
+      const SessionClouds::Cloud* tgt = clouds.Get(ref, &error);
+      if (src->info.has_true_start && tgt != nullptr && tgt->info.has_true_start) {
+        const Rigid3d truth =
+            tgt->info.world_from_session_truth.inverse() * src->info.world_from_session_truth;
         const Rigid3d diff = truth.inverse() * r.target_from_source;
         const double dt = diff.translation().norm();
         const double dr = Eigen::AngleAxisd(diff.rotation()).angle();

@@ -55,20 +55,6 @@ int SelectSessions(const Args& args, const Project& project, const std::string& 
   return kExitOk;
 }
 
-// One session's cloud in the project frame; the cache is not kept (one
-// session in memory at a time).
-int ProjectCloud(const std::string& file, const hardware::SessionCloudOptions& options, const ProjectSession& ps,
-                 hardware::SessionCloud* cloud) {
-  const Status s = hardware::LoadSessionCloud(file, ps, options, cloud);
-  if (!s.ok()) {
-    PrintError(s.message());
-    return kExitBadInput;
-  }
-  if (!cloud->damage.empty()) std::cerr << "sweepscan-cli: warning: " << cloud->dir << ": " << cloud->damage << "\n";
-  hardware::TransformPoints(*ps.project_from_session, &cloud->points);
-  return kExitOk;
-}
-
 }  // namespace
 
 void WarnPoseSource(const Project& project, const std::vector<size_t>& chosen, PoseSource source) {
@@ -94,10 +80,20 @@ int ProjectPositions(const Args& args, const std::string& file, std::vector<Eige
     return code;
   WarnPoseSource(project, chosen, options.pose_source);
   for (size_t i : chosen) {
+    // Streamed (12 bytes a point, the session never held decoded), then
+    // moved into the project's frame as TransformPoints moves points.
+    const ProjectSession& ps = project.sessions[i];
     hardware::SessionCloud cloud;
-    if (const int code = ProjectCloud(file, options, project.sessions[i], &cloud); code != kExitOk) return code;
-    points->reserve(points->size() + cloud.points.size());
-    for (const CloudPoint& p : cloud.points) points->emplace_back(p.x, p.y, p.z);
+    std::vector<Eigen::Vector3f> positions;
+    const Status built = hardware::LoadSessionPositions(file, ps, options, &cloud, &positions);
+    if (!built.ok()) return (PrintError(built.message()), kExitBadInput);
+    if (!cloud.damage.empty())
+      std::cerr << "sweepscan-cli: warning: " << cloud.dir << ": " << cloud.damage << "\n";
+    const Eigen::Matrix3d r = ps.project_from_session->rotation().toRotationMatrix();
+    const Eigen::Vector3d o = ps.project_from_session->translation();
+    points->reserve(points->size() + positions.size());
+    for (const Eigen::Vector3f& p : positions)
+      points->push_back((r * p.cast<double>() + o).cast<float>());
   }
   return kExitOk;
 }
