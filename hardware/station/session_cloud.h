@@ -1,6 +1,6 @@
 // A project session's cloud (core/project/project.h), built the one way the
 // CLI's `project` commands and the desktop app's project tree build it: the
-// session folder decoded (hardware/station/recording.h), its poses from the
+// session folder decoded (streamed, session_stream.h), its poses from the
 // EKF (or the wheels alone) starting at the identity, so the cloud is in
 // the session's own frame (where the operator put the robot down) whatever
 // meta.json says about a simulated or imported start, under the project's
@@ -48,6 +48,10 @@ struct SessionCloud {
   Rigid3d world_from_session_truth;
 };
 
+// The cloud with the session decoded whole (recording.h) and
+// reconstructed at once: 24 bytes a lidar sample and 32 a point at its
+// peak. The programs stream it (below); this is the reference the streamed
+// clouds are tested against, point for point.
 Status LoadSessionCloud(const std::string& project_file, const ProjectSession& session,
                         const SessionCloudOptions& options, SessionCloud* cloud);
 
