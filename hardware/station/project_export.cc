@@ -1,6 +1,5 @@
 #include "hardware/station/project_export.h"
 
-#include <Eigen/Core>
 #include <algorithm>
 
 #include "core/cloud/cloud_io.h"
@@ -10,18 +9,10 @@
 namespace sweepscan::hardware {
 namespace {
 
-// p <- project_from_session * p for a chunk, into `out` (the math of
-// TransformPoints, so that a chunk's points are what the whole cloud's were).
+// p <- project_from_session * p for a chunk, into `out`.
 void ToProject(const Rigid3d& t, const CloudPoint* p, size_t n, std::vector<CloudPoint>* out) {
   out->assign(p, p + n);
-  const Eigen::Matrix3d r = t.rotation().toRotationMatrix();
-  const Eigen::Vector3d o = t.translation();
-  for (CloudPoint& q : *out) {
-    const Eigen::Vector3d v = r * Eigen::Vector3d(q.x, q.y, q.z) + o;
-    q.x = static_cast<float>(v.x());
-    q.y = static_cast<float>(v.y());
-    q.z = static_cast<float>(v.z());
-  }
+  TransformPoints(t, out->data(), n);
 }
 
 // One pass over the chosen sessions: each streamed in the project's frame

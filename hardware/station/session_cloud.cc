@@ -93,15 +93,20 @@ Status LoadSessionCloud(const std::string& project_file, const ProjectSession& s
   return Status::Ok();
 }
 
-void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points) {
+void TransformPoints(const Rigid3d& t, CloudPoint* points, size_t n) {
   const Eigen::Matrix3d r = t.rotation().toRotationMatrix();
   const Eigen::Vector3d o = t.translation();
-  for (CloudPoint& p : *points) {
+  for (size_t i = 0; i < n; ++i) {
+    CloudPoint& p = points[i];
     const Eigen::Vector3d q = r * Eigen::Vector3d(p.x, p.y, p.z) + o;
     p.x = static_cast<float>(q.x());
     p.y = static_cast<float>(q.y());
     p.z = static_cast<float>(q.z());
   }
+}
+
+void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points) {
+  TransformPoints(t, points->data(), points->size());
 }
 
 std::vector<Eigen::Vector3f> Positions(const std::vector<CloudPoint>& points) {

@@ -76,6 +76,7 @@ Status LoadSessionPositions(const std::string& project_file, const ProjectSessio
 
 // p <- t * p for every point (double precision in, float out).
 void TransformPoints(const Rigid3d& t, std::vector<CloudPoint>* points);
+void TransformPoints(const Rigid3d& t, CloudPoint* points, size_t n);
 std::vector<Eigen::Vector3f> Positions(const std::vector<CloudPoint>& points);
 
 }  // namespace sweepscan::hardware
