@@ -10,6 +10,7 @@
 #include <QAction>
 #include <QDir>
 #include <QFileInfo>
+#include <QProgressBar>
 #include <QSettings>
 #include <QToolButton>
 
@@ -113,13 +114,23 @@ TEST_F(ProjectExportUiTest, CancelledOrNothingToExportLeavesNoFile) {
   // export of two sessions takes some 100 times the event loop's turn.
   bool clicked = false;
   QObject context;
-  QObject::connect(project()->jobs(), &ProjectJobs::progress, &context,
-                   [&](const QString& what, double) {
-                     if (clicked || !what.startsWith("Reading")) return;
-                     EXPECT_TRUE(cancel->isVisible());
-                     cancel->click();
-                     clicked = true;
-                   });
+  QObject::connect(
+      project()->jobs(), &ProjectJobs::progress, &context, [&](const QString& what, double) {
+        if (clicked || !what.startsWith("Export: reading")) return;
+        EXPECT_TRUE(cancel->isVisible());
+        // The stage fits its bar on one line (it wrapped, cut off).
+        auto* bar = window_->findChild<QProgressBar*>(QStringLiteral("projectProgress"));
+        ASSERT_NE(bar, nullptr);
+        EXPECT_LE(bar->fontMetrics().horizontalAdvance(bar->format()), bar->width() - 8)
+            << bar->format().toStdString();
+        EXPECT_EQ(bar->toolTip(), what);
+        if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+          window_->grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") +
+                               "/project-export-progress.png");
+        }
+        cancel->click();
+        clicked = true;
+      });
   ASSERT_TRUE(project()->ExportCloud(folder + "/floor.las"));
   ASSERT_TRUE(WaitFor([&] { return !project()->busy(); }, 60000));
   EXPECT_TRUE(clicked);

@@ -79,7 +79,10 @@ bool ProjectController::ExportCloud(const QString& path) {
         const Status s = hardware::ExportProjectCloud(
             file, project, chosen, out, hardware::SessionCloudOptions(),
             [&](const std::string& stage, double f) {
-              progress(QString::fromStdString(stage), f);
+              // "Export: reading 'a' for the extent (1 of 2)": the bar says what runs.
+              QString text = QString::fromStdString(stage);
+              if (!text.isEmpty()) text[0] = text[0].toLower();
+              progress(tr("Export: %1").arg(text), f);
               return !*cancel;
             },
             result.get());
