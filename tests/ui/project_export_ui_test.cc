@@ -8,10 +8,12 @@
 #include <gtest/gtest.h>
 
 #include <QAction>
+#include <QApplication>
 #include <QDir>
 #include <QFileInfo>
 #include <QProgressBar>
 #include <QSettings>
+#include <QTimer>
 #include <QToolButton>
 
 #include "tests/testing/las_records.h"
@@ -142,13 +144,23 @@ TEST_F(ProjectExportUiTest, CancelledOrNothingToExportLeavesNoFile) {
   EXPECT_FALSE(project()->ExportCloud(folder + "/floor.las"));
   EXPECT_TRUE(window_->last_error().contains("placed and shown"))
       << window_->last_error().toStdString();
+  // Through the menu: said before any chooser opens (none is answered).
+  QAction* export_project = Action(QStringLiteral("Export Pro&ject Cloud…"));
+  ASSERT_NE(export_project, nullptr);
+  const int errors = window_->errors_shown();
+  bool chooser = false;  // A chooser would block trigger(): closed, and said.
+  QObject watch;
+  QTimer::singleShot(3000, &watch, [&chooser] {
+    if (QWidget* modal = QApplication::activeModalWidget()) {
+      chooser = true;
+      modal->close();
+    }
+  });
+  export_project->trigger();
+  EXPECT_FALSE(chooser);
+  EXPECT_EQ(window_->errors_shown(), errors + 1);
   EXPECT_TRUE(QDir(folder).isEmpty(QDir::AllEntries | QDir::NoDotAndDotDot | QDir::Hidden));
 
-  QAction* export_project = nullptr;
-  for (QAction* a : window_->findChildren<QAction*>()) {
-    if (a->text() == QStringLiteral("Export Pro&ject Cloud…")) export_project = a;
-  }
-  ASSERT_NE(export_project, nullptr);
   ASSERT_TRUE(project()->CloseProject());
   EXPECT_FALSE(export_project->isEnabled());
 }

@@ -87,6 +87,8 @@ class ProjectController : public QObject {
   // The same, here and now (the command line's --export-cloud at quit);
   // *notes gets what the status bar would add (sessions left out, damage).
   Status ExportCloudNow(const QString& path, QStringList* notes);
+  // True if a session is placed and shown; else says so (show_error).
+  bool SayIfNothingToExport();
   // The window title's part: "floor.sweepscan-project[*]", "" without a project.
   QString title() const;
 

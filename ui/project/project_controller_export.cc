@@ -20,6 +20,8 @@ QAction* ProjectController::AddExportAction(QMenu* file) {
 
 void ProjectController::ExportWithDialog() {
   if (!document_.is_open()) return;
+  // Said before a file is asked for, not after.
+  if (!SayIfNothingToExport()) return;
   const QFileInfo project(document_.path());
   const QString path = ChooseCloudExport(window_, tr("Export project cloud"),
                                          project.completeBaseName(), project.absolutePath());
@@ -57,18 +59,19 @@ Status ProjectController::ExportCloudNow(const QString& path, QStringList* notes
   return s;
 }
 
+bool ProjectController::SayIfNothingToExport() {
+  if (!hardware::PlacedVisibleSessions(document_.project(), nullptr).empty()) return true;
+  show_error_(tr("Cannot export the project's cloud"),
+              tr("No session of %1 is both placed and shown: align a session (or show one) first.")
+                  .arg(QFileInfo(document_.path()).fileName()));
+  return false;
+}
+
 bool ProjectController::ExportCloud(const QString& path) {
-  if (!document_.is_open()) return false;
+  if (!document_.is_open() || !SayIfNothingToExport()) return false;
   const Project project = document_.project();
   std::vector<std::string> unplaced;
   const std::vector<size_t> chosen = hardware::PlacedVisibleSessions(project, &unplaced);
-  if (chosen.empty()) {
-    show_error_(
-        tr("Cannot export the project's cloud"),
-        tr("No session of %1 is both placed and shown: align a session (or show one) first.")
-            .arg(QFileInfo(document_.path()).fileName()));
-    return false;
-  }
   const std::string file = document_.path().toStdString();
   const std::string out = path.toStdString();
   auto result = std::make_shared<hardware::ProjectExportResult>();
