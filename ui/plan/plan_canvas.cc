@@ -23,6 +23,12 @@ const QColor kOpening(21, 101, 192);
 const QColor kDimension(198, 40, 40);
 const QColor kRoomText(40, 56, 72);
 const QColor kSection(106, 27, 154);  // the section line: violet, apart from the plan's colours
+// Its end marks (pixels): a stroke along the viewing direction, an arrow
+// at its tip, a half-width, and the letters' distance before and after
+// the line's ends. PaintSectionLine draws them; SectionMarks keeps the
+// room names off them.
+constexpr double kSectionStroke = 22.0, kSectionArrow = 6.0, kSectionArrowHalf = 5.0,
+                 kSectionLetterGap = 14.0;
 
 // A pale, translucent tint for room `i`: hues 137.5 deg apart (the golden
 // angle) so that neighbours, numbered south to north, differ.
@@ -304,13 +310,14 @@ std::vector<QPolygonF> PlanCanvas::SectionMarks(const SectionLine& line, QFont f
   const QPointF side = 3.0 * QPointF(-u.y(), u.x());
   std::vector<QPolygonF> marks{QPolygonF({a + side, b + side, b - side, a - side})};
   for (const QPointF& end : {a, b}) {  // the stroke and its arrow
-    const QPointF tip = end + 28.0 * n;
-    marks.push_back(QPolygonF({end - 5.0 * u, tip - 5.0 * u, tip + 5.0 * u, end + 5.0 * u}));
+    const QPointF tip = end + (kSectionStroke + kSectionArrow) * n;
+    const QPointF half = kSectionArrowHalf * u;
+    marks.push_back(QPolygonF({end - half, tip - half, tip + half, end + half}));
   }
   font.setBold(true);
   const QFontMetrics bold(font);
-  marks.push_back(LabelPlate(bold, a - 14.0 * u, 0.0, QStringLiteral("A")));
-  marks.push_back(LabelPlate(bold, b + 14.0 * u, 0.0, QStringLiteral("A'")));
+  marks.push_back(LabelPlate(bold, a - kSectionLetterGap * u, 0.0, QStringLiteral("A")));
+  marks.push_back(LabelPlate(bold, b + kSectionLetterGap * u, 0.0, QStringLiteral("A'")));
   return marks;
 }
 
@@ -328,17 +335,18 @@ void PlanCanvas::PaintSectionLine(QPainter* p, const SectionLine& line, bool rub
   p->setPen(QPen(kSection, 2.5, Qt::SolidLine, Qt::FlatCap));
   p->setBrush(kSection);
   for (const QPointF& end : {a, b}) {
-    const QPointF tip = end + 22.0 * n;
+    const QPointF tip = end + kSectionStroke * n;
     p->drawLine(end, tip);
-    p->drawPolygon(QPolygonF({tip + 6.0 * n, tip - 5.0 * u, tip + 5.0 * u}));
+    p->drawPolygon(QPolygonF(
+        {tip + kSectionArrow * n, tip - kSectionArrowHalf * u, tip + kSectionArrowHalf * u}));
   }
   p->setBrush(Qt::NoBrush);
   QFont bold = p->font();
   bold.setBold(true);
   p->save();
   p->setFont(bold);
-  PaintLabel(p, a - 14.0 * u, 0.0, QStringLiteral("A"), kSection);
-  PaintLabel(p, b + 14.0 * u, 0.0, QStringLiteral("A'"), kSection);
+  PaintLabel(p, a - kSectionLetterGap * u, 0.0, QStringLiteral("A"), kSection);
+  PaintLabel(p, b + kSectionLetterGap * u, 0.0, QStringLiteral("A'"), kSection);
   p->restore();
   if (rubber_band) {
     PaintLabel(p, 0.5 * (a + b) - 12.0 * n, ScreenAngle(b - a),
