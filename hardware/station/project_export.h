@@ -11,8 +11,9 @@
 // own Point Source ID (its 1-based place in the project file) and GPS
 // times from its own clock (meta.json's created_utc); one session without
 // a usable clock makes the whole file robot seconds, since LAS says which
-// in one header bit (Global Encoding bit 0). PLY and PCD are written whole
-// (their writers take one array: 32 bytes a point of the building).
+// in one header bit (Global Encoding bit 0). PLY and PCD take one pass
+// through the streamed cloud writer (CloudFileWriter): the same bounded
+// memory.
 //
 // Pure, no Qt; any thread (the app runs it on a job thread).
 #ifndef SWEEPSCAN_HARDWARE_STATION_PROJECT_EXPORT_H_
