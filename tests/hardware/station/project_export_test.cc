@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -139,6 +140,19 @@ TEST(ProjectExportTest, LasAndPlyHoldEachSessionWherePlaced) {
   }
   EXPECT_EQ(differ, 0u);
   EXPECT_EQ(r.sessions[1].points, second.size());
+
+  // PCD through the same streamed writer: every attribute of every point.
+  s = ExportProjectCloud(kProjectFile, project, chosen, P("floor.pcd"), SessionCloudOptions(),
+                         nullptr, &r);
+  ASSERT_TRUE(s.ok()) << s.message();
+  std::vector<CloudPoint> pcd;
+  ASSERT_TRUE(LoadCloud(P("floor.pcd"), &pcd).ok());
+  ASSERT_EQ(pcd.size(), ply.size());
+  differ = 0;
+  for (size_t i = 0; i < pcd.size(); ++i) {
+    differ += std::memcmp(&pcd[i], &ply[i], sizeof(CloudPoint)) != 0;
+  }
+  EXPECT_EQ(differ, 0u);
 }
 
 // Cancelled half way, a session that cannot be read, an unplaced session
@@ -149,18 +163,25 @@ TEST(ProjectExportTest, CancelledOrRefusedLeavesNothing) {
   std::filesystem::create_directories(P("refused"));
   Project project = TwoPlaced();
   ProjectExportResult r;
-  Status s = ExportProjectCloud(
-      kProjectFile, project, {0, 2}, out, SessionCloudOptions(),
-      [](const std::string&, double f) { return f < 0.6; }, &r);
-  EXPECT_EQ(s.message(), "cancelled");
-  EXPECT_FALSE(r.session_unreadable);
-  EXPECT_TRUE(std::filesystem::is_empty(P("refused")));
+  Status s;
+  // LAS writes in its second pass, PLY from the first session's first chunk.
+  for (const char* name : {"refused/floor.las", "refused/floor.ply"}) {
+    s = ExportProjectCloud(
+        kProjectFile, project, {0, 2}, P(name), SessionCloudOptions(),
+        [](const std::string&, double f) { return f < 0.6; }, &r);
+    EXPECT_EQ(s.message(), "cancelled") << name;
+    EXPECT_FALSE(r.session_unreadable);
+    EXPECT_TRUE(std::filesystem::is_empty(P("refused"))) << name;
+  }
 
   project.sessions[2].path = P("no_such.sweepscan");
-  s = ExportProjectCloud(kProjectFile, project, {0, 2}, out, SessionCloudOptions(), nullptr, &r);
-  EXPECT_NE(s.message().find("session 'b'"), std::string::npos) << s.message();
-  EXPECT_TRUE(r.session_unreadable);
-  EXPECT_TRUE(std::filesystem::is_empty(P("refused")));
+  for (const char* name : {"refused/floor.las", "refused/floor.ply"}) {
+    s = ExportProjectCloud(kProjectFile, project, {0, 2}, P(name), SessionCloudOptions(), nullptr,
+                           &r);
+    EXPECT_NE(s.message().find("session 'b'"), std::string::npos) << s.message();
+    EXPECT_TRUE(r.session_unreadable) << name;
+    EXPECT_TRUE(std::filesystem::is_empty(P("refused"))) << name;
+  }
 
   s = ExportProjectCloud(kProjectFile, project, {3}, out, SessionCloudOptions(), nullptr, &r);
   EXPECT_EQ(s.message(), "'loose' is not placed yet");
