@@ -296,10 +296,10 @@ void ProjectPanel::ShowProgress(const QString& what, double fraction) {
   progress_->setVisible(on);
   cancel_->setVisible(on);
   if (on) {
-    // Elided to the bar (a long stage wrapped into two cut-off lines); the
-    // whole text is the status line's below and the tooltip's.
-    progress_->setFormat(
-        progress_->fontMetrics().elidedText(what, Qt::ElideRight, progress_->width() - 12));
+    // As QProgressDialog shows it: the stage in words on the line below
+    // (wrapped, whole), the bar its percentage. The stage in the bar too
+    // said it twice, and a long one was cut off in the bar.
+    progress_->setFormat(QStringLiteral("%p %"));
     progress_->setToolTip(what);
     progress_->setRange(0, fraction < 0 ? 0 : 1000);
     if (fraction >= 0) progress_->setValue(static_cast<int>(1000 * fraction));
