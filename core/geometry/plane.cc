@@ -6,6 +6,23 @@
 
 namespace sweepscan {
 
+namespace {
+
+// The plane through centroid c of `n` points with scatter S (header).
+bool PlaneFromScatter(const Eigen::Vector3d& c, const Eigen::Matrix3d& s, size_t n, Plane* plane) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
+  const Eigen::Vector3d ev = eig.eigenvalues();             // ascending
+  if (ev[1] <= 1e-12 * std::max(1.0, ev[2])) return false;  // collinear or a single point
+  plane->normal = eig.eigenvectors().col(0).normalized();
+  plane->centroid = c;
+  plane->d = -plane->normal.dot(c);
+  plane->rms = std::sqrt(std::max(0.0, ev[0]) / static_cast<double>(n));
+  plane->count = n;
+  return true;
+}
+
+}  // namespace
+
 bool FitPlane(const std::vector<Eigen::Vector3d>& points, Plane* plane) {
   if (points.size() < 3) return false;
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -16,15 +33,14 @@ bool FitPlane(const std::vector<Eigen::Vector3d>& points, Plane* plane) {
     const Eigen::Vector3d q = p - c;
     s += q * q.transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(s);
-  const Eigen::Vector3d ev = eig.eigenvalues();  // ascending
-  if (ev[1] <= 1e-12 * std::max(1.0, ev[2])) return false;  // collinear or a single point
-  plane->normal = eig.eigenvectors().col(0).normalized();
-  plane->centroid = c;
-  plane->d = -plane->normal.dot(c);
-  plane->rms = std::sqrt(std::max(0.0, ev[0]) / static_cast<double>(points.size()));
-  plane->count = points.size();
-  return true;
+  return PlaneFromScatter(c, s, points.size(), plane);
+}
+
+bool PlaneFit::Fit(Plane* plane) const {
+  if (count_ < 3) return false;
+  // The update's product is symmetric only to rounding.
+  const Eigen::Matrix3d s = 0.5 * (scatter_ + scatter_.transpose());
+  return PlaneFromScatter(centroid_, s, count_, plane);
 }
 
 double DistanceBetweenPlanes(const Plane& a, const Plane& b) {

@@ -25,6 +25,28 @@ struct Plane {
 // False if fewer than 3 points or all collinear.
 bool FitPlane(const std::vector<Eigen::Vector3d>& points, Plane* plane);
 
+// FitPlane for points that arrive one at a time and are not kept (a
+// streamed cloud): the centroid and S updated per point (Welford's update,
+// S += (p - c_old)(p - c_new)^T, so no large sums cancel). 96 bytes,
+// whatever the count; the plane is FitPlane's to rounding.
+class PlaneFit {
+ public:
+  void Add(const Eigen::Vector3d& p) {
+    ++count_;
+    const Eigen::Vector3d before = p - centroid_;
+    centroid_ += before / static_cast<double>(count_);
+    scatter_ += before * (p - centroid_).transpose();
+  }
+  size_t count() const { return count_; }
+  // False as FitPlane.
+  bool Fit(Plane* plane) const;
+
+ private:
+  size_t count_ = 0;
+  Eigen::Vector3d centroid_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d scatter_ = Eigen::Matrix3d::Zero();
+};
+
 // Distance between two nearly parallel planes: the mean of each centroid's
 // distance to the other plane (symmetric, robust to a small tilt between them).
 double DistanceBetweenPlanes(const Plane& a, const Plane& b);

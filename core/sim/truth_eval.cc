@@ -23,96 +23,159 @@ double Percentile(std::vector<double> v, double q) {
 
 }  // namespace
 
-SurfaceErrorStats SurfaceErrors(const Scene& scene, const std::vector<CloudPoint>& points) {
-  SurfaceErrorStats s;
-  std::vector<double> d;
-  d.reserve(points.size());
-  double sum = 0.0, sum2 = 0.0;
-  for (const CloudPoint& p : points) {
-    const double e = scene.DistanceToSurface(P(p));
-    d.push_back(e);
-    sum += e;
-    sum2 += e * e;
-    s.max = std::max(s.max, e);
+void SurfaceErrorAccumulator::Add(const CloudPoint* points, size_t n) {
+  if (n > 0 && fine_.empty()) {
+    fine_.assign(kFineBins, 0);
+    coarse_.assign(kCoarseBins, 0);
   }
-  s.count = d.size();
-  if (s.count == 0) return s;
-  s.mean = sum / static_cast<double>(s.count);
-  s.rms = std::sqrt(sum2 / static_cast<double>(s.count));
-  s.p95 = Percentile(std::move(d), 0.95);
+  for (size_t i = 0; i < n; ++i) {
+    const double e = scene_.DistanceToSurface(P(points[i]));
+    sum_ += e;
+    sum2_ += e * e;
+    max_ = std::max(max_, e);
+    if (e < 1.0) {
+      ++fine_[static_cast<size_t>(e * 1e6)];
+    } else {
+      ++coarse_[std::min(kCoarseBins - 1, static_cast<size_t>(e * 1e3))];
+    }
+  }
+  count_ += n;
+}
+
+SurfaceErrorStats SurfaceErrorAccumulator::Stats() const {
+  SurfaceErrorStats s;
+  s.count = count_;
+  if (count_ == 0) return s;
+  const double n = static_cast<double>(count_);
+  s.mean = sum_ / n;
+  s.rms = std::sqrt(sum2_ / n);
+  s.max = max_;
+  // The k-th smallest (0-based) is in the bin where the running count
+  // first exceeds k; its centre, no farther than the largest distance.
+  const uint64_t k = std::min<uint64_t>(count_ - 1, static_cast<uint64_t>(0.95 * (n - 1)));
+  uint64_t below = 0;
+  const auto kth = [&](const std::vector<uint64_t>& bins, double step) {
+    for (size_t b = 0; b < bins.size(); ++b) {
+      below += bins[b];
+      if (below > k) return std::min(max_, (static_cast<double>(b) + 0.5) * step);
+    }
+    return -1.0;
+  };
+  s.p95 = kth(fine_, 1e-6);
+  if (s.p95 < 0) s.p95 = kth(coarse_, 1e-3);
   return s;
 }
 
-RoomMeasurement MeasureRoom(const Scene& scene, const std::string& room_label,
-                            const std::vector<CloudPoint>& points, double band_m, double margin_m) {
-  RoomMeasurement m;
-  const int idx = scene.Find(room_label);
-  if (idx < 0 || !scene.boxes()[idx].inside) {
-    m.error = "no room box labelled '" + room_label + "'";
-    return m;
+SurfaceErrorStats SurfaceErrors(const Scene& scene, const std::vector<CloudPoint>& points) {
+  SurfaceErrorAccumulator a(scene);
+  a.Add(points.data(), points.size());
+  return a.Stats();
+}
+
+RoomAccumulator::RoomAccumulator(const Scene& scene, const std::string& room_label, double band_m,
+                                 double margin_m)
+    : band_m_(band_m), margin_m_(margin_m) {
+  room_ = scene.Find(room_label);
+  if (room_ < 0 || !scene.boxes()[room_].inside) {
+    room_ = -1;
+    error_ = "no room box labelled '" + room_label + "'";
+    return;
   }
-  const Box& room = scene.boxes()[idx];
-  const Eigen::Vector3d h = 0.5 * room.size;
+  box_ = scene.boxes()[room_];
   // Everything but the room: points near these (the feet of a desk within
   // the floor's band, a handrail beside a wall) belong to them, not to a face.
   std::vector<Box> others;
   for (size_t i = 0; i < scene.boxes().size(); ++i) {
-    if (static_cast<int>(i) != idx) others.push_back(scene.boxes()[i]);
+    if (static_cast<int>(i) != room_) others.push_back(scene.boxes()[i]);
   }
-  const Scene furniture(others);
-  std::vector<Eigen::Vector3d> face_points[6];
-  for (const CloudPoint& cp : points) {
-    const Eigen::Vector3d q = ToBoxFrame(room, P(cp));
+  furniture_ = Scene(std::move(others));
+}
+
+void RoomAccumulator::Add(const CloudPoint* points, size_t n) {
+  if (room_ < 0) return;
+  const Eigen::Vector3d h = 0.5 * box_.size;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d q = ToBoxFrame(box_, P(points[i]));
     for (int face = 0; face < 6; ++face) {
       const int axis = face / 2;
       const double wall = face % 2 == 0 ? -h[axis] : h[axis];
-      if (std::abs(q[axis] - wall) > band_m) continue;
+      if (std::abs(q[axis] - wall) > band_m_) continue;
       bool inside_edges = true;
       for (int a = 0; a < 3; ++a) {
-        if (a != axis && std::abs(q[a]) > h[a] - margin_m) inside_edges = false;
+        if (a != axis && std::abs(q[a]) > h[a] - margin_m_) inside_edges = false;
       }
-      if (inside_edges && (others.empty() || furniture.DistanceToSurface(P(cp)) > band_m)) {
-        face_points[face].push_back(q);
+      if (inside_edges &&
+          (furniture_.boxes().empty() || furniture_.DistanceToSurface(P(points[i])) > band_m_)) {
+        faces_[face].Add(q);
       }
     }
   }
+}
+
+RoomMeasurement RoomAccumulator::Result() const {
+  RoomMeasurement m;
+  if (room_ < 0) {
+    m.error = error_;
+    return m;
+  }
   for (int face = 0; face < 6; ++face) {
-    if (!FitPlane(face_points[face], &m.faces[face])) {
+    if (!faces_[face].Fit(&m.faces[face])) {
       m.error = std::string("too few points on the room's ") + FaceName(face) + " face";
       return m;
     }
   }
-  m.true_size = room.size;
+  m.true_size = box_.size;
   for (int axis = 0; axis < 3; ++axis) {
     m.measured[axis] = DistanceBetweenPlanes(m.faces[2 * axis], m.faces[2 * axis + 1]);
-    m.relative_error[axis] = (m.measured[axis] - room.size[axis]) / room.size[axis];
+    m.relative_error[axis] = (m.measured[axis] - box_.size[axis]) / box_.size[axis];
   }
   m.ok = true;
   return m;
 }
 
-PassDisagreement MeasureTargetPasses(const Scene& scene, const std::string& label,
-                                     const std::vector<CloudPoint>& points, double band_m,
-                                     double gap_s) {
+RoomMeasurement MeasureRoom(const Scene& scene, const std::string& room_label,
+                            const std::vector<CloudPoint>& points, double band_m, double margin_m) {
+  RoomAccumulator a(scene, room_label, band_m, margin_m);
+  a.Add(points.data(), points.size());
+  return a.Result();
+}
+
+TargetPassAccumulator::TargetPassAccumulator(const Scene& scene, const std::string& label,
+                                             double band_m, double gap_s)
+    : band_m_(band_m), gap_s_(gap_s) {
+  box_index_ = scene.Find(label);
+  if (box_index_ < 0) {
+    error_ = "no box labelled '" + label + "'";
+    return;
+  }
+  box_ = scene.boxes()[box_index_];
+}
+
+void TargetPassAccumulator::Add(const CloudPoint* points, size_t n) {
+  if (box_index_ < 0) return;
+  const Eigen::Vector3d h = 0.5 * box_.size + Eigen::Vector3d::Constant(band_m_);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d q = ToBoxFrame(box_, P(points[i])).cwiseAbs();
+    if ((q.array() <= h.array()).all()) near_.push_back(points[i]);
+  }
+}
+
+PassDisagreement TargetPassAccumulator::Result() const {
   PassDisagreement r;
-  const int idx = scene.Find(label);
-  if (idx < 0) {
-    r.error = "no box labelled '" + label + "'";
+  if (box_index_ < 0) {
+    r.error = error_;
     return r;
   }
-  const Box& box = scene.boxes()[idx];
-  const Eigen::Vector3d h = 0.5 * box.size + Eigen::Vector3d::Constant(band_m);
   std::vector<const CloudPoint*> near;
-  for (const CloudPoint& p : points) {
-    const Eigen::Vector3d q = ToBoxFrame(box, P(p)).cwiseAbs();
-    if ((q.array() <= h.array()).all()) near.push_back(&p);
-  }
+  near.reserve(near_.size());
+  for (const CloudPoint& p : near_) near.push_back(&p);
   std::sort(near.begin(), near.end(),
             [](const CloudPoint* a, const CloudPoint* b) { return a->time_ns < b->time_ns; });
   std::vector<std::vector<Eigen::Vector3d>> passes;
   int64_t last = 0;
   for (const CloudPoint* p : near) {
-    if (passes.empty() || static_cast<double>(p->time_ns - last) * 1e-9 > gap_s) passes.emplace_back();
+    if (passes.empty() || static_cast<double>(p->time_ns - last) * 1e-9 > gap_s_)
+      passes.emplace_back();
     passes.back().push_back(P(*p));
     last = p->time_ns;
   }
@@ -139,6 +202,14 @@ PassDisagreement MeasureTargetPasses(const Scene& scene, const std::string& labe
   r.edge_shift_m = std::abs(top[0] - top[1]);
   r.ok = true;
   return r;
+}
+
+PassDisagreement MeasureTargetPasses(const Scene& scene, const std::string& label,
+                                     const std::vector<CloudPoint>& points, double band_m,
+                                     double gap_s) {
+  TargetPassAccumulator a(scene, label, band_m, gap_s);
+  a.Add(points.data(), points.size());
+  return a.Result();
 }
 
 }  // namespace sweepscan::sim

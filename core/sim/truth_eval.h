@@ -3,6 +3,7 @@
 #ifndef SWEEPSCAN_CORE_SIM_TRUTH_EVAL_H_
 #define SWEEPSCAN_CORE_SIM_TRUTH_EVAL_H_
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,8 @@ struct SurfaceErrorStats {
   double max = 0.0;
 };
 
-// Distance of every point to the nearest true surface.
+// Distance of every point to the nearest true surface (p95 as
+// SurfaceErrorAccumulator::Stats says).
 SurfaceErrorStats SurfaceErrors(const Scene& scene, const std::vector<CloudPoint>& points);
 
 // The room's size measured from the cloud: for each face of the room box,
@@ -59,6 +61,61 @@ struct PassDisagreement {
 PassDisagreement MeasureTargetPasses(const Scene& scene, const std::string& label,
                                      const std::vector<CloudPoint>& points, double band_m = 0.05,
                                      double gap_s = 1.0);
+
+// The three measurements above over a cloud that arrives in pieces, in
+// time order, and is not kept (sweepscan-cli simulate streams a 12-hour
+// drive's 200 M points): each Add takes the next piece; the functions
+// above are these over one piece. What is held does not grow with the
+// cloud, but for the target's points (a board's, a few per scan line).
+class SurfaceErrorAccumulator {
+ public:
+  explicit SurfaceErrorAccumulator(const Scene& scene) : scene_(scene) {}
+  void Add(const CloudPoint* points, size_t n);
+  // count, mean, rms and max exact; p95 the exact order statistic's
+  // (the k-th smallest, k = floor(0.95 (N - 1))) to half a bin: a
+  // histogram of 1 um bins below 1 m, 1 mm bins above to 1 km (and
+  // farther in the last), 16 MB.
+  SurfaceErrorStats Stats() const;
+
+ private:
+  static constexpr size_t kFineBins = 1000000;    // 1 um each, to 1 m
+  static constexpr size_t kCoarseBins = 1000000;  // 1 mm each, to 1 km
+  const Scene& scene_;
+  size_t count_ = 0;
+  double sum_ = 0.0, sum2_ = 0.0, max_ = 0.0;
+  std::vector<uint64_t> fine_, coarse_;  // allocated by the first point
+};
+
+class RoomAccumulator {
+ public:
+  RoomAccumulator(const Scene& scene, const std::string& room_label, double band_m = 0.10,
+                  double margin_m = 0.3);
+  void Add(const CloudPoint* points, size_t n);
+  RoomMeasurement Result() const;
+
+ private:
+  int room_ = -1;
+  Box box_;
+  Scene furniture_;  // every box but the room
+  double band_m_, margin_m_;
+  std::string error_;
+  PlaneFit faces_[6];  // in the room box's frame
+};
+
+class TargetPassAccumulator {
+ public:
+  TargetPassAccumulator(const Scene& scene, const std::string& label, double band_m = 0.05,
+                        double gap_s = 1.0);
+  void Add(const CloudPoint* points, size_t n);
+  PassDisagreement Result() const;
+
+ private:
+  int box_index_ = -1;
+  Box box_;
+  double band_m_, gap_s_;
+  std::string error_;
+  std::vector<CloudPoint> near_;  // within the band of the box
+};
 
 }  // namespace sweepscan::sim
 

@@ -31,6 +31,41 @@ TEST(PlaneTest, RefusesDegenerateInput) {
   EXPECT_FALSE(FitPlane({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}}, &p));  // collinear
 }
 
+// The streamed fit is the two-pass one, far from the origin too (a wall
+// 5 km out: plain sums of p and p p^T would cancel there), and refuses
+// what FitPlane refuses.
+TEST(PlaneTest, PlaneFitOfPointsOneAtATimeIsFitPlanes) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-3, 3);
+  std::normal_distribution<double> n(0, 0.004);
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.3, 1.0, -0.05).normalized();
+  const Eigen::Vector3d e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+  for (const double far : {0.0, 5000.0}) {
+    const Eigen::Vector3d origin(far, -far, 2.0);
+    std::vector<Eigen::Vector3d> pts;
+    PlaneFit fit;
+    for (int i = 0; i < 20000; ++i) {
+      pts.push_back(origin + u(rng) * e1 + u(rng) * e2 + n(rng) * normal);
+      fit.Add(pts.back());
+    }
+    Plane whole, streamed;
+    ASSERT_TRUE(FitPlane(pts, &whole));
+    ASSERT_TRUE(fit.Fit(&streamed));
+    EXPECT_EQ(streamed.count, 20000u);
+    EXPECT_LT((streamed.centroid - whole.centroid).norm(), 1e-9 * (1 + far)) << far;
+    EXPECT_NEAR(std::abs(streamed.normal.dot(whole.normal)), 1.0, 1e-12) << far;
+    EXPECT_NEAR(streamed.rms, whole.rms, 1e-9) << far;
+    EXPECT_NEAR(streamed.rms, 0.004, 3e-4) << far;
+  }
+  PlaneFit two, line;
+  two.Add({0, 0, 0});
+  two.Add({1, 0, 0});
+  for (int i = 0; i < 4; ++i) line.Add({static_cast<double>(i), 0, 0});
+  Plane p;
+  EXPECT_FALSE(two.Fit(&p));
+  EXPECT_FALSE(line.Fit(&p));
+}
+
 TEST(PlaneTest, DistanceBetweenParallelPlanes) {
   std::vector<Eigen::Vector3d> a, b;
   for (int i = 0; i < 10; ++i) {
