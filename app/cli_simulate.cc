@@ -1,17 +1,23 @@
 // sweepscan-cli simulate: a scenario's world behind the byte-exact device
 // emulations, recorded as a session, reconstructed from its bytes and
-// measured against the ground truth.
+// measured against the ground truth. The cloud is streamed from the
+// session, written and measured piece by piece, so a 12-hour drive needs
+// what a minute's does but for its poses (docs/performance.md).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
+#include "core/common/checked_file.h"
 #include "core/common/file_suffix.h"
 #include "core/common/json_reader.h"
 #include "core/scenario/scenario.h"
@@ -19,6 +25,7 @@
 #include "core/sim/world.h"
 #include "hardware/emulation/simulate_session.h"
 #include "hardware/link/telemetry_decoder.h"
+#include "hardware/station/session_stream.h"
 
 namespace sweepscan::app {
 
@@ -107,15 +114,36 @@ int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
   return kExitOk;
 }
 
-// The sensor records: run through the device and link bytes into a session
-// folder and decoded from it, or (--direct) the simulator's records.
-int RecordAndDecode(const Args& args, const SimulateRequest& request, sim::SimWorld* world,
-                    SensorLog* log, std::string* session_dir) {
-  const std::string& out = request.out;
-  if (args.Flag("direct")) {
-    *log = world->RunAll();
-    return kExitOk;
+// What the report measures of the cloud, fed each piece as it is written
+// (core/sim/truth_eval.h): the cloud is never held.
+class CloudMeasures {
+ public:
+  explicit CloudMeasures(const sim::Scene& scene) : surface_(scene) {
+    for (const char* room : {"room", "stairwell"}) {
+      if (scene.Find(room) >= 0) rooms_.emplace_back(room, sim::RoomAccumulator(scene, room));
+    }
+    if (scene.Find("target") >= 0) target_.emplace_back(scene, "target");
   }
+  void Add(const CloudPoint* p, size_t n) {
+    surface_.Add(p, n);
+    for (auto& room : rooms_) room.second.Add(p, n);
+    for (auto& target : target_) target.Add(p, n);
+  }
+  const sim::SurfaceErrorAccumulator& surface() const { return surface_; }
+  const std::vector<std::pair<std::string, sim::RoomAccumulator>>& rooms() const { return rooms_; }
+  const sim::TargetPassAccumulator* target() const {
+    return target_.empty() ? nullptr : &target_[0];
+  }
+
+ private:
+  sim::SurfaceErrorAccumulator surface_;
+  std::vector<std::pair<std::string, sim::RoomAccumulator>> rooms_;
+  std::vector<sim::TargetPassAccumulator> target_;  // none without a target
+};
+
+// The session folder, recorded through the device and link bytes.
+int RecordSession(const Args& args, const SimulateRequest& request, std::string* session_dir) {
+  const std::string& out = request.out;
   *session_dir = args.Get("session", out.substr(0, out.size() - 4) + ".sweepscan");
   hardware::SimulateSessionOptions sim_options;
   sim_options.overwrite = args.Flag("overwrite");
@@ -136,21 +164,58 @@ int RecordAndDecode(const Args& args, const SimulateRequest& request, sim::SimWo
     PrintError(message);
     return kExitFailure;
   }
-  hardware::SessionDecodeInfo info;
-  status = hardware::DecodeSession(*session_dir, log, &info);
-  if (!status.ok()) {
-    PrintError(status.message());
-    return kExitFailure;
-  }
   return kExitOk;
+}
+
+// The cloud, written to request.out and measured as it is placed; `result`
+// gets everything but the points. Through the bytes the session streams
+// (hardware/station/session_stream.h: the same points as DecodeSession +
+// Reconstruct, in memory that does not grow with the drive); --direct
+// reconstructs the simulator's records whole.
+Status PlaceAndWrite(bool direct, const SimulateRequest& request, sim::SimWorld* world,
+                     const std::string& session_dir, CloudMeasures* measures,
+                     ReconstructionResult* result, size_t* scans) {
+  const ReconstructionOptions& options = request.options;
+  // The truth at 1 kHz only when asked for: 65 bytes a pose, 2.8 GB for
+  // 12 hours.
+  PoseBuffer truth;
+  if (options.pose.source == PoseSource::kTruth) truth = world->TruthPoses(1000.0);
+  CloudFileWriter writer;
+  Status s = writer.Open(request.out);
+  if (!s.ok()) return s;
+  const auto sink = [&](const CloudPoint* p, size_t n) {
+    measures->Add(p, n);
+    return writer.Append(p, n);
+  };
+  if (direct) {
+    const SensorLog log = world->RunAll();
+    s = Reconstruct(log, request.config.geometry, options, &truth, result);
+    if (!s.ok()) return s;
+    *scans = log.scans.size();
+    constexpr size_t kPiece = 65536;
+    for (size_t i = 0; i < result->points.size() && s.ok(); i += kPiece) {
+      s = sink(result->points.data() + i, std::min(kPiece, result->points.size() - i));
+    }
+    std::vector<CloudPoint>().swap(result->points);
+  } else {
+    hardware::SessionCloudStream stream;
+    s = stream.EstimatePoses(session_dir, hardware::DefaultSessionFramesOptions(), options, &truth);
+    if (s.ok()) s = stream.PlacePoints(sink);
+    if (!s.ok()) return s;
+    PoseBuffer poses = stream.TakePoses();  // moved, not copied with the rest
+    *result = stream.result();
+    result->poses = std::move(poses);
+    *scans = stream.scans();
+  }
+  return s.ok() ? writer.Finish() : s;
 }
 
 // The accuracy report: counts, distance to the true surfaces, final pose
 // error, the room's size and the target's pass-to-pass disagreement.
 nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
-                              const sim::SimWorld& world, const SensorLog& log,
+                              const sim::SimWorld& world, size_t scans,
                               const std::string& session_dir, const ReconstructionResult& result,
-                              sim::SurfaceErrorStats* surface_out) {
+                              const CloudMeasures& measures, sim::SurfaceErrorStats* surface_out) {
   const sim::SimConfig& config = request.config;
   const ReconstructionOptions& options = request.options;
   const std::string& out = request.out;
@@ -162,7 +227,7 @@ nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
   report["duration_s"] = world.duration_s();
   report["pose_source"] = PoseSourceName(options.pose.source);
   report["deskew"] = options.assembly.deskew;
-  report["scans"] = log.scans.size();
+  report["scans"] = scans;
   report["samples"] = result.stats.samples_in;
   report["points"] = result.stats.points_out;
   report["invalid_samples"] = result.stats.invalid_range;
@@ -170,7 +235,7 @@ nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
   report["ekf_updates"] = result.ekf_counters.updates;
   report["ekf_rejected"] = result.ekf_counters.rejected;
   report["out"] = out;
-  const sim::SurfaceErrorStats surface = sim::SurfaceErrors(config.scene, result.points);
+  const sim::SurfaceErrorStats surface = measures.surface().Stats();
   *surface_out = surface;
   report["surface_error"] = StatsJson(surface);
   // Final pose error (position and heading) of the estimate against truth.
@@ -181,9 +246,8 @@ nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
     report["final_heading_error_rad"] =
         std::abs(WrapAngle(YawFromQuaternion(est.rotation()) - YawFromQuaternion(tru.rotation())));
   }
-  for (const char* room : {"room", "stairwell"}) {
-    if (config.scene.Find(room) < 0) continue;
-    const sim::RoomMeasurement m = sim::MeasureRoom(config.scene, room, result.points);
+  for (const auto& [room, accumulator] : measures.rooms()) {
+    const sim::RoomMeasurement m = accumulator.Result();
     if (m.ok) {
       report["room"] = {{"label", room},
                         {"true_m", {m.true_size.x(), m.true_size.y(), m.true_size.z()}},
@@ -193,8 +257,8 @@ nlohmann::json AccuracyReport(const Args& args, const SimulateRequest& request,
       report["room"] = {{"label", room}, {"error", m.error}};
     }
   }
-  if (config.scene.Find("target") >= 0) {
-    const sim::PassDisagreement d = sim::MeasureTargetPasses(config.scene, "target", result.points);
+  if (measures.target() != nullptr) {
+    const sim::PassDisagreement d = measures.target()->Result();
     if (d.ok) {
       report["target_passes"] = {{"passes", d.passes},
                                  {"points", {d.points[0], d.points[1]}},
@@ -233,17 +297,16 @@ int WriteTruth(const std::string& path, const sim::SimConfig& config, const sim:
   return kExitOk;
 }
 
-void PrintSimulateReport(const SimulateRequest& request, const sim::SimWorld& world,
-                         const SensorLog& log, const std::string& session_dir,
-                         const ReconstructionResult& result, const sim::SurfaceErrorStats& surface,
-                         const nlohmann::json& report) {
+void PrintSimulateReport(const SimulateRequest& request, const sim::SimWorld& world, size_t scans,
+                         const std::string& session_dir, const ReconstructionResult& result,
+                         const sim::SurfaceErrorStats& surface, const nlohmann::json& report) {
   const sim::SimConfig& config = request.config;
   const ReconstructionOptions& options = request.options;
   const std::string& out = request.out;
   if (!session_dir.empty()) std::printf("recorded session %s (through the device and link bytes)\n", session_dir.c_str());
   std::printf("simulated %.1f s of '%s' (seed %llu): %zu scans, %zu samples -> %zu points in %s\n",
               world.duration_s(), config.name.c_str(), static_cast<unsigned long long>(config.seed),
-              log.scans.size(), result.stats.samples_in, result.stats.points_out, out.c_str());
+              scans, result.stats.samples_in, result.stats.points_out, out.c_str());
   std::printf("poses: %s, deskew %s; EKF updates %d, gated out %d\n", PoseSourceName(options.pose.source),
               options.assembly.deskew ? "on" : "off", result.ekf_counters.updates,
               result.ekf_counters.rejected);
@@ -291,19 +354,27 @@ int RunSimulate(int argc, char** argv) {
   if (code != kExitOk || request.out.empty()) return code;
   const sim::SimConfig& config = request.config;
 
-  sim::SimWorld world(config);
-  const PoseBuffer truth = world.TruthPoses(1000.0);
-  SensorLog log;
-  std::string session_dir;
-  code = RecordAndDecode(args, request, &world, &log, &session_dir);
-  if (code != kExitOk) return code;
-  ReconstructionResult result;
-  Status status = Reconstruct(log, config.geometry, request.options, &truth, &result);
+  // The cloud's folder is made if missing (the session recorded beside it
+  // always made it), and the cloud asked to be writable before the drive is
+  // simulated and placed (minutes for a long one).
+  std::error_code ignored;  // CheckCanWrite says why it cannot
+  std::filesystem::create_directories(std::filesystem::path(request.out).parent_path(), ignored);
+  Status status = CheckCanWrite(request.out);
   if (!status.ok()) {
     PrintError(status.message());
     return kExitFailure;
   }
-  status = SaveCloud(request.out, result.points);
+  sim::SimWorld world(config);
+  std::string session_dir;
+  const bool direct = args.Flag("direct");
+  if (!direct) {
+    code = RecordSession(args, request, &session_dir);
+    if (code != kExitOk) return code;
+  }
+  CloudMeasures measures(config.scene);
+  ReconstructionResult result;
+  size_t scans = 0;
+  status = PlaceAndWrite(direct, request, &world, session_dir, &measures, &result, &scans);
   if (!status.ok()) {
     PrintError(status.message());
     return kExitFailure;
@@ -311,7 +382,7 @@ int RunSimulate(int argc, char** argv) {
 
   sim::SurfaceErrorStats surface;
   const nlohmann::json report =
-      AccuracyReport(args, request, world, log, session_dir, result, &surface);
+      AccuracyReport(args, request, world, scans, session_dir, result, measures, &surface);
   if (args.Has("truth")) {
     code = WriteTruth(args.Get("truth"), config, world, report);
     if (code != kExitOk) return code;
@@ -320,7 +391,7 @@ int RunSimulate(int argc, char** argv) {
     std::cout << report.dump(2) << "\n";
     return kExitOk;
   }
-  PrintSimulateReport(request, world, log, session_dir, result, surface, report);
+  PrintSimulateReport(request, world, scans, session_dir, result, surface, report);
   return kExitOk;
 }
 

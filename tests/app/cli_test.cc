@@ -6,12 +6,15 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "core/cloud/cloud_io.h"
+#include "core/scenario/scenario.h"
+#include "core/sim/truth_eval.h"
 #include "tests/testing/run_command.h"
 
 namespace {
@@ -37,6 +40,28 @@ TEST(CliTest, SimulateWritesCloudTruthAndJsonReport) {
   std::vector<Eigen::Vector3f> pts;
   ASSERT_TRUE(sweepscan::LoadCloudPositions(Tmp("lab.ply"), &pts).ok());
   EXPECT_EQ(static_cast<int>(pts.size()), report["points"].get<int>());
+  // The report measured the cloud piece by piece as it was placed and
+  // written, never holding it: the same as measuring the file whole.
+  std::vector<sweepscan::CloudPoint> cloud;
+  ASSERT_TRUE(sweepscan::LoadCloud(Tmp("lab.ply"), &cloud).ok());
+  sweepscan::sim::SimConfig config;
+  ASSERT_TRUE(sweepscan::LoadScenario(Scenario("lab"), &config).ok());
+  const sweepscan::sim::SurfaceErrorStats surface =
+      sweepscan::sim::SurfaceErrors(config.scene, cloud);
+  EXPECT_EQ(report["surface_error"]["count"].get<size_t>(), surface.count);
+  EXPECT_DOUBLE_EQ(report["surface_error"]["mean_m"].get<double>(), surface.mean);
+  EXPECT_DOUBLE_EQ(report["surface_error"]["p95_m"].get<double>(), surface.p95);
+  EXPECT_DOUBLE_EQ(report["surface_error"]["max_m"].get<double>(), surface.max);
+  const sweepscan::sim::RoomMeasurement room =
+      sweepscan::sim::MeasureRoom(config.scene, "room", cloud);
+  ASSERT_TRUE(room.ok) << room.error;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(report["room"]["measured_m"][a].get<double>(), room.measured[a], 1e-12);
+  }
+  const sweepscan::sim::PassDisagreement target =
+      sweepscan::sim::MeasureTargetPasses(config.scene, "target", cloud);
+  ASSERT_TRUE(target.ok) << target.error;
+  EXPECT_DOUBLE_EQ(report["target_passes"]["plane_offset_m"].get<double>(), target.plane_offset_m);
   std::ifstream truth(Tmp("truth.json"));
   const nlohmann::json t = nlohmann::json::parse(truth);
   EXPECT_EQ(t["format"], "sweepscan-truth");
@@ -71,7 +96,21 @@ TEST(CliTest, BadInputExitsTwoWithOneClearLine) {
   EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out x.ply --bogus").code, 2);
   EXPECT_EQ(Cli("teleport").code, 2);
   EXPECT_EQ(Cli("").code, 2);
-  EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /dev/null/x.ply").code, 1);
+  // An unwritable cloud is refused before the drive is simulated: no
+  // session recorded.
+  const std::string unused = Tmp("unused.sweepscan");
+  std::filesystem::remove_all(unused);
+  r = Cli("simulate --scenario " + Scenario("lab") + " --out /dev/null/x.ply --session " + unused);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.out.find("/dev/null"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(unused));
+  // A missing folder of the cloud is made, as the session's beside it is.
+  const std::string fresh = Tmp("fresh_folder");
+  std::filesystem::remove_all(fresh);
+  r = Cli("simulate --scenario " + Scenario("lab_circle") + " --out " + fresh + "/a/x.ply");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(fresh + "/a/x.ply"));
+  EXPECT_TRUE(std::filesystem::exists(fresh + "/a/x.sweepscan/frames.bin"));
   EXPECT_EQ(Cli("simulate --scenario " + Scenario("lab") + " --out /dev/null/x.ply --direct").code, 1);
 }
 
