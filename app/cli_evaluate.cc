@@ -13,6 +13,7 @@
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "app/cli_recording.h"
+#include "app/terminal_progress.h"
 #include "core/calibration/calibration_file.h"
 #include "core/cloud/cloud_io.h"
 #include "core/common/file_suffix.h"
@@ -75,39 +76,17 @@ Status LoadPositions(const std::string& path, std::vector<Eigen::Vector3f>* pts)
   return LoadCloudPositions(path, pts);
 }
 
-// Progress on a terminal: "evaluate cloud: neighbours  42 %".
-class TerminalProgress {
- public:
-  TerminalProgress(bool on, std::string title) : on_(on), title_(std::move(title)) {}
-  ~TerminalProgress() {
-    if (shown_) std::fprintf(stderr, "\r\033[K");
+// The evaluation's stages on a terminal: "evaluate cloud: neighbours  42 %".
+EvaluationControl ShowOn(TerminalProgress* progress) {
+  EvaluationControl c;
+  if (progress->on()) {
+    c.progress = [progress](const EvaluationProgress& p) {
+      progress->Show(EvaluationStageName(p.stage), p.fraction);
+      return true;
+    };
   }
-  EvaluationControl Control() {
-    EvaluationControl c;
-    if (on_) {
-      c.progress = [this](const EvaluationProgress& p) {
-        const int percent = static_cast<int>(100.0 * p.fraction);
-        if (percent != last_percent_ || p.stage != last_stage_) {
-          std::fprintf(stderr, "\r\033[Kevaluate %s: %-10s %3d %%", title_.c_str(),
-                       EvaluationStageName(p.stage), percent);
-          std::fflush(stderr);
-          last_percent_ = percent;
-          last_stage_ = p.stage;
-          shown_ = true;
-        }
-        return true;
-      };
-    }
-    return c;
-  }
-
- private:
-  bool on_;
-  std::string title_;
-  bool shown_ = false;
-  int last_percent_ = -1;
-  EvaluationStage last_stage_ = EvaluationStage::kNeighbours;
-};
+  return c;
+}
 
 void PrintTiming(const std::string& title, const CloudEvaluation& e) {
   const EvaluationTiming& t = e.timing;
@@ -171,11 +150,12 @@ int RunEvaluate(int argc, char** argv) {
       return kExitBadInput;
     }
   }
-  const bool show_progress = !args.Flag("json") && ::isatty(STDERR_FILENO) != 0;
+  const bool show_progress = TerminalProgress::Wanted(args.Flag("json"));
   const auto evaluate = [&](const std::string& title, const std::vector<Eigen::Vector3f>& pts,
                             CloudEvaluation* e) {
-    TerminalProgress progress(show_progress, title);
-    const Status s = EvaluateCloud(pts, options, e, progress.Control());
+    TerminalProgress progress(show_progress, "evaluate " + title);
+    const Status s = EvaluateCloud(pts, options, e, ShowOn(&progress));
+    progress.Clear();
     if (s.ok() && args.Flag("timing")) PrintTiming(title, *e);
     return s;
   };
@@ -252,7 +232,8 @@ int RunEvaluate(int argc, char** argv) {
       }
       code = evaluate_runs([&](const MountingError& c, std::vector<Eigen::Vector3f>* pts) {
         ro.calibration = c;
-        return StreamPositions(args, args.positional()[0], ro, pts);
+        TerminalProgress reading(show_progress, "evaluate " + args.positional()[0]);
+        return StreamPositions(args, args.positional()[0], ro, pts, &reading);
       });
     } else {
       // A scenario (simulated in-process, with its truth) or truth poses.

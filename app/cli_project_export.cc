@@ -8,6 +8,7 @@
 
 #include "app/cli_common.h"
 #include "app/cli_project.h"
+#include "app/terminal_progress.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
 #include "core/common/file_suffix.h"
@@ -115,7 +116,16 @@ int RunProjectExport(const Args& args) {
     return code;
   WarnPoseSource(project, chosen, options.pose_source);
   hardware::ProjectExportResult result;
-  s = hardware::ExportProjectCloud(file, project, chosen, out, options, nullptr, &result);
+  TerminalProgress progress(TerminalProgress::Wanted(args.Flag("json")), "project export " + out);
+  hardware::ProjectExportProgress show;
+  if (progress.on()) {
+    show = [&progress](const std::string& stage, double f) {
+      progress.Show(stage, f);
+      return true;
+    };
+  }
+  s = hardware::ExportProjectCloud(file, project, chosen, out, options, show, &result);
+  progress.Clear();
   for (const std::string& w : result.warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
   if (!s.ok())
     return (PrintError(s.message()), result.session_unreadable ? kExitBadInput : kExitFailure);

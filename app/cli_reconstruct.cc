@@ -15,6 +15,7 @@
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "app/cli_recording.h"
+#include "app/terminal_progress.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/las_writer.h"
 #include "core/cloud/reconstruct.h"
@@ -34,7 +35,8 @@ const char* const kReconstructUsage =
     "\n"
     "Options:\n"
     "  --calibration FILE     mounting error to undo (calibration JSON); default: meta.json's\n"
-    "  --pose-source S        ekf (default), odometry, or sfm: the EKF corrected by the planes the\n"
+    "  --pose-source S        ekf (default), odometry, or sfm: the EKF corrected by the planes "
+    "the\n"
     "                         scans cross (lidar-only structure from motion, docs/sfm.md; the\n"
     "                         position along the walls stays the EKF's)\n"
     "  --no-ekf               same as --pose-source odometry\n"
@@ -42,7 +44,8 @@ const char* const kReconstructUsage =
     "  --loop-closure         the drive ends in the room it started in: register what it saw\n"
     "                         at the end to what it saw at the start and spread the correction\n"
     "                         over the loop (docs/registration.md, \"Loop closure\")\n"
-    "  --strict               refuse a session with damaged records (default: skip them, with a warning)\n"
+    "  --strict               refuse a session with damaged records (default: skip them, with a "
+    "warning)\n"
     "  --json                 print the report as JSON\n"
     "\n"
     "Memory: with the EKF or odometry poses the session is read twice, record by record, and\n"
@@ -50,7 +53,8 @@ const char* const kReconstructUsage =
     "the poses and motion records, about 50 MB an hour of drive (a 10-hour drive of 175 M\n"
     "points: 0.6 GB, against 14 GB held whole). --pose-source sfm and\n"
     "--loop-closure need every scan at once: about 24 B a lidar sample plus 32 B a point\n"
-    "(a 10-hour drive: 180 M samples, about 10 GB).\n";
+    "(a 10-hour drive: 180 M samples, about 10 GB).\n"
+    "On a terminal (and without --json) the two passes' progress is shown on stderr.\n";
 
 namespace {
 
@@ -241,14 +245,20 @@ void PrintCloudReport(const nlohmann::json& report) {
 int StreamToFile(const Args& args, ReconstructionOptions options) {
   const std::string& dir = args.positional()[0];
   hardware::SessionCloudStream stream;
-  const int code = OpenSessionStream(args, dir, /*session_calibration=*/true, &options, &stream);
+  TerminalProgress progress(TerminalProgress::Wanted(args.Flag("json")), "reconstruct " + dir);
+  const int code =
+      OpenSessionStream(args, dir, /*session_calibration=*/true, &options, &stream, &progress);
   if (code != kExitOk) return code;
   CloudOutput out(dir, args.Get("out"), stream.decode().meta);
   double min[3], max[3];
   stream.PointBounds(min, max);
   out.SetBox(min, max);
   Status s = out.Open();
-  if (s.ok()) s = stream.PlacePoints([&out](const CloudPoint* p, size_t n) { return out.Append(p, n); });
+  if (s.ok()) {
+    s = stream.PlacePoints([&out](const CloudPoint* p, size_t n) { return out.Append(p, n); },
+                           progress.Stage("placing the points"));
+  }
+  progress.Clear();
   nlohmann::json las;
   if (s.ok()) s = out.Finish(&las);
   if (!s.ok()) {

@@ -136,7 +136,8 @@ int SessionReconstructionOptions(const Args& args, const SessionMeta& meta, Reco
 }
 
 int OpenSessionStream(const Args& args, const std::string& dir, bool session_calibration,
-                      ReconstructionOptions* options, hardware::SessionCloudStream* stream) {
+                      ReconstructionOptions* options, hardware::SessionCloudStream* stream,
+                      TerminalProgress* progress) {
   SessionMeta meta;
   Status s = ReadSessionMeta(dir + "/" + kSessionMetaFile, &meta);
   if (!s.ok()) {
@@ -149,7 +150,10 @@ int OpenSessionStream(const Args& args, const std::string& dir, bool session_cal
   } else {
     options->pose.initial_pose = SessionStartPose(meta);
   }
-  s = stream->EstimatePoses(dir, SessionFramesOptions(args), *options);
+  s = stream->EstimatePoses(
+      dir, SessionFramesOptions(args), *options, nullptr,
+      progress != nullptr ? progress->Stage("estimating the poses") : nullptr);
+  if (progress != nullptr) progress->Clear();  // what follows on lines of its own
   if (!s.ok() && !stream->decoded()) {
     PrintSessionError(args, dir, s);
     return kExitBadInput;
@@ -166,16 +170,20 @@ int OpenSessionStream(const Args& args, const std::string& dir, bool session_cal
 }
 
 int StreamPositions(const Args& args, const std::string& dir, ReconstructionOptions options,
-                    std::vector<Eigen::Vector3f>* points) {
+                    std::vector<Eigen::Vector3f>* points, TerminalProgress* progress) {
   hardware::SessionCloudStream stream;
-  const int code = OpenSessionStream(args, dir, /*session_calibration=*/false, &options, &stream);
+  const int code =
+      OpenSessionStream(args, dir, /*session_calibration=*/false, &options, &stream, progress);
   if (code != kExitOk) return code;
   points->clear();
   points->reserve(stream.PointBound());
-  const Status s = stream.PlacePoints([points](const CloudPoint* p, size_t n) {
-    for (size_t i = 0; i < n; ++i) points->emplace_back(p[i].x, p[i].y, p[i].z);
-    return Status::Ok();
-  });
+  const Status s = stream.PlacePoints(
+      [points](const CloudPoint* p, size_t n) {
+        for (size_t i = 0; i < n; ++i) points->emplace_back(p[i].x, p[i].y, p[i].z);
+        return Status::Ok();
+      },
+      progress != nullptr ? progress->Stage("placing the points") : nullptr);
+  if (progress != nullptr) progress->Clear();
   if (!s.ok()) {
     PrintError(dir + ": " + s.message());
     return kExitFailure;

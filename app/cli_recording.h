@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "app/cli_args.h"
+#include "app/terminal_progress.h"
 #include "core/cloud/reconstruct.h"
 #include "core/robot/robot_model.h"
 #include "hardware/station/recording.h"
@@ -42,12 +43,15 @@ int DecodeOrFail(const Args& args, const std::string& dir, Decoded* d, bool quie
 // meta.json, completes *options (the start pose; with session_calibration
 // also meta.json's calibration or --calibration FILE's), estimates the
 // poses, warns about damage and prints the pose gaps on stderr. Returns an
-// exit code; prints one error line otherwise.
+// exit code; prints one error line otherwise. `progress` (may be null)
+// shows pass 1 on a terminal.
 int OpenSessionStream(const Args& args, const std::string& dir, bool session_calibration,
-                      ReconstructionOptions* options, hardware::SessionCloudStream* stream);
-// The positions of a session's cloud, streamed (evaluate).
+                      ReconstructionOptions* options, hardware::SessionCloudStream* stream,
+                      TerminalProgress* progress = nullptr);
+// The positions of a session's cloud, streamed (evaluate); `progress` as
+// above, for both passes.
 int StreamPositions(const Args& args, const std::string& dir, ReconstructionOptions options,
-                    std::vector<Eigen::Vector3f>* points);
+                    std::vector<Eigen::Vector3f>* points, TerminalProgress* progress = nullptr);
 
 // `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`
 // (cli_reconstruct.cc); IsCloudFile: CLOUD ends in .las, .ply or .pcd.

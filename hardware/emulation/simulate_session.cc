@@ -82,8 +82,13 @@ Status SimulateSession(const sim::SimConfig& config, const std::string& session_
   }
   if (!(s = deliver(now)).ok()) return s;
   Time last_heartbeat = now;
+  Time last_progress = now;
   while (now < end) {
     now += options.step;
+    if (options.progress && now - last_progress >= std::chrono::seconds(1)) {
+      options.progress(ToSeconds(now) / ToSeconds(end));
+      last_progress = now;
+    }
     chunks.clear();
     devices.AdvanceTo(now, &chunks);
     for (const TimedBytes& c : chunks) {

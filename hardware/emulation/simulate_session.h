@@ -11,6 +11,7 @@
 #ifndef SWEEPSCAN_HARDWARE_EMULATION_SIMULATE_SESSION_H_
 #define SWEEPSCAN_HARDWARE_EMULATION_SIMULATE_SESSION_H_
 
+#include <functional>
 #include <string>
 
 #include "core/common/status.h"
@@ -27,6 +28,9 @@ struct SimulateSessionOptions {
   Duration tail = std::chrono::milliseconds(500);
   bool overwrite = false;  // Replace an existing session folder.
   std::string notes;
+  // Called once a simulated second with the fraction of the drive recorded
+  // (0..1); may be empty.
+  std::function<void(double fraction)> progress;
 };
 
 struct SimulateSessionReport {
