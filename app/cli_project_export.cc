@@ -1,6 +1,7 @@
 // sweepscan-cli project export: the placed, visible sessions' clouds in the
 // project's frame, as one file (hardware/station/project_export.h, which
 // the app's File > Export Project Cloud writes through too).
+#include <cctype>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -119,7 +120,9 @@ int RunProjectExport(const Args& args) {
   TerminalProgress progress(TerminalProgress::Wanted(args.Flag("json")), "project export " + out);
   hardware::ProjectExportProgress show;
   if (progress.on()) {
-    show = [&progress](const std::string& stage, double f) {
+    show = [&progress](std::string stage, double f) {
+      // "Reading 'a' (1 of 2)" (the app's panel) mid-line: "reading".
+      if (!stage.empty()) stage[0] = static_cast<char>(std::tolower(stage[0]));
       progress.Show(stage, f);
       return true;
     };

@@ -138,6 +138,21 @@ TEST(CliProgressTest, ReconstructShowsBothPassesOnATerminal) {
   ASSERT_FALSE(evaluated.empty());
   EXPECT_EQ(evaluated.back(), "");
   EXPECT_EQ(report.find('\033'), std::string::npos);
+
+  // project export: each session's passes, named.
+  const std::string project = Tmp("rec.sweepscan-project");
+  std::remove(project.c_str());
+  ASSERT_EQ(RunCommand(std::string(SWEEPSCAN_CLI) + " project new " + project + " " + session).code,
+            0);
+  const std::string exported =
+      OnATerminal("project export " + project + " --out " + Tmp("rec.las"), &report, &code);
+  ASSERT_EQ(code, 0) << exported;
+  const std::vector<std::string> stages = Lines(exported);
+  const std::string as = "project export " + Tmp("rec.las") + ": ";
+  EXPECT_LT(StageAt(stages, as + "reading 'sweepscan_progress_rec' for the extent (1 of 1)"),
+            StageAt(stages, as + "reading 'sweepscan_progress_rec' (1 of 1)"));
+  ASSERT_FALSE(stages.empty());
+  EXPECT_EQ(stages.back(), "");
 }
 
 }  // namespace
