@@ -24,10 +24,7 @@ double Percentile(std::vector<double> v, double q) {
 }  // namespace
 
 void SurfaceErrorAccumulator::Add(const CloudPoint* points, size_t n) {
-  if (n > 0 && fine_.empty()) {
-    fine_.assign(kFineBins, 0);
-    coarse_.assign(kCoarseBins, 0);
-  }
+  if (n > 0 && fine_.empty()) fine_.assign(kFineBins, 0);
   for (size_t i = 0; i < n; ++i) {
     const double e = scene_.DistanceToSurface(P(points[i]));
     sum_ += e;
@@ -36,6 +33,7 @@ void SurfaceErrorAccumulator::Add(const CloudPoint* points, size_t n) {
     if (e < 1.0) {
       ++fine_[static_cast<size_t>(e * 1e6)];
     } else {
+      if (coarse_.empty()) coarse_.assign(kCoarseBins, 0);  // only a cloud that far off
       ++coarse_[std::min(kCoarseBins - 1, static_cast<size_t>(e * 1e3))];
     }
   }

@@ -74,7 +74,7 @@ class SurfaceErrorAccumulator {
   // count, mean, rms and max exact; p95 the exact order statistic's
   // (the k-th smallest, k = floor(0.95 (N - 1))) to half a bin: a
   // histogram of 1 um bins below 1 m, 1 mm bins above to 1 km (and
-  // farther in the last), 16 MB.
+  // farther in the last): 8 MB, 16 with a distance over 1 m.
   SurfaceErrorStats Stats() const;
 
  private:
@@ -83,7 +83,7 @@ class SurfaceErrorAccumulator {
   const Scene& scene_;
   size_t count_ = 0;
   double sum_ = 0.0, sum2_ = 0.0, max_ = 0.0;
-  std::vector<uint64_t> fine_, coarse_;  // allocated by the first point
+  std::vector<uint64_t> fine_, coarse_;  // allocated by the first point there
 };
 
 class RoomAccumulator {
