@@ -240,10 +240,10 @@ void PrintCloudReport(const nlohmann::json& report) {
 
 // The EKF's or the wheels' poses: two passes over frames.bin
 // (hardware/station/session_stream.h), the points written as they are placed.
-int StreamToFile(const Args& args, ReconstructionOptions options) {
+int StreamToFile(const Args& args, const std::string& command, ReconstructionOptions options) {
   const std::string& dir = args.positional()[0];
   hardware::SessionCloudStream stream;
-  TerminalProgress progress(TerminalProgress::Wanted(args.Flag("json")), "reconstruct " + dir);
+  TerminalProgress progress(TerminalProgress::Wanted(args.Flag("json")), command + " " + dir);
   const int code =
       OpenSessionStream(args, dir, /*session_calibration=*/true, &options, &stream, &progress);
   if (code != kExitOk) return code;
@@ -280,7 +280,7 @@ bool IsCloudFile(const std::string& path) {
   return HasFileSuffix(path, ".las") || HasFileSuffix(path, ".ply") || HasFileSuffix(path, ".pcd");
 }
 
-int ReconstructToFile(const Args& args) {
+int ReconstructToFile(const Args& args, const std::string& command) {
   int code;
   ReconstructionOptions options;
   if (args.Has("pose-source")) {
@@ -303,7 +303,8 @@ int ReconstructToFile(const Args& args) {
     PrintError(w.message());
     return kExitFailure;
   }
-  if (options.pose.source != PoseSource::kSfm && !args.Flag("loop-closure")) return StreamToFile(args, options);
+  if (options.pose.source != PoseSource::kSfm && !args.Flag("loop-closure"))
+    return StreamToFile(args, command, options);
   // sfm and loop closure work on every scan at once.
   Decoded d;
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;

@@ -54,8 +54,9 @@ int StreamPositions(const Args& args, const std::string& dir, ReconstructionOpti
                     std::vector<Eigen::Vector3f>* points, TerminalProgress* progress = nullptr);
 
 // `reconstruct SESSION --out CLOUD` and `export SESSION --out CLOUD`
-// (cli_reconstruct.cc); IsCloudFile: CLOUD ends in .las, .ply or .pcd.
-int ReconstructToFile(const Args& args);
+// (cli_reconstruct.cc); `command` titles the progress shown on a terminal.
+// IsCloudFile: CLOUD ends in .las, .ply or .pcd.
+int ReconstructToFile(const Args& args, const std::string& command);
 bool IsCloudFile(const std::string& path);
 
 // What `reconstruct` and `export --format rosbag` make a session's cloud

@@ -256,7 +256,7 @@ int RunReconstruct(int argc, char** argv) {
                      "sweepscan-cli help reconstruct)");
     return kExitBadInput;
   }
-  return ReconstructToFile(args);
+  return ReconstructToFile(args, "reconstruct");
 }
 
 int RunExport(int argc, char** argv) {
@@ -271,7 +271,7 @@ int RunExport(int argc, char** argv) {
                  " exports the cloud in the format its suffix names");
       return kExitBadInput;
     }
-    return ReconstructToFile(args);
+    return ReconstructToFile(args, "export");
   }
   if (args.Has("pose-source") || args.Flag("no-deskew") || args.Flag("loop-closure")) {
     PrintError("--pose-source, --no-deskew and --loop-closure are for cloud exports (--out FILE.las|FILE.ply|FILE.pcd)");

@@ -127,6 +127,14 @@ TEST(CliProgressTest, ReconstructShowsBothPassesOnATerminal) {
   EXPECT_EQ(lines.back(), "");
   EXPECT_NE(report.find("points"), std::string::npos) << report;
 
+  // export SESSION --out CLOUD is the same work, titled as it was asked.
+  const std::string exported_cloud =
+      OnATerminal("export " + session + " --out " + Tmp("again.pcd"), &report, &code);
+  ASSERT_EQ(code, 0) << exported_cloud;
+  EXPECT_NE(exported_cloud.find("export " + session + ": placing the points 100 %"),
+            std::string::npos);
+  EXPECT_EQ(exported_cloud.find("reconstruct "), std::string::npos);
+
   // evaluate: reading the session, then the evaluation's own stages.
   const std::string shown = OnATerminal("evaluate " + session, &report, &code);
   ASSERT_EQ(code, 0) << shown;
