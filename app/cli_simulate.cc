@@ -176,6 +176,19 @@ int RecordSession(const Args& args, const SimulateRequest& request, TerminalProg
   return kExitOk;
 }
 
+// --direct's records of the whole drive, made a simulated second at a time
+// when the terminal shows how far it is (the same records as RunAll:
+// WorldTest.RunUntilInPiecesEqualsRunAll).
+SensorLog RunShowing(sim::SimWorld* world, TerminalProgress* progress) {
+  if (!progress->on()) return world->RunAll();
+  sim::SensorLogCollector collector;
+  for (double t = 1.0; !world->finished(); t += 1.0) {
+    world->RunUntil(TimeFromSeconds(sim::SimWorld::kStartTimeS + t), &collector);
+    progress->Show("simulating the drive", std::min(1.0, t / world->duration_s()));
+  }
+  return std::move(*collector.log());
+}
+
 // The cloud, written to request.out and measured as it is placed; `result`
 // gets everything but the points. Through the bytes the session streams
 // (hardware/station/session_stream.h: the same points as DecodeSession +
@@ -197,13 +210,17 @@ Status PlaceAndWrite(bool direct, const SimulateRequest& request, sim::SimWorld*
     return writer.Append(p, n);
   };
   if (direct) {
-    const SensorLog log = world->RunAll();
+    const SensorLog log = RunShowing(world, progress);
+    progress->Show("reconstructing the cloud", 0.0);  // one step, without a fraction of its own
     s = Reconstruct(log, request.config.geometry, options, &truth, result);
     if (!s.ok()) return s;
     *scans = log.scans.size();
     constexpr size_t kPiece = 65536;
-    for (size_t i = 0; i < result->points.size() && s.ok(); i += kPiece) {
-      s = sink(result->points.data() + i, std::min(kPiece, result->points.size() - i));
+    const size_t total = result->points.size();
+    for (size_t i = 0; i < total && s.ok(); i += kPiece) {
+      s = sink(result->points.data() + i, std::min(kPiece, total - i));
+      progress->Show("writing the points",
+                     static_cast<double>(std::min(i + kPiece, total)) / total);
     }
     std::vector<CloudPoint>().swap(result->points);
   } else {

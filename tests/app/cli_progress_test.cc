@@ -100,6 +100,30 @@ TEST(CliProgressTest, SimulateShowsItsStagesOnATerminalAndClearsThem) {
   ASSERT_EQ(code, 0) << json_terminal;
   EXPECT_EQ(json_terminal.find('\033'), std::string::npos);
   EXPECT_EQ(report.front(), '{');
+  // --direct (no session, the simulator's records): its own three stages.
+  std::string direct_report;
+  const std::string direct = OnATerminal("simulate --scenario " + Scenario("lab") + " --out " +
+                                             Tmp("direct.ply") + " --overwrite --direct",
+                                         &direct_report, &code);
+  ASSERT_EQ(code, 0) << direct;
+  const std::vector<std::string> direct_lines = Lines(direct);
+  const size_t simulating = StageAt(direct_lines, "simulate lab: simulating the drive");
+  const size_t reconstructing = StageAt(direct_lines, "simulate lab: reconstructing the cloud");
+  const size_t writing = StageAt(direct_lines, "simulate lab: writing the points");
+  EXPECT_LT(simulating, reconstructing);
+  EXPECT_LT(reconstructing, writing);
+  EXPECT_NE(direct.find("simulate lab: simulating the drive 100 %"), std::string::npos);
+  EXPECT_NE(direct.find("simulate lab: writing the points 100 %"), std::string::npos);
+  ASSERT_FALSE(direct_lines.empty());
+  EXPECT_EQ(direct_lines.back(), "");
+  // The same cloud as without a terminal (the records made a second at a
+  // time are those made at once).
+  const auto quiet =
+      RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " + Scenario("lab") +
+                 " --out " + Tmp("direct_quiet.ply") + " --overwrite --direct");
+  ASSERT_EQ(quiet.code, 0) << quiet.out;
+  EXPECT_EQ(Read(Tmp("direct.ply")), Read(Tmp("direct_quiet.ply")));
+
   // In a pipe (stderr and stdout): no progress either.
   const auto piped = RunCommand(std::string(SWEEPSCAN_CLI) + " simulate --scenario " +
                                 Scenario("lab") + " --out " + Tmp("lab.ply") + " --overwrite");
