@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <functional>
 #include <tuple>
 
@@ -225,6 +226,20 @@ inline int RunAgentUntilSignal(QCoreApplication* app, hardware::RobotAgent* agen
   const int rc = app->exec();
   agent->Shutdown();
   return rc;
+}
+
+// Nothing escapes an agent's main: an exception becomes one line and exit 1
+// (options errors are exit 2 with their own line, before the agent starts).
+inline int RunAgentMain(const char* program, int (*agent_main)(int, char**), int argc,
+                        char** argv) {
+  try {
+    return agent_main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: unexpected failure: %s\n", program, e.what());
+  } catch (...) {
+    std::fprintf(stderr, "%s: error: unexpected failure\n", program);
+  }
+  return 1;
 }
 
 }  // namespace sweepscan::app

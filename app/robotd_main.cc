@@ -287,15 +287,6 @@ int AgentMain(int argc, char** argv) {
 }
 }  // namespace
 
-// Nothing escapes: an exception becomes one line and exit 1 (options errors
-// are exit 2 with their own line, before the agent starts).
 int main(int argc, char** argv) {
-  try {
-    return AgentMain(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: error: unexpected failure: %s\n", "sweepscan-robotd", e.what());
-  } catch (...) {
-    std::fprintf(stderr, "%s: error: unexpected failure\n", "sweepscan-robotd");
-  }
-  return 1;
+  return sweepscan::app::RunAgentMain("sweepscan-robotd", AgentMain, argc, argv);
 }
