@@ -109,7 +109,9 @@ bool StartDriveDemo(const Options& o, Workspace* workspace, MainWindow* window) 
                      *started = true;
                      QString error;
                      if (!workspace->StartRecording(&error)) window->ShowError("Record", error);
-                     workspace->StartScriptedDrive(config.path);
+                     workspace->StartScriptedDrive(config.path,
+                                                   QObject::tr("the scenario's path (%1)")
+                                                       .arg(QString::fromStdString(config.name)));
                    });
   return true;
 }

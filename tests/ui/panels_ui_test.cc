@@ -204,9 +204,15 @@ TEST_F(PanelsTest, RobotMenuOffersWhatTheLinkAllows) {
   EXPECT_TRUE(disconnect->isEnabled());
   EXPECT_TRUE(clear->isEnabled());
   EXPECT_FALSE(abort->isEnabled());
-  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 1.0));
+  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 1.0), "the calibration circle");
   emit robot->aboutToShow();  // the menu opened
   EXPECT_TRUE(abort->isEnabled());
+  // The Drive panel names the drive that runs (the drive demo's is a
+  // scenario's path, not a circle).
+  auto* state = window_->findChild<QLabel*>("driveScriptState");
+  ASSERT_NE(state, nullptr);
+  EXPECT_TRUE(WaitFor([&] { return state->isVisibleTo(window_.get()); }, 2000));
+  EXPECT_EQ(state->text(), "Driving the calibration circle: Abort ends it.");
   abort->trigger();
   EXPECT_FALSE(workspace_->scripted_drive_running());
 
@@ -509,7 +515,7 @@ TEST_F(PanelsTest, LiveCeilingHiddenWithinSeconds) {
   QAction* ceiling = window_->ceiling_action();
   EXPECT_FALSE(ceiling->isChecked());
   const uint64_t camera = view->camera_generation();
-  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.1, 1.0));
+  workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.1, 1.0), "the circle");
   // The lab's ceiling is at 2.5 m.
   ASSERT_TRUE(WaitFor([&] { return ceiling->isChecked(); }, 30000)) << view->point_count();
   EXPECT_LT(view->point_count(), 100'000u);

@@ -267,7 +267,8 @@ QWidget* CalibrationPanel::BuildTargetStep() {
     // Three turns: six sightings of the target and of every wall instead of
     // four average the heading's and the board fit's noise (docs/results.md,
     // "Robustness": the worst angles of 120 automatic and 60 refined drives).
-    workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 3.0));
+    workspace_->StartScriptedDrive(Workspace::CirclePath(1.0, 0.05, 3.0),
+                                   tr("the calibration circle"));
   });
   layout->addWidget(drive);
   return box;

@@ -100,13 +100,14 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
   row->addWidget(start_circle_);
   row->addWidget(abort_);
   script_form->addRow(row);
-  script_state_ = new QLabel(tr("Driving the circle: Abort ends it."));
+  script_state_ = new QLabel;
   script_state_->setObjectName(QStringLiteral("driveScriptState"));
   script_state_->setVisible(false);
   script_form->addRow(script_state_);
   connect(start_circle_, &QPushButton::clicked, this, [this] {
     workspace_->StartScriptedDrive(
-        Workspace::CirclePath(radius_->value(), speed_->value(), turns_->value()));
+        Workspace::CirclePath(radius_->value(), speed_->value(), turns_->value()),
+        tr("the circle"));
   });
   connect(abort_, &QPushButton::clicked, workspace_, &Workspace::AbortScriptedDrive);
   layout->addWidget(script);
@@ -116,6 +117,7 @@ DrivePanel::DrivePanel(Workspace* workspace, QWidget* parent)
 
 void DrivePanel::ShowCommand(const Twist2d& c) {
   command_->setText(tr("v %1 m/s, w %2 rad/s").arg(c.v, 0, 'f', 2).arg(c.w, 0, 'f', 2));
+  script_state_->setText(tr("Driving %1: Abort ends it.").arg(workspace_->scripted_drive_name()));
   script_state_->setVisible(workspace_->scripted_drive_running());
   abort_->setEnabled(workspace_->scripted_drive_running());
   const bool can_drive = workspace_->authenticated();

@@ -117,9 +117,11 @@ class Workspace : public QObject {
   // exactly what the keyboard sends. CirclePath is the calibration drive.
   // Aborted, with a message, when the robot stops on its own (a watchdog
   // trip, this process frozen or the computer asleep: hardware/station/drive_script.h).
-  void StartScriptedDrive(const std::vector<sim::DriveSegment>& path);
+  // `what` names the drive for the operator ("the circle").
+  void StartScriptedDrive(const std::vector<sim::DriveSegment>& path, const QString& what);
   void AbortScriptedDrive();
   bool scripted_drive_running() const { return script_timer_ != nullptr; }
+  const QString& scripted_drive_name() const { return script_name_; }
   static std::vector<sim::DriveSegment> CirclePath(double radius_m, double speed_mps, double turns);
 
   // ---- Sessions -----------------------------------------------------------
@@ -426,6 +428,7 @@ class Workspace : public QObject {
   SessionMeta live_meta_;
 
   QTimer* script_timer_ = nullptr;
+  QString script_name_;
   std::optional<hardware::DriveScript> script_;
 
   bool recording_ = false;

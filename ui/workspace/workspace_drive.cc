@@ -149,9 +149,11 @@ std::vector<sim::DriveSegment> Workspace::CirclePath(double radius_m, double spe
   return path;
 }
 
-void Workspace::StartScriptedDrive(const std::vector<sim::DriveSegment>& path) {
+void Workspace::StartScriptedDrive(const std::vector<sim::DriveSegment>& path,
+                                   const QString& what) {
   AbortScriptedDrive();
   if (path.empty()) return;
+  script_name_ = what;
   // The app's script ticks on the GUI thread, and a GUI hiccup does not
   // stop the robot: the I/O thread keeps its link fed. Only a stall long
   // enough to be the whole process (a suspend, SIGSTOP) aborts on the
