@@ -172,6 +172,8 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
     }
   });
   connect(project_.get(), &ProjectController::titleChanged, this, &MainWindow::UpdateTitle);
+  // The status bar's poses: a project's sessions' when one is shown.
+  connect(project_->document(), &ProjectDocument::opened, this, &MainWindow::ShowPoseSource);
   connect(project_.get(), &ProjectController::message, this,
           [this](const QString& m) { statusBar()->showMessage(m, 10000); });
   // A project opened: into the building, its ceilings hidden, once its
@@ -350,10 +352,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
   });
   connect(workspace_, &Workspace::shownPoseSourceChanged, this, &MainWindow::ShowPoseSource);
   connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::ShowPoseSource);
+  connect(workspace_, &Workspace::recordingChanged, this, &MainWindow::UpdateLinkLabel);
   connect(workspace_, &Workspace::poseSourceFailed, this,
           [this](const QString& m) { ShowError(tr("Pose source"), m); });
   connect(workspace_, &Workspace::authenticatedChanged, this, &MainWindow::UpdateActions);
   connect(workspace_, &Workspace::linkStateChanged, this, &MainWindow::UpdateActions);
+  connect(workspace_, &Workspace::linkStateChanged, this, &MainWindow::ShowPoseSource);
 
   qApp->installEventFilter(this);
   ScrollWheelGuard::Install(this);
@@ -613,12 +617,7 @@ void MainWindow::OnTick() {
     fps_ = (frames - fps_last_frames_) * 1000.0 / fps_clock_.elapsed();
     fps_last_frames_ = frames;
     fps_clock_.restart();
-    const hardware::LinkHealth& h = workspace_->health();
-    QString link = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
-    if (workspace_->authenticated()) link = tr("connected");
-    if (h.outage_open) link = tr("reconnecting (%1 s)").arg(h.outage_s, 0, 'f', 0);
-    if (workspace_->recording()) link += tr(" · REC");
-    link_label_->setText(tr("Link: %1").arg(link));
+    UpdateLinkLabel();
     // The view draws only when something changes: no frame in the last
     // second is a still view, not a stalled one ("0 fps" read as a hang).
     fps_label_->setText(still ? tr("view still") : tr("%1 fps").arg(fps_, 0, 'f', 0));
@@ -715,6 +714,17 @@ void MainWindow::UpdateTeleop() {
   } else {
     workspace_->Drive(v, w);
   }
+}
+
+// "Link: connected · REC": the link's state, refreshed once a second, and at
+// once when a recording starts or stops.
+void MainWindow::UpdateLinkLabel() {
+  const hardware::LinkHealth& h = workspace_->health();
+  QString link = QString::fromLatin1(hardware::LinkHealth::StateName(h.state));
+  if (workspace_->authenticated()) link = tr("connected");
+  if (h.outage_open) link = tr("reconnecting (%1 s)").arg(h.outage_s, 0, 'f', 0);
+  if (workspace_->recording()) link += tr(" · REC");
+  link_label_->setText(tr("Link: %1").arg(link));
 }
 
 void MainWindow::UpdateActions() {

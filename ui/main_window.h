@@ -164,6 +164,7 @@ class MainWindow : public QMainWindow {
   void RemoveRecent(const QString& dir);
   void RebuildRecentMenu();
   void UpdateActions();
+  void UpdateLinkLabel();  // the status bar's "Link: ..."
   void UpdateTitle();  // The project's file, the session's folder.
 
   Workspace* workspace_;

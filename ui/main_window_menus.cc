@@ -369,7 +369,16 @@ void MainWindow::BuildToolsMenu() {
     if (!on) view_->ClearMeasurement();
     statusBar()->showMessage(on ? tr("Measure: Shift + click the first point") : QString(), 6000);
   });
-  tools->addAction(tr("&Cancel Running Task"), workspace_, &Workspace::CancelJob);
+  // The session's job (open, save, calibrate, evaluate, SfM) or the
+  // project's (load, align, export): enabled only while one runs.
+  QAction* cancel = tools->addAction(tr("&Cancel Running Task"), this, [this] {
+    workspace_->CancelJob();
+    if (project_ != nullptr) project_->Cancel();
+  });
+  cancel->setObjectName(QStringLiteral("cancelTaskAction"));
+  connect(tools, &QMenu::aboutToShow, this, [this, cancel] {
+    cancel->setEnabled(workspace_->job_running() || (project_ != nullptr && project_->busy()));
+  });
 }
 
 void MainWindow::BuildPoseSourceMenu(QMenu* parent) {
@@ -412,24 +421,46 @@ QAction* MainWindow::pose_source_action(PoseSource source) const {
 
 QString MainWindow::pose_source_status() const { return pose_source_label_->text(); }
 
-// The status bar says what the cloud shown is made with, and while a new
-// choice is being computed, what is coming.
+// The status bar says what the cloud shown is made with (the poses, and the
+// mounting calibration when it is not zero), and while a new choice is
+// being computed, what is coming.
 void MainWindow::ShowPoseSource() {
   const PoseSource shown = workspace_->shown_pose_source();
   const PoseSource chosen = workspace_->pose_source();
   const bool opened = workspace_->recording_opened() != nullptr && !workspace_->recording();
+  // A project's sessions are built with the EKF's poses (as `project
+  // export` builds them), whatever the choice for opened sessions.
+  const bool project =
+      !opened && !workspace_->link_open() && project_ != nullptr && project_->document()->is_open();
   QString text = tr("Poses: %1").arg(PoseSourceTitle(shown));
-  if (!opened) {
+  if (project) {
+    text = tr("Poses: %1 (the project's sessions)").arg(PoseSourceTitle(PoseSource::kEkf));
+  } else if (!opened) {
     text += tr(" (live)");
   } else if (chosen != shown) {
     text += tr(" → %1…").arg(PoseSourceTitle(chosen));
   }
+  const MountingError& calibration = workspace_->shown_calibration();
+  const bool calibrated =
+      opened && (calibration.alpha != 0.0 || calibration.beta != 0.0 || calibration.gamma != 0.0);
+  if (calibrated) text += tr(" · calibrated");
   pose_source_label_->setText(text);
-  QString tip = opened ? tr("The cloud of the opened session is made with the %1 poses.")
-                             .arg(PoseSourceTitle(shown))
-                       : tr("Live clouds and recordings always use the EKF; Tools > Pose Source "
-                            "(now %1) applies to opened sessions.")
-                             .arg(PoseSourceTitle(chosen));
+  QString tip = project
+                    ? tr("The project's sessions are drawn with the EKF poses, as `sweepscan-cli "
+                         "project export` builds them; Tools > Pose Source (now %1) applies to "
+                         "opened sessions.")
+                          .arg(PoseSourceTitle(chosen))
+                : opened ? tr("The cloud of the opened session is made with the %1 poses.")
+                               .arg(PoseSourceTitle(shown))
+                         : tr("Live clouds and recordings always use the EKF; Tools > Pose Source "
+                              "(now %1) applies to opened sessions.")
+                               .arg(PoseSourceTitle(chosen));
+  if (calibrated) {
+    tip += QLatin1Char('\n') + tr("Mounting calibration applied: alpha %1, beta %2, gamma %3 mrad.")
+                                   .arg(1e3 * calibration.alpha, 0, 'f', 2)
+                                   .arg(1e3 * calibration.beta, 0, 'f', 2)
+                                   .arg(1e3 * calibration.gamma, 0, 'f', 2);
+  }
   if (!workspace_->sfm_summary().isEmpty()) tip += QLatin1Char('\n') + workspace_->sfm_summary();
   pose_source_label_->setToolTip(tip);
 }

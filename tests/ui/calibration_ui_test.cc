@@ -362,6 +362,18 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   EXPECT_GT(moved, 0.01);  // 35 mrad of roll moves points centimetres at 1-2 m.
   EXPECT_TRUE(WaitFor(
       [&] { return view->has_point_values(CloudView::ColorMode::kPass); }, 10000));
+  // The status bar says the cloud shown is the calibrated one, and back.
+  EXPECT_EQ(window_->pose_source_status(), "Poses: EKF · calibrated");
+  replayed = false;
+  panel->ShowAfter(false);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
+  EXPECT_EQ(window_->pose_source_status(), "Poses: EKF");
+  const std::vector<CloudPoint> again = workspace_->CloudSnapshot().Flatten();
+  ASSERT_EQ(again.size(), before.size());
+  for (size_t i = 0; i < again.size(); i += 97) ASSERT_EQ(again[i].z, before[i].z) << i;
+  replayed = false;
+  panel->ShowAfter(true);
+  ASSERT_TRUE(WaitFor([&] { return replayed; }, 120000));
 
   // Saved, loaded back as the result, kept for the robot.
   ASSERT_TRUE(panel->SaveCalibration(tmp_.path() + "/calibration.json", &error))

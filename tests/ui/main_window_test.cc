@@ -587,7 +587,12 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
   EXPECT_NE(window_->pose_source_status().indexOf("EKF (live)"), -1)
       << window_->pose_source_status().toStdString();
   EXPECT_NE(window_->replay_panel()->pose_source_text().indexOf("live"), -1);
+  // The status bar's REC comes and goes with the recording, not a second later.
+  auto* link = window_->findChild<QLabel*>(QStringLiteral("statusLink"));
+  ASSERT_NE(link, nullptr);
+  EXPECT_TRUE(link->text().endsWith(" · REC")) << link->text().toStdString();
   ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+  EXPECT_FALSE(link->text().contains("REC")) << link->text().toStdString();
 }
 
 // The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for

@@ -91,6 +91,8 @@ TEST_F(ProjectUiTest, OpensShowsTogglesAndUndoes) {
   EXPECT_NE(window_->windowTitle().indexOf("toggle.sweepscan-project"), -1)
       << window_->windowTitle().toStdString();
   EXPECT_FALSE(window_->isWindowModified());
+  // The status bar's poses are the project's sessions', not a live cloud's.
+  EXPECT_EQ(window_->pose_source_status(), "Poses: EKF (the project's sessions)");
   // The height colour bar explains the session cloud's colours: the
   // project's layers alone (coloured by session) have none to explain.
   window_->view()->RenderNow();

@@ -5,6 +5,7 @@
 // with the app still working, and opening with progress and Cancel.
 #include <sys/stat.h>
 
+#include <QAction>
 #include <QApplication>
 #include <QDir>
 #include <QFile>
@@ -12,6 +13,7 @@
 #include <QFileInfo>
 #include <QLabel>
 #include <QLineEdit>
+#include <QMenu>
 #include <QMessageBox>
 #include <QPushButton>
 #include <QSettings>
@@ -338,10 +340,21 @@ TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
                      finished_ok = ok;
                      finished_message = m;
                    });
-  // Cancelled at once: the job ends without a session and says so.
+  // Cancelled at once (Tools > Cancel Running Task, enabled only while a
+  // job runs): the job ends without a session and says so.
+  auto* cancel = window_->findChild<QAction*>(QStringLiteral("cancelTaskAction"));
+  ASSERT_NE(cancel, nullptr);
+  auto* tools = qobject_cast<QMenu*>(cancel->parent());
+  ASSERT_NE(tools, nullptr);
+  emit tools->aboutToShow();
+  EXPECT_FALSE(cancel->isEnabled());
   workspace_->OpenSession(session);
-  workspace_->CancelJob();
+  emit tools->aboutToShow();
+  ASSERT_TRUE(cancel->isEnabled());
+  cancel->trigger();
   ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
+  emit tools->aboutToShow();
+  EXPECT_FALSE(cancel->isEnabled());
   EXPECT_FALSE(finished_ok);
   EXPECT_NE(finished_message.indexOf("ancel"), -1) << finished_message.toStdString();
   EXPECT_TRUE(workspace_->session_dir().isEmpty());
