@@ -142,9 +142,26 @@ TEST(CloudViewGrowingTest, ANanFirstHeightLeavesTheColourRangeFinite) {
   points[0].z = std::numeric_limits<float>::quiet_NaN();
   view.AppendPoints(points);
   const std::array<double, 2> range = view.color_range();
-  EXPECT_EQ(range[0], 10.0);  // The floor: whole metres below the lowest point.
+  EXPECT_EQ(range[0], 10.0);  // The floor: the decimetre below the lowest point.
   EXPECT_TRUE(std::isfinite(range[1]));
   EXPECT_GE(range[1], 12.7);
+}
+
+// A room's floor a few millimetres below 0 (its noise) and its ceiling at
+// 3.3 m: the height bar spans -0.1 to 3.5 m, not -1 to 6 m (whole metres
+// down, doubling up), so the room's colours use the whole map.
+TEST(CloudViewGrowingTest, HeightColoursSpanTheRoomToTheDecimetreAndHalfMetre) {
+  CloudView view;
+  std::mt19937 rng(8);
+  std::vector<CloudPoint> points = RoomPoints(20000, 0, &rng);
+  points[10].z = 3.3f;
+  view.AppendPoints(points);
+  points = RoomPoints(20000, points.size(), &rng);
+  points[5].z = -0.004f;
+  view.AppendPoints(points);
+  const std::array<double, 2> range = view.color_range();
+  EXPECT_DOUBLE_EQ(range[0], -0.1);
+  EXPECT_DOUBLE_EQ(range[1], 3.5);
 }
 
 }  // namespace

@@ -136,6 +136,14 @@ void CloudView::BuildColorBar() {
   color_bar_->UnconstrainedFontSizeOn();
   color_bar_->GetTitleTextProperty()->SetFontSize(13);
   color_bar_->GetLabelTextProperty()->SetFontSize(12);
+  // The pass names stand left of their swatches, over the cloud: upright
+  // on a dark backing, readable on the points of either pass.
+  vtkTextProperty* names = color_bar_->GetAnnotationTextProperty();
+  names->SetFontSize(12);
+  names->ItalicOff();
+  names->ShadowOff();
+  names->SetBackgroundColor(0.1, 0.1, 0.12);
+  names->SetBackgroundOpacity(0.75);
   color_bar_->SetLabelFormat("%.1f");
   renderer_->AddViewProp(color_bar_);
   ApplyLookupTable();

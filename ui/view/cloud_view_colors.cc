@@ -34,6 +34,14 @@ double Grow(double current, double value) {
   return hi;
 }
 
+// Height's range ends: the lowest point rounded down to the decimetre (a
+// floor's noise a few millimetres below 0 made whole metres start the bar
+// at -1 m, a quarter of it empty), the top grown in half metres (doubling
+// took a 3.3 m room's bar to 6 m). A vertical scan sees floor to ceiling in
+// its first revolution, so height re-maps a handful of times at the start.
+double HeightLow(double z) { return std::floor(z * 10.0) / 10.0; }
+double HeightHigh(double lo, double span) { return lo + std::ceil(span * 2.0) / 2.0; }
+
 }  // namespace
 
 void CloudView::UpdateRanges(float z, float t, float r) {
@@ -42,21 +50,22 @@ void CloudView::UpdateRanges(float z, float t, float r) {
     z_min_ = z_max_ = z;
     have_points_ = true;
     // Height: start with the floor-to-ceiling span of a room.
-    range_lo_[0] = std::floor(z);
+    range_lo_[0] = HeightLow(z);
   }
   z_min_ = std::min(z_min_, z);
   z_max_ = std::max(z_max_, z);
   t_max_ = std::max(t_max_, t);
   r_max_ = std::max(r_max_, r);
   if (z_min_ < range_lo_[0]) {
-    range_lo_[0] = std::floor(z_min_);
+    range_lo_[0] = HeightLow(z_min_);
     changed = true;
   }
   const double spans[3] = {z_max_ - range_lo_[0], t_max_, r_max_};
   for (int i = 0; i < 3; ++i) {
     const double hi_span = range_hi_[i] - range_lo_[i];
     if (spans[i] > hi_span) {
-      range_hi_[i] = range_lo_[i] + Grow(hi_span, spans[i]);
+      range_hi_[i] =
+          i == 0 ? HeightHigh(range_lo_[0], spans[0]) : range_lo_[i] + Grow(hi_span, spans[i]);
       changed = true;
     }
   }
