@@ -171,6 +171,7 @@ TEST_F(SessionResultsTest, AnEvaluationGoesWithTheSessionItDescribes) {
   EXPECT_EQ(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
   for (const QString& b : before_column()) EXPECT_EQ(b, "-");
   EXPECT_TRUE(planes_table()->isColumnHidden(4));  // nothing to compare with
+  EXPECT_TRUE(planes_table()->isColumnHidden(5));
   ASSERT_TRUE(evaluation()->ExportReport(tmp_.path() + "/b.json", &error)) << error.toStdString();
   std::ifstream in(tmp_.path().toStdString() + "/b.json");
   const nlohmann::json report = nlohmann::json::parse(in);
@@ -193,6 +194,7 @@ TEST_F(SessionResultsTest, AnEvaluationGoesWithTheSessionItDescribes) {
   ASSERT_TRUE(EvaluateByButton()) << summary().toStdString();
   EXPECT_NE(summary().indexOf("previous evaluation"), -1) << summary().toStdString();
   EXPECT_FALSE(planes_table()->isColumnHidden(4));  // B's with the EKF, before
+  EXPECT_FALSE(planes_table()->isColumnHidden(5));
   EXPECT_FALSE(dimensions_table()->isColumnHidden(2));
 
   // New Session and Connect: a live cloud, no evaluation.

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/evaluation/plane_match.h"
 #include "ui/view/cloud_view.h"
 
 namespace sweepscan::ui {
@@ -174,13 +175,22 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   summary_->setWordWrap(true);
   summary_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   layout->addWidget(summary_);
-  planes_ = new QTableWidget(0, 5);
+  // Named as in the view ("wall 3"), so no row numbers; the previous
+  // evaluation's figures in columns of their own, as numbers like the
+  // others (the units in the headers and tooltips).
+  planes_ = new QTableWidget(0, 6);
   planes_->setObjectName(QStringLiteral("evaluationPlanes"));
-  planes_->setHorizontalHeaderLabels(
-      {tr("plane"), tr("points"), tr("RMS (mm)"), tr("tilt (°)"), tr("before: RMS, tilt")});
+  planes_->setHorizontalHeaderLabels({tr("plane"), tr("points"), tr("RMS (mm)"), tr("tilt (°)"),
+                                      tr("RMS before"), tr("tilt before")});
+  planes_->horizontalHeaderItem(4)->setToolTip(
+      tr("RMS (mm) of the same surface in the previous evaluation"));
+  planes_->horizontalHeaderItem(5)->setToolTip(
+      tr("Tilt (°) of the same surface in the previous evaluation"));
+  planes_->verticalHeader()->setVisible(false);
   planes_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   planes_->horizontalHeader()->setStretchLastSection(true);
   planes_->setColumnHidden(4, true);  // shown when there is a previous evaluation
+  planes_->setColumnHidden(5, true);
   planes_->setSelectionBehavior(QAbstractItemView::SelectRows);
   planes_->setSelectionMode(QAbstractItemView::SingleSelection);
   planes_->setEditTriggers(QAbstractItemView::NoEditTriggers);
@@ -304,22 +314,33 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
   // "before" only when there is one: an empty column's header was cut to
   // "before: RM" and pushed the table into scrolling.
   planes_->setColumnHidden(4, before == nullptr);
+  planes_->setColumnHidden(5, before == nullptr);
   dimensions_->setColumnHidden(2, before == nullptr);
+  // The same surfaces, matched by place: the rows are by size, and a
+  // calibration changes the planes' inlier counts.
+  const std::vector<int> same =
+      before != nullptr ? MatchPlanes(*e, *before) : std::vector<int>(e->planes.size(), -1);
+  const std::vector<int> same_dimension = before != nullptr
+                                              ? MatchDimensions(*e, *before, same)
+                                              : std::vector<int>(e->dimensions.size(), -1);
   planes_->setRowCount(static_cast<int>(e->planes.size()));
   for (size_t i = 0; i < e->planes.size(); ++i) {
     const EvaluatedPlane& p = e->planes[i];
     const int r = static_cast<int>(i);
-    planes_->setItem(r, 0, new QTableWidgetItem(QString::fromStdString(p.kind)));
+    planes_->setItem(r, 0,
+                     new QTableWidgetItem(
+                         QStringLiteral("%1 %2").arg(QString::fromStdString(p.kind)).arg(i + 1)));
     planes_->setItem(r, 1, Item(QString::number(p.plane.count)));
     planes_->setItem(r, 2, Item(QString::number(p.plane.rms * 1e3, 'f', 2)));
     planes_->setItem(r, 3, Item(QString::number(p.tilt_deg, 'f', 3)));
-    QString b = QStringLiteral("-");
-    if (before != nullptr && i < before->planes.size() && before->planes[i].kind == p.kind) {
-      b = QStringLiteral("%1 mm, %2°")
-              .arg(before->planes[i].plane.rms * 1e3, 0, 'f', 2)
-              .arg(before->planes[i].tilt_deg, 0, 'f', 3);
+    QString rms_before = QStringLiteral("-"), tilt_before = QStringLiteral("-");
+    if (same[i] >= 0) {
+      const EvaluatedPlane& b = before->planes[static_cast<size_t>(same[i])];
+      rms_before = QString::number(b.plane.rms * 1e3, 'f', 2);
+      tilt_before = QString::number(b.tilt_deg, 'f', 3);
     }
-    planes_->setItem(r, 4, Item(b));
+    planes_->setItem(r, 4, Item(rms_before));
+    planes_->setItem(r, 5, Item(tilt_before));
   }
   dimensions_->setRowCount(static_cast<int>(e->dimensions.size()));
   for (size_t i = 0; i < e->dimensions.size(); ++i) {
@@ -330,9 +351,9 @@ void EvaluationPanel::Show(bool ok, const QString& message) {
     // several (a tenth of a millimetre claimed what it does not know).
     dimensions_->setItem(r, 1, Item(QString::number(d.distance_m, 'f', 3)));
     QString b = QStringLiteral("-");
-    if (before != nullptr && i < before->dimensions.size() &&
-        before->dimensions[i].axis == d.axis) {
-      b = QString::number(before->dimensions[i].distance_m, 'f', 3);
+    if (same_dimension[i] >= 0) {
+      b = QString::number(before->dimensions[static_cast<size_t>(same_dimension[i])].distance_m,
+                          'f', 3);
     }
     dimensions_->setItem(r, 2, Item(b));
   }
