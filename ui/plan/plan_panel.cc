@@ -438,17 +438,21 @@ void PlanPanel::Rebuild() {
                      .arg(source->what)
                      .arg(options.section.height_m, 0, 'f', 2)
                      .arg(options.section.band_m, 0, 'f', 2);
-        const QString text = tr("%1 · section %L2 of %L3 points · %4 wall faces (%5 furniture), %6 walls, "
-                                "%7 openings, %8 dimensions, %9 rooms")
-                                 .arg(source->what)
-                                 .arg(plan.section.points_out)
-                                 .arg(plan.section.points_in)
-                                 .arg(structural)
-                                 .arg(plan.faces.size() - structural)
-                                 .arg(plan.walls.size())
-                                 .arg(plan.openings.size())
-                                 .arg(plan.dimensions.size())
-                                 .arg(plan.rooms.size());
+        // The CLI's words (`plan`): faces of walls and of furniture, and
+        // walls seen from both sides (two faces back to back, thickness known).
+        const QString text =
+            tr("%1 · section %L2 of %L3 points · %4 faces (%5 of walls, %6 of furniture), "
+               "%7 walls seen from both sides, %8 openings, %9 dimensions, %10 rooms")
+                .arg(source->what)
+                .arg(plan.section.points_out)
+                .arg(plan.section.points_in)
+                .arg(plan.faces.size())
+                .arg(structural)
+                .arg(plan.faces.size() - structural)
+                .arg(plan.walls.size())
+                .arg(plan.openings.size())
+                .arg(plan.dimensions.size())
+                .arg(plan.rooms.size());
         // What the CLI warns about, said where the operator looks.
         QStringList notes;
         if (std::isfinite(built->level_near_cut)) {
