@@ -91,6 +91,15 @@ void ReadSegments(const JsonObject& o, std::vector<sim::DriveSegment>* path) {
       s.Fail("v_mps", "speed beyond the robot's limits (|v| <= 2 m/s, |w| <= 5 rad/s)");
     }
   }
+  // A week at most: 1e308 s made a session of a header alone, 2^32 s a
+  // recording that grew by 12 MB a second until the disk was full.
+  constexpr double kMaxPathS = 7 * 86400.0;
+  double total_s = 0.0;
+  for (const sim::DriveSegment& d : *path) total_s += d.duration_s;
+  if (!(total_s <= kMaxPathS)) {
+    o.Fail("segments",
+           "the path lasts " + std::to_string(total_s) + " s; at most a week (604800 s) is driven");
+  }
 }
 
 void ReadPath(const JsonObject& o, SimConfig* c) {
@@ -98,6 +107,10 @@ void ReadPath(const JsonObject& o, SimConfig* c) {
   const JsonObject start = o.Object("start");
   start.AllowOnly({"x_m", "y_m", "yaw_rad"});
   c->start = {start.Number("x_m"), start.Number("y_m"), start.Number("yaw_rad")};
+  // Within the 8 000 m a cloud's float positions keep to the millimetre.
+  if (std::abs(c->start.x) > 8000.0 || std::abs(c->start.y) > 8000.0) {
+    start.Fail("x_m", "the start must be within 8000 m of the world's origin in x and y");
+  }
   ReadSegments(o, &c->path);
 }
 

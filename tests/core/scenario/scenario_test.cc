@@ -109,25 +109,51 @@ TEST(ScenarioTest, BadFilesGiveOneClearError) {
       {"missing scene", [](nlohmann::json* j) { j->erase("scene"); }, "scene: missing"},
       {"wrong format", [](nlohmann::json* j) { (*j)["format"] = "ply"; }, "format: must be"},
       {"wrong version", [](nlohmann::json* j) { (*j)["version"] = 7; }, "unsupported version 7"},
-      {"wrong type", [](nlohmann::json* j) { (*j)["robot"] = {{"lidar_height_m", "high"}}; },
+      {"wrong type",
+       [](nlohmann::json* j) {
+         (*j)["robot"] = {{"lidar_height_m", "high"}};
+       },
        "robot.lidar_height_m: expected a number, got a string"},
       {"negative size",
        [](nlohmann::json* j) {
          (*j)["scene"]["boxes"] = {{{"center", {0, 0, 0}}, {"size", {1, -2, 1}}}};
        },
        "scene.boxes[0].size[1]: must be > 0"},
-      {"negative wheel distance", [](nlohmann::json* j) { (*j)["robot"] = {{"wheel_distance_m", -0.1}}; },
+      {"negative wheel distance",
+       [](nlohmann::json* j) {
+         (*j)["robot"] = {{"wheel_distance_m", -0.1}};
+       },
        "robot.wheel_distance_m: must be > 0, got -0.1"},
       {"zero duration", [](nlohmann::json* j) { (*j)["path"]["segments"][0]["duration_s"] = 0; },
        "path.segments[0].duration_s: must be > 0"},
       {"unknown key", [](nlohmann::json* j) { (*j)["robott"] = 1; }, "robott: unknown key"},
-      {"unknown preset", [](nlohmann::json* j) { (*j)["scene"]["preset"] = "moon"; }, "unknown preset 'moon'"},
-      {"bad wheel", [](nlohmann::json* j) {
+      {"unknown preset", [](nlohmann::json* j) { (*j)["scene"]["preset"] = "moon"; },
+       "unknown preset 'moon'"},
+      {"bad wheel",
+       [](nlohmann::json* j) {
          (*j)["slips"] = {{{"duration_s", 1}, {"wheel", "middle"}, {"extra", 0.1}}};
-       }, "slips[0].wheel"},
-      {"huge mounting error", [](nlohmann::json* j) { (*j)["mounting_error_rad"] = {{"gamma", 3.0}}; },
+       },
+       "slips[0].wheel"},
+      {"huge mounting error",
+       [](nlohmann::json* j) {
+         (*j)["mounting_error_rad"] = {{"gamma", 3.0}};
+       },
        "mounting_error_rad.gamma: must be within"},
-      {"not an object", [](nlohmann::json* j) { *j = nlohmann::json::array(); }, "expected an object"},
+      {"not an object", [](nlohmann::json* j) { *j = nlohmann::json::array(); },
+       "expected an object"},
+      // 2^32 s was a recording that grew until the disk was full; 1e308 s a
+      // session of a header alone.
+      {"a path of 136 years",
+       [](nlohmann::json* j) { (*j)["path"]["segments"][0]["duration_s"] = 4294967296.0; },
+       "path.segments: the path lasts 4294967296"},
+      {"a path longer than a week in pieces",
+       [](nlohmann::json* j) {
+         (*j)["path"]["segments"] = {{{"v_mps", 0}, {"w_radps", 0}, {"duration_s", 400000}},
+                                     {{"v_mps", 0.1}, {"w_radps", 0}, {"duration_s", 400000}}};
+       },
+       "at most a week (604800 s)"},
+      {"a start beyond 8 km", [](nlohmann::json* j) { (*j)["path"]["start"]["x_m"] = -1e308; },
+       "path.start.x_m: the start must be within 8000 m"},
   };
   for (const BadCase& c : cases) {
     nlohmann::json j = Minimal();
