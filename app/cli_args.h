@@ -3,6 +3,9 @@
 #ifndef SWEEPSCAN_APP_CLI_ARGS_H_
 #define SWEEPSCAN_APP_CLI_ARGS_H_
 
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <map>
 #include <set>
@@ -70,11 +73,31 @@ class Args {
     const std::string v = Get(key);
     char* end = nullptr;
     const double d = std::strtod(v.c_str(), &end);
-    if (v.empty() || *end != '\0' || !(d == d)) {
+    if (v.empty() || *end != '\0' || !std::isfinite(d)) {
       *error = "option --" + key + " expects a number, got '" + v + "'";
       return false;
     }
     *out = d;
+    return true;
+  }
+  // A whole number in [lo, hi], written in decimal digits (a count: "2.5",
+  // "0x10" and "1e9" are refused, as is anything out of the range, which
+  // would otherwise overflow or run for days).
+  bool GetInteger(const std::string& key, int64_t lo, int64_t hi, int64_t* out,
+                  std::string* error) const {
+    if (!Has(key)) return true;
+    const std::string v = Get(key);
+    const size_t digits = v.find_first_not_of("0123456789", v[0] == '-' || v[0] == '+' ? 1 : 0);
+    errno = 0;
+    char* end = nullptr;
+    const long long n = std::strtoll(v.c_str(), &end, 10);
+    if (v.empty() || digits != std::string::npos || *end != '\0' || errno == ERANGE || n < lo ||
+        n > hi) {
+      *error = "option --" + key + " expects a whole number from " + std::to_string(lo) + " to " +
+               std::to_string(hi) + ", got '" + v + "'";
+      return false;
+    }
+    *out = n;
     return true;
   }
   const std::vector<std::string>& positional() const { return positional_; }

@@ -12,6 +12,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_outputs.h"
 #include "app/cli_recording.h"
 #include "core/calibration/automatic.h"
 #include "core/calibration/calibration_file.h"
@@ -126,27 +127,16 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
     // Before the solve, and never over what it reads: `--out` once replaced
     // the pairs file it was given, or the session's meta.json (which the
     // session then could not be opened without).
-    namespace fs = std::filesystem;
     const std::string out = args.Get("out");
-    std::error_code ec;
-    const fs::path target = fs::weakly_canonical(out, ec);
-    for (const char* input : {"pairs", "scenario"}) {
-      if (args.Has(input) && fs::exists(out, ec) && fs::equivalent(out, args.Get(input), ec)) {
-        PrintError("--out " + out + " is the --" + input +
-                   " file: the calibration would replace it");
-        return kExitBadInput;
-      }
-    }
+    std::vector<CommandInput> inputs = {{"the --pairs file", args.Get("pairs")},
+                                        {"the --scenario file", args.Get("scenario")}};
     if (!args.positional().empty()) {
-      const fs::path session = fs::weakly_canonical(args.positional()[0], ec);
-      for (fs::path p = target.parent_path(); !p.empty(); p = p.parent_path()) {
-        if (p == session) {
-          PrintError("--out " + out + " is inside the session folder " + args.positional()[0] +
-                     ", which holds the recording: write the calibration beside it");
-          return kExitBadInput;
-        }
-        if (p == p.parent_path()) break;
-      }
+      inputs.push_back(
+          {"the session folder " + args.positional()[0] + ", which holds the recording",
+           args.positional()[0], true});
+    }
+    if (const int refused = RefuseOutputOverInput({{"--out", out}}, inputs); refused != kExitOk) {
+      return refused;
     }
     if (const Status w = CheckCanWrite(out); !w.ok()) {
       PrintError(w.message());

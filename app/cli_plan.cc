@@ -2,6 +2,7 @@
 // cloud file or of a session's cloud (core/plan/floor_plan.h), as text or
 // JSON, drawn as SVG and DXF (docs/plan-formats.md).
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -10,6 +11,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_outputs.h"
 #include "app/cli_project.h"
 #include "app/cli_recording.h"
 #include "core/calibration/calibration_file.h"
@@ -119,9 +121,12 @@ void PrintPlan(const plan::FloorPlan& p) {
         "%zu stray point(s) (alone in their 0.5 m cell) left outside the drawing's extent\n",
         p.stray_points);
   }
-  std::printf("%zu faces (%zu of walls, %zu of furniture), %zu walls, %zu openings, %zu dimensions, %zu rooms\n",
-              p.faces.size(), structural, p.faces.size() - structural, p.walls.size(), p.openings.size(),
-              p.dimensions.size(), p.rooms.size());
+  std::printf(
+      "%zu faces (%zu of walls, %zu of furniture), %zu walls seen from both sides, %zu openings, "
+      "%zu dimensions, "
+      "%zu rooms\n",
+      p.faces.size(), structural, p.faces.size() - structural, p.walls.size(), p.openings.size(),
+      p.dimensions.size(), p.rooms.size());
   for (const plan::Wall& w : p.walls) {
     std::printf("  wall     (%.3f, %.3f) - (%.3f, %.3f)  thickness %.3f m\n", w.a.x(), w.a.y(), w.b.x(), w.b.y(),
                 w.thickness_m);
@@ -223,8 +228,21 @@ int RunPlan(int argc, char** argv) {
                args.Get("section-line") + "'" + (error.empty() ? "" : ": " + error));
     return kExitBadInput;
   }
+  // The drawings never replace what is drawn, nor each other.
+  std::vector<CommandInput> inputs = {{"the --calibration file", args.Get("calibration")},
+                                      {"the --scenario file", args.Get("scenario")}};
+  // A session folder holds no drawing; a cloud or project file is not one.
+  for (const std::string& input : args.positional()) {
+    inputs.push_back({"the input " + input, input, std::filesystem::is_directory(input)});
+  }
+  int code = RefuseOutputOverInput({{"--svg", args.Get("svg")},
+                                    {"--dxf", args.Get("dxf")},
+                                    {"--section-svg", args.Get("section-svg")},
+                                    {"--section-dxf", args.Get("section-dxf")}},
+                                   inputs);
+  if (code != kExitOk) return code;
   std::vector<Eigen::Vector3f> cloud;
-  int code = LoadInput(args, &cloud);
+  code = LoadInput(args, &cloud);
   if (code != kExitOk) return code;
   // A cut through a floor or ceiling slab draws the slab's whole extent as
   // points, which the fit turns into diagonal "walls" (hundreds of them at 2.69 m

@@ -86,6 +86,9 @@ Status LoadProjectAndSay(const std::string& file, Project* project, std::string*
 }
 
 bool ReadProjectFile(const std::string& file, std::string* text) {
+  // A folder opens as a stream and throws on its first read; LoadProject
+  // then says what it is.
+  if (!CheckRegularFile(file).ok()) return false;
   std::ifstream in(file, std::ios::binary);
   if (!in) return false;
   text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -345,9 +348,13 @@ int RunProjectInfo(const Args& args) {
 }  // namespace
 
 int RunProject(int argc, char** argv) {
-  if (argc < 3 || std::string(argv[2]) == "--help" || std::string(argv[2]) == "-h") {
+  if (argc < 3) {
+    // A usage error says so on stderr, as every other one does.
+    return Fail(kExitBadInput, std::string("project needs a subcommand\n") + kProjectUsage);
+  }
+  if (std::string(argv[2]) == "--help" || std::string(argv[2]) == "-h") {
     std::cout << kProjectUsage;
-    return argc < 3 ? kExitBadInput : kExitOk;
+    return kExitOk;
   }
   const std::string sub = argv[2];
   Args args({"json", "strict", "no-icp", "hold-free", "help"},

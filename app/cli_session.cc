@@ -18,6 +18,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_outputs.h"
 #include "app/cli_recording.h"
 #include "core/calibration/calibration.h"
 #include "core/cloud/cloud_io.h"
@@ -244,10 +245,22 @@ int RunInfo(int argc, char** argv) {
   return kExitOk;
 }
 
+// The session and the calibration file are inputs: nothing is written over
+// them or into the session folder (an export's --out S/frames.bin replaced
+// the recording).
+int RefuseOutputIntoSession(const Args& args) {
+  const std::string& session = args.positional()[0];
+  return RefuseOutputOverInput(
+      {{"--out", args.Get("out")}},
+      {{"the session folder " + session + ", which holds the recording", session, true},
+       {"the --calibration file", args.Get("calibration")}});
+}
+
 int RunReconstruct(int argc, char** argv) {
   Args args({"json", "help", "no-ekf", "no-deskew", "strict", "loop-closure"}, {"out", "calibration", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kReconstructUsage, &code)) return code;
+  if ((code = RefuseOutputIntoSession(args)) != kExitOk) return code;
   if (!args.Has("out") || !IsCloudFile(args.Get("out"))) {
     // Said before the session is read, not after.
     PrintError(args.Has("out")
@@ -264,6 +277,7 @@ int RunExport(int argc, char** argv) {
             {"out", "format", "calibration", "frame", "pose-source"});
   int code;
   if (!ParseCommon(&args, argc, argv, kExportUsage, &code)) return code;
+  if ((code = RefuseOutputIntoSession(args)) != kExitOk) return code;
   // --out FILE.las|.ply|.pcd: the cloud, exactly as `reconstruct` makes it.
   if (args.Has("out") && IsCloudFile(args.Get("out"))) {
     if (args.Has("format") || args.Has("frame")) {

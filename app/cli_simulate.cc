@@ -16,6 +16,7 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_outputs.h"
 #include "app/terminal_progress.h"
 #include "core/cloud/cloud_io.h"
 #include "core/cloud/reconstruct.h"
@@ -380,13 +381,20 @@ int RunSimulate(int argc, char** argv) {
   int code = ParseSimulateArgs(args, &request);
   if (code != kExitOk || request.out.empty()) return code;
   const sim::SimConfig& config = request.config;
+  if ((code = RefuseOutputOverInput({{"--out", request.out}, {"--truth", args.Get("truth")}},
+                                    {{"the --scenario file", args.Get("scenario")}})) != kExitOk) {
+    return code;
+  }
 
   // The cloud's folder is made if missing (the session recorded beside it
   // always made it), and the cloud asked to be writable before the drive is
   // simulated and placed (minutes for a long one).
   std::error_code ignored;  // CheckCanWrite says why it cannot
   std::filesystem::create_directories(std::filesystem::path(request.out).parent_path(), ignored);
+  // And the truth file, else a whole drive was simulated before its
+  // folder turned out to be a file.
   Status status = CheckCanWrite(request.out);
+  if (status.ok() && args.Has("truth")) status = CheckCanWrite(args.Get("truth"));
   if (!status.ok()) {
     PrintError(status.message());
     return kExitFailure;

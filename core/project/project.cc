@@ -13,6 +13,7 @@
 #include <iterator>
 #include <set>
 
+#include "core/common/checked_file.h"
 #include "core/common/json_reader.h"
 #include "core/geometry/skew.h"
 
@@ -705,6 +706,8 @@ std::string ProjectToJson(const Project& project) {
 }
 
 Status LoadProject(const std::string& path, Project* project, std::vector<std::string>* repairs) {
+  // A folder opens as a stream and throws on its first read.
+  if (const Status file = CheckRegularFile(path); !file.ok()) return file;
   std::string text;
   {
     std::ifstream in(path, std::ios::binary);

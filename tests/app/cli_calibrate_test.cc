@@ -78,7 +78,7 @@ TEST(CliCalibrateTest, BadInput) {
   Write(Tmp("mine.json"),
         std::string(kHead) + kPair + "," + kPair + "," + kPair + "," + kPair + "]}");
   ExpectBadInput("calibrate" + sc + " --pairs " + Tmp("mine.json") + " --out " + Tmp("mine.json"),
-                 "is the --pairs file: the calibration would replace it");
+                 "is the --pairs file: it would be replaced");
   ExpectBadInput(
       "calibrate " + Tmp("s.sweepscan") + " --auto --out " + Tmp("s.sweepscan/meta.json"),
       "is inside the session folder");

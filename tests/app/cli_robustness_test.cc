@@ -14,14 +14,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "tests/testing/cli_files.h"
-#include "tests/testing/run_command.h"
 #include "tests/testing/remove_at_exit.h"
+#include "tests/testing/run_command.h"
 
 namespace {
 
@@ -70,6 +71,11 @@ void WriteText(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
 }
 
+std::string Read(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 // One simulated session shared by the tests (1-2 s to make).
 class CliRobustnessTest : public ::testing::Test {
  protected:
@@ -107,6 +113,12 @@ TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
   }
   EXPECT_EQ(Cli("no-such-command").code, 2);
   EXPECT_EQ(Cli("").code, 2);
+  // `project` alone said nothing on stderr (its usage went to stdout).
+  const CommandRun project = sweepscan::testing::RunCommand("sh -c '" + std::string(SWEEPSCAN_CLI) +
+                                                            " project 2>&1 >/dev/null'");
+  EXPECT_EQ(project.code, 2);
+  EXPECT_EQ(project.out.rfind("sweepscan-cli: error: project needs a subcommand\n", 0), 0u)
+      << project.out;
 }
 
 TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
@@ -153,6 +165,25 @@ TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
        "option --out does not apply to `project new`"},
       {"project info " + Tmp("p.sweepscan-project") + " --no-icp",
        "option --no-icp does not apply to `project info`"},
+      // Counts cast to int: --points inf crashed (SIGSEGV), --trials inf
+      // "succeeded" with -2147483648 trials, --noise-max inf and --trials
+      // 1e9 ran on for hours.
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --points inf",
+       "option --points expects a whole number from 2 to 10000, got 'inf'"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --points 1e20",
+       "option --points expects a whole number from 2 to 10000, got '1e20'"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --trials 99999999999999999999",
+       "option --trials expects a whole number from 1 to 1000000"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --trials 2.7",
+       "option --trials expects a whole number"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --steps 0x10",
+       "option --steps expects a whole number"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --noise-max inf",
+       "option --noise-max expects a number, got 'inf'"},
+      {"p3l --protocol --csv " + Tmp("p.csv") + " --noise-max 5",
+       "--noise-max is a width in metres"},
+      {"sfm --rig-scenario room --out " + Tmp("r.ply") + " --frames 2.5",
+       "option --frames expects a whole number from 2 to 1000000"},
   };
   for (const auto& [args, expect] : cases) {
     const CommandRun r = Cli(args);
@@ -162,6 +193,7 @@ TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
   EXPECT_FALSE(std::filesystem::exists(strict_dir));
   EXPECT_FALSE(std::filesystem::exists(Tmp("p.sweepscan-project")));
   EXPECT_FALSE(std::filesystem::exists(Tmp("cloud.txt")));
+  EXPECT_FALSE(std::filesystem::exists(Tmp("p.csv")));
 }
 
 TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
@@ -199,6 +231,15 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
     EXPECT_EQ(sweepscan::testing::RunCommand("cat '" + out + "/" + name + "'").out, "older\n");
     sweepscan::testing::ShellOrFail("rm '" + out + "/" + name + "'");
   }
+  // A ROS 1 bag: rosbag's ~Bag closed the bag again after a failed write,
+  // threw from the destructor (std::terminate, exit 134) and left
+  // cloud.bag.tmp-PID behind.
+  for (int kib : {16, 200}) {
+    const CommandRun b = CliWithFullDisk(
+        "export " + Session() + " --format rosbag --out " + out + "/cloud.bag", kib);
+    EXPECT_EQ(b.code, 1) << kib << " KiB: " << b.out;
+    ExpectOneErrorLine(b, out + "/cloud.bag: cannot write the ROS 1 bag");
+  }
   EXPECT_EQ(LsA(out), "csv\n");  // No temporary either.
 }
 
@@ -222,13 +263,13 @@ TEST_F(CliRobustnessTest, UnwritableOutputIsExitOneInEveryCommand) {
   // Before: exit 1 in reconstruct but exit 2 in simulate.
   const std::string folder = Tmp("a-folder.ply");
   sweepscan::testing::ShellOrFail("mkdir -p '" + folder + "'");
+  WriteText(Tmp("not-a-folder"), "a file");
   for (const std::string& args :
        {"reconstruct " + Session() + " --out " + folder,
         "simulate --scenario " + Scenario("lab") + " --out " + folder + " --session " +
             Tmp("u.sweepscan") + " --overwrite",
         "export " + Session() + " --out " + folder,  // A cloud (.ply) where a folder is.
-        "export " + Session() + " --out " + Session() +
-            "/meta.json",  // CSV folder where a file is.
+        "export " + Session() + " --out " + Tmp("not-a-folder"),  // CSV folder where a file is.
         "repair " + Session() + " --out " + Tmp("lab.ply/x"),
         "repair " + Session() + " --out " + Session(),  // a folder that is not empty
         "record --serial /dev/null --out " + folder,    // record writes a new session folder
@@ -314,6 +355,17 @@ TEST_F(CliRobustnessTest, AFolderWhereAFileIsExpectedIsExitTwo) {
   const CommandRun c = Cli("reconstruct " + Session() + " --out " + Tmp("f.ply") + " --calibration " + Dir());
   EXPECT_EQ(c.code, 2) << c.out;
   ExpectOneErrorLine(c, "is a folder");
+  // A project file that is a folder (was exit 1, "unexpected failure:
+  // basic_filebuf::underflow error reading the file").
+  const std::string project = Tmp("folder.sweepscan-project");
+  sweepscan::testing::ShellOrFail("mkdir -p '" + project + "'");
+  for (const std::string& args :
+       {"project info " + project, "plan " + project + " --svg " + Tmp("f.svg"),
+        "project export " + project + " --out " + Tmp("f.las")}) {
+    const CommandRun p = Cli(args);
+    EXPECT_EQ(p.code, 2) << args << ": " << p.out;
+    ExpectOneErrorLine(p, project + ": is a folder, expected a file");
+  }
 }
 
 TEST_F(CliRobustnessTest, OneFlippedByteLosesOneRecordWithAWarning) {
@@ -408,6 +460,54 @@ TEST_F(CliRobustnessTest, CalibrateAndEvaluateAcceptStrictAndWarn) {
   r = Cli("calibrate " + dir + " --auto --strict");
   EXPECT_EQ(r.code, 2) << r.out;
   ExpectOneErrorLine(r, "CRC mismatch");
+}
+
+// No output replaces what the command reads, or another output: `export S
+// --format rosbag --out S/frames.bin` replaced the recording with a bag,
+// `simulate --truth` named as the scenario overwrote it, `plan d.ply --svg
+// d.ply` overwrote the cloud (all exit 0). Refused before any work.
+TEST_F(CliRobustnessTest, AnOutputNeverReplacesAnInput) {
+  const std::string session = Session();
+  const std::string frames = Read(session + "/frames.bin");
+  const std::string scenario = Tmp("mine.json");
+  WriteText(scenario, Read(Scenario("lab")));
+  const std::string cloud = Tmp("lab.ply");
+  const std::string cloud_bytes = Read(cloud);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"export " + session + " --format rosbag --out " + session + "/frames.bin",
+       "--out " + session + "/frames.bin is inside the session folder " + session +
+           ", which holds the recording: write it elsewhere"},
+      {"export " + session + " --out " + session, "is inside the session folder"},
+      {"export " + session + " --out " + session + "/cloud.las", "is inside the session folder"},
+      {"reconstruct " + session + " --out " + session + "/../lab.sweepscan/x.ply",
+       "is inside the session folder"},
+      {"simulate --scenario " + scenario + " --out " + Tmp("m.ply") + " --truth " + scenario,
+       "--truth " + scenario + " is the --scenario file: it would be replaced"},
+      {"plan " + cloud + " --svg " + cloud, "--svg " + cloud + " is the input " + cloud},
+      {"plan " + cloud + " --svg " + Tmp("o.svg") + " --dxf " + Tmp("o.svg"),
+       "--dxf " + Tmp("o.svg") + " is also --svg's file: give each output its own"},
+  };
+  for (const auto& [args, expect] : cases) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    ExpectOneErrorLine(r, expect);
+  }
+  EXPECT_EQ(Read(session + "/frames.bin"), frames);
+  EXPECT_EQ(Read(scenario), Read(Scenario("lab")));
+  EXPECT_EQ(Read(cloud), cloud_bytes);
+  EXPECT_FALSE(Exists(Tmp("m.sweepscan")));
+  EXPECT_FALSE(Exists(Tmp("o.svg")));
+  EXPECT_EQ(LsA(session), "frames.bin\nmeta.json\n");
+
+  // An unwritable --truth is said before the drive is simulated (it was
+  // said after, the session and cloud left behind).
+  WriteText(Tmp("a-file"), "not a folder");
+  const CommandRun r = Cli("simulate --scenario " + scenario + " --out " + Tmp("t.ply") +
+                           " --truth " + Tmp("a-file") + "/t.json");
+  EXPECT_EQ(r.code, 1) << r.out;
+  ExpectOneErrorLine(r, Tmp("a-file") + "/t.json");
+  EXPECT_FALSE(Exists(Tmp("t.sweepscan")));
+  EXPECT_FALSE(Exists(Tmp("t.ply")));
 }
 
 }  // namespace

@@ -1,14 +1,14 @@
 #include "core/io/rosbag1/rosbag1_writer.h"
 
+#include <nav_msgs/Path.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-
-#include <nav_msgs/Path.h>
-#include <rosbag/bag.h>
-#include <sensor_msgs/PointCloud2.h>
+#include <memory>
 
 namespace sweepscan::io {
 namespace {
@@ -88,13 +88,19 @@ Status WriteRosbag1Export(const std::string& path, const RosExport& data) {
   }
 
   const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  auto bag = std::make_unique<rosbag::Bag>();
   try {
-    rosbag::Bag bag(tmp, rosbag::bagmode::Write);
-    bag.setCompression(rosbag::compression::LZ4);
-    if (!data.points.empty()) bag.write("/sweepscan/cloud", stamp, cloud);
-    if (!data.poses.empty()) bag.write("/sweepscan/path", stamp, trajectory);
-    bag.close();
+    bag->open(tmp, rosbag::bagmode::Write);
+    bag->setCompression(rosbag::compression::LZ4);
+    if (!data.points.empty()) bag->write("/sweepscan/cloud", stamp, cloud);
+    if (!data.poses.empty()) bag->write("/sweepscan/path", stamp, trajectory);
+    bag->close();
   } catch (const std::exception& e) {
+    // A bag whose writes failed (a full disk) is let go unclosed: ~Bag
+    // closes it again, that close's writes fail too, and an exception out
+    // of a destructor is std::terminate. Its descriptor lives until the
+    // process ends (the CLI's next step is to exit); the file is unlinked.
+    (void)bag.release();
     std::remove(tmp.c_str());
     return Status::Error(path + ": cannot write the ROS 1 bag: " + e.what());
   }
