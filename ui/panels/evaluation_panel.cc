@@ -180,8 +180,10 @@ EvaluationPanel::EvaluationPanel(Workspace* workspace, CloudView* view, QWidget*
   // others (the units in the headers and tooltips).
   planes_ = new QTableWidget(0, 6);
   planes_->setObjectName(QStringLiteral("evaluationPlanes"));
-  planes_->setHorizontalHeaderLabels({tr("plane"), tr("points"), tr("RMS (mm)"), tr("tilt (°)"),
-                                      tr("RMS before"), tr("tilt before")});
+  // Headers on two lines: the figures are narrower than their names, and
+  // the six columns then fit the dock without scrolling.
+  planes_->setHorizontalHeaderLabels({tr("plane"), tr("points"), tr("RMS\n(mm)"), tr("tilt\n(°)"),
+                                      tr("RMS\nbefore"), tr("tilt\nbefore")});
   planes_->horizontalHeaderItem(4)->setToolTip(
       tr("RMS (mm) of the same surface in the previous evaluation"));
   planes_->horizontalHeaderItem(5)->setToolTip(
