@@ -71,8 +71,12 @@ int Main(int argc, char** argv) {
       std::cout << kProjectUsage;
     } else if (topic == "repair") {
       std::cout << kRepairUsage;
-    } else {
+    } else if (topic.empty()) {
       std::cout << kUsage;
+    } else {
+      // Asked about a command there is not: a usage error, said on stderr.
+      std::cerr << "sweepscan-cli: error: no command '" << topic << "'\n" << kUsage;
+      return kExitBadInput;
     }
     return kExitOk;
   }

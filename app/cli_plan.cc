@@ -122,9 +122,8 @@ void PrintPlan(const plan::FloorPlan& p) {
         p.stray_points);
   }
   std::printf(
-      "%zu faces (%zu of walls, %zu of furniture), %zu walls seen from both sides, %zu openings, "
-      "%zu dimensions, "
-      "%zu rooms\n",
+      "%zu faces (%zu of walls, %zu of furniture), %zu walls seen from both sides, "
+      "%zu openings, %zu dimensions, %zu rooms\n",
       p.faces.size(), structural, p.faces.size() - structural, p.walls.size(), p.openings.size(),
       p.dimensions.size(), p.rooms.size());
   for (const plan::Wall& w : p.walls) {

@@ -12,10 +12,12 @@
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
+#include "app/cli_outputs.h"
 #include "app/cli_recording.h"
 #include "core/calibration/calibration_file.h"
-#include "core/common/json_reader.h"
 #include "core/cloud/cloud_io.h"
+#include "core/common/checked_file.h"
+#include "core/common/json_reader.h"
 #include "core/sfm/p3l_json.h"
 #include "core/sfm/rig_scenario.h"
 #include "core/sfm/sequence.h"
@@ -442,6 +444,29 @@ int RunSfm(int argc, char** argv) {
   if (args.Flag("help")) {
     std::cout << kSfmUsage;
     return kExitOk;
+  }
+  // Every output over no input nor another, and writable, before the
+  // minutes of work (a --poses that could not be written was said after
+  // the cloud was written).
+  std::vector<CommandInput> inputs = {{"the --scenario file", args.Get("scenario")},
+                                      {"the --calibration file", args.Get("calibration")},
+                                      {"the --init file", args.Get("init")}};
+  for (const std::string& session : args.positional()) {
+    inputs.push_back(
+        {"the session folder " + session + ", which holds the recording", session, true});
+  }
+  const std::vector<CommandOutput> outputs = {{"--out", args.Get("out")},
+                                              {"--poses", args.Get("poses")},
+                                              {"--planes", args.Get("planes")},
+                                              {"--write-init", args.Get("write-init")}};
+  if (const int refused = RefuseOutputOverInput(outputs, inputs); refused != kExitOk)
+    return refused;
+  for (const CommandOutput& out : outputs) {
+    if (out.path.empty()) continue;
+    if (const Status w = CheckCanWrite(out.path); !w.ok()) {
+      PrintError(w.message());
+      return kExitFailure;
+    }
   }
   if (!args.positional().empty() || args.Has("scenario")) {
     if (args.Has("rig-scenario")) {

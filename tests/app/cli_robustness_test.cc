@@ -119,6 +119,10 @@ TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
   EXPECT_EQ(project.code, 2);
   EXPECT_EQ(project.out.rfind("sweepscan-cli: error: project needs a subcommand\n", 0), 0u)
       << project.out;
+  // Help on a command there is not was exit 0.
+  const CommandRun help = Cli("help bogus");
+  EXPECT_EQ(help.code, 2) << help.out;
+  EXPECT_EQ(help.out.rfind("sweepscan-cli: error: no command 'bogus'\n", 0), 0u) << help.out;
 }
 
 TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
@@ -508,6 +512,16 @@ TEST_F(CliRobustnessTest, AnOutputNeverReplacesAnInput) {
   ExpectOneErrorLine(r, Tmp("a-file") + "/t.json");
   EXPECT_FALSE(Exists(Tmp("t.sweepscan")));
   EXPECT_FALSE(Exists(Tmp("t.ply")));
+  // sfm's poses likewise (they were tried after the cloud was written).
+  const CommandRun sfm = Cli("sfm --rig-scenario room --frames 20 --out " + Tmp("r.ply") +
+                             " --poses " + Tmp("a-file") + "/p.csv");
+  EXPECT_EQ(sfm.code, 1) << sfm.out;
+  ExpectOneErrorLine(sfm, Tmp("a-file") + "/p.csv");
+  EXPECT_FALSE(Exists(Tmp("r.ply")));
+  const CommandRun same =
+      Cli("sfm --rig-scenario room --frames 20 --out " + Tmp("r.ply") + " --poses " + Tmp("r.ply"));
+  EXPECT_EQ(same.code, 2) << same.out;
+  ExpectOneErrorLine(same, "--poses " + Tmp("r.ply") + " is also --out's file");
 }
 
 }  // namespace
