@@ -591,8 +591,14 @@ TEST_F(AppTest, CancelledSfmKeepsTheCloudAndLiveUsesTheEkf) {
   auto* link = window_->findChild<QLabel*>(QStringLiteral("statusLink"));
   ASSERT_NE(link, nullptr);
   EXPECT_TRUE(link->text().endsWith(" · REC")) << link->text().toStdString();
+  const QString dir = workspace_->session_dir();
   ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
   EXPECT_FALSE(link->text().contains("REC")) << link->text().toStdString();
+  // The message names the session first: a status bar cut at its right
+  // kept "Recording stopped: /root/sweepscan-sessions/2026…".
+  EXPECT_EQ(window_->statusBar()->currentMessage(),
+            QStringLiteral("Recording stopped: %1 in %2")
+                .arg(QFileInfo(dir).fileName(), QFileInfo(dir).absolutePath()));
 }
 
 // The evaluation panel gives what `sweepscan-cli evaluate SESSION` gives for

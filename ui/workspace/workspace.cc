@@ -36,6 +36,13 @@
 namespace sweepscan::ui {
 namespace {
 
+// "Recording stopped: 20261201-075115-420.sweepscan in /root/sweepscan-sessions":
+// the session's name first, which a status bar cut at its right keeps.
+QString RecordingMessage(const QString& what, const QString& dir) {
+  const QFileInfo info(dir);
+  return QStringLiteral("%1 %2 in %3").arg(what, info.fileName(), info.absolutePath());
+}
+
 // The job that computes SfM poses for the opened session (its failures
 // give the pose source choice back to the cloud shown).
 QString SfmJobName() { return QObject::tr("Structure from motion"); }
@@ -222,7 +229,7 @@ bool Workspace::StartRecording(QString* error) {
   SetShownPoseSource(PoseSource::kEkf);  // Live: always the EKF.
   emit recordingChanged(true);
   emit sessionChanged(dir);
-  emit message(QStringLiteral("Recording to %1").arg(dir));
+  emit message(RecordingMessage(QStringLiteral("Recording to"), dir));
   return true;
 }
 
@@ -249,7 +256,7 @@ bool Workspace::StopRecording(QString* error) {
     *error = QString::fromStdString(closed.message());
     return false;
   }
-  emit message(QStringLiteral("Recording stopped: %1").arg(session_dir_));
+  emit message(RecordingMessage(QStringLiteral("Recording stopped:"), session_dir_));
   return true;
 }
 
