@@ -17,6 +17,15 @@ fs::path Resolved(const std::string& path) {
   return ec ? fs::path(path).lexically_normal() : p;
 }
 
+// One file under two names: the same resolved path, or (both existing)
+// the same inode, a hard link included (calibrate's check had caught it).
+bool SameFile(const std::string& a, const fs::path& resolved_a, const std::string& b,
+              const fs::path& resolved_b) {
+  if (resolved_a == resolved_b) return true;
+  std::error_code ec;
+  return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
 bool Inside(const fs::path& file, const fs::path& folder) {
   for (fs::path p = file.parent_path(); !p.empty(); p = p.parent_path()) {
     if (p == folder) return true;
@@ -40,12 +49,13 @@ std::string OutputOverInput(const std::vector<CommandOutput>& outputs,
         if (target == source || Inside(target, source)) {
           return out.option + " " + out.path + " is inside " + in.what + ": write it elsewhere";
         }
-      } else if (target == source) {
+      } else if (SameFile(out.path, target, in.path, source)) {
         return out.option + " " + out.path + " is " + in.what + ": it would be replaced";
       }
     }
     for (size_t j = 0; j < i; ++j) {
-      if (!outputs[j].path.empty() && Resolved(outputs[j].path) == target) {
+      if (!outputs[j].path.empty() &&
+          SameFile(outputs[j].path, Resolved(outputs[j].path), out.path, target)) {
         return out.option + " " + out.path + " is also " + outputs[j].option +
                "'s file: give each output its own";
       }

@@ -2,6 +2,7 @@
 // real binary, its exit code and its output.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -79,6 +80,12 @@ TEST(CliCalibrateTest, BadInput) {
         std::string(kHead) + kPair + "," + kPair + "," + kPair + "," + kPair + "]}");
   ExpectBadInput("calibrate" + sc + " --pairs " + Tmp("mine.json") + " --out " + Tmp("mine.json"),
                  "is the --pairs file: it would be replaced");
+  // ... under another name too (a hard link).
+  std::remove(Tmp("also-mine.json").c_str());
+  ASSERT_EQ(::link(Tmp("mine.json").c_str(), Tmp("also-mine.json").c_str()), 0);
+  ExpectBadInput(
+      "calibrate" + sc + " --pairs " + Tmp("mine.json") + " --out " + Tmp("also-mine.json"),
+      "is the --pairs file: it would be replaced");
   ExpectBadInput(
       "calibrate " + Tmp("s.sweepscan") + " --auto --out " + Tmp("s.sweepscan/meta.json"),
       "is inside the session folder");
