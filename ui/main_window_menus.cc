@@ -445,16 +445,19 @@ void MainWindow::ShowPoseSource() {
       opened && (calibration.alpha != 0.0 || calibration.beta != 0.0 || calibration.gamma != 0.0);
   if (calibrated) text += tr(" · calibrated");
   pose_source_label_->setText(text);
-  QString tip = project
-                    ? tr("The project's sessions are drawn with the EKF poses, as `sweepscan-cli "
-                         "project export` builds them; Tools > Pose Source (now %1) applies to "
-                         "opened sessions.")
-                          .arg(PoseSourceTitle(chosen))
-                : opened ? tr("The cloud of the opened session is made with the %1 poses.")
-                               .arg(PoseSourceTitle(shown))
-                         : tr("Live clouds and recordings always use the EKF; Tools > Pose Source "
-                              "(now %1) applies to opened sessions.")
-                               .arg(PoseSourceTitle(chosen));
+  QString tip;
+  if (project) {
+    tip = tr("The project's sessions are drawn with the EKF poses, as `sweepscan-cli project "
+             "export` builds them; Tools > Pose Source (now %1) applies to opened sessions.")
+              .arg(PoseSourceTitle(chosen));
+  } else if (opened) {
+    tip = tr("The cloud of the opened session is made with the %1 poses.")
+              .arg(PoseSourceTitle(shown));
+  } else {
+    tip = tr("Live clouds and recordings always use the EKF; Tools > Pose Source (now %1) applies "
+             "to opened sessions.")
+              .arg(PoseSourceTitle(chosen));
+  }
   if (calibrated) {
     tip += QLatin1Char('\n') + tr("Mounting calibration applied: alpha %1, beta %2, gamma %3 mrad.")
                                    .arg(1e3 * calibration.alpha, 0, 'f', 2)
