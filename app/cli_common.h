@@ -25,6 +25,13 @@ inline void PrintError(const std::string& message) {
   std::cerr << "sweepscan-cli: error: " << message << "\n";
 }
 
+// A usage error is one line too, which points at the command's help rather
+// than printing all of it after the error (a script's log kept 30 lines of
+// help for one mistyped word, and the error scrolled off a terminal).
+inline std::string SeeHelp(const std::string& message, const std::string& command) {
+  return message + " (see `sweepscan-cli help" + (command.empty() ? "" : " " + command) + "`)";
+}
+
 // --seed's value: a decimal integer that fits 64 bits (strtoull saturates
 // an overflow at 2^64 - 1 and says so only through errno).
 inline bool ParseSeed(const std::string& text, uint64_t* seed) {

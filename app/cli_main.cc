@@ -75,7 +75,7 @@ int Main(int argc, char** argv) {
       std::cout << kUsage;
     } else {
       // Asked about a command there is not: a usage error, said on stderr.
-      std::cerr << "sweepscan-cli: error: no command '" << topic << "'\n" << kUsage;
+      PrintError(SeeHelp("no command '" + topic + "'", ""));
       return kExitBadInput;
     }
     return kExitOk;
@@ -97,7 +97,7 @@ int Main(int argc, char** argv) {
   if (command == "p3l") return RunP3l(argc, argv);
   if (command == "sfm") return RunSfm(argc, argv);
   if (command == "plan") return RunPlan(argc, argv);
-  PrintError("unknown command '" + command + "'\n" + kUsage);
+  PrintError(SeeHelp("unknown command '" + command + "'", ""));
   return kExitBadInput;
 }
 

@@ -350,7 +350,7 @@ int RunProjectInfo(const Args& args) {
 int RunProject(int argc, char** argv) {
   if (argc < 3) {
     // A usage error says so on stderr, as every other one does.
-    return Fail(kExitBadInput, std::string("project needs a subcommand\n") + kProjectUsage);
+    return Fail(kExitBadInput, SeeHelp("project needs a subcommand", "project"));
   }
   if (std::string(argv[2]) == "--help" || std::string(argv[2]) == "-h") {
     std::cout << kProjectUsage;
@@ -360,7 +360,7 @@ int RunProject(int argc, char** argv) {
   Args args({"json", "strict", "no-icp", "hold-free", "help"},
             {"name", "description", "calibration", "session", "to", "pairs", "pose-source", "out", "sessions"});
   std::string error;
-  if (!args.Parse(argc, argv, 3, &error)) return Fail(kExitBadInput, error + "\n" + kProjectUsage);
+  if (!args.Parse(argc, argv, 3, &error)) return Fail(kExitBadInput, SeeHelp(error, "project"));
   if (args.Flag("help")) {
     std::cout << kProjectUsage;
     return kExitOk;
@@ -392,7 +392,7 @@ int RunProject(int argc, char** argv) {
   if (sub == "info") return RunProjectInfo(args);
   if (sub == "align") return RunProjectAlign(args);
   if (sub == "export") return RunProjectExport(args);
-  return Fail(kExitBadInput, "unknown project subcommand '" + sub + "'\n" + kProjectUsage);
+  return Fail(kExitBadInput, SeeHelp("unknown project subcommand '" + sub + "'", "project"));
 }
 
 }  // namespace sweepscan::app

@@ -210,8 +210,9 @@ int RunImport(int argc, char** argv) {
     return kExitOk;
   }
   if (args.positional().size() != 1 || !args.Has("out")) {
-    PrintError(args.positional().size() != 1 ? "expected one BAG" : "import needs --out NAME.sweepscan");
-    std::cerr << kImportUsage;
+    PrintError(SeeHelp(
+        args.positional().size() != 1 ? "expected one BAG" : "import needs --out NAME.sweepscan",
+        "import"));
     return kExitBadInput;
   }
   io::RosImportOptions options;

@@ -105,8 +105,9 @@ bool ParseCommon(Args* args, int argc, char** argv, const char* usage, int* code
     return false;
   }
   if (args->positional().size() != 1) {
-    PrintError(args->positional().empty() ? "missing SESSION folder" : "expected one SESSION folder");
-    std::cerr << usage;
+    PrintError(SeeHelp(
+        args->positional().empty() ? "missing SESSION folder" : "expected one SESSION folder",
+        argv[1]));
     *code = kExitBadInput;
     return false;
   }

@@ -118,7 +118,7 @@ int RunP3l(int argc, char** argv) {
   }
   if (args.Flag("protocol")) return RunProtocol(args);
   if (args.positional().size() != 1) {
-    PrintError("p3l needs one PROBLEM.json\n" + std::string(kP3lUsage));
+    PrintError(SeeHelp("p3l needs one PROBLEM.json", "p3l"));
     return kExitBadInput;
   }
   const std::string path = args.positional()[0];
@@ -476,7 +476,8 @@ int RunSfm(int argc, char** argv) {
     return RunSfmWheeled(args);
   }
   if (!args.Has("rig-scenario")) {
-    PrintError("sfm needs SESSION, --scenario FILE or --rig-scenario (room, stairwell)\n" + std::string(kSfmUsage));
+    PrintError(
+        SeeHelp("sfm needs SESSION, --scenario FILE or --rig-scenario (room, stairwell)", "sfm"));
     return kExitBadInput;
   }
   const int refused =

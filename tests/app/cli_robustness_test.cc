@@ -117,12 +117,22 @@ TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
   const CommandRun project = sweepscan::testing::RunCommand("sh -c '" + std::string(SWEEPSCAN_CLI) +
                                                             " project 2>&1 >/dev/null'");
   EXPECT_EQ(project.code, 2);
-  EXPECT_EQ(project.out.rfind("sweepscan-cli: error: project needs a subcommand\n", 0), 0u)
-      << project.out;
+  EXPECT_EQ(
+      project.out,
+      "sweepscan-cli: error: project needs a subcommand (see `sweepscan-cli help project`)\n");
   // Help on a command there is not was exit 0.
   const CommandRun help = Cli("help bogus");
   EXPECT_EQ(help.code, 2) << help.out;
-  EXPECT_EQ(help.out.rfind("sweepscan-cli: error: no command 'bogus'\n", 0), 0u) << help.out;
+  EXPECT_EQ(help.out, "sweepscan-cli: error: no command 'bogus' (see `sweepscan-cli help`)\n");
+  // A usage error is one line pointing at the help, not the error followed
+  // by all of the help (30 lines, the error scrolled off).
+  for (const std::string& args :
+       std::vector<std::string>{"no-such-command", "info", "reconstruct", "project frobnicate x",
+                                "project new --bogus", "p3l", "sfm"}) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args;
+    ExpectOneErrorLine(r, "(see `sweepscan-cli help");
+  }
 }
 
 TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
