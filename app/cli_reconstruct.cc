@@ -324,9 +324,9 @@ int ReconstructToFile(const Args& args, const std::string& command) {
   }
   Status s = Reconstruct(d.log, d.info.meta.geometry, options,
                          options.pose.source == PoseSource::kSfm ? &sfm_result.poses : nullptr, &result);
-  if (!s.ok()) {
+  if (!s.ok()) {  // the session's geometry or records cannot make poses
     PrintError(args.positional()[0] + ": " + s.message());
-    return kExitFailure;
+    return kExitBadInput;
   }
   nlohmann::json loop_report;
   if (args.Flag("loop-closure") && (code = CloseLoop(args.positional()[0], d, &options, &result, &loop_report)) != kExitOk) {

@@ -110,9 +110,9 @@ int RecordingPoses(const Args& args, const RecordingInput& in, const MountingErr
   }
   options.calibration = calibration;
   const Status s = hardware::ReconstructRecording(in, options, result);
-  if (!s.ok()) {
-    PrintError(s.message());
-    return kExitFailure;
+  if (!s.ok()) {  // no poses from the records (no odometry): an unusable input
+    PrintError(in.session_dir.empty() ? s.message() : in.session_dir + ": " + s.message());
+    return kExitBadInput;
   }
   // Holes in the sensor data (a link outage the robot's buffer did not
   // cover): no motion was invented across them; say how the pose resumed.
@@ -158,9 +158,9 @@ int OpenSessionStream(const Args& args, const std::string& dir, bool session_cal
     PrintSessionError(args, dir, s);
     return kExitBadInput;
   }
-  if (!s.ok()) {  // the session read, but no poses from it (no odometry, say)
-    PrintError(dir + ": " + s.message());
-    return kExitFailure;
+  if (!s.ok()) {  // the session read, but no poses from it (no odometry, say):
+    PrintError(dir + ": " + s.message());  // an input that cannot be used
+    return kExitBadInput;
   }
   WarnAboutDamage(dir, stream->decode().frames);
   for (const PoseGap& gap : stream->result().gaps) {

@@ -135,6 +135,25 @@ TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
   }
 }
 
+// A session with no records (the robot never sent one: meta.json and the
+// frames.bin header alone) is an input that cannot be used, exit 2 with
+// its name; reconstruct and calibrate said exit 1, "failed while working".
+TEST_F(CliRobustnessTest, ASessionWithNoRecordsIsExitTwo) {
+  const std::string empty = Tmp("empty.sweepscan");
+  sweepscan::testing::ShellOrFail("rm -rf '" + empty + "' && mkdir '" + empty + "' && cp '" +
+                                  Session() + "/meta.json' '" + empty + "/' && head -c 16 '" +
+                                  Session() + "/frames.bin' > '" + empty + "/frames.bin'");
+  for (const std::string& args :
+       {"reconstruct " + empty + " --out " + Tmp("empty.ply"),
+        "reconstruct " + empty + " --out " + Tmp("empty.ply") + " --loop-closure",
+        "calibrate " + empty + " --auto", "evaluate " + empty}) {
+    const CommandRun r = Cli(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    ExpectOneErrorLine(r, empty + ": the recording has no wheel odometry records");
+  }
+  EXPECT_FALSE(Exists(Tmp("empty.ply")));
+}
+
 TEST_F(CliRobustnessTest, MissingInputsAreExitTwoWithOneLine) {
   const std::string missing = Tmp("missing.sweepscan");
   for (const std::string& args :
