@@ -183,6 +183,14 @@ TEST_F(CliRos2Test, ACutMcapSaysWhatWasLostAndAFolderWithOneMcapIsABag) {
   r = Cli("info " + cut);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("warning: " + cut + ": file ends at byte"), std::string::npos) << r.out;
+  // --strict refuses it, as it refuses a damaged session; it was exit 0.
+  r = Cli("info " + cut + " --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("sweepscan-cli: error: " + cut + ": damaged (--strict)\n"),
+            std::string::npos)
+      << r.out;
+  r = Cli("info " + Bag("lab", kStorages[1]) + " --strict");
+  EXPECT_EQ(r.code, 0) << r.out;
 
   const std::string folder = Tmp("copied_bag");
   RunCommand("rm -rf " + folder + " && mkdir -p " + folder + " && cp " + Bag("lab", kStorages[1]) +
@@ -276,6 +284,16 @@ TEST_F(CliRos2Test, ATruncatedDb3ImportsWhatItHoldsAndMetadataYamlNamesItsBag) {
       << said;
   EXPECT_GT(report["scans"].get<int>(), whole["scans"].get<int>() / 3);
   EXPECT_LT(report["scans"].get<int>(), whole["scans"].get<int>());
+  // Its damage is found only by reading the messages, as --strict does.
+  r = Cli("info " + cut + " --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(": the database is damaged or truncated (sqlite: "), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("sweepscan-cli: error: " + cut + ": damaged (--strict)\n"),
+            std::string::npos)
+      << r.out;
+  r = Cli("info " + folder + " --strict");
+  EXPECT_EQ(r.code, 0) << r.out;
 }
 
 class CliRos2CalibrationTest : public ::testing::Test {
