@@ -107,6 +107,15 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
     PrintError("record needs --out NAME.sweepscan (a new session folder)");
     return kExitBadInput;
   }
+  // The options' values before any file is read: a mistyped number is said
+  // as such, not behind a key file's error.
+  double stall_s = o->link.stall_ms * 1e-3;
+  if (!ParsePositive(args, "duration", &o->duration_s) ||
+      !ParsePositive(args, "connect-timeout", &o->connect_timeout_s) ||
+      !ParsePositive(args, "stall-s", &stall_s)) {
+    return kExitBadInput;
+  }
+  o->link.stall_ms = static_cast<int>(stall_s * 1e3 + 0.5);
   o->out = QString::fromStdString(args.Get("out"));
   if (QFileInfo::exists(o->out)) {
     PrintError(args.Get("out") + ": exists; record writes a new session folder");
@@ -140,13 +149,6 @@ int ParseRecordOptions(const Args& args, RecordOptions* o) {
     }
     if (!warning.isEmpty()) std::cerr << "sweepscan-cli: warning: " << warning.toStdString() << "\n";
   }
-  double stall_s = o->link.stall_ms * 1e-3;
-  if (!ParsePositive(args, "duration", &o->duration_s) ||
-      !ParsePositive(args, "connect-timeout", &o->connect_timeout_s) ||
-      !ParsePositive(args, "stall-s", &stall_s)) {
-    return kExitBadInput;
-  }
-  o->link.stall_ms = static_cast<int>(stall_s * 1e3 + 0.5);
   if (args.Has("drive-script")) {
     const Status s = LoadDriveScript(args.Get("drive-script"), &o->script);
     if (!s.ok()) {

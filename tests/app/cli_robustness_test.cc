@@ -192,6 +192,10 @@ TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
       {"record --connect 127.0.0.1:1 --key-file " + key + " --out " + Tmp("r.sweepscan") +
            " --duration 3000000",
        "--duration expects a positive number of seconds below 2000000"},
+      // The option's value is said first, not the key file's error.
+      {"record --connect 127.0.0.1:1 --key-file " + Tmp("no.key") + " --out " + Tmp("r.sweepscan") +
+           " --duration ten",
+       "--duration expects a positive number of seconds"},
       {"project new " + Tmp("p.sweepscan-project") + " " + Tmp("missing.sweepscan"),
        "not a session folder"},
       {"project new " + Tmp("p.sweepscan-project") + " " + Session() + " --out " + Tmp("y.las"),
