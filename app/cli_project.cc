@@ -108,7 +108,10 @@ Status CheckSessionFolder(const std::string& project_file, const std::string& pa
   if (!fs::exists(fs::path(dir) / kSessionMetaFile)) {
     return Status::Error(path + ": not a session folder (no " + kSessionMetaFile + ")");
   }
-  return Status::Ok();
+  // A meta.json that does not read would fail only later, at align or
+  // export, with the project already written around it.
+  SessionMeta meta;
+  return ReadSessionMeta((fs::path(dir) / kSessionMetaFile).string(), &meta);
 }
 
 namespace {

@@ -179,8 +179,14 @@ TEST_F(CliRobustnessTest, UsageTakenTheWrongWayIsExitTwoBeforeAnyWork) {
   ::chmod(key.c_str(), 0600);
   const std::string strict_dir = Tmp("--strict");
   sweepscan::testing::RunCommand("rm -rf -- '" + strict_dir + "'");
+  // A session folder whose meta.json does not read: `project new` wrote the
+  // project around it, and only the alignment failed.
+  const std::string broken = Tmp("broken-meta.sweepscan");
+  sweepscan::testing::ShellOrFail("mkdir -p '" + broken + "'");
+  WriteText(broken + "/meta.json", "{\"format_version\": 2,");
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"evaluate", "expected a SESSION, a cloud file or --scenario"},
+      {"project new " + Tmp("p.sweepscan-project") + " " + broken, broken + "/meta.json"},
       {"evaluate " + Session() + " " + Session(),
        "evaluate takes one SESSION or cloud file, got 2"},
       {"export " + Session() + " --out --strict", "option --out needs a value"},

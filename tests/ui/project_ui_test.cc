@@ -622,6 +622,17 @@ TEST_F(ProjectUiTest, NewProjectAsksBeforeReplacingAFileAndSavesOverIt) {
   QApplication::processEvents();
   EXPECT_FALSE(dock->visibleRegion().isEmpty());
   ASSERT_TRUE(project()->AddSession(QString::fromStdString(Dir()) + "/a.sweepscan"));
+  // A session whose meta.json does not read is refused at once, with where
+  // and why; it used to be added and fail only at the alignment.
+  const QString broken = QString::fromStdString(Dir()) + "/broken.sweepscan";
+  ASSERT_TRUE(QDir().mkpath(broken));
+  QFile meta(broken + "/meta.json");
+  ASSERT_TRUE(meta.open(QIODevice::WriteOnly));
+  meta.write("{\"format_version\": 2,");
+  meta.close();
+  EXPECT_FALSE(project()->AddSession(broken));
+  EXPECT_NE(window_->last_error().indexOf("broken.sweepscan/meta.json"), -1)
+      << window_->last_error().toStdString();
   EXPECT_TRUE(project()->SaveProject()) << window_->last_error().toStdString();
   Project saved;
   ASSERT_TRUE(LoadProject(file.toStdString(), &saved).ok());

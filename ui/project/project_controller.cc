@@ -13,6 +13,7 @@
 #include <optional>
 
 #include "core/registration/registration.h"
+#include "core/session/session.h"
 #include "hardware/station/project_align.h"
 #include "ui/project/pair_picking.h"
 #include "ui/project/project_commands.h"
@@ -277,6 +278,14 @@ bool ProjectController::AddSession(const QString& dir) {
   if (!document_.is_open()) return false;
   if (!QFileInfo::exists(dir + QStringLiteral("/meta.json"))) {
     show_error_(tr("Cannot add the session"), tr("%1: not a session folder (no meta.json)").arg(dir));
+    return false;
+  }
+  // As `sweepscan-cli project add`: a meta.json that does not read is
+  // refused now, not at the alignment.
+  SessionMeta meta;
+  if (const Status m = ReadSessionMeta((dir + QStringLiteral("/meta.json")).toStdString(), &meta);
+      !m.ok()) {
+    show_error_(tr("Cannot add the session"), QString::fromStdString(m.message()));
     return false;
   }
   Project after = document_.project();
