@@ -311,7 +311,8 @@ int RunExport(int argc, char** argv) {
   if ((code = DecodeOrFail(args, args.positional()[0], &d)) != kExitOk) return code;
   if (format == "rosbag") return ExportRosbag(args, d.log, d.info.meta);
   const std::string dir = args.Get("out");
-  if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) {
+  const bool created = ::mkdir(dir.c_str(), 0755) == 0;
+  if (!created && errno != EEXIST) {
     PrintError(dir + ": cannot create folder: " + std::strerror(errno));
     return kExitFailure;
   }
@@ -321,6 +322,7 @@ int RunExport(int argc, char** argv) {
     return kExitFailure;
   }
   // Each file through the checked writer: complete under its name, or absent.
+  std::vector<std::string> written;
   auto write = [&](const std::string& name, const std::string& header, auto&& rows) -> Status {
     CheckedFileWriter out;
     Status s = out.Open(dir + "/" + name);
@@ -333,7 +335,9 @@ int RunExport(int argc, char** argv) {
     rows(&text, flush);
     flush();
     if (!s.ok()) return s;
-    return out.Commit();
+    s = out.Commit();
+    if (s.ok()) written.push_back(dir + "/" + name);
+    return s;
   };
   auto line = [](std::string* text, const char* format, auto... values) {
     char buf[256];
@@ -379,7 +383,9 @@ int RunExport(int argc, char** argv) {
       }
     });
   }
-  if (!s.ok()) {
+  if (!s.ok()) {  // a full disk: no lidar.csv without its imu.csv, no empty folder
+    for (const std::string& path : written) ::unlink(path.c_str());
+    if (created) ::rmdir(dir.c_str());
     PrintError(s.message());
     return kExitFailure;
   }
@@ -482,11 +488,16 @@ int RunRepair(int argc, char** argv) {
     return kExitBadInput;
   }
   if (s.ok()) s = frames.Commit();
+  std::vector<std::string> written = {kSessionFramesFile};
   for (const std::string& name : extra_files) {
     if (!s.ok()) break;
     s = CopyFileChecked(in + "/" + name, out + "/" + name);
+    written.push_back(name);
   }
-  if (!s.ok()) {
+  if (!s.ok()) {  // a full disk: no half copy is left to pass for a repair
+    frames.Abort();
+    for (const std::string& name : written) ::unlink((out + "/" + name).c_str());
+    if (created) ::rmdir(out.c_str());
     PrintError(s.message());
     return kExitFailure;
   }

@@ -158,9 +158,14 @@ int RecordSession(const Args& args, const SimulateRequest& request, TerminalProg
     sim_options.progress = [progress](double f) { progress->Show("recording the drive", f); };
   }
   hardware::SimulateSessionReport sim_report;
+  const bool existed = std::filesystem::exists(*session_dir);
   Status status = hardware::SimulateSession(request.config, *session_dir, sim_options, &sim_report);
   if (!status.ok()) {
     progress->Clear();  // the error on a line of its own
+    // A drive cut short by a full disk is no recording of the scenario (as a
+    // robot's would be): what was written goes, and the folder made for it.
+    std::error_code ignored;
+    if (!existed) std::filesystem::remove_all(*session_dir, ignored);
     // --overwrite only helps when the session folder already holds a session.
     const bool exists = status.message().find("not empty") != std::string::npos;
     // The writer's "(ask for overwrite explicitly)" becomes this command's option.

@@ -259,8 +259,20 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
   const CommandRun r = CliWithFullDisk("export " + Session() + " --out " + out + "/csv");
   EXPECT_EQ(r.code, 1) << r.out;
   ExpectOneErrorLine(r, out + "/csv/lidar.csv: write failed: File too large");
-  EXPECT_EQ(LsA(out), "csv\n");  // No cloud, no temporary.
-  EXPECT_EQ(LsA(out + "/csv"), "");
+  // No cloud, no temporary, and no folder of CSV files: the export made
+  // it, and left it empty.
+  EXPECT_EQ(LsA(out), "");
+  // A repair and a simulated drive cut short by the full disk: the new
+  // session folder left behind (its frames.bin torn, or only meta.json) went
+  // for a recording, and the next run needed --overwrite.
+  CommandRun torn = CliWithFullDisk("repair " + Session() + " --out " + out + "/repaired");
+  EXPECT_EQ(torn.code, 1) << torn.out;
+  ExpectOneErrorLine(torn, out + "/repaired/frames.bin");
+  torn = CliWithFullDisk("simulate --scenario " + Scenario("lab") + " --out " + out +
+                         "/torn.ply --session " + out + "/torn.sweepscan");
+  EXPECT_EQ(torn.code, 1) << torn.out;
+  ExpectOneErrorLine(torn, out + "/torn.sweepscan/frames.bin");
+  EXPECT_EQ(LsA(out), "");
   // The floor plan's drawings (60-70 kB of the lab) over older ones: those
   // stay as they were.
   for (const char* drawing : {"--svg plan.svg", "--dxf plan.dxf"}) {
@@ -283,7 +295,7 @@ TEST_F(CliRobustnessTest, FullDiskIsExitOneAndLeavesNoFileBehind) {
     EXPECT_EQ(b.code, 1) << kib << " KiB: " << b.out;
     ExpectOneErrorLine(b, out + "/cloud.bag: cannot write the ROS 1 bag");
   }
-  EXPECT_EQ(LsA(out), "csv\n");  // No temporary either.
+  EXPECT_EQ(LsA(out), "");  // No temporary either.
 }
 
 // A cloud's suffix in capitals is the same format in every command
