@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/common/checked_file.h"
+#include "core/common/quoted.h"
 #include "core/io/ros2/mcap.h"
 #include "core/io/ros2/ros2_sqlite.h"
 
@@ -260,7 +261,7 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
   if (!m.has_info) return Status::Error(yaml + ": no rosbag2_bagfile_information");
   if (!m.has_files || m.files.empty()) return Status::Error(yaml + ": no relative_file_paths");
   if (!m.compression_mode.empty() && m.compression_mode != "NONE") {
-    return Status::Error(yaml + ": compression_mode " + m.compression_mode +
+    return Status::Error(yaml + ": compression_mode " + Quoted(m.compression_mode) +
                          " is not supported (decompress the bag with `ros2 bag convert` first)");
   }
   for (const std::string& rel : m.files) {
@@ -269,14 +270,14 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
     const size_t slash = rel.rfind('/');
     if (!IsFile(p) && slash != std::string::npos) p = dir + "/" + rel.substr(slash + 1);
     if (!IsFile(p)) {
-      return Status::Error(yaml + ": lists " + rel + ", which is not a file in " + dir);
+      return Status::Error(yaml + ": lists " + Quoted(rel) + ", which is not a file in " + dir);
     }
     files->push_back(p);
   }
   *storage = m.storage.empty() ? StorageOfFile(files->front()) : m.storage;
   if (*storage != "sqlite3" && *storage != "mcap") {
-    return Status::Error(yaml + ": storage_identifier '" + m.storage +
-                         "' is not supported (sqlite3 and mcap are)");
+    return Status::Error(yaml + ": storage_identifier " + Quoted(m.storage) +
+                         " is not supported (sqlite3 and mcap are)");
   }
   return Status::Ok();
 }

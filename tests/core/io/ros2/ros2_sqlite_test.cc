@@ -324,16 +324,30 @@ TEST(Ros2BagTest, MetadataThatIsRefused) {
                  "  relative_file_paths:\n    - b_0.db3.zstd\n")
                 .message(),
             yaml +
-                ": compression_mode FILE is not supported (decompress the bag with "
+                ": compression_mode \"FILE\" is not supported (decompress the bag with "
                 "`ros2 bag convert` first)");
   EXPECT_EQ(find("rosbag2_bagfile_information:\n  storage_identifier: rosbag_v2\n"
                  "  relative_file_paths:\n    - b_0.db3\n")
                 .message(),
-            yaml + ": storage_identifier 'rosbag_v2' is not supported (sqlite3 and mcap are)");
+            yaml + ": storage_identifier \"rosbag_v2\" is not supported (sqlite3 and mcap are)");
   EXPECT_EQ(find("rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
                  "  relative_file_paths:\n    - b_0.db3\n    - b_1.db3\n")
                 .message(),
-            yaml + ": lists b_1.db3, which is not a file in " + scratch.dir());
+            yaml + ": lists \"b_1.db3\", which is not a file in " + scratch.dir());
+  // A damaged file's bytes are quoted and cut, not echoed: a terminal
+  // escape, a control byte, a byte that is not UTF-8, 300 bytes of a name.
+  EXPECT_EQ(find("rosbag2_bagfile_information:\n  storage_identifier: \x1b[2J\x01\xff\n"
+                 "  relative_file_paths:\n    - b_0.db3\n")
+                .message(),
+            yaml +
+                ": storage_identifier \"\\u001b[2J\\u0001\\ufffd\" is not supported (sqlite3 and "
+                "mcap are)");
+  EXPECT_EQ(find("rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n"
+                 "  relative_file_paths:\n    - " +
+                 std::string(300, 'x') + "\n")
+                .message(),
+            yaml + ": lists \"" + std::string(80, 'x') + "\"..., which is not a file in " +
+                scratch.dir());
   EXPECT_EQ(find("something_else: 1\n").message(), yaml + ": no rosbag2_bagfile_information");
   // Accepted: flow lists, quotes, the folder name in front (early rosbag2).
   ASSERT_TRUE(find("rosbag2_bagfile_information:\n  version: 4\n  storage_identifier: \"sqlite3\"\n"

@@ -1,0 +1,25 @@
+// A value read from a file, fit to be said in an error message: a damaged
+// file can hold any bytes, and an error line that echoes them raw can hold
+// terminal escapes, line breaks or megabytes of one line.
+#ifndef SWEEPSCAN_CORE_COMMON_QUOTED_H_
+#define SWEEPSCAN_CORE_COMMON_QUOTED_H_
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace sweepscan {
+
+// As a JSON string (RFC 8259 §7): in double quotes, control characters and
+// anything not ASCII as \uXXXX escapes, bytes that are not UTF-8 as U+FFFD;
+// cut to `max_bytes` of the value with "..." after the closing quote.
+inline std::string Quoted(const std::string& value, size_t max_bytes = 80) {
+  const bool cut = value.size() > max_bytes;
+  const std::string kept = cut ? value.substr(0, max_bytes) : value;
+  return nlohmann::json(kept).dump(-1, ' ', /*ensure_ascii=*/true,
+                                   nlohmann::json::error_handler_t::replace) +
+         (cut ? "..." : "");
+}
+
+}  // namespace sweepscan
+
+#endif  // SWEEPSCAN_CORE_COMMON_QUOTED_H_
