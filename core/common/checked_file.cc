@@ -32,9 +32,23 @@ std::string BaseOf(const std::string& path) {
 
 std::string ErrnoText(int error_number) { return std::strerror(error_number); }
 
+// "BASE.tmp-", BASE cut where the PID (up to 10 digits) would take the
+// name past a file name's 255 bytes (NAME_MAX on Linux' file systems): a
+// 252-byte name could be written by `cp` but not by us ("File name too
+// long"). Cut between UTF-8 characters.
+std::string TemporaryPrefix(std::string base) {
+  constexpr size_t kNameMax = 255, kSuffix = 5 + 10;  // ".tmp-" + the PID
+  if (base.size() + kSuffix > kNameMax) {
+    size_t n = kNameMax - kSuffix;
+    while (n > 0 && (static_cast<unsigned char>(base[n]) & 0xC0) == 0x80) --n;
+    base.resize(n);
+  }
+  return base + ".tmp-";
+}
+
 // Parses the PID of "BASE.tmp-PID"; -1 if `name` is not a temporary of BASE.
 long TemporaryPid(const std::string& name, const std::string& base) {
-  const std::string prefix = base + ".tmp-";
+  const std::string prefix = TemporaryPrefix(base);
   if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return -1;
   const std::string digits = name.substr(prefix.size());
   if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
@@ -42,6 +56,12 @@ long TemporaryPid(const std::string& name, const std::string& base) {
 }
 
 }  // namespace
+
+std::string TemporaryPathFor(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  const std::string folder = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+  return folder + TemporaryPrefix(BaseOf(path)) + std::to_string(::getpid());
+}
 
 bool IsTemporaryFileName(const std::string& name) {
   const size_t at = name.rfind(".tmp-");
@@ -99,14 +119,13 @@ Status CheckedFileWriter::Open(const std::string& path) {
     return Fail("is a folder, cannot write a file there", 0);
   }
   RemoveStaleTemporaries(path);
-  tmp_ = path + ".tmp-" + std::to_string(::getpid());
+  tmp_ = TemporaryPathFor(path);
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) {
     const int e = errno;
+    const std::string tmp = BaseOf(tmp_);
     tmp_.clear();
-    return Fail("cannot create " + BaseOf(path) + ".tmp-" + std::to_string(::getpid()) +
-                    " in " + FolderOf(path),
-                e);
+    return Fail("cannot create " + tmp + " in " + FolderOf(path), e);
   }
   buffer_.reserve(kBufferSize);
   return Status::Ok();

@@ -88,6 +88,10 @@ Status CheckRegularFile(const std::string& path, uint64_t* size = nullptr);
 // writer's leftovers). Returns how many were deleted.
 int RemoveStaleTemporaries(const std::string& path);
 
+// The temporary this process writes PATH through: PATH.tmp-PID, PATH's
+// name cut short if the whole would pass 255 bytes.
+std::string TemporaryPathFor(const std::string& path);
+
 // True for names written by CheckedFileWriter as temporaries ("x.ply.tmp-123").
 bool IsTemporaryFileName(const std::string& name);
 

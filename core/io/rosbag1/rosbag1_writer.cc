@@ -10,6 +10,8 @@
 #include <cstring>
 #include <memory>
 
+#include "core/common/checked_file.h"
+
 namespace sweepscan::io {
 namespace {
 
@@ -87,7 +89,7 @@ Status WriteRosbag1Export(const std::string& path, const RosExport& data) {
     trajectory.poses.push_back(s);
   }
 
-  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  const std::string tmp = TemporaryPathFor(path);
   auto bag = std::make_unique<rosbag::Bag>();
   try {
     bag->open(tmp, rosbag::bagmode::Write);

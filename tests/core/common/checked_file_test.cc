@@ -180,6 +180,43 @@ TEST(CheckedFileTest, StaleTemporariesOfDeadProcessesAreRemoved) {
   EXPECT_FALSE(IsTemporaryFileName("x.tmp-"));
 }
 
+// Names of up to 255 bytes, the most a file name may have, are written
+// (their temporary cut short: a 252-byte name failed, "File name too
+// long", on its ".tmp-PID"), and a dead writer's cut temporary is found.
+TEST(CheckedFileTest, TheLongestNamesAreWrittenAndTheirStaleTemporariesFound) {
+  const std::string dir = TempDir("long");
+  // 250 bytes of "é" (two bytes each) behind an ASCII byte or not: the
+  // cut of one falls inside a character, and moves back before it.
+  std::string name;
+  for (int i = 0; i < 125; ++i) name += "\xc3\xa9";
+  for (const std::string& n :
+       {"x" + name + ".ply", name + ".p", std::string(252, 'a'), std::string(240, 'b')}) {
+    SCOPED_TRACE(n.size());
+    const std::string path = dir + "/" + n;
+    const std::string tmp = TemporaryPathFor(path);
+    const std::string tmp_name = tmp.substr(dir.size() + 1);
+    EXPECT_LE(tmp_name.size(), 255u);
+    EXPECT_TRUE(IsTemporaryFileName(tmp_name));
+    const size_t suffix = tmp_name.rfind(".tmp-" + std::to_string(::getpid()));
+    ASSERT_NE(suffix, std::string::npos);
+    EXPECT_NE(static_cast<unsigned char>(tmp_name[suffix - 1]), 0xC3u);  // not half an "é"
+    ASSERT_TRUE(WriteFileChecked(path, "whole").ok());
+    EXPECT_EQ(Read(path), "whole");
+  }
+  EXPECT_EQ(CountEntries(dir), 4);  // No temporary left.
+  // A killed writer's temporary of the 252-byte name, found as stale.
+  const pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string path = dir + "/" + std::string(252, 'a');
+  const std::string ours = TemporaryPathFor(path);
+  const std::string stale = ours.substr(0, ours.rfind('-') + 1) + std::to_string(dead);
+  std::ofstream(stale) << "partial";
+  ASSERT_TRUE(Exists(stale));
+  EXPECT_EQ(RemoveStaleTemporaries(path), 1);
+  EXPECT_FALSE(Exists(stale));
+}
+
 TEST(CheckedFileTest, AFolderWhereAFileIsExpectedIsAClearError) {
   const std::string dir = TempDir("folder");
   const Status w = WriteFileChecked(dir, "x");
