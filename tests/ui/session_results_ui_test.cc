@@ -476,7 +476,7 @@ TEST_F(SessionResultsTest, NewSessionAndConnectResetTheReplayAndCalibrationPanel
     ASSERT_NO_FATAL_FAILURE(Open(LabSession()));
     ASSERT_EQ(name->text(), "lab.sweepscan");
     ASSERT_GT(slider->value(), 900);
-    ASSERT_NE(position->text(), "0.0 / 0.0 s");
+    ASSERT_NE(position->text().indexOf(" s"), -1) << position->text().toStdString();
     QString error;
     ASSERT_TRUE(calibration->LoadCalibration(QString::fromStdString(file), &error))
         << error.toStdString();
@@ -491,7 +491,7 @@ TEST_F(SessionResultsTest, NewSessionAndConnectResetTheReplayAndCalibrationPanel
     EXPECT_EQ(name->text(), "No session");
     EXPECT_EQ(slider->value(), 0);
     EXPECT_FALSE(slider->isEnabled());
-    EXPECT_EQ(position->text(), "0.0 / 0.0 s");
+    EXPECT_EQ(position->text(), QString(QChar(0x2014)));  // no replay, no "0.0 / 0.0 s"
     EXPECT_EQ(calibration->result_text(), "");
     EXPECT_EQ(workspace_->calibration_result(), nullptr);
     EXPECT_TRUE(workspace_->session_dir().isEmpty());

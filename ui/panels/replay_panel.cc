@@ -38,8 +38,11 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   slider_->setToolTip(tr("Replay position: drag to seek"));
   layout->addWidget(slider_);
   auto* row = new QHBoxLayout;
-  position_ = new QLabel(QStringLiteral("0.0 / 0.0 s"));
+  // A dash until a replay reports its time: a live cloud or a recording has
+  // no position in a session ("0.0 / 0.0 s" read as a replay of nothing).
+  position_ = new QLabel(QString(QChar(0x2014)));
   position_->setObjectName(QStringLiteral("replayPosition"));
+  position_->setToolTip(tr("Replay position / length of the opened session"));
   speed_ = new QComboBox;
   for (double s : {1.0, 2.0, 5.0, 10.0, 20.0}) speed_->addItem(QStringLiteral("%1x").arg(s), s);
   speed_->addItem(tr("max"), 0.0);
@@ -119,7 +122,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
       slider_->setValue(0);
     }
     slider_->setEnabled(false);
-    position_->setText(QStringLiteral("0.0 / 0.0 s"));
+    position_->setText(QString(QChar(0x2014)));
     UpdatePause();
     ShowPoseSource();
     ShowDamage();
