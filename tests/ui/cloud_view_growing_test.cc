@@ -112,9 +112,13 @@ TEST(CloudViewGrowingTest, StreamedPointsAreDrawnExactlyWithTheirScalarsAndThePa
     if (i % 3 == 0) pass_b.push_back(cloud[i]);
   }
   view.SetPointValues(CloudView::ColorMode::kPass, pass);
+  view.SetColorMode(CloudView::ColorMode::kPass);
+  EXPECT_EQ(view.color_bar_categories(), QStringList({"pass A (near side)", "pass B (far side)"}));
   view.SetPassFilter(1);
   view.RenderNow();
   EXPECT_EQ(Sorted(view.BatchedPoints()), Sorted(pass_b));
+  // The bar names the pass shown, not both beside one pass's points.
+  EXPECT_EQ(view.color_bar_categories(), QStringList({"pass B (far side)"}));
   // New points have no pass: not drawn while the filter is on ...
   std::vector<CloudPoint> batch = RoomPoints(500, cloud.size(), &rng);
   view.AppendPoints(batch);
@@ -123,6 +127,7 @@ TEST(CloudViewGrowingTest, StreamedPointsAreDrawnExactlyWithTheirScalarsAndThePa
   EXPECT_EQ(Sorted(view.BatchedPoints()), Sorted(pass_b));
   // ... and every point again with it off, the points streamed after too.
   view.SetPassFilter(-1);
+  EXPECT_EQ(view.color_bar_categories().size(), 2);
   batch = RoomPoints(2000, cloud.size(), &rng);
   view.AppendPoints(batch);
   cloud.insert(cloud.end(), batch.begin(), batch.end());

@@ -43,6 +43,7 @@
 #include <QPoint>
 #include <QRectF>
 #include <QString>
+#include <QStringList>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -175,6 +176,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   // points (a project's layers alone have no scalar to explain).
   void SetColorBarVisible(bool visible);
   bool color_bar_drawn() const;
+  // The bar's category names, for the categories it shows (kPass).
+  QStringList color_bar_categories() const;
   // Hides every point above `z` (metres; NaN shows all): a room's ceiling,
   // so that the floor, the walls and a calibration target are seen from above.
   void SetClipHeight(double z);

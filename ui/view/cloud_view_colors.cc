@@ -89,8 +89,10 @@ void CloudView::ApplyLookupTable() {
     for (int k = 0; k < 2; ++k) {
       lut_->SetTableValue(k, kPassColors[k][0], kPassColors[k][1], kPassColors[k][2], 1.0);
     }
-    lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
-    lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
+    // The bar's swatches are its annotations: the pass shown alone when the
+    // calibration panel shows one (it listed both beside one pass's points).
+    if (pass_filter_ != 1) lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
+    if (pass_filter_ != 0) lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
     lut_->SetTableRange(0.0, 1.0);
     color_bar_->SetUseCustomLabels(false);
     color_bar_->SetLabelFormat("%.0f");
@@ -211,11 +213,20 @@ void CloudView::SetDeviationRange(double max_mm) {
   RequestRender();
 }
 
+QStringList CloudView::color_bar_categories() const {
+  QStringList names;
+  for (vtkIdType i = 0; i < lut_->GetNumberOfAnnotatedValues(); ++i) {
+    names << QString::fromStdString(lut_->GetAnnotation(i));
+  }
+  return names;
+}
+
 void CloudView::SetPassFilter(int pass) {
   pass = pass < 0 || pass > 1 ? -1 : pass;
   if (pass == pass_filter_) return;
   pass_filter_ = pass;
   ApplyPassFilter();
+  if (color_mode_ == ColorMode::kPass) ApplyLookupTable();
   RequestRender();
 }
 
