@@ -442,6 +442,27 @@ TEST(ColorBarTicksTest, RoundValuesWithTheirDecimals) {
   EXPECT_TRUE(CloudView::BarTicks(1.0, 1.0, &decimals).empty());
 }
 
+// The evaluation's planes in the view: a room of an alcove has more than
+// four walls, and its fifth was drawn in the first one's colour. The first
+// eight walls, the floor and the ceiling are all far apart (RGB distance),
+// and no two of a dozen walls are the same.
+TEST(PlaneColorTest, WallsOfARoomEachHaveTheirOwnColour) {
+  auto distance = [](const QColor& a, const QColor& b) {
+    return std::hypot(a.red() - b.red(), a.green() - b.green(), a.blue() - b.blue());
+  };
+  std::vector<QColor> distinct = {PlaneColor("floor", 0), PlaneColor("ceiling", 0)};
+  for (int w = 0; w < 8; ++w) distinct.push_back(PlaneColor("wall", w));
+  for (size_t i = 0; i < distinct.size(); ++i) {
+    for (size_t j = i + 1; j < distinct.size(); ++j) {
+      EXPECT_GT(distance(distinct[i], distinct[j]), 40.0) << i << " and " << j;
+    }
+  }
+  for (int i = 0; i < 12; ++i) {
+    for (int j = i + 1; j < 12; ++j)
+      EXPECT_NE(PlaneColor("wall", i), PlaneColor("wall", j)) << i << ", " << j;
+  }
+}
+
 TEST_F(PanelsTest, ColourModesOfferedWhenTheCloudHasThem) {
   QMenu* colour = nullptr;
   for (QAction* a : window_->menuBar()->actions()) {

@@ -132,18 +132,24 @@ class HistogramPlot : public QWidget {
   QString title_;
 };
 
-namespace {
-
 QColor PlaneColor(const std::string& kind, int wall) {
   if (kind == "floor") return QColor(141, 110, 99);
   if (kind == "ceiling") return QColor(144, 202, 249);
   if (kind == "wall") {
-    static const QColor walls[] = {QColor(255, 183, 77), QColor(129, 199, 132),
-                                   QColor(186, 104, 200), QColor(77, 208, 225)};
-    return walls[wall % 4];
+    // Eight of Material's 300 tones, then hues a golden angle apart: a room
+    // of an alcove or two has more than four walls, and its fifth wall was
+    // drawn in its first one's orange.
+    static const QColor walls[] = {
+        QColor(255, 183, 77), QColor(129, 199, 132), QColor(186, 104, 200), QColor(77, 208, 225),
+        QColor(240, 98, 146), QColor(220, 231, 117), QColor(121, 134, 203), QColor(77, 182, 172)};
+    constexpr int kNamed = static_cast<int>(sizeof(walls) / sizeof(walls[0]));
+    if (wall >= 0 && wall < kNamed) return walls[wall];
+    return QColor::fromHsv((15 + 137 * (wall - kNamed)) % 360, 150, 235);
   }
   return QColor(224, 224, 224);
 }
+
+namespace {
 
 QTableWidgetItem* Item(const QString& text) {
   auto* item = new QTableWidgetItem(text);

@@ -12,7 +12,9 @@
 #ifndef SWEEPSCAN_UI_PANELS_EVALUATION_PANEL_H_
 #define SWEEPSCAN_UI_PANELS_EVALUATION_PANEL_H_
 
+#include <QColor>
 #include <QWidget>
+#include <string>
 #include <vector>
 
 #include "ui/view/cloud_view.h"
@@ -31,6 +33,9 @@ class HistogramPlot;
 // A room dimension's name in the panel: the planes it spans, as
 // "wall 3 – wall 4" (planes numbered from 1, as the planes table's rows).
 QString DimensionName(const CloudEvaluation& e, const RoomDimension& d);
+// A plane's colour in the view: by kind ("floor", "ceiling", "wall", other),
+// walls each their own, counted from 0 in the planes' order.
+QColor PlaneColor(const std::string& kind, int wall);
 
 class EvaluationPanel : public QWidget {
   Q_OBJECT
