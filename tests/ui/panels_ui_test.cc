@@ -520,7 +520,10 @@ TEST_F(PanelsTest, LinkHealthReadsAtAGlance) {
   const QString text = health->text();
   const QStringList lines = text.split(QLatin1Char('\n'));
   EXPECT_LE(lines.size(), 4) << text.toStdString();
-  EXPECT_TRUE(lines[0].contains(QRegularExpression("lidar \\d+/s, IMU \\d+/s, motor \\d+/s")))
+  // The robot's battery first, in sight: it was the fourth line, below the
+  // dock's fold.
+  EXPECT_TRUE(lines[0].startsWith("robot: battery")) << text.toStdString();
+  EXPECT_TRUE(lines[1].contains(QRegularExpression("lidar \\d+/s, IMU \\d+/s, motor \\d+/s")))
       << text.toStdString();
   EXPECT_TRUE(text.contains("errors: none")) << text.toStdString();
   EXPECT_FALSE(text.contains(QRegularExpression("\\d\\.\\d\\d")))
@@ -571,9 +574,9 @@ TEST(LinkHealthTextTest, SaysWhatWentWrong) {
   h.data_lost_s[1] = 0.5;
   h.reconnects = 1;
   EXPECT_EQ(ConnectionPanel::HealthText(h).toStdString(),
+            "robot: battery 12.1 V, emergency stop latched\n"
             "333 frames/s, 36.4 kB/s: lidar 154/s, IMU 100/s, motor 50/s\n"
             "errors: 2 CRC, 3 frames lost in a gap\n"
-            "robot: battery 12.1 V, emergency stop latched\n"
             "1 outage (last 2.3 s, 3 attempts: no data for 2 s)\n"
             "IMU data lost: 0.5 s\n"
             "reconnected once");

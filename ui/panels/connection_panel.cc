@@ -194,6 +194,17 @@ void ConnectionPanel::UpdateState() {
 
 QString ConnectionPanel::HealthText(const hardware::LinkHealth& h) {
   QStringList lines;
+  // The robot's own state first: the battery and a latched emergency stop
+  // are what an operator looks for, and as the fourth line they were below
+  // the dock's fold while connected.
+  if (h.have_status) {
+    QString robot = tr("robot: battery %1 V").arg(h.agent_status.battery_voltage_v, 0, 'f', 1);
+    if (h.agent_status.emergency_stop_latched) robot += tr(", emergency stop latched");
+    if (h.agent_status.fault_bits != 0) {
+      robot += tr(", faults 0x%1").arg(h.agent_status.fault_bits, 0, 16);
+    }
+    lines << robot;
+  }
   lines << tr("%1 frames/s, %2 kB/s: lidar %3/s, IMU %4/s, motor %5/s")
                .arg(h.frames_per_s, 0, 'f', 0)
                .arg(h.bytes_per_s / 1000.0, 0, 'f', 1)
@@ -222,14 +233,6 @@ QString ConnectionPanel::HealthText(const hardware::LinkHealth& h) {
                    : tr("%L1 frames lost in %L2 gaps").arg(h.frames_missing).arg(h.sequence_gaps));
   }
   lines << (errors.isEmpty() ? tr("errors: none") : tr("errors: %1").arg(errors.join(", ")));
-  if (h.have_status) {
-    QString robot = tr("robot: battery %1 V").arg(h.agent_status.battery_voltage_v, 0, 'f', 1);
-    if (h.agent_status.emergency_stop_latched) robot += tr(", emergency stop latched");
-    if (h.agent_status.fault_bits != 0) {
-      robot += tr(", faults 0x%1").arg(h.agent_status.fault_bits, 0, 16);
-    }
-    lines << robot;
-  }
   if (h.outages > 0) {
     lines << (h.outages == 1 ? tr("1 outage (%2 %3 s, %4 attempts: %5)")
                              : tr("%L1 outages (%2 %3 s, %4 attempts: %5)").arg(h.outages))
