@@ -306,6 +306,11 @@ TEST_F(CalibrationTest, PicksThroughTheViewSolveAndTheCalibrationIsKept) {
   }
   EXPECT_LT(gaps_after, gaps_before);
   ASSERT_TRUE(r->has_corners);
+  // Those gaps are the fitted corners', not the picks' in each row: the
+  // column says so.
+  auto* table = panel->findChild<QTableWidget*>();
+  ASSERT_NE(table, nullptr);
+  EXPECT_EQ(table->horizontalHeaderItem(2)->text(), "corner\ngap (mm)");
   for (int k = 0; k < 4; ++k) {
     EXPECT_LT((r->corners[0].corners[k] - r->corners[1].corners[k]).norm(), 0.01) << k;
     EXPECT_LT((r->corners[0].corners[k] - kDiamondCorners[k]).norm(), 0.03) << k;

@@ -310,8 +310,6 @@ QWidget* CalibrationPanel::BuildPickStep() {
   layout->addWidget(next_pick_);
   table_ = new QTableWidget(0, 3);
   table_->setHorizontalHeaderLabels({tr("pass A (m)"), tr("pass B (m)"), tr("gap (mm)")});
-  table_->horizontalHeaderItem(2)->setToolTip(
-      tr("The pair's distance before -> after the solve (each pick snapped to its sample)"));
   table_->horizontalHeader()->setSectionResizeMode(QHeaderView::Stretch);
   table_->horizontalHeader()->setSectionResizeMode(2, QHeaderView::ResizeToContents);
   table_->setSelectionBehavior(QAbstractItemView::SelectRows);
@@ -685,6 +683,18 @@ void CalibrationPanel::Refresh() {
     auto* item = new QTableWidgetItem(gap);
     item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
     table_->setItem(row, 2, item);
+  }
+  // A refined solve's gaps are its fitted corners', not the picks' in the
+  // row: the column says which (it read as the picks' own).
+  const bool corner_gaps = checks && result->has_corners;
+  if (QTableWidgetItem* header = table_->horizontalHeaderItem(2)) {
+    header->setText(corner_gaps ? tr("corner\ngap (mm)") : tr("gap (mm)"));
+    header->setToolTip(
+        corner_gaps
+            ? tr("The gap between pass A and B of the fitted board corner nearest "
+                 "each pick (the green and yellow markers in the view), before -> after the solve")
+            : tr("The pair's distance before -> after the solve (each pick snapped to "
+                 "its sample)"));
   }
   if (selected >= 0 && selected < table_->rowCount()) table_->selectRow(selected);
   table_->blockSignals(false);
