@@ -589,6 +589,18 @@ TEST_F(PlanUiTest, ExportsActWhenTheyCanAndRoomNamesClearTheFigures) {
     canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names-section.png");
   }
   canvas.SetSectionLine(std::nullopt);
+  // In the app's dock (560 x 430 px, the plan about 22 px/m), the corridor
+  // (2 m, 44 px between its walls, a dimension line along its middle) has
+  // room for neither its name's two lines across nor along it: they come
+  // on one line along it ("Room 2 · 32.00 m²"), where it had none.
+  canvas.resize(560, 430);
+  canvas.Fit();
+  (void)canvas.grab();
+  check_labels();
+  EXPECT_EQ(canvas.room_labels().size(), plan.rooms.size()) << canvas.scale() << " px/m";
+  if (qEnvironmentVariableIsSet("SWEEPSCAN_TEST_SHOTS")) {
+    canvas.grab().save(qEnvironmentVariable("SWEEPSCAN_TEST_SHOTS") + "/room-names-dock.png");
+  }
 
   // A cut in the ceiling's slab (2.7 m) is said under the plan, as the CLI
   // warns; a cut above the ceiling: no plan, and Export says why.

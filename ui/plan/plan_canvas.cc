@@ -251,10 +251,13 @@ void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room
   // 40 x 40 points) by distance from it.
   const QRectF bounds = outline.boundingRect().intersected(QRectF(rect()));
   if (bounds.isEmpty()) return;
-  const double step = std::max({4.0, bounds.width() / 40.0, bounds.height() / 40.0});
+  // Each way its own step: across a corridor of 40 px a square grid's
+  // 9 px steps missed the strip of 5 px where its name fits.
+  const double step_x = std::max(2.0, bounds.width() / 40.0),
+               step_y = std::max(2.0, bounds.height() / 40.0);
   std::vector<QPointF> candidates{label};
-  for (double y = bounds.top() + 0.5 * step; y < bounds.bottom(); y += step) {
-    for (double x = bounds.left() + 0.5 * step; x < bounds.right(); x += step) {
+  for (double y = bounds.top() + 0.5 * step_y; y < bounds.bottom(); y += step_y) {
+    for (double x = bounds.left() + 0.5 * step_x; x < bounds.right(); x += step_x) {
       if (outline.containsPoint({x, y}, Qt::OddEvenFill)) candidates.emplace_back(x, y);
     }
   }
@@ -266,15 +269,21 @@ void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room
   const int base = QFontInfo(font).pixelSize();
   // Across the plan first, at every size; then along it, turned as a
   // vertical dimension's figure is: a corridor (2 m) is narrower than its
-  // name across it until zoomed far in, but long.
-  for (const double degrees : {0.0, 90.0}) {
+  // name across it until zoomed far in, but long. Last the name and area
+  // on one line, along then across: half the height, which a corridor
+  // between its dimension lines has at the default zoom (it had no name).
+  const QString one_line = name + QStringLiteral(" · ") + area;
+  for (const auto& [degrees, lines] : {std::pair{0.0, 2}, {90.0, 2}, {90.0, 1}, {0.0, 1}}) {
     for (double px = base; px >= kMinRoomFontPx; px -= 1.0) {
       font.setPixelSize(static_cast<int>(px));
       const QFontMetricsF m(font);
       const double line = m.height() + 2.0;
-      const double width = std::max(m.horizontalAdvance(name), m.horizontalAdvance(area)) + 6.0;
-      const QSizeF size =
-          degrees == 0.0 ? QSizeF(width, 2.0 * line + 2.0) : QSizeF(2.0 * line + 2.0, width);
+      const double width =
+          (lines == 1 ? m.horizontalAdvance(one_line)
+                      : std::max(m.horizontalAdvance(name), m.horizontalAdvance(area))) +
+          6.0;
+      const double height = lines * line + 2.0;
+      const QSizeF size = degrees == 0.0 ? QSizeF(width, height) : QSizeF(height, width);
       for (const QPointF& at : candidates) {
         const QRectF block(at - QPointF(0.5 * size.width(), 0.5 * size.height()), size);
         const QPolygonF box(block.adjusted(-1, -1, 1, 1));  // clear by a pixel, not touching
@@ -291,8 +300,12 @@ void PlanCanvas::PaintRoomName(QPainter* p, size_t index, const plan::Room& room
         const QPointF down = QTransform().rotate(-degrees).map(QPointF(0.0, 0.5 * line));
         p->save();
         p->setFont(font);
-        PaintLabel(p, at - down, degrees, name, kRoomText);
-        PaintLabel(p, at + down, degrees, area, kRoomText);
+        if (lines == 1) {
+          PaintLabel(p, at, degrees, one_line, kRoomText);
+        } else {
+          PaintLabel(p, at - down, degrees, name, kRoomText);
+          PaintLabel(p, at + down, degrees, area, kRoomText);
+        }
         p->restore();
         room_labels_.push_back({name, block});
         return;
