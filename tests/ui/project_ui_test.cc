@@ -239,6 +239,20 @@ TEST_F(ProjectUiTest, AlignsThroughThePanelAgainstTheTruth) {
   EXPECT_EQ(s.registration.reference, "a");
   EXPECT_EQ(s.registration.method, "planes+icp");
   EXPECT_NE(panel->item("b")->text(1).indexOf("planes+icp to a"), -1);
+  // Every figure of the placement in sight, a line each: on one line the
+  // dock's width cut it after the rms (the overlap and 1σ only in the
+  // tooltip).
+  auto* tree = panel->findChild<QTreeWidget*>(QStringLiteral("projectSessions"));
+  ASSERT_NE(tree, nullptr);
+  const QStringList placement = panel->item("b")->text(1).split(QLatin1Char('\n'));
+  ASSERT_EQ(placement.size(), 3) << panel->item("b")->text(1).toStdString();
+  EXPECT_TRUE(placement[1].startsWith("rms ") && placement[1].contains("overlap"))
+      << placement[1].toStdString();
+  EXPECT_TRUE(placement[2].startsWith(QString::fromUtf8("1σ "))) << placement[2].toStdString();
+  for (const QString& line : placement) {
+    EXPECT_LE(tree->fontMetrics().horizontalAdvance(line), tree->columnWidth(1))
+        << line.toStdString();
+  }
   WaitFor([&] { return !project()->busy(); }, 60000);
   EXPECT_EQ(project()->layer()->drawn_sessions(), (std::vector<std::string>{"a", "b"}));
   EXPECT_TRUE(window_->isWindowModified());

@@ -46,13 +46,15 @@ QString Placement(const ProjectSession& s, bool* placed) {
   if (e.method == "anchor") return QObject::tr("anchor (the project's frame)");
   // Typed in, or its reference dropped: the zero covariance means unknown.
   if (e.method == "manual") return QObject::tr("manual · not measured");
-  QString text = QObject::tr("%1 to %2 · rms %3 mm · overlap %4 % · 1σ %5 mm / %6°")
+  // On three lines: on one, the dock's width cut it after the rms, and the
+  // overlap and the uncertainty were only in the tooltip.
+  QString text = QObject::tr("%1 to %2\nrms %3 mm · overlap %4 %\n1σ %5 mm / %6°")
                      .arg(QString::fromStdString(e.method), QString::fromStdString(e.reference))
                      .arg(e.rms_m * 1e3, 0, 'f', 1)
                      .arg(std::lround(e.overlap * 100))
                      .arg(e.SigmaTranslation() * 1e3, 0, 'f', 1)
                      .arg(e.SigmaRotation() * 180.0 / M_PI, 0, 'f', 3);
-  if (!e.free_direction.isZero()) text += QObject::tr(" · free along a corridor");
+  if (!e.free_direction.isZero()) text += QObject::tr("\nfree along a corridor");
   return text;
 }
 
