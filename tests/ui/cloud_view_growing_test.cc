@@ -114,11 +114,21 @@ TEST(CloudViewGrowingTest, StreamedPointsAreDrawnExactlyWithTheirScalarsAndThePa
   view.SetPointValues(CloudView::ColorMode::kPass, pass);
   view.SetColorMode(CloudView::ColorMode::kPass);
   EXPECT_EQ(view.color_bar_categories(), QStringList({"pass A (near side)", "pass B (far side)"}));
+  const QColor cyan = view.ColorOfValue(0.0), magenta = view.ColorOfValue(1.0);
+  EXPECT_EQ(cyan.rgb(), QColor::fromRgbF(0.0, 0.78, 1.0).rgb());  // 8 bits a channel, as drawn
+  EXPECT_EQ(magenta.rgb(), QColor::fromRgbF(1.0, 0.24, 0.78).rgb());
   view.SetPassFilter(1);
   view.RenderNow();
   EXPECT_EQ(Sorted(view.BatchedPoints()), Sorted(pass_b));
-  // The bar names the pass shown, not both beside one pass's points.
+  // The bar names the pass shown, not both beside one pass's points, and
+  // the pass keeps its colour (pass B alone was drawn in pass A's cyan).
   EXPECT_EQ(view.color_bar_categories(), QStringList({"pass B (far side)"}));
+  EXPECT_EQ(view.ColorOfValue(1.0).rgb(), magenta.rgb());
+  view.SetPassFilter(0);
+  EXPECT_EQ(view.color_bar_categories(), QStringList({"pass A (near side)"}));
+  EXPECT_EQ(view.ColorOfValue(0.0).rgb(), cyan.rgb());
+  view.SetPassFilter(1);
+  view.RenderNow();
   // New points have no pass: not drawn while the filter is on ...
   std::vector<CloudPoint> batch = RoomPoints(500, cloud.size(), &rng);
   view.AppendPoints(batch);

@@ -178,6 +178,8 @@ class CloudView : public QVTKOpenGLNativeWidget {
   bool color_bar_drawn() const;
   // The bar's category names, for the categories it shows (kPass).
   QStringList color_bar_categories() const;
+  // The colour the colour mode gives a point's value (as drawn).
+  QColor ColorOfValue(double value) const;
   // Hides every point above `z` (metres; NaN shows all): a room's ceiling,
   // so that the floor, the walls and a calibration target are seen from above.
   void SetClipHeight(double z);

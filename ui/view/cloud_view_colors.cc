@@ -83,16 +83,20 @@ void CloudView::ApplyLookupTable() {
   lut_->ResetAnnotations();
   lut_->SetNanColor(0.42, 0.43, 0.45, 1.0);
   if (color_mode_ == ColorMode::kPass) {
-    // Two categories, as swatches in the colour bar.
+    // Two categories, as swatches in the colour bar: the pass shown alone
+    // when the calibration panel shows one (it listed both beside one
+    // pass's points). Indexed lookup colours a value by its annotation's
+    // index, so the table follows the annotations (pass B alone is index 0).
+    static const char* const kPassNames[2] = {"pass A (near side)", "pass B (far side)"};
     lut_->IndexedLookupOn();
-    lut_->SetNumberOfTableValues(2);
-    for (int k = 0; k < 2; ++k) {
-      lut_->SetTableValue(k, kPassColors[k][0], kPassColors[k][1], kPassColors[k][2], 1.0);
+    lut_->SetNumberOfTableValues(pass_filter_ < 0 ? 2 : 1);
+    vtkIdType index = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+      if (pass_filter_ >= 0 && pass_filter_ != pass) continue;
+      lut_->SetTableValue(index++, kPassColors[pass][0], kPassColors[pass][1], kPassColors[pass][2],
+                          1.0);
+      lut_->SetAnnotation(vtkVariant(static_cast<float>(pass)), kPassNames[pass]);
     }
-    // The bar's swatches are its annotations: the pass shown alone when the
-    // calibration panel shows one (it listed both beside one pass's points).
-    if (pass_filter_ != 1) lut_->SetAnnotation(vtkVariant(0.0f), "pass A (near side)");
-    if (pass_filter_ != 0) lut_->SetAnnotation(vtkVariant(1.0f), "pass B (far side)");
     lut_->SetTableRange(0.0, 1.0);
     color_bar_->SetUseCustomLabels(false);
     color_bar_->SetLabelFormat("%.0f");
@@ -219,6 +223,12 @@ QStringList CloudView::color_bar_categories() const {
     names << QString::fromStdString(lut_->GetAnnotation(i));
   }
   return names;
+}
+
+QColor CloudView::ColorOfValue(double value) const {
+  double rgb[3];
+  lut_->GetColor(value, rgb);
+  return QColor::fromRgbF(rgb[0], rgb[1], rgb[2]);
 }
 
 void CloudView::SetPassFilter(int pass) {
