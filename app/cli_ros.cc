@@ -2,21 +2,23 @@
 // BAG --out NAME.sweepscan` (a bag -> a session that reconstruct, calibrate,
 // evaluate, sfm and the app open like a native one). docs/ros-bags.md.
 #include <cmath>
-#include <limits>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
+#include <string>
 
 #include "app/cli_args.h"
 #include "app/cli_common.h"
 #include "app/cli_recording.h"
+#include "core/calibration/calibration.h"
+#include "core/cloud/reconstruct.h"
 #include "core/io/ros/import.h"
 #include "core/io/ros/ros_bag.h"
 #include "core/io/ros/tf_tree.h"
 #include "core/io/rosbag1/rosbag1_writer.h"
-#include "core/calibration/calibration.h"
-#include "core/cloud/reconstruct.h"
 #include "core/session/session.h"
 
 namespace sweepscan::app {
@@ -155,6 +157,8 @@ int RunBagInfo(int argc, char** argv) {
     PrintError(s.message());
     return kExitBadInput;
   }
+  // Said before tf is read: a tf read that fails would lose them.
+  for (const std::string& w : warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
   TfSink tf;
   io::RosReadOptions read;
   for (const io::RosTopicInfo& t : summary.topics) {
@@ -175,24 +179,29 @@ int RunBagInfo(int argc, char** argv) {
   }
   // As `info SESSION --strict`, which reads every record: every message is
   // read (the description needs only the summary and tf), and a damaged bag
-  // is refused with its warnings saying where.
+  // is refused, its warnings saying where. An intact bag's warnings (a
+  // topic in another encoding, messages back in time) are not damage.
   if (args.Flag("strict")) {
     CheckSink check;
     io::RosReadStats stats;
     s = io::ReadRosBag(bag, io::RosReadOptions(), &check, &stats);
-    if (!s.ok()) warnings.push_back(s.message());
-    for (const std::string& w : stats.warnings) warnings.push_back(w);
-    if (check.undecodable > 0) {
-      warnings.push_back(std::to_string(check.undecodable) +
-                         " messages did not decode, the first on " + check.first_undecodable);
+    if (!s.ok()) {
+      PrintError(s.message());
+      return kExitBadInput;
     }
-    if (!warnings.empty()) {
-      for (const std::string& w : warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
+    std::set<std::string> said(warnings.begin(), warnings.end());
+    for (const std::string& w : stats.warnings) {
+      if (said.insert(w).second) std::cerr << "sweepscan-cli: warning: " << w << "\n";
+    }
+    if (check.undecodable > 0) {
+      std::cerr << "sweepscan-cli: warning: " << check.undecodable
+                << " messages did not decode, the first on " << check.first_undecodable << "\n";
+    }
+    if (stats.damaged || check.undecodable > 0) {
       PrintError(bag + ": damaged (--strict)");
       return kExitBadInput;
     }
   }
-  for (const std::string& w : warnings) std::cerr << "sweepscan-cli: warning: " << w << "\n";
   nlohmann::json topics = nlohmann::json::array();
   for (const io::RosTopicInfo& t : summary.topics) {
     topics.push_back({{"topic", t.topic},
@@ -241,7 +250,7 @@ int RunImport(int argc, char** argv) {
   Args args({"json", "help"}, {"out", "scan", "odom", "imu", "base-frame", "mount", "imu-mount", "wheel-distance", "notes"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error);
+    PrintError(SeeHelp(error, "import"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {

@@ -296,6 +296,27 @@ TEST_F(CliRos2Test, ATruncatedDb3ImportsWhatItHoldsAndMetadataYamlNamesItsBag) {
   EXPECT_EQ(r.code, 0) << r.out;
 }
 
+// `info BAG --strict` refuses damage, not an intact bag's warnings: a topic
+// in another serialization format (here /tf said to be 'ros1') is skipped
+// with a warning, and the bag is whole. It was refused as damaged.
+TEST(CliRos2StrictTest, AnIntactBagsWarningsAreNotDamage) {
+  const std::string bag = Tmp("ros1_tf_bag");
+  CommandRun r = RunCommand(
+      "rm -rf " + bag + " && cp -r " + Source("tests/data/ros2/sqlite_bag") + " " + bag + " && " +
+      SWEEPSCAN_PYTHON3 +
+      " -c \"import sqlite3, sys; c = sqlite3.connect(sys.argv[1]); "
+      "c.execute(\\\"UPDATE topics SET serialization_format = 'ros1' WHERE name = '/tf'\\\"); "
+      "c.commit()\" " +
+      bag + "/sqlite_bag_0.db3");
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("info " + bag + " --strict");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("topic /tf (tf2_msgs/msg/TFMessage) is in serialization format 'ros1'"),
+            std::string::npos)
+      << r.out;
+  RunCommand("rm -rf " + bag);
+}
+
 class CliRos2CalibrationTest : public ::testing::Test {
  protected:
   static void TearDownTestSuite() { RunCommand("rm -rf " + Tmp("")); }

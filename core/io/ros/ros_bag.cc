@@ -97,7 +97,10 @@ Status ReadRosBag(const std::string& given, const RosReadOptions& options, RosMe
     RosBagSummary ignored;
     Ros2ReadReport report;
     const Status s = ReadRos2Bag(path, options, sink, &ignored, stats, &report);
-    if (stats != nullptr) AddOnce(report.warnings, &stats->warnings);
+    if (stats != nullptr) {
+      AddOnce(report.warnings, &stats->warnings);
+      stats->damaged = stats->damaged || report.damaged;
+    }
     return s;
   }
   return NotABag(path);

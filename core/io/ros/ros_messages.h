@@ -158,6 +158,9 @@ struct RosReadStats {
   // What the reader noticed and read past (a file cut short, a damaged
   // summary, messages back in time), each once however often it was read.
   std::vector<std::string> warnings;
+  // Whether any of them tells of damage read past (a torn file, a damaged
+  // database or summary), not of an intact file's quirks.
+  bool damaged = false;
 };
 
 }  // namespace sweepscan::io

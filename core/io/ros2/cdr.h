@@ -86,6 +86,11 @@ Status DecodeCdrTfMessage(const uint8_t* data, size_t n, RosTfMessage* m);
 struct Ros2ReadReport {
   std::vector<std::string> warnings;
   bool torn_tail = false;  // the file ended inside a record (or lacks its footer)
+  // Something of the file was damaged and read past (a torn tail, a
+  // summary whose CRC or offsets fail, a damaged sqlite page); warnings of
+  // an intact file (a topic in another encoding, messages back in time) do
+  // not set it.
+  bool damaged = false;
   // An MCAP read in log-time order (chunks out of it) at its fullest: the
   // chunks whose messages were waiting at once, and those messages. What
   // bounds its memory; tests check it stays the chunks overlapping in time.

@@ -28,6 +28,7 @@ namespace mcap_internal {
 
 Status Reader::TornTail(uint64_t pos, const std::string& why) {
   report_->torn_tail = true;
+  report_->damaged = true;
   Warn("file ends at byte " + std::to_string(src_->size()) + " " + why + ": the " +
        std::to_string(messages_) + " messages before byte " + std::to_string(pos) +
        " were read, the rest of the file is lost");

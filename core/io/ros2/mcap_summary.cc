@@ -32,6 +32,7 @@ Status Reader::SummaryFromIndex(bool* used) {
   if (summary_start == 0) return Status::Ok();
   const uint64_t end = summary_offset_start != 0 ? summary_offset_start : footer_at;
   if (summary_start < sizeof(kMagic) || summary_start > end || end > footer_at) {
+    report_->damaged = true;
     Warn("footer: summary_start " + std::to_string(summary_start) + " / summary_offset_start " +
          std::to_string(summary_offset_start) + " lie outside the file; scanning it instead");
     return Status::Ok();
@@ -48,6 +49,7 @@ Status Reader::SummaryFromIndex(bool* used) {
       at += k;
     }
     if (crc != summary_crc) {
+      report_->damaged = true;
       Warn("summary section's CRC-32 does not match the footer's; scanning the file instead");
       return Status::Ok();
     }
@@ -61,6 +63,7 @@ Status Reader::SummaryFromIndex(bool* used) {
     uint64_t len;
     if (end - pos < kPrefix || !src_->ReadAt(pos, kPrefix, prefix).ok() ||
         (memcpy(&len, prefix + 1, 8), len > end - pos - kPrefix)) {
+      report_->damaged = true;
       Warn(At("summary record", pos) + " overruns the summary section; scanning the file");
       return Status::Ok();
     }

@@ -235,6 +235,7 @@ Status SummarizeRos2Sqlite(const std::string& path, RosBagSummary* s, Ros2ReadRe
   }
   if (st.ok()) bag.Fill(s);
   if (st.ok() && bag.damaged() && report != nullptr) {
+    report->damaged = true;
     report->warnings.push_back(bag.DamageWarning(s->message_count, "could be read"));
   }
   return st;
@@ -345,7 +346,10 @@ Status ReadRos2Sqlite(const std::string& path, const RosReadOptions& opt, RosMes
       }
     }
     if (bag.cancelled()) return bag.Error("reading messages");
-    if (report != nullptr) report->warnings.push_back(bag.DamageWarning(done, "could be read"));
+    if (report != nullptr) {
+      report->damaged = true;
+      report->warnings.push_back(bag.DamageWarning(done, "could be read"));
+    }
   }
   return Status::Ok();
 }
