@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -35,15 +36,21 @@ std::string ErrnoText(int error_number) { return std::strerror(error_number); }
 // "BASE.tmp-", BASE cut where the PID (up to 10 digits) would take the
 // name past a file name's 255 bytes (NAME_MAX on Linux' file systems): a
 // 252-byte name could be written by `cp` but not by us ("File name too
-// long"). Cut between UTF-8 characters.
-std::string TemporaryPrefix(std::string base) {
-  constexpr size_t kNameMax = 255, kSuffix = 5 + 10;  // ".tmp-" + the PID
-  if (base.size() + kSuffix > kNameMax) {
-    size_t n = kNameMax - kSuffix;
-    while (n > 0 && (static_cast<unsigned char>(base[n]) & 0xC0) == 0x80) --n;
-    base.resize(n);
-  }
-  return base + ".tmp-";
+// long"). Cut between UTF-8 characters (at most 3 bytes back), then "~"
+// and 8 hex digits of the whole name's FNV-1a hash, so that two names cut
+// alike do not share one temporary.
+std::string TemporaryPrefix(const std::string& base) {
+  constexpr size_t kNameMax = 255, kSuffix = 5 + 10, kHash = 9;  // ".tmp-" + the PID; "~" + 8
+  if (base.size() + kSuffix <= kNameMax) return base + ".tmp-";
+  size_t n = kNameMax - kSuffix - kHash;
+  for (int back = 0; back < 3 && n > 0 && (static_cast<unsigned char>(base[n]) & 0xC0) == 0x80;
+       ++back)
+    --n;
+  uint32_t hash = 2166136261u;
+  for (const unsigned char c : base) hash = (hash ^ c) * 16777619u;
+  char hex[10];
+  std::snprintf(hex, sizeof(hex), "~%08x", hash);
+  return base.substr(0, n) + hex + ".tmp-";
 }
 
 // Parses the PID of "BASE.tmp-PID"; -1 if `name` is not a temporary of BASE.

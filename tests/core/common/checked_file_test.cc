@@ -199,11 +199,29 @@ TEST(CheckedFileTest, TheLongestNamesAreWrittenAndTheirStaleTemporariesFound) {
     EXPECT_TRUE(IsTemporaryFileName(tmp_name));
     const size_t suffix = tmp_name.rfind(".tmp-" + std::to_string(::getpid()));
     ASSERT_NE(suffix, std::string::npos);
-    EXPECT_NE(static_cast<unsigned char>(tmp_name[suffix - 1]), 0xC3u);  // not half an "é"
+    // A cut name ends in "~" and its hash; what is kept before them is not
+    // half an "é".
+    const size_t tilde = tmp_name.rfind('~', suffix);
+    const size_t kept = tilde == std::string::npos ? suffix : tilde;
+    EXPECT_EQ(tilde == std::string::npos, n.size() <= 240u);
+    EXPECT_NE(static_cast<unsigned char>(tmp_name[kept - 1]), 0xC3u);
     ASSERT_TRUE(WriteFileChecked(path, "whole").ok());
     EXPECT_EQ(Read(path), "whole");
   }
   EXPECT_EQ(CountEntries(dir), 4);  // No temporary left.
+  // Two names alike in their first 240 bytes, written at once: each its
+  // own temporary (cut alike, they shared one).
+  const std::string first = dir + "/" + std::string(250, 'c') + "1",
+                    second = dir + "/" + std::string(250, 'c') + "2";
+  EXPECT_NE(TemporaryPathFor(first), TemporaryPathFor(second));
+  CheckedFileWriter a, b;
+  ASSERT_TRUE(a.Open(first).ok());
+  ASSERT_TRUE(b.Open(second).ok());
+  ASSERT_TRUE(a.Write("first").ok() && b.Write("second").ok());
+  ASSERT_TRUE(a.Commit().ok() && b.Commit().ok());
+  EXPECT_EQ(Read(first), "first");
+  EXPECT_EQ(Read(second), "second");
+  ASSERT_TRUE(::unlink(first.c_str()) == 0 && ::unlink(second.c_str()) == 0);
   // A killed writer's temporary of the 252-byte name, found as stale.
   const pid_t dead = ::fork();
   if (dead == 0) ::_exit(0);
