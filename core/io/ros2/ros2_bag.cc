@@ -276,6 +276,10 @@ Status FindRos2Bag(const std::string& path, std::string* storage, std::vector<st
   }
   *storage = m.storage.empty() ? StorageOfFile(files->front()) : m.storage;
   if (*storage != "sqlite3" && *storage != "mcap") {
+    if (m.storage.empty()) {  // guessed from the first file, which is neither
+      return Status::Error(yaml + ": no storage_identifier, and " + files->front() +
+                           " is neither an MCAP nor a sqlite3 file");
+    }
     return Status::Error(yaml + ": storage_identifier " + Quoted(m.storage) +
                          " is not supported (sqlite3 and mcap are)");
   }
