@@ -502,7 +502,7 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
     KeepSurfacesSeenTwice(&planes, in, &used, &sightings);
     if (used.size() < 2) {
       summary->trace = trace;
-      return Status::Error("automatic calibration: found " + std::to_string(used.size()) +
+      return Status::Error("refused: automatic calibration: found " + std::to_string(used.size()) +
                            " plane(s) seen in both passes, need at least 2");
     }
     if (last_band) DropOffsetRuns(in, pts, options, &used);
@@ -532,10 +532,13 @@ Status SolveAutomatic(const SampleStore& store, const RobotGeometry& geometry,
       if (!(pre.condition_number <= so_opts.max_condition_number)) {
         static const char* kNames[3] = {"alpha", "beta", "gamma"};
         const int w = std::max(0, pre.weakest_angle);
+        char numbers[64];
+        std::snprintf(numbers, sizeof(numbers), "%.1f > %.0f", pre.condition_number,
+                      so_opts.max_condition_number);
         return Status::Error(
             "refused: the drive leaves " + std::string(kNames[w]) +
-            " weakly determined (Jacobian condition number " + std::to_string(pre.condition_number) +
-            " > " + std::to_string(so_opts.max_condition_number) + ", " + std::to_string(used.size()) +
+            " weakly determined (Jacobian condition number " + numbers + ", " +
+            std::to_string(used.size()) +
             " planes seen in both passes): drive the circle where the floor and walls facing "
             "different ways are within the lidar's range from both sides of it");
       }
