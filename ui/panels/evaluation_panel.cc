@@ -143,7 +143,8 @@ QColor PlaneColor(const std::string& kind, int wall) {
         QColor(255, 183, 77), QColor(129, 199, 132), QColor(186, 104, 200), QColor(77, 208, 225),
         QColor(240, 98, 146), QColor(220, 231, 117), QColor(121, 134, 203), QColor(77, 182, 172)};
     constexpr int kNamed = static_cast<int>(sizeof(walls) / sizeof(walls[0]));
-    if (wall >= 0 && wall < kNamed) return walls[wall];
+    if (wall < 0) wall = 0;
+    if (wall < kNamed) return walls[wall];
     return QColor::fromHsv((15 + 137 * (wall - kNamed)) % 360, 150, 235);
   }
   return QColor(224, 224, 224);

@@ -2,6 +2,7 @@
 
 #include <QAction>
 #include <QDockWidget>
+#include <QFile>
 #include <QFileDialog>
 #include <QFileInfo>
 #include <QMenu>
@@ -283,7 +284,8 @@ bool ProjectController::AddSession(const QString& dir) {
   // As `sweepscan-cli project add`: a meta.json that does not read is
   // refused now, not at the alignment.
   SessionMeta meta;
-  if (const Status m = ReadSessionMeta((dir + QStringLiteral("/meta.json")).toStdString(), &meta);
+  if (const Status m = ReadSessionMeta(
+          QFile::encodeName(dir + QStringLiteral("/meta.json")).toStdString(), &meta);
       !m.ok()) {
     show_error_(tr("Cannot add the session"), QString::fromStdString(m.message()));
     return false;
