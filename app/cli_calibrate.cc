@@ -94,7 +94,7 @@ int ParseCalibrateArgs(const Args& args, std::vector<PickPair>* picks, bool* don
     return kExitOk;
   }
   if (args.Has("pairs") == args.Flag("auto")) {
-    PrintError("give exactly one of --pairs FILE and --auto (see sweepscan-cli help calibrate)");
+    PrintError(SeeHelp("give exactly one of --pairs FILE and --auto", "calibrate"));
     return kExitBadInput;
   }
   if (args.Flag("refine") && !args.Has("pairs")) {
@@ -411,7 +411,7 @@ int RunCalibrate(int argc, char** argv) {
             {"scenario", "pairs", "out", "pose-source", "seed", "board-thickness"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error + " (see sweepscan-cli help calibrate)");
+    PrintError(SeeHelp(error, "calibrate"));
     return kExitBadInput;
   }
   std::vector<PickPair> picks;

@@ -26,7 +26,7 @@ namespace sweepscan::app {
 const char* const kEvaluateUsage =
     "usage: sweepscan-cli evaluate CLOUD.ply|CLOUD.pcd|SESSION|--scenario FILE\n"
     "                              [--calibration CALIB.json] [--pose-source S] [--json]\n"
-    "                              [--threads N] [--timing]\n"
+    "                              [--seed N] [--threads N] [--timing]\n"
     "\n"
     "Evaluates a cloud (Miao et al. 2022, section 5): statistical outlier removal,\n"
     "RANSAC planes (floor, ceiling, walls) with normal and RMS, signed deviation\n"
@@ -35,6 +35,7 @@ const char* const kEvaluateUsage =
     "and --calibration, the cloud is rebuilt from the raw samples twice, without\n"
     "and with the calibration, and both are reported (before / after).\n"
     "\n"
+    "  --seed N      the --scenario's noise seed (default: the scenario's own)\n"
     "  --threads N   worker threads (default: every core; the result does not depend on it)\n"
     "  --timing      print the wall time of each stage on stderr\n"
     "  --strict      refuse a SESSION with damaged records (default: skip them, with a warning)\n"
@@ -103,7 +104,7 @@ int RunEvaluate(int argc, char** argv) {
   Args args({"json", "help", "timing", "strict"}, {"scenario", "calibration", "pose-source", "seed", "threads", "neighbours"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error + " (see sweepscan-cli help evaluate)");
+    PrintError(SeeHelp(error, "evaluate"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {

@@ -18,7 +18,7 @@ const char* kUsage =
     "  simulate   record a simulated scan (scenario file) as a session and reconstruct it\n"
     "  info       describe a recorded session or a ROS bag\n"
     "  reconstruct  build the cloud of a recorded session\n"
-    "  export     write a session's decoded sensor records as CSV\n"
+    "  export     a session's cloud (LAS, PLY, PCD), its sensor records (CSV) or a ROS 1 bag\n"
     "  import     turn a ROS 1 or ROS 2 bag (2D lidar, odometry, IMU, tf) into a session\n"
     "  record     record a session from a robot agent (robotd or the simulator), headless\n"
     "  project    a building in many sessions: new, add, align (registration), export\n"
@@ -26,7 +26,7 @@ const char* kUsage =
     "  calibrate  solve the lidar's mounting error from a circle drive (pairs or automatic)\n"
     "  evaluate   planes, deviation histograms, room dimensions and density of a cloud\n"
     "  p3l        6-DoF pose from three scan lines on three known planes (lidar-only SfM)\n"
-    "  sfm        lidar-only structure from motion of a simulated 2D-lidar rig (poses, planes, cloud)\n"
+    "  sfm        lidar-only structure from motion (a session, a scenario or a simulated rig)\n"
     "  plan       floor plan of a cloud: walls, openings, room dimensions; SVG and DXF drawings\n"
     "  help       show this text, or `help <command>` for one command\n"
     "  --version  print the version\n"
@@ -71,7 +71,7 @@ int Main(int argc, char** argv) {
       std::cout << kProjectUsage;
     } else if (topic == "repair") {
       std::cout << kRepairUsage;
-    } else if (topic.empty()) {
+    } else if (topic.empty() || topic == "help") {
       std::cout << kUsage;
     } else {
       // Asked about a command there is not: a usage error, said on stderr.

@@ -25,16 +25,19 @@
 namespace sweepscan::app {
 
 const char* const kPlanUsage =
-    "usage: sweepscan-cli plan CLOUD.ply|CLOUD.pcd|SESSION|PROJECT|--scenario FILE [--height H] [--band B]\n"
+    "usage: sweepscan-cli plan CLOUD.ply|CLOUD.pcd|SESSION|PROJECT|--scenario FILE [--height H] "
+    "[--band B]\n"
     "                          [--opening W] [--scale N] [--svg F.svg] [--dxf F.dxf]\n"
-    "                          [--section-line x0,y0,x1,y1 --section-svg F.svg|--section-dxf F.dxf] [--json]\n"
+    "                          [--section-line x0,y0,x1,y1 [--section-svg F.svg] [--section-dxf "
+    "F.dxf]] [--json]\n"
     "\n"
     "A floor plan from the horizontal section at height H (default 1.0 m, z up) +- B\n"
     "(default 0.05 m): wall faces fitted as lines, walls (two faces 0.05-0.4 m apart\n"
     "back to back) with their thickness, openings (gaps of at least W, default 0.6 m,\n"
     "that are not shadows of furniture) with their width, the rooms' inner\n"
     "dimensions between facing walls across free space, and the rooms' outlines\n"
-    "(closed polygons on the walls' faces, doors closed) with their areas. A SESSION's cloud is built as\n"
+    "(closed polygons on the walls' faces, doors closed) with their areas. A SESSION's cloud is "
+    "built as\n"
     "`reconstruct` builds it (meta.json's calibration or --calibration, EKF poses or\n"
     "--pose-source). A PROJECT (.sweepscan-project) is drawn in its frame from its placed,\n"
     "visible sessions (or --sessions ID,ID), each built as `project export` builds it.\n"
@@ -42,7 +45,7 @@ const char* const kPlanUsage =
     "  --svg F.svg            the plan as SVG 1.1 at 1:N (--scale N, default 50), north up\n"
     "  --dxf F.dxf            the plan as DXF R12 in metres (layers WALLS, OPENINGS,\n"
     "                         DIMENSIONS, SECTION, ROOMS); docs/plan-formats.md\n"
-    "  --section-line x0,y0,x1,y1 --section-svg F.svg | --section-dxf F.dxf\n"
+    "  --section-line x0,y0,x1,y1 --section-svg F.svg and/or --section-dxf F.dxf\n"
     "                         the vertical section along that line (m, +- B either side)\n"
     "  --calibration FILE, --pose-source S, --strict, --seed N   as for evaluate\n"
     "  --json                 the plan as JSON on stdout\n";
@@ -198,7 +201,7 @@ int RunPlan(int argc, char** argv) {
                                          "section-svg", "section-dxf", "scenario", "seed", "calibration", "pose-source", "sessions"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error + " (see sweepscan-cli help plan)");
+    PrintError(SeeHelp(error, "plan"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {

@@ -60,7 +60,7 @@ const char* const kProjectUsage =
     "                     rooms). What another program saved to PROJECT meanwhile\n"
     "                     is kept: the placements are applied onto it, and one\n"
     "                     whose session changed there is refused (exit 1)\n"
-    "  export PROJECT --out FILE.las|FILE.ply|FILE.pcd [--sessions ID,ID]\n"
+    "  export PROJECT --out FILE.las|FILE.ply|FILE.pcd [--sessions ID,ID] [--pose-source S]\n"
     "                     the placed, visible sessions' clouds in the project frame;\n"
     "                     every format is streamed one session at a time; LAS\n"
     "                     gives each its own Point Source ID. On a terminal\n"

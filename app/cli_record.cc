@@ -208,7 +208,7 @@ int RunRecord(int argc, char** argv) {
                                "scenario", "calibration", "connect-timeout", "stall-s"});
   std::string parse_error;
   if (!args.Parse(argc, argv, 2, &parse_error)) {
-    PrintError(parse_error);
+    PrintError(SeeHelp(parse_error, "record"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {

@@ -52,7 +52,8 @@ const char* const kRepairUsage =
 const char* const kExportUsage =
     "usage: sweepscan-cli export SESSION --out DIR [--strict] [--json]\n"
     "       sweepscan-cli export SESSION --out FILE.las|FILE.ply|FILE.pcd [--calibration FILE]\n"
-    "                            [--pose-source S] [--no-ekf] [--no-deskew] [--strict] [--json]\n"
+    "                            [--pose-source S] [--no-ekf] [--no-deskew] [--loop-closure]\n"
+    "                            [--strict] [--json]\n"
     "       sweepscan-cli export SESSION --format rosbag --out FILE.bag [--calibration FILE]\n"
     "                            [--no-ekf] [--frame F]\n"
     "\n"
@@ -95,7 +96,7 @@ nlohmann::json DamageJson(const FramesLoadReport& f) {
 bool ParseCommon(Args* args, int argc, char** argv, const char* usage, int* code) {
   std::string error;
   if (!args->Parse(argc, argv, 2, &error)) {
-    PrintError(error);
+    PrintError(SeeHelp(error, argv[1]));
     *code = kExitBadInput;
     return false;
   }
@@ -322,8 +323,12 @@ int RunExport(int argc, char** argv) {
     return kExitFailure;
   }
   // Each file through the checked writer: complete under its name, or absent.
+  // `written`: the files this export made that were not there before (an
+  // earlier export's it replaced cannot be given back, and stay).
   std::vector<std::string> written;
   auto write = [&](const std::string& name, const std::string& header, auto&& rows) -> Status {
+    struct stat before;
+    const bool existed = ::stat((dir + "/" + name).c_str(), &before) == 0;
     CheckedFileWriter out;
     Status s = out.Open(dir + "/" + name);
     if (!s.ok()) return s;
@@ -336,7 +341,7 @@ int RunExport(int argc, char** argv) {
     flush();
     if (!s.ok()) return s;
     s = out.Commit();
-    if (s.ok()) written.push_back(dir + "/" + name);
+    if (s.ok() && !existed) written.push_back(dir + "/" + name);
     return s;
   };
   auto line = [](std::string* text, const char* format, auto... values) {
@@ -383,7 +388,7 @@ int RunExport(int argc, char** argv) {
       }
     });
   }
-  if (!s.ok()) {  // a full disk: no lidar.csv without its imu.csv, no empty folder
+  if (!s.ok()) {  // a full disk: no new lidar.csv without its imu.csv, no empty folder
     for (const std::string& path : written) ::unlink(path.c_str());
     if (created) ::rmdir(dir.c_str());
     PrintError(s.message());

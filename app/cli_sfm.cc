@@ -106,10 +106,12 @@ int RunProtocol(const Args& args) {
 }  // namespace
 
 int RunP3l(int argc, char** argv) {
-  Args args({"protocol", "help"}, {"csv", "trials", "seed", "noise-max", "steps", "points"});
+  // --json is taken as every command takes it: p3l prints JSON anyway.
+  Args args({"protocol", "help", "json"},
+            {"csv", "trials", "seed", "noise-max", "steps", "points"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error);
+    PrintError(SeeHelp(error, "p3l"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {
@@ -282,7 +284,7 @@ int RunSfmWheeled(const Args& args) {
                                     "the wheeled scanner (it is for --rig-scenario)");
   if (refused != kExitOk) return refused;
   if (!args.Has("out")) {
-    PrintError("sfm needs --out CLOUD.ply (see sweepscan-cli help sfm)");
+    PrintError(SeeHelp("sfm needs --out CLOUD.ply", "sfm"));
     return kExitBadInput;
   }
   if (!IsCloudFile(args.Get("out"))) {
@@ -438,7 +440,7 @@ int RunSfm(int argc, char** argv) {
              "motion-prior", "calibration"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error);
+    PrintError(SeeHelp(error, "sfm"));
     return kExitBadInput;
   }
   if (args.Flag("help")) {

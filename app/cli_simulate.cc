@@ -83,7 +83,7 @@ int ParseSimulateArgs(const Args& args, SimulateRequest* request) {
     return kExitBadInput;
   }
   if (!args.Has("scenario") || !args.Has("out")) {
-    PrintError("simulate needs --scenario FILE and --out CLOUD.ply (see sweepscan-cli help simulate)");
+    PrintError(SeeHelp("simulate needs --scenario FILE and --out CLOUD.ply", "simulate"));
     return kExitBadInput;
   }
   const std::string out = args.Get("out");
@@ -158,7 +158,12 @@ int RecordSession(const Args& args, const SimulateRequest& request, TerminalProg
     sim_options.progress = [progress](double f) { progress->Show("recording the drive", f); };
   }
   hardware::SimulateSessionReport sim_report;
-  const bool existed = std::filesystem::exists(*session_dir);
+  // Not followed through a link (a dangling one is not ours to remove), and
+  // an unanswerable question (a name too long) counts as there.
+  std::error_code looked;
+  const auto status_before = std::filesystem::symlink_status(*session_dir, looked);
+  const bool existed = looked ? looked != std::errc::no_such_file_or_directory
+                              : std::filesystem::exists(status_before);
   Status status = hardware::SimulateSession(request.config, *session_dir, sim_options, &sim_report);
   if (!status.ok()) {
     progress->Clear();  // the error on a line of its own
@@ -374,7 +379,7 @@ int RunSimulate(int argc, char** argv) {
             {"scenario", "out", "truth", "pose-source", "seed", "session"});
   std::string error;
   if (!args.Parse(argc, argv, 2, &error)) {
-    PrintError(error + " (see sweepscan-cli help simulate)");
+    PrintError(SeeHelp(error, "simulate"));
     return kExitBadInput;
   }
   if (args.Flag("direct")) {

@@ -68,7 +68,10 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "save a screenshot with the menu open as PNG, then quit.",
       "PNG");
   const QCommandLineOption sessions(
-      "sessions-dir", "Where new recordings go (default: ~/sweepscan-sessions).", "DIR");
+      "sessions-dir",
+      "Where new recordings go (default: the folder last chosen in Tools > Sessions Folder, else "
+      "~/sweepscan-sessions).",
+      "DIR");
   const QCommandLineOption memory_budget(
       "memory-budget",
       "Memory for the cloud's points, in MiB (default: a quarter of the machine's RAM). Above it "

@@ -124,6 +124,13 @@ TEST_F(CliRobustnessTest, UsageErrorsAreExitTwoForEveryCommand) {
   const CommandRun help = Cli("help bogus");
   EXPECT_EQ(help.code, 2) << help.out;
   EXPECT_EQ(help.out, "sweepscan-cli: error: no command 'bogus' (see `sweepscan-cli help`)\n");
+  // `help` is a command too, and every command takes --json (p3l refused it).
+  EXPECT_EQ(Cli("help help").code, 0);
+  ExpectOneErrorLine(Cli("p3l --json"), "p3l needs one PROBLEM.json");
+  // Option errors point at the help too.
+  ExpectOneErrorLine(Cli("reconstruct x --bogus"),
+                     "unknown option --bogus (see `sweepscan-cli help reconstruct`)");
+  ExpectOneErrorLine(Cli("calibrate --bogus"), "(see `sweepscan-cli help calibrate`)");
   // A usage error is one line pointing at the help, not the error followed
   // by all of the help (30 lines, the error scrolled off).
   for (const std::string& args :
