@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <functional>
@@ -191,29 +192,84 @@ void WalkChunk(const uint8_t* p, size_t size, std::map<uint32_t, uint32_t>* mess
   }
 }
 
+// bz2 through its stream interface into a buffer that grows with what the
+// data really decompress to, doubling up to `size`: bzip2 can expand ~1:46
+// million, so no bound on `size` follows from `len`, and a corrupt header's
+// 4 GiB must not be allocated before the data say otherwise (the fuzzer's
+// out-of-memory). Ends where bzip2's stream ends; output past `size` is
+// refused, as BZ2_bzBuffToBuffDecompress refuses it (BZ_OUTBUFF_FULL).
+std::unique_ptr<uint8_t[]> DecompressBz2(const uint8_t* data, uint32_t len, uint32_t size,
+                                         uint64_t* got) {
+  bz_stream bz{};
+  int rc = BZ2_bzDecompressInit(&bz, 0, 0);
+  if (rc != BZ_OK) throw Bad{"bzip2 could not start (bzip2 error " + std::to_string(rc) + ")"};
+  struct End {
+    bz_stream* bz;
+    ~End() { BZ2_bzDecompressEnd(bz); }
+  } end{&bz};
+  // Both libraries take non-const input they do not write.
+  bz.next_in = const_cast<char*>(reinterpret_cast<const char*>(data));
+  bz.avail_in = len;
+  uint64_t cap = std::min<uint64_t>(size, std::max<uint64_t>(uint64_t{len} * 16, 1 << 20));
+  std::unique_ptr<uint8_t[]> out(new uint8_t[cap == 0 ? 1 : cap]);
+  *got = 0;
+  for (;;) {
+    if (*got == cap && cap < size) {
+      const uint64_t grown = std::min<uint64_t>(size, cap * 2);
+      std::unique_ptr<uint8_t[]> bigger(new uint8_t[grown]);
+      std::memcpy(bigger.get(), out.get(), *got);
+      out = std::move(bigger);
+      cap = grown;
+    }
+    char spare;  // Once `size` bytes are out: any more is too many.
+    const bool full = *got == cap;
+    const unsigned room = full ? 1u : static_cast<unsigned>(std::min<uint64_t>(cap - *got, 1u << 30));
+    bz.next_out = full ? &spare : reinterpret_cast<char*>(out.get() + *got);
+    bz.avail_out = room;
+    const unsigned in_before = bz.avail_in;
+    rc = BZ2_bzDecompress(&bz);
+    const unsigned produced = room - bz.avail_out;
+    if (full && produced > 0) rc = BZ_OUTBUFF_FULL;
+    if (rc == BZ_STREAM_END && !full) *got += produced;
+    if (rc == BZ_STREAM_END) return out;
+    if (rc == BZ_OK && produced == 0 && bz.avail_in == in_before) rc = BZ_UNEXPECTED_EOF;
+    if (rc != BZ_OK)
+      throw Bad{"its bz2 data do not decompress (bzip2 error " + std::to_string(rc) + ")"};
+    *got += produced;
+  }
+}
+
 // The chunk's data decompressed as its `compression` says, to exactly
 // `size` bytes (any size a u32 holds: one message of a gigabyte makes a
 // chunk that big). The buffer is left uninitialised: a corrupt size costs
-// the pages the decompressor writes before it fails, not `size` of zeros.
+// the pages the decompressor writes before it fails, not `size` of zeros;
+// bz2's grows with its output, and lz4's is bounded by lz4's best ratio.
 std::unique_ptr<uint8_t[]> Decompress(const std::string& compression, const uint8_t* data,
                                       uint32_t len, uint32_t size) {
-  std::unique_ptr<uint8_t[]> out(new uint8_t[size == 0 ? 1 : size]);
   if (compression == "none") {
+    std::unique_ptr<uint8_t[]> out(new uint8_t[size == 0 ? 1 : size]);
     std::memcpy(out.get(), data, size);  // len == size, checked by the caller
     return out;
   }
-  // Both libraries take non-const input they do not write.
-  char* in = const_cast<char*>(reinterpret_cast<const char*>(data));
-  unsigned int got = size;
+  uint64_t got = 0;
+  std::unique_ptr<uint8_t[]> out;
   if (compression == "bz2") {
-    const int rc =
-        BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.get()), &got, in, len, 0, 0);
-    if (rc != BZ_OK)
-      throw Bad{"its bz2 data do not decompress (bzip2 error " + std::to_string(rc) + ")"};
+    out = DecompressBz2(data, len, size, &got);
   } else {
-    const int rc = roslz4_buffToBuffDecompress(in, len, reinterpret_cast<char*>(out.get()), &got);
+    // An LZ4 sequence expands at most ~255 times (a match's length grows by
+    // 255 a byte), plus the frame's own bytes: a header claiming more than
+    // that is refused before anything is allocated.
+    if (size > uint64_t{len} * 255 + 65536) {
+      throw Bad{"the chunk's header says it decompresses to " + std::to_string(size) +
+                " bytes, more than its " + std::to_string(len) + " bytes of lz4 can hold"};
+    }
+    out.reset(new uint8_t[size == 0 ? 1 : size]);
+    unsigned int lz4_got = size;
+    const int rc = roslz4_buffToBuffDecompress(const_cast<char*>(reinterpret_cast<const char*>(data)),
+                                               len, reinterpret_cast<char*>(out.get()), &lz4_got);
     if (rc != ROSLZ4_OK)
       throw Bad{"its lz4 data do not decompress (roslz4 error " + std::to_string(rc) + ")"};
+    got = lz4_got;
   }
   if (got != size) {
     throw Bad{"the chunk decompresses to " + std::to_string(got) + " bytes, its header says " +
