@@ -197,7 +197,9 @@ int RunBagInfo(int argc, char** argv) {
       std::cerr << "sweepscan-cli: warning: " << check.undecodable
                 << " messages did not decode, the first on " << check.first_undecodable << "\n";
     }
-    if (stats.damaged || check.undecodable > 0) {
+    // The message read never looks at an MCAP's summary: its damage was
+    // found by the description (SummarizeRosBag).
+    if (stats.damaged || summary.damaged || check.undecodable > 0) {
       PrintError(bag + ": damaged (--strict)");
       return kExitBadInput;
     }

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <map>
@@ -191,6 +192,27 @@ TEST_F(CliRos2Test, ACutMcapSaysWhatWasLostAndAFolderWithOneMcapIsABag) {
       << r.out;
   r = Cli("info " + Bag("lab", kStorages[1]) + " --strict");
   EXPECT_EQ(r.code, 0) << r.out;
+  // A byte of the summary section changed, the messages intact: described
+  // by scanning, with a warning, and refused by --strict (it was exit 0:
+  // the message read stops at Data End and never sees the summary). The
+  // footer (29 bytes, then the 8-byte magic) holds summary_start.
+  std::string flipped = full;
+  uint64_t summary_start = 0;
+  std::memcpy(&summary_start, flipped.data() + flipped.size() - 37 + 9, 8);
+  ASSERT_GT(summary_start, 8u);
+  ASSERT_LT(summary_start + 12, flipped.size() - 37);
+  flipped[summary_start + 12] ^= 0x01;
+  const std::string bad_summary = Tmp("lab_bad_summary.mcap");
+  std::ofstream(bad_summary, std::ios::binary)
+      .write(flipped.data(), static_cast<std::streamsize>(flipped.size()));
+  r = Cli("info " + bad_summary);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("CRC-32 does not match the footer's; scanning the file instead"),
+            std::string::npos)
+      << r.out;
+  r = Cli("info " + bad_summary + " --strict");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find(bad_summary + ": damaged (--strict)"), std::string::npos) << r.out;
 
   const std::string folder = Tmp("copied_bag");
   RunCommand("rm -rf " + folder + " && mkdir -p " + folder + " && cp " + Bag("lab", kStorages[1]) +

@@ -83,6 +83,7 @@ Status SummarizeRosBag(const std::string& given, RosBagSummary* summary,
   if (LooksLikeRosBag(path)) {
     Ros2ReadReport report;
     const Status s = SummarizeRos2Bag(path, summary, &report, progress);
+    summary->damaged = summary->damaged || report.damaged;
     if (warnings != nullptr) AddOnce(report.warnings, warnings);
     return s;
   }

@@ -139,6 +139,10 @@ struct RosBagSummary {
   uint64_t message_count = 0;
   int64_t start_ns = 0, end_ns = 0;  // log times of the first and last message
   std::vector<RosTopicInfo> topics;  // sorted by topic name
+  // The summary's own index met damage (an MCAP summary whose CRC or
+  // offsets fail: described by scanning the file instead, its warning says
+  // so); `info --strict` refuses it as it refuses damaged messages.
+  bool damaged = false;
 };
 
 struct RosReadOptions {
