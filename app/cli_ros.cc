@@ -348,11 +348,7 @@ int ExportRosbag(const Args& args, const SensorLog& log, const SessionMeta& meta
   // Intensities are the samples', found by (scan, beam): the cloud keeps
   // provenance, not the intensity itself. Points come scan by scan, so one
   // beam table a scan.
-  std::vector<const LidarScan*> scans;
-  for (const LidarScan& scan : log.scans) {
-    if (scan.index >= scans.size()) scans.resize(scan.index + 1, nullptr);
-    scans[scan.index] = &scan;
-  }
+  const ScansByIndex scans(log.scans);
   io::RosExport out;
   out.frame_id = args.Has("frame") ? args.Get("frame") : "odom";
   out.points.reserve(result.points.size());
@@ -362,8 +358,8 @@ int ExportRosbag(const Args& args, const SensorLog& log, const SessionMeta& meta
     if (p.scan != table_scan) {
       table_scan = p.scan;
       beam_intensity.assign(65536, 0.0f);
-      if (p.scan < scans.size() && scans[p.scan] != nullptr) {
-        for (const LidarSample& sample : scans[p.scan]->samples) beam_intensity[sample.beam] = sample.intensity;
+      if (const LidarScan* scan = scans.Find(p.scan)) {
+        for (const LidarSample& sample : scan->samples) beam_intensity[sample.beam] = sample.intensity;
       }
     }
     out.points.push_back({p.x, p.y, p.z, beam_intensity[p.beam], p.time_ns + origin});

@@ -4,7 +4,10 @@
 #ifndef SWEEPSCAN_CORE_ROBOT_SENSOR_DATA_H_
 #define SWEEPSCAN_CORE_ROBOT_SENSOR_DATA_H_
 
+#include <algorithm>
 #include <cstdint>
+#include <iterator>
+#include <utility>
 #include <vector>
 
 #include "core/common/time.h"
@@ -51,6 +54,32 @@ struct LidarScan {
 
   Time start_time() const { return samples.empty() ? Time() : samples.front().time; }
   Time end_time() const { return samples.empty() ? Time() : samples.back().time; }
+};
+
+// The scans looked up by index (a cloud point's `scan`). An imported
+// recording's indices are whatever its file says: a table sized by the
+// largest would be 32 GiB for one scan numbered 2^32 - 2 (and wrap to
+// nothing at 2^32 - 1), so this holds one entry a scan, sorted. Of scans
+// sharing an index, the last in the log is found.
+class ScansByIndex {
+ public:
+  explicit ScansByIndex(const std::vector<LidarScan>& scans) {
+    sorted_.reserve(scans.size());
+    for (const LidarScan& s : scans) sorted_.emplace_back(s.index, &s);
+    std::stable_sort(sorted_.begin(), sorted_.end(),
+                     [](const Entry& a, const Entry& b) { return a.first < b.first; });
+  }
+  const LidarScan* Find(uint32_t index) const {
+    const auto after = std::upper_bound(
+        sorted_.begin(), sorted_.end(), index,
+        [](uint32_t i, const Entry& e) { return i < e.first; });
+    if (after == sorted_.begin() || std::prev(after)->first != index) return nullptr;
+    return std::prev(after)->second;
+  }
+
+ private:
+  using Entry = std::pair<uint32_t, const LidarScan*>;
+  std::vector<Entry> sorted_;
 };
 
 // Everything a recording produced, in time order per stream.

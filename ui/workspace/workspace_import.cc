@@ -86,29 +86,30 @@ void Workspace::ImportRosRecording(const QString& bag, const QString& session_di
 bool Workspace::MapIntensities(const SensorLog& log, const CloudSnapshotRef& cloud,
                                const std::atomic<bool>& cancel, QuantizedValues* out) {
   bool any = false;
-  std::vector<const LidarScan*> scans;
   for (const LidarScan& scan : log.scans) {
-    if (cancel) return false;  // a session change waits for this thread
-    if (scan.index >= scans.size()) scans.resize(scan.index + 1, nullptr);
-    scans[scan.index] = &scan;
+    if (cancel || any) break;  // a session change waits for this thread
     for (size_t i = 0; !any && i < scan.samples.size(); ++i)
       any = scan.samples[i].intensity != 0.0f;
   }
-  if (!any) return false;
+  if (!any || cancel) return false;
+  const ScansByIndex scans(log.scans);
   // Chunk by chunk (a 10 M-point cloud decoded whole would be 320 MB more).
   // Points come scan by scan: one beam table a scan.
   std::vector<float> values;
   values.reserve(cloud.size());
   std::vector<float> beam(65536, 0.0f);
   uint32_t table = std::numeric_limits<uint32_t>::max();
+  const LidarScan* scan = nullptr;  // table's
   const auto map = [&](const CloudPoint& p) {
-    if (p.scan >= scans.size() || scans[p.scan] == nullptr) {
-      values.push_back(std::numeric_limits<float>::quiet_NaN());
-      return;
-    }
     if (p.scan != table) {
       table = p.scan;
-      for (const LidarSample& s : scans[p.scan]->samples) beam[s.beam] = s.intensity;
+      scan = scans.Find(p.scan);
+      if (scan != nullptr)
+        for (const LidarSample& s : scan->samples) beam[s.beam] = s.intensity;
+    }
+    if (scan == nullptr) {
+      values.push_back(std::numeric_limits<float>::quiet_NaN());
+      return;
     }
     values.push_back(beam[p.beam]);
   };

@@ -108,6 +108,26 @@ TEST(MeasurementsTest, StreamsAreSortedByTime) {
   EXPECT_EQ(ToNanoseconds(log.wheels[2].time), 300);
 }
 
+// A measurements session's scan index is whatever its file says: looked up
+// without a table sized by the largest (one scan numbered 2^32 - 2 made a
+// 32 GiB table; 2^32 - 1 wrapped the size to 0 and wrote past it).
+TEST(MeasurementsTest, ScansAreFoundByIndexWhateverTheIndices) {
+  std::vector<LidarScan> scans(5);
+  const uint32_t indices[] = {7, 0xFFFFFFFFu, 0, 0xFFFFFFFEu, 7};
+  for (size_t i = 0; i < scans.size(); ++i) {
+    scans[i].index = indices[i];
+    scans[i].samples.resize(i + 1);
+  }
+  const ScansByIndex found(scans);
+  EXPECT_EQ(found.Find(0), &scans[2]);
+  EXPECT_EQ(found.Find(0xFFFFFFFFu), &scans[1]);
+  EXPECT_EQ(found.Find(0xFFFFFFFEu), &scans[3]);
+  EXPECT_EQ(found.Find(7), &scans[4]);  // the last of those sharing it
+  EXPECT_EQ(found.Find(1), nullptr);
+  EXPECT_EQ(found.Find(8), nullptr);
+  EXPECT_EQ(ScansByIndex({}).Find(0), nullptr);
+}
+
 TEST(MeasurementsTest, OverlongScansAreRefused) {
   LidarScan scan;
   scan.samples.resize(2);
