@@ -9,11 +9,15 @@
 #include <pcl/point_types.h>
 #include <unistd.h>
 
+#include <pcl/conversions.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -179,8 +183,21 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
     int properties = 0;
   };
   std::vector<Element> elements;
+  // PCL sizes the cloud as width x height rows of the vertex element, in
+  // header order: `element vertex N` sets N x 1, `obj_info num_cols` /
+  // `num_rows` set either. They must agree with the vertex count, or PCL
+  // allocates what they say (a 250-byte file with num_cols and num_rows of
+  // 20 000 cost 4.8 GB before a byte was read).
+  uint64_t width = 0, height = 1;
   for (size_t i = 1; i < lines.size(); ++i) {
     const std::vector<std::string> w = SplitWords(lines[i]);
+    if (!w.empty() && w[0] == "obj_info" && w.size() >= 3 &&
+        (w[1] == "num_cols" || w[1] == "num_rows")) {
+      uint64_t v = 0;
+      if (!ParseCount(w[2], &v)) return bad("'" + lines[i] + "' has no valid count");
+      (w[1] == "num_cols" ? width : height) = v;
+      continue;
+    }
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info" || w[0] == "end_header") continue;
     if (w[0] == "format") {
       if (w.size() < 2) return bad("format line without a format");
@@ -191,6 +208,14 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
         return bad("'" + lines[i] + "' has no valid non-negative count");
       }
       e.name = w[1];
+      for (const Element& seen : elements) {
+        // PCL takes the cloud's rows from one and its width from the other.
+        if (seen.name == e.name) return bad("two '" + e.name + "' elements");
+      }
+      if (e.name == "vertex") {
+        width = e.count;
+        height = 1;
+      }
       elements.push_back(e);
     } else if (w[0] == "property") {
       if (elements.empty()) return bad("property before any element");
@@ -210,6 +235,26 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
     }
   }
   if (format.empty()) return bad("no format line");
+  const Element* vertex = nullptr;
+  const Element* grid = nullptr;
+  for (const Element& e : elements) {
+    if (e.name == "vertex") vertex = &e;
+    if (e.name == "range_grid") grid = &e;
+  }
+  const uint64_t vertices = vertex != nullptr ? vertex->count : 0;
+  if ((width != vertices || height != 1) && (height == 0 || width > UINT64_MAX / height ||
+                                             width * height != vertices)) {
+    return bad("obj_info num_cols x num_rows (" + std::to_string(width) + " x " +
+               std::to_string(height) + ") differs from the " + std::to_string(vertices) +
+               " vertices");
+  }
+  // PCL lays an organised cloud out on its range grid, a vertex row a cell:
+  // bounded by the vertices (a grid at least 1/16 valid), or a grid of
+  // one-byte rows would cost a vertex row each (26 000 times the file).
+  if (grid != nullptr && grid->count > 16 * std::max<uint64_t>(vertices, 1)) {
+    return bad("a range grid of " + std::to_string(grid->count) + " cells for " +
+               std::to_string(vertices) + " vertices");
+  }
   const uint64_t data_size = file_size - data_offset;
   const std::string declared = std::to_string(data_size) + " bytes follow the header";
   if (format == "ascii") {
@@ -265,9 +310,21 @@ Status ValidatePcd(const std::string& path, uint64_t file_size) {
   uint64_t width = 0, height = 1, points = 0;
   bool have_points = false, have_width = false;
   std::string data;
+  // PCL matches a keyword by its first letters ("POINTSx" is POINTS) and
+  // acts on every line (each POINTS resizes the cloud: POINTS 300000000
+  // then POINTS 1 kept 3.6 GB): a keyword is taken exactly and once.
+  static const char* const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE",
+                                          "COUNT",   "WIDTH",  "HEIGHT",  "VIEWPOINT",
+                                          "POINTS",  "DATA"};
+  std::set<std::string> seen;
   for (const std::string& line : lines) {
     const std::vector<std::string> w = SplitWords(line);
     if (w.empty() || w[0][0] == '#') continue;
+    for (const char* k : kKeywords) {
+      if (w[0].compare(0, std::strlen(k), k) != 0) continue;
+      if (w[0] != k) return bad("unknown header line '" + line + "'");
+      if (!seen.insert(k).second) return bad("two " + std::string(k) + " lines");
+    }
     auto numbers = [&](std::vector<uint64_t>* out) {
       for (size_t i = 1; i < w.size(); ++i) {
         uint64_t v;
@@ -329,11 +386,28 @@ Status ValidatePcd(const std::string& path, uint64_t file_size) {
   }
   if (data == "binary_compressed") {
     if (data_size < 8) return bad("compressed data shorter than its 8-byte sizes");
-    // PCL decompresses into points x point_size bytes: bound it by LZF's
-    // best ratio (about 1:100) so a forged count cannot exhaust memory.
-    if (point_size == 0 || points / 128 > data_size / point_size) {
-      return bad("POINTS " + std::to_string(points) + " for only " + declared +
-                 " of compressed data");
+    // The data start with their compressed and uncompressed sizes (u32
+    // little-endian). PCL allocates the uncompressed size twice, zeroed,
+    // before it decompresses: it must be the points' bytes, and the
+    // compressed bytes must be in the file.
+    uint32_t sizes_at[2] = {0, 0};
+    std::ifstream in(path, std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(data_offset));
+    if (!in.read(reinterpret_cast<char*>(sizes_at), sizeof(sizes_at)))
+      return bad("cannot read the compressed data's sizes");
+    const uint64_t compressed = sizes_at[0], uncompressed = sizes_at[1];
+    if (compressed > data_size - 8) {
+      return bad("compressed data of " + std::to_string(compressed) + " bytes but " + declared);
+    }
+    if (point_size == 0 || points > UINT64_MAX / point_size ||
+        uncompressed != points * point_size) {
+      return bad("POINTS " + std::to_string(points) + " of " + std::to_string(point_size) +
+                 " bytes but the data decompress to " + std::to_string(uncompressed));
+    }
+    // LZF's best ratio is about 1:100.
+    if (points / 128 > std::max<uint64_t>(compressed, 1) / point_size + 1) {
+      return bad("POINTS " + std::to_string(points) + " for only " + std::to_string(compressed) +
+                 " bytes of compressed data");
     }
     return Status::Ok();
   }
@@ -428,19 +502,33 @@ Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
   const Status valid = ValidateCloudFile(path);
   if (!valid.ok()) return valid;
   QuietPcl();
+  // Through PCL's blob, as loadPLYFile(path, cloud) reads, so that its
+  // size is checked before the conversion allocates width x height points:
+  // a PLY camera element's viewport, read from the data, resets them after
+  // the blob was sized (the conversion then read past it).
+  pcl::PCLPointCloud2 blob;
   int rc = -1;
   try {
     if (HasFileSuffix(path, ".ply")) {
-      rc = pcl::io::loadPLYFile(path, *cloud);
+      rc = pcl::io::loadPLYFile(path, blob);
     } else {
-      rc = pcl::io::loadPCDFile(path, *cloud);
+      rc = pcl::io::loadPCDFile(path, blob);
     }
+    if (rc != 0)
+      return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+    const uint64_t n = static_cast<uint64_t>(blob.width) * blob.height;
+    if (blob.data.size() / std::max<uint64_t>(blob.point_step, 1) < n) {
+      return Status::Error(path + ": not a readable point cloud (" + std::to_string(blob.width) +
+                           " x " + std::to_string(blob.height) + " points but " +
+                           std::to_string(blob.data.size()) + " bytes of " +
+                           std::to_string(blob.point_step) + " a point)");
+    }
+    pcl::fromPCLPointCloud2(blob, *cloud);
   } catch (const std::bad_alloc&) {
     return Status::Error(path + ": not a readable point cloud (too large for memory)");
   } catch (const std::exception& e) {
     return Status::Error(path + ": not a readable point cloud (" + e.what() + ")");
   }
-  if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
   return Status::Ok();
 }
 

@@ -1,6 +1,10 @@
 #include "core/evaluation/cloud_arrays.h"
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -19,11 +23,21 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 bool ReadLine(std::FILE* f, std::string* line) {
   line->clear();
   int c;
+  // Only a line's last '\r' is its ending: one inside a line separates
+  // words, as PCL and the validator (cloud_io.cc) read it ("POI\rNTS" was
+  // POINTS here and nothing there).
+  const auto cut = [&] {
+    if (!line->empty() && line->back() == '\r') line->pop_back();
+  };
   while ((c = std::fgetc(f)) != EOF) {
-    if (c == '\n') return true;
-    if (c != '\r') line->push_back(static_cast<char>(c));
+    if (c == '\n') {
+      cut();
+      return true;
+    }
+    line->push_back(static_cast<char>(c));
     if (line->size() > 4096) return false;
   }
+  cut();
   return !line->empty();
 }
 
@@ -48,11 +62,23 @@ double Get(const unsigned char* p, int width) {
 CloudReadResult ReadRecords(std::FILE* f, size_t count, const Layout& layout, const std::string& path,
                             std::vector<Eigen::Vector3f>* points, std::string* error) {
   points->clear();
+  // Checked here, against the bytes after the header, before anything is
+  // allocated: not trusted to another parser's reading of the header.
+  const long at = std::ftell(f);
+  struct stat st {};
+  if (at < 0 || fstat(fileno(f), &st) != 0 || layout.record == 0 ||
+      count > (static_cast<uint64_t>(st.st_size) - std::min<uint64_t>(st.st_size, at)) /
+                  layout.record) {
+    *error = path + ": truncated (" + std::to_string(count) + " points of " +
+             std::to_string(layout.record) + " bytes declared, " +
+             std::to_string(at < 0 ? 0 : st.st_size - std::min<int64_t>(st.st_size, at)) +
+             " bytes follow the header)";
+    return CloudReadResult::kError;
+  }
   points->reserve(count);
   constexpr size_t kChunkRecords = 1 << 16;
-  // At most what the file holds (count * record was checked against its
-  // size): a header of one point of 2^20 doubles would otherwise cost 64k
-  // records of 8 MiB.
+  // At most what the file holds (checked above): a header of one point of
+  // 2^20 doubles would otherwise cost 64k records of 8 MiB.
   std::vector<unsigned char> buffer(std::min(count, kChunkRecords) * layout.record);
   size_t left = count;
   while (left > 0) {

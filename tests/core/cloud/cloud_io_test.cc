@@ -1,4 +1,5 @@
 #include "core/cloud/cloud_io.h"
+#include "core/evaluation/cloud_arrays.h"
 
 #include <gtest/gtest.h>
 
@@ -305,6 +306,90 @@ TEST(CloudHeaderTest, TrailingJunkAndShortDataAreRefused) {
   const std::string cut = TempPath("cut.ply");
   WriteText(cut, PlyHeaderFor("10") + std::string(100, '\0'));
   EXPECT_FALSE(LoadCloudPositions(cut, &xyz).ok());
+}
+
+// Header lines PCL sizes the cloud by, which the checks had not read: a
+// PLY's obj_info num_cols / num_rows (a 250-byte file cost 4.8 GB), a
+// second vertex element, a range grid far beyond the vertices; a PCD's
+// repeated or prefixed keyword (PCL resizes at every POINTS line and takes
+// "POINTSx" as POINTS) and a compressed block's uncompressed size (PCL
+// allocates it twice, zeroed, before decompressing).
+TEST(CloudHeaderTest, WhatPclSizesTheCloudByMustAgreeWithTheData) {
+  std::vector<Eigen::Vector3f> xyz;
+  const std::string body(12, '\0');  // one vertex of three floats
+  const auto ply_with = [&](const std::string& name, const std::string& extra) {
+    const std::string path = TempPath(name);
+    WriteText(path, "ply\nformat binary_little_endian 1.0\n" + extra +
+                        "element vertex 1\nproperty float x\nproperty float y\n"
+                        "property float z\nend_header\n" + body);
+    return path;
+  };
+  const auto refused = [&](const std::string& path, const std::string& why) {
+    const Status s = LoadCloudPositions(path, &xyz);
+    EXPECT_FALSE(s.ok()) << path;
+    EXPECT_NE(s.message().find(why), std::string::npos) << s.message();
+  };
+  // Before the vertex element PCL overrides them, as the check does.
+  ASSERT_TRUE(LoadCloudPositions(ply_with("info_first.ply", "obj_info num_cols 20000\n"), &xyz).ok());
+  EXPECT_EQ(xyz.size(), 1u);
+  std::string path = TempPath("obj_info.ply");
+  WriteText(path, PlyHeaderFor("1").substr(0, PlyHeaderFor("1").size() - 11) +
+                      "obj_info num_cols 20000\nobj_info num_rows 20000\nend_header\n" + body);
+  refused(path, "obj_info num_cols x num_rows (20000 x 20000) differs from the 1 vertices");
+  path = TempPath("two_vertex.ply");
+  WriteText(path, "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                  "property float y\nproperty float z\nelement vertex 1\nproperty uchar a\n"
+                  "end_header\n" + body + std::string(1, '\0'));
+  refused(path, "two 'vertex' elements");
+  path = TempPath("grid.ply");
+  WriteText(path, PlyHeaderFor("1").substr(0, PlyHeaderFor("1").size() - 11) +
+                      "element range_grid 1000\nproperty list uchar int vertex_indices\n"
+                      "end_header\n" + body + std::string(1000, '\0'));
+  refused(path, "a range grid of 1000 cells for 1 vertices");
+
+  const std::string fields =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\n";
+  path = TempPath("twice.pcd");
+  WriteText(path, fields + "POINTS 300000000\nPOINTS 1\nDATA binary\n" + body);
+  refused(path, "two POINTS lines");
+  path = TempPath("prefixed.pcd");
+  WriteText(path, fields + "POINTSx 300000000\nPOINTS 1\nDATA binary\n" + body);
+  refused(path, "unknown header line 'POINTSx 300000000'");
+  path = TempPath("compressed.pcd");
+  const uint32_t claim[2] = {4, 0x7FFFFFFFu};
+  std::string block(reinterpret_cast<const char*>(claim), 8);
+  WriteText(path, fields + "POINTS 1\nDATA binary_compressed\n" + block + "abcd");
+  refused(path, "POINTS 1 of 12 bytes but the data decompress to 2147483647");
+  const uint32_t beyond[2] = {400, 12};
+  WriteText(path, fields + "POINTS 1\nDATA binary_compressed\n" +
+                      std::string(reinterpret_cast<const char*>(beyond), 8) + "abcd");
+  refused(path, "compressed data of 400 bytes but 12 bytes follow the header");
+}
+
+// The evaluation's own reader checks a header's count against the bytes
+// that follow it before it allocates (it had trusted the validator, whose
+// reading of an inner '\r' differed: a 3.3 GB buffer for a 12-byte file).
+TEST(CloudHeaderTest, TheDirectReaderChecksCountsAgainstTheBytes) {
+  const std::string path = TempPath("wide_direct.pcd");
+  WriteText(path,
+            "VERSION 0.7\nFIELDS x y z w\nSIZE 4 4 4 8\nTYPE F F F F\nCOUNT 1 1 1 100000\n"
+            "WIDTH 4096\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4096\nDATA binary\n" +
+                std::string(12, '\0'));
+  std::vector<Eigen::Vector3f> xyz;
+  std::string error;
+  EXPECT_EQ(ReadCloudPositions(path, &xyz, &error), CloudReadResult::kError);
+  EXPECT_NE(error.find("truncated (4096 points of 800012 bytes declared, 12 bytes follow the header)"),
+            std::string::npos)
+      << error;
+  // "POI\rNTS" is no POINTS line to it, as to PCL and the validator.
+  const std::string hidden = TempPath("hidden.pcd");
+  WriteText(hidden,
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
+            "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nPOI\rNTS 4096\nDATA binary\n" +
+                std::string(12, '\0'));
+  ASSERT_EQ(ReadCloudPositions(hidden, &xyz, &error), CloudReadResult::kOk) << error;
+  EXPECT_EQ(xyz.size(), 1u);
 }
 
 TEST(CloudHeaderTest, AFolderIsAClearError) {
