@@ -560,6 +560,7 @@ int RunSfm(int argc, char** argv) {
           c.time_ns = static_cast<int64_t>(std::llround(scan.time_s * 1e9));
           c.scan = static_cast<uint32_t>(si);
           c.beam = static_cast<uint16_t>(b);
+          c.pose_source = static_cast<uint8_t>(PoseSource::kSfm);  // placed by the SfM
           cloud.push_back(c);
         }
       }

@@ -95,6 +95,11 @@ std::string UtcNowIso8601() {
 std::string SessionSystemIdentifier(const SessionMeta& meta) {
   if (meta.content == kSessionContentMeasurements) return "OTHER";
   if (meta.link.rfind("sim", 0) == 0) return "sweepscan simulation";
+  // The app's simulator records over loopback TCP ("tcp:127.0.0.1:PORT"),
+  // as a robot would: its scenario in the settings says what it was.
+  if (meta.settings.is_object() && meta.settings.contains("scenario") &&
+      meta.settings.at("scenario").is_object())
+    return "sweepscan simulation";
   return "sweepscan YDLIDAR X4";
 }
 

@@ -88,8 +88,9 @@ inline constexpr char kSessionContentMeasurements[] = "measurements";
 Pose2d SessionStartPose(const SessionMeta& meta);
 // What recorded the session, as a LAS file's System Identifier names it
 // (ASPRS LAS 1.4 §2.4, docs/las-format.md): the hardware for a robot's
-// recording, the operation otherwise (a simulation; an imported bag, whose
-// sensors are unknown: "OTHER").
+// recording, the operation otherwise (a simulation: a link named "sim..."
+// or a scenario in the settings; an imported bag, whose sensors are
+// unknown: "OTHER").
 std::string SessionSystemIdentifier(const SessionMeta& meta);
 
 nlohmann::json SessionMetaToJson(const SessionMeta& meta);

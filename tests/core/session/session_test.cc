@@ -113,6 +113,28 @@ TEST(SessionTest, StartPoseFromTheScenarioSettings) {
   EXPECT_EQ(SessionStartPose(meta).y, 0.0);
 }
 
+// The LAS System Identifier: a simulation whether the CLI ran it in process
+// ("simulated ...") or the app's simulator recorded it over loopback TCP
+// (its scenario in the settings, as a robot's link): the app's exports had
+// said "sweepscan YDLIDAR X4" of simulated data.
+TEST(SessionTest, SystemIdentifierNamesSimulationsWhateverTheirLink) {
+  SessionMeta meta;
+  meta.link = "/dev/ttyUSB0";
+  EXPECT_EQ(SessionSystemIdentifier(meta), "sweepscan YDLIDAR X4");
+  meta.link = "tcp:192.168.4.1:7700";
+  EXPECT_EQ(SessionSystemIdentifier(meta), "sweepscan YDLIDAR X4");
+  meta.settings["scenario"] = 3;  // not a scenario
+  EXPECT_EQ(SessionSystemIdentifier(meta), "sweepscan YDLIDAR X4");
+  meta.link = "tcp:127.0.0.1:40123";
+  meta.settings["scenario"] = {{"name", "lab"}};
+  EXPECT_EQ(SessionSystemIdentifier(meta), "sweepscan simulation");
+  meta.settings = nlohmann::json::object();
+  meta.link = "simulated (in-process, scenario lab)";
+  EXPECT_EQ(SessionSystemIdentifier(meta), "sweepscan simulation");
+  meta.content = kSessionContentMeasurements;
+  EXPECT_EQ(SessionSystemIdentifier(meta), "OTHER");
+}
+
 TEST(SessionTest, WriteAndReloadEqual) {
   TempDir tmp;
   const std::string dir = tmp.Sub("lab.sweepscan");

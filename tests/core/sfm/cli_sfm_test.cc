@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "core/cloud/cloud_io.h"
+#include "core/pose/pose_estimator.h"
 #include "core/sfm/synthetic.h"
 #include "tests/testing/run_command.h"
 
@@ -130,8 +132,13 @@ TEST(CliSfmTest, RoomScenario) {
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 121);
-  std::ifstream ply(cloud);
-  EXPECT_TRUE(ply.good());
+  // Every point placed by the SfM says so (its pose source byte was 0, the
+  // EKF's, though no EKF ran).
+  std::vector<CloudPoint> points;
+  ASSERT_TRUE(LoadCloud(cloud, &points).ok());
+  ASSERT_GT(points.size(), 10000u);
+  for (const CloudPoint& p : points)
+    ASSERT_EQ(p.pose_source, static_cast<uint8_t>(PoseSource::kSfm));
   // The written initialisation reads back and gives the same run.
   run = Cli("sfm --rig-scenario room --frames 120 --json --init " + init);
   ASSERT_EQ(run.code, 0) << run.out;
