@@ -434,6 +434,8 @@ int Main(int argc, char** argv) {
       if (scripted) return 2;
     }
   }
+  // A session given as PATH replays at the panel's speed: --speed's.
+  window.replay_panel()->SetSpeed(o.speed);
   if (!o.open_path.isEmpty()) OpenPathGiven(o.open_path, &window);
   if (o.floor_plan) {
     if (o.plan_height_m > 0) window.plan_panel()->height_box()->setValue(o.plan_height_m);

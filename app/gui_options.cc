@@ -28,7 +28,9 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "project", "Open a project (many sessions in one frame, docs/project-format.md) at start.",
       "FILE");
   const QCommandLineOption speed(
-      "speed", "Replay speed: 1 to 20, or 0 for as fast as possible (default 0).", "X", "0");
+      "speed", "Replay speed, times real time (the Replay panel offers 1 to 20; any up to 1000), or 0 for "
+      "as fast as possible (default 0): of --replay, or of a session given as PATH.",
+      "X", "0");
   const QCommandLineOption screenshot("screenshot", "Save the view as PNG just before quitting.",
                                       "PATH");
   const QCommandLineOption window_shot(
@@ -102,7 +104,7 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
       "S");
   const QCommandLineOption floor_plan(
       "floor-plan", "Show the floor plan (View > Floor Plan) of the project or session at start.");
-  const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m).", "M");
+  const QCommandLineOption plan_height("plan-height", "The floor plan's cut height (m, 0.05 to 10).", "M");
   parser.addOptions({floor_plan, plan_height, draw_pace, seek});
   parser.addPositionalArgument(
       QStringLiteral("path"),
@@ -120,18 +122,18 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
   o.scenario = parser.isSet(scenario) ? parser.value(scenario)
                                       : resources + QStringLiteral("/scenarios/lab.json");
   o.replay = parser.value(replay);
-  o.speed = parser.value(speed).toDouble();
   o.screenshot = parser.value(screenshot);
   o.window_screenshot = parser.value(window_shot);
   o.export_cloud = parser.value(export_cloud);
   o.sessions_dir = parser.value(sessions);
   // A number the option takes, or the option named in o.bad_number (refused
   // in Main): "2G" read as 0 would have been a zero-byte memory budget.
-  const auto number = [&](const QCommandLineOption& option, double lo, double* out) {
+  const auto number = [&](const QCommandLineOption& option, double lo, double* out,
+                          double hi = std::numeric_limits<double>::max()) {
     if (!parser.isSet(option)) return;
     bool ok = false;
     const double v = parser.value(option).toDouble(&ok);
-    if (ok && v >= lo && std::isfinite(v)) {
+    if (ok && v >= lo && v <= hi && std::isfinite(v)) {
       *out = v;
     } else if (o.bad_number.isEmpty()) {
       o.bad_number = QStringLiteral("--%1 '%2'").arg(option.names().front(), parser.value(option));
@@ -142,14 +144,18 @@ Options ParseOptions(const QCoreApplication& app, const QString& resources) {
     number(option, 0.0, &v);
     if (v >= 0.0) *out = static_cast<long long>(v);
   };
+  number(speed, 0.0, &o.speed, 1000.0);
   number(quit_after, 0.0, &o.quit_after_s);
-  if (parser.isSet(orbit)) o.orbit_frames = std::max(1, parser.value(orbit).toInt());
+  double frames = 0.0;
+  number(orbit, 1.0, &frames, 1e6);
+  o.orbit_frames = static_cast<int>(frames);
   o.pairs = parser.value(pairs);
   o.tour = parser.value(tour);
   o.pose_source = parser.value(pose_source);
   o.project = parser.value(project);
   o.floor_plan = parser.isSet(floor_plan);
-  number(plan_height, -1e6, &o.plan_height_m);
+  // The plan dock's range (PlanPanel's spin box).
+  number(plan_height, 0.05, &o.plan_height_m, 10.0);
   o.pose_source_tour = parser.value(pose_source_tour);
   number(memory_budget, 0.0, &o.memory_budget_mib);
   count(rest_budget, &o.rest_budget);

@@ -35,13 +35,17 @@ TEST(GuiHeadlessTest, StartingWithoutADisplaySaysSoInOneLine) {
 
 // A number option that is not a number is refused by name, before anything
 // starts: "--memory-budget 2G" was read as a zero-byte budget (every chunk
-// paged out). Needs a display (QApplication parses the options).
+// paged out); "--speed fast" was as fast as possible, "--orbit-benchmark abc"
+// one frame, and a --plan-height of 0 silently the last cut. Needs a display
+// (QApplication parses the options).
 TEST(GuiHeadlessTest, ANumberOptionThatIsNotANumberIsRefusedByName) {
   if (std::getenv("DISPLAY") == nullptr) GTEST_SKIP() << "no display (run under xvfb-run)";
   const std::string gui = SWEEPSCAN_GUI;
   for (const std::string& bad :
        {std::string("--memory-budget 2G"), std::string("--rest-budget lots"),
-        std::string("--quit-after -3")}) {
+        std::string("--quit-after -3"), std::string("--speed fast"), std::string("--speed -5"),
+        std::string("--orbit-benchmark abc"), std::string("--orbit-benchmark 0"),
+        std::string("--plan-height 0"), std::string("--plan-height 12")}) {
     const auto r = sweepscan::testing::RunCommand(gui + " " + bad);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
     const std::string option = bad.substr(0, bad.find(' '));

@@ -24,6 +24,7 @@
 
 #include <QAbstractButton>
 #include <QAction>
+#include <QComboBox>
 #include <QApplication>
 #include <QDialog>
 #include <QDockWidget>
@@ -171,6 +172,30 @@ TEST_F(PanelsTest, PauseOnlyWhileAReplayRuns) {
   ASSERT_TRUE(WaitFor([&] { return finished; }, 120000));
   EXPECT_FALSE(pause->isEnabled());
   EXPECT_EQ(pause->text(), "Pause");
+}
+
+// `--speed 3` was lost: the list had no 3x, so the panel stayed at "max" and
+// a replay that restarted (a seek back) ran as fast as possible.
+TEST_F(PanelsTest, ASpeedTheListLacksIsAddedInItsPlace) {
+  auto* box = window_->findChild<QComboBox*>(QStringLiteral("replaySpeed"));
+  ASSERT_NE(box, nullptr);
+  const int offered = box->count();
+  window_->replay_panel()->SetSpeed(3.0);
+  EXPECT_EQ(box->currentText(), "3x");
+  EXPECT_DOUBLE_EQ(window_->replay_panel()->speed(), 3.0);
+  ASSERT_EQ(box->count(), offered + 1);
+  for (int i = 1; i + 1 < box->count(); ++i)  // in order, "max" (0) last
+    EXPECT_LT(box->itemData(i - 1).toDouble(), box->itemData(i).toDouble()) << i;
+  EXPECT_EQ(box->itemText(box->count() - 1), "max");
+  window_->replay_panel()->SetSpeed(0.0);
+  EXPECT_EQ(box->currentText(), "max");
+  window_->replay_panel()->SetSpeed(3.0);  // once in the list
+  EXPECT_EQ(box->count(), offered + 1);
+  window_->replay_panel()->SetSpeed(50.0);
+  EXPECT_EQ(box->currentText(), "50x");
+  EXPECT_EQ(box->currentIndex(), box->count() - 2);
+  window_->replay_panel()->SetSpeed(-1.0);  // refused: unchanged
+  EXPECT_EQ(box->currentText(), "50x");
 }
 
 TEST_F(PanelsTest, RobotMenuOffersWhatTheLinkAllows) {

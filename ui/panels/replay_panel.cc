@@ -44,6 +44,7 @@ ReplayPanel::ReplayPanel(Workspace* workspace, QWidget* parent)
   position_->setObjectName(QStringLiteral("replayPosition"));
   position_->setToolTip(tr("Replay position / length of the opened session"));
   speed_ = new QComboBox;
+  speed_->setObjectName(QStringLiteral("replaySpeed"));
   for (double s : {1.0, 2.0, 5.0, 10.0, 20.0}) speed_->addItem(QStringLiteral("%1x").arg(s), s);
   speed_->addItem(tr("max"), 0.0);
   speed_->setCurrentIndex(speed_->count() - 1);
@@ -200,8 +201,17 @@ QString ReplayPanel::pose_source_text() const { return pose_note_->text(); }
 double ReplayPanel::speed() const { return speed_->currentData().toDouble(); }
 
 void ReplayPanel::SetSpeed(double s) {
-  const int i = speed_->findData(s);
-  if (i >= 0) speed_->setCurrentIndex(i);
+  if (!(s >= 0.0)) return;
+  int i = speed_->findData(s);
+  if (i < 0) {
+    // A speed the list does not offer (--speed 3): added in its place, so
+    // that the panel shows it and a restarted replay (a seek back, another
+    // pose source) keeps it. "max" (0) stays last.
+    i = 0;
+    while (i < speed_->count() - 1 && speed_->itemData(i).toDouble() < s) ++i;
+    speed_->insertItem(i, QStringLiteral("%1x").arg(s), s);
+  }
+  speed_->setCurrentIndex(i);
 }
 
 }  // namespace sweepscan::ui

@@ -22,6 +22,8 @@ class ReplayPanel : public QWidget {
   explicit ReplayPanel(Workspace* workspace, QWidget* parent = nullptr);
   // 0 = as fast as possible.
   double speed() const;
+  // Any speed >= 0 (one the list lacks is added to it); the workspace's
+  // replay follows.
   void SetSpeed(double speed);
   QComboBox* pose_source_box() const { return pose_source_; }
   QString pose_source_text() const;  // What the cloud shown is made with.
