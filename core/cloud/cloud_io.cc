@@ -184,11 +184,12 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
   };
   std::vector<Element> elements;
   // PCL sizes the cloud as width x height rows of the vertex element, in
-  // header order: `element vertex N` sets N x 1, `obj_info num_cols` /
-  // `num_rows` set either. They must agree with the vertex count, or PCL
-  // allocates what they say (a 250-byte file with num_cols and num_rows of
-  // 20 000 cost 4.8 GB before a byte was read).
-  uint64_t width = 0, height = 1;
+  // header order: `obj_info num_cols` / `num_rows` set either, and
+  // `element vertex N` sets N x 1 unless both were set (PCL's writer puts
+  // an organised cloud's before it). They must agree with the vertex count
+  // or the range grid's, or PCL allocates what they say (a 250-byte file
+  // with num_cols and num_rows of 20 000 cost 4.8 GB before a byte was read).
+  uint64_t width = 0, height = 0;
   for (size_t i = 1; i < lines.size(); ++i) {
     const std::vector<std::string> w = SplitWords(lines[i]);
     if (!w.empty() && w[0] == "obj_info" && w.size() >= 3 &&
@@ -212,7 +213,7 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
         // PCL takes the cloud's rows from one and its width from the other.
         if (seen.name == e.name) return bad("two '" + e.name + "' elements");
       }
-      if (e.name == "vertex") {
+      if (e.name == "vertex" && (width == 0 || height == 0)) {
         width = e.count;
         height = 1;
       }
@@ -222,6 +223,9 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
       Element& e = elements.back();
       ++e.properties;
       if (w.size() >= 2 && w[1] == "list") {
+        // PCL sizes every vertex row by the first one's lists: one long
+        // list first, then short rows, is the first row times the count.
+        if (e.name == "vertex") return bad("a list property in the vertex element");
         const int count_size = w.size() == 5 ? PlyTypeSize(w[2]) : 0;
         if (count_size == 0 || PlyTypeSize(w[3]) == 0) return bad("bad list property");
         e.min_list_bytes += static_cast<uint64_t>(count_size);
@@ -242,20 +246,24 @@ Status ValidatePly(const std::string& path, uint64_t file_size) {
     if (e.name == "range_grid") grid = &e;
   }
   const uint64_t vertices = vertex != nullptr ? vertex->count : 0;
-  if ((width != vertices || height != 1) && (height == 0 || width > UINT64_MAX / height ||
-                                             width * height != vertices)) {
+  const uint64_t cells = grid != nullptr ? grid->count : vertices;
+  const bool fits = height != 0 && width <= UINT64_MAX / height;
+  if (vertex != nullptr &&
+      !(fits && (width * height == vertices || width * height == cells))) {
     return bad("obj_info num_cols x num_rows (" + std::to_string(width) + " x " +
                std::to_string(height) + ") differs from the " + std::to_string(vertices) +
                " vertices");
   }
-  // PCL lays an organised cloud out on its range grid, a vertex row a cell:
-  // bounded by the vertices (a grid at least 1/16 valid), or a grid of
-  // one-byte rows would cost a vertex row each (26 000 times the file).
-  if (grid != nullptr && grid->count > 16 * std::max<uint64_t>(vertices, 1)) {
-    return bad("a range grid of " + std::to_string(grid->count) + " cells for " +
-               std::to_string(vertices) + " vertices");
-  }
   const uint64_t data_size = file_size - data_offset;
+  // PCL lays an organised cloud out on its range grid, a vertex row a cell
+  // (the invalid cells cost a row too): bounded by the file, or a grid of
+  // one-byte rows would cost a vertex row each (26 000 times the file).
+  if (grid != nullptr && vertex != nullptr && vertex->fixed_bytes > 0 &&
+      grid->count > 64 * std::max<uint64_t>(data_size, 1) / vertex->fixed_bytes) {
+    return bad("a range grid of " + std::to_string(grid->count) + " cells of " +
+               std::to_string(vertex->fixed_bytes) + " bytes for " + std::to_string(data_size) +
+               " bytes of data");
+  }
   const std::string declared = std::to_string(data_size) + " bytes follow the header";
   if (format == "ascii") {
     // Every value needs at least one character and a separator.

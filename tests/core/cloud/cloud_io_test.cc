@@ -2,6 +2,10 @@
 #include "core/evaluation/cloud_arrays.h"
 
 #include <gtest/gtest.h>
+#include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
+
+#include <limits>
 
 #include <cstdio>
 #include <cstdlib>
@@ -329,9 +333,15 @@ TEST(CloudHeaderTest, WhatPclSizesTheCloudByMustAgreeWithTheData) {
     EXPECT_FALSE(s.ok()) << path;
     EXPECT_NE(s.message().find(why), std::string::npos) << s.message();
   };
-  // Before the vertex element PCL overrides them, as the check does.
+  // One of them before the vertex element is overridden by it, as in PCL;
+  // both are kept (PCL's writer puts an organised cloud's there).
   ASSERT_TRUE(LoadCloudPositions(ply_with("info_first.ply", "obj_info num_cols 20000\n"), &xyz).ok());
   EXPECT_EQ(xyz.size(), 1u);
+  ASSERT_TRUE(LoadCloudPositions(
+                  ply_with("pcl_info.ply", "obj_info num_cols 1\nobj_info num_rows 1\n"), &xyz)
+                  .ok());
+  refused(ply_with("both_first.ply", "obj_info num_cols 20000\nobj_info num_rows 20000\n"),
+          "obj_info num_cols x num_rows (20000 x 20000) differs from the 1 vertices");
   std::string path = TempPath("obj_info.ply");
   WriteText(path, PlyHeaderFor("1").substr(0, PlyHeaderFor("1").size() - 11) +
                       "obj_info num_cols 20000\nobj_info num_rows 20000\nend_header\n" + body);
@@ -341,11 +351,23 @@ TEST(CloudHeaderTest, WhatPclSizesTheCloudByMustAgreeWithTheData) {
                   "property float y\nproperty float z\nelement vertex 1\nproperty uchar a\n"
                   "end_header\n" + body + std::string(1, '\0'));
   refused(path, "two 'vertex' elements");
+  // A range grid costs PCL a vertex row a cell: wide rows (1 003 values)
+  // on a grid of one-byte cells.
+  std::string wide = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                     "property float y\nproperty float z\n";
+  for (int i = 0; i < 1000; ++i) wide += "property double d" + std::to_string(i) + "\n";
   path = TempPath("grid.ply");
-  WriteText(path, PlyHeaderFor("1").substr(0, PlyHeaderFor("1").size() - 11) +
-                      "element range_grid 1000\nproperty list uchar int vertex_indices\n"
-                      "end_header\n" + body + std::string(1000, '\0'));
-  refused(path, "a range grid of 1000 cells for 1 vertices");
+  WriteText(path, wide + "element range_grid 1000\nproperty list uchar int vertex_indices\n"
+                         "end_header\n" + std::string(8012 + 1000, '\0'));
+  refused(path, "a range grid of 1000 cells of 8012 bytes for 9012 bytes of data");
+  WriteText(path, wide + "element range_grid 60\nproperty list uchar int vertex_indices\n"
+                         "end_header\n" + std::string(8012 + 60, '\0'));
+  EXPECT_TRUE(ValidateCloudFile(path).ok());  // 60 cells: within 64 times the data
+  path = TempPath("vertex_list.ply");
+  WriteText(path, "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                  "property float y\nproperty float z\nproperty list uint float h\nend_header\n" +
+                      body + std::string(4, '\0'));
+  refused(path, "a list property in the vertex element");
 
   const std::string fields =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
@@ -365,6 +387,31 @@ TEST(CloudHeaderTest, WhatPclSizesTheCloudByMustAgreeWithTheData) {
   WriteText(path, fields + "POINTS 1\nDATA binary_compressed\n" +
                       std::string(reinterpret_cast<const char*>(beyond), 8) + "abcd");
   refused(path, "compressed data of 400 bytes but 12 bytes follow the header");
+}
+
+// PCL's own writer's organised cloud passes the checks and reads back its
+// valid points.
+TEST(CloudHeaderTest, PclsOrganisedPlyIsRead) {
+  pcl::PointCloud<pcl::PointXYZ> organised(4, 3);
+  for (size_t i = 0; i < organised.size(); ++i) {
+    const float v = i % 3 == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(i);
+    organised[i] = pcl::PointXYZ(v, 2 * v, 3 * v);
+  }
+  organised.is_dense = false;
+  // With its camera element (viewport 4 x 3, every cell a vertex) or
+  // without (obj_info 4 x 3 before the 8 valid vertices, a 12-cell grid).
+  for (const int variant : {0, 1, 2, 3}) {
+    const bool binary = variant % 2 == 0, camera = variant < 2;
+    const std::string path = TempPath("organised" + std::to_string(variant) + ".ply");
+    pcl::PLYWriter writer;
+    ASSERT_EQ(writer.write(path, organised, binary, camera), 0);
+    std::vector<Eigen::Vector3f> xyz;
+    const Status s = LoadCloudPositions(path, &xyz);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_EQ(xyz.size(), 8u);  // 12 cells, 4 of them NaN
+    EXPECT_EQ(xyz[0], Eigen::Vector3f(1, 2, 3));
+    EXPECT_EQ(xyz[7], Eigen::Vector3f(11, 22, 33));
+  }
 }
 
 // The evaluation's own reader checks a header's count against the bytes
