@@ -504,33 +504,40 @@ Status ValidateCloudFile(const std::string& path) {
   return Status::Error(path + ": unknown cloud format (use .ply or .pcd)");
 }
 
+// PCL's blob of a PLY or PCD file (by extension), holding the width x
+// height points it says: a PLY camera element's viewport, read from the
+// data, resets them after the blob was sized (the conversion to points
+// then allocated what they said and read past the blob).
+Status ReadBlob(const std::string& path, pcl::PCLPointCloud2* blob) {
+  QuietPcl();
+  int rc = -1;
+  try {
+    rc = HasFileSuffix(path, ".ply") ? pcl::io::loadPLYFile(path, *blob)
+                                     : pcl::io::loadPCDFile(path, *blob);
+  } catch (const std::bad_alloc&) {
+    return Status::Error(path + ": not a readable point cloud (too large for memory)");
+  } catch (const std::exception& e) {
+    return Status::Error(path + ": not a readable point cloud (" + e.what() + ")");
+  }
+  if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+  const uint64_t n = static_cast<uint64_t>(blob->width) * blob->height;
+  if (n > 0 && (blob->point_step == 0 || blob->data.size() / blob->point_step < n)) {
+    return Status::Error(path + ": not a readable point cloud (" + std::to_string(blob->width) +
+                         " x " + std::to_string(blob->height) + " points but " +
+                         std::to_string(blob->data.size()) + " bytes of " +
+                         std::to_string(blob->point_step) + " a point)");
+  }
+  return Status::Ok();
+}
+
 // Reads a PLY or PCD file (by extension) into a PCL cloud of PointT.
 template <typename PointT>
 Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
-  const Status valid = ValidateCloudFile(path);
-  if (!valid.ok()) return valid;
-  QuietPcl();
-  // Through PCL's blob, as loadPLYFile(path, cloud) reads, so that its
-  // size is checked before the conversion allocates width x height points:
-  // a PLY camera element's viewport, read from the data, resets them after
-  // the blob was sized (the conversion then read past it).
+  Status s = ValidateCloudFile(path);
   pcl::PCLPointCloud2 blob;
-  int rc = -1;
+  if (s.ok()) s = ReadBlob(path, &blob);
+  if (!s.ok()) return s;
   try {
-    if (HasFileSuffix(path, ".ply")) {
-      rc = pcl::io::loadPLYFile(path, blob);
-    } else {
-      rc = pcl::io::loadPCDFile(path, blob);
-    }
-    if (rc != 0)
-      return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
-    const uint64_t n = static_cast<uint64_t>(blob.width) * blob.height;
-    if (blob.data.size() / std::max<uint64_t>(blob.point_step, 1) < n) {
-      return Status::Error(path + ": not a readable point cloud (" + std::to_string(blob.width) +
-                           " x " + std::to_string(blob.height) + " points but " +
-                           std::to_string(blob.data.size()) + " bytes of " +
-                           std::to_string(blob.point_step) + " a point)");
-    }
     pcl::fromPCLPointCloud2(blob, *cloud);
   } catch (const std::bad_alloc&) {
     return Status::Error(path + ": not a readable point cloud (too large for memory)");
@@ -608,17 +615,8 @@ Status ReadPositionType(const std::string& path, PositionType* type) {
 // half-metre steps, every plane and distance measured on it wrong.
 Status ReadDoublePositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
   pcl::PCLPointCloud2 blob;
-  QuietPcl();
-  int rc = -1;
-  try {
-    rc = HasFileSuffix(path, ".ply") ? pcl::io::loadPLYFile(path, blob)
-                                     : pcl::io::loadPCDFile(path, blob);
-  } catch (const std::bad_alloc&) {
-    return Status::Error(path + ": not a readable point cloud (too large for memory)");
-  } catch (const std::exception& e) {
-    return Status::Error(path + ": not a readable point cloud (" + e.what() + ")");
-  }
-  if (rc != 0) return Status::Error(path + ": not a readable point cloud (PCL could not parse it)");
+  const Status read = ReadBlob(path, &blob);
+  if (!read.ok()) return read;
   int offset[3] = {-1, -1, -1};
   uint8_t type[3] = {0, 0, 0};
   for (const pcl::PCLPointField& f : blob.fields) {
@@ -634,10 +632,7 @@ Status ReadDoublePositions(const std::string& path, std::vector<Eigen::Vector3f>
           path + ": not a readable point cloud (its coordinates are not float or double)");
     }
   }
-  const size_t n = static_cast<size_t>(blob.width) * blob.height;
-  if (blob.point_step == 0 || blob.data.size() < n * blob.point_step) {
-    return Status::Error(path + ": not a readable point cloud (fewer bytes than points)");
-  }
+  const size_t n = static_cast<size_t>(blob.width) * blob.height;  // ReadBlob checked
   points->resize(n);
   double farthest = 0.0;
   for (size_t i = 0; i < n; ++i) {

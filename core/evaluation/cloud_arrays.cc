@@ -66,12 +66,12 @@ CloudReadResult ReadRecords(std::FILE* f, size_t count, const Layout& layout, co
   // allocated: not trusted to another parser's reading of the header.
   const long at = std::ftell(f);
   struct stat st {};
-  if (at < 0 || fstat(fileno(f), &st) != 0 || layout.record == 0 ||
-      count > (static_cast<uint64_t>(st.st_size) - std::min<uint64_t>(st.st_size, at)) /
-                  layout.record) {
+  const uint64_t follow = at >= 0 && fstat(fileno(f), &st) == 0 && st.st_size > at
+                              ? static_cast<uint64_t>(st.st_size - at)
+                              : 0;
+  if (layout.record == 0 || count > follow / layout.record) {
     *error = path + ": truncated (" + std::to_string(count) + " points of " +
-             std::to_string(layout.record) + " bytes declared, " +
-             std::to_string(at < 0 ? 0 : st.st_size - std::min<int64_t>(st.st_size, at)) +
+             std::to_string(layout.record) + " bytes declared, " + std::to_string(follow) +
              " bytes follow the header)";
     return CloudReadResult::kError;
   }

@@ -230,12 +230,11 @@ std::unique_ptr<uint8_t[]> DecompressBz2(const uint8_t* data, uint32_t len, uint
     rc = BZ2_bzDecompress(&bz);
     const unsigned produced = room - bz.avail_out;
     if (full && produced > 0) rc = BZ_OUTBUFF_FULL;
-    if (rc == BZ_STREAM_END && !full) *got += produced;
-    if (rc == BZ_STREAM_END) return out;
     if (rc == BZ_OK && produced == 0 && bz.avail_in == in_before) rc = BZ_UNEXPECTED_EOF;
-    if (rc != BZ_OK)
+    if (rc != BZ_OK && rc != BZ_STREAM_END)
       throw Bad{"its bz2 data do not decompress (bzip2 error " + std::to_string(rc) + ")"};
-    *got += produced;
+    if (!full) *got += produced;
+    if (rc == BZ_STREAM_END) return out;
   }
 }
 
