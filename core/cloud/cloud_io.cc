@@ -530,13 +530,11 @@ Status ReadBlob(const std::string& path, pcl::PCLPointCloud2* blob) {
   return Status::Ok();
 }
 
-// Reads a PLY or PCD file (by extension) into a PCL cloud of PointT.
+// PCL's blob as a cloud of PointT (each field PointT has, copied where the
+// file has it with the same type).
 template <typename PointT>
-Status ReadPcl(const std::string& path, pcl::PointCloud<PointT>* cloud) {
-  Status s = ValidateCloudFile(path);
-  pcl::PCLPointCloud2 blob;
-  if (s.ok()) s = ReadBlob(path, &blob);
-  if (!s.ok()) return s;
+Status ConvertBlob(const std::string& path, const pcl::PCLPointCloud2& blob,
+                   pcl::PointCloud<PointT>* cloud) {
   try {
     pcl::fromPCLPointCloud2(blob, *cloud);
   } catch (const std::bad_alloc&) {
@@ -613,10 +611,8 @@ Status ReadPositionType(const std::string& path, PositionType* type) {
 // 8 000 m of the origin: float keeps whole millimetres only within 8 192 m,
 // and a georeferenced cloud (a UTM northing of 5 000 km) would come back in
 // half-metre steps, every plane and distance measured on it wrong.
-Status ReadDoublePositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
-  pcl::PCLPointCloud2 blob;
-  const Status read = ReadBlob(path, &blob);
-  if (!read.ok()) return read;
+Status DoublePositions(const std::string& path, const pcl::PCLPointCloud2& blob,
+                       std::vector<Eigen::Vector3f>* points) {
   int offset[3] = {-1, -1, -1};
   uint8_t type[3] = {0, 0, 0};
   for (const pcl::PCLPointField& f : blob.fields) {
@@ -662,14 +658,23 @@ Status ReadDoublePositions(const std::string& path, std::vector<Eigen::Vector3f>
   return Status::Ok();
 }
 
-Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
+// The file checked, how it stores its positions, and PCL's blob of it: one
+// read of the file serves both the positions and the other fields.
+Status ReadCloudFile(const std::string& path, PositionType* type, pcl::PCLPointCloud2* blob) {
   Status s = ValidateCloudFile(path);
+  if (s.ok()) s = ReadPositionType(path, type);
+  if (s.ok()) s = ReadBlob(path, blob);
+  return s;
+}
+
+Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>* points) {
   PositionType type = PositionType::kFloat;
-  if (s.ok()) s = ReadPositionType(path, &type);
+  pcl::PCLPointCloud2 blob;
+  Status s = ReadCloudFile(path, &type, &blob);
   if (!s.ok()) return s;
   points->clear();
   if (type == PositionType::kDouble) {
-    s = ReadDoublePositions(path, points);
+    s = DoublePositions(path, blob, points);
     if (!s.ok()) return s;
     points->erase(std::remove_if(points->begin(), points->end(),
                                  [](const Eigen::Vector3f& p) { return !p.allFinite(); }),
@@ -677,8 +682,9 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
     return Status::Ok();
   }
   pcl::PointCloud<pcl::PointXYZ> cloud;
-  s = ReadPcl(path, &cloud);
+  s = ConvertBlob(path, blob, &cloud);
   if (!s.ok()) return s;
+  decltype(blob.data)().swap(blob.data);  // Its bytes are in the cloud now.
   points->reserve(cloud.size());
   for (const auto& p : cloud) {
     if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) points->emplace_back(p.x, p.y, p.z);
@@ -687,22 +693,19 @@ Status LoadCloudPositions(const std::string& path, std::vector<Eigen::Vector3f>*
 }
 
 Status LoadCloud(const std::string& path, std::vector<CloudPoint>* points) {
-  Status s = ValidateCloudFile(path);
   PositionType type = PositionType::kFloat;
-  if (s.ok()) s = ReadPositionType(path, &type);
+  pcl::PCLPointCloud2 blob;
+  Status s = ReadCloudFile(path, &type, &blob);
   if (!s.ok()) return s;
   std::vector<Eigen::Vector3f> doubles;  // A double file's positions, converted.
   if (type == PositionType::kDouble) {
-    s = ReadDoublePositions(path, &doubles);
+    s = DoublePositions(path, blob, &doubles);
     if (!s.ok()) return s;
   }
   pcl::PointCloud<PclSweepPoint> cloud;
-  s = ReadPcl(path, &cloud);
+  s = ConvertBlob(path, blob, &cloud);
   if (!s.ok()) return s;
-  if (!doubles.empty() && doubles.size() != cloud.size()) {
-    return Status::Error(path +
-                         ": not a readable point cloud (its points read twice differ in number)");
-  }
+  decltype(blob.data)().swap(blob.data);  // Its bytes are in the cloud now.
   points->resize(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const PclSweepPoint& q = cloud[i];
