@@ -314,9 +314,12 @@ MainWindow::MainWindow(Workspace* workspace, const QString& resources_dir, QWidg
             }
             // The operator's own Cancel is not an error: a note in the
             // status bar, no box to dismiss (RunJob reports it as this
-            // message; a job's own "Cancelled." too).
+            // message; a job's own "Cancelled." too), nor one the app made
+            // for a reason it gives ("Cancelled: a recording started...").
             if (!ok && message == QLatin1String("Cancelled.")) {
               statusBar()->showMessage(tr("%1: cancelled").arg(what), 6000);
+            } else if (!ok && message.startsWith(QLatin1String("Cancelled: "))) {
+              statusBar()->showMessage(tr("%1: %2").arg(what, message), 10000);
             } else if (!ok) {
               ShowError(what, message);
             }

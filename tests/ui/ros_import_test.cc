@@ -243,6 +243,32 @@ TEST_F(RosImportUiTest, ARecordingStartedMeanwhileIsNotReplaced) {
   ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
 }
 
+// A recording started while the import runs (the chooser has closed): the
+// imported session is written but not opened over the recording, which
+// goes on; the operator is told where it is.
+TEST_F(RosImportUiTest, ARecordingStartedDuringTheImportGoesOn) {
+  ASSERT_NO_FATAL_FAILURE(ConnectToSimulator());
+  QPointer<RosImportDialog> dialog = OpenChooser(kData + "/ros2/ros2_zstd.mcap");
+  ASSERT_TRUE(dialog && dialog->isVisible());
+  const QString session = tmp_.path() + "/imported.sweepscan";
+  dialog->session_dir()->setText(session);
+  QStringList said;
+  QObject::connect(workspace_.get(), &Workspace::message, [&](const QString& m) { said << m; });
+  ClickImport(dialog);
+  ASSERT_TRUE(workspace_->job_running());  // its end is queued at the earliest
+  QString error;
+  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  const QString recording = workspace_->session_dir();
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 30000));
+  QTest::qWait(500);  // an opening it started would have ended by now
+  EXPECT_FALSE(workspace_->job_running());
+  EXPECT_TRUE(workspace_->recording());
+  EXPECT_EQ(workspace_->session_dir(), recording);
+  EXPECT_TRUE(QFileInfo::exists(session + "/frames.bin"));
+  EXPECT_TRUE(said.filter("Imported " + session + "; not opened").size() == 1) << said.join('\n').toStdString();
+  ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+}
+
 }  // namespace
 }  // namespace sweepscan::ui
 

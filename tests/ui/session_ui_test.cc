@@ -371,6 +371,69 @@ TEST_F(AppTest, OpeningShowsProgressAndCancelStopsIt) {
   EXPECT_EQ(workspace_->session_dir(), session);
 }
 
+// Connected to a robot and not recording, the view previews its live
+// cloud; a session opened then shows its own points alone (the robot's went
+// on arriving into it), and New Session shows the robot's preview again.
+TEST_F(AppTest, ASessionOpenedWhileConnectedShowsOnlyItsOwnPoints) {
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  const QString session = tmp_.path() + "/lab.sweepscan";
+  ASSERT_NO_FATAL_FAILURE(ConnectToSimulator());
+  ASSERT_TRUE(WaitFor([&] { return workspace_->point_count() > 2000; }, 20000));  // the preview
+  ASSERT_NO_FATAL_FAILURE(OpenAndReplay(session));
+  const std::vector<CloudPoint> opened = workspace_->CloudSnapshot().Flatten();
+  QTest::qWait(1500);  // the simulated X4 makes ~5 000 points a second
+  const std::vector<CloudPoint> later = workspace_->CloudSnapshot().Flatten();
+  ASSERT_EQ(later.size(), opened.size());
+  // The session's points exactly, as the CLI places them.
+  const std::string dir = tmp_.path().toStdString();
+  const auto cli = testing::RunCommand(std::string(SWEEPSCAN_CLI) + " reconstruct " + dir +
+                                       "/lab.sweepscan --out " + dir + "/cli.ply");
+  ASSERT_EQ(cli.code, 0) << cli.out;
+  std::vector<CloudPoint> expected;
+  ASSERT_TRUE(LoadCloud(dir + "/cli.ply", &expected).ok());
+  ASSERT_EQ(later.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); i += 97) {
+    ASSERT_EQ(later[i].x, expected[i].x) << i;
+    ASSERT_EQ(later[i].z, expected[i].z) << i;
+  }
+  workspace_->NewSession();
+  EXPECT_TRUE(WaitFor([&] { return workspace_->point_count() > 2000; }, 20000));
+}
+
+// Record pressed while a session is being opened: the opening is cancelled
+// and says why; the recording goes on (the opening's end used to replace
+// the live cloud and stop the recording).
+TEST_F(AppTest, StartingARecordingCancelsASessionBeingOpened) {
+  ASSERT_NO_FATAL_FAILURE(SimulateLabSession());
+  const QString session = tmp_.path() + "/lab.sweepscan";
+  ASSERT_NO_FATAL_FAILURE(ConnectToSimulator());
+  bool finished = false, finished_ok = true;
+  QString finished_message;
+  QObject::connect(workspace_.get(), &Workspace::jobFinished,
+                   [&](const QString&, bool ok, const QString& m) {
+                     finished = true;
+                     finished_ok = ok;
+                     finished_message = m;
+                   });
+  workspace_->OpenSession(session);
+  ASSERT_TRUE(workspace_->job_running());
+  QString error;
+  ASSERT_TRUE(workspace_->StartRecording(&error)) << error.toStdString();
+  const QString recording = workspace_->session_dir();
+  ASSERT_TRUE(WaitFor([&] { return finished; }, 20000));
+  EXPECT_FALSE(finished_ok);
+  EXPECT_TRUE(finished_message.contains("a recording started")) << finished_message.toStdString();
+  // Said in the status bar, not as an error box over the recording.
+  EXPECT_TRUE(window_->last_error().isEmpty()) << window_->last_error().toStdString();
+  EXPECT_TRUE(window_->statusBar()->currentMessage().contains("a recording started"))
+      << window_->statusBar()->currentMessage().toStdString();
+  QTest::qWait(300);
+  EXPECT_TRUE(workspace_->recording());
+  EXPECT_EQ(workspace_->session_dir(), recording);
+  ASSERT_TRUE(WaitFor([&] { return workspace_->point_count() > 2000; }, 20000));
+  ASSERT_TRUE(workspace_->StopRecording(&error)) << error.toStdString();
+}
+
 }  // namespace
 }  // namespace sweepscan::ui
 

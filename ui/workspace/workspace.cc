@@ -178,6 +178,13 @@ bool Workspace::StartRecording(QString* error) {
     return false;
   }
   if (recording_) return true;
+  if (job_running() && job_reads_session_) {
+    // Its end (TakeOpened) would replace the live cloud, and stop this
+    // recording, with the session it read.
+    job_cancel_reason_ = tr("Cancelled: a recording started, and its live cloud replaces the "
+                            "session that was being opened.");
+    CancelJob();
+  }
   if (!QDir().mkpath(sessions_root_)) {
     *error = QStringLiteral("%1: cannot create the sessions folder").arg(sessions_root_);
     return false;
@@ -277,7 +284,20 @@ void Workspace::NewSession() {
   replay_loaded_ = false;
   replaying_ = false;
   ResetCloud(live_start_, live_geometry_);
+  if (connection_ != nullptr) SetLiveFeed(true);  // after the reset, posted above
   emit sessionChanged(QString());
+}
+
+void Workspace::SetLiveFeed(bool on) {
+  std::shared_ptr<std::atomic<bool>> feed = live_feed_;
+  if (on || connection_ == nullptr) {
+    *feed = on;
+    return;
+  }
+  // Not recording (TakeOpened, StopRecording's own switch is on the I/O
+  // thread too): the I/O thread is between frames, so this is quick.
+  QMetaObject::invokeMethod(
+      connection_, [feed] { *feed = false; }, Qt::BlockingQueuedConnection);
 }
 
 void Workspace::OpenSession(const QString& dir, double speed) {
@@ -369,7 +389,9 @@ Workspace::OpenedCircle Workspace::FindCircle(const SensorLog& log, const Pose2d
 
 void Workspace::TakeOpened(std::shared_ptr<hardware::Recording> recording, const OpenedCircle& circle,
                            const QString& dir, bool samples_released) {
-  StopRecordingOrSay();
+  StopRecordingOrSay();  // (StartRecording cancels an opening: not expected)
+  // A connected robot's live preview stops: the cloud is the session's alone.
+  SetLiveFeed(false);
   // A damaged recording opens without its damaged records; say what was
   // lost (how many records and seconds, where). One cut off as it was
   // written opens with what was recorded before the cut, which a replay
@@ -532,6 +554,8 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
   }
   job_what_ = what;
   job_cancel_ = false;
+  job_reads_session_ = !refused.isEmpty();
+  job_cancel_reason_.clear();
   emit jobProgress(what, -1.0);  // Indeterminate until the job reports a fraction.
   job_thread_ = std::make_unique<std::thread>([this, what, work, on_success, refused] {
     LowerThisThreadsPriority();
@@ -543,7 +567,9 @@ void Workspace::RunJob(const QString& what, std::function<QString(std::atomic<bo
         job_thread_.reset();
       }
       if (job_cancel_) {
-        emit jobFinished(what, false, QStringLiteral("Cancelled."));
+        emit jobFinished(what, false,
+                         job_cancel_reason_.isEmpty() ? QStringLiteral("Cancelled.")
+                                                      : job_cancel_reason_);
       } else if (!error.isEmpty()) {
         emit jobFinished(what, false, error);
       } else {

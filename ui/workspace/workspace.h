@@ -126,7 +126,9 @@ class Workspace : public QObject {
 
   // ---- Sessions -----------------------------------------------------------
   // Records from now on into a new session folder under sessions_root()
-  // (crash-safe from its first second; the cloud restarts with it).
+  // (crash-safe from its first second; the cloud restarts with it). A
+  // session being opened (or read again) is cancelled: it would replace the
+  // live cloud when it finished.
   bool StartRecording(QString* error);
   bool StopRecording(QString* error);
   bool recording() const { return recording_; }
@@ -143,7 +145,8 @@ class Workspace : public QObject {
   // A Save Session As copy is running (job_name() names it).
   bool saving() const { return job_running() && job_what_ == save_job_; }
   QString job_name() const { return job_running() ? job_what_ : QString(); }
-  // Forgets the current session and cloud (the recording folder stays on disk).
+  // Forgets the current session and cloud (the recording folder stays on
+  // disk); a connected robot's live preview shows again.
   void NewSession();
   // Opens a session folder on a job thread (progress, cancel), then replays
   // it at `speed` (0 = as fast as possible). A corrupt session is refused:
@@ -397,6 +400,8 @@ class Workspace : public QObject {
   void ForgetEvaluation(bool keep_as_previous);
   // `refused`: said first, a line of its own, when the work fails (not
   // when cancelled): what failed in plain words before the reader's ones.
+  // A job with a `refused` reads a session folder (OpenRefused): opening it,
+  // or reading it again; StartRecording cancels those.
   void RunJob(const QString& what, std::function<QString(std::atomic<bool>*)> work,
               std::function<void()> on_success, const QString& refused = QString());
   // RunJob's `refused` for opening session folder `dir`.
@@ -420,8 +425,12 @@ class Workspace : public QObject {
   DriveLimits limits_;
   bool lidar_on_ = true;
   // Whether decoded telemetry reaches the cloud: on while connected, off
-  // once a recording stops (the cloud is then the session's). I/O thread reads it.
+  // once a recording stops or a session is opened (the cloud is then the
+  // session's), on again with New Session. I/O thread reads it.
   std::shared_ptr<std::atomic<bool>> live_feed_ = std::make_shared<std::atomic<bool>>(true);
+  // Switches live_feed_; off, on the I/O thread (when connected), so that no
+  // batch read before lands in the processor after what the caller posts next.
+  void SetLiveFeed(bool on);
   Twist2d commanded_;
   RobotGeometry live_geometry_;
   Pose2d live_start_;
@@ -502,6 +511,8 @@ class Workspace : public QObject {
   QString save_job_;  // The last Save Session As copy's job name.
   QString job_what_;  // the running (or last) job's name, as its progress shows it
   std::atomic<bool> job_cancel_{false};
+  bool job_reads_session_ = false;  // RunJob's `refused` was given
+  QString job_cancel_reason_;       // said for a cancel not the operator's
 };
 
 }  // namespace sweepscan::ui

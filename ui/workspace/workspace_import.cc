@@ -75,9 +75,17 @@ void Workspace::ImportRosRecording(const QString& bag, const QString& session_di
         const Status s = io::ImportRosBag(bag_path, out, o, report.get());
         return s.ok() ? QString() : QString::fromStdString(s.message());
       },
-      [this, report, session_dir, speed] {
+      [this, report, session_dir, speed, session = session_generation_] {
         for (const std::string& w : report->warnings) {
           emit message(tr("%1: %2").arg(session_dir, QString::fromStdString(w)));
+        }
+        if (recording_ || session != session_generation_) {
+          // A recording started (or another session was shown) while the
+          // bag was read: the import does not replace it.
+          emit message(tr("Imported %1; not opened, as the session shown changed meanwhile: "
+                          "open it from File > Open Session.")
+                           .arg(session_dir));
+          return;
         }
         OpenSession(session_dir, speed);
       });
