@@ -135,7 +135,20 @@ bool SerialStream::Write(const uint8_t* data, size_t n) {
 }
 
 void SerialStream::Close() {
-  if (port_->isOpen()) port_->close();
+  if (!port_->isOpen()) return;
+  // QSerialPort sends from its event loop: bytes still queued when the port
+  // closes are lost, and a closing program's event loop has ended (the
+  // recorder's last Stop and lidar-off were). They go to the driver first,
+  // which sends them as the port closes; bounded, for an adapter that no
+  // longer takes data (115 200 baud moves the few messages in ~1 ms).
+  constexpr int kCloseFlushMs = 250;
+  QElapsedTimer clock;
+  clock.start();
+  while (port_->bytesToWrite() > 0) {
+    const qint64 left = kCloseFlushMs - clock.elapsed();
+    if (left <= 0 || !port_->waitForBytesWritten(static_cast<int>(left))) break;
+  }
+  port_->close();
 }
 
 namespace {

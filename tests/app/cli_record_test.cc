@@ -493,6 +493,19 @@ TEST(CliRecordSerialTest, RecordsOverASerialLink) {
                {"record", "--serial", pty, "--out", session, "--duration", "3", "--json"});
   ASSERT_TRUE(record.waitForFinished(20000));
   EXPECT_EQ(record.exitCode(), 0) << record.readAllStandardError().toStdString();
+  // Its clean end turned the lidar off, as over TCP: the last messages left
+  // the port before it closed (they stayed in QSerialPort's buffer, its
+  // event loop over, and the X4 spun on).
+  {
+    hardware::RobotConnectionOptions options;
+    options.address = "serial:" + pty;
+    hardware::RobotConnection look(options);
+    QString error;
+    ASSERT_TRUE(look.Start(&error)) << error.toStdString();
+    ASSERT_TRUE(WaitFor([&] { return look.health().have_status; }, 10000));
+    EXPECT_FALSE(look.health().agent_status.lidar_motor_on);
+    look.Shutdown();
+  }
   sim.terminate();
   sim.waitForFinished(5000);
   SensorLog log;
