@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -442,7 +443,6 @@ int RunRepair(int argc, char** argv) {
     }
     ::closedir(dp);
   }
-  bool created = false;
   if (::stat(out.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) {
       PrintError(out + ": exists and is not a folder");
@@ -460,17 +460,23 @@ int RunRepair(int argc, char** argv) {
       PrintError(out + ": exists and is not empty; repair writes a new session folder");
       return kExitFailure;
     }
-  } else if (::mkdir(out.c_str(), 0755) != 0) {
+  }
+  // Written beside NEW and renamed to it once whole: a repair killed
+  // midway (or a power loss) leaves a hidden .NEW.repairing-PID, never a
+  // NEW without its meta.json or side files that opens as if complete.
+  const std::string writing = SessionWritingDir(out, "repairing");
+  std::error_code gone;
+  std::filesystem::remove_all(writing, gone);  // a killed repair's, whose PID this one has
+  if (::mkdir(writing.c_str(), 0755) != 0) {
     PrintError(out + ": cannot create folder: " + std::strerror(errno));
     return kExitFailure;
-  } else {
-    created = true;
   }
+  const auto remove_writing = [&] { std::filesystem::remove_all(writing, gone); };
   // frames.bin: the header, then every intact record, through the checked
   // writer (docs/session-format.md: length, receive time, bytes, CRC-32C of
   // the three).
   CheckedFileWriter frames;
-  s = frames.Open(out + "/" + kSessionFramesFile);
+  s = frames.Open(writing + "/" + kSessionFramesFile);
   std::vector<uint8_t> bytes = SessionFramesHeader();
   if (s.ok()) s = frames.Write(bytes.data(), bytes.size());
   FramesLoadReport f;
@@ -488,22 +494,20 @@ int RunRepair(int argc, char** argv) {
   }
   if (s.ok() && !read.ok()) {  // frames.bin refused: nothing is left behind
     frames.Abort();
-    if (created) ::rmdir(out.c_str());
+    remove_writing();
     PrintError(read.message());
     return kExitBadInput;
   }
   if (s.ok()) s = frames.Commit();
-  std::vector<std::string> written = {kSessionFramesFile};
   for (const std::string& name : extra_files) {
     if (!s.ok()) break;
-    s = CopyFileChecked(in + "/" + name, out + "/" + name);
-    written.push_back(name);
+    s = CopyFileChecked(in + "/" + name, writing + "/" + name);
   }
+  if (s.ok()) s = RenameSessionIntoPlace(writing, out);
   if (!s.ok()) {  // a full disk: no half copy is left to pass for a repair
     frames.Abort();
-    for (const std::string& name : written) ::unlink((out + "/" + name).c_str());
-    if (created) ::rmdir(out.c_str());
-    PrintError(s.message());
+    remove_writing();
+    PrintError(SaidOfSession(s, writing, out).message());
     return kExitFailure;
   }
   const nlohmann::json report = {{"session", in},

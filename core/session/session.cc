@@ -10,12 +10,15 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "core/common/checked_file.h"
 #include "core/common/crc32c.h"
@@ -279,13 +282,135 @@ bool SessionWriterOptions::IsValid(std::string* error) const {
   return true;
 }
 
+// Writes a file's bytes and fdatasyncs them on a thread of its own
+// (SessionWriterOptions::sync_on_thread): the caller hands them over and
+// goes on, and the disk's time is this thread's. Bytes handed while it
+// writes wait, and go with the next write; a sync asked for meanwhile is
+// one sync after it. After a failure nothing more is written.
+class BackgroundFileWriter {
+ public:
+  BackgroundFileWriter(int fd, std::string name)
+      : fd_(fd), name_(std::move(name)), thread_([this] { Run(); }) {}
+  ~BackgroundFileWriter() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    work_.notify_all();
+    thread_.join();  // after what was handed is done
+  }
+  BackgroundFileWriter(const BackgroundFileWriter&) = delete;
+  BackgroundFileWriter& operator=(const BackgroundFileWriter&) = delete;
+
+  // Takes *bytes (left empty); `sync`: fdatasync once they are written.
+  void Hand(std::vector<uint8_t>* bytes, bool sync) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (pending_.empty()) {
+        pending_.swap(*bytes);
+      } else {
+        pending_.insert(pending_.end(), bytes->begin(), bytes->end());
+      }
+      sync_ = sync_ || sync;
+      ++handed_;
+    }
+    bytes->clear();
+    work_.notify_all();
+  }
+  // Waits until everything handed is done; the first failure ("" if none).
+  std::string Wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_changed_.wait(lock, [this] { return done_ == handed_; });
+    return failed_;
+  }
+  std::string failed() const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return failed_;
+  }
+
+ private:
+  void Run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      work_.wait(lock, [this] { return stop_ || done_ != handed_; });
+      if (done_ == handed_) return;  // stopped, nothing left
+      std::vector<uint8_t> bytes;
+      bytes.swap(pending_);
+      const bool sync = sync_;
+      sync_ = false;
+      const uint64_t upto = handed_;
+      const bool failed = !failed_.empty();
+      lock.unlock();
+      std::string error;
+      if (!failed && !WriteAll(fd_, bytes.data(), bytes.size())) {
+        error = Errno(name_ + ": write failed");
+        ::fdatasync(fd_);  // what was written goes to the disk (WriteBuffer's why)
+      } else if (!failed && sync && ::fdatasync(fd_) != 0) {
+        error = Errno(name_ + ": fsync failed");
+      }
+      lock.lock();
+      if (!error.empty() && failed_.empty()) failed_ = error;
+      done_ = upto;
+      done_changed_.notify_all();
+    }
+  }
+
+  const int fd_;
+  const std::string name_;
+  mutable std::mutex mutex_;
+  std::condition_variable work_, done_changed_;
+  std::vector<uint8_t> pending_;
+  bool sync_ = false;
+  bool stop_ = false;
+  uint64_t handed_ = 0, done_ = 0;
+  std::string failed_;
+  std::thread thread_;  // last: started once the rest is made
+};
+
 SessionWriter::SessionWriter(std::string dir, int fd, uint64_t file_bytes,
                              const SessionWriterOptions& options)
     : dir_(std::move(dir)),
       fd_(fd),
       options_(options),
       file_bytes_(file_bytes),
-      last_sync_(std::chrono::steady_clock::now()) {}
+      last_sync_(std::chrono::steady_clock::now()) {
+  if (options_.sync_on_thread)
+    background_ = std::make_unique<BackgroundFileWriter>(fd_, Join(dir_, kSessionFramesFile));
+}
+
+Status RenameSessionIntoPlace(const std::string& from, const std::string& to) {
+  // rename(2) onto an empty folder replaces it, onto a non-empty one fails
+  // (ENOTEMPTY or EEXIST): another session there is never touched.
+  if (::rename(from.c_str(), to.c_str()) != 0) {
+    if (errno == ENOTEMPTY || errno == EEXIST)
+      return Status::Error(to + ": folder exists and is not empty; refusing to overwrite a session");
+    return Status::Error(Errno(to + ": cannot give the finished session its name"));
+  }
+  std::string name = to;
+  while (name.size() > 1 && name.back() == '/') name.pop_back();
+  const size_t slash = name.rfind('/');
+  SyncDir(slash == std::string::npos ? "." : slash == 0 ? "/" : name.substr(0, slash));
+  return Status::Ok();
+}
+
+std::string SessionWritingDir(const std::string& dir, const std::string& what) {
+  std::string name = dir;
+  while (name.size() > 1 && name.back() == '/') name.pop_back();
+  const size_t slash = name.rfind('/');
+  const std::string parent = slash == std::string::npos ? "" : name.substr(0, slash + 1);
+  return parent + "." + name.substr(slash + 1) + "." + what + "-" + std::to_string(::getpid());
+}
+
+Status SaidOfSession(const Status& s, const std::string& writing, const std::string& dir) {
+  if (s.ok()) return s;
+  std::string message = s.message();
+  std::string name = dir;
+  while (name.size() > 1 && name.back() == '/') name.pop_back();
+  for (size_t at = message.find(writing); at != std::string::npos;
+       at = message.find(writing, at + name.size()))
+    message.replace(at, writing.size(), name);
+  return Status::Error(message);
+}
 
 SessionWriter::~SessionWriter() { Close(); }
 
@@ -419,6 +544,15 @@ Status SessionWriter::Append(const uint8_t* bytes, size_t n, int64_t receive_tim
 
 Status SessionWriter::WriteBuffer() {
   if (buffer_.empty()) return Status::Ok();
+  if (background_ != nullptr) {
+    if (std::string f = background_->failed(); !f.empty()) {
+      failed_ = std::move(f);
+      return Status::Error(failed_);
+    }
+    file_bytes_ += buffer_.size();
+    background_->Hand(&buffer_, false);
+    return Status::Ok();
+  }
   if (!WriteAll(fd_, buffer_.data(), buffer_.size())) {
     failed_ = Errno(Join(dir_, kSessionFramesFile) + ": write failed");
     // The recording ends here (disk full, a pulled disk): what was written
@@ -436,6 +570,15 @@ Status SessionWriter::WriteBuffer() {
 Status SessionWriter::Flush() {
   if (!failed_.empty()) return Status::Error(failed_);
   if (fd_ < 0) return Status::Ok();
+  if (background_ != nullptr) {
+    file_bytes_ += buffer_.size();
+    background_->Hand(&buffer_, true);
+    failed_ = background_->Wait();
+    if (!failed_.empty()) return Status::Error(failed_);
+    dirty_ = false;
+    last_sync_ = std::chrono::steady_clock::now();
+    return Status::Ok();
+  }
   Status s = WriteBuffer();
   if (!s.ok()) return s;
   if (::fdatasync(fd_) != 0) {
@@ -448,17 +591,26 @@ Status SessionWriter::Flush() {
 }
 
 Status SessionWriter::FlushIfDue(std::chrono::steady_clock::time_point now) {
+  // A failure is said at every call, due or not (it was Ok between flushes).
+  if (failed_.empty() && background_ != nullptr) failed_ = background_->failed();
+  if (!failed_.empty()) return Status::Error(failed_);
   if (!dirty_) {
     last_sync_ = now;  // Nothing to lose: restart the interval.
-    return failed_.empty() ? Status::Ok() : Status::Error(failed_);
+    return Status::Ok();
   }
   if (now - last_sync_ < options_.flush_interval) return Status::Ok();
-  return Flush();
+  if (background_ == nullptr) return Flush();
+  file_bytes_ += buffer_.size();
+  background_->Hand(&buffer_, true);
+  dirty_ = false;
+  last_sync_ = now;
+  return Status::Ok();
 }
 
 Status SessionWriter::Close() {
   if (fd_ < 0) return failed_.empty() ? Status::Ok() : Status::Error(failed_);
   Status s = Flush();
+  background_.reset();  // its thread ends before the descriptor does
   if (::close(fd_) != 0 && s.ok()) s = Status::Error(Errno(dir_ + ": close failed"));
   fd_ = -1;
   return s;

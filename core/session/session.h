@@ -233,9 +233,36 @@ struct SessionWriterOptions {
   // Appends beyond this many buffered bytes are written to the kernel at once
   // (no fsync), bounding the memory.
   size_t max_buffered_bytes = 4u << 20;
+  // FlushIfDue() (and the writes above max_buffered_bytes) hand the bytes
+  // and the fdatasync to a thread of the writer's and return at once;
+  // Flush() and Close() still wait for the disk. For a caller whose thread
+  // has other work on time: a link's, which sends the robot's heartbeats,
+  // must not wait for a sync that takes a second on a busy laptop disk
+  // (the robot's watchdog stops it after 0.5 s). A failure there is
+  // returned by the next FlushIfDue, Flush or Close (due or not). Bytes wait in memory while the disk is
+  // slower than the data (an X4 recording makes ~100 kB a second).
+  bool sync_on_thread = false;
 
   bool IsValid(std::string* error) const;
 };
+
+class BackgroundFileWriter;  // session.cc
+
+// Gives a session written whole under another name (`from`, a sibling
+// folder) its name `to`: one rename(2), so `to` never holds part of a
+// session (an import killed midway leaves only `from`). Refuses a `to` that
+// exists and is not an empty folder; the rename is made durable (fsync of
+// the parent folder).
+Status RenameSessionIntoPlace(const std::string& from, const std::string& to);
+// The folder a session `dir` is written in before RenameSessionIntoPlace:
+// hidden, beside it, this process's (lab.sweepscan is written as
+// .lab.sweepscan.WHAT-PID, e.g. WHAT "importing"). A command killed
+// midway, or a power loss, leaves that folder, never a `dir` that opens as
+// if it were whole.
+std::string SessionWritingDir(const std::string& dir, const std::string& what);
+// `s` with `writing` (SessionWritingDir's) said as `dir`: the operator's
+// name for where the failure was ("lab.sweepscan/frames.bin: write failed").
+Status SaidOfSession(const Status& s, const std::string& writing, const std::string& dir);
 
 class SessionWriter {
  public:
@@ -283,6 +310,7 @@ class SessionWriter {
   std::chrono::steady_clock::time_point last_sync_;
   std::string failed_;  // Sticky I/O error.
   std::string created_utc_;  // meta.json's, kept by UpdateMeta
+  std::unique_ptr<BackgroundFileWriter> background_;  // with sync_on_thread
 };
 
 // Current UTC time as ISO 8601 ("2026-11-22T10:15:00Z").

@@ -196,8 +196,12 @@ bool RobotConnection::StartRecording(const QString& session_dir, const SessionMe
   meta.link = address_.ToString().toStdString();
   if (!health_.agent_name.empty()) meta.agent = health_.agent_name;
   options_.session_meta = meta;
-  session_status_ = SessionWriter::Create(session_dir.toStdString(), meta, options_.session_writer,
-                                          &session_);
+  // This thread sends the heartbeats and the drive script's commands: the
+  // disk's syncs go to the writer's own thread (a second-long fdatasync
+  // here tripped the robot's watchdog).
+  SessionWriterOptions writer = options_.session_writer;
+  writer.sync_on_thread = true;
+  session_status_ = SessionWriter::Create(session_dir.toStdString(), meta, writer, &session_);
   if (!session_status_.ok()) {
     if (error != nullptr) *error = QString::fromStdString(session_status_.message());
     session_.reset();

@@ -21,6 +21,7 @@
 #include "hardware/link/telemetry_decoder.h"
 #include "hardware/station/robot_connection.h"
 #include "tests/testing/fault_proxy.h"
+#include "tests/testing/held_ioctl_process.h"
 #include "tests/testing/qt_wait.h"
 
 namespace sweepscan {
@@ -329,6 +330,65 @@ TEST_F(CliRecordTest, AWatchdogTripTheRobotReportsAbortsTheDriveScript) {
   RecordedSeconds(session, &log);
   ASSERT_FALSE(log.wheels.empty());
   EXPECT_LT(std::abs(log.wheels.back().left_mps) + std::abs(log.wheels.back().right_mps), 1e-3);
+}
+
+// A disk whose syncs take seconds (a busy laptop disk, a USB stick): the
+// recorder's link goes on sending its heartbeats and the drive script's
+// commands meanwhile (the syncs are the session writer's own thread's), so
+// the robot's watchdog does not stop it, and nothing recorded is lost. The
+// link's thread waited in fdatasync, and the watchdog stopped the robot.
+TEST_F(CliRecordTest, ADiskThatSyncsSlowlyDoesNotStopTheRobot) {
+  const QString script = WriteSlowStraightScript();
+  const QString session = dir_.filePath("slow-disk.sweepscan");
+  testing::HeldIoctlProcess record(
+      {SWEEPSCAN_CLI, "record", "--connect", address_.toStdString(), "--key-file",
+       key_.toStdString(), "--out", session.toStdString(), "--duration", "6", "--drive-script",
+       script.toStdString()},
+      testing::HeldSyscall{__NR_fdatasync});
+  if (!record.error.empty()) GTEST_SKIP() << record.error;
+  std::string out;
+  // The first sync (half a second into the recording) held for 2.5 s ...
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        out += record.Read();
+        return record.Holding();
+      },
+      15000))
+      << out;
+  sweepscan::testing::Pump(2500);
+  // ... then every sync let go as it comes, until the recorder exits.
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        record.Continue();
+        out += record.Read();
+        return record.Exited();
+      },
+      30000))
+      << out;
+  out += record.Read();
+  ASSERT_TRUE(WIFEXITED(record.status)) << out;
+  EXPECT_EQ(WEXITSTATUS(record.status), 0) << out;
+  EXPECT_EQ(out.find("watchdog"), std::string::npos) << out;
+  EXPECT_EQ(out.find("link lost"), std::string::npos) << out;
+  EXPECT_EQ(out.find("aborted"), std::string::npos) << out;
+  SensorLog log;
+  EXPECT_NEAR(RecordedSeconds(session, &log), 6.0, 1.0);
+  // The IMU's 100 Hz without a hole across the held sync.
+  double widest = 0.0;
+  for (size_t i = 1; i < log.imu.size(); ++i)
+    widest = std::max(widest, ToSeconds(log.imu[i].time - log.imu[i - 1].time));
+  EXPECT_LT(widest, 0.1);
+  // The robot drove on from its start to the recording's last half second
+  // (the recorder's Stop): it never stood still in between.
+  auto speed = [](const WheelSpeedMeasurement& w) { return std::abs(w.left_mps) + std::abs(w.right_mps); };
+  size_t i = 0;
+  while (i < log.wheels.size() && speed(log.wheels[i]) < 0.05) ++i;
+  ASSERT_LT(i, log.wheels.size()) << "the robot never drove";
+  const Time end = log.wheels.back().time;
+  size_t stood = 0;
+  for (; i < log.wheels.size() && ToSeconds(end - log.wheels[i].time) > 0.5; ++i)
+    stood += speed(log.wheels[i]) < 0.01 ? 1 : 0;
+  EXPECT_EQ(stood, 0u);
 }
 
 // A recording of `session` running `after_ms`, then `signal`: it stops

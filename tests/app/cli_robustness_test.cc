@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -18,9 +19,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/testing/cli_files.h"
+#include "tests/testing/held_ioctl_process.h"
 #include "tests/testing/remove_at_exit.h"
 #include "tests/testing/run_command.h"
 
@@ -464,6 +467,38 @@ TEST_F(CliRobustnessTest, OneFlippedByteLosesOneRecordWithAWarning) {
   r = Cli("info " + Session() + " --json");
   EXPECT_FALSE(nlohmann::json::parse(r.out)["damage"]["damaged"].get<bool>());
   EXPECT_EQ(Cli("info " + dir + " --strict").code, 2);
+}
+
+// A repair killed midway (held in its first fsync, frames.bin's, then
+// SIGKILL) leaves no NEW that could pass for a repaired session (NEW used
+// to be there from the start, its meta.json and side files copied last):
+// only the hidden .NEW.repairing-PID. The next repair to NEW succeeds.
+TEST_F(CliRobustnessTest, ARepairKilledMidwayLeavesNoSession) {
+  const std::string out = Tmp("killed.sweepscan");
+  std::filesystem::remove_all(out);
+  sweepscan::testing::HeldIoctlProcess repair({SWEEPSCAN_CLI, "repair", Session(), "--out", out},
+                                              sweepscan::testing::HeldSyscall{__NR_fsync});
+  if (!repair.error.empty()) GTEST_SKIP() << repair.error;
+  std::string said;
+  for (int i = 0; i < 3000 && !repair.Holding() && !repair.Exited(); ++i) {
+    said += repair.Read();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(repair.Holding()) << said << repair.Read();
+  const std::string writing = Tmp(".killed.sweepscan.repairing-" + std::to_string(repair.pid));
+  EXPECT_TRUE(Exists(writing + "/frames.bin.tmp-" + std::to_string(repair.pid)));
+  EXPECT_FALSE(Exists(out));
+  ::kill(repair.pid, SIGKILL);
+  for (int i = 0; i < 1000 && !repair.Exited(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_TRUE(repair.Exited());
+  EXPECT_FALSE(Exists(out));
+  EXPECT_TRUE(Exists(writing));
+  const CommandRun again = Cli("repair " + Session() + " --out " + out);
+  ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_TRUE(Exists(out + "/meta.json"));
+  EXPECT_EQ(sweepscan::testing::ReadWholeFile(out + "/frames.bin"),
+            sweepscan::testing::ReadWholeFile(Session() + "/frames.bin"));
 }
 
 TEST_F(CliRobustnessTest, RepairWritesACleanCopyThatPassesStrict) {

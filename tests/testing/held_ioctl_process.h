@@ -38,6 +38,14 @@ namespace sweepscan::testing {
 // With TCSBRK its tcdrain never returns, as on a wedged USB-serial adapter
 // (a pseudo-terminal's returns at once: it has no queue to wait for); with
 // TIOCEXCL (which QSerialPort's open makes) its serial ports open slowly.
+//
+// With HeldSyscall, every call of that system call is held instead: with
+// fdatasync, the process's disk syncs take as long as the test holds them,
+// as on a busy laptop disk or a slow USB stick.
+struct HeldSyscall {
+  long nr;
+};
+
 struct HeldIoctlProcess {
   pid_t pid = -1;
   int listener = -1;  // The seccomp listener: held calls stay held while it is open.
@@ -46,6 +54,17 @@ struct HeldIoctlProcess {
   int status = -1;    // waitpid's, once it has exited.
 
   HeldIoctlProcess(const std::vector<std::string>& command, uint32_t request) {
+    Start(command, __NR_ioctl, true, request);
+  }
+  HeldIoctlProcess(const std::vector<std::string>& command, HeldSyscall call) {
+    Start(command, call.nr, false, 0);
+  }
+
+ private:
+  // Holds system call `nr`; `match_request`: only when its second argument's
+  // low 32 bits are `request` (ioctl's).
+  void Start(const std::vector<std::string>& command, long nr, bool match_request,
+             uint32_t request) {
 #if defined(__x86_64__)
     constexpr uint32_t kArch = AUDIT_ARCH_X86_64;
 #elif defined(__aarch64__)
@@ -59,7 +78,7 @@ struct HeldIoctlProcess {
         BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, kArch, 1, 0),
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
         BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, nr)),
-        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, __NR_ioctl, 1, 0),
+        BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, static_cast<uint32_t>(nr), 1, 0),
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
         // The request's low 32 bits (little-endian).
         BPF_STMT(BPF_LD | BPF_W | BPF_ABS, offsetof(seccomp_data, args[1])),
@@ -67,6 +86,8 @@ struct HeldIoctlProcess {
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_USER_NOTIF),
         BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_ALLOW),
     };
+    // Any call of `nr`: held where the request would be loaded.
+    if (!match_request) filter[6] = BPF_STMT(BPF_RET | BPF_K, SECCOMP_RET_USER_NOTIF);
     sock_fprog program{static_cast<unsigned short>(std::size(filter)), filter};
     std::vector<char*> argv;  // Made before fork(): the child only makes system calls.
     for (const std::string& a : command) argv.push_back(const_cast<char*>(a.c_str()));
@@ -124,6 +145,8 @@ struct HeldIoctlProcess {
     ::close(channel[0]);
     if (listener < 0) error = "the kernel refused the seccomp filter (user notification)";
   }
+
+ public:
   ~HeldIoctlProcess() {
     ReleaseHeldCalls();
     if (pid > 0 && !Exited()) {

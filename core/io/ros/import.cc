@@ -393,6 +393,24 @@ void RemoveSession(const std::string& dir) {
   rmdir(dir.c_str());
 }
 
+// The output is refused before the work: a folder with anything in it.
+Status CheckSessionTarget(const std::string& session_dir) {
+  struct stat st;
+  if (::stat(session_dir.c_str(), &st) != 0) return Status::Ok();
+  if (!S_ISDIR(st.st_mode)) return Status::Error(session_dir + ": exists and is not a folder");
+  DIR* d = ::opendir(session_dir.c_str());
+  if (d == nullptr) return Status::Error(session_dir + ": cannot be read");
+  bool empty = true;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string n = e->d_name;
+    if (n != "." && n != "..") empty = false;
+  }
+  ::closedir(d);
+  if (empty) return Status::Ok();
+  return Status::Error(session_dir +
+                       ": folder exists and is not empty; refusing to overwrite a session");
+}
+
 Status ResolveMount(const RosImportOptions& options, const FirstPassSink& first,
                     RosImportReport* r) {
   if (options.has_mount) {
@@ -644,10 +662,15 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
   meta.agent = "sweepscan import";
   meta.notes = options.notes;
   std::unique_ptr<SessionWriter> writer;
-  s = SessionWriter::Create(session_dir, meta, SessionWriterOptions(), &writer);
+  const std::string writing = SessionWritingDir(session_dir, "importing");
+  s = CheckSessionTarget(session_dir);
+  if (s.ok()) {
+    RemoveSession(writing);  // one of a killed import whose PID this process has
+    s = SessionWriter::Create(writing, meta, SessionWriterOptions(), &writer);
+  }
   if (!s.ok()) {
     *failure = RosImportFailure::kOutput;
-    return s;
+    return SaidOfSession(s, writing, session_dir);
   }
 
   // The bag's SHA-256 on the second core while pass 2 reads it.
@@ -714,11 +737,15 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
     if (!s.ok()) *failure = RosImportFailure::kOutput;
   }
   writer.reset();
+  if (s.ok()) {
+    s = RenameSessionIntoPlace(writing, session_dir);
+    if (!s.ok()) *failure = RosImportFailure::kOutput;
+  }
   if (!s.ok()) {
     stop_hash = true;
     if (hash.valid()) hash.wait();
-    RemoveSession(session_dir);
-    return s;
+    RemoveSession(writing);
+    return SaidOfSession(s, writing, session_dir);
   }
   if (report != nullptr) *report = std::move(r);
   *failure = RosImportFailure::kNone;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -603,6 +604,60 @@ TEST(SessionWriterTest, FlushIfDueFollowsTheInterval) {
   EXPECT_EQ(ReadAll(dir + "/frames.bin").size(), kSessionFramesHeaderSize);  // Still buffered.
   ASSERT_TRUE(w->FlushIfDue(t0 + std::chrono::milliseconds(600)).ok());
   EXPECT_EQ(ReadAll(dir + "/frames.bin").size(), kSessionFramesHeaderSize + 16 + 3);
+}
+
+// With sync_on_thread the writing and the syncs are a thread's: every
+// record arrives in order, FlushIfDue only hands them over, Flush and
+// Close wait for the disk, and a failure on the thread (here the file-size
+// limit, EFBIG, as a full disk) is said by the next call, due or not.
+TEST(SessionWriterTest, OnItsOwnThreadEveryRecordArrivesAndAFailureIsSaid) {
+  TempDir tmp;
+  const std::string dir = tmp.Sub("thread.sweepscan");
+  SessionWriterOptions options;
+  options.sync_on_thread = true;
+  options.max_buffered_bytes = 300;  // many hand-overs between the syncs
+  std::unique_ptr<SessionWriter> w;
+  ASSERT_TRUE(SessionWriter::Create(dir, TestMeta(), options, &w).ok());
+  auto t = SteadyClock::now();
+  for (int i = 0; i < 2000; ++i) {
+    ASSERT_TRUE(w->Append(RecordBytes(i), 1000 * i).ok());
+    t += std::chrono::milliseconds(7);
+    ASSERT_TRUE(w->FlushIfDue(t).ok());
+  }
+  ASSERT_TRUE(w->Flush().ok());
+  Session s;
+  ASSERT_TRUE(LoadSession(dir, FramesLoadOptions(), &s).ok());
+  ASSERT_EQ(s.records.size(), 2000u);  // all on disk once Flush returned
+  for (int i = 0; i < 2000; ++i) ASSERT_EQ(s.records[i].bytes, RecordBytes(i)) << i;
+  ASSERT_TRUE(w->Close().ok());
+
+  const std::string full = tmp.Sub("full.sweepscan");
+  ASSERT_TRUE(SessionWriter::Create(full, TestMeta(), options, &w).ok());
+  rlimit before{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &before), 0);
+  const auto old_handler = signal(SIGXFSZ, SIG_IGN);
+  rlimit limit = before;
+  limit.rlim_cur = kSessionFramesHeaderSize + 1000;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  t = SteadyClock::now();
+  Status said = Status::Ok();
+  for (int i = 0; i < 400 && said.ok(); ++i) {
+    said = w->Append(RecordBytes(i), i);
+    t += std::chrono::milliseconds(100);
+    if (said.ok()) said = w->FlushIfDue(t);
+    if (said.ok()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_FALSE(said.ok());
+  EXPECT_NE(said.message().find("frames.bin: write failed: File too large"), std::string::npos)
+      << said.message();
+  EXPECT_FALSE(w->FlushIfDue(t).ok());  // not due: said again
+  EXPECT_FALSE(w->Close().ok());
+  setrlimit(RLIMIT_FSIZE, &before);
+  signal(SIGXFSZ, old_handler);
+  // What fitted is kept, whole records.
+  ASSERT_TRUE(LoadSession(full, FramesLoadOptions(), &s).ok());
+  EXPECT_GT(s.records.size(), 0u);
+  for (size_t i = 0; i < s.records.size(); ++i) EXPECT_EQ(s.records[i].bytes, RecordBytes(i));
 }
 
 // meta.json is replaced atomically: a writer killed at any moment leaves

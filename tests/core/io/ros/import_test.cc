@@ -4,6 +4,7 @@
 // hand.
 #include "core/io/ros/import.h"
 
+#include <dirent.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,6 +19,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/io/ros/ros_bag.h"
 #include "core/session/measurements.h"
@@ -278,6 +280,58 @@ TEST_F(ImportTest, CancelLeavesNoSession) {
   s = ImportRosBag(Bag("rules"), Out("cancelled"), o, nullptr, &failure);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(failure, RosImportFailure::kCancelled) << s.message();
+}
+
+// Names in `dir_` that start with `prefix`.
+std::vector<std::string> Listed(const std::string& dir, const std::string& prefix) {
+  std::vector<std::string> names;
+  if (DIR* d = opendir(dir.c_str())) {
+    while (const dirent* e = readdir(d)) {
+      if (std::string(e->d_name).rfind(prefix, 0) == 0) names.push_back(e->d_name);
+    }
+    closedir(d);
+  }
+  return names;
+}
+
+// The session's name appears only once it is whole: written beside it
+// (hidden) and renamed, so an import killed midway (or a power loss) leaves
+// no session that opens as if complete. A cancel leaves neither.
+TEST_F(ImportTest, TheSessionAppearsOnlyWhenWhole) {
+  RosImportOptions o;
+  bool looked = false, named_midway = true, written_there = false;
+  std::vector<std::string> writing;
+  o.progress = [&](double f) {
+    // Pass 2 (0.1 .. 1 of the work) writes the session.
+    if (f >= 0.1 && !looked) {
+      looked = true;
+      named_midway = Exists(Out("whole"));
+      writing = Listed(dir_, ".whole.sweepscan.importing-");
+      written_there = writing.size() == 1 && Exists(dir_ + "/" + writing[0] + "/frames.bin");
+    }
+    return true;
+  };
+  ASSERT_TRUE(ImportRosBag(Bag("rules"), Out("whole"), o, nullptr).ok());
+  ASSERT_TRUE(looked);
+  EXPECT_FALSE(named_midway);
+  ASSERT_EQ(writing.size(), 1u);
+  EXPECT_TRUE(written_there);
+  EXPECT_TRUE(Exists(Out("whole") + "/frames.bin"));
+  EXPECT_TRUE(Listed(dir_, ".whole.sweepscan.importing-").empty());
+  Session session;
+  ASSERT_TRUE(LoadSession(Out("whole"), FramesLoadOptions(), &session).ok());
+  EXPECT_TRUE(session.meta.settings.contains("import"));  // the last thing written
+  // Cancelled as pass 2 writes: nothing under either name.
+  o.progress = [](double f) { return f < 0.1; };
+  RosImportFailure failure = RosImportFailure::kNone;
+  ASSERT_FALSE(ImportRosBag(Bag("rules"), Out("halfway"), o, nullptr, &failure).ok());
+  EXPECT_EQ(failure, RosImportFailure::kCancelled);
+  EXPECT_FALSE(Exists(Out("halfway")));
+  EXPECT_TRUE(Listed(dir_, ".halfway.sweepscan").empty());
+  // An empty folder waiting for it (the app's chooser may make one) takes it.
+  ASSERT_EQ(mkdir(Out("waiting").c_str(), 0755), 0);
+  ASSERT_TRUE(ImportRosBag(Bag("rules"), Out("waiting"), RosImportOptions(), nullptr).ok());
+  EXPECT_TRUE(Exists(Out("waiting") + "/frames.bin"));
 }
 
 TEST_F(ImportTest, ExistingSessionIsNotOverwritten) {
