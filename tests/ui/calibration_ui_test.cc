@@ -675,6 +675,56 @@ TEST_F(CalibrationTest, AutomaticModeGivesTheCliAnswer) {
   EXPECT_EQ(caption.indexOf('%'), -1) << caption.toStdString();
 }
 
+// Show calibrated on a session opened by streaming (its samples let go,
+// as a long drive's are): re-assembling it reads the session again, a job.
+// Cancelled, or refused while another task runs, the cloud stays as it was
+// and the button says so (it stayed down, "Showing calibrated", over the
+// uncalibrated cloud); with nothing in the way, it is done.
+TEST_F(CalibrationTest, AShowCalibratedThatDidNotHappenIsNotShownAsDone) {
+  workspace_->set_stream_open_above_bytes(0);
+  OpenDiamond();
+  CalibrationPanel* panel = window_->calibration_panel();
+  const MountingError truth{kTruthRad[0], kTruthRad[1], kTruthRad[2]};
+  const QString file = tmp_.path() + "/truth.json";
+  ASSERT_TRUE(SaveCalibrationFile(file.toStdString(), truth, nullptr).ok());
+  QString error;
+  ASSERT_TRUE(panel->LoadCalibration(file, &error)) << error.toStdString();
+  QPushButton* after = nullptr;
+  for (QPushButton* b : panel->findChildren<QPushButton*>())
+    if (b->text() == "Show calibrated") after = b;
+  ASSERT_NE(after, nullptr);
+  const auto shown_truth = [&] { return workspace_->shown_calibration().gamma == truth.gamma; };
+
+  after->click();
+  ASSERT_TRUE(workspace_->job_running());  // the session read again
+  workspace_->CancelJob();
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 30000));
+  EXPECT_FALSE(shown_truth());
+  EXPECT_FALSE(after->isChecked());
+  EXPECT_EQ(after->text(), "Show calibrated");
+
+  workspace_->ExportCloud(tmp_.path() + "/busy.ply");  // a task in the way
+  QString refused;
+  const auto c = QObject::connect(workspace_.get(), &Workspace::jobFinished,
+                                  [&](const QString&, bool ok, const QString& m) {
+                                    if (!ok) refused = m;
+                                  });
+  after->click();
+  QObject::disconnect(c);
+  EXPECT_TRUE(refused.contains("still running")) << refused.toStdString();
+  ASSERT_TRUE(WaitFor([&] { return !workspace_->job_running(); }, 30000));
+  EXPECT_FALSE(shown_truth());
+  EXPECT_FALSE(after->isChecked());
+
+  bool replayed = false;
+  QObject::connect(workspace_.get(), &Workspace::replayFinished, [&] { replayed = true; });
+  after->click();
+  ASSERT_TRUE(WaitFor([&] { return replayed && !workspace_->job_running(); }, 120000));
+  EXPECT_TRUE(shown_truth());
+  EXPECT_TRUE(after->isChecked());
+  EXPECT_EQ(after->text(), "Showing calibrated");
+}
+
 // An IMU whose tilt readings are far noisier than its data sheet (3 deg;
 // the diamond drive otherwise): the Automatic button refuses, as the CLI
 // does, with the reason in the panel; nothing is kept and the app goes on.

@@ -229,6 +229,13 @@ CalibrationPanel::CalibrationPanel(Workspace* workspace, CloudView* view, QUndoS
     }
   });
   connect(workspace_, &Workspace::recordingChanged, this, [this] { Refresh(); });
+  // Show calibrated may need a job (the session read again, SfM's poses):
+  // refused while another task runs, cancelled or failed, the cloud stays
+  // as it was, and the button must say so (it stayed down, "Showing
+  // calibrated", over the uncalibrated cloud).
+  connect(workspace_, &Workspace::jobFinished, this, [this] {
+    if (!workspace_->job_running()) SyncAfter();
+  });
   connect(workspace_, &Workspace::sessionRenamed, this,
           [this](const QString& dir) { pairs_session_ = dir; });
   // The passes are split once the opened circle drive has replayed; after a
@@ -646,6 +653,17 @@ void CalibrationPanel::ShowAfter(bool after) {
   if (after_->isChecked() != after) after_->setChecked(after);  // Re-enters with the same value.
   workspace_->ShowCalibrated(after ? r->summary.angles : MountingError());
   after_->setText(after ? tr("Showing calibrated") : tr("Show calibrated"));
+}
+
+void CalibrationPanel::SyncAfter() {
+  const PickCalibrationResult* r = workspace_->calibration_result();
+  const MountingError& shown = workspace_->shown_calibration();
+  const bool calibrated = r != nullptr && shown.alpha == r->summary.angles.alpha &&
+                          shown.beta == r->summary.angles.beta &&
+                          shown.gamma == r->summary.angles.gamma;
+  const QSignalBlocker block(after_);
+  after_->setChecked(calibrated);
+  after_->setText(calibrated ? tr("Showing calibrated") : tr("Show calibrated"));
 }
 
 void CalibrationPanel::UseForRobot() {

@@ -71,6 +71,8 @@ class CalibrationPanel : public QWidget {
   void ShowPass(int pass);
   bool LoadCalibration(const QString& path, QString* error);
   void ShowAfter(bool after);  // The before / after toggle.
+  // The toggle as the cloud shown is: down when it is under the result's angles.
+  void SyncAfter();
   bool SaveCalibration(const QString& path, QString* error) const;
   // Makes the result the robot's calibration for live scans and new recordings.
   void UseForRobot();
