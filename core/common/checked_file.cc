@@ -33,6 +33,27 @@ std::string BaseOf(const std::string& path) {
 
 std::string ErrnoText(int error_number) { return std::strerror(error_number); }
 
+// The file a write of `path` replaces: `path`, or the file its symbolic
+// links lead to. Written through, as an editor saves: renaming over the
+// link replaced it with a file (a project kept under version control and
+// linked into a work folder lost its link, and the file it pointed to kept
+// the old text). A link that leads nowhere is written where it points; a
+// loop of links (past 40 hops, the kernel's limit) gives "".
+std::string FollowLinks(const std::string& path) {
+  std::string target = path;
+  for (int hop = 0; hop < 40; ++hop) {
+    struct stat st;
+    if (::lstat(target.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return target;
+    std::vector<char> link(static_cast<size_t>(st.st_size > 0 ? st.st_size : 4096) + 1);
+    const ssize_t n = ::readlink(target.c_str(), link.data(), link.size());
+    if (n <= 0 || static_cast<size_t>(n) >= link.size()) return path;
+    const std::string to(link.data(), static_cast<size_t>(n));
+    const size_t slash = target.rfind('/');
+    target = to[0] == '/' || slash == std::string::npos ? to : target.substr(0, slash + 1) + to;
+  }
+  return std::string();
+}
+
 // "BASE.tmp-", BASE cut where the PID (up to 10 digits) would take the
 // name past a file name's 255 bytes (NAME_MAX on Linux' file systems): a
 // 252-byte name could be written by `cp` but not by us ("File name too
@@ -125,14 +146,16 @@ Status CheckedFileWriter::Open(const std::string& path) {
   if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
     return Fail("is a folder, cannot write a file there", 0);
   }
-  RemoveStaleTemporaries(path);
-  tmp_ = TemporaryPathFor(path);
+  target_ = FollowLinks(path);
+  if (target_.empty()) return Fail("cannot follow its symbolic links", ELOOP);
+  RemoveStaleTemporaries(target_);
+  tmp_ = TemporaryPathFor(target_);
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) {
     const int e = errno;
     const std::string tmp = BaseOf(tmp_);
     tmp_.clear();
-    return Fail("cannot create " + tmp + " in " + FolderOf(path), e);
+    return Fail("cannot create " + tmp + " in " + FolderOf(target_), e);
   }
   buffer_.reserve(kBufferSize);
   return Status::Ok();
@@ -202,7 +225,7 @@ Status CheckedFileWriter::Commit() {
   const int fd = fd_;
   fd_ = -1;
   if (::close(fd) != 0 && s.ok()) s = Fail("close failed", errno);
-  if (s.ok() && std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+  if (s.ok() && std::rename(tmp_.c_str(), target_.c_str()) != 0) {
     s = Fail("cannot rename the finished temporary file over it", errno);
   }
   if (!s.ok()) {
@@ -212,7 +235,7 @@ Status CheckedFileWriter::Commit() {
   }
   tmp_.clear();
   // Make the new directory entry durable too.
-  const int dir = ::open(FolderOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dir = ::open(FolderOf(target_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) {
     ::fsync(dir);
     ::close(dir);

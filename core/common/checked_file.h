@@ -6,6 +6,8 @@
 // version); the error names the file and the operating system's reason, e.g.
 //   out/lab.ply: write failed: No space left on device
 // A file that exists under its final name is therefore always complete.
+// A PATH that is a symbolic link is written through: the file it leads to
+// is replaced (its folder holds the temporary) and the link stays.
 //
 // Stale temporaries (PATH.tmp-PID of a killed run whose process no longer
 // exists) are deleted when the same PATH is written again; readers never
@@ -56,6 +58,7 @@ class CheckedFileWriter {
   Status Fail(const std::string& what, int error_number);
 
   std::string path_;
+  std::string target_;  // path_, or the file its symbolic links lead to
   std::string tmp_;
   int fd_ = -1;
   std::vector<char> buffer_;

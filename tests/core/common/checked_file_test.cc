@@ -89,6 +89,41 @@ TEST(CheckedFileTest, WritesCompleteFilesAndReplacesAtomically) {
   EXPECT_EQ(CountEntries(dir), 1);  // No temporary left.
 }
 
+// A symbolic link is written through, as an editor saves: the file it
+// leads to (through a chain of links, relative or absolute) gets the new
+// contents and every link stays a link; a link leading nowhere gets its
+// file made where it points.
+TEST(CheckedFileTest, ASymbolicLinkIsWrittenThroughAndStays) {
+  const std::string dir = TempDir("links");
+  ASSERT_EQ(::mkdir((dir + "/real").c_str(), 0755), 0);
+  ASSERT_TRUE(WriteFileChecked(dir + "/real/site.sweepscan-project", "old").ok());
+  ASSERT_EQ(::symlink("real/site.sweepscan-project", (dir + "/hop").c_str()), 0);
+  ASSERT_EQ(::symlink((dir + "/hop").c_str(), (dir + "/site.sweepscan-project").c_str()), 0);
+  ASSERT_TRUE(WriteFileChecked(dir + "/site.sweepscan-project", "new").ok());
+  struct stat st;
+  ASSERT_EQ(::lstat((dir + "/site.sweepscan-project").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  ASSERT_EQ(::lstat((dir + "/hop").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  EXPECT_EQ(Read(dir + "/real/site.sweepscan-project"), "new");
+  EXPECT_EQ(CountEntries(dir + "/real"), 1);  // the temporary was beside the file, and went
+  ASSERT_EQ(::symlink("real/later.txt", (dir + "/dangling").c_str()), 0);
+  ASSERT_TRUE(WriteFileChecked(dir + "/dangling", "made").ok());
+  EXPECT_EQ(Read(dir + "/real/later.txt"), "made");
+  ASSERT_EQ(::lstat((dir + "/dangling").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+  // A loop is the kernel's error, not a hang.
+  ASSERT_EQ(::symlink("loop-b", (dir + "/loop-a").c_str()), 0);
+  ASSERT_EQ(::symlink("loop-a", (dir + "/loop-b").c_str()), 0);
+  const Status loop = WriteFileChecked(dir + "/loop-a", "x");
+  ASSERT_FALSE(loop.ok());
+  EXPECT_NE(loop.message().find("loop-a: cannot follow its symbolic links: Too many levels"),
+            std::string::npos)
+      << loop.message();
+  ASSERT_EQ(::lstat((dir + "/loop-a").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode));
+}
+
 // Asked before the work: the answer writing would give, and nothing left
 // behind either way (the previous file untouched).
 TEST(CheckedFileTest, CheckCanWriteAnswersAsWritingWouldAndLeavesNothing) {
