@@ -95,26 +95,51 @@ bool ReadProjectFile(const std::string& file, std::string* text) {
   return !in.bad();
 }
 
-Status CheckSessionFolder(const std::string& project_file, const std::string& path) {
+Status CheckSessionFolder(const std::string& project_file, const std::string& path,
+                          std::string* recorded_utc) {
   ProjectSession probe;
   probe.path = path;
   const std::string dir = ResolveSessionPath(project_file, probe);
-  if (!fs::is_directory(dir)) {
+  // Without exceptions: a folder that cannot be looked at (no permission
+  // on the way, a name too long) is said, not "an unexpected failure".
+  std::error_code error;
+  const bool folder = fs::is_directory(dir, error);
+  if (error && error != std::errc::no_such_file_or_directory &&
+      error != std::errc::not_a_directory)
+    return Status::Error(path + ": cannot be looked at: " + error.message());
+  if (!folder) {
     return Status::Error(path +
                          ": not a session folder (paths are relative to the project's folder)");
   }
   // The app's words (ProjectController::AddSession): any folder is not a
   // session, and an empty one would only fail later, at align or export.
-  if (!fs::exists(fs::path(dir) / kSessionMetaFile)) {
+  if (!fs::exists(fs::path(dir) / kSessionMetaFile, error)) {
     return Status::Error(path + ": not a session folder (no " + kSessionMetaFile + ")");
   }
   // A meta.json that does not read would fail only later, at align or
   // export, with the project already written around it.
   SessionMeta meta;
-  return ReadSessionMeta((fs::path(dir) / kSessionMetaFile).string(), &meta);
+  const Status s = ReadSessionMeta((fs::path(dir) / kSessionMetaFile).string(), &meta);
+  if (recorded_utc != nullptr) *recorded_utc = meta.created_utc;
+  return s;
 }
 
 namespace {
+
+// How a session's path is kept, as the app keeps it
+// (ProjectDocument::StoredPath): relative to the project's folder, so that
+// the project and its sessions move together. A path typed relative is
+// that already; one typed absolute is made so.
+std::string StoredSessionPath(const std::string& project_file, const std::string& typed) {
+  const fs::path path(typed);
+  if (!path.is_absolute()) return typed;
+  std::error_code error;
+  fs::path folder = fs::absolute(ProjectDirectory(project_file), error).lexically_normal();
+  if (error) return typed;
+  if (!folder.has_filename()) folder = folder.parent_path();  // "/site/." is "/site/"
+  const fs::path relative = path.lexically_normal().lexically_relative(folder);
+  return relative.empty() ? typed : relative.string();
+}
 
 int Fail(int code, const std::string& message) {
   PrintError(message);
@@ -130,10 +155,20 @@ std::string Fixed(double v, int digits) {
 int RunNew(const Args& args) {
   const std::vector<std::string>& pos = args.positional();
   const std::string file = pos[0];
-  if (fs::exists(file)) return Fail(kExitBadInput, file + ": exists already (use `project add` to extend it)");
+  std::error_code error;
+  if (fs::exists(file, error))
+    return Fail(kExitBadInput, file + ": exists already (use `project add` to extend it)");
+  if (error && error != std::errc::no_such_file_or_directory &&
+      error != std::errc::not_a_directory)
+    return Fail(kExitFailure, file + ": cannot be looked at: " + error.message());
   Project project;
   project.name = args.Get("name", fs::path(file).stem().string());
   project.description = args.Get("description");
+  for (const char* key : {"name", "description"}) {
+    if (!IsUtf8Text(args.Get(key)))
+      return Fail(kExitBadInput, std::string("--") + key +
+                                     ": not UTF-8 text, which a project file (JSON) holds");
+  }
   // As `add`: the sessions must be there, and take --calibration.
   std::optional<MountingError> calibration;
   if (args.Has("calibration")) {
@@ -143,11 +178,13 @@ int RunNew(const Args& args) {
     calibration = m;
   }
   for (size_t i = 1; i < pos.size(); ++i) {
-    if (const Status folder = CheckSessionFolder(file, pos[i]); !folder.ok())
+    std::string recorded;
+    if (const Status folder = CheckSessionFolder(file, pos[i], &recorded); !folder.ok())
       return Fail(kExitBadInput, folder.message());
     ProjectSession* added = nullptr;
-    const Status s = project.AddSession(pos[i], &added, file);
+    const Status s = project.AddSession(StoredSessionPath(file, pos[i]), &added, file);
     if (!s.ok()) return Fail(kExitBadInput, s.message());
+    added->recorded_utc = recorded;
     added->calibration = calibration;
   }
   const Status s = SaveProject(file, project);
@@ -201,11 +238,13 @@ int RunAdd(const Args& args) {
   }
   return EditProject(pos[0], [&](Project* project) {
     for (size_t i = 1; i < pos.size(); ++i) {
-      if (const Status folder = CheckSessionFolder(pos[0], pos[i]); !folder.ok())
+      std::string recorded;
+      if (const Status folder = CheckSessionFolder(pos[0], pos[i], &recorded); !folder.ok())
         return Fail(kExitBadInput, folder.message());
       ProjectSession* added = nullptr;
-      const Status s = project->AddSession(pos[i], &added, pos[0]);
+      const Status s = project->AddSession(StoredSessionPath(pos[0], pos[i]), &added, pos[0]);
       if (!s.ok()) return Fail(kExitBadInput, s.message());
+      added->recorded_utc = recorded;
       added->calibration = calibration;
       std::cerr << "added '" << added->id << "'"
                 << (added->project_from_session ? " as the anchor" : ", not placed yet") << "\n";
@@ -289,7 +328,8 @@ int RunProjectInfo(const Args& args) {
   if (!project.description.empty()) text << "  " << project.description << "\n";
   for (const ProjectSession& ps : project.sessions) {
     const std::string dir = ResolveSessionPath(file, ps);
-    const bool present = fs::is_directory(dir);
+    std::error_code error;  // cannot be looked at: shown as missing
+    const bool present = fs::is_directory(dir, error);
     nlohmann::json j = {{"id", ps.id}, {"path", ps.path}, {"present", present}, {"visible", ps.visible},
                         {"placed", ps.project_from_session.has_value()}};
     text << "  " << ps.id << "  " << ps.path << (present ? "" : "  [MISSING]") << (ps.visible ? "" : "  [hidden]");
@@ -387,6 +427,18 @@ int RunProject(int argc, char** argv) {
     }
     if (const int code = RefuseOptions(args, others, "`project " + sub + "`"); code != kExitOk)
       return code;
+  }
+  // Those that take one PROJECT: a second word was ignored (`project align
+  // P building_c` aligned every session, not building_c).
+  static const std::map<std::string, std::string> kOneFile = {
+      {"info", ""},
+      {"align", " (one session: --session ID)"},
+      {"export", " (some sessions: --sessions ID,ID)"},
+  };
+  if (const auto one = kOneFile.find(sub); one != kOneFile.end() && args.positional().size() > 1) {
+    return Fail(kExitBadInput,
+                "unexpected argument '" + args.positional()[1] + "': project " + sub +
+                    " takes one PROJECT file" + one->second);
   }
   if (sub == "new") return RunNew(args);
   if (sub == "add") return RunAdd(args);

@@ -53,7 +53,9 @@ Status LoadProjectAndSay(const std::string& file, Project* project, std::string*
 bool ReadProjectFile(const std::string& file, std::string* text);
 // Whether `path` (relative to the project file's folder) is a session
 // folder: one with a meta.json, as the app requires.
-Status CheckSessionFolder(const std::string& project_file, const std::string& path);
+// `recorded_utc` (optional): its meta.json's created_utc (ProjectSession::recorded_utc).
+Status CheckSessionFolder(const std::string& project_file, const std::string& path,
+                          std::string* recorded_utc = nullptr);
 // Warns on stderr about the sessions in `chosen` whose placement was
 // measured with other poses than `source`, the clouds are drawn with.
 void WarnPoseSource(const Project& project, const std::vector<size_t>& chosen, PoseSource source);

@@ -33,6 +33,11 @@ int SelectSessions(const Args& args, const Project& project, const std::string& 
       }
       named.insert(id);
     }
+    // An empty list is not "all" (a script's empty variable).
+    if (named.empty()) {
+      PrintError("--sessions: no session ID given (IDS: comma-separated session IDs)");
+      return kExitBadInput;
+    }
   }
   for (size_t i = 0; i < project.sessions.size(); ++i) {
     const ProjectSession& ps = project.sessions[i];

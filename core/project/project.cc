@@ -216,7 +216,7 @@ RegistrationEvidence ReadEvidence(const JsonObject& o) {
 
 ProjectSession ReadSession(const JsonObject& o) {
   o.AllowOnly({"id", "path", "calibration", "project_from_session", "registration", "visible",
-               "color"});
+               "color", "recorded_utc"});
   ProjectSession s;
   s.id = o.String("id");
   if (s.id.empty()) o.Fail("id", "must not be empty");
@@ -252,6 +252,11 @@ ProjectSession ReadSession(const JsonObject& o) {
   s.visible = o.Bool("visible", true);
   s.color = o.String("color", s.color);
   if (!IsColor(s.color)) o.Fail("color", "expected #rrggbb, got '" + s.color + "'");
+  s.recorded_utc = o.String("recorded_utc", "");
+  if (!s.recorded_utc.empty() && !IsIso8601Utc(s.recorded_utc)) {
+    o.Fail("recorded_utc", "expected ISO 8601 UTC such as \"2026-11-26T07:40:12Z\", got \"" +
+                               s.recorded_utc + "\"");
+  }
   return s;
 }
 
@@ -596,7 +601,8 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
   try {
     if (!j.is_object()) throw JsonError("expected a JSON object, got " + JsonTypeName(j));
     const JsonObject o(j, "");
-    o.AllowOnly({"format", "version", "name", "description", "sessions"});
+    // What the file is, first: a newer version's keys are its version's,
+    // and "unknown key" would hide that this sweepscan is the older one.
     if (o.String("format") != kFormat) {
       o.Fail("format", std::string("must be \"") + kFormat + "\", got \"" + o.String("format") + "\"");
     }
@@ -605,6 +611,7 @@ Status ProjectFromJson(const std::string& text, const std::string& source, Proje
       o.Fail("version", "this sweepscan reads version " + std::to_string(kProjectFormatVersion) +
                             ", the file is version " + std::to_string(version));
     }
+    o.AllowOnly({"format", "version", "name", "description", "sessions"});
     Project p;
     p.name = o.String("name", "");
     p.description = o.String("description", "");
@@ -697,6 +704,7 @@ std::string ProjectToJson(const Project& project) {
     }
     j["visible"] = s.visible;
     j["color"] = s.color;
+    if (!s.recorded_utc.empty()) j["recorded_utc"] = s.recorded_utc;
     sessions.push_back(j);
   }
   json root = {{"format", kFormat}, {"version", kProjectFormatVersion}, {"name", project.name}};
@@ -717,7 +725,16 @@ Status LoadProject(const std::string& path, Project* project, std::vector<std::s
   return ProjectFromJson(text, path, project, repairs);
 }
 
+bool IsUtf8Text(const std::string& s) { return IsUtf8(s); }
+
 Status SaveProject(const std::string& path, const Project& project) {
+  // JSON holds UTF-8 only (its writer throws on anything else): a name or
+  // description typed in another encoding (`project new --name` in a
+  // Latin-1 terminal) is refused by name, not "an unexpected failure".
+  if (!IsUtf8(project.name))
+    return Status::Error(path + ": the project's name is not UTF-8 text; not saved");
+  if (!IsUtf8(project.description))
+    return Status::Error(path + ": the project's description is not UTF-8 text; not saved");
   // Nothing the loader would refuse (ReadPose): a session beyond 8 000 m.
   for (const ProjectSession& s : project.sessions) {
     if (s.project_from_session &&

@@ -90,6 +90,12 @@ struct ProjectSession {
   RegistrationEvidence registration;
   bool visible = true;
   std::string color = "#1f77b4";  // #rrggbb, the app's colour for "colour by session"
+  // The recording added: its meta.json's created_utc then ("" in files of
+  // an older sweepscan, and for sessions without one). A folder that later
+  // holds another recording (the room recorded again under the same name)
+  // is refused by its cloud's loaders (hardware/station/session_cloud.h):
+  // the placements were measured on the first.
+  std::string recorded_utc;
 };
 
 struct Project {
@@ -161,6 +167,8 @@ std::string SessionColor(size_t index);
 
 // The folder `path` resolves against: the project file's folder.
 std::string ProjectDirectory(const std::string& project_file);
+// Whether `s` is UTF-8, as every string of a project file (JSON) must be.
+bool IsUtf8Text(const std::string& s);
 // A session's folder as an absolute (or working-directory-relative) path.
 std::string ResolveSessionPath(const std::string& project_file, const ProjectSession& session);
 

@@ -47,6 +47,7 @@ void CopyGroup(const ProjectSession& from, int group, ProjectSession* to) {
   switch (group) {
     case 0:
       to->path = from.path;
+      to->recorded_utc = from.recorded_utc;  // which recording the folder holds
       break;
     case 1:
       to->calibration = from.calibration;
@@ -91,13 +92,14 @@ std::string Change(const ProjectSession* was, const ProjectSession* now) {
   if (was == nullptr) return "added";
   if (now == nullptr) return "removed";
   std::vector<std::string> what;
-  if (was->path != now->path) what.push_back("its folder");
+  if (was->path != now->path || was->recorded_utc != now->recorded_utc) what.push_back("its folder");
   ProjectSession a = *was, b = *now;
   a.project_from_session.reset(), b.project_from_session.reset();
   a.registration = b.registration = RegistrationEvidence();
   a.visible = b.visible = true;
   a.color = b.color = "";
   a.path = b.path = "";
+  a.recorded_utc = b.recorded_utc = "";
   if (Saved(a) != Saved(b)) what.push_back("its calibration");
   if (Placement(*was) != Placement(*now)) {
     what.push_back(now->project_from_session ? "placed again (" + now->registration.method + ")"
@@ -221,6 +223,14 @@ ProjectMerge MergeProjects(const Project& base, const Project& here, const Proje
       m.conflicts.push_back("'" + id + "': " + text);
       m.conflicting.push_back(id);
     }
+  }
+  // Each side loads, and so must what is written of both: two sessions
+  // moved onto one folder, one on each side, merge without a conflict of
+  // fields but make a file the loader refuses.
+  if (m.conflicts.empty()) {
+    Project check;
+    const Status loads = ProjectFromJson(ProjectToJson(m.merged), "the merge", &check);
+    if (!loads.ok()) m.conflicts.push_back(loads.message() + " (from the edits here and in the file together)");
   }
   return m;
 }

@@ -6,6 +6,24 @@
 
 namespace sweepscan::hardware {
 
+namespace {
+
+// The folder still holds the recording that was added to the project: a
+// room recorded again under the same name (its folder replaced) is another
+// cloud, and the placements were measured on the first.
+Status CheckSameRecording(const ProjectSession& session, const std::string& dir,
+                          const SessionMeta& meta) {
+  if (session.recorded_utc.empty() || meta.created_utc.empty() ||
+      meta.created_utc == session.recorded_utc)
+    return Status::Ok();
+  return Status::Error(dir + " now holds another recording (begun " + meta.created_utc +
+                       ") than the one added to the project (begun " + session.recorded_utc +
+                       "): its placement was measured on that one; remove the session from the "
+                       "project and add it again");
+}
+
+}  // namespace
+
 Status StreamSessionCloud(const std::string& project_file, const ProjectSession& session,
                           const SessionCloudOptions& options, SessionCloud* cloud,
                           const std::function<Status(const CloudPoint*, size_t)>& sink,
@@ -20,6 +38,7 @@ Status StreamSessionCloud(const std::string& project_file, const ProjectSession&
     return Status::Error("session '" + session.id + "': " + s.message());
   };
   Status s = ReadSessionMeta(out.dir + "/" + kSessionMetaFile, &out.meta);
+  if (s.ok()) s = CheckSameRecording(session, out.dir, out.meta);
   if (!s.ok()) return refuse(s);
   const nlohmann::json& settings = out.meta.settings;
   if (settings.is_object() && settings.contains("scenario")) {
@@ -69,7 +88,9 @@ Status LoadSessionCloud(const std::string& project_file, const ProjectSession& s
   out.id = session.id;
   out.dir = ResolveSessionPath(project_file, session);
   Recording rec;
-  Status s = OpenRecording(out.dir, options.frames, &rec, options.progress);
+  Status s = ReadSessionMeta(out.dir + "/" + kSessionMetaFile, &out.meta);
+  if (s.ok()) s = CheckSameRecording(session, out.dir, out.meta);
+  if (s.ok()) s = OpenRecording(out.dir, options.frames, &rec, options.progress);
   if (!s.ok()) return Status::Error("session '" + session.id + "': " + s.message());
   out.meta = rec.decode.meta;
   if (!rec.decode.frames.damage.empty()) out.damage = rec.decode.frames.DamageSummary();

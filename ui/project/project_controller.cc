@@ -298,6 +298,7 @@ bool ProjectController::AddSession(const QString& dir) {
     show_error_(tr("Cannot add the session"), QString::fromStdString(s.message()));
     return false;
   }
+  added->recorded_utc = meta.created_utc;  // which recording was placed
   Push(after, tr("add session '%1'").arg(Id(added->id)));
   return true;
 }

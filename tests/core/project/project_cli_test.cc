@@ -402,6 +402,47 @@ TEST_F(ProjectCliTest, AnUnreadableSessionCostsOnlyItsOwnPlacement) {
   EXPECT_FALSE(p.sessions[2].project_from_session.has_value());
 }
 
+// The room recorded again into the same folder (another recording, its
+// meta.json's created_utc another time): the placement was measured on the
+// first, so its cloud is refused where it is built, with both times and
+// what to do; removed and added again, it is aligned as the new one.
+TEST_F(ProjectCliTest, ARoomRecordedAgainUnderItsNameIsNotDrawnInTheOldPlace) {
+  const std::string project = NewProject("again.sweepscan-project", "ab");
+  ASSERT_EQ(Cli("project align " + project).code, 0);
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  nlohmann::json meta;
+  std::string text;
+  ASSERT_TRUE(ReadFile(P("building_b.sweepscan/meta.json"), &text));
+  meta = nlohmann::json::parse(text);
+  EXPECT_EQ(p.sessions[1].recorded_utc, meta["created_utc"].get<std::string>());
+  EXPECT_FALSE(p.sessions[1].recorded_utc.empty());
+  // Recorded again: a new created_utc (the frames do not matter here).
+  meta["created_utc"] = "2030-01-02T03:04:05Z";
+  std::ofstream(P("building_b.sweepscan/meta.json")) << meta.dump(2);
+  CommandRun r = Cli("project export " + project + " --out " + P("again.las"));
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("building_b.sweepscan now holds another recording (begun "
+                       "2030-01-02T03:04:05Z) than the one added to the project (begun " +
+                       p.sessions[1].recorded_utc + ")"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("remove the session from the project and add it again"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("again.las")));
+  // Removed and added again: the new recording, aligned afresh.
+  ASSERT_EQ(Cli("project remove " + project + " building_b").code, 0);
+  r = RunCommand("cd " + Dir() + " && " + SWEEPSCAN_CLI +
+                 " project add again.sweepscan-project building_b.sweepscan");
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_EQ(p.sessions[1].recorded_utc, "2030-01-02T03:04:05Z");
+  r = Cli("project align " + project);
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Cli("project export " + project + " --out " + P("again.las"));
+  EXPECT_EQ(r.code, 0) << r.out;
+}
+
 TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   const std::string project = NewProject("bad.sweepscan-project", "a");
   // Exists already.
@@ -461,6 +502,66 @@ TEST_F(ProjectCliTest, BadInputIsRefusedWithWhereAndWhy) {
   EXPECT_NE(r.out.find("warning: " + P("loop.sweepscan-project") + ": the references form a loop"),
             std::string::npos)
       << r.out;
+}
+
+// What a script may get wrong is refused, not half-done: a second word
+// after PROJECT (`project align P building_b` aligned every session), an
+// empty --sessions (it meant all), a folder that cannot be looked at
+// (it threw "unexpected failure"). A session typed with its absolute path
+// is kept relative to the project's folder, as the app keeps it, so that
+// the project moves with its sessions.
+TEST_F(ProjectCliTest, ScriptMistakesAreRefusedAndPathsAreKeptRelative) {
+  const std::string project = NewProject("script.sweepscan-project", "a");
+  CommandRun r = Cli("project add " + project + " " + P("building_b.sweepscan"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  Project p;
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  ASSERT_EQ(p.sessions.size(), 2u);
+  EXPECT_EQ(p.sessions[1].path, "building_b.sweepscan");
+  EXPECT_EQ(ResolveSessionPath(project, p.sessions[1]),
+            std::filesystem::path(P("building_b.sweepscan")).lexically_normal().string());
+  // Outside the project's folder: relative still, through "..".
+  const std::string sub = P("sub");
+  std::filesystem::create_directories(sub);
+  r = Cli("project new " + sub + "/up.sweepscan-project " + P("building_c.sweepscan"));
+  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_TRUE(LoadProject(sub + "/up.sweepscan-project", &p).ok());
+  EXPECT_EQ(p.sessions[0].path, "../building_c.sweepscan");
+
+  for (const std::string& extra : {"align " + project + " building_b",
+                                   "export " + project + " building_b --out " + P("s.las"),
+                                   "info " + project + " building_b"}) {
+    r = Cli("project " + extra);
+    EXPECT_EQ(r.code, 2) << extra;
+    EXPECT_NE(r.out.find("unexpected argument 'building_b': project "), std::string::npos)
+        << extra << ": " << r.out;
+  }
+  ASSERT_TRUE(LoadProject(project, &p).ok());
+  EXPECT_FALSE(p.sessions[1].project_from_session.has_value());  // nothing was aligned
+  r = Cli("project export " + project + " --out " + P("s.las") + " --sessions ''");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--sessions: no session ID given"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("s.las")));
+  // A name longer than a folder's can be (ENAMETOOLONG, not "no such file").
+  const std::string too_long = P(std::string(300, 'x') + ".sweepscan");
+  r = Cli("project add " + project + " " + too_long);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("cannot be looked at: File name too long"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("unexpected"), std::string::npos) << r.out;
+  r = Cli("project new " + too_long + "/p.sweepscan-project");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("cannot be looked at: File name too long"), std::string::npos) << r.out;
+  // A name typed in Latin-1 ("Büro"): JSON holds UTF-8 only.
+  r = Cli("project new " + P("latin1.sweepscan-project") + " --name \"$(printf 'B\\374ro')\"");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--name: not UTF-8 text"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(P("latin1.sweepscan-project")));
+  // Saving one never throws either (the app's names are UTF-8 already).
+  Project latin1;
+  latin1.name = "B\xfcro";
+  const Status saved = SaveProject(P("latin1.sweepscan-project"), latin1);
+  EXPECT_FALSE(saved.ok());
+  EXPECT_NE(saved.message().find("name is not UTF-8"), std::string::npos) << saved.message();
 }
 
 // Runs `project align ARGS` in the background and, once it has read the

@@ -62,6 +62,23 @@ TEST(ProjectMergeTest, KeepsEachSidesOwnChanges) {
   EXPECT_EQ(m.from_file, (std::vector<std::string>{"a", "c"}));
 }
 
+// Each side's edits are fine alone and touch different sessions, but
+// together they put two sessions on one folder: the merge would write a
+// file the loader refuses, so it is a conflict, said with the loader's words.
+TEST(ProjectMergeTest, EditsThatTogetherMakeAFileTheLoaderRefusesConflict) {
+  const Project base = Base();
+  Project here = base, file = base;
+  here.sessions[1].path = "x.sweepscan";  // b's folder moved here
+  file.sessions[2].path = "x.sweepscan";  // c's in the file
+  const ProjectMerge m = MergeProjects(base, here, file);
+  ASSERT_EQ(m.conflicts.size(), 1u);
+  EXPECT_NE(m.conflicts[0].find("the merge: "), std::string::npos) << m.conflicts[0];
+  EXPECT_NE(m.conflicts[0].find("x.sweepscan"), std::string::npos) << m.conflicts[0];
+  EXPECT_NE(m.conflicts[0].find("from the edits here and in the file together"),
+            std::string::npos)
+      << m.conflicts[0];
+}
+
 TEST(ProjectMergeTest, TakesRemovalsFromEitherSide) {
   const Project base = Base();
   Project here = base, file = base;

@@ -391,6 +391,13 @@ TEST(ProjectTest, StrictLoadingNamesThePlace) {
             std::string::npos)
       << s.message();
   EXPECT_FALSE(ProjectFromJson("{\"format\": \"sweepscan-project\", \"version\": 1, \"sessions\": [}", "x", &p).ok());
+  // A newer version with its own new key: the version is what is said
+  // (this sweepscan is the older one), not the key it does not know.
+  nlohmann::json newer = nlohmann::json::parse(good);
+  newer["version"] = 2;
+  newer["site"] = {{"crs", "EPSG:25832"}};
+  const Status v = ProjectFromJson(newer.dump(), "x", &p);
+  EXPECT_NE(v.message().find("version 1, the file is version 2"), std::string::npos) << v.message();
 
   // Values the format's rules exclude, each named at its place.
   struct Edit {
