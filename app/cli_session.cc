@@ -443,23 +443,9 @@ int RunRepair(int argc, char** argv) {
     }
     ::closedir(dp);
   }
-  if (::stat(out.c_str(), &st) == 0) {
-    if (!S_ISDIR(st.st_mode)) {
-      PrintError(out + ": exists and is not a folder");
-      return kExitFailure;  // an output in the way, as for every command (README)
-    }
-    DIR* dp = ::opendir(out.c_str());
-    bool empty = true;
-    if (dp != nullptr) {
-      while (const dirent* e = ::readdir(dp)) {
-        if (std::strcmp(e->d_name, ".") != 0 && std::strcmp(e->d_name, "..") != 0) empty = false;
-      }
-      ::closedir(dp);
-    }
-    if (!empty) {
-      PrintError(out + ": exists and is not empty; repair writes a new session folder");
-      return kExitFailure;
-    }
+  if (const Status free = CheckNewSessionFolder(out); !free.ok()) {
+    PrintError(free.message() + " (repair writes a new session folder)");
+    return kExitFailure;  // an output in the way, as for every command (README)
   }
   // Written beside NEW and renamed to it once whole: a repair killed
   // midway (or a power loss) leaves a hidden .NEW.repairing-PID, never a

@@ -401,6 +401,21 @@ std::string SessionWritingDir(const std::string& dir, const std::string& what) {
   return parent + "." + name.substr(slash + 1) + "." + what + "-" + std::to_string(::getpid());
 }
 
+Status CheckNewSessionFolder(const std::string& dir) {
+  struct stat st;
+  if (::stat(dir.c_str(), &st) != 0) return Status::Ok();
+  if (!S_ISDIR(st.st_mode)) return Status::Error(dir + ": exists and is not a folder");
+  DIR* d = ::opendir(dir.c_str());
+  if (d == nullptr) return Status::Error(Errno(dir + ": cannot be read"));
+  bool empty = true;
+  while (const dirent* e = ::readdir(d)) {
+    if (std::strcmp(e->d_name, ".") != 0 && std::strcmp(e->d_name, "..") != 0) empty = false;
+  }
+  ::closedir(d);
+  if (empty) return Status::Ok();
+  return Status::Error(dir + ": folder exists and is not empty; refusing to overwrite a session");
+}
+
 Status SaidOfSession(const Status& s, const std::string& writing, const std::string& dir) {
   if (s.ok()) return s;
   std::string message = s.message();

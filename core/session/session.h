@@ -260,6 +260,10 @@ Status RenameSessionIntoPlace(const std::string& from, const std::string& to);
 // midway, or a power loss, leaves that folder, never a `dir` that opens as
 // if it were whole.
 std::string SessionWritingDir(const std::string& dir, const std::string& what);
+// Whether `dir` can take a new session: absent, or an empty folder (what
+// RenameSessionIntoPlace replaces). Asked before the work, so that a folder
+// in the way is said before minutes of reading.
+Status CheckNewSessionFolder(const std::string& dir);
 // `s` with `writing` (SessionWritingDir's) said as `dir`: the operator's
 // name for where the failure was ("lab.sweepscan/frames.bin: write failed").
 Status SaidOfSession(const Status& s, const std::string& writing, const std::string& dir);

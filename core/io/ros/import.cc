@@ -393,24 +393,6 @@ void RemoveSession(const std::string& dir) {
   rmdir(dir.c_str());
 }
 
-// The output is refused before the work: a folder with anything in it.
-Status CheckSessionTarget(const std::string& session_dir) {
-  struct stat st;
-  if (::stat(session_dir.c_str(), &st) != 0) return Status::Ok();
-  if (!S_ISDIR(st.st_mode)) return Status::Error(session_dir + ": exists and is not a folder");
-  DIR* d = ::opendir(session_dir.c_str());
-  if (d == nullptr) return Status::Error(session_dir + ": cannot be read");
-  bool empty = true;
-  while (const dirent* e = ::readdir(d)) {
-    const std::string n = e->d_name;
-    if (n != "." && n != "..") empty = false;
-  }
-  ::closedir(d);
-  if (empty) return Status::Ok();
-  return Status::Error(session_dir +
-                       ": folder exists and is not empty; refusing to overwrite a session");
-}
-
 Status ResolveMount(const RosImportOptions& options, const FirstPassSink& first,
                     RosImportReport* r) {
   if (options.has_mount) {
@@ -663,7 +645,7 @@ Status ImportRosBag(const std::string& bag_path, const std::string& session_dir,
   meta.notes = options.notes;
   std::unique_ptr<SessionWriter> writer;
   const std::string writing = SessionWritingDir(session_dir, "importing");
-  s = CheckSessionTarget(session_dir);
+  s = CheckNewSessionFolder(session_dir);
   if (s.ok()) {
     RemoveSession(writing);  // one of a killed import whose PID this process has
     s = SessionWriter::Create(writing, meta, SessionWriterOptions(), &writer);
